@@ -1,0 +1,111 @@
+"""Linear-light FFT blur: identity, linearity, mean, centring, padding."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra.numpy import arrays
+
+from vissim.blur import blur_image
+from vissim.errors import VissimInputError
+from vissim.prescription import Prescription
+from vissim.psf import PSF, compute_psf
+from vissim.wavefront import Wavefront
+
+
+def delta(size=33, step=1.0):
+    data = np.zeros((size, size))
+    data[size // 2, size // 2] = 1.0
+    return PSF.from_array(data, step)
+
+
+@pytest.fixture(scope="module")
+def defocus_psf():
+    return compute_psf(Wavefront.from_prescription(Prescription(-2.0), 3.0), arcmin_per_px=1.0, size_px=32)
+
+
+def random_image(seed=0, shape=(64, 80)):
+    return np.random.default_rng(seed).random(shape).astype(np.float32)
+
+
+@pytest.mark.parametrize("padding", ["constant", "edge", "reflect", "wrap"])
+def test_delta_psf_leaves_the_image_unchanged(padding):
+    image = random_image()
+    np.testing.assert_allclose(blur_image(image, delta(), arcmin_per_px=1.0, padding=padding), image, atol=1e-6)
+
+
+def test_even_sized_psf_does_not_shift_the_image(defocus_psf):
+    # A point at the image centre stays centred: the PSF origin [N//2, N//2] maps to [0, 0].
+    image = np.zeros((64, 64), np.float32)
+    image[32, 32] = 1.0
+    out = blur_image(image, defocus_psf, arcmin_per_px=1.0, padding="constant", background=0.0, dtype=np.float64)
+    # The output is the PSF itself, its origin [16, 16] on the point at [32, 32]: no shift.
+    np.testing.assert_allclose(out[16:48, 16:48], defocus_psf.data, atol=1e-9)
+    assert out.sum() == pytest.approx(1.0, abs=1e-9)
+
+
+def test_constant_image_stays_constant(defocus_psf):
+    image = np.full((50, 70), 0.37, np.float32)
+    for padding in ("constant", "edge", "reflect", "wrap"):
+        np.testing.assert_allclose(blur_image(image, defocus_psf, arcmin_per_px=1.0, padding=padding), 0.37, atol=1e-6)
+
+
+images = arrays(np.float64, (24, 24), elements=st.floats(0, 1))
+
+
+@settings(max_examples=25, deadline=None)
+@given(images, images, st.floats(-3, 3), st.floats(-3, 3))
+def test_blur_is_linear(a, b, alpha, beta):
+    psf = delta(9)
+    psf = PSF.from_array(np.outer(np.hanning(9), np.hanning(9)) + 0.01, 1.0)
+    kw = dict(arcmin_per_px=1.0, padding="constant", background=0.0, dtype=np.float64)
+    left = blur_image(alpha * a + beta * b, psf, **kw)
+    right = alpha * blur_image(a, psf, **kw) + beta * blur_image(b, psf, **kw)
+    np.testing.assert_allclose(left, right, atol=1e-9)
+
+
+@settings(max_examples=25, deadline=None)
+@given(images)
+def test_wrap_padding_preserves_the_mean_exactly(image):
+    psf = PSF.from_array(np.outer(np.hanning(9), np.hanning(9)) + 0.01, 1.0)
+    out = blur_image(image, psf, arcmin_per_px=1.0, padding="wrap", dtype=np.float64)
+    assert out.mean() == pytest.approx(image.mean(), abs=1e-12)
+
+
+def test_mean_preserved_when_the_content_is_away_from_the_border(defocus_psf):
+    # A chart-like image: content inside a uniform border wider than the PSF radius.
+    image = np.full((96, 96), 0.9, np.float32)
+    image[30:66, 40:50] = 0.04
+    for padding in ("constant", "edge", "reflect"):
+        out = blur_image(image, defocus_psf, arcmin_per_px=1.0, padding=padding, dtype=np.float64)
+        assert out.mean() == pytest.approx(image.astype(np.float64).mean(), rel=1e-9)
+
+
+def test_paddings_differ_only_near_the_border(defocus_psf):
+    image = random_image(1, (80, 80))
+    a = blur_image(image, defocus_psf, arcmin_per_px=1.0, padding="reflect", dtype=np.float64)
+    b = blur_image(image, defocus_psf, arcmin_per_px=1.0, padding="edge", dtype=np.float64)
+    reach = defocus_psf.data.shape[0] // 2 + 1
+    np.testing.assert_allclose(a[reach:-reach, reach:-reach], b[reach:-reach, reach:-reach], atol=1e-9)
+    assert np.max(np.abs(a - b)) > 1e-4
+
+
+def test_per_channel_psfs_and_float32_default(defocus_psf):
+    rgb = np.stack([random_image(s) for s in range(3)], axis=-1)
+    out = blur_image(rgb, [delta(), defocus_psf, delta()], arcmin_per_px=1.0)
+    assert out.dtype == np.float32 and out.shape == rgb.shape
+    np.testing.assert_allclose(out[..., 0], rgb[..., 0], atol=1e-6)
+    assert not np.allclose(out[..., 1], rgb[..., 1], atol=1e-3)
+
+
+def test_sampling_mismatch_is_an_error(defocus_psf):
+    with pytest.raises(VissimInputError, match="arcmin/px"):
+        blur_image(random_image(), defocus_psf, arcmin_per_px=0.5)
+
+
+def test_bad_images_are_refused():
+    with pytest.raises(VissimInputError, match="NaN"):
+        blur_image(np.full((8, 8), np.nan), delta(3), arcmin_per_px=1.0)
+    with pytest.raises(VissimInputError, match="shape"):
+        blur_image(np.zeros(8), delta(3), arcmin_per_px=1.0)
+    with pytest.raises(VissimInputError, match="padding"):
+        blur_image(np.zeros((8, 8)), delta(3), arcmin_per_px=1.0, padding="zero")

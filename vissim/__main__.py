@@ -1,0 +1,5 @@
+import sys
+
+from vissim.cli import main
+
+sys.exit(main())

@@ -1,0 +1,495 @@
+"""LogMAR letter charts and single-optotype tiles, rendered in angle or for print.
+
+Layout (ETDRS: Ferris, Kassoff, Bresnick & Bailey 1982, following Bailey & Lovie 1976):
+five Sloan letters per row (any number on request), the gap between neighbouring letters
+is one letter width, the gap between a row's baseline and the top of the next row is the
+height of the letters in that next row, rows are centred on the chart's vertical midline,
+and every margin is one letter width of the largest row.  Letter height is
+``5 * 10**LogMAR`` arcmin (:mod:`vissim.acuity`).
+
+One :class:`ChartSpec` gives two renderings of the same layout:
+
+* :func:`render_chart_angular` -- a pixel grid in visual angle (``arcmin_per_px``), the
+  input to a blur simulation; the thesis used 1 arcmin per pixel.
+* :func:`render_chart_print` / :func:`save_chart_pdf` / :func:`save_chart_png` -- the chart
+  at its physical size for the viewing distance (letter heights from
+  :func:`vissim.acuity.letter_height_mm`, thesis Eq. 4.1 generalised).
+
+Pixels are float32 *linear reflectance*: ``paper_reflectance`` where there is no ink and
+``ink_reflectance`` under ink, mixed by the ink's area in each pixel.  "black-on-white"
+prints letters in ink on bare paper; "white-on-black" swaps them (background in ink).
+Print files carry the printer's view instead: the PDF fills ink black on an unprinted page
+and the PNG stores bare paper as 1 and full ink as 0.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vissim.acuity import THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, letter_height_mm, logmar_to_snellen
+from vissim.acuity import subtense_arcmin, subtense_mm
+from vissim.errors import VissimInputError
+from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window, sloan_letter
+
+logger = logging.getLogger(__name__)
+
+__all__ = [
+    "DEFAULT_LETTER_SEED",
+    "MM_PER_INCH",
+    "POLARITIES",
+    "THESIS_TILE_SHAPE_PX",
+    "Chart",
+    "ChartLayout",
+    "ChartRow",
+    "ChartSpec",
+    "LetterBox",
+    "etdrs_chart_spec",
+    "layout_chart",
+    "logmar_steps",
+    "optotype_tile",
+    "render_chart_angular",
+    "render_chart_print",
+    "save_chart_pdf",
+    "save_chart_png",
+    "single_letter_spec",
+]
+
+POLARITIES = ("black-on-white", "white-on-black")
+#: Thesis tiles: 113 px wide x 133 px tall at 1 arcmin/px (ERRATA item 8), as (rows, cols).
+THESIS_TILE_SHAPE_PX = (133, 113)
+DEFAULT_LETTER_SEED = 2015
+MM_PER_INCH = 25.4
+_LETTERS_PER_ROW = 5
+_SIDECAR_SCHEMA = "vissim.chart-letters/1"
+_BOX_KEYS = ("top", "left", "bottom", "right")
+
+
+def _number(value: Any, name: str, unit: str, *, positive: bool = False) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise VissimInputError(f"{name} must be a number ({unit}), got {value!r}") from None
+    if not math.isfinite(value) or (positive and value <= 0.0):
+        raise VissimInputError(f"{name} must be {'finite and > 0' if positive else 'finite'} ({unit}), got {value}")
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class ChartRow:
+    """One chart row: its LogMAR and its letters, left to right."""
+
+    logmar: float
+    letters: str
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "logmar", _number(self.logmar, "LogMAR", "log10 arcmin"))
+        letters = "".join(sloan_letter(ch).name for ch in str(self.letters) if not ch.isspace())
+        if not letters:
+            raise VissimInputError(f"a chart row needs at least one letter, got {self.letters!r}")
+        object.__setattr__(self, "letters", letters)
+
+
+@dataclasses.dataclass(frozen=True)
+class ChartSpec:
+    """What a chart shows and how it is printed; rendering resolution is chosen later."""
+
+    rows: tuple[ChartRow, ...]
+    viewing_distance_m: float = THESIS_VIEWING_DISTANCE_M
+    polarity: str = "black-on-white"
+    paper_reflectance: float = 0.9
+    ink_reflectance: float = 0.04
+    letter_seed: int | None = None  # the seed that chose the letters, when they were chosen at random
+
+    def __post_init__(self) -> None:
+        rows = tuple(self.rows)
+        if not rows or not all(isinstance(r, ChartRow) for r in rows):
+            raise VissimInputError(f"a chart needs at least one ChartRow, got {self.rows!r}")
+        object.__setattr__(self, "rows", rows)
+        _number(self.viewing_distance_m, "viewing distance", "m", positive=True)
+        if self.polarity not in POLARITIES:
+            raise VissimInputError(f"polarity must be one of {', '.join(POLARITIES)}; got {self.polarity!r}")
+        paper = _number(self.paper_reflectance, "paper reflectance", "fraction 0-1")
+        ink = _number(self.ink_reflectance, "ink reflectance", "fraction 0-1")
+        if not 0.0 <= ink < paper <= 1.0:
+            raise VissimInputError(
+                f"reflectances must satisfy 0 <= ink < paper <= 1 (fractions), got ink {ink:g}, paper {paper:g}"
+            )
+
+    @property
+    def background_reflectance(self) -> float:
+        return self.paper_reflectance if self.polarity == "black-on-white" else self.ink_reflectance
+
+    @property
+    def letter_reflectance(self) -> float:
+        return self.ink_reflectance if self.polarity == "black-on-white" else self.paper_reflectance
+
+
+def logmar_steps(start: float, stop: float, step: float = 0.1) -> tuple[float, ...]:
+    """LogMAR values from ``start`` to ``stop`` inclusive in steps of ``step`` (either direction)."""
+    start = _number(start, "LogMAR range start", "log10 arcmin")
+    stop = _number(stop, "LogMAR range end", "log10 arcmin")
+    step = _number(step, "LogMAR step", "log10 arcmin", positive=True)
+    count = abs(stop - start) / step
+    if abs(count - round(count)) > 1e-6:
+        raise VissimInputError(f"LogMAR range {start:g} to {stop:g} is not a whole number of {step:g} steps")
+    sign = -1.0 if stop < start else 1.0
+    return tuple(round(start + sign * i * step, 10) for i in range(int(round(count)) + 1))
+
+
+def _row_letters(letters: str | Sequence[str] | None, n_rows: int, seed: int) -> list[str]:
+    if letters is None:
+        rng = np.random.default_rng(seed)
+        return ["".join(rng.choice(list(SLOAN_LETTERS), _LETTERS_PER_ROW, replace=False)) for _ in range(n_rows)]
+    if isinstance(letters, str):
+        groups = letters.replace(",", " ").replace("/", " ").split()
+        groups = groups if len(groups) > 1 else groups * n_rows
+    else:
+        groups = [str(g) for g in letters]
+    if len(groups) != n_rows:
+        raise VissimInputError(f"got letters for {len(groups)} rows but the chart has {n_rows} rows")
+    return groups
+
+
+def etdrs_chart_spec(
+    logmar_range: tuple[float, float] = (1.0, -0.3),
+    logmar_step: float = 0.1,
+    *,
+    letters: str | Sequence[str] | None = None,
+    seed: int = DEFAULT_LETTER_SEED,
+    **spec_kwargs: Any,
+) -> ChartSpec:
+    """An ETDRS-style chart, one row per LogMAR step (default 1.0 down to -0.3, as the thesis).
+
+    ``letters``: None picks 5 distinct Sloan letters per row with ``numpy.random.default_rng(seed)``;
+    a string such as ``"NCKZO"`` is used for every row; rows separated by spaces, commas or
+    slashes (``"NCKZO HVORS ..."``) or a sequence give each row its own letters.
+    ``spec_kwargs`` go to :class:`ChartSpec` (viewing distance, polarity, reflectances).
+    """
+    logmars = logmar_steps(*logmar_range, logmar_step)
+    groups = _row_letters(letters, len(logmars), seed)
+    rows = tuple(ChartRow(lm, g) for lm, g in zip(logmars, groups))
+    return ChartSpec(rows, letter_seed=seed if letters is None else None, **spec_kwargs)
+
+
+def single_letter_spec(letter: str, logmar: float, **spec_kwargs: Any) -> ChartSpec:
+    """A chart of one optotype: one row of one letter, with the usual one-letter margins."""
+    return ChartSpec((ChartRow(logmar, letter),), **spec_kwargs)
+
+
+# ---------------------------------------------------------------- layout
+
+
+@dataclasses.dataclass(frozen=True)
+class LetterBox:
+    """Where one letter is.  Boxes are ``(top, left, bottom, right)`` from the top-left corner.
+
+    ``box_px`` is in the rendered image's pixel coordinates (pixel ``(r, c)`` covers
+    ``[r, r+1) x [c, c+1)``); ``box_arcmin`` is the same box in visual angle (image pixels times
+    the angular scale of the grid); ``box_mm`` is where the letter sits on the printed chart.
+    """
+
+    letter: str
+    logmar: float
+    row: int
+    position: int
+    box_px: tuple[float, float, float, float]
+    box_arcmin: tuple[float, float, float, float]
+    box_mm: tuple[float, float, float, float]
+
+    @property
+    def height_px(self) -> float:
+        return self.box_px[2] - self.box_px[0]
+
+    @property
+    def center_rc(self) -> tuple[float, float]:
+        return (0.5 * (self.box_px[0] + self.box_px[2]), 0.5 * (self.box_px[1] + self.box_px[3]))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "letter": self.letter,
+            "logmar": self.logmar,
+            "snellen_20ft": logmar_to_snellen(self.logmar),
+            "row": self.row,
+            "position": self.position,
+            "height_arcmin": letter_height_arcmin(self.logmar),
+            **{f"box_{u}": dict(zip(_BOX_KEYS, getattr(self, f"box_{u}"))) for u in ("px", "arcmin", "mm")},
+        }
+
+
+def _etdrs_boxes(heights: Sequence[float], counts: Sequence[int]) -> tuple[list[list[tuple]], tuple[float, float]]:
+    """ETDRS boxes (top, left, bottom, right) for rows of letter ``heights``, in the heights' unit."""
+    margin = max(heights)
+    width = 2.0 * margin + max((2 * n - 1) * h for h, n in zip(heights, counts))
+    boxes, top = [], margin
+    for i, (h, n) in enumerate(zip(heights, counts)):
+        if i:
+            top += h  # baseline of the row above to the top of this row: this row's letter height
+        left = 0.5 * (width - (2 * n - 1) * h)
+        boxes.append([(top, left + 2 * j * h, top + h, left + 2 * j * h + h) for j in range(n)])
+        top += h
+    return boxes, (top + margin, width)
+
+
+@dataclasses.dataclass(frozen=True)
+class ChartLayout:
+    """Every letter box of a chart on one pixel grid, with that grid's scales."""
+
+    letters: tuple[LetterBox, ...]
+    shape_px: tuple[int, int]
+    arcmin_per_px: float
+    mm_per_px: float
+    page_size_mm: tuple[float, float]  # (height, width) of the printed chart
+    rendering: str  # "angular" or "print"
+    dpi: float | None = None
+
+
+def layout_chart(
+    spec: ChartSpec,
+    *,
+    arcmin_per_px: float | None = None,
+    dpi: float | None = None,
+    shape_px: tuple[int, int] | None = None,
+    snap_to_pixels: bool = False,
+) -> ChartLayout:
+    """Letter boxes of ``spec`` on an angular grid (``arcmin_per_px``) or a print grid (``dpi``).
+
+    ``shape_px`` (angular only) fixes the image size and centres the letters in it, ignoring
+    the margins; ``snap_to_pixels`` moves each letter's top-left corner to the nearest pixel
+    corner (by < 0.5 px) so that letters a whole number of pixels tall have crisp edges.
+    """
+    if (arcmin_per_px is None) == (dpi is None):
+        raise VissimInputError("give exactly one of arcmin_per_px (angular grid) or dpi (print grid)")
+    counts = [len(r.letters) for r in spec.rows]
+    arcmin_boxes, arcmin_size = _etdrs_boxes([letter_height_arcmin(r.logmar) for r in spec.rows], counts)
+    mm_boxes, mm_size = _etdrs_boxes([letter_height_mm(r.logmar, spec.viewing_distance_m) for r in spec.rows], counts)
+    if dpi is not None:
+        dpi = _number(dpi, "print resolution", "dots per inch", positive=True)
+        mm_per_px = MM_PER_INCH / dpi
+        arcmin_per_px = subtense_arcmin(mm_per_px, spec.viewing_distance_m)
+        src_boxes, src_size, px_per_unit = mm_boxes, mm_size, 1.0 / mm_per_px
+    else:
+        arcmin_per_px = _number(arcmin_per_px, "angular pixel size", "arcmin/px", positive=True)
+        mm_per_px = subtense_mm(arcmin_per_px, spec.viewing_distance_m)
+        src_boxes, src_size, px_per_unit = arcmin_boxes, arcmin_size, 1.0 / arcmin_per_px
+    offset = (0.0, 0.0)
+    if shape_px is None:
+        shape = tuple(max(1, math.ceil(s * px_per_unit - 1e-9)) for s in src_size)
+    else:
+        if dpi is not None:
+            raise VissimInputError("shape_px applies to angular charts only; a print chart's size follows its layout")
+        shape = tuple(int(s) for s in shape_px)
+        flat = [b for row in src_boxes for b in row]
+        lo = (min(b[0] for b in flat), min(b[1] for b in flat))
+        hi = (max(b[2] for b in flat), max(b[3] for b in flat))
+        content = [(h - l) * px_per_unit for l, h in zip(lo, hi)]
+        if any(c > s + 1e-9 for c, s in zip(content, shape)) or min(shape) < 1:
+            raise VissimInputError(
+                f"letters {content[0]:.1f} x {content[1]:.1f} px do not fit a {shape[0]} x {shape[1]} px image"
+            )
+        offset = tuple(0.5 * (s - c) - l * px_per_unit for s, c, l in zip(shape, content, lo))
+    letters = []
+    for i, row in enumerate(spec.rows):
+        for j, name in enumerate(row.letters):
+            t, l, b, r = (v * px_per_unit for v in src_boxes[i][j])
+            t, l, b, r = t + offset[0], l + offset[1], b + offset[0], r + offset[1]
+            if snap_to_pixels:
+                dt, dl = math.floor(t + 0.5) - t, math.floor(l + 0.5) - l
+                t, l, b, r = t + dt, l + dl, b + dt, r + dl
+            box_px = (t, l, b, r)
+            letters.append(LetterBox(
+                letter=name, logmar=row.logmar, row=i, position=j, box_px=box_px,
+                box_arcmin=arcmin_boxes[i][j] if dpi is not None else tuple(v * arcmin_per_px for v in box_px),
+                box_mm=mm_boxes[i][j],
+            ))
+    return ChartLayout(
+        letters=tuple(letters), shape_px=shape, arcmin_per_px=float(arcmin_per_px), mm_per_px=float(mm_per_px),
+        page_size_mm=mm_size, rendering="print" if dpi is not None else "angular", dpi=dpi,
+    )
+
+
+# ---------------------------------------------------------------- rendering
+
+
+@dataclasses.dataclass(frozen=True)
+class Chart:
+    """A rendered chart: float32 linear-reflectance ``pixels`` (H, W), its layout and its spec."""
+
+    pixels: np.ndarray
+    layout: ChartLayout
+    spec: ChartSpec
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.pixels, np.ndarray) and self.pixels.dtype == np.float32 and self.pixels.ndim == 2):
+            raise VissimInputError(f"Chart.pixels must be a 2-D float32 array, got {getattr(self.pixels, 'dtype', '?')}")
+        if self.pixels.shape != tuple(self.layout.shape_px):
+            raise VissimInputError(f"Chart.pixels shape {self.pixels.shape} != layout {self.layout.shape_px} px")
+
+    arcmin_per_px = property(lambda self: self.layout.arcmin_per_px)
+    mm_per_px = property(lambda self: self.layout.mm_per_px)
+    letters = property(lambda self: self.layout.letters)
+    viewing_distance_m = property(lambda self: self.spec.viewing_distance_m)
+    polarity = property(lambda self: self.spec.polarity)
+    paper_reflectance = property(lambda self: self.spec.paper_reflectance)
+    ink_reflectance = property(lambda self: self.spec.ink_reflectance)
+
+    def sidecar(self) -> dict[str, Any]:
+        """JSON-safe description of every letter box: all a later step needs to crop letters."""
+        return chart_sidecar(self.spec, self.layout)
+
+
+def chart_sidecar(spec: ChartSpec, layout: ChartLayout) -> dict[str, Any]:
+    """The sidecar dict of :meth:`Chart.sidecar`, from a spec and a layout (no pixels needed)."""
+    return {
+        "schema": _SIDECAR_SCHEMA,
+        "rendering": layout.rendering,
+        "shape_px": list(layout.shape_px),
+        "arcmin_per_px": layout.arcmin_per_px,
+        "mm_per_px": layout.mm_per_px,
+        "dpi": layout.dpi,
+        "page_size_mm": {"height": layout.page_size_mm[0], "width": layout.page_size_mm[1]},
+        "viewing_distance_m": spec.viewing_distance_m,
+        "polarity": spec.polarity,
+        "paper_reflectance": spec.paper_reflectance,
+        "ink_reflectance": spec.ink_reflectance,
+        "background_reflectance": spec.background_reflectance,
+        "letter_reflectance": spec.letter_reflectance,
+        "letter_seed": spec.letter_seed,
+        "layout": "ETDRS (Ferris et al. 1982; Bailey & Lovie 1976): letter gap = letter width, "
+                  "row gap = next row's letter height, margins = largest letter width",
+        "conventions": "boxes are top, left, bottom, right from the top-left corner; pixel (r, c) covers "
+                       "[r, r+1) x [c, c+1); row 0 is the top; box_mm is on the printed chart",
+        "letters": [box.to_dict() for box in layout.letters],
+    }
+
+
+def _render(spec: ChartSpec, layout: ChartLayout, supersample: int) -> Chart:
+    coverage = np.zeros(layout.shape_px, dtype=float)
+    for box in layout.letters:
+        window = letter_coverage_window(box.letter, box.height_px, layout.shape_px, box.center_rc,
+                                        supersample=supersample)
+        if window is None:
+            continue
+        r0, c0, cov = window
+        view = coverage[r0:r0 + cov.shape[0], c0:c0 + cov.shape[1]]
+        np.maximum(view, cov, out=view)
+    bg, fg = spec.background_reflectance, spec.letter_reflectance
+    pixels = (bg + (fg - bg) * coverage).astype(np.float32)
+    logger.debug("rendered %s chart %s px, %d letters", layout.rendering, layout.shape_px, len(layout.letters))
+    return Chart(pixels, layout, spec)
+
+
+def render_chart_angular(
+    spec: ChartSpec,
+    arcmin_per_px: float = 1.0,
+    *,
+    shape_px: tuple[int, int] | None = None,
+    snap_to_pixels: bool = False,
+    supersample: int = 16,
+) -> Chart:
+    """Render ``spec`` on a grid in visual angle (for simulation); see :func:`layout_chart`."""
+    layout = layout_chart(spec, arcmin_per_px=arcmin_per_px, shape_px=shape_px, snap_to_pixels=snap_to_pixels)
+    return _render(spec, layout, supersample)
+
+
+def render_chart_print(spec: ChartSpec, dpi: float = 360.0, *, supersample: int = 16) -> Chart:
+    """Render ``spec`` at its physical size for its viewing distance, ``dpi`` pixels per inch."""
+    return _render(spec, layout_chart(spec, dpi=dpi), supersample)
+
+
+def optotype_tile(
+    letter: str,
+    logmar: float,
+    *,
+    arcmin_per_px: float = 1.0,
+    shape_px: tuple[int, int] = THESIS_TILE_SHAPE_PX,
+    polarity: str = "black-on-white",
+    paper_reflectance: float = 0.9,
+    ink_reflectance: float = 0.04,
+    viewing_distance_m: float = THESIS_VIEWING_DISTANCE_M,
+    snap_to_pixels: bool = True,
+    supersample: int = 16,
+) -> Chart:
+    """One letter centred on a tile: the thesis's 113 x 133 px (1.88 x 2.22 deg) tile at 1 arcmin/px.
+
+    ``shape_px`` is (rows, cols).  With ``snap_to_pixels`` the letter's top-left corner sits
+    on a pixel corner, so it is centred to within half a pixel.
+    """
+    spec = single_letter_spec(letter, logmar, viewing_distance_m=viewing_distance_m, polarity=polarity,
+                              paper_reflectance=paper_reflectance, ink_reflectance=ink_reflectance)
+    return render_chart_angular(spec, arcmin_per_px, shape_px=shape_px, snap_to_pixels=snap_to_pixels,
+                                supersample=supersample)
+
+
+# ---------------------------------------------------------------- print files
+
+
+def save_chart_pdf(
+    spec: ChartSpec, path: str | os.PathLike[str], *, overwrite: bool = False, provenance: dict | None = None
+) -> Path:
+    """Write ``spec`` as a vector PDF whose page is the chart's physical size; return the path.
+
+    Ink is filled black on the unprinted (white) page; one compound path per letter from
+    :meth:`vissim.optotypes.SloanLetter.patches`.  ``provenance`` goes into the PDF's
+    Keywords as JSON.  The write is atomic and refuses to replace a file unless ``overwrite``.
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    from vissim.atomic import atomic_output
+    from vissim.provenance import to_json
+
+    layout = layout_chart(spec, dpi=72.0)
+    height_mm, width_mm = layout.page_size_mm
+    fig = Figure(figsize=(width_mm / MM_PER_INCH, height_mm / MM_PER_INCH), facecolor="white")
+    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+    ax.set_xlim(0.0, width_mm)
+    ax.set_ylim(0.0, height_mm)
+    ax.set_axis_off()
+    letter_colour = "black"
+    if spec.polarity == "white-on-black":
+        ax.add_patch(Rectangle((0.0, 0.0), width_mm, height_mm, facecolor="black", edgecolor="none", linewidth=0))
+        letter_colour = "white"
+    for box in layout.letters:
+        top, left, bottom, _ = box.box_mm
+        for patch in sloan_letter(box.letter).patches((left, height_mm - bottom), bottom - top,
+                                                      facecolor=letter_colour):
+            ax.add_patch(patch)
+    metadata = {"Title": f"vissim LogMAR chart for {spec.viewing_distance_m:g} m", "Creator": "vissim"}
+    if provenance is not None:
+        metadata["Keywords"] = to_json(provenance)
+    path = Path(path)
+    with atomic_output(path, overwrite=overwrite) as tmp:
+        fig.savefig(tmp, format="pdf", metadata=metadata)
+    logger.info("wrote %s (%.1f x %.1f mm)", path, width_mm, height_mm)
+    return path
+
+
+def save_chart_png(
+    spec: ChartSpec,
+    path: str | os.PathLike[str],
+    *,
+    dpi: float = 360.0,
+    overwrite: bool = False,
+    provenance: dict | None = None,
+    supersample: int = 16,
+) -> Chart:
+    """Write the print raster of ``spec`` at ``dpi`` as an sRGB PNG (or TIFF); return the rendered chart.
+
+    The file holds what the printer should lay down: bare paper is 1 (white), full ink 0
+    (black), edge pixels the linear-light mix by ink area.
+    """
+    from vissim.imageio import write_image
+
+    chart = render_chart_print(spec, dpi, supersample=supersample)
+    ink, paper = spec.ink_reflectance, spec.paper_reflectance
+    printer = ((chart.pixels - np.float32(ink)) / np.float32(paper - ink)).clip(0.0, 1.0)
+    write_image(path, printer, provenance=provenance, overwrite=overwrite, encoding="srgb")
+    return chart

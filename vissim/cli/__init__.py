@@ -1,0 +1,83 @@
+"""The ``vissim`` command line: thin wrappers that parse, call one library function and print.
+
+Each sub-command lives in its own module exposing ``add_parser(subparsers)``; the module
+registers its parser and sets ``func`` (a callable taking the parsed namespace and returning
+an exit code) with ``parser.set_defaults(func=...)``.  Bad input raises
+:class:`vissim.errors.VissimInputError`; :func:`main` prints its one line and exits 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import re
+import sys
+
+from vissim import __version__
+from vissim.errors import VissimError
+
+#: Sub-command modules, in the order ``vissim --help`` lists them.
+COMMAND_MODULES = (
+    "vissim.cli.rx",
+    "vissim.cli.trial_lens",
+    "vissim.cli.psf",
+    "vissim.cli.chart",
+    "vissim.cli.blur",
+    "vissim.cli.demo",
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="vissim",
+        description="Simulate how refractive errors blur what an eye or a camera sees.",
+    )
+    parser.add_argument("--version", action="version", version=f"vissim {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="log more (-vv for debug)")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:  # a command not built yet
+            if exc.name != name:
+                raise
+            continue
+        module.add_parser(subparsers)
+    return parser
+
+
+_NEGATIVE_VALUE = re.compile(r"^-(?:\d|\.\d)")
+
+
+def _protect_negative_values(argv: list[str]) -> list[str]:
+    """Let '-2.00/-1.25x180' be a value: argparse would take it for an option.
+
+    No vissim option starts with a digit, so a leading space (stripped by every parser of
+    numbers and prescriptions) marks such tokens as values.
+    """
+    return [" " + a if _NEGATIVE_VALUE.match(a) else a for a in argv]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(_protect_negative_values(sys.argv[1:] if argv is None else list(argv)))
+    logging.basicConfig(
+        level=logging.WARNING - 10 * min(args.verbose, 2),
+        format="vissim: %(levelname)s: %(message)s",
+    )
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except VissimError as exc:
+        print(f"vissim: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("vissim: interrupted; no partial output was left behind", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,67 @@
+"""``vissim psf``: compute a PSF and write it as a float32 ``Y`` EXR (and a PNG preview)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
+from vissim.imageio import to_preview_png, write_image
+from vissim.provenance import make_provenance
+from vissim.psf import compute_psf
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "psf",
+        help="compute a point-spread function",
+        description="Compute the PSF of a prescription or Zernike wavefront at a stated angular "
+        "sampling. Writes a float32 single-channel (Y) EXR that sums to 1, origin at [N//2, N//2], "
+        "row 0 at the top of the visual field; when -o ends in .png, also a peak-normalised PNG "
+        "preview (the EXR goes beside it).",
+    )
+    add_aberration_args(parser)
+    parser.add_argument("--wavelength-nm", default="550", metavar="NM[,NM...]", help="wavelength(s) in nm (default 550)")
+    parser.add_argument("--weights", metavar="W[,W...]", help="relative weight per wavelength (default equal)")
+    parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
+    parser.add_argument("--lca-reference-nm", type=float, default=550.0, metavar="NM", help="in-focus wavelength for --lca")
+    parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
+    parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")
+    parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="wave (default) or geometric optics")
+    parser.add_argument("--float32", action="store_true", help="compute in float32 (default float64; files are float32)")
+    parser.add_argument("-o", "--output", required=True, type=Path, help="out.exr or out.png")
+    parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    wavefront = wavefront_from_args(args)
+    wavelengths = parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
+    weights = parse_float_list(args.weights, "--weights", "relative units") if args.weights else None
+    psf = compute_psf(
+        wavefront,
+        pupil_diameter_mm=args.pupil_mm,
+        wavelength_nm=wavelengths,
+        weights=weights,
+        lca_reference_nm=args.lca_reference_nm if args.lca else None,
+        arcmin_per_px=args.arcmin_per_px,
+        size_px=args.size,
+        mode=args.mode,
+        dtype=np.float32 if args.float32 else np.float64,
+    )
+    provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike)
+    output = args.output
+    exr_path = output.with_suffix(".exr") if output.suffix.lower() == ".png" else output
+    data = psf.data.astype(np.float32)
+    written = [write_image(exr_path, data, provenance=provenance, overwrite=args.overwrite)]
+    if output.suffix.lower() == ".png":
+        written.append(to_preview_png(output, data, provenance=provenance, overwrite=args.overwrite))
+    for path in written:
+        print(f"wrote {path}")
+    print(
+        f"PSF {psf.size_px[0]}x{psf.size_px[1]} px at {psf.arcmin_per_px:g} arcmin/px, pupil "
+        f"{psf.pupil_diameter_mm:g} mm, {psf.mode} optics, {100 * psf.energy_in_field:.2f} % of the energy in the field"
+    )
+    return 0

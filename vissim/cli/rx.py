@@ -1,0 +1,69 @@
+"""``vissim rx``: read a prescription and show its power vector and Zernike coefficients."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from vissim.errors import VissimInputError
+from vissim.prescription import Prescription
+from vissim.wavefront import prescription_to_zernike_um
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "rx",
+        help="parse a prescription: sphere/cylinder/axis, power vector, Zernike coefficients",
+        description="Parse a prescription (the correcting lens, TABO axis) and print it in minus "
+        "cylinder, its spherical equivalent, power vector (M, J0, J45) and, with --pupil-mm, the "
+        "OSA Zernike coefficients c(2,-2), c(2,0), c(2,2) in µm of the eye it corrects.",
+    )
+    parser.add_argument("prescription", help="e.g. '-2.00 -1.25 x 180', '-2.00/-1.25x180', 'plano -0.75 x 90'")
+    parser.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter in mm for Zernike coefficients")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.set_defaults(func=run)
+
+
+def describe(rx: Prescription, pupil_mm: float | None) -> dict:
+    minus = rx.minus_cylinder()
+    plus = rx.plus_cylinder()
+    m, j0, j45 = rx.power_vector()
+    out = {
+        "prescription": str(minus),
+        "plus_cylinder_form": str(plus),
+        "sphere_diopters": minus.sphere_diopters,
+        "cylinder_diopters": minus.cylinder_diopters,
+        "axis_deg": minus.axis_deg,
+        "spherical_equivalent_diopters": rx.spherical_equivalent_diopters,
+        "M_diopters": m,
+        "J0_diopters": j0,
+        "J45_diopters": j45,
+    }
+    if pupil_mm is not None:
+        coefficients = prescription_to_zernike_um(rx, pupil_mm)
+        out["pupil_diameter_mm"] = pupil_mm
+        out["zernike_um"] = {f"{n},{mm}": value for (n, mm), value in coefficients.items()}
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.pupil_mm is not None and not args.pupil_mm > 0:
+        raise VissimInputError(f"--pupil-mm must be a positive diameter in mm, got {args.pupil_mm!r}")
+    info = describe(Prescription.parse(args.prescription), args.pupil_mm)
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    print(f"prescription (minus cyl): {info['prescription']}")
+    print(f"plus-cylinder form:       {info['plus_cylinder_form']}")
+    print(f"spherical equivalent:     {info['spherical_equivalent_diopters']:+.3f} D")
+    print(
+        f"power vector:             M {info['M_diopters']:+.3f} D, J0 {info['J0_diopters']:+.3f} D, "
+        f"J45 {info['J45_diopters']:+.3f} D"
+    )
+    if "zernike_um" in info:
+        z = info["zernike_um"]
+        print(
+            f"Zernike over {args.pupil_mm:g} mm (µm): c(2,-2) {z['2,-2']:+.4f}, c(2,0) {z['2,0']:+.4f}, "
+            f"c(2,2) {z['2,2']:+.4f}"
+        )
+    return 0

@@ -1,0 +1,422 @@
+"""Image files in and out, and the one place that converts to and from linear light.
+
+Inside vissim every image is ``float32`` *linear light* (proportional to radiance), of
+shape ``(H, W)`` (mono, channel ``Y``) or ``(H, W, 3)`` (channels ``R, G, B``), indexed
+``[row, col]``.  Encoded files are converted here and nowhere else:
+
+* ``.exr`` stores linear float32 as-is (ZIP compression); round trips are bit-exact.
+  Provenance rides in one string header attribute, ``vissim_provenance`` (JSON).
+* ``.png`` / ``.tif`` / ``.tiff`` store 8- or 16-bit integers, by default sRGB-encoded
+  (IEC 61966-2-1); provenance goes to a sidecar ``<file>.json`` (``out.png.json``).
+  Float TIFFs are read as linear.  16-bit *colour* PNG is refused both ways, because
+  Pillow silently truncates it to 8 bits; use TIFF or EXR for that.
+
+Every write goes through :func:`vissim.atomic.atomic_output` and refuses to replace an
+existing file unless ``overwrite=True``.  Anything wrong with a file raises one
+:class:`~vissim.errors.VissimInputError` naming the file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import os
+import struct
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import OpenEXR
+import tifffile
+from PIL import Image as _PILImage
+
+from vissim.atomic import atomic_output, write_text_atomic
+from vissim.errors import VissimInputError
+from vissim.provenance import from_json, to_json
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["Image", "read_image", "srgb_decode", "srgb_encode", "to_preview_png", "write_image"]
+
+PROVENANCE_ATTRIBUTE = "vissim_provenance"
+MONO_CHANNELS = ("Y",)
+RGB_CHANNELS = ("R", "G", "B")
+_SUFFIX_KIND = {".exr": "exr", ".png": "png", ".tif": "tiff", ".tiff": "tiff"}
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+# IEC 61966-2-1:1999 sRGB transfer function constants.
+_SRGB_LINEAR_THRESHOLD = 0.0031308
+_SRGB_ENCODED_THRESHOLD = 0.04045
+_SRGB_SLOPE = 12.92
+_SRGB_SCALE = 1.055
+_SRGB_OFFSET = 0.055
+_SRGB_GAMMA = 2.4
+
+
+def _float_array(x: Any) -> np.ndarray:
+    arr = np.asarray(x)
+    return arr if np.issubdtype(arr.dtype, np.floating) else arr.astype(np.float64)
+
+
+def srgb_encode(linear: Any) -> Any:
+    """Linear light in [0, 1] -> sRGB-encoded values in [0, 1] (IEC 61966-2-1).
+
+    Input is clipped to [0, 1] first: values above 1 (highlights) become 1 and negative
+    values become 0.  Float dtypes are preserved; other dtypes are computed in float64.
+    """
+    x = np.clip(_float_array(linear), 0.0, 1.0)
+    curve = _SRGB_SCALE * np.power(x, 1.0 / _SRGB_GAMMA) - _SRGB_OFFSET
+    return np.where(x <= _SRGB_LINEAR_THRESHOLD, _SRGB_SLOPE * x, curve).astype(x.dtype, copy=False)[()]
+
+
+def srgb_decode(encoded: Any) -> Any:
+    """sRGB-encoded values in [0, 1] -> linear light in [0, 1] (IEC 61966-2-1).
+
+    Input is clipped to [0, 1] first.  Float dtypes are preserved; other dtypes are
+    computed in float64 (pass integer codes already divided by 255 or 65535).
+    """
+    v = np.clip(_float_array(encoded), 0.0, 1.0)
+    curve = np.power((v + _SRGB_OFFSET) / _SRGB_SCALE, _SRGB_GAMMA)
+    return np.where(v <= _SRGB_ENCODED_THRESHOLD, v / _SRGB_SLOPE, curve).astype(v.dtype, copy=False)[()]
+
+
+@dataclasses.dataclass(frozen=True)
+class Image:
+    """Linear-light pixels with their channel names and provenance.
+
+    ``pixels`` is float32 of shape ``(H, W)`` with ``channel_names == ("Y",)`` or
+    ``(H, W, 3)`` with ``("R", "G", "B")``.
+    """
+
+    pixels: np.ndarray
+    channel_names: tuple[str, ...]
+    provenance: dict = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.pixels, np.ndarray) or self.pixels.dtype != np.float32:
+            raise VissimInputError(
+                "Image.pixels must be a float32 ndarray, got "
+                f"{getattr(self.pixels, 'dtype', type(self.pixels))}"
+            )
+        n = 1 if self.pixels.ndim == 2 else (self.pixels.shape[-1] if self.pixels.ndim == 3 else -1)
+        if n < 0 or len(self.channel_names) != n:
+            raise VissimInputError(
+                f"Image.channel_names {self.channel_names} do "
+                f"not match pixels of shape {self.pixels.shape}"
+            )
+
+
+# ---------------------------------------------------------------- reading
+
+
+def read_image(path: str | os.PathLike[str], *, encoding: str = "auto") -> Image:
+    """Read an image file into linear light.
+
+    Parameters
+    ----------
+    path:
+        ``.exr``, ``.png``, ``.tif`` or ``.tiff``.
+    encoding:
+        How PNG/TIFF values are encoded: ``"auto"`` (integers are sRGB, floats linear),
+        ``"srgb"`` or ``"linear"``.  EXR is always linear; ``"srgb"`` is refused for it.
+    """
+    path = Path(path)
+    if encoding not in ("auto", "srgb", "linear"):
+        raise VissimInputError(f"encoding must be 'auto', 'srgb' or 'linear', got {encoding!r}")
+    kind = _kind(path)
+    if not path.is_file():
+        raise VissimInputError(f"{path}: no such file")
+    if kind == "exr":
+        if encoding == "srgb":
+            raise VissimInputError(f"{path}: EXR files hold linear light; encoding='srgb' does not apply")
+        return _read_exr(path)
+    raw = _read_png(path) if kind == "png" else _read_tiff(path)
+    pixels = _to_linear(raw, encoding)
+    if not np.all(np.isfinite(pixels)):
+        raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
+    names = MONO_CHANNELS if pixels.ndim == 2 else RGB_CHANNELS
+    return Image(pixels, names, _read_sidecar(path))
+
+
+def _kind(path: Path) -> str:
+    kind = _SUFFIX_KIND.get(path.suffix.lower())
+    if kind is None:
+        raise VissimInputError(f"{path}: unsupported image suffix {path.suffix!r} (expected .exr, .png, .tif or .tiff)")
+    return kind
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _read_exr(path: Path) -> Image:
+    try:
+        exr = OpenEXR.File(str(path), separate_channels=True)
+        n_parts = len(exr.parts)
+        header = exr.parts[0].header
+        channels = {name: ch.pixels for name, ch in exr.parts[0].channels.items()}
+    except Exception as exc:  # OpenEXR raises RuntimeError, ValueError, IndexError ...
+        raise VissimInputError(
+            f"{path}: cannot read as OpenEXR (truncated, "
+            f"corrupt or not an EXR file): {_one_line(exc)}"
+        ) from exc
+    if n_parts > 1:
+        logger.info("%s has %d parts; reading only the first", path, n_parts)
+    names = set(channels)
+    if set(RGB_CHANNELS) <= names:
+        wanted = RGB_CHANNELS
+    elif "Y" in names:
+        wanted = MONO_CHANNELS
+    else:
+        raise VissimInputError(
+            f"{path}: EXR channels {sorted(names)} are not supported (need 'Y' for mono or 'R', 'G', 'B' for colour)"
+        )
+    if names - set(wanted) - {"A"}:
+        logger.info("%s: ignoring EXR channels %s", path, sorted(names - set(wanted)))
+    planes = [channels[c] for c in wanted]
+    for name, plane in zip(wanted, planes):
+        if plane.dtype not in (np.float16, np.float32):
+            raise VissimInputError(f"{path}: EXR channel {name!r} has pixel type {plane.dtype}; expected half or float")
+        if plane.shape != planes[0].shape:
+            raise VissimInputError(f"{path}: EXR channel {name!r} is subsampled ({plane.shape} vs {planes[0].shape})")
+    pixels = planes[0] if len(planes) == 1 else np.stack(planes, axis=-1)
+    pixels = np.ascontiguousarray(pixels, dtype=np.float32)
+    if not np.all(np.isfinite(pixels)):
+        raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
+    prov_text = header.get(PROVENANCE_ATTRIBUTE)
+    provenance = _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
+    return Image(pixels, wanted, provenance)
+
+
+def _parse_provenance(path: Path, text: str) -> dict:
+    try:
+        return from_json(text)
+    except VissimInputError as exc:
+        raise VissimInputError(f"{path}: {exc}") from exc
+
+
+def _read_sidecar(path: Path) -> dict:
+    sidecar = _sidecar_path(path)
+    if not sidecar.is_file():
+        return {}
+    return _parse_provenance(sidecar, sidecar.read_text(encoding="utf-8"))
+
+
+def _read_png(path: Path) -> np.ndarray:
+    with open(path, "rb") as fh:
+        head = fh.read(33)
+    if len(head) < 33 or head[:8] != _PNG_SIGNATURE or head[12:16] != b"IHDR":
+        raise VissimInputError(f"{path}: not a PNG file (bad signature or header)")
+    bit_depth, colour_type = struct.unpack(">BB", head[24:26])
+    if colour_type != 3 and bit_depth not in (8, 16):
+        raise VissimInputError(f"{path}: PNG bit depth {bit_depth} is not supported (expected 8 or 16)")
+    if bit_depth == 16 and colour_type != 0:
+        raise VissimInputError(
+            f"{path}: 16-bit colour PNG is not supported (Pillow "
+            "truncates it to 8 bits); use 16-bit TIFF or EXR"
+        )
+    try:
+        with _PILImage.open(path) as im:
+            im.load()
+            if im.mode == "P":
+                im = im.convert("RGBA" if "transparency" in im.info else "RGB")
+            mode = im.mode
+            data = np.asarray(im)
+    except Exception as exc:  # Pillow raises OSError, SyntaxError, ValueError ...
+        raise VissimInputError(f"{path}: cannot read as PNG (truncated or corrupt): {_one_line(exc)}") from exc
+    if mode in ("I;16", "I;16B", "I"):
+        return data.astype(np.uint16)
+    if mode in ("L", "RGB"):
+        return data
+    if mode in ("LA", "RGBA"):
+        return data[..., 0] if mode == "LA" else data[..., :3]
+    raise VissimInputError(f"{path}: PNG mode {mode!r} is not supported (expected greyscale or RGB, 8 or 16 bit)")
+
+
+def _read_tiff(path: Path) -> np.ndarray:
+    try:
+        with tifffile.TiffFile(path) as tif:
+            series = tif.series[0]
+            axes = series.axes
+            photometric = tif.pages[0].photometric
+            data = series.asarray()
+    except Exception as exc:  # tifffile raises TiffFileError, ValueError, struct.error ...
+        raise VissimInputError(
+            f"{path}: cannot read as TIFF (truncated, "
+            f"corrupt or not a TIFF file): {_one_line(exc)}"
+        ) from exc
+    if axes == "SYX":
+        data, axes = np.moveaxis(data, 0, -1), "YXS"
+    if axes not in ("YX", "YXS"):
+        raise VissimInputError(
+            f"{path}: TIFF layout {axes!r} is not supported "
+            "(expected a single greyscale or RGB image)"
+        )
+    samples = 1 if axes == "YX" else data.shape[-1]
+    if photometric == tifffile.PHOTOMETRIC.MINISBLACK and samples in (1, 2):
+        data = data if samples == 1 else data[..., 0]
+    elif photometric == tifffile.PHOTOMETRIC.RGB and samples in (3, 4):
+        data = data[..., :3]
+    else:
+        raise VissimInputError(
+            f"{path}: TIFF with photometric {getattr(photometric, 'name', photometric)} and {samples} samples "
+            "is not supported (expected greyscale or RGB)"
+        )
+    if data.dtype not in (np.uint8, np.uint16) and not np.issubdtype(data.dtype, np.floating):
+        raise VissimInputError(
+            f"{path}: TIFF sample type {data.dtype} is not "
+            "supported (expected uint8, uint16 or float)"
+        )
+    return data
+
+
+def _to_linear(raw: np.ndarray, encoding: str) -> np.ndarray:
+    if np.issubdtype(raw.dtype, np.integer):
+        values = raw.astype(np.float64) / np.iinfo(raw.dtype).max
+        decode = encoding != "linear"
+    else:
+        values = raw.astype(np.float64)
+        decode = encoding == "srgb"
+    out = srgb_decode(values) if decode else values
+    return np.ascontiguousarray(out, dtype=np.float32)
+
+
+# ---------------------------------------------------------------- writing
+
+
+def _sidecar_path(path: Path) -> Path:
+    return path.with_name(path.name + ".json")
+
+
+def _validated_pixels(path: Path, pixels: Any, channel_names: Any) -> np.ndarray:
+    arr = np.asarray(pixels)
+    if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+        raise VissimInputError(f"cannot write {path}: pixels must be real numbers, got dtype {arr.dtype}")
+    if arr.ndim == 3 and arr.shape[-1] == 1:
+        arr = arr[..., 0]
+    if arr.ndim not in (2, 3):
+        raise VissimInputError(f"cannot write {path}: pixels must have shape (H, W) or (H, W, 3), got {arr.shape}")
+    if arr.ndim == 3 and arr.shape[-1] != 3:
+        raise VissimInputError(f"cannot write {path}: pixels have {arr.shape[-1]} channels; expected 1 or 3")
+    if arr.size == 0:
+        raise VissimInputError(f"cannot write {path}: pixels are empty, shape {arr.shape}")
+    arr = arr.astype(np.float32)
+    if not np.all(np.isfinite(arr)):
+        raise VissimInputError(
+            f"cannot write {path}: {int(np.sum(~np.isfinite(arr)))} "
+            "pixel values are NaN or infinite (as float32)"
+        )
+    expected = MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS
+    if channel_names is not None and tuple(channel_names) != expected:
+        raise VissimInputError(
+            f"cannot write {path}: channel_names {tuple(channel_names)} do "
+            f"not match pixels of shape {arr.shape}; expected {expected}"
+        )
+    return arr
+
+
+def write_image(
+    path: str | os.PathLike[str],
+    pixels: Any,
+    *,
+    provenance: dict | None = None,
+    overwrite: bool = False,
+    channel_names: Any = None,
+    encoding: str = "srgb",
+    bit_depth: int = 8,
+) -> Path:
+    """Write linear-light ``pixels`` to ``path``; the format follows the suffix.
+
+    Parameters
+    ----------
+    pixels:
+        Linear light, shape ``(H, W)`` or ``(H, W, 3)``; finite values only.
+    provenance:
+        JSON-safe-able dict; EXR stores it as the string attribute ``vissim_provenance``,
+        PNG/TIFF in the sidecar ``<path>.json``.
+    channel_names:
+        Optional check: must be ``("Y",)`` for mono or ``("R", "G", "B")`` for colour.
+    encoding, bit_depth:
+        PNG/TIFF only: ``"srgb"`` (default) encodes with IEC 61966-2-1, ``"linear"`` does
+        not; values are clipped to [0, 1] and rounded to ``bit_depth`` (8 or 16) bits.
+        EXR always stores linear float32.
+    """
+    path = Path(path)
+    kind = _kind(path)
+    if encoding not in ("srgb", "linear"):
+        raise VissimInputError(f"cannot write {path}: encoding must be 'srgb' or 'linear', got {encoding!r}")
+    if bit_depth not in (8, 16):
+        raise VissimInputError(f"cannot write {path}: bit_depth must be 8 or 16 bits, got {bit_depth!r}")
+    arr = _validated_pixels(path, pixels, channel_names)
+    if kind == "png" and bit_depth == 16 and arr.ndim == 3:
+        raise VissimInputError(
+            f"cannot write {path}: 16-bit colour PNG is not "
+            "supported (Pillow cannot write it); use .tif or .exr"
+        )
+    if kind == "exr":
+        _write_exr(path, arr, provenance, overwrite)
+        return path
+
+    sidecar = _sidecar_path(path)
+    if not overwrite:
+        for existing in (path, sidecar):
+            if existing.exists():
+                raise VissimInputError(f"{existing} already exists; pass overwrite=True (--overwrite) to replace it")
+    codes = _quantise(path, arr, encoding, bit_depth)
+    with atomic_output(path, overwrite=overwrite) as tmp:
+        if kind == "png":
+            _PILImage.fromarray(codes).save(tmp, format="PNG")
+        else:
+            photometric = "minisblack" if codes.ndim == 2 else "rgb"
+            tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib")
+    if provenance is not None:
+        write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
+    elif sidecar.exists():
+        sidecar.unlink()
+        logger.info("removed stale provenance sidecar %s", sidecar)
+    return path
+
+
+def _quantise(path: Path, arr: np.ndarray, encoding: str, bit_depth: int) -> np.ndarray:
+    lin = arr.astype(np.float64)
+    n_out = int(np.count_nonzero((lin < 0.0) | (lin > 1.0)))
+    if n_out:
+        logger.warning("%s: clipping %d of %d pixel values outside [0, 1]", path, n_out, lin.size)
+    encoded = srgb_encode(lin) if encoding == "srgb" else np.clip(lin, 0.0, 1.0)
+    dtype = np.uint8 if bit_depth == 8 else np.uint16
+    return np.round(encoded * np.iinfo(dtype).max).astype(dtype)
+
+
+def _write_exr(path: Path, arr: np.ndarray, provenance: dict | None, overwrite: bool) -> None:
+    names = MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS
+    planes = [arr] if arr.ndim == 2 else [arr[..., i] for i in range(3)]
+    # OpenEXR.Channel ignores strides: a non-contiguous view is written scrambled.
+    channels = {n: OpenEXR.Channel(np.ascontiguousarray(p, dtype=np.float32)) for n, p in zip(names, planes)}
+    header: dict[str, Any] = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    if provenance is not None:
+        header[PROVENANCE_ATTRIBUTE] = to_json(provenance)  # one Python str -> one EXR string attribute
+    with atomic_output(path, overwrite=overwrite) as tmp:
+        OpenEXR.File(header, channels).write(str(tmp))
+
+
+def to_preview_png(
+    path: str | os.PathLike[str],
+    pixels: Any,
+    *,
+    overwrite: bool = False,
+    provenance: dict | None = None,
+    normalise: bool = True,
+) -> Path:
+    """Write an 8-bit sRGB PNG preview (e.g. of a PSF), scaled so its maximum is 1 if ``normalise``."""
+    path = Path(path)
+    arr = _validated_pixels(path, pixels, None)
+    if normalise:
+        peak = float(arr.max())
+        if peak <= 0.0:
+            raise VissimInputError(
+                f"cannot write {path}: cannot normalise pixels "
+                f"whose maximum is {peak} (must be > 0)"
+            )
+        arr = arr / np.float32(peak)
+    return write_image(path, arr, provenance=provenance, overwrite=overwrite, encoding="srgb", bit_depth=8)

@@ -1,0 +1,241 @@
+"""Wavefront aberrations: OSA Zernike coefficients over a stated pupil, and prescriptions.
+
+A :class:`Wavefront` holds coefficients in micrometres (``opd_um``) over the pupil diameter
+on which they were measured.  Evaluating it inside a smaller pupil is exact (the
+polynomials are evaluated at ``r / R_measured``); :meth:`Wavefront.rescaled` re-expresses the
+same surface on the smaller pupil's own basis.
+
+Prescription <-> second-order Zernike uses the standard formulas (Thibos et al. 2004; Dai
+2008; ERRATA item 1), R the pupil radius in mm::
+
+    c(2,0)  = -M   R^2 / (4 sqrt 3)
+    c(2,2)  = -J0  R^2 / (2 sqrt 6)   = C R^2 cos 2a / (4 sqrt 6)
+    c(2,-2) = -J45 R^2 / (2 sqrt 6)   = C R^2 sin 2a / (4 sqrt 6)
+
+with (M, J0, J45) the power vector of the *correcting lens* (:class:`Prescription`), so a
+myopic eye (negative sphere) has c(2,0) > 0: its wavefront, leaving the eye, leads at the
+pupil's edge (OSA sign: W > 0 is phase advance).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+
+from vissim.errors import VissimInputError
+from vissim.prescription import Prescription, RefractiveError
+from vissim.zernike import zernike_nm
+
+__all__ = ["Wavefront", "prescription_to_zernike_um", "zernike_um_to_prescription", "parse_zernike_terms"]
+
+_SQRT3 = math.sqrt(3.0)
+_SQRT6 = math.sqrt(6.0)
+
+
+def _check_pupil(pupil_diameter_mm: float, name: str = "pupil diameter") -> float:
+    try:
+        value = float(pupil_diameter_mm)
+    except (TypeError, ValueError):
+        raise VissimInputError(f"{name} must be a number in mm, got {pupil_diameter_mm!r}") from None
+    if not math.isfinite(value) or value <= 0.0:
+        raise VissimInputError(f"{name} must be a positive number of mm, got {pupil_diameter_mm!r} mm")
+    return value
+
+
+def _as_prescription(rx) -> Prescription:
+    if isinstance(rx, Prescription):
+        return rx
+    if isinstance(rx, RefractiveError):
+        raise TypeError(
+            "got the eye's RefractiveError where a Prescription (correcting lens) is expected; "
+            "convert explicitly with .prescription()"
+        )
+    raise TypeError(f"expected a Prescription, got {type(rx).__name__}")
+
+
+def prescription_to_zernike_um(rx: Prescription, pupil_diameter_mm: float) -> dict[tuple[int, int], float]:
+    """Second-order OSA coefficients (µm) of the eye that ``rx`` corrects, over the pupil."""
+    rx = _as_prescription(rx)
+    radius_sq = (_check_pupil(pupil_diameter_mm) / 2.0) ** 2
+    m, j0, j45 = rx.power_vector()
+    return {
+        (2, -2): -j45 * radius_sq / (2.0 * _SQRT6),
+        (2, 0): -m * radius_sq / (4.0 * _SQRT3),
+        (2, 2): -j0 * radius_sq / (2.0 * _SQRT6),
+    }
+
+
+def zernike_um_to_prescription(coefficients_um: Mapping[tuple[int, int], float], pupil_diameter_mm: float) -> Prescription:
+    """The correcting lens from the second-order coefficients (higher orders ignored)."""
+    radius_sq = (_check_pupil(pupil_diameter_mm) / 2.0) ** 2
+    c2m2 = float(coefficients_um.get((2, -2), 0.0))
+    c20 = float(coefficients_um.get((2, 0), 0.0))
+    c22 = float(coefficients_um.get((2, 2), 0.0))
+    return Prescription.from_power_vector(
+        -4.0 * _SQRT3 * c20 / radius_sq,
+        -2.0 * _SQRT6 * c22 / radius_sq,
+        -2.0 * _SQRT6 * c2m2 / radius_sq,
+    )
+
+
+_TERM_RE = re.compile(r"^\s*(?P<n>[+-]?\d+)\s*,\s*(?P<m>[+-]?\d+)\s*=\s*(?P<value>\S+)\s*$")
+
+
+def parse_zernike_terms(text: str) -> dict[tuple[int, int], float]:
+    """Parse ``"n,m=µm;n,m=µm"`` (e.g. ``"2,0=0.5;4,0=0.1"``); repeated terms add up."""
+    if not isinstance(text, str) or not text.strip():
+        raise VissimInputError("Zernike terms must look like '2,0=0.5;4,0=0.1' (n,m=coefficient in µm)")
+    terms: dict[tuple[int, int], float] = {}
+    for part in filter(None, (p.strip() for p in text.split(";"))):
+        match = _TERM_RE.match(part)
+        if match is None:
+            raise VissimInputError(f"cannot read Zernike term {part!r}: expected 'n,m=µm' such as '2,0=0.5'")
+        try:
+            value = float(match.group("value"))
+        except ValueError:
+            raise VissimInputError(f"Zernike term {part!r}: {match.group('value')!r} is not a number of µm") from None
+        if not math.isfinite(value):
+            raise VissimInputError(f"Zernike term {part!r}: coefficient must be finite µm")
+        key = (int(match.group("n")), int(match.group("m")))
+        zernike_nm(*key, np.zeros(1), np.zeros(1))  # validates (n, m)
+        terms[key] = terms.get(key, 0.0) + value
+    return terms
+
+
+@dataclass(frozen=True, eq=False)
+class Wavefront:
+    """OSA Zernike expansion of a wavefront error, in µm, over ``pupil_diameter_mm``.
+
+    ``coefficients_um`` maps ``(n, m)`` to the coefficient in micrometres.
+    """
+
+    coefficients_um: Mapping[tuple[int, int], float]
+    pupil_diameter_mm: float
+    _items: tuple = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        diameter = _check_pupil(self.pupil_diameter_mm, "measurement pupil diameter")
+        clean: dict[tuple[int, int], float] = {}
+        for key, value in dict(self.coefficients_um).items():
+            n, m = (int(k) for k in key)
+            zernike_nm(n, m, np.zeros(1), np.zeros(1))  # validates (n, m)
+            value = float(value)
+            if not math.isfinite(value):
+                raise VissimInputError(f"Zernike coefficient ({n},{m}) must be finite µm, got {value!r}")
+            if value != 0.0:
+                clean[(n, m)] = clean.get((n, m), 0.0) + value
+        object.__setattr__(self, "coefficients_um", MappingProxyType(dict(sorted(clean.items()))))
+        object.__setattr__(self, "pupil_diameter_mm", diameter)
+        object.__setattr__(self, "_items", tuple(self.coefficients_um.items()))
+
+    # -- construction -----------------------------------------------------------------
+    @classmethod
+    def from_prescription(cls, rx: Prescription, pupil_diameter_mm: float) -> Wavefront:
+        return cls(prescription_to_zernike_um(rx, pupil_diameter_mm), pupil_diameter_mm)
+
+    @classmethod
+    def parse(cls, text: str, pupil_diameter_mm: float) -> Wavefront:
+        return cls(parse_zernike_terms(text), pupil_diameter_mm)
+
+    @classmethod
+    def zero(cls, pupil_diameter_mm: float) -> Wavefront:
+        return cls({}, pupil_diameter_mm)
+
+    def __add__(self, other: Wavefront) -> Wavefront:
+        if not isinstance(other, Wavefront):
+            return NotImplemented
+        if other.pupil_diameter_mm != self.pupil_diameter_mm:
+            other = other.rescaled(self.pupil_diameter_mm) if other.pupil_diameter_mm > self.pupil_diameter_mm else other
+            if other.pupil_diameter_mm != self.pupil_diameter_mm:
+                raise VissimInputError(
+                    f"cannot add wavefronts over {self.pupil_diameter_mm:g} mm and {other.pupil_diameter_mm:g} mm pupils"
+                )
+        merged = dict(self.coefficients_um)
+        for key, value in other.coefficients_um.items():
+            merged[key] = merged.get(key, 0.0) + value
+        return Wavefront(merged, self.pupil_diameter_mm)
+
+    def with_defocus_diopters(self, extra_sphere_diopters: float) -> Wavefront:
+        """Add a spherical *prescription* change (negative = more myopic eye) at this pupil."""
+        return self + Wavefront.from_prescription(Prescription(extra_sphere_diopters), self.pupil_diameter_mm)
+
+    # -- queries ----------------------------------------------------------------------
+    def to_prescription(self) -> Prescription:
+        return zernike_um_to_prescription(self.coefficients_um, self.pupil_diameter_mm)
+
+    @property
+    def rms_um(self) -> float:
+        """RMS over the measurement pupil, piston excluded (unit-RMS basis)."""
+        return math.sqrt(sum(v * v for (n, _), v in self._items if n > 0))
+
+    @property
+    def max_order(self) -> int:
+        return max((n for n, _ in self.coefficients_um), default=0)
+
+    def opd_um(self, x_mm: np.ndarray, y_mm: np.ndarray) -> np.ndarray:
+        """Wavefront error (µm) at pupil points in mm, OSA frame (+x examiner's right, +y up).
+
+        Points outside the measurement pupil get the polynomial continuation; mask them.
+        """
+        x = np.asarray(x_mm, dtype=float)
+        y = np.asarray(y_mm, dtype=float)
+        radius = self.pupil_diameter_mm / 2.0
+        rho = np.hypot(x, y) / radius
+        theta = np.arctan2(y, x)
+        out = np.zeros(np.broadcast(x, y).shape)
+        for (n, m), value in self._items:
+            out += value * zernike_nm(n, m, rho, theta)
+        return out
+
+    def slopes_mrad(self, x_mm: np.ndarray, y_mm: np.ndarray, step_mm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(dW/dx, dW/dy) in µm/mm = mrad, by central differences of the analytic expansion."""
+        h = step_mm if step_mm is not None else 1e-5 * self.pupil_diameter_mm
+        x = np.asarray(x_mm, dtype=float)
+        y = np.asarray(y_mm, dtype=float)
+        dwdx = (self.opd_um(x + h, y) - self.opd_um(x - h, y)) / (2.0 * h)
+        dwdy = (self.opd_um(x, y + h) - self.opd_um(x, y - h)) / (2.0 * h)
+        return dwdx, dwdy
+
+    def rescaled(self, pupil_diameter_mm: float) -> Wavefront:
+        """The same surface expanded over a smaller, concentric pupil (exact for polynomials).
+
+        Solved by least squares on a polar grid dense enough for the highest order; a pupil
+        larger than the measurement pupil is refused (extrapolation is not a measurement).
+        """
+        new = _check_pupil(pupil_diameter_mm, "calculation pupil diameter")
+        if new > self.pupil_diameter_mm * (1 + 1e-12):
+            raise VissimInputError(
+                f"calculation pupil {new:g} mm is larger than the {self.pupil_diameter_mm:g} mm pupil "
+                "the coefficients were measured over; Zernike coefficients cannot be extrapolated"
+            )
+        if not self._items or new == self.pupil_diameter_mm:
+            return Wavefront(dict(self.coefficients_um), new)
+        order = self.max_order
+        keys = [(n, m) for n in range(order + 1) for m in range(-n, n + 1, 2)]
+        n_r, n_t = 2 * order + 4, 4 * order + 8
+        rho = np.sqrt((np.arange(n_r) + 0.5) / n_r)  # equal-area rings
+        theta = 2 * np.pi * (np.arange(n_t) + 0.5) / n_t
+        rr, tt = np.meshgrid(rho, theta, indexing="ij")
+        radius = new / 2.0
+        target = self.opd_um(radius * rr * np.cos(tt), radius * rr * np.sin(tt)).ravel()
+        basis = np.stack([zernike_nm(n, m, rr, tt).ravel() for n, m in keys], axis=1)
+        solution, *_ = np.linalg.lstsq(basis, target, rcond=None)
+        scale = max(1e-12, float(np.max(np.abs(solution))))
+        return Wavefront(
+            {k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new
+        )
+
+    def as_json(self) -> dict:
+        return {
+            "pupil_diameter_mm": self.pupil_diameter_mm,
+            "zernike_um": {f"{n},{m}": v for (n, m), v in self._items},
+        }
+
+    def __repr__(self) -> str:
+        terms = ", ".join(f"({n},{m})={v:.6g}" for (n, m), v in self._items)
+        return f"Wavefront({{{terms}}} um over {self.pupil_diameter_mm:g} mm)"
