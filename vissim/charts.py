@@ -461,7 +461,7 @@ def save_chart_pdf(
         top, left, bottom, _ = box.box_mm
         for patch in sloan_letter(box.letter).patches((left, height_mm - bottom), bottom - top,
                                                       facecolor=letter_colour):
-            ax.add_patch(patch)
+            ax.add_artist(patch)  # add_artist: no autoscaling pass over every vertex
     metadata = {"Title": f"vissim LogMAR chart for {spec.viewing_distance_m:g} m", "Creator": "vissim"}
     if provenance is not None:
         metadata["Keywords"] = to_json(provenance)

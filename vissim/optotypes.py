@@ -17,8 +17,13 @@ The shapes are built from the published design rules, not traced from a font fil
   radii 0.5 / 1.5, centred at (3.5, 3.5)) and a straight leg from (2.5, 2) to the lower-right
   corner.  **S** bars at y = 4..5, 2..3, 0..1 joined by two half-annulus bowls (radii 0.5 / 1.5),
   the upper one on the left, the lower one on the right.
-* **K**, **N**, **V**, **Z** slanted strokes, each a parallelogram with horizontal ends whose
-  *perpendicular* width is exactly 1 unit (see :func:`_slanted_stroke`).
+* Slanted strokes are parallelograms with horizontal ends whose *perpendicular* width is
+  exactly 1 unit (:func:`_slanted_stroke`).  **N**: two stems and a diagonal whose outer
+  corners are the top-left (0, 5) and bottom-right (5, 0).  **V**: two strokes from the top
+  corners meeting in a flat foot centred at x = 2.5.  **Z**: bars at y = 4..5 and 0..1 and a
+  diagonal from the top bar's right end to the bottom bar's left end.  **K**: a stem, an arm
+  from the stem (upper edge meeting it at y = 2.5) to the top-right corner, and a leg from
+  the arm's lower edge (at x = 2) to the bottom-right corner.
 
 Each letter is a union of primitives -- convex polygons and annuli clipped to a convex
 polygon -- with (a) an exact vectorised :meth:`SloanLetter.inside` test and (b)

@@ -1,0 +1,125 @@
+"""The rx, psf, blur and demo commands, as a user runs them."""
+
+import json
+
+import numpy as np
+import pytest
+
+from vissim.cli import main
+from vissim.imageio import read_image, write_image
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_rx_json_shape(capsys):
+    code, out, _ = run(capsys, "rx", "-2.00/-1.25x180", "--pupil-mm", "6", "--json")
+    assert code == 0
+    info = json.loads(out)
+    assert info["sphere_diopters"] == -2.0 and info["cylinder_diopters"] == -1.25 and info["axis_deg"] == 180
+    assert info["spherical_equivalent_diopters"] == pytest.approx(-2.625)
+    assert info["M_diopters"] == pytest.approx(-2.625) and info["J0_diopters"] == pytest.approx(0.625)
+    assert info["J45_diopters"] == pytest.approx(0.0)
+    assert set(info["zernike_um"]) == {"2,-2", "2,0", "2,2"}
+    assert info["zernike_um"]["2,0"] > 0  # a myope
+
+
+def test_rx_plus_cylinder_is_reported_in_minus_cylinder(capsys):
+    _, out, _ = run(capsys, "rx", "+0.50 +1.00 x 90", "--json")
+    info = json.loads(out)
+    assert (info["sphere_diopters"], info["cylinder_diopters"], info["axis_deg"]) == (1.5, -1.0, 180.0)
+
+
+@pytest.mark.parametrize("bad", ["-2.00 -1.25 x 200", "-2.00 -1.25", "abc"])
+def test_rx_bad_input_is_one_line_and_exit_2(capsys, bad):
+    code, out, err = run(capsys, "rx", bad)
+    assert code == 2 and out == ""
+    assert err.startswith("vissim: error:") and err.count("\n") == 1
+
+
+def test_psf_writes_a_unit_sum_y_exr_with_its_sampling(capsys, tmp_path):
+    target = tmp_path / "psf.exr"
+    code, out, _ = run(capsys, "psf", "--rx", "-1.00 DS", "--pupil-mm", "3", "--arcmin-per-px", "0.5", "--size", "64", "-o", str(target))
+    assert code == 0 and "wrote" in out
+    image = read_image(target)
+    assert image.channel_names == ("Y",) and image.pixels.dtype == np.float32
+    assert float(image.pixels.sum(dtype=np.float64)) == pytest.approx(1.0, abs=1e-5)
+    psf_info = image.provenance["inputs"]["psf"]
+    assert psf_info["arcmin_per_px"] == 0.5 and psf_info["pupil_diameter_mm"] == 3.0
+    # refuses to overwrite
+    code, _, err = run(capsys, "psf", "--rx", "-1.00 DS", "--pupil-mm", "3", "--size", "64", "--arcmin-per-px", "0.5", "-o", str(target))
+    assert code == 2 and "already exists" in err
+
+
+def test_psf_png_preview_and_zernike_with_prescription_terms(capsys, tmp_path):
+    target = tmp_path / "psf.png"
+    code, _, _ = run(
+        capsys, "psf", "--zernike", "2,0=0.2;2,2=-0.1;4,0=0.05", "--pupil-mm", "3", "--size", "64",
+        "--arcmin-per-px", "0.5", "--mode", "geometric", "-o", str(target),
+    )
+    assert code == 0 and target.exists() and (tmp_path / "psf.exr").exists()
+
+
+@pytest.mark.parametrize("rx", ["+0.00 DS", "plano"])
+def test_psf_of_no_aberration(capsys, tmp_path, rx):
+    code, _, _ = run(capsys, "psf", "--rx", rx, "--pupil-mm", "3", "--size", "32", "-o", str(tmp_path / "a.exr"))
+    assert code == 0
+
+
+def test_psf_field_too_small_is_a_clear_error(capsys, tmp_path):
+    code, _, err = run(capsys, "psf", "--rx", "-4 DS", "--pupil-mm", "6", "--size", "32", "--arcmin-per-px", "1", "-o", str(tmp_path / "a.exr"))
+    assert code == 2 and "at least" in err
+
+
+def test_blur_uses_the_sampling_in_the_image_provenance(capsys, tmp_path):
+    source = tmp_path / "in.exr"
+    image = np.full((64, 64), 0.9, np.float32)
+    image[20:44, 28:36] = 0.04
+    write_image(source, image, provenance={"inputs": {"arcmin_per_px": 1.0}})
+    target = tmp_path / "out.exr"
+    code, _, _ = run(capsys, "blur", str(source), "-o", str(target), "--rx", "-2.00 DS", "--pupil-mm", "3")
+    assert code == 0
+    blurred = read_image(target).pixels
+    assert float(blurred.mean()) == pytest.approx(float(image.mean()), rel=1e-5)
+    assert blurred[32, 24] < 0.9 - 0.05  # light spread into the bar's surround
+    # without a sampling anywhere: a clear error
+    bare = tmp_path / "bare.exr"
+    write_image(bare, image)
+    code, _, err = run(capsys, "blur", str(bare), "-o", str(tmp_path / "x.exr"), "--rx", "-2 DS", "--pupil-mm", "3")
+    assert code == 2 and "--arcmin-per-px" in err
+
+
+def test_blur_rgb_with_channel_wavelengths_and_lca(capsys, tmp_path):
+    source = tmp_path / "rgb.exr"
+    rgb = np.zeros((48, 48, 3), np.float32)
+    rgb[24, 24] = 1.0
+    write_image(source, rgb)
+    target = tmp_path / "rgb_out.exr"
+    code, _, _ = run(
+        capsys, "blur", str(source), "-o", str(target), "--rx", "plano", "--pupil-mm", "3",
+        "--arcmin-per-px", "0.5", "--channels-nm", "610,550,465", "--lca",
+    )
+    assert code == 0
+    out = read_image(target).pixels
+    # The eye is in focus for green: the green spot is the most compact.
+    assert out[24, 24, 1] > out[24, 24, 0] and out[24, 24, 1] > out[24, 24, 2]
+
+
+def test_demo_writes_its_files(capsys, tmp_path):
+    code, out, _ = run(capsys, "demo", "-o", str(tmp_path / "demo"))
+    assert code == 0
+    summary = json.loads((tmp_path / "demo" / "summary.json").read_text())
+    for case in summary["cases"].values():
+        assert case["mean_after"] == pytest.approx(case["mean_before"], rel=1e-5)
+    assert (tmp_path / "demo" / "chart_astigmatism.png").exists()
+
+
+def test_every_command_has_help(capsys):
+    for command in ("rx", "trial-lens", "psf", "blur", "demo", "chart"):
+        with pytest.raises(SystemExit) as info:
+            main([command, "--help"])
+        assert info.value.code == 0
+        assert "usage" in capsys.readouterr().out
