@@ -26,7 +26,7 @@ from vissim.charts import (
 from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
-from vissim.optotypes import SLOAN_LETTERS, rasterize_letter
+from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window
 
 THESIS = etdrs_chart_spec()  # LogMAR 1.0 .. -0.3 at 0.9144 m (Krueger 2015, section 4.1)
 
@@ -103,7 +103,7 @@ def test_every_box_holds_all_of_its_letters_ink_and_no_other(thesis_chart):
         window = (slice(math.floor(t), math.ceil(bot)), slice(math.floor(l), math.ceil(r)))
         assert np.all(owner[window] == -1), f"box {i} overlaps another"
         owner[window] = i
-        solo = rasterize_letter(b.letter, b.height_px, ink.shape, b.center_rc)
+        _, _, solo = letter_coverage_window(b.letter, b.height_px, ink.shape, b.center_rc)
         assert ink[window].sum() == pytest.approx(solo.sum(), rel=1e-5, abs=1e-3)
     assert np.abs(ink[owner == -1]).max() < 1e-6  # no ink outside every box
 

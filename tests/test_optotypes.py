@@ -99,7 +99,7 @@ def test_ink_area_matches_analytic_area(name, area):
         assert cov.sum() / height_px**2 == pytest.approx(area / 25.0, rel=0.005)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=30, deadline=None)
 @given(
     st.sampled_from(SLOAN_LETTERS),
     st.floats(min_value=10.0, max_value=60.0),

@@ -432,7 +432,7 @@ def optotype_tile(
 
 
 def save_chart_pdf(
-    spec: ChartSpec, path: str | os.PathLike[str], *, overwrite: bool = False, provenance: dict | None = None
+    spec: ChartSpec, path: str | os.PathLike[str], overwrite: bool = False, *, provenance: dict | None = None
 ) -> Path:
     """Write ``spec`` as a vector PDF whose page is the chart's physical size; return the path.
 

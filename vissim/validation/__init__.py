@@ -1,0 +1,1 @@
+"""The validation harness: Fourier vs ray-traced vs RAW captures."""
