@@ -229,3 +229,14 @@ def test_bad_inputs_name_the_value_and_unit():
     ):
         with pytest.raises(VissimInputError, match=fragment):
             compute_psf(front, **kwargs)
+
+
+def test_gaussian_band_is_a_normalised_symmetric_weighting():
+    from vissim.chromatic import gaussian_band
+
+    wavelengths, weights = gaussian_band(550, 40, samples=7)
+    assert sum(weights) == pytest.approx(1.0)
+    assert wavelengths[3] == 550 and wavelengths[0] == 510 and wavelengths[-1] == 590
+    assert weights[0] == pytest.approx(weights[-1]) and weights[3] == max(weights)
+    # at +-FWHM/2 the Gaussian is half its peak; the samples at +-FWHM are at 1/16.
+    assert weights[0] / weights[3] == pytest.approx(1 / 16)

@@ -20,6 +20,8 @@ import math
 import re
 
 from vissim.errors import VissimInputError
+from vissim.validate import finite_number as _finite
+from vissim.validate import positive_number as _positive
 from vissim.units import arcmin_to_rad, rad_to_arcmin
 
 __all__ = [
@@ -45,23 +47,6 @@ THESIS_VIEWING_DISTANCE_M = 0.9144
 _MAX_ABS_LOGMAR = 300.0
 
 _SNELLEN = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*/\s*([0-9]*\.?[0-9]+)\s*$")
-
-
-def _finite(value: float, name: str, unit: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"{name} must be a number ({unit}), got {value!r}") from None
-    if not math.isfinite(value):
-        raise VissimInputError(f"{name} must be finite ({unit}), got {value}")
-    return value
-
-
-def _positive(value: float, name: str, unit: str) -> float:
-    value = _finite(value, name, unit)
-    if value <= 0.0:
-        raise VissimInputError(f"{name} must be > 0 {unit}, got {value:g}")
-    return value
 
 
 def logmar_to_decimal(logmar: float) -> float:

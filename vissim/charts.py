@@ -37,6 +37,7 @@ import numpy as np
 from vissim.acuity import THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, letter_height_mm, logmar_to_snellen
 from vissim.acuity import subtense_arcmin, subtense_mm
 from vissim.errors import VissimInputError
+from vissim.validate import finite_number, positive_number
 from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window, sloan_letter
 
 logger = logging.getLogger(__name__)
@@ -73,13 +74,7 @@ _BOX_KEYS = ("top", "left", "bottom", "right")
 
 
 def _number(value: Any, name: str, unit: str, *, positive: bool = False) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"{name} must be a number ({unit}), got {value!r}") from None
-    if not math.isfinite(value) or (positive and value <= 0.0):
-        raise VissimInputError(f"{name} must be {'finite and > 0' if positive else 'finite'} ({unit}), got {value}")
-    return value
+    return positive_number(value, name, unit) if positive else finite_number(value, name, unit)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -16,7 +16,7 @@ import math
 
 from vissim.errors import VissimInputError
 
-__all__ = ["chromatic_difference_of_refraction_diopters", "THIBOS_1992"]
+__all__ = ["chromatic_difference_of_refraction_diopters", "gaussian_band", "THIBOS_1992"]
 
 THIBOS_1992 = {"p": 1.68524, "q": 0.63346, "c_um": 0.21410}
 
@@ -33,3 +33,21 @@ def _thibos_rx(wavelength_nm: float) -> float:
 def chromatic_difference_of_refraction_diopters(wavelength_nm: float, reference_nm: float = 550.0) -> float:
     """Prescription-sphere change at ``wavelength_nm`` relative to ``reference_nm`` (D)."""
     return _thibos_rx(wavelength_nm) - _thibos_rx(reference_nm)
+
+
+def gaussian_band(center_nm: float, fwhm_nm: float, samples: int = 7) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A Gaussian spectral weighting: ``samples`` wavelengths over +-FWHM and their weights.
+
+    A simple stand-in for a colour channel's spectral sensitivity (e.g. FWHM 40 nm); pass the
+    result to :func:`vissim.psf.compute_psf` as ``wavelength_nm`` and ``weights``.
+    """
+    center, fwhm = float(center_nm), float(fwhm_nm)
+    if not (math.isfinite(center) and math.isfinite(fwhm)) or fwhm <= 0:
+        raise VissimInputError(f"a spectral band needs a finite centre and a positive FWHM in nm, got {center_nm!r}, {fwhm_nm!r}")
+    if int(samples) != samples or samples < 3:
+        raise VissimInputError(f"a spectral band needs at least 3 samples, got {samples!r}")
+    sigma = fwhm / (2.0 * math.sqrt(2.0 * math.log(2.0)))
+    offsets = [fwhm * (2.0 * k / (samples - 1) - 1.0) for k in range(samples)]
+    weights = [math.exp(-0.5 * (d / sigma) ** 2) for d in offsets]
+    total = sum(weights)
+    return tuple(center + d for d in offsets), tuple(w / total for w in weights)

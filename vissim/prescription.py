@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import Self
 
 from vissim.errors import VissimInputError
+from vissim.validate import finite_number as _finite
 
 __all__ = [
     "SpheroCylinder",
@@ -52,16 +53,6 @@ _RX_RE = re.compile(
     \s*$""",
     re.IGNORECASE | re.VERBOSE,
 )
-
-
-def _finite(value: float, name: str, unit: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"{name} must be a number in {unit}, got {value!r}") from None
-    if not math.isfinite(value):
-        raise VissimInputError(f"{name} must be finite (in {unit}), got {value!r}")
-    return value
 
 
 def _normalise_axis(axis_deg: float) -> float:

@@ -32,6 +32,7 @@ import scipy.fft
 
 from vissim.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.errors import FieldTooSmallError, VissimInputError
+from vissim.validate import positive_number as _check_positive
 from vissim.units import arcmin_to_rad, nm_to_mm, nm_to_um, rad_to_arcmin
 from vissim.wavefront import Wavefront
 from vissim.zernike import zernike_nm
@@ -321,16 +322,6 @@ def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin):
     edges = np.arange(size_px + 1) - size_px // 2 - 0.5
     counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
     return counts / keep.sum(), None
-
-
-def _check_positive(value, name, unit):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"{name} must be a number in {unit}, got {value!r}") from None
-    if not math.isfinite(value) or value <= 0:
-        raise VissimInputError(f"{name} must be a positive number of {unit}, got {value!r}")
-    return value
 
 
 def compute_psf(

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.errors import VissimInputError
+from vissim.validate import finite_number as _number
 from vissim.prescription import LensPower, Prescription
 
 __all__ = [
@@ -68,16 +69,6 @@ _SINGULAR_TOL = 1e-12
 def _mm_to_m(length_mm: float) -> float:
     """The one millimetre-to-metre conversion of this module."""
     return length_mm / 1000.0
-
-
-def _number(value, name: str, unit: str, *, allow_inf: bool = False) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"{name} must be a number in {unit}, got {value!r}") from None
-    if math.isnan(number) or (math.isinf(number) and not allow_inf):
-        raise VissimInputError(f"{name} must be finite (in {unit}), got {value!r}")
-    return number
 
 
 def _as_tuple(matrix: np.ndarray) -> Matrix2:

@@ -28,6 +28,7 @@ from types import MappingProxyType
 import numpy as np
 
 from vissim.errors import VissimInputError
+from vissim.validate import positive_number
 from vissim.prescription import Prescription, RefractiveError
 from vissim.zernike import zernike_nm
 
@@ -38,13 +39,7 @@ _SQRT6 = math.sqrt(6.0)
 
 
 def _check_pupil(pupil_diameter_mm: float, name: str = "pupil diameter") -> float:
-    try:
-        value = float(pupil_diameter_mm)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"{name} must be a number in mm, got {pupil_diameter_mm!r}") from None
-    if not math.isfinite(value) or value <= 0.0:
-        raise VissimInputError(f"{name} must be a positive number of mm, got {pupil_diameter_mm!r} mm")
-    return value
+    return positive_number(pupil_diameter_mm, name, "mm")
 
 
 def _as_prescription(rx) -> Prescription:

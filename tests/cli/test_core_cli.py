@@ -123,3 +123,17 @@ def test_every_command_has_help(capsys):
             main([command, "--help"])
         assert info.value.code == 0
         assert "usage" in capsys.readouterr().out
+
+
+def test_blur_with_spectral_bands_per_channel(capsys, tmp_path):
+    source = tmp_path / "rgb.exr"
+    rgb = np.zeros((48, 48, 3), np.float32)
+    rgb[24, 24] = 1.0
+    write_image(source, rgb)
+    code, _, _ = run(
+        capsys, "blur", str(source), "-o", str(tmp_path / "o.exr"), "--rx", "plano", "--pupil-mm", "3",
+        "--arcmin-per-px", "0.5", "--channel-fwhm-nm", "40", "--lca",
+    )
+    assert code == 0
+    info = read_image(tmp_path / "o.exr").provenance["inputs"]["psfs"]
+    assert len(info) == 3 and all(len(p["wavelengths_nm"]) == 7 for p in info)

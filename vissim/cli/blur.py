@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from vissim.blur import PADDING_MODES, blur_image
+from vissim.chromatic import gaussian_band
 from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
@@ -36,6 +37,12 @@ def add_parser(subparsers) -> None:
     colour = parser.add_mutually_exclusive_group()
     colour.add_argument("--wavelength-nm", metavar="NM[,NM...]", help="wavelength(s) for every channel (default 550)")
     colour.add_argument("--channels-nm", metavar="R,G,B", help="one wavelength per RGB channel (default 610,550,465)")
+    parser.add_argument(
+        "--channel-fwhm-nm",
+        type=float,
+        metavar="W",
+        help="spectral weighting per channel: a Gaussian band of this FWHM around each channel's wavelength",
+    )
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
     parser.add_argument("--lca-reference-nm", type=float, default=550.0, metavar="NM", help="in-focus wavelength for --lca")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="PSF optics (default wave)")
@@ -76,15 +83,23 @@ def run(args: argparse.Namespace) -> int:
     else:
         per_channel = [[w] for w in DEFAULT_CHANNELS_NM]
     lca = args.lca_reference_nm if args.lca else None
-    psfs, cache = [], {}
+    bands = []
     for wavelengths in per_channel:
-        key = tuple(wavelengths)
+        if args.channel_fwhm_nm is not None:
+            if len(wavelengths) != 1:
+                raise VissimInputError("--channel-fwhm-nm needs one centre wavelength per channel")
+            bands.append(gaussian_band(wavelengths[0], args.channel_fwhm_nm))
+        else:
+            bands.append((tuple(wavelengths), None))
+    psfs, cache = [], {}
+    for wavelengths, weights in bands:
+        key = (wavelengths, weights)
         if key not in cache:
             size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
             size = min(size, 2 * max(image.pixels.shape[:2]) + 1)
             cache[key] = compute_psf(
-                wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca,
-                arcmin_per_px=step, size_px=size, mode=args.mode,
+                wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
+                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode,
             )
         psfs.append(cache[key])
     blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)
