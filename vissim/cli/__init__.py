@@ -25,6 +25,8 @@ COMMAND_MODULES = (
     "vissim.cli.chart",
     "vissim.cli.blur",
     "vissim.cli.demo",
+    "vissim.cli.render",
+    "vissim.cli.validate",
 )
 
 

@@ -1,0 +1,27 @@
+"""A stand-in for the Mitsuba bench in harness tests: magnification, geometric blur, seeded noise.
+
+Picklable (module level) so process pools and Dask workers can run it.
+"""
+
+import numpy as np
+
+from vissim.blur import blur_image
+from vissim.charts import optotype_tile
+from vissim.psf import compute_psf, suggested_size_px
+from vissim.trial_lens import TrialLensSetup, entrance_pupil_diameter_mm, trial_lens_effect
+from vissim.validation.simulate import magnify
+from vissim.wavefront import Wavefront
+
+def fake_render(spec):
+    tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=spec.arcmin_per_px, shape_px=spec.tile_px,
+                         polarity=spec.polarity, viewing_distance_m=spec.chart_distance_m).pixels
+    if spec.lenses:
+        effect = trial_lens_effect(TrialLensSetup(spec.lenses, vertex_distance_mm=spec.vertex_distance_mm,
+                                                  object_distance_m=spec.chart_distance_m))
+        front = Wavefront.from_prescription(effect.camera_prescription,
+                                            entrance_pupil_diameter_mm(spec.focal_length_mm, spec.f_number))
+        psf = compute_psf(front, arcmin_per_px=spec.arcmin_per_px, size_px=suggested_size_px(front, spec.arcmin_per_px),
+                          mode="geometric")
+        tile = blur_image(magnify(tile, effect.magnification_matrix), psf, arcmin_per_px=spec.arcmin_per_px, padding="edge")
+    rng = np.random.default_rng(spec.seed)
+    return (tile + rng.normal(0, 0.005, tile.shape)).astype(np.float32)

@@ -1,0 +1,121 @@
+"""One campaign item: simulations against the ground truth, with metrics, maps and images."""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from vissim.atomic import write_json_atomic
+from vissim.charts import optotype_tile
+from vissim.imageio import write_image
+from vissim.validation.campaign import CampaignSettings, Configuration
+from vissim.validation.metrics import compare_images, noise_floor
+from vissim.validation.registration import register
+from vissim.validation.renders import bench_lenses
+from vissim.validation.simulate import add_bench_diffraction, simulate, simulation_setup
+
+__all__ = ["compute_item", "synthetic_tile"]
+
+log = logging.getLogger(__name__)
+
+#: Registration may not move an image further than this (px); more means a wrong crop.
+MAX_SHIFT_PX = 6.0
+
+
+def synthetic_tile(configuration: Configuration, settings: CampaignSettings) -> np.ndarray:
+    """The synthetic chart tile: the same letter, size and contrast the bench shows."""
+    return optotype_tile(
+        configuration.letter,
+        configuration.logmar,
+        arcmin_per_px=settings.arcmin_per_px,
+        shape_px=tuple(settings.tile_px),
+        polarity=configuration.polarity,
+        viewing_distance_m=settings.chart_distance_m,
+    ).pixels
+
+
+def _save(item_dir: Path, name: str, pixels: np.ndarray, preview: bool = True) -> str:
+    write_image(item_dir / f"{name}.exr", np.asarray(pixels, np.float32), overwrite=True)
+    if preview:
+        write_image(item_dir / f"{name}.png", np.clip(np.asarray(pixels, np.float32), 0, 1), overwrite=True)
+    return f"items/{item_dir.name}/{name}.exr"
+
+
+def compute_item(
+    key: str,
+    configuration: Configuration,
+    settings: CampaignSettings,
+    truth_a: np.ndarray,
+    truth_b: np.ndarray,
+    no_lens: np.ndarray,
+    item_dir: Path,
+    *,
+    render_keys: list[str] | None = None,
+) -> dict:
+    """Compare every requested simulation with the ground truth; write images and result.json."""
+    started = time.perf_counter()
+    lenses = bench_lenses(configuration, settings)
+    truth_wave_a = add_bench_diffraction(truth_a, configuration, settings)
+    truth_wave_b = add_bench_diffraction(truth_b, configuration, settings)
+    references = {"geometric": truth_a, "wave": truth_wave_a}
+    floors = {
+        "geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
+        "wave": noise_floor(truth_wave_a, truth_wave_b, settings.data_range).as_json(),
+    }
+    inputs = {"render": no_lens, "synthetic": synthetic_tile(configuration, settings)}
+    images = {
+        "truth": _save(item_dir, "truth", truth_a),
+        "truth_diffracted": _save(item_dir, "truth_diffracted", truth_wave_a),
+        "no_lens_render": _save(item_dir, "no_lens_render", no_lens),
+        "synthetic": _save(item_dir, "synthetic", inputs["synthetic"]),
+    }
+    comparisons = []
+    for kind in settings.simulations:
+        setup = simulation_setup(kind, lenses, configuration, settings)
+        reference_kind = "geometric" if kind == "geometric" else "wave"
+        reference = references[reference_kind]
+        for input_name in settings.inputs:
+            simulated = simulate(setup, inputs[input_name], settings)
+            registration = register(reference, simulated, upsample_factor=100)
+            if math.hypot(*registration.shift_px) > MAX_SHIFT_PX:
+                log.warning("%s: %s/%s registered by %.1f px (> %.0f): check the crop", configuration.name, kind,
+                            input_name, math.hypot(*registration.shift_px), MAX_SHIFT_PX)
+            comparison = compare_images(reference, registration.registered, data_range=settings.data_range)
+            stem = f"{kind}_{input_name}"
+            comparisons.append(
+                {
+                    "simulation": kind,
+                    "input": input_name,
+                    "reference_kind": reference_kind,
+                    "reference_image": "truth" if reference_kind == "geometric" else "truth_diffracted",
+                    "setup": setup.as_json(),
+                    "registration": registration.as_json(),
+                    "metrics": comparison.as_json(),
+                    "images": {
+                        "simulation": _save(item_dir, stem, registration.registered),
+                        "ssim_map": _save(item_dir, f"{stem}_ssim", comparison.ssim_map, preview=False),
+                        "abs_diff_map": _save(item_dir, f"{stem}_ad", comparison.abs_diff_map, preview=False),
+                    },
+                }
+            )
+    result = {
+        "key": key,
+        "configuration": configuration.as_json(),
+        "lens_label": configuration.lens_label(),
+        "lenses": [
+            {"sphere_diopters": l.sphere_diopters, "cylinder_diopters": l.cylinder_diopters, "axis_deg": l.axis_deg,
+             "refractive_index": l.refractive_index, "center_thickness_mm": l.center_thickness_mm}
+            for l in lenses
+        ],
+        "noise_floor": floors,
+        "comparisons": comparisons,
+        "images": images,
+        "render_keys": render_keys or [],
+        "seconds": time.perf_counter() - started,
+    }
+    write_json_atomic(item_dir / "result.json", result, overwrite=True)  # last: marks the item finished
+    return result
