@@ -50,22 +50,30 @@ def compute_item(
     configuration: Configuration,
     settings: CampaignSettings,
     truth_a: np.ndarray,
-    truth_b: np.ndarray,
+    truth_b: np.ndarray | None,
     no_lens: np.ndarray,
     item_dir: Path,
     *,
-    render_keys: list[str] | None = None,
+    source: dict | None = None,
 ) -> dict:
-    """Compare every requested simulation with the ground truth; write images and result.json."""
+    """Compare every requested simulation with the ground truth; write images and result.json.
+
+    ``truth_b`` is a second, independent ground truth (another seed or exposure) for the noise
+    floor; without it the floor is reported as unknown.
+    """
     started = time.perf_counter()
     lenses = bench_lenses(configuration, settings)
-    truth_wave_a = add_bench_diffraction(truth_a, configuration, settings)
-    truth_wave_b = add_bench_diffraction(truth_b, configuration, settings)
+    captured = bool(source and source.get("ground_truth") == "capture")
+    # A photograph already carries the lens's diffraction; a render carries none (module simulate).
+    truth_wave_a = truth_a if captured else add_bench_diffraction(truth_a, configuration, settings)
     references = {"geometric": truth_a, "wave": truth_wave_a}
-    floors = {
-        "geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
-        "wave": noise_floor(truth_wave_a, truth_wave_b, settings.data_range).as_json(),
-    }
+    floors = {"geometric": None, "wave": None}
+    if truth_b is not None:
+        truth_wave_b = truth_b if captured else add_bench_diffraction(truth_b, configuration, settings)
+        floors = {
+            "geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
+            "wave": noise_floor(truth_wave_a, truth_wave_b, settings.data_range).as_json(),
+        }
     inputs = {"render": no_lens, "synthetic": synthetic_tile(configuration, settings)}
     images = {
         "truth": _save(item_dir, "truth", truth_a),
@@ -114,7 +122,7 @@ def compute_item(
         "noise_floor": floors,
         "comparisons": comparisons,
         "images": images,
-        "render_keys": render_keys or [],
+        "source": source or {},
         "seconds": time.perf_counter() - started,
     }
     write_json_atomic(item_dir / "result.json", result, overwrite=True)  # last: marks the item finished

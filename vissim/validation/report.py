@@ -59,7 +59,7 @@ def metrics_rows(results: list[dict]) -> list[dict]:
     for result in results:
         config = result["configuration"]
         for comp in result["comparisons"]:
-            floor = result["noise_floor"][comp["reference_kind"]]
+            floor = result["noise_floor"][comp["reference_kind"]] or {"ssim": float("nan"), "psnr_db": float("nan")}
             rows.append(
                 {
                     "configuration": config["name"],
@@ -86,6 +86,8 @@ def metrics_rows(results: list[dict]) -> list[dict]:
 
 
 def _fmt(value: float, digits: int) -> str:
+    if math.isnan(value):
+        return "—"
     return "∞" if math.isinf(value) else f"{value:.{digits}f}"
 
 

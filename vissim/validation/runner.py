@@ -31,6 +31,7 @@ from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.provenance import make_provenance
 from vissim.validation.campaign import Campaign
+from vissim.validation.captures import capture_problem, capture_tile, load_manifest
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
 
@@ -46,6 +47,31 @@ class RunSummary:
     items_reused: int
     renders_made: int
     renders_reused: int
+    skipped: tuple[str, ...] = ()  # one message per item that could not run (absent capture)
+
+
+def _capture_inputs(campaign: Campaign, config, captures: dict):
+    """(truth_a, truth_b | None, no_lens) from RAW captures, or a message saying why not."""
+    if campaign.manifest is None:
+        return f"{config.name}: capture {config.capture!r} but the campaign names no manifest"
+    capture = captures.get(config.capture)
+    if capture is None:
+        return f"{config.name}: capture {config.capture!r} is not in {campaign.manifest}"
+    ids = [capture.id, capture.no_lens_capture, capture.repeat_capture]
+    if ids[1] is None:
+        return f"{config.name}: capture {capture.id!r} names no no_lens_capture (the simulation input)"
+    tiles = []
+    for capture_id in ids:
+        if capture_id is None:
+            tiles.append(None)
+            continue
+        if capture_id not in captures:
+            return f"{config.name}: capture {capture_id!r} is not in {campaign.manifest}"
+        problem = capture_problem(captures[capture_id])
+        if problem:
+            return f"{config.name}: skipped, {problem}"
+        tiles.append(capture_tile(captures[capture_id], campaign.settings.arcmin_per_px, campaign.settings.tile_px))
+    return tiles[0], tiles[2], tiles[1]
 
 
 def _render_path(run_dir: Path, spec: RenderSpec) -> Path:
@@ -132,17 +158,31 @@ def run_campaign(
         overwrite=True,
     )
     todo = [(k, c) for k, c in zip(keys, campaign.configurations) if not (run_dir / "items" / k / "result.json").exists()]
+    captures = load_manifest(campaign.manifest) if campaign.manifest and any(c.capture for _, c in todo) else {}
     needed: dict[str, RenderSpec] = {}
     for _, config in todo:
+        if config.capture:
+            continue
         for spec in (*truth_specs(config, settings), no_lens_spec(config, settings)):
             needed[spec.key] = spec
     pending = [s for s in needed.values() if not _render_path(run_dir, s).exists()]
     log.info("%d of %d items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending), len(needed) - len(pending))
     if pending:
         _make_renders(pending, run_dir, workers, scheduler, render, show_progress)
+    skipped = []
     for key, config in todo:
-        truth_a, truth_b = (read_image(_render_path(run_dir, s)).pixels for s in truth_specs(config, settings))
-        no_lens = read_image(_render_path(run_dir, no_lens_spec(config, settings))).pixels
-        compute_item(key, config, settings, truth_a, truth_b, no_lens, run_dir / "items" / key,
-                     render_keys=[s.key for s in (*truth_specs(config, settings), no_lens_spec(config, settings))])
-    return RunSummary(run_dir, len(keys), len(keys) - len(todo), len(pending), len(needed) - len(pending))
+        if config.capture:
+            inputs = _capture_inputs(campaign, config, captures)
+            if isinstance(inputs, str):
+                log.warning("%s", inputs)
+                skipped.append(inputs)
+                continue
+            truth_a, truth_b, no_lens = inputs
+            source = {"ground_truth": "capture", "capture": config.capture}
+        else:
+            truth_a, truth_b = (read_image(_render_path(run_dir, s)).pixels for s in truth_specs(config, settings))
+            no_lens = read_image(_render_path(run_dir, no_lens_spec(config, settings))).pixels
+            source = {"ground_truth": "bench render",
+                      "render_keys": [s.key for s in (*truth_specs(config, settings), no_lens_spec(config, settings))]}
+        compute_item(key, config, settings, truth_a, truth_b, no_lens, run_dir / "items" / key, source=source)
+    return RunSummary(run_dir, len(keys), len(keys) - len(todo), len(pending), len(needed) - len(pending), tuple(skipped))

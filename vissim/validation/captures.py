@@ -1,0 +1,172 @@
+"""Real (or virtual) RAW captures as ground truth: the manifest and the capture -> tile path.
+
+A manifest (TOML) lists captures so real photographs can be dropped in::
+
+    [[capture]]
+    id = "t3-k-plus2"
+    file = "raw/IMG_0412.CR2"          # relative to the manifest
+    sha256 = "..."                     # checked before use
+    pixel_pitch_um = 5.2               # Canon EOS Rebel T3 / 1100D
+    focal_length_mm = 18.0
+    f_number = 5.0
+    chart_distance_m = 0.9144
+    lenses = [2.0]                      # as in a campaign
+    letter = "K"
+    logmar = 1.0
+    polarity = "black-on-white"
+    letter_center_px = [1732.0, 2590.0] # (row, col) of the letter's centre on the sensor
+    no_lens_capture = "t3-k-plain"      # the same chart without lenses (simulation input)
+    repeat_capture = "t3-k-plus2-b"     # optional: a second exposure, for the noise floor
+
+A campaign item with ``capture = "t3-k-plus2"`` takes its ground truth from the capture.
+Absent files are skipped with a clear message, never silently.
+
+Capture -> tile: the RAW is read linearly (:func:`vissim.validation.raw.read_raw_linear`,
+no demosaicing), the photosites are divided by their channel's gain (the median of the
+paper around the letter, so a neutral chart gives one grey level per photosite, at full
+sensor resolution and without interpolation), resampled by exact area integration onto the
+campaign's arcmin/px (camera scale from pitch, focal length and focus distance), cropped to
+the tile around the letter, and scaled so that the paper has the chart's paper reflectance.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vissim.errors import VissimInputError
+from vissim.validation.campaign import POLARITIES, LensSpec, _lenses
+from vissim.validation.raw import read_raw_linear, resample_to_arcmin
+
+__all__ = ["Capture", "load_manifest", "capture_problem", "capture_tile", "file_sha256"]
+
+log = logging.getLogger(__name__)
+
+PAPER_REFLECTANCE = 0.9  # the chart generator's default (vissim.charts)
+INK_REFLECTANCE = 0.04
+
+
+@dataclass(frozen=True)
+class Capture:
+    id: str
+    file: Path
+    sha256: str | None
+    pixel_pitch_um: float
+    focal_length_mm: float
+    f_number: float
+    chart_distance_m: float
+    lenses: tuple[LensSpec, ...]
+    letter: str
+    logmar: float
+    polarity: str
+    letter_center_px: tuple[float, float]
+    no_lens_capture: str | None = None
+    repeat_capture: str | None = None
+
+
+def file_sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def load_manifest(path: str | Path) -> dict[str, Capture]:
+    """Read a capture manifest; every field is checked, files are not (see :func:`capture_problem`)."""
+    path = Path(path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise VissimInputError(f"capture manifest {path} does not exist") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise VissimInputError(f"{path} is not valid TOML: {exc}") from None
+    captures = {}
+    for i, entry in enumerate(raw.get("capture", [])):
+        where = f"{path}: capture[{i}]"
+        try:
+            polarity = entry.get("polarity", "black-on-white")
+            if polarity not in POLARITIES:
+                raise VissimInputError(f"{where}.polarity must be {' or '.join(POLARITIES)}, got {polarity!r}")
+            center = entry["letter_center_px"]
+            if not (isinstance(center, list) and len(center) == 2):
+                raise VissimInputError(f"{where}.letter_center_px must be [row, col] in sensor pixels")
+            capture = Capture(
+                id=str(entry["id"]),
+                file=(path.parent / entry["file"]).resolve(),
+                sha256=entry.get("sha256"),
+                pixel_pitch_um=float(entry.get("pixel_pitch_um", 5.2)),
+                focal_length_mm=float(entry.get("focal_length_mm", 18.0)),
+                f_number=float(entry.get("f_number", 5.0)),
+                chart_distance_m=float(entry.get("chart_distance_m", 0.9144)),
+                lenses=_lenses(entry.get("lenses", []), str(path), f"capture[{i}].lenses"),
+                letter=str(entry["letter"]).upper(),
+                logmar=float(entry.get("logmar", 1.0)),
+                polarity=polarity,
+                letter_center_px=(float(center[0]), float(center[1])),
+                no_lens_capture=entry.get("no_lens_capture"),
+                repeat_capture=entry.get("repeat_capture"),
+            )
+        except KeyError as exc:
+            raise VissimInputError(f"{where} lacks the field {exc.args[0]!r}") from None
+        except (TypeError, ValueError) as exc:
+            raise VissimInputError(f"{where}: {exc}") from None
+        if capture.id in captures:
+            raise VissimInputError(f"{where}: duplicate capture id {capture.id!r}")
+        captures[capture.id] = capture
+    return captures
+
+
+def capture_problem(capture: Capture) -> str | None:
+    """Why a capture cannot be used (absent file, wrong checksum), or None."""
+    if not capture.file.exists():
+        return f"capture {capture.id!r}: {capture.file} is absent"
+    if capture.sha256 and file_sha256(capture.file) != capture.sha256.lower():
+        return f"capture {capture.id!r}: {capture.file} does not match its sha256 in the manifest"
+    return None
+
+
+def _neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray) -> np.ndarray:
+    """Full-resolution grey image from the four CFA planes, each divided by its paper level."""
+    rows, cols, _ = planes.shape
+    gains = [float(np.median(planes[..., c][paper_mask])) for c in range(4)]
+    if min(gains) <= 0:
+        raise VissimInputError("the capture's paper is not above black in every colour channel; check exposure")
+    mosaic = np.empty((2 * rows, 2 * cols), np.float64)
+    for c, (dr, dc) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
+        mosaic[dr::2, dc::2] = planes[..., c] / gains[c]
+    return mosaic
+
+
+def capture_tile(capture: Capture, arcmin_per_px: float, tile_px: tuple[int, int]) -> np.ndarray:
+    """The capture's letter as a linear tile on the campaign's grid (paper = 0.9)."""
+    problem = capture_problem(capture)
+    if problem:
+        raise VissimInputError(problem)
+    raw = read_raw_linear(capture.file, mode="planes")
+    row, col = capture.letter_center_px
+    # paper: a ring around the letter between 0.75 and 1.5 tile half-widths (sensor pixels;
+    # plane pixel (i, j) covers sensor pixels (2i..2i+1, 2j..2j+1))
+    pr, pc = np.mgrid[: raw.pixels.shape[0], : raw.pixels.shape[1]]
+    distance = np.hypot(2 * pr + 0.5 - row, 2 * pc + 0.5 - col)
+    reach = max(tile_px) / 2
+    ring = (distance > 0.75 * reach) & (distance < 1.5 * reach)
+    if capture.polarity == "white-on-black":
+        ring = np.zeros_like(ring)  # background is ink: take the paper from the brightest letter pixels
+        ring[np.unravel_index(np.argsort(raw.pixels.mean(axis=-1), axis=None)[-64:], ring.shape)] = True
+    mosaic = _neutral_mosaic(raw.pixels, ring)
+    resampled = resample_to_arcmin(mosaic, capture.pixel_pitch_um, capture.focal_length_mm, arcmin_per_px,
+                                   sensor_px_per_image_px=1, object_distance_m=capture.chart_distance_m)
+    scale = resampled.scale
+    centre = (row * scale, col * scale)
+    top = int(round(centre[0] - tile_px[0] / 2))
+    left = int(round(centre[1] - tile_px[1] / 2))
+    tile = resampled.pixels[top : top + tile_px[0], left : left + tile_px[1]]
+    if tile.shape != tuple(tile_px) or top < 0 or left < 0:
+        raise VissimInputError(f"capture {capture.id!r}: the letter tile runs off the image; check letter_center_px")
+    return (tile * PAPER_REFLECTANCE).astype(np.float32)
