@@ -8,7 +8,8 @@ import numpy as np
 from vissim.blur import blur_image
 from vissim.charts import optotype_tile
 from vissim.psf import compute_psf, suggested_size_px
-from vissim.trial_lens import TrialLensSetup, entrance_pupil_diameter_mm, trial_lens_effect
+from vissim.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
+from vissim.validation.renders import bench_for
 from vissim.validation.simulate import magnify
 from vissim.wavefront import Wavefront
 
@@ -16,8 +17,7 @@ def fake_render(spec):
     tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=spec.arcmin_per_px, shape_px=spec.tile_px,
                          polarity=spec.polarity, viewing_distance_m=spec.chart_distance_m).pixels
     if spec.lenses:
-        effect = trial_lens_effect(TrialLensSetup(spec.lenses, vertex_distance_mm=spec.vertex_distance_mm,
-                                                  object_distance_m=spec.chart_distance_m))
+        effect = trial_lens_effect(bench_for(spec).trial_lens_setup())
         front = Wavefront.from_prescription(effect.camera_prescription,
                                             entrance_pupil_diameter_mm(spec.focal_length_mm, spec.f_number))
         psf = compute_psf(front, arcmin_per_px=spec.arcmin_per_px, size_px=suggested_size_px(front, spec.arcmin_per_px),

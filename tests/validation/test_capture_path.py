@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 from fake_bench import fake_render
 
-from vissim.trial_lens import TrialLens
 from vissim.validation.campaign import load_campaign
 from vissim.validation.captures import capture_tile, file_sha256, load_manifest
 from vissim.validation.raw import camera_arcmin_per_px

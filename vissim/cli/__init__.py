@@ -24,9 +24,11 @@ COMMAND_MODULES = (
     "vissim.cli.psf",
     "vissim.cli.chart",
     "vissim.cli.blur",
+    "vissim.cli.blur_depth",
     "vissim.cli.demo",
     "vissim.cli.render",
     "vissim.cli.validate",
+    "vissim.cli.atv",
 )
 
 

@@ -161,4 +161,7 @@ def mitsuba(kind: str = "mono", variant: str | None = None):
     if mi.variant() != choice.variant:
         mi.set_variant(choice.variant)
         log.info("Mitsuba variant %s (%s)", choice.variant, choice.reason)
+    # Mitsuba's own warnings go straight to the terminal; vissim reports what matters through
+    # its logging (e.g. the sampler's rounded sample count), so keep only Mitsuba's errors.
+    mi.set_log_level(mi.LogLevel.Error)
     return mi

@@ -76,7 +76,6 @@ class CampaignSettings:
     chart_distance_m: float = 0.9144
     vertex_distance_mm: float = 10.0
     wavelength_nm: float = 550.0
-    thick_lenses: bool = True
     refractive_index: float = 1.523
     simulations: tuple[str, ...] = SIMULATIONS
     inputs: tuple[str, ...] = INPUTS
@@ -201,8 +200,6 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
         if not (isinstance(tile, list) and len(tile) == 2 and all(isinstance(t, int) and t >= 16 for t in tile)):
             raise _err(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
         kwargs["tile_px"] = tuple(tile)
-    if "thick_lenses" in raw:
-        kwargs["thick_lenses"] = bool(raw["thick_lenses"])
     for key, allowed in (("simulations", SIMULATIONS), ("inputs", INPUTS)):
         if key in raw:
             values = tuple(raw[key])

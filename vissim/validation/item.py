@@ -15,7 +15,7 @@ from vissim.imageio import write_image
 from vissim.validation.campaign import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
 from vissim.validation.registration import register
-from vissim.validation.renders import bench_lenses
+from vissim.validation.renders import bench_setup
 from vissim.validation.simulate import add_bench_diffraction, simulate, simulation_setup
 
 __all__ = ["compute_item", "synthetic_tile"]
@@ -62,7 +62,8 @@ def compute_item(
     floor; without it the floor is reported as unknown.
     """
     started = time.perf_counter()
-    lenses = bench_lenses(configuration, settings)
+    setup_of_bench = bench_setup(configuration, settings)
+    lenses = setup_of_bench.lenses
     captured = bool(source and source.get("ground_truth") == "capture")
     # A photograph already carries the lens's diffraction; a render carries none (module simulate).
     truth_wave_a = truth_a if captured else add_bench_diffraction(truth_a, configuration, settings)
@@ -83,7 +84,7 @@ def compute_item(
     }
     comparisons = []
     for kind in settings.simulations:
-        setup = simulation_setup(kind, lenses, configuration, settings)
+        setup = simulation_setup(kind, setup_of_bench, configuration, settings)
         reference_kind = "geometric" if kind == "geometric" else "wave"
         reference = references[reference_kind]
         for input_name in settings.inputs:

@@ -8,30 +8,37 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from vissim.bench.lens_mesh import realistic_center_thickness_mm
-from vissim.trial_lens import TrialLens
+from vissim.bench.dslr import DslrBench
+from vissim.trial_lens import TrialLens, TrialLensSetup
 from vissim.validation.campaign import CampaignSettings, Configuration
 
-__all__ = ["RenderSpec", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec", "BENCH_CLEAR_APERTURE_MM"]
+__all__ = ["RenderSpec", "bench_for", "bench_setup", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec"]
 
-#: Clear aperture of the trial lenses (mm): larger than the 3.6 mm beam plus the field.
-BENCH_CLEAR_APERTURE_MM = 20.0
+
+def _bench(configuration: Configuration, settings: CampaignSettings, **extra) -> DslrBench:
+    thin = tuple(TrialLens(l.sphere_diopters, l.cylinder_diopters, l.axis_deg) for l in configuration.lenses)
+    return DslrBench(
+        focal_length_mm=settings.focal_length_mm,
+        f_number=configuration.f_number,
+        focus_distance_mm=settings.chart_distance_m * 1000.0,
+        chart_distance_mm=settings.chart_distance_m * 1000.0,
+        vertex_distance_mm=settings.vertex_distance_mm,
+        lenses=thin,
+        refractive_index=settings.refractive_index,
+        arcmin_per_px=settings.arcmin_per_px,
+        size_px=tuple(settings.tile_px),
+        **extra,
+    )
 
 
 def bench_lenses(configuration: Configuration, settings: CampaignSettings) -> tuple[TrialLens, ...]:
-    """The trial lenses the bench holds (thick, realistic thickness) and the simulations assume."""
-    lenses = []
-    for spec in configuration.lenses:
-        if settings.thick_lenses:
-            thin = TrialLens(spec.sphere_diopters, spec.cylinder_diopters, spec.axis_deg)
-            thickness = realistic_center_thickness_mm(thin, BENCH_CLEAR_APERTURE_MM, settings.refractive_index)
-            lenses.append(
-                TrialLens(spec.sphere_diopters, spec.cylinder_diopters, spec.axis_deg,
-                          refractive_index=settings.refractive_index, center_thickness_mm=thickness)
-            )
-        else:
-            lenses.append(TrialLens(spec.sphere_diopters, spec.cylinder_diopters, spec.axis_deg))
-    return tuple(lenses)
+    """The trial lenses as the bench renders them: crown glass, realistic thickness."""
+    return _bench(configuration, settings).physical_lenses
+
+
+def bench_setup(configuration: Configuration, settings: CampaignSettings) -> TrialLensSetup:
+    """The rendered lenses, gaps, vertex and chart distance: what the simulations must assume."""
+    return _bench(configuration, settings).trial_lens_setup()
 
 
 @dataclass(frozen=True)
@@ -88,8 +95,26 @@ def no_lens_spec(configuration: Configuration, settings: CampaignSettings) -> Re
     return _spec(configuration, settings, (), settings.seeds[0] + settings.seeds[1] + 1)
 
 
-def render_spec(spec: RenderSpec) -> np.ndarray:
-    """Render one spec on this machine (a worker process or a Dask worker): float32 (H, W)."""
-    from vissim.render.run import render_tile  # the Mitsuba door, imported where it runs
+def bench_for(spec: RenderSpec) -> DslrBench:
+    """The :class:`DslrBench` that renders ``spec`` (its lenses are already physical)."""
+    return DslrBench(
+        focal_length_mm=spec.focal_length_mm,
+        f_number=spec.f_number,
+        focus_distance_mm=spec.chart_distance_m * 1000.0,
+        chart_distance_mm=spec.chart_distance_m * 1000.0,
+        vertex_distance_mm=spec.vertex_distance_mm,
+        lenses=spec.lenses,
+        arcmin_per_px=spec.arcmin_per_px,
+        size_px=tuple(spec.tile_px),
+        spp=spec.spp,
+        seed=spec.seed,
+    )
 
-    return render_tile(spec)
+
+def render_spec(spec: RenderSpec) -> np.ndarray:
+    """Render one spec with Mitsuba on this machine (a worker process or a Dask worker)."""
+    from vissim.charts import single_letter_spec
+    from vissim.render.run import render_bench  # the Mitsuba door, imported where it runs
+
+    chart = single_letter_spec(spec.letter, spec.logmar, viewing_distance_m=spec.chart_distance_m, polarity=spec.polarity)
+    return np.asarray(render_bench(bench_for(spec), chart).pixels, dtype=np.float32)

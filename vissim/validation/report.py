@@ -145,6 +145,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
     if not columns:
         return None
     columns = columns[:FIGURE_COLUMNS]
+    ad_max = max(0.01, max(float(np.percentile(read_image(run_dir / c["images"]["abs_diff_map"]).pixels, 99.9)) for _, c in columns))
     fig, axes = plt.subplots(4, len(columns), figsize=(1.9 * len(columns), 8.4), squeeze=False)
     for j, (result, comp) in enumerate(columns):
         truth = _load(result, run_dir, comp["reference_image"])
@@ -155,7 +156,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
             (srgb_encode(np.clip(truth, 0, 1)), "gray", 0, 1),
             (srgb_encode(np.clip(sim, 0, 1)), "gray", 0, 1),
             (ssim_map, "viridis", 0, 1),
-            (ad_map, "magma", 0, 0.2),
+            (ad_map, "magma", 0, ad_max),
         ]
         for i, (img, cmap, lo, hi) in enumerate(panels):
             ax = axes[i, j]
@@ -164,7 +165,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
             ax.set_yticks([])
         axes[0, j].set_title(result["lens_label"], fontsize=8)
         axes[3, j].set_xlabel(f"SSIM {comp['metrics']['ssim']:.3f}\nPSNR {_fmt(_num(comp['metrics']['psnr_db']), 1)} dB", fontsize=8)
-    for i, label in enumerate(["bench (truth)", f"{simulation} sim.", "SSIM map", "|difference|"]):
+    for i, label in enumerate(["bench (truth)", f"{simulation} sim.", "SSIM map (0-1)", f"|difference| (0-{ad_max:.3f})"]):
         axes[i, 0].set_ylabel(label, fontsize=9)
     fig.suptitle(f"{simulation} simulation applied to the {input_kind} input, against {REFERENCE_NOTE[simulation]}", fontsize=10)
     fig.tight_layout()

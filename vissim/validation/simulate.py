@@ -88,14 +88,16 @@ def _thesis_added_power(lenses: tuple[TrialLens, ...], vertex_distance_mm: float
 
 
 def simulation_setup(
-    kind: str, lenses: tuple[TrialLens, ...], configuration: Configuration, settings: CampaignSettings
+    kind: str, setup: TrialLensSetup, configuration: Configuration, settings: CampaignSettings
 ) -> SimulationSetup:
-    """The prescription, pupil and magnification that simulation ``kind`` uses."""
+    """The prescription, pupil and magnification that simulation ``kind`` uses.
+
+    ``setup`` is the bench's own lens setup (physical lenses, gaps, vertex and chart distance).
+    """
     pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, configuration.f_number)
+    lenses = setup.lenses
     if kind in ("wave", "geometric"):
-        effect = trial_lens_effect(
-            TrialLensSetup(lenses, vertex_distance_mm=settings.vertex_distance_mm, object_distance_m=settings.chart_distance_m)
-        )
+        effect = trial_lens_effect(setup)
         matrix = tuple(tuple(float(v) for v in row) for row in np.asarray(effect.magnification_matrix))
         return SimulationSetup(kind, effect.camera_prescription, pupil, matrix, kind)
     if kind == "thesis":

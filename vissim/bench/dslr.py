@@ -1,0 +1,346 @@
+"""The DSLR bench of thesis section 4.4 as a Mitsuba scene dict: camera, trial lenses, chart.
+
+World frame (millimetres): the camera's principal plane (and entrance pupil) at z = 0, looking
+along +z with +y up; the chart at z = ``chart_distance_mm``.  World x is the examiner's right
+(TABO frame of :mod:`vissim.trial_lens`), so the camera's image right is world -x.  Light
+travels towards -z: chart, trial lenses (the last lens's back vertex at ``vertex_distance_mm``,
+the others stacked towards the chart with ``lens_gap_mm`` of air), camera.
+
+Choices, and why:
+
+* **Camera**: Mitsuba's ``thinlens`` -- an ideal lens whose aperture disc of diameter f/N is the
+  entrance pupil (3.6 mm at f/5 and 18 mm) -- focused on ``focus_distance_mm``; a ``box``
+  pixel filter so each output pixel is the integral over its solid angle, like vissim's PSFs.
+  ``near_clip`` is 1 mm: Mitsuba's default 0.01 scene units would be 10 mm in a metre scene
+  and silently skip a lens at 10 mm.
+* **Chart**: a self-emitting rectangle whose radiance is the chart's linear reflectance (times
+  ``radiance_scale``).  Emission is deterministic along every path, so the only noise is the
+  camera's pixel and aperture sampling, and with no lens a pixel's expected value is exactly
+  the chart's mean reflectance over it: a clean ground truth.  A diffuse chart lit by lamps
+  would add light-sampling noise and an illumination falloff that tells nothing about blur.
+* **Texture**: the print raster, ``nearest`` filtered, at >= 4 texels per camera pixel
+  (:func:`chart_mm_per_texel`).  Nearest reproduces the printed raster exactly (piecewise
+  constant, like ink dots); bilinear would add a one-texel triangle blur.  The raster is
+  cropped around the axis, or padded with its edge values, to cover the field plus blur and
+  magnification margins.
+* **Lenses**: PLY meshes with exact normals (:mod:`vissim.bench.lens_mesh`), made of the
+  refraction-only ``vissim_refract`` BSDF (:mod:`vissim.render.plugins`).  Thin lenses
+  (``refractive_index`` None) become crown-glass lenses of realistic centre thickness for the
+  clear aperture, and the theory (:meth:`DslrBench.trial_lens_setup`) uses those same lenses.
+
+The dict is Mitsuba's scene-dict format with plain values only: transforms are 4 x 4 row-major
+nested lists under ``to_world`` and bitmap textures carry a float32 numpy array under
+``data``; :func:`vissim.render.run.to_mitsuba_dict` converts them.  Nothing here imports Mitsuba.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import functools
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm
+from vissim.errors import VissimInputError
+from vissim.trial_lens import (
+    CROWN_GLASS_INDEX,
+    MAX_LENSES_IN_HOLDER,
+    TrialLens,
+    TrialLensEffect,
+    TrialLensSetup,
+    entrance_pupil_diameter_mm,
+    trial_lens_effect,
+)
+from vissim.units import arcmin_to_rad, rad_to_arcmin
+
+__all__ = ["SAMPLERS", "DslrBench", "BenchTheory", "bench_theory", "chart_mm_per_texel", "dslr_scene"]
+
+log = logging.getLogger(__name__)
+
+SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler")
+#: Minimum edge and centre thickness of a trial lens made from a thin one, mm.
+MIN_EDGE_MM = 1.0
+MIN_CENTER_MM = 1.0
+#: Near clipping plane of the camera, mm (well below any vertex distance).
+NEAR_CLIP_MM = 1.0
+#: Path length limits: refractions through three lenses plus total internal reflections.
+MAX_DEPTH = 64
+
+
+def _positive(value: Any, name: str, unit: str, *, allow_zero: bool = False) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise VissimInputError(f"{name} must be a number in {unit}, got {value!r}") from None
+    if not math.isfinite(number) or number < 0.0 or (number == 0.0 and not allow_zero):
+        raise VissimInputError(f"{name} must be {'>= 0' if allow_zero else '> 0'} {unit}, got {value!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class DslrBench:
+    """Camera, trial-lens holder and sampling of the DSLR bench (defaults: the thesis's bench).
+
+    ``lenses`` are ordered from the chart to the camera, as in
+    :class:`~vissim.trial_lens.TrialLensSetup`.  ``size_px`` is (rows, cols).
+    ``clear_aperture_mm`` None sizes the lens meshes to the beam (:meth:`clear_aperture`).
+    """
+
+    focal_length_mm: float = 18.0
+    f_number: float = 5.0
+    focus_distance_mm: float = 914.4
+    chart_distance_mm: float = 914.4
+    vertex_distance_mm: float = 10.0
+    lens_gap_mm: float = 2.0
+    lenses: tuple[TrialLens, ...] = ()
+    refractive_index: float = CROWN_GLASS_INDEX
+    clear_aperture_mm: float | None = None
+    arcmin_per_px: float = 1.0
+    size_px: tuple[int, int] = (133, 113)
+    spp: int = 256
+    seed: int = 0
+    sampler: str = "multijitter"
+    fresnel_loss: bool = False
+    texels_per_px: float = 4.0
+    radiance_scale: float = 1.0
+    mesh_rings: int = 16
+    mesh_segments: int = 64
+
+    def __post_init__(self) -> None:
+        for name, unit in (("focal_length_mm", "mm"), ("f_number", "(f-number)"), ("focus_distance_mm", "mm"),
+                           ("chart_distance_mm", "mm"), ("arcmin_per_px", "arcmin/px"),
+                           ("texels_per_px", "texels per camera pixel"), ("radiance_scale", "(relative)")):
+            object.__setattr__(self, name, _positive(getattr(self, name), name.replace("_", " "), unit))
+        for name in ("vertex_distance_mm", "lens_gap_mm"):
+            value = _positive(getattr(self, name), name.replace("_", " "), "mm", allow_zero=True)
+            object.__setattr__(self, name, value)
+        index = _positive(self.refractive_index, "refractive index", "(dimensionless)")
+        if index <= 1.0:
+            raise VissimInputError(f"refractive index must exceed 1, got {index:g}")
+        lenses = (self.lenses,) if isinstance(self.lenses, TrialLens) else tuple(self.lenses)
+        if len(lenses) > MAX_LENSES_IN_HOLDER or not all(isinstance(lens, TrialLens) for lens in lenses):
+            raise VissimInputError(
+                f"the holder takes up to {MAX_LENSES_IN_HOLDER} TrialLens objects, got {self.lenses!r}")
+        object.__setattr__(self, "lenses", lenses)
+        try:
+            size = tuple(int(v) for v in self.size_px)
+        except (TypeError, ValueError):
+            size = ()
+        if len(size) != 2 or min(size) < 1 or tuple(self.size_px) != size:
+            raise VissimInputError(f"size_px must be (rows, cols) in whole pixels >= 1, got {self.size_px!r}")
+        object.__setattr__(self, "size_px", size)
+        if int(self.spp) != self.spp or self.spp < 1:
+            raise VissimInputError(f"spp must be a whole number of samples per pixel >= 1, got {self.spp!r}")
+        if self.sampler not in SAMPLERS:
+            raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")
+        if self.clear_aperture_mm is not None:
+            object.__setattr__(self, "clear_aperture_mm", _positive(self.clear_aperture_mm, "clear aperture", "mm"))
+        self.trial_lens_setup()  # validates the stack against the chart distance
+
+    # -- geometry -------------------------------------------------------------------------
+    @property
+    def entrance_pupil_diameter_mm(self) -> float:
+        return entrance_pupil_diameter_mm(self.focal_length_mm, self.f_number)
+
+    @property
+    def field_half_diagonal_rad(self) -> float:
+        rows, cols = self.size_px
+        return arcmin_to_rad(0.5 * self.arcmin_per_px * math.hypot(rows, cols))
+
+    def clear_aperture(self) -> float:
+        """Lens clear aperture, mm: given, or the beam at the farthest lens surface x 1.25 + 2 mm.
+
+        Beam = pupil + 2 z tan(half-diagonal field) at z = vertex distance + the holder's depth
+        (3 lenses of <= 4 mm and the gaps), rounded up to 0.5 mm.
+        """
+        if self.clear_aperture_mm is not None:
+            return self.clear_aperture_mm
+        depth = self.vertex_distance_mm + MAX_LENSES_IN_HOLDER * (4.0 + self.lens_gap_mm)
+        beam = self.entrance_pupil_diameter_mm + 2.0 * depth * math.tan(self.field_half_diagonal_rad)
+        return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+
+    def _make_physical(self, lens: TrialLens) -> TrialLens:
+        if not lens.is_thin:
+            return lens
+        index = lens.refractive_index or self.refractive_index
+        thickness = realistic_center_thickness_mm(lens.marked_power, self.clear_aperture(), index, MIN_EDGE_MM,
+                                                  MIN_CENTER_MM, back_surface_diopters=lens.back_surface_diopters)
+        return TrialLens(lens.sphere_diopters, lens.cylinder_diopters, lens.axis_deg, refractive_index=index,
+                         center_thickness_mm=thickness, back_surface_diopters=lens.back_surface_diopters)
+
+    @functools.cached_property
+    def physical_lenses(self) -> tuple[TrialLens, ...]:
+        """The lenses as rendered: thick, with an index (thin ones made realistic)."""
+        return tuple(self._make_physical(lens) for lens in self.lenses)
+
+    def trial_lens_setup(self) -> TrialLensSetup:
+        """The rendered lenses as a :class:`TrialLensSetup` (object distance = chart distance)."""
+        distance_m = self.chart_distance_mm / 1000.0
+        return TrialLensSetup(self.physical_lenses, self.vertex_distance_mm, distance_m, self.lens_gap_mm)
+
+    def lens_back_vertex_z_mm(self) -> tuple[float, ...]:
+        """World z of each lens's back vertex, in the order of ``lenses`` (chart to camera)."""
+        z, positions = self.vertex_distance_mm, []
+        for lens in reversed(self.physical_lenses):
+            positions.append(z)
+            z += lens.center_thickness_mm + self.lens_gap_mm
+        return tuple(reversed(positions))
+
+    @property
+    def pitch_mm(self) -> float:
+        """Size on the chart of the central camera pixel, mm (pixels are uniform in tan(angle))."""
+        return self.chart_distance_mm * math.tan(arcmin_to_rad(self.arcmin_per_px))
+
+    def fov_x_deg(self) -> float:
+        cols = self.size_px[1]
+        return math.degrees(2.0 * math.atan(0.5 * cols * math.tan(arcmin_to_rad(self.arcmin_per_px))))
+
+
+@dataclass(frozen=True)
+class BenchTheory:
+    """What paraxial optics predicts for a bench: defocus, blur and magnification."""
+
+    effect: TrialLensEffect | None
+    defocus_matrix_diopters: tuple[tuple[float, float], tuple[float, float]]
+    blur_diameter_arcmin: tuple[tuple[float, float], tuple[float, float]]  # ((diameter, meridian_deg), ...)
+    magnification_principal: tuple[tuple[float, float], tuple[float, float]]
+
+
+def bench_theory(bench: DslrBench) -> BenchTheory:
+    """Defocus at the camera = power added by the lenses + (1/focus - 1/chart); blur = pupil x defocus.
+
+    The blur diameter in each principal meridian is the entrance pupil (mm) times the
+    defocus (D) in milliradians; magnifications from :func:`vissim.trial_lens.trial_lens_effect`.
+    """
+    focus_error = 1000.0 / bench.focus_distance_mm - 1000.0 / bench.chart_distance_mm
+    if bench.lenses:
+        effect = trial_lens_effect(bench.trial_lens_setup())
+        added = np.asarray(effect.added_power_matrix)
+        magnification = effect.magnification_principal
+    else:
+        effect, added, magnification = None, np.zeros((2, 2)), ((1.0, 180.0), (1.0, 90.0))
+    defocus = added + focus_error * np.eye(2)
+    values, vectors = np.linalg.eigh(defocus)
+    blur = []
+    for value, vector in zip(values[::-1], vectors.T[::-1]):
+        meridian = round(math.degrees(math.atan2(vector[1], vector[0])) % 180.0, 9) or 180.0
+        blur.append((float(rad_to_arcmin(abs(value) * bench.entrance_pupil_diameter_mm / 1000.0)), meridian))
+    return BenchTheory(effect, tuple(map(tuple, defocus.tolist())), tuple(blur), magnification)
+
+
+def chart_mm_per_texel(bench: DslrBench) -> float:
+    """Texel size for the chart raster: ``texels_per_px`` texels per camera pixel on the chart."""
+    return bench.pitch_mm / bench.texels_per_px
+
+
+def _chart_texture(bench: DslrBench, pixels: np.ndarray, mm_per_px: float) -> tuple[np.ndarray, float, float]:
+    """Crop/pad ``pixels`` (centred on the axis) to cover the field with margins; (texture, height_mm, width_mm)."""
+    theory = bench_theory(bench)
+    blur_mm = max(d for d, _ in theory.blur_diameter_arcmin) / bench.arcmin_per_px * bench.pitch_mm
+    mag = max(abs(m) for m, _ in theory.magnification_principal)
+    rows, cols = bench.size_px
+    need_mm = [0.5 * n * bench.pitch_mm * max(mag, 1.0) * 1.05 + blur_mm + 2.0 * bench.pitch_mm for n in (rows, cols)]
+    need_px = [2 * math.ceil(h / mm_per_px) for h in need_mm]  # even; centre stays on a texel corner
+    out = pixels
+    for axis, need in enumerate(need_px):
+        have = out.shape[axis]
+        if have > need:
+            start = (have - need) // 2
+            out = np.take(out, np.arange(start, start + need), axis=axis)
+        elif have < need:
+            before = (need - have) // 2
+            pad = [(0, 0)] * out.ndim
+            pad[axis] = (before, need - have - before)
+            out = np.pad(out, pad, mode="edge")
+    if (pixels.shape[0] - out.shape[0]) % 2 or (pixels.shape[1] - out.shape[1]) % 2:
+        log.debug("chart raster of odd size: its centre moved by half a texel (%.3g mm)", 0.5 * mm_per_px)
+    return np.ascontiguousarray(out, dtype=np.float32), out.shape[0] * mm_per_px, out.shape[1] * mm_per_px
+
+
+def _translate(x: float, y: float, z: float) -> list[list[float]]:
+    return [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]]
+
+
+def dslr_scene(
+    bench: DslrBench,
+    chart_pixels: np.ndarray,
+    chart_mm_per_px: float,
+    *,
+    kind: str = "mono",
+    mesh_cache_dir=None,
+) -> dict[str, Any]:
+    """The Mitsuba scene dict of ``bench`` with the chart raster ``chart_pixels`` (module doc).
+
+    ``chart_pixels``: linear reflectance, (H, W) or (H, W, 3), row 0 the top of the chart as
+    the camera sees it, columns to the camera's right; its centre lies on the optical axis.
+    """
+    pixels = np.asarray(chart_pixels, dtype=np.float32)
+    if pixels.ndim not in (2, 3) or (pixels.ndim == 3 and pixels.shape[2] not in (1, 3)) or min(pixels.shape[:2]) < 1:
+        raise VissimInputError(f"chart pixels must be (H, W) or (H, W, 3), got shape {pixels.shape}")
+    if not np.all(np.isfinite(pixels)) or pixels.min() < 0.0:
+        raise VissimInputError("chart pixels must be finite, non-negative linear reflectance")
+    mm_per_px = _positive(chart_mm_per_px, "chart pixel size", "mm")
+    if kind not in ("mono", "rgb"):
+        raise VissimInputError(f"render kind must be 'mono' or 'rgb', got {kind!r}")
+    texture, height_mm, width_mm = _chart_texture(bench, pixels, mm_per_px)
+    if texture.ndim == 2:
+        texture = texture[:, :, None]
+    if kind == "mono" and texture.shape[2] == 3:
+        texture = texture @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)[:, None]  # Rec. 709 luminance
+    rows, cols = bench.size_px
+    # The rectangle spans [-1, 1]^2 with normal +z; turned 180 deg about y it faces the camera
+    # (-z) and its local +x (texture u) runs along world -x, the camera's image right.  Mitsuba
+    # puts bitmap row 0 at v = 0, local y = -1 (the bottom), so the raster goes in upside down.
+    # Pinned by tests/render/test_dslr_render.py::test_letters_are_neither_mirrored_nor_upside_down.
+    chart_to_world = [[-0.5 * width_mm, 0.0, 0.0, 0.0], [0.0, 0.5 * height_mm, 0.0, 0.0],
+                      [0.0, 0.0, -1.0, bench.chart_distance_mm], [0.0, 0.0, 0.0, 1.0]]
+    scene: dict[str, Any] = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": MAX_DEPTH, "hide_emitters": False},
+        "camera": {
+            "type": "thinlens",
+            "fov": bench.fov_x_deg(),
+            "fov_axis": "x",
+            "aperture_radius": 0.5 * bench.entrance_pupil_diameter_mm,
+            "focus_distance": bench.focus_distance_mm,
+            "near_clip": NEAR_CLIP_MM,
+            "far_clip": 10.0 * bench.chart_distance_mm,
+            # look_at((0,0,0), (0,0,1), up (0,1,0)): Mitsuba's camera frame is +x left, +y up, +z forward.
+            "to_world": [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+            "sampler": {"type": bench.sampler, "sample_count": int(bench.spp), "seed": int(bench.seed)},
+            "film": {
+                "type": "hdrfilm",
+                "width": cols,
+                "height": rows,
+                "rfilter": {"type": "box"},
+                "pixel_format": "luminance" if kind == "mono" else "rgb",
+                "component_format": "float32",
+                "sample_border": False,
+            },
+        },
+        "chart": {
+            "type": "rectangle",
+            "to_world": chart_to_world,
+            "emitter": {
+                "type": "area",
+                "radiance": {"type": "bitmap", "data": texture[::-1] * np.float32(bench.radiance_scale),
+                             "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"},
+            },
+        },
+    }
+    aperture = bench.clear_aperture()
+    for i, (lens, z) in enumerate(zip(bench.physical_lenses, bench.lens_back_vertex_z_mm())):
+        path = cached_lens_ply(lens, aperture, rings=bench.mesh_rings, segments=bench.mesh_segments,
+                               cache_dir=mesh_cache_dir)
+        scene[f"lens_{i}"] = {
+            "type": "ply",
+            "filename": str(path),
+            "face_normals": False,
+            "to_world": _translate(0.0, 0.0, z),
+            "bsdf": {"type": "vissim_refract", "int_ior": float(lens.refractive_index),
+                     "fresnel_loss": bool(bench.fresnel_loss)},
+        }
+    return scene

@@ -1,0 +1,183 @@
+"""Bench scene files (TOML): read, validate, and turn into a :class:`DslrBench` and a chart.
+
+A scene file has the tables ``[camera]``, ``[holder]`` (with ``[[holder.lenses]]``, chart side
+first), ``[chart]``, ``[image]`` and ``[sampling]``; ``scenes/dslr_bench.toml`` is the
+commented example.  Every table and key is optional (defaults: the thesis's bench, an empty
+holder, the Sloan letter R at LogMAR 1.0); unknown tables or keys, and values of the wrong
+type, raise :class:`~vissim.errors.VissimInputError` naming the file, the key and the unit.
+
+The ``[chart]`` table alone also makes a *chart file* (:func:`load_chart_toml`): either one
+letter (``letter``, ``logmar``) or an ETDRS chart (``letters``, ``logmar_range``,
+``logmar_step``, ``seed``), with ``polarity``, ``paper_reflectance``, ``ink_reflectance``.  The
+chart's viewing distance is the bench's chart distance.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from vissim.bench.dslr import DslrBench
+from vissim.charts import DEFAULT_LETTER_SEED, ChartSpec, etdrs_chart_spec, single_letter_spec
+from vissim.errors import VissimInputError
+from vissim.trial_lens import TrialLens
+
+__all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables"]
+
+# key -> (DslrBench field, type, unit)
+_CAMERA = {
+    "focal_length_mm": ("focal_length_mm", float, "mm"),
+    "f_number": ("f_number", float, "(f-number)"),
+    "focus_distance_mm": ("focus_distance_mm", float, "mm"),
+}
+_HOLDER = {
+    "vertex_distance_mm": ("vertex_distance_mm", float, "mm"),
+    "lens_gap_mm": ("lens_gap_mm", float, "mm"),
+    "refractive_index": ("refractive_index", float, "(dimensionless)"),
+    "clear_aperture_mm": ("clear_aperture_mm", float, "mm"),
+    "lenses": (None, list, "(array of tables)"),
+}
+_LENS = {
+    "sphere_diopters": (float, "D"),
+    "cylinder_diopters": (float, "D"),
+    "axis_deg": (float, "degrees TABO"),
+    "refractive_index": (float, "(dimensionless)"),
+    "center_thickness_mm": (float, "mm"),
+    "back_surface_diopters": (float, "D"),
+}
+_IMAGE = {
+    "arcmin_per_px": ("arcmin_per_px", float, "arcmin/px"),
+    "size_px": ("size_px", list, "[rows, cols] px"),
+}
+_SAMPLING = {
+    "spp": ("spp", int, "samples per pixel"),
+    "seed": ("seed", int, "(integer)"),
+    "sampler": ("sampler", str, "(name)"),
+    "fresnel_loss": ("fresnel_loss", bool, "(true/false)"),
+    "texels_per_px": ("texels_per_px", float, "texels per camera pixel"),
+}
+_CHART = {
+    "distance_mm": (float, "mm"),
+    "letter": (str, "(Sloan letter)"),
+    "logmar": (float, "LogMAR"),
+    "letters": (str, "(Sloan letters, rows separated by spaces)"),
+    "logmar_range": (list, "[start, stop] LogMAR"),
+    "logmar_step": (float, "LogMAR"),
+    "seed": (int, "(integer)"),
+    "polarity": (str, "('black-on-white' or 'white-on-black')"),
+    "paper_reflectance": (float, "(fraction 0-1)"),
+    "ink_reflectance": (float, "(fraction 0-1)"),
+}
+_TABLES = ("camera", "holder", "chart", "image", "sampling")
+
+
+def _typed(value: Any, kind: type, where: str, unit: str) -> Any:
+    if kind is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise VissimInputError(f"{where} must be a number in {unit}, got {value!r}")
+        return float(value)
+    if kind is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise VissimInputError(f"{where} must be an integer {unit}, got {value!r}")
+        return value
+    if not isinstance(value, kind):
+        raise VissimInputError(f"{where} must be a {kind.__name__} {unit}, got {value!r}")
+    return value
+
+
+def _table(doc: dict, name: str, source: str) -> dict:
+    table = doc.get(name, {})
+    if not isinstance(table, dict):
+        raise VissimInputError(f"{source}: [{name}] must be a table, got {table!r}")
+    return table
+
+
+def _check_keys(table: dict, allowed, where: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise VissimInputError(f"{where}: unknown key {key!r}; expected one of {', '.join(allowed)}")
+
+
+def _read(path: str | os.PathLike[str]) -> tuple[dict, str]:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise VissimInputError(f"cannot read scene file {path}: {exc.strerror or exc}") from None
+    try:
+        return tomllib.loads(text), str(path)
+    except tomllib.TOMLDecodeError as exc:
+        raise VissimInputError(f"{path} is not valid TOML: {exc}") from None
+
+
+def chart_spec_from_table(table: dict, source: str, chart_distance_mm: float) -> ChartSpec:
+    """The chart of a ``[chart]`` table (module doc) at ``chart_distance_mm``."""
+    where = f"{source} [chart]"
+    _check_keys(table, _CHART, where)
+    values = {key: _typed(table[key], *_CHART[key][:1], f"{where} {key}", _CHART[key][1]) for key in table}
+    style = {key: values[key] for key in ("polarity", "paper_reflectance", "ink_reflectance") if key in values}
+    style["viewing_distance_m"] = chart_distance_mm / 1000.0
+    if "letters" in values or "logmar_range" in values:
+        if "letter" in values or "logmar" in values:
+            raise VissimInputError(f"{where}: give either letter/logmar (one letter) or letters/logmar_range (ETDRS)")
+        span = values.get("logmar_range", [1.0, -0.3])
+        if len(span) != 2:
+            raise VissimInputError(f"{where} logmar_range must be [start, stop] in LogMAR, got {span!r}")
+        start, stop = (_typed(v, float, f"{where} logmar_range", "LogMAR") for v in span)
+        return etdrs_chart_spec((start, stop), values.get("logmar_step", 0.1), letters=values.get("letters"),
+                                seed=values.get("seed", DEFAULT_LETTER_SEED), **style)
+    for key in ("logmar_step", "seed"):
+        if key in values:
+            raise VissimInputError(f"{where}: {key} applies to ETDRS charts (letters/logmar_range) only")
+    return single_letter_spec(values.get("letter", "R"), values.get("logmar", 1.0), **style)
+
+
+def bench_from_tables(doc: dict, source: str, **overrides: Any) -> DslrBench:
+    """A :class:`DslrBench` from parsed scene tables; ``overrides`` replace fields last."""
+    _check_keys(doc, _TABLES, source)
+    fields: dict[str, Any] = {}
+    for name, schema in (("camera", _CAMERA), ("holder", _HOLDER), ("image", _IMAGE), ("sampling", _SAMPLING)):
+        table = _table(doc, name, source)
+        _check_keys(table, schema, f"{source} [{name}]")
+        for key, value in table.items():
+            field, kind, unit = schema[key]
+            if field is not None:
+                fields[field] = _typed(value, kind, f"{source} [{name}] {key}", unit)
+    if "size_px" in fields:
+        size = fields["size_px"]
+        if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
+            raise VissimInputError(f"{source} [image] size_px must be [rows, cols] in whole px, got {size!r}")
+        fields["size_px"] = tuple(size)
+    lenses = []
+    for i, lens in enumerate(_table(doc, "holder", source).get("lenses", [])):
+        where = f"{source} [[holder.lenses]] #{i + 1}"
+        if not isinstance(lens, dict):
+            raise VissimInputError(f"{where} must be a table, got {lens!r}")
+        _check_keys(lens, _LENS, where)
+        if "sphere_diopters" not in lens and "cylinder_diopters" not in lens:
+            raise VissimInputError(f"{where} needs sphere_diopters and/or cylinder_diopters (D)")
+        kwargs = {key: _typed(value, *_LENS[key][:1], f"{where} {key}", _LENS[key][1]) for key, value in lens.items()}
+        kwargs.setdefault("sphere_diopters", 0.0)
+        lenses.append(TrialLens(**kwargs))
+    fields["lenses"] = tuple(lenses)
+    chart = _table(doc, "chart", source)
+    if "distance_mm" in chart:
+        fields["chart_distance_mm"] = _typed(chart["distance_mm"], float, f"{source} [chart] distance_mm", "mm")
+    fields.update({key: value for key, value in overrides.items() if value is not None})
+    return DslrBench(**fields)
+
+
+def load_bench_toml(path: str | os.PathLike[str], **overrides: Any) -> tuple[DslrBench, ChartSpec]:
+    """(bench, chart spec) of the scene file at ``path``; ``overrides`` (not None) replace bench fields."""
+    doc, source = _read(path)
+    bench = bench_from_tables(doc, source, **overrides)
+    return bench, chart_spec_from_table(_table(doc, "chart", source), source, bench.chart_distance_mm)
+
+
+def load_chart_toml(path: str | os.PathLike[str], chart_distance_mm: float) -> ChartSpec:
+    """The chart of the ``[chart]`` table of ``path`` (other tables are ignored)."""
+    doc, source = _read(path)
+    return chart_spec_from_table(_table(doc, "chart", source), source, chart_distance_mm)

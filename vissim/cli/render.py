@@ -1,0 +1,177 @@
+"""``vissim render``: render the virtual optical bench with Mitsuba 3 to a linear EXR.
+
+Sub-commands: ``render bench`` (the DSLR bench, :mod:`vissim.bench.dslr`).  ``render atv``
+slots in through :func:`add_atv_parser` once :mod:`vissim.bench.atv` exists.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import importlib.util
+import logging
+import sys
+from pathlib import Path
+
+from vissim.charts import POLARITIES
+from vissim.errors import VissimInputError
+
+log = logging.getLogger(__name__)
+
+__all__ = ["add_parser", "add_bench_parser", "add_atv_parser"]
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "render",
+        help="render the virtual optical bench (Mitsuba 3) to a linear EXR",
+        description="Render the virtual optical bench with Mitsuba 3: a camera, trial lenses and a chart.",
+    )
+    benches = parser.add_subparsers(dest="bench", metavar="BENCH")
+    add_bench_parser(benches)
+    if importlib.util.find_spec("vissim.bench.atv") is not None:
+        add_atv_parser(benches)
+    parser.set_defaults(func=lambda args: _usage(parser))
+    return parser
+
+
+def _usage(parser: argparse.ArgumentParser) -> int:
+    parser.print_help()
+    return 2
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        rows, cols = (int(v) for v in text.lower().replace("×", "x").split("x"))
+    except ValueError:
+        raise VissimInputError(f"--size must be ROWSxCOLS in pixels, e.g. 133x113, got {text!r}") from None
+    return rows, cols
+
+
+def add_bench_parser(subparsers) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "bench",
+        help="the DSLR with trial lenses in front of a letter chart",
+        description=(
+            "Render the thesis's DSLR bench (18 mm f/5 camera focused on a chart at 914.4 mm, trial "
+            "lenses 10 mm in front) by path tracing through meshed trial lenses.  Options override the "
+            "--scene file; --sphere/--cylinder replace its lenses with one lens."
+        ),
+    )
+    parser.add_argument("--scene", metavar="TOML", help="bench scene file (see scenes/dslr_bench.toml)")
+    lens = parser.add_argument_group("trial lens (replaces the scene's lenses)")
+    lens.add_argument("--sphere", type=float, metavar="D", help="sphere in dioptres (plus lens > 0)")
+    lens.add_argument("--cylinder", type=float, metavar="D", help="cylinder in dioptres (needs --axis)")
+    lens.add_argument("--axis", type=float, metavar="DEG", help="cylinder axis, TABO degrees 0-180")
+    parser.add_argument("--f-number", type=float, metavar="N", help="camera f-number (default 5)")
+    chart = parser.add_mutually_exclusive_group()
+    chart.add_argument("--letter", metavar="X", help="one Sloan letter (C D H K N O R S V Z)")
+    chart.add_argument("--chart", metavar="TOML", help="a file whose [chart] table describes the chart")
+    parser.add_argument("--logmar", type=float, metavar="L", help="letter size in LogMAR (with --letter)")
+    parser.add_argument("--polarity", choices=POLARITIES, help="default black-on-white")
+    parser.add_argument("--arcmin-per-px", type=float, metavar="ARCMIN", help="angular pixel size (default 1)")
+    parser.add_argument("--size", metavar="ROWSxCOLS", help="image size (default 133x113)")
+    parser.add_argument("--spp", type=int, metavar="N", help="samples per pixel (default 256)")
+    parser.add_argument("--seed", type=int, metavar="S", help="sampler seed (default 0)")
+    parser.add_argument("--sampler", choices=("independent", "stratified", "multijitter", "ldsampler"))
+    parser.add_argument("--fresnel-loss", action="store_true", default=None,
+                        help="uncoated lenses: weight by the Fresnel transmittance of each surface")
+    parser.add_argument("--rgb", action="store_true", help="render RGB (default: monochrome)")
+    parser.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
+    parser.add_argument("-o", "--output", required=True, metavar="PATH", help="output .exr (linear float32)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    parser.set_defaults(func=run_bench)
+    return parser
+
+
+def add_atv_parser(subparsers) -> argparse.ArgumentParser:  # pragma: no cover - registered once vissim.bench.atv exists
+    """``render atv``: the ATV tube bench (issue 7); its options and runner live with that bench."""
+    importlib.import_module("vissim.bench.atv")  # the bench this sub-command will render
+
+    parser = subparsers.add_parser("atv", help="the ATV tube bench")
+    parser.set_defaults(func=_atv_not_ready)
+    return parser
+
+
+def _atv_not_ready(args: argparse.Namespace) -> int:  # pragma: no cover - replaced with the ATV bench
+    raise VissimInputError("vissim render atv is not implemented yet")
+
+
+def _lenses(args):
+    from vissim.trial_lens import TrialLens
+
+    if args.sphere is None and args.cylinder is None:
+        if args.axis is not None:
+            raise VissimInputError("--axis needs --cylinder (dioptres)")
+        return None
+    cylinder = args.cylinder or 0.0
+    if cylinder != 0.0 and args.axis is None:
+        raise VissimInputError(f"--cylinder {cylinder:g} D needs --axis in degrees (TABO, 0-180)")
+    return (TrialLens(args.sphere or 0.0, cylinder, 180.0 if args.axis is None else args.axis),)
+
+
+def _chart_table(args, scene_doc: dict) -> dict:
+    table = dict(scene_doc.get("chart", {})) if isinstance(scene_doc.get("chart", {}), dict) else {}
+    if args.letter is not None or args.logmar is not None:
+        for key in ("letters", "logmar_range", "logmar_step", "seed"):
+            table.pop(key, None)
+    if args.letter is not None:
+        table["letter"] = args.letter
+    if args.logmar is not None:
+        table["logmar"] = args.logmar
+    if args.polarity is not None:
+        table["polarity"] = args.polarity
+    return table
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    import tomllib
+
+    from vissim.bench.scene_files import bench_from_tables, chart_spec_from_table, load_chart_toml
+    from vissim.imageio import write_image
+
+    output = Path(args.output)
+    if output.suffix.lower() != ".exr":
+        raise VissimInputError(f"the bench writes linear float EXR; give an output ending in .exr, got {output}")
+    if output.exists() and not args.overwrite:
+        raise VissimInputError(f"{output} already exists; pass --overwrite to replace it")
+    doc, source = {}, "command line"
+    if args.scene is not None:
+        try:
+            doc, source = tomllib.loads(Path(args.scene).read_text(encoding="utf-8")), args.scene
+        except OSError as exc:
+            raise VissimInputError(f"cannot read scene file {args.scene}: {exc.strerror or exc}") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise VissimInputError(f"{args.scene} is not valid TOML: {exc}") from None
+    bench = bench_from_tables(
+        doc, source, lenses=_lenses(args), f_number=args.f_number, arcmin_per_px=args.arcmin_per_px,
+        size_px=None if args.size is None else _size(args.size), spp=args.spp, seed=args.seed,
+        sampler=args.sampler, fresnel_loss=args.fresnel_loss,
+    )
+    if args.chart is not None:
+        if args.logmar is not None or args.polarity is not None:
+            raise VissimInputError("--logmar and --polarity go with --letter; a --chart file sets its own")
+        chart = load_chart_toml(args.chart, bench.chart_distance_mm)
+    else:
+        chart = chart_spec_from_table(_chart_table(args, doc), source, bench.chart_distance_mm)
+    result = _render_with_progress(bench, chart, "rgb" if args.rgb else "mono", args.variant)
+    write_image(output, result.pixels, provenance=result.provenance, overwrite=args.overwrite)
+    theory = result.provenance["inputs"]["theory"]
+    blur = ", ".join(f"{d:.2f}' along {m:g}°" for d, m in theory["blur_diameter_arcmin"])
+    print(f"wrote {output}: {result.pixels.shape[1]} x {result.pixels.shape[0]} px, {result.spp} spp, "
+          f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, added {theory['added_power']}")
+    return 0
+
+
+def _render_with_progress(bench, chart, kind: str, variant: str | None):
+    from vissim.render.run import render_bench
+
+    if not sys.stderr.isatty():
+        return render_bench(bench, chart, kind=kind, variant=variant)
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    with Progress(TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
+                  TimeRemainingColumn(), transient=True) as progress:
+        task = progress.add_task("render", total=bench.spp)
+        return render_bench(bench, chart, kind=kind, variant=variant,
+                            progress=lambda done, total: progress.update(task, completed=done))
