@@ -43,8 +43,10 @@ def main() -> None:
     scene_of = {s: dslr_scene(DslrBench(lenses=base.lenses, sampler=s), chart.pixels, chart.mm_per_px)
                 for s in SAMPLERS}
     start = time.perf_counter()
-    reference = render_scene(scene_of["multijitter"], spp=args.reference_spp, seed=12345).pixels.astype(np.float64)
-    print(f"reference: multijitter {args.reference_spp} spp in {time.perf_counter() - start:.1f} s")
+    reference_result = render_scene(scene_of["multijitter"], spp=args.reference_spp, seed=12345)
+    reference = reference_result.pixels.astype(np.float64)
+    print(f"variant {reference_result.variant}; reference: multijitter {args.reference_spp} spp in "
+          f"{time.perf_counter() - start:.1f} s")
 
     rows = {}
     for sampler in SAMPLERS:
