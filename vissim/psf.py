@@ -5,7 +5,9 @@ Wave optics: the generalised pupil ``P exp(i k W)`` is Fourier transformed and
 the Nyquist interval lambda/(2D) of the intensity PSF, over a field that holds the geometric
 blur plus the diffraction skirt, and then *integrated* over the requested output pixels
 (ERRATA item 6); the integration is exact, done as the pixel's sinc in the
-Fourier domain.  A requested field too small for the blur raises
+Fourier domain.  For blurring images, ``pixel="sample"`` gives instead the band-limited point
+samples whose DFT is the OTF: an image's pixels are already integrals, and convolving them
+with an integrated PSF would apply the pixel aperture twice.  A requested field too small for the blur raises
 :class:`~vissim.errors.FieldTooSmallError`; nothing wraps around silently.
 
 Geometric optics: rays through a stratified pupil sample land at the visual direction given
@@ -38,6 +40,7 @@ from vissim.wavefront import Wavefront
 from vissim.zernike import zernike_nm
 
 __all__ = [
+    "PIXEL_MODES",
     "PSF",
     "PsfSampling",
     "compute_psf",
@@ -53,6 +56,8 @@ log = logging.getLogger(__name__)
 MIN_PUPIL_SAMPLES = 128
 #: Diffraction margin (in lambda/D) kept beyond the geometric blur on each side.
 SKIRT_MARGIN_LAMBDA_OVER_D = 8.0
+#: How output pixels relate to the continuous PSF (see :func:`_to_output_pixels`).
+PIXEL_MODES = ("integrate", "sample")
 #: Largest internal FFT (complex128: 1 GiB at 8192^2).
 MAX_FFT_SIZE = 8192
 
@@ -71,6 +76,7 @@ class PSF:
     wavefront: Wavefront
     lca_reference_nm: float | None = None
     sampling: tuple = field(default=(), repr=False)
+    pixel: str = "integrate"  # "integrate" (sensor values) or "sample" (convolution kernel)
 
     @classmethod
     def from_array(cls, data, arcmin_per_px: float, *, wavelength_nm: float = 550.0, pupil_diameter_mm: float = 0.0) -> PSF:
@@ -83,7 +89,8 @@ class PSF:
         step = _check_positive(arcmin_per_px, "angular sampling", "arcmin per pixel")
         array /= array.sum()
         array.setflags(write=False)
-        return cls(array, step, (float(wavelength_nm),), (1.0,), float(pupil_diameter_mm), "user", 1.0, Wavefront.zero(1.0))
+        return cls(array, step, (float(wavelength_nm),), (1.0,), float(pupil_diameter_mm), "user", 1.0,
+                   Wavefront.zero(1.0), pixel="sample")
 
     @property
     def size_px(self) -> tuple[int, int]:
@@ -111,6 +118,7 @@ class PSF:
             "mode": self.mode,
             "energy_in_field": self.energy_in_field,
             "lca_reference_nm": self.lca_reference_nm,
+            "pixel": self.pixel,
             "wavefront": self.wavefront.as_json(),
             "sampling": [s.as_json() for s in self.sampling],
         }
@@ -259,35 +267,47 @@ def _opd_on_grid(wavefront: Wavefront, sampling: PsfSampling, diameter_mm: float
     return opd
 
 
-@functools.lru_cache(maxsize=8)
-def _pixel_transfer(m: int, oversample: int, dtype) -> np.ndarray:
-    """Transfer function of an output pixel's box on the rfft2 grid (cached)."""
-    cycles_per_pixel_y = scipy.fft.fftfreq(m) * oversample
-    cycles_per_pixel_x = scipy.fft.rfftfreq(m) * oversample
-    transfer = (np.sinc(cycles_per_pixel_y)[:, None] * np.sinc(cycles_per_pixel_x)[None, :]).astype(dtype)
+def _profile(cycles_per_pixel: np.ndarray, pixel: str) -> np.ndarray:
+    if pixel == "integrate":  # the output pixel's box
+        return np.sinc(cycles_per_pixel)
+    # ideal low-pass at the output Nyquist (half weight on the Nyquist bin itself)
+    magnitude = np.abs(cycles_per_pixel)
+    return np.where(magnitude < 0.5 - 1e-12, 1.0, np.where(magnitude <= 0.5 + 1e-12, 0.5, 0.0))
+
+
+@functools.lru_cache(maxsize=16)
+def _pixel_transfer(m: int, oversample: int, dtype, pixel: str) -> np.ndarray:
+    """Transfer function applied before decimation onto output pixels, rfft2 grid (cached)."""
+    y = _profile(scipy.fft.fftfreq(m) * oversample, pixel)
+    x = _profile(scipy.fft.rfftfreq(m) * oversample, pixel)
+    transfer = (y[:, None] * x[None, :]).astype(dtype)
     transfer.setflags(write=False)
     return transfer
 
 
-def _integrate_onto_pixels(intensity: np.ndarray, size_px: int, oversample: int) -> np.ndarray:
-    """Exact integrals of the (Nyquist-sampled, periodic) internal PSF over output pixels.
+def _to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixel: str) -> np.ndarray:
+    """Decimate the (Nyquist-sampled, periodic) internal PSF onto ``size_px`` output pixels.
 
-    ``intensity`` has its origin at ``[0, 0]``.  The box of one output pixel is applied as its
-    sinc in the Fourier domain, then the result is sampled at the output pixel centres, origin
-    moved to ``[N//2, N//2]``.  Because the internal grid is finer than lambda/(2D), the
-    intensity's spectrum is complete and the integral is exact up to the field's periodicity.
+    ``intensity`` has its origin at ``[0, 0]``; the output has it at ``[N//2, N//2]``.
+
+    * ``pixel="integrate"``: exact integrals over the output pixels (the box applied as its sinc
+      in the Fourier domain, then sampled).  What a sensor records; non-negative; unit sum.
+    * ``pixel="sample"``: band-limited point samples (ideal low-pass at the output Nyquist),
+      times the pixel area.  The kernel to convolve a *pixel-integrated* image with: its DFT is
+      the OTF itself, whereas convolving with an integrated PSF would apply the pixel's box a
+      second time.  May ring slightly negative near sharp features.
     """
     m = intensity.shape[0]
     if oversample * size_px > m:
         raise AssertionError("output field larger than the internal field")  # pragma: no cover
     spectrum = scipy.fft.rfft2(intensity, workers=-1)
-    spectrum *= _pixel_transfer(m, oversample, intensity.dtype.type)
+    spectrum *= _pixel_transfer(m, oversample, intensity.dtype.type, pixel)
     averaged = scipy.fft.irfft2(spectrum, s=intensity.shape, workers=-1, overwrite_x=True)
     picks = ((np.arange(size_px) - size_px // 2) * oversample) % m
     return averaged[np.ix_(picks, picks)] * oversample**2
 
 
-def _wave_psf(wavefront, diameter_mm, wavelength_nm, arcmin_per_px, size_px, blur_arcmin, dtype):
+def _wave_psf(wavefront, diameter_mm, wavelength_nm, arcmin_per_px, size_px, blur_arcmin, dtype, pixel):
     sampling = psf_sampling(diameter_mm, wavelength_nm, arcmin_per_px, size_px, blur_arcmin)
     window, _, _, amplitude, _ = _pupil_geometry(sampling.fft_size, sampling.pupil_step_mm, diameter_mm)
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
@@ -299,11 +319,17 @@ def _wave_psf(wavefront, diameter_mm, wavelength_nm, arcmin_per_px, size_px, blu
     intensity = np.square(spectrum.real)  # origin at [0, 0]
     intensity += np.square(spectrum.imag)
     total = sampling.fft_size**2 * float(np.sum(amplitude**2))  # Parseval
-    binned = _integrate_onto_pixels(intensity, size_px, sampling.oversample)
-    return np.maximum(binned, 0.0) / total, sampling
+    binned = _to_output_pixels(intensity, size_px, sampling.oversample, pixel)
+    if pixel == "integrate":
+        binned = np.maximum(binned, 0.0)  # round-off only: integrals of an intensity are >= 0
+    return binned / total, sampling
 
 
-def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin):
+#: Sub-pixels per output pixel for band-limiting a geometric PSF (``pixel="sample"``).
+GEOMETRIC_SAMPLE_OVERSAMPLE = 5
+
+
+def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, pixel):
     blur_px = blur_arcmin / arcmin_per_px
     covered_px = math.pi * (blur_px + 1.0) ** 2
     n_rays = int(min(4_000_000, max(250_000, 400 * covered_px)))
@@ -319,9 +345,15 @@ def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin):
     sx, sy = wavefront.slopes_mrad(x_osa, y_osa)
     col = rad_to_arcmin(-sx * 1e-3) / arcmin_per_px  # landing offsets in output pixels
     row = rad_to_arcmin(-sy * 1e-3) / arcmin_per_px  # dW/dy > 0 lands up (+y), i.e. at -row
-    edges = np.arange(size_px + 1) - size_px // 2 - 0.5
+    if pixel == "integrate":  # the histogram on output pixels is the exact pixel integral
+        edges = np.arange(size_px + 1) - size_px // 2 - 0.5
+        counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
+        return counts / keep.sum(), None
+    q = GEOMETRIC_SAMPLE_OVERSAMPLE
+    fine = q * size_px
+    edges = (np.arange(fine + 1) - fine // 2 - 0.5) / q
     counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
-    return counts / keep.sum(), None
+    return _to_output_pixels(scipy.fft.ifftshift(counts), size_px, q, pixel) / keep.sum(), None
 
 
 def compute_psf(
@@ -334,6 +366,7 @@ def compute_psf(
     arcmin_per_px: float = 0.25,
     size_px: int = 256,
     mode: str = "wave",
+    pixel: str = "integrate",
     dtype=np.float64,
 ) -> PSF:
     """PSF of ``wavefront`` over a ``pupil_diameter_mm`` pupil (default: its measurement pupil).
@@ -350,6 +383,10 @@ def compute_psf(
         Output sampling and square field (pixels).  The result is pixel-integrated.
     mode
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
+    pixel
+        ``"integrate"`` (default): each value is the PSF integrated over its pixel, what a
+        sensor records.  ``"sample"``: band-limited point samples, the kernel for blurring
+        pixel-integrated images (see :func:`vissim.blur.blur_image`).
     """
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else _check_positive(
         pupil_diameter_mm, "pupil diameter", "mm"
@@ -365,6 +402,8 @@ def compute_psf(
     size_px = int(size_px)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
+    if pixel not in PIXEL_MODES:
+        raise VissimInputError(f"PSF pixel must be one of {', '.join(PIXEL_MODES)}, got {pixel!r}")
     if dtype not in (np.float32, np.float64):
         raise VissimInputError(f"PSF dtype must be float32 or float64, got {dtype!r}")
     wavelengths = tuple(float(w) for w in np.atleast_1d(wavelength_nm))
@@ -394,10 +433,10 @@ def compute_psf(
                 f"{int(math.ceil(needed / step)) + 2} px or coarser sampling"
             )
         if mode == "wave":
-            mono, sampling = _wave_psf(front, diameter, w, step, size_px, blur, dtype)
+            mono, sampling = _wave_psf(front, diameter, w, step, size_px, blur, dtype, pixel)
             samplings.append(sampling)
         else:
-            mono, _ = _geometric_psf(front, diameter, step, size_px, blur)
+            mono, _ = _geometric_psf(front, diameter, step, size_px, blur, pixel)
         in_field = float(mono.sum())
         energy += weight * in_field
         accumulated += weight * (mono / in_field)
@@ -420,6 +459,7 @@ def compute_psf(
         wavefront=wavefront,
         lca_reference_nm=lca_reference_nm,
         sampling=tuple(samplings),
+        pixel=pixel,
     )
 
 

@@ -15,7 +15,8 @@ from vissim.wavefront import Wavefront
 
 def fake_render(spec):
     tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=spec.arcmin_per_px, shape_px=spec.tile_px,
-                         polarity=spec.polarity, viewing_distance_m=spec.chart_distance_m).pixels
+                         polarity=spec.polarity, viewing_distance_m=spec.chart_distance_m,
+                         snap_to_pixels=False).pixels
     if spec.lenses:
         effect = trial_lens_effect(bench_for(spec).trial_lens_setup())
         front = Wavefront.from_prescription(effect.camera_prescription,

@@ -5,9 +5,11 @@ from __future__ import annotations
 import logging
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from scipy import ndimage
 
 from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
@@ -16,7 +18,7 @@ from vissim.validation.campaign import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
 from vissim.validation.registration import register
 from vissim.validation.renders import bench_setup
-from vissim.validation.simulate import add_bench_diffraction, simulate, simulation_setup
+from vissim.validation.simulate import add_bench_diffraction, block_mean, simulate, simulation_setup
 
 __all__ = ["compute_item", "synthetic_tile"]
 
@@ -26,15 +28,25 @@ log = logging.getLogger(__name__)
 MAX_SHIFT_PX = 6.0
 
 
-def synthetic_tile(configuration: Configuration, settings: CampaignSettings) -> np.ndarray:
-    """The synthetic chart tile: the same letter, size and contrast the bench shows."""
+#: The synthetic chart is simulated at this many sub-pixels per campaign pixel (per axis).
+SYNTHETIC_OVERSAMPLE = 5
+
+
+def synthetic_tile(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> np.ndarray:
+    """The synthetic chart tile: the same letter, size, contrast and position the bench shows.
+
+    The letter is centred on the tile's centre (the bench's optical axis), not snapped to the
+    pixel grid; ``oversample`` renders it on a grid that many times finer.
+    """
+    rows, cols = settings.tile_px
     return optotype_tile(
         configuration.letter,
         configuration.logmar,
-        arcmin_per_px=settings.arcmin_per_px,
-        shape_px=tuple(settings.tile_px),
+        arcmin_per_px=settings.arcmin_per_px / oversample,
+        shape_px=(rows * oversample, cols * oversample),
         polarity=configuration.polarity,
         viewing_distance_m=settings.chart_distance_m,
+        snap_to_pixels=False,
     ).pixels
 
 
@@ -75,12 +87,13 @@ def compute_item(
             "geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
             "wave": noise_floor(truth_wave_a, truth_wave_b, settings.data_range).as_json(),
         }
-    inputs = {"render": no_lens, "synthetic": synthetic_tile(configuration, settings)}
+    fine_synthetic = synthetic_tile(configuration, settings, SYNTHETIC_OVERSAMPLE)
+    inputs = {"render": (no_lens, 1), "synthetic": (fine_synthetic, SYNTHETIC_OVERSAMPLE)}
     images = {
         "truth": _save(item_dir, "truth", truth_a),
         "truth_diffracted": _save(item_dir, "truth_diffracted", truth_wave_a),
         "no_lens_render": _save(item_dir, "no_lens_render", no_lens),
-        "synthetic": _save(item_dir, "synthetic", inputs["synthetic"]),
+        "synthetic": _save(item_dir, "synthetic", block_mean(fine_synthetic, SYNTHETIC_OVERSAMPLE)),
     }
     comparisons = []
     for kind in settings.simulations:
@@ -88,8 +101,21 @@ def compute_item(
         reference_kind = "geometric" if kind == "geometric" else "wave"
         reference = references[reference_kind]
         for input_name in settings.inputs:
-            simulated = simulate(setup, inputs[input_name], settings)
+            image, oversample = inputs[input_name]
+            simulated = simulate(setup, image, settings, oversample=oversample)
             registration = register(reference, simulated, upsample_factor=100)
+            if oversample > 1:
+                # Move the fine input instead of the coarse result: shifting an under-sampled
+                # sharp edge by interpolation at the campaign's sampling is itself inaccurate.
+                shifted = ndimage.shift(image, (registration.shift_rows_px * oversample,
+                                                registration.shift_cols_px * oversample), order=3, mode="nearest")
+                simulated = simulate(setup, shifted, settings, oversample=oversample)
+                residual = register(reference, simulated, upsample_factor=100)
+                registration = replace(
+                    residual,
+                    shift_rows_px=registration.shift_rows_px + residual.shift_rows_px,
+                    shift_cols_px=registration.shift_cols_px + residual.shift_cols_px,
+                )
             if math.hypot(*registration.shift_px) > MAX_SHIFT_PX:
                 log.warning("%s: %s/%s registered by %.1f px (> %.0f): check the crop", configuration.name, kind,
                             input_name, math.hypot(*registration.shift_px), MAX_SHIFT_PX)
