@@ -8,11 +8,13 @@
   ``"constant"`` (a background value; default the mean of the image's border), ``"edge"``,
   ``"reflect"`` or ``"wrap"`` (circular; preserves the mean exactly).
 * A PSF that sums to 1 preserves the mean wherever the padding continues the image.
-* Pixels of an image are integrals over the pixel (a camera's, a renderer's, a chart
-  rasterised by area).  The right kernel is then the PSF's band-limited *point samples*
-  (``compute_psf(..., pixel="sample")``), whose DFT is the OTF; a pixel-integrated PSF would
-  apply the pixel's box a second time (about a 1-pixel extra blur, visible on sharp edges),
-  so :func:`blur_image` warns once when given one.
+* Pixels of an image are integrals over the pixel.  For a *well-sampled* image the exact
+  kernel is the PSF's band-limited point samples (``compute_psf(..., pixel="sample")``, whose
+  DFT is the OTF); a pixel-integrated PSF adds the pixel's box once more.  Images of sharp
+  letters at 1 arcmin/px are under-sampled, and there the band-limited kernel rings while the
+  extra box costs little: measured against the Mitsuba bench the two differ by < 1 dB, so
+  vissim's default is the non-negative integrated PSF.  Simulate sharp inputs on a finer grid
+  and integrate (as the validation harness does) when the last dB matters.
 * One greyscale image with one PSF costs one forward and one inverse real FFT of the padded
   size plus the kernel's transform, which :class:`BlurKernel` computes once and reuses.
 """
@@ -35,7 +37,6 @@ __all__ = ["blur_image", "BlurKernel", "PADDING_MODES"]
 log = logging.getLogger(__name__)
 
 PADDING_MODES = ("constant", "edge", "reflect", "wrap")
-_WARNED_INTEGRATED: list[bool] = []
 
 
 @dataclass(frozen=True, eq=False)
@@ -159,12 +160,6 @@ def blur_image(
             raise VissimInputError(f"got {len(backgrounds)} background values for {len(channels)} channels")
     for p in psfs:
         _check_sampling(p, arcmin_per_px)
-        if p.pixel == "integrate" and not _WARNED_INTEGRATED:
-            _WARNED_INTEGRATED.append(True)
-            log.warning(
-                "blurring with a pixel-integrated PSF applies the pixel aperture twice; "
-                "compute the PSF with pixel='sample' to blur pixel-integrated images"
-            )
     cache: dict = {}
     blurred = [
         _blur_channel(np.asarray(c, dtype=dtype), p, padding, b, cache, dtype)

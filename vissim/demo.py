@@ -52,8 +52,7 @@ def run_demo(output_dir: str | Path, *, settings: DemoSettings = DemoSettings(),
         rx = Prescription.parse(text)
         front = Wavefront.from_prescription(rx, settings.pupil_diameter_mm)
         size = suggested_size_px(front, settings.arcmin_per_px, wavelength_nm=settings.wavelength_nm)
-        psf = compute_psf(front, wavelength_nm=settings.wavelength_nm, arcmin_per_px=settings.arcmin_per_px, size_px=size,
-                          pixel="sample")
+        psf = compute_psf(front, wavelength_nm=settings.wavelength_nm, arcmin_per_px=settings.arcmin_per_px, size_px=size)
         fine = compute_psf(front, wavelength_nm=settings.wavelength_nm, arcmin_per_px=0.25, size_px=4 * size)
         blurred = blur_image(chart.pixels, psf, arcmin_per_px=settings.arcmin_per_px)
         prov = make_provenance(command="demo", prescription=str(rx), psf=psf.as_json(), chart=chart_prov["inputs"])

@@ -5,9 +5,9 @@ Wave optics: the generalised pupil ``P exp(i k W)`` is Fourier transformed and
 the Nyquist interval lambda/(2D) of the intensity PSF, over a field that holds the geometric
 blur plus the diffraction skirt, and then *integrated* over the requested output pixels
 (ERRATA item 6); the integration is exact, done as the pixel's sinc in the
-Fourier domain.  For blurring images, ``pixel="sample"`` gives instead the band-limited point
-samples whose DFT is the OTF: an image's pixels are already integrals, and convolving them
-with an integrated PSF would apply the pixel aperture twice.  A requested field too small for the blur raises
+Fourier domain.  ``pixel="sample"`` gives instead the band-limited point samples, whose DFT
+is the OTF: the exact kernel for blurring a *well-sampled* image (see :mod:`vissim.blur`).
+A requested field too small for the blur raises
 :class:`~vissim.errors.FieldTooSmallError`; nothing wraps around silently.
 
 Geometric optics: rays through a stratified pupil sample land at the visual direction given
@@ -293,9 +293,9 @@ def _to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixe
     * ``pixel="integrate"``: exact integrals over the output pixels (the box applied as its sinc
       in the Fourier domain, then sampled).  What a sensor records; non-negative; unit sum.
     * ``pixel="sample"``: band-limited point samples (ideal low-pass at the output Nyquist),
-      times the pixel area.  The kernel to convolve a *pixel-integrated* image with: its DFT is
-      the OTF itself, whereas convolving with an integrated PSF would apply the pixel's box a
-      second time.  May ring slightly negative near sharp features.
+      times the pixel area.  Its DFT is the OTF itself: the exact kernel for convolving a
+      well-sampled, pixel-integrated image (an integrated PSF adds the pixel's box once more).
+      May ring slightly negative near sharp features.
     """
     m = intensity.shape[0]
     if oversample * size_px > m:
@@ -385,8 +385,8 @@ def compute_psf(
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
     pixel
         ``"integrate"`` (default): each value is the PSF integrated over its pixel, what a
-        sensor records.  ``"sample"``: band-limited point samples, the kernel for blurring
-        pixel-integrated images (see :func:`vissim.blur.blur_image`).
+        sensor records.  ``"sample"``: band-limited point samples, the exact kernel for
+        blurring well-sampled images (see :mod:`vissim.blur` for when it matters).
     """
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else _check_positive(
         pupil_diameter_mm, "pupil diameter", "mm"

@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
             size = min(size, 2 * max(image.pixels.shape[:2]) + 1)
             cache[key] = compute_psf(
                 wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
-                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode, pixel="sample",
+                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode,
             )
         psfs.append(cache[key])
     blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)

@@ -137,7 +137,7 @@ def _psf(prescription: Prescription, pupil_mm: float, wavelength_nm: float, arcm
     front = Wavefront.from_prescription(prescription, pupil_mm)
     size = suggested_size_px(front, arcmin_per_px, wavelength_nm=wavelength_nm)
     return compute_psf(front, wavelength_nm=wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=size, mode=mode,
-                       pixel="sample")
+                       pixel="integrate")
 
 
 def simulate(setup: SimulationSetup, image: np.ndarray, settings: CampaignSettings, *, oversample: int = 1) -> np.ndarray:
