@@ -1,14 +1,12 @@
 """``vissim render``: render the virtual optical bench with Mitsuba 3 to a linear EXR.
 
-Sub-commands: ``render bench`` (the DSLR bench, :mod:`vissim.bench.dslr`).  ``render atv``
-slots in through :func:`add_atv_parser` once :mod:`vissim.bench.atv` exists.
+Sub-commands: ``render bench`` (the DSLR bench, :mod:`vissim.bench.dslr`) and ``render atv``
+(the ATV tube, :mod:`vissim.bench.atv`).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
-import importlib.util
 import logging
 import sys
 from pathlib import Path
@@ -29,8 +27,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     )
     benches = parser.add_subparsers(dest="bench", metavar="BENCH")
     add_bench_parser(benches)
-    if importlib.util.find_spec("vissim.bench.atv") is not None:
-        add_atv_parser(benches)
+    add_atv_parser(benches)
     parser.set_defaults(func=lambda args: _usage(parser))
     return parser
 
@@ -84,17 +81,11 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def add_atv_parser(subparsers) -> argparse.ArgumentParser:  # pragma: no cover - registered once vissim.bench.atv exists
-    """``render atv``: the ATV tube bench (issue 7); its options and runner live with that bench."""
-    importlib.import_module("vissim.bench.atv")  # the bench this sub-command will render
+def add_atv_parser(subparsers) -> argparse.ArgumentParser:
+    """``render atv``: the ATV tube (thesis §5.4), defined with its bench in :mod:`vissim.cli.render_atv`."""
+    from vissim.cli.render_atv import add_atv_parser as add
 
-    parser = subparsers.add_parser("atv", help="the ATV tube bench")
-    parser.set_defaults(func=_atv_not_ready)
-    return parser
-
-
-def _atv_not_ready(args: argparse.Namespace) -> int:  # pragma: no cover - replaced with the ATV bench
-    raise VissimInputError("vissim render atv is not implemented yet")
+    return add(subparsers)
 
 
 def _lenses(args):

@@ -29,6 +29,15 @@ without Russian roulette finds the pixel by chance: noisy, since each camera ray
 78 µm square through the lenses.  Light tracing cannot do this side's job in Mitsuba (its
 particle tracer returns nothing through smooth glass and does not connect to a thin-lens
 sensor), and vice versa: so both exist, one checking the other.
+
+**Measured** (llvm_ad_mono, 2 shared cores at load 2-5; 4 mm pupil, 0.5'/px unless stated).
+Light tracing: 2^18 rays 0.3-0.6 s, 2^20 rays 1.1-3 s, 2^22 rays 5-14 s per configuration; against
+2^24-ray references (in focus, +2 D, -4 D) the smoothed peak is within 0.2 % at 2^18 rays,
+0.07 % at 2^20 and 0.01 % at 2^22, the spot diameter within 0.1 % and the flux within 0.01 %;
+the largest raw pixel is 10-20 % high at 2^20 (noise bias).  Camera side, +2 D at 1'/px on a
+37 px field: 8192 spp in 45 s gives 12 % noise per pixel, 32768 spp in 73 s 6 %; flux within
+0.2-0.4 % and spot diameter within 0.3-0.5 % of the tracer, annulus means within 2 sigma; in
+focus it is nearly noise-free (64 spp, 0.4 s).  Hence light tracing is the primary method.
 """
 
 from __future__ import annotations
@@ -113,7 +122,10 @@ class AtvResult:
 
 
 def _check_sampling(arcmin_per_px, size_px, config: AtvConfig) -> tuple[float, int]:
-    step = float(arcmin_per_px) if isinstance(arcmin_per_px, (int, float)) else math.nan
+    try:
+        step = float(arcmin_per_px)
+    except (TypeError, ValueError):
+        step = math.nan
     if not math.isfinite(step) or step <= 0.0:
         raise VissimInputError(f"angular sampling must be > 0 arcmin per pixel, got {arcmin_per_px!r}")
     size = suggested_atv_size_px(config, step) if size_px is None else size_px
@@ -152,8 +164,8 @@ class _Tracer:
         if config.trial_lens is not None:
             indices["trial_lens"] = config.trial_lens.refractive_index
         self.lenses = [(self.mi.ShapePtr(s), indices[s.id()]) for s in self.scene.shapes() if s.id() in indices]
-        if len(self.lenses) != len(indices):
-            raise VissimError(f"the ATV scene lost its lens shapes ({', '.join(indices)}) on loading")  # pragma: no cover
+        if len(self.lenses) != len(indices):  # pragma: no cover - optimize=False keeps them apart
+            raise VissimError(f"the ATV scene lost its lens shapes ({', '.join(indices)}) on loading")
         self.max_events = 2 * len(self.lenses) + 2
         self.fresnel = config.fresnel_loss
         self.start_z = config.layout().phone_z_mm - _START_OFFSET_MM

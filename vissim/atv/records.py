@@ -1,0 +1,218 @@
+"""Records of the ATV participant data (thesis Appendix A): frozen dataclasses validated on construction.
+
+Each record checks its own ranges and raises :class:`~vissim.errors.VissimInputError` naming the
+field, the value and its unit; :mod:`vissim.atv.schema` adds the file and the JSON path.
+Public names are re-exported by :mod:`vissim.atv.data`.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+from vissim.errors import VissimInputError
+from vissim.prescription import Prescription
+
+__all__ = [
+    "Autorefraction",
+    "AutorefractorEye",
+    "Discrepancy",
+    "EYES",
+    "Examination",
+    "SubjectData",
+    "SummaryRow",
+    "THESIS_TRIAL_LENSES_DIOPTERS",
+    "Trial",
+]
+
+EYES = ("R", "L")
+#: Thesis §5.1 (line 860): integer lenses -5 ... +5 D plus ±0.25, ±0.5 and ±1.5 D.
+THESIS_TRIAL_LENSES_DIOPTERS = (-5.0, -4.0, -3.0, -2.0, -1.5, -1.0, -0.5, -0.25, 0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0)
+
+
+def _range(value: float, name: str, unit: str, lo: float, hi: float) -> float:
+    if not (lo <= value <= hi):
+        raise VissimInputError(f"{name} must be within {lo:g}-{hi:g} {unit}, got {value:g} {unit}")
+    return value
+
+
+def _eye(value: str, name: str = "eye") -> str:
+    if value not in EYES:
+        raise VissimInputError(f"{name} must be 'R' or 'L', got {value!r}")
+    return value
+
+
+def _quarter_diopters(value: float, name: str) -> float:
+    _range(value, name, "D", -20.0, 20.0)
+    if abs(value * 4 - round(value * 4)) > 1e-9:
+        raise VissimInputError(f"{name} must be a multiple of 0.25 D (a trial lens), got {value:g} D")
+    return value
+
+
+@dataclass(frozen=True)
+class AutorefractorEye:
+    """One eye's autorefraction as printed (minus cylinder; SE as printed, rounded)."""
+
+    sphere_diopters: float
+    cylinder_diopters: float
+    axis_deg: float
+    spherical_equivalent_diopters: float
+    line: int | None = None
+
+    def __post_init__(self) -> None:
+        _range(self.sphere_diopters, "sphere_diopters", "D", -30.0, 30.0)
+        _range(self.cylinder_diopters, "cylinder_diopters", "D", -10.0, 10.0)
+        _range(self.axis_deg, "axis_deg", "deg", 0.0, 180.0)
+        _range(self.spherical_equivalent_diopters, "spherical_equivalent_diopters", "D", -30.0, 30.0)
+
+    @property
+    def computed_spherical_equivalent_diopters(self) -> float:
+        """S + C/2 (thesis Eq. 5.1), unrounded."""
+        return self.sphere_diopters + self.cylinder_diopters / 2.0
+
+    def prescription(self) -> Prescription:
+        """The correcting lens the autorefractor reports (at its vertex distance)."""
+        return Prescription(self.sphere_diopters, self.cylinder_diopters, self.axis_deg)
+
+
+@dataclass(frozen=True)
+class Autorefraction:
+    date: _dt.date
+    eye_drops: bool
+    vertex_distance_mm: float
+    cylinder_sign: str
+    pupil_distance_mm: float
+    right: AutorefractorEye
+    left: AutorefractorEye
+    lines: tuple[int, int] | None = None
+
+    def __post_init__(self) -> None:
+        _range(self.vertex_distance_mm, "vertex_distance_mm", "mm", 0.0, 25.0)
+        _range(self.pupil_distance_mm, "pupil_distance_mm", "mm", 30.0, 90.0)
+        if self.cylinder_sign not in ("-", "+"):
+            raise VissimInputError(f"cylinder_sign must be '-' or '+', got {self.cylinder_sign!r}")
+
+    def eye(self, eye: str) -> AutorefractorEye:
+        return self.right if _eye(eye) == "R" else self.left
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One threshold measurement: a trial lens in front of one eye."""
+
+    trial_lens_diopters: float
+    eye: str
+    minimum_visible_code: float  # display code value in [0, 1] (ERRATA item 9)
+    elapsed_time_s: float
+    lux_mean_lx: float
+    line: int | None = None
+
+    def __post_init__(self) -> None:
+        _quarter_diopters(self.trial_lens_diopters, "trial_lens_diopters")
+        _eye(self.eye)
+        _range(self.minimum_visible_code, "minimum_visible_code", "(display code value)", 0.0, 1.0)
+        _range(self.elapsed_time_s, "elapsed_time_s", "s", 0.0, 3600.0)
+        _range(self.lux_mean_lx, "lux_mean_lx", "lx", 0.0, 200000.0)
+
+
+@dataclass(frozen=True)
+class Examination:
+    number: int
+    date: _dt.date
+    eye_drops: bool
+    duration_s: float
+    lens_sequence_diopters: tuple[float, ...]
+    trials: tuple[Trial, ...]
+    lines: tuple[int, int] | None = None
+
+    def __post_init__(self) -> None:
+        if self.number < 1:
+            raise VissimInputError(f"number must be >= 1, got {self.number}")
+        _range(self.duration_s, "duration_s", "s", 0.0, 86400.0)
+        for i, lens in enumerate(self.lens_sequence_diopters):
+            _quarter_diopters(lens, f"lens_sequence_diopters[{i}]")
+        if not self.trials:
+            raise VissimInputError("trials is empty; an examination needs at least one trial")
+
+    def value(self, lens_diopters: float, eye: str) -> float | None:
+        for t in self.trials:
+            if t.trial_lens_diopters == lens_diopters and t.eye == eye:
+                return t.minimum_visible_code
+        return None
+
+
+@dataclass(frozen=True)
+class SummaryRow:
+    trial_lens_diopters: float
+    eye: str
+    mean_code: float
+    max_code: float
+    diff_code: float
+    line: int | None = None
+
+    def __post_init__(self) -> None:
+        _quarter_diopters(self.trial_lens_diopters, "trial_lens_diopters")
+        _eye(self.eye)
+        for name in ("mean_code", "max_code", "diff_code"):
+            _range(getattr(self, name), name, "(display code value)", 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Discrepancy:
+    """Where the data disagree with a number the thesis printed (or with its protocol)."""
+
+    kind: str  # spherical_equivalent | summary_mean | summary_max | summary_diff | summary_row | duration | missing_trial | ...
+    where: str
+    message: str
+    printed: float | str | None = None
+    computed: float | str | None = None
+
+    def as_json(self) -> dict:
+        return {"kind": self.kind, "where": self.where, "message": self.message, "printed": self.printed, "computed": self.computed}
+
+
+@dataclass(frozen=True)
+class SubjectData:
+    subject_id: str
+    path: Path | None
+    birthdate: _dt.date | None
+    gender: str | None
+    source: Mapping[str, Any]
+    notes: tuple[str, ...]
+    autorefraction: tuple[Autorefraction, ...]
+    examinations: tuple[Examination, ...]
+    summary_without_drops: tuple[SummaryRow, ...]
+    discrepancies: tuple[Discrepancy, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if not self.subject_id:
+            raise VissimInputError("subject_id is empty")
+        if not self.examinations:
+            raise VissimInputError("examinations is empty; a subject needs at least one examination")
+        object.__setattr__(self, "source", MappingProxyType(dict(self.source)))
+
+    def cycloplegic_autorefraction(self) -> Autorefraction | None:
+        """The autorefraction with eye drops (the latest, if several)."""
+        found = [a for a in self.autorefraction if a.eye_drops]
+        return found[-1] if found else None
+
+    def measured_se_diopters(self, eye: str) -> float | None:
+        """S + C/2 of the cycloplegic autorefraction (unrounded), or ``None`` without one."""
+        ar = self.cycloplegic_autorefraction()
+        return None if ar is None else ar.eye(eye).computed_spherical_equivalent_diopters
+
+    def sessions(self, eye_drops: bool) -> tuple[Examination, ...]:
+        return tuple(e for e in self.examinations if e.eye_drops == eye_drops)
+
+    def minimum_visible(self, eye: str, eye_drops: bool) -> dict[float, tuple[float, ...]]:
+        """Printed minimum-visible values per trial lens (D), one per session that has them."""
+        values: dict[float, list[float]] = {}
+        for exam in self.sessions(eye_drops):
+            for t in exam.trials:
+                if t.eye == _eye(eye):
+                    values.setdefault(t.trial_lens_diopters, []).append(t.minimum_visible_code)
+        return {lens: tuple(v) for lens, v in sorted(values.items())}

@@ -1,0 +1,467 @@
+"""The ATV tube of thesis section 5.4 (Fig. 5.4): one lit phone pixel seen through an 8 D lens.
+
+A 125 mm tube, dull black inside, holds an iPhone 5 (326 ppi) at one end and an 8 D
+plano-convex lens with an eyecup at the other; the phone sits in the lens's focal plane, so a
+lit pixel reaches the eye as parallel light, "equivalent to observing a point at infinity".
+Trial lenses (-5 ... +5 D) go in a slot between the lens and the eye.
+
+World frame (millimetres), the same as :mod:`vissim.bench.dslr`: the eye's pupil -- a reduced
+eye, a thin lens at its pupil -- at z = 0, looking along +z with +y up; world x is the
+examiner's right (TABO and OSA pupil x), so the eye's right is world -x.  Light travels toward
+-z: pixel (``phone_z_mm``), collimator, trial lens, pupil.
+
+Choices, and why:
+
+* **Tube length** is measured from the phone's screen to the collimator's *front principal
+  plane*; the default 125 mm = 1000 / 8 D puts the pixel exactly in the focal plane (thesis:
+  "the length of the tube equal to this lens focal distance").  Another length defocuses the
+  phone, and every prediction here follows it.
+* **Collimator**: ``lens_power_diopters`` is its equivalent power.  Convex side toward the eye
+  by default -- the orientation of least spherical aberration for a collimator (the thesis does
+  not say); ``lens_convex_side="phone"`` turns it round.  3 mm thick over a 22 mm clear aperture.
+* **Pixel**: a Lambertian square of side 25.4 / ppi mm (77.9 µm at 326 ppi) whose *linear*
+  radiance is ``pixel_radiance``.  The thesis's "iPhone intensity [0, 1]" is a display code
+  value (ERRATA item 9); :func:`display_code_to_linear` is the separate transfer step.
+* **Trial lens**: a thick crown-glass :class:`~vissim.trial_lens.TrialLens` (marked with its back
+  vertex power, as meshed by :mod:`vissim.bench.lens_mesh`), back vertex
+  ``trial_lens_distance_mm`` in front of the pupil (15 mm: a 12 mm vertex distance plus 3 mm
+  from the cornea to the entrance pupil).  :func:`atv_trial_lens` makes one of realistic
+  thickness.
+* **Eye**: pupil 2-8 mm, its own :class:`~vissim.prescription.RefractiveError` (a
+  :class:`~vissim.prescription.Prescription` is converted) and accommodation >= 0 D.  A ray
+  through pupil point x (mm) with direction angle u lands at visual angle
+  ``-u + (E + A) x`` milliradians: the thin lens is the eye's excess power E plus accommodation.
+
+Scene dicts hold plain values (4 x 4 row-major ``to_world`` lists), converted by
+:func:`vissim.render.run.to_mitsuba_dict`; nothing here imports Mitsuba.  The paraxial model
+(:func:`atv_paraxial`) is the theory both renderers are checked against;
+:func:`predicted_spot` (in :mod:`vissim.bench.atv_predict`) turns it into a retinal image.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm, rim_thickness_mm, sag_mm
+from vissim.bench.lens_mesh import lens_surface_curvatures_per_mm
+from vissim.charts import MM_PER_INCH
+from vissim.errors import VissimInputError
+from vissim.imageio import srgb_decode
+from vissim.prescription import LensPower, Prescription, RefractiveError
+from vissim.trial_lens import CROWN_GLASS_INDEX, TrialLens, transfer_matrix
+from vissim.units import arcmin_to_rad, mrad_to_arcmin
+from vissim.validate import finite_number
+
+__all__ = [
+    "IPHONE5_PPI", "LENS_BSDF", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout",
+    "AtvParaxial", "atv_trial_lens", "atv_layout", "atv_paraxial", "atv_scene", "display_code_to_linear",
+    "pixel_pitch_mm", "predicted_spot",
+]
+
+log = logging.getLogger(__name__)
+
+#: Pixel density of the iPhone 5's Retina display (thesis section 5.4).
+IPHONE5_PPI = 326.0
+#: Plugin name of the refraction-only BSDF; equals :data:`vissim.render.plugins.REFRACT_BSDF`.
+LENS_BSDF = "vissim_refract"
+DISPLAY_TRANSFERS = ("srgb", "gamma2.2")
+PUPIL_RANGE_MM = (2.0, 8.0)
+MAX_ACCOMMODATION_DIOPTERS = 15.0
+#: Tube radius beyond the largest clear aperture, mm (the lenses sit in the tube).
+TUBE_CLEARANCE_MM = 0.05
+#: Least air between the trial lens and the collimator, and between the pupil and the trial lens, mm.
+MIN_AIR_GAP_MM = 0.5
+NEAR_CLIP_MM = 1.0
+#: Path depth of the camera cross-check: two lenses, four refractions, the pixel, some slack.
+MAX_DEPTH = 16
+_FAR_FOCUS_MM = 1.0e9
+_I2 = np.eye(2)
+
+
+def _mm_to_m(length_mm):
+    """The one millimetre-to-metre conversion of this module."""
+    return np.asarray(length_mm, dtype=float) / 1000.0 if np.ndim(length_mm) else float(length_mm) / 1000.0
+
+
+def _number(value, name: str, unit: str, *, lo: float | None = None, hi: float | None = None,
+            lo_open: bool = False) -> float:
+    number = finite_number(value, name, unit)
+    if lo is not None and (number < lo or (lo_open and number == lo)):
+        raise VissimInputError(f"{name} must be {'>' if lo_open else '>='} {lo:g} {unit}, got {number:g} {unit}")
+    if hi is not None and number > hi:
+        raise VissimInputError(f"{name} must be <= {hi:g} {unit}, got {number:g} {unit}")
+    return number + 0.0
+
+
+def pixel_pitch_mm(pixels_per_inch: float) -> float:
+    """Side of one display pixel in mm: 25.4 / ppi (77.9 µm at 326 ppi)."""
+    return MM_PER_INCH / _number(pixels_per_inch, "display resolution", "pixels per inch", lo=0.0, lo_open=True)
+
+
+def display_code_to_linear(code, transfer: str = "srgb"):
+    """Relative linear luminance in [0, 1] of a display code value in [0, 1] (ERRATA item 9).
+
+    ``"srgb"``: the IEC 61966-2-1 decoding (:func:`vissim.imageio.srgb_decode`); ``"gamma2.2"``:
+    a pure power law ``code ** 2.2``.  Multiply by the display's white radiance to get
+    :attr:`AtvTube.pixel_radiance`.  Scalars give floats, arrays arrays.
+    """
+    if transfer not in DISPLAY_TRANSFERS:
+        raise VissimInputError(f"display transfer must be one of {', '.join(DISPLAY_TRANSFERS)}, got {transfer!r}")
+    try:
+        values = np.asarray(code, dtype=float)
+    except (TypeError, ValueError):
+        raise VissimInputError(f"display code must be a number in [0, 1] (code units), got {code!r}") from None
+    if not np.all(np.isfinite(values)) or values.min(initial=0.0) < 0.0 or values.max(initial=0.0) > 1.0:
+        raise VissimInputError(f"display code must lie in [0, 1] (code units), got {code!r}")
+    linear = srgb_decode(values) if transfer == "srgb" else np.power(values, 2.2)
+    return float(linear) if np.ndim(code) == 0 else np.asarray(linear, dtype=float)
+
+
+@dataclass(frozen=True)
+class AtvTube:
+    """The tube, its collimating lens and the phone (module doc for the conventions)."""
+
+    tube_length_mm: float = 125.0
+    lens_power_diopters: float = 8.0
+    lens_refractive_index: float = CROWN_GLASS_INDEX
+    lens_center_thickness_mm: float = 3.0
+    lens_clear_aperture_mm: float = 22.0
+    lens_convex_side: str = "eye"
+    eye_relief_mm: float = 25.0
+    pixels_per_inch: float = IPHONE5_PPI
+    pixel_radiance: float = 1.0
+    pixel_offset_mm: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        s(self, "tube_length_mm", _number(self.tube_length_mm, "tube length", "mm", lo=0.0, lo_open=True))
+        s(self, "lens_power_diopters", _number(self.lens_power_diopters, "collimator power", "dioptres",
+                                               lo=0.0, lo_open=True, hi=40.0))
+        s(self, "lens_refractive_index", _number(self.lens_refractive_index, "collimator refractive index",
+                                                 "(dimensionless)", lo=1.0, lo_open=True, hi=3.0))
+        s(self, "lens_center_thickness_mm", _number(self.lens_center_thickness_mm, "collimator centre thickness",
+                                                    "mm", lo=0.0, lo_open=True))
+        s(self, "lens_clear_aperture_mm", _number(self.lens_clear_aperture_mm, "collimator clear aperture", "mm",
+                                                  lo=0.0, lo_open=True))
+        if self.lens_convex_side not in ("eye", "phone"):
+            raise VissimInputError(f"lens_convex_side must be 'eye' or 'phone', got {self.lens_convex_side!r}")
+        s(self, "eye_relief_mm", _number(self.eye_relief_mm, "eye relief", "mm", lo=0.0, lo_open=True))
+        s(self, "pixels_per_inch", _number(self.pixels_per_inch, "display resolution", "pixels per inch",
+                                           lo=0.0, lo_open=True))
+        s(self, "pixel_radiance", _number(self.pixel_radiance, "pixel radiance", "linear radiance units", lo=0.0))
+        try:
+            offset = tuple(_number(v, "pixel offset", "mm") for v in self.pixel_offset_mm)
+        except TypeError:
+            raise VissimInputError(f"pixel offset must be (x, y) in mm, got {self.pixel_offset_mm!r}") from None
+        if len(offset) != 2 or math.hypot(*offset) > 0.25 * self.lens_clear_aperture_mm:
+            raise VissimInputError(
+                f"pixel offset must be (x, y) in mm within {0.25 * self.lens_clear_aperture_mm:g} mm of the axis, "
+                f"got {self.pixel_offset_mm!r}")
+        s(self, "pixel_offset_mm", offset)
+        thinnest, _ = rim_thickness_mm(self.collimator_lens(), self.lens_clear_aperture_mm)
+        if thinnest <= 0.0:
+            raise VissimInputError(
+                f"a {self.lens_center_thickness_mm:g} mm thick {self.lens_power_diopters:g} D collimator has no edge "
+                f"at a {self.lens_clear_aperture_mm:g} mm clear aperture ({thinnest:.3g} mm); make it thicker")
+        if self.front_focal_distance_mm() + self.tube_length_mm - self.focal_length_mm <= 0.0:
+            raise VissimInputError(f"tube length {self.tube_length_mm:g} mm puts the phone inside the collimator")
+
+    @property
+    def focal_length_mm(self) -> float:
+        return 1000.0 / self.lens_power_diopters
+
+    @property
+    def pixel_pitch_mm(self) -> float:
+        return pixel_pitch_mm(self.pixels_per_inch)
+
+    def collimator_lens(self) -> TrialLens:
+        """The plano-convex collimator as a :class:`TrialLens` (front = phone side) of equivalent power P."""
+        power, n, t = self.lens_power_diopters, self.lens_refractive_index, self.lens_center_thickness_mm
+        if self.lens_convex_side == "eye":  # plano front, F2 = P: back vertex power = P
+            return TrialLens(power, refractive_index=n, center_thickness_mm=t, back_surface_diopters=power)
+        reduced_m = _mm_to_m(t) / n  # convex front F1 = P, plano back: back vertex power P / (1 - t/n P)
+        return TrialLens(power / (1.0 - reduced_m * power), refractive_index=n, center_thickness_mm=t)
+
+    def front_focal_distance_mm(self) -> float:
+        """From the phone-side vertex to the front focal point, mm (f - t/n for convex toward the eye)."""
+        d = self.collimator_lens().ray_transfer_matrix()[2, 2]
+        return 1000.0 * d / self.lens_power_diopters
+
+
+@dataclass(frozen=True)
+class AtvEye:
+    """The observer: pupil diameter, own refractive error (excess power), accommodation."""
+
+    pupil_diameter_mm: float = 4.0
+    refractive_error: RefractiveError | Prescription | None = None
+    accommodation_diopters: float = 0.0
+
+    def __post_init__(self) -> None:
+        lo, hi = PUPIL_RANGE_MM
+        object.__setattr__(self, "pupil_diameter_mm", _number(self.pupil_diameter_mm, "pupil diameter", "mm",
+                                                              lo=lo, hi=hi))
+        error = self.refractive_error
+        if error is None:
+            error = RefractiveError(0.0)
+        elif isinstance(error, Prescription):
+            error = error.refractive_error()
+        elif isinstance(error, LensPower) or not isinstance(error, RefractiveError):
+            raise VissimInputError(
+                f"the eye's refraction must be a Prescription or a RefractiveError, got {type(error).__name__}")
+        object.__setattr__(self, "refractive_error", error)
+        object.__setattr__(self, "accommodation_diopters", _number(
+            self.accommodation_diopters, "accommodation", "dioptres", lo=0.0, hi=MAX_ACCOMMODATION_DIOPTERS))
+
+    def excess_power_matrix_diopters(self) -> np.ndarray:
+        """2x2 excess power of the eye's thin lens over a relaxed emmetrope: error + accommodation."""
+        return np.asarray(self.refractive_error.power_matrix(), dtype=float) + self.accommodation_diopters * _I2
+
+
+def atv_trial_lens(sphere_diopters: float, cylinder_diopters: float = 0.0, axis_deg: float = 180.0, *,
+                   clear_aperture_mm: float = 22.0, refractive_index: float = CROWN_GLASS_INDEX) -> TrialLens:
+    """A crown-glass trial lens of realistic centre thickness (1 mm minimum at edge and centre)."""
+    power = LensPower(sphere_diopters, cylinder_diopters, axis_deg)
+    thickness = realistic_center_thickness_mm(power, clear_aperture_mm, refractive_index)
+    return TrialLens(power.sphere_diopters, power.cylinder_diopters, power.axis_deg,
+                     refractive_index=refractive_index, center_thickness_mm=thickness)
+
+
+@dataclass(frozen=True)
+class AtvLayout:
+    """Axial positions in the world frame, mm (pupil at 0); ``trial_*`` are None without a trial lens."""
+
+    collimator_back_vertex_z_mm: float
+    collimator_front_vertex_z_mm: float
+    collimator_front_principal_z_mm: float
+    phone_z_mm: float
+    tube_radius_mm: float
+    trial_back_vertex_z_mm: float | None = None
+    trial_front_vertex_z_mm: float | None = None
+
+
+def _surface_z_extent_mm(lens: TrialLens, aperture_mm: float, z_back_vertex: float) -> tuple[float, float]:
+    """(nearest to the eye, farthest) z of a lens's surfaces over its clear aperture."""
+    front, back = lens_surface_curvatures_per_mm(lens)
+    angles = np.linspace(0.0, 2.0 * np.pi, 72, endpoint=False)
+    radii = 0.5 * aperture_mm * np.linspace(0.0, 1.0, 9)
+    xy = np.stack([np.outer(radii, np.cos(angles)), np.outer(radii, np.sin(angles))], axis=-1).reshape(-1, 2)
+    z_front = z_back_vertex + lens.center_thickness_mm - sag_mm(front, xy)
+    z_back = z_back_vertex - sag_mm(back, xy)
+    return float(min(z_back.min(), z_front.min())), float(max(z_back.max(), z_front.max()))
+
+
+@dataclass(frozen=True)
+class AtvConfig:
+    """Tube, eye and an optional trial lens in the slot (module doc)."""
+
+    tube: AtvTube = field(default_factory=AtvTube)
+    eye: AtvEye = field(default_factory=AtvEye)
+    trial_lens: TrialLens | None = None
+    trial_lens_distance_mm: float = 15.0
+    trial_clear_aperture_mm: float = 22.0
+    fresnel_loss: bool = False
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.tube, AtvTube) or not isinstance(self.eye, AtvEye):
+            raise VissimInputError("AtvConfig needs an AtvTube and an AtvEye")
+        object.__setattr__(self, "trial_lens_distance_mm", _number(
+            self.trial_lens_distance_mm, "trial lens distance", "mm", lo=0.0, lo_open=True))
+        object.__setattr__(self, "trial_clear_aperture_mm", _number(
+            self.trial_clear_aperture_mm, "trial lens clear aperture", "mm", lo=0.0, lo_open=True))
+        object.__setattr__(self, "fresnel_loss", bool(self.fresnel_loss))
+        lens = self.trial_lens
+        if lens is None:
+            return
+        if not isinstance(lens, TrialLens):
+            raise VissimInputError(f"trial_lens must be a TrialLens or None, got {type(lens).__name__}")
+        if lens.is_thin or lens.refractive_index is None:
+            raise VissimInputError(
+                f"the ATV bench meshes its trial lens: {lens.marked_power} needs a refractive index and a centre "
+                "thickness in mm (use atv_trial_lens)")
+        thinnest, _ = rim_thickness_mm(lens, self.trial_clear_aperture_mm)
+        if thinnest <= 0.0:
+            raise VissimInputError(f"trial lens {lens.marked_power} has no edge at a "
+                                   f"{self.trial_clear_aperture_mm:g} mm aperture ({thinnest:.3g} mm)")
+        near, far = _surface_z_extent_mm(lens, self.trial_clear_aperture_mm, self.trial_lens_distance_mm)
+        coll_near, _ = _surface_z_extent_mm(self.tube.collimator_lens(), self.tube.lens_clear_aperture_mm,
+                                            self.tube.eye_relief_mm)
+        if near < MIN_AIR_GAP_MM or far > coll_near - MIN_AIR_GAP_MM:
+            raise VissimInputError(
+                f"trial lens {lens.marked_power} at {self.trial_lens_distance_mm:g} mm spans z = "
+                f"{near:.2f}-{far:.2f} mm "
+                f"but must fit between {MIN_AIR_GAP_MM:g} mm and the collimator at {coll_near:.2f} mm "
+                f"(eye relief {self.tube.eye_relief_mm:g} mm)")
+
+    def layout(self) -> AtvLayout:
+        return atv_layout(self)
+
+
+def atv_layout(config: AtvConfig) -> AtvLayout:
+    """Where everything sits along the axis (module doc)."""
+    tube = config.tube
+    back = tube.eye_relief_mm
+    front = back + tube.lens_center_thickness_mm
+    principal = front - (tube.focal_length_mm - tube.front_focal_distance_mm())
+    apertures = [tube.lens_clear_aperture_mm]
+    trial_back = trial_front = None
+    if config.trial_lens is not None:
+        trial_back = config.trial_lens_distance_mm
+        trial_front = trial_back + config.trial_lens.center_thickness_mm
+        apertures.append(config.trial_clear_aperture_mm)
+    return AtvLayout(float(back), float(front), float(principal), float(principal + tube.tube_length_mm),
+                     0.5 * max(apertures) + TUBE_CLEARANCE_MM, trial_back, trial_front)
+
+
+@dataclass(frozen=True, eq=False)
+class AtvParaxial:
+    """First-order optics of the tube from the phone's screen to the eye's pupil (SI: m, rad, D).
+
+    ``system_matrix``: 4x4 ray transfer ``(x, y, u_x, u_y)``, phone plane to pupil plane.  A ray
+    from pixel point ``x0`` through pupil point ``xp`` lands at visual angle
+    ``pixel_angle_matrix @ x0 + defocus_matrix_diopters @ xp`` (radians, metres).
+    """
+
+    system_matrix: np.ndarray
+    vergence_matrix_diopters: np.ndarray  # of the pixel's light at the pupil (< 0 diverging)
+    defocus_matrix_diopters: np.ndarray  # vergence + eye excess power + accommodation
+    pixel_angle_matrix: np.ndarray  # rad per metre of screen offset
+    pixel_angle_arcmin: float  # side of the pixel's (square) image, geometric mean of the two axes
+    blur_diameter_arcmin: float  # pupil x the largest |principal defocus|
+    etendue_m2_sr: float  # pixel area x pupil area x |det B^-1|; flux = radiance x etendue
+    cone_center: np.ndarray  # direction (tangents) from the pixel centre to the pupil centre
+    cone_radius_rad: float  # directions within this of cone_center reach the pupil (paraxially)
+    pixel_direction_arcmin: tuple[float, float]  # (right, up) visual direction of the pixel centre
+
+
+def _system_matrix(config: AtvConfig) -> np.ndarray:
+    tube, layout = config.tube, config.layout()
+    system = transfer_matrix(_mm_to_m(layout.phone_z_mm - layout.collimator_front_vertex_z_mm))
+    system = tube.collimator_lens().ray_transfer_matrix() @ system
+    if config.trial_lens is None:
+        return transfer_matrix(_mm_to_m(layout.collimator_back_vertex_z_mm)) @ system
+    system = transfer_matrix(_mm_to_m(layout.collimator_back_vertex_z_mm - layout.trial_front_vertex_z_mm)) @ system
+    system = config.trial_lens.ray_transfer_matrix() @ system
+    return transfer_matrix(_mm_to_m(layout.trial_back_vertex_z_mm)) @ system
+
+
+def atv_paraxial(config: AtvConfig) -> AtvParaxial:
+    """The paraxial theory of ``config`` (see :class:`AtvParaxial`)."""
+    s = _system_matrix(config)
+    a, b, c, d = s[:2, :2], s[:2, 2:], s[2:, :2], s[2:, 2:]
+    b_inv = np.linalg.inv(b)
+    vergence = -d @ b_inv
+    vergence = 0.5 * (vergence + vergence.T)
+    defocus = vergence + config.eye.excess_power_matrix_diopters()
+    pixel_map = -(c - d @ b_inv @ a)  # visual angle = -u at the pupil centre
+    pitch_m = _mm_to_m(config.tube.pixel_pitch_mm)
+    pupil_m = _mm_to_m(config.eye.pupil_diameter_mm)
+    pixel_angle_rad = pitch_m * math.sqrt(abs(np.linalg.det(pixel_map)))
+    blur_mrad = config.eye.pupil_diameter_mm * float(np.max(np.abs(np.linalg.eigvalsh(defocus))))
+    offset_m = _mm_to_m(np.asarray(config.tube.pixel_offset_mm))
+    center = -b_inv @ a @ offset_m
+    half_diagonal_m = pitch_m / math.sqrt(2.0)
+    radius = np.linalg.norm(b_inv, 2) * (0.5 * pupil_m + np.linalg.norm(a, 2) * half_diagonal_m)
+    direction = pixel_map @ offset_m
+    return AtvParaxial(
+        system_matrix=s,
+        vergence_matrix_diopters=vergence,
+        defocus_matrix_diopters=defocus,
+        pixel_angle_matrix=pixel_map,
+        pixel_angle_arcmin=float(mrad_to_arcmin(1000.0 * pixel_angle_rad)),
+        blur_diameter_arcmin=float(mrad_to_arcmin(blur_mrad)),
+        etendue_m2_sr=pitch_m**2 * (math.pi / 4.0) * pupil_m**2 * abs(float(np.linalg.det(b_inv))),
+        cone_center=center,
+        cone_radius_rad=float(radius),
+        pixel_direction_arcmin=(float(mrad_to_arcmin(-1000.0 * direction[0])),
+                                float(mrad_to_arcmin(1000.0 * direction[1]))),
+    )
+
+
+def _translate(x: float, y: float, z: float) -> list[list[float]]:
+    return [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]]
+
+
+def _camera(config: AtvConfig, arcmin_per_px: float, size_px: int, spp: int, seed: int, kind: str) -> dict:
+    excess = config.eye.excess_power_matrix_diopters()
+    if abs(excess[0, 1]) > 1e-12 or abs(excess[0, 0] - excess[1, 1]) > 1e-12:
+        raise VissimInputError(f"the camera cross-check models a spherical eye only; this eye's error is "
+                               f"{config.eye.refractive_error} D (use the light tracer)")
+    focus_diopters = float(excess[0, 0])
+    if focus_diopters < 0.0:
+        raise VissimInputError(f"the camera cross-check cannot focus beyond infinity: the eye's excess power plus "
+                               f"accommodation is {focus_diopters:g} D < 0 D (use the light tracer)")
+    focus_mm = _FAR_FOCUS_MM if focus_diopters == 0.0 else 1000.0 / focus_diopters
+    half_tan = math.tan(0.5 * size_px * float(arcmin_to_rad(arcmin_per_px)))
+    return {
+        "type": "thinlens",
+        "fov": 2.0 * math.degrees(math.atan(half_tan)),
+        "fov_axis": "x",
+        "aperture_radius": 0.5 * config.eye.pupil_diameter_mm,
+        "focus_distance": focus_mm,
+        "near_clip": NEAR_CLIP_MM,
+        "far_clip": 10.0 * config.layout().phone_z_mm,
+        # Looking along +z with +y up: Mitsuba's camera frame is +x left, so image right is world -x.
+        "to_world": _translate(0.0, 0.0, 0.0),
+        "sampler": {"type": "independent", "sample_count": int(spp), "seed": int(seed)},
+        "film": {"type": "hdrfilm", "width": int(size_px), "height": int(size_px), "rfilter": {"type": "box"},
+                 "pixel_format": "luminance" if kind == "mono" else "rgb", "component_format": "float32",
+                 "sample_border": False},
+    }
+
+
+def atv_scene(config: AtvConfig, *, camera: bool = True, arcmin_per_px: float = 1.0, size_px: int = 65,
+              spp: int = 64, seed: int = 0, kind: str = "mono", mesh_cache_dir=None) -> dict[str, Any]:
+    """The Mitsuba scene dict of ``config``: lenses, black tube, the lit pixel, and the eye as a camera.
+
+    Shape keys (Mitsuba ids) are ``collimator``, ``trial_lens`` (when present), ``tube`` and
+    ``pixel``.  With ``camera=False`` the dict has no sensor or integrator (the light tracer's
+    geometry).  The camera is a ``thinlens`` of aperture radius pupil / 2 at the pupil, focused
+    where the eye is (``1 / (E + A)``, or at 10^9 mm), its ``size_px`` square film covering
+    ``size_px * arcmin_per_px`` (odd ``size_px`` puts the axis on the centre pixel).
+    """
+    if kind not in ("mono", "rgb"):
+        raise VissimInputError(f"render kind must be 'mono' or 'rgb', got {kind!r}")
+    layout, tube = config.layout(), config.tube
+    lenses = [("collimator", tube.collimator_lens(), tube.lens_clear_aperture_mm, layout.collimator_back_vertex_z_mm)]
+    if config.trial_lens is not None:
+        lenses.append(("trial_lens", config.trial_lens, config.trial_clear_aperture_mm, layout.trial_back_vertex_z_mm))
+    half = 0.5 * tube.pixel_pitch_mm
+    ox, oy = tube.pixel_offset_mm
+    black = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]} if kind == "rgb" else 0.0}
+    scene: dict[str, Any] = {
+        "type": "scene",
+        "tube": {"type": "cylinder", "p0": [0.0, 0.0, 0.0], "p1": [0.0, 0.0, layout.phone_z_mm],
+                 "radius": layout.tube_radius_mm, "flip_normals": True, "bsdf": black},
+        # The rectangle spans [-1, 1]^2 with normal +z; flipped, it emits toward the eye (-z).
+        "pixel": {"type": "rectangle", "flip_normals": True,
+                  "to_world": [[half, 0.0, 0.0, ox], [0.0, half, 0.0, oy], [0.0, 0.0, 1.0, layout.phone_z_mm],
+                               [0.0, 0.0, 0.0, 1.0]],
+                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [tube.pixel_radiance] * 3}
+                              if kind == "rgb" else tube.pixel_radiance}},
+    }
+    for key, lens, aperture, z in lenses:
+        path = cached_lens_ply(lens, aperture, cache_dir=mesh_cache_dir)
+        scene[key] = {"type": "ply", "filename": str(path), "face_normals": False, "to_world": _translate(0.0, 0.0, z),
+                      "bsdf": {"type": LENS_BSDF, "int_ior": float(lens.refractive_index),
+                               "fresnel_loss": bool(config.fresnel_loss)}}
+    if camera:
+        if int(size_px) != size_px or size_px < 1:
+            raise VissimInputError(f"image size must be a whole number of pixels >= 1, got {size_px!r}")
+        step = _number(arcmin_per_px, "angular sampling", "arcmin per pixel", lo=0.0, lo_open=True)
+        if int(spp) != spp or spp < 1:
+            raise VissimInputError(f"spp must be a whole number of samples per pixel >= 1, got {spp!r}")
+        scene["integrator"] = {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": MAX_DEPTH, "hide_emitters": False}
+        scene["eye"] = _camera(config, step, int(size_px), int(spp), int(seed), kind)
+    return scene
+
+
+def predicted_spot(config: AtvConfig, **kwargs):
+    """The paraxial retinal image of the pixel; see :func:`vissim.bench.atv_predict.predicted_spot`."""
+    from vissim.bench.atv_predict import predicted_spot as _predicted_spot
+
+    return _predicted_spot(config, **kwargs)

@@ -1,0 +1,172 @@
+"""``vissim atv``: the absolute threshold for vision (thesis Ch. 5).
+
+* ``vissim atv analyze DIR -o OUT`` -- fit every subject file in DIR; figures, report.md/.html, analysis.json.
+* ``vissim atv simulate --eye RX --pupil-mm D [--accommodation-d A] [--cycloplegia] -o OUT`` -- a virtual subject.
+* ``vissim atv run [--observer simulated|person] -o result.json`` -- one threshold by Listing 5.1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from vissim.errors import VissimInputError
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "atv",
+        help="absolute threshold for vision: analyse, simulate, measure",
+        description="The thesis's absolute-threshold-for-vision experiment (Ch. 5): analyse participant data, "
+        "simulate a virtual subject, or run the threshold procedure with a simulated observer or a person.",
+    )
+    sub = parser.add_subparsers(dest="atv_command", metavar="ACTION")
+    parser.set_defaults(func=lambda args: (parser.print_help(), 2)[1])
+
+    analyze = sub.add_parser("analyze", help="fit participant data and write a report",
+                             description="Quadratic fits of minimum visible vs trial lens per eye and condition, "
+                             "vertex with Fieller and delta-method intervals, compared with the cycloplegic SE.")
+    analyze.add_argument("data_dir", type=Path, help="directory of subject_*.json files (e.g. validation/atv)")
+    analyze.add_argument("-o", "--output", type=Path, required=True, help="output directory")
+    analyze.add_argument("--strict", action="store_true", help="fail if the data disagree with the thesis's own numbers")
+    analyze.add_argument("--level", type=float, default=0.95, help="confidence level (default 0.95)")
+    analyze.add_argument("--all-sessions", action="store_true", help="fit every session's value instead of the per-lens means")
+    analyze.add_argument("--window-d", type=float, default=2.5, metavar="W",
+                         help="also fit a local parabola over lenses within W D of the least value (default 2.5; 0 to skip)")
+    analyze.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    analyze.set_defaults(func=run_analyze)
+
+    sim = sub.add_parser("simulate", help="simulate the experiment for a virtual subject",
+                         description="Fourier retinal image of one phone pixel through the ATV tube and a trial lens, "
+                         "threshold by spatial summation, Listing 5.1 with a simulated observer at every lens.")
+    sim.add_argument("--eye", required=True, metavar="PRESCRIPTION", help="the eye's correcting lens, e.g. '+1.25 DS'")
+    sim.add_argument("--pupil-mm", type=float, required=True, metavar="D", help="pupil diameter in mm")
+    sim.add_argument("--accommodation-d", type=float, default=8.0, metavar="A", help="accommodation amplitude in D (default 8)")
+    sim.add_argument("--cycloplegia", action="store_true", help="no accommodation (cycloplegic drops)")
+    sim.add_argument("--proximal-d", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
+    sim.add_argument("--lenses", metavar="D[,D...]", help="trial lenses in D (default: the thesis's 17)")
+    sim.add_argument("--vertex-mm", type=float, default=12.0, help="trial lens to eye, mm (default 12)")
+    sim.add_argument("--wavelength-nm", type=float, default=555.0, help="wavelength, nm (default 555)")
+    sim.add_argument("--summation-arcmin", type=float, default=10.0, help="summation (Ricco) diameter, arcmin (default 10)")
+    sim.add_argument("--full-capture-code", type=float, default=0.06, help="threshold code value with all flux summed (default 0.06)")
+    sim.add_argument("--gamma", type=float, default=2.2, help="display gamma, code value -> luminance (default 2.2)")
+    _observer_args(sim, threshold=False)
+    sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sim.add_argument("--window-d", type=float, default=2.5, metavar="W", help="also fit a ±W D local parabola (0 to skip)")
+    sim.add_argument("-o", "--output", type=Path, required=True, help="output directory")
+    sim.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    sim.set_defaults(func=run_simulate)
+
+    run = sub.add_parser("run", help="run the threshold procedure once (Listing 5.1)",
+                         description="Phase 1: quasi-random narrowing in steps of 0.1; phase 2: bisection down to "
+                         "--resolution. A person answers in a one-pixel window (keys y/n/q) or in the terminal.")
+    run.add_argument("--observer", choices=("simulated", "person"), default="simulated")
+    run.add_argument("--display", choices=("auto", "window", "terminal"), default="auto", help="how a person sees the stimulus")
+    _observer_args(run, threshold=True)
+    run.add_argument("--resolution", type=float, default=0.001, help="phase-2 resolution, code value (default 0.001)")
+    run.add_argument("--trial-lens-d", type=float, help="trial lens in use (recorded only), D")
+    run.add_argument("--eye-side", choices=("R", "L"), help="eye tested (recorded only)")
+    run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    run.add_argument("-o", "--output", type=Path, required=True, help="result JSON file")
+    run.add_argument("--overwrite", action="store_true", help="replace an existing result")
+    run.set_defaults(func=run_procedure_command)
+
+
+def _observer_args(parser: argparse.ArgumentParser, *, threshold: bool) -> None:
+    group = parser.add_argument_group("simulated observer (Weibull psychometric function)")
+    if threshold:
+        group.add_argument("--threshold", type=float, default=0.1, help="50 %% point, code value (default 0.1)")
+        group.add_argument("--slope", type=float, default=20.0, help="Weibull exponent in code values (default 20)")
+    else:
+        group.add_argument("--slope", type=float, default=4.0, help="Weibull exponent in luminance (default 4)")
+    group.add_argument("--guess", type=float, default=0.0, help="false-alarm rate (default 0)")
+    group.add_argument("--lapse", type=float, default=0.0, help="lapse rate (default 0)")
+
+
+def _window(value: float) -> float | None:
+    if not math.isfinite(value) or value < 0:
+        raise VissimInputError(f"--window-d must be a half-width >= 0 D, got {value!r} D")
+    return value or None
+
+
+def run_analyze(args: argparse.Namespace) -> int:
+    from vissim.atv.report import analyse_directory
+
+    written, analyses = analyse_directory(
+        args.data_dir, args.output, strict=args.strict, level=args.level, average_sessions=not args.all_sessions,
+        window_diopters=_window(args.window_d), overwrite=args.overwrite,
+    )
+    for a in analyses:
+        vertex = f"{a.vertex_diopters:+.2f} D, CI {a.vertex_interval.describe()}" if a.vertex_diopters is not None else "no minimum"
+        se = f"SE {a.measured_se_diopters:+.3f} D" if a.measured_se_diopters is not None else "no SE"
+        fit = "all lenses" if a.window_diopters is None else f"±{a.window_diopters:g} D"
+        print(f"subject {a.subject_id} {a.eye} {a.condition.replace('_', ' ')} ({fit}): vertex {vertex}; {se}")
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    from vissim.atv.report import write_simulation_report
+    from vissim.atv.virtual import AtvApparatus, DetectionModel, VirtualSubject, run_virtual_experiment
+    from vissim.cli._common import parse_float_list
+    from vissim.prescription import Prescription
+
+    subject = VirtualSubject(
+        Prescription.parse(args.eye), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_d,
+        cycloplegia=args.cycloplegia, proximal_accommodation_diopters=args.proximal_d,
+    )
+    apparatus = AtvApparatus(trial_lens_vertex_mm=args.vertex_mm, wavelength_nm=args.wavelength_nm, display_gamma=args.gamma)
+    detection = DetectionModel(
+        summation_diameter_arcmin=args.summation_arcmin, threshold_code_full_capture=args.full_capture_code,
+        psychometric_slope=args.slope, guess_rate=args.guess, lapse_rate=args.lapse,
+    )
+    kwargs = {}
+    if args.lenses:
+        kwargs["lenses_diopters"] = parse_float_list(args.lenses, "--lenses", "D")
+    experiment = run_virtual_experiment(subject, apparatus=apparatus, detection=detection, seed=args.seed, **kwargs)
+    written, analyses = write_simulation_report(experiment, args.output, window_diopters=_window(args.window_d), overwrite=args.overwrite)
+    for t in experiment.trials:
+        print(f"lens {t.trial_lens_diopters:+.2f} D: residual {t.residual_se_diopters:+.2f} D, accommodation "
+              f"{t.accommodation_diopters:.2f} D, flux in summation area {t.summation_fraction:.3f}, threshold "
+              f"{t.minimum_visible_code:.4f} (model {t.model_threshold_code:.4f})")
+    for a in analyses:
+        fit = "all lenses" if a.window_diopters is None else f"±{a.window_diopters:g} D window"
+        vertex = f"{a.vertex_diopters:+.2f} D, CI {a.vertex_interval.describe()}" if a.vertex_diopters is not None else "no minimum"
+        print(f"fit over {fit}: vertex {vertex}; SE {a.measured_se_diopters:+.3f} D")
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def run_procedure_command(args: argparse.Namespace) -> int:
+    from vissim.atomic import write_json_atomic
+    from vissim.atv.procedure import ProcedureConfig, PsychometricFunction, SimulatedObserver, run_procedure
+    from vissim.provenance import make_provenance
+
+    config = ProcedureConfig(resolution_code=args.resolution)
+    if args.output.exists() and not args.overwrite:  # fail before a person spends minutes answering
+        raise VissimInputError(f"{args.output} already exists; pass --overwrite to replace it")
+    observer_record: dict = {"kind": args.observer}
+    if args.observer == "simulated":
+        psychometric = PsychometricFunction(args.threshold, args.slope, args.guess, args.lapse)
+        observer = SimulatedObserver(psychometric, seed=args.seed)
+        observer_record.update(threshold_code=args.threshold, slope=args.slope, guess_rate=args.guess, lapse_rate=args.lapse)
+    else:
+        from vissim.atv.interactive import make_person_observer
+
+        observer = make_person_observer(args.display)
+        observer_record["display"] = type(observer).__name__
+    try:
+        result = run_procedure(observer, config, seed=args.seed)
+    finally:
+        if hasattr(observer, "close"):
+            observer.close()
+    record = make_provenance(command="atv run", observer=observer_record, trial_lens_diopters=args.trial_lens_d, eye=args.eye_side)
+    record["result"] = result.as_json()
+    write_json_atomic(args.output, record, overwrite=args.overwrite)
+    print(f"threshold {result.threshold_code:.4f} (code value), interval [{result.lower_code:.4f}, {result.upper_code:.4f}], "
+          f"{len(result.presentations)} presentations")
+    print(f"wrote {args.output}")
+    return 0

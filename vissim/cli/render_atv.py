@@ -1,0 +1,145 @@
+"""``vissim render atv``: the retinal image of one lit phone pixel seen through the ATV tube.
+
+Registered by :mod:`vissim.cli.render` through :func:`add_atv_parser`.  Thin: parse, build an
+:class:`~vissim.bench.atv.AtvConfig`, call :func:`~vissim.render.atv_trace.trace_atv` (default)
+or :func:`~vissim.render.atv_trace.render_atv_camera`, write a float32 EXR (flux per arcmin²,
+row 0 up, columns to the eye's right) whose provenance holds the inputs, the metrics and the
+paraxial prediction, and print a summary (``--json``: one JSON object).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from vissim.errors import VissimInputError
+
+__all__ = ["add_atv_parser", "run_atv"]
+
+
+def add_atv_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``atv`` sub-command to ``subparsers`` (those of ``vissim render``) and return it."""
+    parser = subparsers.add_parser(
+        "atv",
+        help="the ATV tube: one lit phone pixel through an 8 D lens (thesis 5.4)",
+        description=(
+            "Render what an eye sees of one lit 326 ppi phone pixel at the focus of an 8 D plano-convex lens "
+            "in a 125 mm tube (thesis section 5.4), with an optional trial lens in the eyecup slot.  Writes the "
+            "retinal image in visual angle (flux per arcmin^2, linear float32 EXR); the peak irradiance, spot "
+            "diameter (FWHM of the radial profile) and total flux follow."
+        ),
+    )
+    lens = parser.add_argument_group("trial lens in the eyecup slot (default: none)")
+    lens.add_argument("--trial-sphere", type=float, metavar="D", help="sphere in dioptres (plus lens > 0)")
+    lens.add_argument("--trial-cylinder", type=float, default=0.0, metavar="D", help="cylinder in dioptres")
+    lens.add_argument("--trial-axis", type=float, default=180.0, metavar="DEG", help="cylinder axis, TABO degrees")
+    lens.add_argument("--trial-distance-mm", type=float, default=15.0, metavar="MM",
+                      help="trial lens back vertex to the eye's pupil (default 15)")
+    eye = parser.add_argument_group("eye")
+    eye.add_argument("--pupil-mm", type=float, default=4.0, metavar="D", help="pupil diameter, 2-8 mm (default 4)")
+    eye.add_argument("--eye", metavar="PRESCRIPTION",
+                     help="the eye's own correcting prescription, e.g. '-2.00 -0.50 x 180' (default: emmetropic)")
+    eye.add_argument("--accommodation-d", type=float, default=0.0, metavar="A",
+                     help="accommodation in dioptres, >= 0 (default 0: focused at infinity)")
+    light = parser.add_argument_group("pixel intensity (default: linear radiance 1)")
+    given = light.add_mutually_exclusive_group()
+    given.add_argument("--pixel-intensity", type=float, metavar="L", help="linear radiance of the lit pixel")
+    given.add_argument("--display-code", type=float, metavar="C",
+                       help="display code value in [0, 1] (the thesis's 'iPhone intensity'), decoded by --transfer")
+    light.add_argument("--transfer", choices=("srgb", "gamma2.2"), default="srgb",
+                       help="display transfer function for --display-code (default srgb)")
+    light.add_argument("--white-radiance", type=float, default=1.0, metavar="L",
+                       help="linear radiance of display code 1 (default 1)")
+    method = parser.add_argument_group("method")
+    method.add_argument("--method", choices=("trace", "camera"), default="trace",
+                        help="trace: light tracing from the pixel (default); camera: thin-lens path tracing (noisy)")
+    budget = method.add_mutually_exclusive_group()
+    budget.add_argument("--rays", type=int, metavar="N", help="rays for --method trace (default 4194304)")
+    budget.add_argument("--spp", type=int, metavar="N", help="samples per pixel for --method camera (default 1024)")
+    method.add_argument("--seed", type=int, default=0, metavar="S", help="seed (default 0)")
+    method.add_argument("--arcmin-per-px", type=float, metavar="S",
+                        help="angular pixel size (default 0.5 for trace, 1 for camera)")
+    method.add_argument("--size", type=int, metavar="N", help="image size in pixels (default: holds the spot)")
+    method.add_argument("--fresnel-loss", action="store_true",
+                        help="uncoated lenses: Fresnel transmittance per surface")
+    method.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
+    parser.add_argument("-o", "--output", required=True, metavar="PATH", help="output .exr (linear float32)")
+    parser.add_argument("--json", action="store_true", help="print a JSON summary")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    parser.set_defaults(func=run_atv)
+    return parser
+
+
+def _config(args: argparse.Namespace):
+    from vissim.bench.atv import AtvConfig, AtvEye, AtvTube, atv_trial_lens, display_code_to_linear
+    from vissim.prescription import Prescription
+
+    if args.display_code is not None:
+        radiance = args.white_radiance * display_code_to_linear(args.display_code, args.transfer)
+    else:
+        radiance = 1.0 if args.pixel_intensity is None else args.pixel_intensity
+    trial = None
+    if args.trial_sphere is not None:
+        trial = atv_trial_lens(args.trial_sphere, args.trial_cylinder, args.trial_axis)
+    elif args.trial_cylinder:
+        raise VissimInputError(
+            f"--trial-cylinder {args.trial_cylinder:g} D needs --trial-sphere (dioptres, 0 for plano)")
+    error = None if args.eye is None else Prescription.parse(args.eye)
+    eye = AtvEye(pupil_diameter_mm=args.pupil_mm, refractive_error=error, accommodation_diopters=args.accommodation_d)
+    return AtvConfig(tube=AtvTube(pixel_radiance=radiance), eye=eye, trial_lens=trial,
+                     trial_lens_distance_mm=args.trial_distance_mm, fresnel_loss=args.fresnel_loss)
+
+
+def run_atv(args: argparse.Namespace) -> int:
+    """Render, write the EXR and print the summary; returns the exit code."""
+    from vissim.bench.atv_predict import predicted_spot
+    from vissim.imageio import write_image
+    from vissim.provenance import json_safe, make_provenance
+    from vissim.render.atv_trace import DEFAULT_N_RAYS, render_atv_camera, trace_atv
+
+    output = Path(args.output)
+    if output.suffix.lower() != ".exr":
+        raise VissimInputError(f"render atv writes a linear float EXR; give an output ending in .exr, got {output}")
+    if output.exists() and not args.overwrite:
+        raise VissimInputError(f"{output} already exists; pass --overwrite to replace it")
+    if args.method == "trace" and args.spp is not None:
+        raise VissimInputError("--spp goes with --method camera; the light tracer takes --rays")
+    if args.method == "camera" and args.rays is not None:
+        raise VissimInputError("--rays goes with --method trace; the camera takes --spp (samples per pixel)")
+    config = _config(args)
+    step = args.arcmin_per_px if args.arcmin_per_px is not None else (0.5 if args.method == "trace" else 1.0)
+    if args.method == "trace":
+        result = trace_atv(config, n_rays=DEFAULT_N_RAYS if args.rays is None else args.rays, seed=args.seed,
+                           arcmin_per_px=step, size_px=args.size, variant=args.variant)
+    else:
+        result = render_atv_camera(config, spp=1024 if args.spp is None else args.spp, seed=args.seed,
+                                   arcmin_per_px=step, size_px=args.size, variant=args.variant)
+    theory = predicted_spot(config, arcmin_per_px=step, size_px=result.image.shape[0])
+    prediction = {
+        "defocus_diopters": theory.defocus_diopters,
+        "blur_diameter_arcmin": theory.blur_diameter_arcmin,
+        "pixel_angle_arcmin": theory.pixel_angle_arcmin,
+        "total_flux": theory.total_flux,
+        "peak_irradiance_per_arcmin2": theory.peak,
+        "spot_diameter_arcmin": theory.spot_diameter_arcmin,
+    }
+    summary = result.summary()
+    provenance = make_provenance(
+        command="render atv", config=config, summary=summary, prediction_geometric=prediction,
+        units="flux per arcmin^2 = pixel radiance x m^2 x sr / arcmin^2",
+        orientation="row 0 up, columns to the eye's right, straight ahead at [N//2, N//2]",
+    )
+    write_image(output, result.image, provenance=provenance, overwrite=args.overwrite)
+    if args.json:
+        print(json.dumps(json_safe({**summary, "output": str(output), "prediction_geometric": prediction}),
+                         indent=2, sort_keys=True, allow_nan=False))
+    else:
+        print(f"wrote {output}: {result.image.shape[1]} x {result.image.shape[0]} px at {result.arcmin_per_px:g} "
+              f"arcmin/px, {result.method} ({result.n_rays} {'rays' if result.method == 'trace' else 'camera paths'}, "
+              f"{result.variant}, {result.seconds:.1f} s)")
+        print(f"peak {result.peak:.5g} per arcmin^2 (±{100 * result.peak_relative_std:.2g} %), spot diameter "
+              f"{result.spot_diameter_arcmin:.3f}' (FWHM), total flux {result.total_flux:.5g}; theory: "
+              f"blur {theory.blur_diameter_arcmin:.3f}', pixel {theory.pixel_angle_arcmin:.3f}', "
+              f"flux {theory.total_flux:.5g}")
+    return 0
