@@ -22,8 +22,8 @@ from vissim.optotypes import SLOAN_LETTERS
 
 __all__ = ["LensSpec", "Configuration", "CampaignSettings", "Campaign", "load_campaign", "SIMULATIONS", "INPUTS"]
 
-#: Simulations a campaign may ask for (see docs of vissim.validation.simulate).
-SIMULATIONS = ("wave", "geometric", "thesis")
+#: Simulations a campaign may ask for (see vissim.validation.simulate.SIMULATION_PARTS).
+SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification")
 #: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
 INPUTS = ("render", "synthetic")
 POLARITIES = ("black-on-white", "white-on-black")
@@ -77,7 +77,7 @@ class CampaignSettings:
     vertex_distance_mm: float = 10.0
     wavelength_nm: float = 550.0
     refractive_index: float = 1.523
-    simulations: tuple[str, ...] = SIMULATIONS
+    simulations: tuple[str, ...] = ("wave", "geometric", "thesis")
     inputs: tuple[str, ...] = INPUTS
     data_range: float = 1.0  # linear reflectance units: what SSIM/PSNR call the peak
 

@@ -24,15 +24,19 @@ import numpy as np  # noqa: E402
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.imageio import read_image, srgb_encode  # noqa: E402
 
-__all__ = ["load_results", "build_report", "metrics_rows", "markdown_tables"]
+__all__ = ["load_results", "build_report", "metrics_rows", "markdown_tables", "summary_table"]
 
 log = logging.getLogger(__name__)
 
 REFERENCE_NOTE = {
     "wave": "render + bench diffraction",
     "thesis": "render + bench diffraction",
+    "thesis_power": "render + bench diffraction",
+    "thesis_pupil": "render + bench diffraction",
+    "no_magnification": "render + bench diffraction",
     "geometric": "render (no diffraction)",
 }
+ORDER = ["wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification"]
 FIGURE_COLUMNS = 8
 
 
@@ -96,12 +100,12 @@ def markdown_tables(results: list[dict]) -> str:
     rows = metrics_rows(results)
     if not rows:
         return "No finished items.\n"
-    columns = sorted({(r["simulation"], r["input"]) for r in rows}, key=lambda c: (["wave", "geometric", "thesis"].index(c[0]), c[1]))
+    columns = sorted({(r["simulation"], r["input"]) for r in rows}, key=lambda c: (ORDER.index(c[0]), c[1]))
     by_config: dict[str, dict] = {}
     for r in rows:
         by_config.setdefault(r["configuration"], {"_floor": {}})[(r["simulation"], r["input"])] = r
         by_config[r["configuration"]]["_floor"][REFERENCE_NOTE[r["simulation"]]] = (r["noise_floor_psnr_db"], r["noise_floor_ssim"])
-    out = []
+    out = [summary_table(rows, columns)]
     for metric, label, digits in (("psnr_db", "PSNR (dB)", 2), ("ssim", "SSIM", 4)):
         floor_idx = 0 if metric == "psnr_db" else 1
         header = ["configuration"] + [f"{s} / {i}" for s, i in columns] + ["noise floor (render)", "noise floor (+diffraction)"]
@@ -126,6 +130,31 @@ def markdown_tables(results: list[dict]) -> str:
         "means the agreement is as good as the renders' Monte-Carlo noise can show.\n"
     )
     return "\n".join(out)
+
+
+def summary_table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
+    """Median PSNR minus the noise floor per group of configurations (a sweep, or one item).
+
+    0 dB is the floor; +3 dB is what a perfect, noise-free simulation would score.
+    """
+    groups: dict[str, dict] = {}
+    for r in rows:
+        group = r["configuration"].split(":")[0]
+        margin = r["psnr_db"] - r["noise_floor_psnr_db"]
+        groups.setdefault(group, {}).setdefault((r["simulation"], r["input"]), []).append(margin)
+    header = ["group (configurations)"] + [f"{s} / {i}" for s, i in columns]
+    lines = [
+        "### Summary: median PSNR minus the noise floor (dB)\n",
+        "A perfect, noise-free simulation scores +3 dB; 0 dB means it differs from the bench as much "
+        "as two renders differ from each other.\n",
+        "| " + " | ".join(header) + " |",
+        "|" + "---|" * len(header),
+    ]
+    for group, cells in groups.items():
+        n = max(len(v) for v in cells.values())
+        values = [_fmt(float(np.median(cells[c])), 1) if c in cells else "—" for c in columns]
+        lines.append("| " + " | ".join([f"{group} ({n})"] + values) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def _load(result: dict, run_dir: Path, name: str) -> np.ndarray | None:
@@ -214,7 +243,7 @@ def build_report(run_dir: str | Path) -> list[Path]:
     tables = markdown_tables(results)
     written.append(write_text_atomic(run_dir / "tables.md", f"# {title}\n\n{campaign.get('description', '')}\n\n{tables}", overwrite=True))
     figures = {}
-    for simulation in ("wave", "geometric", "thesis"):
+    for simulation in ORDER:
         png = _figure(results, run_dir, simulation, "render")
         if png is not None:
             figures[f"{simulation} simulation on the no-lens render"] = png

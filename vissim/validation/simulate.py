@@ -13,6 +13,9 @@ render, as the thesis did, or the synthetic chart):
     The thesis's setup: Table 4.2's P / (1 - dP) per meridian (object at infinity), the
     f-number-matched eye pupil of Table 4.1 (2.7 mm at f/5), no magnification, wave optics.
     (The thesis's printed Eq. 4.7 drops C; its results show it used C, and so do we.)
+``thesis_power``, ``thesis_pupil``, ``no_magnification``
+    The matched wave simulation with just one of the thesis's choices put back (ERRATA items
+    4, 3 and 5): each erratum's effect is then a measured number.
 
 Mitsuba renders no diffraction, so a ``wave`` or ``thesis`` result is compared with the
 render convolved with the bench aperture's diffraction PSF (:func:`add_bench_diffraction`),
@@ -52,6 +55,19 @@ __all__ = [
     "thesis_blur_ratio",
     "defocus_blur_arcmin",
 ]
+
+
+#: kind -> (power: "matched" | "table_4_2", pupil: "entrance" | "f_number_matched",
+#: magnification applied, optics).  The three ``thesis_*``/``no_*`` kinds each put back ONE
+#: of the thesis's choices into the matched simulation, so each erratum's cost is measured.
+SIMULATION_PARTS = {
+    "wave": ("matched", "entrance", True, "wave"),
+    "geometric": ("matched", "entrance", True, "geometric"),
+    "thesis": ("table_4_2", "f_number_matched", False, "wave"),
+    "thesis_power": ("table_4_2", "entrance", True, "wave"),  # ERRATA 4 alone
+    "thesis_pupil": ("matched", "f_number_matched", True, "wave"),  # ERRATA 3 alone
+    "no_magnification": ("matched", "entrance", False, "wave"),  # ERRATA 5 alone
+}
 
 
 @dataclass(frozen=True)
@@ -95,22 +111,22 @@ def simulation_setup(
 
     ``setup`` is the bench's own lens setup (physical lenses, gaps, vertex and chart distance).
     """
-    pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, configuration.f_number)
-    lenses = setup.lenses
-    if kind in ("wave", "geometric"):
-        effect = trial_lens_effect(setup)
+    if kind not in SIMULATION_PARTS:
+        raise ValueError(f"unknown simulation {kind!r}")
+    power, pupil_kind, magnification, mode = SIMULATION_PARTS[kind]
+    effect = trial_lens_effect(setup)
+    if power == "matched":
+        rx = effect.camera_prescription
+    else:
+        rx = _thesis_added_power(setup.lenses, settings.vertex_distance_mm).prescription_of_camera()
+    if pupil_kind == "entrance":
+        pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, configuration.f_number)
+    else:
+        pupil = thesis_eye_pupil_diameter_mm(configuration.f_number)
+    matrix = ((1.0, 0.0), (0.0, 1.0))
+    if magnification:
         matrix = tuple(tuple(float(v) for v in row) for row in np.asarray(effect.magnification_matrix))
-        return SimulationSetup(kind, effect.camera_prescription, pupil, matrix, kind)
-    if kind == "thesis":
-        added = _thesis_added_power(lenses, settings.vertex_distance_mm)
-        return SimulationSetup(
-            kind,
-            added.prescription_of_camera(),
-            thesis_eye_pupil_diameter_mm(configuration.f_number),
-            ((1.0, 0.0), (0.0, 1.0)),
-            "wave",
-        )
-    raise ValueError(f"unknown simulation {kind!r}")
+    return SimulationSetup(kind, rx, pupil, matrix, mode)
 
 
 def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) -> np.ndarray:
