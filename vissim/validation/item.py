@@ -98,7 +98,7 @@ def compute_item(
     comparisons = []
     for kind in settings.simulations:
         setup = simulation_setup(kind, setup_of_bench, configuration, settings)
-        reference_kind = "geometric" if kind == "geometric" else "wave"
+        reference_kind = "geometric" if setup.mode == "geometric" else "wave"
         reference = references[reference_kind]
         for input_name in settings.inputs:
             image, oversample = inputs[input_name]

@@ -31,9 +31,9 @@ log = logging.getLogger(__name__)
 REFERENCE_NOTE = {
     "wave": "render + bench diffraction",
     "thesis": "render + bench diffraction",
-    "thesis_power": "render + bench diffraction",
-    "thesis_pupil": "render + bench diffraction",
-    "no_magnification": "render + bench diffraction",
+    "thesis_power": "render (no diffraction)",
+    "thesis_pupil": "render (no diffraction)",
+    "no_magnification": "render (no diffraction)",
     "geometric": "render (no diffraction)",
 }
 ORDER = ["wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification"]
@@ -123,8 +123,9 @@ def markdown_tables(results: list[dict]) -> str:
     out.append(
         "Columns are simulation / input: `render` = applied to the bench's no-lens render (as the thesis "
         "did), `synthetic` = applied to the synthetic chart. `wave` and `thesis` are compared with the "
-        "render convolved with the bench aperture's diffraction (Mitsuba renders none); `geometric` with "
-        "the render as it is. The noise floor compares the two ground-truth renders (seeds differ): "
+        "render convolved with the bench aperture's diffraction (Mitsuba renders none); `geometric` and "
+        "the one-erratum variants (`thesis_power`, `thesis_pupil`, `no_magnification`, geometric optics) "
+        "with the render as it is. The noise floor compares the two ground-truth renders (seeds differ): "
         "each simulation is compared with the first, so a perfect, noise-free simulation would score "
         "3.0 dB above the floor's PSNR (MSE sigma^2 instead of 2 sigma^2); a score near floor + 3 dB "
         "means the agreement is as good as the renders' Monte-Carlo noise can show.\n"
