@@ -329,3 +329,17 @@ def test_provenance_records_versions_and_json_safe_inputs():
     assert from_json(to_json(prov)) == prov
     with pytest.raises(VissimInputError):
         from_json("[1, 2]")
+
+
+def test_data_maps_round_trip_with_infinity_and_refuse_nan(tmp_path):
+    from vissim.imageio import read_data_map, write_data_map
+
+    depth = np.array([[0.5, 2.0], [np.inf, 6.0]], np.float32)
+    path = write_data_map(tmp_path / "depth.exr", depth, provenance={"unit": "m"})
+    back = read_data_map(path)
+    assert back.channel_names == ("Z",) and back.provenance["unit"] == "m"
+    np.testing.assert_array_equal(back.pixels, depth)
+    np.save(tmp_path / "d.npy", depth.astype(np.float64))
+    np.testing.assert_array_equal(read_data_map(tmp_path / "d.npy").pixels, depth)
+    with pytest.raises(VissimInputError, match="NaN"):
+        write_data_map(tmp_path / "bad.exr", np.array([[np.nan, 1.0]]))

@@ -36,7 +36,16 @@ from vissim.provenance import from_json, to_json
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["Image", "read_image", "srgb_decode", "srgb_encode", "to_preview_png", "write_image"]
+__all__ = [
+    "Image",
+    "read_data_map",
+    "read_image",
+    "srgb_decode",
+    "srgb_encode",
+    "to_preview_png",
+    "write_data_map",
+    "write_image",
+]
 
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 MONO_CHANNELS = ("Y",)
@@ -388,8 +397,8 @@ def _quantise(path: Path, arr: np.ndarray, encoding: str, bit_depth: int) -> np.
     return np.round(encoded * np.iinfo(dtype).max).astype(dtype)
 
 
-def _write_exr(path: Path, arr: np.ndarray, provenance: dict | None, overwrite: bool) -> None:
-    names = MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS
+def _write_exr(path: Path, arr: np.ndarray, provenance: dict | None, overwrite: bool, names=None) -> None:
+    names = names or (MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS)
     planes = [arr] if arr.ndim == 2 else [arr[..., i] for i in range(3)]
     # OpenEXR.Channel ignores strides: a non-contiguous view is written scrambled.
     channels = {n: OpenEXR.Channel(np.ascontiguousarray(p, dtype=np.float32)) for n, p in zip(names, planes)}
@@ -398,6 +407,58 @@ def _write_exr(path: Path, arr: np.ndarray, provenance: dict | None, overwrite: 
         header[PROVENANCE_ATTRIBUTE] = to_json(provenance)  # one Python str -> one EXR string attribute
     with atomic_output(path, overwrite=overwrite) as tmp:
         OpenEXR.File(header, channels).write(str(tmp))
+
+
+#: Channel names a single-channel data map (depth in metres) may carry, in order of preference.
+DATA_MAP_CHANNELS = ("Z", "depth", "Y")
+
+
+def read_data_map(path: str | os.PathLike[str]) -> Image:
+    """A single-channel data map (e.g. depth in metres) from an EXR or ``.npy`` file.
+
+    EXR: the only channel, or the first of ``Z``, ``depth``, ``Y``.  Values are not light: no
+    transfer function applies.  NaN is refused; +inf is allowed (sky, at infinity).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise VissimInputError(f"{path}: no such file")
+    if path.suffix.lower() == ".npy":
+        try:
+            data, provenance, name = np.load(path, allow_pickle=False), {}, "Z"
+        except Exception as exc:  # numpy raises ValueError, OSError, ...
+            raise VissimInputError(f"{path}: cannot read as a .npy array: {_one_line(exc)}") from exc
+    elif path.suffix.lower() == ".exr":
+        try:
+            exr = OpenEXR.File(str(path), separate_channels=True)
+            channels = {n: c.pixels for n, c in exr.parts[0].channels.items()}
+            prov_text = exr.parts[0].header.get(PROVENANCE_ATTRIBUTE)
+        except Exception as exc:  # OpenEXR raises RuntimeError, ValueError, IndexError ...
+            raise VissimInputError(f"{path}: cannot read as OpenEXR (truncated, corrupt or not an EXR file): {_one_line(exc)}") from exc
+        names = list(channels) if len(channels) == 1 else [n for n in DATA_MAP_CHANNELS if n in channels][:1]
+        if not names:
+            raise VissimInputError(f"{path}: EXR channels {sorted(channels)}: a data map needs one channel, or one named Z, depth or Y")
+        name, data = names[0], channels[names[0]]
+        provenance = _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
+    else:
+        raise VissimInputError(f"{path}: data maps must be .exr or .npy, got {path.suffix!r}")
+    if data.dtype.kind != "f" or data.ndim != 2:
+        raise VissimInputError(f"{path}: a data map must be a 2-D float array, got {data.dtype} of shape {data.shape}")
+    if np.any(np.isnan(data)):
+        raise VissimInputError(f"{path}: contains {int(np.sum(np.isnan(data)))} NaN values")
+    return Image(np.ascontiguousarray(data, dtype=np.float32), (name,), provenance)
+
+
+def write_data_map(path: str | os.PathLike[str], data: Any, *, channel: str = "Z", provenance: dict | None = None,
+                   overwrite: bool = False) -> Path:
+    """Write a single-channel float32 EXR data map (e.g. depth in metres, channel ``Z``)."""
+    path = Path(path)
+    if path.suffix.lower() != ".exr":
+        raise VissimInputError(f"{path}: data maps are written as .exr")
+    arr = np.asarray(data, dtype=np.float32)
+    if arr.ndim != 2 or np.any(np.isnan(arr)):
+        raise VissimInputError(f"{path}: a data map must be a 2-D array without NaN, got shape {arr.shape}")
+    _write_exr(path, arr, provenance, overwrite, names=(channel,))
+    return path
 
 
 def to_preview_png(
