@@ -44,6 +44,7 @@ import tifffile
 
 from vissim.charts import Chart
 from vissim.errors import VissimInputError
+from vissim.validate import positive_number as _positive
 from vissim.units import rad_to_arcmin
 
 logger = logging.getLogger(__name__)
@@ -275,16 +276,6 @@ def crop_letters(
 
 
 # ---------------------------------------------------------------- angular resampling
-
-
-def _positive(value: Any, name: str, unit: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"{name} must be a positive number of {unit}, got {value!r}") from None
-    if not (math.isfinite(number) and number > 0):
-        raise VissimInputError(f"{name} must be a positive number of {unit}, got {value!r}")
-    return number
 
 
 def camera_arcmin_per_px(
