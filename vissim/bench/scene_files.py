@@ -181,3 +181,48 @@ def load_chart_toml(path: str | os.PathLike[str], chart_distance_mm: float) -> C
     """The chart of the ``[chart]`` table of ``path`` (other tables are ignored)."""
     doc, source = _read(path)
     return chart_spec_from_table(_table(doc, "chart", source), source, chart_distance_mm)
+
+
+_ATV_TUBE_KEYS = {
+    "tube_length_mm": (float, "mm"), "lens_power_diopters": (float, "dioptres"),
+    "lens_refractive_index": (float, "(index)"), "lens_center_thickness_mm": (float, "mm"),
+    "lens_clear_aperture_mm": (float, "mm"), "lens_convex_side": (str, "('eye' or 'phone')"),
+    "eye_relief_mm": (float, "mm"), "pixels_per_inch": (float, "ppi"), "pixel_radiance": (float, "(linear)"),
+}
+
+
+def load_atv_toml(path: str | os.PathLike[str]):
+    """The :class:`~vissim.bench.atv.AtvConfig` of an ATV scene file (``scenes/atv_tube.toml``)."""
+    from vissim.bench.atv import AtvConfig, AtvEye, AtvTube, atv_trial_lens
+    from vissim.prescription import Prescription
+
+    doc, source = _read(path)
+    _check_keys(doc, ("tube", "eye", "trial_lens"), source)
+    tube_table = _table(doc, "tube", source)
+    _check_keys(tube_table, tuple(_ATV_TUBE_KEYS), f"{source} [tube]")
+    tube = AtvTube(**{k: _typed(v, _ATV_TUBE_KEYS[k][0], f"{source} [tube].{k}", _ATV_TUBE_KEYS[k][1])
+                      for k, v in tube_table.items()})
+    eye_table = _table(doc, "eye", source)
+    _check_keys(eye_table, ("pupil_diameter_mm", "prescription", "accommodation_diopters"), f"{source} [eye]")
+    rx = eye_table.get("prescription")
+    eye = AtvEye(
+        pupil_diameter_mm=_typed(eye_table.get("pupil_diameter_mm", 4.0), float, f"{source} [eye].pupil_diameter_mm", "mm"),
+        refractive_error=None if rx in (None, "") else Prescription.parse(_typed(rx, str, f"{source} [eye].prescription", "")),
+        accommodation_diopters=_typed(eye_table.get("accommodation_diopters", 0.0), float,
+                                      f"{source} [eye].accommodation_diopters", "dioptres"),
+    )
+    lens_table = _table(doc, "trial_lens", source)
+    _check_keys(lens_table, ("sphere_diopters", "cylinder_diopters", "axis_deg", "distance_mm", "fresnel_loss"),
+                f"{source} [trial_lens]")
+    trial = None
+    if "sphere_diopters" in lens_table or "cylinder_diopters" in lens_table:
+        trial = atv_trial_lens(
+            _typed(lens_table.get("sphere_diopters", 0.0), float, f"{source} [trial_lens].sphere_diopters", "dioptres"),
+            _typed(lens_table.get("cylinder_diopters", 0.0), float, f"{source} [trial_lens].cylinder_diopters", "dioptres"),
+            _typed(lens_table.get("axis_deg", 180.0), float, f"{source} [trial_lens].axis_deg", "degrees"),
+        )
+    return AtvConfig(
+        tube=tube, eye=eye, trial_lens=trial,
+        trial_lens_distance_mm=_typed(lens_table.get("distance_mm", 15.0), float, f"{source} [trial_lens].distance_mm", "mm"),
+        fresnel_loss=_typed(lens_table.get("fresnel_loss", False), bool, f"{source} [trial_lens].fresnel_loss", "(true/false)"),
+    )

@@ -30,17 +30,18 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
             "diameter (FWHM of the radial profile) and total flux follow."
         ),
     )
+    parser.add_argument("--scene", metavar="TOML", help="ATV scene file (see scenes/atv_tube.toml); options override it")
     lens = parser.add_argument_group("trial lens in the eyecup slot (default: none)")
     lens.add_argument("--trial-sphere", type=float, metavar="D", help="sphere in dioptres (plus lens > 0)")
-    lens.add_argument("--trial-cylinder", type=float, default=0.0, metavar="D", help="cylinder in dioptres")
-    lens.add_argument("--trial-axis", type=float, default=180.0, metavar="DEG", help="cylinder axis, TABO degrees")
-    lens.add_argument("--trial-distance-mm", type=float, default=15.0, metavar="MM",
+    lens.add_argument("--trial-cylinder", type=float, metavar="D", help="cylinder in dioptres")
+    lens.add_argument("--trial-axis", type=float, metavar="DEG", help="cylinder axis, TABO degrees")
+    lens.add_argument("--trial-distance-mm", type=float, metavar="MM",
                       help="trial lens back vertex to the eye's pupil (default 15)")
     eye = parser.add_argument_group("eye")
-    eye.add_argument("--pupil-mm", type=float, default=4.0, metavar="D", help="pupil diameter, 2-8 mm (default 4)")
+    eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter, 2-8 mm (default 4)")
     eye.add_argument("--eye", metavar="PRESCRIPTION",
                      help="the eye's own correcting prescription, e.g. '-2.00 -0.50 x 180' (default: emmetropic)")
-    eye.add_argument("--accommodation-d", type=float, default=0.0, metavar="A",
+    eye.add_argument("--accommodation-d", type=float, metavar="A",
                      help="accommodation in dioptres, >= 0 (default 0: focused at infinity)")
     light = parser.add_argument_group("pixel intensity (default: linear radiance 1)")
     given = light.add_mutually_exclusive_group()
@@ -72,23 +73,38 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _config(args: argparse.Namespace):
-    from vissim.bench.atv import AtvConfig, AtvEye, AtvTube, atv_trial_lens, display_code_to_linear
+    """The scene file's configuration (or the defaults) with the given options applied."""
+    from dataclasses import replace
+
+    from vissim.bench.atv import AtvConfig, atv_trial_lens, display_code_to_linear
+    from vissim.bench.scene_files import load_atv_toml
     from vissim.prescription import Prescription
 
+    config = load_atv_toml(args.scene) if args.scene else AtvConfig()
     if args.display_code is not None:
-        radiance = args.white_radiance * display_code_to_linear(args.display_code, args.transfer)
-    else:
-        radiance = 1.0 if args.pixel_intensity is None else args.pixel_intensity
-    trial = None
+        config = replace(config, tube=replace(config.tube, pixel_radiance=args.white_radiance
+                                              * display_code_to_linear(args.display_code, args.transfer)))
+    elif args.pixel_intensity is not None:
+        config = replace(config, tube=replace(config.tube, pixel_radiance=args.pixel_intensity))
     if args.trial_sphere is not None:
-        trial = atv_trial_lens(args.trial_sphere, args.trial_cylinder, args.trial_axis)
+        config = replace(config, trial_lens=atv_trial_lens(
+            args.trial_sphere, args.trial_cylinder or 0.0, 180.0 if args.trial_axis is None else args.trial_axis))
     elif args.trial_cylinder:
         raise VissimInputError(
             f"--trial-cylinder {args.trial_cylinder:g} D needs --trial-sphere (dioptres, 0 for plano)")
-    error = None if args.eye is None else Prescription.parse(args.eye)
-    eye = AtvEye(pupil_diameter_mm=args.pupil_mm, refractive_error=error, accommodation_diopters=args.accommodation_d)
-    return AtvConfig(tube=AtvTube(pixel_radiance=radiance), eye=eye, trial_lens=trial,
-                     trial_lens_distance_mm=args.trial_distance_mm, fresnel_loss=args.fresnel_loss)
+    eye = config.eye
+    if args.pupil_mm is not None:
+        eye = replace(eye, pupil_diameter_mm=args.pupil_mm)
+    if args.eye is not None:
+        eye = replace(eye, refractive_error=Prescription.parse(args.eye))
+    if args.accommodation_d is not None:
+        eye = replace(eye, accommodation_diopters=args.accommodation_d)
+    config = replace(config, eye=eye)
+    if args.trial_distance_mm is not None:
+        config = replace(config, trial_lens_distance_mm=args.trial_distance_mm)
+    if args.fresnel_loss:
+        config = replace(config, fresnel_loss=True)
+    return config
 
 
 def run_atv(args: argparse.Namespace) -> int:
