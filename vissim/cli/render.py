@@ -1,7 +1,8 @@
 """``vissim render``: render the virtual optical bench with Mitsuba 3 to a linear EXR.
 
-Sub-commands: ``render bench`` (the DSLR bench, :mod:`vissim.bench.dslr`) and ``render atv``
-(the ATV tube, :mod:`vissim.bench.atv`).
+Sub-commands: ``render bench`` (the DSLR bench, :mod:`vissim.bench.dslr`), ``render atv``
+(the ATV tube, :mod:`vissim.bench.atv`) and ``render depth`` (depth scenes,
+:mod:`vissim.bench.depth_scene`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from vissim.errors import VissimInputError
 
 log = logging.getLogger(__name__)
 
-__all__ = ["add_parser", "add_bench_parser", "add_atv_parser"]
+__all__ = ["add_parser", "add_bench_parser", "add_atv_parser", "add_depth_parser"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -28,6 +29,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     benches = parser.add_subparsers(dest="bench", metavar="BENCH")
     add_bench_parser(benches)
     add_atv_parser(benches)
+    add_depth_parser(benches)
     parser.set_defaults(func=lambda args: _usage(parser))
     return parser
 
@@ -84,6 +86,13 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
 def add_atv_parser(subparsers) -> argparse.ArgumentParser:
     """``render atv``: the ATV tube (thesis §5.4), defined with its bench in :mod:`vissim.cli.render_atv`."""
     from vissim.cli.render_atv import add_atv_parser as add
+
+    return add(subparsers)
+
+
+def add_depth_parser(subparsers) -> argparse.ArgumentParser:
+    """``render depth``: charts at several distances or tilted (:mod:`vissim.cli.render_depth`)."""
+    from vissim.cli.render_depth import add_depth_parser as add
 
     return add(subparsers)
 

@@ -1,0 +1,155 @@
+"""Depth scene files (TOML): panels, a tilted chart, the image, sampling and the observer.
+
+Tables: ``[image]`` (``arcmin_per_px``, ``size_px`` = [rows, cols]), ``[sampling]`` (``spp``,
+``seed``, ``aux_spp`` for the pinhole renders, ``sampler``, ``texels_per_px``), one observer
+-- ``[eye]`` (``prescription``, ``pupil_diameter_mm``, ``accommodation_d``) or ``[camera]``
+(the DSLR: ``focal_length_mm``, ``f_number``, ``focus_distance_m``, ``vertex_distance_mm``,
+``lens_gap_mm``, ``refractive_index``, ``clear_aperture_mm``, ``fresnel_loss`` and
+``[[camera.lenses]]`` as in ``scenes/dslr_bench.toml``) -- and the panels: ``[[panel]]``
+(``distance_m``, ``center_arcmin`` = [right, up]) and ``[[tilted]]`` (``distance_left_m``,
+``distance_right_m``, ``center_arcmin``), each with the chart keys ``letters``, ``logmar``,
+``padding_arcmin``, ``polarity``, ``paper_reflectance``, ``ink_reflectance``.  No observer
+table means an emmetropic eye with a 4 mm pupil.  ``scenes/depth_panels.toml`` and
+``scenes/depth_tilted.toml`` are the commented examples.  Unknown keys and wrong types raise
+:class:`~vissim.errors.VissimInputError` naming the file, the key and the unit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from dataclasses import dataclass
+from typing import Any
+
+from vissim.bench.depth_scene import CameraViewer, ChartPanel, DepthScene, EyeViewer, PanelChart, TiltedChart
+from vissim.bench.scene_files import _LENS, _check_keys, _read, _table, _typed
+from vissim.errors import VissimInputError
+from vissim.prescription import Prescription
+from vissim.trial_lens import TrialLens
+
+__all__ = ["DepthSceneFile", "load_depth_scene_toml", "depth_scene_from_doc"]
+
+_IMAGE = {"arcmin_per_px": (float, "arcmin/px"), "size_px": (list, "[rows, cols] px")}
+_SAMPLING = {
+    "spp": (int, "samples per pixel"),
+    "seed": (int, "(integer)"),
+    "aux_spp": (int, "samples per pixel of the pinhole renders"),
+    "sampler": (str, "(name)"),
+    "texels_per_px": (float, "texels per pixel"),
+}
+_EYE = {"prescription": (str, "(e.g. '-2.00 -0.50 x 180')"), "pupil_diameter_mm": (float, "mm"),
+        "accommodation_d": (float, "dioptres")}
+_CAMERA = {
+    "focal_length_mm": (float, "mm"), "f_number": (float, "(f-number)"), "focus_distance_m": (float, "m"),
+    "vertex_distance_mm": (float, "mm"), "lens_gap_mm": (float, "mm"), "refractive_index": (float, "(dimensionless)"),
+    "clear_aperture_mm": (float, "mm"), "fresnel_loss": (bool, "(true/false)"), "lenses": (list, "(array of tables)"),
+}
+_CHART = {
+    "letters": (str, "(Sloan letters, rows separated by spaces)"), "logmar": (float, "LogMAR"),
+    "padding_arcmin": (float, "arcmin"), "polarity": (str, "('black-on-white' or 'white-on-black')"),
+    "paper_reflectance": (float, "(fraction 0-1)"), "ink_reflectance": (float, "(fraction 0-1)"),
+}
+_PANEL = {"distance_m": (float, "m"), "center_arcmin": (list, "[right, up] arcmin"), **_CHART}
+_TILTED = {"distance_left_m": (float, "m"), "distance_right_m": (float, "m"),
+           "center_arcmin": (list, "[right, up] arcmin"), **_CHART}
+_TABLES = ("image", "sampling", "eye", "camera", "panel", "tilted")
+
+
+@dataclass(frozen=True)
+class DepthSceneFile:
+    """A loaded depth scene file: the scene, the observer and the sampling it asks for."""
+
+    scene: DepthScene
+    viewer: EyeViewer | CameraViewer
+    spp: int = 64
+    seed: int = 0
+    aux_spp: int = 64
+    source: str = ""
+
+
+def _values(table: Any, schema: dict, where: str) -> dict:
+    if not isinstance(table, dict):
+        raise VissimInputError(f"{where} must be a table, got {table!r}")
+    _check_keys(table, schema, where)
+    return {key: _typed(value, schema[key][0], f"{where} {key}", schema[key][1]) for key, value in table.items()}
+
+
+def _center(values: dict, where: str) -> tuple[float, float]:
+    center = values.pop("center_arcmin", [0.0, 0.0])
+    if len(center) != 2:
+        raise VissimInputError(f"{where} center_arcmin must be [right, up] in arcmin, got {center!r}")
+    return tuple(_typed(v, float, f"{where} center_arcmin", "arcmin") for v in center)
+
+
+def _panels(doc: dict, source: str) -> tuple:
+    panels = []
+    for table_name, schema in (("panel", _PANEL), ("tilted", _TILTED)):
+        entries = doc.get(table_name, [])
+        if not isinstance(entries, list):
+            raise VissimInputError(f"{source}: [[{table_name}]] must be an array of tables, got {entries!r}")
+        for i, entry in enumerate(entries):
+            where = f"{source} [[{table_name}]] #{i + 1}"
+            values = _values(entry, schema, where)
+            center = _center(values, where)
+            chart = PanelChart(**{k: values.pop(k) for k in list(values) if k in _CHART})
+            if table_name == "panel":
+                if "distance_m" not in values:
+                    raise VissimInputError(f"{where} needs distance_m (metres)")
+                panels.append(ChartPanel(values["distance_m"], center, chart))
+            else:
+                panels.append(TiltedChart(values.get("distance_left_m", 0.5), values.get("distance_right_m", 3.0),
+                                          center, chart))
+    if not panels:
+        raise VissimInputError(f"{source}: no panels; add [[panel]] and/or [[tilted]] tables")
+    return tuple(panels)
+
+
+def _viewer(doc: dict, source: str) -> EyeViewer | CameraViewer:
+    if "eye" in doc and "camera" in doc:
+        raise VissimInputError(f"{source}: give one observer, [eye] or [camera], not both")
+    if "camera" in doc:
+        where = f"{source} [camera]"
+        values = _values(doc["camera"], _CAMERA, where)
+        lenses = []
+        for i, lens in enumerate(values.pop("lenses", [])):
+            lens_where = f"{source} [[camera.lenses]] #{i + 1}"
+            kwargs = _values(lens, _LENS, lens_where)
+            if "sphere_diopters" not in kwargs and "cylinder_diopters" not in kwargs:
+                raise VissimInputError(f"{lens_where} needs sphere_diopters and/or cylinder_diopters (D)")
+            kwargs.setdefault("sphere_diopters", 0.0)
+            lenses.append(TrialLens(**kwargs))
+        return CameraViewer(lenses=tuple(lenses), **values)
+    values = _values(doc.get("eye", {}), _EYE, f"{source} [eye]")
+    rx = Prescription.parse(values.pop("prescription", "plano"))
+    return EyeViewer(rx, **values)
+
+
+def depth_scene_from_doc(doc: dict, source: str) -> DepthSceneFile:
+    """The :class:`DepthSceneFile` of a parsed TOML document (module doc)."""
+    _check_keys(doc, _TABLES, source)
+    image = _values(_table(doc, "image", source), _IMAGE, f"{source} [image]")
+    sampling = _values(_table(doc, "sampling", source), _SAMPLING, f"{source} [sampling]")
+    fields: dict[str, Any] = {}
+    if "size_px" in image:
+        size = image["size_px"]
+        if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
+            raise VissimInputError(f"{source} [image] size_px must be [rows, cols] in whole px, got {size!r}")
+        fields["size_px"] = tuple(size)
+    if "arcmin_per_px" in image:
+        fields["arcmin_per_px"] = image["arcmin_per_px"]
+    for key in ("sampler", "texels_per_px"):
+        if key in sampling:
+            fields[key] = sampling[key]
+    scene = DepthScene(_panels(doc, source), **fields)
+    counts = {key: sampling.get(key, default) for key, default in (("spp", 64), ("seed", 0), ("aux_spp", 64))}
+    for key in ("spp", "aux_spp"):
+        if counts[key] < 1:
+            raise VissimInputError(f"{source} [sampling] {key} must be >= 1 sample per pixel, got {counts[key]}")
+    return DepthSceneFile(scene, _viewer(doc, source), counts["spp"], counts["seed"], counts["aux_spp"], source)
+
+
+def load_depth_scene_toml(path: str | os.PathLike[str], **overrides: Any) -> DepthSceneFile:
+    """Load a depth scene file; ``overrides`` (not None) replace :class:`DepthSceneFile` fields."""
+    doc, source = _read(path)
+    loaded = depth_scene_from_doc(doc, source)
+    return dataclasses.replace(loaded, **{k: v for k, v in overrides.items() if v is not None})

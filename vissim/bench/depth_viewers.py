@@ -1,0 +1,143 @@
+"""Who looks at a depth scene: an eye (a thin lens at its pupil) or the DSLR bench camera.
+
+Both are ideal thin lenses at the pupil plane with flat focal surfaces, described by the 2 x 2
+vergence matrix ``K`` (dioptres, TABO x/y frame) they focus: an object point at axial
+distance ``z`` is sharp in the meridians where ``1/z = K``, and blurred elsewhere by a
+geometric spot of ``pupil x (K - I/z)`` milliradians (pupil in mm; conventions: D x mm = mrad).
+
+* :class:`EyeViewer` -- ``K = A I - Rx``: the eye's correcting lens ``Rx`` (a
+  :class:`~vissim.prescription.Prescription`, myope negative, *not* worn) and accommodation
+  ``A >= 0``.  So defocus at distance d is ``Rx + 1/d - A``, exactly
+  :func:`vissim.depth.effective_prescription`: a -2 D myope focuses 0.5 m (K = +2 D), an
+  emmetrope accommodating 3 D focuses 1/3 m, a relaxed +1 D hyperope has K = -1 D (focus
+  "beyond infinity": blur at 6 m is pupil x (1 + 1/6) D), and ``plano -2.00 x 90`` has
+  K = diag(2, 0) D (excess power in the horizontal meridian: horizontal blur).  Rendered by
+  the Mitsuba sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), which takes any such K.
+* :class:`CameraViewer` -- the DSLR of :mod:`vissim.bench.dslr` (Mitsuba ``thinlens``,
+  entrance pupil = focal length / f-number): ``K = I / focus distance`` plus the power its
+  trial lenses add (:func:`vissim.trial_lens.trial_lens_effect`, for an object at the focus
+  distance; the lenses' vergence effect changes it by < 1 % between 0.4 m and infinity).
+
+:func:`equivalent_eye` is the eye that blurs like a viewer (``Rx = -K``, same pupil, A = 0):
+what :func:`vissim.depth.blur_depth` is given to simulate a render of that viewer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Union
+
+import numpy as np
+
+from vissim.bench.dslr import DslrBench
+from vissim.errors import VissimInputError
+from vissim.prescription import Prescription, RefractiveError
+from vissim.trial_lens import CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.units import rad_to_arcmin
+from vissim.validate import finite_number, positive_number
+
+__all__ = ["EyeViewer", "CameraViewer", "Viewer", "focus_matrix_diopters", "equivalent_eye", "blur_diameter_arcmin"]
+
+
+@dataclass(frozen=True)
+class EyeViewer:
+    """An eye of correcting lens ``prescription`` (myope < 0, not worn), pupil, accommodation >= 0."""
+
+    prescription: Prescription = field(default_factory=lambda: Prescription(0.0))
+    pupil_diameter_mm: float = 4.0
+    accommodation_d: float = 0.0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.prescription, RefractiveError) or not isinstance(self.prescription, Prescription):
+            raise TypeError(f"the eye needs its Prescription (correcting lens), got {type(self.prescription).__name__}")
+        pupil = positive_number(self.pupil_diameter_mm, "pupil diameter", "mm")
+        object.__setattr__(self, "pupil_diameter_mm", pupil)
+        accommodation = finite_number(self.accommodation_d, "accommodation", "dioptres")
+        if accommodation < 0.0:
+            raise VissimInputError(f"accommodation must be >= 0 dioptres, got {accommodation:g} D")
+        object.__setattr__(self, "accommodation_d", accommodation + 0.0)
+
+    def label(self) -> str:
+        return f"eye {self.prescription.format()}, {self.pupil_diameter_mm:g} mm pupil, A {self.accommodation_d:g} D"
+
+
+@dataclass(frozen=True)
+class CameraViewer:
+    """The DSLR bench camera (thin lens, f/N) focused at ``focus_distance_m``, optional trial lenses."""
+
+    focal_length_mm: float = 18.0
+    f_number: float = 5.0
+    focus_distance_m: float = 0.9144
+    lenses: tuple[TrialLens, ...] = ()
+    vertex_distance_mm: float = 10.0
+    lens_gap_mm: float = 2.0
+    refractive_index: float = CROWN_GLASS_INDEX
+    clear_aperture_mm: float | None = None
+    fresnel_loss: bool = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "focus_distance_m", positive_number(self.focus_distance_m, "focus distance", "m"))
+        lenses = (self.lenses,) if isinstance(self.lenses, TrialLens) else tuple(self.lenses)
+        object.__setattr__(self, "lenses", lenses)
+        self.bench()  # validates through DslrBench
+
+    def bench(self, scene=None) -> DslrBench:
+        """The :class:`DslrBench` of this camera on ``scene``'s pixel grid (object distance = focus).
+
+        ``scene`` (a :class:`~vissim.bench.depth_scene.DepthScene`) sets the grid, sampler and
+        texel density, hence the lenses' clear aperture; None: an 8 x 8 grid at 1 arcmin/px.
+        """
+        grid = {} if scene is None else {"arcmin_per_px": scene.arcmin_per_px, "size_px": scene.size_px,
+                                         "sampler": scene.sampler, "texels_per_px": scene.texels_per_px}
+        return DslrBench(
+            focal_length_mm=self.focal_length_mm, f_number=self.f_number,
+            focus_distance_mm=1000.0 * self.focus_distance_m, chart_distance_mm=1000.0 * self.focus_distance_m,
+            vertex_distance_mm=self.vertex_distance_mm, lens_gap_mm=self.lens_gap_mm, lenses=self.lenses,
+            refractive_index=self.refractive_index, clear_aperture_mm=self.clear_aperture_mm,
+            fresnel_loss=self.fresnel_loss, **({"size_px": (8, 8)} | grid),
+        )
+
+    @property
+    def pupil_diameter_mm(self) -> float:
+        return self.focal_length_mm / self.f_number
+
+    def label(self) -> str:
+        lenses = " + ".join(str(lens.marked_power) for lens in self.lenses) or "no lens"
+        return (f"camera {self.focal_length_mm:g} mm f/{self.f_number:g} focused at {self.focus_distance_m:g} m, "
+                f"{lenses}")
+
+
+Viewer = Union[EyeViewer, CameraViewer]
+
+
+def focus_matrix_diopters(viewer: Viewer, scene=None) -> np.ndarray:
+    """2 x 2 vergence matrix K (TABO x/y) the viewer focuses (module doc); ``scene`` sizes trial lenses."""
+    if isinstance(viewer, EyeViewer):
+        return viewer.accommodation_d * np.eye(2) - np.asarray(viewer.prescription.power_matrix(), dtype=float)
+    if not isinstance(viewer, CameraViewer):
+        raise VissimInputError(f"viewer must be an EyeViewer or a CameraViewer, got {type(viewer).__name__}")
+    k = np.eye(2) / viewer.focus_distance_m
+    if viewer.lenses:
+        bench = viewer.bench(scene)
+        setup = TrialLensSetup(bench.physical_lenses, bench.vertex_distance_mm, viewer.focus_distance_m,
+                               bench.lens_gap_mm)
+        k = k + np.asarray(trial_lens_effect(setup).added_power_matrix, dtype=float)
+    return k
+
+
+def equivalent_eye(viewer: Viewer, scene=None) -> EyeViewer:
+    """The :class:`EyeViewer` that blurs like ``viewer``: Rx = -K, same pupil, no accommodation."""
+    if isinstance(viewer, EyeViewer):
+        return viewer
+    rx = Prescription.from_power_matrix(-focus_matrix_diopters(viewer, scene))
+    return EyeViewer(rx, viewer.pupil_diameter_mm, 0.0)
+
+
+def blur_diameter_arcmin(viewer: Viewer, distance_m, scene=None) -> np.ndarray:
+    """Geometric blur diameter (largest principal meridian) of objects at axial ``distance_m`` (inf ok)."""
+    k = np.linalg.eigvalsh(focus_matrix_diopters(viewer, scene))
+    distance = np.asarray(distance_m, dtype=float)
+    with np.errstate(divide="ignore"):
+        proximity = np.where(np.isinf(distance), 0.0, 1.0 / distance)
+    defocus = np.maximum(np.abs(k[0] - proximity), np.abs(k[1] - proximity))
+    return rad_to_arcmin(defocus * viewer.pupil_diameter_mm / 1000.0)

@@ -1,0 +1,163 @@
+"""``vissim render depth``: a depth scene (charts at several distances, a tilted chart) through an eye or the DSLR.
+
+Registered by :mod:`vissim.cli.render` through :func:`add_depth_parser`.  Thin: load the
+scene file (:mod:`vissim.bench.depth_scene_files`), apply the options, call
+:func:`vissim.render.depth_render.render_depth`, write the blurred image (and on request the
+all-in-focus image and the axial depth map) with provenance, print a summary with the
+predicted blur of every panel.
+
+The depth map is metres along the view axis from the pupil, ``inf`` for sky: an EXR with one
+channel ``Z`` (or ``.npy``), which ``vissim blur-depth AIF.exr DEPTH.exr`` reads as is.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from vissim.errors import VissimInputError
+
+__all__ = ["add_depth_parser", "run_depth", "write_depth"]
+
+
+def add_depth_parser(subparsers) -> argparse.ArgumentParser:
+    """Add the ``depth`` sub-command to ``subparsers`` (those of ``vissim render``) and return it."""
+    parser = subparsers.add_parser(
+        "depth",
+        help="charts at several distances (or a tilted chart) seen by an eye or the DSLR",
+        description=(
+            "Render a depth scene file (scenes/depth_panels.toml, scenes/depth_tilted.toml) by path tracing: "
+            "the blurred image of the scene's observer, and on request the all-in-focus image (a pinhole at "
+            "the pupil) and the depth map (axial metres, inf = sky) on the same pixel grid.  Eye options "
+            "replace the file's observer with an eye, camera options with the DSLR bench camera."
+        ),
+    )
+    parser.add_argument("scene", type=Path, help="depth scene TOML, e.g. scenes/depth_panels.toml")
+    eye = parser.add_argument_group("eye (an eye focused at 1 / (A - Rx) metres; Rx not worn)")
+    eye.add_argument("--eye", metavar="PRESCRIPTION", help="the eye's correcting lens, e.g. '-2.00 DS' (myope < 0)")
+    eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter in mm")
+    eye.add_argument("--accommodation-d", type=float, metavar="A", help="accommodation exerted, dioptres >= 0")
+    camera = parser.add_argument_group("DSLR bench camera (thin lens, entrance pupil focal length / f-number)")
+    camera.add_argument("--f-number", type=float, metavar="N", help="f-number (default 5)")
+    camera.add_argument("--focus-distance-m", type=float, metavar="F", help="focus distance in metres (default 0.9144)")
+    camera.add_argument("--focal-length-mm", type=float, metavar="MM", help="focal length (default 18)")
+    camera.add_argument("--sphere", type=float, metavar="D",
+                        help="one trial lens, sphere in dioptres (replaces the file's lenses)")
+    camera.add_argument("--cylinder", type=float, metavar="D", help="its cylinder in dioptres (needs --axis)")
+    camera.add_argument("--axis", type=float, metavar="DEG", help="its cylinder axis, TABO degrees 0-180")
+    out = parser.add_argument_group("outputs")
+    out.add_argument("-o", "--output", required=True, type=Path, metavar="PATH", help="blurred image, .exr (linear)")
+    out.add_argument("--all-in-focus", type=Path, metavar="PATH", help="also the all-in-focus image, .exr")
+    out.add_argument("--depth", type=Path, metavar="PATH", help="also the axial depth map in metres, .exr (Z) or .npy")
+    out.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    sampling = parser.add_argument_group("sampling (defaults: the scene file's)")
+    sampling.add_argument("--spp", type=int, metavar="N", help="samples per pixel of the blurred render")
+    sampling.add_argument("--aux-spp", type=int, metavar="N",
+                          help="samples per pixel of the all-in-focus and depth renders")
+    sampling.add_argument("--seed", type=int, metavar="S", help="seed (all-in-focus: S + 1, depth: S + 2)")
+    sampling.add_argument("--rgb", action="store_true", help="render RGB (default: monochrome)")
+    sampling.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
+    parser.set_defaults(func=run_depth)
+    return parser
+
+
+def _viewer(args: argparse.Namespace, loaded):
+    from vissim.bench.depth_scene import CameraViewer, EyeViewer
+    from vissim.prescription import Prescription
+    from vissim.trial_lens import TrialLens
+
+    eye_given = any(v is not None for v in (args.eye, args.pupil_mm, args.accommodation_d))
+    camera_given = any(v is not None for v in (args.f_number, args.focus_distance_m, args.focal_length_mm,
+                                               args.sphere, args.cylinder, args.axis))
+    if eye_given and camera_given:
+        raise VissimInputError("give eye options (--eye/--pupil-mm/--accommodation-d) or camera options, not both")
+    if eye_given:
+        base = loaded.viewer if isinstance(loaded.viewer, EyeViewer) else EyeViewer()
+        changes = {"prescription": None if args.eye is None else Prescription.parse(args.eye),
+                   "pupil_diameter_mm": args.pupil_mm, "accommodation_d": args.accommodation_d}
+        return dataclasses.replace(base, **{k: v for k, v in changes.items() if v is not None})
+    if camera_given:
+        base = loaded.viewer if isinstance(loaded.viewer, CameraViewer) else CameraViewer()
+        changes = {"f_number": args.f_number, "focus_distance_m": args.focus_distance_m,
+                   "focal_length_mm": args.focal_length_mm}
+        if args.sphere is not None or args.cylinder is not None:
+            cylinder = args.cylinder or 0.0
+            if cylinder != 0.0 and args.axis is None:
+                raise VissimInputError(f"--cylinder {cylinder:g} D needs --axis in degrees (TABO, 0-180)")
+            changes["lenses"] = (TrialLens(args.sphere or 0.0, cylinder, 180.0 if args.axis is None else args.axis),)
+        elif args.axis is not None:
+            raise VissimInputError("--axis needs --cylinder (dioptres)")
+        return dataclasses.replace(base, **{k: v for k, v in changes.items() if v is not None})
+    return loaded.viewer
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    paths = [p for p in (args.output, args.all_in_focus, args.depth) if p is not None]
+    if len({p.resolve() for p in paths}) != len(paths):
+        raise VissimInputError("the blurred, all-in-focus and depth outputs must be different files")
+    for path, allowed in ((args.output, (".exr",)), (args.all_in_focus, (".exr",)), (args.depth, (".exr", ".npy"))):
+        if path is None:
+            continue
+        if path.suffix.lower() not in allowed:
+            raise VissimInputError(f"{path}: expected a file ending in {' or '.join(allowed)} (linear float)")
+        if path.exists() and not args.overwrite:
+            raise VissimInputError(f"{path} already exists; pass --overwrite to replace it")
+
+
+def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = None, overwrite: bool = False) -> Path:
+    """Write an axial depth map (metres, inf = sky) as a one-channel ``Z`` EXR or a ``.npy``, atomically."""
+    from vissim.atomic import atomic_output
+    from vissim.imageio import write_data_map
+
+    depth = np.ascontiguousarray(depth_m, dtype=np.float32)
+    if depth.ndim != 2 or np.isnan(depth).any() or (depth <= 0).any():
+        raise VissimInputError(f"{path}: a depth map must be (H, W) positive metres or inf")
+    if path.suffix.lower() != ".npy":
+        return write_data_map(path, depth, channel="Z", provenance=provenance, overwrite=overwrite)
+    with atomic_output(path, overwrite=overwrite) as tmp:
+        with open(tmp, "wb") as handle:
+            np.save(handle, depth, allow_pickle=False)
+    return path
+
+
+def run_depth(args: argparse.Namespace) -> int:
+    from vissim.bench.depth_scene import blur_diameter_arcmin, panel_geometries
+    from vissim.bench.depth_scene_files import load_depth_scene_toml
+    from vissim.imageio import write_image
+    from vissim.render.depth_render import render_depth
+
+    _check_outputs(args)
+    for name in ("spp", "aux_spp"):
+        value = getattr(args, name)
+        if value is not None and value < 1:
+            option = "--" + name.replace("_", "-")
+            raise VissimInputError(f"{option} must be a positive number of samples per pixel, got {value}")
+    loaded = load_depth_scene_toml(args.scene, spp=args.spp, seed=args.seed, aux_spp=args.aux_spp)
+    viewer = _viewer(args, loaded)
+    result = render_depth(
+        loaded.scene, viewer, spp=loaded.spp, seed=loaded.seed, all_in_focus=args.all_in_focus is not None,
+        depth=args.depth is not None, aux_spp=loaded.aux_spp, kind="rgb" if args.rgb else "mono", variant=args.variant,
+    )
+    provenance = dict(result.provenance)
+    provenance["inputs"] = dict(provenance["inputs"], scene_file=str(args.scene), command="render depth")
+    write_image(args.output, result.blurred, provenance=provenance, overwrite=args.overwrite)
+    written = [str(args.output)]
+    if args.all_in_focus is not None:
+        aif = dict(provenance, inputs=dict(provenance["inputs"], image="all_in_focus (pinhole at the pupil centre)"))
+        write_image(args.all_in_focus, result.all_in_focus, provenance=aif, overwrite=args.overwrite)
+        written.append(str(args.all_in_focus))
+    if args.depth is not None:
+        depth = dict(provenance, inputs=dict(provenance["inputs"], image="axial depth, metres, inf = sky"))
+        write_depth(args.depth, result.depth_m, provenance=depth, overwrite=args.overwrite)
+        written.append(str(args.depth))
+    rows, cols = loaded.scene.size_px
+    print(f"wrote {', '.join(written)}: {cols} x {rows} px, {result.spp} spp, {result.variant}, "
+          f"{result.seconds:.1f} s; {viewer.label()}")
+    for g in panel_geometries(loaded.scene):
+        blur = [float(blur_diameter_arcmin(viewer, d, loaded.scene)) for d in (g.distance_left_m, g.distance_right_m)]
+        where = f"{blur[0]:.1f}'" if g.kind == "panel" else f"{blur[0]:.1f}' (left) to {blur[1]:.1f}' (right)"
+        print(f"  {g.name}: predicted blur diameter {where}")
+    return 0

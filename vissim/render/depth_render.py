@@ -1,0 +1,176 @@
+"""Render depth scenes: the blurred image, and on request the all-in-focus image and a depth map.
+
+Three renders of one scene (:func:`vissim.bench.depth_scene.depth_scene_dict`), one pixel grid:
+
+* **blurred** -- the observer's optics (eye sensor or DSLR thin lens + trial lenses), seed ``seed``;
+* **all in focus** -- a pinhole at the pupil centre, same film, same lenses, seed ``seed + 1``;
+* **depth** -- the pinhole looking at the *proximity pass* (each panel glows with ``1/z``
+  dioptres, z axial), seed ``seed + 2``.  A pixel's value is its mean proximity over the pixel
+  (0 where it sees sky), and the depth map is ``1 / proximity`` metres, ``inf`` for sky: the
+  axial distance :func:`vissim.depth.blur_depth` expects for these flat-focal-plane optics.
+  Averaging in dioptres is what ``blur_depth`` does between its layers, so a pixel split
+  between two panels gets the dioptric mean of their depths.  Through trial lenses the depth
+  pass sees what the pinhole sees (magnified), unlike Mitsuba's ``aov`` integrator, whose
+  ``position``/``depth`` stop at the first surface (the lens).  :func:`render_aov_depth`
+  gives that AOV's axial depth as an independent check on scenes without lenses (its
+  ``depth`` type is measured from the near-clip plane along the ray, so ``position.z`` is
+  used instead).
+
+Only this package imports Mitsuba (through :func:`vissim.render.backend.mitsuba`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from vissim.errors import VissimInputError
+from vissim.provenance import json_safe, make_provenance
+from vissim.render.backend import mitsuba
+from vissim.render.eye_sensor import register_eye_sensor
+from vissim.render.plugins import register_plugins
+from vissim.render.run import render_scene, to_mitsuba_dict
+
+__all__ = ["DepthRenderResult", "render_depth", "render_view", "render_aov_depth", "proximity_to_depth_m",
+           "SKY_PROXIMITY_D"]
+
+log = logging.getLogger(__name__)
+
+#: Mean proximities below this (dioptres, i.e. beyond 1000 km) are sky: depth inf.
+SKY_PROXIMITY_D = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class DepthRenderResult:
+    """float32 images on one grid (None when not asked for); ``depth_m`` axial metres, inf = sky."""
+
+    blurred: np.ndarray | None
+    all_in_focus: np.ndarray | None
+    depth_m: np.ndarray | None
+    proximity_d: np.ndarray | None
+    variant: str
+    spp: int
+    seed: int
+    seconds: float
+    provenance: dict | None = None
+
+
+def proximity_to_depth_m(proximity_d) -> np.ndarray:
+    """Axial depth (m, float32) from a proximity pass (D): ``1/p``, inf where ``p < SKY_PROXIMITY_D``."""
+    proximity = np.asarray(proximity_d, dtype=np.float64)
+    if not np.all(np.isfinite(proximity)) or proximity.min(initial=0.0) < -1e-6:
+        raise VissimInputError("a proximity pass must be finite and >= 0 dioptres")
+    with np.errstate(divide="ignore"):
+        depth = np.where(proximity < SKY_PROXIMITY_D, np.inf, 1.0 / np.maximum(proximity, SKY_PROXIMITY_D))
+    return depth.astype(np.float32)
+
+
+def render_view(scene, viewer, *, view: str, content: str = "radiance", spp: int, seed: int = 0,
+                kind: str = "mono", variant: str | None = None, pass_spp: int | None = None,
+                progress: Callable[[int, int], None] | None = None, mesh_cache_dir=None):
+    """One render (:class:`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``."""
+    from vissim.bench.depth_scene import depth_scene_dict
+
+    kind = "mono" if content == "proximity" else kind
+    register_eye_sensor(mitsuba(kind, variant))
+    scene_dict = depth_scene_dict(scene, viewer, view=view, content=content, kind=kind, mesh_cache_dir=mesh_cache_dir)
+    return render_scene(scene_dict, kind=kind, spp=spp, seed=seed, variant=variant, pass_spp=pass_spp,
+                        progress=progress)
+
+
+def render_depth(
+    scene,
+    viewer,
+    *,
+    spp: int,
+    seed: int = 0,
+    blurred: bool = True,
+    all_in_focus: bool = False,
+    depth: bool = False,
+    aux_spp: int | None = None,
+    kind: str = "mono",
+    variant: str | None = None,
+    pass_spp: int | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+    mesh_cache_dir=None,
+) -> DepthRenderResult:
+    """Render ``scene`` seen by ``viewer``: blurred, and on request all-in-focus and depth (module doc).
+
+    ``aux_spp`` is the sample count of the pinhole renders (default ``spp``); their noise is
+    only the pixel-area sampling of edges.  ``progress(name, done_spp, total_spp)`` reports
+    each render.  The provenance records the scene, the viewer, seeds, spp and versions.
+    """
+    from vissim.bench.depth_scene import blur_diameter_arcmin, focus_matrix_diopters, panel_geometries
+
+    start = time.perf_counter()
+    aux = int(spp if aux_spp is None else aux_spp)
+    jobs = [("blurred", "blurred", "radiance", seed, spp)] if blurred else []
+    if all_in_focus:
+        jobs.append(("all_in_focus", "all_in_focus", "radiance", seed + 1, aux))
+    if depth:
+        jobs.append(("proximity", "all_in_focus", "proximity", seed + 2, aux))
+    if not jobs:
+        raise VissimInputError("nothing to render: ask for the blurred image, the all-in-focus image or the depth")
+    images: dict[str, np.ndarray] = {}
+    results = {}
+    for name, view, content, job_seed, job_spp in jobs:
+        report = None if progress is None else (lambda done, total, name=name: progress(name, done, total))
+        result = render_view(scene, viewer, view=view, content=content, spp=job_spp, seed=job_seed, kind=kind,
+                             variant=variant, pass_spp=pass_spp, progress=report, mesh_cache_dir=mesh_cache_dir)
+        images[name], results[name] = result.pixels, result
+    proximity = images.get("proximity")
+    depth_m = None if proximity is None else proximity_to_depth_m(proximity)
+    import drjit as _dr_module  # versions only, imported after the backend set Dr.Jit up
+    import mitsuba as _mi_module
+
+    first = results[jobs[0][0]]
+    geometries = panel_geometries(scene)
+    provenance = make_provenance(
+        scene=scene,
+        viewer=viewer,
+        viewer_label=viewer.label(),
+        focus_matrix_diopters=focus_matrix_diopters(viewer, scene),
+        panels=[{"name": g.name, "box_arcmin": g.box_arcmin, "distance_left_m": g.distance_left_m,
+                 "distance_right_m": g.distance_right_m, "size_mm": g.size_mm, "letter_height_mm": g.letter_height_mm,
+                 "blur_diameter_arcmin": [float(blur_diameter_arcmin(viewer, d, scene))
+                                          for d in (g.distance_left_m, g.distance_right_m)]}
+                for g in geometries],
+        arcmin_per_px=scene.arcmin_per_px,
+        renders={name: {"spp": r.spp, "seed": r.seed, "passes": r.passes, "seconds": round(r.seconds, 3)}
+                 for name, r in results.items()},
+        depth_definition="axial distance (m) along the view axis, from the pupil plane; inf = sky",
+        kind=kind,
+        variant=first.variant,
+        mitsuba_version=_mi_module.__version__,
+        drjit_version=_dr_module.__version__,
+    )
+    return DepthRenderResult(images.get("blurred"), images.get("all_in_focus"), depth_m, proximity,
+                             first.variant, first.spp, int(seed), time.perf_counter() - start, json_safe(provenance))
+
+
+def render_aov_depth(scene, viewer, *, spp: int = 16, seed: int = 0, variant: str | None = None,
+                     mesh_cache_dir=None) -> np.ndarray:
+    """Axial depth (m) from Mitsuba's ``aov`` integrator (``position`` z) through the pinhole; inf = sky.
+
+    Mean surface z over each pixel's samples, sky counted as z = 0 (so mixed sky pixels are
+    meaningless).  Refused with trial lenses: the AOV stops at the first surface, the lens.
+    """
+    from vissim.bench.depth_scene import depth_scene_dict
+
+    scene_dict = depth_scene_dict(scene, viewer, view="all_in_focus", content="proximity",
+                                  mesh_cache_dir=mesh_cache_dir)
+    if any(key.startswith("lens_") for key in scene_dict):
+        raise VissimInputError("the aov depth stops at the first surface (a lens); with trial lenses use "
+                               "render_depth(depth=True)")
+    mi = mitsuba("mono", variant)
+    register_plugins(mi)
+    register_eye_sensor(mi)
+    scene_dict["integrator"] = {"type": "aov", "aovs": "pos:position"}
+    loaded = mi.load_dict(to_mitsuba_dict(scene_dict, mi))
+    image = np.asarray(mi.render(loaded, spp=int(spp), seed=int(seed)), dtype=np.float64)
+    z_mm = image[:, :, 2]
+    return np.where(z_mm > 0.0, z_mm / 1000.0, np.inf).astype(np.float32)

@@ -1,0 +1,147 @@
+"""Where to compare a depth render with its simulation: panel interiors, occlusion bands, the frame.
+
+From a rendered proximity map (dioptres, 0 = sky; :mod:`vissim.render.depth_render`) and the
+observer's blur (:func:`vissim.bench.depth_scene.blur_diameter_arcmin`), every pixel gets one
+class:
+
+* a **depth discontinuity** is a pixel whose 3 x 3 neighbourhood spans more than
+  ``jump_d`` dioptres of proximity.  The default ``jump_d`` is the proximity step over which
+  two blur discs differ by one pixel (``theta / pupil``): the occlusion threshold of
+  :func:`vissim.depth.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
+  depth stays below it; a panel edge (or a panel against the sky) does not.  A pixel split
+  between two depths carries the whole jump in its window, so mixed pixels are caught;
+* the **boundary band** is every pixel within ``r + margin_px`` of a discontinuity, where
+  ``r`` is the largest geometric blur radius (px) in that discontinuity's 5 x 5 neighbourhood:
+  there the render mixes light from both sides (and from behind the occluder's edge);
+* the **frame** is every pixel within the scene's largest blur radius + ``margin_px`` of the
+  image border (the render sees beyond the border; a simulation only pads);
+* **interiors**: the rest, split into connected regions, each named after the panel whose
+  proximity range holds the region's median (``sky`` below 1e-6 D).  A fronto panel takes a
+  region whose proximities spread less than ``jump_d``; otherwise a tilted chart does.
+
+So an interior pixel is at least one blur radius (plus the margin) from any depth
+discontinuity: its render is the single-depth blur of its own panel.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from vissim.errors import VissimInputError
+from vissim.units import arcmin_to_rad
+
+__all__ = ["RegionMasks", "depth_regions", "masked_metrics", "SKY"]
+
+log = logging.getLogger(__name__)
+
+SKY = "sky"
+_SKY_PROXIMITY_D = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class RegionMasks:
+    """Boolean masks (H, W) of one image: ``interiors`` by region name, ``boundary``, ``frame``."""
+
+    interiors: dict[str, np.ndarray]
+    boundary: np.ndarray
+    frame: np.ndarray
+    discontinuities: np.ndarray
+    blur_radius_px: np.ndarray
+    jump_d: float
+
+    def label_image(self) -> np.ndarray:
+        """int8 map for figures: 0 frame/unused, 1 boundary, 2... interiors in ``interiors`` order."""
+        out = np.zeros(self.boundary.shape, np.int8)
+        out[self.boundary] = 1
+        for i, mask in enumerate(self.interiors.values()):
+            out[mask] = 2 + i
+        return out
+
+
+def _disc(radius: int) -> np.ndarray:
+    y, x = np.mgrid[-radius : radius + 1, -radius : radius + 1]
+    return x * x + y * y <= radius * radius + 1e-9
+
+
+def depth_regions(
+    proximity_d: np.ndarray,
+    geometries,
+    blur_radius_px,
+    *,
+    pupil_diameter_mm: float,
+    arcmin_per_px: float,
+    jump_d: float | None = None,
+    margin_px: float = 1.0,
+) -> RegionMasks:
+    """Classify the pixels of a proximity map (module doc).
+
+    ``geometries``: the scene's :class:`~vissim.bench.depth_scene.PanelGeometry` list (names
+    and proximity ranges).  ``blur_radius_px``: callable mapping proximity (D, array) to the
+    geometric blur radius in pixels (largest meridian).
+    """
+    proximity = np.asarray(proximity_d, dtype=np.float64)
+    if proximity.ndim != 2:
+        raise VissimInputError(f"a proximity map must be (H, W) dioptres, got shape {proximity.shape}")
+    if jump_d is None:
+        jump_d = float(arcmin_to_rad(arcmin_per_px)) / (pupil_diameter_mm / 1000.0)
+    radius = np.asarray(blur_radius_px(proximity), dtype=np.float64)
+    spread = ndimage.maximum_filter(proximity, size=3, mode="nearest") - ndimage.minimum_filter(
+        proximity, size=3, mode="nearest")
+    discontinuities = spread > jump_d
+    band = np.zeros(proximity.shape, bool)
+    if discontinuities.any():
+        local = ndimage.maximum_filter(radius, size=5, mode="nearest")
+        reach = np.ceil(local + margin_px).astype(int)
+        for r in np.unique(reach[discontinuities]):
+            seeds = discontinuities & (reach == r)
+            band |= ndimage.binary_dilation(seeds, structure=_disc(int(r)))
+    edge = int(math.ceil(float(radius.max()) + margin_px))
+    frame = np.zeros(proximity.shape, bool)
+    if edge > 0:
+        frame[:edge], frame[-edge:], frame[:, :edge], frame[:, -edge:] = True, True, True, True
+    boundary = band & ~frame
+    free = ~(band | frame)
+    components, count = ndimage.label(free)
+    interiors: dict[str, np.ndarray] = {}
+    for index in range(1, count + 1):
+        mask = components == index
+        values = proximity[mask]
+        name = _region_name(float(np.median(values)), float(np.ptp(values)), geometries, jump_d)
+        if name is None:
+            log.warning("an interior region of %d px (median %.3g D) matches no panel", mask.sum(), np.median(values))
+            continue
+        interiors[name] = interiors[name] | mask if name in interiors else mask
+    order = [g.name for g in geometries if g.name in interiors] + ([SKY] if SKY in interiors else [])
+    return RegionMasks({n: interiors[n] for n in order}, boundary, frame, discontinuities, radius, float(jump_d))
+
+
+def _region_name(median_d: float, spread_d: float, geometries, jump_d: float) -> str | None:
+    if median_d < _SKY_PROXIMITY_D:
+        return SKY
+    tolerance = 0.5 * jump_d
+    candidates = [g for g in geometries
+                  if g.proximity_range_d[0] - tolerance <= median_d <= g.proximity_range_d[1] + tolerance]
+    if not candidates:
+        return None
+    fronto = [g for g in candidates if g.kind == "panel"]
+    tilted = [g for g in candidates if g.kind != "panel"]
+    pool = fronto if fronto and (spread_d < jump_d or not tilted) else (tilted or fronto)
+    best = min(pool, key=lambda g: abs(0.5 * sum(g.proximity_range_d) - median_d))
+    return best.name
+
+
+def masked_metrics(squared_error: np.ndarray, abs_diff: np.ndarray, ssim_map: np.ndarray, mask: np.ndarray,
+                   data_range: float) -> dict:
+    """PSNR (dB), MSE, mean |difference| and mean SSIM over ``mask`` (the maps of one comparison)."""
+    n = int(mask.sum())
+    if n == 0:
+        return {"n_px": 0, "psnr_db": None, "mse": None, "mean_abs_diff": None, "ssim": None}
+    mse = float(squared_error[mask].mean())
+    psnr = math.inf if mse == 0.0 else 10.0 * math.log10(data_range**2 / mse)
+    return {"n_px": n, "psnr_db": psnr if math.isfinite(psnr) else "inf", "mse": mse,
+            "mean_abs_diff": float(abs_diff[mask].mean()), "ssim": float(ssim_map[mask].mean())}
