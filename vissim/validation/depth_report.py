@@ -9,8 +9,6 @@ of their own, so boundary errors are shown, not averaged away.
 
 from __future__ import annotations
 
-import csv
-import html
 import io
 import json
 import logging
@@ -23,21 +21,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.imageio import read_image, srgb_encode  # noqa: E402
-from vissim.validation.report import load_results  # noqa: E402
+from vissim.validation.report import _num, campaign_name, load_results, write_report_files  # noqa: E402
+from vissim.validation.report import format_number as _fmt  # noqa: E402
 
 __all__ = ["current_results", "depth_rows", "depth_tables", "build_depth_report", "depth_summary_lines"]
 
 log = logging.getLogger(__name__)
 
 FIGURE_ROWS = 8
-
-
-def _num(value) -> float:
-    if value is None:
-        return math.nan
-    return math.inf if value == "inf" else float(value)
 
 
 def current_results(run_dir: str | Path) -> list[dict]:
@@ -77,12 +69,6 @@ def depth_rows(results: list[dict]) -> list[dict]:
                     "key": result["key"],
                 })
     return rows
-
-
-def _fmt(value: float, digits: int) -> str:
-    if value is None or math.isnan(value):
-        return "—"
-    return "∞" if math.isinf(value) else f"{value:.{digits}f}"
 
 
 def depth_tables(results: list[dict]) -> str:
@@ -164,60 +150,19 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> bytes | None
     return buffer.getvalue()
 
 
-def _html(title: str, tables_md: str, figures: dict[str, bytes]) -> str:
-    import base64
-
-    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
-             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
-             "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;"
-             "text-align:right}td:first-child{text-align:left}</style></head><body>",
-             f"<h1>{html.escape(title)}</h1>"]
-    for block in tables_md.split("### ")[1:]:
-        lines = [line for line in block.strip().splitlines() if line.strip()]
-        parts.append(f"<h2>{html.escape(lines[0])}</h2>")
-        rows = [line for line in lines[1:] if line.startswith("|") and not line.startswith("|---")]
-        text = [line for line in lines[1:] if not line.startswith("|")]
-        parts += [f"<p>{html.escape(t)}</p>" for t in text]
-        parts.append("<table>")
-        for k, line in enumerate(rows):
-            tag = "th" if k == 0 else "td"
-            cells = [c.strip() for c in line.strip("|").split("|")]
-            parts.append("<tr>" + "".join(f"<{tag}>{html.escape(c)}</{tag}>" for c in cells) + "</tr>")
-        parts.append("</table>")
-    for name, png in figures.items():
-        parts.append(f"<h2>{html.escape(name)}</h2><img style='max-width:100%' "
-                     f"src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
-    parts.append("</body></html>")
-    return "\n".join(parts)
-
-
 def build_depth_report(run_dir: str | Path) -> list[Path]:
     """Write metrics.json, metrics.csv, tables.md, figure_depth_*.png and report.html into ``run_dir``."""
     run_dir = Path(run_dir)
     results = current_results(run_dir)
     rows = depth_rows(results)
-    metrics = {"items": results, "rows": _json_rows(rows)}
-    written = [write_json_atomic(run_dir / "metrics.json", metrics, overwrite=True)]
-    with atomic_output(run_dir / "metrics.csv", overwrite=True) as tmp:
-        with open(tmp, "w", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["configuration"])
-            writer.writeheader()
-            writer.writerows(rows)
-    written.append(run_dir / "metrics.csv")
-    campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
-    title = f"vissim depth validation: {campaign.get('name', run_dir.name)}"
-    tables = depth_tables(results)
-    text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables}"
-    written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
     figures = {}
     for simulation in ("geometric", "wave"):
         png = _figure(results, run_dir, simulation)
         if png is not None:
-            figures[f"{simulation} simulation against the render"] = png
-            with atomic_output(run_dir / f"figure_depth_{simulation}.png", overwrite=True) as tmp:
-                tmp.write_bytes(png)
-            written.append(run_dir / f"figure_depth_{simulation}.png")
-    written.append(write_text_atomic(run_dir / "report.html", _html(title, tables, figures), overwrite=True))
+            figures[f"{simulation} simulation against the render"] = (f"figure_depth_{simulation}.png", png)
+    written = write_report_files(run_dir, title=f"vissim depth validation: {campaign_name(run_dir)}",
+                                 metrics={"items": results, "rows": _json_rows(rows)}, rows=rows,
+                                 tables_md=depth_tables(results), figures=figures)
     log.info("depth report of %d items written to %s", len(results), run_dir)
     return written
 

@@ -24,7 +24,16 @@ import numpy as np  # noqa: E402
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.imageio import read_image, srgb_encode  # noqa: E402
 
-__all__ = ["load_results", "build_report", "metrics_rows", "markdown_tables", "summary_table"]
+__all__ = [
+    "load_results",
+    "build_report",
+    "metrics_rows",
+    "markdown_tables",
+    "summary_table",
+    "html_report",
+    "write_report_files",
+    "format_number",
+]
 
 log = logging.getLogger(__name__)
 
@@ -54,7 +63,10 @@ def load_results(run_dir: str | Path) -> list[dict]:
 
 
 def _num(value) -> float:
-    return float("inf") if value == "inf" else float(value)
+    """A JSON metric back to a float: ``"inf"`` is infinite, None unknown (NaN)."""
+    if value is None:
+        return math.nan
+    return math.inf if value == "inf" else float(value)
 
 
 def metrics_rows(results: list[dict]) -> list[dict]:
@@ -89,10 +101,14 @@ def metrics_rows(results: list[dict]) -> list[dict]:
     return rows
 
 
-def _fmt(value: float, digits: int) -> str:
-    if math.isnan(value):
+def format_number(value: float | None, digits: int) -> str:
+    """A table cell: ``—`` for unknown (None/NaN), ``∞`` for infinite PSNR."""
+    if value is None or math.isnan(value):
         return "—"
     return "∞" if math.isinf(value) else f"{value:.{digits}f}"
+
+
+_fmt = format_number
 
 
 def markdown_tables(results: list[dict]) -> str:
@@ -205,34 +221,35 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
     return buffer.getvalue()
 
 
-def _html(title: str, tables_md: str, figures: dict[str, bytes], rows: list[dict]) -> str:
+def html_report(title: str, tables_md: str, figures: dict[str, bytes]) -> str:
+    """A self-contained HTML page: the Markdown tables as HTML tables, figures inline (base64)."""
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
-             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;font-size:12px}"
-             "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}td:first-child{text-align:left}</style></head><body>",
+             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
+             "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;"
+             "text-align:right}td:first-child{text-align:left}</style></head><body>",
              f"<h1>{html.escape(title)}</h1>"]
     for block in tables_md.split("### ")[1:]:
-        lines = [l for l in block.strip().splitlines() if l.strip()]
-        parts.append(f"<h2>{html.escape(lines[0])}</h2><table>")
-        for k, line in enumerate(l for l in lines[1:] if l.startswith("|") and not l.startswith("|---")):
+        lines = [line for line in block.strip().splitlines() if line.strip()]
+        parts.append(f"<h2>{html.escape(lines[0])}</h2>")
+        rows = [line for line in lines[1:] if line.startswith("|") and not line.startswith("|---")]
+        parts += [f"<p>{html.escape(t)}</p>" for t in lines[1:] if not t.startswith("|")]
+        parts.append("<table>")
+        for k, line in enumerate(rows):
             tag = "th" if k == 0 else "td"
             cells = [c.strip() for c in line.strip("|").split("|")]
             parts.append("<tr>" + "".join(f"<{tag}>{html.escape(c)}</{tag}>" for c in cells) + "</tr>")
         parts.append("</table>")
-        note = [l for l in lines if not l.startswith("|")][1:]
-        if note:
-            parts.append(f"<p>{html.escape(' '.join(note))}</p>")
     for name, png in figures.items():
-        parts.append(f"<h2>{html.escape(name)}</h2><img style='max-width:100%' src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
-    parts.append(f"<p>{len(rows)} comparisons.</p></body></html>")
+        parts.append(f"<h2>{html.escape(name)}</h2><img style='max-width:100%' "
+                     f"src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
+    parts.append("</body></html>")
     return "\n".join(parts)
 
 
-def build_report(run_dir: str | Path) -> list[Path]:
-    """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``."""
-    run_dir = Path(run_dir)
-    results = load_results(run_dir)
-    rows = metrics_rows(results)
-    written = [write_json_atomic(run_dir / "metrics.json", {"items": results, "rows": rows}, overwrite=True)]
+def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[dict], tables_md: str,
+                       figures: dict[str, tuple[str, bytes]]) -> list[Path]:
+    """metrics.json, metrics.csv, tables.md, the figures (file name -> PNG) and report.html."""
+    written = [write_json_atomic(run_dir / "metrics.json", metrics, overwrite=True)]
     with atomic_output(run_dir / "metrics.csv", overwrite=True) as tmp:
         with open(tmp, "w", newline="") as handle:
             writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["configuration"])
@@ -240,17 +257,34 @@ def build_report(run_dir: str | Path) -> list[Path]:
             writer.writerows(rows)
     written.append(run_dir / "metrics.csv")
     campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
-    title = f"vissim validation: {campaign.get('name', run_dir.name)}"
-    tables = markdown_tables(results)
-    written.append(write_text_atomic(run_dir / "tables.md", f"# {title}\n\n{campaign.get('description', '')}\n\n{tables}", overwrite=True))
+    text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables_md}"
+    written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
+    for file_name, png in figures.values():
+        with atomic_output(run_dir / file_name, overwrite=True) as tmp:
+            tmp.write_bytes(png)
+        written.append(run_dir / file_name)
+    page = html_report(title, tables_md, {name: png for name, (_, png) in figures.items()})
+    written.append(write_text_atomic(run_dir / "report.html", page, overwrite=True))
+    return written
+
+
+def campaign_name(run_dir: Path) -> str:
+    order = run_dir / "campaign.json"
+    return json.loads(order.read_text()).get("name", run_dir.name) if order.exists() else run_dir.name
+
+
+def build_report(run_dir: str | Path) -> list[Path]:
+    """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``."""
+    run_dir = Path(run_dir)
+    results = load_results(run_dir)
+    rows = metrics_rows(results)
     figures = {}
     for simulation in ORDER:
         png = _figure(results, run_dir, simulation, "render")
         if png is not None:
-            figures[f"{simulation} simulation on the no-lens render"] = png
-            with atomic_output(run_dir / f"figure_{simulation}.png", overwrite=True) as tmp:
-                tmp.write_bytes(png)
-            written.append(run_dir / f"figure_{simulation}.png")
-    written.append(write_text_atomic(run_dir / "report.html", _html(title, tables, figures, rows), overwrite=True))
+            figures[f"{simulation} simulation on the no-lens render"] = (f"figure_{simulation}.png", png)
+    written = write_report_files(run_dir, title=f"vissim validation: {campaign_name(run_dir)}",
+                                 metrics={"items": results, "rows": rows}, rows=rows,
+                                 tables_md=markdown_tables(results), figures=figures)
     log.info("report of %d items written to %s", len(results), run_dir)
     return written
