@@ -27,13 +27,14 @@ import math
 
 from vissim.errors import VissimInputError
 
+from vissim.render.plugins import register_once
+
 __all__ = ["EYE_SENSOR", "register_eye_sensor"]
 
 log = logging.getLogger(__name__)
 
 #: Plugin name; equals :data:`vissim.bench.depth_scene.EYE_SENSOR`.
 EYE_SENSOR = "vissim_eye"
-_registered: set[str] = set()
 
 
 def _make_class(mi, dr):
@@ -94,12 +95,4 @@ def _make_class(mi, dr):
 
 def register_eye_sensor(mi) -> None:
     """Register :data:`EYE_SENSOR` with the current Mitsuba variant (once per variant)."""
-    variant = mi.variant()
-    if variant in _registered:
-        return
-    import drjit as dr
-
-    cls = _make_class(mi, dr)
-    mi.register_sensor(EYE_SENSOR, lambda props: cls(props))
-    _registered.add(variant)
-    log.debug("registered %s for %s", EYE_SENSOR, variant)
+    register_once(mi, EYE_SENSOR, "sensor", _make_class)

@@ -31,13 +31,13 @@ import logging
 
 from vissim.errors import VissimInputError
 
-__all__ = ["REFRACT_BSDF", "register_plugins"]
+__all__ = ["REFRACT_BSDF", "register_plugins", "register_once"]
 
 log = logging.getLogger(__name__)
 
 #: Plugin name of the refraction-only dielectric.
 REFRACT_BSDF = "vissim_refract"
-_registered: set[str] = set()
+_registered: set[tuple[str, str]] = set()
 
 
 def _make_class(mi, dr):
@@ -97,14 +97,24 @@ def _make_class(mi, dr):
     return RefractOnlyDielectric
 
 
-def register_plugins(mi) -> None:
-    """Register :data:`REFRACT_BSDF` with the current Mitsuba variant (once per variant)."""
-    variant = mi.variant()
-    if variant in _registered:
+def register_once(mi, name: str, kind: str, make_class) -> None:
+    """Register plugin ``name`` (``kind`` "bsdf" or "sensor") with the current variant, once.
+
+    ``make_class(mi, dr)`` builds the Python class for the variant; Mitsuba needs one
+    registration per variant.
+    """
+    key = (mi.variant(), name)
+    if key in _registered:
         return
     import drjit as dr
 
-    cls = _make_class(mi, dr)
-    mi.register_bsdf(REFRACT_BSDF, lambda props: cls(props))
-    _registered.add(variant)
-    log.debug("registered %s for %s", REFRACT_BSDF, variant)
+    cls = make_class(mi, dr)
+    register = mi.register_bsdf if kind == "bsdf" else mi.register_sensor
+    register(name, lambda props: cls(props))
+    _registered.add(key)
+    log.debug("registered %s for %s", name, key[0])
+
+
+def register_plugins(mi) -> None:
+    """Register :data:`REFRACT_BSDF` with the current Mitsuba variant (once per variant)."""
+    register_once(mi, REFRACT_BSDF, "bsdf", _make_class)
