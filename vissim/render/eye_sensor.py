@@ -26,7 +26,6 @@ import logging
 import math
 
 from vissim.errors import VissimInputError
-
 from vissim.render.plugins import register_once
 
 __all__ = ["EYE_SENSOR", "register_eye_sensor"]
