@@ -2,7 +2,7 @@
 
 Sign conventions: a hyperope's correcting lens is +1.25 D; the thesis plots the *trial lens*
 power, so a cyclopleged hyperope's least threshold is at the trial lens that corrects him:
-P / (1 - dP) = 1.25 D at d = 12 mm, i.e. P = 1.25 / (1 + 0.012 * 1.25) = 1.232 D.
+P / (1 - dP) = 1.25 D at d = the slot's 15 mm, i.e. P = 1.25 / (1 + 0.015 * 1.25) = 1.227 D.
 """
 
 import functools
@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM
 from vissim.atv.virtual import (
     AtvApparatus,
     DetectionModel,
@@ -27,7 +28,8 @@ from vissim.prescription import Prescription
 # The spot depends only on the request, not on the seed: cache it across tests (keeps the suite fast).
 cached_spot = functools.lru_cache(maxsize=None)(fourier_retinal_image)
 HYPEROPE = Prescription(1.25)
-CORRECTING_TRIAL_LENS_D = 1.25 / (1 + 0.012 * 1.25)
+D_M = ATV_TRIAL_LENS_DISTANCE_MM * 1e-3
+CORRECTING_TRIAL_LENS_D = 1.25 / (1 + D_M * 1.25)
 SEEDS = (0, 1, 2)
 
 
@@ -114,7 +116,7 @@ def test_free_accommodation_shifts_the_minimum_toward_negative_lenses(seed):
     # correcting lens, where the cyclopleged eye's rises steeply.
     model = {t.trial_lens_diopters: t.model_threshold_code for t in free.trials}
     assert model[-5.0] == pytest.approx(model[1.0], rel=0.02)
-    assert free.trials[0].accommodation_diopters == pytest.approx(1.25 + 5.0 / (1 + 0.06))  # -5 D lens: within 8 D
+    assert free.trials[0].accommodation_diopters == pytest.approx(1.25 + 5.0 / (1 + 5.0 * D_M))  # -5 D lens: within 8 D
 
 
 def test_experiment_is_reproducible_from_its_seed():

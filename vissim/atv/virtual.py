@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.signal
 
+from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM, IPHONE5_PPI, AtvTube, pixel_pitch_mm
 from vissim.atv.analysis import CurveAnalysis, analyse_curve
 from vissim.atv.data import THESIS_TRIAL_LENSES_DIOPTERS
 from vissim.atv.procedure import ProcedureConfig, PsychometricFunction, SimulatedObserver, ThresholdResult, run_procedure
@@ -66,8 +67,8 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-IPHONE5_PIXEL_PITCH_MM = 25.4 / 326.0  # 326 ppi (thesis §5.4)
-ATV_COLLIMATOR_FOCAL_LENGTH_MM = 125.0  # 8.0 D plano-convex lens, tube length 12.5 cm
+IPHONE5_PIXEL_PITCH_MM = pixel_pitch_mm(IPHONE5_PPI)  # 326 ppi (thesis §5.4), the bench's value
+ATV_COLLIMATOR_FOCAL_LENGTH_MM = 1000.0 / AtvTube().lens_power_diopters  # the 8 D lens: 125 mm
 
 
 @dataclass(frozen=True)
@@ -101,7 +102,7 @@ class VirtualSubject:
 class AtvApparatus:
     pixel_pitch_mm: float = IPHONE5_PIXEL_PITCH_MM
     collimator_focal_length_mm: float = ATV_COLLIMATOR_FOCAL_LENGTH_MM
-    trial_lens_vertex_mm: float = 12.0
+    trial_lens_vertex_mm: float = ATV_TRIAL_LENS_DISTANCE_MM  # the bench's slot (one value for both)
     wavelength_nm: float = 555.0
     display_gamma: float = 2.2
 

@@ -67,6 +67,8 @@ log = logging.getLogger(__name__)
 
 #: Pixel density of the iPhone 5's Retina display (thesis section 5.4).
 IPHONE5_PPI = 326.0
+#: From the trial lens's back vertex to the eye's pupil in the eyecup slot (mm); the thesis gives none.
+ATV_TRIAL_LENS_DISTANCE_MM = 15.0
 #: Plugin name of the refraction-only BSDF; equals :data:`vissim.render.plugins.REFRACT_BSDF`.
 LENS_BSDF = "vissim_refract"
 DISPLAY_TRANSFERS = ("srgb", "gamma2.2")
@@ -262,7 +264,7 @@ class AtvConfig:
     tube: AtvTube = field(default_factory=AtvTube)
     eye: AtvEye = field(default_factory=AtvEye)
     trial_lens: TrialLens | None = None
-    trial_lens_distance_mm: float = 15.0
+    trial_lens_distance_mm: float = ATV_TRIAL_LENS_DISTANCE_MM
     trial_clear_aperture_mm: float = 22.0
     fresnel_loss: bool = False
 

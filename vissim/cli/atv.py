@@ -46,7 +46,7 @@ def add_parser(subparsers) -> None:
     sim.add_argument("--cycloplegia", action="store_true", help="no accommodation (cycloplegic drops)")
     sim.add_argument("--proximal-d", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
     sim.add_argument("--lenses", metavar="D[,D...]", help="trial lenses in D (default: the thesis's 17)")
-    sim.add_argument("--vertex-mm", type=float, default=12.0, help="trial lens to eye, mm (default 12)")
+    sim.add_argument("--vertex-mm", type=float, default=None, help="trial lens to eye, mm (default: the ATV bench's 15)")
     sim.add_argument("--wavelength-nm", type=float, default=555.0, help="wavelength, nm (default 555)")
     sim.add_argument("--summation-arcmin", type=float, default=10.0, help="summation (Ricco) diameter, arcmin (default 10)")
     sim.add_argument("--full-capture-code", type=float, default=0.06, help="threshold code value with all flux summed (default 0.06)")
@@ -117,7 +117,8 @@ def run_simulate(args: argparse.Namespace) -> int:
         Prescription.parse(args.eye), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_d,
         cycloplegia=args.cycloplegia, proximal_accommodation_diopters=args.proximal_d,
     )
-    apparatus = AtvApparatus(trial_lens_vertex_mm=args.vertex_mm, wavelength_nm=args.wavelength_nm, display_gamma=args.gamma)
+    vertex = {} if args.vertex_mm is None else {"trial_lens_vertex_mm": args.vertex_mm}
+    apparatus = AtvApparatus(**vertex, wavelength_nm=args.wavelength_nm, display_gamma=args.gamma)
     detection = DetectionModel(
         summation_diameter_arcmin=args.summation_arcmin, threshold_code_full_capture=args.full_capture_code,
         psychometric_slope=args.slope, guess_rate=args.guess, lapse_rate=args.lapse,
