@@ -160,7 +160,7 @@ def depth_to_proximity_diopters(depth_m) -> np.ndarray:
     if bad.any():
         example = depth[bad].flat[0]
         raise VissimInputError(
-            f"depth map has {int(bad.sum())} pixels that are not positive metres (e.g. {example!r} m; "
+            f"depth map has {int(bad.sum())} pixels that are not positive metres (e.g. {float(example):g} m; "
             "NaN, 0 and negative depths are refused, inf means sky); fill holes first"
         )
     with np.errstate(divide="ignore"):

@@ -6,6 +6,7 @@ import numpy as np
 import scipy.fft
 
 from vissim.psf import PSF
+from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm
 
 __all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_of_encircled_energy_arcmin", "diffraction_mtf"]
 
@@ -37,7 +38,7 @@ def mtf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
 
 def diffraction_mtf(frequency_cyc_per_deg, pupil_diameter_mm: float, wavelength_nm: float) -> np.ndarray:
     """MTF of an aberration-free circular pupil (Goodman 2005, Eq. 6-32)."""
-    cutoff = pupil_diameter_mm / (wavelength_nm * 1e-6) * np.pi / 180.0  # cycles/degree
+    cutoff = cyc_per_rad_to_cyc_per_deg(pupil_diameter_mm / nm_to_mm(wavelength_nm))  # D / lambda
     nu = np.clip(np.abs(np.asarray(frequency_cyc_per_deg, dtype=float)) / cutoff, 0.0, 1.0)
     return 2.0 / np.pi * (np.arccos(nu) - nu * np.sqrt(1.0 - nu**2))
 

@@ -56,6 +56,12 @@ log = logging.getLogger(__name__)
 
 #: Refractive index of ophthalmic crown glass (nd), the default for thick trial lenses.
 CROWN_GLASS_INDEX = 1.523
+#: The thesis's DSLR bench (§4.1, §4.4): 18 mm lens at f/5, chart at 3 ft, trial lenses 10 mm
+#: in front.  The one place these numbers live; benches, campaigns and captures import them.
+THESIS_FOCAL_LENGTH_MM = 18.0
+THESIS_F_NUMBER = 5.0
+THESIS_CHART_DISTANCE_MM = 914.4
+THESIS_VERTEX_DISTANCE_MM = 10.0
 #: The thesis's lens holder takes up to three trial lenses (section 4.4).
 MAX_LENSES_IN_HOLDER = 3
 #: Focal length of the thesis's simplified eye, 18 mm / 1.333 (section 4.4, Table 4.1).
@@ -256,7 +262,7 @@ class TrialLensSetup:
     """
 
     lenses: tuple[TrialLens, ...] = ()
-    vertex_distance_mm: float = 10.0
+    vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
     object_distance_m: float = math.inf
     lens_gap_mm: float = 0.0
 
@@ -448,7 +454,7 @@ def thesis_eye_pupil_diameter_mm(
     return entrance_pupil_diameter_mm(eye_focal_length_mm, f_number)
 
 
-def thesis_table_4_2_power(lens_diopters: float, vertex_distance_mm: float = 10.0) -> float:
+def thesis_table_4_2_power(lens_diopters: float, vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM) -> float:
     """The thesis's Table 4.2 value P / (1 - dP), dioptres: right only for an object at infinity.
 
     ERRATA item 4: with the chart at a finite distance use :func:`trial_lens_effect`.

@@ -156,13 +156,14 @@ def test_bad_input_is_one_line_naming_the_value(make, message):
 
 
 def test_display_codes_decode_to_linear_radiance():
-    assert display_code_to_linear(0.5) == pytest.approx(0.21404, abs=1e-5)  # IEC 61966-2-1
+    assert display_code_to_linear(0.5, "srgb") == pytest.approx(0.21404, abs=1e-5)  # IEC 61966-2-1
+    assert display_code_to_linear(0.5) == display_code_to_linear(0.5, "gamma2.2")  # the ATV default
     assert display_code_to_linear(0.5, "gamma2.2") == pytest.approx(0.5**2.2, rel=1e-12)
     codes = np.linspace(0.0, 1.0, 11)
     for transfer in ("srgb", "gamma2.2"):
         linear = display_code_to_linear(codes, transfer)
         assert linear[0] == 0.0 and linear[-1] == pytest.approx(1.0) and np.all(np.diff(linear) > 0)
-    assert display_code_to_linear(0.04045) == pytest.approx(0.04045 / 12.92, rel=1e-6)  # linear segment
+    assert display_code_to_linear(0.04045, "srgb") == pytest.approx(0.04045 / 12.92, rel=1e-6)  # linear segment
     for bad in (1.2, -0.1, float("nan"), "bright"):
         with pytest.raises(VissimInputError, match=r"\[0, 1\]"):
             display_code_to_linear(bad)

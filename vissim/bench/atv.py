@@ -105,7 +105,12 @@ def pixel_pitch_mm(pixels_per_inch: float) -> float:
     return MM_PER_INCH / _number(pixels_per_inch, "display resolution", "pixels per inch", lo=0.0, lo_open=True)
 
 
-def display_code_to_linear(code, transfer: str = "srgb"):
+#: The phone display's transfer function used by every ATV path (render atv, atv simulate):
+#: a pure 2.2 power law, a common model of phone displays; "srgb" is available explicitly.
+ATV_DISPLAY_TRANSFER = "gamma2.2"
+
+
+def display_code_to_linear(code, transfer: str = ATV_DISPLAY_TRANSFER):
     """Relative linear luminance in [0, 1] of a display code value in [0, 1] (ERRATA item 9).
 
     ``"srgb"``: the IEC 61966-2-1 decoding (:func:`vissim.imageio.srgb_decode`); ``"gamma2.2"``:

@@ -29,6 +29,7 @@ from typing import Union
 
 import numpy as np
 
+from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.bench.dslr import DslrBench
 from vissim.errors import VissimInputError
 from vissim.prescription import Prescription, RefractiveError
@@ -65,11 +66,11 @@ class EyeViewer:
 class CameraViewer:
     """The DSLR bench camera (thin lens, f/N) focused at ``focus_distance_m``, optional trial lenses."""
 
-    focal_length_mm: float = 18.0
-    f_number: float = 5.0
-    focus_distance_m: float = 0.9144
+    focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
+    f_number: float = THESIS_F_NUMBER
+    focus_distance_m: float = THESIS_CHART_DISTANCE_MM / 1000.0
     lenses: tuple[TrialLens, ...] = ()
-    vertex_distance_mm: float = 10.0
+    vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
     lens_gap_mm: float = 2.0
     refractive_index: float = CROWN_GLASS_INDEX
     clear_aperture_mm: float | None = None

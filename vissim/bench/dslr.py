@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm
 from vissim.errors import VissimInputError
 from vissim.trial_lens import (
@@ -89,11 +90,11 @@ class DslrBench:
     ``clear_aperture_mm`` None sizes the lens meshes to the beam (:meth:`clear_aperture`).
     """
 
-    focal_length_mm: float = 18.0
-    f_number: float = 5.0
-    focus_distance_mm: float = 914.4
-    chart_distance_mm: float = 914.4
-    vertex_distance_mm: float = 10.0
+    focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
+    f_number: float = THESIS_F_NUMBER
+    focus_distance_mm: float = THESIS_CHART_DISTANCE_MM
+    chart_distance_mm: float = THESIS_CHART_DISTANCE_MM
+    vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
     lens_gap_mm: float = 2.0
     lenses: tuple[TrialLens, ...] = ()
     refractive_index: float = CROWN_GLASS_INDEX

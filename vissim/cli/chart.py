@@ -6,6 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from vissim.acuity import THESIS_VIEWING_DISTANCE_M
 from vissim.atomic import write_json_atomic
 from vissim.charts import (
     DEFAULT_LETTER_SEED,
@@ -56,7 +57,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--polarity", choices=POLARITIES, default="black-on-white")
     parser.add_argument("--arcmin-per-px", type=float, default=1.0, metavar="ARCMIN",
                         help="angular pixel size (default 1, as the thesis)")
-    parser.add_argument("--distance-m", type=float, default=0.9144, metavar="M",
+    parser.add_argument("--distance-m", type=float, default=THESIS_VIEWING_DISTANCE_M, metavar="M",
                         help="viewing distance in metres (default 0.9144, three feet)")
     parser.add_argument("--paper-reflectance", type=float, default=0.9, metavar="R", help="default 0.9")
     parser.add_argument("--ink-reflectance", type=float, default=0.04, metavar="R", help="default 0.04")

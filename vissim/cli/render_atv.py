@@ -48,8 +48,8 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
     given.add_argument("--pixel-intensity", type=float, metavar="L", help="linear radiance of the lit pixel")
     given.add_argument("--display-code", type=float, metavar="C",
                        help="display code value in [0, 1] (the thesis's 'iPhone intensity'), decoded by --transfer")
-    light.add_argument("--transfer", choices=("srgb", "gamma2.2"), default="srgb",
-                       help="display transfer function for --display-code (default srgb)")
+    light.add_argument("--transfer", choices=("srgb", "gamma2.2"), default="gamma2.2",
+                       help="display transfer function for --display-code (default gamma2.2, as atv simulate)")
     light.add_argument("--white-radiance", type=float, default=1.0, metavar="L",
                        help="linear radiance of display code 1 (default 1)")
     method = parser.add_argument_group("method")

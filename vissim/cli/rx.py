@@ -42,7 +42,7 @@ def describe(rx: Prescription, pupil_mm: float | None) -> dict:
     if pupil_mm is not None:
         coefficients = prescription_to_zernike_um(rx, pupil_mm)
         out["pupil_diameter_mm"] = pupil_mm
-        out["zernike_um"] = {f"{n},{mm}": value for (n, mm), value in coefficients.items()}
+        out["zernike_um"] = {f"{n},{mm}": value + 0.0 for (n, mm), value in coefficients.items()}  # no -0.0
     return out
 
 

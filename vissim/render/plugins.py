@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import logging
 
+from vissim.trial_lens import CROWN_GLASS_INDEX
 from vissim.errors import VissimInputError
 
 __all__ = ["REFRACT_BSDF", "register_plugins", "register_once"]
@@ -46,7 +47,7 @@ def _make_class(mi, dr):
 
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
-            self.int_ior = float(props.get("int_ior", 1.523))
+            self.int_ior = float(props.get("int_ior", CROWN_GLASS_INDEX))
             ext_ior = float(props.get("ext_ior", 1.0))
             if self.int_ior <= 0.0 or ext_ior <= 0.0:
                 raise VissimInputError(f"indices of refraction must be > 0, got {self.int_ior:g} and {ext_ior:g}")

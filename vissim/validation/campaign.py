@@ -17,6 +17,13 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from vissim.trial_lens import (
+    CROWN_GLASS_INDEX,
+    THESIS_CHART_DISTANCE_MM,
+    THESIS_F_NUMBER,
+    THESIS_FOCAL_LENGTH_MM,
+    THESIS_VERTEX_DISTANCE_MM,
+)
 from vissim.errors import VissimInputError
 from vissim.optotypes import SLOAN_LETTERS
 
@@ -56,7 +63,7 @@ class Configuration:
     logmar: float
     polarity: str = "black-on-white"
     lenses: tuple[LensSpec, ...] = ()
-    f_number: float = 5.0
+    f_number: float = THESIS_F_NUMBER
     capture: str | None = None  # id of a real RAW capture in the manifest, if any
 
     def lens_label(self) -> str:
@@ -72,11 +79,11 @@ class CampaignSettings:
     seeds: tuple[int, int] = (1, 2)
     arcmin_per_px: float = 1.0
     tile_px: tuple[int, int] = (133, 113)  # rows, cols (errata item 8)
-    focal_length_mm: float = 18.0
-    chart_distance_m: float = 0.9144
-    vertex_distance_mm: float = 10.0
+    focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
+    chart_distance_m: float = THESIS_CHART_DISTANCE_MM / 1000.0
+    vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
     wavelength_nm: float = 550.0
-    refractive_index: float = 1.523
+    refractive_index: float = CROWN_GLASS_INDEX
     simulations: tuple[str, ...] = ("wave", "geometric", "thesis")
     inputs: tuple[str, ...] = INPUTS
     data_range: float = 1.0  # linear reflectance units: what SSIM/PSNR call the peak

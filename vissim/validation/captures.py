@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM
 from vissim.errors import VissimInputError
 from vissim.validation.campaign import POLARITIES, LensSpec, _lenses
 from vissim.validation.raw import read_raw_linear, resample_to_arcmin
@@ -101,9 +102,9 @@ def load_manifest(path: str | Path) -> dict[str, Capture]:
                 file=(path.parent / entry["file"]).resolve(),
                 sha256=entry.get("sha256"),
                 pixel_pitch_um=float(entry.get("pixel_pitch_um", 5.2)),
-                focal_length_mm=float(entry.get("focal_length_mm", 18.0)),
-                f_number=float(entry.get("f_number", 5.0)),
-                chart_distance_m=float(entry.get("chart_distance_m", 0.9144)),
+                focal_length_mm=float(entry.get("focal_length_mm", THESIS_FOCAL_LENGTH_MM)),
+                f_number=float(entry.get("f_number", THESIS_F_NUMBER)),
+                chart_distance_m=float(entry.get("chart_distance_m", THESIS_CHART_DISTANCE_MM / 1000.0)),
                 lenses=_lenses(entry.get("lenses", []), str(path), f"capture[{i}].lenses"),
                 letter=str(entry["letter"]).upper(),
                 logmar=float(entry.get("logmar", 1.0)),
