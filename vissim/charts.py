@@ -73,6 +73,11 @@ _SIDECAR_SCHEMA = "vissim.chart-letters/1"
 _BOX_KEYS = ("top", "left", "bottom", "right")
 
 
+#: Linear reflectances of laser-printed paper and toner ink (the charts' defaults).
+PAPER_REFLECTANCE = 0.9
+INK_REFLECTANCE = 0.04
+
+
 def _number(value: Any, name: str, unit: str, *, positive: bool = False) -> float:
     return positive_number(value, name, unit) if positive else finite_number(value, name, unit)
 
@@ -99,8 +104,8 @@ class ChartSpec:
     rows: tuple[ChartRow, ...]
     viewing_distance_m: float = THESIS_VIEWING_DISTANCE_M
     polarity: str = "black-on-white"
-    paper_reflectance: float = 0.9
-    ink_reflectance: float = 0.04
+    paper_reflectance: float = PAPER_REFLECTANCE
+    ink_reflectance: float = INK_REFLECTANCE
     letter_seed: int | None = None  # the seed that chose the letters, when they were chosen at random
 
     def __post_init__(self) -> None:
@@ -406,8 +411,8 @@ def optotype_tile(
     arcmin_per_px: float = 1.0,
     shape_px: tuple[int, int] = THESIS_TILE_SHAPE_PX,
     polarity: str = "black-on-white",
-    paper_reflectance: float = 0.9,
-    ink_reflectance: float = 0.04,
+    paper_reflectance: float = PAPER_REFLECTANCE,
+    ink_reflectance: float = INK_REFLECTANCE,
     viewing_distance_m: float = THESIS_VIEWING_DISTANCE_M,
     snap_to_pixels: bool = True,
     supersample: int = 16,

@@ -62,7 +62,7 @@ from vissim.bench.depth_viewers import (
 from vissim.bench.dslr import MAX_DEPTH, NEAR_CLIP_MM, SAMPLERS, dslr_scene
 from vissim.bench.lens_mesh import mesh_cache_dir
 from vissim.charts import MM_PER_INCH, POLARITIES, ChartRow, ChartSpec, layout_chart, render_chart_angular
-from vissim.charts import render_chart_print
+from vissim.charts import INK_REFLECTANCE, PAPER_REFLECTANCE, render_chart_print
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, rad_to_arcmin
 from vissim.validate import finite_number, positive_number
@@ -107,8 +107,8 @@ class PanelChart:
     letters: str = "R"
     logmar: float = 0.7
     polarity: str = "black-on-white"
-    paper_reflectance: float = 0.9
-    ink_reflectance: float = 0.04
+    paper_reflectance: float = PAPER_REFLECTANCE
+    ink_reflectance: float = INK_REFLECTANCE
     padding_arcmin: float = 0.0
 
     def __post_init__(self) -> None:

@@ -10,6 +10,8 @@ from vissim.acuity import THESIS_VIEWING_DISTANCE_M
 from vissim.atomic import write_json_atomic
 from vissim.charts import (
     DEFAULT_LETTER_SEED,
+    INK_REFLECTANCE,
+    PAPER_REFLECTANCE,
     POLARITIES,
     THESIS_TILE_SHAPE_PX,
     chart_sidecar,
@@ -59,8 +61,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="angular pixel size (default 1, as the thesis)")
     parser.add_argument("--distance-m", type=float, default=THESIS_VIEWING_DISTANCE_M, metavar="M",
                         help="viewing distance in metres (default 0.9144, three feet)")
-    parser.add_argument("--paper-reflectance", type=float, default=0.9, metavar="R", help="default 0.9")
-    parser.add_argument("--ink-reflectance", type=float, default=0.04, metavar="R", help="default 0.04")
+    parser.add_argument("--paper-reflectance", type=float, default=PAPER_REFLECTANCE, metavar="R",
+                        help=f"linear reflectance of the paper (default {PAPER_REFLECTANCE})")
+    parser.add_argument("--ink-reflectance", type=float, default=INK_REFLECTANCE, metavar="R",
+                        help=f"linear reflectance of the ink (default {INK_REFLECTANCE})")
     parser.add_argument("--tile", action="store_true",
                         help="one letter centred on a 113 x 133 px tile (the thesis's optotype tiles)")
     parser.add_argument("--print", dest="print_form", action="store_true",

@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.charts import PAPER_REFLECTANCE
 from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM
 from vissim.errors import VissimInputError
 from vissim.validation.campaign import POLARITIES, LensSpec, _lenses
@@ -48,8 +49,6 @@ __all__ = ["Capture", "load_manifest", "capture_problem", "capture_tile", "file_
 
 log = logging.getLogger(__name__)
 
-PAPER_REFLECTANCE = 0.9  # the chart generator's default (vissim.charts)
-INK_REFLECTANCE = 0.04
 
 
 @dataclass(frozen=True)
