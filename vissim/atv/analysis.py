@@ -5,17 +5,21 @@ the sessions without drops at each lens (or, with ``average_sessions=False``, ev
 value as its own point) -- the minimum-visible code value ``y`` is fitted by ordinary least
 squares with ``y = a x^2 + b x + c``, x the trial-lens power in dioptres.  Errors are taken as
 independent, normal and of equal variance; the covariance of (a, b, c) is ``s^2 (X^T X)^-1``
-with ``s^2 = RSS / (n - 3)``.
+with ``s^2 = RSS / (n - 3)``.  Numerics: the fit is solved by QR in ``t = (x - xc) / h`` (xc, h: the
+centre and half-width of the lenses), and every statistic below is evaluated in t (quadratic
+forms as squared norms ``|W^T d|^2``, ``V_t = W W^T``) and mapped back, so none depends on where
+the origin or the unit of x lies.
 
 * **Confidence band** of the mean curve: pointwise ``yhat(x) +- t(n-3) sqrt(x^T V x)``, x = (x^2, x, 1).
 * **Vertex** ``x0 = -b / (2a)``: the trial-lens power of the least threshold.  If ``a <= 0`` the
   parabola has no minimum; the stationary point is reported but flagged, never used as an
   estimate of the spherical equivalent.
 * **Vertex interval, primary: Fieller (1954)**, exact under the model above: the set of x0 with
-  ``(b + 2a x0)^2 <= t^2 Var(b + 2a x0)``.  It is bounded only when the curvature is significant
-  (``a^2 > t^2 Var(a)``); otherwise it is the whole line or the complement of an interval, and is
-  reported as unbounded.  **Secondary: delta method**, ``x0 +- t se``, ``se^2 = g V g^T`` with
-  ``g = (b / (2a^2), -1 / (2a))``: symmetric, and over-confident when a is poorly determined.
+  ``(b + 2a x0)^2 <= t^2 Var(b + 2a x0)`` (solved about the vertex, with cancellation-free roots).
+  It is bounded only when the curvature is significant (``a^2 > t^2 Var(a)``); otherwise it is
+  the whole line or the complement of an interval, and is reported as unbounded.  **Secondary:
+  delta method**, ``x0 +- t se``, ``se^2 = g V g^T`` with ``g = (b / (2a^2), -1 / (2a))``:
+  symmetric, and over-confident when a is poorly determined.
 * **Comparison**: the measured spherical equivalent is S + C/2 of the cycloplegic autorefraction
   (the correcting lens, so a hyperope's is positive, like the trial lens that corrects him).
 """
@@ -26,8 +30,10 @@ import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
+import scipy.linalg
 import scipy.stats
 
 from vissim.atv.data import EYES, SubjectData
@@ -98,6 +104,24 @@ class VertexInterval:
         }
 
 
+class _Scaled(NamedTuple):
+    """The fit in t = (x - xc) / h: coefficients (alpha, beta, gamma) and W with V_t = W W^T."""
+
+    xc: float
+    h: float
+    coef: np.ndarray
+    root: np.ndarray
+
+
+def _centring(lo: float, hi: float) -> tuple[float, float]:
+    return (lo + hi) / 2.0, ((hi - lo) / 2.0) or 1.0
+
+
+def _to_x(xc: float, h: float) -> np.ndarray:
+    """M with (a, b, c) = M (alpha, beta, gamma)."""
+    return np.array([[1.0 / h**2, 0.0, 0.0], [-2.0 * xc / h**2, 1.0 / h, 0.0], [xc**2 / h**2, -xc / h, 1.0]])
+
+
 @dataclass(frozen=True, eq=False)
 class QuadraticFit:
     """OLS fit ``y = a x^2 + b x + c``; coefficients in code/D^2, code/D, code."""
@@ -124,7 +148,23 @@ class QuadraticFit:
     @property
     def vertex_diopters(self) -> float:
         """Stationary point -b/(2a) (a minimum only if :attr:`has_minimum`); NaN for a == 0."""
-        return -self.b / (2.0 * self.a) if self.a != 0.0 else math.nan
+        sc = self._scaled()
+        return sc.xc + sc.h * self._vertex_t() if self.a != 0.0 else math.nan
+
+    def _scaled(self) -> _Scaled:
+        cached = self.__dict__.get("_scaled_cache")
+        if cached is None:  # built from its fields: re-express them in t
+            xc, h = _centring(*self.x_range_diopters)
+            to_t = np.array([[h * h, 0.0, 0.0], [2.0 * xc * h, h, 0.0], [xc * xc, xc, 1.0]])  # inverse of _to_x
+            cov_t = to_t @ np.asarray(self.covariance, dtype=float) @ to_t.T
+            w, q = np.linalg.eigh((cov_t + cov_t.T) / 2.0)
+            cached = _Scaled(xc, h, to_t @ np.asarray(self.coefficients, dtype=float), q * np.sqrt(np.maximum(w, 0.0)))
+            object.__setattr__(self, "_scaled_cache", cached)
+        return cached
+
+    def _vertex_t(self) -> float:
+        alpha, beta = self._scaled().coef[:2]
+        return float(-beta / (2.0 * alpha))
 
     def _t(self, level: float) -> float:
         if not 0.0 < level < 1.0:
@@ -132,46 +172,53 @@ class QuadraticFit:
         return float(scipy.stats.t.ppf(0.5 + level / 2.0, self.dof))
 
     def predict(self, x_diopters) -> np.ndarray:
-        x = np.asarray(x_diopters, dtype=float)
-        a, b, c = self.coefficients
-        return (a * x + b) * x + c
+        sc = self._scaled()
+        t = (np.asarray(x_diopters, dtype=float) - sc.xc) / sc.h
+        alpha, beta, gamma = sc.coef
+        return (alpha * t + beta) * t + gamma
 
     def band(self, x_diopters, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
         """Pointwise confidence band of the mean curve at ``x_diopters``."""
-        x = np.asarray(x_diopters, dtype=float)
-        design = np.stack([x * x, x, np.ones_like(x)], axis=-1)
-        var = np.einsum("...i,ij,...j->...", design, np.asarray(self.covariance), design)
-        half = self._t(level) * np.sqrt(np.maximum(var, 0.0))
-        y = self.predict(x)
+        sc = self._scaled()
+        t = (np.asarray(x_diopters, dtype=float) - sc.xc) / sc.h
+        sd = np.linalg.norm(np.stack([t * t, t, np.ones_like(t)], axis=-1) @ sc.root, axis=-1)
+        half = self._t(level) * sd
+        y = self.predict(x_diopters)
         return y - half, y + half
 
     def delta_interval(self, level: float = 0.95) -> VertexInterval:
-        a, b = self.a, self.b
-        if a == 0.0:
+        if self.a == 0.0:
             return VertexInterval(-math.inf, math.inf, "unbounded", "delta", level)
-        cov = np.asarray(self.covariance)[:2, :2]
-        grad = np.array([b / (2.0 * a * a), -1.0 / (2.0 * a)])
-        se = math.sqrt(max(float(grad @ cov @ grad), 0.0))
+        sc = self._scaled()
+        tv = self._vertex_t()
+        # se_t = sd(beta + 2 alpha tv) / (2 |alpha|): g V g^T with g = -(2 tv, 1) / (2 alpha)
+        se = sc.h * float(np.linalg.norm(2.0 * tv * sc.root[0] + sc.root[1])) / (2.0 * abs(float(sc.coef[0])))
         half = self._t(level) * se
-        return VertexInterval(self.vertex_diopters - half, self.vertex_diopters + half, "bounded", "delta", level)
+        vertex = self.vertex_diopters
+        return VertexInterval(vertex - half, vertex + half, "bounded", "delta", level)
 
     def fieller_interval(self, level: float = 0.95) -> VertexInterval:
-        a, b = self.a, self.b
-        v = np.asarray(self.covariance)
-        t2 = self._t(level) ** 2
-        # (b + 2 a x)^2 - t^2 (Vbb + 4 x Vab + 4 x^2 Vaa) <= 0  <=>  A x^2 + B x + C <= 0
-        qa = 4.0 * (a * a - t2 * v[0, 0])
-        qb = 4.0 * (a * b - t2 * v[0, 1])
-        qc = b * b - t2 * v[1, 1]
-        disc = qb * qb - 4.0 * qa * qc
-        if qa > 0.0:  # curvature significant: a bounded interval around -b/(2a)
-            root = math.sqrt(max(disc, 0.0))
-            return VertexInterval((-qb - root) / (2 * qa), (-qb + root) / (2 * qa), "bounded", "fieller", level)
-        if disc > 0.0 and qa < 0.0:
-            root = math.sqrt(disc)
-            lo, hi = sorted(((-qb - root) / (2 * qa), (-qb + root) / (2 * qa)))
-            return VertexInterval(lo, hi, "exclusive", "fieller", level)
-        return VertexInterval(-math.inf, math.inf, "unbounded", "fieller", level)
+        sc = self._scaled()
+        alpha, beta = (float(c) for c in sc.coef[:2])
+        crit = self._t(level)
+        k2 = crit * crit
+        sd_a = float(np.linalg.norm(sc.root[0]))
+        qa = (abs(alpha) - crit * sd_a) * (abs(alpha) + crit * sd_a)  # alpha^2 - k^2 Var(alpha)
+        tc = self._vertex_t() if qa > 0.0 else 0.0  # expand about the vertex when it is bounded
+        # bc: slope at tc (~0), wc its W-row; with u = 2 (t - tc) the set is
+        # (bc + alpha u)^2 <= k^2 Var(bc + alpha u)  <=>  qa u^2 + 2 qb u + qc <= 0
+        bc = beta + 2.0 * alpha * tc
+        wc = 2.0 * tc * sc.root[0] + sc.root[1]
+        vaa, vac, vcc = float(sc.root[0] @ sc.root[0]), float(sc.root[0] @ wc), float(wc @ wc)
+        qb = alpha * bc - k2 * vac
+        qc = bc * bc - k2 * vcc
+        # qb^2 - qa qc with the alpha^2 bc^2 terms cancelled analytically (no difference of near-equals)
+        disc = k2 * (qa * vcc + k2 * vac * vac + bc * (bc * vaa - 2.0 * alpha * vac))
+        if qa == 0.0 or (qa < 0.0 and not disc > 0.0):
+            return VertexInterval(-math.inf, math.inf, "unbounded", "fieller", level)
+        q = -(qb + math.copysign(math.sqrt(max(disc, 0.0)), qb))
+        roots = sorted(sc.xc + sc.h * (tc + u / 2.0) for u in (q / qa, qc / q if q != 0.0 else 0.0))
+        return VertexInterval(roots[0], roots[1], "bounded" if qa > 0.0 else "exclusive", "fieller", level)
 
     def as_json(self) -> dict:
         return {
@@ -201,20 +248,26 @@ def fit_quadratic(x_diopters: Sequence[float], y_code: Sequence[float]) -> Quadr
             f"a quadratic with an error estimate needs >= 4 points at >= 3 distinct lenses, got {x.size} points "
             f"at {np.unique(x).size} lenses (D)"
         )
-    design = np.stack([x * x, x, np.ones_like(x)], axis=1)
-    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
-    residual = y - design @ coef
+    xc, h = _centring(float(x.min()), float(x.max()))
+    t = (x - xc) / h
+    q, r = np.linalg.qr(np.stack([t * t, t, np.ones_like(t)], axis=1))
+    coef_t = scipy.linalg.solve_triangular(r, q.T @ y)
+    residual = y - ((coef_t[0] * t + coef_t[1]) * t + coef_t[2])
     dof = x.size - 3
     s2 = float(residual @ residual) / dof
-    cov = s2 * np.linalg.inv(design.T @ design)
-    return QuadraticFit(
-        coefficients=tuple(float(c) for c in coef),
-        covariance=tuple(tuple(float(v) for v in row) for row in cov),
+    root = math.sqrt(s2) * scipy.linalg.solve_triangular(r, np.eye(3))  # V_t = s^2 R^-1 R^-T = W W^T
+    to_x = _to_x(xc, h)
+    cov = (to_x @ root) @ (to_x @ root).T
+    fit = QuadraticFit(
+        coefficients=tuple(float(c) for c in to_x @ coef_t),
+        covariance=tuple(tuple(float(v) for v in row) for row in (cov + cov.T) / 2.0),
         residual_sd_code=math.sqrt(s2),
         dof=dof,
         n_points=int(x.size),
         x_range_diopters=(float(x.min()), float(x.max())),
     )
+    object.__setattr__(fit, "_scaled_cache", _Scaled(xc, h, coef_t, root))
+    return fit
 
 
 @dataclass(frozen=True, eq=False)
