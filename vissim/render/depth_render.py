@@ -34,6 +34,7 @@ from vissim.render.backend import mitsuba
 from vissim.render.eye_sensor import register_eye_sensor
 from vissim.render.plugins import register_plugins
 from vissim.render.run import render_scene, to_mitsuba_dict
+from vissim.render.fixed_order import render_image
 
 __all__ = ["DepthRenderResult", "render_depth", "render_view", "render_aov_depth", "proximity_to_depth_m",
            "SKY_PROXIMITY_D"]
@@ -140,8 +141,7 @@ def render_depth(
                                           for d in (g.distance_left_m, g.distance_right_m)]}
                 for g in geometries],
         arcmin_per_px=scene.arcmin_per_px,
-        renders={name: {"spp": r.spp, "seed": r.seed, "passes": r.passes, "seconds": round(r.seconds, 3)}
-                 for name, r in results.items()},
+        renders={name: {"spp": r.spp, **r.render_record()} for name, r in results.items()},
         depth_definition="axial distance (m) along the view axis, from the pupil plane; inf = sky",
         kind=kind,
         variant=first.variant,
@@ -171,6 +171,6 @@ def render_aov_depth(scene, viewer, *, spp: int = 16, seed: int = 0, variant: st
     register_eye_sensor(mi)
     scene_dict["integrator"] = {"type": "aov", "aovs": "pos:position"}
     loaded = mi.load_dict(to_mitsuba_dict(scene_dict, mi))
-    image = np.asarray(mi.render(loaded, spp=int(spp), seed=int(seed)), dtype=np.float64)
+    image = render_image(mi, loaded, int(spp), int(seed)).image.astype(np.float64)
     z_mm = image[:, :, 2]
     return np.where(z_mm > 0.0, z_mm / 1000.0, np.inf).astype(np.float32)

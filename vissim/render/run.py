@@ -6,13 +6,16 @@ nested lists into transforms and bitmap ``data`` arrays into ``mi.Bitmap``.
 
 Rendering happens in passes of at most ``pass_spp`` samples per pixel (all of them in one pass
 by default when the image is small), each pass seeded from ``(seed, pass index)``; passes are
-averaged in float64.  The same scene, spp, seed and variant give bit-identical pixels.  A
-``progress`` callback (and a log line per pass) reports long renders; nothing is written to
-disk here, so an interrupted render leaves no file behind.
+averaged in float64.  Each pass goes through :func:`vissim.render.fixed_order.render_image`, which
+sums a pixel's samples in a fixed order, so the same scene, spp, seed and variant give
+bit-identical pixels on the llvm and scalar variants (``RenderResult.deterministic``; CUDA is
+untested and not promised).  A ``progress`` callback (and a log line per pass) reports long
+renders; nothing is written to disk here, so an interrupted render leaves no file behind.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
@@ -26,6 +29,8 @@ from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
 from vissim.render.plugins import register_plugins
+from vissim.render.fixed_order import render_image
+from vissim.validate import check_allocation, samples_per_pixel
 
 __all__ = ["RenderResult", "to_mitsuba_dict", "render_scene", "render_bench", "pass_seeds", "DEFAULT_PASS_SAMPLES"]
 
@@ -33,6 +38,9 @@ log = logging.getLogger(__name__)
 
 #: Samples (pixels x spp) per pass above which a render is split into passes.
 DEFAULT_PASS_SAMPLES = 1 << 22
+#: Peak bytes per sample of a pass: the sampler's and the integrator's wavefront state, and the
+#: sample's channels kept for the fixed-order sum (:mod:`vissim.render.fixed_order`).
+BYTES_PER_SAMPLE = 64
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,7 +48,9 @@ class RenderResult:
     """Linear float32 ``pixels`` (H, W) or (H, W, 3), and how they were made.
 
     ``spp`` is the number of samples per pixel actually taken: stratified samplers round a
-    request up to their grid (multijitter 512 -> 528, stratified to a square, ldsampler to 4^k).
+    request up to their grid (multijitter 512 -> 528, stratified to a square, ldsampler to 4^k);
+    ``spp_requested`` is what was asked.  ``pass_seeds`` and ``pass_spp`` (taken) are per pass;
+    ``deterministic``: the same inputs give bit-identical pixels on this variant.
     """
 
     pixels: np.ndarray
@@ -50,6 +60,26 @@ class RenderResult:
     seconds: float
     passes: int = 1
     provenance: dict | None = None
+    spp_requested: int | None = None
+    pass_seeds: tuple[int, ...] = ()
+    pass_spp: tuple[int, ...] = ()
+    deterministic: bool | None = None
+    accumulation: str = ""
+
+    def render_record(self) -> dict:
+        """How the pixels were made: variant, spp asked and taken, seeds, passes, determinism."""
+        return {
+            "variant": self.variant,
+            "spp_requested": self.spp if self.spp_requested is None else self.spp_requested,
+            "spp_used": self.spp,
+            "seed": self.seed,
+            "passes": self.passes,
+            "pass_seeds": list(self.pass_seeds),
+            "pass_spp_used": list(self.pass_spp),
+            "deterministic": self.deterministic,
+            "accumulation": self.accumulation,
+            "seconds": round(self.seconds, 3),
+        }
 
 
 def to_mitsuba_dict(value: Any, mi) -> Any:
@@ -106,8 +136,7 @@ def render_scene(
     (H, W) for ``kind="mono"`` (the one channel; on a scalar_rgb fallback, Rec. 709 luminance),
     (H, W, 3) for ``"rgb"``.
     """
-    if int(spp) != spp or spp < 1:
-        raise VissimInputError(f"spp must be a whole number of samples per pixel >= 1, got {spp!r}")
+    spp = samples_per_pixel(spp)
     mi = mitsuba(kind, variant)
     register_plugins(mi)
     start = time.perf_counter()
@@ -115,13 +144,19 @@ def render_scene(
     film = scene.sensors()[0].film()
     width, height = (int(v) for v in film.crop_size())
     counts = _split(int(spp), width * height, pass_spp)
+    channels = 3 if kind == "rgb" else 1
+    check_allocation(width * height * (2 * 8 * channels + max(counts) * BYTES_PER_SAMPLE),
+                     f"a {height} x {width} px render at {max(counts)} spp per pass")
     seeds = pass_seeds(seed, len(counts))
-    sampler = scene.sensors()[0].sampler()
     total = np.zeros((height, width, 3 if kind == "rgb" else 1), dtype=np.float64)
-    done = 0
+    done, used, deterministic, methods = 0, [], True, set()
     for i, (count, pass_seed) in enumerate(zip(counts, seeds)):
-        image = np.asarray(mi.render(scene, spp=count, seed=pass_seed), dtype=np.float64)
-        count = int(sampler.sample_count())  # stratified samplers round up to their grids
+        rendered = render_image(mi, scene, count, pass_seed)
+        image = rendered.image.astype(np.float64)
+        count = rendered.spp  # stratified samplers round up to their grids
+        used.append(count)
+        deterministic = deterministic and rendered.deterministic
+        methods.add(rendered.accumulation)
         if image.ndim == 2:
             image = image[:, :, None]
         if kind == "mono" and image.shape[2] >= 3:  # scalar_rgb fallback
@@ -138,8 +173,19 @@ def render_scene(
     if kind != "rgb":
         pixels = pixels[:, :, 0]
     seconds = time.perf_counter() - start
-    log.info("rendered %d x %d px, %d spp on %s in %.1f s", width, height, spp, mi.variant(), seconds)
-    return RenderResult(pixels, mi.variant(), done, int(seed), seconds, len(counts))
+    log.info("rendered %d x %d px, %d spp on %s in %.1f s", width, height, done, mi.variant(), seconds)
+    result = RenderResult(pixels, mi.variant(), done, int(seed), seconds, len(counts), spp_requested=int(spp),
+                          pass_seeds=tuple(seeds), pass_spp=tuple(used), deterministic=deterministic,
+                          accumulation="+".join(sorted(methods)))
+    return dataclasses.replace(result, provenance=json_safe(make_provenance(mitsuba_render=result.render_record(),
+                                                                            **_versions())))
+
+
+def _versions() -> dict:
+    import drjit as _dr_module  # versions only, imported after the backend set Dr.Jit up
+    import mitsuba as _mi_module
+
+    return {"mitsuba_version": _mi_module.__version__, "drjit_version": _dr_module.__version__}
 
 
 def render_bench(
@@ -156,8 +202,9 @@ def render_bench(
     ``chart`` is a :class:`vissim.charts.ChartSpec` (rendered for print at the bench's texel
     size, :func:`vissim.bench.dslr.chart_mm_per_texel`) or a :class:`vissim.charts.Chart`
     already rendered for print.  The result carries a provenance record: bench parameters,
-    theory (added power, blur, magnification), chart, variant, spp, seed, vissim, Mitsuba and
-    Dr.Jit versions.
+    theory (added power, blur, magnification), chart, variant, spp taken, seed, ``mitsuba_render``
+    (:meth:`RenderResult.render_record`: spp asked and taken, pass seeds, determinism), vissim,
+    Mitsuba and Dr.Jit versions.
     """
     from vissim.bench.dslr import bench_theory, chart_mm_per_texel, dslr_scene
     from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
@@ -169,9 +216,6 @@ def render_bench(
     scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind=kind)
     result = render_scene(scene, kind=kind, spp=bench.spp, seed=bench.seed, variant=variant,
                           pass_spp=pass_spp, progress=progress)
-    import drjit as _dr_module  # versions only, imported after the backend set Dr.Jit up
-    import mitsuba as _mi_module
-
     theory = bench_theory(bench)
     provenance = make_provenance(
         bench=bench,
@@ -188,12 +232,11 @@ def render_bench(
         chart_mm_per_px=chart.mm_per_px,
         kind=kind,
         variant=result.variant,
-        spp=result.spp,
+        spp=result.spp,  # taken; mitsuba_render.spp_requested is bench.spp
         seed=result.seed,
         passes=result.passes,
         render_seconds=round(result.seconds, 3),
-        mitsuba_version=_mi_module.__version__,
-        drjit_version=_dr_module.__version__,
+        mitsuba_render=result.render_record(),
+        **_versions(),
     )
-    return RenderResult(result.pixels, result.variant, result.spp, result.seed, result.seconds, result.passes,
-                        json_safe(provenance))
+    return dataclasses.replace(result, provenance=json_safe(provenance))

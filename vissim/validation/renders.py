@@ -6,8 +6,6 @@ import hashlib
 import json
 from dataclasses import asdict, dataclass
 
-import numpy as np
-
 from vissim.bench.dslr import DslrBench
 from vissim.trial_lens import TrialLens, TrialLensSetup
 from vissim.validation.campaign import CampaignSettings, Configuration
@@ -111,10 +109,15 @@ def bench_for(spec: RenderSpec) -> DslrBench:
     )
 
 
-def render_spec(spec: RenderSpec) -> np.ndarray:
-    """Render one spec with Mitsuba on this machine (a worker process or a Dask worker)."""
+def render_spec(spec: RenderSpec):
+    """Render one spec with Mitsuba on this machine (a worker process or a Dask worker).
+
+    Returns the :class:`vissim.render.run.RenderResult`: float32 ``pixels``, ``variant``, ``spp``
+    (taken) and ``provenance``, whose ``inputs.mitsuba_render`` records the spp asked and taken,
+    variant, seeds, passes and determinism; the campaign runner writes it in the EXR header.
+    """
     from vissim.charts import single_letter_spec
     from vissim.render.run import render_bench  # the Mitsuba door, imported where it runs
 
     chart = single_letter_spec(spec.letter, spec.logmar, viewing_distance_m=spec.chart_distance_m, polarity=spec.polarity)
-    return np.asarray(render_bench(bench_for(spec), chart).pixels, dtype=np.float32)
+    return render_bench(bench_for(spec), chart)
