@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 from fake_bench import fake_render
+from provenance_walk import image_provenance
 
 from vissim.validation.campaign import load_campaign
 from vissim.validation.captures import capture_tile, file_sha256, load_manifest
@@ -84,3 +85,6 @@ def test_campaign_with_captures_and_an_absent_one(capture_campaign, tmp_path):
     assert from_capture["psnr_db"] > 30 and from_capture["ssim"] > 0.95
     assert from_capture["psnr_db"] > from_render["psnr_db"] - 6
     assert np.isfinite(from_capture["noise_floor_psnr_db"])  # from the repeat exposure
+    captured = [prov["inputs"] for prov in image_provenance(run_dir).values()
+                if prov["inputs"].get("source", {}).get("ground_truth") == "capture"]
+    assert captured and all(inputs["render_provenance"]["truth_a"]["sha256"] for inputs in captured)

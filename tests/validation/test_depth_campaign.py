@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fake_bench import fake_render
+from provenance_walk import image_provenance, json_without_provenance
 
 from vissim.bench.depth_scene import CameraViewer, EyeViewer, default_panels_scene, panel_geometries
 from vissim.errors import VissimInputError
@@ -154,6 +155,14 @@ def test_tiny_depth_campaign_runs_resumes_and_reports(tiny, tmp_path):
             assert row["psnr_db"] >= min(floor, 60.0) - 1.0, row  # as good as the render noise allows
     boundary = [r for r in rows if r["region"] == "boundary"]
     assert len(boundary) == 4 and all(r["n_px"] > 100 and math.isfinite(r["psnr_db"]) for r in boundary)
+    for image, provenance in image_provenance(run_dir).items():  # every image, with its renders' variant and spp
+        if image.parent.name == "renders":
+            assert provenance["variant"] and provenance["spp_used"] >= provenance["inputs"]["render"]["spp"]
+        elif image.parent.parent.name == "items":
+            renders = provenance["inputs"]["render_provenance"]
+            assert set(renders) == {"truth_0", "truth_1", "all_in_focus", "proximity"}
+            assert all(r["variant"] and r["spp_used"] for r in renders.values())
+    assert json_without_provenance(run_dir) == []
     tables = (run_dir / "tables.md").read_text()
     assert "| boundary |" in tables and "panel 3 m" in tables and "DSLR at 3 m" in tables
     before = (run_dir / "metrics.json").read_text()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from vissim.errors import VissimInputError
 
 
 def add_parser(subparsers) -> None:
@@ -37,7 +38,11 @@ def add_parser(subparsers) -> None:
 def run_validate(args: argparse.Namespace) -> int:
     from vissim.validation.depth_campaign import run_any_campaign
 
-    done = run_any_campaign(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler, spp=args.spp)
+    try:
+        done = run_any_campaign(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler,
+                                spp=args.spp)
+    except OSError as exc:  # the run folder cannot be written (permissions, a full disk)
+        raise VissimInputError(f"cannot write {exc.filename or args.output}: {exc.strerror or exc}") from None
     for line in done.lines:
         print(line)
     if done.summary.skipped:

@@ -11,8 +11,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-import math
-import tomllib
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -24,8 +22,11 @@ from vissim.trial_lens import (
     THESIS_FOCAL_LENGTH_MM,
     THESIS_VERTEX_DISTANCE_MM,
 )
-from vissim.errors import VissimInputError
 from vissim.optotypes import SLOAN_LETTERS
+from vissim.validation.fields import (
+    MAX_SPP, LensSpec, choices, field_error, lenses, number, read_campaign_toml, seed_pair, table, tables, text,
+    value_list, whole_number,
+)
 
 __all__ = ["LensSpec", "Configuration", "CampaignSettings", "Campaign", "load_campaign", "SIMULATIONS", "INPUTS"]
 
@@ -36,22 +37,6 @@ INPUTS = ("render", "synthetic")
 POLARITIES = ("black-on-white", "white-on-black")
 #: Bumped when the meaning of an item's inputs changes, so old results are not reused.
 SCHEMA_VERSION = 1
-
-
-@dataclass(frozen=True)
-class LensSpec:
-    """One trial lens in the holder (thin lens powers; TABO axis)."""
-
-    sphere_diopters: float = 0.0
-    cylinder_diopters: float = 0.0
-    axis_deg: float = 180.0
-
-    def label(self) -> str:
-        if self.cylinder_diopters == 0:
-            return f"{self.sphere_diopters:+.2f} DS"
-        if self.sphere_diopters == 0:
-            return f"{self.cylinder_diopters:+.2f} DC x {self.axis_deg:g}"
-        return f"{self.sphere_diopters:+.2f} {self.cylinder_diopters:+.2f} x {self.axis_deg:g}"
 
 
 @dataclass(frozen=True)
@@ -106,79 +91,83 @@ class Campaign:
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def _err(source: str, where: str, message: str) -> VissimInputError:
-    return VissimInputError(f"{source}: {where}: {message}")
+#: [campaign] numbers: (unit, lowest, highest); ranges are physical (a DSLR bench, visible light).
+NUMBER_SETTINGS = {
+    "arcmin_per_px": ("arcmin/px", 1e-3, 60.0),
+    "focal_length_mm": ("mm", 1.0, 1000.0),
+    "chart_distance_m": ("m", 0.01, 1000.0),
+    "vertex_distance_mm": ("mm", 0.0, 200.0),
+    "wavelength_nm": ("nm", 200.0, 2500.0),
+    "refractive_index": ("(refractive index)", 1.01, 3.0),
+    "data_range": ("(linear reflectance)", 1e-3, 1e3),
+}
+F_NUMBER_RANGE = (0.5, 128.0)
+LOGMAR_RANGE = (-1.0, 2.0)
+#: Sloan letters are 5 strokes tall: 5 arcmin at LogMAR 0.
+LETTER_ARCMIN_AT_LOGMAR_0 = 5.0
+MAX_TILE_PX = 1 << 20
 
 
-def _float(value: Any, source: str, where: str, unit: str, *, positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise _err(source, where, f"expected a number in {unit}, got {value!r}")
-    if positive and value <= 0:
-        raise _err(source, where, f"must be > 0 {unit}, got {value!r}")
-    return float(value)
+def _f_number(value: Any, source: str, where: str) -> float:
+    return number(value, source, where, "(f-number)", lo=F_NUMBER_RANGE[0], hi=F_NUMBER_RANGE[1])
 
 
-def _lens(entry: Any, source: str, where: str) -> LensSpec:
-    if isinstance(entry, (int, float)) and not isinstance(entry, bool):
-        return LensSpec(_float(entry, source, where, "dioptres"))
-    if not isinstance(entry, dict):
-        raise _err(source, where, f"a lens is a number (sphere, D) or a table {{sphere, cylinder, axis}}, got {entry!r}")
-    unknown = set(entry) - {"sphere", "cylinder", "axis"}
-    if unknown:
-        raise _err(source, where, f"unknown lens field(s) {sorted(unknown)}; use sphere, cylinder, axis")
-    cyl = _float(entry.get("cylinder", 0.0), source, f"{where}.cylinder", "dioptres")
-    if cyl != 0 and "axis" not in entry:
-        raise _err(source, where, "a cylinder needs an axis in degrees (TABO)")
-    axis = _float(entry.get("axis", 180.0), source, f"{where}.axis", "degrees")
-    if not 0 <= axis <= 180:
-        raise _err(source, f"{where}.axis", f"must be within 0-180 degrees, got {axis:g}")
-    return LensSpec(_float(entry.get("sphere", 0.0), source, f"{where}.sphere", "dioptres"), cyl, axis if cyl else 180.0)
-
-
-def _lenses(value: Any, source: str, where: str) -> tuple[LensSpec, ...]:
-    entries = value if isinstance(value, list) else [value]
-    if len(entries) > 3:
-        raise _err(source, where, f"the holder takes at most 3 lenses, got {len(entries)}")
-    lenses = tuple(_lens(e, source, f"{where}[{i}]") for i, e in enumerate(entries))
-    return tuple(l for l in lenses if (l.sphere_diopters, l.cylinder_diopters) != (0.0, 0.0))
-
-
-def _configuration(raw: dict, defaults: CampaignSettings, source: str, where: str, f_number: float) -> Configuration:
+def _configuration(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> Configuration:
     unknown = set(raw) - {"name", "letter", "logmar", "polarity", "lenses", "f_number", "capture"}
     if unknown:
-        raise _err(source, where, f"unknown field(s) {sorted(unknown)}")
-    letter = str(raw.get("letter", "")).upper()
-    if len(letter) != 1 or letter not in SLOAN_LETTERS:
-        raise _err(source, f"{where}.letter", f"must be one of the Sloan letters {', '.join(SLOAN_LETTERS)}, got {raw.get('letter')!r}")
+        raise field_error(source, where, f"unknown field(s) {sorted(unknown)}")
+    letter = raw.get("letter")
+    if not isinstance(letter, str) or len(letter) != 1 or letter.upper() not in SLOAN_LETTERS:
+        raise field_error(source, f"{where}.letter", f"must be one of the Sloan letters {', '.join(SLOAN_LETTERS)}, "
+                                                     f"got {letter!r}")
+    letter = letter.upper()
     polarity = raw.get("polarity", "black-on-white")
-    if polarity not in POLARITIES:
-        raise _err(source, f"{where}.polarity", f"must be {' or '.join(POLARITIES)}, got {polarity!r}")
-    logmar = _float(raw.get("logmar", 1.0), source, f"{where}.logmar", "LogMAR")
-    lenses = _lenses(raw.get("lenses", []), source, f"{where}.lenses")
-    f_number = _float(raw.get("f_number", f_number), source, f"{where}.f_number", "(f-number)", positive=True)
-    config = Configuration("", letter, logmar, polarity, lenses, f_number, raw.get("capture"))
-    name = str(raw.get("name") or f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}")
-    return Configuration(name, letter, logmar, polarity, lenses, f_number, config.capture)
+    if not isinstance(polarity, str) or polarity not in POLARITIES:
+        raise field_error(source, f"{where}.polarity", f"must be {' or '.join(POLARITIES)}, got {polarity!r}")
+    logmar = number(raw.get("logmar", 1.0), source, f"{where}.logmar", "LogMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1])
+    letter_arcmin = LETTER_ARCMIN_AT_LOGMAR_0 * 10.0**logmar
+    tile_arcmin = min(settings.tile_px) * settings.arcmin_per_px
+    if letter_arcmin > tile_arcmin:
+        raise field_error(source, f"{where}.logmar", f"a LogMAR {logmar:g} letter is {letter_arcmin:.3g} arcmin tall, "
+                                                     f"more than the {tile_arcmin:.3g} arcmin tile; enlarge tile_px")
+    specs = lenses(raw.get("lenses", []), source, f"{where}.lenses")
+    f_number = _f_number(raw.get("f_number", f_number), source, f"{where}.f_number")
+    capture = raw.get("capture")
+    if capture is not None:
+        capture = text(capture, source, f"{where}.capture")
+    name = raw.get("name")
+    if name is not None:
+        name = text(name, source, f"{where}.name")
+    config = Configuration("", letter, logmar, polarity, specs, f_number, capture)
+    name = name or f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}"
+    return Configuration(name, letter, logmar, polarity, specs, f_number, capture)
 
 
-def _sweep(raw: dict, defaults: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
+def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
     unknown = set(raw) - {"name", "letters", "logmars", "polarities", "lenses", "f_number", "spheres", "cylinders"}
     if unknown:
-        raise _err(source, where, f"unknown field(s) {sorted(unknown)}")
-    letters = raw.get("letters", ["N"])
-    logmars = raw.get("logmars", [1.0])
-    polarities = raw.get("polarities", ["black-on-white"])
+        raise field_error(source, where, f"unknown field(s) {sorted(unknown)}")
+    letters = value_list(raw.get("letters", ["N"]), source, f"{where}.letters", '["K", "N"]')
+    logmars = value_list(raw.get("logmars", [1.0]), source, f"{where}.logmars", "[1.0, 0.5]")
+    polarities = value_list(raw.get("polarities", ["black-on-white"]), source, f"{where}.polarities",
+                            '["black-on-white"]')
     lens_sets: list[Any] = []
-    lens_sets += [[{"sphere": s}] for s in raw.get("spheres", [])]
-    lens_sets += [[c] for c in raw.get("cylinders", [])]
-    lens_sets += list(raw.get("lenses", []))
+    if "spheres" in raw:
+        spheres = value_list(raw["spheres"], source, f"{where}.spheres", "[0.0, 2.0] (dioptres)")
+        lens_sets += [[{"sphere": s}] for s in spheres]
+    if "cylinders" in raw:
+        cylinders = value_list(raw["cylinders"], source, f"{where}.cylinders", "[{ cylinder = 2.0, axis = 90 }]")
+        lens_sets += [[table(c, source, f"{where}.cylinders[{i}]")] for i, c in enumerate(cylinders)]
+    if "lenses" in raw:
+        lens_sets += list(value_list(raw["lenses"], source, f"{where}.lenses", "[[2.0], [1.0, -0.5]] (lens sets)"))
     if not lens_sets:
         lens_sets = [[]]
-    prefix = raw.get("name", "")
+    prefix = text(raw.get("name", ""), source, f"{where}.name")
     out = []
-    for letter, logmar, polarity, lenses in itertools.product(letters, logmars, polarities, lens_sets):
-        item = {"letter": letter, "logmar": logmar, "polarity": polarity, "lenses": lenses, "f_number": raw.get("f_number", f_number)}
-        config = _configuration(item, defaults, source, where, f_number)
+    for letter, logmar, polarity, lens_set in itertools.product(letters, logmars, polarities, lens_sets):
+        item = {"letter": letter, "logmar": logmar, "polarity": polarity, "lenses": lens_set,
+                "f_number": raw.get("f_number", f_number)}
+        config = _configuration(item, settings, source, where, f_number)
         label = f"{prefix}: {config.name}" if prefix else config.name
         out.append(Configuration(label, *[getattr(config, f.name) for f in fields(Configuration)][1:]))
     return out
@@ -188,58 +177,56 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
     known = {f.name for f in fields(CampaignSettings)}
     unknown = set(raw) - known - {"name", "description", "f_number", "manifest"}
     if unknown:
-        raise _err(source, "[campaign]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
+        raise field_error(source, "[campaign]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
     kwargs: dict[str, Any] = {}
-    for key in ("arcmin_per_px", "focal_length_mm", "chart_distance_m", "vertex_distance_mm", "wavelength_nm", "refractive_index", "data_range"):
+    for key, (unit, lo, hi) in NUMBER_SETTINGS.items():
         if key in raw:
-            kwargs[key] = _float(raw[key], source, f"campaign.{key}", key.rsplit("_", 1)[-1], positive=True)
+            kwargs[key] = number(raw[key], source, f"campaign.{key}", unit, lo=lo, hi=hi)
     if "spp" in raw:
-        if not isinstance(raw["spp"], int) or raw["spp"] < 1:
-            raise _err(source, "campaign.spp", f"samples per pixel must be a positive integer, got {raw['spp']!r}")
-        kwargs["spp"] = raw["spp"]
+        kwargs["spp"] = whole_number(raw["spp"], source, "campaign.spp", "samples per pixel", lo=1, hi=MAX_SPP)
     if "seeds" in raw:
-        seeds = raw["seeds"]
-        if not (isinstance(seeds, list) and len(seeds) == 2 and all(isinstance(s, int) for s in seeds) and seeds[0] != seeds[1]):
-            raise _err(source, "campaign.seeds", f"need two different integer seeds (for the noise floor), got {seeds!r}")
-        kwargs["seeds"] = tuple(seeds)
+        kwargs["seeds"] = seed_pair(raw["seeds"], source, "campaign.seeds")
     if "tile_px" in raw:
         tile = raw["tile_px"]
-        if not (isinstance(tile, list) and len(tile) == 2 and all(isinstance(t, int) and t >= 16 for t in tile)):
-            raise _err(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
-        kwargs["tile_px"] = tuple(tile)
+        if not (isinstance(tile, list) and len(tile) == 2):
+            raise field_error(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
+        kwargs["tile_px"] = tuple(whole_number(t, source, f"campaign.tile_px[{i}]", "pixels", lo=16, hi=MAX_TILE_PX)
+                                  for i, t in enumerate(tile))
     for key, allowed in (("simulations", SIMULATIONS), ("inputs", INPUTS)):
         if key in raw:
-            values = tuple(raw[key])
-            bad = [v for v in values if v not in allowed]
-            if bad or not values:
-                raise _err(source, f"campaign.{key}", f"choose from {', '.join(allowed)}; got {list(values)!r}")
-            kwargs[key] = values
+            kwargs[key] = choices(raw[key], allowed, source, f"campaign.{key}")
+    for key in ("name", "description", "manifest"):
+        if key in raw:
+            text(raw[key], source, f"campaign.{key}")
     return CampaignSettings(**kwargs)
 
 
-def load_campaign(path: str | Path) -> Campaign:
-    """Read and validate a campaign TOML file."""
+def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
+    """Read and validate a campaign TOML file.
+
+    With ``check_memory`` the memory each item will need is estimated and a campaign this
+    machine cannot hold is refused now (:func:`vissim.validation.preflight.check_campaign_memory`).
+    """
     path = Path(path)
     source = str(path)
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise VissimInputError(f"campaign file {source} does not exist") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise VissimInputError(f"{source} is not valid TOML: {exc}") from None
-    head = raw.get("campaign", {})
-    settings = _settings(head, source)
-    f_number = _float(head.get("f_number", 5.0), source, "campaign.f_number", "(f-number)", positive=True)
-    configurations: list[Configuration] = []
-    for i, item in enumerate(raw.get("item", [])):
-        configurations.append(_configuration(item, settings, source, f"item[{i}]", f_number))
-    for i, sweep in enumerate(raw.get("sweep", [])):
-        configurations += _sweep(sweep, settings, source, f"sweep[{i}]", f_number)
+    raw = read_campaign_toml(path)
+    if "depth_campaign" in raw or "config" in raw:
+        raise field_error(source, "top level", "a depth campaign ([depth_campaign], [[config]]); run it with "
+                                               "vissim validate, or load it with load_depth_campaign")
     unknown = set(raw) - {"campaign", "item", "sweep"}
     if unknown:
-        raise _err(source, "top level", f"unknown table(s) {sorted(unknown)}; use [campaign], [[item]], [[sweep]]")
+        raise field_error(source, "top level",
+                          f"unknown table(s) {sorted(unknown)}; use [campaign], [[item]], [[sweep]]")
+    head = table(raw.get("campaign", {}), source, "[campaign]")
+    settings = _settings(head, source)
+    f_number = _f_number(head.get("f_number", 5.0), source, "campaign.f_number")
+    configurations: list[Configuration] = []
+    for i, item in enumerate(tables(raw, "item", source)):
+        configurations.append(_configuration(item, settings, source, f"item[{i}]", f_number))
+    for i, sweep in enumerate(tables(raw, "sweep", source)):
+        configurations += _sweep(sweep, settings, source, f"sweep[{i}]", f_number)
     if not configurations:
-        raise _err(source, "top level", "no configurations: add [[item]] or [[sweep]] tables")
+        raise field_error(source, "top level", "no configurations: add [[item]] or [[sweep]] tables")
     seen: dict[str, Configuration] = {}
     unique = []
     for c in configurations:  # the same inputs twice run once
@@ -250,11 +237,16 @@ def load_campaign(path: str | Path) -> Campaign:
     manifest = head.get("manifest")
     if manifest is not None:
         manifest = str((path.parent / manifest).resolve())
-    return Campaign(
-        name=str(head.get("name", path.stem)),
-        description=str(head.get("description", "")),
+    campaign = Campaign(
+        name=head.get("name", path.stem),
+        description=head.get("description", ""),
         settings=settings,
         configurations=tuple(unique),
         source=source,
         manifest=manifest,
     )
+    if check_memory:
+        from vissim.validation.preflight import check_campaign_memory  # simulate imports this module
+
+        check_campaign_memory(campaign)
+    return campaign

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,7 +41,8 @@ import numpy as np
 from vissim.charts import PAPER_REFLECTANCE
 from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM
 from vissim.errors import VissimInputError
-from vissim.validation.campaign import POLARITIES, LensSpec, _lenses
+from vissim.validation.campaign import POLARITIES, LensSpec
+from vissim.validation.fields import field_error, lenses, number, read_toml_file, tables, text
 from vissim.validation.raw import read_raw_linear, resample_to_arcmin
 
 __all__ = ["Capture", "load_manifest", "capture_problem", "capture_tile", "file_sha256"]
@@ -77,47 +77,53 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+def _optional_text(entry: dict, key: str, source: str, where: str) -> str | None:
+    return None if entry.get(key) is None else text(entry[key], source, f"{where}.{key}")
+
+
+def _capture(entry: dict, path: Path, i: int) -> Capture:
+    source, where = str(path), f"capture[{i}]"
+    for key in ("id", "file", "letter", "letter_center_px"):
+        if key not in entry:
+            raise field_error(source, where, f"lacks the field {key!r}")
+    polarity = entry.get("polarity", "black-on-white")
+    if polarity not in POLARITIES:
+        raise field_error(source, f"{where}.polarity", f"must be {' or '.join(POLARITIES)}, got {polarity!r}")
+    center = entry["letter_center_px"]
+    if not (isinstance(center, list) and len(center) == 2):
+        raise field_error(source, f"{where}.letter_center_px", f"must be [row, col] in sensor pixels, got {center!r}")
+
+    def positive(key: str, default: float, unit: str) -> float:
+        return number(entry.get(key, default), source, f"{where}.{key}", unit, positive=True)
+
+    return Capture(
+        id=text(entry["id"], source, f"{where}.id"),
+        file=(path.parent / text(entry["file"], source, f"{where}.file")).resolve(),
+        sha256=_optional_text(entry, "sha256", source, where),
+        pixel_pitch_um=positive("pixel_pitch_um", 5.2, "um"),
+        focal_length_mm=positive("focal_length_mm", THESIS_FOCAL_LENGTH_MM, "mm"),
+        f_number=positive("f_number", THESIS_F_NUMBER, "(f-number)"),
+        chart_distance_m=positive("chart_distance_m", THESIS_CHART_DISTANCE_MM / 1000.0, "m"),
+        lenses=lenses(entry.get("lenses", []), source, f"{where}.lenses"),
+        letter=text(entry["letter"], source, f"{where}.letter").upper(),
+        logmar=number(entry.get("logmar", 1.0), source, f"{where}.logmar", "LogMAR"),
+        polarity=polarity,
+        letter_center_px=tuple(number(v, source, f"{where}.letter_center_px[{k}]", "sensor px")
+                               for k, v in enumerate(center)),
+        no_lens_capture=_optional_text(entry, "no_lens_capture", source, where),
+        repeat_capture=_optional_text(entry, "repeat_capture", source, where),
+    )
+
+
 def load_manifest(path: str | Path) -> dict[str, Capture]:
     """Read a capture manifest; every field is checked, files are not (see :func:`capture_problem`)."""
     path = Path(path)
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise VissimInputError(f"capture manifest {path} does not exist") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise VissimInputError(f"{path} is not valid TOML: {exc}") from None
+    raw = read_toml_file(path, "capture manifest")
     captures = {}
-    for i, entry in enumerate(raw.get("capture", [])):
-        where = f"{path}: capture[{i}]"
-        try:
-            polarity = entry.get("polarity", "black-on-white")
-            if polarity not in POLARITIES:
-                raise VissimInputError(f"{where}.polarity must be {' or '.join(POLARITIES)}, got {polarity!r}")
-            center = entry["letter_center_px"]
-            if not (isinstance(center, list) and len(center) == 2):
-                raise VissimInputError(f"{where}.letter_center_px must be [row, col] in sensor pixels")
-            capture = Capture(
-                id=str(entry["id"]),
-                file=(path.parent / entry["file"]).resolve(),
-                sha256=entry.get("sha256"),
-                pixel_pitch_um=float(entry.get("pixel_pitch_um", 5.2)),
-                focal_length_mm=float(entry.get("focal_length_mm", THESIS_FOCAL_LENGTH_MM)),
-                f_number=float(entry.get("f_number", THESIS_F_NUMBER)),
-                chart_distance_m=float(entry.get("chart_distance_m", THESIS_CHART_DISTANCE_MM / 1000.0)),
-                lenses=_lenses(entry.get("lenses", []), str(path), f"capture[{i}].lenses"),
-                letter=str(entry["letter"]).upper(),
-                logmar=float(entry.get("logmar", 1.0)),
-                polarity=polarity,
-                letter_center_px=(float(center[0]), float(center[1])),
-                no_lens_capture=entry.get("no_lens_capture"),
-                repeat_capture=entry.get("repeat_capture"),
-            )
-        except KeyError as exc:
-            raise VissimInputError(f"{where} lacks the field {exc.args[0]!r}") from None
-        except (TypeError, ValueError) as exc:
-            raise VissimInputError(f"{where}: {exc}") from None
+    for i, entry in enumerate(tables(raw, "capture", str(path))):
+        capture = _capture(entry, path, i)
         if capture.id in captures:
-            raise VissimInputError(f"{where}: duplicate capture id {capture.id!r}")
+            raise field_error(str(path), f"capture[{i}]", f"duplicate capture id {capture.id!r}")
         captures[capture.id] = capture
     return captures
 

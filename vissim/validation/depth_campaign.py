@@ -28,7 +28,6 @@ import hashlib
 import json
 import logging
 import time
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -41,14 +40,17 @@ from vissim.bench.depth_scene import (
 )
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.errors import VissimInputError
-from vissim.imageio import read_image, write_image
+from vissim.imageio import read_image
 from vissim.prescription import Prescription
-from vissim.provenance import json_safe
+from vissim.provenance import json_safe, make_provenance
 from vissim.trial_lens import TrialLens
-from vissim.validation.campaign import _float, _lenses
+from vissim.validation.fields import (
+    MAX_SEED, MAX_SPP, choices, field_error, lenses, number, read_campaign_toml, seed_pair, table, tables, text,
+    whole_number,
+)
 from vissim.validation.depth_masks import depth_regions, masked_metrics
 from vissim.validation.metrics import compare_images
-from vissim.validation.runner import RunSummary, _make_renders
+from vissim.validation.runner import RunSummary, _make_renders, check_run_options, connect_scheduler
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "DepthRenderSpec", "load_depth_campaign",
            "is_depth_campaign", "render_depth_spec", "run_depth_campaign", "compute_depth_item", "run_any_campaign",
@@ -132,13 +134,16 @@ class DepthRenderSpec:
         return dataclasses.replace(self.scene, arcmin_per_px=self.scene.arcmin_per_px / s, size_px=(rows * s, cols * s))
 
 
-def render_depth_spec(spec: DepthRenderSpec) -> np.ndarray:
-    """Render one spec with Mitsuba on this machine (a worker process or a Dask worker)."""
+def render_depth_spec(spec: DepthRenderSpec):
+    """Render one spec with Mitsuba on this machine (a worker process or a Dask worker).
+
+    Returns the :class:`vissim.render.run.RenderResult`: pixels, variant and the spp used.
+    """
     from vissim.render.depth_render import render_view  # the Mitsuba door, imported where it runs
 
     result = render_view(spec.render_scene(), spec.viewer, view=spec.view, content=spec.content, spp=spec.spp,
                          seed=spec.seed)
-    return np.asarray(result.pixels, dtype=np.float32)
+    return result
 
 
 def _specs(config: DepthConfiguration, settings: DepthCampaignSettings) -> dict[str, DepthRenderSpec]:
@@ -150,18 +155,24 @@ def _specs(config: DepthConfiguration, settings: DepthCampaignSettings) -> dict[
     return {**truth, **aux}
 
 
-# -- loading ----------------------------------------------------------------------------
-def _err(source: str, where: str, message: str) -> VissimInputError:
-    return VissimInputError(f"{source}: {where}: {message}")
+# -- loading ---------------------------------------------------------------------------
+_err = field_error
+_read_toml = read_campaign_toml
 
-
-def _read_toml(path: Path) -> dict:
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise VissimInputError(f"campaign file {path} does not exist") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise VissimInputError(f"{path} is not valid TOML: {exc}") from None
+#: [depth_campaign] numbers: (unit, lowest, highest).
+NUMBER_SETTINGS = {
+    "wavelength_nm": ("nm", 200.0, 2000.0),
+    "data_range": ("(linear reflectance)", 1e-3, 1e3),
+    "margin_px": ("px", 0.0, 1000.0),
+    "layer_spacing_fraction": ("(of a blur-free depth step)", 1e-3, 1.0),
+}
+#: [depth_campaign] whole numbers: (unit, lowest, highest).
+WHOLE_SETTINGS = {
+    "spp": ("samples per pixel", 1, MAX_SPP),
+    "aux_spp": ("samples per pixel", 1, MAX_SPP),
+    "aux_seed": ("(a seed)", 0, MAX_SEED),
+    "oversample": ("(sub-pixels per pixel per axis)", 1, 16),
+}
 
 
 def is_depth_campaign(doc: dict) -> bool:
@@ -176,85 +187,111 @@ def _settings(head: dict, source: str) -> DepthCampaignSettings:
     if unknown:
         raise _err(source, "[depth_campaign]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
     kwargs: dict[str, Any] = {}
-    for key in ("wavelength_nm", "data_range", "margin_px", "layer_spacing_fraction"):
+    for key, (unit, lo, hi) in NUMBER_SETTINGS.items():
         if key in head:
-            kwargs[key] = _float(head[key], source, f"depth_campaign.{key}", key.rsplit("_", 1)[-1], positive=True)
-    for key in ("spp", "aux_spp", "aux_seed", "oversample"):
+            kwargs[key] = number(head[key], source, f"depth_campaign.{key}", unit, lo=lo, hi=hi)
+    for key, (unit, lo, hi) in WHOLE_SETTINGS.items():
         if key in head:
-            value = head[key]
-            if isinstance(value, bool) or not isinstance(value, int) or value < (0 if key == "aux_seed" else 1):
-                raise _err(source, f"depth_campaign.{key}", f"must be a positive integer, got {value!r}")
-            kwargs[key] = value
+            kwargs[key] = whole_number(head[key], source, f"depth_campaign.{key}", unit, lo=lo, hi=hi)
     if "seeds" in head:
-        seeds = head["seeds"]
-        if not (isinstance(seeds, list) and len(seeds) == 2 and all(isinstance(s, int) for s in seeds)
-                and seeds[0] != seeds[1]):
-            raise _err(source, "depth_campaign.seeds",
-                       f"need two different integer seeds (the noise floor), got {seeds!r}")
-        kwargs["seeds"] = tuple(seeds)
+        kwargs["seeds"] = seed_pair(head["seeds"], source, "depth_campaign.seeds")
     if "simulations" in head:
-        values = tuple(head["simulations"])
-        if not values or any(v not in DEPTH_SIMULATIONS for v in values):
-            raise _err(source, "depth_campaign.simulations",
-                       f"choose from {', '.join(DEPTH_SIMULATIONS)}; got {list(values)!r}")
-        kwargs["simulations"] = values
+        kwargs["simulations"] = choices(head["simulations"], DEPTH_SIMULATIONS, source, "depth_campaign.simulations")
+    for key in ("name", "description"):
+        if key in head:
+            text(head[key], source, f"depth_campaign.{key}")
     return DepthCampaignSettings(**kwargs)
 
 
-def _configuration(raw: Any, base: Path, source: str, where: str) -> DepthConfiguration:
-    if not isinstance(raw, dict):
-        raise _err(source, where, f"must be a table, got {raw!r}")
+#: Camera fields: (unit, lowest, highest).
+CAMERA_FIELDS = {
+    "f_number": ("(f-number)", 0.5, 128.0),
+    "focus_distance_m": ("m", 0.01, 1000.0),
+    "focal_length_mm": ("mm", 1.0, 1000.0),
+    "vertex_distance_mm": ("mm", 0.0, 200.0),
+}
+
+
+def _eye(raw: dict, viewer, source: str, where: str) -> EyeViewer:
+    base_eye = viewer if isinstance(viewer, EyeViewer) else EyeViewer()
+    rx = base_eye.prescription
+    if "eye" in raw:
+        try:
+            rx = Prescription.parse(text(raw["eye"], source, f"{where}.eye"))
+        except VissimInputError as exc:
+            raise _err(source, f"{where}.eye", str(exc)) from None
+    pupil = number(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm", lo=0.5, hi=10.0)
+    accommodation = number(raw.get("accommodation_d", base_eye.accommodation_d), source, f"{where}.accommodation_d",
+                           "dioptres", lo=0.0, hi=20.0)
+    try:
+        return EyeViewer(rx, pupil, accommodation)
+    except VissimInputError as exc:
+        raise _err(source, where, str(exc)) from None
+
+
+def _camera(camera: Any, viewer, source: str, where: str) -> CameraViewer:
+    allowed = set(CAMERA_FIELDS) | {"lenses"}
+    if not isinstance(camera, dict) or set(camera) - allowed:
+        raise _err(source, where, f"a table of {sorted(allowed)}, got {camera!r}")
+    kwargs: dict[str, Any] = {k: number(v, source, f"{where}.{k}", CAMERA_FIELDS[k][0], lo=CAMERA_FIELDS[k][1],
+                                        hi=CAMERA_FIELDS[k][2]) for k, v in camera.items() if k != "lenses"}
+    specs = lenses(camera.get("lenses", []), source, f"{where}.lenses")
+    kwargs["lenses"] = tuple(TrialLens(s.sphere_diopters, s.cylinder_diopters, s.axis_deg) for s in specs)
+    try:
+        return dataclasses.replace(viewer if isinstance(viewer, CameraViewer) else CameraViewer(), **kwargs)
+    except VissimInputError as exc:
+        raise _err(source, where, str(exc)) from None
+
+
+def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfiguration:
     unknown = set(raw) - {"name", "scene", "eye", "pupil_mm", "accommodation_d", "camera"}
     if unknown:
         raise _err(source, where, f"unknown field(s) {sorted(unknown)}")
     if "scene" not in raw:
         raise _err(source, where, "needs scene = a depth scene file (relative to the campaign file)")
-    scene_file = (base / str(raw["scene"])).resolve()
-    loaded = load_depth_scene_toml(scene_file)
+    scene_file = (base / text(raw["scene"], source, f"{where}.scene")).resolve()
+    if not scene_file.is_file():
+        raise _err(source, f"{where}.scene", f"{scene_file} is not a file")
+    try:
+        loaded = load_depth_scene_toml(scene_file)
+    except VissimInputError as exc:
+        raise _err(source, f"{where}.scene", str(exc)) from None
     eye_keys = {"eye", "pupil_mm", "accommodation_d"} & set(raw)
     if eye_keys and "camera" in raw:
         raise _err(source, where, "give an eye (eye, pupil_mm, accommodation_d) or a camera, not both")
     viewer = loaded.viewer
     if eye_keys:
-        base_eye = viewer if isinstance(viewer, EyeViewer) else EyeViewer()
-        rx = Prescription.parse(str(raw["eye"])) if "eye" in raw else base_eye.prescription
-        pupil = _float(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm",
-                       positive=True)
-        accommodation = _float(raw.get("accommodation_d", base_eye.accommodation_d), source,
-                               f"{where}.accommodation_d", "dioptres")
-        viewer = EyeViewer(rx, pupil, accommodation)
+        viewer = _eye(raw, viewer, source, where)
     elif "camera" in raw:
-        camera = raw["camera"]
-        allowed = {"f_number", "focus_distance_m", "focal_length_mm", "vertex_distance_mm", "lenses"}
-        if not isinstance(camera, dict) or set(camera) - allowed:
-            raise _err(source, f"{where}.camera", f"a table of {sorted(allowed)}, got {camera!r}")
-        kwargs = {k: _float(v, source, f"{where}.camera.{k}", k.rsplit("_", 1)[-1], positive=True)
-                  for k, v in camera.items() if k != "lenses"}
-        specs = _lenses(camera.get("lenses", []), source, f"{where}.camera.lenses")
-        kwargs["lenses"] = tuple(TrialLens(s.sphere_diopters, s.cylinder_diopters, s.axis_deg) for s in specs)
-        viewer = dataclasses.replace(viewer if isinstance(viewer, CameraViewer) else CameraViewer(), **kwargs)
-    name = str(raw.get("name") or f"{scene_file.stem}: {viewer.label()}")
-    return DepthConfiguration(name, str(scene_file), loaded.scene, viewer)
+        viewer = _camera(raw["camera"], viewer, source, f"{where}.camera")
+    name = text(raw["name"], source, f"{where}.name") if "name" in raw else ""
+    return DepthConfiguration(name or f"{scene_file.stem}: {viewer.label()}", str(scene_file), loaded.scene, viewer)
 
 
-def load_depth_campaign(path: str | Path) -> DepthCampaign:
-    """Read and validate a depth campaign TOML file (module doc)."""
+def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> DepthCampaign:
+    """Read and validate a depth campaign TOML file (module doc); ``check_memory`` as :func:`load_campaign`."""
     path = Path(path)
     source = str(path)
     raw = _read_toml(path)
     if not is_depth_campaign(raw):
         raise _err(source, "top level",
                    "not a depth campaign: add [depth_campaign] (or kind = \"depth\" in [campaign])")
-    head = raw.get("depth_campaign", raw.get("campaign", {}))
     unknown = set(raw) - {"depth_campaign", "campaign", "config"}
     if unknown:
         raise _err(source, "top level", f"unknown table(s) {sorted(unknown)}; use [depth_campaign] and [[config]]")
+    key = "depth_campaign" if "depth_campaign" in raw else "campaign"
+    head = table(raw[key], source, f"[{key}]")
     settings = _settings(head, source)
-    configs = [_configuration(c, path.parent, source, f"config[{i}]") for i, c in enumerate(raw.get("config", []))]
+    configs = [_configuration(c, path.parent, source, f"config[{i}]")
+               for i, c in enumerate(tables(raw, "config", source))]
     if not configs:
         raise _err(source, "top level", "no configurations: add [[config]] tables")
-    return DepthCampaign(str(head.get("name", path.stem)), str(head.get("description", "")), settings, tuple(configs),
-                         source)
+    campaign = DepthCampaign(head.get("name", path.stem), head.get("description", ""), settings, tuple(configs), source)
+    if check_memory:
+        from vissim.validation.preflight import check_depth_campaign_memory
+
+        check_depth_campaign_memory(campaign)
+    return campaign
 
 
 # -- one item ---------------------------------------------------------------------------
@@ -268,13 +305,6 @@ def _diffracted(image: np.ndarray, pupil_mm: float, settings: DepthCampaignSetti
     return blur_image(image, psf, arcmin_per_px=arcmin_per_px, padding="edge")
 
 
-def _save(item_dir: Path, name: str, pixels: np.ndarray, preview: bool = True) -> str:
-    write_image(item_dir / f"{name}.exr", np.asarray(pixels, np.float32), overwrite=True)
-    if preview:
-        write_image(item_dir / f"{name}.png", np.clip(np.asarray(pixels, np.float32), 0, 1), overwrite=True)
-    return f"items/{item_dir.name}/{name}.exr"
-
-
 def _region_table(comparison, masks, data_range: float) -> dict:
     maps = (comparison.squared_error_map, comparison.abs_diff_map, comparison.ssim_map)
     table = {name: masked_metrics(*maps, mask, data_range) for name, mask in masks.interiors.items()}
@@ -286,16 +316,23 @@ def _region_table(comparison, masks, data_range: float) -> dict:
 
 
 def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCampaignSettings, images: dict,
-                       item_dir: Path) -> dict:
+                       item_dir: Path, *, render_provenance: dict | None = None) -> dict:
     """Simulate, compare per region, write images and ``result.json`` (last) for one configuration.
 
     ``images``: the renders by name (``truth_0``, ``truth_1``, ``all_in_focus``, ``proximity``).
     """
     from vissim.depth import blur_depth
     from vissim.render.depth_render import proximity_to_depth_m
+    from vissim.validation.item import save_item_image
     from vissim.validation.simulate import block_mean
 
     started = time.perf_counter()
+    provenance = make_provenance(item=key, configuration=config.as_json(), settings=settings,
+                                 render_provenance=render_provenance or {})
+
+    def _save(item_dir: Path, name: str, pixels: np.ndarray, preview: bool = True) -> str:
+        return save_item_image(item_dir, name, pixels, provenance, preview)
+
     scene, s = config.scene, settings.oversample
     eye = equivalent_eye(config.viewer, scene)
     truth_a, truth_b = images["truth_0"], images["truth_1"]
@@ -343,7 +380,9 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
         "configuration": config.as_json(),
         "equivalent_eye": {"prescription": eye.prescription.format(4), "pupil_diameter_mm": eye.pupil_diameter_mm,
                            "accommodation_d": eye.accommodation_d},
-        "panels": [{"name": g.name, "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
+        "panels": [{"name": g.name, "letters": scene.panels[g.index].chart.letters,
+                    "logmar": scene.panels[g.index].chart.logmar,
+                    "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
                     "blur_diameter_arcmin": [float(blur_diameter_arcmin(config.viewer, d, scene))
                                              for d in (g.distance_left_m, g.distance_right_m)]} for g in geometries],
         "masks": {"jump_d": masks.jump_d, "margin_px": settings.margin_px,
@@ -354,6 +393,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
         "comparisons": comparisons,
         "images": saved,
         "seconds": time.perf_counter() - started,
+        "provenance": provenance,
     }
     write_json_atomic(item_dir / "result.json", result_json, overwrite=True)  # last: marks the item finished
     return result_json
@@ -361,34 +401,42 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
 
 # -- running ----------------------------------------------------------------------------
 def run_depth_campaign(campaign: DepthCampaign, run_dir: str | Path, *, workers: int = 1, scheduler: str | None = None,
-                       spp: int | None = None, render: Callable[[DepthRenderSpec], np.ndarray] | None = None,
+                       spp: int | None = None, render: Callable[[DepthRenderSpec], Any] | None = None,
                        show_progress: bool = True) -> RunSummary:
-    """Run (or resume) a depth campaign into ``run_dir``; renders are reused by key."""
+    """Run (or resume) a depth campaign into ``run_dir``; renders are reused by key.
+
+    Options and the scheduler are checked before the first file is written.
+    """
     render = render or render_depth_spec
-    if workers < 1:
-        raise VissimInputError(f"--workers must be at least 1, got {workers}")
-    if spp is not None:
-        if spp < 1:
-            raise VissimInputError(f"--spp must be a positive number of samples per pixel, got {spp}")
-        campaign = dataclasses.replace(campaign, settings=dataclasses.replace(campaign.settings, spp=spp))
     run_dir = Path(run_dir)
+    check_run_options(run_dir, workers, spp)
+    if spp is not None:
+        campaign = dataclasses.replace(campaign, settings=dataclasses.replace(campaign.settings, spp=spp))
     keys = [campaign.item_key(c) for c in campaign.configurations]
-    write_json_atomic(run_dir / "campaign.json", {
-        "kind": "depth", "name": campaign.name, "description": campaign.description, "source": campaign.source,
-        "settings": json_safe(campaign.settings), "items": keys,
-        "configurations": [c.as_json() for c in campaign.configurations]}, overwrite=True)
     todo = [(k, c) for k, c in zip(keys, campaign.configurations)
             if not (run_dir / "items" / k / "result.json").exists()]
     needed = {spec.key: spec for _, c in todo for spec in _specs(c, campaign.settings).values()}
     pending = [s for s in needed.values() if not (run_dir / "renders" / f"{s.key}.exr").exists()]
-    log.info("%d of %d depth items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending),
-             len(needed) - len(pending))
-    if pending:
-        _make_renders(pending, run_dir, workers, scheduler, render, show_progress)
+    client = connect_scheduler(scheduler) if scheduler and pending else None
+    try:
+        write_json_atomic(run_dir / "campaign.json", {
+            "kind": "depth", "name": campaign.name, "description": campaign.description, "source": campaign.source,
+            "settings": json_safe(campaign.settings), "items": keys,
+            "configurations": [c.as_json() for c in campaign.configurations],
+            "provenance": make_provenance(campaign=campaign.source)}, overwrite=True)
+        log.info("%d of %d depth items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending),
+                 len(needed) - len(pending))
+        if pending:
+            _make_renders(pending, run_dir, workers, client, render, show_progress)
+    finally:
+        if client is not None:
+            client.close()
     for key, config in todo:
-        images = {name: read_image(run_dir / "renders" / f"{spec.key}.exr").pixels
-                  for name, spec in _specs(config, campaign.settings).items()}
-        compute_depth_item(key, config, campaign.settings, images, run_dir / "items" / key)
+        renders = {name: read_image(run_dir / "renders" / f"{spec.key}.exr")
+                   for name, spec in _specs(config, campaign.settings).items()}
+        compute_depth_item(key, config, campaign.settings, {name: r.pixels for name, r in renders.items()},
+                           run_dir / "items" / key,
+                           render_provenance={name: r.provenance for name, r in renders.items()})
     return RunSummary(run_dir, len(keys), len(keys) - len(todo), len(pending), len(needed) - len(pending))
 
 

@@ -9,10 +9,10 @@ of their own, so boundary errors are shown, not averaged away.
 
 from __future__ import annotations
 
-import io
 import json
 import logging
 import math
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -21,8 +21,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from vissim.imageio import read_image, srgb_encode  # noqa: E402
-from vissim.validation.report import _num, campaign_name, load_results, write_report_files  # noqa: E402
+from vissim.imageio import read_image  # noqa: E402
+from vissim.validation.report import _num, campaign_name, load_results, png_bytes, reflectance_norm  # noqa: E402
+from vissim.validation.report import write_report_files  # noqa: E402
 from vissim.validation.report import format_number as _fmt  # noqa: E402
 
 __all__ = ["current_results", "depth_rows", "depth_tables", "build_depth_report", "depth_summary_lines"]
@@ -113,41 +114,71 @@ def depth_tables(results: list[dict]) -> str:
     return "\n".join(out)
 
 
+def _panels_label(result: dict) -> str:
+    """The panels' letters, LogMAR and distances: 'D at 0.4 m, Z at 0.9144 m; LogMAR 0.5'."""
+    panels = [p for p in result.get("panels", []) if "letters" in p]  # absent from older results
+    if not panels:
+        return ""
+    where = [f"{p['letters']} at {p['distance_left_m']:g}" + (
+        "" if p["distance_left_m"] == p["distance_right_m"] else f"-{p['distance_right_m']:g}") + " m" for p in panels]
+    logmars = sorted({p["logmar"] for p in panels})
+    if len(logmars) == 1:
+        return f"{', '.join(where)}; LogMAR {logmars[0]:.1f}"
+    return ", ".join(f"{w} (LogMAR {p['logmar']:.1f})" for w, p in zip(where, panels))
+
+
+def _region_names(result: dict) -> list[str]:
+    """Names of the region labels 0, 1, 2... (``label_image`` of vissim.validation.depth_masks)."""
+    return ["frame", "boundary"] + [r for r in result["masks"]["regions"] if r not in ("boundary", "frame")]
+
+
 def _figure(results: list[dict], run_dir: Path, simulation: str) -> bytes | None:
-    """Rows: configurations; columns: render (reference), simulation, |difference|, regions."""
+    """Rows: configurations; columns: render (reference), simulation, |difference|, regions; with colour bars."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap, Normalize
+
     rows = [(r, next((c for c in r["comparisons"] if c["simulation"] == simulation), None)) for r in results]
     rows = [(r, c) for r, c in rows if c is not None][:FIGURE_ROWS]
     if not rows:
         return None
     ads = [read_image(run_dir / c["images"]["abs_diff_map"]).pixels for _, c in rows]
     ad_max = max(0.01, max(float(np.percentile(a, 99.5)) for a in ads))
-    fig, axes = plt.subplots(len(rows), 4, figsize=(12.0, 2.2 * len(rows) + 0.6), squeeze=False)
+    fig, axes = plt.subplots(len(rows), 4, figsize=(13.0, 2.3 * len(rows) + 1.2), squeeze=False, layout="constrained")
+    shown = []
     for i, ((result, comp), ad) in enumerate(zip(rows, ads)):
         truth = read_image(run_dir / result["images"][comp["reference_image"]]).pixels
         sim = read_image(run_dir / comp["images"]["simulation"]).pixels
         regions = read_image(run_dir / result["images"]["regions"]).pixels
-        panels = [(srgb_encode(np.clip(truth, 0, 1)), "gray", 0, 1, "render"),
-                  (srgb_encode(np.clip(sim, 0, 1)), "gray", 0, 1, f"{simulation} simulation"),
-                  (ad, "magma", 0, ad_max, f"|difference| (0-{ad_max:.3f})"),
-                  (regions, "tab10", 0, 9, "regions (0 frame, 1 boundary)")]
-        for j, (img, cmap, lo, hi, label) in enumerate(panels):
+        names = _region_names(result)
+        names += [f"region {k}" for k in range(len(names), int(regions.max()) + 1)]
+        palette = plt.get_cmap("tab10" if len(names) <= 10 else "tab20").colors
+        panels = [(truth, "gray", reflectance_norm(), "render"),
+                  (sim, "gray", reflectance_norm(), f"{simulation} simulation"),
+                  (ad, "magma", Normalize(0, ad_max), "|difference|"),
+                  (regions, ListedColormap(palette[: len(names)]), BoundaryNorm(np.arange(len(names) + 1) - 0.5,
+                                                                                 len(names)), "regions")]
+        for j, (img, cmap, norm, label) in enumerate(panels):
             ax = axes[i, j]
-            ax.imshow(img, cmap=cmap, vmin=lo, vmax=hi, interpolation="nearest")
+            image = ax.imshow(img, cmap=cmap, norm=norm, interpolation="nearest")
             ax.set_xticks([])
             ax.set_yticks([])
             if i == 0:
                 ax.set_title(label, fontsize=9)
+                shown.append(image)
+        bar = fig.colorbar(image, ax=axes[i, 3], location="right", pad=0.01, aspect=12)
+        bar.set_ticks(range(len(names)), labels=names)
+        bar.ax.tick_params(labelsize=6)
         interior = [r for r in comp["regions"] if r not in ("boundary", "frame", "all")]
         psnr = ", ".join(f"{r} {_fmt(_num(comp['regions'][r]['psnr_db']), 1)}" for r in interior[:3])
-        axes[i, 0].set_ylabel(result["configuration"]["name"][:38], fontsize=7)
+        axes[i, 0].set_ylabel(textwrap.fill(result["configuration"]["name"], 28), fontsize=7)
+        axes[i, 0].set_xlabel(_panels_label(result), fontsize=7)
         axes[i, 2].set_xlabel(f"PSNR dB: {psnr}; boundary {_fmt(_num(comp['regions']['boundary']['psnr_db']), 1)}",
                               fontsize=7)
+    for j, bar_label in enumerate(("reflectance", "reflectance", "|difference| (reflectance)")):
+        bar = fig.colorbar(shown[j], ax=axes[:, j], location="bottom", shrink=0.9, aspect=30, pad=0.01)
+        bar.set_label(bar_label, fontsize=8)
+        bar.ax.tick_params(labelsize=7)
     fig.suptitle(f"depth campaign: {simulation} blur_depth against the render", fontsize=10)
-    fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100)
-    plt.close(fig)
-    return buffer.getvalue()
+    return png_bytes(fig)
 
 
 def build_depth_report(run_dir: str | Path) -> list[Path]:

@@ -14,13 +14,14 @@ from scipy import ndimage
 from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
 from vissim.imageio import write_image
+from vissim.provenance import make_provenance
 from vissim.validation.campaign import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
 from vissim.validation.registration import register
 from vissim.validation.renders import bench_setup
 from vissim.validation.simulate import add_bench_diffraction, block_mean, simulate, simulation_setup
 
-__all__ = ["compute_item", "synthetic_tile"]
+__all__ = ["compute_item", "synthetic_tile", "save_item_image"]
 
 log = logging.getLogger(__name__)
 
@@ -50,10 +51,13 @@ def synthetic_tile(configuration: Configuration, settings: CampaignSettings, ove
     ).pixels
 
 
-def _save(item_dir: Path, name: str, pixels: np.ndarray, preview: bool = True) -> str:
-    write_image(item_dir / f"{name}.exr", np.asarray(pixels, np.float32), overwrite=True)
+def save_item_image(item_dir: Path, name: str, pixels: np.ndarray, provenance: dict, preview: bool = True) -> str:
+    """``name``.exr (provenance in its header) and, with ``preview``, ``name``.png (provenance sidecar)."""
+    record = {**provenance, "image": name}
+    write_image(item_dir / f"{name}.exr", np.asarray(pixels, np.float32), provenance=record, overwrite=True)
     if preview:
-        write_image(item_dir / f"{name}.png", np.clip(np.asarray(pixels, np.float32), 0, 1), overwrite=True)
+        write_image(item_dir / f"{name}.png", np.clip(np.asarray(pixels, np.float32), 0, 1), provenance=record,
+                    overwrite=True)
     return f"items/{item_dir.name}/{name}.exr"
 
 
@@ -67,13 +71,21 @@ def compute_item(
     item_dir: Path,
     *,
     source: dict | None = None,
+    render_provenance: dict | None = None,
 ) -> dict:
     """Compare every requested simulation with the ground truth; write images and result.json.
 
     ``truth_b`` is a second, independent ground truth (another seed or exposure) for the noise
-    floor; without it the floor is reported as unknown.
+    floor; without it the floor is reported as unknown.  ``render_provenance`` (the provenance
+    of the renders or captures the item uses, by role) goes, as given, into every image's.
     """
     started = time.perf_counter()
+    provenance = make_provenance(item=key, configuration=configuration.as_json(), settings=settings,
+                                 source=source or {}, render_provenance=render_provenance or {})
+
+    def save(name: str, pixels: np.ndarray, preview: bool = True) -> str:
+        return save_item_image(item_dir, name, pixels, provenance, preview)
+
     setup_of_bench = bench_setup(configuration, settings)
     lenses = setup_of_bench.lenses
     captured = bool(source and source.get("ground_truth") == "capture")
@@ -90,10 +102,10 @@ def compute_item(
     fine_synthetic = synthetic_tile(configuration, settings, SYNTHETIC_OVERSAMPLE)
     inputs = {"render": (no_lens, 1), "synthetic": (fine_synthetic, SYNTHETIC_OVERSAMPLE)}
     images = {
-        "truth": _save(item_dir, "truth", truth_a),
-        "truth_diffracted": _save(item_dir, "truth_diffracted", truth_wave_a),
-        "no_lens_render": _save(item_dir, "no_lens_render", no_lens),
-        "synthetic": _save(item_dir, "synthetic", block_mean(fine_synthetic, SYNTHETIC_OVERSAMPLE)),
+        "truth": save("truth", truth_a),
+        "truth_diffracted": save("truth_diffracted", truth_wave_a),
+        "no_lens_render": save("no_lens_render", no_lens),
+        "synthetic": save("synthetic", block_mean(fine_synthetic, SYNTHETIC_OVERSAMPLE)),
     }
     comparisons = []
     # Fine inputs are moved onto the bench's letter position once per item (the offset is the
@@ -131,9 +143,9 @@ def compute_item(
                     "registration": registration.as_json(),
                     "metrics": comparison.as_json(),
                     "images": {
-                        "simulation": _save(item_dir, stem, registration.registered),
-                        "ssim_map": _save(item_dir, f"{stem}_ssim", comparison.ssim_map, preview=False),
-                        "abs_diff_map": _save(item_dir, f"{stem}_ad", comparison.abs_diff_map, preview=False),
+                        "simulation": save(stem, registration.registered),
+                        "ssim_map": save(f"{stem}_ssim", comparison.ssim_map, preview=False),
+                        "abs_diff_map": save(f"{stem}_ad", comparison.abs_diff_map, preview=False),
                     },
                 }
             )
@@ -151,6 +163,7 @@ def compute_item(
         "images": images,
         "source": source or {},
         "seconds": time.perf_counter() - started,
+        "provenance": provenance,
     }
     write_json_atomic(item_dir / "result.json", result, overwrite=True)  # last: marks the item finished
     return result

@@ -22,7 +22,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
-from vissim.imageio import read_image, srgb_encode  # noqa: E402
+from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
+from vissim.provenance import make_provenance  # noqa: E402
 
 __all__ = [
     "load_results",
@@ -181,8 +182,34 @@ def _load(result: dict, run_dir: Path, name: str) -> np.ndarray | None:
     return read_image(run_dir / rel).pixels
 
 
+#: 1 - SSIM is shown on a log scale over this range (the SSIM of a good simulation is 0.99+).
+DISSIMILARITY_RANGE = (1e-4, 1.0)
+
+
+def reflectance_norm():
+    """Grey images as the eye sees them (sRGB), colour bars in linear reflectance."""
+    from matplotlib.colors import FuncNorm
+
+    return FuncNorm((lambda x: srgb_encode(np.clip(x, 0, 1)), lambda y: srgb_decode(np.clip(y, 0, 1))), vmin=0, vmax=1)
+
+
+def column_title(result: dict) -> str:
+    """A figure column's header: the letter, its LogMAR and the lenses."""
+    config = result["configuration"]
+    return f"{config['letter']}, LogMAR {config['logmar']:.1f}\n{result['lens_label']}"
+
+
+def png_bytes(fig) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    return buffer.getvalue()
+
+
 def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str) -> bytes | None:
-    """Fig. 4.8-style: rows ground truth, simulation, SSIM map, AD map; a column per configuration."""
+    """Fig. 4.8-style: rows ground truth, simulation, 1 - SSIM map, AD map; a column per configuration."""
+    from matplotlib.colors import LogNorm, Normalize
+
     columns = []
     for result in results:
         comp = next((c for c in result["comparisons"] if c["simulation"] == simulation and c["input"] == input_kind), None)
@@ -192,36 +219,37 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
         return None
     columns = columns[:FIGURE_COLUMNS]
     ad_max = max(0.01, max(float(np.percentile(read_image(run_dir / c["images"]["abs_diff_map"]).pixels, 99.9)) for _, c in columns))
-    fig, axes = plt.subplots(4, len(columns), figsize=(1.9 * len(columns), 8.4), squeeze=False)
+    lo, hi = DISSIMILARITY_RANGE
+    rows = [("bench (truth)", "gray", reflectance_norm, "reflectance"),
+            (f"{simulation} sim.", "gray", reflectance_norm, "reflectance"),
+            ("1 − SSIM (log)", "viridis", lambda: LogNorm(lo, hi), "1 − SSIM"),
+            ("|difference|", "magma", lambda: Normalize(0, ad_max), "|difference| (reflectance)")]
+    fig, axes = plt.subplots(4, len(columns), figsize=(1.9 * len(columns) + 1.6, 8.8), squeeze=False,
+                             layout="constrained")
+    shown = [None] * len(rows)
     for j, (result, comp) in enumerate(columns):
         truth = _load(result, run_dir, comp["reference_image"])
         sim = read_image(run_dir / comp["images"]["simulation"]).pixels
         ssim_map = read_image(run_dir / comp["images"]["ssim_map"]).pixels
         ad_map = read_image(run_dir / comp["images"]["abs_diff_map"]).pixels
-        panels = [
-            (srgb_encode(np.clip(truth, 0, 1)), "gray", 0, 1),
-            (srgb_encode(np.clip(sim, 0, 1)), "gray", 0, 1),
-            (ssim_map, "viridis", 0, 1),
-            (ad_map, "magma", 0, ad_max),
-        ]
-        for i, (img, cmap, lo, hi) in enumerate(panels):
+        images = [truth, sim, np.clip(1.0 - ssim_map, lo, hi), ad_map]
+        for i, (img, (_, cmap, norm, _)) in enumerate(zip(images, rows)):
             ax = axes[i, j]
-            ax.imshow(img, cmap=cmap, vmin=lo, vmax=hi, interpolation="nearest")
+            shown[i] = ax.imshow(img, cmap=cmap, norm=norm(), interpolation="nearest")
             ax.set_xticks([])
             ax.set_yticks([])
-        axes[0, j].set_title(result["lens_label"], fontsize=8)
+        axes[0, j].set_title(column_title(result), fontsize=8)
         axes[3, j].set_xlabel(f"SSIM {comp['metrics']['ssim']:.3f}\nPSNR {_fmt(_num(comp['metrics']['psnr_db']), 1)} dB", fontsize=8)
-    for i, label in enumerate(["bench (truth)", f"{simulation} sim.", "SSIM map (0-1)", f"|difference| (0-{ad_max:.3f})"]):
+    for i, (label, _, _, bar_label) in enumerate(rows):
         axes[i, 0].set_ylabel(label, fontsize=9)
+        bar = fig.colorbar(shown[i], ax=axes[i, :], shrink=0.9, pad=0.02, aspect=15)
+        bar.set_label(bar_label, fontsize=8)
+        bar.ax.tick_params(labelsize=7)
     fig.suptitle(f"{simulation} simulation applied to the {input_kind} input, against {REFERENCE_NOTE[simulation]}", fontsize=10)
-    fig.tight_layout()
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
-    return buffer.getvalue()
+    return png_bytes(fig)
 
 
-def html_report(title: str, tables_md: str, figures: dict[str, bytes]) -> str:
+def html_report(title: str, tables_md: str, figures: dict[str, bytes], footer: str = "") -> str:
     """A self-contained HTML page: the Markdown tables as HTML tables, figures inline (base64)."""
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
              "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
@@ -242,14 +270,54 @@ def html_report(title: str, tables_md: str, figures: dict[str, bytes]) -> str:
     for name, png in figures.items():
         parts.append(f"<h2>{html.escape(name)}</h2><img style='max-width:100%' "
                      f"src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
+    if footer:
+        parts.append(f"<p><small>{html.escape(footer)}</small></p>")
     parts.append("</body></html>")
     return "\n".join(parts)
 
 
+def _render_records(tree) -> list[dict]:
+    """Every render record (a dict with ``variant`` and ``spp_used``) found in a JSON tree."""
+    if isinstance(tree, dict):
+        found = [tree] if "variant" in tree and "spp_used" in tree else []
+        return found + [r for value in tree.values() for r in _render_records(value)]
+    if isinstance(tree, list):
+        return [r for value in tree for r in _render_records(value)]
+    return []
+
+
+def renders_summary(results: list[dict]) -> list[dict]:
+    """The distinct (variant, spp asked, spp used, deterministic) of the renders behind ``results``."""
+    merged: dict[tuple, dict] = {}
+    for record in _render_records(results):
+        entry = merged.setdefault((record["variant"], record["spp_used"]), {})
+        entry.update({k: record[k] for k in ("variant", "spp_requested", "spp_used", "deterministic") if k in record})
+    return [merged[key] for key in sorted(merged, key=repr)]
+
+
+def report_provenance(run_dir: Path, **extra) -> dict:
+    """Provenance of a report file: the campaign (name, source, settings), the items it shows and their renders."""
+    order = run_dir / "campaign.json"
+    campaign = json.loads(order.read_text()) if order.exists() else {}
+    return make_provenance(run=run_dir, campaign=campaign.get("name"), campaign_file=campaign.get("source"),
+                           settings=campaign.get("settings"), items=campaign.get("items"),
+                           renders=renders_summary(load_results(run_dir)), **extra)
+
+
+def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
+    """A figure's PNG through :func:`vissim.imageio.write_image` (so it gets its provenance sidecar); its bytes."""
+    from PIL import Image as PILImage
+
+    codes = np.asarray(PILImage.open(io.BytesIO(png)).convert("RGB"), dtype=np.float32) / 255.0
+    write_image(path, codes, provenance=provenance, overwrite=True, encoding="linear")  # codes kept exactly
+    return path.read_bytes()
+
+
 def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[dict], tables_md: str,
                        figures: dict[str, tuple[str, bytes]]) -> list[Path]:
-    """metrics.json, metrics.csv, tables.md, the figures (file name -> PNG) and report.html."""
-    written = [write_json_atomic(run_dir / "metrics.json", metrics, overwrite=True)]
+    """metrics.json, metrics.csv, tables.md, the figures (file name -> PNG, with sidecars) and report.html."""
+    provenance = report_provenance(run_dir)
+    written = [write_json_atomic(run_dir / "metrics.json", {**metrics, "provenance": provenance}, overwrite=True)]
     with atomic_output(run_dir / "metrics.csv", overwrite=True) as tmp:
         with open(tmp, "w", newline="") as handle:
             writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["configuration"])
@@ -257,13 +325,15 @@ def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[d
             writer.writerows(rows)
     written.append(run_dir / "metrics.csv")
     campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
-    text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables_md}"
+    made = (f"Made by vissim {provenance['vissim_version']} on {provenance['created_utc']} from "
+            f"{campaign.get('source', 'an unknown campaign file')}; provenance in metrics.json.")
+    text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables_md}\n{made}\n"
     written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
-    for file_name, png in figures.values():
-        with atomic_output(run_dir / file_name, overwrite=True) as tmp:
-            tmp.write_bytes(png)
-        written.append(run_dir / file_name)
-    page = html_report(title, tables_md, {name: png for name, (_, png) in figures.items()})
+    pngs = {}
+    for name, (file_name, png) in figures.items():
+        pngs[name] = write_figure(run_dir / file_name, png, {**provenance, "figure": name})
+        written += [run_dir / file_name, run_dir / f"{file_name}.json"]
+    page = html_report(title, tables_md, pngs, footer=made)
     written.append(write_text_atomic(run_dir / "report.html", page, overwrite=True))
     return written
 

@@ -31,6 +31,7 @@ from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.provenance import make_provenance
 from vissim.validation.campaign import Campaign
+from vissim.validation.fields import MAX_SPP
 from vissim.validation.captures import capture_problem, capture_tile, load_manifest
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
@@ -50,28 +51,43 @@ class RunSummary:
     skipped: tuple[str, ...] = ()  # one message per item that could not run (absent capture)
 
 
-def _capture_inputs(campaign: Campaign, config, captures: dict):
-    """(truth_a, truth_b | None, no_lens) from RAW captures, or a message saying why not."""
+def _capture_plan(campaign: Campaign, config, captures: dict) -> tuple | str:
+    """The captures (truth, repeat | None, no-lens) an item uses, or why it is skipped.
+
+    Each capture's own file (presence, sha256) is checked before what it refers to, so a
+    corrupt capture is reported as such, not as a missing reference.
+    """
     if campaign.manifest is None:
         return f"{config.name}: capture {config.capture!r} but the campaign names no manifest"
     capture = captures.get(config.capture)
     if capture is None:
         return f"{config.name}: capture {config.capture!r} is not in {campaign.manifest}"
-    ids = [capture.id, capture.no_lens_capture, capture.repeat_capture]
-    if ids[1] is None:
+    problem = capture_problem(capture)
+    if problem:
+        return f"{config.name}: skipped, {problem}"
+    if capture.no_lens_capture is None:
         return f"{config.name}: capture {capture.id!r} names no no_lens_capture (the simulation input)"
-    tiles = []
-    for capture_id in ids:
+    plan = [capture]
+    for capture_id in (capture.repeat_capture, capture.no_lens_capture):
         if capture_id is None:
-            tiles.append(None)
+            plan.append(None)
             continue
         if capture_id not in captures:
             return f"{config.name}: capture {capture_id!r} is not in {campaign.manifest}"
         problem = capture_problem(captures[capture_id])
         if problem:
             return f"{config.name}: skipped, {problem}"
-        tiles.append(capture_tile(captures[capture_id], campaign.settings.arcmin_per_px, campaign.settings.tile_px))
-    return tiles[0], tiles[2], tiles[1]
+        plan.append(captures[capture_id])
+    return tuple(plan)
+
+
+def _capture_inputs(campaign: Campaign, plan: tuple):
+    """(truth_a, truth_b | None, no_lens) tiles of a capture plan, and their provenance."""
+    settings = campaign.settings
+    tiles = [None if c is None else capture_tile(c, settings.arcmin_per_px, settings.tile_px) for c in plan]
+    provenance = {name: None if c is None else {"capture": c.id, "file": str(c.file), "sha256": c.sha256}
+                  for name, c in zip(("truth_a", "truth_b", "no_lens"), plan)}
+    return (*tiles, provenance)
 
 
 def _render_path(run_dir: Path, spec: RenderSpec) -> Path:
@@ -89,29 +105,87 @@ def _progress(total: int, label: str):
         return None, lambda: None
 
 
-def _make_renders(pending: list[RenderSpec], run_dir: Path, workers: int, scheduler: str | None,
-                  render: Callable[[RenderSpec], np.ndarray], show_progress: bool) -> None:
-    def save(spec: RenderSpec, pixels: np.ndarray) -> None:
-        prov = make_provenance(render=spec.as_json())
-        write_image(_render_path(run_dir, spec), np.asarray(pixels, np.float32), provenance=prov, overwrite=True)
+#: How long ``--scheduler`` waits for a Dask scheduler to answer.
+SCHEDULER_TIMEOUT_S = 2.0
+MAX_WORKERS = 1024
+
+
+def connect_scheduler(address: str):
+    """A Dask ``Client`` of the scheduler at ``address``, or one clean error within SCHEDULER_TIMEOUT_S."""
+    try:
+        from distributed import Client
+        from distributed.comm import parse_address
+    except ImportError:  # pragma: no cover
+        raise VissimInputError("--scheduler needs Dask distributed: pip install 'dask[distributed]'") from None
+    hint = "expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786"
+    try:
+        scheme, location = parse_address(address)
+    except (ValueError, TypeError) as exc:
+        raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address ({exc}); {hint}") from None
+    host, _, port = location.rpartition(":")
+    if scheme in ("tcp", "tls", "ws", "wss") and not (host and port.isdigit() and 0 < int(port) < 65536):
+        raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address; {hint}")
+    try:
+        return Client(address, timeout=SCHEDULER_TIMEOUT_S)
+    except (OSError, TimeoutError):
+        raise VissimInputError(f"--scheduler {address}: no Dask scheduler answered within {SCHEDULER_TIMEOUT_S:g} s; "
+                               "start one (dask scheduler) or check the address") from None
+    except (ValueError, TypeError) as exc:
+        raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address ({exc}); {hint}") from None
+
+
+def check_run_options(run_dir: Path, workers: int, spp: int | None) -> None:
+    """``-o``, ``--workers`` and ``--spp``, before anything is written."""
+    if run_dir.exists() and not run_dir.is_dir():
+        raise VissimInputError(f"-o {run_dir} is a file, not a run folder")
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
+        raise VissimInputError(f"--workers must be 1 to {MAX_WORKERS} worker processes, got {workers!r}")
+    if spp is not None and (isinstance(spp, bool) or not isinstance(spp, int) or not 1 <= spp <= MAX_SPP):
+        raise VissimInputError(f"--spp must be 1 to {MAX_SPP} samples per pixel, got {spp!r}")
+
+
+def render_file_provenance(spec, result) -> dict:
+    """Provenance of a render file: the spec, and what the renderer says it did.
+
+    ``result`` is an array, or an object with ``pixels`` and optionally ``variant``, ``spp``
+    (recorded as ``variant``, ``spp_used``) and ``provenance`` (e.g.
+    :class:`vissim.render.run.RenderResult`), whose keys win and whose ``inputs`` are merged.
+    """
+    provenance = make_provenance(render=spec.as_json())
+    for attribute, key in (("variant", "variant"), ("spp", "spp_used")):
+        if hasattr(result, attribute):
+            provenance[key] = getattr(result, attribute)
+    for key, value in (getattr(result, "provenance", None) or {}).items():
+        if key == "inputs" and isinstance(value, dict):
+            provenance["inputs"].update(value)
+        else:
+            provenance[key] = value
+    return provenance
+
+
+def _make_renders(pending: list, run_dir: Path, workers: int, scheduler, render: Callable, show_progress: bool) -> None:
+    """Render ``pending`` specs into ``run_dir/renders``; ``scheduler`` is an address or a connected Client."""
+    def save(spec, result) -> None:
+        pixels = np.asarray(getattr(result, "pixels", result), np.float32)
+        write_image(_render_path(run_dir, spec), pixels, provenance=render_file_provenance(spec, result),
+                    overwrite=True)
 
     progress, advance = _progress(len(pending), "rendering") if show_progress else (None, lambda: None)
+    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
     if progress:
         progress.start()
     try:
-        if scheduler:
-            try:
-                from distributed import Client, as_completed
-            except ImportError:  # pragma: no cover
-                raise VissimInputError("--scheduler needs Dask distributed: pip install 'dask[distributed]'") from None
-            with Client(scheduler) as client:
-                futures = {client.submit(render, spec, pure=False): spec for spec in pending}
-                for future in as_completed(futures):
-                    save(futures[future], future.result())
-                    advance()
+        if client is not None:
+            from distributed import as_completed
+
+            futures = {client.submit(render, spec, pure=False): spec for spec in pending}
+            for future in as_completed(futures):
+                save(futures[future], future.result())
+                advance()
         elif workers > 1 and len(pending) > 1:
             context = multiprocessing.get_context("spawn")  # Dr.Jit state does not survive fork
-            with concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+            with concurrent.futures.ProcessPoolExecutor(max_workers=min(workers, len(pending)),
+                                                        mp_context=context) as pool:
                 futures = {pool.submit(render, spec): spec for spec in pending}
                 for future in concurrent.futures.as_completed(futures):
                     save(futures[future], future.result())
@@ -123,6 +197,14 @@ def _make_renders(pending: list[RenderSpec], run_dir: Path, workers: int, schedu
     finally:
         if progress:
             progress.stop()
+        if client is not None and client is not scheduler:
+            client.close()
+
+
+def nothing_to_compare(source: str, total: int, skipped: list[str]) -> VissimInputError:
+    """The error of a campaign all of whose items were skipped (no report is written)."""
+    which = "its only item was" if total == 1 else f"all {total} items were"
+    return VissimInputError(f"{source}: {which} skipped, nothing to compare: {'; '.join(skipped)}")
 
 
 def run_campaign(
@@ -138,27 +220,27 @@ def run_campaign(
     """Run (or resume) ``campaign`` into ``run_dir``; returns what was made and reused.
 
     ``render`` makes one bench render from a :class:`RenderSpec` (default: Mitsuba via
-    :func:`vissim.validation.renders.render_spec`); it must be picklable for workers.
+    :func:`vissim.validation.renders.render_spec`); it must be picklable for workers.  Every
+    check (options, captures, the scheduler) runs before the first file is written; a campaign
+    whose every item would be skipped raises :class:`VissimInputError` and writes nothing.
     """
     render = render or render_spec
-    if workers < 1:
-        raise VissimInputError(f"--workers must be at least 1, got {workers}")
-    if spp is not None:
-        if spp < 1:
-            raise VissimInputError(f"--spp must be a positive number of samples per pixel, got {spp}")
-        campaign = replace(campaign, settings=replace(campaign.settings, spp=spp))
     run_dir = Path(run_dir)
+    check_run_options(run_dir, workers, spp)
+    if spp is not None:
+        campaign = replace(campaign, settings=replace(campaign.settings, spp=spp))
     settings = campaign.settings
     keys = [campaign.item_key(c) for c in campaign.configurations]
-    write_json_atomic(
-        run_dir / "campaign.json",
-        {"name": campaign.name, "description": campaign.description, "source": campaign.source,
-         "settings": asdict(settings), "items": keys,
-         "configurations": [c.as_json() for c in campaign.configurations]},
-        overwrite=True,
-    )
     todo = [(k, c) for k, c in zip(keys, campaign.configurations) if not (run_dir / "items" / k / "result.json").exists()]
     captures = load_manifest(campaign.manifest) if campaign.manifest and any(c.capture for _, c in todo) else {}
+    plans = {k: _capture_plan(campaign, c, captures) for k, c in todo if c.capture}
+    skipped = [p for p in plans.values() if isinstance(p, str)]
+    # capture tiles now, so that a capture that cannot be read stops the run before it writes
+    capture_inputs = {k: _capture_inputs(campaign, p) for k, p in plans.items() if not isinstance(p, str)}
+    if len(skipped) == len(keys):
+        raise nothing_to_compare(campaign.source, len(keys), skipped)
+    for message in skipped:
+        log.warning("%s", message)
     needed: dict[str, RenderSpec] = {}
     for _, config in todo:
         if config.capture:
@@ -166,23 +248,36 @@ def run_campaign(
         for spec in (*truth_specs(config, settings), no_lens_spec(config, settings)):
             needed[spec.key] = spec
     pending = [s for s in needed.values() if not _render_path(run_dir, s).exists()]
-    log.info("%d of %d items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending), len(needed) - len(pending))
-    if pending:
-        _make_renders(pending, run_dir, workers, scheduler, render, show_progress)
-    skipped = []
+    client = connect_scheduler(scheduler) if scheduler and pending else None
+    try:
+        write_json_atomic(
+            run_dir / "campaign.json",
+            {"name": campaign.name, "description": campaign.description, "source": campaign.source,
+             "settings": asdict(settings), "items": keys,
+             "configurations": [c.as_json() for c in campaign.configurations],
+             "provenance": make_provenance(campaign=campaign.source)},
+            overwrite=True,
+        )
+        log.info("%d of %d items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending),
+                 len(needed) - len(pending))
+        if pending:
+            _make_renders(pending, run_dir, workers, client, render, show_progress)
+    finally:
+        if client is not None:
+            client.close()
     for key, config in todo:
         if config.capture:
-            inputs = _capture_inputs(campaign, config, captures)
-            if isinstance(inputs, str):
-                log.warning("%s", inputs)
-                skipped.append(inputs)
-                continue
-            truth_a, truth_b, no_lens = inputs
+            if key not in capture_inputs:
+                continue  # skipped
+            truth_a, truth_b, no_lens, render_provenance = capture_inputs[key]
             source = {"ground_truth": "capture", "capture": config.capture}
         else:
-            truth_a, truth_b = (read_image(_render_path(run_dir, s)).pixels for s in truth_specs(config, settings))
-            no_lens = read_image(_render_path(run_dir, no_lens_spec(config, settings))).pixels
-            source = {"ground_truth": "bench render",
-                      "render_keys": [s.key for s in (*truth_specs(config, settings), no_lens_spec(config, settings))]}
-        compute_item(key, config, settings, truth_a, truth_b, no_lens, run_dir / "items" / key, source=source)
+            roles = dict(zip(("truth_a", "truth_b", "no_lens"),
+                             (*truth_specs(config, settings), no_lens_spec(config, settings))))
+            images = {role: read_image(_render_path(run_dir, spec)) for role, spec in roles.items()}
+            truth_a, truth_b, no_lens = (images[role].pixels for role in roles)
+            render_provenance = {role: image.provenance for role, image in images.items()}
+            source = {"ground_truth": "bench render", "render_keys": [spec.key for spec in roles.values()]}
+        compute_item(key, config, settings, truth_a, truth_b, no_lens, run_dir / "items" / key, source=source,
+                     render_provenance=render_provenance)
     return RunSummary(run_dir, len(keys), len(keys) - len(todo), len(pending), len(needed) - len(pending), tuple(skipped))
