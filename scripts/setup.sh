@@ -4,6 +4,7 @@
 # * Python >= 3.11 (python3.11 if present, else python3).
 # * LLVM 19 for Mitsuba's fast CPU variants (llvm_*): Debian's libllvm19 when this user may
 #   install packages. Without it vissim still works, on Mitsuba's scalar_* variants.
+# * Python packages at the versions pinned in constraints.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,5 +25,6 @@ PYTHON="${PYTHON:-$(command -v python3.11 || command -v python3)}"
 "$PYTHON" -c 'import sys; sys.exit(sys.version_info < (3, 11))' \
     || { echo "setup: vissim needs Python >= 3.11; $PYTHON is $("$PYTHON" --version 2>&1)" >&2; exit 1; }
 [ -x .venv/bin/python ] || "$PYTHON" -m venv .venv
-.venv/bin/python -m pip install --quiet --disable-pip-version-check -e ".[test]"
+# The exact stack the suite passes on (constraints.txt; scripts/lock.sh regenerates it).
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -c constraints.txt -e ".[test]"
 echo "setup: vissim installed in .venv ($(.venv/bin/vissim --version))"
