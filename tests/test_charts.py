@@ -174,7 +174,7 @@ def test_pdf_page_is_the_chart_size_and_is_not_overwritten(tmp_path):
         (lambda: ChartRow(math.nan, "N"), "LogMAR"),
         (lambda: logmar_steps(1.0, 0.05), "steps"),
         (lambda: etdrs_chart_spec((1.0, 0.8), letters="NCKZO,HVORS"), "rows"),
-        (lambda: render_chart_angular(THESIS, 0.0), "arcmin/px"),
+        (lambda: render_chart_angular(THESIS, 0.0), "arcmin per pixel"),
     ],
 )
 def test_bad_chart_input_raises(make, needle):

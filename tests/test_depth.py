@@ -15,7 +15,6 @@ Expected values and where they come from:
 """
 
 import json
-import logging
 import math
 
 import numpy as np
@@ -165,14 +164,15 @@ def test_layer_count_grows_with_the_dioptric_range():
     assert result.n_layers == counts[0]
 
 
-def test_too_many_layers_is_a_clear_error_or_a_warning(caplog):
+def test_too_many_layers_is_a_clear_error():
     depth = np.where(np.arange(16) < 8, 0.1, 10.0)[None, :].repeat(16, axis=0)
     with pytest.raises(VissimInputError, match=r"needs \d+ layers .*max_layers=20"):
         blur_depth(texture((16, 16)), depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM,
                    arcmin_per_px=STEP, max_layers=20)
-    with caplog.at_level(logging.WARNING, logger="vissim.depth"):
+    # refused by default (DEFAULT_MAX_LAYERS = 256), naming the range it found; None lifts the limit
+    with pytest.raises(VissimInputError, match=r"0 to 100 D of proximity \(0.01 m to infinity\), which needs 3335 layers"):
         plan_layers(0.0, 100.0, 0.03)
-    assert "layers" in caplog.text
+    assert plan_layers(0.0, 100.0, 0.03, None).n_layers == 3335  # ceil(100 / 0.03) + 1
 
 
 def test_finer_layers_change_the_result_by_less_than_a_percent():

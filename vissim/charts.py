@@ -37,7 +37,8 @@ import numpy as np
 from vissim.acuity import THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, letter_height_mm, logmar_to_snellen
 from vissim.acuity import subtense_arcmin, subtense_mm
 from vissim.errors import VissimInputError
-from vissim.validate import finite_number, positive_number
+from vissim.validate import arcmin_per_px as check_arcmin_per_px
+from vissim.validate import check_allocation, finite_number, positive_number
 from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window, sloan_letter
 
 logger = logging.getLogger(__name__)
@@ -146,6 +147,8 @@ def logmar_steps(start: float, stop: float, step: float = 0.1) -> tuple[float, .
 
 def _row_letters(letters: str | Sequence[str] | None, n_rows: int, seed: int) -> list[str]:
     if letters is None:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise VissimInputError(f"the letter seed must be a whole number >= 0, got {seed!r}")
         rng = np.random.default_rng(seed)
         return ["".join(rng.choice(list(SLOAN_LETTERS), _LETTERS_PER_ROW, replace=False)) for _ in range(n_rows)]
     if isinstance(letters, str):
@@ -276,12 +279,16 @@ def layout_chart(
         arcmin_per_px = subtense_arcmin(mm_per_px, spec.viewing_distance_m)
         src_boxes, src_size, px_per_unit = mm_boxes, mm_size, 1.0 / mm_per_px
     else:
-        arcmin_per_px = _number(arcmin_per_px, "angular pixel size", "arcmin/px", positive=True)
+        arcmin_per_px = check_arcmin_per_px(arcmin_per_px, "angular pixel size")
         mm_per_px = subtense_mm(arcmin_per_px, spec.viewing_distance_m)
         src_boxes, src_size, px_per_unit = arcmin_boxes, arcmin_size, 1.0 / arcmin_per_px
     offset = (0.0, 0.0)
     if shape_px is None:
-        shape = tuple(max(1, math.ceil(s * px_per_unit - 1e-9)) for s in src_size)
+        extent = [s * px_per_unit for s in src_size]
+        if not all(math.isfinite(e) for e in extent):
+            step = f"{dpi:g} dpi" if dpi is not None else f"{arcmin_per_px:g} arcmin/px"
+            raise VissimInputError(f"a chart at {step} would be an infinitely large image; use a coarser sampling")
+        shape = tuple(max(1, math.ceil(e - 1e-9)) for e in extent)
     else:
         if dpi is not None:
             raise VissimInputError("shape_px applies to angular charts only; a print chart's size follows its layout")
@@ -370,7 +377,18 @@ def chart_sidecar(spec: ChartSpec, layout: ChartLayout) -> dict[str, Any]:
     }
 
 
+#: Peak bytes per chart pixel (float64 coverage, its float64 blend, float32 result) and per
+#: pixel of the largest letter's window (edge distances of its strokes, float64 temporaries).
+_BYTES_PER_CHART_PX = 24
+_BYTES_PER_LETTER_PX = 80
+
+
 def _render(spec: ChartSpec, layout: ChartLayout, supersample: int) -> Chart:
+    rows, cols = layout.shape_px
+    tallest = max((box.height_px for box in layout.letters), default=0.0)
+    letter_px = tallest * tallest
+    check_allocation(float(rows) * cols * _BYTES_PER_CHART_PX + letter_px * _BYTES_PER_LETTER_PX,
+                     f"a {float(rows):.6g} x {float(cols):.6g} px chart ({layout.rendering})")
     coverage = np.zeros(layout.shape_px, dtype=float)
     for box in layout.letters:
         window = letter_coverage_window(box.letter, box.height_px, layout.shape_px, box.center_rc,

@@ -65,7 +65,9 @@ from vissim.prescription import Prescription, RefractiveError
 from vissim.pullpush import pull_push
 from vissim.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
 from vissim.units import arcmin_to_rad
+from vissim.validate import arcmin_per_px as check_arcmin_per_px
 from vissim.validate import finite_number, positive_number
+from vissim.validate import pupil_diameter_mm as check_pupil_mm
 from vissim.wavefront import Wavefront
 
 __all__ = [
@@ -81,8 +83,8 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Above this many layers (and with ``max_layers=None``) a warning is logged.
-WARN_LAYERS = 256
+#: Plans with more layers are refused unless ``max_layers`` is raised (or None: no limit).
+DEFAULT_MAX_LAYERS = 256
 DEPTH_PADDING_MODES = ("edge", "reflect")
 
 
@@ -100,8 +102,8 @@ def effective_prescription(eye_rx: Prescription, object_distance_m: float, accom
 
 def layer_spacing_diopters(arcmin_per_px: float, pupil_diameter_mm: float, fraction: float = 0.5) -> float:
     """Largest layer spacing in proximity: ``fraction * theta / p`` (theta rad/px, p metres)."""
-    theta_rad = float(arcmin_to_rad(positive_number(arcmin_per_px, "angular sampling", "arcmin per pixel")))
-    pupil_m = positive_number(pupil_diameter_mm, "pupil diameter", "mm") * 1e-3
+    theta_rad = float(arcmin_to_rad(check_arcmin_per_px(arcmin_per_px)))
+    pupil_m = check_pupil_mm(pupil_diameter_mm) * 1e-3
     return positive_number(fraction, "layer spacing fraction", "pixels") * theta_rad / pupil_m
 
 
@@ -121,7 +123,7 @@ def plan_layers(
     min_proximity_d: float,
     max_proximity_d: float,
     max_spacing_d: float,
-    max_layers: int | None = None,
+    max_layers: int | None = DEFAULT_MAX_LAYERS,
     *,
     anchor_d: float | None = None,
 ) -> LayerPlan:
@@ -141,13 +143,12 @@ def plan_layers(
         values.extend(a + (b - a) * np.arange(1, n + 1) / n)
     n_layers = len(values)
     if max_layers is not None and n_layers > max_layers:
+        near, far = (("infinity" if d == 0 else f"{1.0 / d:.3g} m") for d in (high, low))
         raise VissimInputError(
-            f"the scene spans {high - low:.3g} D of proximity, which needs {n_layers} layers at <= "
-            f"{max_spacing_d:.3g} D spacing (max_layers={max_layers}); raise max_layers or "
-            "layer_spacing_fraction, or sample coarser"
+            f"the scene spans {low:.3g} to {high:.3g} D of proximity ({near} to {far}), which needs "
+            f"{n_layers} layers at <= {max_spacing_d:.3g} D spacing (max_layers={max_layers}); check that the depth "
+            "is in metres, or raise max_layers (--max-layers) or the layer spacing fraction"
         )
-    if max_layers is None and n_layers > WARN_LAYERS:
-        log.warning("depth blur needs %d layers for %.3g D of proximity at %.3g D spacing", n_layers, high - low, max_spacing_d)
     return LayerPlan(tuple(float(v) for v in values), float(max_spacing_d))
 
 
@@ -268,7 +269,7 @@ def blur_depth(
     mode: str = "wave",
     extra_wavefront: Wavefront | None = None,
     layer_spacing_fraction: float = 0.5,
-    max_layers: int | None = None,
+    max_layers: int | None = DEFAULT_MAX_LAYERS,
     occlusion_threshold_px: float = 1.0,
     padding: str = "edge",
 ) -> DepthBlurResult:
@@ -290,7 +291,7 @@ def blur_depth(
     layer_spacing_fraction : float
         Neighbouring layers' blur discs differ by at most this many pixels.
     max_layers : int, optional
-        Refuse scenes needing more layers; ``None`` only warns above ``WARN_LAYERS``.
+        Refuse scenes needing more layers (default ``DEFAULT_MAX_LAYERS``); ``None``: no limit.
     occlusion_threshold_px : float
         Content occludes what lies behind it only when their blur discs differ by more than
         this many pixels; closer in depth they are one surface and add.
@@ -298,8 +299,8 @@ def blur_depth(
         Outside the image, colour, depth and coverage continue the border.
     """
     rx = _check_rx(eye_prescription)
-    pupil = positive_number(pupil_diameter_mm, "pupil diameter", "mm")
-    step = positive_number(arcmin_per_px, "angular sampling", "arcmin per pixel")
+    pupil = check_pupil_mm(pupil_diameter_mm)
+    step = check_arcmin_per_px(arcmin_per_px)
     accommodation = _check_accommodation(accommodation_d)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import Self
 
 from vissim.errors import VissimInputError
+from vissim.validate import MAX_POWER_DIOPTERS
 from vissim.validate import finite_number as _finite
 
 __all__ = [
@@ -236,6 +237,8 @@ def parse_spherocylinder(text: str) -> tuple[float, float, float]:
     axis = float(axis_text) if axis_text is not None else 180.0
     if not 0.0 <= axis <= 180.0:
         raise VissimInputError(f"axis {axis:g} deg in {text!r} is outside 0-180 degrees (TABO)")
+    if max(abs(sphere), abs(cyl)) > MAX_POWER_DIOPTERS:
+        raise VissimInputError(f"prescription {text!r} exceeds +-{MAX_POWER_DIOPTERS:g} dioptres")
     return sphere, cyl, axis
 
 

@@ -34,7 +34,8 @@ import scipy.fft
 
 from vissim.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.validate import positive_number as _check_positive
+from vissim.validate import arcmin_per_px as check_arcmin_per_px
+from vissim.validate import pupil_diameter_mm as check_pupil_mm
 from vissim.units import arcmin_to_rad, nm_to_mm, nm_to_um, rad_to_arcmin
 from vissim.wavefront import Wavefront
 from vissim.zernike import zernike_nm
@@ -86,7 +87,7 @@ class PSF:
             raise VissimInputError(f"a PSF must be a finite square 2-D array, got shape {array.shape}")
         if np.any(array < 0) or array.sum() <= 0:
             raise VissimInputError("a PSF must be non-negative with a positive sum")
-        step = _check_positive(arcmin_per_px, "angular sampling", "arcmin per pixel")
+        step = check_arcmin_per_px(arcmin_per_px)
         array /= array.sum()
         array.setflags(write=False)
         return cls(array, step, (float(wavelength_nm),), (1.0,), float(pupil_diameter_mm), "user", 1.0,
@@ -176,7 +177,8 @@ def suggested_size_px(
     minimum_px: int = 33,
 ) -> int:
     """An odd field size (px) holding the geometric blur plus ``skirt_lambda_over_d`` of skirt."""
-    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else float(pupil_diameter_mm)
+    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
+    step = check_arcmin_per_px(arcmin_per_px)
     radius = 0.0
     for w in np.atleast_1d(wavelength_nm):
         front = wavefront
@@ -184,7 +186,7 @@ def suggested_size_px(
             front = wavefront.with_defocus_diopters(chromatic_difference_of_refraction_diopters(w, lca_reference_nm))
         skirt = skirt_lambda_over_d * float(rad_to_arcmin(nm_to_mm(w) / diameter))
         radius = max(radius, geometric_blur_radius_arcmin(front, diameter) + skirt)
-    half = int(math.ceil(radius / float(arcmin_per_px)))
+    half = int(math.ceil(radius / step))
     return max(minimum_px, 2 * half + 1)
 
 
@@ -388,15 +390,13 @@ def compute_psf(
         sensor records.  ``"sample"``: band-limited point samples, the exact kernel for
         blurring well-sampled images (see :mod:`vissim.blur` for when it matters).
     """
-    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else _check_positive(
-        pupil_diameter_mm, "pupil diameter", "mm"
-    )
+    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     if diameter > wavefront.pupil_diameter_mm * (1 + 1e-12):
         raise VissimInputError(
             f"pupil {diameter:g} mm is larger than the {wavefront.pupil_diameter_mm:g} mm pupil the "
             "Zernike coefficients were measured over"
         )
-    step = _check_positive(arcmin_per_px, "angular sampling", "arcmin per pixel")
+    step = check_arcmin_per_px(arcmin_per_px)
     if int(size_px) != size_px or not 1 <= size_px <= 16384:
         raise VissimInputError(f"PSF size must be an integer number of pixels in 1-16384, got {size_px!r}")
     size_px = int(size_px)

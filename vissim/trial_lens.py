@@ -243,6 +243,10 @@ class TrialLens:
         return front, SurfaceRadii((back_r, back_r), (180.0, 90.0))
 
 
+#: Longest vertex distance or lens gap, mm: a trial frame holds lenses within centimetres of the eye.
+MAX_HOLDER_DISTANCE_MM = 1000.0
+
+
 @dataclass(frozen=True)
 class TrialLensSetup:
     """Trial lenses in a holder in front of a camera (or an eye).
@@ -283,8 +287,8 @@ class TrialLensSetup:
         object.__setattr__(self, "lenses", lenses)
         for field, label in (("vertex_distance_mm", "vertex distance"), ("lens_gap_mm", "lens gap")):
             value = _number(getattr(self, field), label, "mm")
-            if value < 0.0:
-                raise VissimInputError(f"{label} must be >= 0 mm, got {value:g} mm")
+            if not 0.0 <= value <= MAX_HOLDER_DISTANCE_MM:
+                raise VissimInputError(f"{label} must be within 0-{MAX_HOLDER_DISTANCE_MM:g} mm, got {value:g} mm")
             object.__setattr__(self, field, value + 0.0)
         distance = _number(self.object_distance_m, "object distance", "m", allow_inf=True)
         if distance <= _mm_to_m(self.span_mm):

@@ -28,7 +28,7 @@ from types import MappingProxyType
 import numpy as np
 
 from vissim.errors import VissimInputError
-from vissim.validate import positive_number
+from vissim.validate import pupil_diameter_mm as check_pupil_mm
 from vissim.prescription import Prescription, RefractiveError
 from vissim.zernike import zernike_nm
 
@@ -39,7 +39,7 @@ _SQRT6 = math.sqrt(6.0)
 
 
 def _check_pupil(pupil_diameter_mm: float, name: str = "pupil diameter") -> float:
-    return positive_number(pupil_diameter_mm, name, "mm")
+    return check_pupil_mm(pupil_diameter_mm, name)
 
 
 def _as_prescription(rx) -> Prescription:

@@ -51,7 +51,7 @@ def test_simulate_a_cyclopleged_hyperope(capsys, tmp_path):
 
 def test_simulate_rejects_a_bad_pupil(capsys, tmp_path):
     code, _, err = run(capsys, "atv", "simulate", "--eye", "-2.00 DS", "--pupil-mm", "-3", "-o", str(tmp_path / "s"))
-    assert code == 2 and "pupil diameter must be a positive number of mm" in err
+    assert code == 2 and "--pupil-mm must be > 0 mm, got '-3'" in err
 
 
 def test_run_with_a_simulated_observer_writes_the_result(capsys, tmp_path):

@@ -50,6 +50,7 @@ from vissim.psf import compute_psf, suggested_size_px
 from vissim.trial_lens import thesis_table_4_2_power
 from vissim.units import rad_to_arcmin
 from vissim.validate import finite_number, positive_number
+from vissim.validate import pupil_diameter_mm as check_pupil_mm
 from vissim.wavefront import Wavefront
 
 __all__ = [
@@ -84,7 +85,7 @@ class VirtualSubject:
     def __post_init__(self) -> None:
         if not isinstance(self.prescription, Prescription):
             raise TypeError(f"prescription must be a Prescription (the correcting lens), got {type(self.prescription).__name__}")
-        positive_number(self.pupil_diameter_mm, "pupil diameter", "mm")
+        check_pupil_mm(self.pupil_diameter_mm)
         for name in ("accommodation_amplitude_diopters", "proximal_accommodation_diopters"):
             value = finite_number(getattr(self, name), name.replace("_diopters", "").replace("_", " "), "D")
             if value < 0:
@@ -112,7 +113,8 @@ class AtvApparatus:
         if finite_number(self.trial_lens_vertex_mm, "trial lens vertex distance", "mm") < 0:
             raise VissimInputError(f"trial lens vertex distance must be >= 0 mm, got {self.trial_lens_vertex_mm:g} mm")
         positive_number(self.wavelength_nm, "wavelength", "nm")
-        positive_number(self.display_gamma, "display gamma", "(exponent)")
+        if not 0.1 <= positive_number(self.display_gamma, "display gamma", "(exponent)") <= 10.0:
+            raise VissimInputError(f"display gamma must be within 0.1-10 (displays are near 2.2), got {self.display_gamma:g}")
 
     @property
     def source_size_arcmin(self) -> float:

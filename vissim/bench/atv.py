@@ -55,7 +55,8 @@ from vissim.imageio import srgb_decode
 from vissim.prescription import LensPower, Prescription, RefractiveError
 from vissim.trial_lens import CROWN_GLASS_INDEX, TrialLens, transfer_matrix
 from vissim.units import arcmin_to_rad, mrad_to_arcmin
-from vissim.validate import finite_number
+from vissim.validate import arcmin_per_px as check_arcmin_per_px
+from vissim.validate import finite_number, samples_per_pixel
 
 __all__ = [
     "IPHONE5_PPI", "LENS_BSDF", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout",
@@ -98,6 +99,10 @@ def _number(value, name: str, unit: str, *, lo: float | None = None, hi: float |
     if hi is not None and number > hi:
         raise VissimInputError(f"{name} must be <= {hi:g} {unit}, got {number:g} {unit}")
     return number + 0.0
+
+
+#: Brightest pixel, linear radiance units: keeps the float32 retinal image finite.
+MAX_PIXEL_RADIANCE = 1e30
 
 
 def pixel_pitch_mm(pixels_per_inch: float) -> float:
@@ -160,7 +165,8 @@ class AtvTube:
         s(self, "eye_relief_mm", _number(self.eye_relief_mm, "eye relief", "mm", lo=0.0, lo_open=True))
         s(self, "pixels_per_inch", _number(self.pixels_per_inch, "display resolution", "pixels per inch",
                                            lo=0.0, lo_open=True))
-        s(self, "pixel_radiance", _number(self.pixel_radiance, "pixel radiance", "linear radiance units", lo=0.0))
+        s(self, "pixel_radiance", _number(self.pixel_radiance, "pixel radiance", "linear radiance units", lo=0.0,
+                                                  hi=MAX_PIXEL_RADIANCE))
         try:
             offset = tuple(_number(v, "pixel offset", "mm") for v in self.pixel_offset_mm)
         except TypeError:
@@ -459,9 +465,8 @@ def atv_scene(config: AtvConfig, *, camera: bool = True, arcmin_per_px: float = 
     if camera:
         if int(size_px) != size_px or size_px < 1:
             raise VissimInputError(f"image size must be a whole number of pixels >= 1, got {size_px!r}")
-        step = _number(arcmin_per_px, "angular sampling", "arcmin per pixel", lo=0.0, lo_open=True)
-        if int(spp) != spp or spp < 1:
-            raise VissimInputError(f"spp must be a whole number of samples per pixel >= 1, got {spp!r}")
+        step = check_arcmin_per_px(arcmin_per_px)
+        spp = samples_per_pixel(spp)
         scene["integrator"] = {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": MAX_DEPTH, "hide_emitters": False}
         scene["eye"] = _camera(config, step, int(size_px), int(spp), int(seed), kind)
     return scene

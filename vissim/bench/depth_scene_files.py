@@ -26,6 +26,7 @@ from vissim.bench.scene_files import _LENS, _check_keys, _read, _table, _typed
 from vissim.errors import VissimInputError
 from vissim.prescription import Prescription
 from vissim.trial_lens import TrialLens
+from vissim.validate import samples_per_pixel
 
 __all__ = ["DepthSceneFile", "load_depth_scene_toml", "depth_scene_from_doc"]
 
@@ -143,8 +144,7 @@ def depth_scene_from_doc(doc: dict, source: str) -> DepthSceneFile:
     scene = DepthScene(_panels(doc, source), **fields)
     counts = {key: sampling.get(key, default) for key, default in (("spp", 64), ("seed", 0), ("aux_spp", 64))}
     for key in ("spp", "aux_spp"):
-        if counts[key] < 1:
-            raise VissimInputError(f"{source} [sampling] {key} must be >= 1 sample per pixel, got {counts[key]}")
+        counts[key] = samples_per_pixel(counts[key], f"{source} [sampling] {key}")
     return DepthSceneFile(scene, _viewer(doc, source), counts["spp"], counts["seed"], counts["aux_spp"], source)
 
 

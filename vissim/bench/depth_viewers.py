@@ -36,6 +36,7 @@ from vissim.prescription import Prescription, RefractiveError
 from vissim.trial_lens import CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, trial_lens_effect
 from vissim.units import rad_to_arcmin
 from vissim.validate import finite_number, positive_number
+from vissim.validate import pupil_diameter_mm as check_pupil_mm
 
 __all__ = ["EyeViewer", "CameraViewer", "Viewer", "focus_matrix_diopters", "equivalent_eye", "blur_diameter_arcmin"]
 
@@ -51,7 +52,7 @@ class EyeViewer:
     def __post_init__(self) -> None:
         if isinstance(self.prescription, RefractiveError) or not isinstance(self.prescription, Prescription):
             raise TypeError(f"the eye needs its Prescription (correcting lens), got {type(self.prescription).__name__}")
-        pupil = positive_number(self.pupil_diameter_mm, "pupil diameter", "mm")
+        pupil = check_pupil_mm(self.pupil_diameter_mm)
         object.__setattr__(self, "pupil_diameter_mm", pupil)
         accommodation = finite_number(self.accommodation_d, "accommodation", "dioptres")
         if accommodation < 0.0:

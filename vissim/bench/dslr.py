@@ -46,6 +46,8 @@ import numpy as np
 from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm
 from vissim.errors import VissimInputError
+from vissim.validate import arcmin_per_px as check_arcmin_per_px
+from vissim.validate import check_allocation, samples_per_pixel
 from vissim.trial_lens import (
     CROWN_GLASS_INDEX,
     MAX_LENSES_IN_HOLDER,
@@ -133,10 +135,10 @@ class DslrBench:
         if len(size) != 2 or min(size) < 1 or tuple(self.size_px) != size:
             raise VissimInputError(f"size_px must be (rows, cols) in whole pixels >= 1, got {self.size_px!r}")
         object.__setattr__(self, "size_px", size)
-        if int(self.spp) != self.spp or self.spp < 1:
-            raise VissimInputError(f"spp must be a whole number of samples per pixel >= 1, got {self.spp!r}")
+        object.__setattr__(self, "spp", samples_per_pixel(self.spp))
         if self.sampler not in SAMPLERS:
             raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")
+        check_arcmin_per_px(self.arcmin_per_px, "camera pixel")
         if self.clear_aperture_mm is not None:
             object.__setattr__(self, "clear_aperture_mm", _positive(self.clear_aperture_mm, "clear aperture", "mm"))
         self.trial_lens_setup()  # validates the stack against the chart distance
@@ -148,8 +150,9 @@ class DslrBench:
 
     @property
     def field_half_diagonal_rad(self) -> float:
+        """Angle from the axis to a corner of the frame (pixels are uniform in tan(angle))."""
         rows, cols = self.size_px
-        return arcmin_to_rad(0.5 * self.arcmin_per_px * math.hypot(rows, cols))
+        return math.atan(0.5 * math.hypot(rows, cols) * math.tan(arcmin_to_rad(self.arcmin_per_px)))
 
     def clear_aperture(self) -> float:
         """Lens clear aperture, mm: given, or the beam at the farthest lens surface x 1.25 + 2 mm.
@@ -245,6 +248,11 @@ def _chart_texture(bench: DslrBench, pixels: np.ndarray, mm_per_px: float) -> tu
     rows, cols = bench.size_px
     need_mm = [0.5 * n * bench.pitch_mm * max(mag, 1.0) * 1.05 + blur_mm + 2.0 * bench.pitch_mm for n in (rows, cols)]
     need_px = [2 * math.ceil(h / mm_per_px) for h in need_mm]  # even; centre stays on a texel corner
+    channels = pixels.shape[2] if pixels.ndim == 3 else 1
+    # float32 texture, its padded copy and Mitsuba's bitmap of it
+    check_allocation(3.0 * 4 * channels * need_px[0] * need_px[1],
+                     f"the bench's {need_px[0]} x {need_px[1]} texel chart texture ({rows} x {cols} px frame, "
+                     f"blur {blur_mm:.3g} mm on the chart)")
     out = pixels
     for axis, need in enumerate(need_px):
         have = out.shape[axis]

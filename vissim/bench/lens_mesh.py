@@ -118,8 +118,21 @@ def _rim_directions(curvatures: tuple[np.ndarray, ...]) -> np.ndarray:
     return np.concatenate(dirs)
 
 
+def check_surfaces_fit(lens: TrialLens, clear_aperture_mm: float) -> None:
+    """Refuse a lens whose surface is steeper than a hemisphere over the clear aperture, naming it."""
+    half_aperture_mm = 0.5 * clear_aperture_mm
+    for name, curvature in zip(("front", "back"), lens_surface_curvatures_per_mm(lens)):
+        steepest = float(np.max(np.abs(np.linalg.eigvalsh(curvature))))
+        if steepest * half_aperture_mm >= 1.0:
+            raise VissimInputError(
+                f"a {lens.marked_power} trial lens cannot be {clear_aperture_mm:g} mm wide: its {name} surface's "
+                f"radius of curvature, {1.0 / steepest:.3g} mm, is below the {half_aperture_mm:g} mm half-aperture"
+            )
+
+
 def rim_thickness_mm(lens: TrialLens, clear_aperture_mm: float) -> tuple[float, float]:
     """(thinnest, thickest) edge thickness in mm on the rim of a round ``clear_aperture_mm``."""
+    check_surfaces_fit(lens, clear_aperture_mm)
     front, back = lens_surface_curvatures_per_mm(lens)
     rim = 0.5 * clear_aperture_mm * _rim_directions((front, back))
     edge = lens.center_thickness_mm - sag_mm(front, rim) + sag_mm(back, rim)
@@ -234,14 +247,7 @@ def lens_mesh(lens: TrialLens, clear_aperture_mm: float, *, rings: int = 16, seg
     rings, segments = int(rings), int(segments)
     front, back = lens_surface_curvatures_per_mm(lens)
     radius = 0.5 * aperture
-    for name, curvature in (("front", front), ("back", back)):
-        steepest = float(np.max(np.abs(np.linalg.eigvalsh(curvature))))
-        if steepest * radius >= 1.0:
-            raise VissimInputError(
-                f"clear aperture {aperture:g} mm exceeds the {name} surface's diameter {2.0 / steepest:.3g} mm "
-                f"(lens {lens.marked_power})"
-            )
-    thinnest, _ = rim_thickness_mm(lens, aperture)
+    thinnest, _ = rim_thickness_mm(lens, aperture)  # checks that both surfaces span the aperture
     if lens.center_thickness_mm <= 0.0 or thinnest <= 0.0:
         raise VissimInputError(
             f"lens {lens.marked_power} is {lens.center_thickness_mm:g} mm thick at the centre and {thinnest:.3g} mm "

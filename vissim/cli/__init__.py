@@ -15,6 +15,7 @@ import re
 import sys
 
 from vissim import __version__
+from vissim.cli._parser import VissimArgumentParser
 from vissim.errors import VissimError
 
 #: Sub-command modules, in the order ``vissim --help`` lists them.
@@ -33,7 +34,7 @@ COMMAND_MODULES = (
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = VissimArgumentParser(
         prog="vissim",
         description="Simulate how refractive errors blur what an eye or a camera sees.",
     )
@@ -57,15 +58,33 @@ _NEGATIVE_VALUE = re.compile(r"^-(?:\d|\.\d)")
 def _protect_negative_values(argv: list[str]) -> list[str]:
     """Let '-2.00/-1.25x180' be a value: argparse would take it for an option.
 
-    No vissim option starts with a digit, so a leading space (stripped by every parser of
-    numbers and prescriptions) marks such tokens as values.
+    No vissim option starts with a digit, so a leading space marks such tokens as values while
+    argparse reads them; :func:`_unprotect` takes it off again.
     """
     return [" " + a if _NEGATIVE_VALUE.match(a) else a for a in argv]
 
 
+def _unprotect(args: argparse.Namespace) -> argparse.Namespace:
+    """Strip the leading space :func:`_protect_negative_values` added to string values."""
+
+    def strip(value):
+        if isinstance(value, str) and value.startswith(" ") and _NEGATIVE_VALUE.match(value[1:]):
+            return value[1:]
+        if isinstance(value, list):
+            return [strip(v) for v in value]
+        return value
+
+    for key, value in vars(args).items():
+        setattr(args, key, strip(value))
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(_protect_negative_values(sys.argv[1:] if argv is None else list(argv)))
+    try:
+        args = _unprotect(parser.parse_args(_protect_negative_values(sys.argv[1:] if argv is None else list(argv))))
+    except SystemExit as exc:  # --help, --version, or one 'vissim: error:' line already printed
+        return exc.code if isinstance(exc.code, int) else 2
     logging.basicConfig(
         level=logging.WARNING - 10 * min(args.verbose, 2),
         format="vissim: %(levelname)s: %(message)s",

@@ -48,11 +48,14 @@ def wavefront_from_args(args: argparse.Namespace) -> Wavefront:
     return front
 
 
-def parse_float_list(text: str, name: str, unit: str) -> list[float]:
+def parse_float_list(text: str, name: str, unit: str, *, positive: bool = True) -> list[float]:
+    """Comma-separated finite numbers, positive unless ``positive=False`` (wavelengths; lens powers)."""
     try:
         values = [float(part) for part in text.split(",") if part.strip()]
     except ValueError:
         raise VissimInputError(f"{name} must be comma-separated numbers in {unit}, got {text!r}") from None
     if not values:
         raise VissimInputError(f"{name} is empty; expected numbers in {unit}")
+    if not all(math.isfinite(v) and (v > 0 or not positive) for v in values):
+        raise VissimInputError(f"{name} must be {'positive ' if positive else ''}finite numbers in {unit}, got {text!r}")
     return values

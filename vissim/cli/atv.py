@@ -11,6 +11,7 @@ import argparse
 import math
 from pathlib import Path
 
+from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 
 
@@ -77,9 +78,9 @@ def _observer_args(parser: argparse.ArgumentParser, *, threshold: bool) -> None:
     group = parser.add_argument_group("simulated observer (Weibull psychometric function)")
     if threshold:
         group.add_argument("--threshold", type=float, default=0.1, help="50 %% point, code value (default 0.1)")
-        group.add_argument("--slope", type=float, default=20.0, help="Weibull exponent in code values (default 20)")
+        group.add_argument("--slope", type=Number(float, positive=True, allow_inf=True), default=20.0, help="Weibull exponent in code values (default 20)")
     else:
-        group.add_argument("--slope", type=float, default=4.0, help="Weibull exponent in luminance (default 4)")
+        group.add_argument("--slope", type=Number(float, positive=True, allow_inf=True), default=4.0, help="Weibull exponent in luminance (default 4)")
     group.add_argument("--guess", type=float, default=0.0, help="false-alarm rate (default 0)")
     group.add_argument("--lapse", type=float, default=0.0, help="lapse rate (default 0)")
 
@@ -125,7 +126,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     )
     kwargs = {}
     if args.lenses:
-        kwargs["lenses_diopters"] = parse_float_list(args.lenses, "--lenses", "D")
+        kwargs["lenses_diopters"] = parse_float_list(args.lenses, "--lenses", "D", positive=False)
     experiment = run_virtual_experiment(subject, apparatus=apparatus, detection=detection, seed=args.seed, **kwargs)
     written, analyses = write_simulation_report(experiment, args.output, window_diopters=_window(args.window_d), overwrite=args.overwrite)
     for t in experiment.trials:

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 from vissim.accommodation import Accommodation, accommodation_for_target
 from vissim.cli.blur import _find_key
-from vissim.depth import blur_depth
+from vissim.cli._parser import Number
+from vissim.depth import DEFAULT_MAX_LAYERS, blur_depth
 from vissim.errors import VissimInputError
 from vissim.imageio import read_data_map, read_image, write_image
 from vissim.prescription import Prescription
@@ -43,7 +44,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM", help="wavelength (default 550)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="PSF optics (default wave)")
     parser.add_argument("--layer-spacing-fraction", type=float, default=0.5, metavar="F", help="max blur step between layers, pixels")
-    parser.add_argument("--max-layers", type=int, metavar="N", help="refuse scenes that need more depth layers")
+    parser.add_argument("--max-layers", type=Number(int, positive=True), default=DEFAULT_MAX_LAYERS, metavar="N",
+                        help=f"refuse scenes that need more depth layers (default {DEFAULT_MAX_LAYERS})")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
     parser.set_defaults(func=run)
 

@@ -1,0 +1,137 @@
+"""The argument parser every sub-command uses: one ``vissim: error:`` line for any bad argument.
+
+* argparse's own errors (unknown option, missing argument, bad choice) are printed as one line,
+  ``vissim: error: <message>``, and exit 2 (no usage block).
+* ``type=float`` / ``type=int`` options refuse NaN and infinity and name the option's unit;
+  counts (``--spp``, ``--size``, ...), pupils, samplings and wavelengths must be positive, and
+  seeds 32-bit.  :class:`Number` adds a
+  range (``Number(float, positive=True)``) or allows infinity.
+* The unit is the option's own name where it ends in one (``--pupil-mm``, ``--arcmin-per-px``,
+  ``--accommodation-d``), else its metavar (``D``, ``DEG``, ``MM``), else :data:`UNITS_BY_DEST`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import dataclass
+
+from vissim.validate import MAX_POWER_DIOPTERS, MAX_SAMPLER_SEED, MAX_SPP
+
+__all__ = ["Number", "VissimArgumentParser", "unit_of"]
+
+#: Name endings that are units (units go in names).
+_UNIT_SUFFIXES = (
+    ("_arcmin_per_px", "arcmin per pixel"), ("_per_px", "per pixel"), ("_mm", "mm"), ("_nm", "nm"),
+    ("_deg", "degrees"), ("_diopters", "dioptres"), ("_arcmin", "arcmin"), ("_m", "m"), ("_d", "dioptres"),
+)
+_UNITS_BY_METAVAR = {"D": "dioptres", "DEG": "degrees", "MM": "mm", "NM": "nm", "M": "m", "ARCMIN": "arcmin per pixel"}
+#: Options whose name carries no unit.
+UNITS_BY_DEST = {
+    "spp": "samples per pixel", "aux_spp": "samples per pixel", "size": "pixels", "rays": "rays",
+    "workers": "worker processes", "max_layers": "depth layers", "seed": "(a whole number)", "age": "years",
+    "dpi": "dots per inch", "f_number": "(f-number)", "logmar": "LogMAR", "logmar_step": "LogMAR",
+    "index": "(refractive index)", "gamma": "(display gamma)", "level": "(confidence level)",
+}
+
+
+def unit_of(action: argparse.Action) -> str:
+    """The unit an option's value is in, for error messages."""
+    if isinstance(action.type, Number) and action.type.unit:
+        return action.type.unit
+    dest = action.dest
+    if dest in UNITS_BY_DEST:
+        return UNITS_BY_DEST[dest]
+    for suffix, unit in _UNIT_SUFFIXES:
+        if ("_" + dest).endswith(suffix):
+            return unit
+    if isinstance(action.metavar, str) and action.metavar in _UNITS_BY_METAVAR:
+        return _UNITS_BY_METAVAR[action.metavar]
+    return "(a number)"
+
+
+@dataclass(frozen=True)
+class Number:
+    """A numeric argument type: ``kind`` (float or int), an optional range, infinity refused unless allowed."""
+
+    kind: type = float
+    positive: bool = False
+    nonnegative: bool = False
+    maximum: float | None = None
+    max_magnitude: float | None = None
+    allow_inf: bool = False
+    unit: str | None = None
+
+    def parse(self, text: str, name: str, unit: str) -> float | int:
+        stripped = text.strip()
+        try:
+            value = float(stripped)
+        except ValueError:
+            kind = "a whole number" if self.kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"{name} must be {kind} in {unit}, got {stripped!r}") from None
+        if math.isnan(value) or (math.isinf(value) and not self.allow_inf):
+            raise argparse.ArgumentTypeError(f"{name} must be a finite number in {unit}, got {stripped!r}")
+        if self.kind is int:
+            if value != int(value):
+                raise argparse.ArgumentTypeError(f"{name} must be a whole number in {unit}, got {stripped!r}")
+            value = int(value)
+        if self.positive and not value > 0:
+            raise argparse.ArgumentTypeError(f"{name} must be > 0 {unit}, got {stripped!r}")
+        if self.nonnegative and not value >= 0:
+            raise argparse.ArgumentTypeError(f"{name} must be >= 0 {unit}, got {stripped!r}")
+        if self.max_magnitude is not None and abs(value) > self.max_magnitude:
+            raise argparse.ArgumentTypeError(f"{name} must lie within +-{self.max_magnitude:g} {unit}, got {stripped!r}")
+        if self.maximum is not None and value > self.maximum:
+            raise argparse.ArgumentTypeError(f"{name} must be at most {self.maximum:g} {unit}, got {stripped!r}")
+        return value
+
+    def __call__(self, text: str):  # argparse checks that a type is callable; parsing goes through parse
+        return self.parse(text, "value", self.unit or "(a number)")
+
+
+#: The range of plain ``type=int`` options by name: counts are positive, seeds 32-bit.
+_INTS_BY_DEST = {
+    "seed": Number(int, nonnegative=True, maximum=MAX_SAMPLER_SEED),
+    **{dest: Number(int, positive=True, maximum=MAX_SPP) for dest in ("spp", "aux_spp")},
+    **{dest: Number(int, positive=True) for dest in ("size", "rays", "workers")},
+}
+#: Powers, dioptres: within +-MAX_POWER_DIOPTERS.
+_POWERS = {"sphere", "cylinder", "trial_sphere", "trial_cylinder", "back_surface_diopters", "trial_lens_d",
+           "accommodation_d", "amplitude_d", "proximal_d"}
+#: Plain ``type=float`` options that only make sense positive.
+_POSITIVE_FLOATS = {
+    "pupil_mm", "zernike_pupil_mm", "arcmin_per_px", "wavelength_nm", "lca_reference_nm", "channel_fwhm_nm",
+    "dpi", "f_number", "focal_length_mm", "distance_m", "summation_arcmin", "layer_spacing_fraction", "index",
+}
+
+
+def _number_type(action: argparse.Action) -> Number | None:
+    if isinstance(action.type, Number):
+        return action.type
+    if action.type is int:
+        return _INTS_BY_DEST.get(action.dest, Number(int))
+    if action.type is float:
+        if action.dest in _POWERS:
+            return Number(float, max_magnitude=MAX_POWER_DIOPTERS)
+        return Number(float, positive=action.dest in _POSITIVE_FLOATS)
+    return None
+
+
+class VissimArgumentParser(argparse.ArgumentParser):
+    """:class:`argparse.ArgumentParser` with one-line errors and checked numbers (module doc)."""
+
+    def _get_value(self, action, arg_string):
+        number = _number_type(action)
+        if number is None:
+            return super()._get_value(action, arg_string)
+        name = "/".join(action.option_strings) or action.dest
+        try:
+            return number.parse(arg_string, name, unit_of(action))
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentError(None, str(exc)) from None
+
+    def error(self, message: str):
+        message = " ".join(message.split())
+        sys.stderr.write(f"vissim: error: {message} (see '{self.prog} --help')\n")
+        sys.exit(2)
