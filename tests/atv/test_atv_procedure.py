@@ -176,3 +176,9 @@ def test_window_observer_lights_one_pixel_and_reads_the_keys(monkeypatch):
             observer.seen(0.1)
     finally:
         observer.close()
+
+
+def test_a_huge_slope_is_the_step_function_limit_without_overflow_warnings():
+    # (x/t)^s overflows to inf for s = 1e300 above threshold: P(seen) = 1 - 2^-inf = 1 exactly
+    steep = PsychometricFunction(0.1, slope=1e300)
+    assert steep.probability_seen(0.2) == 1.0 and steep.probability_seen(0.05) == 0.0

@@ -80,7 +80,8 @@ class PsychometricFunction:
 
     def probability_seen(self, intensity) -> np.ndarray | float:
         x = np.maximum(np.asarray(intensity, dtype=float), 0.0)
-        f = 1.0 - np.exp2(-np.power(x / self.threshold, self.slope))
+        with np.errstate(over="ignore"):  # (x/t)^s -> inf is the right limit: seen for sure
+            f = 1.0 - np.exp2(-np.power(x / self.threshold, self.slope))
         p = self.guess_rate + (1.0 - self.guess_rate - self.lapse_rate) * f
         return float(p) if np.ndim(p) == 0 else p
 
