@@ -17,11 +17,11 @@ import numpy as np
 
 from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+from vissim.optics.trial_lens import TrialLens
 from vissim.render.backend import mitsuba
+from vissim.render.fixed_order import render_image
 from vissim.render.plugins import register_plugins
 from vissim.render.run import to_mitsuba_dict
-from vissim.render.fixed_order import render_image
-from vissim.trial_lens import TrialLens
 
 
 def main() -> None:

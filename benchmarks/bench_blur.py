@@ -14,10 +14,10 @@ import time
 import numpy as np
 import scipy.fft
 
-from vissim.blur import _padding_width, blur_image
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf, suggested_size_px
-from vissim.wavefront import Wavefront
+from vissim.optics.blur import _padding_width, blur_image
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.optics.wavefront import Wavefront
 
 
 def best_of(fn, repeats: int = 5) -> float:

@@ -19,10 +19,16 @@ import time
 
 import numpy as np
 
-from vissim.blur import BlurKernel, blur_image
-from vissim.depth import _blur_planes, _cached_psf, blur_depth, layer_spacing_diopters, plan_layers
-from vissim.prescription import Prescription
-from vissim.wavefront import Wavefront
+from vissim.optics.blur import BlurKernel, blur_image
+from vissim.optics.depth import (
+    _blur_planes,
+    _cached_psf,
+    blur_depth,
+    layer_spacing_diopters,
+    plan_layers,
+)
+from vissim.optics.prescription import Prescription
+from vissim.optics.wavefront import Wavefront
 
 ROWS, COLS = 1080, 1920
 PUPIL_MM, STEP, EYE = 3.0, 1.0, Prescription(-1.0)

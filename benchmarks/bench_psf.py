@@ -16,9 +16,9 @@ import time
 import numpy as np
 import scipy.fft
 
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf
-from vissim.wavefront import Wavefront
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf
+from vissim.optics.wavefront import Wavefront
 
 
 def best_of(fn, repeats: int = 7) -> float:

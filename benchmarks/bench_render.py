@@ -19,8 +19,8 @@ import numpy as np
 
 from vissim.bench.dslr import SAMPLERS, DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+from vissim.optics.trial_lens import TrialLens
 from vissim.render.run import render_scene
-from vissim.trial_lens import TrialLens
 
 DATA_RANGE = 0.9  # white paper reflectance: the brightest value of the chart
 

@@ -2,14 +2,15 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from vissim.blur import blur_image
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.psf import PSF, compute_psf
-from vissim.wavefront import Wavefront
+from vissim.optics.blur import blur_image
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import PSF, compute_psf
+from vissim.optics.wavefront import Wavefront
 
 
 def delta(size=33, step=1.0):

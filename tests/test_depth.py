@@ -2,7 +2,7 @@
 
 Expected values and where they come from:
 
-* defocus per depth: effective prescription = Rx + 1/d - A (``vissim.depth`` docstring);
+* defocus per depth: effective prescription = Rx + 1/d - A (``vissim.optics.depth`` docstring);
   a -2 D myope sees 0.5 m with zero defocus and 6 m with 2 - 1/6 = 1.8333 D;
 * geometric blur-disc diameter = pupil (mm) x defocus (D) mrad (``docs/conventions.md``); the
   disc's radius r follows from the pixel-integrated second moment <x^2 + y^2> = r^2/2 + 2/12 px^2;
@@ -21,10 +21,12 @@ import numpy as np
 import OpenEXR
 import pytest
 
-from vissim.accommodation import accommodation_for_target
-from vissim.blur import blur_image
 from vissim.cli import main
-from vissim.depth import (
+from vissim.errors import VissimInputError
+from vissim.imageio import read_image, write_image
+from vissim.optics.accommodation import accommodation_for_target
+from vissim.optics.blur import blur_image
+from vissim.optics.depth import (
     _extended_layer,
     _matte_indices,
     _occlusion_weight,
@@ -33,12 +35,10 @@ from vissim.depth import (
     layer_spacing_diopters,
     plan_layers,
 )
-from vissim.errors import VissimInputError
-from vissim.imageio import read_image, write_image
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf, suggested_size_px
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
-from vissim.wavefront import Wavefront
 
 PUPIL_MM = 4.0
 STEP = 1.0  # arcmin per pixel

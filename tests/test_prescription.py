@@ -3,10 +3,16 @@
 import math
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.prescription import LensPower, Prescription, RefractiveError, SpheroCylinder
+from vissim.optics.prescription import (
+    LensPower,
+    Prescription,
+    RefractiveError,
+    SpheroCylinder,
+)
 
 
 @pytest.mark.parametrize(

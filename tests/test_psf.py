@@ -4,17 +4,24 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.special import j0, j1
 
-from vissim.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf, psf_sampling, strehl_ratio
-from vissim.psf_metrics import diffraction_mtf, encircled_energy, frequencies_cyc_per_deg, mtf, radius_of_encircled_energy_arcmin
-from vissim.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf, psf_sampling, strehl_ratio
+from vissim.optics.psf_metrics import (
+    diffraction_mtf,
+    encircled_energy,
+    frequencies_cyc_per_deg,
+    mtf,
+    radius_of_encircled_energy_arcmin,
+)
+from vissim.optics.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.optics.wavefront import Wavefront
 from vissim.units import ARCMIN_PER_RAD
-from vissim.wavefront import Wavefront
 
 PUPIL_MM = 3.0
 WAVELENGTH_NM = 550.0
@@ -232,7 +239,7 @@ def test_bad_inputs_name_the_value_and_unit():
 
 
 def test_gaussian_band_is_a_normalised_symmetric_weighting():
-    from vissim.chromatic import gaussian_band
+    from vissim.optics.chromatic import gaussian_band
 
     wavelengths, weights = gaussian_band(550, 40, samples=7)
     assert sum(weights) == pytest.approx(1.0)

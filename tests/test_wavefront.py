@@ -4,11 +4,16 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.wavefront import Wavefront, parse_zernike_terms, prescription_to_zernike_um
+from vissim.optics.prescription import Prescription
+from vissim.optics.wavefront import (
+    Wavefront,
+    parse_zernike_terms,
+    prescription_to_zernike_um,
+)
 
 
 def test_standard_formulas_with_cylinder():

@@ -4,10 +4,17 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.zernike import ansi_j_to_nm, nm_to_ansi_j, nm_to_noll, noll_to_nm, zernike_nm
+from vissim.optics.zernike import (
+    ansi_j_to_nm,
+    nm_to_ansi_j,
+    nm_to_noll,
+    noll_to_nm,
+    zernike_nm,
+)
 
 
 def test_first_ansi_indices():

@@ -19,9 +19,9 @@ from __future__ import annotations
 import math
 import re
 
+from vissim.checks import finite_number as _finite
+from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
-from vissim.validate import finite_number as _finite
-from vissim.validate import positive_number as _positive
 from vissim.units import arcmin_to_rad, rad_to_arcmin
 
 __all__ = [

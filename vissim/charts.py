@@ -34,11 +34,17 @@ from typing import Any
 
 import numpy as np
 
-from vissim.acuity import THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, letter_height_mm, logmar_to_snellen
-from vissim.acuity import subtense_arcmin, subtense_mm
+from vissim.acuity import (
+    THESIS_VIEWING_DISTANCE_M,
+    letter_height_arcmin,
+    letter_height_mm,
+    logmar_to_snellen,
+    subtense_arcmin,
+    subtense_mm,
+)
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import check_allocation, finite_number, positive_number
 from vissim.errors import VissimInputError
-from vissim.validate import arcmin_per_px as check_arcmin_per_px
-from vissim.validate import check_allocation, finite_number, positive_number
 from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window, sloan_letter
 
 logger = logging.getLogger(__name__)

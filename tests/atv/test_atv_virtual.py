@@ -11,7 +11,6 @@ import math
 import numpy as np
 import pytest
 
-from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM
 from vissim.atv.virtual import (
     AtvApparatus,
     DetectionModel,
@@ -22,8 +21,9 @@ from vissim.atv.virtual import (
     run_virtual_experiment,
     summation_fraction,
 )
+from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
+from vissim.optics.prescription import Prescription
 
 # The spot depends only on the request, not on the seed: cache it across tests (keeps the suite fast).
 cached_spot = functools.lru_cache(maxsize=None)(fourier_retinal_image)

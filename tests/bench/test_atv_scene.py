@@ -15,6 +15,7 @@ import math
 import numpy as np
 import pytest
 
+from vissim.atv.predict import fresnel_transmittance, predicted_spot, spot_metrics
 from vissim.bench.atv import (
     LENS_BSDF,
     AtvConfig,
@@ -25,13 +26,11 @@ from vissim.bench.atv import (
     atv_trial_lens,
     display_code_to_linear,
     pixel_pitch_mm,
-    predicted_spot,
 )
-from vissim.bench.atv_predict import fresnel_transmittance, spot_metrics
 from vissim.bench.lens_mesh import rim_thickness_mm
 from vissim.errors import VissimInputError
-from vissim.prescription import LensPower, Prescription, RefractiveError
-from vissim.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.optics.prescription import LensPower, Prescription, RefractiveError
+from vissim.optics.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
 from vissim.units import mrad_to_arcmin
 
 PITCH_MM = 25.4 / 326.0

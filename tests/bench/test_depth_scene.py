@@ -17,15 +17,29 @@ import pytest
 
 from vissim.acuity import letter_height_mm
 from vissim.bench.depth_scene import (
-    CameraViewer, ChartPanel, DepthScene, EyeViewer, PanelChart, TiltedChart, axial_depth_map, blur_diameter_arcmin,
-    default_panels_scene, default_tilted_scene, depth_scene_dict, equivalent_eye, focus_matrix_diopters,
-    panel_geometries, panel_texture, pixel_tangents, tilted_mesh,
+    CameraViewer,
+    ChartPanel,
+    DepthScene,
+    EyeViewer,
+    PanelChart,
+    TiltedChart,
+    axial_depth_map,
+    blur_diameter_arcmin,
+    default_panels_scene,
+    default_tilted_scene,
+    depth_scene_dict,
+    equivalent_eye,
+    focus_matrix_diopters,
+    panel_geometries,
+    panel_texture,
+    pixel_tangents,
+    tilted_mesh,
 )
 from vissim.bench.depth_scene_files import load_depth_scene_toml
-from vissim.depth import effective_prescription
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.trial_lens import TrialLens
+from vissim.optics.depth import effective_prescription
+from vissim.optics.prescription import Prescription
+from vissim.optics.trial_lens import TrialLens
 from vissim.units import rad_to_arcmin
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
@@ -106,7 +120,7 @@ def test_eye_focuses_accommodation_minus_prescription():
     assert blur_diameter_arcmin(hyperope, math.inf) == pytest.approx(rad_to_arcmin(3e-3))
     # plano -2.00 x 90 corrects excess power in the horizontal (x) meridian only.
     assert np.allclose(focus_matrix_diopters(EyeViewer(Prescription(0.0, -2.0, 90.0))), [[2.0, 0.0], [0.0, 0.0]])
-    # The eye sensor's K agrees with vissim.depth: defocus Rx + 1/d - A vanishes where 1/d = K.
+    # The eye sensor's K agrees with vissim.optics.depth: defocus Rx + 1/d - A vanishes where 1/d = K.
     rx = Prescription(-1.0, -1.0, 30.0)
     eye = EyeViewer(rx, 3.0, 0.5)
     for k in np.linalg.eigvalsh(focus_matrix_diopters(eye)):

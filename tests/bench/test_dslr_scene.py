@@ -18,7 +18,7 @@ from vissim.bench.dslr import DslrBench, bench_theory, chart_mm_per_texel, dslr_
 from vissim.bench.lens_mesh import rim_thickness_mm
 from vissim.bench.scene_files import load_bench_toml, load_chart_toml
 from vissim.errors import VissimInputError
-from vissim.trial_lens import TrialLens
+from vissim.optics.trial_lens import TrialLens
 
 SCENE = Path(__file__).resolve().parents[2] / "scenes" / "dslr_bench.toml"
 

@@ -1,6 +1,6 @@
 """Trial-lens meshes: shape, normals, power, PLY bytes and the cache (no rendering).
 
-Expected values come from the lens's own definition in :mod:`vissim.trial_lens`: the marked
+Expected values come from the lens's own definition in :mod:`vissim.optics.trial_lens`: the marked
 power is the back vertex power, surface radii follow the lensmaker relation
 (``TrialLens.surface_radii_mm``), and a sphere of radius R has sag R - sqrt(R^2 - a^2) at
 semi-aperture a.
@@ -25,7 +25,7 @@ from vissim.bench.lens_mesh import (
     write_ply,
 )
 from vissim.errors import VissimInputError
-from vissim.trial_lens import CROWN_GLASS_INDEX, TrialLens
+from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
 
 APERTURE_MM = 30.0
 

@@ -12,10 +12,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from vissim.checks import check_allocation, format_bytes
 from vissim.cli import main
 from vissim.imageio import write_image
 from vissim.provenance import make_provenance
-from vissim.validate import check_allocation, format_bytes
 
 BAD_NUMBERS = ["0", "-1", "nan", "inf", "-inf", "1e300", "-1e300", "1e-300", "abc", ""]
 

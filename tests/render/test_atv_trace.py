@@ -26,10 +26,17 @@ import math
 import numpy as np
 import pytest
 
-from vissim.bench.atv import AtvConfig, AtvEye, AtvTube, LENS_BSDF, atv_paraxial, atv_trial_lens
-from vissim.bench.atv_predict import predicted_spot
+from vissim.atv.predict import predicted_spot
+from vissim.bench.atv import (
+    LENS_BSDF,
+    AtvConfig,
+    AtvEye,
+    AtvTube,
+    atv_paraxial,
+    atv_trial_lens,
+)
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
+from vissim.optics.prescription import Prescription
 from vissim.units import mrad_to_arcmin
 
 mitsuba_backend = pytest.importorskip("vissim.render.backend")

@@ -5,7 +5,7 @@ mrad (docs/conventions.md), defocus = K - 1/z with K = A - Rx for an eye and 1/f
 DSLR (vissim.bench.depth_scene).  Estimator: the edge-spread function of a panel's straight
 edge against the black sky, averaged along the edge and fitted with a uniform disc's ESF
 integrated over the pixel (as tests/render/test_dslr_render.py); its noise at 64 spp is
-~0.3 % (measured when written), so 3 % is 10x the noise.  For vissim.depth.blur_depth, whose
+~0.3 % (measured when written), so 3 % is 10x the noise.  For vissim.optics.depth.blur_depth, whose
 layered compositing reshapes edges against the sky (reported by the depth campaign, not
 hidden), the blur is measured instead on the panel's interior: the defocus whose single-plane
 geometric blur of the all-in-focus render best matches it there.
@@ -21,19 +21,30 @@ import pytest
 from scipy.optimize import least_squares, minimize_scalar
 
 from vissim.bench.depth_scene import (
-    CameraViewer, ChartPanel, DepthScene, EyeViewer, PanelChart, axial_depth_map, blur_diameter_arcmin,
-    default_panels_scene, default_tilted_scene, depth_scene_dict, panel_geometries, panel_texture, pixel_tangents,
+    CameraViewer,
+    ChartPanel,
+    DepthScene,
+    EyeViewer,
+    PanelChart,
+    axial_depth_map,
+    blur_diameter_arcmin,
+    default_panels_scene,
+    default_tilted_scene,
+    depth_scene_dict,
+    panel_geometries,
+    panel_texture,
+    pixel_tangents,
 )
-from vissim.blur import blur_image
-from vissim.depth import blur_depth
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf
+from vissim.optics.blur import blur_image
+from vissim.optics.depth import blur_depth
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf
+from vissim.optics.wavefront import Wavefront
 from vissim.render.backend import choose_variant, mitsuba
 from vissim.render.depth_render import render_aov_depth, render_depth
 from vissim.render.eye_sensor import register_eye_sensor
 from vissim.render.run import render_scene
-from vissim.wavefront import Wavefront
 
 if choose_variant("mono").variant.startswith("scalar"):  # pragma: no cover - machine without LLVM/CUDA
     pytest.skip("no JIT Mitsuba variant: renders would take hours on scalar_rgb", allow_module_level=True)

@@ -2,7 +2,7 @@
 
 Theory: :func:`vissim.bench.dslr.bench_theory` -- added power and spectacle magnification by
 4 x 4 ray transfer through the same thick lenses that are rendered
-(:func:`vissim.trial_lens.trial_lens_effect`), blur diameter = entrance pupil (3.6 mm) x
+(:func:`vissim.optics.trial_lens.trial_lens_effect`), blur diameter = entrance pupil (3.6 mm) x
 defocus (conventions: dioptres x mm = mrad).  Prototype reference: +2 D at 10 mm, chart at
 914.4 mm, 3.6 mm pupil -> a 24.7 arcmin blur disc.
 
@@ -28,9 +28,9 @@ from scipy.optimize import least_squares
 
 from vissim.bench.dslr import DslrBench, bench_theory, chart_mm_per_texel, dslr_scene
 from vissim.charts import optotype_tile, single_letter_spec
+from vissim.optics.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
 from vissim.render.run import render_bench, render_scene
-from vissim.trial_lens import TrialLens
 
 if choose_variant("mono").variant.startswith("scalar"):  # pragma: no cover - machine without LLVM/CUDA
     pytest.skip("no JIT Mitsuba variant: bench renders would take hours on scalar_rgb", allow_module_level=True)
@@ -208,15 +208,15 @@ def test_same_seed_gives_bit_identical_pixels_and_another_seed_does_not():
 
 @pytest.mark.parametrize("lens", [TrialLens(2.0), TrialLens(-2.0, 1.0, 30.0)], ids=["+2DS", "-2+1x30"])
 def test_bench_render_matches_vissims_blur_of_the_magnified_letter(lens):
-    """Render vs vissim.psf (geometric mode) + vissim.blur of the tile magnified by the theory.
+    """Render vs vissim.optics.psf (geometric mode) + vissim.optics.blur of the tile magnified by the theory.
 
     Same camera prescription (bench_theory), 3.6 mm pupil, letter scaled by the spectacle
     magnification (ERRATA item 5).  This pins the oblique-axis mirroring of both halves to each
     other.  Measured when written at 256 spp: PSNR 44.8 dB (+2 DS) and 43.2 dB (-2 +1 x 30) over
     the 0.9 white level (46 and 44 dB at 512 spp); the render's own noise is ~48 dB.  Threshold 40 dB."""
-    from vissim.blur import blur_image
-    from vissim.psf import compute_psf
-    from vissim.wavefront import Wavefront
+    from vissim.optics.blur import blur_image
+    from vissim.optics.psf import compute_psf
+    from vissim.optics.wavefront import Wavefront
 
     bench = DslrBench(lenses=(lens,), spp=256, seed=SEED)
     effect = bench_theory(bench).effect

@@ -5,13 +5,14 @@ Picklable (module level) so process pools and Dask workers can run it.
 
 import numpy as np
 
-from vissim.blur import blur_image
 from vissim.charts import optotype_tile
-from vissim.psf import compute_psf, suggested_size_px
-from vissim.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
+from vissim.optics.blur import blur_image
+from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
+from vissim.optics.wavefront import Wavefront
 from vissim.validation.renders import bench_for
 from vissim.validation.simulate import magnify
-from vissim.wavefront import Wavefront
+
 
 def fake_render(spec):
     tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=spec.arcmin_per_px, shape_px=spec.tile_px,

@@ -19,13 +19,23 @@ import pytest
 from fake_bench import fake_render
 from provenance_walk import image_provenance, json_without_provenance
 
-from vissim.bench.depth_scene import CameraViewer, EyeViewer, default_panels_scene, panel_geometries
+from vissim.bench.depth_scene import (
+    CameraViewer,
+    EyeViewer,
+    default_panels_scene,
+    panel_geometries,
+)
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
+from vissim.optics.prescription import Prescription
 from vissim.render.backend import choose_variant
 from vissim.validation import runner
-from vissim.validation.depth_campaign import is_depth_campaign, load_depth_campaign, run_any_campaign
-from vissim.validation.depth_campaign import rebuild_any_report, run_depth_campaign
+from vissim.validation.depth_campaign import (
+    is_depth_campaign,
+    load_depth_campaign,
+    rebuild_any_report,
+    run_any_campaign,
+    run_depth_campaign,
+)
 from vissim.validation.depth_masks import depth_regions
 from vissim.validation.depth_report import current_results, depth_rows
 

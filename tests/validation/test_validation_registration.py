@@ -5,13 +5,13 @@ import pytest
 import scipy.ndimage
 from skimage.registration import phase_cross_correlation
 
-from vissim.blur import blur_image
 from vissim.charts import optotype_tile
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf
+from vissim.optics.blur import blur_image
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf
+from vissim.optics.wavefront import Wavefront
 from vissim.validation.registration import register
-from vissim.wavefront import Wavefront
 
 NOISE_SIGMA = 0.005  # linear units on a 0.04-0.9 chart: about what a well-exposed DSLR plane shows
 

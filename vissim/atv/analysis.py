@@ -37,8 +37,8 @@ import scipy.linalg
 import scipy.stats
 
 from vissim.atv.data import EYES, SubjectData
+from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.validate import finite_number
 
 __all__ = [
     "CONDITIONS",

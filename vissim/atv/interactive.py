@@ -26,7 +26,7 @@ import numpy as np
 
 from vissim.errors import VissimError, VissimInputError
 
-__all__ = ["ProcedureAborted", "PromptObserver", "WindowObserver", "display_available", "make_person_observer"]
+__all__ = ["ProcedureAborted", "PromptObserver", "WindowObserver", "make_person_observer"]
 
 log = logging.getLogger(__name__)
 
@@ -86,10 +86,6 @@ def _interactive_pyplot():
         except Exception:  # noqa: BLE001 -- toolkit missing or unusable: try the next
             continue
     return None
-
-
-def display_available() -> bool:
-    return _interactive_pyplot() is not None
 
 
 class WindowObserver:

@@ -26,8 +26,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.validate import finite_number
 
 __all__ = [
     "Observer",

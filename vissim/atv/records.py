@@ -15,7 +15,7 @@ from types import MappingProxyType
 from typing import Any
 
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
+from vissim.optics.prescription import Prescription
 
 __all__ = [
     "Autorefraction",

@@ -6,7 +6,7 @@ one pixel (iPhone 5: 326 ppi, 77.9 µm) is a source at infinity subtending 77.9 
 eye adds the vergence ``P / (1 - d P)`` at the eye -- exact here, the source being at infinity
 (ERRATA item 4 concerns finite distances).  The eye's correction (a :class:`Prescription`, at the
 eye's principal plane) minus that vergence minus the accommodation exerted is the *residual*
-correction still needed; its wavefront gives the Fourier PSF (:func:`vissim.psf.compute_psf`,
+correction still needed; its wavefront gives the Fourier PSF (:func:`vissim.optics.psf.compute_psf`,
 wave optics, monochromatic at ``wavelength_nm``), which is convolved with the pixel's square.
 
 Accommodation: under cycloplegia none.  Otherwise the eye adds plus power to minimise the blur,
@@ -40,18 +40,29 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.signal
 
-from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM, IPHONE5_PPI, AtvTube, pixel_pitch_mm
 from vissim.atv.analysis import CurveAnalysis, analyse_curve
 from vissim.atv.data import THESIS_TRIAL_LENSES_DIOPTERS
-from vissim.atv.procedure import ProcedureConfig, PsychometricFunction, SimulatedObserver, ThresholdResult, run_procedure
+from vissim.atv.procedure import (
+    ProcedureConfig,
+    PsychometricFunction,
+    SimulatedObserver,
+    ThresholdResult,
+    run_procedure,
+)
+from vissim.bench.atv import (
+    ATV_TRIAL_LENS_DISTANCE_MM,
+    IPHONE5_PPI,
+    AtvTube,
+    pixel_pitch_mm,
+)
+from vissim.checks import finite_number, positive_number
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf, suggested_size_px
-from vissim.trial_lens import thesis_table_4_2_power
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.optics.trial_lens import thesis_table_4_2_power
+from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
-from vissim.validate import finite_number, positive_number
-from vissim.validate import pupil_diameter_mm as check_pupil_mm
-from vissim.wavefront import Wavefront
 
 __all__ = [
     "AtvApparatus",

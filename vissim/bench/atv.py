@@ -22,20 +22,20 @@ Choices, and why:
 * **Pixel**: a Lambertian square of side 25.4 / ppi mm (77.9 µm at 326 ppi) whose *linear*
   radiance is ``pixel_radiance``.  The thesis's "iPhone intensity [0, 1]" is a display code
   value (ERRATA item 9); :func:`display_code_to_linear` is the separate transfer step.
-* **Trial lens**: a thick crown-glass :class:`~vissim.trial_lens.TrialLens` (marked with its back
+* **Trial lens**: a thick crown-glass :class:`~vissim.optics.trial_lens.TrialLens` (marked with its back
   vertex power, as meshed by :mod:`vissim.bench.lens_mesh`), back vertex
   ``trial_lens_distance_mm`` in front of the pupil (15 mm: a 12 mm vertex distance plus 3 mm
   from the cornea to the entrance pupil).  :func:`atv_trial_lens` makes one of realistic
   thickness.
-* **Eye**: pupil 2-8 mm, its own :class:`~vissim.prescription.RefractiveError` (a
-  :class:`~vissim.prescription.Prescription` is converted) and accommodation >= 0 D.  A ray
+* **Eye**: pupil 2-8 mm, its own :class:`~vissim.optics.prescription.RefractiveError` (a
+  :class:`~vissim.optics.prescription.Prescription` is converted) and accommodation >= 0 D.  A ray
   through pupil point x (mm) with direction angle u lands at visual angle
   ``-u + (E + A) x`` milliradians: the thin lens is the eye's excess power E plus accommodation.
 
 Scene dicts hold plain values (4 x 4 row-major ``to_world`` lists), converted by
 :func:`vissim.render.run.to_mitsuba_dict`; nothing here imports Mitsuba.  The paraxial model
 (:func:`atv_paraxial`) is the theory both renderers are checked against;
-:func:`predicted_spot` (in :mod:`vissim.bench.atv_predict`) turns it into a retinal image.
+:func:`predicted_spot` (in :mod:`vissim.atv.predict`) turns it into a retinal image.
 """
 
 from __future__ import annotations
@@ -47,21 +47,26 @@ from typing import Any
 
 import numpy as np
 
-from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm, rim_thickness_mm, sag_mm
-from vissim.bench.lens_mesh import lens_surface_curvatures_per_mm
+from vissim.bench.lens_mesh import (
+    cached_lens_ply,
+    lens_surface_curvatures_per_mm,
+    realistic_center_thickness_mm,
+    rim_thickness_mm,
+    sag_mm,
+)
 from vissim.charts import MM_PER_INCH
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import finite_number, samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.imageio import srgb_decode
-from vissim.prescription import LensPower, Prescription, RefractiveError
-from vissim.trial_lens import CROWN_GLASS_INDEX, TrialLens, transfer_matrix
+from vissim.optics.prescription import LensPower, Prescription, RefractiveError
+from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, transfer_matrix
 from vissim.units import arcmin_to_rad, mrad_to_arcmin
-from vissim.validate import arcmin_per_px as check_arcmin_per_px
-from vissim.validate import finite_number, samples_per_pixel
 
 __all__ = [
     "IPHONE5_PPI", "LENS_BSDF", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout",
     "AtvParaxial", "atv_trial_lens", "atv_layout", "atv_paraxial", "atv_scene", "display_code_to_linear",
-    "pixel_pitch_mm", "predicted_spot",
+    "pixel_pitch_mm",
 ]
 
 log = logging.getLogger(__name__)
@@ -470,10 +475,3 @@ def atv_scene(config: AtvConfig, *, camera: bool = True, arcmin_per_px: float = 
         scene["integrator"] = {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": MAX_DEPTH, "hide_emitters": False}
         scene["eye"] = _camera(config, step, int(size_px), int(spp), int(seed), kind)
     return scene
-
-
-def predicted_spot(config: AtvConfig, **kwargs):
-    """The paraxial retinal image of the pixel; see :func:`vissim.bench.atv_predict.predicted_spot`."""
-    from vissim.bench.atv_predict import predicted_spot as _predicted_spot
-
-    return _predicted_spot(config, **kwargs)

@@ -25,7 +25,7 @@ Observers (a ``viewer``, :mod:`vissim.bench.depth_viewers`, re-exported here): a
 :class:`EyeViewer` -- Mitsuba sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), an ideal
 thin lens at the pupil focusing the vergence matrix ``K = A I - Rx``, so an object at axial
 distance ``z`` is blurred by ``pupil x (K - I/z)``: the defocus ``Rx + 1/z - A`` of
-:func:`vissim.depth.effective_prescription`, cylinders and hyperopia (focus "beyond infinity",
+:func:`vissim.optics.depth.effective_prescription`, cylinders and hyperopia (focus "beyond infinity",
 ``K < 0``) included, which a Mitsuba ``thinlens`` (focus distance > 0, no astigmatism) cannot
 express -- or a :class:`CameraViewer`, the DSLR bench camera (``thinlens``, f/N entrance pupil)
 with optional trial lenses, taken from :func:`vissim.bench.dslr.dslr_scene` itself.
@@ -36,7 +36,7 @@ same lenses, so both images share one pixel grid.  ``content="proximity"`` repla
 panel's radiance by its proximity ``1000 / z_mm`` dioptres (``z`` axial), a *depth pass*: a
 pinhole render of it gives each pixel's mean proximity (0 for empty sky), which
 :func:`vissim.render.depth_render.render_depth` turns into the axial depth in metres that
-:func:`vissim.depth.blur_depth` expects.  Axial, because these thin lenses have flat focal
+:func:`vissim.optics.depth.blur_depth` expects.  Axial, because these thin lenses have flat focal
 planes: the blur is exactly ``pupil x |K - 1/z|`` at every field angle.
 
 Nothing here imports Mitsuba; dicts hold plain values (``to_world`` as nested lists, bitmap
@@ -57,15 +57,29 @@ import numpy as np
 
 from vissim.atomic import atomic_output
 from vissim.bench.depth_viewers import (
-    CameraViewer, EyeViewer, Viewer, blur_diameter_arcmin, equivalent_eye, focus_matrix_diopters,
+    CameraViewer,
+    EyeViewer,
+    Viewer,
+    blur_diameter_arcmin,
+    equivalent_eye,
+    focus_matrix_diopters,
 )
 from vissim.bench.dslr import MAX_DEPTH, NEAR_CLIP_MM, SAMPLERS, dslr_scene
 from vissim.bench.lens_mesh import mesh_cache_dir
-from vissim.charts import MM_PER_INCH, POLARITIES, ChartRow, ChartSpec, layout_chart, render_chart_angular
-from vissim.charts import INK_REFLECTANCE, PAPER_REFLECTANCE, render_chart_print
+from vissim.charts import (
+    INK_REFLECTANCE,
+    MM_PER_INCH,
+    PAPER_REFLECTANCE,
+    POLARITIES,
+    ChartRow,
+    ChartSpec,
+    layout_chart,
+    render_chart_angular,
+    render_chart_print,
+)
+from vissim.checks import finite_number, positive_number
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, rad_to_arcmin
-from vissim.validate import finite_number, positive_number
 
 __all__ = [
     "EYE_SENSOR", "VIEWS", "CONTENTS", "DEFAULT_DISTANCES_M", "PanelChart", "ChartPanel", "TiltedChart",

@@ -21,12 +21,19 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from vissim.bench.depth_scene import CameraViewer, ChartPanel, DepthScene, EyeViewer, PanelChart, TiltedChart
+from vissim.bench.depth_scene import (
+    CameraViewer,
+    ChartPanel,
+    DepthScene,
+    EyeViewer,
+    PanelChart,
+    TiltedChart,
+)
 from vissim.bench.scene_files import _LENS, _check_keys, _read, _table, _typed
+from vissim.checks import samples_per_pixel
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.trial_lens import TrialLens
-from vissim.validate import samples_per_pixel
+from vissim.optics.prescription import Prescription
+from vissim.optics.trial_lens import TrialLens
 
 __all__ = ["DepthSceneFile", "load_depth_scene_toml", "depth_scene_from_doc"]
 

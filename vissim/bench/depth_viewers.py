@@ -6,20 +6,20 @@ distance ``z`` is sharp in the meridians where ``1/z = K``, and blurred elsewher
 geometric spot of ``pupil x (K - I/z)`` milliradians (pupil in mm; conventions: D x mm = mrad).
 
 * :class:`EyeViewer` -- ``K = A I - Rx``: the eye's correcting lens ``Rx`` (a
-  :class:`~vissim.prescription.Prescription`, myope negative, *not* worn) and accommodation
+  :class:`~vissim.optics.prescription.Prescription`, myope negative, *not* worn) and accommodation
   ``A >= 0``.  So defocus at distance d is ``Rx + 1/d - A``, exactly
-  :func:`vissim.depth.effective_prescription`: a -2 D myope focuses 0.5 m (K = +2 D), an
+  :func:`vissim.optics.depth.effective_prescription`: a -2 D myope focuses 0.5 m (K = +2 D), an
   emmetrope accommodating 3 D focuses 1/3 m, a relaxed +1 D hyperope has K = -1 D (focus
   "beyond infinity": blur at 6 m is pupil x (1 + 1/6) D), and ``plano -2.00 x 90`` has
   K = diag(2, 0) D (excess power in the horizontal meridian: horizontal blur).  Rendered by
   the Mitsuba sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), which takes any such K.
 * :class:`CameraViewer` -- the DSLR of :mod:`vissim.bench.dslr` (Mitsuba ``thinlens``,
   entrance pupil = focal length / f-number): ``K = I / focus distance`` plus the power its
-  trial lenses add (:func:`vissim.trial_lens.trial_lens_effect`, for an object at the focus
+  trial lenses add (:func:`vissim.optics.trial_lens.trial_lens_effect`, for an object at the focus
   distance; the lenses' vergence effect changes it by < 1 % between 0.4 m and infinity).
 
 :func:`equivalent_eye` is the eye that blurs like a viewer (``Rx = -K``, same pupil, A = 0):
-what :func:`vissim.depth.blur_depth` is given to simulate a render of that viewer.
+what :func:`vissim.optics.depth.blur_depth` is given to simulate a render of that viewer.
 """
 
 from __future__ import annotations
@@ -29,14 +29,22 @@ from typing import Union
 
 import numpy as np
 
-from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.bench.dslr import DslrBench
+from vissim.checks import finite_number, positive_number
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription, RefractiveError
-from vissim.trial_lens import CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.optics.prescription import Prescription, RefractiveError
+from vissim.optics.trial_lens import (
+    CROWN_GLASS_INDEX,
+    THESIS_CHART_DISTANCE_MM,
+    THESIS_F_NUMBER,
+    THESIS_FOCAL_LENGTH_MM,
+    THESIS_VERTEX_DISTANCE_MM,
+    TrialLens,
+    TrialLensSetup,
+    trial_lens_effect,
+)
 from vissim.units import rad_to_arcmin
-from vissim.validate import finite_number, positive_number
-from vissim.validate import pupil_diameter_mm as check_pupil_mm
 
 __all__ = ["EyeViewer", "CameraViewer", "Viewer", "focus_matrix_diopters", "equivalent_eye", "blur_diameter_arcmin"]
 

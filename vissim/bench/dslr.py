@@ -2,7 +2,7 @@
 
 World frame (millimetres): the camera's principal plane (and entrance pupil) at z = 0, looking
 along +z with +y up; the chart at z = ``chart_distance_mm``.  World x is the examiner's right
-(TABO frame of :mod:`vissim.trial_lens`), so the camera's image right is world -x.  Light
+(TABO frame of :mod:`vissim.optics.trial_lens`), so the camera's image right is world -x.  Light
 travels towards -z: chart, trial lenses (the last lens's back vertex at ``vertex_distance_mm``,
 the others stacked towards the chart with ``lens_gap_mm`` of air), camera.
 
@@ -35,22 +35,25 @@ nested lists under ``to_world`` and bitmap textures carry a float32 numpy array 
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
-import functools
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from vissim.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import check_allocation, samples_per_pixel
 from vissim.errors import VissimInputError
-from vissim.validate import arcmin_per_px as check_arcmin_per_px
-from vissim.validate import check_allocation, samples_per_pixel
-from vissim.trial_lens import (
+from vissim.optics.trial_lens import (
     CROWN_GLASS_INDEX,
     MAX_LENSES_IN_HOLDER,
+    THESIS_CHART_DISTANCE_MM,
+    THESIS_F_NUMBER,
+    THESIS_FOCAL_LENGTH_MM,
+    THESIS_VERTEX_DISTANCE_MM,
     TrialLens,
     TrialLensEffect,
     TrialLensSetup,
@@ -88,7 +91,7 @@ class DslrBench:
     """Camera, trial-lens holder and sampling of the DSLR bench (defaults: the thesis's bench).
 
     ``lenses`` are ordered from the chart to the camera, as in
-    :class:`~vissim.trial_lens.TrialLensSetup`.  ``size_px`` is (rows, cols).
+    :class:`~vissim.optics.trial_lens.TrialLensSetup`.  ``size_px`` is (rows, cols).
     ``clear_aperture_mm`` None sizes the lens meshes to the beam (:meth:`clear_aperture`).
     """
 
@@ -217,7 +220,7 @@ def bench_theory(bench: DslrBench) -> BenchTheory:
     """Defocus at the camera = power added by the lenses + (1/focus - 1/chart); blur = pupil x defocus.
 
     The blur diameter in each principal meridian is the entrance pupil (mm) times the
-    defocus (D) in milliradians; magnifications from :func:`vissim.trial_lens.trial_lens_effect`.
+    defocus (D) in milliradians; magnifications from :func:`vissim.optics.trial_lens.trial_lens_effect`.
     """
     focus_error = 1000.0 / bench.focus_distance_mm - 1000.0 / bench.chart_distance_mm
     if bench.lenses:

@@ -2,7 +2,7 @@
 
 Frame and sign conventions (millimetres; the bench's world frame up to a translation):
 
-* x is the examiner's right (TABO frame, :mod:`vissim.trial_lens`), y is up, +z points from
+* x is the examiner's right (TABO frame, :mod:`vissim.optics.trial_lens`), y is up, +z points from
   the camera towards the chart.  Light travels towards -z.
 * The back vertex (camera side) is at z = 0, the front vertex (chart side) at z = t.
 * A surface of 2x2 curvature matrix K (1/mm) is ``z = z_vertex - sag(x)`` with
@@ -37,8 +37,8 @@ import numpy as np
 
 from vissim.atomic import atomic_output
 from vissim.errors import VissimInputError
-from vissim.prescription import LensPower
-from vissim.trial_lens import TrialLens
+from vissim.optics.prescription import LensPower
+from vissim.optics.trial_lens import TrialLens
 
 __all__ = [
     "LensMesh",

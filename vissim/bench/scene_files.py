@@ -21,9 +21,14 @@ from pathlib import Path
 from typing import Any
 
 from vissim.bench.dslr import DslrBench
-from vissim.charts import DEFAULT_LETTER_SEED, ChartSpec, etdrs_chart_spec, single_letter_spec
+from vissim.charts import (
+    DEFAULT_LETTER_SEED,
+    ChartSpec,
+    etdrs_chart_spec,
+    single_letter_spec,
+)
 from vissim.errors import VissimInputError
-from vissim.trial_lens import TrialLens
+from vissim.optics.trial_lens import TrialLens
 
 __all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables"]
 
@@ -194,7 +199,7 @@ _ATV_TUBE_KEYS = {
 def load_atv_toml(path: str | os.PathLike[str]):
     """The :class:`~vissim.bench.atv.AtvConfig` of an ATV scene file (``scenes/atv_tube.toml``)."""
     from vissim.bench.atv import AtvConfig, AtvEye, AtvTube, atv_trial_lens
-    from vissim.prescription import Prescription
+    from vissim.optics.prescription import Prescription
 
     doc, source = _read(path)
     _check_keys(doc, ("tube", "eye", "trial_lens"), source)

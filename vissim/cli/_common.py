@@ -6,8 +6,8 @@ import argparse
 import math
 
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.wavefront import Wavefront, parse_zernike_terms
+from vissim.optics.prescription import Prescription
+from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 
 
 def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = True) -> None:

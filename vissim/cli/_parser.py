@@ -17,7 +17,7 @@ import math
 import sys
 from dataclasses import dataclass
 
-from vissim.validate import MAX_POWER_DIOPTERS, MAX_SAMPLER_SEED, MAX_SPP
+from vissim.checks import MAX_POWER_DIOPTERS, MAX_SAMPLER_SEED, MAX_SPP
 
 __all__ = ["Number", "VissimArgumentParser", "unit_of"]
 

@@ -110,9 +110,14 @@ def run_analyze(args: argparse.Namespace) -> int:
 
 def run_simulate(args: argparse.Namespace) -> int:
     from vissim.atv.report import write_simulation_report
-    from vissim.atv.virtual import AtvApparatus, DetectionModel, VirtualSubject, run_virtual_experiment
+    from vissim.atv.virtual import (
+        AtvApparatus,
+        DetectionModel,
+        VirtualSubject,
+        run_virtual_experiment,
+    )
     from vissim.cli._common import parse_float_list
-    from vissim.prescription import Prescription
+    from vissim.optics.prescription import Prescription
 
     subject = VirtualSubject(
         Prescription.parse(args.eye), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_d,
@@ -144,7 +149,12 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 def run_procedure_command(args: argparse.Namespace) -> int:
     from vissim.atomic import write_json_atomic
-    from vissim.atv.procedure import ProcedureConfig, PsychometricFunction, SimulatedObserver, run_procedure
+    from vissim.atv.procedure import (
+        ProcedureConfig,
+        PsychometricFunction,
+        SimulatedObserver,
+        run_procedure,
+    )
     from vissim.provenance import make_provenance
 
     config = ProcedureConfig(resolution_code=args.resolution)

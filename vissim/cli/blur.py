@@ -5,13 +5,17 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.blur import PADDING_MODES, blur_image
-from vissim.chromatic import gaussian_band
-from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
+from vissim.cli._common import (
+    add_aberration_args,
+    parse_float_list,
+    wavefront_from_args,
+)
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
+from vissim.optics.blur import PADDING_MODES, blur_image
+from vissim.optics.chromatic import gaussian_band
+from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.provenance import make_provenance
-from vissim.psf import compute_psf, suggested_size_px
 
 DEFAULT_CHANNELS_NM = (610.0, 550.0, 465.0)
 

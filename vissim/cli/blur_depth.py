@@ -7,13 +7,14 @@ import math
 from pathlib import Path
 
 import numpy as np
-from vissim.accommodation import Accommodation, accommodation_for_target
-from vissim.cli.blur import _find_key
+
 from vissim.cli._parser import Number
-from vissim.depth import DEFAULT_MAX_LAYERS, blur_depth
+from vissim.cli.blur import _find_key
 from vissim.errors import VissimInputError
 from vissim.imageio import read_data_map, read_image, write_image
-from vissim.prescription import Prescription
+from vissim.optics.accommodation import Accommodation, accommodation_for_target
+from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
+from vissim.optics.prescription import Prescription
 from vissim.provenance import make_provenance
 
 
@@ -23,7 +24,7 @@ def add_parser(subparsers) -> None:
         help="blur an RGB-D image: defocus per depth for an uncorrected eye, with occlusion",
         description="Blur a linear-light image through an uncorrected eye, each pixel with the defocus "
         "of its depth (effective prescription = eye Rx + 1/d - accommodation), in depth layers "
-        "composited with occlusion so that edges neither glow nor leak (see vissim.depth).",
+        "composited with occlusion so that edges neither glow nor leak (see vissim.optics.depth).",
     )
     parser.add_argument("input", type=Path, help="image file (.exr, .png, .tif)")
     parser.add_argument("depth", type=Path, help="depth in metres: .npy, or .exr with one channel (Z/depth/Y); inf = sky")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.demo import DEMO_PRESCRIPTIONS, run_demo
+from vissim.chart_demo import DEMO_PRESCRIPTIONS, run_demo
 
 
 def add_parser(subparsers) -> None:

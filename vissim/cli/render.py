@@ -98,7 +98,7 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _lenses(args):
-    from vissim.trial_lens import TrialLens
+    from vissim.optics.trial_lens import TrialLens
 
     if args.sphere is None and args.cylinder is None:
         if args.axis is not None:
@@ -127,7 +127,11 @@ def _chart_table(args, scene_doc: dict) -> dict:
 def run_bench(args: argparse.Namespace) -> int:
     import tomllib
 
-    from vissim.bench.scene_files import bench_from_tables, chart_spec_from_table, load_chart_toml
+    from vissim.bench.scene_files import (
+        bench_from_tables,
+        chart_spec_from_table,
+        load_chart_toml,
+    )
     from vissim.imageio import write_image
 
     output = Path(args.output)

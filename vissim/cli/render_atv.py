@@ -78,7 +78,7 @@ def _config(args: argparse.Namespace):
 
     from vissim.bench.atv import AtvConfig, atv_trial_lens, display_code_to_linear
     from vissim.bench.scene_files import load_atv_toml
-    from vissim.prescription import Prescription
+    from vissim.optics.prescription import Prescription
 
     config = load_atv_toml(args.scene) if args.scene else AtvConfig()
     if args.display_code is not None:
@@ -109,7 +109,7 @@ def _config(args: argparse.Namespace):
 
 def run_atv(args: argparse.Namespace) -> int:
     """Render, write the EXR and print the summary; returns the exit code."""
-    from vissim.bench.atv_predict import predicted_spot
+    from vissim.atv.predict import predicted_spot
     from vissim.imageio import write_image
     from vissim.provenance import json_safe, make_provenance
     from vissim.render.atv_trace import DEFAULT_N_RAYS, render_atv_camera, trace_atv

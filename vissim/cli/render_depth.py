@@ -66,8 +66,8 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
 
 def _viewer(args: argparse.Namespace, loaded):
     from vissim.bench.depth_scene import CameraViewer, EyeViewer
-    from vissim.prescription import Prescription
-    from vissim.trial_lens import TrialLens
+    from vissim.optics.prescription import Prescription
+    from vissim.optics.trial_lens import TrialLens
 
     eye_given = any(v is not None for v in (args.eye, args.pupil_mm, args.accommodation_d))
     camera_given = any(v is not None for v in (args.f_number, args.focus_distance_m, args.focal_length_mm,

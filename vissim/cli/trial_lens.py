@@ -9,7 +9,7 @@ import math
 
 from vissim import __version__
 from vissim.errors import VissimInputError
-from vissim.trial_lens import (
+from vissim.optics.trial_lens import (
     CROWN_GLASS_INDEX,
     TrialLens,
     TrialLensSetup,

@@ -19,7 +19,7 @@ direction to the pupil, just wide enough that every ray able to reach the pupil 
 (:attr:`~vissim.bench.atv.AtvParaxial.cone_radius_rad` x 1.05 + 0.1 mrad; a ray in the pupil
 from the cone's outer 2 % widens the cone and traces again).  Each ray carries
 ``L x pixel area x pi sin^2(cone) / n_rays``, so image pixels hold flux per arcmin²
-(:mod:`vissim.bench.atv_predict`).  Putting the direction first in the Sobol sequence cut the
+(:mod:`vissim.atv.predict`).  Putting the direction first in the Sobol sequence cut the
 noise at the blur plateau by 1.7x against pseudo-random sampling (3.6 % vs 6.1 % at ~260 rays
 per pixel); the pixel dimensions, spread over ~4 image pixels, gain nothing.
 
@@ -50,8 +50,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import qmc
 
+from vissim.atv.predict import spot_metrics, suggested_atv_size_px
 from vissim.bench.atv import AtvConfig, atv_paraxial, atv_scene
-from vissim.bench.atv_predict import spot_metrics, suggested_atv_size_px
 from vissim.errors import VissimError, VissimInputError
 from vissim.render.backend import mitsuba
 from vissim.render.plugins import register_plugins
@@ -80,7 +80,7 @@ class AtvResult:
     passes).  ``total_flux`` counts all light in the pupil (tracer) or the field (camera);
     ``peak`` (the largest value after a light smoothing that removes sampling noise),
     ``peak_pixel`` and ``spot_diameter_arcmin`` (the radial-profile FWHM) are defined in
-    :func:`vissim.bench.atv_predict.spot_metrics`.
+    :func:`vissim.atv.predict.spot_metrics`.
     """
 
     image: np.ndarray
@@ -241,7 +241,7 @@ def trace_atv(config: AtvConfig, *, n_rays: int = DEFAULT_N_RAYS, seed: int = 0,
     """Light-trace the ATV tube (module doc): the retinal image of the pixel, flux per arcmin².
 
     ``n_rays`` (rounded up to a power of two) are emitted into the cone that reaches the pupil;
-    ``size_px`` defaults to :func:`vissim.bench.atv_predict.suggested_atv_size_px`.
+    ``size_px`` defaults to :func:`vissim.atv.predict.suggested_atv_size_px`.
     """
     if not isinstance(config, AtvConfig):
         raise VissimInputError(f"trace_atv needs an AtvConfig, got {type(config).__name__}")

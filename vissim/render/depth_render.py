@@ -7,7 +7,7 @@ Three renders of one scene (:func:`vissim.bench.depth_scene.depth_scene_dict`), 
 * **depth** -- the pinhole looking at the *proximity pass* (each panel glows with ``1/z``
   dioptres, z axial), seed ``seed + 2``.  A pixel's value is its mean proximity over the pixel
   (0 where it sees sky), and the depth map is ``1 / proximity`` metres, ``inf`` for sky: the
-  axial distance :func:`vissim.depth.blur_depth` expects for these flat-focal-plane optics.
+  axial distance :func:`vissim.optics.depth.blur_depth` expects for these flat-focal-plane optics.
   Averaging in dioptres is what ``blur_depth`` does between its layers, so a pixel split
   between two panels gets the dioptric mean of their depths.  Through trial lenses the depth
   pass sees what the pinhole sees (magnified), unlike Mitsuba's ``aov`` integrator, whose
@@ -32,9 +32,9 @@ from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
 from vissim.render.eye_sensor import register_eye_sensor
+from vissim.render.fixed_order import render_image
 from vissim.render.plugins import register_plugins
 from vissim.render.run import render_scene, to_mitsuba_dict
-from vissim.render.fixed_order import render_image
 
 __all__ = ["DepthRenderResult", "render_depth", "render_view", "render_aov_depth", "proximity_to_depth_m",
            "SKY_PROXIMITY_D"]
@@ -105,7 +105,11 @@ def render_depth(
     only the pixel-area sampling of edges.  ``progress(name, done_spp, total_spp)`` reports
     each render.  The provenance records the scene, the viewer, seeds, spp and versions.
     """
-    from vissim.bench.depth_scene import blur_diameter_arcmin, focus_matrix_diopters, panel_geometries
+    from vissim.bench.depth_scene import (
+        blur_diameter_arcmin,
+        focus_matrix_diopters,
+        panel_geometries,
+    )
 
     start = time.perf_counter()
     aux = int(spp if aux_spp is None else aux_spp)

@@ -29,8 +29,8 @@ from __future__ import annotations
 
 import logging
 
-from vissim.trial_lens import CROWN_GLASS_INDEX
 from vissim.errors import VissimInputError
+from vissim.optics.trial_lens import CROWN_GLASS_INDEX
 
 __all__ = ["REFRACT_BSDF", "register_plugins", "register_once"]
 

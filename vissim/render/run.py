@@ -25,12 +25,12 @@ from typing import Any
 
 import numpy as np
 
+from vissim.checks import check_allocation, samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
-from vissim.render.plugins import register_plugins
 from vissim.render.fixed_order import render_image
-from vissim.validate import check_allocation, samples_per_pixel
+from vissim.render.plugins import register_plugins
 
 __all__ = ["RenderResult", "to_mitsuba_dict", "render_scene", "render_bench", "pass_seeds", "DEFAULT_PASS_SAMPLES"]
 
@@ -207,7 +207,13 @@ def render_bench(
     Mitsuba and Dr.Jit versions.
     """
     from vissim.bench.dslr import bench_theory, chart_mm_per_texel, dslr_scene
-    from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
+    from vissim.charts import (
+        MM_PER_INCH,
+        Chart,
+        ChartSpec,
+        chart_sidecar,
+        render_chart_print,
+    )
 
     if isinstance(chart, ChartSpec):
         chart = render_chart_print(chart, MM_PER_INCH / chart_mm_per_texel(bench))

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from vissim.trial_lens import (
+from vissim.optics.trial_lens import (
     CROWN_GLASS_INDEX,
     THESIS_CHART_DISTANCE_MM,
     THESIS_F_NUMBER,
@@ -24,8 +24,19 @@ from vissim.trial_lens import (
 )
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.fields import (
-    MAX_SPP, LensSpec, choices, field_error, lenses, number, read_campaign_toml, seed_pair, table, tables, text,
-    value_list, whole_number,
+    MAX_SPP,
+    LensSpec,
+    choices,
+    field_error,
+    lenses,
+    number,
+    read_campaign_toml,
+    seed_pair,
+    table,
+    tables,
+    text,
+    value_list,
+    whole_number,
 )
 
 __all__ = ["LensSpec", "Configuration", "CampaignSettings", "Campaign", "load_campaign", "SIMULATIONS", "INPUTS"]
@@ -246,7 +257,9 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
         manifest=manifest,
     )
     if check_memory:
-        from vissim.validation.preflight import check_campaign_memory  # simulate imports this module
+        from vissim.validation.preflight import (
+            check_campaign_memory,  # simulate imports this module
+        )
 
         check_campaign_memory(campaign)
     return campaign

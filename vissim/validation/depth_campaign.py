@@ -1,4 +1,4 @@
-"""Depth validation campaigns: renders of charts at several depths against :func:`vissim.depth.blur_depth`.
+"""Depth validation campaigns: renders of charts at several depths against :func:`vissim.optics.depth.blur_depth`.
 
 A campaign TOML has a ``[depth_campaign]`` table (or ``[campaign]`` with ``kind = "depth"``)
 of settings and ``[[config]]`` tables, each a scene file (``scene``, relative to the campaign
@@ -36,21 +36,41 @@ import numpy as np
 
 from vissim.atomic import write_json_atomic
 from vissim.bench.depth_scene import (
-    CameraViewer, DepthScene, EyeViewer, blur_diameter_arcmin, equivalent_eye, panel_geometries,
+    CameraViewer,
+    DepthScene,
+    EyeViewer,
+    blur_diameter_arcmin,
+    equivalent_eye,
+    panel_geometries,
 )
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
-from vissim.prescription import Prescription
+from vissim.optics.prescription import Prescription
+from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe, make_provenance
-from vissim.trial_lens import TrialLens
+from vissim.validation.depth_masks import depth_regions, masked_metrics
 from vissim.validation.fields import (
-    MAX_SEED, MAX_SPP, choices, field_error, lenses, number, read_campaign_toml, seed_pair, table, tables, text,
+    MAX_SEED,
+    MAX_SPP,
+    choices,
+    field_error,
+    lenses,
+    number,
+    read_campaign_toml,
+    seed_pair,
+    table,
+    tables,
+    text,
     whole_number,
 )
-from vissim.validation.depth_masks import depth_regions, masked_metrics
 from vissim.validation.metrics import compare_images
-from vissim.validation.runner import RunSummary, _make_renders, check_run_options, connect_scheduler
+from vissim.validation.runner import (
+    RunSummary,
+    _make_renders,
+    check_run_options,
+    connect_scheduler,
+)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "DepthRenderSpec", "load_depth_campaign",
            "is_depth_campaign", "render_depth_spec", "run_depth_campaign", "compute_depth_item", "run_any_campaign",
@@ -139,7 +159,9 @@ def render_depth_spec(spec: DepthRenderSpec):
 
     Returns the :class:`vissim.render.run.RenderResult`: pixels, variant and the spp used.
     """
-    from vissim.render.depth_render import render_view  # the Mitsuba door, imported where it runs
+    from vissim.render.depth_render import (
+        render_view,  # the Mitsuba door, imported where it runs
+    )
 
     result = render_view(spec.render_scene(), spec.viewer, view=spec.view, content=spec.content, spp=spec.spp,
                          seed=spec.seed)
@@ -298,7 +320,7 @@ def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> Depth
 def _diffracted(image: np.ndarray, pupil_mm: float, settings: DepthCampaignSettings,
                 arcmin_per_px: float) -> np.ndarray:
     """``image`` convolved with the in-focus diffraction PSF of a ``pupil_mm`` aperture."""
-    from vissim.blur import blur_image
+    from vissim.optics.blur import blur_image
     from vissim.validation.simulate import _psf
 
     psf = _psf(Prescription(0.0), pupil_mm, settings.wavelength_nm, arcmin_per_px, "wave")
@@ -321,7 +343,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
 
     ``images``: the renders by name (``truth_0``, ``truth_1``, ``all_in_focus``, ``proximity``).
     """
-    from vissim.depth import blur_depth
+    from vissim.optics.depth import blur_depth
     from vissim.render.depth_render import proximity_to_depth_m
     from vissim.validation.item import save_item_image
     from vissim.validation.simulate import block_mean
@@ -458,7 +480,10 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
     """Run the campaign file at ``path`` into ``out`` -- a depth campaign or a single-plane one -- and report it."""
     path, out = Path(path), Path(out)
     if is_depth_campaign(_read_toml(path)):
-        from vissim.validation.depth_report import build_depth_report, depth_summary_lines
+        from vissim.validation.depth_report import (
+            build_depth_report,
+            depth_summary_lines,
+        )
 
         campaign = load_depth_campaign(path)
         summary = run_depth_campaign(campaign, out, workers=workers, scheduler=scheduler, spp=spp,
@@ -489,7 +514,10 @@ def rebuild_any_report(run_dir: str | Path) -> tuple[list[Path], list[str]]:
     if not order.exists():
         raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
     if json.loads(order.read_text()).get("kind") == "depth":
-        from vissim.validation.depth_report import build_depth_report, depth_summary_lines
+        from vissim.validation.depth_report import (
+            build_depth_report,
+            depth_summary_lines,
+        )
 
         return build_depth_report(run_dir), depth_summary_lines(run_dir)
     from vissim.validation.report import build_report

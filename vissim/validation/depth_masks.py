@@ -7,7 +7,7 @@ class:
 * a **depth discontinuity** is a pixel whose 3 x 3 neighbourhood spans more than
   ``jump_d`` dioptres of proximity.  The default ``jump_d`` is the proximity step over which
   two blur discs differ by one pixel (``theta / pupil``): the occlusion threshold of
-  :func:`vissim.depth.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
+  :func:`vissim.optics.depth.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
   depth stays below it; a panel edge (or a panel against the sky) does not.  A pixel split
   between two depths carries the whole jump in its window, so mixed pixels are caught;
 * the **boundary band** is every pixel within ``r + margin_px`` of a discontinuity, where

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP
 from vissim.errors import VissimInputError
-from vissim.validate import MAX_SAMPLER_SEED, MAX_SPP
 
 __all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number", "seed_pair", "text",
            "table", "tables", "value_list", "choices", "lens", "lenses", "LensSpec", "MAX_SPP", "MAX_SEED",

@@ -3,15 +3,19 @@
 The estimates are rough upper bounds of the largest single step (a bench render, a PSF, one
 blurred image), enough to refuse a campaign that cannot fit (a 1e9 px tile, a PSF wider than
 the tile by orders of magnitude) with a message saying what it would need, before a file is
-written.  The machine's memory is :func:`vissim.validate.check_allocation`'s.
+written.  The machine's memory is :func:`vissim.checks.check_allocation`'s.
 """
 
 from __future__ import annotations
 
+from vissim.checks import check_allocation
 from vissim.errors import VissimInputError
-from vissim.psf import geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
-from vissim.validate import check_allocation
-from vissim.wavefront import Wavefront
+from vissim.optics.psf import (
+    geometric_blur_radius_arcmin,
+    psf_sampling,
+    suggested_size_px,
+)
+from vissim.optics.wavefront import Wavefront
 
 __all__ = ["render_memory_bytes", "item_memory_bytes", "check_campaign_memory", "check_depth_campaign_memory"]
 
@@ -25,7 +29,7 @@ BYTES_PER_BLUR_PX = 64
 BYTES_PER_FFT_PX = 48
 #: A geometric PSF's pixel (float64 accumulators).
 BYTES_PER_PSF_PX = 32
-#: vissim.psf.compute_psf refuses larger fields.
+#: vissim.optics.psf.compute_psf refuses larger fields.
 MAX_PSF_PX = 16384
 #: The bench's chart texture: texels per camera pixel (DslrBench.texels_per_px) and bytes per texel.
 TEXELS_PER_PX = 4.0

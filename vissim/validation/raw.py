@@ -43,8 +43,8 @@ import scipy.sparse
 import tifffile
 
 from vissim.charts import Chart
+from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
-from vissim.validate import positive_number as _positive
 from vissim.units import rad_to_arcmin
 
 logger = logging.getLogger(__name__)

@@ -7,7 +7,7 @@ import json
 from dataclasses import asdict, dataclass
 
 from vissim.bench.dslr import DslrBench
-from vissim.trial_lens import TrialLens, TrialLensSetup
+from vissim.optics.trial_lens import TrialLens, TrialLensSetup
 from vissim.validation.campaign import CampaignSettings, Configuration
 
 __all__ = ["RenderSpec", "bench_for", "bench_setup", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec"]
@@ -117,7 +117,9 @@ def render_spec(spec: RenderSpec):
     variant, seeds, passes and determinism; the campaign runner writes it in the EXR header.
     """
     from vissim.charts import single_letter_spec
-    from vissim.render.run import render_bench  # the Mitsuba door, imported where it runs
+    from vissim.render.run import (
+        render_bench,  # the Mitsuba door, imported where it runs
+    )
 
     chart = single_letter_spec(spec.letter, spec.logmar, viewing_distance_m=spec.chart_distance_m, polarity=spec.polarity)
     return render_bench(bench_for(spec), chart)

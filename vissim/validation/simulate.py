@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from vissim.blur import blur_image
-from vissim.prescription import LensPower, Prescription
-from vissim.psf import PSF, compute_psf, suggested_size_px
-from vissim.trial_lens import (
+from vissim.optics.blur import blur_image
+from vissim.optics.prescription import LensPower, Prescription
+from vissim.optics.psf import PSF, compute_psf, suggested_size_px
+from vissim.optics.trial_lens import (
     TrialLens,
     TrialLensSetup,
     entrance_pupil_diameter_mm,
@@ -41,9 +41,8 @@ from vissim.trial_lens import (
     thesis_table_4_2_power,
     trial_lens_effect,
 )
+from vissim.optics.wavefront import Wavefront
 from vissim.validation.campaign import CampaignSettings, Configuration
-from vissim.units import rad_to_arcmin
-from vissim.wavefront import Wavefront
 
 __all__ = [
     "SimulationSetup",
@@ -52,8 +51,6 @@ __all__ = [
     "add_bench_diffraction",
     "magnify",
     "block_mean",
-    "thesis_blur_ratio",
-    "defocus_blur_arcmin",
 ]
 
 
@@ -188,15 +185,3 @@ def add_bench_diffraction(render: np.ndarray, configuration: Configuration, sett
     pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, configuration.f_number)
     psf = _psf(Prescription(0.0), pupil, settings.wavelength_nm, settings.arcmin_per_px, "wave")
     return blur_image(render, psf, arcmin_per_px=settings.arcmin_per_px, padding="edge")
-
-
-def thesis_blur_ratio(configuration: Configuration, settings: CampaignSettings) -> float:
-    """How much smaller the thesis's blur disc is than the bench's (pupil ratio; errata 3)."""
-    return thesis_eye_pupil_diameter_mm(configuration.f_number) / entrance_pupil_diameter_mm(
-        settings.focal_length_mm, configuration.f_number
-    )
-
-
-def defocus_blur_arcmin(prescription: Prescription, pupil_mm: float) -> float:
-    """Angular diameter (arcmin) of the geometric blur disc of the spherical equivalent."""
-    return float(rad_to_arcmin(abs(prescription.spherical_equivalent_diopters) * pupil_mm * 1e-3))

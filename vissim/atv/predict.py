@@ -3,7 +3,7 @@
 The tube is equivalent to a source at (or near) infinity of the pixel's angular extent: the
 retinal image is the pixel's square, mapped by the paraxial system (spectacle magnification
 included), convolved with the eye's blur for the defocus ``K = vergence + E + A`` at the pupil
-(:func:`vissim.bench.atv.atv_paraxial`).  The blur comes from :func:`vissim.psf.compute_psf` of
+(:func:`vissim.bench.atv.atv_paraxial`).  The blur comes from :func:`vissim.optics.psf.compute_psf` of
 the prescription ``-K``: ``mode="geometric"`` (ray optics, comparable with the light tracer)
 or ``"wave"`` (diffraction).  Pure numpy; no Mitsuba.
 
@@ -37,10 +37,10 @@ import scipy.signal
 
 from vissim.bench.atv import AtvConfig, AtvParaxial, atv_paraxial
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription
-from vissim.psf import compute_psf
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf
+from vissim.optics.wavefront import Wavefront
 from vissim.units import arcmin_to_rad
-from vissim.wavefront import Wavefront
 
 __all__ = ["SpotMetrics", "AtvPrediction", "spot_metrics", "predicted_spot", "suggested_atv_size_px",
            "fresnel_transmittance"]

@@ -1,6 +1,6 @@
 """Depth-dependent blur: one eye, one accommodation state, a scene with a depth map.
 
-Defocus per depth (derivation in :mod:`vissim.accommodation`).  An object ``d`` metres away
+Defocus per depth (derivation in :mod:`vissim.optics.accommodation`).  An object ``d`` metres away
 has *proximity* ``L = 1/d`` dioptres (``L = 0`` for sky at infinity).  An eye whose correcting
 lens is ``Rx`` (myope negative), exerting accommodation ``A``, is corrected *for that object*
 by the lens::
@@ -59,16 +59,21 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from vissim.blur import BlurKernel, _pad
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import finite_number, positive_number
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription, RefractiveError
-from vissim.pullpush import pull_push
-from vissim.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
+from vissim.optics.blur import BlurKernel, _pad
+from vissim.optics.prescription import Prescription, RefractiveError
+from vissim.optics.psf import (
+    PSF,
+    compute_psf,
+    geometric_blur_radius_arcmin,
+    suggested_size_px,
+)
+from vissim.optics.pullpush import pull_push
+from vissim.optics.wavefront import Wavefront
 from vissim.units import arcmin_to_rad
-from vissim.validate import arcmin_per_px as check_arcmin_per_px
-from vissim.validate import finite_number, positive_number
-from vissim.validate import pupil_diameter_mm as check_pupil_mm
-from vissim.wavefront import Wavefront
 
 __all__ = [
     "DepthBlurResult",
@@ -285,7 +290,7 @@ def blur_depth(
         The eye's correcting lens (myope negative), *not worn*: the eye is uncorrected.
     accommodation_d : float
         Accommodation exerted (D, >= 0), the same for the whole scene; see
-        :func:`vissim.accommodation.accommodation_for_target`.
+        :func:`vissim.optics.accommodation.accommodation_for_target`.
     extra_wavefront : Wavefront, optional
         Further aberrations of the eye (higher orders), the same at every depth.
     layer_spacing_fraction : float

@@ -1,11 +1,11 @@
-"""Quantities derived from a sampled :class:`~vissim.psf.PSF`: OTF, MTF, encircled energy."""
+"""Quantities derived from a sampled :class:`~vissim.optics.psf.PSF`: OTF, MTF, encircled energy."""
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.fft
 
-from vissim.psf import PSF
+from vissim.optics.psf import PSF
 from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm
 
 __all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_of_encircled_energy_arcmin", "diffraction_mtf"]

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.fft
 
 from vissim.errors import VissimInputError
-from vissim.psf import PSF
+from vissim.optics.psf import PSF
 
 __all__ = ["blur_image", "BlurKernel", "PADDING_MODES"]
 

@@ -6,7 +6,7 @@ the Nyquist interval lambda/(2D) of the intensity PSF, over a field that holds t
 blur plus the diffraction skirt, and then *integrated* over the requested output pixels
 (ERRATA item 6); the integration is exact, done as the pixel's sinc in the
 Fourier domain.  ``pixel="sample"`` gives instead the band-limited point samples, whose DFT
-is the OTF: the exact kernel for blurring a *well-sampled* image (see :mod:`vissim.blur`).
+is the OTF: the exact kernel for blurring a *well-sampled* image (see :mod:`vissim.optics.blur`).
 A requested field too small for the blur raises
 :class:`~vissim.errors.FieldTooSmallError`; nothing wraps around silently.
 
@@ -32,13 +32,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
-from vissim.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.validate import arcmin_per_px as check_arcmin_per_px
-from vissim.validate import pupil_diameter_mm as check_pupil_mm
+from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.wavefront import Wavefront
+from vissim.optics.zernike import zernike_nm
 from vissim.units import arcmin_to_rad, nm_to_mm, nm_to_um, rad_to_arcmin
-from vissim.wavefront import Wavefront
-from vissim.zernike import zernike_nm
 
 __all__ = [
     "PIXEL_MODES",
@@ -388,7 +388,7 @@ def compute_psf(
     pixel
         ``"integrate"`` (default): each value is the PSF integrated over its pixel, what a
         sensor records.  ``"sample"``: band-limited point samples, the exact kernel for
-        blurring well-sampled images (see :mod:`vissim.blur` for when it matters).
+        blurring well-sampled images (see :mod:`vissim.optics.blur` for when it matters).
     """
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     if diameter > wavefront.pupil_diameter_mm * (1 + 1e-12):

@@ -27,10 +27,10 @@ from types import MappingProxyType
 
 import numpy as np
 
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.validate import pupil_diameter_mm as check_pupil_mm
-from vissim.prescription import Prescription, RefractiveError
-from vissim.zernike import zernike_nm
+from vissim.optics.prescription import Prescription, RefractiveError
+from vissim.optics.zernike import zernike_nm
 
 __all__ = ["Wavefront", "prescription_to_zernike_um", "zernike_um_to_prescription", "parse_zernike_terms"]
 

@@ -14,13 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from vissim.atomic import write_json_atomic
-from vissim.blur import blur_image
 from vissim.charts import etdrs_chart_spec, render_chart_angular
 from vissim.imageio import to_preview_png, write_image
-from vissim.prescription import Prescription
+from vissim.optics.blur import blur_image
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.optics.wavefront import Wavefront
 from vissim.provenance import make_provenance
-from vissim.psf import compute_psf, suggested_size_px
-from vissim.wavefront import Wavefront
 
 log = logging.getLogger(__name__)
 

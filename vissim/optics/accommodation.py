@@ -1,6 +1,6 @@
 """Accommodation: how much extra power an eye can add, and how much it adds for a target.
 
-Sign derivation (``docs/conventions.md``: a :class:`~vissim.prescription.Prescription` is the
+Sign derivation (``docs/conventions.md``: a :class:`~vissim.optics.prescription.Prescription` is the
 correcting lens at the eye's principal plane, a myope's sphere is negative).  Write ``M`` for
 the prescription's spherical equivalent, ``E = -M`` for the eye's excess power, ``A >= 0``
 for the accommodation exerted (extra power, dioptres) and ``L = 1/d`` for the *proximity* of
@@ -39,9 +39,9 @@ import logging
 import math
 from dataclasses import dataclass
 
+from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.prescription import Prescription, RefractiveError
-from vissim.validate import finite_number
+from vissim.optics.prescription import Prescription, RefractiveError
 
 __all__ = [
     "HOFSTETTER_1950",

@@ -27,9 +27,9 @@ import re
 from dataclasses import dataclass
 from typing import Self
 
+from vissim.checks import MAX_POWER_DIOPTERS
+from vissim.checks import finite_number as _finite
 from vissim.errors import VissimInputError
-from vissim.validate import MAX_POWER_DIOPTERS
-from vissim.validate import finite_number as _finite
 
 __all__ = [
     "SpheroCylinder",

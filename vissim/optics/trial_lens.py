@@ -7,7 +7,7 @@ stood at 914.4 mm.  It also ignores spectacle magnification (ERRATA item 5).  Th
 both properly, by generalized (astigmatic) paraxial ray transfer:
 
 * a ray is the 4-vector ``(x, y, n u_x, n u_y)``: heights in metres, reduced angles in radians,
-  in the TABO frame used by :meth:`vissim.prescription.SpheroCylinder.power_matrix`
+  in the TABO frame used by :meth:`vissim.optics.prescription.SpheroCylinder.power_matrix`
   (x to the examiner's right, y up), z from the object towards the camera;
 * a refracting surface with 2x2 dioptric power matrix F is ``[[I, 0], [-F, I]]``, a gap of
   thickness t in a medium of index n is ``[[I, (t/n) I], [0, I]]`` (Keating 1981; Harris 1997),
@@ -33,9 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import finite_number as _number
 from vissim.errors import VissimInputError
-from vissim.validate import finite_number as _number
-from vissim.prescription import LensPower, Prescription
+from vissim.optics.prescription import LensPower, Prescription
 
 __all__ = [
     "CROWN_GLASS_INDEX",
