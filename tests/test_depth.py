@@ -320,7 +320,7 @@ def test_blur_depth_command_reads_sampling_from_provenance_and_a_z_channel_exr(t
     depth = np.where(np.arange(48) < 24, 0.5, 6.0)[None, :].repeat(32, axis=0).astype(np.float32)
     OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
                  {"Z": OpenEXR.Channel(np.ascontiguousarray(depth))}).write(str(depth_path))
-    code = main(["blur-depth", str(image_path), str(depth_path), "-o", str(out_path), "--eye", "-2.00 DS",
+    code = main(["blur-depth", str(image_path), str(depth_path), "-o", str(out_path), "--rx", "-2.00 DS",
                  "--pupil-mm", "4", "--age", "30", "--focus-distance-m", "0.25", "--mode", "geometric"])
     out, err = capsys.readouterr()
     assert code == 0 and "wrote" in out, err
@@ -336,7 +336,7 @@ def test_blur_depth_command_refuses_conflicting_focus_options(tmp_path, capsys):
     image_path, depth_path = tmp_path / "in.exr", tmp_path / "depth.npy"
     write_image(image_path, texture((8, 8)))
     np.save(depth_path, np.ones((8, 8)))
-    code = main(["blur-depth", str(image_path), str(depth_path), "-o", str(tmp_path / "o.exr"), "--eye", "plano",
+    code = main(["blur-depth", str(image_path), str(depth_path), "-o", str(tmp_path / "o.exr"), "--rx", "plano",
                  "--pupil-mm", "3", "--arcmin-per-px", "1", "--accommodation-d", "1", "--age", "30"])
     _, err = capsys.readouterr()
     assert code == 2 and err.startswith("vissim: error:") and err.count("\n") == 1

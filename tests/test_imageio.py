@@ -343,3 +343,75 @@ def test_data_maps_round_trip_with_infinity_and_refuse_nan(tmp_path):
     np.testing.assert_array_equal(read_data_map(tmp_path / "d.npy").pixels, depth)
     with pytest.raises(VissimInputError, match="NaN"):
         write_data_map(tmp_path / "bad.exr", np.array([[np.nan, 1.0]]))
+
+
+# ---------------------------------------------------------------- angular sampling
+
+
+@pytest.mark.parametrize("name", ["s.exr", "s.png", "s.tif"])
+def test_arcmin_per_px_round_trips_through_the_file(tmp_path, name):
+    path = tmp_path / name
+    pixels = _rng().random((6, 5)).astype(np.float32)
+    write_image(path, pixels, provenance=make_provenance(command="test"), arcmin_per_px=0.375)
+    image = read_image(path)
+    assert image.arcmin_per_px == 0.375
+    assert image.provenance["arcmin_per_px"] == 0.375  # the one documented place: top-level key
+    assert image.provenance["inputs"]["command"] == "test"  # the rest of the record is kept
+    if path.suffix != ".exr":
+        assert json.loads((tmp_path / (name + ".json")).read_text())["arcmin_per_px"] == 0.375
+
+
+def test_arcmin_per_px_without_other_provenance_writes_a_record(tmp_path):
+    write_image(tmp_path / "a.png", np.zeros((3, 3), np.float32), arcmin_per_px=2.0)
+    assert (tmp_path / "a.png.json").is_file()
+    assert read_image(tmp_path / "a.png").arcmin_per_px == 2.0
+    to_preview_png(tmp_path / "p.png", np.ones((3, 3), np.float32), arcmin_per_px=0.25)
+    assert read_image(tmp_path / "p.png").arcmin_per_px == 0.25
+
+
+def test_an_image_without_sampling_reads_as_none(tmp_path):
+    write_image(tmp_path / "a.exr", np.zeros((3, 3), np.float32))
+    write_image(tmp_path / "b.png", np.zeros((3, 3), np.float32), provenance={"note": "no sampling"})
+    assert read_image(tmp_path / "a.exr").arcmin_per_px is None
+    assert read_image(tmp_path / "b.png").arcmin_per_px is None
+
+
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf"), 1e9])
+def test_a_bad_arcmin_per_px_is_refused_before_writing(tmp_path, value):
+    with pytest.raises(VissimInputError, match="arcmin per pixel") as err:
+        write_image(tmp_path / "a.exr", np.zeros((3, 3), np.float32), arcmin_per_px=value)
+    _assert_one_line(err)
+    assert not (tmp_path / "a.exr").exists()
+
+
+@pytest.mark.parametrize("provenance", [
+    {"inputs": {"arcmin_per_px": 0.5}},                                   # blur, blur-depth outputs
+    {"inputs": {"command": "vissim chart", "options": {"arcmin_per_px": 0.5}}},  # vissim chart
+    {"inputs": {"bench": {"arcmin_per_px": 0.5, "spp": 4}}},              # render bench
+    {"inputs": {"render": {"arcmin_per_px": 0.5}}},                       # campaign renders
+    {"inputs": {"settings": {"arcmin_per_px": 0.5}}},                     # campaign items
+    {"inputs": {"summary": {"arcmin_per_px": 0.5}}},                      # render atv
+    {"inputs": {"psf": {"arcmin_per_px": 0.5}}},                          # psf
+])
+def test_files_written_before_the_sampling_key_keep_their_sampling(tmp_path, provenance):
+    write_image(tmp_path / "old.exr", np.zeros((3, 3), np.float32), provenance=provenance)
+    write_image(tmp_path / "old.png", np.zeros((3, 3), np.float32), provenance=provenance)
+    assert read_image(tmp_path / "old.exr").arcmin_per_px == 0.5
+    assert read_image(tmp_path / "old.png").arcmin_per_px == 0.5
+
+
+def test_the_top_level_sampling_wins_over_older_places(tmp_path):
+    write_image(tmp_path / "a.exr", np.zeros((3, 3), np.float32),
+                provenance={"inputs": {"input_provenance": {"arcmin_per_px": 9.0}, "arcmin_per_px": 3.0}},
+                arcmin_per_px=1.5)
+    assert read_image(tmp_path / "a.exr").arcmin_per_px == 1.5
+    # a sampling buried in an *input's* provenance is not the image's own
+    write_image(tmp_path / "b.exr", np.zeros((3, 3), np.float32),
+                provenance={"inputs": {"input_provenance": {"arcmin_per_px": 9.0}}})
+    assert read_image(tmp_path / "b.exr").arcmin_per_px is None
+
+
+def test_image_arcmin_per_px_must_be_positive():
+    assert Image(np.zeros((2, 2), np.float32), ("Y",), {}, 1).arcmin_per_px == 1.0
+    with pytest.raises(VissimInputError, match="arcmin_per_px"):
+        Image(np.zeros((2, 2), np.float32), ("Y",), {}, -1.0)

@@ -22,7 +22,7 @@ import re
 from vissim.checks import finite_number as _finite
 from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
-from vissim.units import arcmin_to_rad, rad_to_arcmin
+from vissim.units import arcmin_to_rad, m_to_mm, rad_to_arcmin
 
 __all__ = [
     "LETTER_HEIGHT_MAR",
@@ -116,7 +116,7 @@ def subtense_mm(arcmin: float, viewing_distance_m: float) -> float:
     theta_rad = arcmin_to_rad(_positive(arcmin, "visual angle", "arcmin"))
     if theta_rad >= math.pi:
         raise VissimInputError(f"visual angle must be below 10800 arcmin (180 deg), got {arcmin:g} arcmin")
-    return 2.0 * distance_m * math.tan(theta_rad / 2.0) * 1000.0
+    return m_to_mm(2.0 * distance_m * math.tan(theta_rad / 2.0))
 
 
 def subtense_arcmin(size_mm: float, viewing_distance_m: float) -> float:

@@ -11,6 +11,12 @@ shape ``(H, W)`` (mono, channel ``Y``) or ``(H, W, 3)`` (channels ``R, G, B``), 
   Float TIFFs are read as linear.  16-bit *colour* PNG is refused both ways, because
   Pillow silently truncates it to 8 bits; use TIFF or EXR for that.
 
+Images carry their angular sampling: ``write_image(..., arcmin_per_px=S)`` records it in
+the provenance record's top-level key ``"arcmin_per_px"`` (:data:`SAMPLING_KEY`; the EXR
+header attribute or the sidecar, as above), and :func:`read_image` returns it as
+:attr:`Image.arcmin_per_px` (``None`` when the file does not say).  Files written before
+that key existed are read from where their writer put it (:func:`sampling_from_provenance`).
+
 Every write goes through :func:`vissim.atomic.atomic_output` and refuses to replace an
 existing file unless ``overwrite=True``.  Anything wrong with a file raises one
 :class:`~vissim.errors.VissimInputError` naming the file.
@@ -20,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import os
 import struct
 from pathlib import Path
@@ -31,6 +38,7 @@ import tifffile
 from PIL import Image as _PILImage
 
 from vissim.atomic import atomic_output, write_text_atomic
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.errors import VissimInputError
 from vissim.provenance import from_json, to_json
 
@@ -40,6 +48,7 @@ __all__ = [
     "Image",
     "read_data_map",
     "read_image",
+    "sampling_from_provenance",
     "srgb_decode",
     "srgb_encode",
     "to_preview_png",
@@ -48,6 +57,18 @@ __all__ = [
 ]
 
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
+#: Top-level provenance key holding an image's angular sampling, arcmin per pixel.
+SAMPLING_KEY = "arcmin_per_px"
+#: Where files written before :data:`SAMPLING_KEY` existed keep their sampling, in order.
+_LEGACY_SAMPLING_PATHS = (
+    ("inputs", "arcmin_per_px"),             # blur, blur-depth, demo chart, render depth
+    ("inputs", "options", "arcmin_per_px"),  # vissim chart
+    ("inputs", "bench", "arcmin_per_px"),    # render bench; campaign renders
+    ("inputs", "render", "arcmin_per_px"),   # campaign renders (the render spec)
+    ("inputs", "settings", "arcmin_per_px"),  # campaign items
+    ("inputs", "summary", "arcmin_per_px"),  # render atv
+    ("inputs", "psf", "arcmin_per_px"),      # psf; demo PSFs
+)
 MONO_CHANNELS = ("Y",)
 RGB_CHANNELS = ("R", "G", "B")
 _SUFFIX_KIND = {".exr": "exr", ".png": "png", ".tif": "tiff", ".tiff": "tiff"}
@@ -91,15 +112,17 @@ def srgb_decode(encoded: Any) -> Any:
 
 @dataclasses.dataclass(frozen=True)
 class Image:
-    """Linear-light pixels with their channel names and provenance.
+    """Linear-light pixels with their channel names, provenance and angular sampling.
 
     ``pixels`` is float32 of shape ``(H, W)`` with ``channel_names == ("Y",)`` or
-    ``(H, W, 3)`` with ``("R", "G", "B")``.
+    ``(H, W, 3)`` with ``("R", "G", "B")``.  ``arcmin_per_px`` is the angular pixel size,
+    or ``None`` when the file does not record one.
     """
 
     pixels: np.ndarray
     channel_names: tuple[str, ...]
     provenance: dict = dataclasses.field(default_factory=dict)
+    arcmin_per_px: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.pixels, np.ndarray) or self.pixels.dtype != np.float32:
@@ -113,6 +136,50 @@ class Image:
                 f"Image.channel_names {self.channel_names} do "
                 f"not match pixels of shape {self.pixels.shape}"
             )
+        if self.arcmin_per_px is not None:
+            step = _sampling_value(self.arcmin_per_px)
+            if step is None:
+                raise VissimInputError(f"Image.arcmin_per_px must be a positive number or None, got {self.arcmin_per_px!r}")
+            object.__setattr__(self, "arcmin_per_px", step)
+
+
+def _sampling_value(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    value = float(value)
+    return value if math.isfinite(value) and value > 0 else None
+
+
+def sampling_from_provenance(provenance: Any) -> float | None:
+    """The angular sampling (arcmin per pixel) a provenance record states, or ``None``.
+
+    The top-level :data:`SAMPLING_KEY` first; then the places older vissim files kept it
+    (:data:`_LEGACY_SAMPLING_PATHS`: chart options, bench parameters, campaign settings ...).
+    """
+    if not isinstance(provenance, dict):
+        return None
+    found = _sampling_value(provenance.get(SAMPLING_KEY))
+    if found is not None:
+        return found
+    for keys in _LEGACY_SAMPLING_PATHS:
+        node: Any = provenance
+        for key in keys:
+            node = node.get(key) if isinstance(node, dict) else None
+        found = _sampling_value(node)
+        if found is not None:
+            return found
+    return None
+
+
+def _with_sampling(provenance: dict | None, arcmin_per_px: Any, path: Path) -> dict | None:
+    """``provenance`` with the sampling at :data:`SAMPLING_KEY` (unchanged when ``arcmin_per_px`` is None)."""
+    if arcmin_per_px is None:
+        return provenance
+    try:
+        step = check_arcmin_per_px(arcmin_per_px)
+    except VissimInputError as exc:
+        raise VissimInputError(f"cannot write {path}: {exc}") from None
+    return {**(provenance or {}), SAMPLING_KEY: step}
 
 
 # ---------------------------------------------------------------- reading
@@ -144,7 +211,8 @@ def read_image(path: str | os.PathLike[str], *, encoding: str = "auto") -> Image
     if not np.all(np.isfinite(pixels)):
         raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
     names = MONO_CHANNELS if pixels.ndim == 2 else RGB_CHANNELS
-    return Image(pixels, names, _read_sidecar(path))
+    provenance = _read_sidecar(path)
+    return Image(pixels, names, provenance, sampling_from_provenance(provenance))
 
 
 def _kind(path: Path) -> str:
@@ -195,7 +263,7 @@ def _read_exr(path: Path) -> Image:
         raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
     prov_text = header.get(PROVENANCE_ATTRIBUTE)
     provenance = _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
-    return Image(pixels, wanted, provenance)
+    return Image(pixels, wanted, provenance, sampling_from_provenance(provenance))
 
 
 def _parse_provenance(path: Path, text: str) -> dict:
@@ -334,6 +402,7 @@ def write_image(
     channel_names: Any = None,
     encoding: str = "srgb",
     bit_depth: int = 8,
+    arcmin_per_px: float | None = None,
 ) -> Path:
     """Write linear-light ``pixels`` to ``path``; the format follows the suffix.
 
@@ -346,6 +415,10 @@ def write_image(
         PNG/TIFF in the sidecar ``<path>.json``.
     channel_names:
         Optional check: must be ``("Y",)`` for mono or ``("R", "G", "B")`` for colour.
+    arcmin_per_px:
+        The image's angular sampling, stored at the provenance record's top-level key
+        ``"arcmin_per_px"`` (a record is written even without ``provenance``); read back as
+        :attr:`Image.arcmin_per_px`.  ``None`` (default) records none.
     encoding, bit_depth:
         PNG/TIFF only: ``"srgb"`` (default) encodes with IEC 61966-2-1, ``"linear"`` does
         not; values are clipped to [0, 1] and rounded to ``bit_depth`` (8 or 16) bits.
@@ -358,6 +431,7 @@ def write_image(
     if bit_depth not in (8, 16):
         raise VissimInputError(f"cannot write {path}: bit_depth must be 8 or 16 bits, got {bit_depth!r}")
     arr = _validated_pixels(path, pixels, channel_names)
+    provenance = _with_sampling(provenance, arcmin_per_px, path)
     if kind == "png" and bit_depth == 16 and arr.ndim == 3:
         raise VissimInputError(
             f"cannot write {path}: 16-bit colour PNG is not "
@@ -445,19 +519,22 @@ def read_data_map(path: str | os.PathLike[str]) -> Image:
         raise VissimInputError(f"{path}: a data map must be a 2-D float array, got {data.dtype} of shape {data.shape}")
     if np.any(np.isnan(data)):
         raise VissimInputError(f"{path}: contains {int(np.sum(np.isnan(data)))} NaN values")
-    return Image(np.ascontiguousarray(data, dtype=np.float32), (name,), provenance)
+    return Image(np.ascontiguousarray(data, dtype=np.float32), (name,), provenance, sampling_from_provenance(provenance))
 
 
 def write_data_map(path: str | os.PathLike[str], data: Any, *, channel: str = "Z", provenance: dict | None = None,
-                   overwrite: bool = False) -> Path:
-    """Write a single-channel float32 EXR data map (e.g. depth in metres, channel ``Z``)."""
+                   overwrite: bool = False, arcmin_per_px: float | None = None) -> Path:
+    """Write a single-channel float32 EXR data map (e.g. depth in metres, channel ``Z``).
+
+    ``arcmin_per_px`` is recorded as in :func:`write_image`.
+    """
     path = Path(path)
     if path.suffix.lower() != ".exr":
         raise VissimInputError(f"{path}: data maps are written as .exr")
     arr = np.asarray(data, dtype=np.float32)
     if arr.ndim != 2 or np.any(np.isnan(arr)):
         raise VissimInputError(f"{path}: a data map must be a 2-D array without NaN, got shape {arr.shape}")
-    _write_exr(path, arr, provenance, overwrite, names=(channel,))
+    _write_exr(path, arr, _with_sampling(provenance, arcmin_per_px, path), overwrite, names=(channel,))
     return path
 
 
@@ -468,8 +545,12 @@ def to_preview_png(
     overwrite: bool = False,
     provenance: dict | None = None,
     normalise: bool = True,
+    arcmin_per_px: float | None = None,
 ) -> Path:
-    """Write an 8-bit sRGB PNG preview (e.g. of a PSF), scaled so its maximum is 1 if ``normalise``."""
+    """Write an 8-bit sRGB PNG preview (e.g. of a PSF), scaled so its maximum is 1 if ``normalise``.
+
+    ``arcmin_per_px`` is recorded as in :func:`write_image`.
+    """
     path = Path(path)
     arr = _validated_pixels(path, pixels, None)
     if normalise:
@@ -480,4 +561,5 @@ def to_preview_png(
                 f"whose maximum is {peak} (must be > 0)"
             )
         arr = arr / np.float32(peak)
-    return write_image(path, arr, provenance=provenance, overwrite=overwrite, encoding="srgb", bit_depth=8)
+    return write_image(path, arr, provenance=provenance, overwrite=overwrite, encoding="srgb", bit_depth=8,
+                       arcmin_per_px=arcmin_per_px)

@@ -14,6 +14,13 @@ __all__ = [
     "nm_to_um",
     "cyc_per_rad_to_cyc_per_deg",
     "mrad_to_arcmin",
+    "MM_PER_M",
+    "mm_to_m",
+    "m_to_mm",
+    "diopters_to_mm",
+    "mm_to_diopters",
+    "diopters_to_per_mm",
+    "REC709_LUMINANCE",
 ]
 
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
@@ -42,3 +49,38 @@ def nm_to_um(nm: float) -> float:
 
 def cyc_per_rad_to_cyc_per_deg(cyc_per_rad):
     return np.asarray(cyc_per_rad, dtype=float) * (math.pi / 180.0)
+
+
+MM_PER_M = 1000.0
+#: Rec. 709 / sRGB luminance weights of linear R, G, B.
+REC709_LUMINANCE = (0.2126, 0.7152, 0.0722)
+
+
+def _number(x):
+    """Floats and numpy values as they are; other scalars as float, sequences as float arrays."""
+    if isinstance(x, (float, np.ndarray, np.generic)):
+        return x
+    return np.asarray(x, dtype=float) if np.ndim(x) else float(x)
+
+
+def mm_to_m(mm):
+    return _number(mm) / MM_PER_M
+
+
+def m_to_mm(m):
+    return _number(m) * MM_PER_M
+
+
+def diopters_to_mm(diopters):
+    """Focal length, or distance of a vergence, in mm: 1000 / D."""
+    return MM_PER_M / _number(diopters)
+
+
+def mm_to_diopters(mm):
+    """Power (vergence) in dioptres of a distance in mm: 1000 / mm."""
+    return MM_PER_M / _number(mm)
+
+
+def diopters_to_per_mm(diopters):
+    """Dioptres (1/m) as curvature or power per mm."""
+    return _number(diopters) / MM_PER_M

@@ -39,7 +39,7 @@ def test_analyze_strict_fails_with_one_line(capsys, tmp_path):
 
 def test_simulate_a_cyclopleged_hyperope(capsys, tmp_path):
     code, out, _ = run(
-        capsys, "atv", "simulate", "--eye", "+1.25 DS", "--pupil-mm", "4", "--cycloplegia", "--seed", "3",
+        capsys, "atv", "simulate", "--rx", "+1.25 DS", "--pupil-mm", "4", "--cycloplegia", "--seed", "3",
         "--lenses", "-2,-1,0,0.5,1,1.5,2,3,4", "-o", str(tmp_path / "sim"),
     )
     assert code == 0 and "fit over ±2.5 D window: vertex" in out
@@ -50,7 +50,7 @@ def test_simulate_a_cyclopleged_hyperope(capsys, tmp_path):
 
 
 def test_simulate_rejects_a_bad_pupil(capsys, tmp_path):
-    code, _, err = run(capsys, "atv", "simulate", "--eye", "-2.00 DS", "--pupil-mm", "-3", "-o", str(tmp_path / "s"))
+    code, _, err = run(capsys, "atv", "simulate", "--rx", "-2.00 DS", "--pupil-mm", "-3", "-o", str(tmp_path / "s"))
     assert code == 2 and "--pupil-mm must be > 0 mm, got '-3'" in err
 
 
@@ -74,7 +74,7 @@ def test_run_with_a_person_at_the_terminal(capsys, tmp_path, monkeypatch):
     monkeypatch.setattr("builtins.input", fake_input)
     target = tmp_path / "person.json"
     code, out, _ = run(capsys, "atv", "run", "--observer", "person", "--display", "terminal", "--eye-side", "R",
-                       "--trial-lens-d", "-1.5", "-o", str(target))
+                       "--sphere", "-1.5", "-o", str(target))
     assert code == 0
     record = json.loads(target.read_text())
     assert abs(record["result"]["threshold_code"] - 0.42) <= 0.0005

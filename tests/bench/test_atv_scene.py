@@ -17,16 +17,15 @@ import pytest
 
 from vissim.atv.predict import fresnel_transmittance, predicted_spot, spot_metrics
 from vissim.bench.atv import (
-    LENS_BSDF,
     AtvConfig,
     AtvEye,
     AtvTube,
-    atv_paraxial,
-    atv_scene,
     atv_trial_lens,
     display_code_to_linear,
     pixel_pitch_mm,
 )
+from vissim.bench.atv_paraxial import atv_paraxial
+from vissim.bench.atv_scene import LENS_BSDF, atv_scene
 from vissim.bench.lens_mesh import rim_thickness_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription, RefractiveError

@@ -27,15 +27,14 @@ from vissim.bench.depth_scene import (
     blur_diameter_arcmin,
     default_panels_scene,
     default_tilted_scene,
-    depth_scene_dict,
     equivalent_eye,
     focus_matrix_diopters,
     panel_geometries,
-    panel_texture,
     pixel_tangents,
-    tilted_mesh,
 )
+from vissim.bench.depth_scene_dict import depth_scene_dict, tilted_mesh
 from vissim.bench.depth_scene_files import load_depth_scene_toml
+from vissim.bench.depth_textures import panel_texture
 from vissim.errors import VissimInputError
 from vissim.optics.depth import effective_prescription
 from vissim.optics.prescription import Prescription

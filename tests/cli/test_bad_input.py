@@ -98,7 +98,7 @@ def test_blur_depth_refuses_a_radiance_image_as_depth(capsys, tmp_path, chart_ex
     out = tmp_path / "out.exr"
     depth = tmp_path / "depth.npy"
     np.save(depth, np.linspace(0.04, 0.9, 48 * 64).reshape(48, 64))  # values of a reflectance image, not metres
-    code, _, err = run(capsys, "blur-depth", chart_exr, depth, "-o", out, "--eye", "-2", "--pupil-mm", "4")
+    code, _, err = run(capsys, "blur-depth", chart_exr, depth, "-o", out, "--rx", "-2", "--pupil-mm", "4")
     assert_one_error_line(code, err, "D of proximity", "0.04 m to 0.9 m", "layers", "max_layers=256")
     assert not out.exists()
 

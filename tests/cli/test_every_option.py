@@ -23,13 +23,13 @@ BASES = {
     ("psf",): ["psf", "--rx", "-2", "--pupil-mm", "3", "--size", "129", "-o", "{out}/p.exr"],
     ("chart",): ["chart", "--logmar", "1", "-o", "{out}/c.exr"],
     ("blur",): ["blur", "{chart}", "-o", "{out}/b.exr", "--rx", "-2", "--pupil-mm", "3"],
-    ("blur-depth",): ["blur-depth", "{chart}", "{depth}", "-o", "{out}/b.exr", "--eye", "-2", "--pupil-mm", "3"],
+    ("blur-depth",): ["blur-depth", "{chart}", "{depth}", "-o", "{out}/b.exr", "--rx", "-2", "--pupil-mm", "3"],
     ("render", "bench"): ["render", "bench", "--spp", "4", "--size", "21x21", "-o", "{out}/r.exr"],
     ("render", "atv"): ["render", "atv", "--rays", "20000", "-o", "{out}/a.exr"],
     ("render", "depth"): ["render", "depth", str(ROOT / "scenes/depth_panels.toml"), "--spp", "2", "-o", "{out}/d.exr"],
     ("atv", "analyze"): ["atv", "analyze", str(ROOT / "validation/atv"), "-o", "{out}/atv"],
     ("atv", "run"): ["atv", "run", "--observer", "simulated", "-o", "{out}/run.json"],
-    ("atv", "simulate"): ["atv", "simulate", "--pupil-mm", "4", "--eye", "+1", "--lenses", "-1,0,1,2,3", "-o", "{out}/sim"],
+    ("atv", "simulate"): ["atv", "simulate", "--pupil-mm", "4", "--rx", "+1", "--lenses", "-1,0,1,2,3", "-o", "{out}/sim"],
 }
 
 

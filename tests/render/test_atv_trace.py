@@ -28,13 +28,13 @@ import pytest
 
 from vissim.atv.predict import predicted_spot
 from vissim.bench.atv import (
-    LENS_BSDF,
     AtvConfig,
     AtvEye,
     AtvTube,
-    atv_paraxial,
     atv_trial_lens,
 )
+from vissim.bench.atv_paraxial import atv_paraxial
+from vissim.bench.atv_scene import LENS_BSDF
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.units import mrad_to_arcmin
@@ -251,8 +251,8 @@ def test_cli_writes_the_spot_and_a_json_summary(tmp_path, capsys):
     from vissim.imageio import read_image
 
     out = tmp_path / "spot.exr"
-    code, text = _cli(tmp_path, capsys, "--trial-sphere", "-2", "--pupil-mm", "5", "--rays", "65536",
-                      "--eye=-0.5", "--accommodation-d", "0.25", "-o", str(out), "--json")
+    code, text = _cli(tmp_path, capsys, "--sphere", "-2", "--pupil-mm", "5", "--rays", "65536",
+                      "--rx=-0.5", "--accommodation-d", "0.25", "-o", str(out), "--json")
     assert code == 0
     summary = json.loads(text)
     for key in ("peak_irradiance_per_arcmin2", "spot_diameter_arcmin", "total_flux", "method", "seconds"):
@@ -265,7 +265,7 @@ def test_cli_writes_the_spot_and_a_json_summary(tmp_path, capsys):
     assert image.pixels.dtype == np.float32
     assert image.provenance["inputs"]["command"] == "render atv"
     with pytest.raises(VissimInputError, match="already exists"):
-        _cli(tmp_path, capsys, "--trial-sphere", "-2", "-o", str(out))
+        _cli(tmp_path, capsys, "--sphere", "-2", "-o", str(out))
 
 
 def test_cli_refuses_mismatched_budgets_and_bad_values(tmp_path, capsys):

@@ -30,11 +30,11 @@ from vissim.bench.depth_scene import (
     blur_diameter_arcmin,
     default_panels_scene,
     default_tilted_scene,
-    depth_scene_dict,
     panel_geometries,
-    panel_texture,
     pixel_tangents,
 )
+from vissim.bench.depth_scene_dict import depth_scene_dict
+from vissim.bench.depth_textures import panel_texture
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
 from vissim.optics.depth import blur_depth
@@ -249,7 +249,7 @@ def test_render_depth_command_writes_blurred_all_in_focus_and_depth(tmp_path, ca
 
     scene = Path(__file__).resolve().parents[2] / "scenes" / "depth_panels.toml"
     out, aif, depth = tmp_path / "blur.exr", tmp_path / "aif.exr", tmp_path / "depth.exr"
-    argv = [str(scene), "--eye", "-1.00 DS", "--pupil-mm", "3", "--spp", "4", "--aux-spp", "4", "-o", str(out),
+    argv = [str(scene), "--rx", "-1.00 DS", "--pupil-mm", "3", "--spp", "4", "--aux-spp", "4", "-o", str(out),
             "--all-in-focus", str(aif), "--depth", str(depth)]
     assert _cli(argv) == 0
     printed = capsys.readouterr().out
@@ -264,6 +264,6 @@ def test_render_depth_command_writes_blurred_all_in_focus_and_depth(tmp_path, ca
     with pytest.raises(VissimInputError, match="already exists"):
         _cli(argv)
     with pytest.raises(VissimInputError, match="not both"):
-        _cli([str(scene), "--eye", "plano", "--f-number", "4", "-o", str(tmp_path / "x.exr")])
+        _cli([str(scene), "--rx", "plano", "--f-number", "4", "-o", str(tmp_path / "x.exr")])
     with pytest.raises(VissimInputError, match=r"\.exr"):
         _cli([str(scene), "-o", str(tmp_path / "x.png")])

@@ -29,15 +29,11 @@ from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.render.backend import choose_variant
 from vissim.validation import runner
-from vissim.validation.depth_campaign import (
-    is_depth_campaign,
-    load_depth_campaign,
-    rebuild_any_report,
-    run_any_campaign,
-    run_depth_campaign,
-)
+from vissim.validation.depth_campaign import is_depth_campaign, load_depth_campaign
 from vissim.validation.depth_masks import depth_regions
 from vissim.validation.depth_report import current_results, depth_rows
+from vissim.validation.depth_runner import run_depth_campaign
+from vissim.validation.dispatch import rebuild_any_report, run_any_campaign
 
 ROOT = Path(__file__).resolve().parents[2]
 needs_jit = pytest.mark.skipif(choose_variant("mono").variant.startswith("scalar"), reason="no JIT Mitsuba variant")

@@ -3,7 +3,7 @@
 The tube is equivalent to a source at (or near) infinity of the pixel's angular extent: the
 retinal image is the pixel's square, mapped by the paraxial system (spectacle magnification
 included), convolved with the eye's blur for the defocus ``K = vergence + E + A`` at the pupil
-(:func:`vissim.bench.atv.atv_paraxial`).  The blur comes from :func:`vissim.optics.psf.compute_psf` of
+(:func:`vissim.bench.atv_paraxial.atv_paraxial`).  The blur comes from :func:`vissim.optics.psf.compute_psf` of
 the prescription ``-K``: ``mode="geometric"`` (ray optics, comparable with the light tracer)
 or ``"wave"`` (diffraction).  Pure numpy; no Mitsuba.
 
@@ -35,12 +35,13 @@ import numpy as np
 import scipy.ndimage
 import scipy.signal
 
-from vissim.bench.atv import AtvConfig, AtvParaxial, atv_paraxial
+from vissim.bench.atv import AtvConfig
+from vissim.bench.atv_paraxial import AtvParaxial, atv_paraxial
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf
 from vissim.optics.wavefront import Wavefront
-from vissim.units import arcmin_to_rad
+from vissim.units import arcmin_to_rad, mm_to_m
 
 __all__ = ["SpotMetrics", "AtvPrediction", "spot_metrics", "predicted_spot", "suggested_atv_size_px",
            "fresnel_transmittance"]
@@ -179,8 +180,8 @@ def _pixel_kernel(par: AtvParaxial, pitch_mm: float, offset_mm, fine_arcmin: flo
     """
     to_rad = float(arcmin_to_rad(fine_arcmin))
     mapping = par.pixel_angle_matrix / to_rad  # screen offset (m) -> visual angle (fine px), world x/y
-    half_m = 0.5 * pitch_mm / 1000.0
-    offset_m = np.asarray(offset_mm, dtype=float) / 1000.0
+    half_m = mm_to_m(0.5 * pitch_mm)
+    offset_m = mm_to_m(np.asarray(offset_mm, dtype=float))
     corners = np.array([[sx, sy] for sx in (-1.0, 1.0) for sy in (-1.0, 1.0)]) * half_m + offset_m
     half = int(math.ceil(np.abs(corners @ mapping.T).max())) + 1
     grid = np.arange(-half, half + 1, dtype=float)

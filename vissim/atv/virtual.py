@@ -62,7 +62,7 @@ from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.trial_lens import thesis_table_4_2_power
 from vissim.optics.wavefront import Wavefront
-from vissim.units import rad_to_arcmin
+from vissim.units import diopters_to_mm, rad_to_arcmin
 
 __all__ = [
     "AtvApparatus",
@@ -80,7 +80,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 IPHONE5_PIXEL_PITCH_MM = pixel_pitch_mm(IPHONE5_PPI)  # 326 ppi (thesis §5.4), the bench's value
-ATV_COLLIMATOR_FOCAL_LENGTH_MM = 1000.0 / AtvTube().lens_power_diopters  # the 8 D lens: 125 mm
+ATV_COLLIMATOR_FOCAL_LENGTH_MM = diopters_to_mm(AtvTube().lens_power_diopters)  # the 8 D lens: 125 mm
 
 
 @dataclass(frozen=True)

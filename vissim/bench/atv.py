@@ -32,51 +32,40 @@ Choices, and why:
   through pupil point x (mm) with direction angle u lands at visual angle
   ``-u + (E + A) x`` milliradians: the thin lens is the eye's excess power E plus accommodation.
 
-Scene dicts hold plain values (4 x 4 row-major ``to_world`` lists), converted by
-:func:`vissim.render.run.to_mitsuba_dict`; nothing here imports Mitsuba.  The paraxial model
-(:func:`atv_paraxial`) is the theory both renderers are checked against;
-:func:`predicted_spot` (in :mod:`vissim.atv.predict`) turns it into a retinal image.
+The paraxial theory is :mod:`vissim.bench.atv_paraxial`, the Mitsuba scene dict
+:mod:`vissim.bench.atv_scene`.
 """
 
 from __future__ import annotations
 
-import logging
 import math
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from vissim.bench.lens_mesh import (
-    cached_lens_ply,
     lens_surface_curvatures_per_mm,
     realistic_center_thickness_mm,
     rim_thickness_mm,
     sag_mm,
 )
 from vissim.charts import MM_PER_INCH
-from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import finite_number, samples_per_pixel
+from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 from vissim.imageio import srgb_decode
 from vissim.optics.prescription import LensPower, Prescription, RefractiveError
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, transfer_matrix
-from vissim.units import arcmin_to_rad, mrad_to_arcmin
+from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
+from vissim.units import diopters_to_mm, m_to_mm, mm_to_m
 
 __all__ = [
-    "IPHONE5_PPI", "LENS_BSDF", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout",
-    "AtvParaxial", "atv_trial_lens", "atv_layout", "atv_paraxial", "atv_scene", "display_code_to_linear",
-    "pixel_pitch_mm",
+    "IPHONE5_PPI", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout", "atv_trial_lens",
+    "atv_layout", "display_code_to_linear", "pixel_pitch_mm",
 ]
-
-log = logging.getLogger(__name__)
 
 #: Pixel density of the iPhone 5's Retina display (thesis section 5.4).
 IPHONE5_PPI = 326.0
 #: From the trial lens's back vertex to the eye's pupil in the eyecup slot (mm); the thesis gives none.
 ATV_TRIAL_LENS_DISTANCE_MM = 15.0
-#: Plugin name of the refraction-only BSDF; equals :data:`vissim.render.plugins.REFRACT_BSDF`.
-LENS_BSDF = "vissim_refract"
 DISPLAY_TRANSFERS = ("srgb", "gamma2.2")
 PUPIL_RANGE_MM = (2.0, 8.0)
 MAX_ACCOMMODATION_DIOPTERS = 15.0
@@ -84,16 +73,7 @@ MAX_ACCOMMODATION_DIOPTERS = 15.0
 TUBE_CLEARANCE_MM = 0.05
 #: Least air between the trial lens and the collimator, and between the pupil and the trial lens, mm.
 MIN_AIR_GAP_MM = 0.5
-NEAR_CLIP_MM = 1.0
-#: Path depth of the camera cross-check: two lenses, four refractions, the pixel, some slack.
-MAX_DEPTH = 16
-_FAR_FOCUS_MM = 1.0e9
 _I2 = np.eye(2)
-
-
-def _mm_to_m(length_mm):
-    """The one millimetre-to-metre conversion of this module."""
-    return np.asarray(length_mm, dtype=float) / 1000.0 if np.ndim(length_mm) else float(length_mm) / 1000.0
 
 
 def _number(value, name: str, unit: str, *, lo: float | None = None, hi: float | None = None,
@@ -191,7 +171,7 @@ class AtvTube:
 
     @property
     def focal_length_mm(self) -> float:
-        return 1000.0 / self.lens_power_diopters
+        return diopters_to_mm(self.lens_power_diopters)
 
     @property
     def pixel_pitch_mm(self) -> float:
@@ -202,13 +182,13 @@ class AtvTube:
         power, n, t = self.lens_power_diopters, self.lens_refractive_index, self.lens_center_thickness_mm
         if self.lens_convex_side == "eye":  # plano front, F2 = P: back vertex power = P
             return TrialLens(power, refractive_index=n, center_thickness_mm=t, back_surface_diopters=power)
-        reduced_m = _mm_to_m(t) / n  # convex front F1 = P, plano back: back vertex power P / (1 - t/n P)
+        reduced_m = mm_to_m(t) / n  # convex front F1 = P, plano back: back vertex power P / (1 - t/n P)
         return TrialLens(power / (1.0 - reduced_m * power), refractive_index=n, center_thickness_mm=t)
 
     def front_focal_distance_mm(self) -> float:
         """From the phone-side vertex to the front focal point, mm (f - t/n for convex toward the eye)."""
         d = self.collimator_lens().ray_transfer_matrix()[2, 2]
-        return 1000.0 * d / self.lens_power_diopters
+        return m_to_mm(d) / self.lens_power_diopters
 
 
 @dataclass(frozen=True)
@@ -333,145 +313,3 @@ def atv_layout(config: AtvConfig) -> AtvLayout:
         apertures.append(config.trial_clear_aperture_mm)
     return AtvLayout(float(back), float(front), float(principal), float(principal + tube.tube_length_mm),
                      0.5 * max(apertures) + TUBE_CLEARANCE_MM, trial_back, trial_front)
-
-
-@dataclass(frozen=True, eq=False)
-class AtvParaxial:
-    """First-order optics of the tube from the phone's screen to the eye's pupil (SI: m, rad, D).
-
-    ``system_matrix``: 4x4 ray transfer ``(x, y, u_x, u_y)``, phone plane to pupil plane.  A ray
-    from pixel point ``x0`` through pupil point ``xp`` lands at visual angle
-    ``pixel_angle_matrix @ x0 + defocus_matrix_diopters @ xp`` (radians, metres).
-    """
-
-    system_matrix: np.ndarray
-    vergence_matrix_diopters: np.ndarray  # of the pixel's light at the pupil (< 0 diverging)
-    defocus_matrix_diopters: np.ndarray  # vergence + eye excess power + accommodation
-    pixel_angle_matrix: np.ndarray  # rad per metre of screen offset
-    pixel_angle_arcmin: float  # side of the pixel's (square) image, geometric mean of the two axes
-    blur_diameter_arcmin: float  # pupil x the largest |principal defocus|
-    etendue_m2_sr: float  # pixel area x pupil area x |det B^-1|; flux = radiance x etendue
-    cone_center: np.ndarray  # direction (tangents) from the pixel centre to the pupil centre
-    cone_radius_rad: float  # directions within this of cone_center reach the pupil (paraxially)
-    pixel_direction_arcmin: tuple[float, float]  # (right, up) visual direction of the pixel centre
-
-
-def _system_matrix(config: AtvConfig) -> np.ndarray:
-    tube, layout = config.tube, config.layout()
-    system = transfer_matrix(_mm_to_m(layout.phone_z_mm - layout.collimator_front_vertex_z_mm))
-    system = tube.collimator_lens().ray_transfer_matrix() @ system
-    if config.trial_lens is None:
-        return transfer_matrix(_mm_to_m(layout.collimator_back_vertex_z_mm)) @ system
-    system = transfer_matrix(_mm_to_m(layout.collimator_back_vertex_z_mm - layout.trial_front_vertex_z_mm)) @ system
-    system = config.trial_lens.ray_transfer_matrix() @ system
-    return transfer_matrix(_mm_to_m(layout.trial_back_vertex_z_mm)) @ system
-
-
-def atv_paraxial(config: AtvConfig) -> AtvParaxial:
-    """The paraxial theory of ``config`` (see :class:`AtvParaxial`)."""
-    s = _system_matrix(config)
-    a, b, c, d = s[:2, :2], s[:2, 2:], s[2:, :2], s[2:, 2:]
-    b_inv = np.linalg.inv(b)
-    vergence = -d @ b_inv
-    vergence = 0.5 * (vergence + vergence.T)
-    defocus = vergence + config.eye.excess_power_matrix_diopters()
-    pixel_map = -(c - d @ b_inv @ a)  # visual angle = -u at the pupil centre
-    pitch_m = _mm_to_m(config.tube.pixel_pitch_mm)
-    pupil_m = _mm_to_m(config.eye.pupil_diameter_mm)
-    pixel_angle_rad = pitch_m * math.sqrt(abs(np.linalg.det(pixel_map)))
-    blur_mrad = config.eye.pupil_diameter_mm * float(np.max(np.abs(np.linalg.eigvalsh(defocus))))
-    offset_m = _mm_to_m(np.asarray(config.tube.pixel_offset_mm))
-    center = -b_inv @ a @ offset_m
-    half_diagonal_m = pitch_m / math.sqrt(2.0)
-    radius = np.linalg.norm(b_inv, 2) * (0.5 * pupil_m + np.linalg.norm(a, 2) * half_diagonal_m)
-    direction = pixel_map @ offset_m
-    return AtvParaxial(
-        system_matrix=s,
-        vergence_matrix_diopters=vergence,
-        defocus_matrix_diopters=defocus,
-        pixel_angle_matrix=pixel_map,
-        pixel_angle_arcmin=float(mrad_to_arcmin(1000.0 * pixel_angle_rad)),
-        blur_diameter_arcmin=float(mrad_to_arcmin(blur_mrad)),
-        etendue_m2_sr=pitch_m**2 * (math.pi / 4.0) * pupil_m**2 * abs(float(np.linalg.det(b_inv))),
-        cone_center=center,
-        cone_radius_rad=float(radius),
-        pixel_direction_arcmin=(float(mrad_to_arcmin(-1000.0 * direction[0])),
-                                float(mrad_to_arcmin(1000.0 * direction[1]))),
-    )
-
-
-def _translate(x: float, y: float, z: float) -> list[list[float]]:
-    return [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]]
-
-
-def _camera(config: AtvConfig, arcmin_per_px: float, size_px: int, spp: int, seed: int, kind: str) -> dict:
-    excess = config.eye.excess_power_matrix_diopters()
-    if abs(excess[0, 1]) > 1e-12 or abs(excess[0, 0] - excess[1, 1]) > 1e-12:
-        raise VissimInputError(f"the camera cross-check models a spherical eye only; this eye's error is "
-                               f"{config.eye.refractive_error} D (use the light tracer)")
-    focus_diopters = float(excess[0, 0])
-    if focus_diopters < 0.0:
-        raise VissimInputError(f"the camera cross-check cannot focus beyond infinity: the eye's excess power plus "
-                               f"accommodation is {focus_diopters:g} D < 0 D (use the light tracer)")
-    focus_mm = _FAR_FOCUS_MM if focus_diopters == 0.0 else 1000.0 / focus_diopters
-    half_tan = math.tan(0.5 * size_px * float(arcmin_to_rad(arcmin_per_px)))
-    return {
-        "type": "thinlens",
-        "fov": 2.0 * math.degrees(math.atan(half_tan)),
-        "fov_axis": "x",
-        "aperture_radius": 0.5 * config.eye.pupil_diameter_mm,
-        "focus_distance": focus_mm,
-        "near_clip": NEAR_CLIP_MM,
-        "far_clip": 10.0 * config.layout().phone_z_mm,
-        # Looking along +z with +y up: Mitsuba's camera frame is +x left, so image right is world -x.
-        "to_world": _translate(0.0, 0.0, 0.0),
-        "sampler": {"type": "independent", "sample_count": int(spp), "seed": int(seed)},
-        "film": {"type": "hdrfilm", "width": int(size_px), "height": int(size_px), "rfilter": {"type": "box"},
-                 "pixel_format": "luminance" if kind == "mono" else "rgb", "component_format": "float32",
-                 "sample_border": False},
-    }
-
-
-def atv_scene(config: AtvConfig, *, camera: bool = True, arcmin_per_px: float = 1.0, size_px: int = 65,
-              spp: int = 64, seed: int = 0, kind: str = "mono", mesh_cache_dir=None) -> dict[str, Any]:
-    """The Mitsuba scene dict of ``config``: lenses, black tube, the lit pixel, and the eye as a camera.
-
-    Shape keys (Mitsuba ids) are ``collimator``, ``trial_lens`` (when present), ``tube`` and
-    ``pixel``.  With ``camera=False`` the dict has no sensor or integrator (the light tracer's
-    geometry).  The camera is a ``thinlens`` of aperture radius pupil / 2 at the pupil, focused
-    where the eye is (``1 / (E + A)``, or at 10^9 mm), its ``size_px`` square film covering
-    ``size_px * arcmin_per_px`` (odd ``size_px`` puts the axis on the centre pixel).
-    """
-    if kind not in ("mono", "rgb"):
-        raise VissimInputError(f"render kind must be 'mono' or 'rgb', got {kind!r}")
-    layout, tube = config.layout(), config.tube
-    lenses = [("collimator", tube.collimator_lens(), tube.lens_clear_aperture_mm, layout.collimator_back_vertex_z_mm)]
-    if config.trial_lens is not None:
-        lenses.append(("trial_lens", config.trial_lens, config.trial_clear_aperture_mm, layout.trial_back_vertex_z_mm))
-    half = 0.5 * tube.pixel_pitch_mm
-    ox, oy = tube.pixel_offset_mm
-    black = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]} if kind == "rgb" else 0.0}
-    scene: dict[str, Any] = {
-        "type": "scene",
-        "tube": {"type": "cylinder", "p0": [0.0, 0.0, 0.0], "p1": [0.0, 0.0, layout.phone_z_mm],
-                 "radius": layout.tube_radius_mm, "flip_normals": True, "bsdf": black},
-        # The rectangle spans [-1, 1]^2 with normal +z; flipped, it emits toward the eye (-z).
-        "pixel": {"type": "rectangle", "flip_normals": True,
-                  "to_world": [[half, 0.0, 0.0, ox], [0.0, half, 0.0, oy], [0.0, 0.0, 1.0, layout.phone_z_mm],
-                               [0.0, 0.0, 0.0, 1.0]],
-                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [tube.pixel_radiance] * 3}
-                              if kind == "rgb" else tube.pixel_radiance}},
-    }
-    for key, lens, aperture, z in lenses:
-        path = cached_lens_ply(lens, aperture, cache_dir=mesh_cache_dir)
-        scene[key] = {"type": "ply", "filename": str(path), "face_normals": False, "to_world": _translate(0.0, 0.0, z),
-                      "bsdf": {"type": LENS_BSDF, "int_ior": float(lens.refractive_index),
-                               "fresnel_loss": bool(config.fresnel_loss)}}
-    if camera:
-        if int(size_px) != size_px or size_px < 1:
-            raise VissimInputError(f"image size must be a whole number of pixels >= 1, got {size_px!r}")
-        step = check_arcmin_per_px(arcmin_per_px)
-        spp = samples_per_pixel(spp)
-        scene["integrator"] = {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": MAX_DEPTH, "hide_emitters": False}
-        scene["eye"] = _camera(config, step, int(size_px), int(spp), int(seed), kind)
-    return scene

@@ -44,7 +44,7 @@ from vissim.optics.trial_lens import (
     TrialLensSetup,
     trial_lens_effect,
 )
-from vissim.units import rad_to_arcmin
+from vissim.units import m_to_mm, mm_to_m, rad_to_arcmin
 
 __all__ = ["EyeViewer", "CameraViewer", "Viewer", "focus_matrix_diopters", "equivalent_eye", "blur_diameter_arcmin"]
 
@@ -77,7 +77,7 @@ class CameraViewer:
 
     focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
     f_number: float = THESIS_F_NUMBER
-    focus_distance_m: float = THESIS_CHART_DISTANCE_MM / 1000.0
+    focus_distance_m: float = mm_to_m(THESIS_CHART_DISTANCE_MM)
     lenses: tuple[TrialLens, ...] = ()
     vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
     lens_gap_mm: float = 2.0
@@ -101,7 +101,7 @@ class CameraViewer:
                                          "sampler": scene.sampler, "texels_per_px": scene.texels_per_px}
         return DslrBench(
             focal_length_mm=self.focal_length_mm, f_number=self.f_number,
-            focus_distance_mm=1000.0 * self.focus_distance_m, chart_distance_mm=1000.0 * self.focus_distance_m,
+            focus_distance_mm=m_to_mm(self.focus_distance_m), chart_distance_mm=m_to_mm(self.focus_distance_m),
             vertex_distance_mm=self.vertex_distance_mm, lens_gap_mm=self.lens_gap_mm, lenses=self.lenses,
             refractive_index=self.refractive_index, clear_aperture_mm=self.clear_aperture_mm,
             fresnel_loss=self.fresnel_loss, **({"size_px": (8, 8)} | grid),

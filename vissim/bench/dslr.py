@@ -60,7 +60,13 @@ from vissim.optics.trial_lens import (
     entrance_pupil_diameter_mm,
     trial_lens_effect,
 )
-from vissim.units import arcmin_to_rad, rad_to_arcmin
+from vissim.units import (
+    REC709_LUMINANCE,
+    arcmin_to_rad,
+    mm_to_diopters,
+    mm_to_m,
+    rad_to_arcmin,
+)
 
 __all__ = ["SAMPLERS", "DslrBench", "BenchTheory", "bench_theory", "chart_mm_per_texel", "dslr_scene"]
 
@@ -185,7 +191,7 @@ class DslrBench:
 
     def trial_lens_setup(self) -> TrialLensSetup:
         """The rendered lenses as a :class:`TrialLensSetup` (object distance = chart distance)."""
-        distance_m = self.chart_distance_mm / 1000.0
+        distance_m = mm_to_m(self.chart_distance_mm)
         return TrialLensSetup(self.physical_lenses, self.vertex_distance_mm, distance_m, self.lens_gap_mm)
 
     def lens_back_vertex_z_mm(self) -> tuple[float, ...]:
@@ -222,7 +228,7 @@ def bench_theory(bench: DslrBench) -> BenchTheory:
     The blur diameter in each principal meridian is the entrance pupil (mm) times the
     defocus (D) in milliradians; magnifications from :func:`vissim.optics.trial_lens.trial_lens_effect`.
     """
-    focus_error = 1000.0 / bench.focus_distance_mm - 1000.0 / bench.chart_distance_mm
+    focus_error = mm_to_diopters(bench.focus_distance_mm) - mm_to_diopters(bench.chart_distance_mm)
     if bench.lenses:
         effect = trial_lens_effect(bench.trial_lens_setup())
         added = np.asarray(effect.added_power_matrix)
@@ -301,7 +307,7 @@ def dslr_scene(
     if texture.ndim == 2:
         texture = texture[:, :, None]
     if kind == "mono" and texture.shape[2] == 3:
-        texture = texture @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)[:, None]  # Rec. 709 luminance
+        texture = texture @ np.array(REC709_LUMINANCE, dtype=np.float32)[:, None]
     rows, cols = bench.size_px
     # The rectangle spans [-1, 1]^2 with normal +z; turned 180 deg about y it faces the camera
     # (-z) and its local +x (texture u) runs along world -x, the camera's image right.  Mitsuba

@@ -39,6 +39,7 @@ from vissim.atomic import atomic_output
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens
+from vissim.units import diopters_to_per_mm
 
 __all__ = [
     "LensMesh",
@@ -62,7 +63,7 @@ _RIM_SAMPLES = 720
 
 def _diopters_to_per_mm(power_matrix) -> np.ndarray:
     """The one dioptre (1/m) to 1/mm conversion of this module."""
-    return np.asarray(power_matrix, dtype=float) / 1000.0
+    return diopters_to_per_mm(np.asarray(power_matrix, dtype=float))
 
 
 def lens_surface_curvatures_per_mm(lens: TrialLens) -> tuple[np.ndarray, np.ndarray]:

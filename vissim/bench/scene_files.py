@@ -29,6 +29,7 @@ from vissim.charts import (
 )
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import TrialLens
+from vissim.units import mm_to_m
 
 __all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables"]
 
@@ -124,7 +125,7 @@ def chart_spec_from_table(table: dict, source: str, chart_distance_mm: float) ->
     _check_keys(table, _CHART, where)
     values = {key: _typed(table[key], *_CHART[key][:1], f"{where} {key}", _CHART[key][1]) for key in table}
     style = {key: values[key] for key in ("polarity", "paper_reflectance", "ink_reflectance") if key in values}
-    style["viewing_distance_m"] = chart_distance_mm / 1000.0
+    style["viewing_distance_m"] = mm_to_m(chart_distance_mm)
     if "letters" in values or "logmar_range" in values:
         if "letter" in values or "logmar" in values:
             raise VissimInputError(f"{where}: give either letter/logmar (one letter) or letters/logmar_range (ETDRS)")

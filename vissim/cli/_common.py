@@ -10,12 +10,41 @@ from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 
 
+#: What ``--rx`` is, in every command that takes it (docs/conventions.md, "Prescriptions").
+RX_HELP = "the eye's prescription: its correcting lens, not worn (myope < 0)"
+
+
+def add_rx_arg(parser, *, required: bool = False, default_text: str = "") -> None:
+    """``--rx PRESCRIPTION``: the eye's own prescription (the lens that would correct it; not worn)."""
+    parser.add_argument("--rx", required=required, metavar="PRESCRIPTION",
+                        help=f"{RX_HELP}, e.g. '-2.00 -0.50 x 180'{default_text}")
+
+
+def add_trial_lens_args(group) -> None:
+    """``--sphere`` / ``--cylinder`` / ``--axis``: one trial lens (read with :func:`trial_lens_powers`)."""
+    group.add_argument("--sphere", type=float, metavar="D", help="trial lens sphere in dioptres (plus lens > 0)")
+    group.add_argument("--cylinder", type=float, metavar="D", help="trial lens cylinder in dioptres (needs --axis)")
+    group.add_argument("--axis", type=float, metavar="DEG", help="trial lens cylinder axis, TABO degrees 0-180")
+
+
+def trial_lens_powers(args: argparse.Namespace) -> tuple[float, float, float] | None:
+    """(sphere D, cylinder D, axis deg) of the trial lens the options describe, or None when none is given."""
+    if args.sphere is None and args.cylinder is None:
+        if args.axis is not None:
+            raise VissimInputError("--axis needs --cylinder (dioptres)")
+        return None
+    cylinder = args.cylinder or 0.0
+    if cylinder != 0.0 and args.axis is None:
+        raise VissimInputError(f"--cylinder {cylinder:g} D needs --axis in degrees (TABO, 0-180)")
+    return args.sphere or 0.0, cylinder, 180.0 if args.axis is None else args.axis
+
+
 def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
     group = parser.add_argument_group("aberration (at least one of --rx / --zernike)")
     group.add_argument(
         "--rx",
         metavar="PRESCRIPTION",
-        help="the correcting lens, e.g. '-2.00 -1.25 x 180', '+1.50 DS', 'plano' (TABO axis)",
+        help=RX_HELP + ", e.g. '-2.00 -1.25 x 180', '+1.50 DS', 'plano' (TABO axis)",
     )
     group.add_argument(
         "--zernike",

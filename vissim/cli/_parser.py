@@ -97,7 +97,7 @@ _INTS_BY_DEST = {
     **{dest: Number(int, positive=True) for dest in ("size", "rays", "workers")},
 }
 #: Powers, dioptres: within +-MAX_POWER_DIOPTERS.
-_POWERS = {"sphere", "cylinder", "trial_sphere", "trial_cylinder", "back_surface_diopters", "trial_lens_d",
+_POWERS = {"sphere", "cylinder", "back_surface_diopters",
            "accommodation_d", "amplitude_d", "proximal_d"}
 #: Plain ``type=float`` options that only make sense positive.
 _POSITIVE_FLOATS = {

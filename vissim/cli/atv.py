@@ -1,7 +1,7 @@
 """``vissim atv``: the absolute threshold for vision (thesis Ch. 5).
 
 * ``vissim atv analyze DIR -o OUT`` -- fit every subject file in DIR; figures, report.md/.html, analysis.json.
-* ``vissim atv simulate --eye RX --pupil-mm D [--accommodation-d A] [--cycloplegia] -o OUT`` -- a virtual subject.
+* ``vissim atv simulate --rx RX --pupil-mm D [--accommodation-d A] [--cycloplegia] -o OUT`` -- a virtual subject.
 * ``vissim atv run [--observer simulated|person] -o result.json`` -- one threshold by Listing 5.1.
 """
 
@@ -11,6 +11,7 @@ import argparse
 import math
 from pathlib import Path
 
+from vissim.cli._common import add_rx_arg
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 
@@ -41,13 +42,14 @@ def add_parser(subparsers) -> None:
     sim = sub.add_parser("simulate", help="simulate the experiment for a virtual subject",
                          description="Fourier retinal image of one phone pixel through the ATV tube and a trial lens, "
                          "threshold by spatial summation, Listing 5.1 with a simulated observer at every lens.")
-    sim.add_argument("--eye", required=True, metavar="PRESCRIPTION", help="the eye's correcting lens, e.g. '+1.25 DS'")
+    add_rx_arg(sim, required=True)
     sim.add_argument("--pupil-mm", type=float, required=True, metavar="D", help="pupil diameter in mm")
     sim.add_argument("--accommodation-d", type=float, default=8.0, metavar="A", help="accommodation amplitude in D (default 8)")
     sim.add_argument("--cycloplegia", action="store_true", help="no accommodation (cycloplegic drops)")
     sim.add_argument("--proximal-d", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
     sim.add_argument("--lenses", metavar="D[,D...]", help="trial lenses in D (default: the thesis's 17)")
-    sim.add_argument("--vertex-mm", type=float, default=None, help="trial lens to eye, mm (default: the ATV bench's 15)")
+    sim.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
+                     help="vertex distance: trial lens back vertex to the eye's pupil (default: the ATV bench's 15)")
     sim.add_argument("--wavelength-nm", type=float, default=555.0, help="wavelength, nm (default 555)")
     sim.add_argument("--summation-arcmin", type=float, default=10.0, help="summation (Ricco) diameter, arcmin (default 10)")
     sim.add_argument("--full-capture-code", type=float, default=0.06, help="threshold code value with all flux summed (default 0.06)")
@@ -66,7 +68,7 @@ def add_parser(subparsers) -> None:
     run.add_argument("--display", choices=("auto", "window", "terminal"), default="auto", help="how a person sees the stimulus")
     _observer_args(run, threshold=True)
     run.add_argument("--resolution", type=float, default=0.001, help="phase-2 resolution, code value (default 0.001)")
-    run.add_argument("--trial-lens-d", type=float, help="trial lens in use (recorded only), D")
+    run.add_argument("--sphere", type=float, metavar="D", help="trial lens sphere in use, dioptres (recorded only)")
     run.add_argument("--eye-side", choices=("R", "L"), help="eye tested (recorded only)")
     run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     run.add_argument("-o", "--output", type=Path, required=True, help="result JSON file")
@@ -120,7 +122,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     from vissim.optics.prescription import Prescription
 
     subject = VirtualSubject(
-        Prescription.parse(args.eye), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_d,
+        Prescription.parse(args.rx), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_d,
         cycloplegia=args.cycloplegia, proximal_accommodation_diopters=args.proximal_d,
     )
     vertex = {} if args.vertex_mm is None else {"trial_lens_vertex_mm": args.vertex_mm}
@@ -175,7 +177,7 @@ def run_procedure_command(args: argparse.Namespace) -> int:
     finally:
         if hasattr(observer, "close"):
             observer.close()
-    record = make_provenance(command="atv run", observer=observer_record, trial_lens_diopters=args.trial_lens_d, eye=args.eye_side)
+    record = make_provenance(command="atv run", observer=observer_record, trial_lens_diopters=args.sphere, eye=args.eye_side)
     record["result"] = result.as_json()
     write_json_atomic(args.output, record, overwrite=args.overwrite)
     print(f"threshold {result.threshold_code:.4f} (code value), interval [{result.lower_code:.4f}, {result.upper_code:.4f}], "

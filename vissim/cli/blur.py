@@ -11,7 +11,7 @@ from vissim.cli._common import (
     wavefront_from_args,
 )
 from vissim.errors import VissimInputError
-from vissim.imageio import read_image, write_image
+from vissim.imageio import Image, read_image, write_image
 from vissim.optics.blur import PADDING_MODES, blur_image
 from vissim.optics.chromatic import gaussian_band
 from vissim.optics.psf import compute_psf, suggested_size_px
@@ -36,7 +36,7 @@ def add_parser(subparsers) -> None:
         "--arcmin-per-px",
         type=float,
         metavar="S",
-        help="the image's angular sampling (default: from the image's provenance, e.g. a vissim chart)",
+        help="the image's angular sampling (default: the one its file records, e.g. a vissim chart or render)",
     )
     colour = parser.add_mutually_exclusive_group()
     colour.add_argument("--wavelength-nm", metavar="NM[,NM...]", help="wavelength(s) for every channel (default 550)")
@@ -55,24 +55,17 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def _find_key(tree, key):
-    if isinstance(tree, dict):
-        if key in tree and isinstance(tree[key], (int, float)):
-            return float(tree[key])
-        for value in tree.values():
-            found = _find_key(value, key)
-            if found is not None:
-                return found
-    return None
+def image_sampling(image: Image, given: float | None, path: Path) -> float:
+    """``--arcmin-per-px`` if given, else the sampling the image file records (``Image.arcmin_per_px``)."""
+    step = given if given is not None else image.arcmin_per_px
+    if step is None:
+        raise VissimInputError(f"{path} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)")
+    return step
 
 
 def run(args: argparse.Namespace) -> int:
     image = read_image(args.input)
-    step = args.arcmin_per_px if args.arcmin_per_px is not None else _find_key(image.provenance, "arcmin_per_px")
-    if step is None:
-        raise VissimInputError(
-            f"{args.input} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)"
-        )
+    step = image_sampling(image, args.arcmin_per_px, args.input)
     wavefront = wavefront_from_args(args)
     n_channels = 1 if image.pixels.ndim == 2 else image.pixels.shape[2]
     if args.channels_nm is not None:
@@ -117,6 +110,6 @@ def run(args: argparse.Namespace) -> int:
         rx=args.rx,
         zernike=args.zernike,
     )
-    written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite)
+    written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
     print(f"wrote {written}")
     return 0

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.cli._common import add_rx_arg
 from vissim.cli._parser import Number
-from vissim.cli.blur import _find_key
+from vissim.cli.blur import image_sampling
 from vissim.errors import VissimInputError
 from vissim.imageio import read_data_map, read_image, write_image
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
@@ -29,7 +30,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("input", type=Path, help="image file (.exr, .png, .tif)")
     parser.add_argument("depth", type=Path, help="depth in metres: .npy, or .exr with one channel (Z/depth/Y); inf = sky")
     parser.add_argument("-o", "--output", required=True, type=Path, help="output image (.exr, .png, .tif)")
-    parser.add_argument("--eye", required=True, metavar="PRESCRIPTION", help="the eye's correcting lens, not worn: e.g. '-2.00 DS'")
+    add_rx_arg(parser, required=True)
     parser.add_argument("--pupil-mm", required=True, type=float, metavar="D", help="pupil diameter in mm")
     focus = parser.add_argument_group(
         "accommodation (default relaxed, 0 D)",
@@ -41,7 +42,7 @@ def add_parser(subparsers) -> None:
     focus.add_argument("--age", type=float, metavar="Y", help="age in years: amplitude 18.5 - 0.3 Y D (Hofstetter 1950)")
     focus.add_argument("--amplitude-d", type=float, metavar="A", help="amplitude of accommodation, dioptres")
     focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres")
-    parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: the image's provenance)")
+    parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: the one the image file records)")
     parser.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM", help="wavelength (default 550)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="PSF optics (default wave)")
     parser.add_argument("--layer-spacing-fraction", type=float, default=0.5, metavar="F", help="max blur step between layers, pixels")
@@ -84,11 +85,9 @@ def _accommodation(args: argparse.Namespace, eye: Prescription, depth: np.ndarra
 
 def run(args: argparse.Namespace) -> int:
     image = read_image(args.input)
-    step = args.arcmin_per_px if args.arcmin_per_px is not None else _find_key(image.provenance, "arcmin_per_px")
-    if step is None:
-        raise VissimInputError(f"{args.input} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)")
+    step = image_sampling(image, args.arcmin_per_px, args.input)
     depth = read_depth_m(args.depth)
-    eye = Prescription.parse(args.eye)
+    eye = Prescription.parse(args.rx)
     accommodation, focus_info = _accommodation(args, eye, depth)
     result = blur_depth(
         image.pixels, depth, eye_prescription=eye, pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
@@ -108,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
         focus=focus_info,
         depth_blur=result.as_json(),
     )
-    written = write_image(args.output, result.image, provenance=provenance, overwrite=args.overwrite)
+    written = write_image(args.output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
     print(
         f"wrote {written} ({result.n_layers} depth layers, {len(result.layers)} non-empty, "
         f"accommodation {accommodation:.3f} D)"

@@ -143,7 +143,8 @@ def run(args: argparse.Namespace) -> int:
                                   shape_px=THESIS_TILE_SHAPE_PX, **look)
         else:
             chart = render_chart_angular(spec, args.arcmin_per_px)
-        write_image(out, chart.pixels, provenance=provenance, overwrite=args.overwrite, encoding="srgb")
+        write_image(out, chart.pixels, provenance=provenance, overwrite=args.overwrite, encoding="srgb",
+                    arcmin_per_px=args.arcmin_per_px)
         rows, cols = chart.pixels.shape
         what = f"{'tile' if args.tile else 'chart'} {cols} x {rows} px at {args.arcmin_per_px:g} arcmin/px"
         sidecar = chart.sidecar()

@@ -59,9 +59,10 @@ def run(args: argparse.Namespace) -> int:
     output = args.output
     exr_path = output.with_suffix(".exr") if output.suffix.lower() == ".png" else output
     data = psf.data.astype(np.float32)
-    written = [write_image(exr_path, data, provenance=provenance, overwrite=args.overwrite)]
+    step = psf.arcmin_per_px
+    written = [write_image(exr_path, data, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)]
     if output.suffix.lower() == ".png":
-        written.append(to_preview_png(output, data, provenance=provenance, overwrite=args.overwrite))
+        written.append(to_preview_png(output, data, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step))
     for path in written:
         print(f"wrote {path}")
     print(

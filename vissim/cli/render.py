@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 from vissim.charts import POLARITIES
+from vissim.cli._common import add_trial_lens_args, trial_lens_powers
 from vissim.errors import VissimInputError
 
 log = logging.getLogger(__name__)
@@ -58,10 +59,7 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument("--scene", metavar="TOML", help="bench scene file (see scenes/dslr_bench.toml)")
-    lens = parser.add_argument_group("trial lens (replaces the scene's lenses)")
-    lens.add_argument("--sphere", type=float, metavar="D", help="sphere in dioptres (plus lens > 0)")
-    lens.add_argument("--cylinder", type=float, metavar="D", help="cylinder in dioptres (needs --axis)")
-    lens.add_argument("--axis", type=float, metavar="DEG", help="cylinder axis, TABO degrees 0-180")
+    add_trial_lens_args(parser.add_argument_group("trial lens (replaces the scene's lenses)"))
     parser.add_argument("--f-number", type=float, metavar="N", help="camera f-number (default 5)")
     chart = parser.add_mutually_exclusive_group()
     chart.add_argument("--letter", metavar="X", help="one Sloan letter (C D H K N O R S V Z)")
@@ -100,14 +98,8 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
 def _lenses(args):
     from vissim.optics.trial_lens import TrialLens
 
-    if args.sphere is None and args.cylinder is None:
-        if args.axis is not None:
-            raise VissimInputError("--axis needs --cylinder (dioptres)")
-        return None
-    cylinder = args.cylinder or 0.0
-    if cylinder != 0.0 and args.axis is None:
-        raise VissimInputError(f"--cylinder {cylinder:g} D needs --axis in degrees (TABO, 0-180)")
-    return (TrialLens(args.sphere or 0.0, cylinder, 180.0 if args.axis is None else args.axis),)
+    powers = trial_lens_powers(args)
+    return None if powers is None else (TrialLens(*powers),)
 
 
 def _chart_table(args, scene_doc: dict) -> dict:
@@ -159,7 +151,8 @@ def run_bench(args: argparse.Namespace) -> int:
     else:
         chart = chart_spec_from_table(_chart_table(args, doc), source, bench.chart_distance_mm)
     result = _render_with_progress(bench, chart, "rgb" if args.rgb else "mono", args.variant)
-    write_image(output, result.pixels, provenance=result.provenance, overwrite=args.overwrite)
+    write_image(output, result.pixels, provenance=result.provenance, overwrite=args.overwrite,
+                arcmin_per_px=bench.arcmin_per_px)
     theory = result.provenance["inputs"]["theory"]
     blur = ", ".join(f"{d:.2f}' along {m:g}°" for d, m in theory["blur_diameter_arcmin"])
     print(f"wrote {output}: {result.pixels.shape[1]} x {result.pixels.shape[0]} px, {result.spp} spp, "

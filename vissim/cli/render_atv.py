@@ -13,6 +13,7 @@ import argparse
 import json
 from pathlib import Path
 
+from vissim.cli._common import add_rx_arg, add_trial_lens_args, trial_lens_powers
 from vissim.errors import VissimInputError
 
 __all__ = ["add_atv_parser", "run_atv"]
@@ -32,15 +33,12 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument("--scene", metavar="TOML", help="ATV scene file (see scenes/atv_tube.toml); options override it")
     lens = parser.add_argument_group("trial lens in the eyecup slot (default: none)")
-    lens.add_argument("--trial-sphere", type=float, metavar="D", help="sphere in dioptres (plus lens > 0)")
-    lens.add_argument("--trial-cylinder", type=float, metavar="D", help="cylinder in dioptres")
-    lens.add_argument("--trial-axis", type=float, metavar="DEG", help="cylinder axis, TABO degrees")
-    lens.add_argument("--trial-distance-mm", type=float, metavar="MM",
-                      help="trial lens back vertex to the eye's pupil (default 15)")
+    add_trial_lens_args(lens)
+    lens.add_argument("--vertex-mm", type=float, metavar="MM",
+                      help="vertex distance: trial lens back vertex to the eye's pupil (default 15)")
     eye = parser.add_argument_group("eye")
     eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter, 2-8 mm (default 4)")
-    eye.add_argument("--eye", metavar="PRESCRIPTION",
-                     help="the eye's own correcting prescription, e.g. '-2.00 -0.50 x 180' (default: emmetropic)")
+    add_rx_arg(eye, default_text=" (default: emmetropic)")
     eye.add_argument("--accommodation-d", type=float, metavar="A",
                      help="accommodation in dioptres, >= 0 (default 0: focused at infinity)")
     light = parser.add_argument_group("pixel intensity (default: linear radiance 1)")
@@ -86,22 +84,19 @@ def _config(args: argparse.Namespace):
                                               * display_code_to_linear(args.display_code, args.transfer)))
     elif args.pixel_intensity is not None:
         config = replace(config, tube=replace(config.tube, pixel_radiance=args.pixel_intensity))
-    if args.trial_sphere is not None:
-        config = replace(config, trial_lens=atv_trial_lens(
-            args.trial_sphere, args.trial_cylinder or 0.0, 180.0 if args.trial_axis is None else args.trial_axis))
-    elif args.trial_cylinder:
-        raise VissimInputError(
-            f"--trial-cylinder {args.trial_cylinder:g} D needs --trial-sphere (dioptres, 0 for plano)")
+    powers = trial_lens_powers(args)
+    if powers is not None:
+        config = replace(config, trial_lens=atv_trial_lens(*powers))
     eye = config.eye
     if args.pupil_mm is not None:
         eye = replace(eye, pupil_diameter_mm=args.pupil_mm)
-    if args.eye is not None:
-        eye = replace(eye, refractive_error=Prescription.parse(args.eye))
+    if args.rx is not None:
+        eye = replace(eye, refractive_error=Prescription.parse(args.rx))
     if args.accommodation_d is not None:
         eye = replace(eye, accommodation_diopters=args.accommodation_d)
     config = replace(config, eye=eye)
-    if args.trial_distance_mm is not None:
-        config = replace(config, trial_lens_distance_mm=args.trial_distance_mm)
+    if args.vertex_mm is not None:
+        config = replace(config, trial_lens_distance_mm=args.vertex_mm)
     if args.fresnel_loss:
         config = replace(config, fresnel_loss=True)
     return config
@@ -146,7 +141,7 @@ def run_atv(args: argparse.Namespace) -> int:
         units="flux per arcmin^2 = pixel radiance x m^2 x sr / arcmin^2",
         orientation="row 0 up, columns to the eye's right, straight ahead at [N//2, N//2]",
     )
-    write_image(output, result.image, provenance=provenance, overwrite=args.overwrite)
+    write_image(output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=result.arcmin_per_px)
     if args.json:
         print(json.dumps(json_safe({**summary, "output": str(output), "prediction_geometric": prediction}),
                          indent=2, sort_keys=True, allow_nan=False))

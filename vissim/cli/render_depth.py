@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.cli._common import add_rx_arg, add_trial_lens_args, trial_lens_powers
 from vissim.errors import VissimInputError
 
 __all__ = ["add_depth_parser", "run_depth", "write_depth"]
@@ -37,17 +38,14 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument("scene", type=Path, help="depth scene TOML, e.g. scenes/depth_panels.toml")
     eye = parser.add_argument_group("eye (an eye focused at 1 / (A - Rx) metres; Rx not worn)")
-    eye.add_argument("--eye", metavar="PRESCRIPTION", help="the eye's correcting lens, e.g. '-2.00 DS' (myope < 0)")
+    add_rx_arg(eye)
     eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter in mm")
     eye.add_argument("--accommodation-d", type=float, metavar="A", help="accommodation exerted, dioptres >= 0")
     camera = parser.add_argument_group("DSLR bench camera (thin lens, entrance pupil focal length / f-number)")
     camera.add_argument("--f-number", type=float, metavar="N", help="f-number (default 5)")
     camera.add_argument("--focus-distance-m", type=float, metavar="F", help="focus distance in metres (default 0.9144)")
     camera.add_argument("--focal-length-mm", type=float, metavar="MM", help="focal length (default 18)")
-    camera.add_argument("--sphere", type=float, metavar="D",
-                        help="one trial lens, sphere in dioptres (replaces the file's lenses)")
-    camera.add_argument("--cylinder", type=float, metavar="D", help="its cylinder in dioptres (needs --axis)")
-    camera.add_argument("--axis", type=float, metavar="DEG", help="its cylinder axis, TABO degrees 0-180")
+    add_trial_lens_args(parser.add_argument_group("trial lens on the DSLR bench camera (replaces the file's lenses)"))
     out = parser.add_argument_group("outputs")
     out.add_argument("-o", "--output", required=True, type=Path, metavar="PATH", help="blurred image, .exr (linear)")
     out.add_argument("--all-in-focus", type=Path, metavar="PATH", help="also the all-in-focus image, .exr")
@@ -69,27 +67,23 @@ def _viewer(args: argparse.Namespace, loaded):
     from vissim.optics.prescription import Prescription
     from vissim.optics.trial_lens import TrialLens
 
-    eye_given = any(v is not None for v in (args.eye, args.pupil_mm, args.accommodation_d))
+    eye_given = any(v is not None for v in (args.rx, args.pupil_mm, args.accommodation_d))
     camera_given = any(v is not None for v in (args.f_number, args.focus_distance_m, args.focal_length_mm,
                                                args.sphere, args.cylinder, args.axis))
     if eye_given and camera_given:
-        raise VissimInputError("give eye options (--eye/--pupil-mm/--accommodation-d) or camera options, not both")
+        raise VissimInputError("give eye options (--rx/--pupil-mm/--accommodation-d) or camera options, not both")
     if eye_given:
         base = loaded.viewer if isinstance(loaded.viewer, EyeViewer) else EyeViewer()
-        changes = {"prescription": None if args.eye is None else Prescription.parse(args.eye),
+        changes = {"prescription": None if args.rx is None else Prescription.parse(args.rx),
                    "pupil_diameter_mm": args.pupil_mm, "accommodation_d": args.accommodation_d}
         return dataclasses.replace(base, **{k: v for k, v in changes.items() if v is not None})
     if camera_given:
         base = loaded.viewer if isinstance(loaded.viewer, CameraViewer) else CameraViewer()
         changes = {"f_number": args.f_number, "focus_distance_m": args.focus_distance_m,
                    "focal_length_mm": args.focal_length_mm}
-        if args.sphere is not None or args.cylinder is not None:
-            cylinder = args.cylinder or 0.0
-            if cylinder != 0.0 and args.axis is None:
-                raise VissimInputError(f"--cylinder {cylinder:g} D needs --axis in degrees (TABO, 0-180)")
-            changes["lenses"] = (TrialLens(args.sphere or 0.0, cylinder, 180.0 if args.axis is None else args.axis),)
-        elif args.axis is not None:
-            raise VissimInputError("--axis needs --cylinder (dioptres)")
+        powers = trial_lens_powers(args)
+        if powers is not None:
+            changes["lenses"] = (TrialLens(*powers),)
         return dataclasses.replace(base, **{k: v for k, v in changes.items() if v is not None})
     return loaded.viewer
 
@@ -107,8 +101,12 @@ def _check_outputs(args: argparse.Namespace) -> None:
             raise VissimInputError(f"{path} already exists; pass --overwrite to replace it")
 
 
-def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = None, overwrite: bool = False) -> Path:
-    """Write an axial depth map (metres, inf = sky) as a one-channel ``Z`` EXR or a ``.npy``, atomically."""
+def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = None, overwrite: bool = False,
+                arcmin_per_px: float | None = None) -> Path:
+    """Write an axial depth map (metres, inf = sky) as a one-channel ``Z`` EXR or a ``.npy``, atomically.
+
+    ``arcmin_per_px`` is recorded in the EXR's provenance (a ``.npy`` holds none).
+    """
     from vissim.atomic import atomic_output
     from vissim.imageio import write_data_map
 
@@ -116,7 +114,8 @@ def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = No
     if depth.ndim != 2 or np.isnan(depth).any() or (depth <= 0).any():
         raise VissimInputError(f"{path}: a depth map must be (H, W) positive metres or inf")
     if path.suffix.lower() != ".npy":
-        return write_data_map(path, depth, channel="Z", provenance=provenance, overwrite=overwrite)
+        return write_data_map(path, depth, channel="Z", provenance=provenance, overwrite=overwrite,
+                              arcmin_per_px=arcmin_per_px)
     with atomic_output(path, overwrite=overwrite) as tmp:
         with open(tmp, "wb") as handle:
             np.save(handle, depth, allow_pickle=False)
@@ -143,15 +142,16 @@ def run_depth(args: argparse.Namespace) -> int:
     )
     provenance = dict(result.provenance)
     provenance["inputs"] = dict(provenance["inputs"], scene_file=str(args.scene), command="render depth")
-    write_image(args.output, result.blurred, provenance=provenance, overwrite=args.overwrite)
+    step = loaded.scene.arcmin_per_px
+    write_image(args.output, result.blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
     written = [str(args.output)]
     if args.all_in_focus is not None:
         aif = dict(provenance, inputs=dict(provenance["inputs"], image="all_in_focus (pinhole at the pupil centre)"))
-        write_image(args.all_in_focus, result.all_in_focus, provenance=aif, overwrite=args.overwrite)
+        write_image(args.all_in_focus, result.all_in_focus, provenance=aif, overwrite=args.overwrite, arcmin_per_px=step)
         written.append(str(args.all_in_focus))
     if args.depth is not None:
         depth = dict(provenance, inputs=dict(provenance["inputs"], image="axial depth, metres, inf = sky"))
-        write_depth(args.depth, result.depth_m, provenance=depth, overwrite=args.overwrite)
+        write_depth(args.depth, result.depth_m, provenance=depth, overwrite=args.overwrite, arcmin_per_px=step)
         written.append(str(args.depth))
     rows, cols = loaded.scene.size_px
     print(f"wrote {', '.join(written)}: {cols} x {rows} px, {result.spp} spp, {result.variant}, "

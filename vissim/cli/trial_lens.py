@@ -38,9 +38,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--cylinder", type=float, default=0.0, metavar="D",
                         help="marked cylinder in dioptres (needs --axis)")
     parser.add_argument("--axis", type=float, default=None, metavar="DEG",
-                        help="cylinder axis in degrees, TABO 0-180")
+                        help="cylinder axis, TABO degrees 0-180")
     parser.add_argument("--vertex-mm", type=float, default=10.0, metavar="MM",
-                        help="back surface of the lens to the camera principal plane (default 10)")
+                        help="vertex distance: back surface of the lens to the camera principal plane (default 10)")
     parser.add_argument("--object-distance-m", default="inf", metavar="M|inf",
                         help="camera principal plane to the object, metres, or 'inf' (default)")
     parser.add_argument("--index", type=float, default=None, metavar="N",

@@ -36,7 +36,7 @@ def add_parser(subparsers) -> None:
 
 
 def run_validate(args: argparse.Namespace) -> int:
-    from vissim.validation.depth_campaign import run_any_campaign
+    from vissim.validation.dispatch import run_any_campaign
 
     try:
         done = run_any_campaign(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler,
@@ -52,7 +52,7 @@ def run_validate(args: argparse.Namespace) -> int:
 
 
 def run_report(args: argparse.Namespace) -> int:
-    from vissim.validation.depth_campaign import rebuild_any_report
+    from vissim.validation.dispatch import rebuild_any_report
 
     written, lines = rebuild_any_report(args.run)
     for line in lines:

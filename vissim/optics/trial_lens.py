@@ -36,6 +36,7 @@ import numpy as np
 from vissim.checks import finite_number as _number
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription
+from vissim.units import mm_to_m
 
 __all__ = [
     "CROWN_GLASS_INDEX",
@@ -70,11 +71,6 @@ THESIS_EYE_FOCAL_LENGTH_MM = 13.5
 Matrix2 = tuple[tuple[float, float], tuple[float, float]]
 _I2 = np.eye(2)
 _SINGULAR_TOL = 1e-12
-
-
-def _mm_to_m(length_mm: float) -> float:
-    """The one millimetre-to-metre conversion of this module."""
-    return length_mm / 1000.0
 
 
 def _as_tuple(matrix: np.ndarray) -> Matrix2:
@@ -192,7 +188,7 @@ class TrialLens:
         """t/n in metres (0 for a thin lens)."""
         if self.is_thin:
             return 0.0
-        return _mm_to_m(self.center_thickness_mm) / self.refractive_index
+        return mm_to_m(self.center_thickness_mm) / self.refractive_index
 
     def _front_surface(self) -> np.ndarray:
         """F1 from F_bv = F1 (I - tau F1)^-1 + F2 I, i.e. F1 = G (I + tau G)^-1, G = F_bv - F2 I."""
@@ -291,9 +287,9 @@ class TrialLensSetup:
                 raise VissimInputError(f"{label} must be within 0-{MAX_HOLDER_DISTANCE_MM:g} mm, got {value:g} mm")
             object.__setattr__(self, field, value + 0.0)
         distance = _number(self.object_distance_m, "object distance", "m", allow_inf=True)
-        if distance <= _mm_to_m(self.span_mm):
+        if distance <= mm_to_m(self.span_mm):
             raise VissimInputError(
-                f"object distance {distance:g} m must exceed {_mm_to_m(self.span_mm):g} m, the "
+                f"object distance {distance:g} m must exceed {mm_to_m(self.span_mm):g} m, the "
                 "distance from the camera principal plane to the front of the first trial lens"
             )
         object.__setattr__(self, "object_distance_m", distance)
@@ -311,10 +307,10 @@ class TrialLensSetup:
         system = np.eye(4)
         for position, lens in enumerate(self.lenses):
             if position:
-                system = transfer_matrix(_mm_to_m(self.lens_gap_mm)) @ system
+                system = transfer_matrix(mm_to_m(self.lens_gap_mm)) @ system
             system = lens.ray_transfer_matrix() @ system
         if self.lenses:
-            system = transfer_matrix(_mm_to_m(self.vertex_distance_mm)) @ system
+            system = transfer_matrix(mm_to_m(self.vertex_distance_mm)) @ system
         return system
 
 
@@ -380,7 +376,7 @@ def trial_lens_effect(setup: TrialLensSetup) -> TrialLensEffect:
     system = setup.ray_transfer_matrix()
     a, b, c, d = system[:2, :2], system[:2, 2:], system[2:, :2], system[2:, 2:]
     distance_m = setup.object_distance_m
-    span_m = _mm_to_m(setup.span_mm)
+    span_m = mm_to_m(setup.span_mm)
     if math.isinf(distance_m):
         inv_distance, inv_front_distance, front_over_distance = 0.0, 0.0, 1.0
     else:
@@ -464,7 +460,7 @@ def thesis_table_4_2_power(lens_diopters: float, vertex_distance_mm: float = THE
     ERRATA item 4: with the chart at a finite distance use :func:`trial_lens_effect`.
     """
     power = _number(lens_diopters, "lens power", "dioptres")
-    vertex_m = _mm_to_m(_number(vertex_distance_mm, "vertex distance", "mm"))
+    vertex_m = mm_to_m(_number(vertex_distance_mm, "vertex distance", "mm"))
     if vertex_m < 0.0:
         raise VissimInputError(f"vertex distance must be >= 0 mm, got {vertex_distance_mm:g} mm")
     if abs(1.0 - vertex_m * power) < _SINGULAR_TOL:

@@ -1,7 +1,7 @@
 """The ATV tube rendered two ways: light tracing from the pixel (primary) and a camera-side check.
 
 **Light tracing** (:func:`trace_atv`).  Rays start on the lit pixel (a Lambertian square of
-radiance L) and are traced through the Mitsuba scene of :func:`vissim.bench.atv.atv_scene` with
+radiance L) and are traced through the Mitsuba scene of :func:`vissim.bench.atv_scene.atv_scene` with
 ``scene.ray_intersect`` (vectorised Dr.Jit arrays), refracting by vector Snell's law at every
 lens hit with the mesh's interpolated vertex normal ``si.sh_frame.n`` (the exact analytic
 normal at the vertices; ``si.n`` is the flat face normal), oriented against the ray.  Hits on
@@ -16,7 +16,7 @@ Sampling: scrambled Sobol points (:class:`scipy.stats.qmc.Sobol`, seeded; ``n_ra
 up to a power of two), dimensions 0-1 the direction and 2-3 the point on the pixel.  Directions
 are cosine-distributed over a cone -- a disc of direction cosines -- around the paraxial
 direction to the pupil, just wide enough that every ray able to reach the pupil is sampled
-(:attr:`~vissim.bench.atv.AtvParaxial.cone_radius_rad` x 1.05 + 0.1 mrad; a ray in the pupil
+(:attr:`~vissim.bench.atv_paraxial.AtvParaxial.cone_radius_rad` x 1.05 + 0.1 mrad; a ray in the pupil
 from the cone's outer 2 % widens the cone and traces again).  Each ray carries
 ``L x pixel area x pi sin^2(cone) / n_rays``, so image pixels hold flux per arcmin²
 (:mod:`vissim.atv.predict`).  Putting the direction first in the Sobol sequence cut the
@@ -51,12 +51,14 @@ import numpy as np
 from scipy.stats import qmc
 
 from vissim.atv.predict import spot_metrics, suggested_atv_size_px
-from vissim.bench.atv import AtvConfig, atv_paraxial, atv_scene
+from vissim.bench.atv import AtvConfig
+from vissim.bench.atv_paraxial import atv_paraxial
+from vissim.bench.atv_scene import atv_scene
 from vissim.errors import VissimError, VissimInputError
 from vissim.render.backend import mitsuba
 from vissim.render.plugins import register_plugins
 from vissim.render.run import pass_seeds, render_scene, to_mitsuba_dict
-from vissim.units import ARCMIN_PER_RAD, arcmin_to_rad
+from vissim.units import ARCMIN_PER_RAD, arcmin_to_rad, mm_to_m
 
 __all__ = ["AtvResult", "trace_atv", "render_atv_camera", "DEFAULT_N_RAYS"]
 
@@ -262,7 +264,7 @@ def trace_atv(config: AtvConfig, *, n_rays: int = DEFAULT_N_RAYS, seed: int = 0,
         sobol = qmc.Sobol(4, scramble=True, seed=int(seed))
         flux, flux_sq = np.zeros((size, size)), np.zeros((size, size))
         in_pupil, outside, total, fill = 0, 0, 0.0, 0.0
-        per_ray = radiance * (pitch / 1000.0) ** 2 * math.pi * cone**2 / total_rays
+        per_ray = radiance * mm_to_m(pitch) ** 2 * math.pi * cone**2 / total_rays
         for first in range(0, total_rays, _BATCH_RAYS):
             u = sobol.random(min(_BATCH_RAYS, total_rays - first))
             ex, ey, rho = _concentric_disc(u[:, 0], u[:, 1])
@@ -342,7 +344,7 @@ def render_atv_camera(config: AtvConfig, *, spp: int = 1024, seed: int = 0, arcm
     stack = np.stack(renders)
     mean = (stack * weights).sum(axis=0) / weights.sum()
     spread = np.sqrt(((stack - mean) ** 2 * weights).sum(axis=0) / weights.sum() / (passes - 1))
-    to_flux = math.pi / 4.0 * (config.eye.pupil_diameter_mm / 1000.0) ** 2 * float(arcmin_to_rad(1.0)) ** 2
+    to_flux = math.pi / 4.0 * mm_to_m(config.eye.pupil_diameter_mm) ** 2 * float(arcmin_to_rad(1.0)) ** 2
     image = (mean * to_flux).astype(np.float32)
     std_image = (spread * to_flux).astype(np.float32)
     metrics = spot_metrics(image, step, std_image)

@@ -1,6 +1,6 @@
 """Render depth scenes: the blurred image, and on request the all-in-focus image and a depth map.
 
-Three renders of one scene (:func:`vissim.bench.depth_scene.depth_scene_dict`), one pixel grid:
+Three renders of one scene (:func:`vissim.bench.depth_scene_dict.depth_scene_dict`), one pixel grid:
 
 * **blurred** -- the observer's optics (eye sensor or DSLR thin lens + trial lenses), seed ``seed``;
 * **all in focus** -- a pinhole at the pupil centre, same film, same lenses, seed ``seed + 1``;
@@ -35,6 +35,7 @@ from vissim.render.eye_sensor import register_eye_sensor
 from vissim.render.fixed_order import render_image
 from vissim.render.plugins import register_plugins
 from vissim.render.run import render_scene, to_mitsuba_dict
+from vissim.units import mm_to_m
 
 __all__ = ["DepthRenderResult", "render_depth", "render_view", "render_aov_depth", "proximity_to_depth_m",
            "SKY_PROXIMITY_D"]
@@ -74,7 +75,7 @@ def render_view(scene, viewer, *, view: str, content: str = "radiance", spp: int
                 kind: str = "mono", variant: str | None = None, pass_spp: int | None = None,
                 progress: Callable[[int, int], None] | None = None, mesh_cache_dir=None):
     """One render (:class:`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``."""
-    from vissim.bench.depth_scene import depth_scene_dict
+    from vissim.bench.depth_scene_dict import depth_scene_dict
 
     kind = "mono" if content == "proximity" else kind
     register_eye_sensor(mitsuba(kind, variant))
@@ -163,7 +164,7 @@ def render_aov_depth(scene, viewer, *, spp: int = 16, seed: int = 0, variant: st
     Mean surface z over each pixel's samples, sky counted as z = 0 (so mixed sky pixels are
     meaningless).  Refused with trial lenses: the AOV stops at the first surface, the lens.
     """
-    from vissim.bench.depth_scene import depth_scene_dict
+    from vissim.bench.depth_scene_dict import depth_scene_dict
 
     scene_dict = depth_scene_dict(scene, viewer, view="all_in_focus", content="proximity",
                                   mesh_cache_dir=mesh_cache_dir)
@@ -177,4 +178,4 @@ def render_aov_depth(scene, viewer, *, spp: int = 16, seed: int = 0, variant: st
     loaded = mi.load_dict(to_mitsuba_dict(scene_dict, mi))
     image = render_image(mi, loaded, int(spp), int(seed)).image.astype(np.float64)
     z_mm = image[:, :, 2]
-    return np.where(z_mm > 0.0, z_mm / 1000.0, np.inf).astype(np.float32)
+    return np.where(z_mm > 0.0, mm_to_m(z_mm), np.inf).astype(np.float32)

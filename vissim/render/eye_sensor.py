@@ -27,12 +27,13 @@ import math
 
 from vissim.errors import VissimInputError
 from vissim.render.plugins import register_once
+from vissim.units import diopters_to_per_mm
 
 __all__ = ["EYE_SENSOR", "register_eye_sensor"]
 
 log = logging.getLogger(__name__)
 
-#: Plugin name; equals :data:`vissim.bench.depth_scene.EYE_SENSOR`.
+#: Plugin name; equals :data:`vissim.bench.depth_scene_dict.EYE_SENSOR`.
 EYE_SENSOR = "vissim_eye"
 
 
@@ -50,9 +51,9 @@ def _make_class(mi, dr):
             if self.radius < 0.0:
                 raise VissimInputError(f"eye sensor aperture radius must be >= 0 mm, got {self.radius:g}")
             # dioptres (1/m) -> 1/mm: the scene is in millimetres
-            self.kxx = float(props.get("power_xx_diopters", 0.0)) / 1000.0
-            self.kxy = float(props.get("power_xy_diopters", 0.0)) / 1000.0
-            self.kyy = float(props.get("power_yy_diopters", 0.0)) / 1000.0
+            self.kxx = diopters_to_per_mm(float(props.get("power_xx_diopters", 0.0)))
+            self.kxy = diopters_to_per_mm(float(props.get("power_xy_diopters", 0.0)))
+            self.kyy = diopters_to_per_mm(float(props.get("power_yy_diopters", 0.0)))
             self.near_clip = float(props.get("near_clip", 1.0))
             self.far_clip = float(props.get("far_clip", 1.0e7))
             width, height = self.film().size()

@@ -31,6 +31,7 @@ from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
 from vissim.render.fixed_order import render_image
 from vissim.render.plugins import register_plugins
+from vissim.units import REC709_LUMINANCE
 
 __all__ = ["RenderResult", "to_mitsuba_dict", "render_scene", "render_bench", "pass_seeds", "DEFAULT_PASS_SAMPLES"]
 
@@ -160,7 +161,7 @@ def render_scene(
         if image.ndim == 2:
             image = image[:, :, None]
         if kind == "mono" and image.shape[2] >= 3:  # scalar_rgb fallback
-            image = image[:, :, :3] @ np.array([0.2126, 0.7152, 0.0722])[:, None]
+            image = image[:, :, :3] @ np.array(REC709_LUMINANCE)[:, None]
         total += image[:, :, : total.shape[2]] * count
         done += count
         log.info("render pass %d/%d: %d/%d spp, %.1f s", i + 1, len(counts), done, spp, time.perf_counter() - start)

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from vissim.charts import POLARITIES
 from vissim.optics.trial_lens import (
     CROWN_GLASS_INDEX,
     THESIS_CHART_DISTANCE_MM,
@@ -23,6 +24,7 @@ from vissim.optics.trial_lens import (
     THESIS_VERTEX_DISTANCE_MM,
 )
 from vissim.optotypes import SLOAN_LETTERS
+from vissim.units import mm_to_m
 from vissim.validation.fields import (
     MAX_SPP,
     LensSpec,
@@ -45,7 +47,6 @@ __all__ = ["LensSpec", "Configuration", "CampaignSettings", "Campaign", "load_ca
 SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification")
 #: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
 INPUTS = ("render", "synthetic")
-POLARITIES = ("black-on-white", "white-on-black")
 #: Bumped when the meaning of an item's inputs changes, so old results are not reused.
 SCHEMA_VERSION = 1
 
@@ -76,7 +77,7 @@ class CampaignSettings:
     arcmin_per_px: float = 1.0
     tile_px: tuple[int, int] = (133, 113)  # rows, cols (errata item 8)
     focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
-    chart_distance_m: float = THESIS_CHART_DISTANCE_MM / 1000.0
+    chart_distance_m: float = mm_to_m(THESIS_CHART_DISTANCE_MM)
     vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
     wavelength_nm: float = 550.0
     refractive_index: float = CROWN_GLASS_INDEX

@@ -38,14 +38,15 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.charts import PAPER_REFLECTANCE
+from vissim.charts import PAPER_REFLECTANCE, POLARITIES
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import (
     THESIS_CHART_DISTANCE_MM,
     THESIS_F_NUMBER,
     THESIS_FOCAL_LENGTH_MM,
 )
-from vissim.validation.campaign import POLARITIES, LensSpec
+from vissim.units import mm_to_m
+from vissim.validation.campaign import LensSpec
 from vissim.validation.fields import (
     field_error,
     lenses,
@@ -114,7 +115,7 @@ def _capture(entry: dict, path: Path, i: int) -> Capture:
         pixel_pitch_um=positive("pixel_pitch_um", 5.2, "um"),
         focal_length_mm=positive("focal_length_mm", THESIS_FOCAL_LENGTH_MM, "mm"),
         f_number=positive("f_number", THESIS_F_NUMBER, "(f-number)"),
-        chart_distance_m=positive("chart_distance_m", THESIS_CHART_DISTANCE_MM / 1000.0, "m"),
+        chart_distance_m=positive("chart_distance_m", mm_to_m(THESIS_CHART_DISTANCE_MM), "m"),
         lenses=lenses(entry.get("lenses", []), source, f"{where}.lenses"),
         letter=text(entry["letter"], source, f"{where}.letter").upper(),
         logmar=number(entry.get("logmar", 1.0), source, f"{where}.logmar", "LogMAR"),

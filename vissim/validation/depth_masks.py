@@ -33,7 +33,7 @@ import numpy as np
 from scipy import ndimage
 
 from vissim.errors import VissimInputError
-from vissim.units import arcmin_to_rad
+from vissim.units import arcmin_to_rad, mm_to_m
 
 __all__ = ["RegionMasks", "depth_regions", "masked_metrics", "SKY"]
 
@@ -88,7 +88,7 @@ def depth_regions(
     if proximity.ndim != 2:
         raise VissimInputError(f"a proximity map must be (H, W) dioptres, got shape {proximity.shape}")
     if jump_d is None:
-        jump_d = float(arcmin_to_rad(arcmin_per_px)) / (pupil_diameter_mm / 1000.0)
+        jump_d = float(arcmin_to_rad(arcmin_per_px)) / mm_to_m(pupil_diameter_mm)
     radius = np.asarray(blur_radius_px(proximity), dtype=np.float64)
     spread = ndimage.maximum_filter(proximity, size=3, mode="nearest") - ndimage.minimum_filter(
         proximity, size=3, mode="nearest")

@@ -45,7 +45,7 @@ import tifffile
 from vissim.charts import Chart
 from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
-from vissim.units import rad_to_arcmin
+from vissim.units import m_to_mm, rad_to_arcmin
 
 logger = logging.getLogger(__name__)
 
@@ -291,7 +291,7 @@ def camera_arcmin_per_px(
     pixel_pitch_um = _positive(pixel_pitch_um, "pixel pitch", "um")
     focal_length_mm = image_distance_mm = _positive(focal_length_mm, "focal length", "mm")
     if object_distance_m is not None:
-        object_mm = _positive(object_distance_m, "object distance", "m") * 1000.0
+        object_mm = m_to_mm(_positive(object_distance_m, "object distance", "m"))
         if object_mm <= focal_length_mm:
             raise VissimInputError(
                 f"object distance must exceed the focal length {focal_length_mm:g} mm, got {object_distance_m!r} m"

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 
 from vissim.bench.dslr import DslrBench
 from vissim.optics.trial_lens import TrialLens, TrialLensSetup
+from vissim.units import m_to_mm
 from vissim.validation.campaign import CampaignSettings, Configuration
 
 __all__ = ["RenderSpec", "bench_for", "bench_setup", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec"]
@@ -18,8 +19,8 @@ def _bench(configuration: Configuration, settings: CampaignSettings, **extra) ->
     return DslrBench(
         focal_length_mm=settings.focal_length_mm,
         f_number=configuration.f_number,
-        focus_distance_mm=settings.chart_distance_m * 1000.0,
-        chart_distance_mm=settings.chart_distance_m * 1000.0,
+        focus_distance_mm=m_to_mm(settings.chart_distance_m),
+        chart_distance_mm=m_to_mm(settings.chart_distance_m),
         vertex_distance_mm=settings.vertex_distance_mm,
         lenses=thin,
         refractive_index=settings.refractive_index,
@@ -98,8 +99,8 @@ def bench_for(spec: RenderSpec) -> DslrBench:
     return DslrBench(
         focal_length_mm=spec.focal_length_mm,
         f_number=spec.f_number,
-        focus_distance_mm=spec.chart_distance_m * 1000.0,
-        chart_distance_mm=spec.chart_distance_m * 1000.0,
+        focus_distance_mm=m_to_mm(spec.chart_distance_m),
+        chart_distance_mm=m_to_mm(spec.chart_distance_m),
         vertex_distance_mm=spec.vertex_distance_mm,
         lenses=spec.lenses,
         arcmin_per_px=spec.arcmin_per_px,

@@ -1,0 +1,131 @@
+"""Running a depth campaign: its render specs, the renders, then every item.
+
+Run folder: as :mod:`vissim.validation.runner` (``campaign.json``, ``renders/<key>.exr`` keyed
+by their inputs, ``items/<key>/result.json`` written last), so re-runs resume.  Each item needs
+four renders (:class:`DepthRenderSpec`): the blurred view at both seeds, the all-in-focus view
+and the proximity (depth) pass; :mod:`vissim.validation.depth_item` computes the item.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from vissim.atomic import write_json_atomic
+from vissim.bench.depth_scene import DepthScene
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer
+from vissim.imageio import read_image
+from vissim.provenance import json_safe, make_provenance
+from vissim.validation.depth_campaign import (
+    SCHEMA_VERSION,
+    DepthCampaign,
+    DepthCampaignSettings,
+    DepthConfiguration,
+)
+from vissim.validation.depth_item import compute_depth_item
+from vissim.validation.runner import (
+    RunSummary,
+    _make_renders,
+    check_run_options,
+    connect_scheduler,
+)
+
+__all__ = ["DepthRenderSpec", "render_depth_spec", "render_specs", "run_depth_campaign"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class DepthRenderSpec:
+    """Everything one render depends on; ``key`` names its file in ``renders/``."""
+
+    scene: DepthScene
+    viewer: EyeViewer | CameraViewer
+    view: str
+    content: str
+    spp: int
+    seed: int
+    oversample: int = 1
+
+    @property
+    def key(self) -> str:
+        text = json.dumps({"schema": SCHEMA_VERSION, **self.as_json()}, sort_keys=True)
+        return "depth-" + hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def as_json(self) -> dict:
+        return json_safe({f.name: getattr(self, f.name) for f in dataclasses.fields(self)})
+
+    def render_scene(self) -> DepthScene:
+        s = self.oversample
+        if s == 1:
+            return self.scene
+        rows, cols = self.scene.size_px
+        return dataclasses.replace(self.scene, arcmin_per_px=self.scene.arcmin_per_px / s, size_px=(rows * s, cols * s))
+
+
+def render_depth_spec(spec: DepthRenderSpec):
+    """Render one spec with Mitsuba on this machine (a worker process or a Dask worker).
+
+    Returns the :class:`vissim.render.run.RenderResult`: pixels, variant and the spp used.
+    """
+    from vissim.render.depth_render import (
+        render_view,  # the Mitsuba door, imported where it runs
+    )
+
+    result = render_view(spec.render_scene(), spec.viewer, view=spec.view, content=spec.content, spp=spec.spp,
+                         seed=spec.seed)
+    return result
+
+
+def render_specs(config: DepthConfiguration, settings: DepthCampaignSettings) -> dict[str, DepthRenderSpec]:
+    truth = {f"truth_{i}": DepthRenderSpec(config.scene, config.viewer, "blurred", "radiance", settings.spp, seed)
+             for i, seed in enumerate(settings.seeds)}
+    aux = {name: DepthRenderSpec(config.scene, config.viewer, "all_in_focus", content, settings.aux_spp,
+                                 settings.aux_seed, settings.oversample)
+           for name, content in (("all_in_focus", "radiance"), ("proximity", "proximity"))}
+    return {**truth, **aux}
+
+
+def run_depth_campaign(campaign: DepthCampaign, run_dir: str | Path, *, workers: int = 1, scheduler: str | None = None,
+                       spp: int | None = None, render: Callable[[DepthRenderSpec], Any] | None = None,
+                       show_progress: bool = True) -> RunSummary:
+    """Run (or resume) a depth campaign into ``run_dir``; renders are reused by key.
+
+    Options and the scheduler are checked before the first file is written.
+    """
+    render = render or render_depth_spec
+    run_dir = Path(run_dir)
+    check_run_options(run_dir, workers, spp)
+    if spp is not None:
+        campaign = dataclasses.replace(campaign, settings=dataclasses.replace(campaign.settings, spp=spp))
+    keys = [campaign.item_key(c) for c in campaign.configurations]
+    todo = [(k, c) for k, c in zip(keys, campaign.configurations)
+            if not (run_dir / "items" / k / "result.json").exists()]
+    needed = {spec.key: spec for _, c in todo for spec in render_specs(c, campaign.settings).values()}
+    pending = [s for s in needed.values() if not (run_dir / "renders" / f"{s.key}.exr").exists()]
+    client = connect_scheduler(scheduler) if scheduler and pending else None
+    try:
+        write_json_atomic(run_dir / "campaign.json", {
+            "kind": "depth", "name": campaign.name, "description": campaign.description, "source": campaign.source,
+            "settings": json_safe(campaign.settings), "items": keys,
+            "configurations": [c.as_json() for c in campaign.configurations],
+            "provenance": make_provenance(campaign=campaign.source)}, overwrite=True)
+        log.info("%d of %d depth items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending),
+                 len(needed) - len(pending))
+        if pending:
+            _make_renders(pending, run_dir, workers, client, render, show_progress)
+    finally:
+        if client is not None:
+            client.close()
+    for key, config in todo:
+        renders = {name: read_image(run_dir / "renders" / f"{spec.key}.exr")
+                   for name, spec in render_specs(config, campaign.settings).items()}
+        compute_depth_item(key, config, campaign.settings, {name: r.pixels for name, r in renders.items()},
+                           run_dir / "items" / key,
+                           render_provenance={name: r.provenance for name, r in renders.items()})
+    return RunSummary(run_dir, len(keys), len(keys) - len(todo), len(pending), len(needed) - len(pending))

@@ -1,0 +1,94 @@
+"""Either kind of campaign file: run it or rebuild its report (``vissim validate`` / ``vissim report``).
+
+A depth campaign (:mod:`vissim.validation.depth_campaign`) or a single-plane one
+(:mod:`vissim.validation.campaign`) is told apart by its tables when run, and by the ``kind`` in
+``campaign.json`` when its report is rebuilt; each is handed to its own runner and report.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from vissim.errors import VissimInputError
+from vissim.validation.depth_campaign import is_depth_campaign, load_depth_campaign
+from vissim.validation.depth_runner import run_depth_campaign
+from vissim.validation.fields import read_campaign_toml
+from vissim.validation.runner import RunSummary
+
+__all__ = ["CampaignRun", "run_any_campaign", "rebuild_any_report"]
+
+
+@dataclass(frozen=True)
+class CampaignRun:
+    """What :func:`run_any_campaign` did: the kind, the run summary, the report files and summary lines."""
+
+    kind: str  # "depth" or "single-plane"
+    summary: RunSummary
+    report_files: tuple[Path, ...]
+    lines: tuple[str, ...]
+
+    def text(self) -> str:
+        return "\n".join(self.lines)
+
+
+def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: str | None = None,
+                     spp: int | None = None, show_progress: bool = True) -> CampaignRun:
+    """Run the campaign file at ``path`` into ``out`` -- a depth campaign or a single-plane one -- and report it."""
+    path, out = Path(path), Path(out)
+    if is_depth_campaign(read_campaign_toml(path)):
+        from vissim.validation.depth_report import (
+            build_depth_report,
+            depth_summary_lines,
+        )
+
+        campaign = load_depth_campaign(path)
+        summary = run_depth_campaign(campaign, out, workers=workers, scheduler=scheduler, spp=spp,
+                                     show_progress=show_progress)
+        written = build_depth_report(out)
+        lines = depth_summary_lines(out)
+        kind = "depth"
+    else:
+        from vissim.validation.campaign import load_campaign
+        from vissim.validation.report import build_report
+        from vissim.validation.runner import run_campaign
+
+        summary = run_campaign(load_campaign(path), out, workers=workers, scheduler=scheduler, spp=spp,
+                               show_progress=show_progress)
+        written = build_report(out)
+        lines = _single_plane_lines(out)
+        kind = "single-plane"
+    head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
+            f"{summary.renders_reused} reused")
+    report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
+    return CampaignRun(kind, summary, tuple(written), (head, *lines, f"report: {report} ({len(written)} files)"))
+
+
+def rebuild_any_report(run_dir: str | Path) -> tuple[list[Path], list[str]]:
+    """Rebuild the report of a run folder of either kind (``vissim report``): (files written, summary lines)."""
+    run_dir = Path(run_dir)
+    order = run_dir / "campaign.json"
+    if not order.exists():
+        raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
+    if json.loads(order.read_text()).get("kind") == "depth":
+        from vissim.validation.depth_report import (
+            build_depth_report,
+            depth_summary_lines,
+        )
+
+        return build_depth_report(run_dir), depth_summary_lines(run_dir)
+    from vissim.validation.report import build_report
+
+    return build_report(run_dir), _single_plane_lines(run_dir)
+
+
+def _single_plane_lines(run_dir: Path) -> list[str]:
+    """The terminal summary of a single-plane run: one line per comparison."""
+    from vissim.validation.report import load_results, metrics_rows
+
+    lines = [f"{'configuration':44s} {'simulation':>16s} {'input':>9s} {'SSIM':>7s} {'PSNR dB':>8s} {'floor dB':>8s}"]
+    for r in metrics_rows(load_results(run_dir)):
+        lines.append(f"{r['configuration'][:44]:44s} {r['simulation']:>16s} {r['input']:>9s} {r['ssim']:7.4f} "
+                     f"{r['psnr_db']:8.2f} {r['noise_floor_psnr_db']:8.2f}")
+    return lines
