@@ -17,7 +17,7 @@ from vissim.optics.accommodation import (
     clear_vision_range_m,
     required_accommodation_diopters,
 )
-from vissim.optics.depth import effective_prescription
+from vissim.optics.setup import ViewingSetup
 from vissim.optics.prescription import Prescription
 
 MYOPE = Prescription(-2.0)
@@ -108,6 +108,11 @@ def test_range_of_clear_vision(eye, amplitude, expected):
         assert got is None
     else:
         assert got == pytest.approx(expected, abs=1e-12)
+
+
+def effective_prescription(rx, distance_m, accommodation_d=0.0):
+    """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
+    return ViewingSetup.eye(rx, 4.0, accommodation_d, distance_m).camera_prescription
 
 
 def test_bad_inputs_are_one_line_errors():

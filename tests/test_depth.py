@@ -26,12 +26,12 @@ from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.optics.accommodation import accommodation_for_target
 from vissim.optics.blur import blur_image
+from vissim.optics.setup import ViewingSetup
 from vissim.optics.depth import (
     _extended_layer,
     _matte_indices,
     _occlusion_weight,
     blur_depth,
-    effective_prescription,
     layer_spacing_diopters,
     plan_layers,
 )
@@ -39,6 +39,11 @@ from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
+
+
+def effective_prescription(rx, distance_m, accommodation_d=0.0):
+    """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
+    return ViewingSetup.eye(rx, 4.0, accommodation_d, distance_m).camera_prescription
 
 PUPIL_MM = 4.0
 STEP = 1.0  # arcmin per pixel
@@ -75,10 +80,10 @@ def test_effective_prescription_is_rx_plus_proximity_minus_accommodation():
     myope = Prescription(-2.0, -1.0, 30.0)
     assert effective_prescription(myope, 0.5).sphere_diopters == pytest.approx(0.0, abs=1e-12)
     assert effective_prescription(myope, 6.0).sphere_diopters == pytest.approx(-2.0 + 1 / 6, abs=1e-12)
-    assert effective_prescription(myope, math.inf).sphere_diopters == -2.0
+    assert effective_prescription(myope, math.inf).sphere_diopters == pytest.approx(-2.0, abs=1e-12)
     assert effective_prescription(myope, 0.25, 1.0).sphere_diopters == pytest.approx(1.0, abs=1e-12)
     shifted = effective_prescription(myope, 6.0)
-    assert (shifted.cylinder_diopters, shifted.axis_deg) == (-1.0, 30.0)
+    assert (shifted.cylinder_diopters, shifted.axis_deg) == pytest.approx((-1.0, 30.0), abs=1e-9)
 
 
 def test_myopic_eye_sees_the_half_metre_panel_sharp():

@@ -36,10 +36,15 @@ from vissim.bench.depth_scene_dict import depth_scene_dict, tilted_mesh
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_textures import panel_texture
 from vissim.errors import VissimInputError
-from vissim.optics.depth import effective_prescription
+from vissim.optics.setup import ViewingSetup
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import rad_to_arcmin
+
+
+def effective_prescription(rx, distance_m, accommodation_d=0.0):
+    """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
+    return ViewingSetup.eye(rx, 4.0, accommodation_d, distance_m).camera_prescription
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench, bench_theory, chart_mm_per_texel, dslr_scene
+from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.bench.lens_mesh import rim_thickness_mm
 from vissim.bench.scene_files import load_bench_toml, load_chart_toml
 from vissim.errors import VissimInputError
@@ -62,7 +62,7 @@ def test_thin_lenses_become_realistic_crown_lenses_used_by_the_theory_too():
     plus, minus = bench.physical_lenses
     aperture = bench.clear_aperture()
     assert rim_thickness_mm(plus, aperture)[0] == pytest.approx(1.0) and minus.center_thickness_mm == 1.0
-    assert bench_theory(bench).effect.setup.lenses == (plus, minus)
+    assert bench.trial_lens_setup().lenses == (plus, minus)
     farthest_mm = bench.lens_back_vertex_z_mm()[0] + plus.center_thickness_mm
     beam = bench.entrance_pupil_diameter_mm + 2 * farthest_mm * math.tan(bench.field_half_diagonal_rad)
     assert aperture > beam

@@ -1,6 +1,6 @@
 """The virtual DSLR bench against paraxial theory: small CPU renders, fixed seeds.
 
-Theory: :func:`vissim.bench.dslr.bench_theory` -- added power and spectacle magnification by
+Theory: :meth:`vissim.bench.dslr.DslrBench.viewing_setup` -- added power and spectacle magnification by
 4 x 4 ray transfer through the same thick lenses that are rendered
 (:func:`vissim.optics.trial_lens.trial_lens_effect`), blur diameter = entrance pupil (3.6 mm) x
 defocus (conventions: dioptres x mm = mrad).  Prototype reference: +2 D at 10 mm, chart at
@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from vissim.bench.dslr import DslrBench, bench_theory, chart_mm_per_texel, dslr_scene
+from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import optotype_tile, single_letter_spec
 from vissim.optics.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
@@ -99,7 +99,7 @@ def square(x, y):
 
 
 def theory_blur_xy(bench: DslrBench) -> tuple[float, float]:
-    by_meridian = {meridian: diameter for diameter, meridian in bench_theory(bench).blur_diameter_arcmin}
+    by_meridian = {meridian: diameter for diameter, meridian in bench.viewing_setup().blur_diameter_arcmin}
     return by_meridian[180.0], by_meridian[90.0]
 
 
@@ -145,7 +145,7 @@ def test_magnification_matches_ray_transfer_theory(sphere):
     bare = DslrBench(f_number=1000.0, spp=16, seed=SEED)
     bench = dataclasses.replace(bare, lenses=(TrialLens(sphere),))
     ratio = np.divide(square_widths_px(render(bench, square, spp=16)), square_widths_px(render(bare, square, spp=16)))
-    expected = dict((m, mag) for mag, m in bench_theory(bench).magnification_principal)
+    expected = dict((m, mag) for mag, m in bench.viewing_setup().magnification_principal)
     assert ratio == pytest.approx((expected[180.0], expected[90.0]), rel=0.002)
 
 
@@ -210,19 +210,19 @@ def test_same_seed_gives_bit_identical_pixels_and_another_seed_does_not():
 def test_bench_render_matches_vissims_blur_of_the_magnified_letter(lens):
     """Render vs vissim.optics.psf (geometric mode) + vissim.optics.blur of the tile magnified by the theory.
 
-    Same camera prescription (bench_theory), 3.6 mm pupil, letter scaled by the spectacle
+    Same camera prescription (DslrBench.viewing_setup), 3.6 mm pupil, letter scaled by the spectacle
     magnification (ERRATA item 5).  This pins the oblique-axis mirroring of both halves to each
     other.  Measured when written at 256 spp: PSNR 44.8 dB (+2 DS) and 43.2 dB (-2 +1 x 30) over
     the 0.9 white level (46 and 44 dB at 512 spp); the render's own noise is ~48 dB.  Threshold 40 dB."""
     from vissim.optics.blur import blur_image
     from vissim.optics.psf import compute_psf
-    from vissim.optics.wavefront import Wavefront
 
     bench = DslrBench(lenses=(lens,), spp=256, seed=SEED)
-    effect = bench_theory(bench).effect
+    setup = bench.viewing_setup()
     image = render_bench(bench, single_letter_spec("R", 1.0)).pixels.astype(np.float64)
-    tile = optotype_tile("R", 1.0 + math.log10(effect.magnification), snap_to_pixels=False).pixels
-    wavefront = Wavefront.from_prescription(effect.camera_prescription, bench.entrance_pupil_diameter_mm)
+    magnification = math.sqrt(np.linalg.det(np.asarray(setup.magnification_matrix)))
+    tile = optotype_tile("R", 1.0 + math.log10(magnification), snap_to_pixels=False).pixels
+    wavefront = setup.wavefront
     psf = compute_psf(wavefront, mode="geometric", arcmin_per_px=1.0, size_px=101)
     simulated = blur_image(tile, psf, arcmin_per_px=1.0, background=0.9).astype(np.float64)
     psnr_db = 10.0 * math.log10(0.9**2 / np.mean((simulated - image) ** 2))

@@ -2,8 +2,15 @@
 
 from __future__ import annotations
 
+import numpy as np
+import pytest
+
+from vissim.bench.dslr import dslr_scene
 from vissim.imageio import read_image, write_image
-from vissim.validation.renders import RenderSpec, render_spec
+from vissim.validation.campaign import CampaignSettings, Configuration
+from vissim.validation.fields import LensSpec
+from vissim.validation.renders import RenderSpec, bench_for, campaign_bench, render_spec, truth_specs
+from vissim.validation.simulate import simulation_setup
 from vissim.validation.runner import render_file_provenance
 
 
@@ -19,3 +26,20 @@ def test_render_header_records_spp_used_and_variant(tmp_path):
     assert record["variant"] == header["variant"] == result.variant
     assert record["seed"] == 1 and record["pass_seeds"] == [1] and record["passes"] == 1
     assert record["deterministic"] is (not result.variant.startswith("cuda_"))
+
+
+@pytest.mark.parametrize("lenses", [(), (LensSpec(2.0),), (LensSpec(-3.0),), (LensSpec(0.0, -2.0, 90.0),),
+                                    (LensSpec(1.0, -0.5, 30.0), LensSpec(-2.0))],
+                         ids=["no lens", "+2 DS", "-3 DS", "-2 DC x 90", "+1 -0.5 x 30 and -2 DS"])
+@pytest.mark.parametrize("kind", ["wave", "geometric"])
+def test_the_simulation_assumes_the_setup_the_bench_renders(tmp_path, lenses, kind):
+    """'Does the simulation assume what the bench renders?' is one comparison of ViewingSetups."""
+    settings = CampaignSettings()
+    configuration = Configuration("c", "K", 1.0, lenses=lenses)
+    rendered = bench_for(truth_specs(configuration, settings)[0])  # the DslrBench render_spec renders
+    bench = campaign_bench(configuration, settings)
+    simulated = simulation_setup(kind, bench.viewing_setup(settings.wavelength_nm), bench.physical_lenses,
+                                 configuration, settings)
+    assert simulated.setup == rendered.viewing_setup(settings.wavelength_nm)
+    scene = dslr_scene(rendered, np.ones((8, 8), np.float32), 1.0, mesh_cache_dir=tmp_path)
+    assert scene["camera"]["aperture_radius"] == 0.5 * simulated.setup.pupil_diameter_mm

@@ -4,7 +4,8 @@ Optics (thesis §5.4): the phone sits in the focal plane of an 8 D (125 mm) coll
 one pixel (iPhone 5: 326 ppi, 77.9 µm) is a source at infinity subtending 77.9 µm / 125 mm =
 0.623 mrad = 2.14 arcmin.  A trial lens of power P at ``trial_lens_vertex_mm`` (d) in front of the
 eye adds the vergence ``P / (1 - d P)`` at the eye -- exact here, the source being at infinity
-(ERRATA item 4 concerns finite distances).  The eye's correction (a :class:`Prescription`, at the
+(ERRATA item 4 concerns finite distances).  What the eye then focuses, and through which pupil,
+is :meth:`vissim.optics.setup.ViewingSetup.atv_observer`.  The eye's correction (a :class:`Prescription`, at the
 eye's principal plane) minus that vergence minus the accommodation exerted is the *residual*
 correction still needed; its wavefront gives the Fourier PSF (:func:`vissim.optics.psf.compute_psf`,
 wave optics, monochromatic at ``wavelength_nm``), which is convolved with the pixel's square.
@@ -60,6 +61,7 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import thesis_table_4_2_power
 from vissim.optics.wavefront import Wavefront
 from vissim.units import diopters_to_mm, rad_to_arcmin
@@ -338,7 +340,9 @@ def run_virtual_experiment(
         lens = finite_number(lens, "trial lens power", "D")
         vergence = apparatus.trial_vergence_diopters(lens)
         accommodation = subject.accommodation_diopters(vergence)
-        residual = Prescription(rx.sphere_diopters - vergence - accommodation, rx.cylinder_diopters, rx.axis_deg)
+        setup = ViewingSetup.atv_observer(rx, subject.pupil_diameter_mm, accommodation, lens,
+                                          apparatus.trial_lens_vertex_mm, wavelength_nm=apparatus.wavelength_nm)
+        residual = setup.camera_prescription
         request = SpotRequest(subject, apparatus, lens, vergence, accommodation, residual, detection.summation_diameter_arcmin)
         fraction = summation_fraction(retinal_image(request), detection.summation_diameter_arcmin)
         threshold = detection.threshold_code(fraction, apparatus.display_gamma)

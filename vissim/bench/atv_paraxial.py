@@ -2,7 +2,8 @@
 
 Ray transfer matrices (:func:`vissim.optics.trial_lens.transfer_matrix`) of the gaps and lenses
 laid out by :func:`vissim.bench.atv.atv_layout` give where a pixel's light lands: the pixel's
-visual angle and size, the eye's defocus, the blur diameter, the etendue and the cone of
+visual angle and size, the eye's defocus and blur diameter (from
+:meth:`vissim.optics.setup.ViewingSetup.eye`, given the tube's vergence at the pupil), the etendue and the cone of
 directions that reach the pupil.  This is the theory both renderers are checked against;
 :func:`vissim.atv.predict.predicted_spot` turns it into a retinal image.
 """
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.bench.atv import AtvConfig
+from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import transfer_matrix
 from vissim.units import mm_to_m, mrad_to_arcmin
 
@@ -60,12 +62,13 @@ def atv_paraxial(config: AtvConfig) -> AtvParaxial:
     b_inv = np.linalg.inv(b)
     vergence = -d @ b_inv
     vergence = 0.5 * (vergence + vergence.T)
-    defocus = vergence + config.eye.excess_power_matrix_diopters()
+    eye = config.eye
+    setup = ViewingSetup.eye(eye.refractive_error.prescription(), eye.pupil_diameter_mm, eye.accommodation_diopters,
+                             vergence_diopters=vergence)
     pixel_map = -(c - d @ b_inv @ a)  # visual angle = -u at the pupil centre
     pitch_m = mm_to_m(config.tube.pixel_pitch_mm)
     pupil_m = mm_to_m(config.eye.pupil_diameter_mm)
     pixel_angle_rad = pitch_m * math.sqrt(abs(np.linalg.det(pixel_map)))
-    blur_mrad = config.eye.pupil_diameter_mm * float(np.max(np.abs(np.linalg.eigvalsh(defocus))))
     offset_m = mm_to_m(np.asarray(config.tube.pixel_offset_mm))
     center = -b_inv @ a @ offset_m
     half_diagonal_m = pitch_m / math.sqrt(2.0)
@@ -74,10 +77,10 @@ def atv_paraxial(config: AtvConfig) -> AtvParaxial:
     return AtvParaxial(
         system_matrix=s,
         vergence_matrix_diopters=vergence,
-        defocus_matrix_diopters=defocus,
+        defocus_matrix_diopters=np.asarray(setup.defocus_matrix_diopters),
         pixel_angle_matrix=pixel_map,
         pixel_angle_arcmin=float(mrad_to_arcmin(1000.0 * pixel_angle_rad)),
-        blur_diameter_arcmin=float(mrad_to_arcmin(blur_mrad)),
+        blur_diameter_arcmin=max(d for d, _ in setup.blur_diameter_arcmin),
         etendue_m2_sr=pitch_m**2 * (math.pi / 4.0) * pupil_m**2 * abs(float(np.linalg.det(b_inv))),
         cone_center=center,
         cone_radius_rad=float(radius),

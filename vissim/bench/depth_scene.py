@@ -25,7 +25,7 @@ Observers (a ``viewer``, :mod:`vissim.bench.depth_viewers`, re-exported here): a
 :class:`EyeViewer` -- Mitsuba sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), an ideal
 thin lens at the pupil focusing the vergence matrix ``K = A I - Rx``, so an object at axial
 distance ``z`` is blurred by ``pupil x (K - I/z)``: the defocus ``Rx + 1/z - A`` of
-:func:`vissim.optics.depth.effective_prescription`, cylinders and hyperopia (focus "beyond infinity",
+:meth:`vissim.optics.setup.ViewingSetup.eye`, cylinders and hyperopia (focus "beyond infinity",
 ``K < 0``) included, which a Mitsuba ``thinlens`` (focus distance > 0, no astigmatism) cannot
 express -- or a :class:`CameraViewer`, the DSLR bench camera (``thinlens``, f/N entrance pupil)
 with optional trial lenses, taken from :func:`vissim.bench.dslr.dslr_scene` itself.

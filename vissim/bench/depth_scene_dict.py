@@ -31,7 +31,7 @@ from vissim.bench.depth_viewers import (
     CameraViewer,
     EyeViewer,
     Viewer,
-    focus_matrix_diopters,
+    viewing_setup,
 )
 from vissim.bench.dslr import MAX_DEPTH, NEAR_CLIP_MM, dslr_scene
 from vissim.bench.lens_mesh import mesh_cache_dir
@@ -70,9 +70,10 @@ def _pinhole(scene: DepthScene, kind: str, far_clip_mm: float) -> dict:
 
 
 def _eye_sensor(scene: DepthScene, viewer: EyeViewer, kind: str, far_clip_mm: float) -> dict:
-    k = focus_matrix_diopters(viewer)
+    setup = viewing_setup(viewer)
+    k = setup.focus_matrix_diopters
     camera = _pinhole(scene, kind, far_clip_mm)
-    camera.update({"type": EYE_SENSOR, "aperture_radius": 0.5 * viewer.pupil_diameter_mm,
+    camera.update({"type": EYE_SENSOR, "aperture_radius": 0.5 * setup.pupil_diameter_mm,
                    "power_xx_diopters": float(k[0, 0]), "power_xy_diopters": float(k[0, 1]),
                    "power_yy_diopters": float(k[1, 1])})
     del camera["fov_axis"]  # the eye sensor's fov is always horizontal

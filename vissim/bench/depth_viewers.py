@@ -8,10 +8,11 @@ geometric spot of ``pupil x (K - I/z)`` milliradians (pupil in mm; conventions: 
 * :class:`EyeViewer` -- ``K = A I - Rx``: the eye's correcting lens ``Rx`` (a
   :class:`~vissim.optics.prescription.Prescription`, myope negative, *not* worn) and accommodation
   ``A >= 0``.  So defocus at distance d is ``Rx + 1/d - A``, exactly
-  :func:`vissim.optics.depth.effective_prescription`: a -2 D myope focuses 0.5 m (K = +2 D), an
+  :meth:`vissim.optics.setup.ViewingSetup.eye`: a -2 D myope focuses 0.5 m (K = +2 D), an
   emmetrope accommodating 3 D focuses 1/3 m, a relaxed +1 D hyperope has K = -1 D (focus
   "beyond infinity": blur at 6 m is pupil x (1 + 1/6) D), and ``plano -2.00 x 90`` has
-  K = diag(2, 0) D (excess power in the horizontal meridian: horizontal blur).  Rendered by
+  K = diag(2, 0) D (excess power in the horizontal meridian: horizontal blur).  Both come from
+  :class:`vissim.optics.setup.ViewingSetup` (:func:`viewing_setup`), which decides them.  Rendered by
   the Mitsuba sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), which takes any such K.
 * :class:`CameraViewer` -- the DSLR of :mod:`vissim.bench.dslr` (Mitsuba ``thinlens``,
   entrance pupil = focal length / f-number): ``K = I / focus distance`` plus the power its
@@ -42,11 +43,12 @@ from vissim.optics.trial_lens import (
     THESIS_VERTEX_DISTANCE_MM,
     TrialLens,
     TrialLensSetup,
-    trial_lens_effect,
+    entrance_pupil_diameter_mm,
 )
-from vissim.units import m_to_mm, mm_to_m, rad_to_arcmin
+from vissim.optics.setup import ViewingSetup
+from vissim.units import m_to_mm, mm_to_m
 
-__all__ = ["EyeViewer", "CameraViewer", "Viewer", "focus_matrix_diopters", "equivalent_eye", "blur_diameter_arcmin"]
+__all__ = ["EyeViewer", "CameraViewer", "Viewer", "viewing_setup", "focus_matrix_diopters", "equivalent_eye", "blur_diameter_arcmin"]
 
 
 @dataclass(frozen=True)
@@ -109,7 +111,7 @@ class CameraViewer:
 
     @property
     def pupil_diameter_mm(self) -> float:
-        return self.focal_length_mm / self.f_number
+        return entrance_pupil_diameter_mm(self.focal_length_mm, self.f_number)
 
     def label(self) -> str:
         lenses = " + ".join(str(lens.marked_power) for lens in self.lenses) or "no lens"
@@ -120,34 +122,35 @@ class CameraViewer:
 Viewer = Union[EyeViewer, CameraViewer]
 
 
-def focus_matrix_diopters(viewer: Viewer, scene=None) -> np.ndarray:
-    """2 x 2 vergence matrix K (TABO x/y) the viewer focuses (module doc); ``scene`` sizes trial lenses."""
+def viewing_setup(viewer: Viewer, scene=None) -> ViewingSetup:
+    """The viewer's :class:`~vissim.optics.setup.ViewingSetup`; ``scene`` sizes trial lenses.
+
+    An eye looks at infinity; the camera at its focus distance (the lenses' vergence effect is
+    taken there, module doc).
+    """
     if isinstance(viewer, EyeViewer):
-        return viewer.accommodation_d * np.eye(2) - np.asarray(viewer.prescription.power_matrix(), dtype=float)
+        return ViewingSetup.eye(viewer.prescription, viewer.pupil_diameter_mm, viewer.accommodation_d)
     if not isinstance(viewer, CameraViewer):
         raise VissimInputError(f"viewer must be an EyeViewer or a CameraViewer, got {type(viewer).__name__}")
-    k = np.eye(2) / viewer.focus_distance_m
-    if viewer.lenses:
-        bench = viewer.bench(scene)
-        setup = TrialLensSetup(bench.physical_lenses, bench.vertex_distance_mm, viewer.focus_distance_m,
-                               bench.lens_gap_mm)
-        k = k + np.asarray(trial_lens_effect(setup).added_power_matrix, dtype=float)
-    return k
+    bench = viewer.bench(scene) if viewer.lenses else None
+    lenses = () if bench is None else bench.physical_lenses
+    setup = TrialLensSetup(lenses, viewer.vertex_distance_mm, viewer.focus_distance_m, viewer.lens_gap_mm)
+    return ViewingSetup.dslr(viewer.focal_length_mm, viewer.f_number, viewer.focus_distance_m, setup)
+
+
+def focus_matrix_diopters(viewer: Viewer, scene=None) -> np.ndarray:
+    """2 x 2 vergence matrix K (TABO x/y) the viewer focuses (module doc); ``scene`` sizes trial lenses."""
+    return viewing_setup(viewer, scene).focus_matrix_diopters
 
 
 def equivalent_eye(viewer: Viewer, scene=None) -> EyeViewer:
     """The :class:`EyeViewer` that blurs like ``viewer``: Rx = -K, same pupil, no accommodation."""
     if isinstance(viewer, EyeViewer):
         return viewer
-    rx = Prescription.from_power_matrix(-focus_matrix_diopters(viewer, scene))
-    return EyeViewer(rx, viewer.pupil_diameter_mm, 0.0)
+    setup = viewing_setup(viewer, scene)
+    return EyeViewer(Prescription.from_power_matrix(-setup.focus_matrix_diopters), setup.pupil_diameter_mm, 0.0)
 
 
 def blur_diameter_arcmin(viewer: Viewer, distance_m, scene=None) -> np.ndarray:
     """Geometric blur diameter (largest principal meridian) of objects at axial ``distance_m`` (inf ok)."""
-    k = np.linalg.eigvalsh(focus_matrix_diopters(viewer, scene))
-    distance = np.asarray(distance_m, dtype=float)
-    with np.errstate(divide="ignore"):
-        proximity = np.where(np.isinf(distance), 0.0, 1.0 / distance)
-    defocus = np.maximum(np.abs(k[0] - proximity), np.abs(k[1] - proximity))
-    return rad_to_arcmin(defocus * viewer.pupil_diameter_mm / 1000.0)
+    return viewing_setup(viewer, scene).blur_diameter_at_arcmin(distance_m)

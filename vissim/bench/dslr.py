@@ -26,7 +26,8 @@ Choices, and why:
 * **Lenses**: PLY meshes with exact normals (:mod:`vissim.bench.lens_mesh`), made of the
   refraction-only ``vissim_refract`` BSDF (:mod:`vissim.render.plugins`).  Thin lenses
   (``refractive_index`` None) become crown-glass lenses of realistic centre thickness for the
-  clear aperture, and the theory (:meth:`DslrBench.trial_lens_setup`) uses those same lenses.
+  clear aperture, and the theory (:meth:`DslrBench.viewing_setup`, a
+  :class:`~vissim.optics.setup.ViewingSetup`) uses those same lenses and gives the aperture.
 
 The dict is Mitsuba's scene-dict format with plain values only: transforms are 4 x 4 row-major
 nested lists under ``to_world`` and bitmap textures carry a float32 numpy array under
@@ -55,20 +56,17 @@ from vissim.optics.trial_lens import (
     THESIS_FOCAL_LENGTH_MM,
     THESIS_VERTEX_DISTANCE_MM,
     TrialLens,
-    TrialLensEffect,
     TrialLensSetup,
     entrance_pupil_diameter_mm,
-    trial_lens_effect,
 )
+from vissim.optics.setup import DEFAULT_WAVELENGTH_NM, ViewingSetup
 from vissim.units import (
     REC709_LUMINANCE,
     arcmin_to_rad,
-    mm_to_diopters,
     mm_to_m,
-    rad_to_arcmin,
 )
 
-__all__ = ["SAMPLERS", "DslrBench", "BenchTheory", "bench_theory", "chart_mm_per_texel", "dslr_scene"]
+__all__ = ["SAMPLERS", "DslrBench", "chart_mm_per_texel", "dslr_scene"]
 
 log = logging.getLogger(__name__)
 
@@ -207,41 +205,14 @@ class DslrBench:
         """Size on the chart of the central camera pixel, mm (pixels are uniform in tan(angle))."""
         return self.chart_distance_mm * math.tan(arcmin_to_rad(self.arcmin_per_px))
 
+    def viewing_setup(self, wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
+        """What this camera sees through its rendered lenses: pupil, defocus, magnification."""
+        return ViewingSetup.dslr(self.focal_length_mm, self.f_number, mm_to_m(self.focus_distance_mm),
+                                 self.trial_lens_setup(), wavelength_nm=wavelength_nm)
+
     def fov_x_deg(self) -> float:
         cols = self.size_px[1]
         return math.degrees(2.0 * math.atan(0.5 * cols * math.tan(arcmin_to_rad(self.arcmin_per_px))))
-
-
-@dataclass(frozen=True)
-class BenchTheory:
-    """What paraxial optics predicts for a bench: defocus, blur and magnification."""
-
-    effect: TrialLensEffect | None
-    defocus_matrix_diopters: tuple[tuple[float, float], tuple[float, float]]
-    blur_diameter_arcmin: tuple[tuple[float, float], tuple[float, float]]  # ((diameter, meridian_deg), ...)
-    magnification_principal: tuple[tuple[float, float], tuple[float, float]]
-
-
-def bench_theory(bench: DslrBench) -> BenchTheory:
-    """Defocus at the camera = power added by the lenses + (1/focus - 1/chart); blur = pupil x defocus.
-
-    The blur diameter in each principal meridian is the entrance pupil (mm) times the
-    defocus (D) in milliradians; magnifications from :func:`vissim.optics.trial_lens.trial_lens_effect`.
-    """
-    focus_error = mm_to_diopters(bench.focus_distance_mm) - mm_to_diopters(bench.chart_distance_mm)
-    if bench.lenses:
-        effect = trial_lens_effect(bench.trial_lens_setup())
-        added = np.asarray(effect.added_power_matrix)
-        magnification = effect.magnification_principal
-    else:
-        effect, added, magnification = None, np.zeros((2, 2)), ((1.0, 180.0), (1.0, 90.0))
-    defocus = added + focus_error * np.eye(2)
-    values, vectors = np.linalg.eigh(defocus)
-    blur = []
-    for value, vector in zip(values[::-1], vectors.T[::-1]):
-        meridian = round(math.degrees(math.atan2(vector[1], vector[0])) % 180.0, 9) or 180.0
-        blur.append((float(rad_to_arcmin(abs(value) * bench.entrance_pupil_diameter_mm / 1000.0)), meridian))
-    return BenchTheory(effect, tuple(map(tuple, defocus.tolist())), tuple(blur), magnification)
 
 
 def chart_mm_per_texel(bench: DslrBench) -> float:
@@ -249,11 +220,10 @@ def chart_mm_per_texel(bench: DslrBench) -> float:
     return bench.pitch_mm / bench.texels_per_px
 
 
-def _chart_texture(bench: DslrBench, pixels: np.ndarray, mm_per_px: float) -> tuple[np.ndarray, float, float]:
+def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm_per_px: float) -> tuple[np.ndarray, float, float]:
     """Crop/pad ``pixels`` (centred on the axis) to cover the field with margins; (texture, height_mm, width_mm)."""
-    theory = bench_theory(bench)
-    blur_mm = max(d for d, _ in theory.blur_diameter_arcmin) / bench.arcmin_per_px * bench.pitch_mm
-    mag = max(abs(m) for m, _ in theory.magnification_principal)
+    blur_mm = max(d for d, _ in setup.blur_diameter_arcmin) / bench.arcmin_per_px * bench.pitch_mm
+    mag = max(abs(m) for m, _ in setup.magnification_principal)
     rows, cols = bench.size_px
     need_mm = [0.5 * n * bench.pitch_mm * max(mag, 1.0) * 1.05 + blur_mm + 2.0 * bench.pitch_mm for n in (rows, cols)]
     need_px = [2 * math.ceil(h / mm_per_px) for h in need_mm]  # even; centre stays on a texel corner
@@ -303,7 +273,8 @@ def dslr_scene(
     mm_per_px = _positive(chart_mm_per_px, "chart pixel size", "mm")
     if kind not in ("mono", "rgb"):
         raise VissimInputError(f"render kind must be 'mono' or 'rgb', got {kind!r}")
-    texture, height_mm, width_mm = _chart_texture(bench, pixels, mm_per_px)
+    setup = bench.viewing_setup()
+    texture, height_mm, width_mm = _chart_texture(bench, setup, pixels, mm_per_px)
     if texture.ndim == 2:
         texture = texture[:, :, None]
     if kind == "mono" and texture.shape[2] == 3:
@@ -322,7 +293,7 @@ def dslr_scene(
             "type": "thinlens",
             "fov": bench.fov_x_deg(),
             "fov_axis": "x",
-            "aperture_radius": 0.5 * bench.entrance_pupil_diameter_mm,
+            "aperture_radius": 0.5 * setup.pupil_diameter_mm,
             "focus_distance": bench.focus_distance_mm,
             "near_clip": NEAR_CLIP_MM,
             "far_clip": 10.0 * bench.chart_distance_mm,

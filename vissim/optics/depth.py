@@ -81,7 +81,6 @@ __all__ = [
     "LayerPlan",
     "blur_depth",
     "depth_to_proximity_diopters",
-    "effective_prescription",
     "layer_spacing_diopters",
     "plan_layers",
 ]
@@ -94,17 +93,6 @@ DEPTH_PADDING_MODES = ("edge", "reflect")
 
 
 # -- the optics of one depth ------------------------------------------------------------
-def effective_prescription(eye_rx: Prescription, object_distance_m: float, accommodation_d: float = 0.0) -> Prescription:
-    """The lens that would correct ``eye_rx`` for an object at ``object_distance_m``: ``Rx + 1/d - A``."""
-    rx = _check_rx(eye_rx)
-    distance = finite_number(object_distance_m, "object distance", "metres", allow_inf=True)
-    if distance <= 0:
-        raise VissimInputError(f"object distance must be a positive number of metres (or inf), got {object_distance_m!r} m")
-    proximity = 0.0 if math.isinf(distance) else 1.0 / distance
-    shift = proximity - _check_accommodation(accommodation_d)
-    return Prescription(rx.sphere_diopters + shift, rx.cylinder_diopters, rx.axis_deg)
-
-
 def layer_spacing_diopters(arcmin_per_px: float, pupil_diameter_mm: float, fraction: float = 0.5) -> float:
     """Largest layer spacing in proximity: ``fraction * theta / p`` (theta rad/px, p metres)."""
     theta_rad = float(arcmin_to_rad(check_arcmin_per_px(arcmin_per_px)))

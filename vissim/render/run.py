@@ -207,7 +207,8 @@ def render_bench(
     (:meth:`RenderResult.render_record`: spp asked and taken, pass seeds, determinism), vissim,
     Mitsuba and Dr.Jit versions.
     """
-    from vissim.bench.dslr import bench_theory, chart_mm_per_texel, dslr_scene
+    from vissim.bench.dslr import chart_mm_per_texel, dslr_scene
+    from vissim.optics.prescription import LensPower
     from vissim.charts import (
         MM_PER_INCH,
         Chart,
@@ -223,14 +224,14 @@ def render_bench(
     scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind=kind)
     result = render_scene(scene, kind=kind, spp=bench.spp, seed=bench.seed, variant=variant,
                           pass_spp=pass_spp, progress=progress)
-    theory = bench_theory(bench)
+    theory = bench.viewing_setup()
     provenance = make_provenance(
         bench=bench,
         physical_lenses=bench.physical_lenses,
         clear_aperture_mm=bench.clear_aperture(),
         lens_back_vertex_z_mm=bench.lens_back_vertex_z_mm(),
         theory={
-            "added_power": None if theory.effect is None else theory.effect.added_power.format(4),
+            "added_power": LensPower.from_power_matrix(theory.defocus_matrix_diopters).format(4) if bench.lenses else None,
             "defocus_matrix_diopters": theory.defocus_matrix_diopters,
             "blur_diameter_arcmin": theory.blur_diameter_arcmin,
             "magnification_principal": theory.magnification_principal,

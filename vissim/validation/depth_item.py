@@ -22,6 +22,7 @@ from vissim.atomic import write_json_atomic
 from vissim.bench.depth_scene import panel_geometries
 from vissim.bench.depth_viewers import blur_diameter_arcmin, equivalent_eye
 from vissim.optics.prescription import Prescription
+from vissim.optics.setup import ViewingSetup
 from vissim.provenance import make_provenance
 from vissim.validation.depth_campaign import DepthCampaignSettings, DepthConfiguration
 from vissim.validation.depth_masks import depth_regions, masked_metrics
@@ -33,11 +34,10 @@ __all__ = ["compute_depth_item"]
 def _diffracted(image: np.ndarray, pupil_mm: float, settings: DepthCampaignSettings,
                 arcmin_per_px: float) -> np.ndarray:
     """``image`` convolved with the in-focus diffraction PSF of a ``pupil_mm`` aperture."""
-    from vissim.optics.blur import blur_image
-    from vissim.validation.simulate import _psf
+    from vissim.validation.simulate import add_bench_diffraction
 
-    psf = _psf(Prescription(0.0), pupil_mm, settings.wavelength_nm, arcmin_per_px, "wave")
-    return blur_image(image, psf, arcmin_per_px=arcmin_per_px, padding="edge")
+    in_focus = ViewingSetup.eye(Prescription(0.0), pupil_mm, wavelength_nm=settings.wavelength_nm)
+    return add_bench_diffraction(image, in_focus, arcmin_per_px)
 
 
 def _region_table(comparison, masks, data_range: float) -> dict:

@@ -18,7 +18,7 @@ from vissim.provenance import make_provenance
 from vissim.validation.campaign import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
 from vissim.validation.registration import register
-from vissim.validation.renders import bench_setup
+from vissim.validation.renders import campaign_bench
 from vissim.validation.simulate import add_bench_diffraction, block_mean, simulate, simulation_setup
 
 __all__ = ["compute_item", "synthetic_tile", "save_item_image"]
@@ -86,15 +86,16 @@ def compute_item(
     def save(name: str, pixels: np.ndarray, preview: bool = True) -> str:
         return save_item_image(item_dir, name, pixels, provenance, preview)
 
-    setup_of_bench = bench_setup(configuration, settings)
-    lenses = setup_of_bench.lenses
+    bench = campaign_bench(configuration, settings)
+    lenses = bench.physical_lenses
+    bench_setup = bench.viewing_setup(settings.wavelength_nm)  # trial_lens_effect once per item
     captured = bool(source and source.get("ground_truth") == "capture")
     # A photograph already carries the lens's diffraction; a render carries none (module simulate).
-    truth_wave_a = truth_a if captured else add_bench_diffraction(truth_a, configuration, settings)
+    truth_wave_a = truth_a if captured else add_bench_diffraction(truth_a, bench_setup, settings.arcmin_per_px)
     references = {"geometric": truth_a, "wave": truth_wave_a}
     floors = {"geometric": None, "wave": None}
     if truth_b is not None:
-        truth_wave_b = truth_b if captured else add_bench_diffraction(truth_b, configuration, settings)
+        truth_wave_b = truth_b if captured else add_bench_diffraction(truth_b, bench_setup, settings.arcmin_per_px)
         floors = {
             "geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
             "wave": noise_floor(truth_wave_a, truth_wave_b, settings.data_range).as_json(),
@@ -113,7 +114,7 @@ def compute_item(
     # shifting an under-sampled result at the campaign's sampling is not.
     prealigned: dict[str, tuple[np.ndarray, tuple[float, float]]] = {}
     for kind in settings.simulations:
-        setup = simulation_setup(kind, setup_of_bench, configuration, settings)
+        setup = simulation_setup(kind, bench_setup, lenses, configuration, settings)
         reference_kind = "geometric" if setup.mode == "geometric" else "wave"
         reference = references[reference_kind]
         for input_name in settings.inputs:

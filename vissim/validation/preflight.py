@@ -58,28 +58,26 @@ def _psf_bytes(front: Wavefront, pupil_mm: float, step: float, wavelength_nm: fl
 
 def item_memory_bytes(configuration, settings) -> tuple[float, str]:
     """(peak bytes, the step that needs them) for one single-plane campaign item."""
-    from vissim.bench.dslr import bench_theory
     from vissim.validation.item import SYNTHETIC_OVERSAMPLE
-    from vissim.validation.renders import bench_for, truth_specs
+    from vissim.validation.renders import campaign_bench
     from vissim.validation.simulate import simulation_setup
 
     rows, cols = settings.tile_px
-    bench = bench_for(truth_specs(configuration, settings)[0])
-    theory = bench_theory(bench)
+    bench = campaign_bench(configuration, settings)
+    theory = bench.viewing_setup(settings.wavelength_nm)
     blur_px = max(d for d, _ in theory.blur_diameter_arcmin) / settings.arcmin_per_px
     mag = max(1.0, max(abs(m) for m, _ in theory.magnification_principal))
     texels = [TEXELS_PER_PX * (n * mag * 1.05 + 2 * blur_px + 4) for n in (rows, cols)]
     steps = [(render_memory_bytes(rows * cols, settings.spp) + texels[0] * texels[1] * BYTES_PER_TEXEL,
               f"its bench render ({rows} x {cols} px, {texels[0]:.0f} x {texels[1]:.0f} texel chart)")]
-    setup = bench.trial_lens_setup()
     for kind in settings.simulations:
-        sim = simulation_setup(kind, setup, configuration, settings)
-        front = Wavefront.from_prescription(sim.camera_prescription, sim.pupil_diameter_mm)
+        sim = simulation_setup(kind, theory, bench.physical_lenses, configuration, settings)
+        front = sim.setup.wavefront
         for name in settings.inputs:
             s = SYNTHETIC_OVERSAMPLE if name == "synthetic" else 1
             step = settings.arcmin_per_px / s
             try:
-                psf, size = _psf_bytes(front, sim.pupil_diameter_mm, step, settings.wavelength_nm, sim.mode)
+                psf, size = _psf_bytes(front, sim.setup.pupil_diameter_mm, step, settings.wavelength_nm, sim.mode)
             except VissimInputError as exc:
                 raise VissimInputError(f"the {kind} simulation of the {name} input: {exc}") from None
             image = float(rows * s + size) * float(cols * s + size) * BYTES_PER_BLUR_PX

@@ -7,14 +7,15 @@ import json
 from dataclasses import asdict, dataclass
 
 from vissim.bench.dslr import DslrBench
-from vissim.optics.trial_lens import TrialLens, TrialLensSetup
+from vissim.optics.trial_lens import TrialLens
 from vissim.units import m_to_mm
 from vissim.validation.campaign import CampaignSettings, Configuration
 
-__all__ = ["RenderSpec", "bench_for", "bench_setup", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec"]
+__all__ = ["RenderSpec", "bench_for", "campaign_bench", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec"]
 
 
-def _bench(configuration: Configuration, settings: CampaignSettings, **extra) -> DslrBench:
+def campaign_bench(configuration: Configuration, settings: CampaignSettings, **extra) -> DslrBench:
+    """The configuration's bench; its :meth:`~DslrBench.viewing_setup` is what the simulations assume."""
     thin = tuple(TrialLens(l.sphere_diopters, l.cylinder_diopters, l.axis_deg) for l in configuration.lenses)
     return DslrBench(
         focal_length_mm=settings.focal_length_mm,
@@ -32,12 +33,7 @@ def _bench(configuration: Configuration, settings: CampaignSettings, **extra) ->
 
 def bench_lenses(configuration: Configuration, settings: CampaignSettings) -> tuple[TrialLens, ...]:
     """The trial lenses as the bench renders them: crown glass, realistic thickness."""
-    return _bench(configuration, settings).physical_lenses
-
-
-def bench_setup(configuration: Configuration, settings: CampaignSettings) -> TrialLensSetup:
-    """The rendered lenses, gaps, vertex and chart distance: what the simulations must assume."""
-    return _bench(configuration, settings).trial_lens_setup()
+    return campaign_bench(configuration, settings).physical_lenses
 
 
 @dataclass(frozen=True)

@@ -3,6 +3,9 @@
 Three simulations, each applicable to any linear-light input image (the bench's no-lens
 render, as the thesis did, or the synthetic chart):
 
+Every simulation starts from the bench's own :class:`~vissim.optics.setup.ViewingSetup` (the one
+its scene is built from, :meth:`vissim.bench.dslr.DslrBench.viewing_setup`).
+
 ``wave``
     Physically matched: the power the trial lenses add at the camera's principal plane for
     the chart's real distance (vergence / ray-transfer matrices), the camera's entrance pupil
@@ -25,23 +28,15 @@ and a ``geometric`` result with the render as it is.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import ndimage
 
 from vissim.optics.blur import blur_image
-from vissim.optics.prescription import LensPower, Prescription
 from vissim.optics.psf import PSF, compute_psf, suggested_size_px
-from vissim.optics.trial_lens import (
-    TrialLens,
-    TrialLensSetup,
-    entrance_pupil_diameter_mm,
-    thesis_eye_pupil_diameter_mm,
-    thesis_table_4_2_power,
-    trial_lens_effect,
-)
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.setup import ViewingSetup
+from vissim.optics.trial_lens import TrialLens
 from vissim.validation.campaign import CampaignSettings, Configuration
 
 __all__ = [
@@ -54,79 +49,58 @@ __all__ = [
 ]
 
 
-#: kind -> (power: "matched" | "table_4_2", pupil: "entrance" | "f_number_matched",
-#: magnification applied, optics).  The three ``thesis_*``/``no_*`` kinds each put back ONE
-#: of the thesis's choices into the matched *geometric* simulation and are compared with the
-#: render itself, which geometric optics matches to the noise limit: each erratum's cost is
-#: then measured against an exact reference.  (Against "render + diffraction" a wave
-#: simulation is limited by that reference, which is not wave optics; see the README.)
+#: kind -> (the thesis's choices put back, optics).  Each choice is one field of the bench's
+#: :class:`~vissim.optics.setup.ViewingSetup` replaced: "pupil" (ERRATA item 3), "power"
+#: (item 4), "magnification" (item 5).  The three ``thesis_*``/``no_*`` kinds each put back ONE
+#: of them into the matched *geometric* simulation and are compared with the render itself,
+#: which geometric optics matches to the noise limit: each erratum's cost is then measured
+#: against an exact reference.  (Against "render + diffraction" a wave simulation is limited by
+#: that reference, which is not wave optics; see the README.)
 SIMULATION_PARTS = {
-    "wave": ("matched", "entrance", True, "wave"),
-    "geometric": ("matched", "entrance", True, "geometric"),
-    "thesis": ("table_4_2", "f_number_matched", False, "wave"),
-    "thesis_power": ("table_4_2", "entrance", True, "geometric"),  # ERRATA 4 alone
-    "thesis_pupil": ("matched", "f_number_matched", True, "geometric"),  # ERRATA 3 alone
-    "no_magnification": ("matched", "entrance", False, "geometric"),  # ERRATA 5 alone
+    "wave": ((), "wave"),
+    "geometric": ((), "geometric"),
+    "thesis": (("power", "pupil", "magnification"), "wave"),
+    "thesis_power": (("power",), "geometric"),  # ERRATA 4 alone
+    "thesis_pupil": (("pupil",), "geometric"),  # ERRATA 3 alone
+    "no_magnification": (("magnification",), "geometric"),  # ERRATA 5 alone
 }
 
 
 @dataclass(frozen=True)
 class SimulationSetup:
-    """What one simulation assumes: the camera's prescription, pupil and magnification."""
+    """What one simulation assumes: a :class:`ViewingSetup` and the optics it is blurred with."""
 
     kind: str
-    camera_prescription: Prescription
-    pupil_diameter_mm: float
-    magnification_matrix: tuple[tuple[float, float], tuple[float, float]]
+    setup: ViewingSetup
     mode: str  # "wave" or "geometric"
 
     def as_json(self) -> dict:
         return {
             "kind": self.kind,
-            "camera_prescription": self.camera_prescription.format(4),
-            "pupil_diameter_mm": self.pupil_diameter_mm,
-            "magnification_matrix": [list(r) for r in self.magnification_matrix],
+            "camera_prescription": self.setup.camera_prescription.format(4),
+            "pupil_diameter_mm": self.setup.pupil_diameter_mm,
+            "magnification_matrix": [list(r) for r in self.setup.magnification_matrix],
             "mode": self.mode,
         }
 
 
-def _thesis_added_power(lenses: tuple[TrialLens, ...], vertex_distance_mm: float) -> LensPower:
-    """Table 4.2 applied per principal meridian of the lenses' summed (thin) power."""
-    if not lenses:
-        return LensPower(0.0)
-    total = np.zeros((2, 2))
-    for lens in lenses:
-        total += np.array(lens.marked_power.power_matrix())
-    summed = LensPower.from_power_matrix(total)
-    axis = summed.axis_deg
-    p_axis = thesis_table_4_2_power(summed.meridian_power(axis), vertex_distance_mm)
-    p_perp = thesis_table_4_2_power(summed.meridian_power(axis + 90.0), vertex_distance_mm)
-    return LensPower(p_axis, p_perp - p_axis, axis)
+def simulation_setup(kind: str, bench: ViewingSetup, lenses: tuple[TrialLens, ...], configuration: Configuration,
+                     settings: CampaignSettings) -> SimulationSetup:
+    """The setup simulation ``kind`` uses: the bench's own (``bench``), with its thesis choices put back.
 
-
-def simulation_setup(
-    kind: str, setup: TrialLensSetup, configuration: Configuration, settings: CampaignSettings
-) -> SimulationSetup:
-    """The prescription, pupil and magnification that simulation ``kind`` uses.
-
-    ``setup`` is the bench's own lens setup (physical lenses, gaps, vertex and chart distance).
+    ``lenses`` are the bench's trial lenses (for Table 4.2's power).
     """
     if kind not in SIMULATION_PARTS:
         raise ValueError(f"unknown simulation {kind!r}")
-    power, pupil_kind, magnification, mode = SIMULATION_PARTS[kind]
-    effect = trial_lens_effect(setup)
-    if power == "matched":
-        rx = effect.camera_prescription
-    else:
-        rx = _thesis_added_power(setup.lenses, settings.vertex_distance_mm).prescription_of_camera()
-    if pupil_kind == "entrance":
-        pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, configuration.f_number)
-    else:
-        pupil = thesis_eye_pupil_diameter_mm(configuration.f_number)
-    matrix = ((1.0, 0.0), (0.0, 1.0))
-    if magnification:
-        matrix = tuple(tuple(float(v) for v in row) for row in np.asarray(effect.magnification_matrix))
-    return SimulationSetup(kind, rx, pupil, matrix, mode)
+    choices, mode = SIMULATION_PARTS[kind]
+    setup = bench
+    if "power" in choices:
+        setup = setup.with_table_4_2_power(lenses, settings.vertex_distance_mm)
+    if "pupil" in choices:
+        setup = setup.with_thesis_pupil(configuration.f_number)
+    if "magnification" in choices:
+        setup = setup.without_magnification()
+    return SimulationSetup(kind, setup, mode)
 
 
 def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) -> np.ndarray:
@@ -148,11 +122,15 @@ def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) ->
     return out.astype(np.float32)
 
 
+def _psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
+    return _cached_psf(setup.without_magnification(), arcmin_per_px, mode)
+
+
 @functools.lru_cache(maxsize=64)
-def _psf(prescription: Prescription, pupil_mm: float, wavelength_nm: float, arcmin_per_px: float, mode: str) -> PSF:
-    front = Wavefront.from_prescription(prescription, pupil_mm)
-    size = suggested_size_px(front, arcmin_per_px, wavelength_nm=wavelength_nm)
-    return compute_psf(front, wavelength_nm=wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=size, mode=mode,
+def _cached_psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
+    front = setup.wavefront
+    size = suggested_size_px(front, arcmin_per_px, wavelength_nm=setup.wavelength_nm)
+    return compute_psf(front, wavelength_nm=setup.wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=size, mode=mode,
                        pixel="integrate")
 
 
@@ -166,8 +144,8 @@ def simulate(setup: SimulationSetup, image: np.ndarray, settings: CampaignSettin
     (``oversample=1``), as the thesis used its photographs.
     """
     step = settings.arcmin_per_px / oversample
-    magnified = magnify(image, setup.magnification_matrix)
-    psf = _psf(setup.camera_prescription, setup.pupil_diameter_mm, settings.wavelength_nm, step, setup.mode)
+    magnified = magnify(image, setup.setup.magnification_matrix)
+    psf = _psf(setup.setup, step, setup.mode)
     out = blur_image(magnified, psf, arcmin_per_px=step, padding="edge")
     return block_mean(out, oversample)
 
@@ -180,8 +158,7 @@ def block_mean(image: np.ndarray, factor: int) -> np.ndarray:
     return image[: rows * factor, : cols * factor].reshape(rows, factor, cols, factor).mean(axis=(1, 3)).astype(np.float32)
 
 
-def add_bench_diffraction(render: np.ndarray, configuration: Configuration, settings: CampaignSettings) -> np.ndarray:
-    """The render convolved with the diffraction PSF of the bench's aperture (no aberration)."""
-    pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, configuration.f_number)
-    psf = _psf(Prescription(0.0), pupil, settings.wavelength_nm, settings.arcmin_per_px, "wave")
-    return blur_image(render, psf, arcmin_per_px=settings.arcmin_per_px, padding="edge")
+def add_bench_diffraction(render: np.ndarray, bench: ViewingSetup, arcmin_per_px: float) -> np.ndarray:
+    """The render convolved with the diffraction PSF of ``bench``'s pupil, in focus (no aberration)."""
+    psf = _psf(replace(bench, defocus_matrix_diopters=((0.0, 0.0), (0.0, 0.0))), arcmin_per_px, "wave")
+    return blur_image(render, psf, arcmin_per_px=arcmin_per_px, padding="edge")

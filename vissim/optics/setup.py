@@ -1,0 +1,188 @@
+"""What a viewer focuses, through which pupil, with which magnification: decided once, here.
+
+A :class:`ViewingSetup` is one viewer (the DSLR bench camera, an eye, the ATV observer) looking
+at an object at ``object_distance_m``.  It holds
+
+* ``pupil_diameter_mm`` -- the entrance pupil (the camera's is focal length / f-number);
+* ``defocus_matrix_diopters`` -- the dioptric defocus at the pupil, 2 x 2 in the TABO x/y frame:
+  the viewer's excess power over what the object's light needs, ``D = E + A I + V`` (E the eye's
+  refractive error or the power trial lenses add, A accommodation, V the vergence arriving
+  at the pupil: ``-1/d`` for an object at d).  **A myopic viewer has D > 0**; it sees sharply
+  where D = 0.  Its prescription (the correcting lens, :mod:`vissim.optics.prescription`) is
+  ``-D``;
+* ``magnification_matrix`` -- maps a chief-ray angle without the trial lenses onto the angle
+  with them (spectacle magnification, ERRATA item 5);
+* ``wavelength_nm`` -- the wavelength the defocus is referenced to (the in-focus wavelength).
+
+From these follow the wavefront (``W = -P r^2 / 2`` of the prescription P) and the geometric
+blur: pupil (mm) x |principal defocus| (D) milliradians per principal meridian.
+
+Named constructors only: :meth:`ViewingSetup.dslr`, :meth:`ViewingSetup.eye`,
+:meth:`ViewingSetup.atv_observer`.  The thesis's choices are named replacements, each one field
+changed (``dataclasses.replace``): :meth:`~ViewingSetup.with_thesis_pupil` (ERRATA item 3),
+:meth:`~ViewingSetup.with_table_4_2_power` (item 4), :meth:`~ViewingSetup.without_magnification`
+(item 5).  Pinned by ``tests/test_setup.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from vissim.checks import finite_number
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.errors import VissimInputError
+from vissim.optics.prescription import LensPower, Prescription, RefractiveError
+from vissim.optics.trial_lens import (
+    Matrix2,
+    TrialLens,
+    TrialLensSetup,
+    _as_tuple,
+    _principal,
+    entrance_pupil_diameter_mm,
+    thesis_eye_pupil_diameter_mm,
+    thesis_table_4_2_power,
+    trial_lens_effect,
+)
+from vissim.optics.wavefront import Wavefront
+from vissim.units import rad_to_arcmin
+
+__all__ = ["ViewingSetup", "DEFAULT_WAVELENGTH_NM"]
+
+#: Reference (in-focus) wavelength when none is given, nm.
+DEFAULT_WAVELENGTH_NM = 550.0
+_IDENTITY: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
+
+
+def _proximity(distance_m: float) -> float:
+    distance = finite_number(distance_m, "object distance", "metres", allow_inf=True)
+    if distance <= 0:
+        raise VissimInputError(f"object distance must be a positive number of metres (or inf), got {distance_m!r} m")
+    return 0.0 if math.isinf(distance) else 1.0 / distance
+
+
+@dataclass(frozen=True)
+class ViewingSetup:
+    """One viewer looking at one object distance (module doc); build it with a named constructor."""
+
+    pupil_diameter_mm: float
+    defocus_matrix_diopters: Matrix2
+    magnification_matrix: Matrix2 = _IDENTITY
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM
+    object_distance_m: float = math.inf
+
+    # -- constructors -----------------------------------------------------------------------
+    @classmethod
+    def dslr(cls, focal_length_mm: float, f_number: float, focus_distance_m: float, lenses: TrialLensSetup,
+             *, wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
+        """The bench camera (pupil f/N) focused at ``focus_distance_m``, looking through ``lenses``.
+
+        ``lenses.object_distance_m`` is the chart's distance; the lenses add their power at the
+        pupil by :func:`~vissim.optics.trial_lens.trial_lens_effect`, and the focus error adds
+        ``1/focus - 1/chart``.
+        """
+        chart_m = lenses.object_distance_m
+        focus_error = _proximity(focus_distance_m) - _proximity(chart_m)
+        added, magnification = np.zeros((2, 2)), _IDENTITY
+        if lenses.lenses:
+            effect = trial_lens_effect(lenses)
+            added, magnification = np.asarray(effect.added_power_matrix), effect.magnification_matrix
+        return cls(entrance_pupil_diameter_mm(focal_length_mm, f_number), _as_tuple(added + focus_error * np.eye(2)),
+                   magnification, wavelength_nm, chart_m)
+
+    @classmethod
+    def eye(cls, prescription: Prescription, pupil_diameter_mm: float, accommodation_d: float = 0.0,
+            object_distance_m: float = math.inf, *, vergence_diopters=None,
+            wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
+        """An eye of correcting lens ``prescription`` (myope < 0, not worn) exerting ``accommodation_d``.
+
+        D = -Rx + A I + V, V = -I/d for an object at ``object_distance_m`` or the given
+        ``vergence_diopters`` (scalar or 2 x 2) of the light arriving at the pupil.
+        """
+        if isinstance(prescription, RefractiveError) or not isinstance(prescription, Prescription):
+            raise TypeError(f"the eye needs its Prescription (correcting lens), got {type(prescription).__name__}")
+        accommodation = finite_number(accommodation_d, "accommodation", "dioptres")
+        if accommodation < 0.0:
+            raise VissimInputError(f"accommodation must be >= 0 dioptres, got {accommodation:g} D")
+        if vergence_diopters is None:
+            vergence = -_proximity(object_distance_m) * np.eye(2)
+        else:
+            vergence = np.asarray(vergence_diopters, dtype=float)
+            vergence = vergence * np.eye(2) if vergence.ndim == 0 else vergence
+        defocus = accommodation * np.eye(2) - np.asarray(prescription.power_matrix(), dtype=float) + vergence
+        return cls(check_pupil_mm(pupil_diameter_mm), _as_tuple(defocus), _IDENTITY, wavelength_nm,
+                   float(object_distance_m))
+
+    @classmethod
+    def atv_observer(cls, prescription: Prescription, pupil_diameter_mm: float, accommodation_d: float,
+                     trial_lens_diopters: float, vertex_distance_mm: float, *,
+                     wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
+        """The ATV observer: a collimated pixel (source at infinity) through a thin trial lens.
+
+        The lens of power P at d mm adds the vergence ``P / (1 - dP)`` at the eye, exact for a
+        source at infinity (:func:`~vissim.optics.trial_lens.thesis_table_4_2_power`).
+        """
+        vergence = thesis_table_4_2_power(trial_lens_diopters, vertex_distance_mm)
+        return cls.eye(prescription, pupil_diameter_mm, accommodation_d, vergence_diopters=vergence,
+                       wavelength_nm=wavelength_nm)
+
+    # -- the thesis's choices, one field each -----------------------------------------------
+    def with_thesis_pupil(self, f_number: float) -> ViewingSetup:
+        """ERRATA item 3: the f-number-matched eye pupil of Table 4.1 (2.7 mm at f/5)."""
+        return replace(self, pupil_diameter_mm=thesis_eye_pupil_diameter_mm(f_number))
+
+    def with_table_4_2_power(self, lenses: tuple[TrialLens, ...], vertex_distance_mm: float) -> ViewingSetup:
+        """ERRATA item 4: Table 4.2's P / (1 - dP) per principal meridian of the lenses' summed power."""
+        total = sum((np.asarray(lens.marked_power.power_matrix()) for lens in lenses), np.zeros((2, 2)))
+        summed = LensPower.from_power_matrix(total)
+        axis = summed.axis_deg
+        p_axis = thesis_table_4_2_power(summed.meridian_power(axis), vertex_distance_mm)
+        p_perp = thesis_table_4_2_power(summed.meridian_power(axis + 90.0), vertex_distance_mm)
+        power = LensPower(p_axis, p_perp - p_axis, axis) if lenses else LensPower(0.0)
+        return replace(self, defocus_matrix_diopters=power.power_matrix())
+
+    def without_magnification(self) -> ViewingSetup:
+        """ERRATA item 5: no spectacle magnification."""
+        return replace(self, magnification_matrix=_IDENTITY)
+
+    # -- what follows -----------------------------------------------------------------------
+    @property
+    def camera_prescription(self) -> Prescription:
+        """The correcting lens equivalent to the defocus: ``-D`` (a myopic viewer's is < 0), minus cylinder."""
+        return Prescription.from_power_matrix(-np.asarray(self.defocus_matrix_diopters, dtype=float))
+
+    @property
+    def wavefront(self) -> Wavefront:
+        return Wavefront.from_prescription(self.camera_prescription, self.pupil_diameter_mm)
+
+    @property
+    def focus_matrix_diopters(self) -> np.ndarray:
+        """The vergence matrix K the viewer focuses: objects at d are sharp where K = I/d."""
+        return np.asarray(self.defocus_matrix_diopters, dtype=float) + _proximity(self.object_distance_m) * np.eye(2)
+
+    @property
+    def blur_diameter_arcmin(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Geometric blur ((diameter arcmin, meridian deg), ...) per principal meridian, larger defocus first."""
+        values, vectors = np.linalg.eigh(np.asarray(self.defocus_matrix_diopters, dtype=float))
+        blur = []
+        for value, vector in zip(values[::-1], vectors.T[::-1]):
+            meridian = round(math.degrees(math.atan2(vector[1], vector[0])) % 180.0, 9) or 180.0
+            blur.append((float(rad_to_arcmin(abs(value) * self.pupil_diameter_mm / 1000.0)), meridian))
+        return tuple(blur)  # type: ignore[return-value]
+
+    def blur_diameter_at_arcmin(self, distance_m) -> np.ndarray:
+        """Largest-meridian geometric blur of objects at axial ``distance_m`` (array, inf ok), same focus."""
+        k = np.linalg.eigvalsh(self.focus_matrix_diopters)
+        distance = np.asarray(distance_m, dtype=float)
+        with np.errstate(divide="ignore"):
+            proximity = np.where(np.isinf(distance), 0.0, 1.0 / distance)
+        defocus = np.maximum(np.abs(k[0] - proximity), np.abs(k[1] - proximity))
+        return rad_to_arcmin(defocus * self.pupil_diameter_mm / 1000.0)
+
+    @property
+    def magnification_principal(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Spectacle magnification per principal meridian ((mag, meridian_deg), ...), larger first."""
+        m = np.asarray(self.magnification_matrix, dtype=float)
+        return _principal(0.5 * (m + m.T))
