@@ -55,7 +55,7 @@ def spacing_fraction_for(depth: np.ndarray, n_layers: int) -> float:
     low, high, anchor = float(proximity.min()), float(proximity.max()), -EYE.spherical_equivalent_diopters
     for fraction in np.arange(2.0, 0.01, -0.001):
         spacing = layer_spacing_diopters(STEP, PUPIL_MM, fraction)
-        if plan_layers(low, high, spacing, anchor_d=anchor).n_layers == n_layers:
+        if plan_layers(low, high, spacing, anchor_diopters=anchor).n_layers == n_layers:
             return float(fraction)
     raise RuntimeError("no spacing fraction gives the requested layer count")
 

@@ -110,9 +110,9 @@ def test_range_of_clear_vision(eye, amplitude, expected):
         assert got == pytest.approx(expected, abs=1e-12)
 
 
-def effective_prescription(rx, distance_m, accommodation_d=0.0):
+def effective_prescription(rx, distance_m, accommodation_diopters=0.0):
     """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
-    return ViewingSetup.eye(rx, 4.0, accommodation_d, distance_m).camera_prescription
+    return ViewingSetup.eye(rx, 4.0, accommodation_diopters, distance_m).camera_prescription
 
 
 def test_bad_inputs_are_one_line_errors():

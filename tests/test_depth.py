@@ -41,9 +41,9 @@ from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
 
-def effective_prescription(rx, distance_m, accommodation_d=0.0):
+def effective_prescription(rx, distance_m, accommodation_diopters=0.0):
     """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
-    return ViewingSetup.eye(rx, 4.0, accommodation_d, distance_m).camera_prescription
+    return ViewingSetup.eye(rx, 4.0, accommodation_diopters, distance_m).camera_prescription
 
 PUPIL_MM = 4.0
 STEP = 1.0  # arcmin per pixel
@@ -128,7 +128,7 @@ def test_emmetrope_accommodating_to_each_panel_in_turn_sees_it_sharp():
         exerted = accommodation_for_target(Prescription(0.0), distance, 3.0)
         result = blur_depth(
             image, depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
-            accommodation_d=exerted,
+            accommodation_diopters=exerted,
         )
         m = margin_px(result)
         assert m < width // 2 - 4
@@ -145,7 +145,7 @@ def test_layer_spacing_keeps_neighbouring_blur_discs_within_the_fraction_of_a_pi
     spacing = layer_spacing_diopters(STEP, PUPIL_MM, 0.5)
     pixel_rad = math.radians(STEP / 60)
     assert spacing == pytest.approx(0.5 * pixel_rad / (PUPIL_MM * 1e-3), rel=1e-12)  # 0.03636 D
-    plan = plan_layers(0.0, 1.0, spacing, anchor_d=0.3)
+    plan = plan_layers(0.0, 1.0, spacing, anchor_diopters=0.3)
     gaps = np.diff(plan.proximities_diopters)
     assert gaps.min() > 0 and 0.3 in plan.proximities_diopters
     step_px = rad_to_arcmin(gaps.max() * PUPIL_MM * 1e-3) / STEP
@@ -159,7 +159,7 @@ def test_layer_count_grows_with_the_dioptric_range():
     assert (counts[1] - 1) / (counts[0] - 1) == pytest.approx(2.0, rel=0.05)
     assert (counts[2] - 1) / (counts[1] - 1) == pytest.approx(2.0, rel=0.05)
     # an in-focus anchor inside the range adds at most one layer
-    assert plan_layers(0.5, 1.5, spacing, anchor_d=0.77).n_layers <= counts[0] + 1
+    assert plan_layers(0.5, 1.5, spacing, anchor_diopters=0.77).n_layers <= counts[0] + 1
     # blur_depth reports the same count for a depth ramp over that range (in focus: 0 D, outside)
     proximity = np.linspace(0.5, 1.5, 32)[None, :].repeat(8, axis=0)
     result = blur_depth(
@@ -213,7 +213,7 @@ def test_two_depth_scene_equals_each_single_psf_blur_away_from_the_boundary():
     image = texture((48, 192), seed=4)
     depth = np.where(np.arange(192) < 96, 0.4, 3.0)[None, :].repeat(48, axis=0)
     result = blur_depth(
-        image, depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, accommodation_d=1.0
+        image, depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, accommodation_diopters=1.0
     )
     m = margin_px(result)
     near = single_psf_blur(image, Prescription(2.5 - 1.0))
@@ -230,15 +230,15 @@ def test_layers_without_blur_give_back_the_input():
     colour = rng.random((3, 40, 50)).astype(np.float32)
     proximity = rng.random((40, 50)) * 0.15
     proximity[10:20, 10:30] = 2.9 + rng.random((10, 20)) * 0.1
-    threshold_d = 0.2
+    threshold_diopters = 0.2
     plan = plan_layers(float(proximity.min()), float(proximity.max()), 0.05)
-    layer_d = np.array(plan.proximities_diopters)
-    lower, frac = _matte_indices(proximity, layer_d)
+    layer_diopters = np.array(plan.proximities_diopters)
+    lower, frac = _matte_indices(proximity, layer_diopters)
     upper, frac = np.minimum(lower + 1, plan.n_layers - 1), frac.astype(np.float32)
     numerator, denominator = np.zeros_like(colour), np.zeros((40, 50), np.float32)
-    layers = [_extended_layer(colour, lower, upper, frac, layer_d, k, threshold_d) for k in range(plan.n_layers)]
+    layers = [_extended_layer(colour, lower, upper, frac, layer_diopters, k, threshold_diopters) for k in range(plan.n_layers)]
     for k, planes in enumerate(layers):
-        weights = _occlusion_weight(layer_d - layer_d[k], threshold_d)
+        weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters)
         transmitted = np.clip(1.0 - sum(w * other[-1] for w, other in zip(weights, layers)), 0, 1)
         numerator += planes[:-1] * transmitted
         denominator += planes[-1] * transmitted
@@ -264,7 +264,7 @@ def test_bright_near_panel_leaks_no_light_beyond_its_own_blur(case):
     eye, accommodation = OCCLUSION_CASES[case]
     mask, depth = panel_scene()
     result = blur_depth(mask, depth, eye_prescription=eye, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
-                        accommodation_d=accommodation)
+                        accommodation_diopters=accommodation)
     own_blur = single_psf_blur(mask, effective_prescription(eye, 0.5, accommodation))
     np.testing.assert_allclose(result.image, own_blur, atol=ATOL)
 
@@ -274,7 +274,7 @@ def test_dark_near_panel_over_a_bright_background_shows_no_halo(case):
     eye, accommodation = OCCLUSION_CASES[case]
     mask, depth = panel_scene()
     result = blur_depth(1.0 - mask, depth, eye_prescription=eye, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
-                        accommodation_d=accommodation)
+                        accommodation_diopters=accommodation)
     assert result.image.max() <= 1.0 + ATOL  # no glow
     # The near panel's blurred edge attenuates the background by its own blurred coverage,
     # on both sides of the edge; the far blur does not reach into it.
@@ -312,7 +312,7 @@ def test_other_bad_inputs():
     with pytest.raises(VissimInputError, match="does not match the image"):
         blur_depth(texture((8, 8)), np.ones((8, 9)), **kwargs)
     with pytest.raises(VissimInputError, match="accommodation exerted must be >= 0 dioptres"):
-        blur_depth(texture((8, 8)), np.ones((8, 8)), accommodation_d=-1.0, **kwargs)
+        blur_depth(texture((8, 8)), np.ones((8, 8)), accommodation_diopters=-1.0, **kwargs)
     with pytest.raises(TypeError, match="RefractiveError"):
         blur_depth(texture((8, 8)), np.ones((8, 8)), eye_prescription=Prescription(-1.0).refractive_error(),
                    pupil_diameter_mm=3.0, arcmin_per_px=1.0)
@@ -332,7 +332,7 @@ def test_blur_depth_command_reads_sampling_from_provenance_and_a_z_channel_exr(t
     written = read_image(out_path)
     assert written.pixels.shape == (32, 48, 3)
     focus = written.provenance["inputs"]["focus"]
-    assert focus["accommodation_d"] == pytest.approx(2.0) and focus["amplitude_d"] == pytest.approx(9.5)
+    assert focus["accommodation_diopters"] == pytest.approx(2.0) and focus["amplitude_diopters"] == pytest.approx(9.5)
     assert written.provenance["inputs"]["depth_blur"]["n_layers"] > 2
     json.dumps(written.provenance)
 
@@ -342,6 +342,6 @@ def test_blur_depth_command_refuses_conflicting_focus_options(tmp_path, capsys):
     write_image(image_path, texture((8, 8)))
     np.save(depth_path, np.ones((8, 8)))
     code = main(["blur-depth", str(image_path), str(depth_path), "-o", str(tmp_path / "o.exr"), "--rx", "plano",
-                 "--pupil-mm", "3", "--arcmin-per-px", "1", "--accommodation-d", "1", "--age", "30"])
+                 "--pupil-mm", "3", "--arcmin-per-px", "1", "--accommodation-diopters", "1", "--age", "30"])
     _, err = capsys.readouterr()
     assert code == 2 and err.startswith("vissim: error:") and err.count("\n") == 1

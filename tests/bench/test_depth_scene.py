@@ -42,9 +42,9 @@ from vissim.optics.trial_lens import TrialLens
 from vissim.units import rad_to_arcmin
 
 
-def effective_prescription(rx, distance_m, accommodation_d=0.0):
+def effective_prescription(rx, distance_m, accommodation_diopters=0.0):
     """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
-    return ViewingSetup.eye(rx, 4.0, accommodation_d, distance_m).camera_prescription
+    return ViewingSetup.eye(rx, 4.0, accommodation_diopters, distance_m).camera_prescription
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
@@ -135,7 +135,7 @@ def test_eye_focuses_accommodation_minus_prescription():
 def test_dslr_is_simulated_as_the_eye_of_minus_its_focus_vergence():
     camera = CameraViewer(f_number=5.0, focus_distance_m=2.0)
     eye = equivalent_eye(camera)
-    assert eye.pupil_diameter_mm == pytest.approx(3.6) and eye.accommodation_d == 0.0
+    assert eye.pupil_diameter_mm == pytest.approx(3.6) and eye.accommodation_diopters == 0.0
     assert eye.prescription.sphere_diopters == pytest.approx(-0.5) and eye.prescription.cylinder_diopters == 0.0
     assert effective_prescription(eye.prescription, 2.0).spherical_equivalent_diopters == pytest.approx(0.0)
     plus = CameraViewer(focus_distance_m=2.0, lenses=(TrialLens(1.0),))

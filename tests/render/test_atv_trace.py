@@ -252,7 +252,7 @@ def test_cli_writes_the_spot_and_a_json_summary(tmp_path, capsys):
 
     out = tmp_path / "spot.exr"
     code, text = _cli(tmp_path, capsys, "--sphere", "-2", "--pupil-mm", "5", "--rays", "65536",
-                      "--rx=-0.5", "--accommodation-d", "0.25", "-o", str(out), "--json")
+                      "--rx=-0.5", "--accommodation-diopters", "0.25", "-o", str(out), "--json")
     assert code == 0
     summary = json.loads(text)
     for key in ("peak_irradiance_per_arcmin2", "spot_diameter_arcmin", "total_flux", "method", "seconds"):

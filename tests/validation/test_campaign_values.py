@@ -45,7 +45,7 @@ DEPTH = {
     "depth_campaign": {"name": "fuzz", "description": "mutated values", "spp": 4, "aux_spp": 4, "seeds": [1, 2],
                        "aux_seed": 3, "oversample": 1, "simulations": ["geometric", "wave"], "wavelength_nm": 550.0,
                        "data_range": 1.0, "margin_px": 1.0, "layer_spacing_fraction": 0.5},
-    "config": [{"name": "eye", "scene": "scene.toml", "eye": "-1.00 DS", "pupil_mm": 3.0, "accommodation_d": 0.5},
+    "config": [{"name": "eye", "scene": "scene.toml", "eye": "-1.00 DS", "pupil_mm": 3.0, "accommodation_diopters": 0.5},
                {"name": "camera", "scene": "scene.toml",
                 "camera": {"f_number": 5.0, "focus_distance_m": 2.0, "focal_length_mm": 18.0,
                            "vertex_distance_mm": 10.0, "lenses": [1.0]}}],

@@ -223,7 +223,7 @@ class PanelGeometry:
         return tuple(float(rad_to_arcmin(math.atan(v))) for v in self.box_tan)
 
     @property
-    def proximity_range_d(self) -> tuple[float, float]:
+    def proximity_range_diopters(self) -> tuple[float, float]:
         values = (1.0 / self.distance_left_m, 1.0 / self.distance_right_m)
         return min(values), max(values)
 

@@ -2,7 +2,7 @@
 
 Tables: ``[image]`` (``arcmin_per_px``, ``size_px`` = [rows, cols]), ``[sampling]`` (``spp``,
 ``seed``, ``aux_spp`` for the pinhole renders, ``sampler``, ``texels_per_px``), one observer
--- ``[eye]`` (``prescription``, ``pupil_diameter_mm``, ``accommodation_d``) or ``[camera]``
+-- ``[eye]`` (``prescription``, ``pupil_diameter_mm``, ``accommodation_diopters``) or ``[camera]``
 (the DSLR: ``focal_length_mm``, ``f_number``, ``focus_distance_m``, ``vertex_distance_mm``,
 ``lens_gap_mm``, ``refractive_index``, ``clear_aperture_mm``, ``fresnel_loss`` and
 ``[[camera.lenses]]`` as in ``scenes/dslr_bench.toml``) -- and the panels: ``[[panel]]``
@@ -46,7 +46,7 @@ _SAMPLING = {
     "texels_per_px": (float, "texels per pixel"),
 }
 _EYE = {"prescription": (str, "(e.g. '-2.00 -0.50 x 180')"), "pupil_diameter_mm": (float, "mm"),
-        "accommodation_d": (float, "dioptres")}
+        "accommodation_diopters": (float, "dioptres")}
 _CAMERA = {
     "focal_length_mm": (float, "mm"), "f_number": (float, "(f-number)"), "focus_distance_m": (float, "m"),
     "vertex_distance_mm": (float, "mm"), "lens_gap_mm": (float, "mm"), "refractive_index": (float, "(dimensionless)"),

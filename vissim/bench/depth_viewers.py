@@ -57,20 +57,20 @@ class EyeViewer:
 
     prescription: Prescription = field(default_factory=lambda: Prescription(0.0))
     pupil_diameter_mm: float = 4.0
-    accommodation_d: float = 0.0
+    accommodation_diopters: float = 0.0
 
     def __post_init__(self) -> None:
         if isinstance(self.prescription, RefractiveError) or not isinstance(self.prescription, Prescription):
             raise TypeError(f"the eye needs its Prescription (correcting lens), got {type(self.prescription).__name__}")
         pupil = check_pupil_mm(self.pupil_diameter_mm)
         object.__setattr__(self, "pupil_diameter_mm", pupil)
-        accommodation = finite_number(self.accommodation_d, "accommodation", "dioptres")
+        accommodation = finite_number(self.accommodation_diopters, "accommodation", "dioptres")
         if accommodation < 0.0:
             raise VissimInputError(f"accommodation must be >= 0 dioptres, got {accommodation:g} D")
-        object.__setattr__(self, "accommodation_d", accommodation + 0.0)
+        object.__setattr__(self, "accommodation_diopters", accommodation + 0.0)
 
     def label(self) -> str:
-        return f"eye {self.prescription.format()}, {self.pupil_diameter_mm:g} mm pupil, A {self.accommodation_d:g} D"
+        return f"eye {self.prescription.format()}, {self.pupil_diameter_mm:g} mm pupil, A {self.accommodation_diopters:g} D"
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,7 @@ def viewing_setup(viewer: Viewer, scene=None) -> ViewingSetup:
     taken there, module doc).
     """
     if isinstance(viewer, EyeViewer):
-        return ViewingSetup.eye(viewer.prescription, viewer.pupil_diameter_mm, viewer.accommodation_d)
+        return ViewingSetup.eye(viewer.prescription, viewer.pupil_diameter_mm, viewer.accommodation_diopters)
     if not isinstance(viewer, CameraViewer):
         raise VissimInputError(f"viewer must be an EyeViewer or a CameraViewer, got {type(viewer).__name__}")
     bench = viewer.bench(scene) if viewer.lenses else None

@@ -7,7 +7,7 @@
   seeds 32-bit.  :class:`Number` adds a
   range (``Number(float, positive=True)``) or allows infinity.
 * The unit is the option's own name where it ends in one (``--pupil-mm``, ``--arcmin-per-px``,
-  ``--accommodation-d``), else its metavar (``D``, ``DEG``, ``MM``), else :data:`UNITS_BY_DEST`.
+  ``--accommodation-diopters``), else its metavar (``D``, ``DEG``, ``MM``), else :data:`UNITS_BY_DEST`.
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ _INTS_BY_DEST = {
 }
 #: Powers, dioptres: within +-MAX_POWER_DIOPTERS.
 _POWERS = {"sphere", "cylinder", "back_surface_diopters",
-           "accommodation_d", "amplitude_d", "proximal_d"}
+           "accommodation_diopters", "amplitude_diopters", "proximal_diopters"}
 #: Plain ``type=float`` options that only make sense positive.
 _POSITIVE_FLOATS = {
     "pupil_mm", "zernike_pupil_mm", "arcmin_per_px", "wavelength_nm", "lca_reference_nm", "channel_fwhm_nm",

@@ -1,7 +1,7 @@
 """``vissim atv``: the absolute threshold for vision (thesis Ch. 5).
 
 * ``vissim atv analyze DIR -o OUT`` -- fit every subject file in DIR; figures, report.md/.html, analysis.json.
-* ``vissim atv simulate --rx RX --pupil-mm D [--accommodation-d A] [--cycloplegia] -o OUT`` -- a virtual subject.
+* ``vissim atv simulate --rx RX --pupil-mm D [--accommodation-diopters A] [--cycloplegia] -o OUT`` -- a virtual subject.
 * ``vissim atv run [--observer simulated|person] -o result.json`` -- one threshold by Listing 5.1.
 """
 
@@ -34,7 +34,7 @@ def add_parser(subparsers) -> None:
     analyze.add_argument("--strict", action="store_true", help="fail if the data disagree with the thesis's own numbers")
     analyze.add_argument("--level", type=float, default=0.95, help="confidence level (default 0.95)")
     analyze.add_argument("--all-sessions", action="store_true", help="fit every session's value instead of the per-lens means")
-    analyze.add_argument("--window-d", type=float, default=2.5, metavar="W",
+    analyze.add_argument("--window-diopters", type=float, default=2.5, metavar="W",
                          help="also fit a local parabola over lenses within W D of the least value (default 2.5; 0 to skip)")
     analyze.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     analyze.set_defaults(func=run_analyze)
@@ -44,9 +44,9 @@ def add_parser(subparsers) -> None:
                          "threshold by spatial summation, Listing 5.1 with a simulated observer at every lens.")
     add_rx_arg(sim, required=True)
     sim.add_argument("--pupil-mm", type=float, required=True, metavar="D", help="pupil diameter in mm")
-    sim.add_argument("--accommodation-d", type=float, default=8.0, metavar="A", help="accommodation amplitude in D (default 8)")
+    sim.add_argument("--accommodation-diopters", type=float, default=8.0, metavar="A", help="accommodation amplitude in D (default 8)")
     sim.add_argument("--cycloplegia", action="store_true", help="no accommodation (cycloplegic drops)")
-    sim.add_argument("--proximal-d", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
+    sim.add_argument("--proximal-diopters", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
     sim.add_argument("--lenses", metavar="D[,D...]", help="trial lenses in D (default: the thesis's 17)")
     sim.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
                      help="vertex distance: trial lens back vertex to the eye's pupil (default: the ATV bench's 15)")
@@ -56,7 +56,7 @@ def add_parser(subparsers) -> None:
     sim.add_argument("--gamma", type=float, default=2.2, help="display gamma, code value -> luminance (default 2.2)")
     _observer_args(sim, threshold=False)
     sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    sim.add_argument("--window-d", type=float, default=2.5, metavar="W", help="also fit a ±W D local parabola (0 to skip)")
+    sim.add_argument("--window-diopters", type=float, default=2.5, metavar="W", help="also fit a ±W D local parabola (0 to skip)")
     sim.add_argument("-o", "--output", type=Path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     sim.set_defaults(func=run_simulate)
@@ -89,7 +89,7 @@ def _observer_args(parser: argparse.ArgumentParser, *, threshold: bool) -> None:
 
 def _window(value: float) -> float | None:
     if not math.isfinite(value) or value < 0:
-        raise VissimInputError(f"--window-d must be a half-width >= 0 D, got {value!r} D")
+        raise VissimInputError(f"--window-diopters must be a half-width >= 0 D, got {value!r} D")
     return value or None
 
 
@@ -98,7 +98,7 @@ def run_analyze(args: argparse.Namespace) -> int:
 
     written, analyses = analyse_directory(
         args.data_dir, args.output, strict=args.strict, level=args.level, average_sessions=not args.all_sessions,
-        window_diopters=_window(args.window_d), overwrite=args.overwrite,
+        window_diopters=_window(args.window_diopters), overwrite=args.overwrite,
     )
     for a in analyses:
         vertex = f"{a.vertex_diopters:+.2f} D, CI {a.vertex_interval.describe()}" if a.vertex_diopters is not None else "no minimum"
@@ -122,8 +122,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     from vissim.optics.prescription import Prescription
 
     subject = VirtualSubject(
-        Prescription.parse(args.rx), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_d,
-        cycloplegia=args.cycloplegia, proximal_accommodation_diopters=args.proximal_d,
+        Prescription.parse(args.rx), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_diopters,
+        cycloplegia=args.cycloplegia, proximal_accommodation_diopters=args.proximal_diopters,
     )
     vertex = {} if args.vertex_mm is None else {"trial_lens_vertex_mm": args.vertex_mm}
     apparatus = AtvApparatus(**vertex, wavelength_nm=args.wavelength_nm, display_gamma=args.gamma)
@@ -135,7 +135,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     if args.lenses:
         kwargs["lenses_diopters"] = parse_float_list(args.lenses, "--lenses", "D", positive=False)
     experiment = run_virtual_experiment(subject, apparatus=apparatus, detection=detection, seed=args.seed, **kwargs)
-    written, analyses = write_simulation_report(experiment, args.output, window_diopters=_window(args.window_d), overwrite=args.overwrite)
+    written, analyses = write_simulation_report(experiment, args.output, window_diopters=_window(args.window_diopters), overwrite=args.overwrite)
     for t in experiment.trials:
         print(f"lens {t.trial_lens_diopters:+.2f} D: residual {t.residual_se_diopters:+.2f} D, accommodation "
               f"{t.accommodation_diopters:.2f} D, flux in summation area {t.summation_fraction:.3f}, threshold "

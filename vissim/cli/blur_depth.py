@@ -34,13 +34,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--pupil-mm", required=True, type=float, metavar="D", help="pupil diameter in mm")
     focus = parser.add_argument_group(
         "accommodation (default relaxed, 0 D)",
-        "Either --accommodation-d, or a focus target (--focus-distance-m, default the depth at the image "
-        "centre) reached as far as the amplitude allows (--age: Hofstetter 1950 mean; --amplitude-d; "
+        "Either --accommodation-diopters, or a focus target (--focus-distance-m, default the depth at the image "
+        "centre) reached as far as the amplitude allows (--age: Hofstetter 1950 mean; --amplitude-diopters; "
         "neither: unlimited).",
     )
-    focus.add_argument("--accommodation-d", type=float, metavar="A", help="accommodation exerted, dioptres")
+    focus.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres")
     focus.add_argument("--age", type=float, metavar="Y", help="age in years: amplitude 18.5 - 0.3 Y D (Hofstetter 1950)")
-    focus.add_argument("--amplitude-d", type=float, metavar="A", help="amplitude of accommodation, dioptres")
+    focus.add_argument("--amplitude-diopters", type=float, metavar="A", help="amplitude of accommodation, dioptres")
     focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres")
     parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: the one the image file records)")
     parser.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM", help="wavelength (default 550)")
@@ -58,27 +58,27 @@ def read_depth_m(path: Path) -> np.ndarray:
 
 
 def _accommodation(args: argparse.Namespace, eye: Prescription, depth: np.ndarray) -> tuple[float, dict]:
-    targeted = args.age is not None or args.amplitude_d is not None or args.focus_distance_m is not None
-    if args.accommodation_d is not None:
+    targeted = args.age is not None or args.amplitude_diopters is not None or args.focus_distance_m is not None
+    if args.accommodation_diopters is not None:
         if targeted:
-            raise VissimInputError("give --accommodation-d alone, or a focus target (--focus-distance-m/--age/--amplitude-d)")
-        return args.accommodation_d, {"accommodation_d": args.accommodation_d}
+            raise VissimInputError("give --accommodation-diopters alone, or a focus target (--focus-distance-m/--age/--amplitude-diopters)")
+        return args.accommodation_diopters, {"accommodation_diopters": args.accommodation_diopters}
     if not targeted:
-        return 0.0, {"accommodation_d": 0.0, "note": "relaxed"}
-    if args.age is not None and args.amplitude_d is not None:
-        raise VissimInputError("give --age or --amplitude-d, not both")
+        return 0.0, {"accommodation_diopters": 0.0, "note": "relaxed"}
+    if args.age is not None and args.amplitude_diopters is not None:
+        raise VissimInputError("give --age or --amplitude-diopters, not both")
     if args.age is not None:
         amplitude = Accommodation.from_age(args.age)
     else:
-        amplitude = Accommodation(math.inf if args.amplitude_d is None else args.amplitude_d, "given")
+        amplitude = Accommodation(math.inf if args.amplitude_diopters is None else args.amplitude_diopters, "given")
     target = args.focus_distance_m
     if target is None:
         target = float(depth[depth.shape[0] // 2, depth.shape[1] // 2])
     exerted = accommodation_for_target(eye, target, amplitude.amplitude_diopters)
     return exerted, {
-        "accommodation_d": exerted,
+        "accommodation_diopters": exerted,
         "focus_distance_m": target,
-        "amplitude_d": amplitude.amplitude_diopters,
+        "amplitude_diopters": amplitude.amplitude_diopters,
         "amplitude_source": amplitude.source,
     }
 
@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     accommodation, focus_info = _accommodation(args, eye, depth)
     result = blur_depth(
         image.pixels, depth, eye_prescription=eye, pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
-        accommodation_d=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
+        accommodation_diopters=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
         layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers,
     )
     provenance = make_provenance(

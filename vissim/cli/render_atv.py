@@ -39,7 +39,7 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
     eye = parser.add_argument_group("eye")
     eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter, 2-8 mm (default 4)")
     add_rx_arg(eye, default_text=" (default: emmetropic)")
-    eye.add_argument("--accommodation-d", type=float, metavar="A",
+    eye.add_argument("--accommodation-diopters", type=float, metavar="A",
                      help="accommodation in dioptres, >= 0 (default 0: focused at infinity)")
     light = parser.add_argument_group("pixel intensity (default: linear radiance 1)")
     given = light.add_mutually_exclusive_group()
@@ -92,8 +92,8 @@ def _config(args: argparse.Namespace):
         eye = replace(eye, pupil_diameter_mm=args.pupil_mm)
     if args.rx is not None:
         eye = replace(eye, refractive_error=Prescription.parse(args.rx))
-    if args.accommodation_d is not None:
-        eye = replace(eye, accommodation_diopters=args.accommodation_d)
+    if args.accommodation_diopters is not None:
+        eye = replace(eye, accommodation_diopters=args.accommodation_diopters)
     config = replace(config, eye=eye)
     if args.vertex_mm is not None:
         config = replace(config, trial_lens_distance_mm=args.vertex_mm)

@@ -40,7 +40,7 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
     eye = parser.add_argument_group("eye (an eye focused at 1 / (A - Rx) metres; Rx not worn)")
     add_rx_arg(eye)
     eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter in mm")
-    eye.add_argument("--accommodation-d", type=float, metavar="A", help="accommodation exerted, dioptres >= 0")
+    eye.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres >= 0")
     camera = parser.add_argument_group("DSLR bench camera (thin lens, entrance pupil focal length / f-number)")
     camera.add_argument("--f-number", type=float, metavar="N", help="f-number (default 5)")
     camera.add_argument("--focus-distance-m", type=float, metavar="F", help="focus distance in metres (default 0.9144)")
@@ -67,15 +67,15 @@ def _viewer(args: argparse.Namespace, loaded):
     from vissim.optics.prescription import Prescription
     from vissim.optics.trial_lens import TrialLens
 
-    eye_given = any(v is not None for v in (args.rx, args.pupil_mm, args.accommodation_d))
+    eye_given = any(v is not None for v in (args.rx, args.pupil_mm, args.accommodation_diopters))
     camera_given = any(v is not None for v in (args.f_number, args.focus_distance_m, args.focal_length_mm,
                                                args.sphere, args.cylinder, args.axis))
     if eye_given and camera_given:
-        raise VissimInputError("give eye options (--rx/--pupil-mm/--accommodation-d) or camera options, not both")
+        raise VissimInputError("give eye options (--rx/--pupil-mm/--accommodation-diopters) or camera options, not both")
     if eye_given:
         base = loaded.viewer if isinstance(loaded.viewer, EyeViewer) else EyeViewer()
         changes = {"prescription": None if args.rx is None else Prescription.parse(args.rx),
-                   "pupil_diameter_mm": args.pupil_mm, "accommodation_d": args.accommodation_d}
+                   "pupil_diameter_mm": args.pupil_mm, "accommodation_diopters": args.accommodation_diopters}
         return dataclasses.replace(base, **{k: v for k, v in changes.items() if v is not None})
     if camera_given:
         base = loaded.viewer if isinstance(loaded.viewer, CameraViewer) else CameraViewer()

@@ -74,10 +74,10 @@ def _check_prescription(eye_rx) -> Prescription:
     return eye_rx
 
 
-def _check_amplitude(amplitude_d) -> float:
-    amplitude = finite_number(amplitude_d, "amplitude of accommodation", "dioptres", allow_inf=True)
+def _check_amplitude(amplitude_diopters) -> float:
+    amplitude = finite_number(amplitude_diopters, "amplitude of accommodation", "dioptres", allow_inf=True)
     if amplitude < 0.0:
-        raise VissimInputError(f"amplitude of accommodation must be >= 0 dioptres, got {amplitude_d!r} D")
+        raise VissimInputError(f"amplitude of accommodation must be >= 0 dioptres, got {amplitude_diopters!r} D")
     return amplitude
 
 
@@ -144,23 +144,23 @@ def required_accommodation_diopters(eye_rx: Prescription, target_distance_m: flo
     return rx.spherical_equivalent_diopters + object_proximity_diopters(target_distance_m)
 
 
-def accommodation_for_target(eye_rx: Prescription, target_distance_m: float, amplitude_d: float) -> float:
+def accommodation_for_target(eye_rx: Prescription, target_distance_m: float, amplitude_diopters: float) -> float:
     """The accommodation (D) an eye with prescription ``eye_rx`` exerts to look at a target.
 
     The eye focuses where it can: the need ``M + 1/d`` (``M`` the spherical equivalent of the
-    correcting lens) clamped to ``[0, amplitude_d]``.  An uncorrected -2 D myope exerts 0 D
+    correcting lens) clamped to ``[0, amplitude_diopters]``.  An uncorrected -2 D myope exerts 0 D
     for targets at or beyond 0.5 m and ``1/d - 2`` D nearer; a +1 D hyperope exerts 1 D at
     infinity.
     """
     need = required_accommodation_diopters(eye_rx, target_distance_m)
-    amplitude = _check_amplitude(amplitude_d)
+    amplitude = _check_amplitude(amplitude_diopters)
     exerted = min(max(need, 0.0), amplitude)
     if need > amplitude:
         log.info("target at %s m needs %.3f D of accommodation; only %.3f D available", target_distance_m, need, amplitude)
     return exerted
 
 
-def clear_vision_range_m(eye_rx: Prescription, amplitude_d: float) -> tuple[float, float] | None:
+def clear_vision_range_m(eye_rx: Prescription, amplitude_diopters: float) -> tuple[float, float] | None:
     """``(near_point_m, far_point_m)`` of the eye that ``eye_rx`` corrects (spherical equivalent).
 
     Objects at proximity ``1/d`` in ``[-M, amplitude - M]`` (and >= 0) can be focused.  The far
@@ -168,7 +168,7 @@ def clear_vision_range_m(eye_rx: Prescription, amplitude_d: float) -> tuple[floa
     focused (a hyperope whose amplitude is below its prescription).
     """
     rx = _check_prescription(eye_rx)
-    amplitude = _check_amplitude(amplitude_d)
+    amplitude = _check_amplitude(amplitude_diopters)
     m = rx.spherical_equivalent_diopters
     far_proximity = max(0.0, -m)
     near_proximity = amplitude - m

@@ -113,36 +113,36 @@ class LayerPlan:
 
 
 def plan_layers(
-    min_proximity_d: float,
-    max_proximity_d: float,
-    max_spacing_d: float,
+    min_proximity_diopters: float,
+    max_proximity_diopters: float,
+    max_spacing_diopters: float,
     max_layers: int | None = DEFAULT_MAX_LAYERS,
     *,
-    anchor_d: float | None = None,
+    anchor_diopters: float | None = None,
 ) -> LayerPlan:
-    """Layers covering ``[min, max]`` with gaps <= ``max_spacing_d``; ends (and ``anchor_d``) exact.
+    """Layers covering ``[min, max]`` with gaps <= ``max_spacing_diopters``; ends (and ``anchor_diopters``) exact.
 
     The anchor is the in-focus proximity: it gets a layer of its own, so whatever the eye
     focuses on is rendered with exactly its in-focus PSF.  Each side of it is spaced evenly.
     The count is ``ceil(range / spacing) + 1`` (+1 with an anchor inside the range).
     """
-    low, high = float(min_proximity_d), float(max_proximity_d)
+    low, high = float(min_proximity_diopters), float(max_proximity_diopters)
     if high < low:
         raise VissimInputError(f"proximity range is reversed: {low:g} D to {high:g} D")
-    knots = [low, high] if anchor_d is None or not low < anchor_d < high else [low, float(anchor_d), high]
+    knots = [low, high] if anchor_diopters is None or not low < anchor_diopters < high else [low, float(anchor_diopters), high]
     values = [low]
     for a, b in zip(knots[:-1], knots[1:]):
-        n = int(math.ceil((b - a) / max_spacing_d - 1e-9))
+        n = int(math.ceil((b - a) / max_spacing_diopters - 1e-9))
         values.extend(a + (b - a) * np.arange(1, n + 1) / n)
     n_layers = len(values)
     if max_layers is not None and n_layers > max_layers:
         near, far = (("infinity" if d == 0 else f"{1.0 / d:.3g} m") for d in (high, low))
         raise VissimInputError(
             f"the scene spans {low:.3g} to {high:.3g} D of proximity ({near} to {far}), which needs "
-            f"{n_layers} layers at <= {max_spacing_d:.3g} D spacing (max_layers={max_layers}); check that the depth "
+            f"{n_layers} layers at <= {max_spacing_diopters:.3g} D spacing (max_layers={max_layers}); check that the depth "
             "is in metres, or raise max_layers (--max-layers) or the layer spacing fraction"
         )
-    return LayerPlan(tuple(float(v) for v in values), float(max_spacing_d))
+    return LayerPlan(tuple(float(v) for v in values), float(max_spacing_diopters))
 
 
 def depth_to_proximity_diopters(depth_m) -> np.ndarray:
@@ -221,10 +221,10 @@ def _check_rx(eye_rx) -> Prescription:
     return eye_rx
 
 
-def _check_accommodation(accommodation_d) -> float:
-    value = finite_number(accommodation_d, "accommodation", "dioptres")
+def _check_accommodation(accommodation_diopters) -> float:
+    value = finite_number(accommodation_diopters, "accommodation", "dioptres")
     if value < 0:
-        raise VissimInputError(f"accommodation exerted must be >= 0 dioptres, got {accommodation_d!r} D")
+        raise VissimInputError(f"accommodation exerted must be >= 0 dioptres, got {accommodation_diopters!r} D")
     return value
 
 
@@ -257,7 +257,7 @@ def blur_depth(
     eye_prescription: Prescription,
     pupil_diameter_mm: float,
     arcmin_per_px: float,
-    accommodation_d: float = 0.0,
+    accommodation_diopters: float = 0.0,
     wavelength_nm: float = 550.0,
     mode: str = "wave",
     extra_wavefront: Wavefront | None = None,
@@ -276,7 +276,7 @@ def blur_depth(
         Distance of each pixel's surface from the eye, metres; ``inf`` for sky.
     eye_prescription : Prescription
         The eye's correcting lens (myope negative), *not worn*: the eye is uncorrected.
-    accommodation_d : float
+    accommodation_diopters : float
         Accommodation exerted (D, >= 0), the same for the whole scene; see
         :func:`vissim.optics.accommodation.accommodation_for_target`.
     extra_wavefront : Wavefront, optional
@@ -294,7 +294,7 @@ def blur_depth(
     rx = _check_rx(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
-    accommodation = _check_accommodation(accommodation_d)
+    accommodation = _check_accommodation(accommodation_diopters)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
     if padding not in DEPTH_PADDING_MODES:
@@ -315,12 +315,12 @@ def blur_depth(
     rows, cols = proximity.shape
 
     base = _base_wavefront(rx, pupil, extra_wavefront)
-    in_focus_d = accommodation - base.to_prescription().spherical_equivalent_diopters
+    in_focus_diopters = accommodation - base.to_prescription().spherical_equivalent_diopters
     spacing_max = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
-    plan = plan_layers(float(proximity.min()), float(proximity.max()), spacing_max, max_layers, anchor_d=in_focus_d)
-    layer_d = np.array(plan.proximities_diopters)
-    threshold_d = max(layer_spacing_diopters(step, pupil, threshold_px), spacing_max * (1 + 1e-9))
-    lower, frac = _matte_indices(proximity, layer_d)
+    plan = plan_layers(float(proximity.min()), float(proximity.max()), spacing_max, max_layers, anchor_diopters=in_focus_diopters)
+    layer_diopters = np.array(plan.proximities_diopters)
+    threshold_diopters = max(layer_spacing_diopters(step, pupil, threshold_px), spacing_max * (1 + 1e-9))
+    lower, frac = _matte_indices(proximity, layer_diopters)
     coverage = np.bincount(lower.ravel(), weights=(1.0 - frac).ravel(), minlength=plan.n_layers + 1)
     coverage += np.bincount((lower + 1).ravel(), weights=frac.ravel(), minlength=plan.n_layers + 1)
     upper = np.minimum(lower + 1, plan.n_layers - 1).astype(np.int32)
@@ -329,10 +329,10 @@ def blur_depth(
 
     psfs, layers = {}, []
     for k in active:
-        front = base.with_defocus_diopters(layer_d[k] - accommodation)
+        front = base.with_defocus_diopters(layer_diopters[k] - accommodation)
         psfs[k] = _cached_psf(tuple(front.coefficients_um.items()), pupil, wavelength, step, mode)
         layers.append(DepthLayer(
-            k, float(layer_d[k]), rx.sphere_diopters + float(layer_d[k]) - accommodation,
+            k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
             2.0 * geometric_blur_radius_arcmin(front, pupil), psfs[k].data.shape[0], float(coverage[k] / lower.size),
         ))
     offset = max(p.data.shape[0] for p in psfs.values()) // 2 + 1
@@ -345,21 +345,21 @@ def blur_depth(
     denominator = np.zeros((rows, cols), np.float32)
     occluders = np.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
     pending: list[tuple[float, np.ndarray]] = []  # nearer layers' blurred coverage, occluding in part
-    farthest = layer_d[active[0]]
+    farthest = layer_diopters[active[0]]
     for k in reversed(active):  # near to far
-        while pending and pending[0][0] - layer_d[k] >= 2 * threshold_d:
+        while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:
             occluders += pending.pop(0)[1]
         transmitted = occluders.copy()
         for proximity_j, matte_j in pending:
-            weight = _occlusion_weight(proximity_j - layer_d[k], threshold_d)
+            weight = _occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
             if weight > 0:
                 transmitted += weight * matte_j
         np.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-        planes = _extended_layer(colour, lower, upper, frac, layer_d, k, threshold_d, work)
+        planes = _extended_layer(colour, lower, upper, frac, layer_diopters, k, threshold_diopters, work)
         kernel = BlurKernel.prepare(psfs[k], shape, dtype=np.float32)
         blurred = _blur_planes(planes, kernel, offset, padding, out=padded)
-        if layer_d[k] - threshold_d > farthest:  # it occludes layers behind it: keep its blurred coverage
-            pending.append((layer_d[k], np.array(blurred[-1])))
+        if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind it: keep its blurred coverage
+            pending.append((layer_diopters[k], np.array(blurred[-1])))
         blurred *= transmitted
         numerator += blurred[:-1]
         denominator += blurred[-1]
@@ -370,29 +370,29 @@ def blur_depth(
     result = out[0] if pixels.ndim == 2 else np.moveaxis(out, 0, -1)
     return DepthBlurResult(
         np.ascontiguousarray(result, dtype=np.float32), tuple(layers), plan.n_layers, plan.max_spacing_diopters,
-        threshold_d, accommodation, in_focus_d, shape,
+        threshold_diopters, accommodation, in_focus_diopters, shape,
     )
 
 
-def _matte_indices(proximity: np.ndarray, layer_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's farther layer index ``i`` and its weight ``t`` in layer ``i + 1`` (tent matte)."""
-    if layer_d.size == 1:
+    if layer_diopters.size == 1:
         return np.zeros(proximity.shape, np.int64), np.zeros(proximity.shape)
-    lower = np.clip(np.searchsorted(layer_d, proximity, side="right") - 1, 0, layer_d.size - 2)
-    gap = layer_d[lower + 1] - layer_d[lower]
-    frac = np.clip((proximity - layer_d[lower]) / gap, 0.0, 1.0)
+    lower = np.clip(np.searchsorted(layer_diopters, proximity, side="right") - 1, 0, layer_diopters.size - 2)
+    gap = layer_diopters[lower + 1] - layer_diopters[lower]
+    frac = np.clip((proximity - layer_diopters[lower]) / gap, 0.0, 1.0)
     snap_up = frac > 1.0 - 1e-6  # on a layer (to rounding): that layer only
     lower[snap_up] += 1
     frac[snap_up | (frac < 1e-6)] = 0.0
     return lower, frac
 
 
-def _occlusion_weight(proximity_gap_d, threshold_d: float):
+def _occlusion_weight(proximity_gap_diopters, threshold_diopters: float):
     """How much nearer content occludes: 0 up to the threshold, rising to 1 at twice it."""
-    return np.clip(np.asarray(proximity_gap_d) / threshold_d - 1.0, 0.0, 1.0)
+    return np.clip(np.asarray(proximity_gap_diopters) / threshold_diopters - 1.0, 0.0, 1.0)
 
 
-def _extended_layer(colour, lower, upper, frac, layer_d: np.ndarray, k: int, threshold_d: float, work=None):
+def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None):
     """Layer ``k``: premultiplied colours and coverage (C + 1, H, W), extended behind its occluders.
 
     ``lower``/``upper`` are each pixel's two layers and ``frac`` (float32) its weight in
@@ -411,7 +411,7 @@ def _extended_layer(colour, lower, upper, frac, layer_d: np.ndarray, k: int, thr
     np.subtract(1.0, frac, out=matte, where=lower == k)
     np.copyto(matte, frac, where=(upper == k) & (lower != k))
     np.multiply(colour, matte, out=stack[:n_ch])
-    weights = _occlusion_weight(layer_d - layer_d[k], threshold_d).astype(np.float32)
+    weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
     if not weights.any():
         return stack
     np.take(weights, lower, out=hidden)

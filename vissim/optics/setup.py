@@ -93,17 +93,17 @@ class ViewingSetup:
                    magnification, wavelength_nm, chart_m)
 
     @classmethod
-    def eye(cls, prescription: Prescription, pupil_diameter_mm: float, accommodation_d: float = 0.0,
+    def eye(cls, prescription: Prescription, pupil_diameter_mm: float, accommodation_diopters: float = 0.0,
             object_distance_m: float = math.inf, *, vergence_diopters=None,
             wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
-        """An eye of correcting lens ``prescription`` (myope < 0, not worn) exerting ``accommodation_d``.
+        """An eye of correcting lens ``prescription`` (myope < 0, not worn) exerting ``accommodation_diopters``.
 
         D = -Rx + A I + V, V = -I/d for an object at ``object_distance_m`` or the given
         ``vergence_diopters`` (scalar or 2 x 2) of the light arriving at the pupil.
         """
         if isinstance(prescription, RefractiveError) or not isinstance(prescription, Prescription):
             raise TypeError(f"the eye needs its Prescription (correcting lens), got {type(prescription).__name__}")
-        accommodation = finite_number(accommodation_d, "accommodation", "dioptres")
+        accommodation = finite_number(accommodation_diopters, "accommodation", "dioptres")
         if accommodation < 0.0:
             raise VissimInputError(f"accommodation must be >= 0 dioptres, got {accommodation:g} D")
         if vergence_diopters is None:
@@ -116,7 +116,7 @@ class ViewingSetup:
                    float(object_distance_m))
 
     @classmethod
-    def atv_observer(cls, prescription: Prescription, pupil_diameter_mm: float, accommodation_d: float,
+    def atv_observer(cls, prescription: Prescription, pupil_diameter_mm: float, accommodation_diopters: float,
                      trial_lens_diopters: float, vertex_distance_mm: float, *,
                      wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
         """The ATV observer: a collimated pixel (source at infinity) through a thin trial lens.
@@ -125,7 +125,7 @@ class ViewingSetup:
         source at infinity (:func:`~vissim.optics.trial_lens.thesis_table_4_2_power`).
         """
         vergence = thesis_table_4_2_power(trial_lens_diopters, vertex_distance_mm)
-        return cls.eye(prescription, pupil_diameter_mm, accommodation_d, vergence_diopters=vergence,
+        return cls.eye(prescription, pupil_diameter_mm, accommodation_diopters, vergence_diopters=vergence,
                        wavelength_nm=wavelength_nm)
 
     # -- the thesis's choices, one field each -----------------------------------------------

@@ -53,7 +53,7 @@ class DepthRenderResult:
     blurred: np.ndarray | None
     all_in_focus: np.ndarray | None
     depth_m: np.ndarray | None
-    proximity_d: np.ndarray | None
+    proximity_diopters: np.ndarray | None
     variant: str
     spp: int
     seed: int
@@ -61,9 +61,9 @@ class DepthRenderResult:
     provenance: dict | None = None
 
 
-def proximity_to_depth_m(proximity_d) -> np.ndarray:
+def proximity_to_depth_m(proximity_diopters) -> np.ndarray:
     """Axial depth (m, float32) from a proximity pass (D): ``1/p``, inf where ``p < SKY_PROXIMITY_D``."""
-    proximity = np.asarray(proximity_d, dtype=np.float64)
+    proximity = np.asarray(proximity_diopters, dtype=np.float64)
     if not np.all(np.isfinite(proximity)) or proximity.min(initial=0.0) < -1e-6:
         raise VissimInputError("a proximity pass must be finite and >= 0 dioptres")
     with np.errstate(divide="ignore"):

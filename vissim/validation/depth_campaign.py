@@ -2,7 +2,7 @@
 
 A campaign TOML has a ``[depth_campaign]`` table (or ``[campaign]`` with ``kind = "depth"``)
 of settings and ``[[config]]`` tables, each a scene file (``scene``, relative to the campaign
-file) and an observer: an eye (``eye`` = prescription, ``pupil_mm``, ``accommodation_d``), the
+file) and an observer: an eye (``eye`` = prescription, ``pupil_mm``, ``accommodation_diopters``), the
 DSLR (``camera = {f_number, focus_distance_m, focal_length_mm, lenses}``), or none (the scene
 file's).  ``validation/depth.toml`` is the commented example.  Items are computed by
 :mod:`vissim.validation.depth_item`, run by :mod:`vissim.validation.depth_runner`, and either
@@ -158,7 +158,7 @@ def _eye(raw: dict, viewer, source: str, where: str) -> EyeViewer:
         except VissimInputError as exc:
             raise _err(source, f"{where}.eye", str(exc)) from None
     pupil = number(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm", lo=0.5, hi=10.0)
-    accommodation = number(raw.get("accommodation_d", base_eye.accommodation_d), source, f"{where}.accommodation_d",
+    accommodation = number(raw.get("accommodation_diopters", base_eye.accommodation_diopters), source, f"{where}.accommodation_diopters",
                            "dioptres", lo=0.0, hi=20.0)
     try:
         return EyeViewer(rx, pupil, accommodation)
@@ -181,7 +181,7 @@ def _camera(camera: Any, viewer, source: str, where: str) -> CameraViewer:
 
 
 def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfiguration:
-    unknown = set(raw) - {"name", "scene", "eye", "pupil_mm", "accommodation_d", "camera"}
+    unknown = set(raw) - {"name", "scene", "eye", "pupil_mm", "accommodation_diopters", "camera"}
     if unknown:
         raise _err(source, where, f"unknown field(s) {sorted(unknown)}")
     if "scene" not in raw:
@@ -193,9 +193,9 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
         loaded = load_depth_scene_toml(scene_file)
     except VissimInputError as exc:
         raise _err(source, f"{where}.scene", str(exc)) from None
-    eye_keys = {"eye", "pupil_mm", "accommodation_d"} & set(raw)
+    eye_keys = {"eye", "pupil_mm", "accommodation_diopters"} & set(raw)
     if eye_keys and "camera" in raw:
-        raise _err(source, where, "give an eye (eye, pupil_mm, accommodation_d) or a camera, not both")
+        raise _err(source, where, "give an eye (eye, pupil_mm, accommodation_diopters) or a camera, not both")
     viewer = loaded.viewer
     if eye_keys:
         viewer = _eye(raw, viewer, source, where)

@@ -83,13 +83,13 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
                           arcmin_per_px=scene.arcmin_per_px, margin_px=settings.margin_px)
     saved = {"truth": _save(item_dir, "truth", truth_a), "all_in_focus": _save(item_dir, "all_in_focus",
                                                                                 block_mean(images["all_in_focus"], s)),
-             "proximity": _save(item_dir, "proximity_d", proximity, preview=False),
+             "proximity": _save(item_dir, "proximity_diopters", proximity, preview=False),
              "regions": _save(item_dir, "regions", masks.label_image().astype(np.float32), preview=False)}
     comparisons = []
     for mode in settings.simulations:
         result = blur_depth(images["all_in_focus"], proximity_to_depth_m(images["proximity"]),
                             eye_prescription=eye.prescription, pupil_diameter_mm=eye.pupil_diameter_mm,
-                            arcmin_per_px=scene.arcmin_per_px / s, accommodation_d=eye.accommodation_d,
+                            arcmin_per_px=scene.arcmin_per_px / s, accommodation_diopters=eye.accommodation_diopters,
                             wavelength_nm=settings.wavelength_nm, mode=mode,
                             layer_spacing_fraction=settings.layer_spacing_fraction)
         simulated = block_mean(result.image, s)
@@ -114,13 +114,13 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
         "key": key,
         "configuration": config.as_json(),
         "equivalent_eye": {"prescription": eye.prescription.format(4), "pupil_diameter_mm": eye.pupil_diameter_mm,
-                           "accommodation_d": eye.accommodation_d},
+                           "accommodation_diopters": eye.accommodation_diopters},
         "panels": [{"name": g.name, "letters": scene.panels[g.index].chart.letters,
                     "logmar": scene.panels[g.index].chart.logmar,
                     "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
                     "blur_diameter_arcmin": [float(blur_diameter_arcmin(config.viewer, d, scene))
                                              for d in (g.distance_left_m, g.distance_right_m)]} for g in geometries],
-        "masks": {"jump_d": masks.jump_d, "margin_px": settings.margin_px,
+        "masks": {"jump_diopters": masks.jump_diopters, "margin_px": settings.margin_px,
                   "regions": list(masks.interiors) + ["boundary", "frame"],
                   "definition": "interior: >= blur radius + margin from any depth discontinuity and the frame; "
                                 "boundary: within that of a discontinuity; frame: within the largest blur radius + "

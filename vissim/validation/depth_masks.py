@@ -5,7 +5,7 @@ observer's blur (:func:`vissim.bench.depth_scene.blur_diameter_arcmin`), every p
 class:
 
 * a **depth discontinuity** is a pixel whose 3 x 3 neighbourhood spans more than
-  ``jump_d`` dioptres of proximity.  The default ``jump_d`` is the proximity step over which
+  ``jump_diopters`` dioptres of proximity.  The default ``jump_diopters`` is the proximity step over which
   two blur discs differ by one pixel (``theta / pupil``): the occlusion threshold of
   :func:`vissim.optics.depth.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
   depth stays below it; a panel edge (or a panel against the sky) does not.  A pixel split
@@ -17,7 +17,7 @@ class:
   image border (the render sees beyond the border; a simulation only pads);
 * **interiors**: the rest, split into connected regions, each named after the panel whose
   proximity range holds the region's median (``sky`` below 1e-6 D).  A fronto panel takes a
-  region whose proximities spread less than ``jump_d``; otherwise a tilted chart does.
+  region whose proximities spread less than ``jump_diopters``; otherwise a tilted chart does.
 
 So an interior pixel is at least one blur radius (plus the margin) from any depth
 discontinuity: its render is the single-depth blur of its own panel.
@@ -52,7 +52,7 @@ class RegionMasks:
     frame: np.ndarray
     discontinuities: np.ndarray
     blur_radius_px: np.ndarray
-    jump_d: float
+    jump_diopters: float
 
     def label_image(self) -> np.ndarray:
         """int8 map for figures: 0 frame/unused, 1 boundary, 2... interiors in ``interiors`` order."""
@@ -69,13 +69,13 @@ def _disc(radius: int) -> np.ndarray:
 
 
 def depth_regions(
-    proximity_d: np.ndarray,
+    proximity_diopters: np.ndarray,
     geometries,
     blur_radius_px,
     *,
     pupil_diameter_mm: float,
     arcmin_per_px: float,
-    jump_d: float | None = None,
+    jump_diopters: float | None = None,
     margin_px: float = 1.0,
 ) -> RegionMasks:
     """Classify the pixels of a proximity map (module doc).
@@ -84,15 +84,15 @@ def depth_regions(
     and proximity ranges).  ``blur_radius_px``: callable mapping proximity (D, array) to the
     geometric blur radius in pixels (largest meridian).
     """
-    proximity = np.asarray(proximity_d, dtype=np.float64)
+    proximity = np.asarray(proximity_diopters, dtype=np.float64)
     if proximity.ndim != 2:
         raise VissimInputError(f"a proximity map must be (H, W) dioptres, got shape {proximity.shape}")
-    if jump_d is None:
-        jump_d = float(arcmin_to_rad(arcmin_per_px)) / mm_to_m(pupil_diameter_mm)
+    if jump_diopters is None:
+        jump_diopters = float(arcmin_to_rad(arcmin_per_px)) / mm_to_m(pupil_diameter_mm)
     radius = np.asarray(blur_radius_px(proximity), dtype=np.float64)
     spread = ndimage.maximum_filter(proximity, size=3, mode="nearest") - ndimage.minimum_filter(
         proximity, size=3, mode="nearest")
-    discontinuities = spread > jump_d
+    discontinuities = spread > jump_diopters
     band = np.zeros(proximity.shape, bool)
     if discontinuities.any():
         local = ndimage.maximum_filter(radius, size=5, mode="nearest")
@@ -111,27 +111,27 @@ def depth_regions(
     for index in range(1, count + 1):
         mask = components == index
         values = proximity[mask]
-        name = _region_name(float(np.median(values)), float(np.ptp(values)), geometries, jump_d)
+        name = _region_name(float(np.median(values)), float(np.ptp(values)), geometries, jump_diopters)
         if name is None:
             log.warning("an interior region of %d px (median %.3g D) matches no panel", mask.sum(), np.median(values))
             continue
         interiors[name] = interiors[name] | mask if name in interiors else mask
     order = [g.name for g in geometries if g.name in interiors] + ([SKY] if SKY in interiors else [])
-    return RegionMasks({n: interiors[n] for n in order}, boundary, frame, discontinuities, radius, float(jump_d))
+    return RegionMasks({n: interiors[n] for n in order}, boundary, frame, discontinuities, radius, float(jump_diopters))
 
 
-def _region_name(median_d: float, spread_d: float, geometries, jump_d: float) -> str | None:
-    if median_d < _SKY_PROXIMITY_D:
+def _region_name(median_diopters: float, spread_diopters: float, geometries, jump_diopters: float) -> str | None:
+    if median_diopters < _SKY_PROXIMITY_D:
         return SKY
-    tolerance = 0.5 * jump_d
+    tolerance = 0.5 * jump_diopters
     candidates = [g for g in geometries
-                  if g.proximity_range_d[0] - tolerance <= median_d <= g.proximity_range_d[1] + tolerance]
+                  if g.proximity_range_diopters[0] - tolerance <= median_diopters <= g.proximity_range_diopters[1] + tolerance]
     if not candidates:
         return None
     fronto = [g for g in candidates if g.kind == "panel"]
     tilted = [g for g in candidates if g.kind != "panel"]
-    pool = fronto if fronto and (spread_d < jump_d or not tilted) else (tilted or fronto)
-    best = min(pool, key=lambda g: abs(0.5 * sum(g.proximity_range_d) - median_d))
+    pool = fronto if fronto and (spread_diopters < jump_diopters or not tilted) else (tilted or fronto)
+    best = min(pool, key=lambda g: abs(0.5 * sum(g.proximity_range_diopters) - median_diopters))
     return best.name
 
 

@@ -86,7 +86,7 @@ def depth_tables(results: list[dict]) -> str:
         blur = ", ".join(f"{p['name']} {_fmt(max(p['blur_diameter_arcmin']), 1)}'" for p in result["panels"])
         eye = result["equivalent_eye"]
         out.append(f"{result['configuration']['viewer_label']}; simulated as the eye {eye['prescription']} "
-                   f"(pupil {eye['pupil_diameter_mm']:g} mm, A {eye['accommodation_d']:g} D); "
+                   f"(pupil {eye['pupil_diameter_mm']:g} mm, A {eye['accommodation_diopters']:g} D); "
                    f"predicted blur diameters: {blur}.\n")
         header = ["region", "pixels"]
         for sim in sims:
