@@ -18,7 +18,6 @@ __all__ = [
     "mm_to_m",
     "m_to_mm",
     "diopters_to_mm",
-    "mm_to_diopters",
     "diopters_to_per_mm",
     "REC709_LUMINANCE",
 ]
@@ -74,11 +73,6 @@ def m_to_mm(m):
 def diopters_to_mm(diopters):
     """Focal length, or distance of a vergence, in mm: 1000 / D."""
     return MM_PER_M / _number(diopters)
-
-
-def mm_to_diopters(mm):
-    """Power (vergence) in dioptres of a distance in mm: 1000 / mm."""
-    return MM_PER_M / _number(mm)
 
 
 def diopters_to_per_mm(diopters):

@@ -17,24 +17,20 @@ import pytest
 
 from vissim.acuity import letter_height_mm
 from vissim.bench.depth_scene import (
-    CameraViewer,
     ChartPanel,
     DepthScene,
-    EyeViewer,
     PanelChart,
     TiltedChart,
     axial_depth_map,
-    blur_diameter_arcmin,
     default_panels_scene,
     default_tilted_scene,
-    equivalent_eye,
-    focus_matrix_diopters,
     panel_geometries,
     pixel_tangents,
 )
 from vissim.bench.depth_scene_dict import depth_scene_dict, tilted_mesh
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_textures import panel_texture
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer, blur_diameter_arcmin, equivalent_eye, focus_matrix_diopters
 from vissim.errors import VissimInputError
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.prescription import Prescription

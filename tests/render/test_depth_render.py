@@ -21,18 +21,16 @@ import pytest
 from scipy.optimize import least_squares, minimize_scalar
 
 from vissim.bench.depth_scene import (
-    CameraViewer,
     ChartPanel,
     DepthScene,
-    EyeViewer,
     PanelChart,
     axial_depth_map,
-    blur_diameter_arcmin,
     default_panels_scene,
     default_tilted_scene,
     panel_geometries,
     pixel_tangents,
 )
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer, blur_diameter_arcmin
 from vissim.bench.depth_scene_dict import depth_scene_dict
 from vissim.bench.depth_textures import panel_texture
 from vissim.errors import VissimInputError

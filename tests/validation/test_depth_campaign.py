@@ -19,12 +19,8 @@ import pytest
 from fake_bench import fake_render
 from provenance_walk import image_provenance, json_without_provenance
 
-from vissim.bench.depth_scene import (
-    CameraViewer,
-    EyeViewer,
-    default_panels_scene,
-    panel_geometries,
-)
+from vissim.bench.depth_scene import default_panels_scene, panel_geometries
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.render.backend import choose_variant

@@ -54,6 +54,7 @@ from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 from vissim.imageio import srgb_decode
 from vissim.optics.prescription import LensPower, Prescription, RefractiveError
+from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
 from vissim.units import diopters_to_mm, m_to_mm, mm_to_m
 
@@ -73,7 +74,6 @@ MAX_ACCOMMODATION_DIOPTERS = 15.0
 TUBE_CLEARANCE_MM = 0.05
 #: Least air between the trial lens and the collimator, and between the pupil and the trial lens, mm.
 MIN_AIR_GAP_MM = 0.5
-_I2 = np.eye(2)
 
 
 def _number(value, name: str, unit: str, *, lo: float | None = None, hi: float | None = None,
@@ -215,9 +215,11 @@ class AtvEye:
         object.__setattr__(self, "accommodation_diopters", _number(
             self.accommodation_diopters, "accommodation", "dioptres", lo=0.0, hi=MAX_ACCOMMODATION_DIOPTERS))
 
-    def excess_power_matrix_diopters(self) -> np.ndarray:
-        """2x2 excess power of the eye's thin lens over a relaxed emmetrope: error + accommodation."""
-        return np.asarray(self.refractive_error.power_matrix(), dtype=float) + self.accommodation_diopters * _I2
+    def viewing_setup(self, vergence_diopters=None) -> ViewingSetup:
+        """This eye's :meth:`ViewingSetup.eye <vissim.optics.setup.ViewingSetup.eye>`; its defocus matrix
+        is the eye's excess power, error + accommodation, plus ``vergence_diopters`` at the pupil (0 if None)."""
+        return ViewingSetup.eye(self.refractive_error.prescription(), self.pupil_diameter_mm,
+                                self.accommodation_diopters, vergence_diopters=vergence_diopters)
 
 
 def atv_trial_lens(sphere_diopters: float, cylinder_diopters: float = 0.0, axis_deg: float = 180.0, *,

@@ -16,7 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.bench.atv import AtvConfig
-from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import transfer_matrix
 from vissim.units import mm_to_m, mrad_to_arcmin
 
@@ -62,9 +61,7 @@ def atv_paraxial(config: AtvConfig) -> AtvParaxial:
     b_inv = np.linalg.inv(b)
     vergence = -d @ b_inv
     vergence = 0.5 * (vergence + vergence.T)
-    eye = config.eye
-    setup = ViewingSetup.eye(eye.refractive_error.prescription(), eye.pupil_diameter_mm, eye.accommodation_diopters,
-                             vergence_diopters=vergence)
+    setup = config.eye.viewing_setup(vergence)
     pixel_map = -(c - d @ b_inv @ a)  # visual angle = -u at the pupil centre
     pitch_m = mm_to_m(config.tube.pixel_pitch_mm)
     pupil_m = mm_to_m(config.eye.pupil_diameter_mm)

@@ -33,11 +33,11 @@ def _translate(x: float, y: float, z: float) -> list[list[float]]:
 
 
 def _camera(config: AtvConfig, arcmin_per_px: float, size_px: int, spp: int, seed: int, kind: str) -> dict:
-    excess = config.eye.excess_power_matrix_diopters()
-    if abs(excess[0, 1]) > 1e-12 or abs(excess[0, 0] - excess[1, 1]) > 1e-12:
+    excess = config.eye.viewing_setup().defocus_matrix_diopters
+    if abs(excess[0][1]) > 1e-12 or abs(excess[0][0] - excess[1][1]) > 1e-12:
         raise VissimInputError(f"the camera cross-check models a spherical eye only; this eye's error is "
                                f"{config.eye.refractive_error} D (use the light tracer)")
-    focus_diopters = float(excess[0, 0])
+    focus_diopters = float(excess[0][0])
     if focus_diopters < 0.0:
         raise VissimInputError(f"the camera cross-check cannot focus beyond infinity: the eye's excess power plus "
                                f"accommodation is {focus_diopters:g} D < 0 D (use the light tracer)")

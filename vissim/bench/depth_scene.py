@@ -21,13 +21,13 @@ What is in a scene:
   chart's angular rectangle; it is a PLY mesh whose texture coordinates are image tangents,
   with columns at most half a pixel apart (texture error < 0.01 px).
 
-Observers (a ``viewer``, :mod:`vissim.bench.depth_viewers`, re-exported here): an
-:class:`EyeViewer` -- Mitsuba sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), an ideal
-thin lens at the pupil focusing the vergence matrix ``K = A I - Rx``, so an object at axial
-distance ``z`` is blurred by ``pupil x (K - I/z)``: the defocus ``Rx + 1/z - A`` of
+Observers (a ``viewer``, :mod:`vissim.bench.depth_viewers`): an ``EyeViewer`` -- Mitsuba
+sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), an ideal thin lens at the pupil
+focusing the vergence matrix ``K = A I - Rx``, so an object at axial distance ``z`` is blurred
+by ``pupil x (K - I/z)``: the defocus ``Rx + 1/z - A`` of
 :meth:`vissim.optics.setup.ViewingSetup.eye`, cylinders and hyperopia (focus "beyond infinity",
 ``K < 0``) included, which a Mitsuba ``thinlens`` (focus distance > 0, no astigmatism) cannot
-express -- or a :class:`CameraViewer`, the DSLR bench camera (``thinlens``, f/N entrance pupil)
+express -- or a ``CameraViewer``, the DSLR bench camera (``thinlens``, f/N entrance pupil)
 with optional trial lenses, taken from :func:`vissim.bench.dslr.dslr_scene` itself.
 
 The scene dicts are :mod:`vissim.bench.depth_scene_dict`, the chart textures
@@ -41,13 +41,6 @@ from typing import Union
 
 import numpy as np
 
-from vissim.bench.depth_viewers import (
-    CameraViewer,
-    EyeViewer,
-    blur_diameter_arcmin,
-    equivalent_eye,
-    focus_matrix_diopters,
-)
 from vissim.bench.dslr import SAMPLERS
 from vissim.charts import (
     INK_REFLECTANCE,
@@ -63,9 +56,8 @@ from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, m_to_mm, rad_to_arcmin
 
 __all__ = [
-    "DEFAULT_DISTANCES_M", "PanelChart", "ChartPanel", "TiltedChart", "DepthScene", "EyeViewer", "CameraViewer",
-    "PanelGeometry", "panel_geometries", "pixel_tangents", "axial_depth_map", "focus_matrix_diopters",
-    "equivalent_eye", "blur_diameter_arcmin", "default_panels_scene", "default_tilted_scene",
+    "DEFAULT_DISTANCES_M", "PanelChart", "ChartPanel", "TiltedChart", "DepthScene", "PanelGeometry",
+    "panel_geometries", "pixel_tangents", "axial_depth_map", "default_panels_scene", "default_tilted_scene",
 ]
 
 #: The issue's chart distances: near work, the thesis's 3 ft, across the room, far.

@@ -21,14 +21,8 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from vissim.bench.depth_scene import (
-    CameraViewer,
-    ChartPanel,
-    DepthScene,
-    EyeViewer,
-    PanelChart,
-    TiltedChart,
-)
+from vissim.bench.depth_scene import ChartPanel, DepthScene, PanelChart, TiltedChart
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.bench.scene_files import _LENS, _check_keys, _read, _table, _typed
 from vissim.checks import samples_per_pixel
 from vissim.errors import VissimInputError

@@ -63,7 +63,7 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _viewer(args: argparse.Namespace, loaded):
-    from vissim.bench.depth_scene import CameraViewer, EyeViewer
+    from vissim.bench.depth_viewers import CameraViewer, EyeViewer
     from vissim.optics.prescription import Prescription
     from vissim.optics.trial_lens import TrialLens
 
@@ -123,8 +123,9 @@ def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = No
 
 
 def run_depth(args: argparse.Namespace) -> int:
-    from vissim.bench.depth_scene import blur_diameter_arcmin, panel_geometries
+    from vissim.bench.depth_scene import panel_geometries
     from vissim.bench.depth_scene_files import load_depth_scene_toml
+    from vissim.bench.depth_viewers import blur_diameter_arcmin
     from vissim.imageio import write_image
     from vissim.render.depth_render import render_depth
 

@@ -101,12 +101,6 @@ class PSF:
     def field_arcmin(self) -> float:
         return self.data.shape[0] * self.arcmin_per_px
 
-    def coords_arcmin(self) -> tuple[np.ndarray, np.ndarray]:
-        """(x, y) visual-field coordinates of pixel centres: x to the right, y up."""
-        n = self.data.shape[0]
-        offsets = (np.arange(n) - n // 2) * self.arcmin_per_px
-        return offsets, -offsets
-
     def as_json(self) -> dict:
         return {
             "arcmin_per_px": self.arcmin_per_px,

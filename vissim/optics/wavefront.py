@@ -164,11 +164,6 @@ class Wavefront:
         return zernike_um_to_prescription(self.coefficients_um, self.pupil_diameter_mm)
 
     @property
-    def rms_um(self) -> float:
-        """RMS over the measurement pupil, piston excluded (unit-RMS basis)."""
-        return math.sqrt(sum(v * v for (n, _), v in self._items if n > 0))
-
-    @property
     def max_order(self) -> int:
         return max((n for n, _ in self.coefficients_um), default=0)
 

@@ -31,23 +31,7 @@ __all__ = [
     "zernike_norm",
     "zernike_radial",
     "zernike_nm",
-    "ZERNIKE_NAMES",
 ]
-
-#: Common names of the low orders, keyed (n, m).
-ZERNIKE_NAMES = {
-    (0, 0): "piston",
-    (1, -1): "vertical tilt",
-    (1, 1): "horizontal tilt",
-    (2, -2): "oblique astigmatism",
-    (2, 0): "defocus",
-    (2, 2): "vertical astigmatism",
-    (3, -3): "vertical trefoil",
-    (3, -1): "vertical coma",
-    (3, 1): "horizontal coma",
-    (3, 3): "oblique trefoil",
-    (4, 0): "primary spherical",
-}
 
 
 def _check_nm(n: int, m: int) -> tuple[int, int]:

@@ -172,7 +172,7 @@ class _Tracer:
         self.fresnel = config.fresnel_loss
         self.start_z = config.layout().phone_z_mm - _START_OFFSET_MM
         self.radius_mm = 0.5 * config.eye.pupil_diameter_mm
-        self.eye_matrix = config.eye.excess_power_matrix_diopters()
+        self.eye_matrix = np.asarray(config.eye.viewing_setup().defocus_matrix_diopters)
         self.dropped = 0
 
     def batch(self, x0, y0, dx, dy):

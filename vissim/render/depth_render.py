@@ -106,11 +106,8 @@ def render_depth(
     only the pixel-area sampling of edges.  ``progress(name, done_spp, total_spp)`` reports
     each render.  The provenance records the scene, the viewer, seeds, spp and versions.
     """
-    from vissim.bench.depth_scene import (
-        blur_diameter_arcmin,
-        focus_matrix_diopters,
-        panel_geometries,
-    )
+    from vissim.bench.depth_scene import panel_geometries
+    from vissim.bench.depth_viewers import blur_diameter_arcmin, focus_matrix_diopters
 
     start = time.perf_counter()
     aux = int(spp if aux_spp is None else aux_spp)
