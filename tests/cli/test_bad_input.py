@@ -151,3 +151,11 @@ def test_every_numeric_value_gives_a_result_or_one_error_line(capsys, tmp_path_f
         return
     assert_one_error_line(code, err)
     assert not list(folder.iterdir()), "an error left files behind"
+
+
+def test_demo_into_a_file_is_refused(capsys, tmp_path):
+    target = tmp_path / "notes.txt"
+    target.write_text("mine")
+    code, _, err = run(capsys, "demo", "-o", target)
+    assert_one_error_line(code, err, "is a file")
+    assert target.read_text() == "mine"

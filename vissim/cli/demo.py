@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from vissim.chart_demo import DEMO_PRESCRIPTIONS, run_demo
+from vissim.errors import VissimInputError
 
 
 def add_parser(subparsers) -> None:
@@ -21,6 +22,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.output.exists() and not args.output.is_dir():
+        raise VissimInputError(f"-o {args.output} is a file; the demo writes into a folder")
     for path in run_demo(args.output, overwrite=args.overwrite):
         print(f"wrote {path}")
     return 0
