@@ -220,18 +220,27 @@ def chart_mm_per_texel(bench: DslrBench) -> float:
     return bench.pitch_mm / bench.texels_per_px
 
 
-def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm_per_px: float) -> tuple[np.ndarray, float, float]:
-    """Crop/pad ``pixels`` (centred on the axis) to cover the field with margins; (texture, height_mm, width_mm)."""
+#: Peak bytes per texel and channel of the chart texture: float32 raster, its padded copy, Mitsuba's bitmap.
+TEXTURE_BYTES_PER_TEXEL = 3 * 4
+
+
+def chart_texture_shape(bench: DslrBench, setup: ViewingSetup, mm_per_px: float) -> tuple[int, int]:
+    """(rows, cols) texels the chart texture needs: the magnified field, the blur and a margin."""
     blur_mm = max(d for d, _ in setup.blur_diameter_arcmin) / bench.arcmin_per_px * bench.pitch_mm
     mag = max(abs(m) for m, _ in setup.magnification_principal)
-    rows, cols = bench.size_px
-    need_mm = [0.5 * n * bench.pitch_mm * max(mag, 1.0) * 1.05 + blur_mm + 2.0 * bench.pitch_mm for n in (rows, cols)]
-    need_px = [2 * math.ceil(h / mm_per_px) for h in need_mm]  # even; centre stays on a texel corner
+    need_mm = [0.5 * n * bench.pitch_mm * max(mag, 1.0) * 1.05 + blur_mm + 2.0 * bench.pitch_mm for n in bench.size_px]
+    rows, cols = (2 * math.ceil(h / mm_per_px) for h in need_mm)  # even; centre stays on a texel corner
+    return rows, cols
+
+
+def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm_per_px: float) -> tuple[np.ndarray, float, float]:
+    """Crop/pad ``pixels`` (centred on the axis) to cover the field with margins; (texture, height_mm, width_mm)."""
+    need_px = chart_texture_shape(bench, setup, mm_per_px)
     channels = pixels.shape[2] if pixels.ndim == 3 else 1
-    # float32 texture, its padded copy and Mitsuba's bitmap of it
-    check_allocation(3.0 * 4 * channels * need_px[0] * need_px[1],
+    rows, cols = bench.size_px
+    check_allocation(TEXTURE_BYTES_PER_TEXEL * channels * need_px[0] * need_px[1],
                      f"the bench's {need_px[0]} x {need_px[1]} texel chart texture ({rows} x {cols} px frame, "
-                     f"blur {blur_mm:.3g} mm on the chart)")
+                     f"blur {max(d for d, _ in setup.blur_diameter_arcmin):.3g} arcmin)")
     out = pixels
     for axis, need in enumerate(need_px):
         have = out.shape[axis]

@@ -61,6 +61,8 @@ SKIRT_MARGIN_LAMBDA_OVER_D = 8.0
 PIXEL_MODES = ("integrate", "sample")
 #: Largest internal FFT (complex128: 1 GiB at 8192^2).
 MAX_FFT_SIZE = 8192
+#: Largest PSF field, pixels.
+MAX_PSF_SIZE_PX = 16384
 
 
 @dataclass(frozen=True, eq=False)
@@ -391,8 +393,8 @@ def compute_psf(
             "Zernike coefficients were measured over"
         )
     step = check_arcmin_per_px(arcmin_per_px)
-    if int(size_px) != size_px or not 1 <= size_px <= 16384:
-        raise VissimInputError(f"PSF size must be an integer number of pixels in 1-16384, got {size_px!r}")
+    if int(size_px) != size_px or not 1 <= size_px <= MAX_PSF_SIZE_PX:
+        raise VissimInputError(f"PSF size must be an integer number of pixels in 1-{MAX_PSF_SIZE_PX}, got {size_px!r}")
     size_px = int(size_px)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")

@@ -118,6 +118,12 @@ def _split(spp: int, pixels: int, pass_spp: int | None) -> list[int]:
     return [base + (1 if i < extra else 0) for i in range(passes)]
 
 
+def render_memory_bytes(n_pixels: float, spp: int, *, channels: int = 1, pass_spp: int | None = None) -> float:
+    """Peak bytes of one render: the samples of its largest pass in flight, and the float64 sums."""
+    largest_pass = max(_split(int(spp), max(int(n_pixels), 1), pass_spp))
+    return float(n_pixels) * (2 * 8 * channels + largest_pass * BYTES_PER_SAMPLE)
+
+
 _ROUNDING_REPORTED: set[tuple[int, int]] = set()
 
 
@@ -145,8 +151,7 @@ def render_scene(
     film = scene.sensors()[0].film()
     width, height = (int(v) for v in film.crop_size())
     counts = _split(int(spp), width * height, pass_spp)
-    channels = 3 if kind == "rgb" else 1
-    check_allocation(width * height * (2 * 8 * channels + max(counts) * BYTES_PER_SAMPLE),
+    check_allocation(render_memory_bytes(width * height, spp, channels=3 if kind == "rgb" else 1, pass_spp=pass_spp),
                      f"a {height} x {width} px render at {max(counts)} spp per pass")
     seeds = pass_seeds(seed, len(counts))
     total = np.zeros((height, width, 3 if kind == "rgb" else 1), dtype=np.float64)
