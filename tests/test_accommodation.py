@@ -17,7 +17,6 @@ from vissim.optics.accommodation import (
     clear_vision_range_m,
     required_accommodation_diopters,
 )
-from vissim.optics.setup import ViewingSetup
 from vissim.optics.prescription import Prescription
 
 MYOPE = Prescription(-2.0)
@@ -111,8 +110,9 @@ def test_range_of_clear_vision(eye, amplitude, expected):
 
 
 def effective_prescription(rx, distance_m, accommodation_diopters=0.0):
-    """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
-    return ViewingSetup.eye(rx, 4.0, accommodation_diopters, distance_m).camera_prescription
+    """Oracle, written out (not vissim's code): Rx + 1/d - A on the sphere (docs/conventions.md, Depth)."""
+    proximity = 0.0 if math.isinf(distance_m) else 1.0 / distance_m
+    return Prescription(rx.sphere_diopters + proximity - accommodation_diopters, rx.cylinder_diopters, rx.axis_deg)
 
 
 def test_bad_inputs_are_one_line_errors():

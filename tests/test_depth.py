@@ -26,7 +26,6 @@ from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.optics.accommodation import accommodation_for_target
 from vissim.optics.blur import blur_image
-from vissim.optics.setup import ViewingSetup
 from vissim.optics.depth import (
     _extended_layer,
     _matte_indices,
@@ -42,8 +41,9 @@ from vissim.units import rad_to_arcmin
 
 
 def effective_prescription(rx, distance_m, accommodation_diopters=0.0):
-    """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
-    return ViewingSetup.eye(rx, 4.0, accommodation_diopters, distance_m).camera_prescription
+    """Oracle, written out (not vissim's code): Rx + 1/d - A on the sphere (docs/conventions.md, Depth)."""
+    proximity = 0.0 if math.isinf(distance_m) else 1.0 / distance_m
+    return Prescription(rx.sphere_diopters + proximity - accommodation_diopters, rx.cylinder_diopters, rx.axis_deg)
 
 PUPIL_MM = 4.0
 STEP = 1.0  # arcmin per pixel
@@ -83,7 +83,7 @@ def test_effective_prescription_is_rx_plus_proximity_minus_accommodation():
     assert effective_prescription(myope, math.inf).sphere_diopters == pytest.approx(-2.0, abs=1e-12)
     assert effective_prescription(myope, 0.25, 1.0).sphere_diopters == pytest.approx(1.0, abs=1e-12)
     shifted = effective_prescription(myope, 6.0)
-    assert (shifted.cylinder_diopters, shifted.axis_deg) == pytest.approx((-1.0, 30.0), abs=1e-9)
+    assert (shifted.cylinder_diopters, shifted.axis_deg) == (-1.0, 30.0)  # the oracle keeps them exactly
 
 
 def test_myopic_eye_sees_the_half_metre_panel_sharp():

@@ -60,7 +60,10 @@ def check_allocation(n_bytes: float, what: str) -> None:
     ``what`` names the request and its size ('a 100000 x 100000 px render'); the error says
     how much memory it would need and how much is available.
     """
-    needed = float(n_bytes)
+    try:
+        needed = float(n_bytes)
+    except OverflowError:  # an integer estimate beyond any float
+        needed = math.inf
     available = available_memory_bytes()
     if not math.isfinite(needed) or needed > available:
         shown = f"{format_bytes(needed)} of memory" if math.isfinite(needed) else "more memory than any machine has"

@@ -32,15 +32,15 @@ from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_textures import panel_texture
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer, blur_diameter_arcmin, equivalent_eye, focus_matrix_diopters
 from vissim.errors import VissimInputError
-from vissim.optics.setup import ViewingSetup
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import rad_to_arcmin
 
 
 def effective_prescription(rx, distance_m, accommodation_diopters=0.0):
-    """The eye's prescription for an object at ``distance_m`` (:meth:`ViewingSetup.eye`)."""
-    return ViewingSetup.eye(rx, 4.0, accommodation_diopters, distance_m).camera_prescription
+    """Oracle, written out (not vissim's code): Rx + 1/d - A on the sphere (docs/conventions.md, Depth)."""
+    proximity = 0.0 if math.isinf(distance_m) else 1.0 / distance_m
+    return Prescription(rx.sphere_diopters + proximity - accommodation_diopters, rx.cylinder_diopters, rx.axis_deg)
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
@@ -120,7 +120,7 @@ def test_eye_focuses_accommodation_minus_prescription():
     assert blur_diameter_arcmin(hyperope, math.inf) == pytest.approx(rad_to_arcmin(3e-3))
     # plano -2.00 x 90 corrects excess power in the horizontal (x) meridian only.
     assert np.allclose(focus_matrix_diopters(EyeViewer(Prescription(0.0, -2.0, 90.0))), [[2.0, 0.0], [0.0, 0.0]])
-    # The eye sensor's K agrees with vissim.optics.depth: defocus Rx + 1/d - A vanishes where 1/d = K.
+    # The eye sensor's K agrees with the written-out Rx + 1/d - A: that defocus vanishes where 1/d = K.
     rx = Prescription(-1.0, -1.0, 30.0)
     eye = EyeViewer(rx, 3.0, 0.5)
     for k in np.linalg.eigvalsh(focus_matrix_diopters(eye)):

@@ -110,6 +110,8 @@ def test_allocation_check_names_the_request_and_the_need():
     assert format_bytes(1.66 * 2**40) == "1.66 TiB" and format_bytes(512) == "512 B"
     with pytest.raises(ValueError, match="more memory than any machine has"):
         check_allocation(math.inf, "an infinite array")
+    with pytest.raises(ValueError, match="more memory than any machine has"):
+        check_allocation(10**400, "an integer estimate beyond any float")
 
 
 # -- the argument space: every numeric option of the fast commands ------------------------------
@@ -146,6 +148,12 @@ def test_every_numeric_value_gives_a_result_or_one_error_line(capsys, tmp_path_f
         argv += ["-o", str(folder / "out.exr")]
     code = main(argv)
     out, err = capsys.readouterr()
+    try:
+        number = float(value)
+    except ValueError:
+        number = None
+    if number is not None and (math.isnan(number) or (math.isinf(number) and option != "--object-distance-m")):
+        assert code == 2, f"{option} {value!r} was accepted"  # no option of these takes NaN; only a distance inf
     if code == 0:
         assert "Traceback" not in err
         return

@@ -227,3 +227,15 @@ def test_bench_render_matches_vissims_blur_of_the_magnified_letter(lens):
     simulated = blur_image(tile, psf, arcmin_per_px=1.0, background=0.9).astype(np.float64)
     psnr_db = 10.0 * math.log10(0.9**2 / np.mean((simulated - image) ** 2))
     assert psnr_db >= 40.0
+
+
+def test_provenance_added_power_is_the_lenses_alone_not_the_focus_error():
+    # Camera focused at 600 mm, chart at 914.4 mm: the defocus holds 1/0.6 - 1/0.9144 = 0.5730 D
+    # of focus error; "added_power" is the +2 D lens's own contribution at the camera (ERRATA
+    # item 4: 1.9960 D at 914.4 mm, tests/test_trial_lens.py), unchanged by where the camera focuses.
+    bench = DslrBench(lenses=(TrialLens(2.0),), focus_distance_mm=600.0, size_px=(21, 21), spp=4)
+    result = render_bench(bench, single_letter_spec("K", 1.0))
+    theory = result.provenance["inputs"]["theory"]
+    assert theory["added_power"].startswith("+1.99")
+    defocus = theory["defocus_matrix_diopters"]
+    assert defocus[0][0] - 1.99 == pytest.approx(1 / 0.6 - 1 / 0.9144, abs=0.01)

@@ -139,7 +139,9 @@ def test_interiors_keep_one_blur_radius_from_depth_edges_and_a_slope_is_no_edge(
     ramp = np.tile(np.linspace(2.0, 0.34, 120), (40, 1))  # 0.014 D per pixel: a tilted chart
     sloped = depth_regions(ramp, [far, near], lambda p: np.full(np.shape(p), 2.0), pupil_diameter_mm=4.0,
                            arcmin_per_px=1.0)
-    assert not sloped.discontinuities.any() and sloped.jump_diopters == pytest.approx(0.0727, abs=1e-4)
+    # the jump threshold is one pixel of blur step: theta / pupil = 1 arcmin / 4 mm = 0.0727 D
+    one_pixel_d = math.radians(1.0 / 60.0) / 4e-3
+    assert not sloped.discontinuities.any() and sloped.jump_diopters == pytest.approx(one_pixel_d, rel=1e-9)
 
 
 @needs_jit

@@ -61,11 +61,6 @@ _PLY_SCHEMA = "vissim.lens-mesh/1"
 _RIM_SAMPLES = 720
 
 
-def _diopters_to_per_mm(power_matrix) -> np.ndarray:
-    """The one dioptre (1/m) to 1/mm conversion of this module."""
-    return diopters_to_per_mm(np.asarray(power_matrix, dtype=float))
-
-
 def lens_surface_curvatures_per_mm(lens: TrialLens) -> tuple[np.ndarray, np.ndarray]:
     """(front, back) 2x2 curvature matrices K in 1/mm, in the sag convention of the module doc."""
     if lens.refractive_index is None:
@@ -74,8 +69,8 @@ def lens_surface_curvatures_per_mm(lens: TrialLens) -> tuple[np.ndarray, np.ndar
             "centre thickness (see realistic_center_thickness_mm)"
         )
     n_minus_1 = lens.refractive_index - 1.0
-    front = _diopters_to_per_mm(lens.front_surface_power_matrix()) / n_minus_1
-    back = -_diopters_to_per_mm(lens.back_surface_diopters * np.eye(2)) / n_minus_1
+    front = diopters_to_per_mm(np.asarray(lens.front_surface_power_matrix(), dtype=float)) / n_minus_1
+    back = -diopters_to_per_mm(lens.back_surface_diopters * np.eye(2)) / n_minus_1
     return front, back
 
 

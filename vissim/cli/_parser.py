@@ -24,9 +24,9 @@ __all__ = ["Number", "VissimArgumentParser", "unit_of"]
 #: Name endings that are units (units go in names).
 _UNIT_SUFFIXES = (
     ("_arcmin_per_px", "arcmin per pixel"), ("_per_px", "per pixel"), ("_mm", "mm"), ("_nm", "nm"),
-    ("_deg", "degrees"), ("_diopters", "dioptres"), ("_arcmin", "arcmin"), ("_m", "m"), ("_d", "dioptres"),
+    ("_deg", "degrees"), ("_diopters", "dioptres"), ("_arcmin", "arcmin"), ("_m", "m"),
 )
-_UNITS_BY_METAVAR = {"D": "dioptres", "DEG": "degrees", "MM": "mm", "NM": "nm", "M": "m", "ARCMIN": "arcmin per pixel"}
+_UNITS_BY_METAVAR = {"D": "dioptres", "DEG": "degrees", "MM": "mm", "NM": "nm", "M": "m"}
 #: Options whose name carries no unit.
 UNITS_BY_DEST = {
     "spp": "samples per pixel", "aux_spp": "samples per pixel", "size": "pixels", "rays": "rays",

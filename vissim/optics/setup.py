@@ -147,6 +147,10 @@ class ViewingSetup:
         """ERRATA item 5: no spectacle magnification."""
         return replace(self, magnification_matrix=_IDENTITY)
 
+    def in_focus(self) -> ViewingSetup:
+        """The same pupil and wavelength with no defocus: the diffraction limit."""
+        return replace(self, defocus_matrix_diopters=((0.0, 0.0), (0.0, 0.0)))
+
     # -- what follows -----------------------------------------------------------------------
     @property
     def camera_prescription(self) -> Prescription:

@@ -34,7 +34,7 @@ from vissim.render.backend import mitsuba
 from vissim.render.eye_sensor import register_eye_sensor
 from vissim.render.fixed_order import render_image
 from vissim.render.plugins import register_plugins
-from vissim.render.run import render_scene, to_mitsuba_dict
+from vissim.render.run import mitsuba_versions, render_scene, to_mitsuba_dict
 from vissim.units import mm_to_m
 
 __all__ = ["DepthRenderResult", "render_depth", "render_view", "render_aov_depth", "proximity_to_depth_m",
@@ -127,9 +127,6 @@ def render_depth(
         images[name], results[name] = result.pixels, result
     proximity = images.get("proximity")
     depth_m = None if proximity is None else proximity_to_depth_m(proximity)
-    import drjit as _dr_module  # versions only, imported after the backend set Dr.Jit up
-    import mitsuba as _mi_module
-
     first = results[jobs[0][0]]
     geometries = panel_geometries(scene)
     provenance = make_provenance(
@@ -147,8 +144,7 @@ def render_depth(
         depth_definition="axial distance (m) along the view axis, from the pupil plane; inf = sky",
         kind=kind,
         variant=first.variant,
-        mitsuba_version=_mi_module.__version__,
-        drjit_version=_dr_module.__version__,
+        **mitsuba_versions(),
     )
     return DepthRenderResult(images.get("blurred"), images.get("all_in_focus"), depth_m, proximity,
                              first.variant, first.spp, int(seed), time.perf_counter() - start, json_safe(provenance))

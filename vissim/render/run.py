@@ -33,7 +33,7 @@ from vissim.render.fixed_order import render_image
 from vissim.render.plugins import register_plugins
 from vissim.units import REC709_LUMINANCE
 
-__all__ = ["RenderResult", "to_mitsuba_dict", "render_scene", "render_bench", "pass_seeds", "DEFAULT_PASS_SAMPLES"]
+__all__ = ["RenderResult", "to_mitsuba_dict", "render_scene", "render_bench", "pass_seeds", "mitsuba_versions", "render_memory_bytes", "DEFAULT_PASS_SAMPLES"]
 
 log = logging.getLogger(__name__)
 
@@ -184,10 +184,10 @@ def render_scene(
                           pass_seeds=tuple(seeds), pass_spp=tuple(used), deterministic=deterministic,
                           accumulation="+".join(sorted(methods)))
     return dataclasses.replace(result, provenance=json_safe(make_provenance(mitsuba_render=result.render_record(),
-                                                                            **_versions())))
+                                                                            **mitsuba_versions())))
 
 
-def _versions() -> dict:
+def mitsuba_versions() -> dict:
     import drjit as _dr_module  # versions only, imported after the backend set Dr.Jit up
     import mitsuba as _mi_module
 
@@ -213,7 +213,7 @@ def render_bench(
     Mitsuba and Dr.Jit versions.
     """
     from vissim.bench.dslr import chart_mm_per_texel, dslr_scene
-    from vissim.optics.prescription import LensPower
+    from vissim.optics.trial_lens import trial_lens_effect
     from vissim.charts import (
         MM_PER_INCH,
         Chart,
@@ -236,7 +236,8 @@ def render_bench(
         clear_aperture_mm=bench.clear_aperture(),
         lens_back_vertex_z_mm=bench.lens_back_vertex_z_mm(),
         theory={
-            "added_power": LensPower.from_power_matrix(theory.defocus_matrix_diopters).format(4) if bench.lenses else None,
+            # what the lenses add, without the camera's own focus error (that is in the defocus)
+            "added_power": trial_lens_effect(bench.trial_lens_setup()).added_power.format(4) if bench.lenses else None,
             "defocus_matrix_diopters": theory.defocus_matrix_diopters,
             "blur_diameter_arcmin": theory.blur_diameter_arcmin,
             "magnification_principal": theory.magnification_principal,
@@ -250,6 +251,6 @@ def render_bench(
         passes=result.passes,
         render_seconds=round(result.seconds, 3),
         mitsuba_render=result.render_record(),
-        **_versions(),
+        **mitsuba_versions(),
     )
     return dataclasses.replace(result, provenance=json_safe(provenance))

@@ -31,7 +31,7 @@ from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.provenance import make_provenance
 from vissim.validation.campaign import Campaign
-from vissim.validation.fields import MAX_SPP
+from vissim.checks import samples_per_pixel
 from vissim.validation.captures import capture_problem, capture_tile, load_manifest
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
@@ -140,8 +140,8 @@ def check_run_options(run_dir: Path, workers: int, spp: int | None) -> None:
         raise VissimInputError(f"-o {run_dir} is a file, not a run folder")
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
         raise VissimInputError(f"--workers must be 1 to {MAX_WORKERS} worker processes, got {workers!r}")
-    if spp is not None and (isinstance(spp, bool) or not isinstance(spp, int) or not 1 <= spp <= MAX_SPP):
-        raise VissimInputError(f"--spp must be 1 to {MAX_SPP} samples per pixel, got {spp!r}")
+    if spp is not None:
+        samples_per_pixel(spp, "--spp")
 
 
 def render_file_provenance(spec, result) -> dict:
@@ -163,15 +163,14 @@ def render_file_provenance(spec, result) -> dict:
     return provenance
 
 
-def _make_renders(pending: list, run_dir: Path, workers: int, scheduler, render: Callable, show_progress: bool) -> None:
-    """Render ``pending`` specs into ``run_dir/renders``; ``scheduler`` is an address or a connected Client."""
+def _make_renders(pending: list, run_dir: Path, workers: int, client, render: Callable, show_progress: bool) -> None:
+    """Render ``pending`` specs into ``run_dir/renders``: on a connected Dask ``client``, or locally."""
     def save(spec, result) -> None:
         pixels = np.asarray(getattr(result, "pixels", result), np.float32)
         write_image(_render_path(run_dir, spec), pixels, provenance=render_file_provenance(spec, result),
                     overwrite=True)
 
     progress, advance = _progress(len(pending), "rendering") if show_progress else (None, lambda: None)
-    client = connect_scheduler(scheduler) if isinstance(scheduler, str) else scheduler
     if progress:
         progress.start()
     try:
@@ -197,8 +196,6 @@ def _make_renders(pending: list, run_dir: Path, workers: int, scheduler, render:
     finally:
         if progress:
             progress.stop()
-        if client is not None and client is not scheduler:
-            client.close()
 
 
 def nothing_to_compare(source: str, total: int, skipped: list[str]) -> VissimInputError:

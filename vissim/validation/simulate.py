@@ -28,7 +28,7 @@ and a ``geometric`` result with the render as it is.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
@@ -160,5 +160,5 @@ def block_mean(image: np.ndarray, factor: int) -> np.ndarray:
 
 def add_bench_diffraction(render: np.ndarray, bench: ViewingSetup, arcmin_per_px: float) -> np.ndarray:
     """The render convolved with the diffraction PSF of ``bench``'s pupil, in focus (no aberration)."""
-    psf = _psf(replace(bench, defocus_matrix_diopters=((0.0, 0.0), (0.0, 0.0))), arcmin_per_px, "wave")
+    psf = _psf(bench.in_focus(), arcmin_per_px, "wave")
     return blur_image(render, psf, arcmin_per_px=arcmin_per_px, padding="edge")
