@@ -295,13 +295,11 @@ def renders_summary(results: list[dict]) -> list[dict]:
     return [merged[key] for key in sorted(merged, key=repr)]
 
 
-def report_provenance(run_dir: Path, **extra) -> dict:
+def report_provenance(run_dir: Path, campaign: dict, results: list[dict]) -> dict:
     """Provenance of a report file: the campaign (name, source, settings), the items it shows and their renders."""
-    order = run_dir / "campaign.json"
-    campaign = json.loads(order.read_text()) if order.exists() else {}
     return make_provenance(run=run_dir, campaign=campaign.get("name"), campaign_file=campaign.get("source"),
                            settings=campaign.get("settings"), items=campaign.get("items"),
-                           renders=renders_summary(load_results(run_dir)), **extra)
+                           renders=renders_summary(results))
 
 
 def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
@@ -316,7 +314,8 @@ def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
 def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[dict], tables_md: str,
                        figures: dict[str, tuple[str, bytes]]) -> list[Path]:
     """metrics.json, metrics.csv, tables.md, the figures (file name -> PNG, with sidecars) and report.html."""
-    provenance = report_provenance(run_dir)
+    campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
+    provenance = report_provenance(run_dir, campaign, metrics["items"])
     written = [write_json_atomic(run_dir / "metrics.json", {**metrics, "provenance": provenance}, overwrite=True)]
     with atomic_output(run_dir / "metrics.csv", overwrite=True) as tmp:
         with open(tmp, "w", newline="") as handle:
@@ -324,7 +323,6 @@ def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[d
             writer.writeheader()
             writer.writerows(rows)
     written.append(run_dir / "metrics.csv")
-    campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
     made = (f"Made by vissim {provenance['vissim_version']} on {provenance['created_utc']} from "
             f"{campaign.get('source', 'an unknown campaign file')}; provenance in metrics.json.")
     text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables_md}\n{made}\n"
