@@ -7,7 +7,9 @@ import os
 
 from vissim.errors import VissimInputError
 
-__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "samples_per_pixel", "MAX_SPP", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes", "format_bytes", "check_allocation"]
+__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "size_px",
+           "samples_per_pixel", "MAX_SPP", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
+           "format_bytes", "check_allocation"]
 
 
 def finite_number(value, name: str, unit: str, *, allow_inf: bool = False) -> float:
@@ -94,6 +96,17 @@ def pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
     if not MIN_PUPIL_MM <= pupil <= MAX_PUPIL_MM:
         raise VissimInputError(f"{name} must be within {MIN_PUPIL_MM:g}-{MAX_PUPIL_MM:g} mm, got {pupil:g} mm")
     return pupil
+
+
+def size_px(value, name: str = "size_px") -> tuple[int, int]:
+    """An image size (rows, cols) in whole pixels >= 1."""
+    try:
+        size = tuple(int(v) for v in value)
+    except (TypeError, ValueError):
+        size = ()
+    if len(size) != 2 or min(size) < 1 or tuple(value) != size:
+        raise VissimInputError(f"{name} must be (rows, cols) in whole pixels >= 1, got {value!r}")
+    return size  # type: ignore[return-value]
 
 
 #: Most samples per pixel a render takes (Mitsuba counts them in 32 bits; 65536 spp of the

@@ -227,7 +227,8 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _read_exr(path: Path) -> Image:
+def _open_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
+    """The first part's channels ``{name: pixels}`` and provenance; one clean error for a file that is no EXR."""
     try:
         exr = OpenEXR.File(str(path), separate_channels=True)
         n_parts = len(exr.parts)
@@ -240,6 +241,12 @@ def _read_exr(path: Path) -> Image:
         ) from exc
     if n_parts > 1:
         logger.info("%s has %d parts; reading only the first", path, n_parts)
+    prov_text = header.get(PROVENANCE_ATTRIBUTE)
+    return channels, _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
+
+
+def _read_exr(path: Path) -> Image:
+    channels, provenance = _open_exr(path)
     names = set(channels)
     if set(RGB_CHANNELS) <= names:
         wanted = RGB_CHANNELS
@@ -261,8 +268,6 @@ def _read_exr(path: Path) -> Image:
     pixels = np.ascontiguousarray(pixels, dtype=np.float32)
     if not np.all(np.isfinite(pixels)):
         raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
-    prov_text = header.get(PROVENANCE_ATTRIBUTE)
-    provenance = _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
     return Image(pixels, wanted, provenance, sampling_from_provenance(provenance))
 
 
@@ -502,17 +507,11 @@ def read_data_map(path: str | os.PathLike[str]) -> Image:
         except Exception as exc:  # numpy raises ValueError, OSError, ...
             raise VissimInputError(f"{path}: cannot read as a .npy array: {_one_line(exc)}") from exc
     elif path.suffix.lower() == ".exr":
-        try:
-            exr = OpenEXR.File(str(path), separate_channels=True)
-            channels = {n: c.pixels for n, c in exr.parts[0].channels.items()}
-            prov_text = exr.parts[0].header.get(PROVENANCE_ATTRIBUTE)
-        except Exception as exc:  # OpenEXR raises RuntimeError, ValueError, IndexError ...
-            raise VissimInputError(f"{path}: cannot read as OpenEXR (truncated, corrupt or not an EXR file): {_one_line(exc)}") from exc
+        channels, provenance = _open_exr(path)
         names = list(channels) if len(channels) == 1 else [n for n in DATA_MAP_CHANNELS if n in channels][:1]
         if not names:
             raise VissimInputError(f"{path}: EXR channels {sorted(channels)}: a data map needs one channel, or one named Z, depth or Y")
         name, data = names[0], channels[names[0]]
-        provenance = _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
     else:
         raise VissimInputError(f"{path}: data maps must be .exr or .npy, got {path.suffix!r}")
     if data.dtype.kind != "f" or data.ndim != 2:

@@ -30,7 +30,7 @@ from vissim.bench.depth_scene import (
 from vissim.bench.depth_scene_dict import depth_scene_dict, tilted_mesh
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_textures import panel_texture
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer, blur_diameter_arcmin, equivalent_eye, focus_matrix_diopters
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import TrialLens
@@ -108,22 +108,24 @@ def test_tilted_chart_spans_its_depths_continuously_across_the_image():
 def test_eye_focuses_accommodation_minus_prescription():
     """Sign: a -2 D myope focuses 0.5 m; +3 D accommodation focuses 1/3 m; a relaxed +1 D hyperope focuses
     'beyond infinity' (K = -1 D), so its blur at 6 m is pupil x (1 + 1/6) D, not x (1 - 1/6)."""
-    myope = EyeViewer(Prescription(-2.0), 4.0, 0.0)
-    assert np.allclose(focus_matrix_diopters(myope), 2.0 * np.eye(2))
-    assert blur_diameter_arcmin(myope, 0.5) == pytest.approx(0.0, abs=1e-12)
-    assert blur_diameter_arcmin(myope, 6.0) == pytest.approx(rad_to_arcmin(4e-3 * (2.0 - 1.0 / 6.0)))  # 25.21'
-    assert float(blur_diameter_arcmin(myope, 6.0)) == pytest.approx(25.21, abs=0.01)
-    assert blur_diameter_arcmin(EyeViewer(Prescription(0.0), 4.0, 3.0), 1.0 / 3.0) == pytest.approx(0.0, abs=1e-12)
-    hyperope = EyeViewer(Prescription(1.0), 3.0, 0.0)
-    assert np.allclose(focus_matrix_diopters(hyperope), -np.eye(2))
-    assert blur_diameter_arcmin(hyperope, 6.0) == pytest.approx(rad_to_arcmin(3e-3 * (1.0 + 1.0 / 6.0)))
-    assert blur_diameter_arcmin(hyperope, math.inf) == pytest.approx(rad_to_arcmin(3e-3))
+    myope = viewing_setup(EyeViewer(Prescription(-2.0), 4.0, 0.0))
+    assert np.allclose(myope.focus_matrix_diopters, 2.0 * np.eye(2))
+    assert myope.blur_diameter_at_arcmin(0.5) == pytest.approx(0.0, abs=1e-12)
+    assert myope.blur_diameter_at_arcmin(6.0) == pytest.approx(rad_to_arcmin(4e-3 * (2.0 - 1.0 / 6.0)))  # 25.21'
+    assert float(myope.blur_diameter_at_arcmin(6.0)) == pytest.approx(25.21, abs=0.01)
+    accommodating = viewing_setup(EyeViewer(Prescription(0.0), 4.0, 3.0))
+    assert accommodating.blur_diameter_at_arcmin(1.0 / 3.0) == pytest.approx(0.0, abs=1e-12)
+    hyperope = viewing_setup(EyeViewer(Prescription(1.0), 3.0, 0.0))
+    assert np.allclose(hyperope.focus_matrix_diopters, -np.eye(2))
+    assert hyperope.blur_diameter_at_arcmin(6.0) == pytest.approx(rad_to_arcmin(3e-3 * (1.0 + 1.0 / 6.0)))
+    assert hyperope.blur_diameter_at_arcmin(math.inf) == pytest.approx(rad_to_arcmin(3e-3))
     # plano -2.00 x 90 corrects excess power in the horizontal (x) meridian only.
-    assert np.allclose(focus_matrix_diopters(EyeViewer(Prescription(0.0, -2.0, 90.0))), [[2.0, 0.0], [0.0, 0.0]])
+    astigmat = viewing_setup(EyeViewer(Prescription(0.0, -2.0, 90.0)))
+    assert np.allclose(astigmat.focus_matrix_diopters, [[2.0, 0.0], [0.0, 0.0]])
     # The eye sensor's K agrees with the written-out Rx + 1/d - A: that defocus vanishes where 1/d = K.
     rx = Prescription(-1.0, -1.0, 30.0)
     eye = EyeViewer(rx, 3.0, 0.5)
-    for k in np.linalg.eigvalsh(focus_matrix_diopters(eye)):
+    for k in np.linalg.eigvalsh(viewing_setup(eye).focus_matrix_diopters):
         effective = effective_prescription(rx, 1.0 / k, 0.5)
         assert min(abs(effective.meridian_power(m)) for m in np.arange(0.0, 180.0, 0.5)) < 1e-3
 
@@ -135,7 +137,7 @@ def test_dslr_is_simulated_as_the_eye_of_minus_its_focus_vergence():
     assert eye.prescription.sphere_diopters == pytest.approx(-0.5) and eye.prescription.cylinder_diopters == 0.0
     assert effective_prescription(eye.prescription, 2.0).spherical_equivalent_diopters == pytest.approx(0.0)
     plus = CameraViewer(focus_distance_m=2.0, lenses=(TrialLens(1.0),))
-    assert focus_matrix_diopters(plus)[0, 0] == pytest.approx(1.5, abs=0.02)  # a plus lens makes it myopic
+    assert viewing_setup(plus).focus_matrix_diopters[0, 0] == pytest.approx(1.5, abs=0.02)  # a plus lens: myopic
 
 
 def test_scene_dicts_for_the_eye_and_the_dslr():

@@ -30,7 +30,7 @@ from vissim.bench.depth_scene import (
     panel_geometries,
     pixel_tangents,
 )
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer, blur_diameter_arcmin
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer, viewing_setup
 from vissim.bench.depth_scene_dict import depth_scene_dict
 from vissim.bench.depth_textures import panel_texture
 from vissim.errors import VissimInputError
@@ -181,7 +181,8 @@ def test_myopic_eye_sees_the_half_metre_panel_sharp_and_6m_blurred_by_pupil_time
     scene = two_panels(0.5, 6.0)
     eye = EyeViewer(Prescription(-2.0), 4.0, 0.0)
     result = render_depth(scene, eye, spp=SPP, seed=SEED, all_in_focus=True, depth=True)
-    theory_px = float(blur_diameter_arcmin(eye, 6.0)) / scene.arcmin_per_px  # 4 mm x 1.833 D = 25.21'
+    # 4 mm x 1.833 D = 25.21'
+    theory_px = float(viewing_setup(eye).blur_diameter_at_arcmin(6.0)) / scene.arcmin_per_px
     assert theory_px == pytest.approx(25.21, abs=0.01)
     assert edge_blur_px(result.blurred, scene, 0, "right", theory_px) == pytest.approx(theory_px, rel=0.03)
     assert edge_blur_px(result.blurred, scene, 1, "left", 0.0) < 1.0
@@ -199,7 +200,7 @@ def test_emmetrope_accommodating_3_d_sees_the_third_of_a_metre_panel_sharp():
     eye = EyeViewer(Prescription(0.0), 4.0, 3.0)
     image = render_depth(scene, eye, spp=SPP, seed=SEED).blurred
     assert edge_blur_px(image, scene, 1, "left", 0.0) < 1.0
-    theory_px = float(blur_diameter_arcmin(eye, 0.5))  # 4 mm x 1 D = 13.75'
+    theory_px = float(viewing_setup(eye).blur_diameter_at_arcmin(0.5))  # 4 mm x 1 D = 13.75'
     assert edge_blur_px(image, scene, 0, "right", theory_px) == pytest.approx(theory_px, rel=0.03)
 
 
@@ -214,7 +215,7 @@ def test_astigmatic_eye_blurs_across_the_cylinder_axis():
     """plano -2.00 x 90: excess power 2 D in the horizontal meridian -> horizontal blur only (conventions)."""
     scene = two_panels(0.5, 6.0)
     image = render_depth(scene, EyeViewer(Prescription(0.0, -2.0, 90.0), 4.0, 0.0), spp=SPP, seed=SEED).blurred
-    horizontal = float(blur_diameter_arcmin(EyeViewer(Prescription(-2.0), 4.0), 6.0))  # 4 mm x 1.83 D
+    horizontal = float(viewing_setup(EyeViewer(Prescription(-2.0), 4.0)).blur_diameter_at_arcmin(6.0))  # 4 mm x 1.83
     vertical = float(4.0 / 6.0 * 180 * 60 / math.pi / 1000)  # 4 mm x 1/6 D = 2.29'
     assert edge_blur_px(image, scene, 0, "right", horizontal) == pytest.approx(horizontal, rel=0.03)
     assert edge_blur_px(image, scene, 0, "top", vertical) == pytest.approx(vertical, abs=0.3)
@@ -225,7 +226,7 @@ def test_dslr_focused_at_3_ft_blurs_near_and_far_panels_by_its_entrance_pupil():
     camera = CameraViewer(f_number=5.0, focus_distance_m=0.9144)
     image = render_depth(scene, camera, spp=SPP, seed=SEED).blurred
     for index, side, distance in ((0, "right", 6.0), (1, "left", 0.5)):
-        theory = float(blur_diameter_arcmin(camera, distance, scene))  # 3.6 mm x |1.094 - 1/d| D
+        theory = float(viewing_setup(camera, scene).blur_diameter_at_arcmin(distance))  # 3.6 mm x |1.094 - 1/d| D
         assert edge_blur_px(image, scene, index, side, theory) == pytest.approx(theory, rel=0.03)
 
 

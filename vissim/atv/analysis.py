@@ -29,7 +29,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -434,12 +434,8 @@ def analyse_subject(
             )
             incomplete = [f"{lens:+.2f} D" for lens, v in values.items() if len(v) < n_sessions]
             if average_sessions and incomplete:
-                analysis = CurveAnalysis(**{
-                    **{f: getattr(analysis, f) for f in analysis.__dataclass_fields__},
-                    "notes": analysis.notes + (
-                        f"mean over fewer than the {n_sessions} sessions at {', '.join(incomplete)} (rows not printed)",
-                    ),
-                })
+                analysis = replace(analysis, notes=analysis.notes + (
+                    f"mean over fewer than the {n_sessions} sessions at {', '.join(incomplete)} (rows not printed)",))
             for note in analysis.notes:
                 log.info("%s: %s", analysis.label, note)
             results.append(analysis)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 import logging
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -225,7 +226,7 @@ def _report(subject: SubjectData, strict: bool) -> SubjectData:
         )
     for d in found:
         log.warning("%s: %s", origin, d.message)
-    return SubjectData(**{**{f: getattr(subject, f) for f in subject.__dataclass_fields__}, "discrepancies": found})
+    return replace(subject, discrepancies=found)
 
 
 def load_subject(path: str | Path, *, strict: bool = False) -> SubjectData:

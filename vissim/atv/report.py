@@ -26,7 +26,7 @@ from vissim.atv.analysis import CONDITION_LABELS, CurveAnalysis  # noqa: E402
 from vissim.atv.data import Discrepancy  # noqa: E402
 from vissim.provenance import json_safe  # noqa: E402
 
-__all__ = ["plot_fits", "plot_overview", "summary_rows", "markdown_report", "html_report", "write_report"]
+__all__ = ["plot_fits", "plot_overview", "summary_rows", "report_pages", "write_report"]
 
 log = logging.getLogger(__name__)
 
@@ -165,37 +165,21 @@ def _md_table(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def markdown_report(
+def report_pages(
     title: str,
     intro: str,
     analyses: Sequence[CurveAnalysis],
     figures: Sequence[tuple[str, str]],
     discrepancies: Sequence[tuple[str, Discrepancy]] = (),
     notes: Sequence[str] = (),
-) -> str:
-    parts = [f"# {title}\n", intro.strip() + "\n", "## Fitted vertices\n", _md_table(summary_rows(analyses))]
-    curve_notes = [f"- {a.label}: {n}" for a in analyses for n in a.notes]
-    if curve_notes or notes:
-        parts += ["\n## Notes\n", "\n".join([f"- {n}" for n in notes] + curve_notes) + "\n"]
-    if discrepancies:
-        parts.append("\n## Where the data disagree with the thesis's own numbers\n")
-        parts.append("\n".join(f"- subject {sid}, `{d.kind}`: {d.message}" for sid, d in discrepancies) + "\n")
-    parts.append("\n## Figures\n")
-    parts += [f"![{caption}]({name})\n\n_{caption}_\n" for name, caption in figures]
-    return "\n".join(parts)
-
-
-def html_report(
-    title: str,
-    intro: str,
-    analyses: Sequence[CurveAnalysis],
-    figures: Sequence[tuple[str, str]],
-    discrepancies: Sequence[tuple[str, Discrepancy]] = (),
-    notes: Sequence[str] = (),
-) -> str:
+) -> tuple[str, str]:
+    """The report as (Markdown, HTML): the same sections, rows and notes in both."""
     esc = html.escape
     rows = summary_rows(analyses)
-    out = [
+    all_notes = [*notes, *(f"{a.label}: {n}" for a in analyses for n in a.notes)]
+    disagree = "Where the data disagree with the thesis's own numbers"
+    md = [f"# {title}\n", intro.strip() + "\n", "## Fitted vertices\n", _md_table(rows)]
+    page = [
         "<!DOCTYPE html><html><head><meta charset='utf-8'>",
         f"<title>{esc(title)}</title>",
         "<style>body{font-family:sans-serif;max-width:72em;margin:auto}table{border-collapse:collapse;font-size:90%}"
@@ -205,21 +189,21 @@ def html_report(
         "<h2>Fitted vertices</h2>",
     ]
     if rows:
-        out.append("<table><tr>" + "".join(f"<th>{esc(k)}</th>" for k in rows[0]) + "</tr>")
-        out += ["<tr>" + "".join(f"<td>{esc(v)}</td>" for v in r.values()) + "</tr>" for r in rows]
-        out.append("</table>")
-    curve_notes = [f"{a.label}: {n}" for a in analyses for n in a.notes]
-    if curve_notes or notes:
-        out.append("<h2>Notes</h2><ul>" + "".join(f"<li>{esc(n)}</li>" for n in [*notes, *curve_notes]) + "</ul>")
+        page.append("<table><tr>" + "".join(f"<th>{esc(k)}</th>" for k in rows[0]) + "</tr>")
+        page += ["<tr>" + "".join(f"<td>{esc(v)}</td>" for v in r.values()) + "</tr>" for r in rows]
+        page.append("</table>")
+    if all_notes:
+        md += ["\n## Notes\n", "\n".join(f"- {n}" for n in all_notes) + "\n"]
+        page.append("<h2>Notes</h2><ul>" + "".join(f"<li>{esc(n)}</li>" for n in all_notes) + "</ul>")
     if discrepancies:
-        out.append("<h2>Where the data disagree with the thesis's own numbers</h2><ul>")
-        out += [f"<li>subject {esc(sid)}, <code>{esc(d.kind)}</code>: {esc(d.message)}</li>" for sid, d in discrepancies]
-        out.append("</ul>")
-    out.append("<h2>Figures</h2>")
-    out += [f"<figure><img src='{esc(name)}' alt='{esc(caption)}'><figcaption>{esc(caption)}</figcaption></figure>"
-            for name, caption in figures]
-    out.append("</body></html>")
-    return "\n".join(out) + "\n"
+        md += [f"\n## {disagree}\n",
+               "\n".join(f"- subject {sid}, `{d.kind}`: {d.message}" for sid, d in discrepancies) + "\n"]
+        page += [f"<h2>{disagree}</h2><ul>", *(f"<li>subject {esc(sid)}, <code>{esc(d.kind)}</code>: {esc(d.message)}"
+                                              "</li>" for sid, d in discrepancies), "</ul>"]
+    md += ["\n## Figures\n", *(f"![{caption}]({name})\n\n_{caption}_\n" for name, caption in figures)]
+    page += ["<h2>Figures</h2>", *(f"<figure><img src='{esc(name)}' alt='{esc(caption)}'><figcaption>{esc(caption)}"
+                                   "</figcaption></figure>" for name, caption in figures), "</body></html>"]
+    return "\n".join(md), "\n".join(page) + "\n"
 
 
 def write_report(
@@ -236,10 +220,9 @@ def write_report(
 ) -> list[Path]:
     """Write ``report.md``, ``report.html`` and (if ``record``) ``analysis.json`` into ``out_dir``."""
     out_dir = Path(out_dir)
-    written = [
-        write_text_atomic(out_dir / "report.md", markdown_report(title, intro, analyses, figures, discrepancies, notes), overwrite),
-        write_text_atomic(out_dir / "report.html", html_report(title, intro, analyses, figures, discrepancies, notes), overwrite),
-    ]
+    markdown, page = report_pages(title, intro, analyses, figures, discrepancies, notes)
+    written = [write_text_atomic(out_dir / "report.md", markdown, overwrite),
+               write_text_atomic(out_dir / "report.html", page, overwrite)]
     if record is not None:
         written.append(write_json_atomic(out_dir / "analysis.json", json_safe(record), overwrite))
     return written

@@ -135,23 +135,19 @@ class AtvTube:
     pixel_offset_mm: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
-        s = object.__setattr__
-        s(self, "tube_length_mm", _number(self.tube_length_mm, "tube length", "mm", lo=0.0, lo_open=True))
-        s(self, "lens_power_diopters", _number(self.lens_power_diopters, "collimator power", "dioptres",
-                                               lo=0.0, lo_open=True, hi=40.0))
-        s(self, "lens_refractive_index", _number(self.lens_refractive_index, "collimator refractive index",
-                                                 "(dimensionless)", lo=1.0, lo_open=True, hi=3.0))
-        s(self, "lens_center_thickness_mm", _number(self.lens_center_thickness_mm, "collimator centre thickness",
-                                                    "mm", lo=0.0, lo_open=True))
-        s(self, "lens_clear_aperture_mm", _number(self.lens_clear_aperture_mm, "collimator clear aperture", "mm",
-                                                  lo=0.0, lo_open=True))
+        for name, (what, unit, lo, lo_open, hi) in {  # field: (what, unit, lowest, lowest excluded, highest)
+            "tube_length_mm": ("tube length", "mm", 0.0, True, None),
+            "lens_power_diopters": ("collimator power", "dioptres", 0.0, True, 40.0),
+            "lens_refractive_index": ("collimator refractive index", "(dimensionless)", 1.0, True, 3.0),
+            "lens_center_thickness_mm": ("collimator centre thickness", "mm", 0.0, True, None),
+            "lens_clear_aperture_mm": ("collimator clear aperture", "mm", 0.0, True, None),
+            "eye_relief_mm": ("eye relief", "mm", 0.0, True, None),
+            "pixels_per_inch": ("display resolution", "pixels per inch", 0.0, True, None),
+            "pixel_radiance": ("pixel radiance", "linear radiance units", 0.0, False, MAX_PIXEL_RADIANCE),
+        }.items():
+            object.__setattr__(self, name, _number(getattr(self, name), what, unit, lo=lo, lo_open=lo_open, hi=hi))
         if self.lens_convex_side not in ("eye", "phone"):
             raise VissimInputError(f"lens_convex_side must be 'eye' or 'phone', got {self.lens_convex_side!r}")
-        s(self, "eye_relief_mm", _number(self.eye_relief_mm, "eye relief", "mm", lo=0.0, lo_open=True))
-        s(self, "pixels_per_inch", _number(self.pixels_per_inch, "display resolution", "pixels per inch",
-                                           lo=0.0, lo_open=True))
-        s(self, "pixel_radiance", _number(self.pixel_radiance, "pixel radiance", "linear radiance units", lo=0.0,
-                                                  hi=MAX_PIXEL_RADIANCE))
         try:
             offset = tuple(_number(v, "pixel offset", "mm") for v in self.pixel_offset_mm)
         except TypeError:
@@ -160,7 +156,7 @@ class AtvTube:
             raise VissimInputError(
                 f"pixel offset must be (x, y) in mm within {0.25 * self.lens_clear_aperture_mm:g} mm of the axis, "
                 f"got {self.pixel_offset_mm!r}")
-        s(self, "pixel_offset_mm", offset)
+        object.__setattr__(self, "pixel_offset_mm", offset)
         thinnest, _ = rim_thickness_mm(self.collimator_lens(), self.lens_clear_aperture_mm)
         if thinnest <= 0.0:
             raise VissimInputError(

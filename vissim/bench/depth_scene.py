@@ -52,6 +52,7 @@ from vissim.charts import (
     layout_chart,
 )
 from vissim.checks import finite_number, positive_number
+from vissim.checks import size_px as check_size_px
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, m_to_mm, rad_to_arcmin
 
@@ -163,13 +164,7 @@ class DepthScene:
         for name, unit in (("arcmin_per_px", "arcmin/px"), ("texels_per_px", "texels per pixel"),
                            ("radiance_scale", "(relative)")):
             object.__setattr__(self, name, positive_number(getattr(self, name), name.replace("_", " "), unit))
-        try:
-            size = tuple(int(v) for v in self.size_px)
-        except (TypeError, ValueError):
-            size = ()
-        if len(size) != 2 or min(size) < 1 or tuple(self.size_px) != size:
-            raise VissimInputError(f"size_px must be (rows, cols) in whole pixels >= 1, got {self.size_px!r}")
-        object.__setattr__(self, "size_px", size)
+        object.__setattr__(self, "size_px", check_size_px(self.size_px))
         if self.sampler not in SAMPLERS:
             raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")
 

@@ -33,7 +33,7 @@ from vissim.bench.depth_viewers import (
     Viewer,
     viewing_setup,
 )
-from vissim.bench.dslr import MAX_DEPTH, NEAR_CLIP_MM, dslr_scene
+from vissim.bench.dslr import MAX_DEPTH, NEAR_CLIP_MM, dslr_scene, hdr_film
 from vissim.bench.lens_mesh import mesh_cache_dir
 from vissim.errors import VissimInputError
 from vissim.units import m_to_mm
@@ -52,13 +52,6 @@ _MESH_SCHEMA = "vissim.tilted-chart-mesh/1"
 _FAR_CLIP_FACTOR = 10.0
 
 
-def _film(scene: DepthScene, kind: str) -> dict:
-    rows, cols = scene.size_px
-    return {"type": "hdrfilm", "width": cols, "height": rows, "rfilter": {"type": "box"},
-            "pixel_format": "luminance" if kind == "mono" else "rgb", "component_format": "float32",
-            "sample_border": False}
-
-
 def _identity() -> list[list[float]]:
     return [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
 
@@ -66,7 +59,7 @@ def _identity() -> list[list[float]]:
 def _pinhole(scene: DepthScene, kind: str, far_clip_mm: float) -> dict:
     return {"type": "perspective", "fov": scene.fov_x_deg(), "fov_axis": "x", "near_clip": NEAR_CLIP_MM,
             "far_clip": far_clip_mm, "to_world": _identity(),
-            "sampler": {"type": scene.sampler, "sample_count": 16, "seed": 0}, "film": _film(scene, kind)}
+            "sampler": {"type": scene.sampler, "sample_count": 16, "seed": 0}, "film": hdr_film(scene.size_px, kind)}
 
 
 def _eye_sensor(scene: DepthScene, viewer: EyeViewer, kind: str, far_clip_mm: float) -> dict:

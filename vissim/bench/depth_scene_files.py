@@ -23,11 +23,10 @@ from typing import Any
 
 from vissim.bench.depth_scene import ChartPanel, DepthScene, PanelChart, TiltedChart
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
-from vissim.bench.scene_files import _LENS, _check_keys, _read, _table, _typed
+from vissim.bench.scene_files import _check_keys, _size_px, _table, _trial_lenses, _typed, _values, read_scene_toml
 from vissim.checks import samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import TrialLens
 
 __all__ = ["DepthSceneFile", "load_depth_scene_toml", "depth_scene_from_doc"]
 
@@ -69,13 +68,6 @@ class DepthSceneFile:
     source: str = ""
 
 
-def _values(table: Any, schema: dict, where: str) -> dict:
-    if not isinstance(table, dict):
-        raise VissimInputError(f"{where} must be a table, got {table!r}")
-    _check_keys(table, schema, where)
-    return {key: _typed(value, schema[key][0], f"{where} {key}", schema[key][1]) for key, value in table.items()}
-
-
 def _center(values: dict, where: str) -> tuple[float, float]:
     center = values.pop("center_arcmin", [0.0, 0.0])
     if len(center) != 2:
@@ -112,15 +104,7 @@ def _viewer(doc: dict, source: str) -> EyeViewer | CameraViewer:
     if "camera" in doc:
         where = f"{source} [camera]"
         values = _values(doc["camera"], _CAMERA, where)
-        lenses = []
-        for i, lens in enumerate(values.pop("lenses", [])):
-            lens_where = f"{source} [[camera.lenses]] #{i + 1}"
-            kwargs = _values(lens, _LENS, lens_where)
-            if "sphere_diopters" not in kwargs and "cylinder_diopters" not in kwargs:
-                raise VissimInputError(f"{lens_where} needs sphere_diopters and/or cylinder_diopters (D)")
-            kwargs.setdefault("sphere_diopters", 0.0)
-            lenses.append(TrialLens(**kwargs))
-        return CameraViewer(lenses=tuple(lenses), **values)
+        return CameraViewer(lenses=_trial_lenses(values.pop("lenses", []), f"{source} [[camera.lenses]]"), **values)
     values = _values(doc.get("eye", {}), _EYE, f"{source} [eye]")
     rx = Prescription.parse(values.pop("prescription", "plano"))
     return EyeViewer(rx, **values)
@@ -133,10 +117,7 @@ def depth_scene_from_doc(doc: dict, source: str) -> DepthSceneFile:
     sampling = _values(_table(doc, "sampling", source), _SAMPLING, f"{source} [sampling]")
     fields: dict[str, Any] = {}
     if "size_px" in image:
-        size = image["size_px"]
-        if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
-            raise VissimInputError(f"{source} [image] size_px must be [rows, cols] in whole px, got {size!r}")
-        fields["size_px"] = tuple(size)
+        fields["size_px"] = _size_px(image["size_px"], source)
     if "arcmin_per_px" in image:
         fields["arcmin_per_px"] = image["arcmin_per_px"]
     for key in ("sampler", "texels_per_px"):
@@ -151,6 +132,6 @@ def depth_scene_from_doc(doc: dict, source: str) -> DepthSceneFile:
 
 def load_depth_scene_toml(path: str | os.PathLike[str], **overrides: Any) -> DepthSceneFile:
     """Load a depth scene file; ``overrides`` (not None) replace :class:`DepthSceneFile` fields."""
-    doc, source = _read(path)
+    doc, source = read_scene_toml(path)
     loaded = depth_scene_from_doc(doc, source)
     return dataclasses.replace(loaded, **{k: v for k, v in overrides.items() if v is not None})

@@ -28,13 +28,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Union
 
-import numpy as np
-
 from vissim.bench.dslr import DslrBench
-from vissim.checks import finite_number, positive_number
-from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.checks import positive_number
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription, RefractiveError
+from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import (
     CROWN_GLASS_INDEX,
     THESIS_CHART_DISTANCE_MM,
@@ -42,13 +39,12 @@ from vissim.optics.trial_lens import (
     THESIS_FOCAL_LENGTH_MM,
     THESIS_VERTEX_DISTANCE_MM,
     TrialLens,
-    TrialLensSetup,
     entrance_pupil_diameter_mm,
 )
 from vissim.optics.setup import ViewingSetup
 from vissim.units import m_to_mm, mm_to_m
 
-__all__ = ["EyeViewer", "CameraViewer", "Viewer", "viewing_setup", "focus_matrix_diopters", "equivalent_eye", "blur_diameter_arcmin"]
+__all__ = ["EyeViewer", "CameraViewer", "Viewer", "viewing_setup", "equivalent_eye"]
 
 
 @dataclass(frozen=True)
@@ -60,14 +56,9 @@ class EyeViewer:
     accommodation_diopters: float = 0.0
 
     def __post_init__(self) -> None:
-        if isinstance(self.prescription, RefractiveError) or not isinstance(self.prescription, Prescription):
-            raise TypeError(f"the eye needs its Prescription (correcting lens), got {type(self.prescription).__name__}")
-        pupil = check_pupil_mm(self.pupil_diameter_mm)
-        object.__setattr__(self, "pupil_diameter_mm", pupil)
-        accommodation = finite_number(self.accommodation_diopters, "accommodation", "dioptres")
-        if accommodation < 0.0:
-            raise VissimInputError(f"accommodation must be >= 0 dioptres, got {accommodation:g} D")
-        object.__setattr__(self, "accommodation_diopters", accommodation + 0.0)
+        setup = ViewingSetup.eye(self.prescription, self.pupil_diameter_mm, self.accommodation_diopters)  # validates
+        object.__setattr__(self, "pupil_diameter_mm", setup.pupil_diameter_mm)
+        object.__setattr__(self, "accommodation_diopters", float(self.accommodation_diopters) + 0.0)
 
     def label(self) -> str:
         return f"eye {self.prescription.format()}, {self.pupil_diameter_mm:g} mm pupil, A {self.accommodation_diopters:g} D"
@@ -123,24 +114,17 @@ Viewer = Union[EyeViewer, CameraViewer]
 
 
 def viewing_setup(viewer: Viewer, scene=None) -> ViewingSetup:
-    """The viewer's :class:`~vissim.optics.setup.ViewingSetup`; ``scene`` sizes trial lenses.
+    """The viewer's :class:`~vissim.optics.setup.ViewingSetup`: its focus matrix, blur and pupil.
 
-    An eye looks at infinity; the camera at its focus distance (the lenses' vergence effect is
+    An eye looks at infinity; the camera is its bench on ``scene``'s grid (:meth:`CameraViewer.bench`,
+    which sizes the trial lenses), looking at its focus distance (the lenses' vergence effect is
     taken there, module doc).
     """
     if isinstance(viewer, EyeViewer):
         return ViewingSetup.eye(viewer.prescription, viewer.pupil_diameter_mm, viewer.accommodation_diopters)
     if not isinstance(viewer, CameraViewer):
         raise VissimInputError(f"viewer must be an EyeViewer or a CameraViewer, got {type(viewer).__name__}")
-    bench = viewer.bench(scene) if viewer.lenses else None
-    lenses = () if bench is None else bench.physical_lenses
-    setup = TrialLensSetup(lenses, viewer.vertex_distance_mm, viewer.focus_distance_m, viewer.lens_gap_mm)
-    return ViewingSetup.dslr(viewer.focal_length_mm, viewer.f_number, viewer.focus_distance_m, setup)
-
-
-def focus_matrix_diopters(viewer: Viewer, scene=None) -> np.ndarray:
-    """2 x 2 vergence matrix K (TABO x/y) the viewer focuses (module doc); ``scene`` sizes trial lenses."""
-    return viewing_setup(viewer, scene).focus_matrix_diopters
+    return viewer.bench(scene).viewing_setup()
 
 
 def equivalent_eye(viewer: Viewer, scene=None) -> EyeViewer:
@@ -149,8 +133,3 @@ def equivalent_eye(viewer: Viewer, scene=None) -> EyeViewer:
         return viewer
     setup = viewing_setup(viewer, scene)
     return EyeViewer(Prescription.from_power_matrix(-setup.focus_matrix_diopters), setup.pupil_diameter_mm, 0.0)
-
-
-def blur_diameter_arcmin(viewer: Viewer, distance_m, scene=None) -> np.ndarray:
-    """Geometric blur diameter (largest principal meridian) of objects at axial ``distance_m`` (inf ok)."""
-    return viewing_setup(viewer, scene).blur_diameter_at_arcmin(distance_m)

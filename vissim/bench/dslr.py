@@ -47,6 +47,7 @@ import numpy as np
 from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, samples_per_pixel
+from vissim.checks import size_px as check_size_px
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import (
     CROWN_GLASS_INDEX,
@@ -66,7 +67,7 @@ from vissim.units import (
     mm_to_m,
 )
 
-__all__ = ["SAMPLERS", "DslrBench", "chart_mm_per_texel", "dslr_scene"]
+__all__ = ["SAMPLERS", "DslrBench", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
 
 log = logging.getLogger(__name__)
 
@@ -135,13 +136,7 @@ class DslrBench:
             raise VissimInputError(
                 f"the holder takes up to {MAX_LENSES_IN_HOLDER} TrialLens objects, got {self.lenses!r}")
         object.__setattr__(self, "lenses", lenses)
-        try:
-            size = tuple(int(v) for v in self.size_px)
-        except (TypeError, ValueError):
-            size = ()
-        if len(size) != 2 or min(size) < 1 or tuple(self.size_px) != size:
-            raise VissimInputError(f"size_px must be (rows, cols) in whole pixels >= 1, got {self.size_px!r}")
-        object.__setattr__(self, "size_px", size)
+        object.__setattr__(self, "size_px", check_size_px(self.size_px))
         object.__setattr__(self, "spp", samples_per_pixel(self.spp))
         if self.sampler not in SAMPLERS:
             raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")
@@ -257,6 +252,14 @@ def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm
     return np.ascontiguousarray(out, dtype=np.float32), out.shape[0] * mm_per_px, out.shape[1] * mm_per_px
 
 
+def hdr_film(size_px: tuple[int, int], kind: str) -> dict[str, Any]:
+    """Mitsuba's float32 ``hdrfilm`` of ``size_px`` (rows, cols); box filter: a pixel integrates its solid angle."""
+    rows, cols = size_px
+    return {"type": "hdrfilm", "width": cols, "height": rows, "rfilter": {"type": "box"},
+            "pixel_format": "luminance" if kind == "mono" else "rgb", "component_format": "float32",
+            "sample_border": False}
+
+
 def _translate(x: float, y: float, z: float) -> list[list[float]]:
     return [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]]
 
@@ -288,7 +291,6 @@ def dslr_scene(
         texture = texture[:, :, None]
     if kind == "mono" and texture.shape[2] == 3:
         texture = texture @ np.array(REC709_LUMINANCE, dtype=np.float32)[:, None]
-    rows, cols = bench.size_px
     # The rectangle spans [-1, 1]^2 with normal +z; turned 180 deg about y it faces the camera
     # (-z) and its local +x (texture u) runs along world -x, the camera's image right.  Mitsuba
     # puts bitmap row 0 at v = 0, local y = -1 (the bottom), so the raster goes in upside down.
@@ -309,15 +311,7 @@ def dslr_scene(
             # look_at((0,0,0), (0,0,1), up (0,1,0)): Mitsuba's camera frame is +x left, +y up, +z forward.
             "to_world": [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
             "sampler": {"type": bench.sampler, "sample_count": int(bench.spp), "seed": int(bench.seed)},
-            "film": {
-                "type": "hdrfilm",
-                "width": cols,
-                "height": rows,
-                "rfilter": {"type": "box"},
-                "pixel_format": "luminance" if kind == "mono" else "rgb",
-                "component_format": "float32",
-                "sample_border": False,
-            },
+            "film": hdr_film(bench.size_px, kind),
         },
         "chart": {
             "type": "rectangle",

@@ -31,7 +31,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import mm_to_m
 
-__all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables"]
+__all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables", "read_scene_toml"]
 
 # key -> (DslrBench field, type, unit)
 _CAMERA = {
@@ -107,7 +107,35 @@ def _check_keys(table: dict, allowed, where: str) -> None:
             raise VissimInputError(f"{where}: unknown key {key!r}; expected one of {', '.join(allowed)}")
 
 
-def _read(path: str | os.PathLike[str]) -> tuple[dict, str]:
+def _values(table: Any, schema: dict, where: str) -> dict:
+    """The keys of ``table`` checked against ``schema`` ``{key: (type, unit)}``."""
+    if not isinstance(table, dict):
+        raise VissimInputError(f"{where} must be a table, got {table!r}")
+    _check_keys(table, schema, where)
+    return {key: _typed(value, schema[key][0], f"{where} {key}", schema[key][1]) for key, value in table.items()}
+
+
+def _trial_lenses(entries: list, where: str) -> tuple[TrialLens, ...]:
+    """The trial lenses of an array of ``_LENS`` tables called ``where`` (e.g. ``[[holder.lenses]]``)."""
+    lenses = []
+    for i, entry in enumerate(entries):
+        lens_where = f"{where} #{i + 1}"
+        kwargs = _values(entry, _LENS, lens_where)
+        if "sphere_diopters" not in kwargs and "cylinder_diopters" not in kwargs:
+            raise VissimInputError(f"{lens_where} needs sphere_diopters and/or cylinder_diopters (D)")
+        kwargs.setdefault("sphere_diopters", 0.0)
+        lenses.append(TrialLens(**kwargs))
+    return tuple(lenses)
+
+
+def _size_px(size: list, source: str) -> tuple[int, int]:
+    if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
+        raise VissimInputError(f"{source} [image] size_px must be [rows, cols] in whole px, got {size!r}")
+    return tuple(size)  # type: ignore[return-value]
+
+
+def read_scene_toml(path: str | os.PathLike[str]) -> tuple[dict, str]:
+    """(the TOML document, its path as text) of a scene file; one clean error if unreadable or not TOML."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -122,8 +150,7 @@ def _read(path: str | os.PathLike[str]) -> tuple[dict, str]:
 def chart_spec_from_table(table: dict, source: str, chart_distance_mm: float) -> ChartSpec:
     """The chart of a ``[chart]`` table (module doc) at ``chart_distance_mm``."""
     where = f"{source} [chart]"
-    _check_keys(table, _CHART, where)
-    values = {key: _typed(table[key], *_CHART[key][:1], f"{where} {key}", _CHART[key][1]) for key in table}
+    values = _values(table, _CHART, where)
     style = {key: values[key] for key in ("polarity", "paper_reflectance", "ink_reflectance") if key in values}
     style["viewing_distance_m"] = mm_to_m(chart_distance_mm)
     if "letters" in values or "logmar_range" in values:
@@ -153,22 +180,8 @@ def bench_from_tables(doc: dict, source: str, **overrides: Any) -> DslrBench:
             if field is not None:
                 fields[field] = _typed(value, kind, f"{source} [{name}] {key}", unit)
     if "size_px" in fields:
-        size = fields["size_px"]
-        if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
-            raise VissimInputError(f"{source} [image] size_px must be [rows, cols] in whole px, got {size!r}")
-        fields["size_px"] = tuple(size)
-    lenses = []
-    for i, lens in enumerate(_table(doc, "holder", source).get("lenses", [])):
-        where = f"{source} [[holder.lenses]] #{i + 1}"
-        if not isinstance(lens, dict):
-            raise VissimInputError(f"{where} must be a table, got {lens!r}")
-        _check_keys(lens, _LENS, where)
-        if "sphere_diopters" not in lens and "cylinder_diopters" not in lens:
-            raise VissimInputError(f"{where} needs sphere_diopters and/or cylinder_diopters (D)")
-        kwargs = {key: _typed(value, *_LENS[key][:1], f"{where} {key}", _LENS[key][1]) for key, value in lens.items()}
-        kwargs.setdefault("sphere_diopters", 0.0)
-        lenses.append(TrialLens(**kwargs))
-    fields["lenses"] = tuple(lenses)
+        fields["size_px"] = _size_px(fields["size_px"], source)
+    fields["lenses"] = _trial_lenses(_table(doc, "holder", source).get("lenses", []), f"{source} [[holder.lenses]]")
     chart = _table(doc, "chart", source)
     if "distance_mm" in chart:
         fields["chart_distance_mm"] = _typed(chart["distance_mm"], float, f"{source} [chart] distance_mm", "mm")
@@ -178,14 +191,14 @@ def bench_from_tables(doc: dict, source: str, **overrides: Any) -> DslrBench:
 
 def load_bench_toml(path: str | os.PathLike[str], **overrides: Any) -> tuple[DslrBench, ChartSpec]:
     """(bench, chart spec) of the scene file at ``path``; ``overrides`` (not None) replace bench fields."""
-    doc, source = _read(path)
+    doc, source = read_scene_toml(path)
     bench = bench_from_tables(doc, source, **overrides)
     return bench, chart_spec_from_table(_table(doc, "chart", source), source, bench.chart_distance_mm)
 
 
 def load_chart_toml(path: str | os.PathLike[str], chart_distance_mm: float) -> ChartSpec:
     """The chart of the ``[chart]`` table of ``path`` (other tables are ignored)."""
-    doc, source = _read(path)
+    doc, source = read_scene_toml(path)
     return chart_spec_from_table(_table(doc, "chart", source), source, chart_distance_mm)
 
 
@@ -202,7 +215,7 @@ def load_atv_toml(path: str | os.PathLike[str]):
     from vissim.bench.atv import AtvConfig, AtvEye, AtvTube, atv_trial_lens
     from vissim.optics.prescription import Prescription
 
-    doc, source = _read(path)
+    doc, source = read_scene_toml(path)
     _check_keys(doc, ("tube", "eye", "trial_lens"), source)
     tube_table = _table(doc, "tube", source)
     _check_keys(tube_table, tuple(_ATV_TUBE_KEYS), f"{source} [tube]")

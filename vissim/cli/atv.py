@@ -11,7 +11,7 @@ import argparse
 import math
 from pathlib import Path
 
-from vissim.cli._common import add_rx_arg
+from vissim.cli._common import add_rx_arg, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 
@@ -160,8 +160,7 @@ def run_procedure_command(args: argparse.Namespace) -> int:
     from vissim.provenance import make_provenance
 
     config = ProcedureConfig(resolution_code=args.resolution)
-    if args.output.exists() and not args.overwrite:  # fail before a person spends minutes answering
-        raise VissimInputError(f"{args.output} already exists; pass --overwrite to replace it")
+    refuse_existing(args.output, overwrite=args.overwrite)  # fail before a person spends minutes answering
     observer_record: dict = {"kind": args.observer}
     if args.observer == "simulated":
         psychometric = PsychometricFunction(args.threshold, args.slope, args.guess, args.lapse)

@@ -22,6 +22,7 @@ from vissim.charts import (
     save_chart_pdf,
     save_chart_png,
 )
+from vissim.cli._common import refuse_existing
 from vissim.errors import VissimInputError
 from vissim.provenance import make_provenance
 
@@ -94,12 +95,6 @@ def _letters(args: argparse.Namespace) -> str | None:
     return args.letters
 
 
-def _check_free(paths: list[Path], overwrite: bool) -> None:
-    for path in paths:
-        if path.exists() and not overwrite:
-            raise VissimInputError(f"{path} already exists; pass --overwrite to replace it")
-
-
 def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     suffix = out.suffix.lower()
@@ -123,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     written = [out, sidecar_path]
     if suffix not in (".exr", ".pdf"):  # PNG/TIFF provenance goes to OUTPUT.json
         written.append(out.with_name(out.name + ".json"))
-    _check_free(written, args.overwrite)
+    refuse_existing(*written, overwrite=args.overwrite)
     provenance = make_provenance(command="vissim chart", options={k: v for k, v in vars(args).items() if k != "func"}, spec=spec)
 
     if args.print_form:

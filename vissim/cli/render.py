@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from vissim.charts import POLARITIES
-from vissim.cli._common import add_trial_lens_args, trial_lens_powers
+from vissim.cli._common import add_trial_lens_args, refuse_existing, trial_lens_powers
 from vissim.errors import VissimInputError
 
 log = logging.getLogger(__name__)
@@ -117,28 +117,19 @@ def _chart_table(args, scene_doc: dict) -> dict:
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    import tomllib
-
     from vissim.bench.scene_files import (
         bench_from_tables,
         chart_spec_from_table,
         load_chart_toml,
+        read_scene_toml,
     )
     from vissim.imageio import write_image
 
     output = Path(args.output)
     if output.suffix.lower() != ".exr":
         raise VissimInputError(f"the bench writes linear float EXR; give an output ending in .exr, got {output}")
-    if output.exists() and not args.overwrite:
-        raise VissimInputError(f"{output} already exists; pass --overwrite to replace it")
-    doc, source = {}, "command line"
-    if args.scene is not None:
-        try:
-            doc, source = tomllib.loads(Path(args.scene).read_text(encoding="utf-8")), args.scene
-        except OSError as exc:
-            raise VissimInputError(f"cannot read scene file {args.scene}: {exc.strerror or exc}") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise VissimInputError(f"{args.scene} is not valid TOML: {exc}") from None
+    refuse_existing(output, overwrite=args.overwrite)
+    doc, source = ({}, "command line") if args.scene is None else read_scene_toml(args.scene)
     bench = bench_from_tables(
         doc, source, lenses=_lenses(args), f_number=args.f_number, arcmin_per_px=args.arcmin_per_px,
         size_px=None if args.size is None else _size(args.size), spp=args.spp, seed=args.seed,

@@ -13,7 +13,7 @@ import argparse
 import json
 from pathlib import Path
 
-from vissim.cli._common import add_rx_arg, add_trial_lens_args, trial_lens_powers
+from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
 from vissim.errors import VissimInputError
 
 __all__ = ["add_atv_parser", "run_atv"]
@@ -112,8 +112,7 @@ def run_atv(args: argparse.Namespace) -> int:
     output = Path(args.output)
     if output.suffix.lower() != ".exr":
         raise VissimInputError(f"render atv writes a linear float EXR; give an output ending in .exr, got {output}")
-    if output.exists() and not args.overwrite:
-        raise VissimInputError(f"{output} already exists; pass --overwrite to replace it")
+    refuse_existing(output, overwrite=args.overwrite)
     if args.method == "trace" and args.spp is not None:
         raise VissimInputError("--spp goes with --method camera; the light tracer takes --rays")
     if args.method == "camera" and args.rays is not None:

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.cli._common import add_rx_arg, add_trial_lens_args, trial_lens_powers
+from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
 from vissim.errors import VissimInputError
 
 __all__ = ["add_depth_parser", "run_depth", "write_depth"]
@@ -97,8 +97,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
             continue
         if path.suffix.lower() not in allowed:
             raise VissimInputError(f"{path}: expected a file ending in {' or '.join(allowed)} (linear float)")
-        if path.exists() and not args.overwrite:
-            raise VissimInputError(f"{path} already exists; pass --overwrite to replace it")
+    refuse_existing(*paths, overwrite=args.overwrite)
 
 
 def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = None, overwrite: bool = False,
@@ -125,7 +124,7 @@ def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = No
 def run_depth(args: argparse.Namespace) -> int:
     from vissim.bench.depth_scene import panel_geometries
     from vissim.bench.depth_scene_files import load_depth_scene_toml
-    from vissim.bench.depth_viewers import blur_diameter_arcmin
+    from vissim.bench.depth_viewers import viewing_setup
     from vissim.imageio import write_image
     from vissim.render.depth_render import render_depth
 
@@ -157,8 +156,9 @@ def run_depth(args: argparse.Namespace) -> int:
     rows, cols = loaded.scene.size_px
     print(f"wrote {', '.join(written)}: {cols} x {rows} px, {result.spp} spp, {result.variant}, "
           f"{result.seconds:.1f} s; {viewer.label()}")
+    setup = viewing_setup(viewer, loaded.scene)
     for g in panel_geometries(loaded.scene):
-        blur = [float(blur_diameter_arcmin(viewer, d, loaded.scene)) for d in (g.distance_left_m, g.distance_right_m)]
+        blur = [float(setup.blur_diameter_at_arcmin(d)) for d in (g.distance_left_m, g.distance_right_m)]
         where = f"{blur[0]:.1f}'" if g.kind == "panel" else f"{blur[0]:.1f}' (left) to {blur[1]:.1f}' (right)"
         print(f"  {g.name}: predicted blur diameter {where}")
     return 0

@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription, RefractiveError
+from vissim.optics.prescription import Prescription, as_prescription
 
 __all__ = [
     "HOFSTETTER_1950",
@@ -63,17 +63,6 @@ HOFSTETTER_1950 = {
 }
 
 
-def _check_prescription(eye_rx) -> Prescription:
-    if isinstance(eye_rx, RefractiveError):
-        raise TypeError(
-            "got the eye's RefractiveError where its Prescription (correcting lens) is expected; "
-            "convert explicitly with .prescription()"
-        )
-    if not isinstance(eye_rx, Prescription):
-        raise TypeError(f"expected a Prescription, got {type(eye_rx).__name__}")
-    return eye_rx
-
-
 def _check_amplitude(amplitude_diopters) -> float:
     amplitude = finite_number(amplitude_diopters, "amplitude of accommodation", "dioptres", allow_inf=True)
     if amplitude < 0.0:
@@ -81,11 +70,11 @@ def _check_amplitude(amplitude_diopters) -> float:
     return amplitude
 
 
-def object_proximity_diopters(distance_m) -> float:
+def object_proximity_diopters(distance_m, name: str = "target distance") -> float:
     """``1/d`` for an object ``d`` metres away (0 at infinity): the minus of its vergence."""
-    distance = finite_number(distance_m, "target distance", "metres", allow_inf=True)
+    distance = finite_number(distance_m, name, "metres", allow_inf=True)
     if distance <= 0.0:
-        raise VissimInputError(f"target distance must be a positive number of metres (or inf), got {distance_m!r} m")
+        raise VissimInputError(f"{name} must be a positive number of metres (or inf), got {distance_m!r} m")
     return 0.0 if math.isinf(distance) else 1.0 / distance
 
 
@@ -140,7 +129,7 @@ class Accommodation:
 
 def required_accommodation_diopters(eye_rx: Prescription, target_distance_m: float) -> float:
     """Unclamped accommodation ``M + 1/d`` that focuses the target (negative: beyond the far point)."""
-    rx = _check_prescription(eye_rx)
+    rx = as_prescription(eye_rx)
     return rx.spherical_equivalent_diopters + object_proximity_diopters(target_distance_m)
 
 
@@ -167,7 +156,7 @@ def clear_vision_range_m(eye_rx: Prescription, amplitude_diopters: float) -> tup
     point is ``inf`` for emmetropes and hyperopes; ``None`` means no real object can be
     focused (a hyperope whose amplitude is below its prescription).
     """
-    rx = _check_prescription(eye_rx)
+    rx = as_prescription(eye_rx)
     amplitude = _check_amplitude(amplitude_diopters)
     m = rx.spherical_equivalent_diopters
     far_proximity = max(0.0, -m)

@@ -64,7 +64,7 @@ from vissim.checks import finite_number, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.blur import BlurKernel, _pad
-from vissim.optics.prescription import Prescription, RefractiveError
+from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import (
     PSF,
     compute_psf,
@@ -213,14 +213,6 @@ class DepthBlurResult:
 
 
 # -- validation helpers ---------------------------------------------------------------
-def _check_rx(eye_rx) -> Prescription:
-    if isinstance(eye_rx, RefractiveError):
-        raise TypeError("got the eye's RefractiveError where its Prescription is expected; use .prescription()")
-    if not isinstance(eye_rx, Prescription):
-        raise TypeError(f"eye_prescription must be a Prescription, got {type(eye_rx).__name__}")
-    return eye_rx
-
-
 def _check_accommodation(accommodation_diopters) -> float:
     value = finite_number(accommodation_diopters, "accommodation", "dioptres")
     if value < 0:
@@ -291,7 +283,7 @@ def blur_depth(
     padding : {"edge", "reflect"}
         Outside the image, colour, depth and coverage continue the border.
     """
-    rx = _check_rx(eye_prescription)
+    rx = as_prescription(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
     accommodation = _check_accommodation(accommodation_diopters)

@@ -36,6 +36,7 @@ __all__ = [
     "Prescription",
     "RefractiveError",
     "LensPower",
+    "as_prescription",
     "parse_spherocylinder",
 ]
 
@@ -212,6 +213,16 @@ class LensPower(SpheroCylinder):
     def prescription_of_camera(self) -> Prescription:
         """A perfect camera with this much power added needs the opposite lens to see sharply."""
         return Prescription(-self.sphere_diopters, -self.cylinder_diopters, self.axis_deg)
+
+
+def as_prescription(value) -> Prescription:
+    """``value``, which must be a :class:`Prescription` (a :class:`RefractiveError` has the opposite sign)."""
+    if isinstance(value, RefractiveError):
+        raise TypeError("got the eye's RefractiveError where its Prescription (correcting lens) is expected; "
+                        "convert explicitly with .prescription()")
+    if not isinstance(value, Prescription):
+        raise TypeError(f"expected a Prescription (the correcting lens), got {type(value).__name__}")
+    return value
 
 
 def parse_spherocylinder(text: str) -> tuple[float, float, float]:

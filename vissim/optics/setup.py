@@ -34,12 +34,14 @@ import numpy as np
 from vissim.checks import finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import LensPower, Prescription, RefractiveError
+from vissim.optics.accommodation import object_proximity_diopters
+from vissim.optics.prescription import LensPower, Prescription, as_prescription
 from vissim.optics.trial_lens import (
     Matrix2,
     TrialLens,
     TrialLensSetup,
     _as_tuple,
+    _meridian_deg,
     _principal,
     entrance_pupil_diameter_mm,
     thesis_eye_pupil_diameter_mm,
@@ -57,10 +59,7 @@ _IDENTITY: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
 
 
 def _proximity(distance_m: float) -> float:
-    distance = finite_number(distance_m, "object distance", "metres", allow_inf=True)
-    if distance <= 0:
-        raise VissimInputError(f"object distance must be a positive number of metres (or inf), got {distance_m!r} m")
-    return 0.0 if math.isinf(distance) else 1.0 / distance
+    return object_proximity_diopters(distance_m, "object distance")
 
 
 @dataclass(frozen=True)
@@ -101,8 +100,7 @@ class ViewingSetup:
         D = -Rx + A I + V, V = -I/d for an object at ``object_distance_m`` or the given
         ``vergence_diopters`` (scalar or 2 x 2) of the light arriving at the pupil.
         """
-        if isinstance(prescription, RefractiveError) or not isinstance(prescription, Prescription):
-            raise TypeError(f"the eye needs its Prescription (correcting lens), got {type(prescription).__name__}")
+        as_prescription(prescription)
         accommodation = finite_number(accommodation_diopters, "accommodation", "dioptres")
         if accommodation < 0.0:
             raise VissimInputError(f"accommodation must be >= 0 dioptres, got {accommodation:g} D")
@@ -170,11 +168,8 @@ class ViewingSetup:
     def blur_diameter_arcmin(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """Geometric blur ((diameter arcmin, meridian deg), ...) per principal meridian, larger defocus first."""
         values, vectors = np.linalg.eigh(np.asarray(self.defocus_matrix_diopters, dtype=float))
-        blur = []
-        for value, vector in zip(values[::-1], vectors.T[::-1]):
-            meridian = round(math.degrees(math.atan2(vector[1], vector[0])) % 180.0, 9) or 180.0
-            blur.append((float(rad_to_arcmin(abs(value) * self.pupil_diameter_mm / 1000.0)), meridian))
-        return tuple(blur)  # type: ignore[return-value]
+        return tuple((float(rad_to_arcmin(abs(value) * self.pupil_diameter_mm / 1000.0)), _meridian_deg(vector))
+                     for value, vector in zip(values[::-1], vectors.T[::-1]))  # type: ignore[return-value]
 
     def blur_diameter_at_arcmin(self, distance_m) -> np.ndarray:
         """Largest-meridian geometric blur of objects at axial ``distance_m`` (array, inf ok), same focus."""

@@ -29,7 +29,7 @@ import numpy as np
 
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription, RefractiveError
+from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.zernike import zernike_nm
 
 __all__ = ["Wavefront", "prescription_to_zernike_um", "zernike_um_to_prescription", "parse_zernike_terms"]
@@ -42,20 +42,9 @@ def _check_pupil(pupil_diameter_mm: float, name: str = "pupil diameter") -> floa
     return check_pupil_mm(pupil_diameter_mm, name)
 
 
-def _as_prescription(rx) -> Prescription:
-    if isinstance(rx, Prescription):
-        return rx
-    if isinstance(rx, RefractiveError):
-        raise TypeError(
-            "got the eye's RefractiveError where a Prescription (correcting lens) is expected; "
-            "convert explicitly with .prescription()"
-        )
-    raise TypeError(f"expected a Prescription, got {type(rx).__name__}")
-
-
 def prescription_to_zernike_um(rx: Prescription, pupil_diameter_mm: float) -> dict[tuple[int, int], float]:
     """Second-order OSA coefficients (µm) of the eye that ``rx`` corrects, over the pupil."""
-    rx = _as_prescription(rx)
+    rx = as_prescription(rx)
     radius_sq = (_check_pupil(pupil_diameter_mm) / 2.0) ** 2
     m, j0, j45 = rx.power_vector()
     return {

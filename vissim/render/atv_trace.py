@@ -123,6 +123,19 @@ class AtvResult:
         }
 
 
+def _atv_result(image: np.ndarray, std_image: np.ndarray, step: float, *, total_flux: float | None = None,
+                **run) -> AtvResult:
+    """``image`` and its standard error with their spot metrics; ``total_flux`` None: the image's integral.
+
+    ``run`` holds the remaining :class:`AtvResult` fields (how the image was made).
+    """
+    metrics = spot_metrics(image, step, std_image)
+    return AtvResult(image=image, std_image=std_image, arcmin_per_px=step,
+                     total_flux=metrics.total_flux if total_flux is None else total_flux, peak=metrics.peak,
+                     peak_pixel=metrics.peak_pixel, peak_relative_std=metrics.peak_relative_std,
+                     spot_diameter_arcmin=metrics.spot_diameter_arcmin, centroid_arcmin=metrics.centroid_arcmin, **run)
+
+
 def _check_sampling(arcmin_per_px, size_px, config: AtvConfig) -> tuple[float, int]:
     try:
         step = float(arcmin_per_px)
@@ -288,32 +301,15 @@ def trace_atv(config: AtvConfig, *, n_rays: int = DEFAULT_N_RAYS, seed: int = 0,
         log.warning("%d rays were still bouncing after %d surface events and were dropped",
                     tracer.dropped, tracer.max_events)
     area = step * step
-    image = (flux / area).astype(np.float32)
-    std_image = (np.sqrt(flux_sq) / area).astype(np.float32)
-    metrics = spot_metrics(image, step, std_image)
     if total > 0.0 and outside / max(in_pupil, 1) > 0.01:
         log.warning("%.1f %% of the rays in the pupil land outside the %d px field", 100.0 * outside / in_pupil, size)
     seconds = time.perf_counter() - start
+    result = _atv_result((flux / area).astype(np.float32), (np.sqrt(flux_sq) / area).astype(np.float32), step,
+                         total_flux=total, n_rays=total_rays, seconds=seconds, method="trace", seed=int(seed),
+                         variant=tracer.mi.variant(), mitsuba_version=tracer.mi.__version__, config=config)
     log.info("traced %d rays (%d in the pupil) on %s in %.2f s: flux %.4g, spot %.3g arcmin",
-             total_rays, in_pupil, tracer.mi.variant(), seconds, total, metrics.spot_diameter_arcmin)
-    return AtvResult(
-        image=image,
-        std_image=std_image,
-        arcmin_per_px=step,
-        total_flux=total,
-        peak=metrics.peak,
-        peak_pixel=metrics.peak_pixel,
-        peak_relative_std=metrics.peak_relative_std,
-        spot_diameter_arcmin=metrics.spot_diameter_arcmin,
-        centroid_arcmin=metrics.centroid_arcmin,
-        n_rays=total_rays,
-        seconds=seconds,
-        method="trace",
-        seed=int(seed),
-        variant=tracer.mi.variant(),
-        mitsuba_version=tracer.mi.__version__,
-        config=config,
-    )
+             total_rays, in_pupil, tracer.mi.variant(), seconds, total, result.spot_diameter_arcmin)
+    return result
 
 
 def render_atv_camera(config: AtvConfig, *, spp: int = 1024, seed: int = 0, arcmin_per_px: float = 1.0,
@@ -345,27 +341,9 @@ def render_atv_camera(config: AtvConfig, *, spp: int = 1024, seed: int = 0, arcm
     mean = (stack * weights).sum(axis=0) / weights.sum()
     spread = np.sqrt(((stack - mean) ** 2 * weights).sum(axis=0) / weights.sum() / (passes - 1))
     to_flux = math.pi / 4.0 * mm_to_m(config.eye.pupil_diameter_mm) ** 2 * float(arcmin_to_rad(1.0)) ** 2
-    image = (mean * to_flux).astype(np.float32)
-    std_image = (spread * to_flux).astype(np.float32)
-    metrics = spot_metrics(image, step, std_image)
     seconds = time.perf_counter() - start
     log.info("camera-side ATV render: %d x %d px, %d spp in %d passes on %s, %.1f s", size, size, spp, passes,
              used_variant, seconds)
-    return AtvResult(
-        image=image,
-        std_image=std_image,
-        arcmin_per_px=step,
-        total_flux=metrics.total_flux,
-        peak=metrics.peak,
-        peak_pixel=metrics.peak_pixel,
-        peak_relative_std=metrics.peak_relative_std,
-        spot_diameter_arcmin=metrics.spot_diameter_arcmin,
-        centroid_arcmin=metrics.centroid_arcmin,
-        n_rays=int(spp) * odd * odd,
-        seconds=seconds,
-        method="camera",
-        seed=int(seed),
-        variant=used_variant,
-        mitsuba_version=mitsuba("mono", variant).__version__,
-        config=config,
-    )
+    return _atv_result((mean * to_flux).astype(np.float32), (spread * to_flux).astype(np.float32), step,
+                       n_rays=int(spp) * odd * odd, seconds=seconds, method="camera", seed=int(seed),
+                       variant=used_variant, mitsuba_version=mitsuba("mono", variant).__version__, config=config)

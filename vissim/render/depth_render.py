@@ -107,7 +107,7 @@ def render_depth(
     each render.  The provenance records the scene, the viewer, seeds, spp and versions.
     """
     from vissim.bench.depth_scene import panel_geometries
-    from vissim.bench.depth_viewers import blur_diameter_arcmin, focus_matrix_diopters
+    from vissim.bench.depth_viewers import viewing_setup
 
     start = time.perf_counter()
     aux = int(spp if aux_spp is None else aux_spp)
@@ -128,17 +128,17 @@ def render_depth(
     proximity = images.get("proximity")
     depth_m = None if proximity is None else proximity_to_depth_m(proximity)
     first = results[jobs[0][0]]
-    geometries = panel_geometries(scene)
+    setup = viewing_setup(viewer, scene)
     provenance = make_provenance(
         scene=scene,
         viewer=viewer,
         viewer_label=viewer.label(),
-        focus_matrix_diopters=focus_matrix_diopters(viewer, scene),
+        focus_matrix_diopters=setup.focus_matrix_diopters,
         panels=[{"name": g.name, "box_arcmin": g.box_arcmin, "distance_left_m": g.distance_left_m,
                  "distance_right_m": g.distance_right_m, "size_mm": g.size_mm, "letter_height_mm": g.letter_height_mm,
-                 "blur_diameter_arcmin": [float(blur_diameter_arcmin(viewer, d, scene))
+                 "blur_diameter_arcmin": [float(setup.blur_diameter_at_arcmin(d))
                                           for d in (g.distance_left_m, g.distance_right_m)]}
-                for g in geometries],
+                for g in panel_geometries(scene)],
         arcmin_per_px=scene.arcmin_per_px,
         renders={name: {"spp": r.spp, **r.render_record()} for name, r in results.items()},
         depth_definition="axial distance (m) along the view axis, from the pupil plane; inf = sky",

@@ -11,7 +11,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -28,12 +28,11 @@ from vissim.units import mm_to_m
 from vissim.validation.fields import (
     MAX_SPP,
     LensSpec,
-    choices,
     field_error,
     lenses,
     number,
     read_campaign_toml,
-    seed_pair,
+    settings_kwargs,
     table,
     tables,
     text,
@@ -181,35 +180,21 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
                 "f_number": raw.get("f_number", f_number)}
         config = _configuration(item, settings, source, where, f_number)
         label = f"{prefix}: {config.name}" if prefix else config.name
-        out.append(Configuration(label, *[getattr(config, f.name) for f in fields(Configuration)][1:]))
+        out.append(replace(config, name=label))
     return out
 
 
 def _settings(raw: dict, source: str) -> CampaignSettings:
-    known = {f.name for f in fields(CampaignSettings)}
-    unknown = set(raw) - known - {"name", "description", "f_number", "manifest"}
-    if unknown:
-        raise field_error(source, "[campaign]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
-    kwargs: dict[str, Any] = {}
-    for key, (unit, lo, hi) in NUMBER_SETTINGS.items():
-        if key in raw:
-            kwargs[key] = number(raw[key], source, f"campaign.{key}", unit, lo=lo, hi=hi)
-    if "spp" in raw:
-        kwargs["spp"] = whole_number(raw["spp"], source, "campaign.spp", "samples per pixel", lo=1, hi=MAX_SPP)
-    if "seeds" in raw:
-        kwargs["seeds"] = seed_pair(raw["seeds"], source, "campaign.seeds")
+    kwargs = settings_kwargs(raw, CampaignSettings, source, "campaign", numbers=NUMBER_SETTINGS,
+                             whole_numbers={"spp": ("samples per pixel", 1, MAX_SPP)},
+                             lists={"simulations": SIMULATIONS, "inputs": INPUTS},
+                             texts=("name", "description", "manifest"), read_elsewhere=("f_number",))
     if "tile_px" in raw:
         tile = raw["tile_px"]
         if not (isinstance(tile, list) and len(tile) == 2):
             raise field_error(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
         kwargs["tile_px"] = tuple(whole_number(t, source, f"campaign.tile_px[{i}]", "pixels", lo=16, hi=MAX_TILE_PX)
                                   for i, t in enumerate(tile))
-    for key, allowed in (("simulations", SIMULATIONS), ("inputs", INPUTS)):
-        if key in raw:
-            kwargs[key] = choices(raw[key], allowed, source, f"campaign.{key}")
-    for key in ("name", "description", "manifest"):
-        if key in raw:
-            text(raw[key], source, f"campaign.{key}")
     return CampaignSettings(**kwargs)
 
 

@@ -28,16 +28,15 @@ from vissim.provenance import json_safe
 from vissim.validation.fields import (
     MAX_SEED,
     MAX_SPP,
-    choices,
+    checked_numbers,
     field_error,
     lenses,
     number,
     read_campaign_toml,
-    seed_pair,
+    settings_kwargs,
     table,
     tables,
     text,
-    whole_number,
 )
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
@@ -93,9 +92,6 @@ class DepthCampaign:
 
 
 # -- loading ---------------------------------------------------------------------------
-_err = field_error
-_read_toml = read_campaign_toml
-
 #: [depth_campaign] numbers: (unit, lowest, highest).
 NUMBER_SETTINGS = {
     "wavelength_nm": ("nm", 200.0, 2000.0),
@@ -119,25 +115,9 @@ def is_depth_campaign(doc: dict) -> bool:
 
 
 def _settings(head: dict, source: str) -> DepthCampaignSettings:
-    known = {f.name for f in dataclasses.fields(DepthCampaignSettings)}
-    unknown = set(head) - known - {"name", "description", "kind"}
-    if unknown:
-        raise _err(source, "[depth_campaign]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
-    kwargs: dict[str, Any] = {}
-    for key, (unit, lo, hi) in NUMBER_SETTINGS.items():
-        if key in head:
-            kwargs[key] = number(head[key], source, f"depth_campaign.{key}", unit, lo=lo, hi=hi)
-    for key, (unit, lo, hi) in WHOLE_SETTINGS.items():
-        if key in head:
-            kwargs[key] = whole_number(head[key], source, f"depth_campaign.{key}", unit, lo=lo, hi=hi)
-    if "seeds" in head:
-        kwargs["seeds"] = seed_pair(head["seeds"], source, "depth_campaign.seeds")
-    if "simulations" in head:
-        kwargs["simulations"] = choices(head["simulations"], DEPTH_SIMULATIONS, source, "depth_campaign.simulations")
-    for key in ("name", "description"):
-        if key in head:
-            text(head[key], source, f"depth_campaign.{key}")
-    return DepthCampaignSettings(**kwargs)
+    return DepthCampaignSettings(**settings_kwargs(
+        head, DepthCampaignSettings, source, "depth_campaign", numbers=NUMBER_SETTINGS, whole_numbers=WHOLE_SETTINGS,
+        lists={"simulations": DEPTH_SIMULATIONS}, texts=("name", "description"), read_elsewhere=("kind",)))
 
 
 #: Camera fields: (unit, lowest, highest).
@@ -156,46 +136,46 @@ def _eye(raw: dict, viewer, source: str, where: str) -> EyeViewer:
         try:
             rx = Prescription.parse(text(raw["eye"], source, f"{where}.eye"))
         except VissimInputError as exc:
-            raise _err(source, f"{where}.eye", str(exc)) from None
+            raise field_error(source, f"{where}.eye", str(exc)) from None
     pupil = number(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm", lo=0.5, hi=10.0)
     accommodation = number(raw.get("accommodation_diopters", base_eye.accommodation_diopters), source, f"{where}.accommodation_diopters",
                            "dioptres", lo=0.0, hi=20.0)
     try:
         return EyeViewer(rx, pupil, accommodation)
     except VissimInputError as exc:
-        raise _err(source, where, str(exc)) from None
+        raise field_error(source, where, str(exc)) from None
 
 
 def _camera(camera: Any, viewer, source: str, where: str) -> CameraViewer:
     allowed = set(CAMERA_FIELDS) | {"lenses"}
     if not isinstance(camera, dict) or set(camera) - allowed:
-        raise _err(source, where, f"a table of {sorted(allowed)}, got {camera!r}")
-    kwargs: dict[str, Any] = {k: number(v, source, f"{where}.{k}", CAMERA_FIELDS[k][0], lo=CAMERA_FIELDS[k][1],
-                                        hi=CAMERA_FIELDS[k][2]) for k, v in camera.items() if k != "lenses"}
+        raise field_error(source, where, f"a table of {sorted(allowed)}, got {camera!r}")
+    kwargs: dict[str, Any] = checked_numbers(camera, CAMERA_FIELDS, source, where)
     specs = lenses(camera.get("lenses", []), source, f"{where}.lenses")
     kwargs["lenses"] = tuple(TrialLens(s.sphere_diopters, s.cylinder_diopters, s.axis_deg) for s in specs)
     try:
         return dataclasses.replace(viewer if isinstance(viewer, CameraViewer) else CameraViewer(), **kwargs)
     except VissimInputError as exc:
-        raise _err(source, where, str(exc)) from None
+        raise field_error(source, where, str(exc)) from None
 
 
 def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfiguration:
     unknown = set(raw) - {"name", "scene", "eye", "pupil_mm", "accommodation_diopters", "camera"}
     if unknown:
-        raise _err(source, where, f"unknown field(s) {sorted(unknown)}")
+        raise field_error(source, where, f"unknown field(s) {sorted(unknown)}")
     if "scene" not in raw:
-        raise _err(source, where, "needs scene = a depth scene file (relative to the campaign file)")
+        raise field_error(source, where, "needs scene = a depth scene file (relative to the campaign file)")
     scene_file = (base / text(raw["scene"], source, f"{where}.scene")).resolve()
     if not scene_file.is_file():
-        raise _err(source, f"{where}.scene", f"{scene_file} is not a file")
+        raise field_error(source, f"{where}.scene", f"{scene_file} is not a file")
     try:
         loaded = load_depth_scene_toml(scene_file)
     except VissimInputError as exc:
-        raise _err(source, f"{where}.scene", str(exc)) from None
+        raise field_error(source, f"{where}.scene", str(exc)) from None
     eye_keys = {"eye", "pupil_mm", "accommodation_diopters"} & set(raw)
     if eye_keys and "camera" in raw:
-        raise _err(source, where, "give an eye (eye, pupil_mm, accommodation_diopters) or a camera, not both")
+        raise field_error(source, where,
+                          "give an eye (eye, pupil_mm, accommodation_diopters) or a camera, not both")
     viewer = loaded.viewer
     if eye_keys:
         viewer = _eye(raw, viewer, source, where)
@@ -209,20 +189,21 @@ def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> Depth
     """Read and validate a depth campaign TOML file (module doc); ``check_memory`` as :func:`load_campaign`."""
     path = Path(path)
     source = str(path)
-    raw = _read_toml(path)
+    raw = read_campaign_toml(path)
     if not is_depth_campaign(raw):
-        raise _err(source, "top level",
-                   "not a depth campaign: add [depth_campaign] (or kind = \"depth\" in [campaign])")
+        raise field_error(source, "top level",
+                          "not a depth campaign: add [depth_campaign] (or kind = \"depth\" in [campaign])")
     unknown = set(raw) - {"depth_campaign", "campaign", "config"}
     if unknown:
-        raise _err(source, "top level", f"unknown table(s) {sorted(unknown)}; use [depth_campaign] and [[config]]")
+        raise field_error(source, "top level",
+                          f"unknown table(s) {sorted(unknown)}; use [depth_campaign] and [[config]]")
     key = "depth_campaign" if "depth_campaign" in raw else "campaign"
     head = table(raw[key], source, f"[{key}]")
     settings = _settings(head, source)
     configs = [_configuration(c, path.parent, source, f"config[{i}]")
                for i, c in enumerate(tables(raw, "config", source))]
     if not configs:
-        raise _err(source, "top level", "no configurations: add [[config]] tables")
+        raise field_error(source, "top level", "no configurations: add [[config]] tables")
     campaign = DepthCampaign(head.get("name", path.stem), head.get("description", ""), settings, tuple(configs), source)
     if check_memory:
         from vissim.validation.preflight import check_depth_campaign_memory

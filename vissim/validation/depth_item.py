@@ -14,30 +14,20 @@ for the whole image, each beside the same metric between the two seeds (the floo
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from vissim.atomic import write_json_atomic
 from vissim.bench.depth_scene import panel_geometries
-from vissim.bench.depth_viewers import blur_diameter_arcmin, equivalent_eye
-from vissim.optics.prescription import Prescription
-from vissim.optics.setup import ViewingSetup
+from vissim.bench.depth_viewers import equivalent_eye, viewing_setup
 from vissim.provenance import make_provenance
 from vissim.validation.depth_campaign import DepthCampaignSettings, DepthConfiguration
 from vissim.validation.depth_masks import depth_regions, masked_metrics
 from vissim.validation.metrics import compare_images
 
 __all__ = ["compute_depth_item"]
-
-
-def _diffracted(image: np.ndarray, pupil_mm: float, settings: DepthCampaignSettings,
-                arcmin_per_px: float) -> np.ndarray:
-    """``image`` convolved with the in-focus diffraction PSF of a ``pupil_mm`` aperture."""
-    from vissim.validation.simulate import add_bench_diffraction
-
-    in_focus = ViewingSetup.eye(Prescription(0.0), pupil_mm, wavelength_nm=settings.wavelength_nm)
-    return add_bench_diffraction(image, in_focus, arcmin_per_px)
 
 
 def _region_table(comparison, masks, data_range: float) -> dict:
@@ -59,7 +49,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     from vissim.optics.depth import blur_depth
     from vissim.render.depth_render import proximity_to_depth_m
     from vissim.validation.item import save_item_image
-    from vissim.validation.simulate import block_mean
+    from vissim.validation.simulate import add_bench_diffraction, block_mean
 
     started = time.perf_counter()
     provenance = make_provenance(item=key, configuration=config.as_json(), settings=settings,
@@ -69,7 +59,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
         return save_item_image(item_dir, name, pixels, provenance, preview)
 
     scene, s = config.scene, settings.oversample
-    eye = equivalent_eye(config.viewer, scene)
+    eye, setup = equivalent_eye(config.viewer, scene), viewing_setup(config.viewer, scene)
     truth_a, truth_b = images["truth_0"], images["truth_1"]
     proximity = block_mean(images["proximity"], s)
     geometries = panel_geometries(scene)
@@ -77,7 +67,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     def radius_px(p):
         with np.errstate(divide="ignore"):
             distance = np.where(p > 1e-9, 1.0 / np.maximum(p, 1e-9), np.inf)
-        return 0.5 * blur_diameter_arcmin(config.viewer, distance, scene) / scene.arcmin_per_px
+        return 0.5 * setup.blur_diameter_at_arcmin(distance) / scene.arcmin_per_px
 
     masks = depth_regions(proximity, geometries, radius_px, pupil_diameter_mm=eye.pupil_diameter_mm,
                           arcmin_per_px=scene.arcmin_per_px, margin_px=settings.margin_px)
@@ -93,9 +83,9 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
                             wavelength_nm=settings.wavelength_nm, mode=mode,
                             layer_spacing_fraction=settings.layer_spacing_fraction)
         simulated = block_mean(result.image, s)
-        if mode == "wave":
-            reference = _diffracted(truth_a, eye.pupil_diameter_mm, settings, scene.arcmin_per_px)
-            other = _diffracted(truth_b, eye.pupil_diameter_mm, settings, scene.arcmin_per_px)
+        if mode == "wave":  # the render convolved with the aperture's in-focus diffraction at the campaign's wavelength
+            aperture = replace(setup, wavelength_nm=settings.wavelength_nm)
+            reference, other = (add_bench_diffraction(t, aperture, scene.arcmin_per_px) for t in (truth_a, truth_b))
             saved["truth_diffracted"] = _save(item_dir, "truth_diffracted", reference)
         else:
             reference, other = truth_a, truth_b
@@ -118,7 +108,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
         "panels": [{"name": g.name, "letters": scene.panels[g.index].chart.letters,
                     "logmar": scene.panels[g.index].chart.logmar,
                     "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
-                    "blur_diameter_arcmin": [float(blur_diameter_arcmin(config.viewer, d, scene))
+                    "blur_diameter_arcmin": [float(setup.blur_diameter_at_arcmin(d))
                                              for d in (g.distance_left_m, g.distance_right_m)]} for g in geometries],
         "masks": {"jump_diopters": masks.jump_diopters, "margin_px": settings.margin_px,
                   "regions": list(masks.interiors) + ["boundary", "frame"],

@@ -1,7 +1,7 @@
 """Where to compare a depth render with its simulation: panel interiors, occlusion bands, the frame.
 
 From a rendered proximity map (dioptres, 0 = sky; :mod:`vissim.render.depth_render`) and the
-observer's blur (:func:`vissim.bench.depth_viewers.blur_diameter_arcmin`), every pixel gets one
+observer's blur (:meth:`vissim.optics.setup.ViewingSetup.blur_diameter_at_arcmin`), every pixel gets one
 class:
 
 * a **depth discontinuity** is a pixel whose 3 x 3 neighbourhood spans more than

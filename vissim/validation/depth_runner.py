@@ -16,11 +16,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from vissim.atomic import write_json_atomic
 from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.imageio import read_image
-from vissim.provenance import json_safe, make_provenance
+from vissim.provenance import json_safe
 from vissim.validation.depth_campaign import (
     SCHEMA_VERSION,
     DepthCampaign,
@@ -28,12 +27,7 @@ from vissim.validation.depth_campaign import (
     DepthConfiguration,
 )
 from vissim.validation.depth_item import compute_depth_item
-from vissim.validation.runner import (
-    RunSummary,
-    _make_renders,
-    check_run_options,
-    connect_scheduler,
-)
+from vissim.validation.runner import RunSummary, make_missing_renders, plan_run
 
 __all__ = ["DepthRenderSpec", "render_depth_spec", "render_specs", "run_depth_campaign"]
 
@@ -58,7 +52,7 @@ class DepthRenderSpec:
         return "depth-" + hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def as_json(self) -> dict:
-        return json_safe({f.name: getattr(self, f.name) for f in dataclasses.fields(self)})
+        return json_safe(self)
 
     def render_scene(self) -> DepthScene:
         s = self.oversample
@@ -100,32 +94,17 @@ def run_depth_campaign(campaign: DepthCampaign, run_dir: str | Path, *, workers:
     """
     render = render or render_depth_spec
     run_dir = Path(run_dir)
-    check_run_options(run_dir, workers, spp)
-    if spp is not None:
-        campaign = dataclasses.replace(campaign, settings=dataclasses.replace(campaign.settings, spp=spp))
-    keys = [campaign.item_key(c) for c in campaign.configurations]
-    todo = [(k, c) for k, c in zip(keys, campaign.configurations)
-            if not (run_dir / "items" / k / "result.json").exists()]
+    campaign, keys, todo = plan_run(campaign, run_dir, workers, spp)
     needed = {spec.key: spec for _, c in todo for spec in render_specs(c, campaign.settings).values()}
-    pending = [s for s in needed.values() if not (run_dir / "renders" / f"{s.key}.exr").exists()]
-    client = connect_scheduler(scheduler) if scheduler and pending else None
-    try:
-        write_json_atomic(run_dir / "campaign.json", {
-            "kind": "depth", "name": campaign.name, "description": campaign.description, "source": campaign.source,
-            "settings": json_safe(campaign.settings), "items": keys,
-            "configurations": [c.as_json() for c in campaign.configurations],
-            "provenance": make_provenance(campaign=campaign.source)}, overwrite=True)
-        log.info("%d of %d depth items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending),
-                 len(needed) - len(pending))
-        if pending:
-            _make_renders(pending, run_dir, workers, client, render, show_progress)
-    finally:
-        if client is not None:
-            client.close()
+    record = {"kind": "depth", "name": campaign.name, "description": campaign.description, "source": campaign.source,
+              "settings": json_safe(campaign.settings), "items": keys,
+              "configurations": [c.as_json() for c in campaign.configurations]}
+    made = make_missing_renders(run_dir, needed, record, workers=workers, scheduler=scheduler, render=render,
+                                show_progress=show_progress, items=f"{len(todo)} of {len(keys)} depth items")
     for key, config in todo:
         renders = {name: read_image(run_dir / "renders" / f"{spec.key}.exr")
                    for name, spec in render_specs(config, campaign.settings).items()}
         compute_depth_item(key, config, campaign.settings, {name: r.pixels for name, r in renders.items()},
                            run_dir / "items" / key,
                            render_provenance={name: r.provenance for name, r in renders.items()})
-    return RunSummary(run_dir, len(keys), len(keys) - len(todo), len(pending), len(needed) - len(pending))
+    return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made)

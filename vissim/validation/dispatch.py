@@ -37,32 +37,23 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
                      spp: int | None = None, show_progress: bool = True) -> CampaignRun:
     """Run the campaign file at ``path`` into ``out`` -- a depth campaign or a single-plane one -- and report it."""
     path, out = Path(path), Path(out)
-    if is_depth_campaign(read_campaign_toml(path)):
-        from vissim.validation.depth_report import (
-            build_depth_report,
-            depth_summary_lines,
-        )
-
-        campaign = load_depth_campaign(path)
-        summary = run_depth_campaign(campaign, out, workers=workers, scheduler=scheduler, spp=spp,
+    depth = is_depth_campaign(read_campaign_toml(path))
+    if depth:
+        summary = run_depth_campaign(load_depth_campaign(path), out, workers=workers, scheduler=scheduler, spp=spp,
                                      show_progress=show_progress)
-        written = build_depth_report(out)
-        lines = depth_summary_lines(out)
-        kind = "depth"
     else:
         from vissim.validation.campaign import load_campaign
-        from vissim.validation.report import build_report
         from vissim.validation.runner import run_campaign
 
         summary = run_campaign(load_campaign(path), out, workers=workers, scheduler=scheduler, spp=spp,
                                show_progress=show_progress)
-        written = build_report(out)
-        lines = _single_plane_lines(out)
-        kind = "single-plane"
+    build_report, summary_lines = _report_of(depth)
+    written, lines = build_report(out), summary_lines(out)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
-    return CampaignRun(kind, summary, tuple(written), (head, *lines, f"report: {report} ({len(written)} files)"))
+    return CampaignRun("depth" if depth else "single-plane", summary, tuple(written),
+                       (head, *lines, f"report: {report} ({len(written)} files)"))
 
 
 def rebuild_any_report(run_dir: str | Path) -> tuple[list[Path], list[str]]:
@@ -71,16 +62,19 @@ def rebuild_any_report(run_dir: str | Path) -> tuple[list[Path], list[str]]:
     order = run_dir / "campaign.json"
     if not order.exists():
         raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
-    if json.loads(order.read_text()).get("kind") == "depth":
-        from vissim.validation.depth_report import (
-            build_depth_report,
-            depth_summary_lines,
-        )
+    build_report, summary_lines = _report_of(json.loads(order.read_text()).get("kind") == "depth")
+    return build_report(run_dir), summary_lines(run_dir)
 
-        return build_depth_report(run_dir), depth_summary_lines(run_dir)
+
+def _report_of(depth: bool):
+    """(write the report, its terminal summary lines): functions of a run folder of a depth or single-plane run."""
+    if depth:
+        from vissim.validation.depth_report import build_depth_report, depth_summary_lines
+
+        return build_depth_report, depth_summary_lines
     from vissim.validation.report import build_report
 
-    return build_report(run_dir), _single_plane_lines(run_dir)
+    return build_report, _single_plane_lines
 
 
 def _single_plane_lines(run_dir: Path) -> list[str]:

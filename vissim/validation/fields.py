@@ -8,16 +8,16 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP
 from vissim.errors import VissimInputError
 
-__all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number", "seed_pair", "text",
-           "table", "tables", "value_list", "choices", "lens", "lenses", "LensSpec", "MAX_SPP", "MAX_SEED",
-           "MAX_LENS_DIOPTERS", "CAMPAIGN_TABLES"]
+__all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number", "checked_numbers",
+           "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs", "lens", "lenses",
+           "LensSpec", "MAX_SPP", "MAX_SEED", "MAX_LENS_DIOPTERS", "CAMPAIGN_TABLES"]
 
 #: Campaign seeds: the no-lens render uses seed_a + seed_b + 1, which must stay a sampler seed.
 MAX_SEED = (MAX_SAMPLER_SEED - 1) // 2
@@ -85,6 +85,13 @@ def whole_number(value: Any, source: str, where: str, unit: str, *, lo: int, hi:
     return value
 
 
+def checked_numbers(raw: dict, ranges: dict, source: str, where: str, *, whole: bool = False) -> dict:
+    """The entries of ``raw`` that ``ranges`` names (``{key: (unit, lowest, highest)}``), each checked."""
+    check = whole_number if whole else number
+    return {key: check(raw[key], source, f"{where}.{key}", unit, lo=lo, hi=hi)
+            for key, (unit, lo, hi) in ranges.items() if key in raw}
+
+
 def seed_pair(value: Any, source: str, where: str) -> tuple[int, int]:
     """Two different seeds in 0..MAX_SEED (the ground truth twice: its noise floor)."""
     if not (isinstance(value, list) and len(value) == 2):
@@ -130,6 +137,31 @@ def choices(value: Any, allowed: tuple[str, ...], source: str, where: str) -> tu
     if len(set(value)) != len(value):
         raise field_error(source, where, f"lists a name twice: {value!r}")
     return tuple(value)
+
+
+def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numbers: dict, whole_numbers: dict,
+                    lists: dict, texts: tuple[str, ...], read_elsewhere: tuple[str, ...] = ()) -> dict:
+    """Checked fields of ``settings_class`` found in a campaign's settings table ``head`` (named ``where``).
+
+    ``numbers`` and ``whole_numbers`` as :func:`checked_numbers`, ``seeds`` by :func:`seed_pair`,
+    ``lists`` (``{key: allowed names}``) by :func:`choices`; ``texts`` must be strings and, like
+    ``read_elsewhere``, are no fields; any other key is refused.
+    """
+    known = {f.name for f in fields(settings_class)}
+    unknown = set(head) - known - set(texts) - set(read_elsewhere)
+    if unknown:
+        raise field_error(source, f"[{where}]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
+    kwargs = checked_numbers(head, numbers, source, where)
+    kwargs |= checked_numbers(head, whole_numbers, source, where, whole=True)
+    if "seeds" in head:
+        kwargs["seeds"] = seed_pair(head["seeds"], source, f"{where}.seeds")
+    for key, allowed in lists.items():
+        if key in head:
+            kwargs[key] = choices(head[key], allowed, source, f"{where}.{key}")
+    for key in texts:
+        if key in head:
+            text(head[key], source, f"{where}.{key}")
+    return kwargs
 
 
 @dataclass(frozen=True)

@@ -14,21 +14,18 @@ from vissim.validation.campaign import CampaignSettings, Configuration
 __all__ = ["RenderSpec", "bench_for", "campaign_bench", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec"]
 
 
-def campaign_bench(configuration: Configuration, settings: CampaignSettings, **extra) -> DslrBench:
+def _dslr_bench(grid, f_number: float, lenses: tuple[TrialLens, ...], **extra) -> DslrBench:
+    """A bench focused on its chart; ``grid`` (campaign settings or a render spec) gives distances and sampling."""
+    chart_distance_mm = m_to_mm(grid.chart_distance_m)
+    return DslrBench(focal_length_mm=grid.focal_length_mm, f_number=f_number, focus_distance_mm=chart_distance_mm,
+                     chart_distance_mm=chart_distance_mm, vertex_distance_mm=grid.vertex_distance_mm, lenses=lenses,
+                     arcmin_per_px=grid.arcmin_per_px, size_px=tuple(grid.tile_px), **extra)
+
+
+def campaign_bench(configuration: Configuration, settings: CampaignSettings) -> DslrBench:
     """The configuration's bench; its :meth:`~DslrBench.viewing_setup` is what the simulations assume."""
     thin = tuple(TrialLens(l.sphere_diopters, l.cylinder_diopters, l.axis_deg) for l in configuration.lenses)
-    return DslrBench(
-        focal_length_mm=settings.focal_length_mm,
-        f_number=configuration.f_number,
-        focus_distance_mm=m_to_mm(settings.chart_distance_m),
-        chart_distance_mm=m_to_mm(settings.chart_distance_m),
-        vertex_distance_mm=settings.vertex_distance_mm,
-        lenses=thin,
-        refractive_index=settings.refractive_index,
-        arcmin_per_px=settings.arcmin_per_px,
-        size_px=tuple(settings.tile_px),
-        **extra,
-    )
+    return _dslr_bench(settings, configuration.f_number, thin, refractive_index=settings.refractive_index)
 
 
 def bench_lenses(configuration: Configuration, settings: CampaignSettings) -> tuple[TrialLens, ...]:
@@ -92,18 +89,7 @@ def no_lens_spec(configuration: Configuration, settings: CampaignSettings) -> Re
 
 def bench_for(spec: RenderSpec) -> DslrBench:
     """The :class:`DslrBench` that renders ``spec`` (its lenses are already physical)."""
-    return DslrBench(
-        focal_length_mm=spec.focal_length_mm,
-        f_number=spec.f_number,
-        focus_distance_mm=m_to_mm(spec.chart_distance_m),
-        chart_distance_mm=m_to_mm(spec.chart_distance_m),
-        vertex_distance_mm=spec.vertex_distance_mm,
-        lenses=spec.lenses,
-        arcmin_per_px=spec.arcmin_per_px,
-        size_px=tuple(spec.tile_px),
-        spp=spec.spp,
-        seed=spec.seed,
-    )
+    return _dslr_bench(spec, spec.f_number, spec.lenses, spp=spec.spp, seed=spec.seed)
 
 
 def render_spec(spec: RenderSpec):

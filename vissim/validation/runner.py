@@ -36,7 +36,7 @@ from vissim.validation.captures import capture_problem, capture_tile, load_manif
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
 
-__all__ = ["run_campaign", "RunSummary"]
+__all__ = ["run_campaign", "RunSummary", "plan_run", "make_missing_renders"]
 
 log = logging.getLogger(__name__)
 
@@ -204,6 +204,37 @@ def nothing_to_compare(source: str, total: int, skipped: list[str]) -> VissimInp
     return VissimInputError(f"{source}: {which} skipped, nothing to compare: {'; '.join(skipped)}")
 
 
+def plan_run(campaign, run_dir: Path, workers: int, spp: int | None):
+    """Check ``-o``, ``--workers`` and ``--spp``; (campaign with ``spp`` applied, every item key, (key, item) to do)."""
+    check_run_options(run_dir, workers, spp)
+    if spp is not None:
+        campaign = replace(campaign, settings=replace(campaign.settings, spp=spp))
+    keys = [campaign.item_key(c) for c in campaign.configurations]
+    todo = [(k, c) for k, c in zip(keys, campaign.configurations) if not (run_dir / "items" / k / "result.json").exists()]
+    return campaign, keys, todo
+
+
+def make_missing_renders(run_dir: Path, needed: dict, record: dict, *, workers: int, scheduler: str | None,
+                         render: Callable, show_progress: bool, items: str) -> int:
+    """Write ``campaign.json`` (``record``) and the ``needed`` renders ({key: spec}) not yet in ``run_dir``.
+
+    The scheduler is connected before anything is written; ``items`` ("3 of 5 items") is logged.
+    Returns the number of renders made.
+    """
+    pending = [s for s in needed.values() if not _render_path(run_dir, s).exists()]
+    client = connect_scheduler(scheduler) if scheduler and pending else None
+    try:
+        provenance = make_provenance(campaign=record["source"])
+        write_json_atomic(run_dir / "campaign.json", {**record, "provenance": provenance}, overwrite=True)
+        log.info("%s to do; %d renders to make, %d reused", items, len(pending), len(needed) - len(pending))
+        if pending:
+            _make_renders(pending, run_dir, workers, client, render, show_progress)
+    finally:
+        if client is not None:
+            client.close()
+    return len(pending)
+
+
 def run_campaign(
     campaign: Campaign,
     run_dir: str | Path,
@@ -223,12 +254,8 @@ def run_campaign(
     """
     render = render or render_spec
     run_dir = Path(run_dir)
-    check_run_options(run_dir, workers, spp)
-    if spp is not None:
-        campaign = replace(campaign, settings=replace(campaign.settings, spp=spp))
+    campaign, keys, todo = plan_run(campaign, run_dir, workers, spp)
     settings = campaign.settings
-    keys = [campaign.item_key(c) for c in campaign.configurations]
-    todo = [(k, c) for k, c in zip(keys, campaign.configurations) if not (run_dir / "items" / k / "result.json").exists()]
     captures = load_manifest(campaign.manifest) if campaign.manifest and any(c.capture for _, c in todo) else {}
     plans = {k: _capture_plan(campaign, c, captures) for k, c in todo if c.capture}
     skipped = [p for p in plans.values() if isinstance(p, str)]
@@ -244,24 +271,11 @@ def run_campaign(
             continue
         for spec in (*truth_specs(config, settings), no_lens_spec(config, settings)):
             needed[spec.key] = spec
-    pending = [s for s in needed.values() if not _render_path(run_dir, s).exists()]
-    client = connect_scheduler(scheduler) if scheduler and pending else None
-    try:
-        write_json_atomic(
-            run_dir / "campaign.json",
-            {"name": campaign.name, "description": campaign.description, "source": campaign.source,
-             "settings": asdict(settings), "items": keys,
-             "configurations": [c.as_json() for c in campaign.configurations],
-             "provenance": make_provenance(campaign=campaign.source)},
-            overwrite=True,
-        )
-        log.info("%d of %d items to do; %d renders to make, %d reused", len(todo), len(keys), len(pending),
-                 len(needed) - len(pending))
-        if pending:
-            _make_renders(pending, run_dir, workers, client, render, show_progress)
-    finally:
-        if client is not None:
-            client.close()
+    record = {"name": campaign.name, "description": campaign.description, "source": campaign.source,
+              "settings": asdict(settings), "items": keys,
+              "configurations": [c.as_json() for c in campaign.configurations]}
+    made = make_missing_renders(run_dir, needed, record, workers=workers, scheduler=scheduler, render=render,
+                                show_progress=show_progress, items=f"{len(todo)} of {len(keys)} items")
     for key, config in todo:
         if config.capture:
             if key not in capture_inputs:
@@ -277,4 +291,4 @@ def run_campaign(
             source = {"ground_truth": "bench render", "render_keys": [spec.key for spec in roles.values()]}
         compute_item(key, config, settings, truth_a, truth_b, no_lens, run_dir / "items" / key, source=source,
                      render_provenance=render_provenance)
-    return RunSummary(run_dir, len(keys), len(keys) - len(todo), len(pending), len(needed) - len(pending), tuple(skipped))
+    return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped))
