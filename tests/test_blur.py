@@ -21,7 +21,7 @@ def delta(size=33, step=1.0):
 
 @pytest.fixture(scope="module")
 def defocus_psf():
-    return compute_psf(Wavefront.from_prescription(Prescription(-2.0), 3.0), arcmin_per_px=1.0, size_px=32)
+    return compute_psf(Wavefront.from_prescription(Prescription(-2.0), 3.0), arcmin_per_px=1.0, size_px=46)
 
 
 def random_image(seed=0, shape=(64, 80)):
@@ -36,11 +36,11 @@ def test_delta_psf_leaves_the_image_unchanged(padding):
 
 def test_even_sized_psf_does_not_shift_the_image(defocus_psf):
     # A point at the image centre stays centred: the PSF origin [N//2, N//2] maps to [0, 0].
-    image = np.zeros((64, 64), np.float32)
-    image[32, 32] = 1.0
+    image = np.zeros((96, 96), np.float32)
+    image[48, 48] = 1.0
     out = blur_image(image, defocus_psf, arcmin_per_px=1.0, padding="constant", background=0.0, dtype=np.float64)
-    # The output is the PSF itself, its origin [16, 16] on the point at [32, 32]: no shift.
-    np.testing.assert_allclose(out[16:48, 16:48], defocus_psf.data, atol=1e-9)
+    # The output is the PSF itself, its origin [23, 23] on the point at [48, 48]: no shift.
+    np.testing.assert_allclose(out[25:71, 25:71], defocus_psf.data, atol=1e-9)
     assert out.sum() == pytest.approx(1.0, abs=1e-9)
 
 
@@ -124,13 +124,13 @@ def test_sample_kernel_is_exact_for_well_sampled_images():
         c = (np.arange(n) + 0.5) * step - 32.0
         return np.exp(-(c[:, None] ** 2 + c[None, :] ** 2) / (2 * 3.0**2)).astype(np.float64)
 
-    psf_fine = compute_psf(front, arcmin_per_px=0.2, size_px=101, pixel="sample")
+    psf_fine = compute_psf(front, arcmin_per_px=0.2, size_px=135, pixel="sample")
     reference = blur_image(blob(0.2), psf_fine, arcmin_per_px=0.2, padding="constant", background=0.0, dtype=np.float64)
     reference = reference.reshape(64, 5, 64, 5).mean(axis=(1, 3))
     coarse = blob(0.2).reshape(64, 5, 64, 5).mean(axis=(1, 3))  # exact pixel integrals
     errors = {}
     for pixel in ("sample", "integrate"):
-        psf = compute_psf(front, arcmin_per_px=1.0, size_px=21, pixel=pixel)
+        psf = compute_psf(front, arcmin_per_px=1.0, size_px=27, pixel=pixel)
         out = blur_image(coarse, psf, arcmin_per_px=1.0, padding="constant", background=0.0, dtype=np.float64)
         errors[pixel] = float(np.max(np.abs(out - reference)))
     assert errors["sample"] < 2e-4

@@ -65,7 +65,7 @@ def test_psf_png_preview_and_zernike_with_prescription_terms(capsys, tmp_path):
 
 @pytest.mark.parametrize("rx", ["+0.00 DS", "plano"])
 def test_psf_of_no_aberration(capsys, tmp_path, rx):
-    code, _, _ = run(capsys, "psf", "--rx", rx, "--pupil-mm", "3", "--size", "32", "-o", str(tmp_path / "a.exr"))
+    code, _, _ = run(capsys, "psf", "--rx", rx, "--pupil-mm", "3", "--size", "128", "-o", str(tmp_path / "a.exr"))
     assert code == 0
 
 

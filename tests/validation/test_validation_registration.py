@@ -48,7 +48,7 @@ def test_recovers_known_subpixel_shifts_of_a_noisy_blurred_letter(letter, true_s
 def test_recovers_the_shift_of_a_pixel_integrated_letter():
     # A non-band-limited test: render at 0.1 arcmin/px, move by whole fine pixels, integrate 10 x 10
     # onto 1 arcmin pixels.  The capture is then exactly (2.3, -1.7) px away, edges pixel-integrated.
-    fine = blurred_letter(arcmin_per_px=0.1, scale=10, size_px=16)
+    fine = blurred_letter(arcmin_per_px=0.1, scale=10, size_px=40)
 
     def integrate(a):
         return a.reshape(a.shape[0] // 10, 10, a.shape[1] // 10, 10).mean(axis=(1, 3))

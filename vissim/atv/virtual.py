@@ -211,7 +211,7 @@ def fourier_retinal_image(request: SpotRequest, *, arcmin_per_px: float = 0.25) 
     pupil = request.subject.pupil_diameter_mm
     wavefront = Wavefront.from_prescription(request.residual, pupil)
     source_px = request.apparatus.source_size_arcmin / arcmin_per_px
-    size = suggested_size_px(wavefront, arcmin_per_px, wavelength_nm=request.apparatus.wavelength_nm, skirt_lambda_over_d=8.0)
+    size = suggested_size_px(wavefront, arcmin_per_px, wavelength_nm=request.apparatus.wavelength_nm)
     size = max(size + int(math.ceil(source_px)) + 2, int(math.ceil(request.field_arcmin / arcmin_per_px)) + 3)
     size += 1 - size % 2
     psf = compute_psf(wavefront, arcmin_per_px=arcmin_per_px, size_px=size, wavelength_nm=request.apparatus.wavelength_nm, mode="wave")

@@ -1,0 +1,204 @@
+"""How large a field a PSF needs: blur radius, and the energy that would fall outside a field.
+
+:func:`energy_outside_field` estimates the fraction of a PSF's energy outside a square field
+before the PSF is computed: the PSF is modelled as the ray-optics PSF convolved with the
+aberration-free pupil's Airy pattern.  Rays through a stratified pupil sample land at the
+visual direction given by the wavefront slope; each ray's Airy pattern is integrated over the
+square along a fan of directions, with the Airy pattern's exact radial tail
+``1 - EE(r) = J0^2(pi r) + J1^2(pi r)`` (r in lambda/D; Born & Wolf §8.5.2), which falls as
+2 / (pi^2 r): the Airy pattern leaves 1 % outside a square of half-width 18 lambda/D.
+
+A defocused pupil's rim diffracts more light past the geometric edge than the Airy pattern
+does: its Fresnel zone spreads the edge over about sqrt(2 N_F) lambda/D, N_F = the blur's
+Fresnel number (waves of equivalent defocus).  The conservative estimate widens each ray's
+Airy pattern by sqrt(1 + EDGE_BROADENING N_F); measured against computed PSFs from 0 to 16
+waves of defocus, astigmatism and coma (``tests/test_psf_field.py``) it is 0.9-2.2 times
+the true fraction outside.  :func:`~vissim.optics.psf.compute_psf` refuses on the energy it
+measures; the conservative estimate sizes fields (:func:`suggested_size_px`) and names the
+size that would hold the PSF.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.special import j0, j1
+
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.wavefront import Wavefront
+from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
+
+__all__ = [
+    "MAX_ENERGY_OUTSIDE",
+    "energy_outside_field",
+    "geometric_blur_radius_arcmin",
+    "size_holding_px",
+    "suggested_size_px",
+]
+
+#: Largest fraction of a PSF's energy that may fall outside its field.
+MAX_ENERGY_OUTSIDE = 0.01
+#: Rays per pupil side for the estimate (about 0.8 x this squared inside the pupil).
+ESTIMATE_RAYS_PER_SIDE = 40
+#: Directions over which each ray's diffraction pattern is integrated.
+ESTIMATE_DIRECTIONS = 48
+_AIRY_TABLE_LAMBDA_OVER_D = 64.0
+#: Sizes searched for a field that holds the PSF.
+SIZE_SEARCH_LIMIT_PX = 2**20
+#: Widening of the diffraction pattern with the blur's Fresnel number (conservative estimate).
+EDGE_BROADENING = 0.5
+
+
+def _pupil_points(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A polar sample of the unit disc for slope maxima (deterministic)."""
+    rho = np.sqrt(np.linspace(0.0, 1.0, n))
+    theta = np.linspace(0.0, 2 * np.pi, 4 * n, endpoint=False)
+    rr, tt = np.meshgrid(rho, theta, indexing="ij")
+    return rr * np.cos(tt), rr * np.sin(tt)
+
+
+def geometric_blur_radius_arcmin(wavefront: Wavefront, pupil_diameter_mm: float) -> float:
+    """Largest ray deviation |grad W| over the pupil, in arcmin (tilt included)."""
+    if not hasattr(wavefront, "coefficients_um"):  # an OPD map: its own slopes
+        ux, uy = _pupil_points(48)
+        sx, sy = wavefront.slopes_mrad(pupil_diameter_mm / 2.0 * ux, pupil_diameter_mm / 2.0 * uy)
+        return float(rad_to_arcmin(1e-3 * np.max(np.hypot(sx, sy))))
+    if not wavefront.coefficients_um:
+        return 0.0
+    return _blur_radius_cached(tuple(wavefront.coefficients_um.items()), wavefront.pupil_diameter_mm, float(pupil_diameter_mm))
+
+
+@functools.lru_cache(maxsize=256)
+def _blur_radius_cached(items: tuple, measured_mm: float, diameter_mm: float) -> float:
+    ux, uy = _pupil_points(48)
+    radius = diameter_mm / 2.0
+    sx, sy = Wavefront(dict(items), measured_mm).slopes_mrad(radius * ux, radius * uy)
+    return float(rad_to_arcmin(1e-3 * np.max(np.hypot(sx, sy))))
+
+
+def front_at_wavelength(wavefront: Wavefront, wavelength_nm: float, lca_reference_nm: float | None) -> Wavefront:
+    if lca_reference_nm is None:
+        return wavefront
+    return wavefront.with_defocus_diopters(chromatic_difference_of_refraction_diopters(wavelength_nm, lca_reference_nm))
+
+
+def suggested_size_px(
+    wavefront: Wavefront,
+    arcmin_per_px: float,
+    *,
+    pupil_diameter_mm: float | None = None,
+    wavelength_nm: float | Sequence[float] = 550.0,
+    weights: Sequence[float] | None = None,
+    lca_reference_nm: float | None = None,
+    mode: str = "wave",
+    minimum_px: int = 33,
+) -> int:
+    """The smallest odd field size (px, at least ``minimum_px``) that holds all but
+    :data:`MAX_ENERGY_OUTSIDE` of the PSF's energy (:func:`energy_outside_field`)."""
+    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
+    step = check_arcmin_per_px(arcmin_per_px)
+    wavelengths = [float(w) for w in np.atleast_1d(wavelength_nm)]
+    weights = [1.0] * len(wavelengths) if weights is None else list(weights)
+    start = minimum_px - 1 + minimum_px % 2
+    if energy_outside_field(wavefront, diameter, wavelengths, weights, step, start, mode=mode,
+                            lca_reference_nm=lca_reference_nm) <= MAX_ENERGY_OUTSIDE:
+        return start + 1 - start % 2
+    return size_holding_px(wavefront, diameter, wavelengths, weights, step, start, mode=mode,
+                           lca_reference_nm=lca_reference_nm)
+
+
+@functools.cache
+def _airy_tail_table() -> tuple[np.ndarray, np.ndarray]:
+    r = np.linspace(0.0, _AIRY_TABLE_LAMBDA_OVER_D, 20001)
+    return r, np.square(j0(np.pi * r)) + np.square(j1(np.pi * r))
+
+
+def airy_tail(r_lambda_over_d: np.ndarray) -> np.ndarray:
+    """Fraction of an Airy pattern's energy beyond radius r (lambda/D): J0^2 + J1^2 of pi r (Rayleigh).
+
+    Tabulated to 64 lambda/D, beyond which it is its asymptote 2 / (pi^2 r) to 0.2 % relative.
+    """
+    r, tail = _airy_tail_table()
+    far = (2.0 / np.pi**2) / np.maximum(r_lambda_over_d, r[-1])
+    return np.where(r_lambda_over_d < r[-1], np.interp(r_lambda_over_d, r, tail), far)
+
+
+def _rays(wavefront: Wavefront, diameter_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """Landing offsets (col, row) in arcmin of a stratified pupil sample of rays."""
+    n = ESTIMATE_RAYS_PER_SIDE
+    cells = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+    u, v = np.meshgrid(cells, cells)
+    keep = u * u + v * v <= 1.0
+    sx, sy = wavefront.slopes_mrad(-u[keep] * diameter_mm / 2, -v[keep] * diameter_mm / 2)
+    return rad_to_arcmin(-1e-3 * sx), rad_to_arcmin(-1e-3 * sy)
+
+
+def _inside_fraction(col, row, low, high, lambda_over_d):
+    """Mean fraction of each ray's diffraction pattern inside the square [low, high]^2 (arcmin)."""
+    if lambda_over_d is None:  # ray optics: the ray is in or out
+        return float(np.mean((col >= low) & (col <= high) & (row >= low) & (row <= high)))
+    phi = (np.arange(ESTIMATE_DIRECTIONS) + 0.5) * (2 * np.pi / ESTIMATE_DIRECTIONS)
+    dx, dy = np.cos(phi)[None, :], np.sin(phi)[None, :]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # slab intersection with the square
+        tx = np.stack([(low - col[:, None]) / dx, (high - col[:, None]) / dx])
+        ty = np.stack([(low - row[:, None]) / dy, (high - row[:, None]) / dy])
+    enter = np.maximum(np.maximum(tx.min(axis=0), ty.min(axis=0)), 0.0)
+    leave = np.minimum(tx.max(axis=0), ty.max(axis=0))
+    inside = np.where(leave > enter, airy_tail(enter / lambda_over_d) - airy_tail(leave / lambda_over_d), 0.0)
+    return float(np.mean(inside))
+
+
+def energy_outside_field(
+    wavefront: Wavefront,
+    diameter_mm: float,
+    wavelengths_nm: Sequence[float],
+    weights: Sequence[float],
+    arcmin_per_px: float,
+    size_px: int,
+    *,
+    mode: str = "wave",
+    lca_reference_nm: float | None = None,
+    conservative: bool = True,
+) -> float:
+    """Estimated fraction of the (weighted) PSF's energy outside a ``size_px`` field.
+
+    ``conservative``: widen each ray's diffraction pattern for the rim's Fresnel diffraction
+    (see the module docstring), so the estimate is not below the PSF's; otherwise the plain
+    ray-optics-times-Airy model, which can be well below it for a defocused pupil.
+    """
+    low = -(size_px // 2 + 0.5) * arcmin_per_px  # pixel edges; the origin is at [N//2, N//2]
+    high = (size_px - size_px // 2 - 0.5) * arcmin_per_px
+    outside = 0.0
+    for w, weight in zip(wavelengths_nm, weights):
+        front = front_at_wavelength(wavefront, w, lca_reference_nm)
+        col, row = _rays(front, diameter_mm)
+        spread = None
+        if mode == "wave":
+            lambda_over_d = float(rad_to_arcmin(nm_to_mm(w) / diameter_mm))
+            fresnel = float(arcmin_to_rad(geometric_blur_radius_arcmin(front, diameter_mm))) * diameter_mm / (4 * nm_to_mm(w))
+            spread = lambda_over_d * math.sqrt(1.0 + (EDGE_BROADENING * fresnel if conservative else 0.0))
+        outside += weight * (1.0 - _inside_fraction(col, row, low, high, spread))
+    return outside / sum(weights)
+
+
+def size_holding_px(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_px, size_px, *, mode="wave",
+                    lca_reference_nm=None, fraction: float = MAX_ENERGY_OUTSIDE) -> int:
+    """Smallest odd size > ``size_px`` whose field leaves at most ``fraction`` of the energy outside
+    (conservative estimate); ``size_px`` itself is taken to be too small."""
+    def too_small(n):
+        return energy_outside_field(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_px, n,
+                                    mode=mode, lca_reference_nm=lca_reference_nm) > fraction
+    low, high = size_px, max(size_px, 3)
+    while too_small(high):
+        if high >= SIZE_SEARCH_LIMIT_PX:
+            return SIZE_SEARCH_LIMIT_PX + 1  # more than any PSF vissim computes: the caller refuses
+        low, high = high, min(2 * high, SIZE_SEARCH_LIMIT_PX)
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (middle, high) if too_small(middle) else (low, middle)
+    return high + (1 - high % 2)

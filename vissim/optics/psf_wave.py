@@ -1,0 +1,315 @@
+"""Wave-optical PSFs: the pupil's Fourier transform by matrix products or by one FFT.
+
+The generalised pupil is sampled as cell averages (:mod:`vissim.optics.pupil_grid`), on as
+many cells as the wavefront needs (``docs/conventions.md``, "Pupil sampling"), independently
+of the output grid.  Its Fraunhofer transform is evaluated on an internal grid finer than the
+intensity's Nyquist interval lambda/(2D), over a field that holds the output pixels and the
+PSF, and then integrated over the output pixels (or band-limited, ``pixel="sample"``).
+
+Two ways to evaluate the transform, the same numbers to round-off:
+
+* ``"mft"``, a matrix Fourier transform ``A G A^T`` (Soummer et al. 2007, Opt. Express 15,
+  15935): any pupil step, exactly the internal samples asked for;
+* ``"fft"``, one zero-padded FFT: the pupil step is then lambda / (FFT field), so the FFT
+  grows until the pupil is sampled finely enough.
+
+The cheaper of the two (an operation count) is chosen per call and recorded in the
+provenance (``PSF.sampling``).  Several wavelengths share the internal grid and, for the
+matrix transform, the pupil grid: they are transformed as one batch.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft
+
+from vissim.errors import VissimInputError
+from vissim.optics.psf_field import EDGE_BROADENING
+from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
+from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
+
+__all__ = ["PHASE_STEP_WAVES", "MIN_PUPIL_CELLS", "PsfSampling", "plan_wave_psf", "wave_psf", "to_output_pixels"]
+
+#: Largest change of the wavefront across one pupil cell at its steepest slope, in waves.
+PHASE_STEP_WAVES = 0.125
+#: Fewest cells across the pupil diameter (the rim's quadrature needs no more).
+MIN_PUPIL_CELLS = 64
+#: Diffraction margin (in lambda/D) kept beyond the geometric blur on each side.
+SKIRT_MARGIN_LAMBDA_OVER_D = 8.0
+#: Largest internal grid or FFT, per side (complex128: 1 GiB at 8192^2).
+MAX_INTERNAL_SIZE = 8192
+#: Bytes per internal grid point (complex field, intensity, the pixel filter's spectrum).
+BYTES_PER_INTERNAL_PX = 48
+#: Largest fraction of the energy that the pupil sampling may fold back into the field (aliasing).
+ALIAS_MAX_ENERGY = 2e-3
+#: Measured rates on this project's 2-core machine: real matrix products and complex FFTs (flop/s).
+GEMM_FLOPS_PER_S, FFT_FLOPS_PER_S = 40e9, 6e9
+
+
+@dataclass(frozen=True)
+class PsfSampling:
+    """How one monochromatic wave PSF is sampled internally."""
+
+    method: str  # "mft" or "fft"
+    wavelength_nm: float
+    oversample: int  # q: internal samples per output pixel along each axis
+    internal_size: int  # M: internal grid (or FFT) points per side
+    pupil_step_mm: float
+    pupil_cells: float  # cells across the pupil diameter
+    internal_arcmin_per_px: float
+
+    @property
+    def fft_size(self) -> int:
+        return self.internal_size
+
+    def as_json(self) -> dict:
+        return {
+            "method": self.method,
+            "wavelength_nm": self.wavelength_nm,
+            "oversample": self.oversample,
+            "internal_size": self.internal_size,
+            "pupil_step_mm": self.pupil_step_mm,
+            "pupil_cells": self.pupil_cells,
+            "internal_arcmin_per_px": self.internal_arcmin_per_px,
+        }
+
+
+def required_pupil_cells(blur_radius_arcmin: float, pupil_diameter_mm: float, wavelength_nm: float) -> float:
+    """Cells across the pupil so the phase changes by <= PHASE_STEP_WAVES per cell at the steepest slope."""
+    slope_rad = float(arcmin_to_rad(blur_radius_arcmin))
+    return max(MIN_PUPIL_CELLS, pupil_diameter_mm * slope_rad / (PHASE_STEP_WAVES * nm_to_mm(wavelength_nm)))
+
+
+def _fft_seconds(size: int) -> float:
+    return 5.0 * size**2 * math.log2(max(size, 2) ** 2) / FFT_FLOPS_PER_S
+
+
+def fold_radius_arcmin(blur_arcmin: float, lambda_over_d_arcmin: float) -> float:
+    """Radius beyond which at most ALIAS_MAX_ENERGY of the PSF lies: the Airy tail 2 / (pi^2 r),
+    widened for a defocused rim as in :mod:`vissim.optics.psf_field`, beyond the geometric blur."""
+    fresnel = blur_arcmin / lambda_over_d_arcmin / 4.0  # the blur's Fresnel number, waves
+    widening = math.sqrt(1.0 + EDGE_BROADENING * fresnel)
+    return blur_arcmin + widening * lambda_over_d_arcmin * 2.0 / (math.pi**2 * ALIAS_MAX_ENERGY)
+
+
+def plan_wave_psf(
+    pupil_diameter_mm: float,
+    wavelengths_nm: Sequence[float],
+    arcmin_per_px: float,
+    size_px: int,
+    blur_radii_arcmin: Sequence[float],
+    method: str | None = None,
+) -> tuple[PsfSampling, ...]:
+    """Internal sampling shared by the wavelengths, by the cheaper method unless ``method`` is given.
+
+    The pupil cells repeat the PSF every lambda/step in angle (for the FFT, lambda/step is its
+    field).  That period must hold the internal field plus the radius beyond which at most
+    ALIAS_MAX_ENERGY of the light lies, so what folds back into the field is below that; the
+    light itself then lies where the cell average's sinc is divided out in full.
+    """
+    d = pupil_diameter_mm
+    lambda_over_d = [float(rad_to_arcmin(nm_to_mm(w) / d)) for w in wavelengths_nm]
+    oversample = max(1, math.ceil(arcmin_per_px / (0.5 * min(lambda_over_d)) - 1e-9))
+    internal = arcmin_per_px / oversample
+    reach = [b + SKIRT_MARGIN_LAMBDA_OVER_D * ld for b, ld in zip(blur_radii_arcmin, lambda_over_d)]
+    field = max(size_px * arcmin_per_px, 2.0 * max(reach))
+    size = max(int(math.ceil(field / internal - 1e-9)), oversample * size_px)
+    size += size % 2
+    half_field = size * internal / 2
+    period = [max(required_pupil_cells(b, d, w) * ld, half_field + fold_radius_arcmin(b, ld))
+              for b, w, ld in zip(blur_radii_arcmin, wavelengths_nm, lambda_over_d)]  # arcmin
+    # Matrix transform: one pupil grid for every wavelength.
+    mft_step = d / max(p / ld for p, ld in zip(period, lambda_over_d))
+    grid = 2 * int(math.ceil(d / 2 / mft_step + 0.5)) + 1
+    n = len(wavelengths_nm)
+    mft_seconds = n * 2.0 * (grid**2 * size + grid * size**2) / GEMM_FLOPS_PER_S + _fft_seconds(size)
+    # FFT: its field is the period; one FFT per wavelength and one for the pixels.
+    fft = scipy.fft.next_fast_len(max(size, int(math.ceil(max(period) / internal - 1e-9))))
+    fft += fft % 2
+    fft_seconds = (n + 1) * _fft_seconds(fft)
+    if method is None:
+        method = "fft" if fft_seconds < mft_seconds and fft <= MAX_INTERNAL_SIZE else "mft"
+    used = fft if method == "fft" else size
+    if used > MAX_INTERNAL_SIZE:
+        raise VissimInputError(
+            f"{arcmin_per_px:g} arcmin/px over {size_px} px with a {d:g} mm pupil needs a {used}^2 internal grid "
+            f"(over the {MAX_INTERNAL_SIZE}^2 limit, ~{used**2 * BYTES_PER_INTERNAL_PX / 2**30:.0f} GiB); "
+            "use coarser sampling or a smaller field"
+        )
+    plans = []
+    for w in wavelengths_nm:
+        step = mft_step if method == "mft" else nm_to_mm(w) / (fft * float(arcmin_to_rad(internal)))
+        plans.append(PsfSampling(method, float(w), oversample, used, step, d / step, internal))
+    return tuple(plans)
+
+
+def wave_psf_memory_bytes(plans: Sequence[PsfSampling]) -> float:
+    """Peak bytes of :func:`wave_psf` for these plans (internal grids; the batch is bounded)."""
+    return float(plans[0].internal_size) ** 2 * BYTES_PER_INTERNAL_PX * 2
+
+
+@functools.lru_cache(maxsize=16)
+def _folded_matrices(size: int, internal_arcmin: float, pupil_step_mm: float, half: int, wavelength_nm: float, dtype):
+    """Real cos and sin of ``k theta_r u_j`` for theta_r >= 0 (rows 0..size/2) and u_j >= 0, over the
+    cell average's sinc (divided out up to sinc(1/2): beyond, only folded skirt, not to amplify)."""
+    wavelength_mm = nm_to_mm(wavelength_nm)
+    theta = np.arange(size // 2 + 1) * float(arcmin_to_rad(internal_arcmin))
+    u = np.arange(half + 1) * pupil_step_mm
+    phase = (2 * math.pi / wavelength_mm) * np.outer(theta, u)
+    correction = 1.0 / np.sinc(np.minimum(theta * pupil_step_mm / wavelength_mm, 0.5))[:, None]
+    cos, sin = (np.cos(phase) * correction).astype(dtype), (np.sin(phase) * correction).astype(dtype)
+    for array in (cos, sin):
+        array.setflags(write=False)
+    return cos, sin
+
+
+def _fold(array: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """Even and odd parts about the centre index along ``axis``, on the centre and beyond."""
+    a = np.moveaxis(array, axis, -1)
+    h = a.shape[-1] // 2
+    ahead, behind = a[..., h:], a[..., h::-1]
+    even, odd = ahead + behind, ahead - behind
+    even[..., 0] *= 0.5
+    return np.moveaxis(even, -1, axis), np.moveaxis(odd, -1, axis)
+
+
+def _transform(matrix: np.ndarray, real: np.ndarray, imag: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``matrix @ (real + i imag)`` for a real ``matrix``, as one real product."""
+    n = real.shape[-1]
+    product = matrix @ np.concatenate([real, imag], axis=-1)
+    return product[..., :n], product[..., n:]
+
+
+def _quadrant_intensities(pupil: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> dict:
+    """|A G A^T|^2 for ``A = cos - i sin`` on the four quadrants of non-negative |theta|.
+
+    The cell grid is symmetric about its centre, so each axis splits into even and odd parts
+    that transform by real cosines and sines over half the cells, and the output's four
+    quadrants follow from the non-negative one: a quarter of the multiply-adds of ``A G A^T``.
+    Keys: the signs of (theta_row, theta_col).
+    """
+    even, odd = _fold(pupil, axis=-1)  # along the columns
+    # Columns: T(row, theta_c) = even C^T - i odd S^T, kept as its even (te) and odd (to) parts.
+    te = _transform(cos, even.real.T.copy(), even.imag.T.copy())  # (theta_c, rows) pairs
+    to = _transform(sin, odd.real.T.copy(), odd.imag.T.copy())
+    # Rows: fold each part about the centre row, then cos / sin again.
+    ee, eo = _fold(te[0].T + 1j * te[1].T, axis=0)
+    oe, oo = _fold(to[0].T + 1j * to[1].T, axis=0)
+    p1, p2 = _transform(cos, ee.real, ee.imag), _transform(sin, eo.real, eo.imag)
+    p3, p4 = _transform(cos, oe.real, oe.imag), _transform(sin, oo.real, oo.imag)
+    # E(+,+) = A - iB, E(-,-) = A + iB with A = p1 - p4, B = p2 + p3;
+    # E(+,-) = C - iD, E(-,+) = C + iD with C = p1 + p4, D = p2 - p3.
+    a = (p1[0] - p4[0], p1[1] - p4[1])
+    b = (p2[0] + p3[0], p2[1] + p3[1])
+    c = (p1[0] + p4[0], p1[1] + p4[1])
+    d = (p2[0] - p3[0], p2[1] - p3[1])
+    sum_ab = a[0] ** 2 + a[1] ** 2 + b[0] ** 2 + b[1] ** 2
+    cross_ab = 2 * (a[0] * b[1] - a[1] * b[0])
+    sum_cd = c[0] ** 2 + c[1] ** 2 + d[0] ** 2 + d[1] ** 2
+    cross_cd = 2 * (c[0] * d[1] - c[1] * d[0])
+    return {(1, 1): sum_ab + cross_ab, (-1, -1): sum_ab - cross_ab, (1, -1): sum_cd + cross_cd, (-1, 1): sum_cd - cross_cd}
+
+
+def _add_quadrants(total: np.ndarray, quadrants: dict, weight: float) -> None:
+    """Add the quadrants (|k| = 0..M/2 each way) to an M x M intensity in FFT order."""
+    h = total.shape[0] // 2
+    index = {1: (slice(0, h), slice(0, h)), -1: (slice(h, None), slice(h, 0, -1))}
+    for (sr, sc), values in quadrants.items():
+        (rows_out, rows_in), (cols_out, cols_in) = index[sr], index[sc]
+        total[rows_out, cols_out] += weight * values[rows_in, cols_in]
+
+
+def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
+    """Sum over wavelengths of weight x unit-energy intensity on the internal grid (origin at [0, 0])."""
+    complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
+    plan = plans[0]
+    grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
+    m = plan.internal_size
+    total = np.zeros((m, m), dtype=dtype)
+    for front, weight, each in zip(fronts, weights, plans):
+        pupil = generalised_pupil(grid, opd_on_points_um(grid, front), each.wavelength_nm, complex_dtype)
+        cos, sin = _folded_matrices(m, plan.internal_arcmin_per_px, plan.pupil_step_mm, grid.half,
+                                    each.wavelength_nm, dtype)
+        scale = (plan.pupil_step_mm * float(arcmin_to_rad(plan.internal_arcmin_per_px))
+                 / nm_to_mm(each.wavelength_nm)) ** 2 / grid.area_cells
+        _add_quadrants(total, _quadrant_intensities(pupil, cos, sin), weight * scale)
+    return total
+
+
+@functools.lru_cache(maxsize=8)
+def _cell_transfer(size: int) -> np.ndarray:
+    """1 / sinc of the FFT's angles in units of lambda / step: the cell average divided out."""
+    return 1.0 / np.sinc(scipy.fft.fftfreq(size))
+
+
+def _fft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
+    complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
+    m = plans[0].internal_size
+    total = np.zeros((m, m), dtype=dtype)
+    correction = _cell_transfer(m).astype(dtype)
+    for front, weight, plan in zip(fronts, weights, plans):
+        grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
+        window = np.arange(-grid.half, grid.half + 1) % m  # pupil centre at index [0, 0]: no shifts
+        pupil = np.zeros((m, m), dtype=complex_dtype)
+        pupil[np.ix_(window, window)] = generalised_pupil(grid, opd_on_points_um(grid, front), plan.wavelength_nm,
+                                                          complex_dtype)
+        spectrum = scipy.fft.fft2(pupil, workers=-1, overwrite_x=True)
+        spectrum *= correction[:, None]
+        spectrum *= correction[None, :]
+        total += (weight / (m * m * grid.area_cells)) * (np.square(spectrum.real) + np.square(spectrum.imag))
+    return total
+
+
+def _profile(cycles_per_pixel: np.ndarray, pixel: str) -> np.ndarray:
+    if pixel == "integrate":  # the output pixel's box
+        return np.sinc(cycles_per_pixel)
+    # ideal low-pass at the output Nyquist (half weight on the Nyquist bin itself)
+    magnitude = np.abs(cycles_per_pixel)
+    return np.where(magnitude < 0.5 - 1e-12, 1.0, np.where(magnitude <= 0.5 + 1e-12, 0.5, 0.0))
+
+
+@functools.lru_cache(maxsize=16)
+def _pixel_transfer(m: int, oversample: int, dtype, pixel: str) -> np.ndarray:
+    """Transfer function applied before decimation onto output pixels, rfft2 grid (cached)."""
+    y = _profile(scipy.fft.fftfreq(m) * oversample, pixel)
+    x = _profile(scipy.fft.rfftfreq(m) * oversample, pixel)
+    transfer = (y[:, None] * x[None, :]).astype(dtype)
+    transfer.setflags(write=False)
+    return transfer
+
+
+def to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixel: str) -> np.ndarray:
+    """Decimate the (Nyquist-sampled, periodic) internal PSF onto ``size_px`` output pixels.
+
+    ``intensity`` has its origin at ``[0, 0]``; the output has it at ``[N//2, N//2]``.
+
+    * ``pixel="integrate"``: exact integrals over the output pixels (the box applied as its sinc
+      in the Fourier domain, then sampled).  What a sensor records; non-negative; unit sum.
+    * ``pixel="sample"``: band-limited point samples (ideal low-pass at the output Nyquist),
+      times the pixel area.  Its DFT is the OTF itself: the exact kernel for convolving a
+      well-sampled, pixel-integrated image (an integrated PSF adds the pixel's box once more).
+      May ring slightly negative near sharp features.
+    """
+    m = intensity.shape[0]
+    if oversample * size_px > m:
+        raise AssertionError("output field larger than the internal field")  # pragma: no cover
+    spectrum = scipy.fft.rfft2(intensity, workers=-1)
+    spectrum *= _pixel_transfer(m, oversample, intensity.dtype.type, pixel)
+    averaged = scipy.fft.irfft2(spectrum, s=intensity.shape, workers=-1, overwrite_x=True)
+    picks = ((np.arange(size_px) - size_px // 2) * oversample) % m
+    return averaged[np.ix_(picks, picks)] * oversample**2
+
+
+def wave_psf(fronts, weights, diameter_mm, plans, size_px, dtype, pixel) -> np.ndarray:
+    """Weighted wave PSF on the output pixels; each wavelength carries its weight of the total energy."""
+    engine = _mft_intensity if plans[0].method == "mft" else _fft_intensity
+    intensity = engine(fronts, weights, diameter_mm, plans, dtype)
+    out = to_output_pixels(intensity, size_px, plans[0].oversample, pixel)
+    if pixel == "integrate":
+        out = np.maximum(out, 0.0)  # round-off only: integrals of an intensity are >= 0
+    return out

@@ -1,0 +1,173 @@
+"""The pupil sampled for Fourier optics: cell averages of the generalised pupil, exact at the edge.
+
+A square grid of cells of side ``step_mm`` is centred on the pupil (cell ``[h, h]`` holds the
+axis).  Each cell carries the *average over the cell* of the generalised pupil
+``P(x) exp(i k W(x))`` (``P`` the hard-edged disc), not its value at the cell centre:
+
+* inside cells: 2 x 2 Gauss-Legendre points (exact for cubic phase variation across a cell);
+* cells the rim crosses: Gauss-Legendre over the part of the cell inside the disc, split where
+  the rim enters and leaves, so the covered area is exact and the phase is integrated over it.
+
+Sampling cell averages makes the grid's discrete Fourier sum the transform of the pupil
+convolved with the cell: at angle ``a`` it carries the factor ``sinc(a_x step/lambda)
+sinc(a_y step/lambda)`` for every wavefront, which :mod:`vissim.optics.psf_wave` divides out.
+What is left is aliasing of light from ``lambda/step`` away, kept out of the field by the
+sampling criterion (``docs/conventions.md``, "Pupil sampling").
+
+Orientation as in :mod:`vissim.optics.psf`: array columns run to the observer's right and rows
+down, so a cell at offsets (u, v) is the OSA pupil point (x, y) = (-u, -v).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.polynomial.legendre import leggauss
+
+from vissim.optics.zernike import zernike_nm
+
+__all__ = ["PupilGrid", "pupil_grid", "generalised_pupil"]
+
+#: Gauss-Legendre points per axis in an inside cell.
+INSIDE_POINTS = 2
+#: Gauss-Legendre points per axis in each piece of a rim cell.
+RIM_POINTS = 4
+
+
+@dataclass(frozen=True, eq=False)
+class PupilGrid:
+    """Quadrature of the disc on ``(2 half + 1)^2`` cells of side ``step_mm``.
+
+    Inside cells: flat cell indices ``inside`` with ``INSIDE_POINTS^2`` points each (rows of
+    ``x_osa_mm[:n_inside]``); rim cells: one point list with the cell of each point in
+    ``rim_cell``.  Weights are fractions of a cell's area.
+    """
+
+    step_mm: float
+    diameter_mm: float
+    half: int
+    inside: np.ndarray  # (n_inside,) flat cell indices
+    inside_x_mm: np.ndarray  # (n_inside, INSIDE_POINTS**2) OSA coordinates of the points
+    inside_y_mm: np.ndarray
+    inside_weights: np.ndarray  # (INSIDE_POINTS**2,)
+    rim_cell: np.ndarray  # (n_rim_points,) flat cell index of each rim point
+    rim_x_mm: np.ndarray
+    rim_y_mm: np.ndarray
+    rim_weights: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return 2 * self.half + 1
+
+    @property
+    def offsets_mm(self) -> np.ndarray:
+        """Cell-centre offsets along the array's columns (and rows), mm."""
+        return np.arange(-self.half, self.half + 1) * self.step_mm
+
+    @property
+    def area_cells(self) -> float:
+        """The disc's area in cells."""
+        return math.pi * (self.diameter_mm / 2.0 / self.step_mm) ** 2
+
+    def points(self) -> tuple[np.ndarray, np.ndarray]:
+        """All quadrature points (OSA x, y in mm), inside cells' first: where to evaluate W."""
+        return (np.concatenate([self.inside_x_mm.ravel(), self.rim_x_mm]),
+                np.concatenate([self.inside_y_mm.ravel(), self.rim_y_mm]))
+
+
+def _inside_points(centres_u, centres_v, step):
+    nodes, w = leggauss(INSIDE_POINTS)
+    du, dv = np.meshgrid(nodes * step / 2, nodes * step / 2)
+    weights = np.outer(w, w).ravel() / 4.0
+    u = centres_u[:, None] + du.ravel()[None, :]
+    v = centres_v[:, None] + dv.ravel()[None, :]
+    return u, v, np.broadcast_to(weights, u.shape)
+
+
+def _rim_points(centres_u, centres_v, step, radius):
+    """Gauss-Legendre over cell ∩ disc: pieces in u between the rim's crossings, then v in each column."""
+    u0, u1 = centres_u - step / 2, centres_u + step / 2
+    v0, v1 = centres_v - step / 2, centres_v + step / 2
+    breaks = [u0, u1, np.full_like(u0, -radius), np.full_like(u0, radius)]
+    for v in (v0, v1):
+        root = np.sqrt(np.maximum(radius**2 - v**2, 0.0))
+        breaks += [root, -root]
+    cuts = np.sort(np.clip(np.stack(breaks, axis=1), u0[:, None], u1[:, None]), axis=1)
+    nodes, w = leggauss(RIM_POINTS)
+    us, vs, ws = [], [], []
+    for a, b in zip(cuts[:, :-1].T, cuts[:, 1:].T):  # pieces, some of zero length
+        for ni, wi in zip(nodes, w):
+            u = (a + b) / 2 + (b - a) / 2 * ni
+            chord = np.sqrt(np.maximum(radius**2 - u**2, 0.0))
+            lo, hi = np.maximum(v0, -chord), np.minimum(v1, chord)
+            height = np.maximum(hi - lo, 0.0)
+            for nj, wj in zip(nodes, w):
+                us.append(u)
+                vs.append((lo + hi) / 2 + height / 2 * nj)
+                ws.append(wi * wj * (b - a) / 2 * height / 2 / step**2)
+    return np.stack(us, axis=1), np.stack(vs, axis=1), np.stack(ws, axis=1)
+
+
+@functools.lru_cache(maxsize=32)
+def pupil_grid(step_mm: float, diameter_mm: float) -> PupilGrid:
+    """The cells and quadrature points of a ``diameter_mm`` disc at ``step_mm`` (cached)."""
+    radius = diameter_mm / 2.0
+    half = int(math.ceil(radius / step_mm + 0.5))
+    offsets = np.arange(-half, half + 1) * step_mm
+    u, v = (a.ravel() for a in np.meshgrid(offsets, offsets))  # u along columns, v along rows
+    near = np.hypot(np.maximum(np.abs(u) - step_mm / 2, 0), np.maximum(np.abs(v) - step_mm / 2, 0))
+    far = np.hypot(np.abs(u) + step_mm / 2, np.abs(v) + step_mm / 2)
+    inside = np.flatnonzero(far <= radius)
+    rim = np.flatnonzero((near < radius) & (far > radius))
+    iu, iv, iw = _inside_points(u[inside], v[inside], step_mm)
+    ru, rv, rw = _rim_points(u[rim], v[rim], step_mm, radius)
+    keep = rw > 0  # zero-length pieces and columns outside the disc carry nothing
+    cell = np.broadcast_to(rim[:, None], rw.shape)[keep]
+    # image-oriented (u, v) -> OSA (x, y) = (-u, -v)
+    arrays = (inside, -iu, -iv, iw[0].copy(), cell, -ru[keep], -rv[keep], rw[keep])
+    for array in arrays:
+        array.setflags(write=False)
+    return PupilGrid(step_mm, diameter_mm, half, *arrays)
+
+
+@functools.lru_cache(maxsize=96)
+def _zernike_on_points(grid: PupilGrid, measured_mm: float, n: int, m: int) -> np.ndarray:
+    x, y = grid.points()
+    values = zernike_nm(n, m, np.hypot(x, y) / (measured_mm / 2.0), np.arctan2(y, x))
+    values.setflags(write=False)
+    return values
+
+
+def opd_on_points_um(grid: PupilGrid, wavefront) -> np.ndarray:
+    """The wavefront's optical path difference (µm) at :meth:`PupilGrid.points`.
+
+    Zernike wavefronts use cached polynomials on the points; any other wavefront (an
+    :class:`~vissim.optics.opd_map.OpdMap`) is evaluated through its ``opd_um(x, y)``.
+    """
+    if not hasattr(wavefront, "coefficients_um"):
+        return wavefront.opd_um(*grid.points())
+    opd = np.zeros(grid.inside_x_mm.size + grid.rim_x_mm.size)
+    for (n, m), value in wavefront.coefficients_um.items():
+        if n > 0:  # piston changes nothing
+            opd += value * _zernike_on_points(grid, wavefront.pupil_diameter_mm, n, m)
+    return opd
+
+
+def generalised_pupil(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: float, dtype=np.complex128) -> np.ndarray:
+    """Cell averages of ``P exp(i k W)`` on the ``size x size`` grid (a cell's area = 1)."""
+    real = np.float32 if dtype == np.complex64 else np.float64
+    phase = (opd_um * (2.0 * math.pi / (wavelength_nm * 1e-3))).astype(real, copy=False)
+    cos, sin = np.cos(phase), np.sin(phase)
+    n_inside = grid.inside_x_mm.size
+    shape = grid.inside_x_mm.shape
+    weights = grid.inside_weights.astype(real)
+    values = np.zeros(grid.size * grid.size, dtype=dtype)
+    values.real[grid.inside] = cos[:n_inside].reshape(shape) @ weights
+    values.imag[grid.inside] = sin[:n_inside].reshape(shape) @ weights
+    cells = grid.size * grid.size
+    values.real += np.bincount(grid.rim_cell, cos[n_inside:] * grid.rim_weights, cells)
+    values.imag += np.bincount(grid.rim_cell, sin[n_inside:] * grid.rim_weights, cells)
+    return values.reshape(grid.size, grid.size)
