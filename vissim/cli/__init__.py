@@ -30,6 +30,7 @@ COMMAND_MODULES = (
     "vissim.cli.render",
     "vissim.cli.validate",
     "vissim.cli.atv",
+    "vissim.cli.bench",
 )
 
 
