@@ -44,9 +44,9 @@ __all__ = [
 #: Largest fraction of a PSF's energy that may fall outside its field.
 MAX_ENERGY_OUTSIDE = 0.01
 #: Rays per pupil side for the estimate (about 0.8 x this squared inside the pupil).
-ESTIMATE_RAYS_PER_SIDE = 40
+ESTIMATE_RAYS_PER_SIDE = 32
 #: Directions over which each ray's diffraction pattern is integrated.
-ESTIMATE_DIRECTIONS = 48
+ESTIMATE_DIRECTIONS = 32
 _AIRY_TABLE_LAMBDA_OVER_D = 64.0
 #: Sizes searched for a field that holds the PSF.
 SIZE_SEARCH_LIMIT_PX = 2**20
@@ -102,12 +102,25 @@ def suggested_size_px(
     :data:`MAX_ENERGY_OUTSIDE` of the PSF's energy (:func:`energy_outside_field`)."""
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
-    wavelengths = [float(w) for w in np.atleast_1d(wavelength_nm)]
-    weights = [1.0] * len(wavelengths) if weights is None else list(weights)
-    start = minimum_px - 1 + minimum_px % 2
+    wavelengths = tuple(float(w) for w in np.atleast_1d(wavelength_nm))
+    weights = (1.0,) * len(wavelengths) if weights is None else tuple(float(w) for w in weights)
+    if hasattr(wavefront, "coefficients_um"):  # campaigns ask again and again for the same eyes
+        return _suggested_size_cached(tuple(wavefront.coefficients_um.items()), wavefront.pupil_diameter_mm, diameter,
+                                      step, wavelengths, weights, lca_reference_nm, mode, int(minimum_px))
+    return _suggested_size(wavefront, diameter, step, wavelengths, weights, lca_reference_nm, mode, int(minimum_px))
+
+
+@functools.lru_cache(maxsize=1024)
+def _suggested_size_cached(items, measured_mm, diameter, step, wavelengths, weights, lca_reference_nm, mode, minimum_px):
+    return _suggested_size(Wavefront(dict(items), measured_mm), diameter, step, list(wavelengths), list(weights),
+                           lca_reference_nm, mode, minimum_px)
+
+
+def _suggested_size(wavefront, diameter, step, wavelengths, weights, lca_reference_nm, mode, minimum_px) -> int:
+    start = minimum_px | 1  # the smallest odd size allowed
     if energy_outside_field(wavefront, diameter, wavelengths, weights, step, start, mode=mode,
                             lca_reference_nm=lca_reference_nm) <= MAX_ENERGY_OUTSIDE:
-        return start + 1 - start % 2
+        return start
     return size_holding_px(wavefront, diameter, wavelengths, weights, step, start, mode=mode,
                            lca_reference_nm=lca_reference_nm)
 
@@ -193,7 +206,15 @@ def size_holding_px(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_
     def too_small(n):
         return energy_outside_field(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_px, n,
                                     mode=mode, lca_reference_nm=lca_reference_nm) > fraction
+    # First guess: the blur plus the Airy tail's 1 % radius (18 lambda/D), widened as the estimate is.
+    blur = max(geometric_blur_radius_arcmin(front_at_wavelength(wavefront, w, lca_reference_nm), diameter_mm)
+               for w in wavelengths_nm)
+    widest = float(rad_to_arcmin(nm_to_mm(max(wavelengths_nm)) / diameter_mm))
+    guess = int(2 * math.ceil((blur + 18 * widest * math.sqrt(1 + EDGE_BROADENING * blur / widest / 4)) / arcmin_per_px))
     low, high = size_px, max(size_px, 3)
+    if guess > size_px and too_small(guess // 2):
+        low = guess // 2
+    high = max(high, guess if guess > low else high)
     while too_small(high):
         if high >= SIZE_SEARCH_LIMIT_PX:
             return SIZE_SEARCH_LIMIT_PX + 1  # more than any PSF vissim computes: the caller refuses

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from vissim.charts import POLARITIES
+from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import (
     CROWN_GLASS_INDEX,
     THESIS_CHART_DISTANCE_MM,
@@ -96,7 +97,8 @@ class Campaign:
 
     def item_key(self, configuration: Configuration) -> str:
         """Stable key of one item's inputs: equal inputs, equal key (results are reused)."""
-        payload = {"schema": SCHEMA_VERSION, "settings": asdict(self.settings), "configuration": configuration.as_json()}
+        payload = {"schema": SCHEMA_VERSION, "simulator": SIMULATOR_REVISION, "settings": asdict(self.settings),
+                   "configuration": configuration.as_json()}
         payload["configuration"].pop("name")
         text = json.dumps(payload, sort_keys=True, default=list)
         return hashlib.sha256(text.encode()).hexdigest()[:16]

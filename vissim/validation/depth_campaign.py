@@ -23,6 +23,7 @@ from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
+from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
 from vissim.validation.fields import (
@@ -85,7 +86,7 @@ class DepthCampaign:
 
     def item_key(self, configuration: DepthConfiguration) -> str:
         """Stable key of one item's inputs (scene content, observer, settings): equal inputs, equal key."""
-        payload = {"schema": SCHEMA_VERSION, "settings": json_safe(self.settings),
+        payload = {"schema": SCHEMA_VERSION, "simulator": SIMULATOR_REVISION, "settings": json_safe(self.settings),
                    "scene": json_safe(configuration.scene), "viewer": json_safe(configuration.viewer)}
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 

@@ -59,8 +59,12 @@ def load_results(run_dir: str | Path) -> list[dict]:
     for path in sorted((run_dir / "items").glob("*/result.json")):
         result = json.loads(path.read_text())
         results[result["key"]] = result
-    keys = [k for k in order if k in results] + sorted(set(results) - set(order))
-    return [results[k] for k in keys]
+    if not order:
+        return [results[k] for k in sorted(results)]
+    stale = set(results) - set(order)
+    if stale:  # items of another campaign (or of an older simulator) left in the folder: not this run's
+        log.info("ignoring %d finished items in %s that are not in its campaign", len(stale), run_dir / "items")
+    return [results[k] for k in order if k in results]
 
 
 def _num(value) -> float:
