@@ -13,7 +13,7 @@ from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
 from vissim.optics.wavefront import Wavefront
 from vissim.validation.renders import bench_for
-from vissim.validation.simulate import magnify
+from vissim.optics.resample import magnify
 
 
 def fake_render(spec):

@@ -75,6 +75,12 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
                         help="uncoated lenses: weight by the Fresnel transmittance of each surface")
     parser.add_argument("--rgb", action="store_true", help="render RGB (default: monochrome)")
     parser.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
+    parser.add_argument("--optics", choices=("ray", "wave"), default="ray",
+                        help="ray: Mitsuba's render (default); wave: the wave-optical truth, the chart imaged "
+                             "through the lenses' traced wavefront (no noise, no Mitsuba)")
+    parser.add_argument("--wavelength-nm", metavar="NM[,NM...]",
+                        help="with --optics wave: wavelength(s), traced through the dispersive glass "
+                             "(default the d line, 587.5618 nm, where the glass has the rendered index)")
     parser.add_argument("-o", "--output", required=True, metavar="PATH", help="output .exr (linear float32)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
     parser.set_defaults(func=run_bench)
@@ -141,6 +147,10 @@ def run_bench(args: argparse.Namespace) -> int:
         chart = load_chart_toml(args.chart, bench.chart_distance_mm)
     else:
         chart = chart_spec_from_table(_chart_table(args, doc), source, bench.chart_distance_mm)
+    if args.optics == "wave":
+        return _write_wave_truth(bench, chart, args, output)
+    if args.wavelength_nm is not None:
+        raise VissimInputError("--wavelength-nm goes with --optics wave (Mitsuba renders one refractive index)")
     result = _render_with_progress(bench, chart, "rgb" if args.rgb else "mono", args.variant)
     write_image(output, result.pixels, provenance=result.provenance, overwrite=args.overwrite,
                 arcmin_per_px=bench.arcmin_per_px)
@@ -148,6 +158,26 @@ def run_bench(args: argparse.Namespace) -> int:
     blur = ", ".join(f"{d:.2f}' along {m:g}°" for d, m in theory["blur_diameter_arcmin"])
     print(f"wrote {output}: {result.pixels.shape[1]} x {result.pixels.shape[0]} px, {result.spp} spp, "
           f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, added {theory['added_power']}")
+    return 0
+
+
+def _write_wave_truth(bench, chart, args, output: Path) -> int:
+    from vissim.bench.wave_truth import wave_truth
+    from vissim.cli._common import parse_float_list
+    from vissim.imageio import write_image
+    from vissim.provenance import make_provenance
+
+    if args.rgb or args.variant is not None or args.spp is not None or args.seed is not None or args.sampler:
+        raise VissimInputError("--rgb, --variant, --spp, --seed and --sampler are render options; "
+                               "--optics wave computes the image without Mitsuba")
+    wavelengths = [587.5618] if args.wavelength_nm is None else parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
+    truth = wave_truth(bench, chart, wavelengths_nm=wavelengths)
+    write_image(output, truth.pixels, provenance=make_provenance(command="render bench --optics wave", **truth.provenance),
+                overwrite=args.overwrite, arcmin_per_px=bench.arcmin_per_px)
+    traced = truth.provenance["traced"][0]
+    print(f"wrote {output}: {truth.pixels.shape[1]} x {truth.pixels.shape[0]} px, wave truth at "
+          f"{', '.join(f'{w:g}' for w in wavelengths)} nm; traced RMS {traced['rms_um']:.4g} µm over "
+          f"{traced['pupil_diameter_mm']:g} mm")
     return 0
 
 

@@ -31,10 +31,9 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
-
 from vissim.optics.blur import blur_image
 from vissim.optics.psf import PSF, compute_psf, suggested_size_px
+from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLens
 from vissim.validation.campaign import CampaignSettings, Configuration
@@ -44,8 +43,6 @@ __all__ = [
     "simulation_setup",
     "simulate",
     "add_bench_diffraction",
-    "magnify",
-    "block_mean",
 ]
 
 
@@ -103,25 +100,6 @@ def simulation_setup(kind: str, bench: ViewingSetup, lenses: tuple[TrialLens, ..
     return SimulationSetup(kind, setup, mode)
 
 
-def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) -> np.ndarray:
-    """Resample ``image`` magnified by a 2 x 2 matrix (TABO x/y frame) about its centre.
-
-    The image frame is (col, row) = (-x, -y), so the matrix is the same in image axes; the
-    optical axis is the tile's centre.  Radiance is conserved: values are resampled, not scaled.
-    """
-    m = np.asarray(matrix_xy, dtype=float)
-    if np.allclose(m, np.eye(2), atol=1e-12):
-        return np.asarray(image, dtype=np.float32)
-    m_rc = np.array([[m[1, 1], m[1, 0]], [m[0, 1], m[0, 0]]])  # (row, col) order
-    inverse = np.linalg.inv(m_rc)
-    centre = (np.array(image.shape[:2], dtype=float) - 1.0) / 2.0
-    fill = float(np.median(np.concatenate([image[0], image[-1]]))) if background is None else background
-    out = ndimage.affine_transform(
-        np.asarray(image, dtype=np.float64), inverse, offset=centre - inverse @ centre, order=3, mode="constant", cval=fill
-    )
-    return out.astype(np.float32)
-
-
 def _psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
     return _cached_psf(setup.without_magnification(), arcmin_per_px, mode)
 
@@ -148,14 +126,6 @@ def simulate(setup: SimulationSetup, image: np.ndarray, settings: CampaignSettin
     psf = _psf(setup.setup, step, setup.mode)
     out = blur_image(magnified, psf, arcmin_per_px=step, padding="edge")
     return block_mean(out, oversample)
-
-
-def block_mean(image: np.ndarray, factor: int) -> np.ndarray:
-    """Integrate onto pixels ``factor`` times larger (exact for pixel-integrated images)."""
-    if factor == 1:
-        return image
-    rows, cols = image.shape[0] // factor, image.shape[1] // factor
-    return image[: rows * factor, : cols * factor].reshape(rows, factor, cols, factor).mean(axis=(1, 3)).astype(np.float32)
 
 
 def add_bench_diffraction(render: np.ndarray, bench: ViewingSetup, arcmin_per_px: float) -> np.ndarray:
