@@ -64,9 +64,14 @@ class OpdMap:
         return cls(wavefront.opd_um(axis[None, :], axis[::-1, None]), wavefront.pupil_diameter_mm)
 
     def opd_um(self, x_mm: np.ndarray, y_mm: np.ndarray) -> np.ndarray:
-        """OPD (µm) at OSA pupil points (mm)."""
+        """OPD (µm) at OSA pupil points (mm); just beyond the grid's square, continued linearly
+        from its edge (the PSF core's finite differences reach half a cell past the pupil)."""
         x, y = np.broadcast_arrays(np.asarray(x_mm, dtype=float), np.asarray(y_mm, dtype=float))
-        out = self._spline.ev(x.ravel(), y.ravel()).reshape(x.shape)
+        radius = self.pupil_diameter_mm / 2.0
+        cx, cy = np.clip(x, -radius, radius).ravel(), np.clip(y, -radius, radius).ravel()
+        out = self._spline.ev(cx, cy)
+        out += self._spline.ev(cx, cy, dx=1) * (x.ravel() - cx) + self._spline.ev(cx, cy, dy=1) * (y.ravel() - cy)
+        out = out.reshape(x.shape)
         return out if self.added is None else out + self.added.opd_um(x, y)
 
     def slopes_mrad(self, x_mm: np.ndarray, y_mm: np.ndarray, step_mm: float | None = None) -> tuple[np.ndarray, np.ndarray]:

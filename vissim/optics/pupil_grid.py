@@ -4,7 +4,8 @@ A square grid of cells of side ``step_mm`` is centred on the pupil (cell ``[h, h
 axis).  Each cell carries the *average over the cell* of the generalised pupil
 ``P(x) exp(i k W(x))`` (``P`` the hard-edged disc), not its value at the cell centre:
 
-* inside cells: 2 x 2 Gauss-Legendre points (exact for cubic phase variation across a cell);
+* inside cells: from the phase at the centre and its central differences, the linear phase
+  averaged exactly (a sinc per axis) and its curvature to leading order;
 * cells the rim crosses: Gauss-Legendre over the part of the cell inside the disc, split where
   the rim enters and leaves, so the covered area is exact and the phase is integrated over it.
 
@@ -31,8 +32,6 @@ from vissim.optics.zernike import zernike_nm
 
 __all__ = ["PupilGrid", "pupil_grid", "generalised_pupil"]
 
-#: Gauss-Legendre points per axis in an inside cell.
-INSIDE_POINTS = 2
 #: Gauss-Legendre points per axis in each piece of a rim cell.
 RIM_POINTS = 4
 
@@ -41,18 +40,17 @@ RIM_POINTS = 4
 class PupilGrid:
     """Quadrature of the disc on ``(2 half + 1)^2`` cells of side ``step_mm``.
 
-    Inside cells: flat cell indices ``inside`` with ``INSIDE_POINTS^2`` points each (rows of
-    ``x_osa_mm[:n_inside]``); rim cells: one point list with the cell of each point in
-    ``rim_cell``.  Weights are fractions of a cell's area.
+    Every cell's centre (inside cells are averaged from the phase there and its derivatives);
+    rim cells: one point list with the cell of each point in ``rim_cell``, weights fractions
+    of a cell's area.
     """
 
     step_mm: float
     diameter_mm: float
     half: int
     inside: np.ndarray  # (n_inside,) flat cell indices
-    inside_x_mm: np.ndarray  # (n_inside, INSIDE_POINTS**2) OSA coordinates of the points
-    inside_y_mm: np.ndarray
-    inside_weights: np.ndarray  # (INSIDE_POINTS**2,)
+    centre_x_mm: np.ndarray  # (size, size) OSA coordinates of every cell's centre
+    centre_y_mm: np.ndarray
     rim_cell: np.ndarray  # (n_rim_points,) flat cell index of each rim point
     rim_x_mm: np.ndarray
     rim_y_mm: np.ndarray
@@ -73,18 +71,9 @@ class PupilGrid:
         return math.pi * (self.diameter_mm / 2.0 / self.step_mm) ** 2
 
     def points(self) -> tuple[np.ndarray, np.ndarray]:
-        """All quadrature points (OSA x, y in mm), inside cells' first: where to evaluate W."""
-        return (np.concatenate([self.inside_x_mm.ravel(), self.rim_x_mm]),
-                np.concatenate([self.inside_y_mm.ravel(), self.rim_y_mm]))
-
-
-def _inside_points(centres_u, centres_v, step):
-    nodes, w = leggauss(INSIDE_POINTS)
-    du, dv = np.meshgrid(nodes * step / 2, nodes * step / 2)
-    weights = np.outer(w, w).ravel() / 4.0
-    u = centres_u[:, None] + du.ravel()[None, :]
-    v = centres_v[:, None] + dv.ravel()[None, :]
-    return u, v, np.broadcast_to(weights, u.shape)
+        """Where to evaluate W (OSA x, y in mm): every cell's centre, then the rim's points."""
+        return (np.concatenate([self.centre_x_mm.ravel(), self.rim_x_mm]),
+                np.concatenate([self.centre_y_mm.ravel(), self.rim_y_mm]))
 
 
 def _rim_points(centres_u, centres_v, step, radius):
@@ -122,12 +111,12 @@ def pupil_grid(step_mm: float, diameter_mm: float) -> PupilGrid:
     far = np.hypot(np.abs(u) + step_mm / 2, np.abs(v) + step_mm / 2)
     inside = np.flatnonzero(far <= radius)
     rim = np.flatnonzero((near < radius) & (far > radius))
-    iu, iv, iw = _inside_points(u[inside], v[inside], step_mm)
     ru, rv, rw = _rim_points(u[rim], v[rim], step_mm, radius)
     keep = rw > 0  # zero-length pieces and columns outside the disc carry nothing
     cell = np.broadcast_to(rim[:, None], rw.shape)[keep]
+    size = 2 * half + 1
     # image-oriented (u, v) -> OSA (x, y) = (-u, -v)
-    arrays = (inside, -iu, -iv, iw[0].copy(), cell, -ru[keep], -rv[keep], rw[keep])
+    arrays = (inside, -u.reshape(size, size), -v.reshape(size, size), cell, -ru[keep], -rv[keep], rw[keep])
     for array in arrays:
         array.setflags(write=False)
     return PupilGrid(step_mm, diameter_mm, half, *arrays)
@@ -149,7 +138,7 @@ def opd_on_points_um(grid: PupilGrid, wavefront) -> np.ndarray:
     """
     if not hasattr(wavefront, "coefficients_um"):
         return wavefront.opd_um(*grid.points())
-    opd = np.zeros(grid.inside_x_mm.size + grid.rim_x_mm.size)
+    opd = np.zeros(grid.centre_x_mm.size + grid.rim_x_mm.size)
     for (n, m), value in wavefront.coefficients_um.items():
         if n > 0:  # piston changes nothing
             opd += value * _zernike_on_points(grid, wavefront.pupil_diameter_mm, n, m)
@@ -157,17 +146,28 @@ def opd_on_points_um(grid: PupilGrid, wavefront) -> np.ndarray:
 
 
 def generalised_pupil(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: float, dtype=np.complex128) -> np.ndarray:
-    """Cell averages of ``P exp(i k W)`` on the ``size x size`` grid (a cell's area = 1)."""
+    """Cell averages of ``P exp(i k W)`` on the ``size x size`` grid (a cell's area = 1).
+
+    Inside cells: ``exp(i phi) sinc(phi_x h / 2) sinc(phi_y h / 2) + i h^2 lap(phi) / 24`` at the
+    centre (h the step; the linear phase averaged exactly, its curvature to leading order),
+    derivatives by central differences of the centres' phase.  Rim cells: their quadrature.
+    """
     real = np.float32 if dtype == np.complex64 else np.float64
     phase = (opd_um * (2.0 * math.pi / (wavelength_nm * 1e-3))).astype(real, copy=False)
-    cos, sin = np.cos(phase), np.sin(phase)
-    n_inside = grid.inside_x_mm.size
-    shape = grid.inside_x_mm.shape
-    weights = grid.inside_weights.astype(real)
-    values = np.zeros(grid.size * grid.size, dtype=dtype)
-    values.real[grid.inside] = cos[:n_inside].reshape(shape) @ weights
-    values.imag[grid.inside] = sin[:n_inside].reshape(shape) @ weights
-    cells = grid.size * grid.size
-    values.real += np.bincount(grid.rim_cell, cos[n_inside:] * grid.rim_weights, cells)
-    values.imag += np.bincount(grid.rim_cell, sin[n_inside:] * grid.rim_weights, cells)
-    return values.reshape(grid.size, grid.size)
+    n = grid.size
+    centre = phase[: n * n].reshape(n, n)
+    d_row, d_col = np.gradient(centre)  # phase change per cell along rows and columns
+    padded = np.pad(centre, 1, mode="edge")  # the 5-point Laplacian: nearest neighbours only
+    laplacian = padded[:-2, 1:-1] + padded[2:, 1:-1] + padded[1:-1, :-2] + padded[1:-1, 2:] - 4 * centre
+    inside = grid.inside
+    flat = centre.ravel()[inside]
+    linear = np.sinc(d_row.ravel()[inside] / (2 * math.pi)) * np.sinc(d_col.ravel()[inside] / (2 * math.pi))
+    curvature = laplacian.ravel()[inside] / 24.0
+    cos, sin = np.cos(flat), np.sin(flat)
+    values = np.zeros(n * n, dtype=dtype)
+    values.real[inside] = cos * linear - sin * curvature
+    values.imag[inside] = sin * linear + cos * curvature
+    rim = phase[n * n:]
+    values.real += np.bincount(grid.rim_cell, np.cos(rim) * grid.rim_weights, n * n)
+    values.imag += np.bincount(grid.rim_cell, np.sin(rim) * grid.rim_weights, n * n)
+    return values.reshape(n, n)
