@@ -20,7 +20,7 @@ SINGLE_PLANE = {
         "name": "fuzz", "description": "mutated values", "f_number": 5.0, "spp": 4, "seeds": [1, 2],
         "arcmin_per_px": 1.0, "tile_px": [48, 48], "focal_length_mm": 18.0, "chart_distance_m": 0.9144,
         "vertex_distance_mm": 10.0, "wavelength_nm": 550.0, "refractive_index": 1.523, "data_range": 1.0,
-        "simulations": ["wave", "geometric"], "inputs": ["render", "synthetic"],
+        "simulations": ["wave", "geometric"], "inputs": ["render", "synthetic"], "wave_truth": True,
     },
     "item": [{"name": "plus two", "letter": "K", "logmar": 0.5, "polarity": "black-on-white",
               "lenses": [{"sphere": 2.0, "cylinder": -1.0, "axis": 90}], "f_number": 5.0, "capture": "none"}],

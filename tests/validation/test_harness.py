@@ -59,7 +59,8 @@ def test_a_tiny_campaign_runs_and_reports(tiny, tmp_path):
     names = {p.name for p in written}
     assert {"metrics.json", "metrics.csv", "tables.md", "report.html", "figure_wave.png"} <= names
     rows = metrics_rows(load_results(run_dir))
-    assert len(rows) == 2 * 3 * 2
+    # 3 simulations x 2 inputs against the render, and wave and thesis against the wave bench
+    assert len(rows) == 2 * (3 * 2 + 2)
     # The stand-in bench *is* geometric optics on the synthetic chart plus noise of sigma 0.005:
     # the geometric simulation of the synthetic input must reach the noise limit (floor + ~3 dB).
     for r in rows:

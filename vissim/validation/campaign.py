@@ -84,6 +84,7 @@ class CampaignSettings:
     simulations: tuple[str, ...] = ("wave", "geometric", "thesis")
     inputs: tuple[str, ...] = INPUTS
     data_range: float = 1.0  # linear reflectance units: what SSIM/PSNR call the peak
+    wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth (validation.wave_bench)
 
 
 @dataclass(frozen=True)
@@ -197,6 +198,10 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
             raise field_error(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
         kwargs["tile_px"] = tuple(whole_number(t, source, f"campaign.tile_px[{i}]", "pixels", lo=16, hi=MAX_TILE_PX)
                                   for i, t in enumerate(tile))
+    if "wave_truth" in raw:
+        if not isinstance(raw["wave_truth"], bool):
+            raise field_error(source, "campaign.wave_truth", f"must be true or false, got {raw['wave_truth']!r}")
+        kwargs["wave_truth"] = raw["wave_truth"]
     return CampaignSettings(**kwargs)
 
 

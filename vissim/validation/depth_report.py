@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 
 from vissim.imageio import read_image  # noqa: E402
 from vissim.validation.report import _num, campaign_name, load_results, png_bytes, reflectance_norm  # noqa: E402
-from vissim.validation.report import write_report_files  # noqa: E402
+from vissim.validation.report import json_rows, write_report_files  # noqa: E402
 from vissim.validation.report import format_number as _fmt  # noqa: E402
 
 __all__ = ["current_results", "depth_rows", "depth_tables", "build_depth_report", "depth_summary_lines"]
@@ -192,15 +192,10 @@ def build_depth_report(run_dir: str | Path) -> list[Path]:
         if png is not None:
             figures[f"{simulation} simulation against the render"] = (f"figure_depth_{simulation}.png", png)
     written = write_report_files(run_dir, title=f"vissim depth validation: {campaign_name(run_dir)}",
-                                 metrics={"items": results, "rows": _json_rows(rows)}, rows=rows,
+                                 metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=depth_tables(results), figures=figures)
     log.info("depth report of %d items written to %s", len(results), run_dir)
     return written
-
-
-def _json_rows(rows: list[dict]) -> list[dict]:
-    return [{k: (v if not isinstance(v, float) or math.isfinite(v) else ("inf" if v > 0 else None if math.isnan(v)
-             else "-inf")) for k, v in row.items()} for row in rows]
 
 
 def depth_summary_lines(run_dir: str | Path) -> list[str]:

@@ -78,11 +78,15 @@ def _report_of(depth: bool):
 
 
 def _single_plane_lines(run_dir: Path) -> list[str]:
-    """The terminal summary of a single-plane run: one line per comparison."""
-    from vissim.validation.report import load_results, metrics_rows
+    """The terminal summary of a single-plane run: one line per comparison (no floor: ``—``)."""
+    from vissim.validation.report import format_number, load_results, metrics_rows
+    from vissim.validation.wave_bench_report import is_wave_bench_row
 
-    lines = [f"{'configuration':44s} {'simulation':>16s} {'input':>9s} {'SSIM':>7s} {'PSNR dB':>8s} {'floor dB':>8s}"]
+    lines = [(f"{'configuration':44s} {'simulation':>16s} {'input':>9s} {'SSIM':>7s} {'PSNR dB':>8s} {'floor dB':>8s} "
+              f"{'against':>10s}")]
     for r in metrics_rows(load_results(run_dir)):
+        against = "wave bench" if is_wave_bench_row(r) else "render"
         lines.append(f"{r['configuration'][:44]:44s} {r['simulation']:>16s} {r['input']:>9s} {r['ssim']:7.4f} "
-                     f"{r['psnr_db']:8.2f} {r['noise_floor_psnr_db']:8.2f}")
+                     f"{format_number(r['psnr_db'], 2):>8s} {format_number(r['noise_floor_psnr_db'], 2):>8s} "
+                     f"{against:>10s}")
     return lines

@@ -1,4 +1,8 @@
-"""One campaign item: simulations against the ground truth, with metrics, maps and images."""
+"""One campaign item: simulations against the ground truth(s), with metrics, maps and images.
+
+The truths: the bench render (and, for wave-optical simulations, the render convolved with the
+aperture's diffraction) and, with ``wave_truth``, the wave bench (:mod:`vissim.validation.wave_bench`).
+"""
 
 from __future__ import annotations
 
@@ -14,12 +18,13 @@ from scipy import ndimage
 from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
 from vissim.imageio import write_image
-from vissim.provenance import make_provenance
+from vissim.provenance import json_safe, make_provenance
 from vissim.validation.campaign import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
 from vissim.validation.registration import register
 from vissim.validation.renders import campaign_bench
 from vissim.validation.simulate import add_bench_diffraction, block_mean, simulate, simulation_setup
+from vissim.validation.wave_bench import WAVE_BENCH, compute_wave_bench, residual_budget
 
 __all__ = ["compute_item", "synthetic_tile", "save_item_image"]
 
@@ -59,6 +64,30 @@ def save_item_image(item_dir: Path, name: str, pixels: np.ndarray, provenance: d
         write_image(item_dir / f"{name}.png", np.clip(np.asarray(pixels, np.float32), 0, 1), provenance=record,
                     overwrite=True)
     return f"items/{item_dir.name}/{name}.exr"
+
+
+def _comparison(kind: str, input_name: str, reference_kind: str, reference_image: str, setup, registration: dict,
+                simulated: np.ndarray, comparison, save, stem: str) -> dict:
+    """One comparison's record in result.json, its simulation and maps saved as ``stem``*."""
+    return {
+        "simulation": kind,
+        "input": input_name,
+        "reference_kind": reference_kind,
+        "reference_image": reference_image,
+        "setup": setup.as_json(),
+        "registration": registration,
+        "metrics": comparison.as_json(),
+        "images": {
+            "simulation": save(stem, simulated),
+            "ssim_map": save(f"{stem}_ssim", comparison.ssim_map, preview=False),
+            "abs_diff_map": save(f"{stem}_ad", comparison.abs_diff_map, preview=False),
+        },
+    }
+
+
+#: The wave bench's truth and a simulation share one grid: nothing is registered (module wave_bench).
+UNREGISTERED = {"shift_rows_px": 0.0, "shift_cols_px": 0.0, "error": None, "upsample_factor": None,
+                "method": "none: the wave truth and the simulation are laid out on one grid from one chart"}
 
 
 def compute_item(
@@ -108,6 +137,15 @@ def compute_item(
         "no_lens_render": save("no_lens_render", no_lens),
         "synthetic": save("synthetic", block_mean(fine_synthetic, SYNTHETIC_OVERSAMPLE)),
     }
+    # The wave bench (module wave_bench): the bench's chart through the traced lenses' wave PSF.
+    # A capture's truth is the photograph; the virtual bench's wave optics does not stand in for it.
+    traced_truth, budget = None, None
+    if settings.wave_truth and not captured:
+        traced_truth = compute_wave_bench(bench, configuration, settings, SYNTHETIC_OVERSAMPLE)
+        images["wave_truth"] = save_item_image(item_dir, "wave_truth", traced_truth.pixels,
+                                               {**provenance, "wave_truth": json_safe(traced_truth.provenance)})
+        budget = residual_budget(bench, bench_setup, settings.wavelength_nm)
+        floors[WAVE_BENCH] = None  # noise-free: no floor
     comparisons = []
     # Fine inputs are moved onto the bench's letter position once per item (the offset is the
     # letter's placement, the same for every simulation): shifting the fine image is accurate,
@@ -133,23 +171,16 @@ def compute_item(
                 log.warning("%s: %s/%s registered by %.1f px (> %.0f): check the crop", configuration.name, kind,
                             input_name, math.hypot(*registration.shift_px), MAX_SHIFT_PX)
             comparison = compare_images(reference, registration.registered, data_range=settings.data_range)
-            stem = f"{kind}_{input_name}"
-            comparisons.append(
-                {
-                    "simulation": kind,
-                    "input": input_name,
-                    "reference_kind": reference_kind,
-                    "reference_image": "truth" if reference_kind == "geometric" else "truth_diffracted",
-                    "setup": setup.as_json(),
-                    "registration": registration.as_json(),
-                    "metrics": comparison.as_json(),
-                    "images": {
-                        "simulation": save(stem, registration.registered),
-                        "ssim_map": save(f"{stem}_ssim", comparison.ssim_map, preview=False),
-                        "abs_diff_map": save(f"{stem}_ad", comparison.abs_diff_map, preview=False),
-                    },
-                }
-            )
+            comparisons.append(_comparison(kind, input_name, reference_kind,
+                                           "truth" if reference_kind == "geometric" else "truth_diffracted", setup,
+                                           registration.as_json(), registration.registered, comparison, save,
+                                           f"{kind}_{input_name}"))
+        if traced_truth is not None and setup.mode == "wave":
+            # the synthetic chart as laid out, unshifted: the truth is laid out from the same chart
+            simulated = simulate(setup, fine_synthetic, settings, oversample=SYNTHETIC_OVERSAMPLE)
+            comparison = compare_images(traced_truth.pixels, simulated, data_range=settings.data_range)
+            comparisons.append(_comparison(kind, "synthetic", WAVE_BENCH, "wave_truth", setup, UNREGISTERED, simulated,
+                                           comparison, save, f"{kind}_synthetic_{WAVE_BENCH}"))
     result = {
         "key": key,
         "configuration": configuration.as_json(),
@@ -161,6 +192,7 @@ def compute_item(
         ],
         "noise_floor": floors,
         "comparisons": comparisons,
+        "wave_bench": budget,
         "images": images,
         "source": source or {},
         "seconds": time.perf_counter() - started,

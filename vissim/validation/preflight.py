@@ -56,7 +56,9 @@ def item_memory_bytes(configuration, settings) -> tuple[float, str]:
     for kind in settings.simulations:
         sim = simulation_setup(kind, theory, bench.physical_lenses, configuration, settings)
         front = sim.setup.wavefront
-        for name in settings.inputs:
+        # against the wave bench, wave-optical simulations run on the synthetic chart (as the truth does)
+        extra = ("synthetic",) if settings.wave_truth and sim.mode == "wave" else ()
+        for name in dict.fromkeys((*settings.inputs, *extra)):
             s = SYNTHETIC_OVERSAMPLE if name == "synthetic" else 1
             step = settings.arcmin_per_px / s
             try:

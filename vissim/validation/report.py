@@ -24,6 +24,8 @@ import numpy as np  # noqa: E402
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
+from vissim.validation.wave_bench import WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
+from vissim.validation.wave_bench_report import is_wave_bench_row, wave_bench_tables  # noqa: E402
 
 __all__ = [
     "load_results",
@@ -34,6 +36,8 @@ __all__ = [
     "html_report",
     "write_report_files",
     "format_number",
+    "json_rows",
+    "reference_note",
 ]
 
 log = logging.getLogger(__name__)
@@ -80,7 +84,8 @@ def metrics_rows(results: list[dict]) -> list[dict]:
     for result in results:
         config = result["configuration"]
         for comp in result["comparisons"]:
-            floor = result["noise_floor"][comp["reference_kind"]] or {"ssim": float("nan"), "psnr_db": float("nan")}
+            # no floor: a capture without a repeat, or the noise-free wave bench
+            floor = result["noise_floor"].get(comp["reference_kind"]) or {"ssim": float("nan"), "psnr_db": float("nan")}
             rows.append(
                 {
                     "configuration": config["name"],
@@ -90,7 +95,7 @@ def metrics_rows(results: list[dict]) -> list[dict]:
                     "lenses": result["lens_label"],
                     "simulation": comp["simulation"],
                     "input": comp["input"],
-                    "reference": REFERENCE_NOTE[comp["simulation"]],
+                    "reference": reference_note(comp),
                     "ssim": comp["metrics"]["ssim"],
                     "psnr_db": _num(comp["metrics"]["psnr_db"]),
                     "mean_abs_diff": comp["metrics"]["mean_abs_diff"],
@@ -106,6 +111,23 @@ def metrics_rows(results: list[dict]) -> list[dict]:
     return rows
 
 
+def reference_note(comparison: dict) -> str:
+    """What a comparison's simulation was compared with, in words (the ``reference`` column)."""
+    if comparison.get("reference_kind") == WAVE_BENCH:
+        return WAVE_BENCH_NOTE
+    return REFERENCE_NOTE[comparison["simulation"]]
+
+
+def json_rows(rows: list[dict]) -> list[dict]:
+    """Rows for JSON: an unknown number (NaN, e.g. the wave bench's noise floor) is null, infinity ``"inf"``."""
+    def cell(value):
+        if isinstance(value, float) and not math.isfinite(value):
+            return None if math.isnan(value) else ("inf" if value > 0 else "-inf")
+        return value
+
+    return [{k: cell(v) for k, v in row.items()} for row in rows]
+
+
 def format_number(value: float | None, digits: int) -> str:
     """A table cell: ``—`` for unknown (None/NaN), ``∞`` for infinite PSNR."""
     if value is None or math.isnan(value):
@@ -117,10 +139,11 @@ _fmt = format_number
 
 
 def markdown_tables(results: list[dict]) -> str:
-    """Thesis-style tables (one row per configuration), PSNR and SSIM, with noise floors."""
-    rows = metrics_rows(results)
-    if not rows:
+    """Thesis-style tables (one row per configuration), PSNR and SSIM, with noise floors; then the wave bench's."""
+    all_rows = metrics_rows(results)
+    if not all_rows:
         return "No finished items.\n"
+    rows = [r for r in all_rows if not is_wave_bench_row(r)]
     columns = sorted({(r["simulation"], r["input"]) for r in rows}, key=lambda c: (ORDER.index(c[0]), c[1]))
     by_config: dict[str, dict] = {}
     for r in rows:
@@ -151,6 +174,9 @@ def markdown_tables(results: list[dict]) -> str:
         "3.0 dB above the floor's PSNR (MSE sigma^2 instead of 2 sigma^2); a score near floor + 3 dB "
         "means the agreement is as good as the renders' Monte-Carlo noise can show.\n"
     )
+    wave_bench = wave_bench_tables(results, all_rows)
+    if wave_bench:
+        out.append(wave_bench)
     return "\n".join(out)
 
 
@@ -210,21 +236,27 @@ def png_bytes(fig) -> bytes:
     return buffer.getvalue()
 
 
-def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str) -> bytes | None:
-    """Fig. 4.8-style: rows ground truth, simulation, 1 - SSIM map, AD map; a column per configuration."""
+def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str,
+            wave_bench: bool = False) -> bytes | None:
+    """Fig. 4.8-style: rows ground truth, simulation, 1 - SSIM map, AD map; a column per configuration.
+
+    ``wave_bench``: the comparisons against the wave bench, else those against the render.
+    """
     from matplotlib.colors import LogNorm, Normalize
 
     columns = []
     for result in results:
-        comp = next((c for c in result["comparisons"] if c["simulation"] == simulation and c["input"] == input_kind), None)
+        comp = next((c for c in result["comparisons"] if c["simulation"] == simulation and c["input"] == input_kind
+                     and (c.get("reference_kind") == WAVE_BENCH) == wave_bench), None)
         if comp is not None:
             columns.append((result, comp))
     if not columns:
         return None
     columns = columns[:FIGURE_COLUMNS]
-    ad_max = max(0.01, max(float(np.percentile(read_image(run_dir / c["images"]["abs_diff_map"]).pixels, 99.9)) for _, c in columns))
+    highest = max(float(np.percentile(read_image(run_dir / c["images"]["abs_diff_map"]).pixels, 99.9)) for _, c in columns)
+    ad_max = max(1e-4 if wave_bench else 0.01, highest)  # the wave bench's differences are 100x smaller
     lo, hi = DISSIMILARITY_RANGE
-    rows = [("bench (truth)", "gray", reflectance_norm, "reflectance"),
+    rows = [("wave bench (truth)" if wave_bench else "bench (truth)", "gray", reflectance_norm, "reflectance"),
             (f"{simulation} sim.", "gray", reflectance_norm, "reflectance"),
             ("1 − SSIM (log)", "viridis", lambda: LogNorm(lo, hi), "1 − SSIM"),
             ("|difference|", "magma", lambda: Normalize(0, ad_max), "|difference| (reflectance)")]
@@ -249,7 +281,8 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
         bar = fig.colorbar(shown[i], ax=axes[i, :], shrink=0.9, pad=0.02, aspect=15)
         bar.set_label(bar_label, fontsize=8)
         bar.ax.tick_params(labelsize=7)
-    fig.suptitle(f"{simulation} simulation applied to the {input_kind} input, against {REFERENCE_NOTE[simulation]}", fontsize=10)
+    fig.suptitle(f"{simulation} simulation applied to the {input_kind} input, against {reference_note(columns[0][1])}",
+                 fontsize=10)
     return png_bytes(fig)
 
 
@@ -355,8 +388,12 @@ def build_report(run_dir: str | Path) -> list[Path]:
         png = _figure(results, run_dir, simulation, "render")
         if png is not None:
             figures[f"{simulation} simulation on the no-lens render"] = (f"figure_{simulation}.png", png)
+    png = _figure(results, run_dir, "wave", "synthetic", wave_bench=True)
+    if png is not None:
+        name = "wave simulation on the synthetic chart against the wave bench"
+        figures[name] = (f"figure_wave_{WAVE_BENCH}.png", png)
     written = write_report_files(run_dir, title=f"vissim validation: {campaign_name(run_dir)}",
-                                 metrics={"items": results, "rows": rows}, rows=rows,
+                                 metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=markdown_tables(results), figures=figures)
     log.info("report of %d items written to %s", len(results), run_dir)
     return written
