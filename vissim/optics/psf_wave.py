@@ -194,14 +194,15 @@ def _quadrant_intensities(pupil: np.ndarray, cos: np.ndarray, sin: np.ndarray) -
     Keys: the signs of (theta_row, theta_col).
     """
     even, odd = _fold(pupil, axis=-1)  # along the columns
-    # Columns: T(row, theta_c) = even C^T - i odd S^T, kept as its even (te) and odd (to) parts.
-    te = _transform(cos, even.real.T.copy(), even.imag.T.copy())  # (theta_c, rows) pairs
-    to = _transform(sin, odd.real.T.copy(), odd.imag.T.copy())
+    # Columns: T(row, theta_c) = even C^T - i odd S^T, kept as its even (te) and odd (to) parts,
+    # as (real, imaginary) pairs laid out (theta_c, rows).
+    te = _transform(cos, even.real.T, even.imag.T)
+    to = _transform(sin, odd.real.T, odd.imag.T)
     # Rows: fold each part about the centre row, then cos / sin again.
-    ee, eo = _fold(te[0].T + 1j * te[1].T, axis=0)
-    oe, oo = _fold(to[0].T + 1j * to[1].T, axis=0)
-    p1, p2 = _transform(cos, ee.real, ee.imag), _transform(sin, eo.real, eo.imag)
-    p3, p4 = _transform(cos, oe.real, oe.imag), _transform(sin, oo.real, oo.imag)
+    (ee_r, eo_r), (ee_i, eo_i) = _fold(te[0], axis=-1), _fold(te[1], axis=-1)
+    (oe_r, oo_r), (oe_i, oo_i) = _fold(to[0], axis=-1), _fold(to[1], axis=-1)
+    p1, p2 = _transform(cos, ee_r.T, ee_i.T), _transform(sin, eo_r.T, eo_i.T)
+    p3, p4 = _transform(cos, oe_r.T, oe_i.T), _transform(sin, oo_r.T, oo_i.T)
     # E(+,+) = A - iB, E(-,-) = A + iB with A = p1 - p4, B = p2 + p3;
     # E(+,-) = C - iD, E(-,+) = C + iD with C = p1 + p4, D = p2 - p3.
     a = (p1[0] - p4[0], p1[1] - p4[1])
@@ -301,8 +302,14 @@ def to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixel
     spectrum = scipy.fft.rfft2(intensity, workers=-1)
     spectrum *= _pixel_transfer(m, oversample, intensity.dtype.type, pixel)
     averaged = scipy.fft.irfft2(spectrum, s=intensity.shape, workers=-1, overwrite_x=True)
-    picks = ((np.arange(size_px) - size_px // 2) * oversample) % m
-    return averaged[np.ix_(picks, picks)] * oversample**2
+    if oversample == 1 and size_px == m:
+        averaged = np.fft.fftshift(averaged)  # the same picks, as a roll
+    else:
+        picks = ((np.arange(size_px) - size_px // 2) * oversample) % m
+        averaged = averaged[np.ix_(picks, picks)]
+    if oversample != 1:
+        averaged *= oversample**2
+    return averaged
 
 
 def wave_psf(fronts, weights, diameter_mm, plans, size_px, dtype, pixel) -> np.ndarray:
@@ -311,5 +318,5 @@ def wave_psf(fronts, weights, diameter_mm, plans, size_px, dtype, pixel) -> np.n
     intensity = engine(fronts, weights, diameter_mm, plans, dtype)
     out = to_output_pixels(intensity, size_px, plans[0].oversample, pixel)
     if pixel == "integrate":
-        out = np.maximum(out, 0.0)  # round-off only: integrals of an intensity are >= 0
+        np.maximum(out, 0.0, out=out)  # round-off only: integrals of an intensity are >= 0
     return out
