@@ -57,8 +57,15 @@ def wave_truth(
     wavelengths_nm: Sequence[float] = (D_LINE_NM,),
     weights: Sequence[float] | None = None,
     oversample: int = WAVE_TRUTH_OVERSAMPLE,
+    mode: str = "wave",
 ) -> WaveTruth:
-    """The wave-optical image of ``chart`` on ``bench``'s sensor (module docstring)."""
+    """The wave-optical image of ``chart`` on ``bench``'s sensor (module docstring).
+
+    ``mode="geometric"``: the same trace's ray optics instead (the PSF of its ray landing
+    points): the geometric self-check, which must match the Mitsuba render to its noise floor.
+    """
+    if mode not in ("wave", "geometric"):
+        raise VissimInputError(f"the bench truth's optics must be 'wave' or 'geometric', got {mode!r}")
     setup = bench.viewing_setup()
     if abs(bench.focus_distance_mm - bench.chart_distance_mm) > 1e-9 * bench.chart_distance_mm:
         raise VissimInputError(
@@ -78,13 +85,13 @@ def wave_truth(
     psfs = []
     for trace, weight in zip(traced, weights):
         front = trace.as_opd_map()
-        size = suggested_size_px(front, step, wavelength_nm=trace.wavelength_nm)
-        psf = compute_psf(front, wavelength_nm=trace.wavelength_nm, arcmin_per_px=step, size_px=size)
+        size = suggested_size_px(front, step, wavelength_nm=trace.wavelength_nm, mode=mode)
+        psf = compute_psf(front, wavelength_nm=trace.wavelength_nm, arcmin_per_px=step, size_px=size, mode=mode)
         blurred = blur_image(magnified, psf, arcmin_per_px=step, padding="edge", dtype=np.float64)
         out += weight / sum(weights) * block_mean(blurred, oversample)
         psfs.append(psf)
     provenance = {
-        "kind": "bench wave truth",
+        "kind": "bench wave truth" if mode == "wave" else "bench ray truth (traced)",
         "oversample": int(oversample),
         "magnification_matrix": [list(r) for r in setup.magnification_matrix],
         "traced": [t.as_json() for t in traced],
