@@ -17,15 +17,15 @@ from vissim.optics.trial_lens import TrialLens
 D_LINE_NM = 587.5618
 
 
-def vergence_simulation(bench, chart, oversample=5):
-    """The harness's matched wave simulation, by hand: vergence-theory wavefront at the d line."""
+def vergence_simulation(bench, chart, oversample=5, mode="wave"):
+    """The harness's matched simulation, by hand: vergence-theory wavefront at the d line."""
     setup = bench.viewing_setup(D_LINE_NM)
     step = bench.arcmin_per_px / oversample
     rows, cols = bench.size_px
     fine = render_chart_angular(chart, step, shape_px=(rows * oversample, cols * oversample)).pixels
     front = setup.wavefront
-    psf = compute_psf(front, wavelength_nm=D_LINE_NM, arcmin_per_px=step,
-                      size_px=suggested_size_px(front, step, wavelength_nm=D_LINE_NM))
+    psf = compute_psf(front, wavelength_nm=D_LINE_NM, arcmin_per_px=step, mode=mode,
+                      size_px=suggested_size_px(front, step, wavelength_nm=D_LINE_NM, mode=mode))
     blurred = blur_image(magnify(fine, setup.magnification_matrix), psf, arcmin_per_px=step, padding="edge",
                          dtype=np.float64)
     return block_mean(blurred, oversample)
@@ -71,13 +71,6 @@ def test_the_traces_ray_optics_image_is_the_geometric_simulation():
     bench = DslrBench(lenses=(TrialLens(0.0, -2.0, 90.0),))
     chart = single_letter_spec("K", 1.0, viewing_distance_m=bench.chart_distance_mm / 1000)
     traced = wave_truth(bench, chart, mode="geometric").pixels
-    setup = bench.viewing_setup(D_LINE_NM)
-    step = bench.arcmin_per_px / 5
-    rows, cols = bench.size_px
-    fine = render_chart_angular(chart, step, shape_px=(rows * 5, cols * 5)).pixels
-    psf = compute_psf(setup.wavefront, arcmin_per_px=step, wavelength_nm=D_LINE_NM, mode="geometric",
-                      size_px=suggested_size_px(setup.wavefront, step, wavelength_nm=D_LINE_NM, mode="geometric"))
-    simulated = block_mean(blur_image(magnify(fine, setup.magnification_matrix), psf, arcmin_per_px=step,
-                                      padding="edge", dtype=np.float64), 5)
+    simulated = vergence_simulation(bench, chart, mode="geometric")
     psnr = 10 * np.log10(float(traced.max()) ** 2 / float(np.mean((simulated - traced) ** 2)))
     assert psnr >= 80.0, psnr
