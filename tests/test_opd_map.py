@@ -31,13 +31,14 @@ def test_grid_orientation_and_the_spline_reproduce_the_wavefront(sampled):
     assert sampled.samples_um[32, 0] == pytest.approx(FRONT.opd_um(-1.8, 0.0))
 
 
-@pytest.mark.parametrize("method", ["mft", "fft"])
-@pytest.mark.parametrize("mode", ["wave", "geometric"])
-def test_psf_of_the_map_is_the_psf_of_the_wavefront(sampled, method, mode):
-    # The core evaluates both at the same quadrature points: agreement to 1e-5 of the peak.
-    kwargs = dict(arcmin_per_px=0.25, size_px=173, mode=mode, method=method if mode == "wave" else None)
+@pytest.mark.parametrize("mode, method, tolerance", [("wave", "mft", 1e-5), ("wave", "fft", 1e-5), ("geometric", None, 1e-3)])
+def test_psf_of_the_map_is_the_psf_of_the_wavefront(sampled, mode, method, tolerance):
+    # The core evaluates both at the same quadrature points: the wave PSFs agree to 1e-5 of the
+    # peak.  The ray PSFs use the same seeded rays, landing by the spline's slopes (1e-4 mrad
+    # from the polynomial's), so a few rays cross pixel edges: measured 3e-4 of the peak, 1e-3 allowed.
+    kwargs = dict(arcmin_per_px=0.25, size_px=173, mode=mode, method=method)
     a, b = compute_psf(sampled, **kwargs), compute_psf(FRONT, **kwargs)
-    assert np.max(np.abs(a.data - b.data)) <= 1e-5 * b.data.max() + (2e-3 * b.data.max() if mode == "geometric" else 0)
+    assert np.max(np.abs(a.data - b.data)) <= tolerance * b.data.max()
     assert a.as_json()["wavefront"]["kind"] == "opd_map"
 
 

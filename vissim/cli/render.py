@@ -162,6 +162,7 @@ def run_bench(args: argparse.Namespace) -> int:
 
 
 def _write_wave_truth(bench, chart, args, output: Path) -> int:
+    from vissim.bench.bench_wavefront import D_LINE_NM
     from vissim.bench.wave_truth import wave_truth
     from vissim.cli._common import parse_float_list
     from vissim.imageio import write_image
@@ -170,7 +171,7 @@ def _write_wave_truth(bench, chart, args, output: Path) -> int:
     if args.rgb or args.variant is not None or args.spp is not None or args.seed is not None or args.sampler:
         raise VissimInputError("--rgb, --variant, --spp, --seed and --sampler are render options; "
                                "--optics wave computes the image without Mitsuba")
-    wavelengths = [587.5618] if args.wavelength_nm is None else parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
+    wavelengths = [D_LINE_NM] if args.wavelength_nm is None else parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
     truth = wave_truth(bench, chart, wavelengths_nm=wavelengths)
     write_image(output, truth.pixels, provenance=make_provenance(command="render bench --optics wave", **truth.provenance),
                 overwrite=args.overwrite, arcmin_per_px=bench.arcmin_per_px)

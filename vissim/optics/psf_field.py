@@ -31,7 +31,7 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.wavefront import Wavefront
-from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
+from vissim.units import nm_to_mm, rad_to_arcmin
 
 __all__ = [
     "MAX_ENERGY_OUTSIDE",
@@ -141,6 +141,17 @@ def airy_tail(r_lambda_over_d: np.ndarray) -> np.ndarray:
     return np.where(r_lambda_over_d < r[-1], np.interp(r_lambda_over_d, r, tail), far)
 
 
+def rim_widening(blur_arcmin: float, lambda_over_d_arcmin: float) -> float:
+    """How much wider than the Airy pattern a defocused rim spreads light: sqrt(1 + EDGE_BROADENING N_F),
+    N_F = the blur's Fresnel number (waves of equivalent defocus, blur / (4 lambda/D))."""
+    return math.sqrt(1.0 + EDGE_BROADENING * blur_arcmin / lambda_over_d_arcmin / 4.0)
+
+
+def airy_tail_radius_lambda_over_d(fraction: float) -> float:
+    """The radius (lambda/D) beyond which ``fraction`` of an Airy pattern lies: its tail 2 / (pi^2 r)."""
+    return 2.0 / (math.pi**2 * fraction)
+
+
 def _rays(wavefront: Wavefront, diameter_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """Landing offsets (col, row) in arcmin of a stratified pupil sample of rays."""
     n = ESTIMATE_RAYS_PER_SIDE
@@ -193,8 +204,8 @@ def energy_outside_field(
         spread = None
         if mode == "wave":
             lambda_over_d = float(rad_to_arcmin(nm_to_mm(w) / diameter_mm))
-            fresnel = float(arcmin_to_rad(geometric_blur_radius_arcmin(front, diameter_mm))) * diameter_mm / (4 * nm_to_mm(w))
-            spread = lambda_over_d * math.sqrt(1.0 + (EDGE_BROADENING * fresnel if conservative else 0.0))
+            blur = geometric_blur_radius_arcmin(front, diameter_mm)
+            spread = lambda_over_d * (rim_widening(blur, lambda_over_d) if conservative else 1.0)
         outside += weight * (1.0 - _inside_fraction(col, row, low, high, spread))
     return outside / sum(weights)
 
@@ -206,11 +217,12 @@ def size_holding_px(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_
     def too_small(n):
         return energy_outside_field(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_px, n,
                                     mode=mode, lca_reference_nm=lca_reference_nm) > fraction
-    # First guess: the blur plus the Airy tail's 1 % radius (18 lambda/D), widened as the estimate is.
+    # First guess: the blur plus the Airy tail's radius for ``fraction``, widened as the estimate is.
     blur = max(geometric_blur_radius_arcmin(front_at_wavelength(wavefront, w, lca_reference_nm), diameter_mm)
                for w in wavelengths_nm)
     widest = float(rad_to_arcmin(nm_to_mm(max(wavelengths_nm)) / diameter_mm))
-    guess = int(2 * math.ceil((blur + 18 * widest * math.sqrt(1 + EDGE_BROADENING * blur / widest / 4)) / arcmin_per_px))
+    reach = blur + airy_tail_radius_lambda_over_d(fraction) * widest * rim_widening(blur, widest)
+    guess = int(2 * math.ceil(reach / arcmin_per_px))
     low, high = size_px, max(size_px, 3)
     if guess > size_px and too_small(guess // 2):
         low = guess // 2

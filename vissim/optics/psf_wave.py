@@ -14,8 +14,8 @@ Two ways to evaluate the transform, the same numbers to round-off:
   grows until the pupil is sampled finely enough.
 
 The cheaper of the two (an operation count) is chosen per call and recorded in the
-provenance (``PSF.sampling``).  Several wavelengths share the internal grid and, for the
-matrix transform, the pupil grid: they are transformed as one batch.
+provenance (``PSF.sampling``).  Several wavelengths share the internal grid, the pixel pass
+and, for the matrix transform, the pupil grid; each is transformed in turn.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import numpy as np
 import scipy.fft
 
 from vissim.errors import VissimInputError
-from vissim.optics.psf_field import EDGE_BROADENING
+from vissim.optics.psf_field import airy_tail_radius_lambda_over_d, rim_widening
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
 from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
 
@@ -63,10 +63,6 @@ class PsfSampling:
     pupil_cells: float  # cells across the pupil diameter
     internal_arcmin_per_px: float
 
-    @property
-    def fft_size(self) -> int:
-        return self.internal_size
-
     def as_json(self) -> dict:
         return {
             "method": self.method,
@@ -92,9 +88,8 @@ def _fft_seconds(size: int) -> float:
 def fold_radius_arcmin(blur_arcmin: float, lambda_over_d_arcmin: float) -> float:
     """Radius beyond which at most ALIAS_MAX_ENERGY of the PSF lies: the Airy tail 2 / (pi^2 r),
     widened for a defocused rim as in :mod:`vissim.optics.psf_field`, beyond the geometric blur."""
-    fresnel = blur_arcmin / lambda_over_d_arcmin / 4.0  # the blur's Fresnel number, waves
-    widening = math.sqrt(1.0 + EDGE_BROADENING * fresnel)
-    return blur_arcmin + widening * lambda_over_d_arcmin * 2.0 / (math.pi**2 * ALIAS_MAX_ENERGY)
+    widening = rim_widening(blur_arcmin, lambda_over_d_arcmin)
+    return blur_arcmin + widening * lambda_over_d_arcmin * airy_tail_radius_lambda_over_d(ALIAS_MAX_ENERGY)
 
 
 def plan_wave_psf(
@@ -146,11 +141,6 @@ def plan_wave_psf(
         step = mft_step if method == "mft" else nm_to_mm(w) / (fft * float(arcmin_to_rad(internal)))
         plans.append(PsfSampling(method, float(w), oversample, used, step, d / step, internal))
     return tuple(plans)
-
-
-def wave_psf_memory_bytes(plans: Sequence[PsfSampling]) -> float:
-    """Peak bytes of :func:`wave_psf` for these plans (internal grids; the batch is bounded)."""
-    return float(plans[0].internal_size) ** 2 * BYTES_PER_INTERNAL_PX * 2
 
 
 @functools.lru_cache(maxsize=16)

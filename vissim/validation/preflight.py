@@ -36,7 +36,7 @@ def _psf_bytes(front: Wavefront, pupil_mm: float, step: float, wavelength_nm: fl
                                f"(the limit is {MAX_PSF_SIZE_PX} px)")
     if mode == "wave":
         blur = geometric_blur_radius_arcmin(front, pupil_mm)
-        fft = psf_sampling(pupil_mm, wavelength_nm, step, size, blur).fft_size  # refuses FFTs over its limit
+        fft = psf_sampling(pupil_mm, wavelength_nm, step, size, blur).internal_size  # refuses grids over the limit
         return float(fft) ** 2 * BYTES_PER_FFT_PX, size
     return float(size) ** 2 * BYTES_PER_PSF_PX, size
 
