@@ -135,3 +135,44 @@ def test_sample_kernel_is_exact_for_well_sampled_images():
         errors[pixel] = float(np.max(np.abs(out - reference)))
     assert errors["sample"] < 2e-4
     assert errors["integrate"] > 5 * errors["sample"]
+
+
+# Overlap-save tiling (large images) against direct convolution: scipy.ndimage sums the kernel
+# over the padded neighbourhood, sharing no code with the FFT path (odd kernels: the centre is
+# unambiguous; ``ndimage.convolve`` flips the kernel as convolution does).
+NDIMAGE_MODES = {"edge": "nearest", "reflect": "reflect", "constant": "constant"}
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    st.integers(40, 260), st.integers(40, 260), st.integers(1, 12), st.sampled_from(sorted(NDIMAGE_MODES)),
+    st.integers(0, 2**32 - 1),
+)
+def test_tiled_blur_equals_direct_convolution(rows, cols, half_kernel, padding, seed):
+    from scipy import ndimage
+
+    import vissim.optics.blur as blur
+
+    rng = np.random.default_rng(seed)
+    image = rng.random((rows, cols))
+    size = 2 * half_kernel + 1
+    kernel = rng.random((size, size))
+    psf = PSF.from_array(kernel / kernel.sum(), 1.0)
+    with pytest.MonkeyPatch.context() as patch:  # force tiles small enough for these images
+        patch.setattr(blur, "TILE_SIZES_PX", (32, 48, 64, 96, 128))
+        patch.setattr(blur, "TILE_COST_FACTOR", 0.0)
+        tile = blur._tile_px((rows + 2 * size, cols + 2 * size), size)
+        out = blur_image(image, psf, arcmin_per_px=1.0, padding=padding, dtype=np.float64)
+    background = np.mean(np.concatenate([image[0], image[-1], image[1:-1, 0], image[1:-1, -1]]))
+    direct = ndimage.convolve(image, psf.data, mode=NDIMAGE_MODES[padding], cval=background)
+    np.testing.assert_allclose(out, direct, atol=1e-12)
+    if min(rows, cols) >= 130 and size <= 9:
+        assert tile is not None  # the tiled path was taken
+
+
+def test_tiles_only_for_large_images_and_small_kernels():
+    from vissim.optics.blur import _tile_px
+
+    assert _tile_px((2250, 3888), 45) is not None  # 4K, a 45 px PSF
+    assert _tile_px((150, 150), 45) is None  # a campaign tile: one FFT
+    assert _tile_px((2250, 3888), 301) is None  # a kernel as large as the tiles

@@ -18,6 +18,9 @@
 * One greyscale image with one PSF costs one forward and one inverse real FFT of the padded
   size plus the kernel's transform, pruned to the kernel's support (:func:`kernel_transfer`),
   which :class:`BlurKernel` keeps for the next image blurred by the same PSF on the same grid.
+  Large images with small kernels are convolved by overlap-save instead, in squares of a few
+  hundred pixels (:func:`_tile_px` picks the size from an operation count): the same numbers
+  to round-off, a kernel transform the size of one square, and FFTs that stay in cache.
 """
 
 from __future__ import annotations
@@ -99,13 +102,15 @@ def _padding_width(psf: PSF) -> int:
 def _pad(channel: np.ndarray, width: int, shape: tuple[int, int], mode: str, background: float | None) -> np.ndarray:
     rows, cols = channel.shape
     extra_r, extra_c = shape[0] - rows - 2 * width, shape[1] - cols - 2 * width
-    pad = ((width, width + extra_r), (width, width + extra_c))
+    if mode == "constant" and background is None:
+        background = _border_mean(channel)
+    return _pad_widths(channel, ((width, width + extra_r), (width, width + extra_c)), mode, background)
+
+
+def _pad_widths(channel: np.ndarray, widths, mode: str, background: float | None) -> np.ndarray:
     if mode == "constant":
-        value = _border_mean(channel) if background is None else background
-        return np.pad(channel, pad, mode="constant", constant_values=value)
-    if mode == "reflect":
-        return np.pad(channel, pad, mode="symmetric")
-    return np.pad(channel, pad, mode="edge")
+        return np.pad(channel, widths, mode="constant", constant_values=background)
+    return np.pad(channel, widths, mode="symmetric" if mode == "reflect" else "edge")
 
 
 def _border_mean(channel: np.ndarray) -> float:
@@ -123,6 +128,64 @@ def _check_sampling(psf: PSF, arcmin_per_px: float) -> None:
         raise VissimInputError(f"PSF must be square, got {psf.data.shape}")
 
 
+#: Tile sizes (px) tried for overlap-save convolution of large images.
+TILE_SIZES_PX = (256, 384, 512, 768, 1024)
+#: A tiled blur is chosen when its estimated cost is below this fraction of the full FFT's.
+#: The estimate counts FFT operations (n log n); measured on 2 cores, the small tiles' FFTs run
+#: at about 1.6x the full-frame FFT's rate per operation (cache), so their count is scaled by this.
+TILE_COST_FACTOR = 0.6
+
+
+def _fft_cost(shape) -> float:
+    n = float(np.prod(shape))
+    return n * math.log2(n)
+
+
+def _tile_px(shape: tuple[int, int], kernel_px: int) -> int | None:
+    """The overlap-save tile size that beats one FFT of the padded ``shape``, or None."""
+    best, best_cost = None, _fft_cost(shape)
+    for tile in TILE_SIZES_PX:
+        valid = tile - kernel_px + 1
+        if valid < 3 * kernel_px or tile >= min(shape):
+            continue
+        count = math.ceil(shape[0] / valid) * math.ceil(shape[1] / valid)
+        cost = TILE_COST_FACTOR * count * _fft_cost((tile, tile))
+        if cost < best_cost:
+            best, best_cost = tile, cost
+    return best
+
+
+def _blur_tiled(channel, psf, padding, background, dtype, tile):
+    """Overlap-save: the padded image cut into ``tile``-px squares, each convolved circularly.
+
+    A square's circular convolution is exact on its ``tile - N + 1`` valid pixels per axis (those
+    the kernel reaches without wrapping); squares step by that much, so their valid parts tile
+    the image.  One row of squares is padded and transformed at a time (arrays that the
+    allocator reuses, and that stay in cache).  Equal to the full-frame convolution to round-off.
+    """
+    rows, cols = channel.shape
+    n = psf.data.shape[0]
+    valid, first_valid = tile - n + 1, n - 1 - n // 2
+    n_cols = math.ceil(cols / valid)
+    right = n_cols * valid + n - 1 - first_valid - cols
+    if padding == "constant" and background is None:
+        background = _border_mean(channel)
+    transfer = BlurKernel.prepare(psf, (tile, tile), dtype=dtype).transfer[:, None, :]
+    out = np.empty((rows, cols), dtype)
+    for top in range(0, rows, valid):  # output rows top .. top + valid
+        first, last = top - first_valid, top - first_valid + tile  # the squares' rows in the image
+        strip = _pad_widths(channel[max(first, 0) : min(last, rows)],
+                            ((max(-first, 0), max(last - rows, 0)), (first_valid, right)), padding, background)
+        squares = np.lib.stride_tricks.sliding_window_view(strip, tile, axis=1)[:, ::valid]  # (tile, n_cols, tile)
+        spectra = scipy.fft.rfft2(squares, axes=(0, 2), workers=-1)
+        spectra *= transfer
+        blurred = scipy.fft.irfft2(spectra, s=(tile, tile), axes=(0, 2), workers=-1, overwrite_x=True)
+        done = min(valid, rows - top)
+        part = blurred[first_valid : first_valid + done, :, first_valid : first_valid + valid]
+        out[top : top + done] = part.reshape(done, n_cols * valid)[:, :cols]
+    return out
+
+
 def _blur_channel(channel, psf, padding, background, dtype):
     rows, cols = channel.shape
     if padding == "wrap":
@@ -135,6 +198,10 @@ def _blur_channel(channel, psf, padding, background, dtype):
     else:
         offset = _padding_width(psf)
         shape = (scipy.fft.next_fast_len(rows + 2 * offset, real=True), scipy.fft.next_fast_len(cols + 2 * offset, real=True))
+        tile = _tile_px(shape, psf.data.shape[0])
+        if tile is not None:
+            log.debug("blur by overlap-save in %d px tiles", tile)
+            return _blur_tiled(channel, psf, padding, background, dtype, tile)
         padded = _pad(channel, offset, shape, padding, background)
     kernel = BlurKernel.prepare(psf, shape, dtype=dtype)
     spectrum = scipy.fft.rfft2(padded.astype(dtype, copy=False), workers=-1)

@@ -164,7 +164,7 @@ def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, 
     fine = q * size_px
     edges = (np.arange(fine + 1) - fine // 2 - 0.5) / q
     counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
-    return to_output_pixels(scipy.fft.ifftshift(counts), size_px, q, pixel) / keep.sum()
+    return to_output_pixels(counts, size_px, q, pixel) / keep.sum()
 
 
 def _clearly_holds(diameter_mm, wavelengths_nm, blurs_arcmin, arcmin_per_px, size_px, mode) -> bool:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -158,65 +159,97 @@ def _folded_matrices(size: int, internal_arcmin: float, pupil_step_mm: float, ha
     return cos, sin
 
 
-def _fold(array: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
-    """Even and odd parts about the centre index along ``axis``, on the centre and beyond."""
-    a = np.moveaxis(array, axis, -1)
-    h = a.shape[-1] // 2
-    ahead, behind = a[..., h:], a[..., h::-1]
-    even, odd = ahead + behind, ahead - behind
-    even[..., 0] *= 0.5
-    return np.moveaxis(even, -1, axis), np.moveaxis(odd, -1, axis)
+class _Workspace(threading.local):
+    """Scratch arrays reused across calls: fresh memory costs a page fault per 4 KiB on first
+    touch, which at these sizes took as long as the arithmetic."""
+
+    def __init__(self):
+        self.arrays: dict = {}
+
+    def get(self, name: str, shape: tuple, dtype) -> np.ndarray:
+        key = (name, shape, np.dtype(dtype).str)
+        if key not in self.arrays:
+            if len(self.arrays) > 64:
+                self.arrays.clear()
+            self.arrays[key] = np.empty(shape, dtype)
+        return self.arrays[key]
 
 
-def _transform(matrix: np.ndarray, real: np.ndarray, imag: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``matrix @ (real + i imag)`` for a real ``matrix``, as one real product."""
-    n = real.shape[-1]
-    product = matrix @ np.concatenate([real, imag], axis=-1)
-    return product[..., :n], product[..., n:]
+_WORKSPACE = _Workspace()
 
 
-def _quadrant_intensities(pupil: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> dict:
+def _fold_rows(source: np.ndarray, even: np.ndarray, odd: np.ndarray) -> None:
+    """Even and odd parts of ``source`` about its centre row, on the centre row and below."""
+    h = source.shape[0] // 2
+    ahead, behind = source[h:], source[h::-1]
+    np.add(ahead, behind, out=even)
+    np.subtract(ahead, behind, out=odd)
+    even[0] *= 0.5
+
+
+def _quadrant_intensities(pupil: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
     """|A G A^T|^2 for ``A = cos - i sin`` on the four quadrants of non-negative |theta|.
 
     The cell grid is symmetric about its centre, so each axis splits into even and odd parts
     that transform by real cosines and sines over half the cells, and the output's four
     quadrants follow from the non-negative one: a quarter of the multiply-adds of ``A G A^T``.
-    Keys: the signs of (theta_row, theta_col).
+    Returns the quadrants (+,+), (-,-), (+,-), (-,+) (signs of theta_row, theta_col), each
+    indexed ``[|theta_row|, |theta_col|]``, in a scratch array valid until the next call.
     """
-    even, odd = _fold(pupil, axis=-1)  # along the columns
-    # Columns: T(row, theta_c) = even C^T - i odd S^T, kept as its even (te) and odd (to) parts,
-    # as (real, imaginary) pairs laid out (theta_c, rows).
-    te = _transform(cos, even.real.T, even.imag.T)
-    to = _transform(sin, odd.real.T, odd.imag.T)
-    # Rows: fold each part about the centre row, then cos / sin again.
-    (ee_r, eo_r), (ee_i, eo_i) = _fold(te[0], axis=-1), _fold(te[1], axis=-1)
-    (oe_r, oo_r), (oe_i, oo_i) = _fold(to[0], axis=-1), _fold(to[1], axis=-1)
-    p1, p2 = _transform(cos, ee_r.T, ee_i.T), _transform(sin, eo_r.T, eo_i.T)
-    p3, p4 = _transform(cos, oe_r.T, oe_i.T), _transform(sin, oo_r.T, oo_i.T)
+    n, h, m = pupil.shape[0], pupil.shape[0] // 2, cos.shape[0]
+    work = functools.partial(_WORKSPACE.get, dtype=cos.dtype)
+    # Columns: fold along them; rows of the products are (real | imag) x pupil rows.
+    even, odd = work("even_columns", (2 * n, h + 1)), work("odd_columns", (2 * n, h + 1))
+    for i, part in enumerate((pupil.real, pupil.imag)):
+        _fold_rows(part.T, even[i * n : (i + 1) * n].T, odd[i * n : (i + 1) * n].T)
+    te = np.matmul(even, cos.T, out=work("te", (2 * n, m)))  # [(real | imag) x row, theta_c]
+    to = np.matmul(odd, sin.T, out=work("to", (2 * n, m)))
+    # Rows: fold each part about the centre row; even parts go to cos, odd parts to sin.
+    even_rows, odd_rows = work("even_rows", (h + 1, 4, m)), work("odd_rows", (h + 1, 4, m))
+    for i, (source, part) in enumerate(((te, 0), (te, 1), (to, 0), (to, 1))):
+        _fold_rows(source[part * n : (part + 1) * n], even_rows[:, i], odd_rows[:, i])
+    # [theta_r, (p1r, p1i, p3r, p3i), theta_c] and [theta_r, (p2r, p2i, p4r, p4i), theta_c]
+    pc = np.matmul(cos, even_rows.reshape(h + 1, 4 * m), out=work("pc", (m, 4 * m))).reshape(m, 4, m)
+    ps = np.matmul(sin, odd_rows.reshape(h + 1, 4 * m), out=work("ps", (m, 4 * m))).reshape(m, 4, m)
     # E(+,+) = A - iB, E(-,-) = A + iB with A = p1 - p4, B = p2 + p3;
     # E(+,-) = C - iD, E(-,+) = C + iD with C = p1 + p4, D = p2 - p3.
-    a = (p1[0] - p4[0], p1[1] - p4[1])
-    b = (p2[0] + p3[0], p2[1] + p3[1])
-    c = (p1[0] + p4[0], p1[1] + p4[1])
-    d = (p2[0] - p3[0], p2[1] - p3[1])
-    sum_ab = a[0] ** 2 + a[1] ** 2 + b[0] ** 2 + b[1] ** 2
-    cross_ab = 2 * (a[0] * b[1] - a[1] * b[0])
-    sum_cd = c[0] ** 2 + c[1] ** 2 + d[0] ** 2 + d[1] ** 2
-    cross_cd = 2 * (c[0] * d[1] - c[1] * d[0])
-    return {(1, 1): sum_ab + cross_ab, (-1, -1): sum_ab - cross_ab, (1, -1): sum_cd + cross_cd, (-1, 1): sum_cd - cross_cd}
+    ac, bd = work("ac", (2, m, 2, m)), work("bd", (2, m, 2, m))  # [A | C], [B | D]: [theta_r, real | imag, theta_c]
+    np.subtract(pc[:, :2], ps[:, 2:], out=ac[0])
+    np.add(pc[:, :2], ps[:, 2:], out=ac[1])
+    np.add(ps[:, :2], pc[:, 2:], out=bd[0])
+    np.subtract(ps[:, :2], pc[:, 2:], out=bd[1])
+    # |E(+-,+-)|^2 = |A|^2 + |B|^2 +- 2 (Ar Bi - Ai Br), likewise with C and D.
+    total, cross, scratch = work("sum", (2, m, m)), work("cross", (2, m, m)), work("scratch", (2, m, m))
+    np.multiply(ac[:, :, 0], ac[:, :, 0], out=total)
+    for source, part in ((ac, 1), (bd, 0), (bd, 1)):
+        total += np.multiply(source[:, :, part], source[:, :, part], out=scratch)
+    np.multiply(ac[:, :, 0], bd[:, :, 1], out=cross)
+    cross -= np.multiply(ac[:, :, 1], bd[:, :, 0], out=scratch)
+    cross *= 2
+    out = work("quadrants", (4, m, m))
+    np.add(total, cross, out=out[0::2])  # (+,+), (+,-)
+    np.subtract(total, cross, out=out[1::2])  # (-,-), (-,+)
+    return out
 
 
-def _add_quadrants(total: np.ndarray, quadrants: dict, weight: float) -> None:
-    """Add the quadrants (|k| = 0..M/2 each way) to an M x M intensity in FFT order."""
+#: The quadrants' order in :func:`_quadrant_intensities`: signs of (theta_row, theta_col).
+QUADRANTS = ((1, 1), (-1, -1), (1, -1), (-1, 1))
+
+
+def _add_quadrants(total: np.ndarray, quadrants: np.ndarray, weight: float) -> None:
+    """Add the quadrants (|k| = 0..M/2 each way) to an M x M intensity centred on [M/2, M/2]."""
     h = total.shape[0] // 2
-    index = {1: (slice(0, h), slice(0, h)), -1: (slice(h, None), slice(h, 0, -1))}
-    for (sr, sc), values in quadrants.items():
+    index = {1: (slice(h, None), slice(0, h)), -1: (slice(h - 1, None, -1), slice(1, h + 1))}
+    for (sr, sc), values in zip(QUADRANTS, quadrants):
         (rows_out, rows_in), (cols_out, cols_in) = index[sr], index[sc]
-        total[rows_out, cols_out] += weight * values[rows_in, cols_in]
+        if weight == 1.0:
+            total[rows_out, cols_out] += values[rows_in, cols_in]
+        else:
+            total[rows_out, cols_out] += weight * values[rows_in, cols_in]
 
 
 def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
-    """Sum over wavelengths of weight x unit-energy intensity on the internal grid (origin at [0, 0])."""
+    """Sum over wavelengths of weight x unit-energy intensity on the internal grid (origin at [M/2, M/2])."""
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     plan = plans[0]
     grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
@@ -242,13 +275,15 @@ def _fft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     m = plans[0].internal_size
     total = np.zeros((m, m), dtype=dtype)
-    correction = _cell_transfer(m).astype(dtype)
+    correction = scipy.fft.fftshift(_cell_transfer(m)).astype(dtype)
     for front, weight, plan in zip(fronts, weights, plans):
         grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
-        window = np.arange(-grid.half, grid.half + 1) % m  # pupil centre at index [0, 0]: no shifts
+        offsets = np.arange(-grid.half, grid.half + 1)
+        window = offsets % m  # pupil centre at index [0, 0]
+        checker = np.where(offsets % 2, -1, 1).astype(dtype)  # (-1)^(i + j): the output centred on [M/2, M/2]
         pupil = np.zeros((m, m), dtype=complex_dtype)
-        pupil[np.ix_(window, window)] = generalised_pupil(grid, opd_on_points_um(grid, front), plan.wavelength_nm,
-                                                          complex_dtype)
+        pupil[np.ix_(window, window)] = (generalised_pupil(grid, opd_on_points_um(grid, front), plan.wavelength_nm,
+                                                           complex_dtype) * checker[:, None] * checker[None, :])
         spectrum = scipy.fft.fft2(pupil, workers=-1, overwrite_x=True)
         spectrum *= correction[:, None]
         spectrum *= correction[None, :]
@@ -277,7 +312,7 @@ def _pixel_transfer(m: int, oversample: int, dtype, pixel: str) -> np.ndarray:
 def to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixel: str) -> np.ndarray:
     """Decimate the (Nyquist-sampled, periodic) internal PSF onto ``size_px`` output pixels.
 
-    ``intensity`` has its origin at ``[0, 0]``; the output has it at ``[N//2, N//2]``.
+    ``intensity`` (M x M) has its origin at ``[M//2, M//2]``; the output has it at ``[N//2, N//2]``.
 
     * ``pixel="integrate"``: exact integrals over the output pixels (the box applied as its sinc
       in the Fourier domain, then sampled).  What a sensor records; non-negative; unit sum.
@@ -292,14 +327,9 @@ def to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixel
     spectrum = scipy.fft.rfft2(intensity, workers=-1)
     spectrum *= _pixel_transfer(m, oversample, intensity.dtype.type, pixel)
     averaged = scipy.fft.irfft2(spectrum, s=intensity.shape, workers=-1, overwrite_x=True)
-    if oversample == 1 and size_px == m:
-        averaged = np.fft.fftshift(averaged)  # the same picks, as a roll
-    else:
-        picks = ((np.arange(size_px) - size_px // 2) * oversample) % m
-        averaged = averaged[np.ix_(picks, picks)]
-    if oversample != 1:
-        averaged *= oversample**2
-    return averaged
+    first = m // 2 - (size_px // 2) * oversample
+    averaged = averaged[first : first + size_px * oversample : oversample, first : first + size_px * oversample : oversample]
+    return averaged * oversample**2 if oversample != 1 else averaged
 
 
 def wave_psf(fronts, weights, diameter_mm, plans, size_px, dtype, pixel) -> np.ndarray:
