@@ -40,15 +40,8 @@ from vissim.atv.data import EYES, SubjectData
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "CONDITIONS",
-    "CurveAnalysis",
-    "QuadraticFit",
-    "VertexInterval",
-    "analyse_curve",
-    "analyse_subject",
-    "fit_quadratic",
-]
+__all__ = ["CONDITIONS", "CurveAnalysis", "QuadraticFit", "VertexInterval", "analyse_curve",
+           "analyse_subject", "fit_quadratic"]
 
 log = logging.getLogger(__name__)
 

@@ -12,14 +12,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from vissim.atv.records import (
-    Autorefraction,
-    AutorefractorEye,
-    Examination,
-    SubjectData,
-    SummaryRow,
-    Trial,
-)
+from vissim.atv.records import Autorefraction, AutorefractorEye, Examination, SubjectData, SummaryRow, Trial
 from vissim.errors import VissimInputError
 
 __all__ = ["SCHEMA", "SCHEMA_VERSION", "parse_subject"]

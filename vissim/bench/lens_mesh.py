@@ -41,19 +41,9 @@ from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import diopters_to_per_mm
 
-__all__ = [
-    "LensMesh",
-    "lens_mesh",
-    "lens_surface_curvatures_per_mm",
-    "sag_mm",
-    "sag_gradient",
-    "rim_thickness_mm",
-    "realistic_center_thickness_mm",
-    "write_ply",
-    "ply_bytes",
-    "cached_lens_ply",
-    "mesh_cache_dir",
-]
+__all__ = ["LensMesh", "lens_mesh", "lens_surface_curvatures_per_mm", "sag_mm", "sag_gradient",
+           "rim_thickness_mm", "realistic_center_thickness_mm", "write_ply", "ply_bytes", "cached_lens_ply",
+           "mesh_cache_dir"]
 
 log = logging.getLogger(__name__)
 

@@ -21,12 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from vissim.bench.dslr import DslrBench
-from vissim.charts import (
-    DEFAULT_LETTER_SEED,
-    ChartSpec,
-    etdrs_chart_spec,
-    single_letter_spec,
-)
+from vissim.charts import DEFAULT_LETTER_SEED, ChartSpec, etdrs_chart_spec, single_letter_spec
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import mm_to_m

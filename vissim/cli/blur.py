@@ -5,11 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.cli._common import (
-    add_aberration_args,
-    parse_float_list,
-    wavefront_from_args,
-)
+from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
 from vissim.imageio import Image, read_image, write_image
 from vissim.optics.blur import PADDING_MODES, blur_image

@@ -7,11 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.cli._common import (
-    add_aberration_args,
-    parse_float_list,
-    wavefront_from_args,
-)
+from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.imageio import to_preview_png, write_image
 from vissim.optics.psf import compute_psf
 from vissim.provenance import make_provenance

@@ -9,13 +9,8 @@ import math
 
 from vissim import __version__
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import (
-    CROWN_GLASS_INDEX,
-    TrialLens,
-    TrialLensSetup,
-    thesis_table_4_2_power,
-    trial_lens_effect,
-)
+from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, thesis_table_4_2_power,
+                                      trial_lens_effect)
 
 log = logging.getLogger(__name__)
 

@@ -31,14 +31,8 @@ from vissim.checks import MAX_POWER_DIOPTERS
 from vissim.checks import finite_number as _finite
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "SpheroCylinder",
-    "Prescription",
-    "RefractiveError",
-    "LensPower",
-    "as_prescription",
-    "parse_spherocylinder",
-]
+__all__ = ["SpheroCylinder", "Prescription", "RefractiveError", "LensPower", "as_prescription",
+           "parse_spherocylinder"]
 
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)"
 _SPHERE = rf"(?P<sphere>{_NUMBER}|plano|pl)"

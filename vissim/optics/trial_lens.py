@@ -38,20 +38,9 @@ from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription
 from vissim.units import mm_to_m
 
-__all__ = [
-    "CROWN_GLASS_INDEX",
-    "MAX_LENSES_IN_HOLDER",
-    "SurfaceRadii",
-    "TrialLens",
-    "TrialLensSetup",
-    "TrialLensEffect",
-    "trial_lens_effect",
-    "refraction_matrix",
-    "transfer_matrix",
-    "entrance_pupil_diameter_mm",
-    "thesis_eye_pupil_diameter_mm",
-    "thesis_table_4_2_power",
-]
+__all__ = ["CROWN_GLASS_INDEX", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
+           "TrialLensEffect", "trial_lens_effect", "refraction_matrix", "transfer_matrix",
+           "entrance_pupil_diameter_mm", "thesis_eye_pupil_diameter_mm", "thesis_table_4_2_power"]
 
 log = logging.getLogger(__name__)
 

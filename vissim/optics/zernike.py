@@ -23,15 +23,8 @@ from scipy.special import eval_jacobi
 
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "ansi_j_to_nm",
-    "nm_to_ansi_j",
-    "noll_to_nm",
-    "nm_to_noll",
-    "zernike_norm",
-    "zernike_radial",
-    "zernike_nm",
-]
+__all__ = ["ansi_j_to_nm", "nm_to_ansi_j", "noll_to_nm", "nm_to_noll", "zernike_norm", "zernike_radial",
+           "zernike_nm"]
 
 
 def _check_nm(n: int, m: int) -> tuple[int, int]:

@@ -26,19 +26,8 @@ from vissim.optics.prescription import Prescription
 from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
-from vissim.validation.fields import (
-    MAX_SEED,
-    MAX_SPP,
-    checked_numbers,
-    field_error,
-    lenses,
-    number,
-    read_campaign_toml,
-    settings_kwargs,
-    table,
-    tables,
-    text,
-)
+from vissim.validation.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
+                                      read_campaign_toml, settings_kwargs, table, tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
            "is_depth_campaign", "DEPTH_SIMULATIONS", "SCHEMA_VERSION"]
