@@ -151,9 +151,7 @@ def _parse_examination(r: _Reader, obj: Any, where: str) -> Examination:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise r.fail(f"{where}.lens_sequence_diopters[{i}]", f"must be a number in D, got {value!r}")
         lenses.append(float(value))
-    trials = tuple(
-        _parse_trial(r, t, f"{where}.trials[{i}]") for i, t in enumerate(r.array(obj, "trials", where))
-    )
+    trials = tuple(_parse_trial(r, t, f"{where}.trials[{i}]") for i, t in enumerate(r.array(obj, "trials", where)))
     return r.build(
         Examination,
         where,

@@ -49,10 +49,7 @@ _LENS = {
     "center_thickness_mm": (float, "mm"),
     "back_surface_diopters": (float, "D"),
 }
-_IMAGE = {
-    "arcmin_per_px": ("arcmin_per_px", float, "arcmin/px"),
-    "size_px": ("size_px", list, "[rows, cols] px"),
-}
+_IMAGE = {"arcmin_per_px": ("arcmin_per_px", float, "arcmin/px"), "size_px": ("size_px", list, "[rows, cols] px")}
 _SAMPLING = {
     "spp": ("spp", int, "samples per pixel"),
     "seed": ("seed", int, "(integer)"),

@@ -63,9 +63,7 @@ def _object_distance_m(text: str) -> float:
 
 def _lens_from_args(args: argparse.Namespace) -> TrialLens:
     if args.cylinder != 0.0 and args.axis is None:
-        raise VissimInputError(
-            f"--cylinder {args.cylinder:g} D needs --axis in degrees (TABO, 0-180)"
-        )
+        raise VissimInputError(f"--cylinder {args.cylinder:g} D needs --axis in degrees (TABO, 0-180)")
     index = args.index
     if args.thickness_mm > 0.0 and index is None:
         index = CROWN_GLASS_INDEX
@@ -113,15 +111,11 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(result, indent=2, allow_nan=False))
         return 0
 
-    kind = "thin" if lens.is_thin else (
-        f"{lens.center_thickness_mm:g} mm thick, n = {lens.refractive_index:g}"
-    )
+    kind = "thin" if lens.is_thin else f"{lens.center_thickness_mm:g} mm thick, n = {lens.refractive_index:g}"
     where = "infinity" if result["object_distance_m"] is None else f"{setup.object_distance_m:g} m"
     added = effect.added_power.minus_cylinder()
     print(f"trial lens {marked} ({kind}) at {setup.vertex_distance_mm:g} mm, object at {where}")
-    cylinder = "DS" if added.cylinder_diopters == 0.0 else (
-        f"{added.cylinder_diopters:+.4f} x {added.axis_deg:g}"
-    )
+    cylinder = "DS" if added.cylinder_diopters == 0.0 else f"{added.cylinder_diopters:+.4f} x {added.axis_deg:g}"
     print(f"added power at the camera:   {added.sphere_diopters:+.4f} {cylinder}")
     print("  per meridian:              " + ",  ".join(
         f"{row['meridian_deg']:g}: {row['power_diopters']:+.4f} D"

@@ -49,11 +49,7 @@ __all__ = ["HOFSTETTER_1950", "Accommodation", "accommodation_for_target", "ampl
 log = logging.getLogger(__name__)
 
 #: Hofstetter (1950), amplitude = intercept - slope * age (dioptres, age in years).
-HOFSTETTER_1950 = {
-    "minimum": (15.0, 0.25),
-    "mean": (18.5, 0.30),
-    "maximum": (25.0, 0.40),
-}
+HOFSTETTER_1950 = {"minimum": (15.0, 0.25), "mean": (18.5, 0.30), "maximum": (25.0, 0.40)}
 
 
 def _check_amplitude(amplitude_diopters) -> float:

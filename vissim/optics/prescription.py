@@ -131,11 +131,7 @@ class SpheroCylinder:
         """(M, J0, J45) in dioptres, Thibos, Wheeler & Horner (1997)."""
         two_axis = math.radians(2.0 * self.axis_deg)
         half_cyl = self.cylinder_diopters / 2.0
-        vector = (
-            self.sphere_diopters + half_cyl,
-            -half_cyl * math.cos(two_axis),
-            -half_cyl * math.sin(two_axis),
-        )
+        vector = (self.sphere_diopters + half_cyl, -half_cyl * math.cos(two_axis), -half_cyl * math.sin(two_axis))
         # cos/sin of multiples of 90 deg leave ~1e-16 residues; they are exact zeros.
         return tuple(0.0 if abs(v) < 1e-13 * (1.0 + abs(half_cyl)) else v for v in vector)
 
@@ -174,9 +170,7 @@ class SpheroCylinder:
 
     def is_close(self, other: SpheroCylinder, tol_diopters: float = 1e-9) -> bool:
         """Same power (whatever the cylinder sign it is written in)."""
-        return all(
-            abs(a - b) <= tol_diopters for a, b in zip(self.power_vector(), other.power_vector())
-        )
+        return all(abs(a - b) <= tol_diopters for a, b in zip(self.power_vector(), other.power_vector()))
 
     def __neg__(self) -> Self:
         return type(self)(-self.sphere_diopters, -self.cylinder_diopters, self.axis_deg)

@@ -78,10 +78,7 @@ def _principal(symmetric: np.ndarray) -> tuple[tuple[float, float], tuple[float,
     if abs(values[1] - values[0]) <= 1e-12 * max(1.0, abs(values[1])):
         mean = float(values.mean())
         return (mean, 180.0), (mean, 90.0)
-    return (
-        (float(values[1]), _meridian_deg(vectors[:, 1])),
-        (float(values[0]), _meridian_deg(vectors[:, 0])),
-    )
+    return ((float(values[1]), _meridian_deg(vectors[:, 1])), (float(values[0]), _meridian_deg(vectors[:, 0])))
 
 
 def refraction_matrix(power_matrix_diopters) -> np.ndarray:

@@ -205,9 +205,7 @@ class Wavefront:
         basis = np.stack([zernike_nm(n, m, rr, tt).ravel() for n, m in keys], axis=1)
         solution, *_ = np.linalg.lstsq(basis, target, rcond=None)
         scale = max(1e-12, float(np.max(np.abs(solution))))
-        return Wavefront(
-            {k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new
-        )
+        return Wavefront({k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new)
 
     def as_json(self) -> dict:
         return {

@@ -32,9 +32,7 @@ def _check_nm(n: int, m: int) -> tuple[int, int]:
         raise VissimInputError(f"Zernike indices must be integers, got n={n!r}, m={m!r}")
     n, m = int(n), int(m)
     if n < 0 or abs(m) > n or (n - m) % 2:
-        raise VissimInputError(
-            f"invalid Zernike term (n={n}, m={m}): need n >= 0, |m| <= n and n - m even"
-        )
+        raise VissimInputError(f"invalid Zernike term (n={n}, m={m}): need n >= 0, |m| <= n and n - m even")
     return n, m
 
 
