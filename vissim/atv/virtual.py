@@ -327,12 +327,9 @@ def run_virtual_experiment(
         request = SpotRequest(subject, apparatus, lens, vergence, accommodation, residual, detection.summation_diameter_arcmin)
         fraction = summation_fraction(retinal_image(request), detection.summation_diameter_arcmin)
         threshold = detection.threshold_code(fraction, apparatus.display_gamma)
-        psychometric = PsychometricFunction(
-            threshold if math.isfinite(threshold) else 1e6,
-            slope=detection.psychometric_slope * apparatus.display_gamma,
-            guess_rate=detection.guess_rate,
-            lapse_rate=detection.lapse_rate,
-        )
+        psychometric = PsychometricFunction(threshold if math.isfinite(threshold) else 1e6,
+                                            slope=detection.psychometric_slope * apparatus.display_gamma,
+                                            guess_rate=detection.guess_rate, lapse_rate=detection.lapse_rate)
         observer_seed, procedure_seed = (int(s) for s in child.generate_state(2))
         result = run_procedure(SimulatedObserver(psychometric, seed=observer_seed), procedure, seed=procedure_seed)
         if result.never_seen:

@@ -96,16 +96,9 @@ def run(args: argparse.Namespace) -> int:
             )
         psfs.append(cache[key])
     blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)
-    provenance = make_provenance(
-        command="blur",
-        input=str(args.input),
-        input_provenance=image.provenance,
-        arcmin_per_px=step,
-        padding=args.padding,
-        psfs=[p.as_json() for p in cache.values()],
-        rx=args.rx,
-        zernike=args.zernike,
-    )
+    provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
+                                 arcmin_per_px=step, padding=args.padding,
+                                 psfs=[p.as_json() for p in cache.values()], rx=args.rx, zernike=args.zernike)
     written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
     print(f"wrote {written}")
     return 0

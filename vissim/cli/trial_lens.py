@@ -68,23 +68,15 @@ def _lens_from_args(args: argparse.Namespace) -> TrialLens:
     if args.thickness_mm > 0.0 and index is None:
         index = CROWN_GLASS_INDEX
         log.info("no --index given: using crown glass, n = %g", index)
-    return TrialLens(
-        sphere_diopters=args.sphere,
-        cylinder_diopters=args.cylinder,
-        axis_deg=180.0 if args.axis is None else args.axis,
-        refractive_index=index,
-        center_thickness_mm=args.thickness_mm,
-        back_surface_diopters=args.back_surface_diopters,
-    )
+    return TrialLens(sphere_diopters=args.sphere, cylinder_diopters=args.cylinder,
+                     axis_deg=180.0 if args.axis is None else args.axis, refractive_index=index,
+                     center_thickness_mm=args.thickness_mm, back_surface_diopters=args.back_surface_diopters)
 
 
 def run(args: argparse.Namespace) -> int:
     lens = _lens_from_args(args)
-    setup = TrialLensSetup(
-        lenses=(lens,),
-        vertex_distance_mm=args.vertex_mm,
-        object_distance_m=_object_distance_m(args.object_distance_m),
-    )
+    setup = TrialLensSetup(lenses=(lens,), vertex_distance_mm=args.vertex_mm,
+                           object_distance_m=_object_distance_m(args.object_distance_m))
     effect = trial_lens_effect(setup)
     marked = lens.marked_power
     lens_meridians = (marked.axis_deg, (marked.axis_deg + 90.0) % 180.0 or 180.0)

@@ -110,11 +110,8 @@ class SpheroCylinder:
         """The same power written with the opposite cylinder sign."""
         if self.cylinder_diopters == 0:
             return self
-        return type(self)(
-            self.sphere_diopters + self.cylinder_diopters,
-            -self.cylinder_diopters,
-            _normalise_axis(self.axis_deg + 90.0),
-        )
+        return type(self)(self.sphere_diopters + self.cylinder_diopters, -self.cylinder_diopters,
+                          _normalise_axis(self.axis_deg + 90.0))
 
     def minus_cylinder(self) -> Self:
         return self.transposed() if self.cylinder_diopters > 0 else self

@@ -401,15 +401,11 @@ def trial_lens_effect(setup: TrialLensSetup) -> TrialLensEffect:
 
     added_power = LensPower.from_power_matrix(added)
     log.debug("trial lenses %s: added %s, magnification %s", setup, added_power, principal)
-    return TrialLensEffect(
-        setup=setup,
-        added_power=added_power,
-        added_power_matrix=_as_tuple(added),
-        camera_prescription=added_power.prescription_of_camera(),
-        magnification_principal=principal,
-        magnification=math.copysign(math.sqrt(mag_a * mag_b), mag_a),
-        magnification_matrix=_as_tuple(magnification_matrix),
-    )
+    return TrialLensEffect(setup=setup, added_power=added_power, added_power_matrix=_as_tuple(added),
+                           camera_prescription=added_power.prescription_of_camera(),
+                           magnification_principal=principal,
+                           magnification=math.copysign(math.sqrt(mag_a * mag_b), mag_a),
+                           magnification_matrix=_as_tuple(magnification_matrix))
 
 
 # -- the thesis's rules, kept for explicit comparison --------------------------------------

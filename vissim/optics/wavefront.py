@@ -60,11 +60,8 @@ def zernike_um_to_prescription(coefficients_um: Mapping[tuple[int, int], float],
     c2m2 = float(coefficients_um.get((2, -2), 0.0))
     c20 = float(coefficients_um.get((2, 0), 0.0))
     c22 = float(coefficients_um.get((2, 2), 0.0))
-    return Prescription.from_power_vector(
-        -4.0 * _SQRT3 * c20 / radius_sq,
-        -2.0 * _SQRT6 * c22 / radius_sq,
-        -2.0 * _SQRT6 * c2m2 / radius_sq,
-    )
+    return Prescription.from_power_vector(-4.0 * _SQRT3 * c20 / radius_sq, -2.0 * _SQRT6 * c22 / radius_sq,
+                                          -2.0 * _SQRT6 * c2m2 / radius_sq)
 
 
 _TERM_RE = re.compile(r"^\s*(?P<n>[+-]?\d+)\s*,\s*(?P<m>[+-]?\d+)\s*=\s*(?P<value>\S+)\s*$")
