@@ -256,7 +256,6 @@ def panel_geometries(scene: DepthScene) -> tuple[PanelGeometry, ...]:
     return tuple(_geometry(scene, i, p) for i, p in enumerate(scene.panels))
 
 
-
 def pixel_tangents(scene: DepthScene) -> tuple[np.ndarray, np.ndarray]:
     """(tx per column, ty per row) of the pixel centres: right and up image tangents."""
     rows, cols = scene.size_px

@@ -51,7 +51,6 @@ __all__ = ["Capture", "load_manifest", "capture_problem", "capture_tile", "file_
 log = logging.getLogger(__name__)
 
 
-
 @dataclass(frozen=True)
 class Capture:
     id: str

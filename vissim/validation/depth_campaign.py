@@ -80,7 +80,6 @@ class DepthCampaign:
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
 
-
 # -- loading ---------------------------------------------------------------------------
 #: [depth_campaign] numbers: (unit, lowest, highest).
 NUMBER_SETTINGS = {
