@@ -24,18 +24,9 @@ from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, m_to_mm, rad_to_arcmin
 
-__all__ = [
-    "LETTER_HEIGHT_MAR",
-    "THESIS_VIEWING_DISTANCE_M",
-    "decimal_to_logmar",
-    "letter_height_arcmin",
-    "letter_height_mm",
-    "logmar_to_decimal",
-    "logmar_to_snellen",
-    "snellen_to_logmar",
-    "subtense_arcmin",
-    "subtense_mm",
-]
+__all__ = ["LETTER_HEIGHT_MAR", "THESIS_VIEWING_DISTANCE_M", "decimal_to_logmar", "letter_height_arcmin",
+           "letter_height_mm", "logmar_to_decimal", "logmar_to_snellen", "snellen_to_logmar",
+           "subtense_arcmin", "subtense_mm"]
 
 #: A Sloan letter is five strokes (five MAR) tall.
 LETTER_HEIGHT_MAR = 5.0

@@ -34,14 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from vissim.acuity import (
-    THESIS_VIEWING_DISTANCE_M,
-    letter_height_arcmin,
-    letter_height_mm,
-    logmar_to_snellen,
-    subtense_arcmin,
-    subtense_mm,
-)
+from vissim.acuity import (THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, letter_height_mm,
+                           logmar_to_snellen, subtense_arcmin, subtense_mm)
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, finite_number, positive_number
 from vissim.errors import VissimInputError
@@ -49,26 +43,10 @@ from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window, sloan_letter
 
 logger = logging.getLogger(__name__)
 
-__all__ = [
-    "DEFAULT_LETTER_SEED",
-    "MM_PER_INCH",
-    "POLARITIES",
-    "THESIS_TILE_SHAPE_PX",
-    "Chart",
-    "ChartLayout",
-    "ChartRow",
-    "ChartSpec",
-    "LetterBox",
-    "etdrs_chart_spec",
-    "layout_chart",
-    "logmar_steps",
-    "optotype_tile",
-    "render_chart_angular",
-    "render_chart_print",
-    "save_chart_pdf",
-    "save_chart_png",
-    "single_letter_spec",
-]
+__all__ = ["DEFAULT_LETTER_SEED", "MM_PER_INCH", "POLARITIES", "THESIS_TILE_SHAPE_PX", "Chart", "ChartLayout",
+           "ChartRow", "ChartSpec", "LetterBox", "etdrs_chart_spec", "layout_chart", "logmar_steps",
+           "optotype_tile", "render_chart_angular", "render_chart_print", "save_chart_pdf", "save_chart_png",
+           "single_letter_spec"]
 
 POLARITIES = ("black-on-white", "white-on-black")
 #: Thesis tiles: 113 px wide x 133 px tall at 1 arcmin/px (ERRATA item 8), as (rows, cols).

@@ -51,16 +51,8 @@ from vissim.errors import VissimInputError
 
 logger = logging.getLogger(__name__)
 
-__all__ = [
-    "DESIGN_UNITS",
-    "SLOAN_LETTERS",
-    "ClippedRing",
-    "ConvexPolygon",
-    "SloanLetter",
-    "letter_coverage_window",
-    "rasterize_letter",
-    "sloan_letter",
-]
+__all__ = ["DESIGN_UNITS", "SLOAN_LETTERS", "ClippedRing", "ConvexPolygon", "SloanLetter",
+           "letter_coverage_window", "rasterize_letter", "sloan_letter"]
 
 #: Design units per letter height (and width); one unit is one stroke.
 DESIGN_UNITS = 5.0

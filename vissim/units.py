@@ -6,21 +6,9 @@ import math
 
 import numpy as np
 
-__all__ = [
-    "ARCMIN_PER_RAD",
-    "arcmin_to_rad",
-    "rad_to_arcmin",
-    "nm_to_mm",
-    "nm_to_um",
-    "cyc_per_rad_to_cyc_per_deg",
-    "mrad_to_arcmin",
-    "MM_PER_M",
-    "mm_to_m",
-    "m_to_mm",
-    "diopters_to_mm",
-    "diopters_to_per_mm",
-    "REC709_LUMINANCE",
-]
+__all__ = ["ARCMIN_PER_RAD", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
+           "cyc_per_rad_to_cyc_per_deg", "mrad_to_arcmin", "MM_PER_M", "mm_to_m", "m_to_mm", "diopters_to_mm",
+           "diopters_to_per_mm", "REC709_LUMINANCE"]
 
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
 

@@ -40,15 +40,8 @@ from vissim.atv.data import EYES, SubjectData
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "CONDITIONS",
-    "CurveAnalysis",
-    "QuadraticFit",
-    "VertexInterval",
-    "analyse_curve",
-    "analyse_subject",
-    "fit_quadratic",
-]
+__all__ = ["CONDITIONS", "CurveAnalysis", "QuadraticFit", "VertexInterval", "analyse_curve",
+           "analyse_subject", "fit_quadratic"]
 
 log = logging.getLogger(__name__)
 
@@ -258,14 +251,10 @@ def fit_quadratic(x_diopters: Sequence[float], y_code: Sequence[float]) -> Quadr
     root = math.sqrt(s2) * scipy.linalg.solve_triangular(r, np.eye(3))  # V_t = s^2 R^-1 R^-T = W W^T
     to_x = _to_x(xc, h)
     cov = (to_x @ root) @ (to_x @ root).T
-    fit = QuadraticFit(
-        coefficients=tuple(float(c) for c in to_x @ coef_t),
-        covariance=tuple(tuple(float(v) for v in row) for row in (cov + cov.T) / 2.0),
-        residual_sd_code=math.sqrt(s2),
-        dof=dof,
-        n_points=int(x.size),
-        x_range_diopters=(float(x.min()), float(x.max())),
-    )
+    fit = QuadraticFit(coefficients=tuple(float(c) for c in to_x @ coef_t),
+                       covariance=tuple(tuple(float(v) for v in row) for row in (cov + cov.T) / 2.0),
+                       residual_sd_code=math.sqrt(s2), dof=dof, n_points=int(x.size),
+                       x_range_diopters=(float(x.min()), float(x.max())))
     object.__setattr__(fit, "_scaled_cache", _Scaled(xc, h, coef_t, root))
     return fit
 
@@ -389,22 +378,13 @@ def analyse_curve(
         if not lo <= fit.vertex_diopters <= hi:
             notes.append(f"the vertex {fit.vertex_diopters:+.2f} D lies outside the measured lenses ({lo:+g} to {hi:+g} D): an extrapolation")
     counts = tuple(int(n) for n in sessions_per_point) if sessions_per_point is not None else (1,) * len(lens_diopters)
-    return CurveAnalysis(
-        subject_id=subject_id,
-        eye=eye,
-        condition=condition,
-        lens_diopters=tuple(float(x) for x in lens_diopters),
-        minimum_visible_code=tuple(float(y) for y in minimum_visible_code),
-        sessions_per_point=counts,
-        fit=fit,
-        vertex_interval=fieller,
-        vertex_interval_delta=delta,
-        measured_se_diopters=measured_se_diopters,
-        level=level,
-        notes=tuple(notes),
-        used_in_fit=tuple(bool(u) for u in used),
-        window_diopters=None if window_diopters is None else float(window_diopters),
-    )
+    return CurveAnalysis(subject_id=subject_id, eye=eye, condition=condition,
+                         lens_diopters=tuple(float(x) for x in lens_diopters),
+                         minimum_visible_code=tuple(float(y) for y in minimum_visible_code),
+                         sessions_per_point=counts, fit=fit, vertex_interval=fieller, vertex_interval_delta=delta,
+                         measured_se_diopters=measured_se_diopters, level=level, notes=tuple(notes),
+                         used_in_fit=tuple(bool(u) for u in used),
+                         window_diopters=None if window_diopters is None else float(window_diopters))
 
 
 def analyse_subject(

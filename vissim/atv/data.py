@@ -27,39 +27,15 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.atv.records import (
-    EYES,
-    THESIS_TRIAL_LENSES_DIOPTERS,
-    Autorefraction,
-    AutorefractorEye,
-    Discrepancy,
-    Examination,
-    SubjectData,
-    SummaryRow,
-    Trial,
-)
+from vissim.atv.records import (EYES, THESIS_TRIAL_LENSES_DIOPTERS, Autorefraction, AutorefractorEye,
+                                Discrepancy, Examination, SubjectData, SummaryRow, Trial)
 from vissim.atv.schema import SCHEMA, SCHEMA_VERSION, parse_subject
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "AtvDataDiscrepancyError",
-    "Autorefraction",
-    "AutorefractorEye",
-    "Discrepancy",
-    "Examination",
-    "EYES",
-    "SCHEMA",
-    "SCHEMA_VERSION",
-    "SubjectData",
-    "SummaryRow",
-    "THESIS_TRIAL_LENSES_DIOPTERS",
-    "Trial",
-    "check_subject",
-    "compute_summary_without_drops",
-    "load_directory",
-    "load_subject",
-    "parse_subject",
-]
+__all__ = ["AtvDataDiscrepancyError", "Autorefraction", "AutorefractorEye", "Discrepancy", "Examination",
+           "EYES", "SCHEMA", "SCHEMA_VERSION", "SubjectData", "SummaryRow", "THESIS_TRIAL_LENSES_DIOPTERS",
+           "Trial", "check_subject", "compute_summary_without_drops", "load_directory", "load_subject",
+           "parse_subject"]
 
 log = logging.getLogger(__name__)
 

@@ -120,15 +120,10 @@ def spot_metrics(image, arcmin_per_px: float, std_image=None) -> SpotMetrics:
             variance /= 4.0 * math.pi * sigma**2
         relative_std = float(math.sqrt(variance[at]) / smoothed[at]) if smoothed[at] > 0 else math.inf
     n0, n1 = data.shape
-    return SpotMetrics(
-        total_flux=total * step * step,
-        peak=float(smoothed[at]),
-        peak_pixel=float(data.max()),
-        peak_relative_std=relative_std,
-        spot_diameter_arcmin=float(fwhm_px * step),
-        centroid_arcmin=((cx - n1 // 2) * step, -(cy - n0 // 2) * step),
-        peak_smoothing_px=float(sigma),
-    )
+    return SpotMetrics(total_flux=total * step * step, peak=float(smoothed[at]), peak_pixel=float(data.max()),
+                       peak_relative_std=relative_std, spot_diameter_arcmin=float(fwhm_px * step),
+                       centroid_arcmin=((cx - n1 // 2) * step, -(cy - n0 // 2) * step),
+                       peak_smoothing_px=float(sigma))
 
 
 def fresnel_transmittance(config: AtvConfig) -> float:
@@ -237,17 +232,8 @@ def predicted_spot(config: AtvConfig, *, arcmin_per_px: float = 0.5, size_px: in
     metrics = spot_metrics(image, step)
     log.debug("ATV prediction (%s): defocus %s D, blur %.3g', pixel %.3g', flux %.4g", mode,
               rx, par.blur_diameter_arcmin, par.pixel_angle_arcmin, flux)
-    return AtvPrediction(
-        image=image,
-        arcmin_per_px=step,
-        mode=mode,
-        total_flux=flux,
-        peak=metrics.peak,
-        peak_pixel=metrics.peak_pixel,
-        spot_diameter_arcmin=metrics.spot_diameter_arcmin,
-        centroid_arcmin=metrics.centroid_arcmin,
-        blur_diameter_arcmin=par.blur_diameter_arcmin,
-        pixel_angle_arcmin=par.pixel_angle_arcmin,
-        defocus_diopters=float(np.trace(par.defocus_matrix_diopters) / 2.0),
-        paraxial=par,
-    )
+    return AtvPrediction(image=image, arcmin_per_px=step, mode=mode, total_flux=flux, peak=metrics.peak,
+                         peak_pixel=metrics.peak_pixel, spot_diameter_arcmin=metrics.spot_diameter_arcmin,
+                         centroid_arcmin=metrics.centroid_arcmin, blur_diameter_arcmin=par.blur_diameter_arcmin,
+                         pixel_angle_arcmin=par.pixel_angle_arcmin,
+                         defocus_diopters=float(np.trace(par.defocus_matrix_diopters) / 2.0), paraxial=par)

@@ -29,15 +29,8 @@ import numpy as np
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "Observer",
-    "Presentation",
-    "ProcedureConfig",
-    "PsychometricFunction",
-    "SimulatedObserver",
-    "ThresholdResult",
-    "run_procedure",
-]
+__all__ = ["Observer", "Presentation", "ProcedureConfig", "PsychometricFunction", "SimulatedObserver",
+           "ThresholdResult", "run_procedure"]
 
 log = logging.getLogger(__name__)
 

@@ -17,17 +17,8 @@ from typing import Any
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 
-__all__ = [
-    "Autorefraction",
-    "AutorefractorEye",
-    "Discrepancy",
-    "EYES",
-    "Examination",
-    "SubjectData",
-    "SummaryRow",
-    "THESIS_TRIAL_LENSES_DIOPTERS",
-    "Trial",
-]
+__all__ = ["Autorefraction", "AutorefractorEye", "Discrepancy", "EYES", "Examination", "SubjectData",
+           "SummaryRow", "THESIS_TRIAL_LENSES_DIOPTERS", "Trial"]
 
 EYES = ("R", "L")
 #: Thesis §5.1 (line 860): integer lenses -5 ... +5 D plus ±0.25, ±0.5 and ±1.5 D.

@@ -12,14 +12,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from vissim.atv.records import (
-    Autorefraction,
-    AutorefractorEye,
-    Examination,
-    SubjectData,
-    SummaryRow,
-    Trial,
-)
+from vissim.atv.records import Autorefraction, AutorefractorEye, Examination, SubjectData, SummaryRow, Trial
 from vissim.errors import VissimInputError
 
 __all__ = ["SCHEMA", "SCHEMA_VERSION", "parse_subject"]
@@ -111,16 +104,24 @@ class _Reader:
             raise self.fail(where, str(exc)) from None
 
 
-def _parse_eye(r: _Reader, obj: Any, where: str) -> AutorefractorEye:
-    return r.build(
-        AutorefractorEye,
-        where,
-        sphere_diopters=r.number(obj, "sphere_diopters", where, "D"),
-        cylinder_diopters=r.number(obj, "cylinder_diopters", where, "D"),
-        axis_deg=r.number(obj, "axis_deg", where, "deg"),
-        spherical_equivalent_diopters=r.number(obj, "spherical_equivalent_diopters", where, "D"),
-        line=r.integer(obj, "line", where, "(line number)", optional=True),
-    )
+_CODE = "display code value 0-1"
+#: The fields of the flat records, in the order they are read: name and unit (None: text).  Each may
+#: also give its source ``line``.
+_RECORD_FIELDS = {
+    AutorefractorEye: (("sphere_diopters", "D"), ("cylinder_diopters", "D"), ("axis_deg", "deg"),
+                       ("spherical_equivalent_diopters", "D")),
+    Trial: (("trial_lens_diopters", "D"), ("eye", None), ("minimum_visible_code", _CODE), ("elapsed_time_s", "s"),
+            ("lux_mean_lx", "lx")),
+    SummaryRow: (("trial_lens_diopters", "D"), ("eye", None), ("mean_code", _CODE), ("max_code", _CODE),
+                 ("diff_code", _CODE)),
+}
+
+
+def _parse_record(r: _Reader, cls, obj: Any, where: str):
+    """One of the flat records of :data:`_RECORD_FIELDS`."""
+    values = {name: r.text(obj, name, where) if unit is None else r.number(obj, name, where, unit)
+              for name, unit in _RECORD_FIELDS[cls]}
+    return r.build(cls, where, **values, line=r.integer(obj, "line", where, "(line number)", optional=True))
 
 
 def _parse_autorefraction(r: _Reader, obj: Any, where: str) -> Autorefraction:
@@ -132,22 +133,9 @@ def _parse_autorefraction(r: _Reader, obj: Any, where: str) -> Autorefraction:
         vertex_distance_mm=r.number(obj, "vertex_distance_mm", where, "mm"),
         cylinder_sign=r.text(obj, "cylinder_sign", where),
         pupil_distance_mm=r.number(obj, "pupil_distance_mm", where, "mm"),
-        right=_parse_eye(r, r.get(obj, "right", where), f"{where}.right"),
-        left=_parse_eye(r, r.get(obj, "left", where), f"{where}.left"),
+        right=_parse_record(r, AutorefractorEye, r.get(obj, "right", where), f"{where}.right"),
+        left=_parse_record(r, AutorefractorEye, r.get(obj, "left", where), f"{where}.left"),
         lines=r.lines(obj, "lines", where),
-    )
-
-
-def _parse_trial(r: _Reader, obj: Any, where: str) -> Trial:
-    return r.build(
-        Trial,
-        where,
-        trial_lens_diopters=r.number(obj, "trial_lens_diopters", where, "D"),
-        eye=r.text(obj, "eye", where),
-        minimum_visible_code=r.number(obj, "minimum_visible_code", where, "display code value 0-1"),
-        elapsed_time_s=r.number(obj, "elapsed_time_s", where, "s"),
-        lux_mean_lx=r.number(obj, "lux_mean_lx", where, "lx"),
-        line=r.integer(obj, "line", where, "(line number)", optional=True),
     )
 
 
@@ -158,9 +146,8 @@ def _parse_examination(r: _Reader, obj: Any, where: str) -> Examination:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise r.fail(f"{where}.lens_sequence_diopters[{i}]", f"must be a number in D, got {value!r}")
         lenses.append(float(value))
-    trials = tuple(
-        _parse_trial(r, t, f"{where}.trials[{i}]") for i, t in enumerate(r.array(obj, "trials", where))
-    )
+    trials = tuple(_parse_record(r, Trial, t, f"{where}.trials[{i}]")
+                   for i, t in enumerate(r.array(obj, "trials", where)))
     return r.build(
         Examination,
         where,
@@ -171,19 +158,6 @@ def _parse_examination(r: _Reader, obj: Any, where: str) -> Examination:
         lens_sequence_diopters=tuple(lenses),
         trials=trials,
         lines=r.lines(obj, "lines", where),
-    )
-
-
-def _parse_summary_row(r: _Reader, obj: Any, where: str) -> SummaryRow:
-    return r.build(
-        SummaryRow,
-        where,
-        trial_lens_diopters=r.number(obj, "trial_lens_diopters", where, "D"),
-        eye=r.text(obj, "eye", where),
-        mean_code=r.number(obj, "mean_code", where, "display code value 0-1"),
-        max_code=r.number(obj, "max_code", where, "display code value 0-1"),
-        diff_code=r.number(obj, "diff_code", where, "display code value 0-1"),
-        line=r.integer(obj, "line", where, "(line number)", optional=True),
     )
 
 
@@ -207,7 +181,7 @@ def parse_subject(obj: Any, origin: str = "<subject>", path: Path | None = None)
         raise r.fail("notes", "must be an array of text")
     summary = r.get(obj, "summary_without_drops", "", optional=True) or {"rows": []}
     rows = tuple(
-        _parse_summary_row(r, row, f"summary_without_drops.rows[{i}]")
+        _parse_record(r, SummaryRow, row, f"summary_without_drops.rows[{i}]")
         for i, row in enumerate(r.array(summary, "rows", "summary_without_drops"))
     )
     return r.build(

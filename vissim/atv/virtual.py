@@ -43,19 +43,9 @@ import scipy.signal
 
 from vissim.atv.analysis import CurveAnalysis, analyse_curve
 from vissim.atv.data import THESIS_TRIAL_LENSES_DIOPTERS
-from vissim.atv.procedure import (
-    ProcedureConfig,
-    PsychometricFunction,
-    SimulatedObserver,
-    ThresholdResult,
-    run_procedure,
-)
-from vissim.bench.atv import (
-    ATV_TRIAL_LENS_DISTANCE_MM,
-    IPHONE5_PPI,
-    AtvTube,
-    pixel_pitch_mm,
-)
+from vissim.atv.procedure import (ProcedureConfig, PsychometricFunction, SimulatedObserver, ThresholdResult,
+                                  run_procedure)
+from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM, IPHONE5_PPI, AtvTube, pixel_pitch_mm
 from vissim.checks import finite_number, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
@@ -66,18 +56,9 @@ from vissim.optics.trial_lens import thesis_table_4_2_power
 from vissim.optics.wavefront import Wavefront
 from vissim.units import diopters_to_mm, rad_to_arcmin
 
-__all__ = [
-    "AtvApparatus",
-    "DetectionModel",
-    "RetinalSpot",
-    "SpotRequest",
-    "VirtualExperiment",
-    "VirtualSubject",
-    "VirtualTrial",
-    "fourier_retinal_image",
-    "run_virtual_experiment",
-    "summation_fraction",
-]
+__all__ = ["AtvApparatus", "DetectionModel", "RetinalSpot", "SpotRequest", "VirtualExperiment",
+           "VirtualSubject", "VirtualTrial", "fourier_retinal_image", "run_virtual_experiment",
+           "summation_fraction"]
 
 log = logging.getLogger(__name__)
 
@@ -346,12 +327,9 @@ def run_virtual_experiment(
         request = SpotRequest(subject, apparatus, lens, vergence, accommodation, residual, detection.summation_diameter_arcmin)
         fraction = summation_fraction(retinal_image(request), detection.summation_diameter_arcmin)
         threshold = detection.threshold_code(fraction, apparatus.display_gamma)
-        psychometric = PsychometricFunction(
-            threshold if math.isfinite(threshold) else 1e6,
-            slope=detection.psychometric_slope * apparatus.display_gamma,
-            guess_rate=detection.guess_rate,
-            lapse_rate=detection.lapse_rate,
-        )
+        psychometric = PsychometricFunction(threshold if math.isfinite(threshold) else 1e6,
+                                            slope=detection.psychometric_slope * apparatus.display_gamma,
+                                            guess_rate=detection.guess_rate, lapse_rate=detection.lapse_rate)
         observer_seed, procedure_seed = (int(s) for s in child.generate_state(2))
         result = run_procedure(SimulatedObserver(psychometric, seed=observer_seed), procedure, seed=procedure_seed)
         if result.never_seen:

@@ -43,12 +43,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vissim.bench.lens_mesh import (
-    lens_surface_curvatures_per_mm,
-    realistic_center_thickness_mm,
-    rim_thickness_mm,
-    sag_mm,
-)
+from vissim.bench.lens_mesh import (lens_surface_curvatures_per_mm, realistic_center_thickness_mm,
+                                    rim_thickness_mm, sag_mm)
 from vissim.charts import MM_PER_INCH
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
@@ -58,10 +54,8 @@ from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
 from vissim.units import diopters_to_mm, m_to_mm, mm_to_m
 
-__all__ = [
-    "IPHONE5_PPI", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout", "atv_trial_lens",
-    "atv_layout", "display_code_to_linear", "pixel_pitch_mm",
-]
+__all__ = ["IPHONE5_PPI", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout",
+           "atv_trial_lens", "atv_layout", "display_code_to_linear", "pixel_pitch_mm"]
 
 #: Pixel density of the iPhone 5's Retina display (thesis section 5.4).
 IPHONE5_PPI = 326.0

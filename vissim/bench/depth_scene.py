@@ -42,24 +42,16 @@ from typing import Union
 import numpy as np
 
 from vissim.bench.dslr import SAMPLERS
-from vissim.charts import (
-    INK_REFLECTANCE,
-    MM_PER_INCH,
-    PAPER_REFLECTANCE,
-    POLARITIES,
-    ChartRow,
-    ChartSpec,
-    layout_chart,
-)
+from vissim.charts import (INK_REFLECTANCE, MM_PER_INCH, PAPER_REFLECTANCE, POLARITIES, ChartRow, ChartSpec,
+                           layout_chart)
 from vissim.checks import finite_number, positive_number
 from vissim.checks import size_px as check_size_px
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, m_to_mm, rad_to_arcmin
 
-__all__ = [
-    "DEFAULT_DISTANCES_M", "PanelChart", "ChartPanel", "TiltedChart", "DepthScene", "PanelGeometry",
-    "panel_geometries", "pixel_tangents", "axial_depth_map", "default_panels_scene", "default_tilted_scene",
-]
+__all__ = ["DEFAULT_DISTANCES_M", "PanelChart", "ChartPanel", "TiltedChart", "DepthScene", "PanelGeometry",
+           "panel_geometries", "pixel_tangents", "axial_depth_map", "default_panels_scene",
+           "default_tilted_scene"]
 
 #: The issue's chart distances: near work, the thesis's 3 ft, across the room, far.
 DEFAULT_DISTANCES_M = (0.4, 0.9144, 2.0, 6.0)
@@ -262,7 +254,6 @@ def _geometry(scene: DepthScene, index: int, panel: Panel) -> PanelGeometry:
 def panel_geometries(scene: DepthScene) -> tuple[PanelGeometry, ...]:
     """Every panel's :class:`PanelGeometry`, in the scene's order."""
     return tuple(_geometry(scene, i, p) for i, p in enumerate(scene.panels))
-
 
 
 def pixel_tangents(scene: DepthScene) -> tuple[np.ndarray, np.ndarray]:

@@ -27,12 +27,7 @@ import numpy as np
 from vissim.atomic import atomic_output
 from vissim.bench.depth_scene import DepthScene, PanelGeometry, panel_geometries
 from vissim.bench.depth_textures import panel_texture
-from vissim.bench.depth_viewers import (
-    CameraViewer,
-    EyeViewer,
-    Viewer,
-    viewing_setup,
-)
+from vissim.bench.depth_viewers import CameraViewer, EyeViewer, Viewer, viewing_setup
 from vissim.bench.dslr import MAX_DEPTH, NEAR_CLIP_MM, dslr_scene, hdr_film
 from vissim.bench.lens_mesh import mesh_cache_dir
 from vissim.errors import VissimInputError

@@ -32,15 +32,9 @@ from vissim.bench.dslr import DslrBench
 from vissim.checks import positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import (
-    CROWN_GLASS_INDEX,
-    THESIS_CHART_DISTANCE_MM,
-    THESIS_F_NUMBER,
-    THESIS_FOCAL_LENGTH_MM,
-    THESIS_VERTEX_DISTANCE_MM,
-    TrialLens,
-    entrance_pupil_diameter_mm,
-)
+from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER,
+                                      THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM, TrialLens,
+                                      entrance_pupil_diameter_mm)
 from vissim.optics.setup import ViewingSetup
 from vissim.units import m_to_mm, mm_to_m
 

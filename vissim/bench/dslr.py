@@ -49,23 +49,11 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, samples_per_pixel
 from vissim.checks import size_px as check_size_px
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import (
-    CROWN_GLASS_INDEX,
-    MAX_LENSES_IN_HOLDER,
-    THESIS_CHART_DISTANCE_MM,
-    THESIS_F_NUMBER,
-    THESIS_FOCAL_LENGTH_MM,
-    THESIS_VERTEX_DISTANCE_MM,
-    TrialLens,
-    TrialLensSetup,
-    entrance_pupil_diameter_mm,
-)
+from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, THESIS_CHART_DISTANCE_MM,
+                                      THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM,
+                                      TrialLens, TrialLensSetup, entrance_pupil_diameter_mm)
 from vissim.optics.setup import DEFAULT_WAVELENGTH_NM, ViewingSetup
-from vissim.units import (
-    REC709_LUMINANCE,
-    arcmin_to_rad,
-    mm_to_m,
-)
+from vissim.units import REC709_LUMINANCE, arcmin_to_rad, mm_to_m
 
 __all__ = ["SAMPLERS", "DslrBench", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
 

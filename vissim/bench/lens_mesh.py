@@ -41,19 +41,9 @@ from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import diopters_to_per_mm
 
-__all__ = [
-    "LensMesh",
-    "lens_mesh",
-    "lens_surface_curvatures_per_mm",
-    "sag_mm",
-    "sag_gradient",
-    "rim_thickness_mm",
-    "realistic_center_thickness_mm",
-    "write_ply",
-    "ply_bytes",
-    "cached_lens_ply",
-    "mesh_cache_dir",
-]
+__all__ = ["LensMesh", "lens_mesh", "lens_surface_curvatures_per_mm", "sag_mm", "sag_gradient",
+           "rim_thickness_mm", "realistic_center_thickness_mm", "write_ply", "ply_bytes", "cached_lens_ply",
+           "mesh_cache_dir"]
 
 log = logging.getLogger(__name__)
 
@@ -261,18 +251,12 @@ def lens_mesh(lens: TrialLens, clear_aperture_mm: float, *, rings: int = 16, seg
     nxt = np.roll(np.arange(segments), -1)
     e_f = np.concatenate([np.stack([bottom, bottom[nxt], top[nxt]], axis=1), np.stack([bottom, top[nxt], top], axis=1)])
     offsets = np.cumsum([0, len(f_v), len(b_v)])
-    return LensMesh(
-        vertices_mm=np.concatenate([f_v, b_v, e_v]),
-        normals=np.concatenate([f_n, b_n, e_n]),
-        faces=np.concatenate([f_f + offsets[0], b_f + offsets[1], e_f + offsets[2]]).astype(np.int32),
-        clear_aperture_mm=aperture,
-        center_thickness_mm=t,
-        refractive_index=float(lens.refractive_index),
-        front_curvature_per_mm=tuple(map(tuple, front.tolist())),
-        back_curvature_per_mm=tuple(map(tuple, back.tolist())),
-        rings=rings,
-        segments=segments,
-    )
+    return LensMesh(vertices_mm=np.concatenate([f_v, b_v, e_v]), normals=np.concatenate([f_n, b_n, e_n]),
+                    faces=np.concatenate([f_f + offsets[0], b_f + offsets[1], e_f + offsets[2]]).astype(np.int32),
+                    clear_aperture_mm=aperture, center_thickness_mm=t,
+                    refractive_index=float(lens.refractive_index),
+                    front_curvature_per_mm=tuple(map(tuple, front.tolist())),
+                    back_curvature_per_mm=tuple(map(tuple, back.tolist())), rings=rings, segments=segments)
 
 
 def ply_bytes(mesh: LensMesh) -> bytes:

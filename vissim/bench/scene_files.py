@@ -21,12 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from vissim.bench.dslr import DslrBench
-from vissim.charts import (
-    DEFAULT_LETTER_SEED,
-    ChartSpec,
-    etdrs_chart_spec,
-    single_letter_spec,
-)
+from vissim.charts import DEFAULT_LETTER_SEED, ChartSpec, etdrs_chart_spec, single_letter_spec
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import mm_to_m
@@ -54,10 +49,7 @@ _LENS = {
     "center_thickness_mm": (float, "mm"),
     "back_surface_diopters": (float, "D"),
 }
-_IMAGE = {
-    "arcmin_per_px": ("arcmin_per_px", float, "arcmin/px"),
-    "size_px": ("size_px", list, "[rows, cols] px"),
-}
+_IMAGE = {"arcmin_per_px": ("arcmin_per_px", float, "arcmin/px"), "size_px": ("size_px", list, "[rows, cols] px")}
 _SAMPLING = {
     "spp": ("spp", int, "samples per pixel"),
     "seed": ("seed", int, "(integer)"),

@@ -35,10 +35,8 @@ COMMAND_MODULES = (
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = VissimArgumentParser(
-        prog="vissim",
-        description="Simulate how refractive errors blur what an eye or a camera sees.",
-    )
+    parser = VissimArgumentParser(prog="vissim",
+                                  description="Simulate how refractive errors blur what an eye or a camera sees.")
     parser.add_argument("--version", action="version", version=f"vissim {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="log more (-vv for debug)")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -80,10 +78,8 @@ def main(argv: list[str] | None = None) -> int:
         args = _unprotect(parser.parse_args(_protect_negative_values(sys.argv[1:] if argv is None else list(argv))))
     except SystemExit as exc:  # --help, --version, or one 'vissim: error:' line already printed
         return exc.code if isinstance(exc.code, int) else 2
-    logging.basicConfig(
-        level=logging.WARNING - 10 * min(args.verbose, 2),
-        format="vissim: %(levelname)s: %(message)s",
-    )
+    logging.basicConfig(level=logging.WARNING - 10 * min(args.verbose, 2),
+                        format="vissim: %(levelname)s: %(message)s")
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

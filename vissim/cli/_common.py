@@ -42,22 +42,12 @@ def trial_lens_powers(args: argparse.Namespace) -> tuple[float, float, float] | 
 
 def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
     group = parser.add_argument_group("aberration (at least one of --rx / --zernike)")
-    group.add_argument(
-        "--rx",
-        metavar="PRESCRIPTION",
-        help=RX_HELP + ", e.g. '-2.00 -1.25 x 180', '+1.50 DS', 'plano' (TABO axis)",
-    )
-    group.add_argument(
-        "--zernike",
-        metavar="TERMS",
-        help="OSA Zernike terms in µm, 'n,m=µm;n,m=µm' (e.g. '2,0=0.5;4,0=0.1'); adds to --rx",
-    )
-    group.add_argument(
-        "--zernike-pupil-mm",
-        type=float,
-        metavar="D",
-        help="pupil diameter the --zernike coefficients were measured over (default: --pupil-mm)",
-    )
+    group.add_argument("--rx", metavar="PRESCRIPTION",
+                       help=RX_HELP + ", e.g. '-2.00 -1.25 x 180', '+1.50 DS', 'plano' (TABO axis)")
+    group.add_argument("--zernike", metavar="TERMS",
+                       help="OSA Zernike terms in µm, 'n,m=µm;n,m=µm' (e.g. '2,0=0.5;4,0=0.1'); adds to --rx")
+    group.add_argument("--zernike-pupil-mm", type=float, metavar="D",
+                       help="pupil diameter the --zernike coefficients were measured over (default: --pupil-mm)")
     group.add_argument("--pupil-mm", type=float, required=required, metavar="D", help="pupil diameter in mm")
     parser.set_defaults(_aberration_required=required)
 

@@ -24,7 +24,7 @@ def add_parser(subparsers) -> None:
         "simulate a virtual subject, or run the threshold procedure with a simulated observer or a person.",
     )
     sub = parser.add_subparsers(dest="atv_command", metavar="ACTION")
-    parser.set_defaults(func=lambda args: (parser.print_help(), 2)[1])
+    parser.set_defaults(func=lambda args: parser.print_help() or 2)
 
     analyze = sub.add_parser("analyze", help="fit participant data and write a report",
                              description="Quadratic fits of minimum visible vs trial lens per eye and condition, "
@@ -112,12 +112,7 @@ def run_analyze(args: argparse.Namespace) -> int:
 
 def run_simulate(args: argparse.Namespace) -> int:
     from vissim.atv.report import write_simulation_report
-    from vissim.atv.virtual import (
-        AtvApparatus,
-        DetectionModel,
-        VirtualSubject,
-        run_virtual_experiment,
-    )
+    from vissim.atv.virtual import AtvApparatus, DetectionModel, VirtualSubject, run_virtual_experiment
     from vissim.cli._common import parse_float_list
     from vissim.optics.prescription import Prescription
 
@@ -151,12 +146,7 @@ def run_simulate(args: argparse.Namespace) -> int:
 
 def run_procedure_command(args: argparse.Namespace) -> int:
     from vissim.atomic import write_json_atomic
-    from vissim.atv.procedure import (
-        ProcedureConfig,
-        PsychometricFunction,
-        SimulatedObserver,
-        run_procedure,
-    )
+    from vissim.atv.procedure import ProcedureConfig, PsychometricFunction, SimulatedObserver, run_procedure
     from vissim.provenance import make_provenance
 
     config = ProcedureConfig(resolution_code=args.resolution)

@@ -5,11 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.cli._common import (
-    add_aberration_args,
-    parse_float_list,
-    wavefront_from_args,
-)
+from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
 from vissim.imageio import Image, read_image, write_image
 from vissim.optics.blur import PADDING_MODES, blur_image
@@ -100,16 +96,9 @@ def run(args: argparse.Namespace) -> int:
             )
         psfs.append(cache[key])
     blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)
-    provenance = make_provenance(
-        command="blur",
-        input=str(args.input),
-        input_provenance=image.provenance,
-        arcmin_per_px=step,
-        padding=args.padding,
-        psfs=[p.as_json() for p in cache.values()],
-        rx=args.rx,
-        zernike=args.zernike,
-    )
+    provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
+                                 arcmin_per_px=step, padding=args.padding,
+                                 psfs=[p.as_json() for p in cache.values()], rx=args.rx, zernike=args.zernike)
     written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
     print(f"wrote {written}")
     return 0

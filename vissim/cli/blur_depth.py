@@ -94,19 +94,11 @@ def run(args: argparse.Namespace) -> int:
         accommodation_diopters=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
         layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers,
     )
-    provenance = make_provenance(
-        command="blur-depth",
-        input=str(args.input),
-        depth=str(args.depth),
-        input_provenance=image.provenance,
-        eye=eye.format(),
-        pupil_diameter_mm=args.pupil_mm,
-        arcmin_per_px=step,
-        wavelength_nm=args.wavelength_nm,
-        mode=args.mode,
-        focus=focus_info,
-        depth_blur=result.as_json(),
-    )
+    provenance = make_provenance(command="blur-depth", input=str(args.input), depth=str(args.depth),
+                                 input_provenance=image.provenance, eye=eye.format(),
+                                 pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
+                                 wavelength_nm=args.wavelength_nm, mode=args.mode, focus=focus_info,
+                                 depth_blur=result.as_json())
     written = write_image(args.output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
     print(
         f"wrote {written} ({result.n_layers} depth layers, {len(result.layers)} non-empty, "

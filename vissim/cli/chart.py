@@ -8,20 +8,9 @@ from pathlib import Path
 
 from vissim.acuity import THESIS_VIEWING_DISTANCE_M
 from vissim.atomic import write_json_atomic
-from vissim.charts import (
-    DEFAULT_LETTER_SEED,
-    INK_REFLECTANCE,
-    PAPER_REFLECTANCE,
-    POLARITIES,
-    THESIS_TILE_SHAPE_PX,
-    chart_sidecar,
-    etdrs_chart_spec,
-    layout_chart,
-    optotype_tile,
-    render_chart_angular,
-    save_chart_pdf,
-    save_chart_png,
-)
+from vissim.charts import (DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTANCE, POLARITIES,
+                           THESIS_TILE_SHAPE_PX, chart_sidecar, etdrs_chart_spec, layout_chart, optotype_tile,
+                           render_chart_angular, save_chart_pdf, save_chart_png)
 from vissim.cli._common import refuse_existing
 from vissim.errors import VissimInputError
 from vissim.provenance import make_provenance

@@ -7,11 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.cli._common import (
-    add_aberration_args,
-    parse_float_list,
-    wavefront_from_args,
-)
+from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.imageio import to_preview_png, write_image
 from vissim.optics.psf import compute_psf
 from vissim.provenance import make_provenance
@@ -44,17 +40,10 @@ def run(args: argparse.Namespace) -> int:
     wavefront = wavefront_from_args(args)
     wavelengths = parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
     weights = parse_float_list(args.weights, "--weights", "relative units") if args.weights else None
-    psf = compute_psf(
-        wavefront,
-        pupil_diameter_mm=args.pupil_mm,
-        wavelength_nm=wavelengths,
-        weights=weights,
-        lca_reference_nm=args.lca_reference_nm if args.lca else None,
-        arcmin_per_px=args.arcmin_per_px,
-        size_px=args.size,
-        mode=args.mode,
-        dtype=np.float32 if args.float32 else np.float64,
-    )
+    psf = compute_psf(wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
+                      lca_reference_nm=args.lca_reference_nm if args.lca else None,
+                      arcmin_per_px=args.arcmin_per_px, size_px=args.size, mode=args.mode,
+                      dtype=np.float32 if args.float32 else np.float64)
     provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike)
     output = args.output
     exr_path = output.with_suffix(".exr") if output.suffix.lower() == ".png" else output

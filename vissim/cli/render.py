@@ -14,6 +14,8 @@ from pathlib import Path
 
 from vissim.charts import POLARITIES
 from vissim.cli._common import add_trial_lens_args, refuse_existing, trial_lens_powers
+from vissim.cli.render_atv import add_atv_parser
+from vissim.cli.render_depth import add_depth_parser
 from vissim.errors import VissimInputError
 
 log = logging.getLogger(__name__)
@@ -31,13 +33,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     add_bench_parser(benches)
     add_atv_parser(benches)
     add_depth_parser(benches)
-    parser.set_defaults(func=lambda args: _usage(parser))
+    parser.set_defaults(func=lambda args: parser.print_help() or 2)
     return parser
-
-
-def _usage(parser: argparse.ArgumentParser) -> int:
-    parser.print_help()
-    return 2
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -87,20 +84,6 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def add_atv_parser(subparsers) -> argparse.ArgumentParser:
-    """``render atv``: the ATV tube (thesis §5.4), defined with its bench in :mod:`vissim.cli.render_atv`."""
-    from vissim.cli.render_atv import add_atv_parser as add
-
-    return add(subparsers)
-
-
-def add_depth_parser(subparsers) -> argparse.ArgumentParser:
-    """``render depth``: charts at several distances or tilted (:mod:`vissim.cli.render_depth`)."""
-    from vissim.cli.render_depth import add_depth_parser as add
-
-    return add(subparsers)
-
-
 def _lenses(args):
     from vissim.optics.trial_lens import TrialLens
 
@@ -123,12 +106,8 @@ def _chart_table(args, scene_doc: dict) -> dict:
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    from vissim.bench.scene_files import (
-        bench_from_tables,
-        chart_spec_from_table,
-        load_chart_toml,
-        read_scene_toml,
-    )
+    from vissim.bench.scene_files import (bench_from_tables, chart_spec_from_table, load_chart_toml,
+                                          read_scene_toml)
     from vissim.imageio import write_image
 
     output = Path(args.output)

@@ -9,13 +9,8 @@ import math
 
 from vissim import __version__
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import (
-    CROWN_GLASS_INDEX,
-    TrialLens,
-    TrialLensSetup,
-    thesis_table_4_2_power,
-    trial_lens_effect,
-)
+from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, thesis_table_4_2_power,
+                                      trial_lens_effect)
 
 log = logging.getLogger(__name__)
 
@@ -68,30 +63,20 @@ def _object_distance_m(text: str) -> float:
 
 def _lens_from_args(args: argparse.Namespace) -> TrialLens:
     if args.cylinder != 0.0 and args.axis is None:
-        raise VissimInputError(
-            f"--cylinder {args.cylinder:g} D needs --axis in degrees (TABO, 0-180)"
-        )
+        raise VissimInputError(f"--cylinder {args.cylinder:g} D needs --axis in degrees (TABO, 0-180)")
     index = args.index
     if args.thickness_mm > 0.0 and index is None:
         index = CROWN_GLASS_INDEX
         log.info("no --index given: using crown glass, n = %g", index)
-    return TrialLens(
-        sphere_diopters=args.sphere,
-        cylinder_diopters=args.cylinder,
-        axis_deg=180.0 if args.axis is None else args.axis,
-        refractive_index=index,
-        center_thickness_mm=args.thickness_mm,
-        back_surface_diopters=args.back_surface_diopters,
-    )
+    return TrialLens(sphere_diopters=args.sphere, cylinder_diopters=args.cylinder,
+                     axis_deg=180.0 if args.axis is None else args.axis, refractive_index=index,
+                     center_thickness_mm=args.thickness_mm, back_surface_diopters=args.back_surface_diopters)
 
 
 def run(args: argparse.Namespace) -> int:
     lens = _lens_from_args(args)
-    setup = TrialLensSetup(
-        lenses=(lens,),
-        vertex_distance_mm=args.vertex_mm,
-        object_distance_m=_object_distance_m(args.object_distance_m),
-    )
+    setup = TrialLensSetup(lenses=(lens,), vertex_distance_mm=args.vertex_mm,
+                           object_distance_m=_object_distance_m(args.object_distance_m))
     effect = trial_lens_effect(setup)
     marked = lens.marked_power
     lens_meridians = (marked.axis_deg, (marked.axis_deg + 90.0) % 180.0 or 180.0)
@@ -118,15 +103,11 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(result, indent=2, allow_nan=False))
         return 0
 
-    kind = "thin" if lens.is_thin else (
-        f"{lens.center_thickness_mm:g} mm thick, n = {lens.refractive_index:g}"
-    )
+    kind = "thin" if lens.is_thin else f"{lens.center_thickness_mm:g} mm thick, n = {lens.refractive_index:g}"
     where = "infinity" if result["object_distance_m"] is None else f"{setup.object_distance_m:g} m"
     added = effect.added_power.minus_cylinder()
     print(f"trial lens {marked} ({kind}) at {setup.vertex_distance_mm:g} mm, object at {where}")
-    cylinder = "DS" if added.cylinder_diopters == 0.0 else (
-        f"{added.cylinder_diopters:+.4f} x {added.axis_deg:g}"
-    )
+    cylinder = "DS" if added.cylinder_diopters == 0.0 else f"{added.cylinder_diopters:+.4f} x {added.axis_deg:g}"
     print(f"added power at the camera:   {added.sphere_diopters:+.4f} {cylinder}")
     print("  per meridian:              " + ",  ".join(
         f"{row['meridian_deg']:g}: {row['power_diopters']:+.4f} D"

@@ -43,24 +43,13 @@ from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription, as_prescription
 
-__all__ = [
-    "HOFSTETTER_1950",
-    "Accommodation",
-    "accommodation_for_target",
-    "amplitude_from_age_diopters",
-    "clear_vision_range_m",
-    "object_proximity_diopters",
-    "required_accommodation_diopters",
-]
+__all__ = ["HOFSTETTER_1950", "Accommodation", "accommodation_for_target", "amplitude_from_age_diopters",
+           "clear_vision_range_m", "object_proximity_diopters", "required_accommodation_diopters"]
 
 log = logging.getLogger(__name__)
 
 #: Hofstetter (1950), amplitude = intercept - slope * age (dioptres, age in years).
-HOFSTETTER_1950 = {
-    "minimum": (15.0, 0.25),
-    "mean": (18.5, 0.30),
-    "maximum": (25.0, 0.40),
-}
+HOFSTETTER_1950 = {"minimum": (15.0, 0.25), "mean": (18.5, 0.30), "maximum": (25.0, 0.40)}
 
 
 def _check_amplitude(amplitude_diopters) -> float:

@@ -65,25 +65,13 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.blur import BlurKernel, _pad
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.psf import (
-    PSF,
-    compute_psf,
-    geometric_blur_radius_arcmin,
-    suggested_size_px,
-)
+from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
 from vissim.optics.pullpush import pull_push
 from vissim.optics.wavefront import Wavefront
 from vissim.units import arcmin_to_rad
 
-__all__ = [
-    "DepthBlurResult",
-    "DepthLayer",
-    "LayerPlan",
-    "blur_depth",
-    "depth_to_proximity_diopters",
-    "layer_spacing_diopters",
-    "plan_layers",
-]
+__all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to_proximity_diopters",
+           "layer_spacing_diopters", "plan_layers"]
 
 log = logging.getLogger(__name__)
 

@@ -31,14 +31,8 @@ from vissim.checks import MAX_POWER_DIOPTERS
 from vissim.checks import finite_number as _finite
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "SpheroCylinder",
-    "Prescription",
-    "RefractiveError",
-    "LensPower",
-    "as_prescription",
-    "parse_spherocylinder",
-]
+__all__ = ["SpheroCylinder", "Prescription", "RefractiveError", "LensPower", "as_prescription",
+           "parse_spherocylinder"]
 
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)"
 _SPHERE = rf"(?P<sphere>{_NUMBER}|plano|pl)"
@@ -116,11 +110,8 @@ class SpheroCylinder:
         """The same power written with the opposite cylinder sign."""
         if self.cylinder_diopters == 0:
             return self
-        return type(self)(
-            self.sphere_diopters + self.cylinder_diopters,
-            -self.cylinder_diopters,
-            _normalise_axis(self.axis_deg + 90.0),
-        )
+        return type(self)(self.sphere_diopters + self.cylinder_diopters, -self.cylinder_diopters,
+                          _normalise_axis(self.axis_deg + 90.0))
 
     def minus_cylinder(self) -> Self:
         return self.transposed() if self.cylinder_diopters > 0 else self
@@ -137,11 +128,7 @@ class SpheroCylinder:
         """(M, J0, J45) in dioptres, Thibos, Wheeler & Horner (1997)."""
         two_axis = math.radians(2.0 * self.axis_deg)
         half_cyl = self.cylinder_diopters / 2.0
-        vector = (
-            self.sphere_diopters + half_cyl,
-            -half_cyl * math.cos(two_axis),
-            -half_cyl * math.sin(two_axis),
-        )
+        vector = (self.sphere_diopters + half_cyl, -half_cyl * math.cos(two_axis), -half_cyl * math.sin(two_axis))
         # cos/sin of multiples of 90 deg leave ~1e-16 residues; they are exact zeros.
         return tuple(0.0 if abs(v) < 1e-13 * (1.0 + abs(half_cyl)) else v for v in vector)
 
@@ -180,9 +167,7 @@ class SpheroCylinder:
 
     def is_close(self, other: SpheroCylinder, tol_diopters: float = 1e-9) -> bool:
         """Same power (whatever the cylinder sign it is written in)."""
-        return all(
-            abs(a - b) <= tol_diopters for a, b in zip(self.power_vector(), other.power_vector())
-        )
+        return all(abs(a - b) <= tol_diopters for a, b in zip(self.power_vector(), other.power_vector()))
 
     def __neg__(self) -> Self:
         return type(self)(-self.sphere_diopters, -self.cylinder_diopters, self.axis_deg)

@@ -36,18 +36,9 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.accommodation import object_proximity_diopters
 from vissim.optics.prescription import LensPower, Prescription, as_prescription
-from vissim.optics.trial_lens import (
-    Matrix2,
-    TrialLens,
-    TrialLensSetup,
-    _as_tuple,
-    _meridian_deg,
-    _principal,
-    entrance_pupil_diameter_mm,
-    thesis_eye_pupil_diameter_mm,
-    thesis_table_4_2_power,
-    trial_lens_effect,
-)
+from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, _as_tuple, _meridian_deg,
+                                      _principal, entrance_pupil_diameter_mm, thesis_eye_pupil_diameter_mm,
+                                      thesis_table_4_2_power, trial_lens_effect)
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 

@@ -38,20 +38,9 @@ from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription
 from vissim.units import mm_to_m
 
-__all__ = [
-    "CROWN_GLASS_INDEX",
-    "MAX_LENSES_IN_HOLDER",
-    "SurfaceRadii",
-    "TrialLens",
-    "TrialLensSetup",
-    "TrialLensEffect",
-    "trial_lens_effect",
-    "refraction_matrix",
-    "transfer_matrix",
-    "entrance_pupil_diameter_mm",
-    "thesis_eye_pupil_diameter_mm",
-    "thesis_table_4_2_power",
-]
+__all__ = ["CROWN_GLASS_INDEX", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
+           "TrialLensEffect", "trial_lens_effect", "refraction_matrix", "transfer_matrix",
+           "entrance_pupil_diameter_mm", "thesis_eye_pupil_diameter_mm", "thesis_table_4_2_power"]
 
 log = logging.getLogger(__name__)
 
@@ -89,10 +78,7 @@ def _principal(symmetric: np.ndarray) -> tuple[tuple[float, float], tuple[float,
     if abs(values[1] - values[0]) <= 1e-12 * max(1.0, abs(values[1])):
         mean = float(values.mean())
         return (mean, 180.0), (mean, 90.0)
-    return (
-        (float(values[1]), _meridian_deg(vectors[:, 1])),
-        (float(values[0]), _meridian_deg(vectors[:, 0])),
-    )
+    return ((float(values[1]), _meridian_deg(vectors[:, 1])), (float(values[0]), _meridian_deg(vectors[:, 0])))
 
 
 def refraction_matrix(power_matrix_diopters) -> np.ndarray:
@@ -415,15 +401,11 @@ def trial_lens_effect(setup: TrialLensSetup) -> TrialLensEffect:
 
     added_power = LensPower.from_power_matrix(added)
     log.debug("trial lenses %s: added %s, magnification %s", setup, added_power, principal)
-    return TrialLensEffect(
-        setup=setup,
-        added_power=added_power,
-        added_power_matrix=_as_tuple(added),
-        camera_prescription=added_power.prescription_of_camera(),
-        magnification_principal=principal,
-        magnification=math.copysign(math.sqrt(mag_a * mag_b), mag_a),
-        magnification_matrix=_as_tuple(magnification_matrix),
-    )
+    return TrialLensEffect(setup=setup, added_power=added_power, added_power_matrix=_as_tuple(added),
+                           camera_prescription=added_power.prescription_of_camera(),
+                           magnification_principal=principal,
+                           magnification=math.copysign(math.sqrt(mag_a * mag_b), mag_a),
+                           magnification_matrix=_as_tuple(magnification_matrix))
 
 
 # -- the thesis's rules, kept for explicit comparison --------------------------------------

@@ -60,11 +60,8 @@ def zernike_um_to_prescription(coefficients_um: Mapping[tuple[int, int], float],
     c2m2 = float(coefficients_um.get((2, -2), 0.0))
     c20 = float(coefficients_um.get((2, 0), 0.0))
     c22 = float(coefficients_um.get((2, 2), 0.0))
-    return Prescription.from_power_vector(
-        -4.0 * _SQRT3 * c20 / radius_sq,
-        -2.0 * _SQRT6 * c22 / radius_sq,
-        -2.0 * _SQRT6 * c2m2 / radius_sq,
-    )
+    return Prescription.from_power_vector(-4.0 * _SQRT3 * c20 / radius_sq, -2.0 * _SQRT6 * c22 / radius_sq,
+                                          -2.0 * _SQRT6 * c2m2 / radius_sq)
 
 
 _TERM_RE = re.compile(r"^\s*(?P<n>[+-]?\d+)\s*,\s*(?P<m>[+-]?\d+)\s*=\s*(?P<value>\S+)\s*$")
@@ -205,9 +202,7 @@ class Wavefront:
         basis = np.stack([zernike_nm(n, m, rr, tt).ravel() for n, m in keys], axis=1)
         solution, *_ = np.linalg.lstsq(basis, target, rcond=None)
         scale = max(1e-12, float(np.max(np.abs(solution))))
-        return Wavefront(
-            {k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new
-        )
+        return Wavefront({k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new)
 
     def as_json(self) -> dict:
         return {

@@ -23,15 +23,8 @@ from scipy.special import eval_jacobi
 
 from vissim.errors import VissimInputError
 
-__all__ = [
-    "ansi_j_to_nm",
-    "nm_to_ansi_j",
-    "noll_to_nm",
-    "nm_to_noll",
-    "zernike_norm",
-    "zernike_radial",
-    "zernike_nm",
-]
+__all__ = ["ansi_j_to_nm", "nm_to_ansi_j", "noll_to_nm", "nm_to_noll", "zernike_norm", "zernike_radial",
+           "zernike_nm"]
 
 
 def _check_nm(n: int, m: int) -> tuple[int, int]:
@@ -39,9 +32,7 @@ def _check_nm(n: int, m: int) -> tuple[int, int]:
         raise VissimInputError(f"Zernike indices must be integers, got n={n!r}, m={m!r}")
     n, m = int(n), int(m)
     if n < 0 or abs(m) > n or (n - m) % 2:
-        raise VissimInputError(
-            f"invalid Zernike term (n={n}, m={m}): need n >= 0, |m| <= n and n - m even"
-        )
+        raise VissimInputError(f"invalid Zernike term (n={n}, m={m}): need n >= 0, |m| <= n and n - m even")
     return n, m
 
 

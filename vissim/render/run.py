@@ -214,13 +214,7 @@ def render_bench(
     """
     from vissim.bench.dslr import chart_mm_per_texel, dslr_scene
     from vissim.optics.trial_lens import trial_lens_effect
-    from vissim.charts import (
-        MM_PER_INCH,
-        Chart,
-        ChartSpec,
-        chart_sidecar,
-        render_chart_print,
-    )
+    from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
 
     if isinstance(chart, ChartSpec):
         chart = render_chart_print(chart, MM_PER_INCH / chart_mm_per_texel(bench))

@@ -26,19 +26,8 @@ from vissim.optics.prescription import Prescription
 from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
-from vissim.validation.fields import (
-    MAX_SEED,
-    MAX_SPP,
-    checked_numbers,
-    field_error,
-    lenses,
-    number,
-    read_campaign_toml,
-    settings_kwargs,
-    table,
-    tables,
-    text,
-)
+from vissim.validation.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
+                                      read_campaign_toml, settings_kwargs, table, tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
            "is_depth_campaign", "DEPTH_SIMULATIONS", "SCHEMA_VERSION"]
@@ -89,7 +78,6 @@ class DepthCampaign:
         payload = {"schema": SCHEMA_VERSION, "simulator": SIMULATOR_REVISION, "settings": json_safe(self.settings),
                    "scene": json_safe(configuration.scene), "viewer": json_safe(configuration.viewer)}
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
-
 
 
 # -- loading ---------------------------------------------------------------------------

@@ -20,12 +20,8 @@ from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.imageio import read_image
 from vissim.provenance import json_safe
-from vissim.validation.depth_campaign import (
-    SCHEMA_VERSION,
-    DepthCampaign,
-    DepthCampaignSettings,
-    DepthConfiguration,
-)
+from vissim.validation.depth_campaign import (SCHEMA_VERSION, DepthCampaign, DepthCampaignSettings,
+                                              DepthConfiguration)
 from vissim.validation.depth_item import compute_depth_item
 from vissim.validation.runner import RunSummary, make_missing_renders, plan_run
 

@@ -49,16 +49,8 @@ from vissim.units import m_to_mm, rad_to_arcmin
 
 logger = logging.getLogger(__name__)
 
-__all__ = [
-    "RAW_MODES",
-    "LetterCrop",
-    "RawImage",
-    "ResampledImage",
-    "camera_arcmin_per_px",
-    "crop_letters",
-    "read_raw_linear",
-    "resample_to_arcmin",
-]
+__all__ = ["RAW_MODES", "LetterCrop", "RawImage", "ResampledImage", "camera_arcmin_per_px", "crop_letters",
+           "read_raw_linear", "resample_to_arcmin"]
 
 RAW_MODES = ("planes", "demosaic")
 

@@ -60,20 +60,11 @@ class RenderSpec:
 
 
 def _spec(configuration: Configuration, settings: CampaignSettings, lenses, seed: int) -> RenderSpec:
-    return RenderSpec(
-        letter=configuration.letter,
-        logmar=configuration.logmar,
-        polarity=configuration.polarity,
-        lenses=lenses,
-        f_number=configuration.f_number,
-        focal_length_mm=settings.focal_length_mm,
-        chart_distance_m=settings.chart_distance_m,
-        vertex_distance_mm=settings.vertex_distance_mm,
-        arcmin_per_px=settings.arcmin_per_px,
-        tile_px=tuple(settings.tile_px),
-        spp=settings.spp,
-        seed=seed,
-    )
+    return RenderSpec(letter=configuration.letter, logmar=configuration.logmar, polarity=configuration.polarity,
+                      lenses=lenses, f_number=configuration.f_number, focal_length_mm=settings.focal_length_mm,
+                      chart_distance_m=settings.chart_distance_m, vertex_distance_mm=settings.vertex_distance_mm,
+                      arcmin_per_px=settings.arcmin_per_px, tile_px=tuple(settings.tile_px), spp=settings.spp,
+                      seed=seed)
 
 
 def truth_specs(configuration: Configuration, settings: CampaignSettings) -> tuple[RenderSpec, RenderSpec]:

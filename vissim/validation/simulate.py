@@ -38,12 +38,7 @@ from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLens
 from vissim.validation.campaign import CampaignSettings, Configuration
 
-__all__ = [
-    "SimulationSetup",
-    "simulation_setup",
-    "simulate",
-    "add_bench_diffraction",
-]
+__all__ = ["SimulationSetup", "simulation_setup", "simulate", "add_bench_diffraction"]
 
 
 #: kind -> (the thesis's choices put back, optics).  Each choice is one field of the bench's
