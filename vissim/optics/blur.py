@@ -128,8 +128,8 @@ def _check_sampling(psf: PSF, arcmin_per_px: float) -> None:
         raise VissimInputError(f"PSF must be square, got {psf.data.shape}")
 
 
-#: Tile sizes (px) tried for overlap-save convolution of large images.
-TILE_SIZES_PX = (256, 384, 512, 768, 1024)
+#: Tile sizes (px) tried for overlap-save convolution of large images (larger ones measured slower: cache).
+TILE_SIZES_PX = (256, 384, 512)
 #: A tiled blur is chosen when its estimated cost is below this fraction of the full FFT's.
 #: The estimate counts FFT operations (n log n); measured on 2 cores, the small tiles' FFTs run
 #: at about 1.6x the full-frame FFT's rate per operation (cache), so their count is scaled by this.
