@@ -105,7 +105,7 @@ def image_through_traced_lenses(
     step = bench.arcmin_per_px / oversample
     wavelengths = [float(w) for w in wavelengths_nm]
     weights = [1.0] * len(wavelengths) if weights is None else [float(w) for w in weights]
-    magnified = magnify(np.asarray(fine, dtype=np.float64), setup.magnification_matrix)
+    magnified = magnify(fine, setup.magnification_matrix)
     traced, psfs = zip(*(_traced_psf(bench, w, step, mode) for w in wavelengths))
     out = np.zeros((rows, cols))
     for psf, weight in zip(psfs, weights):
