@@ -106,7 +106,8 @@ def _comparison(kind: str, input_name: str, reference_kind: str, reference_image
 
 #: The fine pre-alignment stops when the registration left is below this in both axes (px) ...
 ALIGN_TOLERANCE_PX = 0.01
-#: ... or after this many simulations (measured: 2-3 passes).
+#: ... or after this many simulations (the thesis campaign: 1-3 passes for 482 of its 497 fine
+#: alignments; 15 reached 4, 11 of them with one 0.01 px step left).
 MAX_ALIGN_PASSES = 4
 #: Registrations resolve 1/100 px: "below 0.01 px" is then "measured as 0", within 0.005 px.
 REGISTRATION_UPSAMPLE = 100
