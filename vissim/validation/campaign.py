@@ -85,7 +85,8 @@ class CampaignSettings:
     simulations: tuple[str, ...] = ("wave", "geometric", "thesis")
     inputs: tuple[str, ...] = INPUTS
     data_range: float = 1.0  # linear reflectance units: what SSIM/PSNR call the peak
-    wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth (validation.wave_bench)
+    wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth, and the geometric
+    # self-check (the traced lenses' ray PSF against the render; validation.wave_bench)
 
 
 @dataclass(frozen=True)
