@@ -43,17 +43,16 @@ def _margins(rows: list[dict], simulation: str) -> dict[str, list[tuple[float, s
 
 def self_check_table(rows: list[dict]) -> str:
     """Markdown: the geometric self-check per group (median, lowest and where), configurations without lenses apart."""
-    with_lenses = [r for r in rows if r["lenses"] != "no lens"]
-    traced = _margins(with_lenses, TRACED_RAYS)
-    if not traced and not any(r["simulation"] == TRACED_RAYS for r in rows):
+    if not any(r["simulation"] == TRACED_RAYS for r in rows):
         return ""
-    geometric = _margins(with_lenses, "geometric")
+    with_lenses = [r for r in rows if r["lenses"] != "no lens"]
+    traced, geometric = _margins(with_lenses, TRACED_RAYS), _margins(with_lenses, "geometric")
     header = ["group (configurations with lenses)", "traced rays, median", "traced rays, lowest", "lowest at",
               "geometric / synthetic, median", "geometric / synthetic, lowest"]
     out = [
         "### Summary: the geometric self-check, traced rays against the render (dB)\n",
-        (f"The lens trace's ray optics (`{TRACED_RAYS}`: the ray PSF of the trial lenses' traced wavefront at the d line, "
-         "where the glass has the index Mitsuba renders) applied to the synthetic chart and compared with the render, "
+        (f"The lens trace's ray optics (`{TRACED_RAYS}`: the ray PSF of the trial lenses' traced wavefront at the "
+         "d line, where the glass has the index Mitsuba renders) applied to the synthetic chart and compared with the render, "
          "aligned on the fine grid like the geometric simulation beside it. PSNR minus the render noise floor: "
          f"+3 dB is perfect, 0 dB the floor; issue 13 accepts >= +{SELF_CHECK_MARGIN_DB:g} dB. "
          "Configurations without lenses are listed apart, below.\n"),
