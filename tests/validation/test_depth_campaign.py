@@ -188,7 +188,8 @@ def test_run_any_campaign_runs_single_plane_campaigns_too(tmp_path, monkeypatch)
     done = run_any_campaign(path, tmp_path / "run", show_progress=False)
     assert done.kind == "single-plane" and done.summary.items_total == 1 and "PSNR" in done.text()
     written, lines = rebuild_any_report(tmp_path / "run")
-    assert (tmp_path / "run" / "tables.md") in written and len(lines) == 2  # header + one comparison
+    # header, the one comparison, and the geometric self-check (the wave bench is on by default)
+    assert (tmp_path / "run" / "tables.md") in written and len(lines) == 3
 
 
 @needs_jit

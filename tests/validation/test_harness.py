@@ -59,12 +59,14 @@ def test_a_tiny_campaign_runs_and_reports(tiny, tmp_path):
     names = {p.name for p in written}
     assert {"metrics.json", "metrics.csv", "tables.md", "report.html", "figure_wave.png"} <= names
     rows = metrics_rows(load_results(run_dir))
-    # 3 simulations x 2 inputs against the render, and wave and thesis against the wave bench
-    assert len(rows) == 2 * (3 * 2 + 2)
+    # 3 simulations x 2 inputs against the render, wave and thesis against the wave bench, and
+    # the geometric self-check (traced rays on the synthetic chart against the render)
+    assert len(rows) == 2 * (3 * 2 + 2 + 1)
     # The stand-in bench *is* geometric optics on the synthetic chart plus noise of sigma 0.005:
-    # the geometric simulation of the synthetic input must reach the noise limit (floor + ~3 dB).
+    # the geometric simulation of the synthetic input, and the trace's ray optics, must reach the
+    # noise limit (floor + ~3 dB).
     for r in rows:
-        if r["simulation"] == "geometric" and r["input"] == "synthetic":
+        if r["simulation"] in ("geometric", "traced_rays") and r["input"] == "synthetic":
             assert r["psnr_db"] > r["noise_floor_psnr_db"] + 2.0
             assert abs(r["shift_rows_px"]) < 0.05 and abs(r["shift_cols_px"]) < 0.05
     assert "plus two" in (run_dir / "tables.md").read_text()

@@ -15,7 +15,7 @@ from vissim.validation.campaign import load_campaign
 from vissim.validation.dispatch import _single_plane_lines
 from vissim.validation.report import build_report, load_results, metrics_rows
 from vissim.validation.runner import run_campaign
-from vissim.validation.wave_bench import WAVE_BENCH, WAVE_BENCH_NOTE
+from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE
 
 TINY = """
 [campaign]
@@ -101,6 +101,20 @@ def test_tables_have_the_wave_bench_summary_and_name_each_groups_cause(run):
     assert "against the wave bench" in (run_dir / "report.html").read_text()
 
 
+def test_the_geometric_self_check_has_its_summary_with_no_lens_configurations_apart(run):
+    _, run_dir = run
+    rows = [r for r in metrics_rows(load_results(run_dir)) if r["simulation"] == TRACED_RAYS]
+    # one row per rendered item: the synthetic chart against the render, with its geometric floor
+    assert sorted((r["configuration"], r["input"], r["reference"]) for r in rows) == [
+        ("no lens", "synthetic", "render (no diffraction)"), ("plus two", "synthetic", "render (no diffraction)")]
+    assert all(r["noise_floor_psnr_db"] > 0 for r in rows)
+    text = (run_dir / "tables.md").read_text()
+    section = text.split("### Summary: the geometric self-check")[1].split("###")[0]
+    assert "| plus two (1) |" in section and "Without lenses (1):" in section and "| no lens (" not in section
+    # the first summary (the simulations) has no traced-rays column
+    assert TRACED_RAYS not in text.split("### Summary: the geometric self-check")[0]
+
+
 def test_residual_explanation_is_in_numbers_and_plausible(run):
     _, run_dir = run
     budgets = {r["configuration"]["name"]: r["wave_bench"] for r in load_results(run_dir)}
@@ -150,8 +164,10 @@ def test_wave_truth_false_skips_the_wave_bench_and_keys_the_items_apart(run, tmp
     quiet = tmp_path / "off"
     run_campaign(off, quiet, render=fake_render, show_progress=False)
     build_report(quiet)
-    assert not any(r["reference"] == WAVE_BENCH_NOTE for r in metrics_rows(load_results(quiet)))
+    assert not any(r["reference"] == WAVE_BENCH_NOTE or r["simulation"] == TRACED_RAYS
+                   for r in metrics_rows(load_results(quiet)))
     assert "wave bench" not in (quiet / "tables.md").read_text()
+    assert "geometric self-check" not in (quiet / "tables.md").read_text()
 
 
 def test_wave_truth_must_be_a_boolean(tmp_path):

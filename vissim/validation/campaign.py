@@ -47,8 +47,9 @@ __all__ = ["LensSpec", "Configuration", "CampaignSettings", "Campaign", "load_ca
 SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification")
 #: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
 INPUTS = ("render", "synthetic")
-#: Bumped when the meaning of an item's inputs changes, so old results are not reused.
-SCHEMA_VERSION = 1
+#: Bumped when the meaning of an item's inputs or results changes, so old results are not reused
+#: (2: the geometric self-check's row, and synthetic inputs aligned on the fine grid).
+SCHEMA_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -84,7 +85,8 @@ class CampaignSettings:
     simulations: tuple[str, ...] = ("wave", "geometric", "thesis")
     inputs: tuple[str, ...] = INPUTS
     data_range: float = 1.0  # linear reflectance units: what SSIM/PSNR call the peak
-    wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth (validation.wave_bench)
+    wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth, and the geometric
+    # self-check (the traced lenses' ray PSF against the render; validation.wave_bench)
 
 
 @dataclass(frozen=True)

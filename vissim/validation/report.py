@@ -24,8 +24,8 @@ import numpy as np  # noqa: E402
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
-from vissim.validation.wave_bench import WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
-from vissim.validation.wave_bench_report import is_wave_bench_row, wave_bench_tables  # noqa: E402
+from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
+from vissim.validation.wave_bench_report import is_wave_bench_row, self_check_table, wave_bench_tables  # noqa: E402
 
 __all__ = [
     "load_results",
@@ -49,8 +49,9 @@ REFERENCE_NOTE = {
     "thesis_pupil": "render (no diffraction)",
     "no_magnification": "render (no diffraction)",
     "geometric": "render (no diffraction)",
+    TRACED_RAYS: "render (no diffraction)",
 }
-ORDER = ["wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification"]
+ORDER = ["wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification", TRACED_RAYS]
 FIGURE_COLUMNS = 8
 
 
@@ -149,7 +150,10 @@ def markdown_tables(results: list[dict]) -> str:
     for r in rows:
         by_config.setdefault(r["configuration"], {"_floor": {}})[(r["simulation"], r["input"])] = r
         by_config[r["configuration"]]["_floor"][REFERENCE_NOTE[r["simulation"]]] = (r["noise_floor_psnr_db"], r["noise_floor_ssim"])
-    out = [summary_table(rows, columns)]
+    out = [summary_table(rows, [c for c in columns if c[0] != TRACED_RAYS])]
+    self_check = self_check_table(rows)
+    if self_check:
+        out.append(self_check)
     for metric, label, digits in (("psnr_db", "PSNR (dB)", 2), ("ssim", "SSIM", 4)):
         floor_idx = 0 if metric == "psnr_db" else 1
         header = ["configuration"] + [f"{s} / {i}" for s, i in columns] + ["noise floor (render)", "noise floor (+diffraction)"]

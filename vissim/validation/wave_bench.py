@@ -27,6 +27,12 @@ spherical aberration (the traced terms of radial order >= 3, which vergence theo
 of), and, as checks that they are *not* in the residual, the trial lenses' thickness (both
 have it) and obliquity (neither has it: both use the frame centre's wavefront). The largest
 RMS wavefront part is the residual's named cause.
+
+:func:`traced_ray_image` is the **geometric self-check** (simulation kind :data:`TRACED_RAYS`):
+the same trace's ray optics (the PSF of its ray landing points) applied to the synthetic
+chart, at the d line, where the glass has the index Mitsuba renders (the render has no
+dispersion).  It is compared with the render, like the geometric simulations, and must sit at
+its noise floor (>= +2 dB over it): then the lens trace and the renderer vouch for each other.
 """
 
 from __future__ import annotations
@@ -41,7 +47,7 @@ from vissim.bench.bench_wavefront import (
     trace_bench_wavefront,
 )
 from vissim.bench.dslr import DslrBench
-from vissim.bench.wave_truth import WaveTruth, wave_truth
+from vissim.bench.wave_truth import WaveTruth, image_through_traced_lenses, wave_truth
 from vissim.charts import ChartSpec, single_letter_spec
 from vissim.optics.glass import D_LINE_NM, glass_like_crown
 from vissim.optics.prescription import LensPower
@@ -50,10 +56,22 @@ from vissim.optics.trial_lens import TrialLensSetup
 from vissim.units import mm_to_m
 from vissim.validation.campaign import CampaignSettings, Configuration
 
-__all__ = ["CAUSES", "WAVE_BENCH", "WAVE_BENCH_NOTE", "compute_wave_bench", "residual_budget", "wave_bench_chart"]
+__all__ = [
+    "CAUSES",
+    "TRACED_RAYS",
+    "WAVE_BENCH",
+    "WAVE_BENCH_NOTE",
+    "compute_wave_bench",
+    "residual_budget",
+    "traced_ray_image",
+    "traced_rays_setup",
+    "wave_bench_chart",
+]
 
 #: A comparison's ``reference_kind`` (and the item image ``wave_truth``) for the wave bench.
 WAVE_BENCH = "wave_bench"
+#: The simulation kind of the geometric self-check: the trace's ray optics, against the render.
+TRACED_RAYS = "traced_rays"
 #: The ``reference`` column of metrics rows against it.
 WAVE_BENCH_NOTE = "wave bench (traced lenses, noise-free)"
 #: The named causes a residual can have (``none``: nothing left but rounding).
@@ -73,6 +91,30 @@ def compute_wave_bench(bench: DslrBench, configuration: Configuration, settings:
     """The wave truth of ``bench`` (the configuration's) at the campaign's wavelength, ``oversample`` x finer."""
     return wave_truth(bench, wave_bench_chart(configuration, settings), wavelengths_nm=(settings.wavelength_nm,),
                       oversample=oversample)
+
+
+def traced_ray_image(bench: DslrBench, fine: np.ndarray, oversample: int) -> np.ndarray:
+    """``fine`` (the synthetic chart, ``oversample`` x finer) through the traced lenses' ray PSF at the d line.
+
+    Magnified by the bench's spectacle magnification and integrated onto the camera's pixels,
+    as the wave truth (:func:`~vissim.bench.wave_truth.image_through_traced_lenses`).
+    """
+    return image_through_traced_lenses(bench, fine, oversample=oversample, wavelengths_nm=(D_LINE_NM,),
+                                       mode="geometric").pixels
+
+
+def traced_rays_setup(bench: DslrBench) -> dict:
+    """What the self-check assumes, as a simulation's ``setup`` record: the traced lenses at the d line."""
+    traced = trace_bench_wavefront(bench)
+    setup = bench.viewing_setup()
+    return {
+        "kind": TRACED_RAYS,
+        "camera_prescription": traced.wavefront.to_prescription().format(4),
+        "pupil_diameter_mm": traced.pupil_diameter_mm,
+        "magnification_matrix": [list(r) for r in setup.magnification_matrix],
+        "mode": "geometric",
+        "wavelength_nm": traced.wavelength_nm,
+    }
 
 
 def _principal_diopters(matrix) -> float:
