@@ -15,22 +15,31 @@ the pixel residual of :class:`vissim.fit.forward.ForwardModel`.  Multi-started:
 
 1. the shift is initialised by cross-correlation (:func:`vissim.validation.registration.register`)
    and then re-solved inside every least-squares step as two of the fitted parameters;
-2. a scan of spherical powers (J = 0) finds the best sphere of each sign;
-3. for each sign, a polar grid of cylinders (|J| up to 3 D, axes every 15 degrees) around that
-   sphere; least squares starts from the two best grid points;
-4. in wave mode the multi-start runs in geometric optics (cheap, analytic) and each sign's best
-   is refined in wave optics.
+2. stage A fits the blur alone: the effective power with a free isotropic magnification, from
+   the best sphere of a scan (J = 0) and four cylinders around it (axes 0, 45, 90, 135);
+3. the blur ellipse is even in *each* principal power, so stage B starts the chosen model from
+   the four combinations of the principal powers' signs (++, +-, -+, --);
+4. in wave mode all this runs in geometric optics (cheap, analytic) and each candidate is
+   refined in wave optics.
 
-**Sign.**  Blur is even in the power; the sign is in the magnification (model ``bench``).
-The best fit of the opposite sign is kept: the sign is *determined* when that fit is worse by
-``delta_chi2 = (SSR_opposite - SSR_best) / sigma^2 >=`` :data:`SIGN_MIN_DELTA_CHI2`.  Otherwise
-both solutions are reported and the top-level sphere, cylinder and axis are ``None``.
+**Sign.**  Blur is even in each principal power; the signs are in the magnification (model
+``bench``: the trial lens magnifies each meridian by its own power).  The candidates other than
+the best (those that differ from it by more than :data:`SAME_SOLUTION_DIOPTERS`: a principal
+power near zero has no sign to decide) are kept with ``delta_chi2 = (SSR - SSR_best) / sigma^2``;
+the signs are *determined* when every one of them is worse by at least
+:data:`SIGN_MIN_DELTA_CHI2`.  Otherwise all plausible solutions are reported and the top-level
+sphere, cylinder, axis and power vector are ``None``.
 
 **Intervals.**  95 % intervals (+-1.96 sigma) from the Gauss-Newton curvature ``J^T J`` at the
 optimum, scaled by the measured residual variance ``sigma^2 = SSR / (N - k)`` (k counts gain and
 offset too); the effective power's covariance is carried from q by the model's Jacobian.  The
 axis is *determined* when the cylinder differs from zero at 95 % (the 2-dof test
 ``J^T Cov_J^-1 J >=`` :data:`AXIS_MIN_CHI2`); its interval is 1.96 sigma_perp / (2 |J|).
+
+**Resolution.**  At coarse sampling a sub-pixel shift of the sharp reference and a small blur
+look alike (measured: about 0.1 D of spurious power on a synthetic no-lens capture at 1 arcmin/px
+and 3.6 mm), so a fit whose largest blur is below :data:`MIN_RESOLVED_BLUR_PX` reports status
+``"unresolved"`` with a bound on the power, not a value.
 
 **Failure.**  Bad inputs (shapes, non-finite pixels, no structure, a blurred reference) raise
 :class:`~vissim.errors.VissimInputError`.  A fit is *failed* (``status == "failed"``, with a
@@ -55,16 +64,24 @@ from vissim.errors import VissimInputError
 from vissim.fit.forward import FORWARD_MODES, ForwardModel
 from vissim.fit.power_model import MAGNIFICATION_MODELS, power_model
 from vissim.optics.prescription import LensPower
+from vissim.units import rad_to_arcmin
 from vissim.validation.registration import register
 
 __all__ = ["RxFit", "fit_rx", "check_fit_inputs", "SIGN_MIN_DELTA_CHI2", "AXIS_MIN_CHI2", "MAX_UNEXPLAINED_FRACTION"]
 
 log = logging.getLogger(__name__)
 
-#: The opposite sign must fit worse by this many units of chi-square (3 standard errors) to be rejected.
+#: Another sign combination must fit worse by this many units of chi-square (3 standard errors) to be rejected.
 SIGN_MIN_DELTA_CHI2 = 9.0
 #: 95 % point of chi-square with 2 dof: the cylinder (J0, J45) differs from zero.
 AXIS_MIN_CHI2 = 5.991
+#: Below this cylinder the axis is reported undetermined whatever the statistics: the model's
+#: systematic error (about 0.01 D per component on renders, measured) exceeds its noise there.
+AXIS_MIN_CYLINDER_DIOPTERS = 0.125
+#: A fitted blur narrower than this (px, largest principal meridian) is not resolved: the power is only bounded.
+MIN_RESOLVED_BLUR_PX = 2.0
+#: Candidates whose power vectors agree within this are one solution (a principal power ~ 0 has no sign).
+SAME_SOLUTION_DIOPTERS = 0.05
 #: A fit whose model leaves more than this fraction of the capture's variance unexplained failed.
 MAX_UNEXPLAINED_FRACTION = 0.05
 #: A sharp reference's steepest step is at least this fraction of its contrast (an edge spread <~ 3 px).
@@ -73,8 +90,6 @@ MIN_REFERENCE_SHARPNESS = 0.3
 MIN_CONTRAST_OVER_NOISE = 8.0
 Z95 = 1.959964
 _SCAN_STEP_DIOPTERS = 0.25
-_CYL_GRID_DIOPTERS = (0.5, 1.0, 2.0)
-_AXIS_GRID_DEG = tuple(range(0, 180, 15))
 
 
 # -- input checks --------------------------------------------------------------------------
@@ -182,14 +197,16 @@ class Solution:
 class RxFit:
     """The result of :func:`fit_rx`; :meth:`as_json` is the record the CLI and a campaign write.
 
-    ``status`` is ``"ok"``, ``"sign undetermined"`` (both signs fit alike: :attr:`sphere_diopters`
-    and friends are None, :attr:`solutions` holds both) or ``"failed"`` (:attr:`reason`).
+    ``status`` is ``"ok"``, ``"unresolved"`` (the blur is below :data:`MIN_RESOLVED_BLUR_PX`: only a
+    bound on the power, ``power_bound_diopters``), ``"sign undetermined"`` (another combination of the principal powers'
+    signs fits as well: the record's sphere, cylinder, axis and power vector are None and
+    ``solutions`` lists the candidates with their delta chi2) or ``"failed"`` (``reason``).
     """
 
     status: str
     reason: str | None
     best: Solution
-    opposite: Solution | None
+    alternatives: tuple  # ((Solution, delta_chi2), ...): the other sign combinations, distinct from best
     sign_delta_chi2: float | None
     axis_determined: bool
     residual_psnr_db: float
@@ -225,6 +242,7 @@ class RxFit:
             "axis_deg": best["axis_deg"] if confident else None,
             "axis_determined": self.axis_determined if confident else False,
             "sign_determined": self.status == "ok",
+            "power_bound_diopters": self.settings.get("resolution_power_diopters") if self.status == "unresolved" else None,
             "sign_delta_chi2": self.sign_delta_chi2,
             "power_vector": best["power_vector"] if confident else None,
             "interval_95": best["interval_95"] if confident else None,
@@ -236,10 +254,9 @@ class RxFit:
             "evaluations": self.evaluations,
             "seconds": self.seconds,
         }
+        out["solutions"] = [dict(best, delta_chi2=0.0)]
         if self.status != "failed":
-            out["solutions"] = [best] + ([self.opposite.summary(self.axis_determined)] if self.opposite else [])
-        else:
-            out["solutions"] = [best]
+            out["solutions"] += [dict(s.summary(self.axis_determined), delta_chi2=d) for s, d in self.alternatives]
         return out
 
 
@@ -301,29 +318,30 @@ def _bounds(problem: _Problem, max_power: float, max_shift: float):
     return np.array(lower), np.array(upper)
 
 
-def _starts(problem: _Problem, base: np.ndarray, sign: float, max_power: float) -> list[np.ndarray]:
-    """Least-squares starts of one sign: the best sphere of that sign, then a polar cylinder grid around it."""
+def _blur_starts(problem: _Problem, base: np.ndarray, max_power: float) -> list[np.ndarray]:
+    """Stage A starts: the best sphere of a scan (J = 0), and four cylinders around it (axes 0, 45, 90, 135)."""
     def at(m, j0, j45):
         theta = base.copy()
         theta[:3] = (m, j0, j45)
         return theta
 
-    spheres = sign * np.arange(_SCAN_STEP_DIOPTERS, max_power * 0.8, _SCAN_STEP_DIOPTERS)
+    spheres = np.arange(0.0, max_power * 0.8, _SCAN_STEP_DIOPTERS)
     costs = [problem.cost(at(m, 0.0, 0.0)) for m in spheres]
-    best_m = float(spheres[int(np.argmin(costs))])
-    grid = [(best_m, 0.0, 0.0)]
-    for j in _CYL_GRID_DIOPTERS:
-        for axis in _AXIS_GRID_DEG:
-            phi = math.radians(2 * axis)
-            grid.append((best_m, j * math.cos(phi), j * math.sin(phi)))
-    scored = sorted(((problem.cost(at(*g)), g) for g in grid if abs(g[0]) < max_power), key=lambda t: t[0])
-    picked: list[tuple] = []
-    for _, g in scored:
-        if all(np.hypot(g[1] - p[1], g[2] - p[2]) > 0.3 or abs(g[0] - p[0]) > 0.3 for p in picked):
-            picked.append(g)
-        if len(picked) == 2:
-            break
-    return [at(*g) for g in picked]
+    m0 = float(spheres[int(np.argmin(costs))])
+    h = max(0.25, 0.4 * m0)
+    return [at(m0, 0.0, 0.0)] + [at(m0, h * c, h * s) for c, s in ((1, 0), (-1, 0), (0, 1), (0, -1))]
+
+
+def _sign_combinations(power_vector) -> list[tuple[float, float, float]]:
+    """The four power vectors with the blur of ``power_vector``: each principal power's sign flipped or not."""
+    m, j0, j45 = power_vector
+    values, vectors = np.linalg.eigh(np.array([[m + j0, j45], [j45, m - j0]]))
+    out = []
+    for s1 in (1.0, -1.0):
+        for s2 in (1.0, -1.0):
+            d = vectors @ np.diag([s1 * abs(values[0]), s2 * abs(values[1])]) @ vectors.T
+            out.append((0.5 * (d[0, 0] + d[1, 1]), 0.5 * (d[0, 0] - d[1, 1]), d[0, 1]))
+    return out
 
 
 def _least_squares(problem: _Problem, start: np.ndarray, lower, upper, forward: ForwardModel | None = None):
@@ -401,38 +419,46 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
 
     # 1. shift from cross-correlation (content of the image relative to the reference)
     shift = register(img, ref, upsample_factor=20).shift_px
-    base = np.zeros(len(problem.names))
+    # 2. stage A, the blur alone: effective power with a free isotropic magnification, principal powers >= 0
+    blur_model = power_model("free", bench) if model.determines_sign else model
+    blur_problem = _Problem(geometric, img, blur_model, fit_focus_offset, fit_pupil)
+    blur_lower, blur_upper = _bounds(blur_problem, max_power_diopters, max_shift_px)
+    base = np.zeros(len(blur_problem.names))
     base[3:5] = np.clip(shift, -max_shift_px * 0.9, max_shift_px * 0.9)
-
-    # 2-3. multi-start per sign
-    signs = (1.0, -1.0) if model.determines_sign else (1.0,)
-    per_sign = {}
-    for sign in signs:
-        results = [_least_squares(problem, start, lower, upper) for start in _starts(problem, base, sign, max_power_diopters)]
-        per_sign[sign] = min(results, key=lambda r: r.cost)
-    # 4. wave refinement
+    stage_a = min((_least_squares(blur_problem, start, blur_lower, blur_upper)
+                   for start in _blur_starts(blur_problem, base, max_power_diopters)), key=lambda r: r.cost)
+    problem.evaluations += blur_problem.evaluations
+    # 3. stage B: each principal power's sign, under the chosen model
+    results = []
+    for vector in _sign_combinations(stage_a.x[:3]):
+        theta = np.zeros(len(problem.names))
+        theta[:5] = (*vector, *stage_a.x[3:5])
+        for name in problem.names[5:]:
+            theta[problem.names.index(name)] = stage_a.x[blur_problem.names.index(name)]
+        if model.determines_sign:
+            results.append(_least_squares(problem, theta, lower, upper))
+        else:  # the blur is even in each principal power: every combination fits alike
+            results.append(scipy.optimize.OptimizeResult(x=np.clip(theta, lower, upper), cost=stage_a.cost,
+                                                         jac=stage_a.jac))
+    # 4. wave refinement of each distinct candidate
     forward = geometric
     if mode == "wave":
         forward = ForwardModel(ref, step, pupil, mode="wave", wavelength_nm=wavelength_nm,
                                max_power_diopters=reach * widest / pupil, max_shift_px=max_shift_px)
-        per_sign = {s: _least_squares(problem, r.x, lower, upper, forward) for s, r in per_sign.items()}
+        results = [_least_squares(problem, r.x, lower, upper, forward) for r in results]
         problem.forward = forward
 
-    ordered = sorted(per_sign.items(), key=lambda kv: kv[1].cost)
-    best_result = ordered[0][1]
+    results.sort(key=lambda r: r.cost)
+    best_result = results[0]
     best, cov_theta, sigma2 = _solution(problem, best_result, img.size)
-    opposite = None
-    delta_chi2 = None
-    if len(ordered) > 1:
-        opposite = _solution(problem, ordered[1][1], img.size)[0]
-        delta_chi2 = (opposite.ssr - best.ssr) / sigma2
-    else:  # the sign-free models: the opposite solution is the mirror, with the same residual
-        q, _, nuisances, _, _ = problem.unpack(best_result.x)
-        mirrored = best_result.x.copy()
-        mirrored[:3] = -q
-        p = _effective_vector(model, -q, nuisances)
-        opposite = Solution(tuple(float(v) for v in p), best.covariance, best.ssr, mirrored)
-        delta_chi2 = 0.0
+    alternatives: list[tuple[Solution, float]] = []
+    for result in results[1:]:
+        candidate = _solution(problem, result, img.size)[0]
+        distinct = np.max(np.abs(np.subtract(candidate.power_vector, best.power_vector))) > SAME_SOLUTION_DIOPTERS
+        if distinct and all(np.max(np.abs(np.subtract(candidate.power_vector, a.power_vector))) > SAME_SOLUTION_DIOPTERS
+                            for a, _ in alternatives):
+            alternatives.append((candidate, (candidate.ssr - best.ssr) / sigma2))
+    delta_chi2 = min((d for _, d in alternatives), default=None)
 
     prediction = problem.prediction(best_result.x, forward)
     fitted, gain, offset = problem.projected(prediction)
@@ -444,6 +470,11 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     psnr = math.inf if mse == 0 else 10.0 * math.log10(data_range ** 2 / mse)
 
     # decisions
+    principal = np.abs(np.linalg.eigvalsh(np.array([[best.power_vector[0] + best.power_vector[1], best.power_vector[2]],
+                                                     [best.power_vector[2], best.power_vector[0] - best.power_vector[1]]])))
+    to_px = float(rad_to_arcmin(1e-3 * pupil)) / step  # blur diameter in px per dioptre
+    largest_blur_px = float(principal.max()) * to_px
+    resolution_power = MIN_RESOLVED_BLUR_PX / to_px
     status, reason = "ok", None
     on_bound = [name for name, x, lo, hi in zip(problem.names, best_result.x, lower, upper)
                 if min(x - lo, hi - x) <= 1e-6 * (hi - lo)]
@@ -454,18 +485,25 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     elif on_bound:
         status = "failed"
         reason = f"the fit ended on the bound of {', '.join(on_bound)}"
-    elif delta_chi2 is None or delta_chi2 < SIGN_MIN_DELTA_CHI2:
+    elif largest_blur_px < MIN_RESOLVED_BLUR_PX:
+        status = "unresolved"
+        reason = (f"the fitted blur ({largest_blur_px:.2f} px across) is below {MIN_RESOLVED_BLUR_PX:g} px: at this "
+                  "sampling a sub-pixel shift of the sharp reference and a small power look alike; the power added is "
+                  f"below about {resolution_power:.2f} D in each meridian, its value and sign are not determined")
+    elif delta_chi2 is not None and delta_chi2 < SIGN_MIN_DELTA_CHI2:
         status = "sign undetermined"
-        reason = ("the opposite sign fits as well (delta chi2 "
-                  f"{delta_chi2:.2f} < {SIGN_MIN_DELTA_CHI2:g})" if model.determines_sign else
-                  f"magnification model {model.name!r} does not tie magnification to power; blur alone is even in the power")
+        reason = (f"a solution with other signs of the principal powers fits as well (delta chi2 {delta_chi2:.2f} < "
+                  f"{SIGN_MIN_DELTA_CHI2:g})" if model.determines_sign else
+                  f"magnification model {model.name!r} does not tie magnification to power; blur alone is even in "
+                  "each principal power")
     j = np.array(best.power_vector[1:])
     cov_j = best.covariance[1:, 1:]
     try:
         axis_chi2 = float(j @ np.linalg.solve(cov_j, j))
     except np.linalg.LinAlgError:
         axis_chi2 = 0.0
-    axis_determined = status == "ok" and axis_chi2 >= AXIS_MIN_CHI2
+    cylinder = 2.0 * float(np.hypot(*j))
+    axis_determined = status == "ok" and axis_chi2 >= AXIS_MIN_CHI2 and cylinder >= AXIS_MIN_CYLINDER_DIOPTERS
 
     _, shift_fit, nuisances, focus, pupil_fit = problem.unpack(best_result.x)
     sd_theta = np.sqrt(np.maximum(np.diag(cov_theta), 0.0))
@@ -484,11 +522,13 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
                 "magnification_model": model.as_json(), "fit_focus_offset": fit_focus_offset, "fit_pupil": fit_pupil,
                 "max_power_diopters": max_power_diopters, "max_shift_px": max_shift_px, "pixels": int(img.size),
                 "parameters": problem.names, "sign_min_delta_chi2": SIGN_MIN_DELTA_CHI2,
-                "axis_min_chi2": AXIS_MIN_CHI2, "max_unexplained_fraction": MAX_UNEXPLAINED_FRACTION}
+                "axis_min_chi2": AXIS_MIN_CHI2, "max_unexplained_fraction": MAX_UNEXPLAINED_FRACTION,
+                "min_resolved_blur_px": MIN_RESOLVED_BLUR_PX, "resolution_power_diopters": resolution_power,
+                "axis_min_cylinder_diopters": AXIS_MIN_CYLINDER_DIOPTERS, "same_solution_diopters": SAME_SOLUTION_DIOPTERS}
     seconds = time.perf_counter() - started
     log.info("fit-rx: %s, effective %s, PSNR %.1f dB, %d evaluations, %.1f s", status,
              best.spherocylinder().format(3), psnr, problem.evaluations, seconds)
-    return RxFit(status=status, reason=reason, best=best, opposite=opposite, sign_delta_chi2=delta_chi2,
+    return RxFit(status=status, reason=reason, best=best, alternatives=tuple(alternatives), sign_delta_chi2=delta_chi2,
                  axis_determined=axis_determined, residual_psnr_db=psnr, residual_sigma=math.sqrt(sigma2),
                  unexplained_fraction=unexplained, nuisances=nuisance_record, settings=settings,
                  evaluations=problem.evaluations, seconds=seconds, model=fitted)
