@@ -131,6 +131,8 @@ class BenchLensModel:
 
 def power_model(name: str, bench: DslrBench | None = None):
     """The model called ``name`` (:data:`MAGNIFICATION_MODELS`); ``bench`` is needed for ``"bench"``."""
+    if bench is not None:
+        bench = dataclasses.replace(bench, lenses=())  # the fit must not see the lenses, only the holder
     if name == "bench":
         if bench is None:
             raise VissimInputError("magnification model 'bench' needs the bench setup (vertex and chart distances)")
