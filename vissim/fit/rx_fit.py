@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -397,8 +398,6 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
         Fit a focus offset (dioptres) and the pupil (a log scale) as nuisances.  Both trade
         against the power: use them only when magnification or diffraction can separate them.
     """
-    import time
-
     started = time.perf_counter()
     step = check_arcmin_per_px(arcmin_per_px)
     pupil = check_pupil_mm(pupil_diameter_mm)
