@@ -1,0 +1,533 @@
+"""Fit the refraction a capture shows: :func:`fit_rx` and its result record :class:`RxFit`.
+
+**What is fitted.**  The sphero-cylinder added at the camera (``vissim trial-lens``'s
+``effective_*``; positive for a plus lens), in power vectors (M, J0, J45) so that the axis
+never wraps.  The parameters are the power vector q of the magnification model
+(:mod:`vissim.fit.power_model`: the trial lens's marked power on the bench, or the effective
+power itself), the sub-pixel shift (rows, cols), and optional nuisances: a focus offset (a
+sphere added to the defocus but not to the magnification), the pupil diameter (as a log
+scale), an isotropic magnification (model ``free``).  Gain and offset are solved in closed
+form at every evaluation (variable projection), so an exposure or paper-level difference
+between capture and reference costs nothing.
+
+**How.**  :func:`scipy.optimize.least_squares` (trust region, finite-difference Jacobian) on
+the pixel residual of :class:`vissim.fit.forward.ForwardModel`.  Multi-started:
+
+1. the shift is initialised by cross-correlation (:func:`vissim.validation.registration.register`)
+   and then re-solved inside every least-squares step as two of the fitted parameters;
+2. stage A fits the blur alone: the effective power with a free isotropic magnification, from
+   the best sphere of a scan (J = 0) and four cylinders around it (axes 0, 45, 90, 135);
+3. the blur ellipse is even in *each* principal power, so stage B starts the chosen model from
+   the four combinations of the principal powers' signs (++, +-, -+, --);
+4. in wave mode all this runs in geometric optics (cheap, analytic) and each candidate is
+   refined in wave optics.
+
+**Sign.**  Blur is even in each principal power; the signs are in the magnification (model
+``bench``: the trial lens magnifies each meridian by its own power).  The candidates other than
+the best (those that differ from it by more than :data:`SAME_SOLUTION_DIOPTERS`: a principal
+power near zero has no sign to decide) are kept with ``delta_chi2 = (SSR - SSR_best) / sigma^2``;
+the signs are *determined* when every one of them is worse by at least
+:data:`SIGN_MIN_DELTA_CHI2`.  Otherwise all plausible solutions are reported and the top-level
+sphere, cylinder, axis and power vector are ``None``.
+
+**Intervals.**  95 % intervals (+-1.96 sigma) from the Gauss-Newton curvature ``J^T J`` at the
+optimum, scaled by the measured residual variance ``sigma^2 = SSR / (N - k)`` (k counts gain and
+offset too); the effective power's covariance is carried from q by the model's Jacobian.  The
+axis is *determined* when the cylinder differs from zero at 95 % (the 2-dof test
+``J^T Cov_J^-1 J >=`` :data:`AXIS_MIN_CHI2`); its interval is 1.96 sigma_perp / (2 |J|).
+
+**Resolution.**  At coarse sampling a sub-pixel shift of the sharp reference and a small blur
+look alike (measured: about 0.1 D of spurious power on a synthetic no-lens capture at 1 arcmin/px
+and 3.6 mm), so a fit whose largest blur is below :data:`MIN_RESOLVED_BLUR_PX` reports status
+``"unresolved"`` with a bound on the power, not a value.
+
+**Failure.**  Bad inputs (shapes, non-finite pixels, no structure, a blurred reference) raise
+:class:`~vissim.errors.VissimInputError`.  A fit is *failed* (``status == "failed"``, with a
+reason, and no prescription) when the model leaves more than :data:`MAX_UNEXPLAINED_FRACTION`
+of the capture's variance unexplained, or a parameter ends on its bound.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.optimize
+
+from vissim.bench.dslr import DslrBench
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.errors import VissimInputError
+from vissim.fit.forward import FORWARD_MODES, ForwardModel
+from vissim.fit.power_model import MAGNIFICATION_MODELS, power_model
+from vissim.optics.prescription import LensPower
+from vissim.units import rad_to_arcmin
+from vissim.validation.registration import register
+
+__all__ = ["RxFit", "fit_rx", "check_fit_inputs", "SIGN_MIN_DELTA_CHI2", "AXIS_MIN_CHI2", "MAX_UNEXPLAINED_FRACTION"]
+
+log = logging.getLogger(__name__)
+
+#: Another sign combination must fit worse by this many units of chi-square (3 standard errors) to be rejected.
+SIGN_MIN_DELTA_CHI2 = 9.0
+#: 95 % point of chi-square with 2 dof: the cylinder (J0, J45) differs from zero.
+AXIS_MIN_CHI2 = 5.991
+#: Below this cylinder the axis is reported undetermined whatever the statistics: the model's
+#: systematic error (about 0.01 D per component on renders, measured) exceeds its noise there.
+AXIS_MIN_CYLINDER_DIOPTERS = 0.125
+#: A fitted blur narrower than this (px, largest principal meridian) is not resolved: the power is only bounded.
+MIN_RESOLVED_BLUR_PX = 2.0
+#: Candidates whose power vectors agree within this are one solution (a principal power ~ 0 has no sign).
+SAME_SOLUTION_DIOPTERS = 0.05
+#: A fit whose model leaves more than this fraction of the capture's variance unexplained failed.
+MAX_UNEXPLAINED_FRACTION = 0.05
+#: A sharp reference's steepest step is at least this fraction of its contrast (an edge spread <~ 3 px).
+MIN_REFERENCE_SHARPNESS = 0.3
+#: An image has structure when its contrast exceeds this many times its pixel-to-pixel noise.
+MIN_CONTRAST_OVER_NOISE = 8.0
+Z95 = 1.959964
+_SCAN_STEP_DIOPTERS = 0.25
+
+
+# -- input checks --------------------------------------------------------------------------
+def _as_image(value: Any, name: str) -> np.ndarray:
+    array = np.asarray(value)
+    if array.ndim == 3 and array.shape[2] == 3:
+        raise VissimInputError(f"the {name} has 3 channels; fit one channel (or luminance) at a time")
+    if array.ndim != 2 or min(array.shape) < 16:
+        raise VissimInputError(f"the {name} must be one 2-D channel of at least 16 x 16 px, got shape {array.shape}")
+    if not np.issubdtype(array.dtype, np.number) or np.iscomplexobj(array):
+        raise VissimInputError(f"the {name} must hold real numbers, got dtype {array.dtype}")
+    array = array.astype(np.float64)
+    if not np.all(np.isfinite(array)):
+        raise VissimInputError(f"the {name} has NaN or infinite pixels")
+    return array
+
+
+def _contrast(image: np.ndarray) -> float:
+    low, high = np.percentile(image, (0.5, 99.5))
+    return float(high - low)
+
+
+def _pixel_noise(image: np.ndarray) -> float:
+    """Robust pixel noise: the MAD of horizontal and vertical differences / sqrt 2 (0 for noise-free renders)."""
+    diffs = np.concatenate([np.diff(image, axis=0).ravel(), np.diff(image, axis=1).ravel()])
+    return float(1.4826 * np.median(np.abs(diffs - np.median(diffs))) / math.sqrt(2.0))
+
+
+def reference_sharpness(reference: np.ndarray) -> float:
+    """The steepest pixel step (99.9th percentile of |differences|) over the contrast: ~0.5-1 when sharp."""
+    diffs = np.concatenate([np.abs(np.diff(reference, axis=0)).ravel(), np.abs(np.diff(reference, axis=1)).ravel()])
+    return float(np.percentile(diffs, 99.9) / max(_contrast(reference), 1e-300))
+
+
+def check_fit_inputs(image: Any, reference: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The two images as float64 arrays, or one :class:`VissimInputError` naming what is wrong."""
+    img = _as_image(image, "image")
+    ref = _as_image(reference, "reference")
+    if img.shape != ref.shape:
+        raise VissimInputError(f"the image is {img.shape[0]} x {img.shape[1]} px but the reference is "
+                               f"{ref.shape[0]} x {ref.shape[1]} px (rows x cols); they must match, pixel for pixel")
+    for array, name in ((img, "image"), (ref, "reference")):
+        contrast, noise = _contrast(array), _pixel_noise(array)
+        if contrast <= max(MIN_CONTRAST_OVER_NOISE * noise, 1e-9 * max(1.0, float(np.abs(array).max()))):
+            raise VissimInputError(f"the {name} has no structure to fit: contrast {contrast:.3g} against pixel "
+                                   f"noise {noise:.3g} (linear units); it needs a chart or letter")
+    sharpness = reference_sharpness(ref)
+    if sharpness < MIN_REFERENCE_SHARPNESS:
+        raise VissimInputError(
+            f"the reference is itself blurred: its steepest step is {sharpness:.2f} of its contrast (a sharp "
+            f"reference has >= {MIN_REFERENCE_SHARPNESS}); give the no-lens capture or the chart")
+    return img, ref
+
+
+# -- the result ----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Solution:
+    """One sign's best fit: effective power vector, its covariance, and the sum of squared residuals."""
+
+    power_vector: tuple[float, float, float]
+    covariance: np.ndarray = field(repr=False)
+    ssr: float
+    parameters: np.ndarray = field(repr=False)
+    marked_vector: tuple[float, float, float] | None = None
+
+    def spherocylinder(self) -> LensPower:
+        return LensPower.from_power_vector(*self.power_vector).minus_cylinder()
+
+    def summary(self, axis_determined: bool) -> dict:
+        rx = self.spherocylinder()
+        sd = np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
+        m, j0, j45 = self.power_vector
+        j = math.hypot(j0, j45)
+        e_par = np.array([j0, j45]) / j if j > 0 else np.array([1.0, 0.0])
+        cov_j = self.covariance[1:, 1:]
+        var_par = float(e_par @ cov_j @ e_par)
+        var_perp = float(np.array([-e_par[1], e_par[0]]) @ cov_j @ np.array([-e_par[1], e_par[0]]))
+        cov_m_par = float(self.covariance[0, 1:] @ e_par)
+        sd_sphere = math.sqrt(max(self.covariance[0, 0] + var_par + 2 * cov_m_par, 0.0))
+        sd_cyl = 2.0 * math.sqrt(max(var_par, 0.0))
+        axis_half = math.degrees(Z95 * math.sqrt(max(var_perp, 0.0)) / (2.0 * j)) if j > 0 else math.inf
+        out = {
+            "sphere_diopters": rx.sphere_diopters,
+            "cylinder_diopters": rx.cylinder_diopters,
+            "axis_deg": rx.axis_deg if axis_determined else None,
+            "power_vector": {"M_diopters": m, "J0_diopters": j0, "J45_diopters": j45},
+            "interval_95": {
+                "M_diopters": [m - Z95 * sd[0], m + Z95 * sd[0]],
+                "J0_diopters": [j0 - Z95 * sd[1], j0 + Z95 * sd[1]],
+                "J45_diopters": [j45 - Z95 * sd[2], j45 + Z95 * sd[2]],
+                "sphere_diopters": [rx.sphere_diopters - Z95 * sd_sphere, rx.sphere_diopters + Z95 * sd_sphere],
+                "cylinder_diopters": [rx.cylinder_diopters - Z95 * sd_cyl, min(0.0, rx.cylinder_diopters + Z95 * sd_cyl)],
+                "axis_deg": ([rx.axis_deg - axis_half, rx.axis_deg + axis_half]
+                             if axis_determined and axis_half < 90.0 else None),
+            },
+            "standard_error": {"M_diopters": sd[0], "J0_diopters": sd[1], "J45_diopters": sd[2]},
+            "sum_squared_residuals": self.ssr,
+        }
+        if self.marked_vector is not None:
+            out["trial_lens_marked_power"] = str(LensPower.from_power_vector(*self.marked_vector).minus_cylinder())
+        return out
+
+
+@dataclass(frozen=True)
+class RxFit:
+    """The result of :func:`fit_rx`; :meth:`as_json` is the record the CLI and a campaign write.
+
+    ``status`` is ``"ok"``, ``"unresolved"`` (the blur is below :data:`MIN_RESOLVED_BLUR_PX`: only a
+    bound on the power, ``power_bound_diopters``), ``"sign undetermined"`` (another combination of the principal powers'
+    signs fits as well: the record's sphere, cylinder, axis and power vector are None and
+    ``solutions`` lists the candidates with their delta chi2) or ``"failed"`` (``reason``).
+    """
+
+    status: str
+    reason: str | None
+    best: Solution
+    alternatives: tuple  # ((Solution, delta_chi2), ...): the other sign combinations, distinct from best
+    sign_delta_chi2: float | None
+    axis_determined: bool
+    residual_psnr_db: float
+    residual_sigma: float
+    unexplained_fraction: float
+    nuisances: dict
+    settings: dict
+    evaluations: int
+    seconds: float
+    model: np.ndarray = field(repr=False)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    @property
+    def power_vector(self) -> tuple[float, float, float] | None:
+        return self.best.power_vector if self.status == "ok" else None
+
+    @property
+    def effective_power(self) -> LensPower | None:
+        return self.best.spherocylinder() if self.status == "ok" else None
+
+    def as_json(self) -> dict:
+        best = self.best.summary(self.axis_determined)
+        confident = self.status == "ok"
+        out: dict[str, Any] = {
+            "status": self.status,
+            "reason": self.reason,
+            "quantity": "sphero-cylinder added at the camera (vissim trial-lens effective_*), minus-cylinder form",
+            "sphere_diopters": best["sphere_diopters"] if confident else None,
+            "cylinder_diopters": best["cylinder_diopters"] if confident else None,
+            "axis_deg": best["axis_deg"] if confident else None,
+            "axis_determined": self.axis_determined if confident else False,
+            "sign_determined": self.status == "ok",
+            "power_bound_diopters": self.settings.get("resolution_power_diopters") if self.status == "unresolved" else None,
+            "sign_delta_chi2": self.sign_delta_chi2,
+            "power_vector": best["power_vector"] if confident else None,
+            "interval_95": best["interval_95"] if confident else None,
+            "residual_psnr_db": self.residual_psnr_db,
+            "residual_sigma": self.residual_sigma,
+            "unexplained_variance_fraction": self.unexplained_fraction,
+            "nuisances": self.nuisances,
+            "settings": self.settings,
+            "evaluations": self.evaluations,
+            "seconds": self.seconds,
+        }
+        out["solutions"] = [dict(best, delta_chi2=0.0)]
+        if self.status != "failed":
+            out["solutions"] += [dict(s.summary(self.axis_determined), delta_chi2=d) for s, d in self.alternatives]
+        return out
+
+
+# -- the fit -------------------------------------------------------------------------------
+class _Problem:
+    """Parameters <-> model image and residual, with gain and offset projected out."""
+
+    def __init__(self, forward: ForwardModel, image: np.ndarray, model, fit_focus: bool, fit_pupil: bool):
+        self.forward, self.image, self.model = forward, image, model
+        self.names = ["q_M", "q_J0", "q_J45", "shift_rows_px", "shift_cols_px", *model.nuisance_names]
+        if fit_focus:
+            self.names.append("focus_offset_diopters")
+        if fit_pupil:
+            self.names.append("log_pupil_scale")
+        self.fit_focus, self.fit_pupil = fit_focus, fit_pupil
+        self.n_model_nuisances = len(model.nuisance_names)
+        self.evaluations = 0
+        self._image_centred = image - image.mean()
+
+    def unpack(self, theta: np.ndarray):
+        q, shift = theta[:3], theta[3:5]
+        i = 5
+        nuisances = theta[i:i + self.n_model_nuisances]
+        i += self.n_model_nuisances
+        focus = theta[i] if self.fit_focus else 0.0
+        i += self.fit_focus
+        pupil = self.forward.pupil_diameter_mm * (math.exp(theta[i]) if self.fit_pupil else 1.0)
+        return q, shift, nuisances, focus, pupil
+
+    def prediction(self, theta: np.ndarray, forward: ForwardModel | None = None) -> np.ndarray:
+        q, shift, nuisances, focus, pupil = self.unpack(theta)
+        optics = self.model.optics(q, nuisances)
+        self.evaluations += 1
+        return (forward or self.forward).predict(optics.defocus + focus * np.eye(2), optics.magnification, shift, pupil)
+
+    def projected(self, prediction: np.ndarray) -> tuple[np.ndarray, float, float]:
+        centred = prediction - prediction.mean()
+        norm = float(np.sum(centred * centred))
+        gain = float(np.sum(centred * self._image_centred)) / norm if norm > 0 else 0.0
+        offset = float(self.image.mean() - gain * prediction.mean())
+        return gain * prediction + offset, gain, offset
+
+    def residual(self, theta: np.ndarray, forward: ForwardModel | None = None) -> np.ndarray:
+        fitted, _, _ = self.projected(self.prediction(theta, forward))
+        return (self.image - fitted).ravel()
+
+    def cost(self, theta: np.ndarray) -> float:
+        r = self.residual(theta)
+        return float(np.einsum("i,i->", r, r))
+
+
+def _bounds(problem: _Problem, max_power: float, max_shift: float):
+    lower = [-max_power, -max_power / 2, -max_power / 2] + [-max_shift] * 2
+    upper = [max_power, max_power / 2, max_power / 2] + [max_shift] * 2
+    for name in problem.names[5:]:
+        limit = {"log_magnification": 0.2, "focus_offset_diopters": 3.0, "log_pupil_scale": 0.7}[name]
+        lower.append(-limit)
+        upper.append(limit)
+    return np.array(lower), np.array(upper)
+
+
+def _blur_starts(problem: _Problem, base: np.ndarray, max_power: float) -> list[np.ndarray]:
+    """Stage A starts: the best sphere of a scan (J = 0), and four cylinders around it (axes 0, 45, 90, 135)."""
+    def at(m, j0, j45):
+        theta = base.copy()
+        theta[:3] = (m, j0, j45)
+        return theta
+
+    spheres = np.arange(0.0, max_power * 0.8, _SCAN_STEP_DIOPTERS)
+    costs = [problem.cost(at(m, 0.0, 0.0)) for m in spheres]
+    m0 = float(spheres[int(np.argmin(costs))])
+    h = max(0.25, 0.4 * m0)
+    return [at(m0, 0.0, 0.0)] + [at(m0, h * c, h * s) for c, s in ((1, 0), (-1, 0), (0, 1), (0, -1))]
+
+
+def _sign_combinations(power_vector) -> list[tuple[float, float, float]]:
+    """The four power vectors with the blur of ``power_vector``: each principal power's sign flipped or not."""
+    m, j0, j45 = power_vector
+    values, vectors = np.linalg.eigh(np.array([[m + j0, j45], [j45, m - j0]]))
+    out = []
+    for s1 in (1.0, -1.0):
+        for s2 in (1.0, -1.0):
+            d = vectors @ np.diag([s1 * abs(values[0]), s2 * abs(values[1])]) @ vectors.T
+            out.append((0.5 * (d[0, 0] + d[1, 1]), 0.5 * (d[0, 0] - d[1, 1]), d[0, 1]))
+    return out
+
+
+def _least_squares(problem: _Problem, start: np.ndarray, lower, upper, forward: ForwardModel | None = None):
+    diff_step = 1e-4 if (forward or problem.forward).mode == "geometric" else 2e-3
+    return scipy.optimize.least_squares(lambda t: problem.residual(t, forward), np.clip(start, lower, upper),
+                                        bounds=(lower, upper), x_scale="jac", diff_step=diff_step, method="trf",
+                                        xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+
+
+def _effective_vector(model, q, nuisances) -> np.ndarray:
+    p = model.optics(q, nuisances).effective_power
+    return np.array([0.5 * (p[0, 0] + p[1, 1]), 0.5 * (p[0, 0] - p[1, 1]), 0.5 * (p[0, 1] + p[1, 0])])
+
+
+def _solution(problem: _Problem, result, n_pixels: int) -> tuple[Solution, np.ndarray, float]:
+    theta = result.x
+    ssr = float(2.0 * result.cost)
+    dof = max(n_pixels - len(theta) - 2, 1)
+    sigma2 = ssr / dof
+    jac = np.asarray(result.jac)
+    cov_theta = sigma2 * np.linalg.pinv(jac.T @ jac)
+    q, _, nuisances, _, _ = problem.unpack(theta)
+    p = _effective_vector(problem.model, q, nuisances)
+    g = np.zeros((3, 3))
+    for k in range(3):  # d(effective)/d(q) by central differences
+        h = 1e-5
+        dq = np.zeros(3)
+        dq[k] = h
+        g[:, k] = (_effective_vector(problem.model, q + dq, nuisances) - _effective_vector(problem.model, q - dq, nuisances)) / (2 * h)
+    cov_p = g @ cov_theta[:3, :3] @ g.T
+    marked = tuple(float(v) for v in q) if problem.model.name == "bench" else None
+    return (Solution(tuple(float(v) for v in p), cov_p, ssr, theta.copy(), marked), cov_theta, sigma2)
+
+
+def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_mm: float, mode: str = "geometric",
+           magnification: str = "bench", bench: DslrBench | None = None, wavelength_nm: float = 550.0,
+           fit_focus_offset: bool = False, fit_pupil: bool = False, max_power_diopters: float = 6.0,
+           max_shift_px: float = 8.0) -> RxFit:
+    """Fit the sphero-cylinder added at the camera that turns ``reference`` into ``image`` (module doc).
+
+    Parameters
+    ----------
+    image, reference : ndarray (H, W)
+        Linear light, one channel, the same size and sampling; the reference sharp (no lens).
+    arcmin_per_px, pupil_diameter_mm
+        The images' sampling and the camera's entrance pupil.
+    mode
+        ``"geometric"`` (ray optics: a Mitsuba render has no diffraction) or ``"wave"``.
+    magnification, bench
+        How magnification follows power (:mod:`vissim.fit.power_model`); ``"bench"`` needs the
+        ``bench`` (its lenses are ignored: only vertex, chart and focus distances, glass).
+    fit_focus_offset, fit_pupil
+        Fit a focus offset (dioptres) and the pupil (a log scale) as nuisances.  Both trade
+        against the power: use them only when magnification or diffraction can separate them.
+    """
+    started = time.perf_counter()
+    step = check_arcmin_per_px(arcmin_per_px)
+    pupil = check_pupil_mm(pupil_diameter_mm)
+    if mode not in FORWARD_MODES:
+        raise VissimInputError(f"fit mode must be one of {', '.join(FORWARD_MODES)}, got {mode!r}")
+    if magnification not in MAGNIFICATION_MODELS:
+        raise VissimInputError(f"magnification model must be one of {', '.join(MAGNIFICATION_MODELS)}, got {magnification!r}")
+    img, ref = check_fit_inputs(image, reference)
+    model = power_model(magnification, bench)
+    # the largest principal defocus the bounds allow (|M| + |J|, J0 and J45 within half of it),
+    # with the trial lens's vergence gain at the vertex, plus the focus offset; the largest pupil
+    reach = max_power_diopters * (1.0 + math.sqrt(0.5)) * 1.1 + (3.0 if fit_focus_offset else 0.0)
+    widest = pupil * (math.exp(0.7) if fit_pupil else 1.0)
+    geometric = ForwardModel(ref, step, pupil, mode="geometric", max_power_diopters=reach * widest / pupil,
+                             max_shift_px=max_shift_px)
+    problem = _Problem(geometric, img, model, fit_focus_offset, fit_pupil)
+    lower, upper = _bounds(problem, max_power_diopters, max_shift_px)
+
+    # 1. shift from cross-correlation (content of the image relative to the reference)
+    shift = register(img, ref, upsample_factor=20).shift_px
+    # 2. stage A, the blur alone: effective power with a free isotropic magnification, principal powers >= 0
+    blur_model = power_model("free", bench) if model.determines_sign else model
+    blur_problem = _Problem(geometric, img, blur_model, fit_focus_offset, fit_pupil)
+    blur_lower, blur_upper = _bounds(blur_problem, max_power_diopters, max_shift_px)
+    base = np.zeros(len(blur_problem.names))
+    base[3:5] = np.clip(shift, -max_shift_px * 0.9, max_shift_px * 0.9)
+    stage_a = min((_least_squares(blur_problem, start, blur_lower, blur_upper)
+                   for start in _blur_starts(blur_problem, base, max_power_diopters)), key=lambda r: r.cost)
+    problem.evaluations += blur_problem.evaluations
+    # 3. stage B: each principal power's sign, under the chosen model
+    results = []
+    for vector in _sign_combinations(stage_a.x[:3]):
+        theta = np.zeros(len(problem.names))
+        theta[:5] = (*vector, *stage_a.x[3:5])
+        for name in problem.names[5:]:
+            theta[problem.names.index(name)] = stage_a.x[blur_problem.names.index(name)]
+        if model.determines_sign:
+            results.append(_least_squares(problem, theta, lower, upper))
+        else:  # the blur is even in each principal power: every combination fits alike
+            results.append(scipy.optimize.OptimizeResult(x=np.clip(theta, lower, upper), cost=stage_a.cost,
+                                                         jac=stage_a.jac))
+    # 4. wave refinement of each distinct candidate
+    forward = geometric
+    if mode == "wave":
+        forward = ForwardModel(ref, step, pupil, mode="wave", wavelength_nm=wavelength_nm,
+                               max_power_diopters=reach * widest / pupil, max_shift_px=max_shift_px)
+        results = [_least_squares(problem, r.x, lower, upper, forward) for r in results]
+        problem.forward = forward
+
+    results.sort(key=lambda r: r.cost)
+    best_result = results[0]
+    best, cov_theta, sigma2 = _solution(problem, best_result, img.size)
+    alternatives: list[tuple[Solution, float]] = []
+    for result in results[1:]:
+        candidate = _solution(problem, result, img.size)[0]
+        distinct = np.max(np.abs(np.subtract(candidate.power_vector, best.power_vector))) > SAME_SOLUTION_DIOPTERS
+        if distinct and all(np.max(np.abs(np.subtract(candidate.power_vector, a.power_vector))) > SAME_SOLUTION_DIOPTERS
+                            for a, _ in alternatives):
+            alternatives.append((candidate, (candidate.ssr - best.ssr) / sigma2))
+    delta_chi2 = min((d for _, d in alternatives), default=None)
+
+    prediction = problem.prediction(best_result.x, forward)
+    fitted, gain, offset = problem.projected(prediction)
+    residual = img - fitted
+    sst = float(np.sum((img - img.mean()) ** 2))
+    unexplained = float(np.sum(residual ** 2)) / sst
+    data_range = float(img.max() - img.min())
+    mse = float(np.mean(residual ** 2))
+    psnr = math.inf if mse == 0 else 10.0 * math.log10(data_range ** 2 / mse)
+
+    # decisions
+    principal = np.abs(np.linalg.eigvalsh(np.array([[best.power_vector[0] + best.power_vector[1], best.power_vector[2]],
+                                                     [best.power_vector[2], best.power_vector[0] - best.power_vector[1]]])))
+    to_px = float(rad_to_arcmin(1e-3 * pupil)) / step  # blur diameter in px per dioptre
+    largest_blur_px = float(principal.max()) * to_px
+    resolution_power = MIN_RESOLVED_BLUR_PX / to_px
+    status, reason = "ok", None
+    on_bound = [name for name, x, lo, hi in zip(problem.names, best_result.x, lower, upper)
+                if min(x - lo, hi - x) <= 1e-6 * (hi - lo)]
+    if unexplained > MAX_UNEXPLAINED_FRACTION:
+        status = "failed"
+        reason = (f"the model leaves {100 * unexplained:.1f} % of the image's variance unexplained (at most "
+                  f"{100 * MAX_UNEXPLAINED_FRACTION:g} %): a different chart, crop, sampling or optics")
+    elif on_bound:
+        status = "failed"
+        reason = f"the fit ended on the bound of {', '.join(on_bound)}"
+    elif largest_blur_px < MIN_RESOLVED_BLUR_PX:
+        status = "unresolved"
+        reason = (f"the fitted blur ({largest_blur_px:.2f} px across) is below {MIN_RESOLVED_BLUR_PX:g} px: at this "
+                  "sampling a sub-pixel shift of the sharp reference and a small power look alike; the power added is "
+                  f"below about {resolution_power:.2f} D in each meridian, its value and sign are not determined")
+    elif delta_chi2 is not None and delta_chi2 < SIGN_MIN_DELTA_CHI2:
+        status = "sign undetermined"
+        reason = (f"a solution with other signs of the principal powers fits as well (delta chi2 {delta_chi2:.2f} < "
+                  f"{SIGN_MIN_DELTA_CHI2:g})" if model.determines_sign else
+                  f"magnification model {model.name!r} does not tie magnification to power; blur alone is even in "
+                  "each principal power")
+    j = np.array(best.power_vector[1:])
+    cov_j = best.covariance[1:, 1:]
+    try:
+        axis_chi2 = float(j @ np.linalg.solve(cov_j, j))
+    except np.linalg.LinAlgError:
+        axis_chi2 = 0.0
+    cylinder = 2.0 * float(np.hypot(*j))
+    axis_determined = status == "ok" and axis_chi2 >= AXIS_MIN_CHI2 and cylinder >= AXIS_MIN_CYLINDER_DIOPTERS
+
+    _, shift_fit, nuisances, focus, pupil_fit = problem.unpack(best_result.x)
+    sd_theta = np.sqrt(np.maximum(np.diag(cov_theta), 0.0))
+    nuisance_record = {
+        "shift_rows_px": float(shift_fit[0]), "shift_cols_px": float(shift_fit[1]),
+        "shift_sign": "the image's content relative to the reference (positive: down, right)",
+        "gain": gain, "offset": offset,
+        "magnification_matrix": model.optics(best_result.x[:3], nuisances).magnification.tolist(),
+    }
+    for k, name in enumerate(problem.names[5:], start=5):
+        nuisance_record[name] = float(best_result.x[k])
+        nuisance_record[name + "_standard_error"] = float(sd_theta[k])
+    if fit_pupil:
+        nuisance_record["pupil_diameter_mm"] = pupil_fit
+    settings = {"arcmin_per_px": step, "pupil_diameter_mm": pupil, "mode": mode, "wavelength_nm": wavelength_nm,
+                "magnification_model": model.as_json(), "fit_focus_offset": fit_focus_offset, "fit_pupil": fit_pupil,
+                "max_power_diopters": max_power_diopters, "max_shift_px": max_shift_px, "pixels": int(img.size),
+                "parameters": problem.names, "sign_min_delta_chi2": SIGN_MIN_DELTA_CHI2,
+                "axis_min_chi2": AXIS_MIN_CHI2, "max_unexplained_fraction": MAX_UNEXPLAINED_FRACTION,
+                "min_resolved_blur_px": MIN_RESOLVED_BLUR_PX, "resolution_power_diopters": resolution_power,
+                "axis_min_cylinder_diopters": AXIS_MIN_CYLINDER_DIOPTERS, "same_solution_diopters": SAME_SOLUTION_DIOPTERS}
+    seconds = time.perf_counter() - started
+    log.info("fit-rx: %s, effective %s, PSNR %.1f dB, %d evaluations, %.1f s", status,
+             best.spherocylinder().format(3), psnr, problem.evaluations, seconds)
+    return RxFit(status=status, reason=reason, best=best, alternatives=tuple(alternatives), sign_delta_chi2=delta_chi2,
+                 axis_determined=axis_determined, residual_psnr_db=psnr, residual_sigma=math.sqrt(sigma2),
+                 unexplained_fraction=unexplained, nuisances=nuisance_record, settings=settings,
+                 evaluations=problem.evaluations, seconds=seconds, model=fitted)
