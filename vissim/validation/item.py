@@ -31,7 +31,7 @@ from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
 from vissim.imageio import write_image
 from vissim.provenance import json_safe, make_provenance
-from vissim.validation.campaign import CampaignSettings, Configuration
+from vissim.validation.campaign_types import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
 from vissim.validation.registration import Registration, register
 from vissim.validation.renders import campaign_bench

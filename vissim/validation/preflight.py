@@ -16,6 +16,9 @@ from vissim.errors import VissimInputError
 from vissim.optics.psf import MAX_PSF_SIZE_PX, geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
 from vissim.optics.wavefront import Wavefront
 from vissim.render.run import render_memory_bytes  # no Mitsuba import: that happens when a render starts
+from vissim.validation.item import SYNTHETIC_OVERSAMPLE
+from vissim.validation.renders import campaign_bench
+from vissim.validation.simulate import simulation_setup
 
 __all__ = ["item_memory_bytes", "check_campaign_memory", "check_depth_campaign_memory"]
 
@@ -43,10 +46,6 @@ def _psf_bytes(front: Wavefront, pupil_mm: float, step: float, wavelength_nm: fl
 
 def item_memory_bytes(configuration, settings) -> tuple[float, str]:
     """(peak bytes, the step that needs them) for one single-plane campaign item."""
-    from vissim.validation.item import SYNTHETIC_OVERSAMPLE
-    from vissim.validation.renders import campaign_bench
-    from vissim.validation.simulate import simulation_setup
-
     rows, cols = settings.tile_px
     bench = campaign_bench(configuration, settings)
     theory = bench.viewing_setup(settings.wavelength_nm)

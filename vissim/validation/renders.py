@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass
 from vissim.bench.dslr import DslrBench
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import m_to_mm
-from vissim.validation.campaign import CampaignSettings, Configuration
+from vissim.validation.campaign_types import CampaignSettings, Configuration
 
 __all__ = ["RenderSpec", "bench_for", "campaign_bench", "bench_lenses", "truth_specs", "no_lens_spec", "render_spec"]
 

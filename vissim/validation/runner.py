@@ -30,7 +30,7 @@ from vissim.atomic import write_json_atomic
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.provenance import make_provenance
-from vissim.validation.campaign import Campaign
+from vissim.validation.campaign_types import Campaign
 from vissim.checks import samples_per_pixel
 from vissim.validation.captures import capture_problem, capture_tile, load_manifest
 from vissim.validation.item import compute_item

@@ -36,7 +36,7 @@ from vissim.optics.psf import PSF, compute_psf, suggested_size_px
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLens
-from vissim.validation.campaign import CampaignSettings, Configuration
+from vissim.validation.campaign_types import CampaignSettings, Configuration
 
 __all__ = ["SimulationSetup", "simulation_setup", "simulate", "add_bench_diffraction"]
 

@@ -54,7 +54,7 @@ from vissim.optics.prescription import LensPower
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLensSetup
 from vissim.units import mm_to_m
-from vissim.validation.campaign import CampaignSettings, Configuration
+from vissim.validation.campaign_types import CampaignSettings, Configuration
 
 __all__ = [
     "CAUSES",
