@@ -78,7 +78,35 @@ def test_bench_renders_at_256_spp_fit_within_0_05_d_and_2_degrees(lens):
     print(f"{lens.marked_power}: truth {expected.format(4)} fit {LensPower.from_power_vector(*fit.power_vector).minus_cylinder().format(4)} "
           f"errors M {errors[0]:+.4f} J0 {errors[1]:+.4f} J45 {errors[2]:+.4f} D; axis {record['axis_deg']}; "
           f"PSNR {record['residual_psnr_db']:.1f} dB; {record['seconds']:.1f} s")
+    half = [0.5 * (record["interval_95"][k][1] - record["interval_95"][k][0]) for k in ("M_diopters", "J0_diopters", "J45_diopters")]
+    inside = [abs(e) <= h for e, h in zip(errors, half)]
+    print(f"  95 % half-widths M {half[0]:.4f} J0 {half[1]:.4f} J45 {half[2]:.4f} D (noise SE "
+          f"{np.round(record['uncertainty']['noise_standard_error'], 4)}); theory inside: {inside}")
     assert np.max(np.abs(errors)) < 0.05
     if abs(expected.cylinder_diopters) >= 0.75:
         delta = (record["axis_deg"] - expected.axis_deg + 90.0) % 180.0 - 90.0
         assert abs(delta) < 2.0
+
+
+@pytest.mark.slow
+def test_a_virtual_dng_of_a_render_fits_as_the_render(tmp_path):
+    """The render and its no-lens reference through the virtual camera, the DNG and rawpy
+    (``tests/fit/virtual_dng.py``): the two fits differ by less than the DNG fit's 95 % noise
+    half-width in each component, and by less than 0.02 D."""
+    from tests.fit.virtual_dng import through_virtual_dng
+    from vissim.fit.rx_fit import Z95
+
+    lens = TrialLens(1.0, -1.5, 30.0)
+    bench = DslrBench(lenses=(lens,), size_px=(134, 114), spp=256, seed=21)
+    image = _render(bench, "K", 1.0)
+    reference = _render(dataclasses.replace(bench, lenses=(), seed=1021), "K", 1.0)
+    kw = dict(arcmin_per_px=bench.arcmin_per_px, pupil_diameter_mm=bench.entrance_pupil_diameter_mm, bench=bench)
+    render_fit = fit_capture(image, reference, **kw)
+    dng_fit = fit_capture(through_virtual_dng(image, tmp_path / "lens.dng", seed=5),
+                          through_virtual_dng(reference, tmp_path / "no_lens.dng", seed=6), **kw)
+    assert render_fit.status == "ok" and dng_fit.status == "ok", (render_fit.reason, dng_fit.reason)
+    difference = np.subtract(dng_fit.power_vector, render_fit.power_vector)
+    half = Z95 * np.sqrt(np.diag(dng_fit.best.noise_covariance))
+    print(f"DNG - render fit {np.round(difference, 4)} D; DNG noise half-width {np.round(half, 4)} D; "
+          f"render fit - theory {np.round(np.subtract(render_fit.power_vector, _truth(bench)), 4)} D")
+    assert np.all(np.abs(difference) < half) and np.max(np.abs(difference)) < 0.02

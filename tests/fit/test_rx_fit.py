@@ -105,3 +105,34 @@ def test_the_wrong_reference_gives_a_flagged_failed_fit_not_an_answer():
     record = fit.as_json()
     assert fit.status == "failed" and "unexplained" in fit.reason
     assert record["sphere_diopters"] is None and record["power_vector"] is None
+
+
+def test_the_sandwich_covariance_matches_monte_carlo_for_uneven_correlated_noise():
+    """A linear model (two parameters on a 48 x 48 image) with noise 4x stronger on one half and
+    smoothed over 3 px.  Over 300 fits (Monte Carlo's own error ~4 %), the sandwich standard errors
+    (window twice the correlation length found, as fit_rx uses) are 0.75-1.1 of the spread of the
+    estimates (measured when written: 0.93 and 0.80; a Bartlett window under-weights the longest
+    lags), where the textbook sigma^2 (J^T J)^-1 gives under 0.6 of it (measured 0.39, 0.33)."""
+    from scipy.ndimage import uniform_filter
+
+    from vissim.fit.rx_fit import residual_correlation_lag_px, sandwich_covariance
+
+    rng = np.random.default_rng(7)
+    shape = (48, 48)
+    rows, cols = np.mgrid[:48, :48]
+    design = np.stack([np.sin(rows / 3.0) * (cols > 24), np.cos(cols / 4.0) * (rows > 10)], axis=-1).reshape(-1, 2)
+    scale = np.where(cols > 24, 4.0, 1.0).ravel()
+    estimates, sandwich_se, white_se = [], [], []
+    for _ in range(300):
+        noise = uniform_filter(rng.standard_normal(shape), 3, mode="wrap").ravel() * scale
+        beta, *_ = np.linalg.lstsq(design, noise, rcond=None)
+        residual = noise - design @ beta
+        estimates.append(beta)
+        lag = 2 * residual_correlation_lag_px(residual.reshape(shape))
+        sandwich_se.append(np.sqrt(np.diag(sandwich_covariance(design, residual, shape, lag))))
+        sigma2 = residual @ residual / (residual.size - 2)
+        white_se.append(np.sqrt(np.diag(sigma2 * np.linalg.inv(design.T @ design))))
+    spread = np.std(estimates, axis=0)
+    ratio = np.mean(sandwich_se, axis=0) / spread
+    assert np.all((ratio > 0.75) & (ratio < 1.1)), ratio
+    assert np.all(np.mean(white_se, axis=0) / spread < 0.6)
