@@ -21,7 +21,7 @@ from vissim.fit.rx_fit import RxFit, fit_rx
 from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_power
 
-__all__ = ["bench_from_provenance", "pupil_from_provenance", "fit_capture", "compare_with_theory"]
+__all__ = ["bench_from_provenance", "pupil_from_provenance", "fit_capture", "compare_with_theory", "fit_bench_item"]
 
 #: Bench fields read from a render's provenance (``inputs.bench`` of ``vissim render bench``).
 _BENCH_FIELDS = ("focal_length_mm", "f_number", "focus_distance_mm", "chart_distance_mm", "vertex_distance_mm",
@@ -121,3 +121,24 @@ def compare_with_theory(fit: RxFit, bench_with_lenses: DslrBench) -> dict:
     if math.isfinite(record["residual_psnr_db"]):
         out["residual_psnr_db"] = record["residual_psnr_db"]
     return out
+
+
+def fit_bench_item(image: np.ndarray, reference: np.ndarray, bench_with_lenses: DslrBench, *, arcmin_per_px: float,
+                   photograph: bool = False) -> dict:
+    """A campaign item's fit: ``image`` (the capture through the lenses) against ``reference`` (no lens).
+
+    Geometric optics for a render (Mitsuba renders no diffraction), wave optics for a
+    ``photograph``.  Returns ``{"comparison": compare_with_theory(...), "fit": the fit's record}``;
+    a fit that raises (bad input) is recorded as failed with its message, not raised: one
+    configuration's capture must not stop a campaign.
+    """
+    try:
+        fit = fit_capture(image, reference, arcmin_per_px=arcmin_per_px,
+                          pupil_diameter_mm=bench_with_lenses.entrance_pupil_diameter_mm, bench=bench_with_lenses,
+                          mode="wave" if photograph else "geometric")
+    except VissimInputError as exc:
+        return {"comparison": {"fit_status": "failed", "reason": str(exc)}, "fit": None}
+    record = fit.as_json()
+    comparison = compare_with_theory(fit, bench_with_lenses)
+    comparison["reason"] = record["reason"]
+    return {"comparison": comparison, "fit": record}

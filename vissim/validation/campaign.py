@@ -128,10 +128,11 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
             raise field_error(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
         kwargs["tile_px"] = tuple(whole_number(t, source, f"campaign.tile_px[{i}]", "pixels", lo=16, hi=MAX_TILE_PX)
                                   for i, t in enumerate(tile))
-    if "wave_truth" in raw:
-        if not isinstance(raw["wave_truth"], bool):
-            raise field_error(source, "campaign.wave_truth", f"must be true or false, got {raw['wave_truth']!r}")
-        kwargs["wave_truth"] = raw["wave_truth"]
+    for switch in ("wave_truth", "fit_rx"):
+        if switch in raw:
+            if not isinstance(raw[switch], bool):
+                raise field_error(source, f"campaign.{switch}", f"must be true or false, got {raw[switch]!r}")
+            kwargs[switch] = raw[switch]
     return CampaignSettings(**kwargs)
 
 

@@ -23,8 +23,9 @@ SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "n
 #: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
 INPUTS = ("render", "synthetic")
 #: Bumped when the meaning of an item's inputs or results changes, so old results are not reused
-#: (2: the geometric self-check's row, and synthetic inputs aligned on the fine grid).
-SCHEMA_VERSION = 2
+#: (2: the geometric self-check's row, and synthetic inputs aligned on the fine grid; 3: the
+#: prescription fit of each capture, ``fit_rx``).
+SCHEMA_VERSION = 3
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,7 @@ class CampaignSettings:
     data_range: float = 1.0  # linear reflectance units: what SSIM/PSNR call the peak
     wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth, and the geometric
     # self-check (the traced lenses' ray PSF against the render; validation.wave_bench)
+    fit_rx: bool = False  # fit the refraction each capture with lenses shows (vissim.fit), beside vergence theory
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from scipy import ndimage
 
 from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
+from vissim.fit.capture import fit_bench_item
 from vissim.imageio import write_image
 from vissim.provenance import json_safe, make_provenance
 from vissim.validation.campaign_types import CampaignSettings, Configuration
@@ -247,6 +248,9 @@ def compute_item(
         # The geometric self-check (module wave_bench): the trace's ray optics against the render.
         compare_with_render(TRACED_RAYS, "synthetic", "geometric", traced_rays_setup(bench),
                             lambda image: traced_ray_image(bench, image, SYNTHETIC_OVERSAMPLE))
+    fit = None
+    if settings.fit_rx and configuration.lenses:  # the refraction the capture shows, beside vergence theory
+        fit = fit_bench_item(truth_a, no_lens, bench, arcmin_per_px=settings.arcmin_per_px, photograph=captured)
     result = {
         "key": key,
         "configuration": configuration.as_json(),
@@ -259,6 +263,7 @@ def compute_item(
         "noise_floor": floors,
         "comparisons": comparisons,
         "wave_bench": budget,
+        "fit_rx": fit,
         "images": images,
         "source": source or {},
         "seconds": time.perf_counter() - started,

@@ -25,6 +25,7 @@ from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  #
 from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
 from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
+from vissim.validation.fit_report import fit_table  # noqa: E402
 from vissim.validation.wave_bench_report import is_wave_bench_row, self_check_table, wave_bench_tables  # noqa: E402
 
 __all__ = [
@@ -181,6 +182,9 @@ def markdown_tables(results: list[dict]) -> str:
     wave_bench = wave_bench_tables(results, all_rows)
     if wave_bench:
         out.append(wave_bench)
+    fits = fit_table(results)
+    if fits:
+        out.append(fits)
     return "\n".join(out)
 
 
