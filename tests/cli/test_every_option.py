@@ -32,6 +32,8 @@ BASES = {
     ("atv", "analyze"): ["atv", "analyze", str(ROOT / "validation/atv"), "-o", "{out}/atv"],
     ("atv", "run"): ["atv", "run", "--observer", "simulated", "-o", "{out}/run.json"],
     ("atv", "simulate"): ["atv", "simulate", "--pupil-mm", "4", "--rx", "+1", "--lenses", "-1,0,1,2,3", "-o", "{out}/sim"],
+    ("fit-rx",): ["fit-rx", "{fit_image}", "--reference", "{fit_reference}", "--pupil-mm", "3.6", "--mode", "geometric",
+                  "--magnification", "none", "--json", "-o", "{out}/fit.json"],
 }
 
 
@@ -49,12 +51,21 @@ def test_every_option_at_bad_values(path, tmp_path, capsys):
     chart, depth = tmp_path / "chart.exr", tmp_path / "depth.npy"
     write_image(chart, np.full((48, 64), 0.5, np.float32), provenance=make_provenance(command="test", arcmin_per_px=1.0))
     np.save(depth, np.full((48, 64), 2.0))
+    fit_image, fit_reference = tmp_path / "fit_image.exr", tmp_path / "fit_reference.exr"
+    if path == ("fit-rx",):  # a +1.50 DS capture of a letter and its sharp reference (tests/fit/synthetic.py)
+        from tests.fit.synthetic import capture
+        from vissim.optics.trial_lens import TrialLens
+
+        blurred, sharp, _ = capture(TrialLens(1.5))
+        for file, pixels in ((fit_image, blurred), (fit_reference, sharp)):
+            write_image(file, pixels.astype(np.float32), provenance=make_provenance(command="test", arcmin_per_px=1.0))
     out = tmp_path / "out"
 
     def invoke(argv):
         shutil.rmtree(out, ignore_errors=True)
         out.mkdir()
-        argv = [a.format(out=out, chart=chart, depth=depth) for a in argv]
+        argv = [a.format(out=out, chart=chart, depth=depth, fit_image=fit_image, fit_reference=fit_reference)
+                for a in argv]
         code = main(argv)
         _, err = capsys.readouterr()
         lines = [line for line in err.splitlines() if line.strip() and ": WARNING: " not in line]
