@@ -80,3 +80,21 @@ def test_bad_input_gets_one_error_line_and_exit_2(tmp_path, plus_two, capsys, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and err[0].startswith("vissim: error: ") and message in err[0], err
     assert not (tmp_path / "fit.json").exists()
+
+
+def test_a_render_whose_lenses_theory_contradicts_is_reported_as_a_disagreement(tmp_path, plus_two, capsys):
+    """The image records a bench with a +2.25 D lens (as ``vissim render bench`` does) but shows +2 D:
+    the fit (about +1.99 D, interval +-0.01 D) is printed beside theory (+2.24 D) and flagged."""
+    from vissim.bench.dslr import DslrBench
+
+    image, reference, _ = plus_two
+    said = make_provenance(command="test", bench=DslrBench(lenses=(TrialLens(2.25),), size_px=(96, 96)))
+    path = tmp_path / "i.exr"
+    write_image(path, np.asarray(image, np.float32), provenance=said, arcmin_per_px=1.0)
+    code = main(["fit-rx", str(path), "--reference", _write(tmp_path / "r.exr", reference), "--mode", "geometric",
+                 "-o", str(tmp_path / "fit.json")])
+    out = capsys.readouterr().out
+    assert code == 0 and "vergence theory for the rendered lenses (+2.00 DS" not in out
+    assert "DISAGREES: vergence theory lies outside the fit's 95 % interval in M" in out
+    theory = json.loads((tmp_path / "fit.json").read_text())["fit"]["vergence_theory"]
+    assert theory["agrees"] is False and theory["errors_diopters"]["M_diopters"] < -0.2

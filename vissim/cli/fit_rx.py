@@ -88,6 +88,7 @@ def _bench(args, image):
 
 def run(args: argparse.Namespace) -> int:
     from vissim.checks import pupil_diameter_mm as check_pupil
+    from vissim.fit.capture import compare_with_theory, rendered_bench
     from vissim.fit.rx_fit import fit_rx
     from vissim.imageio import read_image
     from vissim.provenance import make_provenance, to_json
@@ -117,6 +118,9 @@ def run(args: argparse.Namespace) -> int:
                  max_power_diopters=args.max_power_diopters,
                  **({} if args.model_error_diopters is None else {"model_error_diopters": args.model_error_diopters}))
     record = fit.as_json()
+    rendered_with = rendered_bench(image.provenance)
+    if rendered_with is not None:  # a bench render: the fit beside vergence theory for its lenses
+        record["vergence_theory"] = compare_with_theory(fit, rendered_with)
     record["mode_chosen"] = "given" if args.mode else ("geometric: IMAGE is a Mitsuba render" if rendered else "wave")
     if args.output is not None:
         from vissim.atomic import write_text_atomic
@@ -153,6 +157,14 @@ def _print_text(record: dict, args) -> None:
         for solution in record["solutions"]:
             print(f"  either {solution['sphere_diopters']:+.3f} {solution['cylinder_diopters']:+.3f} x "
                   f"{solution['axis_deg'] if solution['axis_deg'] is not None else '?'}")
+    theory = record.get("vergence_theory")
+    if theory is not None:
+        print(f"vergence theory for the rendered lenses ({', '.join(theory['trial_lenses'])}): "
+              f"{theory['vergence_theory']}; Table 4.2: {theory['table_4_2']}")
+        if theory["agrees"] is False:
+            print(f"DISAGREES: {theory['disagreement']}")
+        elif theory["agrees"]:
+            print("agrees: theory lies inside the 95 % interval in M, J0 and J45")
     print(f"residual PSNR {record['residual_psnr_db']:.1f} dB; shift ({record['nuisances']['shift_rows_px']:+.2f}, "
           f"{record['nuisances']['shift_cols_px']:+.2f}) px; {record['evaluations']} model evaluations, "
           f"{record['seconds']:.1f} s")

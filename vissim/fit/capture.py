@@ -21,7 +21,8 @@ from vissim.fit.rx_fit import RxFit, fit_rx
 from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_power
 
-__all__ = ["bench_from_provenance", "pupil_from_provenance", "fit_capture", "compare_with_theory", "fit_bench_item"]
+__all__ = ["bench_from_provenance", "rendered_bench", "pupil_from_provenance", "fit_capture", "compare_with_theory",
+           "fit_bench_item"]
 
 #: Bench fields read from a render's provenance (``inputs.bench`` of ``vissim render bench``).
 _BENCH_FIELDS = ("focal_length_mm", "f_number", "focus_distance_mm", "chart_distance_mm", "vertex_distance_mm",
@@ -56,6 +57,25 @@ def bench_from_provenance(provenance: Any) -> DslrBench | None:
         return DslrBench(**kwargs)
     except (TypeError, VissimInputError) as exc:
         raise VissimInputError(f"the image's provenance records a bench vissim cannot rebuild: {exc}") from None
+
+
+def rendered_bench(provenance: Any) -> DslrBench | None:
+    """The bench a render records *with* its trial lenses (to compare a fit with theory), or None.
+
+    Only ``vissim render bench``'s record (``inputs.bench.lenses``) has them; None when there are
+    none, or they cannot be rebuilt.  The fit itself never sees them (:func:`bench_from_provenance`).
+    """
+    bench = bench_from_provenance(provenance)
+    table = _bench_table(provenance)
+    lenses = table.get("lenses") if table else None
+    if bench is None or not isinstance(lenses, list) or not lenses:
+        return None
+    keys = ("sphere_diopters", "cylinder_diopters", "axis_deg")
+    try:
+        thin = tuple(TrialLens(*(float(lens[k]) for k in keys)) for lens in lenses)
+        return dataclasses.replace(bench, lenses=thin)
+    except (TypeError, KeyError, ValueError, VissimInputError):
+        return None
 
 
 def pupil_from_provenance(provenance: Any) -> float | None:
