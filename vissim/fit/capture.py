@@ -132,7 +132,9 @@ def compare_with_theory(fit: RxFit, bench_with_lenses: DslrBench) -> dict:
               record["power_vector"]["J45_diopters"])
     keys = ("M_diopters", "J0_diopters", "J45_diopters")
     inside = [interval[k][0] <= t <= interval[k][1] for k, t in zip(keys, theory.power_vector())]
-    out["fitted"] = LensPower.from_power_vector(*fitted).minus_cylinder().format(4)
+    fitted_rx = LensPower.from_power_vector(*fitted).minus_cylinder()
+    out["fitted"] = (fitted_rx.format(4) if record["axis_determined"] else
+                     f"{fitted_rx.sphere_diopters:+.4f} {fitted_rx.cylinder_diopters:+.4f} (axis undetermined)")
     out["errors_diopters"] = {k: f - t for k, f, t in zip(keys, fitted, theory.power_vector())}
     out["agrees"] = all(inside)
     if not all(inside):
