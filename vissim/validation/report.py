@@ -24,8 +24,8 @@ import numpy as np  # noqa: E402
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
-from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
 from vissim.validation.fit_report import fit_table  # noqa: E402
+from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
 from vissim.validation.wave_bench_report import is_wave_bench_row, self_check_table, wave_bench_tables  # noqa: E402
 
 __all__ = [
