@@ -25,7 +25,8 @@ the pixel residual of :class:`vissim.fit.forward.ForwardModel`.  Multi-started:
 **Sign.**  Blur is even in each principal power; the signs are in the magnification (model
 ``bench``: the trial lens magnifies each meridian by its own power).  The candidates other than
 the best (those that differ from it by more than :data:`SAME_SOLUTION_DIOPTERS`: a principal
-power near zero has no sign to decide) are kept with ``delta_chi2 = (SSR - SSR_best) / sigma^2``;
+power near zero has no sign to decide) are kept with ``delta_chi2 = (SSR - SSR_best) / (sigma^2 kappa)``,
+``kappa >= 1`` the largest ratio of the measured (sandwich) to the white variance of a power component;
 the signs are *determined* when every one of them is worse by at least
 :data:`SIGN_MIN_DELTA_CHI2`.  Otherwise all plausible solutions are reported and the top-level
 sphere, cylinder, axis and power vector are ``None``.
@@ -536,13 +537,17 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     results.sort(key=lambda r: r.cost)
     best_result = results[0]
     best, cov_theta, sigma2 = _solution(problem, best_result, img.shape, model_error_diopters)
+    # The residual variance counts white noise; the measured spread (sandwich) is wider on renders, so
+    # chi-square differences are deflated by the largest ratio of the two (never by less than 1).
+    white, measured = (np.square(best.uncertainty[k]) for k in ("white_standard_error", "noise_standard_error"))
+    inflation = float(max(1.0, np.max(np.divide(measured, white, out=np.ones(3), where=white > 0))))
     alternatives: list[tuple[Solution, float]] = []
     for result in results[1:]:
         candidate = _solution(problem, result, img.shape, model_error_diopters)[0]
         distinct = np.max(np.abs(np.subtract(candidate.power_vector, best.power_vector))) > SAME_SOLUTION_DIOPTERS
         if distinct and all(np.max(np.abs(np.subtract(candidate.power_vector, a.power_vector))) > SAME_SOLUTION_DIOPTERS
                             for a, _ in alternatives):
-            alternatives.append((candidate, (candidate.ssr - best.ssr) / sigma2))
+            alternatives.append((candidate, (candidate.ssr - best.ssr) / (sigma2 * inflation)))
     delta_chi2 = min((d for _, d in alternatives), default=None)
 
     prediction = problem.prediction(best_result.x, forward)
@@ -610,7 +615,7 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
                 "axis_min_chi2": AXIS_MIN_CHI2, "max_unexplained_fraction": MAX_UNEXPLAINED_FRACTION,
                 "min_resolved_blur_px": MIN_RESOLVED_BLUR_PX, "resolution_power_diopters": resolution_power,
                 "axis_min_cylinder_diopters": AXIS_MIN_CYLINDER_DIOPTERS, "same_solution_diopters": SAME_SOLUTION_DIOPTERS,
-                "model_error_diopters": model_error_diopters}
+                "model_error_diopters": model_error_diopters, "sign_chi2_deflation": inflation}
     seconds = time.perf_counter() - started
     log.info("fit-rx: %s, effective %s, PSNR %.1f dB, %d evaluations, %.1f s", status,
              best.spherocylinder().format(3), psnr, problem.evaluations, seconds)
