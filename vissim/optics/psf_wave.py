@@ -31,7 +31,7 @@ import scipy.fft
 
 from vissim.errors import VissimInputError
 from vissim.optics.psf_field import airy_tail_radius_lambda_over_d, rim_widening
-from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
+from vissim.optics.pupil_grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
 from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
 
 __all__ = ["PHASE_STEP_WAVES", "MIN_PUPIL_CELLS", "PsfSampling", "plan_wave_psf", "wave_psf", "to_output_pixels"]
@@ -187,8 +187,8 @@ def _fold_rows(source: np.ndarray, even: np.ndarray, odd: np.ndarray) -> None:
     even[0] *= 0.5
 
 
-def _quadrant_intensities(pupil: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
-    """|A G A^T|^2 for ``A = cos - i sin`` on the four quadrants of non-negative |theta|.
+def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+    """|A G A^T|^2 for ``A = cos - i sin`` on the four quadrants of non-negative |theta|; ``G`` as (real, imag).
 
     The cell grid is symmetric about its centre, so each axis splits into even and odd parts
     that transform by real cosines and sines over half the cells, and the output's four
@@ -196,11 +196,11 @@ def _quadrant_intensities(pupil: np.ndarray, cos: np.ndarray, sin: np.ndarray) -
     Returns the quadrants (+,+), (-,-), (+,-), (-,+) (signs of theta_row, theta_col), each
     indexed ``[|theta_row|, |theta_col|]``, in a scratch array valid until the next call.
     """
-    n, h, m = pupil.shape[0], pupil.shape[0] // 2, cos.shape[0]
+    n, h, m = pupil[0].shape[0], pupil[0].shape[0] // 2, cos.shape[0]
     work = functools.partial(_WORKSPACE.get, dtype=cos.dtype)
     # Columns: fold along them; rows of the products are (real | imag) x pupil rows.
     even, odd = work("even_columns", (2 * n, h + 1)), work("odd_columns", (2 * n, h + 1))
-    for i, part in enumerate((pupil.real, pupil.imag)):
+    for i, part in enumerate(pupil):  # real, imaginary
         _fold_rows(part.T, even[i * n : (i + 1) * n].T, odd[i * n : (i + 1) * n].T)
     te = np.matmul(even, cos.T, out=work("te", (2 * n, m)))  # [(real | imag) x row, theta_c]
     to = np.matmul(odd, sin.T, out=work("to", (2 * n, m)))
@@ -250,13 +250,12 @@ def _add_quadrants(total: np.ndarray, quadrants: np.ndarray, weight: float) -> N
 
 def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
     """Sum over wavelengths of weight x unit-energy intensity on the internal grid (origin at [M/2, M/2])."""
-    complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     plan = plans[0]
     grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
     m = plan.internal_size
     total = np.zeros((m, m), dtype=dtype)
     for front, weight, each in zip(fronts, weights, plans):
-        pupil = generalised_pupil(grid, opd_on_points_um(grid, front), each.wavelength_nm, complex_dtype)
+        pupil = generalised_pupil_parts(grid, opd_on_points_um(grid, front), each.wavelength_nm, dtype)
         cos, sin = _folded_matrices(m, plan.internal_arcmin_per_px, plan.pupil_step_mm, grid.half,
                                     each.wavelength_nm, dtype)
         scale = (plan.pupil_step_mm * float(arcmin_to_rad(plan.internal_arcmin_per_px))

@@ -30,7 +30,7 @@ from numpy.polynomial.legendre import leggauss
 
 from vissim.optics.zernike import zernike_nm
 
-__all__ = ["PupilGrid", "pupil_grid", "generalised_pupil"]
+__all__ = ["PupilGrid", "pupil_grid", "generalised_pupil", "generalised_pupil_parts"]
 
 #: Gauss-Legendre points per axis in each piece of a rim cell.
 RIM_POINTS = 4
@@ -49,9 +49,12 @@ class PupilGrid:
     diameter_mm: float
     half: int
     inside: np.ndarray  # (n_inside,) flat cell indices
+    inside_mask: np.ndarray  # (size, size) 1.0 on inside cells, 0.0 elsewhere
     centre_x_mm: np.ndarray  # (size, size) OSA coordinates of every cell's centre
     centre_y_mm: np.ndarray
     rim_cell: np.ndarray  # (n_rim_points,) flat cell index of each rim point
+    rim_cells: np.ndarray  # (n_rim_cells,) the distinct rim cells, flat indices
+    rim_slot: np.ndarray  # (n_rim_points,) each rim point's position in rim_cells
     rim_x_mm: np.ndarray
     rim_y_mm: np.ndarray
     rim_weights: np.ndarray
@@ -114,9 +117,13 @@ def pupil_grid(step_mm: float, diameter_mm: float) -> PupilGrid:
     ru, rv, rw = _rim_points(u[rim], v[rim], step_mm, radius)
     keep = rw > 0  # zero-length pieces and columns outside the disc carry nothing
     cell = np.broadcast_to(rim[:, None], rw.shape)[keep]
+    cells, slot = np.unique(cell, return_inverse=True)
     size = 2 * half + 1
+    mask = np.zeros(size * size)
+    mask[inside] = 1.0
     # image-oriented (u, v) -> OSA (x, y) = (-u, -v)
-    arrays = (inside, -u.reshape(size, size), -v.reshape(size, size), cell, -ru[keep], -rv[keep], rw[keep])
+    arrays = (inside, mask.reshape(size, size), -u.reshape(size, size), -v.reshape(size, size), cell, cells,
+              slot.ravel(), -ru[keep], -rv[keep], rw[keep])
     for array in arrays:
         array.setflags(write=False)
     return PupilGrid(step_mm, diameter_mm, half, *arrays)
@@ -146,28 +153,43 @@ def opd_on_points_um(grid: PupilGrid, wavefront) -> np.ndarray:
 
 
 def generalised_pupil(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: float, dtype=np.complex128) -> np.ndarray:
-    """Cell averages of ``P exp(i k W)`` on the ``size x size`` grid (a cell's area = 1).
+    """Cell averages of ``P exp(i k W)`` on the ``size x size`` grid (a cell's area = 1), complex."""
+    real, imag = generalised_pupil_parts(grid, opd_um, wavelength_nm, np.float32 if dtype == np.complex64 else np.float64)
+    values = np.empty(real.shape, dtype)
+    values.real, values.imag = real, imag
+    return values
+
+
+def _sinc_of_half(step: np.ndarray) -> np.ndarray:
+    """sin(x) / x at x = step / 2 (the average of exp(i phi) over a cell with phase change ``step``)."""
+    half = 0.5 * step
+    return np.divide(np.sin(half), half, out=np.ones_like(half), where=half != 0)
+
+
+def generalised_pupil_parts(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: float, dtype=np.float64):
+    """The cell averages' real and imaginary parts, each ``size x size`` of ``dtype`` (float32 or float64).
 
     Inside cells: ``exp(i phi) sinc(phi_x h / 2) sinc(phi_y h / 2) + i h^2 lap(phi) / 24`` at the
     centre (h the step; the linear phase averaged exactly, its curvature to leading order),
     derivatives by central differences of the centres' phase.  Rim cells: their quadrature.
     """
-    real = np.float32 if dtype == np.complex64 else np.float64
-    phase = (opd_um * (2.0 * math.pi / (wavelength_nm * 1e-3))).astype(real, copy=False)
+    phase = (opd_um * (2.0 * math.pi / (wavelength_nm * 1e-3))).astype(dtype, copy=False)
     n = grid.size
     centre = phase[: n * n].reshape(n, n)
-    d_row, d_col = np.gradient(centre)  # phase change per cell along rows and columns
-    padded = np.pad(centre, 1, mode="edge")  # the 5-point Laplacian: nearest neighbours only
-    laplacian = padded[:-2, 1:-1] + padded[2:, 1:-1] + padded[1:-1, :-2] + padded[1:-1, 2:] - 4 * centre
-    inside = grid.inside
-    flat = centre.ravel()[inside]
-    linear = np.sinc(d_row.ravel()[inside] / (2 * math.pi)) * np.sinc(d_col.ravel()[inside] / (2 * math.pi))
-    curvature = laplacian.ravel()[inside] / 24.0
-    cos, sin = np.cos(flat), np.sin(flat)
-    values = np.zeros(n * n, dtype=dtype)
-    values.real[inside] = cos * linear - sin * curvature
-    values.imag[inside] = sin * linear + cos * curvature
+    # Neighbours by edge padding: inside cells never touch the grid's border (it lies beyond the disc).
+    padded = np.pad(centre, 1, mode="edge")
+    up, down, left, right = padded[:-2, 1:-1], padded[2:, 1:-1], padded[1:-1, :-2], padded[1:-1, 2:]
+    linear = _sinc_of_half(0.5 * (down - up))
+    linear *= _sinc_of_half(0.5 * (right - left))
+    linear *= grid.inside_mask
+    curvature = (up + down + left + right - 4 * centre) * (grid.inside_mask / 24.0)
+    cos, sin = np.cos(centre), np.sin(centre)
+    real, imag = cos * linear, sin * linear
+    real -= sin * curvature
+    imag += cos * curvature
     rim = phase[n * n:]
-    values.real += np.bincount(grid.rim_cell, np.cos(rim) * grid.rim_weights, n * n)
-    values.imag += np.bincount(grid.rim_cell, np.sin(rim) * grid.rim_weights, n * n)
-    return values.reshape(n, n)
+    weights = grid.rim_weights.astype(dtype, copy=False)
+    cells = grid.rim_cells
+    real.ravel()[cells] += np.bincount(grid.rim_slot, np.cos(rim) * weights, cells.size).astype(dtype, copy=False)
+    imag.ravel()[cells] += np.bincount(grid.rim_slot, np.sin(rim) * weights, cells.size).astype(dtype, copy=False)
+    return real, imag
