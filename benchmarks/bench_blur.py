@@ -48,7 +48,7 @@ def main() -> None:
     cold = best_of(lambda: blur_image(image, dataclasses.replace(psf), arcmin_per_px=1.0))
     blur_image(image, psf, arcmin_per_px=1.0)
     warm = best_of(lambda: blur_image(image, psf, arcmin_per_px=1.0))
-    tile = _tile_px(shape, psf.data.shape[0])
+    tile = _tile_px((rows, cols), psf.data.shape[0])
     path = f"overlap-save in {tile} px squares" if tile else "one FFT of the padded size"
     print(f"image {cols}x{rows} float32, PSF {psf.data.shape[0]} px, padded {shape[1]}x{shape[0]}; blur by {path}")
     print(f"rfft2+irfft2 pair:          {1e3 * pair:8.1f} ms")

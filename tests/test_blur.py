@@ -161,7 +161,7 @@ def test_tiled_blur_equals_direct_convolution(rows, cols, half_kernel, padding, 
     with pytest.MonkeyPatch.context() as patch:  # force tiles small enough for these images
         patch.setattr(blur, "TILE_SIZES_PX", (32, 48, 64, 96, 128))
         patch.setattr(blur, "TILE_COST_FACTOR", 0.0)
-        tile = blur._tile_px((rows + 2 * size, cols + 2 * size), size)
+        tile = blur._tile_px((rows, cols), size)
         out = blur_image(image, psf, arcmin_per_px=1.0, padding=padding, dtype=np.float64)
     background = np.mean(np.concatenate([image[0], image[-1], image[1:-1, 0], image[1:-1, -1]]))
     direct = ndimage.convolve(image, psf.data, mode=NDIMAGE_MODES[padding], cval=background)
@@ -173,6 +173,6 @@ def test_tiled_blur_equals_direct_convolution(rows, cols, half_kernel, padding, 
 def test_tiles_only_for_large_images_and_small_kernels():
     from vissim.optics.blur import _tile_px
 
-    assert _tile_px((2250, 3888), 45) is not None  # 4K, a 45 px PSF
+    assert _tile_px((2160, 3840), 45) is not None  # 4K, a 45 px PSF
     assert _tile_px((150, 150), 45) is None  # a campaign tile: one FFT
-    assert _tile_px((2250, 3888), 301) is None  # a kernel as large as the tiles
+    assert _tile_px((2160, 3840), 301) is None  # a kernel as large as the tiles

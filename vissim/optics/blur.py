@@ -128,8 +128,9 @@ def _check_sampling(psf: PSF, arcmin_per_px: float) -> None:
         raise VissimInputError(f"PSF must be square, got {psf.data.shape}")
 
 
-#: Tile sizes (px) tried for overlap-save convolution of large images (larger ones measured slower: cache).
-TILE_SIZES_PX = (256, 384, 512)
+#: Tile sizes (px) tried for overlap-save convolution of large images: the even 5-smooth sizes (fast
+#: FFTs) from 256 to 512 (larger squares measured slower than one full-frame FFT: cache).
+TILE_SIZES_PX = tuple(n for n in range(256, 513, 2) if scipy.fft.next_fast_len(n, real=True) == n)
 #: A tiled blur is chosen when its estimated cost is below this fraction of the full FFT's.
 #: The estimate counts FFT operations (n log n); measured on 2 cores, the small tiles' FFTs run
 #: at about 1.6x the full-frame FFT's rate per operation (cache), so their count is scaled by this.
@@ -141,9 +142,15 @@ def _fft_cost(shape) -> float:
     return n * math.log2(n)
 
 
+def _padded_shape(shape: tuple[int, int], kernel_px: int) -> tuple[int, int]:
+    """The full-frame FFT's grid: the image plus the kernel's reach on each side, at a fast size."""
+    width = kernel_px // 2 + 1
+    return tuple(scipy.fft.next_fast_len(n + 2 * width, real=True) for n in shape)
+
+
 def _tile_px(shape: tuple[int, int], kernel_px: int) -> int | None:
-    """The overlap-save tile size that beats one FFT of the padded ``shape``, or None."""
-    best, best_cost = None, _fft_cost(shape)
+    """The overlap-save tile size for an image of ``shape`` that beats one full-frame FFT, or None."""
+    best, best_cost = None, _fft_cost(_padded_shape(shape, kernel_px))
     for tile in TILE_SIZES_PX:
         valid = tile - kernel_px + 1
         if valid < 3 * kernel_px or tile >= min(shape):
@@ -197,8 +204,8 @@ def _blur_channel(channel, psf, padding, background, dtype):
         padded, offset = channel, 0
     else:
         offset = _padding_width(psf)
-        shape = (scipy.fft.next_fast_len(rows + 2 * offset, real=True), scipy.fft.next_fast_len(cols + 2 * offset, real=True))
-        tile = _tile_px(shape, psf.data.shape[0])
+        shape = _padded_shape((rows, cols), psf.data.shape[0])
+        tile = _tile_px((rows, cols), psf.data.shape[0])
         if tile is not None:
             log.debug("blur by overlap-save in %d px tiles", tile)
             return _blur_tiled(channel, psf, padding, background, dtype, tile)
