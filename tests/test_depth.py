@@ -345,3 +345,14 @@ def test_blur_depth_command_refuses_conflicting_focus_options(tmp_path, capsys):
                  "--pupil-mm", "3", "--arcmin-per-px", "1", "--accommodation-diopters", "1", "--age", "30"])
     _, err = capsys.readouterr()
     assert code == 2 and err.startswith("vissim: error:") and err.count("\n") == 1
+
+
+def test_crop_px_cuts_the_margin_from_the_result():
+    image = texture((40, 50))
+    depth = np.full((40, 50), 2.0)
+    depth[:, 25:] = 0.5
+    kwargs = dict(eye_prescription=Prescription(-1.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode="geometric")
+    whole = blur_depth(image, depth, **kwargs).image
+    np.testing.assert_array_equal(blur_depth(image, depth, crop_px=6, **kwargs).image, whole[6:-6, 6:-6])
+    with pytest.raises(VissimInputError, match="crop_px"):
+        blur_depth(image, depth, crop_px=20, **kwargs)

@@ -245,6 +245,7 @@ def blur_depth(
     max_layers: int | None = DEFAULT_MAX_LAYERS,
     occlusion_threshold_px: float = 1.0,
     padding: str = "edge",
+    crop_px: int = 0,
 ) -> DepthBlurResult:
     """Blur a linear-light image whose pixels lie at different depths, with occlusion.
 
@@ -270,6 +271,9 @@ def blur_depth(
         this many pixels; closer in depth they are one surface and add.
     padding : {"edge", "reflect"}
         Outside the image, colour, depth and coverage continue the border.
+    crop_px : int
+        Pixels cut from every side of the result: the input covers a margin beyond the frame
+        wanted (as ``render depth`` writes it), so the frame sees what lies beyond it.
     """
     rx = as_prescription(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
@@ -291,6 +295,10 @@ def blur_depth(
     proximity = depth_to_proximity_diopters(depth_m)
     if proximity.shape != pixels.shape[:2]:
         raise VissimInputError(f"depth map {proximity.shape} does not match the image {pixels.shape[:2]} (rows, cols)")
+    if int(crop_px) != crop_px or crop_px < 0 or 2 * crop_px >= min(proximity.shape):
+        raise VissimInputError(f"crop_px must be whole pixels >= 0 leaving an image; got {crop_px!r} px for "
+                               f"{proximity.shape[1]} x {proximity.shape[0]} px")
+    crop = int(crop_px)
     colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
     rows, cols = proximity.shape
 
@@ -347,6 +355,7 @@ def blur_depth(
     if low.any():
         log.info("depth blur: %d pixels have total blurred coverage below 0.5 (min %.3g)", int(low.sum()), float(denominator.min()))
     out = numerator / np.maximum(denominator, 1e-6)
+    out = out[:, crop : rows - crop, crop : cols - crop]
     result = out[0] if pixels.ndim == 2 else np.moveaxis(out, 0, -1)
     return DepthBlurResult(
         np.ascontiguousarray(result, dtype=np.float32), tuple(layers), plan.n_layers, plan.max_spacing_diopters,
