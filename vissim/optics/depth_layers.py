@@ -183,8 +183,9 @@ def _check_layer(layer: SceneLayer, shape, index: int):
 def _slices(index: int, colour, coverage, proximity, spacing_diopters: float, anchor_diopters: float) -> list[_Slice]:
     """A layer cut into proximity slices by the tent matte (one slice for a constant proximity).
 
-    As :func:`vissim.optics.depth.plan_layers` plans them: even steps, one slice exactly at the in-focus
-    proximity ``anchor_diopters`` when the layer spans it.
+    As :func:`vissim.optics.depth.blur_depth` plans its layers (:func:`vissim.optics.depth.plan_layers`,
+    symmetric): exact ends, and steps of the largest spacing from the in-focus proximity
+    ``anchor_diopters`` when the layer spans it.
     """
     inside = coverage > 0
     if proximity.ndim == 0 or not inside.any():
@@ -197,7 +198,8 @@ def _slices(index: int, colour, coverage, proximity, spacing_diopters: float, an
     # The plane continued where the layer has no coverage: each pixel takes its nearest covered pixel's proximity.
     nearest = ndimage.distance_transform_edt(~inside, return_distances=False, return_indices=True)
     continued = np.clip(proximity[tuple(nearest)], low, high)
-    plan = np.array(plan_layers(low, high, spacing_diopters, None, anchor_diopters=anchor_diopters).proximities_diopters)
+    plan = np.array(plan_layers(low, high, spacing_diopters, None, anchor_diopters=anchor_diopters,
+                                symmetric=True).proximities_diopters)
     lower, frac = _matte_indices(continued, plan)
     out = []
     for k in range(plan.size):
