@@ -74,7 +74,7 @@ def best(function, repeats: int) -> float:
     return min(times)
 
 
-def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int) -> tuple[float, float]:
+def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px=None) -> tuple[float, float]:
     from vissim.imageio import write_data_map, write_image
 
     with tempfile.TemporaryDirectory() as folder:
@@ -83,7 +83,8 @@ def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int) -> tuple[float
         write_data_map(depth_file, depth.astype(np.float32), arcmin_per_px=STEP)
         eye = ["--rx", EYE.format(), "--pupil-mm", f"{PUPIL_MM:g}", "--overwrite"]
         commands = {"blur": ["blur", str(rgb), "-o", str(out), *eye],
-                    "blur-depth": ["blur-depth", str(rgb), str(depth_file), "-o", str(out), *eye]}
+                    "blur-depth": ["blur-depth", str(rgb), str(depth_file), "-o", str(out), *eye]
+                    + ([] if coarse_blur_px is None else ["--coarse-blur-px", f"{coarse_blur_px:g}"])}
         times = {name: [] for name in commands}
         env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
         for _ in range(repeats):  # interleaved, so a busy machine slows both alike
@@ -98,9 +99,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="best of N (default 3)")
     parser.add_argument("--cli", action="store_true", help="also time the two commands (fresh processes)")
+    parser.add_argument("--coarse-blur-px", type=float, help="blur_depth's coarse_blur_px (default: off)")
     args = parser.parse_args()
     image, depth = scene()
-    kwargs = dict(eye_prescription=EYE, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP)
+    kwargs = dict(eye_prescription=EYE, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+                  coarse_blur_px=args.coarse_blur_px)
 
     def cold():
         _cached_psf.cache_clear()
@@ -123,7 +126,7 @@ def main() -> None:
     cold_s, warm_s, single_s, floor_s = (min(timings[k]) for k in ("cold", "warm", "single", "floor"))
     n = len(result.layers)
     print(f"image {COLS}x{ROWS} RGB float32, depth 0.33-8 m, eye {EYE.format()}, {PUPIL_MM:g} mm pupil, "
-          f"{STEP:g} arcmin/px, 550 nm wave optics")
+          f"{STEP:g} arcmin/px, 550 nm wave optics, coarse grid from {args.coarse_blur_px} px of blur")
     print(f"layers: {result.n_layers} planned (<= {result.max_layer_spacing_diopters:.4f} D apart), {n} non-empty; "
           f"PSFs {min(la.psf_size_px for la in result.layers)}-{widest.psf_size_px} px")
     print(f"blur_depth, PSFs computed (cold):  {cold_s:6.2f} s  ({1e3 * cold_s / n:5.1f} ms/layer)")
@@ -134,7 +137,7 @@ def main() -> None:
     print(f"ratios: blur_depth / blur_image {cold_s / single_s:5.1f} (cold), {warm_s / single_s:5.1f} (warm); "
           f"blur_depth (warm) / naive floor {warm_s / (n * floor_s):5.2f}")
     if args.cli:
-        depth_cli, blur_cli = cli_times(image, depth, args.repeats)
+        depth_cli, blur_cli = cli_times(image, depth, args.repeats, args.coarse_blur_px)
         print(f"command line: vissim blur-depth {depth_cli:5.2f} s, vissim blur {blur_cli:5.2f} s, "
               f"ratio {depth_cli / blur_cli:4.1f}")
 

@@ -53,6 +53,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--layer-spacing-fraction", type=float, default=0.5, metavar="F", help="max blur step between layers, pixels")
     parser.add_argument("--max-layers", type=Number(int, positive=True), default=DEFAULT_MAX_LAYERS, metavar="N",
                         help=f"refuse scenes that need more depth layers (default {DEFAULT_MAX_LAYERS})")
+    parser.add_argument("--coarse-blur-px", type=float, metavar="B",
+                        help="blur layers whose blur is at least B px wide on a grid twice as coarse (faster; at "
+                             "B = 14 within 44 dB of the fine grid on white noise; default: off)")
     parser.add_argument("--crop-px", type=int, metavar="M",
                         help="crop M px from every side of the output (default: the margin_px the input's "
                              "provenance records, as render depth writes it; else 0)")
@@ -113,11 +116,13 @@ def run(args: argparse.Namespace) -> int:
         image.pixels, depth, eye_prescription=eye, pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
         accommodation_diopters=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
         layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers, crop_px=crop,
+        coarse_blur_px=args.coarse_blur_px,
     )
     provenance = make_provenance(command="blur-depth", input=str(args.input), depth=str(args.depth),
                                  input_provenance=image.provenance, eye=eye.format(),
                                  pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
                                  wavelength_nm=args.wavelength_nm, mode=args.mode, focus=focus_info, crop_px=crop,
+                                 coarse_blur_px=args.coarse_blur_px,
                                  depth_blur=result.as_json())
     written = write_image(args.output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
     print(

@@ -75,7 +75,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.blur import BlurKernel
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
-from vissim.optics.pullpush import pull_push
+from vissim.optics.pullpush import pull_push, upsample2
 from vissim.optics.wavefront import Wavefront
 from vissim.units import arcmin_to_rad
 
@@ -84,6 +84,10 @@ __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to
 
 log = logging.getLogger(__name__)
 
+#: A blur diameter (px) from which a layer may go on the coarse grid, and the PSNR (dB, unit range)
+#: of its coarse blur against the fine one on white noise there (``tests/test_depth.py``).
+COARSE_BLUR_PX = 14.0
+COARSE_MIN_DB = 44.0
 #: Plans with more layers are refused unless ``max_layers`` is raised (or None: no limit).
 DEFAULT_MAX_LAYERS = 256
 DEPTH_PADDING_MODES = ("edge", "reflect")
@@ -255,7 +259,8 @@ def _wavefront_key(coefficients: dict, sign: float = 1.0) -> tuple:
     return tuple(sorted((k, round(sign * v, 12)) for k, v in coefficients.items() if round(v, 12) != 0.0))
 
 
-def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict) -> PSF:
+def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict,
+               size_px: int | None = None) -> PSF:
     """A layer's PSF; the point reflection of an already computed one when its wavefront is that one's negative.
 
     ``|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2``, and the geometric PSF's rays land at
@@ -265,6 +270,10 @@ def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: fl
     """
     key = _wavefront_key(front.coefficients_um)
     mirror = seen.get(_wavefront_key(front.coefficients_um, -1.0))
+    if size_px is not None:
+        psf = _sized_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
+        seen[key] = psf
+        return psf
     if mirror is not None and mirror.data.shape[0] % 2 == 1 and key not in seen:
         data = np.ascontiguousarray(mirror.data[::-1, ::-1])
         data.setflags(write=False)
@@ -273,6 +282,14 @@ def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: fl
         psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode)
     seen[key] = psf
     return psf
+
+
+@functools.lru_cache(maxsize=128)
+def _sized_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str, size_px: int) -> PSF:
+    """A layer's PSF on a given field (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
+    front = Wavefront(dict(items), pupil_mm)
+    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step,
+                       size_px=size_px, mode=mode)
 
 
 # -- the layered blur -----------------------------------------------------------------
@@ -292,6 +309,7 @@ def blur_depth(
     occlusion_threshold_px: float = 1.0,
     padding: str = "edge",
     crop_px: int = 0,
+    coarse_blur_px: float | None = None,
 ) -> DepthBlurResult:
     """Blur a linear-light image whose pixels lie at different depths, with occlusion.
 
@@ -320,6 +338,11 @@ def blur_depth(
     crop_px : int
         Pixels cut from every side of the result: the input covers a margin beyond the frame
         wanted (as ``render depth`` writes it), so the frame sees what lies beyond it.
+    coarse_blur_px : float, optional
+        Blur layers whose geometric blur diameter is at least this many pixels on a grid twice
+        as coarse (:func:`_blur_coarse`); ``None`` (default): every layer on the image's grid.
+        At :data:`COARSE_BLUR_PX` (14 px) a layer of white noise, the hardest input, comes out
+        within :data:`COARSE_MIN_DB` (44 dB PSNR) of its fine blur; wider blurs come closer.
     """
     rx = as_prescription(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
@@ -331,6 +354,8 @@ def blur_depth(
         raise VissimInputError(f"depth-blur padding must be one of {', '.join(DEPTH_PADDING_MODES)}; got {padding!r}")
     wavelength = finite_number(wavelength_nm, "wavelength", "nm")
     threshold_px = positive_number(occlusion_threshold_px, "occlusion threshold", "pixels of blur")
+    if coarse_blur_px is not None:
+        coarse_blur_px = positive_number(coarse_blur_px, "coarse-grid blur threshold", "pixels of blur diameter")
     if max_layers is not None and (int(max_layers) != max_layers or max_layers < 1):
         raise VissimInputError(f"max_layers must be a positive whole number of layers, got {max_layers!r}")
     pixels = np.asarray(image)
@@ -362,15 +387,23 @@ def blur_depth(
     lower, frac = lower.astype(np.int32), frac.astype(np.float32)
     active = [k for k in range(plan.n_layers) if coverage[k] > 0]
 
-    psfs, layers, by_wavefront = {}, [], {}
+    psfs, scales, layers, by_wavefront = {}, {}, [], {1: {}, COARSE_FACTOR: {}}
     for k in active:
         front = base.with_defocus_diopters(layer_diopters[k] - accommodation)
-        psfs[k] = _layer_psf(front, pupil, wavelength, step, mode, by_wavefront)
+        blur_arcmin = 2.0 * geometric_blur_radius_arcmin(front, pupil)
+        scales[k] = COARSE_FACTOR if coarse_blur_px is not None and blur_arcmin / step >= coarse_blur_px else 1
+        if scales[k] == 1:
+            psfs[k] = _layer_psf(front, pupil, wavelength, step, mode, by_wavefront[1])
+        else:  # the fine grid's field (arcmin) on the coarse grid: windows as wide as the fine grid's
+            size = suggested_size_px(front, step, pupil_diameter_mm=pupil, wavelength_nm=wavelength) // COARSE_FACTOR
+            psfs[k] = _layer_psf(front, pupil, wavelength, step * scales[k], mode, by_wavefront[scales[k]],
+                                 size_px=size + 1 - size % 2)
         layers.append(DepthLayer(
             k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
-            2.0 * geometric_blur_radius_arcmin(front, pupil), psfs[k].data.shape[0], float(coverage[k] / lower.size),
+            blur_arcmin, psfs[k].data.shape[0] * scales[k], float(coverage[k] / lower.size),
         ))
-    reach_max = max(p.data.shape[0] // 2 for p in psfs.values())
+    reach = {k: (psfs[k].data.shape[0] // 2 + 1) * scales[k] for k in active}
+    reach_max = max(reach.values())
     boxes = _layer_boxes(lower, upper, frac, plan.n_layers)
     numerator = np.zeros_like(colour)
     denominator = np.zeros((rows, cols), np.float32)
@@ -384,7 +417,7 @@ def blur_depth(
             occluders[r0:r1, c0:c1] += matte_j
         # Layer k reaches its matte's box grown by its own PSF; its continuation behind nearer content
         # matters only where that content's blur leaves it visible: the largest PSF's reach further.
-        window = _grow(boxes[k], 2 * (psfs[k].data.shape[0] // 2 + reach_max) + 2, (rows, cols))
+        window = _grow(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
         r0, r1, c0, c1 = window
         transmitted = occluders[r0:r1, c0:c1].copy()
         for proximity_j, window_j, matte_j in pending:
@@ -395,7 +428,11 @@ def blur_depth(
         section = (slice(r0, r1), slice(c0, c1))
         planes = _extended_layer(colour[:, r0:r1, c0:c1], lower[section], upper[section], frac[section], layer_diopters,
                                  k, threshold_diopters)
-        blurred, shape = _blur_window(planes, psfs[k], padding, window, (rows, cols))
+        touches = (window[0] == 0, window[1] == rows, window[2] == 0, window[3] == cols)
+        if scales[k] == 1:
+            blurred, shape = _blur_window(planes, psfs[k], padding, touches)
+        else:
+            blurred, shape = _blur_coarse(planes, psfs[k], padding, touches, scales[k])
         largest = max(largest, shape)
         if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind it: keep its blurred coverage
             pending.append((layer_diopters[k], window, np.array(blurred[-1])))
@@ -511,9 +548,10 @@ def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) 
             source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
 
 
-def _blur_window(planes: np.ndarray, psf: PSF, padding: str, window, image_shape) -> tuple[np.ndarray, tuple]:
-    """Blur (C, h, w) planes of ``window`` with one PSF: one batched rfft2 / irfft2, sized to the window.
+def _blur_window(planes: np.ndarray, psf: PSF, padding: str, touches) -> tuple[np.ndarray, tuple]:
+    """Blur (C, h, w) planes of a window with one PSF: one batched rfft2 / irfft2, sized to the window.
 
+    ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
     the image they are zero (the window already holds everything of the layer that reaches it).
     """
@@ -523,20 +561,42 @@ def _blur_window(planes: np.ndarray, psf: PSF, padding: str, window, image_shape
     extra_r, extra_c = shape[0] - h - 2 * offset, shape[1] - w - 2 * offset
     padded = np.pad(planes, ((0, 0), (offset, offset + extra_r), (offset, offset + extra_c)),
                     mode="symmetric" if padding == "reflect" else "edge")
-    r0, r1, c0, c1 = window
-    if r0 > 0:
+    top, bottom, left, right = touches
+    if not top:
         padded[:, :offset] = 0.0
-    if r1 < image_shape[0]:
+    if not bottom:
         padded[:, offset + h :] = 0.0
-    if c0 > 0:
+    if not left:
         padded[:, :, :offset] = 0.0
-    if c1 < image_shape[1]:
+    if not right:
         padded[:, :, offset + w :] = 0.0
     kernel = BlurKernel.prepare(psf, shape, dtype=np.float32)
     spectrum = scipy.fft.rfft2(padded, axes=(-2, -1), workers=-1)
     spectrum *= kernel.transfer
     blurred = scipy.fft.irfft2(spectrum, s=shape, axes=(-2, -1), workers=-1, overwrite_x=True)
     return blurred[:, offset : offset + h, offset : offset + w], shape
+
+
+#: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of :func:`blur_depth`).
+COARSE_FACTOR = 2
+
+
+def _blur_coarse(planes: np.ndarray, psf: PSF, padding: str, touches, factor: int) -> tuple[np.ndarray, tuple]:
+    """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
+
+    ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
+    image holds little above the coarse grid's Nyquist frequency, so this is close to the fine
+    blur (:data:`COARSE_MIN_DB` at :data:`COARSE_BLUR_PX`) at a quarter of the FFT work.
+    """
+    n, h, w = planes.shape
+    q = factor
+    even = np.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
+    coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
+    blurred, shape = _blur_window(np.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches)
+    fine = blurred
+    for _ in range(int(round(math.log2(q)))):
+        fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))
+    return fine[:, :h, :w], shape
 
 
 def _workspace(shape: tuple[int, int, int]) -> dict:
