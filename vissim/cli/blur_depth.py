@@ -56,6 +56,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--coarse-blur-px", type=float, metavar="B",
                         help="blur layers whose blur is at least B px wide on a grid twice as coarse (faster; at "
                              "B = 14 within 44 dB of the fine grid on white noise; default: off)")
+    parser.add_argument("--device", choices=("cpu", "cuda", "auto"), default="cpu",
+                        help="where to blur the layers: cpu (default), cuda (a GPU through CuPy, the gpu extra), "
+                             "auto (cuda when present)")
     parser.add_argument("--crop-px", type=int, metavar="M",
                         help="crop M px from every side of the output (default: the margin_px the input's "
                              "provenance records, as render depth writes it; else 0)")
@@ -116,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         image.pixels, depth, eye_prescription=eye, pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
         accommodation_diopters=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
         layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers, crop_px=crop,
-        coarse_blur_px=args.coarse_blur_px,
+        coarse_blur_px=args.coarse_blur_px, device=args.device,
     )
     provenance = make_provenance(command="blur-depth", input=str(args.input), depth=str(args.depth),
                                  input_provenance=image.provenance, eye=eye.format(),

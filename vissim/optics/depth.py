@@ -72,6 +72,8 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
+from vissim.optics.array_backend import CPU as CPU_BACKEND
+from vissim.optics.array_backend import ArrayBackend, array_backend, array_module
 from vissim.optics.blur import BlurKernel
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
@@ -310,6 +312,7 @@ def blur_depth(
     padding: str = "edge",
     crop_px: int = 0,
     coarse_blur_px: float | None = None,
+    device: str = "cpu",
 ) -> DepthBlurResult:
     """Blur a linear-light image whose pixels lie at different depths, with occlusion.
 
@@ -343,6 +346,10 @@ def blur_depth(
         as coarse (:func:`_blur_coarse`); ``None`` (default): every layer on the image's grid.
         At :data:`COARSE_BLUR_PX` (14 px) a layer of white noise, the hardest input, comes out
         within :data:`COARSE_MIN_DB` (44 dB PSNR) of its fine blur; wider blurs come closer.
+    device : {"cpu", "cuda", "auto"}
+        Where the layers are blurred (:mod:`vissim.optics.array_backend`): ``"cuda"`` on a GPU
+        through CuPy (the ``gpu`` extra), ``"auto"`` there when one is present.  PSFs are computed
+        on the CPU either way.
     """
     rx = as_prescription(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
@@ -354,6 +361,7 @@ def blur_depth(
         raise VissimInputError(f"depth-blur padding must be one of {', '.join(DEPTH_PADDING_MODES)}; got {padding!r}")
     wavelength = finite_number(wavelength_nm, "wavelength", "nm")
     threshold_px = positive_number(occlusion_threshold_px, "occlusion threshold", "pixels of blur")
+    backend = array_backend(device)
     if coarse_blur_px is not None:
         coarse_blur_px = positive_number(coarse_blur_px, "coarse-grid blur threshold", "pixels of blur diameter")
     if max_layers is not None and (int(max_layers) != max_layers or max_layers < 1):
@@ -405,9 +413,11 @@ def blur_depth(
     reach = {k: (psfs[k].data.shape[0] // 2 + 1) * scales[k] for k in active}
     reach_max = max(reach.values())
     boxes = _layer_boxes(lower, upper, frac, plan.n_layers)
-    numerator = np.zeros_like(colour)
-    denominator = np.zeros((rows, cols), np.float32)
-    occluders = np.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
+    xp, transfers = backend.xp, {}
+    colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
+    numerator = xp.zeros_like(colour)
+    denominator = xp.zeros((rows, cols), np.float32)
+    occluders = xp.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
     pending: list[tuple[float, tuple, np.ndarray]] = []  # nearer layers' blurred coverage (window), occluding in part
     farthest = layer_diopters[active[0]]
     largest = (0, 0)
@@ -424,28 +434,28 @@ def blur_depth(
             weight = _occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
             if weight > 0:
                 _add_overlap(transmitted, window, weight * matte_j, window_j)
-        np.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
+        xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
         section = (slice(r0, r1), slice(c0, c1))
         planes = _extended_layer(colour[:, r0:r1, c0:c1], lower[section], upper[section], frac[section], layer_diopters,
                                  k, threshold_diopters)
         touches = (window[0] == 0, window[1] == rows, window[2] == 0, window[3] == cols)
         if scales[k] == 1:
-            blurred, shape = _blur_window(planes, psfs[k], padding, touches)
+            blurred, shape = _blur_window(planes, psfs[k], padding, touches, backend, transfers)
         else:
-            blurred, shape = _blur_coarse(planes, psfs[k], padding, touches, scales[k])
+            blurred, shape = _blur_coarse(planes, psfs[k], padding, touches, scales[k], backend, transfers)
         largest = max(largest, shape)
         if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind it: keep its blurred coverage
-            pending.append((layer_diopters[k], window, np.array(blurred[-1])))
+            pending.append((layer_diopters[k], window, blurred[-1].copy()))
         blurred *= transmitted
         numerator[:, r0:r1, c0:c1] += blurred[:-1]
         denominator[r0:r1, c0:c1] += blurred[-1]
     log.info("depth blur: %d layers planned, %d non-empty, largest padded window %s", plan.n_layers, len(active), largest)
     shape = largest
-    low = denominator < 0.5
-    if low.any():
-        log.info("depth blur: %d pixels have total blurred coverage below 0.5 (min %.3g)", int(low.sum()), float(denominator.min()))
-    out = numerator / np.maximum(denominator, 1e-6)
-    out = out[:, crop : rows - crop, crop : cols - crop]
+    low = int((denominator < 0.5).sum())
+    if low:
+        log.info("depth blur: %d pixels have total blurred coverage below 0.5 (min %.3g)", low, float(denominator.min()))
+    out = numerator / xp.maximum(denominator, 1e-6)
+    out = backend.to_numpy(out[:, crop : rows - crop, crop : cols - crop])
     result = out[0] if pixels.ndim == 2 else np.moveaxis(out, 0, -1)
     return DepthBlurResult(
         np.ascontiguousarray(result, dtype=np.float32), tuple(layers), plan.n_layers, plan.max_spacing_diopters,
@@ -482,25 +492,25 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     extended coverage also occludes the layers behind it: they are behind its continuation.
     ``work`` (from :func:`_workspace`) holds reused buffers; the result may be one of them.
     """
+    xp = array_module(colour)
     n_ch = colour.shape[0]
-    work = _workspace(colour.shape) if work is None else work
+    work = _workspace(colour.shape, xp) if work is None else work
     stack, hidden, scratch = work["stack"], work["hidden"], work["scratch"]
     matte = stack[n_ch]
-    matte.fill(0.0)
-    np.subtract(1.0, frac, out=matte, where=lower == k)
-    np.copyto(matte, frac, where=(upper == k) & (lower != k))
-    np.multiply(colour, matte, out=stack[:n_ch])
+    matte[...] = xp.where(lower == k, 1.0 - frac, xp.where(upper == k, frac, 0.0))
+    xp.multiply(colour, matte, out=stack[:n_ch])
     weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
     if not weights.any():
         return stack
-    np.take(weights, lower, out=hidden)
-    np.take(weights, upper, out=scratch)
+    weights = xp.asarray(weights)
+    hidden[...] = weights[lower]
+    scratch[...] = weights[upper]
     scratch -= hidden
     scratch *= frac
     hidden += scratch
-    if not hidden.any():
+    if not bool(hidden.any()):
         return stack
-    np.subtract(1.0, hidden, out=scratch)
+    xp.subtract(1.0, hidden, out=scratch)
     estimate = pull_push(stack, scratch)
     # Where hidden > 0 the pixel has no coverage of its own on layer k (its layers are nearer),
     # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again.
@@ -548,18 +558,21 @@ def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) 
             source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
 
 
-def _blur_window(planes: np.ndarray, psf: PSF, padding: str, touches) -> tuple[np.ndarray, tuple]:
+def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
+                 transfers: dict | None = None) -> tuple:
     """Blur (C, h, w) planes of a window with one PSF: one batched rfft2 / irfft2, sized to the window.
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
     the image they are zero (the window already holds everything of the layer that reaches it).
+    ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device.
     """
+    xp = backend.xp
     n, h, w = planes.shape
     offset = psf.data.shape[0] // 2 + 1
     shape = (scipy.fft.next_fast_len(h + 2 * offset, real=True), scipy.fft.next_fast_len(w + 2 * offset, real=True))
     extra_r, extra_c = shape[0] - h - 2 * offset, shape[1] - w - 2 * offset
-    padded = np.pad(planes, ((0, 0), (offset, offset + extra_r), (offset, offset + extra_c)),
+    padded = xp.pad(planes, ((0, 0), (offset, offset + extra_r), (offset, offset + extra_c)),
                     mode="symmetric" if padding == "reflect" else "edge")
     top, bottom, left, right = touches
     if not top:
@@ -570,10 +583,17 @@ def _blur_window(planes: np.ndarray, psf: PSF, padding: str, touches) -> tuple[n
         padded[:, :, :offset] = 0.0
     if not right:
         padded[:, :, offset + w :] = 0.0
-    kernel = BlurKernel.prepare(psf, shape, dtype=np.float32)
-    spectrum = scipy.fft.rfft2(padded, axes=(-2, -1), workers=-1)
-    spectrum *= kernel.transfer
-    blurred = scipy.fft.irfft2(spectrum, s=shape, axes=(-2, -1), workers=-1, overwrite_x=True)
+    transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
+    if backend is not CPU_BACKEND:
+        key = (id(psf), shape)
+        if transfers is None or key not in transfers:
+            device_transfer = backend.asarray(transfer)
+            if transfers is not None:
+                transfers[key] = device_transfer
+        transfer = transfers[key] if transfers is not None else device_transfer
+    spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
+    spectrum *= transfer
+    blurred = backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())
     return blurred[:, offset : offset + h, offset : offset + w], shape
 
 
@@ -581,7 +601,8 @@ def _blur_window(planes: np.ndarray, psf: PSF, padding: str, touches) -> tuple[n
 COARSE_FACTOR = 2
 
 
-def _blur_coarse(planes: np.ndarray, psf: PSF, padding: str, touches, factor: int) -> tuple[np.ndarray, tuple]:
+def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
+                 transfers: dict | None = None) -> tuple:
     """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
 
     ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
@@ -590,21 +611,23 @@ def _blur_coarse(planes: np.ndarray, psf: PSF, padding: str, touches, factor: in
     """
     n, h, w = planes.shape
     q = factor
-    even = np.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
+    xp = backend.xp
+    even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
     coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
-    blurred, shape = _blur_window(np.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches)
+    blurred, shape = _blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
+                                  transfers)
     fine = blurred
     for _ in range(int(round(math.log2(q)))):
         fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))
     return fine[:, :h, :w], shape
 
 
-def _workspace(shape: tuple[int, int, int]) -> dict:
-    """Buffers reused from layer to layer (fresh large arrays cost page faults every time)."""
+def _workspace(shape: tuple[int, int, int], xp=np) -> dict:
+    """Buffers for :func:`_extended_layer` (``xp``: the array module, NumPy or CuPy)."""
     n_ch, rows, cols = shape
     return {
-        "stack": np.empty((n_ch + 1, rows, cols), np.float32),
-        "hidden": np.empty((rows, cols), np.float32),
-        "scratch": np.empty((rows, cols), np.float32),
-        "upsampled": np.empty((n_ch + 1, rows + rows % 2, cols + cols % 2), np.float32),
+        "stack": xp.empty((n_ch + 1, rows, cols), np.float32),
+        "hidden": xp.empty((rows, cols), np.float32),
+        "scratch": xp.empty((rows, cols), np.float32),
+        "upsampled": xp.empty((n_ch + 1, rows + rows % 2, cols + cols % 2), np.float32),
     }
