@@ -374,3 +374,22 @@ def test_coarse_grid_for_wide_blurs_stays_within_its_stated_db():
         assert coarse.layers[0].blur_diameter_arcmin == pytest.approx(blur_px * STEP, rel=1e-9)
         error = (coarse.image - fine.image)[16:-16, 16:-16].astype(np.float64)
         assert 10 * math.log10(1.0 / np.mean(error**2)) >= floor_db
+
+
+@pytest.mark.parametrize("mode", ["wave", "geometric"])
+def test_a_layer_of_opposite_defocus_reuses_the_reflected_psf(mode):
+    """|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2 and rays land at -grad W: the PSF of -W is that of W
+    turned through 180 degrees, so the symmetric plan's mirrored layers need not compute it again."""
+    from vissim.optics.depth import _layer_psf
+
+    base = Wavefront.from_prescription(Prescription(-1.5), PUPIL_MM)
+    seen = {}
+    plus = _layer_psf(base.with_defocus_diopters(1.5 + 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
+    minus = _layer_psf(base.with_defocus_diopters(1.5 - 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
+    front = base.with_defocus_diopters(1.5 - 0.6)
+    computed = compute_psf(front, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode=mode,
+                           size_px=suggested_size_px(front, STEP, pupil_diameter_mm=PUPIL_MM))
+    assert minus.data.shape[0] % 2 == 1 and minus is not plus
+    assert minus.wavefront.coefficients_um == pytest.approx(front.coefficients_um, abs=1e-12)
+    np.testing.assert_allclose(minus.data, computed.data, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(minus.data, plus.data[::-1, ::-1])

@@ -200,14 +200,20 @@ def test_run_any_campaign_runs_single_plane_campaigns_too(tmp_path, monkeypatch)
 @needs_jit
 @pytest.mark.slow
 def test_shipped_depth_campaign_interiors_match_to_the_noise_floor(tmp_path):
-    """validation/depth.toml (about a minute on 2 cores): every panel interior, both optics."""
+    """validation/depth.toml (about two minutes on 2 cores): every panel interior, both optics and inputs;
+    the layered geometric simulation at the noise floor everywhere: whole image, occlusion bands, frame."""
     done = run_any_campaign(ROOT / "validation" / "depth.toml", tmp_path / "run", show_progress=False)
     rows = depth_rows(current_results(tmp_path / "run"))
     interiors = [r for r in rows if r["region"].startswith(("panel", "tilted"))]
-    assert len(interiors) == 2 * (4 * 4 + 3)
+    assert len(interiors) == 4 * (4 * 4 + 3)  # (geometric, wave) x (layered, rgbd)
     for row in interiors:
         floor = min(row["noise_floor_psnr_db"], 60.0)  # noise-free renders: float32 rounding only
-        assert row["psnr_db"] >= floor - (1.0 if row["simulation"] == "geometric" else 1.5), row
+        assert row["psnr_db"] >= floor - (1.0 if row["simulation"].startswith("geometric") else 1.5), row
+    layered = [r for r in rows if r["simulation"] == "geometric layered" and r["region"] in ("all", "boundary", "frame")
+               and r["n_px"] > 0]
+    assert len(layered) == 7 * 3 - 1  # the tilted DSLR view has no boundary band outside the frame
+    for row in layered:  # issue 15: within 3 dB of the floor, aiming at 1 dB; measured >= +1.2 dB
+        assert row["psnr_db"] >= min(row["noise_floor_psnr_db"], 60.0) - 1.0, row
     boundary = [r for r in rows if r["region"] == "boundary" and r["n_px"] > 1000]
     assert boundary and all(math.isfinite(r["psnr_db"]) for r in boundary)
     assert done.summary.items_total == 7
