@@ -1,108 +1,145 @@
-"""Benchmark: depth-dependent blur of a 1080p RGB-D image, 32 depth layers, against one blur_image.
+"""Benchmark: depth-dependent blur of a 1080p RGB-D image against one blur_image and the naive layer floor.
 
-    .venv/bin/python benchmarks/bench_depth.py
+    .venv/bin/python benchmarks/bench_depth.py [--cli] [--repeats N]
 
-Scene (synthetic, linear RGB noise textures): a wall at 6 m, a floor sloping from 6 m (horizon)
-to 0.4 m (bottom row) so that every layer has pixels, and panels at 3, 1.5, 0.8 and 0.4 m.
-Eye: uncorrected -1.00 DS, 3 mm pupil, no accommodation, 1 arcmin/px, 550 nm wave optics.  The
-layer-spacing fraction is chosen so that the plan has exactly 32 layers.
+Scene (synthetic, linear RGB noise textures, the hardest case for every FFT shortcut): a wall at
+8 m over the top half, a floor sloping from 8 m (horizon) to 0.33 m (bottom row), and panels at
+3, 1.5, 0.8 and 0.33 m.  Eye: uncorrected -1.50 DS, 4 mm pupil, relaxed, 1 arcmin/px, 550 nm
+wave optics, the default layering (spacing fraction 0.5: 82 layers).  Issue 15's case.
 
-Prints the total time with the PSF cache cold (PSFs computed) and warm, the time per layer, and
-the time of ``blur_image`` of the same image with one PSF (the widest layer's, so the padded
-FFT shape is the same), all measured in the same run, the ratio, and the FFT floor of a layer
-(its kernel's transform plus one batched real FFT pair of 3 colour planes + coverage).
+Measured in the same run, best of ``--repeats`` each, interleaved:
+
+* ``blur_depth`` with its PSFs computed (cold: the PSF cache cleared) and cached (warm);
+* ``blur_image`` of the same image with one PSF (the widest layer's, edge padding);
+* the naive per-layer floor: per non-empty layer, the kernel's transform and one batched
+  real FFT pair of 3 colour planes + coverage on the full padded frame (what the layered blur
+  cost before it cropped each layer to its support), times the number of layers;
+* with ``--cli``: ``vissim blur-depth`` and ``vissim blur`` of the same files, each a fresh
+  process (imports, EXR reading and writing, PSFs: everything a user waits for).
 """
 
 from __future__ import annotations
 
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
+import scipy.fft
 
 from vissim.optics.blur import BlurKernel, blur_image
-from vissim.optics.depth import (
-    _blur_planes,
-    _cached_psf,
-    blur_depth,
-    layer_spacing_diopters,
-    plan_layers,
-)
+from vissim.optics.depth import _cached_psf, blur_depth
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront
 
 ROWS, COLS = 1080, 1920
-PUPIL_MM, STEP, EYE = 3.0, 1.0, Prescription(-1.0)
-TARGET_LAYERS = 32
+PUPIL_MM, STEP, EYE = 4.0, 1.0, Prescription(-1.5)
 
 
 def scene() -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(0)
     image = rng.random((ROWS, COLS, 3), dtype=np.float32)
-    depth = np.full((ROWS, COLS), 6.0)
+    depth = np.full((ROWS, COLS), 8.0)
     horizon = ROWS // 2
-    floor_proximity = np.linspace(1 / 6.0, 1 / 0.4, ROWS - horizon)
-    depth[horizon:] = (1.0 / floor_proximity)[:, None]
+    depth[horizon:] = (1.0 / np.linspace(1 / 8.0, 1 / 0.33, ROWS - horizon))[:, None]
     for (top, left, height, width), metres in zip(
-        [(150, 150, 400, 300), (300, 600, 450, 350), (200, 1100, 500, 300), (600, 1450, 450, 400)], [3.0, 1.5, 0.8, 0.4]
+        [(150, 150, 400, 300), (300, 600, 450, 350), (200, 1100, 500, 300), (600, 1450, 450, 400)], [3.0, 1.5, 0.8, 0.33]
     ):
         depth[top : top + height, left : left + width] = metres
         image[top : top + height, left : left + width] *= np.array([0.9, 0.6, 0.3], np.float32)
     return image, depth
 
 
-def spacing_fraction_for(depth: np.ndarray, n_layers: int) -> float:
-    proximity = 1.0 / depth
-    low, high, anchor = float(proximity.min()), float(proximity.max()), -EYE.spherical_equivalent_diopters
-    for fraction in np.arange(2.0, 0.01, -0.001):
-        spacing = layer_spacing_diopters(STEP, PUPIL_MM, fraction)
-        if plan_layers(low, high, spacing, anchor_diopters=anchor).n_layers == n_layers:
-            return float(fraction)
-    raise RuntimeError("no spacing fraction gives the requested layer count")
+def naive_layer(planes: np.ndarray, psf, shape: tuple[int, int]) -> None:
+    """One layer the naive way: its kernel's transform, 4 planes padded to the frame, rfft2 / irfft2."""
+    offset = psf.data.shape[0] // 2 + 1
+    padded = np.pad(planes, ((0, 0), (offset, shape[0] - planes.shape[1] - offset),
+                             (offset, shape[1] - planes.shape[2] - offset)), mode="edge")
+    transfer = BlurKernel.prepare(psf, shape).transfer
+    spectrum = scipy.fft.rfft2(padded, axes=(-2, -1), workers=-1)
+    spectrum *= transfer
+    scipy.fft.irfft2(spectrum, s=shape, axes=(-2, -1), workers=-1, overwrite_x=True)
+
+
+def best(function, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px=None) -> tuple[float, float]:
+    from vissim.imageio import write_data_map, write_image
+
+    with tempfile.TemporaryDirectory() as folder:
+        rgb, depth_file, out = Path(folder, "rgb.exr"), Path(folder, "depth.exr"), Path(folder, "out.exr")
+        write_image(rgb, image, arcmin_per_px=STEP)
+        write_data_map(depth_file, depth.astype(np.float32), arcmin_per_px=STEP)
+        eye = ["--rx", EYE.format(), "--pupil-mm", f"{PUPIL_MM:g}", "--overwrite"]
+        commands = {"blur": ["blur", str(rgb), "-o", str(out), *eye],
+                    "blur-depth": ["blur-depth", str(rgb), str(depth_file), "-o", str(out), *eye]
+                    + ([] if coarse_blur_px is None else ["--coarse-blur-px", f"{coarse_blur_px:g}"])}
+        times = {name: [] for name in commands}
+        env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+        for _ in range(repeats):  # interleaved, so a busy machine slows both alike
+            for name, argv in commands.items():
+                start = time.perf_counter()
+                subprocess.run([sys.executable, "-m", "vissim", *argv], check=True, capture_output=True, env=env)
+                times[name].append(time.perf_counter() - start)
+    return min(times["blur-depth"]), min(times["blur"])
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3, help="best of N (default 3)")
+    parser.add_argument("--cli", action="store_true", help="also time the two commands (fresh processes)")
+    parser.add_argument("--coarse-blur-px", type=float, help="blur_depth's coarse_blur_px (default: off)")
+    args = parser.parse_args()
     image, depth = scene()
-    fraction = spacing_fraction_for(depth, TARGET_LAYERS)
-    kwargs = dict(eye_prescription=EYE, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, layer_spacing_fraction=fraction)
+    kwargs = dict(eye_prescription=EYE, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+                  coarse_blur_px=args.coarse_blur_px)
 
-    _cached_psf.cache_clear()
-    start = time.perf_counter()
-    result = blur_depth(image, depth, **kwargs)
-    cold = time.perf_counter() - start
-    warm = float("inf")
-    for _ in range(2):
-        start = time.perf_counter()
-        blur_depth(image, depth, **kwargs)
-        warm = min(warm, time.perf_counter() - start)
+    def cold():
+        _cached_psf.cache_clear()
+        return blur_depth(image, depth, **kwargs)
 
+    result = cold()
     widest = max(result.layers, key=lambda layer: layer.psf_size_px)
     front = Wavefront.from_prescription(EYE, PUPIL_MM).with_defocus_diopters(widest.proximity_diopters)
     single_psf = _cached_psf(tuple(front.coefficients_um.items()), PUPIL_MM, 550.0, STEP, "wave")
-    single = float("inf")
-    for _ in range(3):
-        start = time.perf_counter()
-        blur_image(image, single_psf, arcmin_per_px=STEP, padding="edge")
-        single = min(single, time.perf_counter() - start)
-
-    # The FFT floor of one layer: its kernel's transform and one batched rfft2/irfft2 of 4 planes.
+    offset = widest.psf_size_px // 2 + 1
+    frame = (scipy.fft.next_fast_len(ROWS + 2 * offset, real=True), scipy.fft.next_fast_len(COLS + 2 * offset, real=True))
     planes = np.ascontiguousarray(np.moveaxis(np.concatenate([image, image[..., :1]], axis=-1), -1, 0))
-    offset = max(la.psf_size_px for la in result.layers) // 2 + 1
-    floor = float("inf")
-    for _ in range(3):
-        start = time.perf_counter()
-        _blur_planes(planes, BlurKernel.prepare(single_psf, result.padded_shape), offset, "edge")
-        floor = min(floor, time.perf_counter() - start)
 
+    timings = {"cold": [], "warm": [], "single": [], "floor": []}
+    for _ in range(args.repeats):
+        timings["cold"].append(best(cold, 1))
+        timings["warm"].append(best(lambda: blur_depth(image, depth, **kwargs), 1))
+        timings["single"].append(best(lambda: blur_image(image, single_psf, arcmin_per_px=STEP, padding="edge"), 1))
+        timings["floor"].append(best(lambda: naive_layer(planes, single_psf, frame), 1))
+    cold_s, warm_s, single_s, floor_s = (min(timings[k]) for k in ("cold", "warm", "single", "floor"))
     n = len(result.layers)
-    print(f"image {COLS}x{ROWS} RGB float32, depth 0.4-6 m, eye {EYE.format()}, {PUPIL_MM:g} mm pupil, {STEP:g} arcmin/px")
-    print(f"layers: {result.n_layers} planned (spacing fraction {fraction:.3f}, <= {result.max_layer_spacing_diopters:.4f} D), "
-          f"{n} non-empty; PSFs {min(la.psf_size_px for la in result.layers)}-{widest.psf_size_px} px; padded {result.padded_shape}")
-    print(f"blur_depth, PSFs computed (cold cache): {cold:7.2f} s  ({1e3 * cold / n:6.1f} ms/layer)")
-    print(f"blur_depth, PSFs cached (warm, best of 2): {warm:7.2f} s  ({1e3 * warm / n:6.1f} ms/layer)")
-    print(f"blur_image, one {single_psf.data.shape[0]} px PSF, same image (best of 3): {single:7.3f} s")
-    print(f"ratio blur_depth / blur_image: {cold / single:6.1f} (cold)  {warm / single:6.1f} (warm)")
-    print(f"FFT floor per layer (kernel + 4-plane rfft2/irfft2): {1e3 * floor:6.1f} ms; x {n} layers = {n * floor:5.2f} s "
-          f"({100 * n * floor / warm:4.1f} % of the warm total)")
+    print(f"image {COLS}x{ROWS} RGB float32, depth 0.33-8 m, eye {EYE.format()}, {PUPIL_MM:g} mm pupil, "
+          f"{STEP:g} arcmin/px, 550 nm wave optics, coarse grid from {args.coarse_blur_px} px of blur")
+    print(f"layers: {result.n_layers} planned (<= {result.max_layer_spacing_diopters:.4f} D apart), {n} non-empty; "
+          f"PSFs {min(la.psf_size_px for la in result.layers)}-{widest.psf_size_px} px")
+    print(f"blur_depth, PSFs computed (cold):  {cold_s:6.2f} s  ({1e3 * cold_s / n:5.1f} ms/layer)")
+    print(f"blur_depth, PSFs cached (warm):    {warm_s:6.2f} s  ({1e3 * warm_s / n:5.1f} ms/layer)")
+    print(f"blur_image, one {single_psf.data.shape[0]} px PSF:        {single_s:6.3f} s")
+    print(f"naive floor: {n} x (kernel + 4-plane rfft2/irfft2 on {frame}) = {n} x {1e3 * floor_s:.1f} ms = "
+          f"{n * floor_s:5.2f} s")
+    print(f"ratios: blur_depth / blur_image {cold_s / single_s:5.1f} (cold), {warm_s / single_s:5.1f} (warm); "
+          f"blur_depth (warm) / naive floor {warm_s / (n * floor_s):5.2f}")
+    if args.cli:
+        depth_cli, blur_cli = cli_times(image, depth, args.repeats, args.coarse_blur_px)
+        print(f"command line: vissim blur-depth {depth_cli:5.2f} s, vissim blur {blur_cli:5.2f} s, "
+              f"ratio {depth_cli / blur_cli:4.1f}")
 
 
 if __name__ == "__main__":

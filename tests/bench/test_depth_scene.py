@@ -213,3 +213,36 @@ def test_a_camera_scene_file_with_a_trial_lens(tmp_path):
     loaded = load_depth_scene_toml(path)
     assert loaded.viewer == CameraViewer(f_number=4.0, focus_distance_m=2.0, lenses=(TrialLens(1.0),))
     assert dataclasses.replace(loaded.scene.panels[0]).chart.letters == "CKNOR"
+
+
+def test_a_margin_adds_pixels_around_the_same_frame():
+    from vissim.bench.depth_scene import pixel_tangents
+
+    scene = default_panels_scene()
+    wide = scene.with_margin(7)
+    assert wide.size_px == (scene.size_px[0] + 14, scene.size_px[1] + 14) and scene.with_margin(0) is scene
+    (tx, ty), (wx, wy) = pixel_tangents(scene), pixel_tangents(wide)
+    np.testing.assert_allclose(wx[7:-7], tx, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(wy[7:-7], ty, rtol=0, atol=1e-15)
+    with pytest.raises(VissimInputError, match="whole number of pixels"):
+        scene.with_margin(-1)
+
+
+def test_frame_margin_holds_the_largest_blur_radius():
+    """-2 D myope, 4 mm: the 0.4 m panel is |2 - 2.5| D, the 6 m one |2 - 1/6| D = 1.833 D:
+    4 mm x 1.833 D = 7.33 mrad = 25.2 arcmin, radius 12.6 px -> 13 + 2."""
+    from vissim.bench.depth_viewers import frame_margin_px
+
+    scene = default_panels_scene()
+    assert frame_margin_px(EyeViewer(Prescription(-2.0), 4.0, 0.0), scene) == 13 + 2
+    # tilted 0.5-3 m, emmetrope accommodating 2.5 D: |2.5 - 1/3| D = 2.167 D -> 29.8 arcmin, radius 14.9 px
+    assert frame_margin_px(EyeViewer(Prescription(0.0), 4.0, 2.5), default_tilted_scene(0.5, 3.0)) == 15 + 2
+
+
+def test_a_layer_is_one_panel_and_its_coverage_glows_with_one():
+    scene = default_panels_scene()
+    layer = depth_scene_dict(scene, EyeViewer(), view="all_in_focus", content="coverage", panels=(2,))
+    assert [k for k in layer if k.startswith("panel_")] == ["panel_2"]
+    assert layer["panel_2"]["emitter"] == {"type": "area", "radiance": 1.0}
+    with pytest.raises(VissimInputError, match="not indices"):
+        depth_scene_dict(scene, EyeViewer(), panels=(7,))

@@ -253,16 +253,42 @@ def test_render_depth_command_writes_blurred_all_in_focus_and_depth(tmp_path, ca
     assert _cli(argv) == 0
     printed = capsys.readouterr().out
     assert "wrote" in printed and "panel 6 m: predicted blur diameter 8.6'" in printed  # 3 mm x (1 - 1/6) D
+    # The all-in-focus image and the depth extend beyond the frame by the largest blur radius + 2 px:
+    # the 0.4 m panel's 3 mm x |1 - 2.5| D = 15.5 arcmin disc, radius 7.7 -> 8 + 2 = 10 px.
+    assert "a 10 px margin beyond the frame" in printed
     blurred, sharp = read_image(out), read_image(aif)
-    assert blurred.pixels.shape == sharp.pixels.shape == (128, 192)
+    assert blurred.pixels.shape == (128, 192) and sharp.pixels.shape == (148, 212)
     inputs = blurred.provenance["inputs"]
     assert inputs["viewer"]["prescription"]["sphere_diopters"] == -1.0 and inputs["arcmin_per_px"] == 1.0
+    assert inputs["margin_px"] == 10 and sharp.provenance["inputs"]["margin_px"] == 10
     distances = read_depth_m(depth)
-    assert distances.shape == (128, 192) and np.isinf(distances).any()
+    assert distances.shape == (148, 212) and np.isinf(distances).any()
     assert distances[np.isfinite(distances)].min() == pytest.approx(0.4, rel=1e-5)
+    # blur-depth reads the margin from the input's provenance and crops its output to the frame
+    from vissim.cli import main
+
+    simulated = tmp_path / "sim.exr"
+    assert main(["blur-depth", str(aif), str(depth), "-o", str(simulated), "--rx", "-1.00 DS", "--pupil-mm", "3",
+                 "--mode", "geometric"]) == 0
+    assert read_image(simulated).pixels.shape == (128, 192)
     with pytest.raises(VissimInputError, match="already exists"):
         _cli(argv)
     with pytest.raises(VissimInputError, match="not both"):
         _cli([str(scene), "--rx", "plano", "--f-number", "4", "-o", str(tmp_path / "x.exr")])
     with pytest.raises(VissimInputError, match=r"\.exr"):
         _cli([str(scene), "-o", str(tmp_path / "x.png")])
+
+
+def test_layers_rendered_alone_composite_to_the_all_in_focus_render():
+    """Each panel alone (radiance, coverage): over-composited near to far with no blur, they are the pinhole
+    render of the whole scene (to its edge sampling noise), and the far panel is there behind the near one."""
+    scene = default_panels_scene((3.0, 0.5), size_px=(96, 128))  # overlapping: the 0.5 m panel hides part of the 3 m
+    result = render_depth(scene, EyeViewer(pupil_diameter_mm=3.0), spp=SPP, seed=SEED, blurred=False,
+                          all_in_focus=True, layers=True, margin_px=4)
+    assert result.all_in_focus.shape == (scene.size_px[0] + 8, scene.size_px[1] + 8) and result.margin_px == 4
+    (far, near), (far_cover, near_cover) = result.layer_radiance, result.layer_coverage  # scene order: far first
+    assert near_cover.max() == pytest.approx(1.0) and far_cover.max() == pytest.approx(1.0)
+    hidden = (near_cover > 0.999) & (far_cover > 0.999)
+    assert hidden.sum() > 100  # the far panel behind the near one: what an RGB-D image cannot hold
+    composite = near + (1.0 - near_cover) * far
+    assert np.abs(composite - result.all_in_focus).mean() < 2e-3

@@ -35,6 +35,7 @@ The scene dicts are :mod:`vissim.bench.depth_scene_dict`, the chart textures
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Union
@@ -171,6 +172,25 @@ class DepthScene:
     def far_distance_m(self) -> float:
         return max(max(getattr(p, n, 0.0) for n in ("distance_m", "distance_left_m", "distance_right_m"))
                    for p in self.panels)
+
+    def distances_m(self) -> tuple[float, ...]:
+        """Every panel's axial distances (a tilted chart's two ends): where blur is largest."""
+        return tuple(getattr(p, n) for p in self.panels for n in ("distance_m", "distance_left_m", "distance_right_m")
+                     if hasattr(p, n))
+
+    def with_margin(self, margin_px: int) -> DepthScene:
+        """The same view on a grid ``margin_px`` larger on every side (same pixel centres, inner frame unchanged).
+
+        Pixel centres sit at ``(i + 0.5 - n/2)`` pitches from the axis, so adding ``2 m`` rows and
+        columns moves every original pixel to ``[i + m, j + m]`` exactly.
+        """
+        m = int(margin_px)
+        if m != margin_px or m < 0:
+            raise VissimInputError(f"a frame margin must be a whole number of pixels >= 0, got {margin_px!r} px")
+        if m == 0:
+            return self
+        rows, cols = self.size_px
+        return dataclasses.replace(self, size_px=(rows + 2 * m, cols + 2 * m))
 
 
 # -- geometry ---------------------------------------------------------------------------

@@ -40,7 +40,7 @@ log = logging.getLogger(__name__)
 #: Plugin name of the eye sensor; equals :data:`vissim.render.eye_sensor.EYE_SENSOR`.
 EYE_SENSOR = "vissim_eye"
 VIEWS = ("blurred", "all_in_focus")
-CONTENTS = ("radiance", "proximity")
+CONTENTS = ("radiance", "proximity", "coverage")
 #: Texels of a tilted chart's proximity ramp (bilinear; error <= slope x 0.5 / texels at the rim).
 PROXIMITY_TEXELS = 1024
 _MESH_SCHEMA = "vissim.tilted-chart-mesh/1"
@@ -132,6 +132,8 @@ def _tilted_ply(g: PanelGeometry, columns: int, cache_dir) -> Path:
 
 
 def _emitter(scene: DepthScene, g: PanelGeometry, content: str) -> dict:
+    if content == "coverage":
+        return {"type": "area", "radiance": 1.0}
     if content == "proximity":
         if g.kind == "panel":
             return {"type": "area", "radiance": 1.0 / g.distance_left_m}
@@ -155,10 +157,14 @@ def depth_scene_dict(
     content: str = "radiance",
     kind: str = "mono",
     mesh_cache_dir=None,
+    panels: tuple[int, ...] | None = None,
 ) -> dict[str, Any]:
     """The Mitsuba scene dict of ``scene`` seen by ``viewer`` (module doc for views and contents).
 
     Shape keys are ``panel_<i>`` in the scene's order and ``lens_<i>`` for a camera's trial lenses.
+    ``panels`` (indices into ``scene.panels``) keeps only those panels: a *layer* of the scene,
+    seen unoccluded by the others.  ``content="coverage"`` makes every kept panel glow with 1, so
+    a pinhole render of it is the layer's coverage (alpha) per pixel.
     """
     if view not in VIEWS:
         raise VissimInputError(f"view must be one of {', '.join(VIEWS)}, got {view!r}")
@@ -185,7 +191,12 @@ def depth_scene_dict(
         camera["far_clip"] = far_clip
         out["camera"] = camera
         out.update({key: value for key, value in bench_dict.items() if key.startswith("lens_")})
+    keep = range(len(scene.panels)) if panels is None else tuple(panels)
+    if not set(keep) <= set(range(len(scene.panels))):
+        raise VissimInputError(f"panels {tuple(keep)!r} are not indices of the scene's {len(scene.panels)} panels")
     for g in panel_geometries(scene):
+        if g.index not in keep:
+            continue
         emitter = _emitter(scene, g, content)
         if g.kind == "panel":
             out[f"panel_{g.index}"] = _fronto_shape(g, emitter)

@@ -25,8 +25,11 @@ what :func:`vissim.optics.depth.blur_depth` is given to simulate a render of tha
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Union
+
+import numpy as np
 
 from vissim.bench.dslr import DslrBench
 from vissim.checks import positive_number
@@ -38,7 +41,8 @@ from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, THESIS_CHART_DISTANCE_M
 from vissim.optics.setup import ViewingSetup
 from vissim.units import m_to_mm, mm_to_m
 
-__all__ = ["EyeViewer", "CameraViewer", "Viewer", "viewing_setup", "equivalent_eye"]
+__all__ = ["EyeViewer", "CameraViewer", "Viewer", "viewing_setup", "equivalent_eye", "frame_margin_px",
+           "FRAME_MARGIN_EXTRA_PX"]
 
 
 @dataclass(frozen=True)
@@ -127,3 +131,21 @@ def equivalent_eye(viewer: Viewer, scene=None) -> EyeViewer:
         return viewer
     setup = viewing_setup(viewer, scene)
     return EyeViewer(Prescription.from_power_matrix(-setup.focus_matrix_diopters), setup.pupil_diameter_mm, 0.0)
+
+
+#: Pixels added to the largest blur radius in :func:`frame_margin_px`: the pixel's own width and
+#: the diffraction PSF's core (the Airy radius of a 3 mm pupil at 550 nm is 0.77 arcmin).
+FRAME_MARGIN_EXTRA_PX = 2
+
+
+def frame_margin_px(viewer: Viewer, scene) -> int:
+    """Pixels to render and simulate beyond each side of ``scene``'s frame, then crop.
+
+    The largest geometric blur radius of any panel depth (a tilted chart's blur is largest at an
+    end: ``|K - 1/z|`` is convex in ``1/z``) rounded up, plus :data:`FRAME_MARGIN_EXTRA_PX`.  A pixel
+    of the frame then receives light only from inside the margin, so a simulation on the
+    enlarged grid sees what the observer sees beyond the frame.
+    """
+    setup = viewing_setup(viewer, scene)
+    diameters = setup.blur_diameter_at_arcmin(np.asarray(scene.distances_m()))
+    return int(math.ceil(0.5 * float(np.max(diameters)) / scene.arcmin_per_px - 1e-9)) + FRAME_MARGIN_EXTRA_PX

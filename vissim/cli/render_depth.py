@@ -8,6 +8,12 @@ predicted blur of every panel.
 
 The depth map is metres along the view axis from the pupil, ``inf`` for sky: an EXR with one
 channel ``Z`` (or ``.npy``), which ``vissim blur-depth AIF.exr DEPTH.exr`` reads as is.
+
+The all-in-focus image and the depth map cover a margin beyond the blurred image's frame on
+every side (``--margin-px``; default the scene's largest blur radius,
+:func:`vissim.bench.depth_viewers.frame_margin_px`), recorded as ``margin_px`` in their
+provenance: ``blur-depth`` simulates on the larger grid, so it sees what the observer sees
+beyond the frame, and crops its output to the blurred image's frame.
 """
 
 from __future__ import annotations
@@ -56,6 +62,9 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
     sampling.add_argument("--aux-spp", type=int, metavar="N",
                           help="samples per pixel of the all-in-focus and depth renders")
     sampling.add_argument("--seed", type=int, metavar="S", help="seed (all-in-focus: S + 1, depth: S + 2)")
+    sampling.add_argument("--margin-px", type=int, metavar="M",
+                          help="render the all-in-focus image and the depth M px beyond every side of the frame "
+                               "(default: the scene's largest blur radius + 2 px; 0: none)")
     sampling.add_argument("--rgb", action="store_true", help="render RGB (default: monochrome)")
     sampling.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
     parser.set_defaults(func=run_depth)
@@ -124,7 +133,7 @@ def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = No
 def run_depth(args: argparse.Namespace) -> int:
     from vissim.bench.depth_scene import panel_geometries
     from vissim.bench.depth_scene_files import load_depth_scene_toml
-    from vissim.bench.depth_viewers import viewing_setup
+    from vissim.bench.depth_viewers import frame_margin_px, viewing_setup
     from vissim.imageio import write_image
     from vissim.render.depth_render import render_depth
 
@@ -134,11 +143,16 @@ def run_depth(args: argparse.Namespace) -> int:
         if value is not None and value < 1:
             option = "--" + name.replace("_", "-")
             raise VissimInputError(f"{option} must be a positive number of samples per pixel, got {value}")
+    if args.margin_px is not None and args.margin_px < 0:
+        raise VissimInputError(f"--margin-px must be a whole number of pixels >= 0, got {args.margin_px}")
     loaded = load_depth_scene_toml(args.scene, spp=args.spp, seed=args.seed, aux_spp=args.aux_spp)
     viewer = _viewer(args, loaded)
+    margin = frame_margin_px(viewer, loaded.scene) if args.margin_px is None else args.margin_px
+    auxiliary = args.all_in_focus is not None or args.depth is not None
     result = render_depth(
         loaded.scene, viewer, spp=loaded.spp, seed=loaded.seed, all_in_focus=args.all_in_focus is not None,
         depth=args.depth is not None, aux_spp=loaded.aux_spp, kind="rgb" if args.rgb else "mono", variant=args.variant,
+        margin_px=margin if auxiliary else 0,
     )
     provenance = dict(result.provenance)
     provenance["inputs"] = dict(provenance["inputs"], scene_file=str(args.scene), command="render depth")
@@ -156,6 +170,9 @@ def run_depth(args: argparse.Namespace) -> int:
     rows, cols = loaded.scene.size_px
     print(f"wrote {', '.join(written)}: {cols} x {rows} px, {result.spp} spp, {result.variant}, "
           f"{result.seconds:.1f} s; {viewer.label()}")
+    if result.margin_px:
+        print(f"  all-in-focus and depth: {cols + 2 * result.margin_px} x {rows + 2 * result.margin_px} px "
+              f"(a {result.margin_px} px margin beyond the frame; blur-depth crops it)")
     setup = viewing_setup(viewer, loaded.scene)
     for g in panel_geometries(loaded.scene):
         blur = [float(setup.blur_diameter_at_arcmin(d)) for d in (g.distance_left_m, g.distance_right_m)]

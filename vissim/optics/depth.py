@@ -45,12 +45,24 @@ input; a bright near panel over black gives its own blur only; a black near pane
 uniform background of 1 gives ``1 - B_near(mask)`` (no halo, no dark fringe) whichever is in
 focus; every output is a weighted mean of (extended) input colours.
 
-Cost: per non-empty layer one PSF (cached by wavefront), one pull-push and one batched real
-FFT pair of (colours, extended coverage) on a padded shape common to all layers.
+Cost: per non-empty layer one PSF (cached by wavefront; for an eye whose wavefront is defocus
+alone the symmetric plan pairs layers of opposite defocus, whose PSFs are point reflections of
+each other, so about half are computed), one pull-push and one batched real FFT pair of
+(colours, extended coverage), on the layer's *window*: the box of its tent matte grown by
+``2 (r_k + r_max)`` pixels (``r`` the PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's
+blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
+content's blur (``r_max``) lets it show, and both spread once more through partly occluding
+neighbours.  The continuation itself is estimated by pull-push on the window grown by another
+:data:`EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see the neighbourhood the whole
+frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
+(same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
+60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
+a floor, each window is a few per cent of the frame.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -63,10 +75,12 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.optics.blur import BlurKernel, _pad
+from vissim.optics.array_backend import CPU as CPU_BACKEND
+from vissim.optics.array_backend import ArrayBackend, array_backend, array_module
+from vissim.optics.blur import BlurKernel
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
-from vissim.optics.pullpush import pull_push
+from vissim.optics.pullpush import pull_push, upsample2
 from vissim.optics.wavefront import Wavefront
 from vissim.units import arcmin_to_rad
 
@@ -75,6 +89,12 @@ __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to
 
 log = logging.getLogger(__name__)
 
+#: Pixels by which a layer's continuation behind nearer content is estimated beyond its window.
+EXTENSION_HALO_PX = 64
+#: A blur diameter (px) from which a layer may go on the coarse grid, and the PSNR (dB, unit range)
+#: of its coarse blur against the fine one on white noise there (``tests/test_depth.py``).
+COARSE_BLUR_PX = 14.0
+COARSE_MIN_DB = 44.0
 #: Plans with more layers are refused unless ``max_layers`` is raised (or None: no limit).
 DEFAULT_MAX_LAYERS = 256
 DEPTH_PADDING_MODES = ("edge", "reflect")
@@ -107,21 +127,34 @@ def plan_layers(
     max_layers: int | None = DEFAULT_MAX_LAYERS,
     *,
     anchor_diopters: float | None = None,
+    symmetric: bool = False,
 ) -> LayerPlan:
     """Layers covering ``[min, max]`` with gaps <= ``max_spacing_diopters``; ends (and ``anchor_diopters``) exact.
 
     The anchor is the in-focus proximity: it gets a layer of its own, so whatever the eye
     focuses on is rendered with exactly its in-focus PSF.  Each side of it is spaced evenly.
     The count is ``ceil(range / spacing) + 1`` (+1 with an anchor inside the range).
+
+    ``symmetric``: with an anchor inside the range, step by exactly ``max_spacing_diopters`` from
+    it both ways, and end at the range's ends (at most one layer more per side), so layers
+    pair up at equal and opposite defocus: for an eye whose wavefront is defocus alone their
+    PSFs are point reflections of each other (one computed PSF serves both, :func:`blur_depth`).
     """
     low, high = float(min_proximity_diopters), float(max_proximity_diopters)
     if high < low:
         raise VissimInputError(f"proximity range is reversed: {low:g} D to {high:g} D")
-    knots = [low, high] if anchor_diopters is None or not low < anchor_diopters < high else [low, float(anchor_diopters), high]
-    values = [low]
-    for a, b in zip(knots[:-1], knots[1:]):
-        n = int(math.ceil((b - a) / max_spacing_diopters - 1e-9))
-        values.extend(a + (b - a) * np.arange(1, n + 1) / n)
+    inside = anchor_diopters is not None and low < anchor_diopters < high
+    knots = [low, float(anchor_diopters), high] if inside else [low, high]
+    if symmetric and inside:
+        a, step = float(anchor_diopters), float(max_spacing_diopters)
+        below, above = (int(math.ceil(span / step - 1e-9)) - 1 for span in (a - low, high - a))
+        grid = a + step * np.arange(-below, above + 1)
+        values = [low] + [v for v in grid if low < v < high] + [high]
+    else:
+        values = [low]
+        for a, b in zip(knots[:-1], knots[1:]):
+            n = int(math.ceil((b - a) / max_spacing_diopters - 1e-9))
+            values.extend(a + (b - a) * np.arange(1, n + 1) / n)
     n_layers = len(values)
     if max_layers is not None and n_layers > max_layers:
         near, far = (("infinity" if d == 0 else f"{1.0 / d:.3g} m") for d in (high, low))
@@ -229,6 +262,43 @@ def _cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float
     return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step, size_px=size, mode=mode)
 
 
+def _wavefront_key(coefficients: dict, sign: float = 1.0) -> tuple:
+    return tuple(sorted((k, round(sign * v, 12)) for k, v in coefficients.items() if round(v, 12) != 0.0))
+
+
+def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict,
+               size_px: int | None = None) -> PSF:
+    """A layer's PSF; the point reflection of an already computed one when its wavefront is that one's negative.
+
+    ``|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2``, and the geometric PSF's rays land at
+    ``-grad W``: both PSFs of ``-W`` are those of ``W`` reflected through the origin (to round-off;
+    odd sizes only, whose origin ``[N//2, N//2]`` is the centre).  For an eye whose wavefront is
+    defocus alone, the symmetric layer plan pairs every layer with one of opposite defocus.
+    """
+    key = _wavefront_key(front.coefficients_um)
+    mirror = seen.get(_wavefront_key(front.coefficients_um, -1.0))
+    if size_px is not None:
+        psf = _sized_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
+        seen[key] = psf
+        return psf
+    if mirror is not None and mirror.data.shape[0] % 2 == 1 and key not in seen:
+        data = np.ascontiguousarray(mirror.data[::-1, ::-1])
+        data.setflags(write=False)
+        psf = dataclasses.replace(mirror, data=data, wavefront=front)
+    else:
+        psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode)
+    seen[key] = psf
+    return psf
+
+
+@functools.lru_cache(maxsize=128)
+def _sized_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str, size_px: int) -> PSF:
+    """A layer's PSF on a given field (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
+    front = Wavefront(dict(items), pupil_mm)
+    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step,
+                       size_px=size_px, mode=mode)
+
+
 # -- the layered blur -----------------------------------------------------------------
 def blur_depth(
     image,
@@ -245,6 +315,9 @@ def blur_depth(
     max_layers: int | None = DEFAULT_MAX_LAYERS,
     occlusion_threshold_px: float = 1.0,
     padding: str = "edge",
+    crop_px: int = 0,
+    coarse_blur_px: float | None = None,
+    device: str = "cpu",
 ) -> DepthBlurResult:
     """Blur a linear-light image whose pixels lie at different depths, with occlusion.
 
@@ -270,6 +343,18 @@ def blur_depth(
         this many pixels; closer in depth they are one surface and add.
     padding : {"edge", "reflect"}
         Outside the image, colour, depth and coverage continue the border.
+    crop_px : int
+        Pixels cut from every side of the result: the input covers a margin beyond the frame
+        wanted (as ``render depth`` writes it), so the frame sees what lies beyond it.
+    coarse_blur_px : float, optional
+        Blur layers whose geometric blur diameter is at least this many pixels on a grid twice
+        as coarse (:func:`_blur_coarse`); ``None`` (default): every layer on the image's grid.
+        At :data:`COARSE_BLUR_PX` (14 px) a layer of white noise, the hardest input, comes out
+        within :data:`COARSE_MIN_DB` (44 dB PSNR) of its fine blur; wider blurs come closer.
+    device : {"cpu", "cuda", "auto"}
+        Where the layers are blurred (:mod:`vissim.optics.array_backend`): ``"cuda"`` on a GPU
+        through CuPy (the ``gpu`` extra), ``"auto"`` there when one is present.  PSFs are computed
+        on the CPU either way.
     """
     rx = as_prescription(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
@@ -281,6 +366,9 @@ def blur_depth(
         raise VissimInputError(f"depth-blur padding must be one of {', '.join(DEPTH_PADDING_MODES)}; got {padding!r}")
     wavelength = finite_number(wavelength_nm, "wavelength", "nm")
     threshold_px = positive_number(occlusion_threshold_px, "occlusion threshold", "pixels of blur")
+    backend = array_backend(device)
+    if coarse_blur_px is not None:
+        coarse_blur_px = positive_number(coarse_blur_px, "coarse-grid blur threshold", "pixels of blur diameter")
     if max_layers is not None and (int(max_layers) != max_layers or max_layers < 1):
         raise VissimInputError(f"max_layers must be a positive whole number of layers, got {max_layers!r}")
     pixels = np.asarray(image)
@@ -291,13 +379,18 @@ def blur_depth(
     proximity = depth_to_proximity_diopters(depth_m)
     if proximity.shape != pixels.shape[:2]:
         raise VissimInputError(f"depth map {proximity.shape} does not match the image {pixels.shape[:2]} (rows, cols)")
+    if int(crop_px) != crop_px or crop_px < 0 or 2 * crop_px >= min(proximity.shape):
+        raise VissimInputError(f"crop_px must be whole pixels >= 0 leaving an image; got {crop_px!r} px for "
+                               f"{proximity.shape[1]} x {proximity.shape[0]} px")
+    crop = int(crop_px)
     colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
     rows, cols = proximity.shape
 
     base = _base_wavefront(rx, pupil, extra_wavefront)
     in_focus_diopters = accommodation - base.to_prescription().spherical_equivalent_diopters
     spacing_max = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
-    plan = plan_layers(float(proximity.min()), float(proximity.max()), spacing_max, max_layers, anchor_diopters=in_focus_diopters)
+    plan = plan_layers(float(proximity.min()), float(proximity.max()), spacing_max, max_layers,
+                       anchor_diopters=in_focus_diopters, symmetric=True)
     layer_diopters = np.array(plan.proximities_diopters)
     threshold_diopters = max(layer_spacing_diopters(step, pupil, threshold_px), spacing_max * (1 + 1e-9))
     lower, frac = _matte_indices(proximity, layer_diopters)
@@ -307,46 +400,70 @@ def blur_depth(
     lower, frac = lower.astype(np.int32), frac.astype(np.float32)
     active = [k for k in range(plan.n_layers) if coverage[k] > 0]
 
-    psfs, layers = {}, []
+    psfs, scales, layers, by_wavefront = {}, {}, [], {1: {}, COARSE_FACTOR: {}}
     for k in active:
         front = base.with_defocus_diopters(layer_diopters[k] - accommodation)
-        psfs[k] = _cached_psf(tuple(front.coefficients_um.items()), pupil, wavelength, step, mode)
+        blur_arcmin = 2.0 * geometric_blur_radius_arcmin(front, pupil)
+        scales[k] = COARSE_FACTOR if coarse_blur_px is not None and blur_arcmin / step >= coarse_blur_px else 1
+        if scales[k] == 1:
+            psfs[k] = _layer_psf(front, pupil, wavelength, step, mode, by_wavefront[1])
+        else:  # the fine grid's field (arcmin) on the coarse grid: windows as wide as the fine grid's
+            size = suggested_size_px(front, step, pupil_diameter_mm=pupil, wavelength_nm=wavelength) // COARSE_FACTOR
+            psfs[k] = _layer_psf(front, pupil, wavelength, step * scales[k], mode, by_wavefront[scales[k]],
+                                 size_px=size + 1 - size % 2)
         layers.append(DepthLayer(
             k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
-            2.0 * geometric_blur_radius_arcmin(front, pupil), psfs[k].data.shape[0], float(coverage[k] / lower.size),
+            blur_arcmin, psfs[k].data.shape[0] * scales[k], float(coverage[k] / lower.size),
         ))
-    offset = max(p.data.shape[0] for p in psfs.values()) // 2 + 1
-    shape = (scipy.fft.next_fast_len(rows + 2 * offset, real=True), scipy.fft.next_fast_len(cols + 2 * offset, real=True))
-    log.info("depth blur: %d layers planned, %d non-empty, padded %s", plan.n_layers, len(active), shape)
-
-    work = _workspace(colour.shape)
-    padded = np.empty((colour.shape[0] + 1,) + shape, np.float32)
-    numerator = np.zeros_like(colour)
-    denominator = np.zeros((rows, cols), np.float32)
-    occluders = np.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
-    pending: list[tuple[float, np.ndarray]] = []  # nearer layers' blurred coverage, occluding in part
+    reach = {k: (psfs[k].data.shape[0] // 2 + 1) * scales[k] for k in active}
+    reach_max = max(reach.values())
+    boxes = _layer_boxes(lower, upper, frac, plan.n_layers)
+    xp, transfers = backend.xp, {}
+    colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
+    numerator = xp.zeros_like(colour)
+    denominator = xp.zeros((rows, cols), np.float32)
+    occluders = xp.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
+    pending: list[tuple[float, tuple, np.ndarray]] = []  # nearer layers' blurred coverage (window), occluding in part
     farthest = layer_diopters[active[0]]
+    largest = (0, 0)
     for k in reversed(active):  # near to far
         while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:
-            occluders += pending.pop(0)[1]
-        transmitted = occluders.copy()
-        for proximity_j, matte_j in pending:
+            _, (r0, r1, c0, c1), matte_j = pending.pop(0)
+            occluders[r0:r1, c0:c1] += matte_j
+        # Layer k reaches its matte's box grown by its own PSF; its continuation behind nearer content
+        # matters only where that content's blur leaves it visible: the largest PSF's reach further.
+        window = _grow(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
+        r0, r1, c0, c1 = window
+        transmitted = occluders[r0:r1, c0:c1].copy()
+        for proximity_j, window_j, matte_j in pending:
             weight = _occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
             if weight > 0:
-                transmitted += weight * matte_j
-        np.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-        planes = _extended_layer(colour, lower, upper, frac, layer_diopters, k, threshold_diopters, work)
-        kernel = BlurKernel.prepare(psfs[k], shape, dtype=np.float32)
-        blurred = _blur_planes(planes, kernel, offset, padding, out=padded)
+                _add_overlap(transmitted, window, weight * matte_j, window_j)
+        xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
+        section = (slice(r0, r1), slice(c0, c1))
+        # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
+        e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
+        wide = (slice(e0, e1), slice(f0, f1))
+        planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
+                                 threshold_diopters)[:, r0 - e0 : r1 - e0, c0 - f0 : c1 - f0]
+        touches = (window[0] == 0, window[1] == rows, window[2] == 0, window[3] == cols)
+        if scales[k] == 1:
+            blurred, shape = _blur_window(planes, psfs[k], padding, touches, backend, transfers)
+        else:
+            blurred, shape = _blur_coarse(planes, psfs[k], padding, touches, scales[k], backend, transfers)
+        largest = max(largest, shape)
         if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind it: keep its blurred coverage
-            pending.append((layer_diopters[k], np.array(blurred[-1])))
+            pending.append((layer_diopters[k], window, blurred[-1].copy()))
         blurred *= transmitted
-        numerator += blurred[:-1]
-        denominator += blurred[-1]
-    low = denominator < 0.5
-    if low.any():
-        log.info("depth blur: %d pixels have total blurred coverage below 0.5 (min %.3g)", int(low.sum()), float(denominator.min()))
-    out = numerator / np.maximum(denominator, 1e-6)
+        numerator[:, r0:r1, c0:c1] += blurred[:-1]
+        denominator[r0:r1, c0:c1] += blurred[-1]
+    log.info("depth blur: %d layers planned, %d non-empty, largest padded window %s", plan.n_layers, len(active), largest)
+    shape = largest
+    low = int((denominator < 0.5).sum())
+    if low:
+        log.info("depth blur: %d pixels have total blurred coverage below 0.5 (min %.3g)", low, float(denominator.min()))
+    out = numerator / xp.maximum(denominator, 1e-6)
+    out = backend.to_numpy(out[:, crop : rows - crop, crop : cols - crop])
     result = out[0] if pixels.ndim == 2 else np.moveaxis(out, 0, -1)
     return DepthBlurResult(
         np.ascontiguousarray(result, dtype=np.float32), tuple(layers), plan.n_layers, plan.max_spacing_diopters,
@@ -383,25 +500,25 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     extended coverage also occludes the layers behind it: they are behind its continuation.
     ``work`` (from :func:`_workspace`) holds reused buffers; the result may be one of them.
     """
+    xp = array_module(colour)
     n_ch = colour.shape[0]
-    work = _workspace(colour.shape) if work is None else work
+    work = _workspace(colour.shape, xp) if work is None else work
     stack, hidden, scratch = work["stack"], work["hidden"], work["scratch"]
     matte = stack[n_ch]
-    matte.fill(0.0)
-    np.subtract(1.0, frac, out=matte, where=lower == k)
-    np.copyto(matte, frac, where=(upper == k) & (lower != k))
-    np.multiply(colour, matte, out=stack[:n_ch])
+    matte[...] = xp.where(lower == k, 1.0 - frac, xp.where(upper == k, frac, 0.0))
+    xp.multiply(colour, matte, out=stack[:n_ch])
     weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
     if not weights.any():
         return stack
-    np.take(weights, lower, out=hidden)
-    np.take(weights, upper, out=scratch)
+    weights = xp.asarray(weights)
+    hidden[...] = weights[lower]
+    scratch[...] = weights[upper]
     scratch -= hidden
     scratch *= frac
     hidden += scratch
-    if not hidden.any():
+    if not bool(hidden.any()):
         return stack
-    np.subtract(1.0, hidden, out=scratch)
+    xp.subtract(1.0, hidden, out=scratch)
     estimate = pull_push(stack, scratch)
     # Where hidden > 0 the pixel has no coverage of its own on layer k (its layers are nearer),
     # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again.
@@ -414,24 +531,111 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     return stack
 
 
-def _workspace(shape: tuple[int, int, int]) -> dict:
-    """Buffers reused from layer to layer (fresh large arrays cost page faults every time)."""
+def _layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int, int, int]]:
+    """Each layer's bounding box (row0, row1, col0, col1) of the pixels its tent matte touches."""
+    rows, cols = lower.shape
+    row_index = np.arange(rows, dtype=np.int64)[:, None]
+    col_index = np.arange(cols, dtype=np.int64)[None, :]
+    in_lower, in_upper = (frac < 1.0).astype(np.float32), (frac > 0.0).astype(np.float32)
+    hits = []
+    for index, size in ((row_index, rows), (col_index, cols)):
+        count = np.zeros(n_layers * size)
+        for layer, present in ((lower, in_lower), (upper, in_upper)):
+            count += np.bincount((layer.astype(np.int64) * size + index).ravel(), weights=present.ravel(),
+                                 minlength=n_layers * size)
+        hits.append(count.reshape(n_layers, size) > 0)
+    boxes = {}
+    for k in range(n_layers):
+        r, c = np.flatnonzero(hits[0][k]), np.flatnonzero(hits[1][k])
+        if r.size:
+            boxes[k] = (int(r[0]), int(r[-1]) + 1, int(c[0]), int(c[-1]) + 1)
+    return boxes
+
+
+def _grow(box, reach: int, shape) -> tuple[int, int, int, int]:
+    r0, r1, c0, c1 = box
+    return max(r0 - reach, 0), min(r1 + reach, shape[0]), max(c0 - reach, 0), min(c1 + reach, shape[1])
+
+
+def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -> None:
+    """``target`` (on ``window``) += ``source`` (on ``source_window``) where the two windows overlap."""
+    r0, r1 = max(window[0], source_window[0]), min(window[1], source_window[1])
+    c0, c1 = max(window[2], source_window[2]), min(window[3], source_window[3])
+    if r0 < r1 and c0 < c1:
+        target[r0 - window[0] : r1 - window[0], c0 - window[2] : c1 - window[2]] += \
+            source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
+
+
+def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
+                 transfers: dict | None = None) -> tuple:
+    """Blur (C, h, w) planes of a window with one PSF: one batched rfft2 / irfft2, sized to the window.
+
+    ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
+    Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
+    the image they are zero (the window already holds everything of the layer that reaches it).
+    ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device.
+    """
+    xp = backend.xp
+    n, h, w = planes.shape
+    offset = psf.data.shape[0] // 2 + 1
+    shape = (scipy.fft.next_fast_len(h + 2 * offset, real=True), scipy.fft.next_fast_len(w + 2 * offset, real=True))
+    extra_r, extra_c = shape[0] - h - 2 * offset, shape[1] - w - 2 * offset
+    padded = xp.pad(planes, ((0, 0), (offset, offset + extra_r), (offset, offset + extra_c)),
+                    mode="symmetric" if padding == "reflect" else "edge")
+    top, bottom, left, right = touches
+    if not top:
+        padded[:, :offset] = 0.0
+    if not bottom:
+        padded[:, offset + h :] = 0.0
+    if not left:
+        padded[:, :, :offset] = 0.0
+    if not right:
+        padded[:, :, offset + w :] = 0.0
+    transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
+    if backend is not CPU_BACKEND:
+        key = (id(psf), shape)
+        if transfers is None or key not in transfers:
+            device_transfer = backend.asarray(transfer)
+            if transfers is not None:
+                transfers[key] = device_transfer
+        transfer = transfers[key] if transfers is not None else device_transfer
+    spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
+    spectrum *= transfer
+    blurred = backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())
+    return blurred[:, offset : offset + h, offset : offset + w], shape
+
+
+#: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of :func:`blur_depth`).
+COARSE_FACTOR = 2
+
+
+def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
+                 transfers: dict | None = None) -> tuple:
+    """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
+
+    ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
+    image holds little above the coarse grid's Nyquist frequency, so this is close to the fine
+    blur (:data:`COARSE_MIN_DB` at :data:`COARSE_BLUR_PX`) at a quarter of the FFT work.
+    """
+    n, h, w = planes.shape
+    q = factor
+    xp = backend.xp
+    even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
+    coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
+    blurred, shape = _blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
+                                  transfers)
+    fine = blurred
+    for _ in range(int(round(math.log2(q)))):
+        fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))
+    return fine[:, :h, :w], shape
+
+
+def _workspace(shape: tuple[int, int, int], xp=np) -> dict:
+    """Buffers for :func:`_extended_layer` (``xp``: the array module, NumPy or CuPy)."""
     n_ch, rows, cols = shape
     return {
-        "stack": np.empty((n_ch + 1, rows, cols), np.float32),
-        "hidden": np.empty((rows, cols), np.float32),
-        "scratch": np.empty((rows, cols), np.float32),
-        "upsampled": np.empty((n_ch + 1, rows + rows % 2, cols + cols % 2), np.float32),
+        "stack": xp.empty((n_ch + 1, rows, cols), np.float32),
+        "hidden": xp.empty((rows, cols), np.float32),
+        "scratch": xp.empty((rows, cols), np.float32),
+        "upsampled": xp.empty((n_ch + 1, rows + rows % 2, cols + cols % 2), np.float32),
     }
-
-
-def _blur_planes(planes: np.ndarray, kernel: BlurKernel, offset: int, padding: str, out=None) -> np.ndarray:
-    """Blur each (H, W) plane with one kernel: one batched rfft2 / irfft2 on the padded shape."""
-    rows, cols = planes.shape[1:]
-    padded = np.empty((planes.shape[0],) + kernel.padded_shape, np.float32) if out is None else out
-    for plane, target in zip(planes, padded):
-        target[...] = _pad(plane, offset, kernel.padded_shape, padding, None)
-    spectrum = scipy.fft.rfft2(padded, axes=(-2, -1), workers=-1)
-    spectrum *= kernel.transfer
-    blurred = scipy.fft.irfft2(spectrum, s=kernel.padded_shape, axes=(-2, -1), workers=-1, overwrite_x=True)
-    return blurred[:, offset : offset + rows, offset : offset + cols]

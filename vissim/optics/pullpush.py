@@ -9,20 +9,23 @@ from __future__ import annotations
 
 import numpy as np
 
+from vissim.optics.array_backend import array_module
+
 __all__ = ["pull_push", "upsample2"]
 
 
 def upsample2(coarse: np.ndarray, shape: tuple[int, int], *, bilinear: bool = True) -> np.ndarray:
     """x2 upsampling of (C, h, w) onto (C, *shape): bilinear (cell-centred, edges clamped) or nearest."""
+    xp = array_module(coarse)
     n_ch, h, w = coarse.shape
     if not bilinear:
-        fine = np.empty((n_ch, h, 2, w, 2), coarse.dtype)
+        fine = xp.empty((n_ch, h, 2, w, 2), coarse.dtype)
         fine[...] = coarse[:, :, np.newaxis, :, np.newaxis]
         return fine.reshape(n_ch, 2 * h, 2 * w)[:, : shape[0], : shape[1]]
     out = coarse
     for axis, size in ((1, shape[0]), (2, shape[1])):
-        src = np.moveaxis(out, axis, -1)
-        fine = np.empty(src.shape[:-1] + (2 * src.shape[-1],), src.dtype)
+        src = xp.moveaxis(out, axis, -1)
+        fine = xp.empty(src.shape[:-1] + (2 * src.shape[-1],), src.dtype)
         fine[..., 0::2] = src
         fine[..., 1::2] = src
         fine *= 0.75
@@ -30,7 +33,7 @@ def upsample2(coarse: np.ndarray, shape: tuple[int, int], *, bilinear: bool = Tr
         fine[..., 0] += 0.25 * src[..., 0]
         fine[..., 1:-1:2] += 0.25 * src[..., 1:]
         fine[..., -1] += 0.25 * src[..., -1]
-        out = np.moveaxis(fine[..., :size], -1, axis)
+        out = xp.moveaxis(fine[..., :size], -1, axis)
     return out
 
 
@@ -43,23 +46,24 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray) -> np.ndarray:
     estimate is returned at *half* resolution (level 1, cells of 2 x 2 pixels): the caller
     uses it only where its own data are missing, nearest-upsampled (:func:`upsample2`).
     """
+    xp = array_module(premultiplied)
     levels = []
     q, w = premultiplied, weight
     while max(w.shape) > 1:
         h, wd = w.shape
         if h % 2 or wd % 2:
-            q = np.pad(q, ((0, 0), (0, h % 2), (0, wd % 2)))
-            w = np.pad(w, ((0, h % 2), (0, wd % 2)))
+            q = xp.pad(q, ((0, 0), (0, h % 2), (0, wd % 2)))
+            w = xp.pad(w, ((0, h % 2), (0, wd % 2)))
         q = q[:, 0::2, 0::2] + q[:, 1::2, 0::2] + q[:, 0::2, 1::2] + q[:, 1::2, 1::2]
         w = w[0::2, 0::2] + w[1::2, 0::2] + w[0::2, 1::2] + w[1::2, 1::2]
-        scale = 1.0 / np.maximum(w, 1.0)
+        scale = 1.0 / xp.maximum(w, 1.0)
         q *= scale
         w *= scale
         levels.append((q, w))
     if not levels:  # a single pixel
-        return premultiplied / np.where(weight > 0, weight, 1.0)
+        return premultiplied / xp.where(weight > 0, weight, 1.0)
     q, w = levels[-1]
-    value = q / np.where(w > 0, w, 1.0)
+    value = q / xp.where(w > 0, w, 1.0)
     for q, w in reversed(levels[:-1]):
         value = q + (1.0 - w) * upsample2(value, w.shape)
     return value

@@ -14,7 +14,17 @@ Three renders of one scene (:func:`vissim.bench.depth_scene_dict.depth_scene_dic
   ``position``/``depth`` stop at the first surface (the lens).  :func:`render_aov_depth`
   gives that AOV's axial depth as an independent check on scenes without lenses (its
   ``depth`` type is measured from the near-clip plane along the ray, so ``position.z`` is
-  used instead).
+  used instead);
+* **layers** (on request) -- each panel alone (the scene's other panels removed), through the
+  same pinhole: its radiance and its coverage (the panel glowing with 1), seeds ``seed + 3 +
+  2 i`` and ``seed + 4 + 2 i``.  What the pupil sees *behind* a nearer panel's edge is there,
+  for :func:`vissim.optics.depth_layers.composite_layers`.
+
+The frame: the pinhole renders (all in focus, depth, layers) cover ``margin_px`` more pixels on
+every side than the blurred render (:meth:`vissim.bench.depth_scene.DepthScene.with_margin`; the
+blurred render's pixel ``[i, j]`` is their ``[i + m, j + m]``), so a simulation from them sees what
+the observer sees beyond the frame; :func:`vissim.bench.depth_viewers.frame_margin_px` is the
+margin that holds the scene's largest blur.
 
 Only this package imports Mitsuba (through :func:`vissim.render.backend.mitsuba`).
 """
@@ -59,6 +69,9 @@ class DepthRenderResult:
     seed: int
     seconds: float
     provenance: dict | None = None
+    margin_px: int = 0  # the pinhole renders' extra pixels on every side
+    layer_radiance: tuple[np.ndarray, ...] | None = None  # per panel, in the scene's order
+    layer_coverage: tuple[np.ndarray, ...] | None = None
 
 
 def proximity_to_depth_m(proximity_diopters) -> np.ndarray:
@@ -73,13 +86,15 @@ def proximity_to_depth_m(proximity_diopters) -> np.ndarray:
 
 def render_view(scene, viewer, *, view: str, content: str = "radiance", spp: int, seed: int = 0,
                 kind: str = "mono", variant: str | None = None, pass_spp: int | None = None,
-                progress: Callable[[int, int], None] | None = None, mesh_cache_dir=None):
+                progress: Callable[[int, int], None] | None = None, mesh_cache_dir=None,
+                panels: tuple[int, ...] | None = None):
     """One render (:class:`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``."""
     from vissim.bench.depth_scene_dict import depth_scene_dict
 
-    kind = "mono" if content == "proximity" else kind
+    kind = "mono" if content in ("proximity", "coverage") else kind
     register_eye_sensor(mitsuba(kind, variant))
-    scene_dict = depth_scene_dict(scene, viewer, view=view, content=content, kind=kind, mesh_cache_dir=mesh_cache_dir)
+    scene_dict = depth_scene_dict(scene, viewer, view=view, content=content, kind=kind, mesh_cache_dir=mesh_cache_dir,
+                                  panels=panels)
     return render_scene(scene_dict, kind=kind, spp=spp, seed=seed, variant=variant, pass_spp=pass_spp,
                         progress=progress)
 
@@ -93,6 +108,8 @@ def render_depth(
     blurred: bool = True,
     all_in_focus: bool = False,
     depth: bool = False,
+    layers: bool = False,
+    margin_px: int = 0,
     aux_spp: int | None = None,
     kind: str = "mono",
     variant: str | None = None,
@@ -100,30 +117,38 @@ def render_depth(
     progress: Callable[[str, int, int], None] | None = None,
     mesh_cache_dir=None,
 ) -> DepthRenderResult:
-    """Render ``scene`` seen by ``viewer``: blurred, and on request all-in-focus and depth (module doc).
+    """Render ``scene`` seen by ``viewer``: blurred, and on request all-in-focus, depth and layers (module doc).
 
     ``aux_spp`` is the sample count of the pinhole renders (default ``spp``); their noise is
-    only the pixel-area sampling of edges.  ``progress(name, done_spp, total_spp)`` reports
-    each render.  The provenance records the scene, the viewer, seeds, spp and versions.
+    only the pixel-area sampling of edges.  They cover ``margin_px`` more pixels on every side
+    than the blurred render.  ``progress(name, done_spp, total_spp)`` reports each render.  The
+    provenance records the scene, the viewer, seeds, spp, the margin and versions.
     """
     from vissim.bench.depth_scene import panel_geometries
     from vissim.bench.depth_viewers import viewing_setup
 
     start = time.perf_counter()
     aux = int(spp if aux_spp is None else aux_spp)
-    jobs = [("blurred", "blurred", "radiance", seed, spp)] if blurred else []
+    wide = scene.with_margin(margin_px)
+    jobs = [("blurred", scene, "blurred", "radiance", seed, spp, None)] if blurred else []
     if all_in_focus:
-        jobs.append(("all_in_focus", "all_in_focus", "radiance", seed + 1, aux))
+        jobs.append(("all_in_focus", wide, "all_in_focus", "radiance", seed + 1, aux, None))
     if depth:
-        jobs.append(("proximity", "all_in_focus", "proximity", seed + 2, aux))
+        jobs.append(("proximity", wide, "all_in_focus", "proximity", seed + 2, aux, None))
+    if layers:
+        for i in range(len(scene.panels)):
+            jobs.append((f"layer_{i}", wide, "all_in_focus", "radiance", seed + 3 + 2 * i, aux, (i,)))
+            jobs.append((f"coverage_{i}", wide, "all_in_focus", "coverage", seed + 4 + 2 * i, aux, (i,)))
     if not jobs:
-        raise VissimInputError("nothing to render: ask for the blurred image, the all-in-focus image or the depth")
+        raise VissimInputError("nothing to render: ask for the blurred image, the all-in-focus image, the depth "
+                               "or the layers")
     images: dict[str, np.ndarray] = {}
     results = {}
-    for name, view, content, job_seed, job_spp in jobs:
+    for name, grid, view, content, job_seed, job_spp, panels in jobs:
         report = None if progress is None else (lambda done, total, name=name: progress(name, done, total))
-        result = render_view(scene, viewer, view=view, content=content, spp=job_spp, seed=job_seed, kind=kind,
-                             variant=variant, pass_spp=pass_spp, progress=report, mesh_cache_dir=mesh_cache_dir)
+        result = render_view(grid, viewer, view=view, content=content, spp=job_spp, seed=job_seed, kind=kind,
+                             variant=variant, pass_spp=pass_spp, progress=report, mesh_cache_dir=mesh_cache_dir,
+                             panels=panels)
         images[name], results[name] = result.pixels, result
     proximity = images.get("proximity")
     depth_m = None if proximity is None else proximity_to_depth_m(proximity)
@@ -140,14 +165,21 @@ def render_depth(
                                           for d in (g.distance_left_m, g.distance_right_m)]}
                 for g in panel_geometries(scene)],
         arcmin_per_px=scene.arcmin_per_px,
+        margin_px=int(margin_px),
+        margin_definition="the all-in-focus, depth and layer renders cover margin_px more pixels on every side "
+                          "than the blurred render; crop them by margin_px to its frame",
         renders={name: {"spp": r.spp, **r.render_record()} for name, r in results.items()},
         depth_definition="axial distance (m) along the view axis, from the pupil plane; inf = sky",
         kind=kind,
         variant=first.variant,
         **mitsuba_versions(),
     )
+    n = len(scene.panels)
+    radiance = tuple(images[f"layer_{i}"] for i in range(n)) if layers else None
+    coverage = tuple(images[f"coverage_{i}"] for i in range(n)) if layers else None
     return DepthRenderResult(images.get("blurred"), images.get("all_in_focus"), depth_m, proximity,
-                             first.variant, first.spp, int(seed), time.perf_counter() - start, json_safe(provenance))
+                             first.variant, first.spp, int(seed), time.perf_counter() - start, json_safe(provenance),
+                             int(margin_px), radiance, coverage)
 
 
 def render_aov_depth(scene, viewer, *, spp: int = 16, seed: int = 0, variant: str | None = None,

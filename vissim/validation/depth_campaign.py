@@ -30,11 +30,15 @@ from vissim.validation.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_
                                       read_campaign_toml, settings_kwargs, table, tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
-           "is_depth_campaign", "DEPTH_SIMULATIONS", "SCHEMA_VERSION"]
+           "is_depth_campaign", "DEPTH_SIMULATIONS", "DEPTH_INPUTS", "SCHEMA_VERSION"]
 
 DEPTH_SIMULATIONS = ("geometric", "wave")
+#: What a simulation starts from: the scene's layers rendered alone (radiance and coverage,
+#: :func:`vissim.optics.depth_layers.composite_layers`) or one all-in-focus image and its depth
+#: map (:func:`vissim.optics.depth.blur_depth`).
+DEPTH_INPUTS = ("layered", "rgbd")
 #: Bumped when the meaning of an item's inputs or results changes, so old results are not reused.
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -50,6 +54,12 @@ class DepthConfiguration:
         return {"name": self.name, "scene_file": self.scene_file, "viewer": json_safe(self.viewer),
                 "viewer_label": self.viewer.label()}
 
+    def frame_margin_px(self, settings: DepthCampaignSettings) -> int:
+        """Pixels (of the campaign's grid) the simulations' inputs extend beyond the frame on every side."""
+        from vissim.bench.depth_viewers import frame_margin_px
+
+        return frame_margin_px(self.viewer, self.scene) if settings.frame_margin else 0
+
 
 @dataclass(frozen=True)
 class DepthCampaignSettings:
@@ -63,6 +73,8 @@ class DepthCampaignSettings:
     data_range: float = 1.0
     margin_px: float = 1.0
     layer_spacing_fraction: float = 0.5
+    inputs: tuple[str, ...] = DEPTH_INPUTS
+    frame_margin: bool = True  # render the simulations' inputs beyond the frame by the largest blur radius
 
 
 @dataclass(frozen=True)
@@ -104,9 +116,15 @@ def is_depth_campaign(doc: dict) -> bool:
 
 
 def _settings(head: dict, source: str) -> DepthCampaignSettings:
-    return DepthCampaignSettings(**settings_kwargs(
+    kwargs = settings_kwargs(
         head, DepthCampaignSettings, source, "depth_campaign", numbers=NUMBER_SETTINGS, whole_numbers=WHOLE_SETTINGS,
-        lists={"simulations": DEPTH_SIMULATIONS}, texts=("name", "description"), read_elsewhere=("kind",)))
+        lists={"simulations": DEPTH_SIMULATIONS, "inputs": DEPTH_INPUTS}, texts=("name", "description"),
+        read_elsewhere=("kind", "frame_margin"))
+    if "frame_margin" in head:
+        if not isinstance(head["frame_margin"], bool):
+            raise field_error(source, "depth_campaign.frame_margin", f"true or false, got {head['frame_margin']!r}")
+        kwargs["frame_margin"] = head["frame_margin"]
+    return DepthCampaignSettings(**kwargs)
 
 
 #: Camera fields: (unit, lowest, highest).

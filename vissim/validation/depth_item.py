@@ -4,7 +4,10 @@ Per configuration: the blurred render twice (``seeds``: the ground truth and its
 noise floor) and the pinhole all-in-focus and depth renders (``aux_seed``, optionally
 ``oversample`` times finer); ``blur_depth`` of the all-in-focus image and depth for the
 observer's equivalent eye (:func:`vissim.bench.depth_viewers.equivalent_eye`), in geometric
-and wave optics.  Mitsuba renders no diffraction, so ``geometric`` is compared with the render
+and wave optics; and the same from the *layered* input -- every panel rendered alone, radiance
+and coverage -- by :func:`vissim.optics.depth_layers.composite_layers`, which needs no guess
+behind occluding edges.  The pinhole renders extend beyond the frame by the scene's largest blur
+radius (``frame_margin``), and the simulations are cropped to the frame.  Mitsuba renders no diffraction, so ``geometric`` is compared with the render
 and ``wave`` with the render convolved with the aperture's in-focus diffraction PSF (as
 :func:`vissim.validation.simulate.add_bench_diffraction` does for the single-plane harness).
 Metrics (:mod:`vissim.validation.depth_masks`) per panel interior, for the occlusion band and
@@ -40,6 +43,32 @@ def _region_table(comparison, masks, data_range: float) -> dict:
     return table
 
 
+def _crop(pixels: np.ndarray, margin: int) -> np.ndarray:
+    return pixels if margin == 0 else pixels[margin:-margin, margin:-margin]
+
+
+def _scene_layers(scene, images: dict) -> list:
+    """Each panel rendered alone, as a :class:`~vissim.optics.depth_layers.SceneLayer` (campaign sampling / oversample).
+
+    A fronto panel's proximity is ``1 / distance``; a tilted chart's is its own proximity pass
+    divided by its coverage (the pass holds the pixel's mean proximity, 0 where it sees nothing).
+    """
+    from vissim.optics.depth_layers import SceneLayer
+
+    layers = []
+    for i, panel in enumerate(scene.panels):
+        coverage = np.clip(images[f"coverage_{i}"], 0.0, 1.0)
+        if hasattr(panel, "distance_m"):
+            proximity = 1.0 / panel.distance_m
+        else:
+            ends = sorted((1.0 / panel.distance_left_m, 1.0 / panel.distance_right_m))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                proximity = np.where(coverage > 1e-6, images[f"layer_proximity_{i}"] / coverage, ends[0])
+            proximity = np.clip(proximity, *ends)
+        layers.append(SceneLayer(images[f"layer_{i}"], coverage, proximity))
+    return layers
+
+
 def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCampaignSettings, images: dict,
                        item_dir: Path, *, render_provenance: dict | None = None) -> dict:
     """Simulate, compare per region, write images and ``result.json`` (last) for one configuration.
@@ -47,6 +76,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     ``images``: the renders by name (``truth_0``, ``truth_1``, ``all_in_focus``, ``proximity``).
     """
     from vissim.optics.depth import blur_depth
+    from vissim.optics.depth_layers import composite_layers
     from vissim.render.depth_render import proximity_to_depth_m
     from vissim.validation.item import save_item_image
     from vissim.validation.simulate import add_bench_diffraction, block_mean
@@ -61,7 +91,12 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     scene, s = config.scene, settings.oversample
     eye, setup = equivalent_eye(config.viewer, scene), viewing_setup(config.viewer, scene)
     truth_a, truth_b = images["truth_0"], images["truth_1"]
-    proximity = block_mean(images["proximity"], s)
+    margin = config.frame_margin_px(settings)
+
+    def frame(pixels):  # integrated onto the campaign's pixels, the margin cropped
+        return _crop(block_mean(pixels, s), margin)
+
+    proximity = frame(images["proximity"])
     geometries = panel_geometries(scene)
 
     def radius_px(p):
@@ -72,34 +107,49 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     masks = depth_regions(proximity, geometries, radius_px, pupil_diameter_mm=eye.pupil_diameter_mm,
                           arcmin_per_px=scene.arcmin_per_px, margin_px=settings.margin_px)
     saved = {"truth": _save(item_dir, "truth", truth_a), "all_in_focus": _save(item_dir, "all_in_focus",
-                                                                                block_mean(images["all_in_focus"], s)),
+                                                                                frame(images["all_in_focus"])),
              "proximity": _save(item_dir, "proximity_diopters", proximity, preview=False),
              "regions": _save(item_dir, "regions", masks.label_image().astype(np.float32), preview=False)}
+    eye_kwargs = dict(eye_prescription=eye.prescription, pupil_diameter_mm=eye.pupil_diameter_mm,
+                      arcmin_per_px=scene.arcmin_per_px / s, accommodation_diopters=eye.accommodation_diopters,
+                      wavelength_nm=settings.wavelength_nm, layer_spacing_fraction=settings.layer_spacing_fraction)
+    layers = _scene_layers(scene, images) if "layered" in settings.inputs else None
+    references = {}
     comparisons = []
-    for mode in settings.simulations:
-        result = blur_depth(images["all_in_focus"], proximity_to_depth_m(images["proximity"]),
-                            eye_prescription=eye.prescription, pupil_diameter_mm=eye.pupil_diameter_mm,
-                            arcmin_per_px=scene.arcmin_per_px / s, accommodation_diopters=eye.accommodation_diopters,
-                            wavelength_nm=settings.wavelength_nm, mode=mode,
-                            layer_spacing_fraction=settings.layer_spacing_fraction)
-        simulated = block_mean(result.image, s)
-        if mode == "wave":  # the render convolved with the aperture's in-focus diffraction at the campaign's wavelength
-            aperture = replace(setup, wavelength_nm=settings.wavelength_nm)
-            reference, other = (add_bench_diffraction(t, aperture, scene.arcmin_per_px) for t in (truth_a, truth_b))
-            saved["truth_diffracted"] = _save(item_dir, "truth_diffracted", reference)
-        else:
-            reference, other = truth_a, truth_b
-        comparison = compare_images(reference, simulated, data_range=settings.data_range)
-        floor = compare_images(reference, other, data_range=settings.data_range)
-        comparisons.append({
-            "simulation": mode,
-            "reference_image": "truth" if mode == "geometric" else "truth_diffracted",
-            "regions": _region_table(comparison, masks, settings.data_range),
-            "noise_floor": _region_table(floor, masks, settings.data_range),
-            "depth_blur": {k: v for k, v in result.as_json().items() if k != "layers"},
-            "images": {"simulation": _save(item_dir, f"sim_{mode}", simulated),
-                       "abs_diff_map": _save(item_dir, f"sim_{mode}_ad", comparison.abs_diff_map, preview=False)},
-        })
+    for source in settings.inputs:
+        for mode in settings.simulations:
+            started_sim = time.perf_counter()
+            if source == "rgbd":
+                result = blur_depth(images["all_in_focus"], proximity_to_depth_m(images["proximity"]), mode=mode,
+                                    crop_px=margin * s, **eye_kwargs)
+            else:
+                result = composite_layers(layers, mode=mode, crop_px=margin * s, **eye_kwargs)
+            simulated = block_mean(result.image, s)
+            if mode not in references:
+                if mode == "wave":  # the render convolved with the aperture's in-focus diffraction
+                    aperture = replace(setup, wavelength_nm=settings.wavelength_nm)
+                    references[mode] = tuple(add_bench_diffraction(t, aperture, scene.arcmin_per_px)
+                                             for t in (truth_a, truth_b))
+                    saved["truth_diffracted"] = _save(item_dir, "truth_diffracted", references[mode][0])
+                else:
+                    references[mode] = (truth_a, truth_b)
+            reference, other = references[mode]
+            comparison = compare_images(reference, simulated, data_range=settings.data_range)
+            floor = compare_images(reference, other, data_range=settings.data_range)
+            name = f"{mode} {source}"
+            tag = f"{mode}_{source}"
+            comparisons.append({
+                "simulation": name,
+                "optics": mode,
+                "input": source,
+                "reference_image": "truth" if mode == "geometric" else "truth_diffracted",
+                "regions": _region_table(comparison, masks, settings.data_range),
+                "noise_floor": _region_table(floor, masks, settings.data_range),
+                "depth_blur": {k: v for k, v in result.as_json().items() if k != "layers"},
+                "seconds": time.perf_counter() - started_sim,
+                "images": {"simulation": _save(item_dir, f"sim_{tag}", simulated),
+                           "abs_diff_map": _save(item_dir, f"sim_{tag}_ad", comparison.abs_diff_map, preview=False)},
+            })
     result_json = {
         "key": key,
         "configuration": config.as_json(),
@@ -110,6 +160,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
                     "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
                     "blur_diameter_arcmin": [float(setup.blur_diameter_at_arcmin(d))
                                              for d in (g.distance_left_m, g.distance_right_m)]} for g in geometries],
+        "frame_margin_px": margin,
         "masks": {"jump_diopters": masks.jump_diopters, "margin_px": settings.margin_px,
                   "regions": list(masks.interiors) + ["boundary", "frame"],
                   "definition": "interior: >= blur radius + margin from any depth discontinuity and the frame; "

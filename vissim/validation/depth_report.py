@@ -72,12 +72,43 @@ def depth_rows(results: list[dict]) -> list[dict]:
     return rows
 
 
+SUMMARY_REGIONS = ("all", "boundary", "frame")
+
+
+def summary_table(results: list[dict]) -> str:
+    """Configurations x simulations: PSNR minus the noise floor (dB) in all, boundary, frame and the worst interior."""
+    rows = depth_rows(results)
+    sims = list(dict.fromkeys(r["simulation"] for r in rows))
+    header = ["configuration"] + [f"{sim}: {region}" for sim in sims for region in (*SUMMARY_REGIONS, "interiors (min)")]
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for result in results:
+        mine = [r for r in rows if r["key"] == result["key"]]
+        cells = [result["configuration"]["name"]]
+        for sim in sims:
+            by_region = {r["region"]: r for r in mine if r["simulation"] == sim}
+            for region in SUMMARY_REGIONS:
+                row = by_region.get(region)
+                cells.append(_fmt(row["psnr_minus_floor_db"], 1) if row and row["n_px"] else "—")
+            interior = [r["psnr_minus_floor_db"] for name, r in by_region.items()
+                        if name not in (*SUMMARY_REGIONS, "sky") and math.isfinite(r["psnr_minus_floor_db"])]
+            cells.append(_fmt(min(interior), 1) if interior else "—")
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
+
+
 def depth_tables(results: list[dict]) -> str:
-    """Per configuration: a table of regions x (simulation PSNR, floor, margin, SSIM, mean |difference|)."""
+    """A summary (margins over the floor), then per configuration a table of regions x (simulation PSNR,
+    floor, margin, SSIM, mean |difference|)."""
     if not results:
         return "No finished items.\n"
     rows = depth_rows(results)
-    out = []
+    out = ["### Summary: PSNR minus the noise floor (dB; +3 is a perfect, noise-free simulation)\n",
+           summary_table(results),
+           "`layered`: each panel rendered alone (radiance and coverage), composited per pupil ray "
+           "(vissim.optics.depth_layers); `rgbd`: one all-in-focus image and its depth map "
+           "(vissim.optics.depth.blur_depth). Both simulate from inputs rendered beyond the frame by the "
+           "scene's largest blur radius, cropped afterwards. `interiors (min)`: the worst panel interior "
+           "(the sky, noise-free in the render, is left out).\n"]
     for result in results:
         name = result["configuration"]["name"]
         mine = [r for r in rows if r["key"] == result["key"]]
@@ -88,6 +119,8 @@ def depth_tables(results: list[dict]) -> str:
         out.append(f"{result['configuration']['viewer_label']}; simulated as the eye {eye['prescription']} "
                    f"(pupil {eye['pupil_diameter_mm']:g} mm, A {eye['accommodation_diopters']:g} D); "
                    f"predicted blur diameters: {blur}.\n")
+        if result.get("frame_margin_px"):
+            out.append(f"Simulated from inputs {result['frame_margin_px']} px beyond each side of the frame.\n")
         header = ["region", "pixels"]
         for sim in sims:
             header += [f"{sim} PSNR dB", "floor dB", "margin dB", f"{sim} SSIM", "floor SSIM", "mean AD"]
@@ -108,7 +141,7 @@ def depth_tables(results: list[dict]) -> str:
         "from the frame; `boundary` is the band around depth discontinuities (occlusion edges, panels against "
         "the sky), where the render mixes light from both sides and a layered simulation is least exact; `frame` "
         "is the border strip where the render sees beyond the image and the simulation pads it; `all` is the "
-        "whole image. `geometric` is compared with the render, `wave` with the render convolved with the "
+        "whole image. `geometric ...` is compared with the render, `wave ...` with the render convolved with the "
         "aperture's diffraction (Mitsuba renders none). The floor compares the two seeds' renders over the same "
         "pixels: a perfect, noise-free simulation scores +3 dB above it (margin 3.0).\n")
     return "\n".join(out)
@@ -187,10 +220,11 @@ def build_depth_report(run_dir: str | Path) -> list[Path]:
     results = current_results(run_dir)
     rows = depth_rows(results)
     figures = {}
-    for simulation in ("geometric", "wave"):
+    for simulation in dict.fromkeys(r["simulation"] for r in rows):
         png = _figure(results, run_dir, simulation)
         if png is not None:
-            figures[f"{simulation} simulation against the render"] = (f"figure_depth_{simulation}.png", png)
+            name = simulation.replace(" ", "_")
+            figures[f"{simulation} simulation against the render"] = (f"figure_depth_{name}.png", png)
     written = write_report_files(run_dir, title=f"vissim depth validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=depth_tables(results), figures=figures)
@@ -200,8 +234,8 @@ def build_depth_report(run_dir: str | Path) -> list[Path]:
 
 def depth_summary_lines(run_dir: str | Path) -> list[str]:
     """A terminal summary: one line per (configuration, simulation, region)."""
-    lines = [f"{'configuration':40s} {'simulation':>10s} {'region':>16s} {'PSNR dB':>8s} {'floor dB':>8s} {'SSIM':>7s}"]
+    lines = [f"{'configuration':40s} {'simulation':>16s} {'region':>16s} {'PSNR dB':>8s} {'floor dB':>8s} {'SSIM':>7s}"]
     for r in depth_rows(current_results(run_dir)):
-        lines.append(f"{r['configuration'][:40]:40s} {r['simulation']:>10s} {r['region'][:16]:>16s} "
+        lines.append(f"{r['configuration'][:40]:40s} {r['simulation']:>16s} {r['region'][:16]:>16s} "
                      f"{_fmt(r['psnr_db'], 2):>8s} {_fmt(r['noise_floor_psnr_db'], 2):>8s} {_fmt(r['ssim'], 4):>7s}")
     return lines

@@ -2,8 +2,11 @@
 
 Run folder: as :mod:`vissim.validation.runner` (``campaign.json``, ``renders/<key>.exr`` keyed
 by their inputs, ``items/<key>/result.json`` written last), so re-runs resume.  Each item needs
-four renders (:class:`DepthRenderSpec`): the blurred view at both seeds, the all-in-focus view
-and the proximity (depth) pass; :mod:`vissim.validation.depth_item` computes the item.
+renders (:class:`DepthRenderSpec`): the blurred view at both seeds, the all-in-focus view and
+the proximity (depth) pass (the RGB-D input), and for the layered input each panel alone: its
+radiance and coverage (and, for a tilted chart, its proximity pass).  The pinhole renders
+extend ``margin_px`` beyond the frame on every side (the settings' ``frame_margin``);
+:mod:`vissim.validation.depth_item` computes the item.
 """
 
 from __future__ import annotations
@@ -41,6 +44,8 @@ class DepthRenderSpec:
     spp: int
     seed: int
     oversample: int = 1
+    margin_px: int = 0  # pixels (campaign grid) beyond the frame on every side
+    panels: tuple[int, ...] | None = None  # only these panels (a layer); None: the whole scene
 
     @property
     def key(self) -> str:
@@ -51,11 +56,11 @@ class DepthRenderSpec:
         return json_safe(self)
 
     def render_scene(self) -> DepthScene:
-        s = self.oversample
+        scene, s = self.scene.with_margin(self.margin_px), self.oversample
         if s == 1:
-            return self.scene
-        rows, cols = self.scene.size_px
-        return dataclasses.replace(self.scene, arcmin_per_px=self.scene.arcmin_per_px / s, size_px=(rows * s, cols * s))
+            return scene
+        rows, cols = scene.size_px
+        return dataclasses.replace(scene, arcmin_per_px=scene.arcmin_per_px / s, size_px=(rows * s, cols * s))
 
 
 def render_depth_spec(spec: DepthRenderSpec):
@@ -68,16 +73,29 @@ def render_depth_spec(spec: DepthRenderSpec):
     )
 
     result = render_view(spec.render_scene(), spec.viewer, view=spec.view, content=spec.content, spp=spec.spp,
-                         seed=spec.seed)
+                         seed=spec.seed, panels=spec.panels)
     return result
 
 
 def render_specs(config: DepthConfiguration, settings: DepthCampaignSettings) -> dict[str, DepthRenderSpec]:
+    """The renders of one configuration by name: ``truth_<i>``, ``all_in_focus``, ``proximity`` and
+    per panel ``layer_<i>``, ``coverage_<i>`` (and ``layer_proximity_<i>`` for a tilted chart)."""
     truth = {f"truth_{i}": DepthRenderSpec(config.scene, config.viewer, "blurred", "radiance", settings.spp, seed)
              for i, seed in enumerate(settings.seeds)}
-    aux = {name: DepthRenderSpec(config.scene, config.viewer, "all_in_focus", content, settings.aux_spp,
-                                 settings.aux_seed, settings.oversample)
-           for name, content in (("all_in_focus", "radiance"), ("proximity", "proximity"))}
+    margin = config.frame_margin_px(settings)
+
+    def pinhole(content, seed, panels=None):
+        return DepthRenderSpec(config.scene, config.viewer, "all_in_focus", content, settings.aux_spp, seed,
+                               settings.oversample, margin, panels)
+
+    aux = {"all_in_focus": pinhole("radiance", settings.aux_seed),  # the RGB-D input; the masks need its depth
+           "proximity": pinhole("proximity", settings.aux_seed)}
+    if "layered" in settings.inputs:
+        for i, panel in enumerate(config.scene.panels):
+            aux[f"layer_{i}"] = pinhole("radiance", settings.aux_seed, (i,))
+            aux[f"coverage_{i}"] = pinhole("coverage", settings.aux_seed, (i,))
+            if not hasattr(panel, "distance_m"):  # a tilted chart: its proximity varies across it
+                aux[f"layer_proximity_{i}"] = pinhole("proximity", settings.aux_seed, (i,))
     return {**truth, **aux}
 
 

@@ -30,6 +30,8 @@ BYTES_PER_FFT_PX = 48
 BYTES_PER_PSF_PX = 32
 #: Layered depth blur, per pixel of the (oversampled) image: layers' images, masks and spectra.
 BYTES_PER_DEPTH_PX = 256
+#: Layered input, per pixel and scene layer: its radiance and coverage, padded, and float64 composites.
+BYTES_PER_LAYER_PX = 64
 
 
 def _psf_bytes(front: Wavefront, pupil_mm: float, step: float, wavelength_nm: float, mode: str) -> tuple[float, int]:
@@ -85,9 +87,11 @@ def check_depth_campaign_memory(campaign) -> None:
     settings = campaign.settings
     for config in campaign.configurations:
         rows, cols = config.scene.size_px
-        fine = float(rows) * cols * settings.oversample**2
+        margin = config.frame_margin_px(settings)  # the simulations' inputs extend beyond the frame
+        fine = float(rows + 2 * margin) * (cols + 2 * margin) * settings.oversample**2
+        layered = BYTES_PER_LAYER_PX * len(config.scene.panels) if "layered" in settings.inputs else 0
         need = max(render_memory_bytes(rows * cols, settings.spp), render_memory_bytes(fine, settings.aux_spp),
-                   fine * BYTES_PER_DEPTH_PX)
+                   fine * (BYTES_PER_DEPTH_PX + layered))
         try:
             check_allocation(need, f"its {rows * settings.oversample} x {cols * settings.oversample} px renders "
                                    f"and layered blur")

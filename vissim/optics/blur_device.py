@@ -1,0 +1,83 @@
+"""``blur_image`` on a device (:mod:`vissim.optics.array_backend`): the CPU, or a CUDA GPU through CuPy.
+
+Same contract as :func:`vissim.optics.blur.blur_image` (linear light, one PSF or one per channel,
+the same padding modes and default background, float32), computed as one full-frame real FFT
+pair per PSF with every channel that shares it batched: on a GPU a 1080p frame fits in one
+transform, so the CPU's overlap-save squares would only add launches.  On the CPU backend it
+equals ``blur_image`` to float32 round-off (``tests/test_array_backend.py``), and it is the same
+code that runs on the GPU.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.fft
+
+from vissim.errors import VissimInputError
+from vissim.optics.array_backend import array_backend
+from vissim.optics.blur import PADDING_MODES, BlurKernel, _border_mean, _check_sampling, _padding_width
+from vissim.optics.psf import PSF
+
+__all__ = ["blur_image_on"]
+
+
+def blur_image_on(
+    image: np.ndarray,
+    psf: PSF | Sequence[PSF],
+    *,
+    arcmin_per_px: float,
+    padding: str = "constant",
+    background: float | Sequence[float] | None = None,
+    device: str = "cpu",
+) -> np.ndarray:
+    """:func:`vissim.optics.blur.blur_image` on ``device`` (``"cpu"``, ``"cuda"`` or ``"auto"``); float32, on the host."""
+    backend = array_backend(device)
+    xp = backend.xp
+    if padding not in PADDING_MODES:
+        raise VissimInputError(f"padding must be one of {', '.join(PADDING_MODES)}; got {padding!r}")
+    array = np.asarray(image, dtype=np.float32)
+    if array.ndim not in (2, 3) or min(array.shape[:2]) < 1:
+        raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise VissimInputError("image has NaN or infinite pixels; blur needs finite linear-light values")
+    channels = array[np.newaxis] if array.ndim == 2 else np.moveaxis(array, -1, 0)
+    psfs = [psf] * len(channels) if isinstance(psf, PSF) else list(psf)
+    if len(psfs) != len(channels):
+        raise VissimInputError(f"got {len(psfs)} PSFs for an image with {len(channels)} channels")
+    backgrounds = [background] * len(channels) if background is None or np.ndim(background) == 0 else list(background)
+    if len(backgrounds) != len(channels):
+        raise VissimInputError(f"got {len(backgrounds)} background values for {len(channels)} channels")
+    for p in psfs:
+        _check_sampling(p, arcmin_per_px)
+    rows, cols = array.shape[:2]
+    out = np.empty(channels.shape, np.float32)
+    for group in {id(p): p for p in psfs}.values():
+        members = [c for c, p in enumerate(psfs) if p is group]
+        if padding == "wrap":
+            if group.data.shape[0] > min(rows, cols):
+                raise VissimInputError(f"a {group.data.shape[0]} px PSF is larger than the {rows}x{cols} px image; "
+                                       "'wrap' padding needs a smaller PSF")
+            offset, shape = 0, (rows, cols)
+            padded = backend.asarray(channels[members])
+        else:
+            offset = _padding_width(group)
+            shape = (scipy.fft.next_fast_len(rows + 2 * offset, real=True),
+                     scipy.fft.next_fast_len(cols + 2 * offset, real=True))
+            widths = ((offset, shape[0] - rows - offset), (offset, shape[1] - cols - offset))
+            padded = xp.stack([_pad(backend.asarray(channels[c]), widths, padding, backgrounds[c], channels[c], xp)
+                               for c in members])
+        transfer = backend.asarray(BlurKernel.prepare(group, shape, dtype=np.float32).transfer)
+        spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
+        spectrum *= transfer
+        blurred = backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())
+        out[members] = backend.to_numpy(blurred[:, offset : offset + rows, offset : offset + cols])
+    return out[0] if array.ndim == 2 else np.moveaxis(out, 0, -1)
+
+
+def _pad(channel, widths, mode: str, background, host_channel: np.ndarray, xp):
+    if mode == "constant":
+        value = _border_mean(host_channel) if background is None else float(background)
+        return xp.pad(channel, widths, mode="constant", constant_values=value)
+    return xp.pad(channel, widths, mode="symmetric" if mode == "reflect" else "edge")
