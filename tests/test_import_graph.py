@@ -69,7 +69,7 @@ def test_no_import_loops():
 
 def test_heavy_dependencies_stay_behind_their_doors():
     doors = {"mitsuba": "vissim.render", "drjit": "vissim.render", "rawpy": "vissim.validation.raw",
-             "OpenEXR": "vissim.imageio"}
+             "OpenEXR": "vissim.imageio", "cupy": "vissim.optics.array_backend"}
     for name, path in _modules().items():
         for imported in _imports(path):
             door = doors.get(imported.split(".")[0])

@@ -251,6 +251,15 @@ def test_gaussian_band_is_a_normalised_symmetric_weighting():
     assert weights[0] / weights[3] == pytest.approx(1 / 16)
 
 
+@pytest.mark.parametrize("center_nm, fwhm_nm", [(550, 550), (550, 360), (1900, 200)])
+def test_a_band_reaching_outside_the_wavelength_range_is_refused(center_nm, fwhm_nm):
+    from vissim.errors import VissimInputError
+    from vissim.optics.chromatic import gaussian_band
+
+    with pytest.raises(VissimInputError, match="200-2000 nm"):
+        gaussian_band(center_nm, fwhm_nm)
+
+
 @pytest.mark.parametrize(
     "terms, pupil_mm, arcmin_per_px, size_px",
     [({(2, 0): 1.0, (2, 2): 0.4}, 4.0, 0.25, 201), ({(3, 1): 0.3, (4, 0): 0.2}, 6.0, 0.5, 101),

@@ -8,7 +8,7 @@ import os
 from vissim.errors import VissimInputError
 
 __all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "size_px",
-           "samples_per_pixel", "MAX_SPP", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
+           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
            "format_bytes", "check_allocation"]
 
 
@@ -28,6 +28,19 @@ def positive_number(value, name: str, unit: str, *, allow_inf: bool = False) -> 
     number = finite_number(value, name, unit, allow_inf=allow_inf)
     if number <= 0.0:
         raise VissimInputError(f"{name} must be a positive number of {unit}, got {value!r}")
+    return number
+
+
+#: Wavelengths a PSF may be computed at (nm): the near UV to the near IR.
+WAVELENGTH_RANGE_NM = (200.0, 2000.0)
+
+
+def wavelength_nm(value, name: str = "wavelength") -> float:
+    """A wavelength within :data:`WAVELENGTH_RANGE_NM`."""
+    number = finite_number(value, name, "nm")
+    low, high = WAVELENGTH_RANGE_NM
+    if not low <= number <= high:
+        raise VissimInputError(f"{name} must be within {low:g}-{high:g} nm, got {value!r} nm")
     return number
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+from vissim.checks import wavelength_nm
 from vissim.errors import VissimInputError
 
 __all__ = ["chromatic_difference_of_refraction_diopters", "gaussian_band", "THIBOS_1992"]
@@ -46,6 +47,8 @@ def gaussian_band(center_nm: float, fwhm_nm: float, samples: int = 7) -> tuple[t
         raise VissimInputError(f"a spectral band needs a finite centre and a positive FWHM in nm, got {center_nm!r}, {fwhm_nm!r}")
     if int(samples) != samples or samples < 3:
         raise VissimInputError(f"a spectral band needs at least 3 samples, got {samples!r}")
+    for edge in (center - fwhm, center + fwhm):  # the band's outermost samples
+        wavelength_nm(edge, f"the band {center:g} +- {fwhm:g} nm (its FWHM each way) reaches a wavelength that")
     sigma = fwhm / (2.0 * math.sqrt(2.0 * math.log(2.0)))
     offsets = [fwhm * (2.0 * k / (samples - 1) - 1.0) for k in range(samples)]
     weights = [math.exp(-0.5 * (d / sigma) ** 2) for d in offsets]

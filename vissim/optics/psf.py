@@ -35,6 +35,7 @@ import scipy.fft
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.optics.psf_field import (
     MAX_ENERGY_OUTSIDE,
@@ -236,10 +237,7 @@ def compute_psf(
         raise VissimInputError(f"PSF pixel must be one of {', '.join(PIXEL_MODES)}, got {pixel!r}")
     if dtype not in (np.float32, np.float64):
         raise VissimInputError(f"PSF dtype must be float32 or float64, got {dtype!r}")
-    wavelengths = tuple(float(w) for w in np.atleast_1d(wavelength_nm))
-    for w in wavelengths:
-        if not math.isfinite(w) or not 200.0 <= w <= 2000.0:
-            raise VissimInputError(f"wavelength must be within 200-2000 nm, got {w!r} nm")
+    wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))
     weights_t = tuple(float(w) for w in (weights if weights is not None else [1.0] * len(wavelengths)))
     if len(weights_t) != len(wavelengths) or any(not math.isfinite(w) or w < 0 for w in weights_t) or sum(weights_t) <= 0:
         raise VissimInputError(f"need one non-negative weight per wavelength, got {weights_t!r} for {wavelengths!r} nm")

@@ -29,6 +29,7 @@ from scipy.special import j0, j1
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.wavefront import Wavefront
 from vissim.units import nm_to_mm, rad_to_arcmin
@@ -102,7 +103,7 @@ def suggested_size_px(
     :data:`MAX_ENERGY_OUTSIDE` of the PSF's energy (:func:`energy_outside_field`)."""
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
-    wavelengths = tuple(float(w) for w in np.atleast_1d(wavelength_nm))
+    wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))
     weights = (1.0,) * len(wavelengths) if weights is None else tuple(float(w) for w in weights)
     if hasattr(wavefront, "coefficients_um"):  # campaigns ask again and again for the same eyes
         return _suggested_size_cached(tuple(wavefront.coefficients_um.items()), wavefront.pupil_diameter_mm, diameter,

@@ -21,6 +21,7 @@ from typing import Any
 from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
+from vissim.checks import WAVELENGTH_RANGE_NM
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import SIMULATOR_REVISION
@@ -95,7 +96,7 @@ class DepthCampaign:
 # -- loading ---------------------------------------------------------------------------
 #: [depth_campaign] numbers: (unit, lowest, highest).
 NUMBER_SETTINGS = {
-    "wavelength_nm": ("nm", 200.0, 2000.0),
+    "wavelength_nm": ("nm", *WAVELENGTH_RANGE_NM),
     "data_range": ("(linear reflectance)", 1e-3, 1e3),
     "margin_px": ("px", 0.0, 1000.0),
     "layer_spacing_fraction": ("(of a blur-free depth step)", 1e-3, 1.0),
