@@ -178,7 +178,7 @@ def _blur_tiled(channel, psf, padding, background, dtype, tile):
     if padding == "constant" and background is None:
         background = _border_mean(channel)
     transfer = BlurKernel.prepare(psf, (tile, tile), dtype=dtype).transfer[:, None, :]
-    out = np.empty((rows, cols), dtype)
+    out = np.empty((rows, n_cols * valid), dtype)  # whole squares wide; cropped on return
     for top in range(0, rows, valid):  # output rows top .. top + valid
         first, last = top - first_valid, top - first_valid + tile  # the squares' rows in the image
         strip = _pad_widths(channel[max(first, 0) : min(last, rows)],
@@ -188,9 +188,9 @@ def _blur_tiled(channel, psf, padding, background, dtype, tile):
         spectra *= transfer
         blurred = scipy.fft.irfft2(spectra, s=(tile, tile), axes=(0, 2), workers=-1, overwrite_x=True)
         done = min(valid, rows - top)
-        part = blurred[first_valid : first_valid + done, :, first_valid : first_valid + valid]
-        out[top : top + done] = part.reshape(done, n_cols * valid)[:, :cols]
-    return out
+        out[top : top + done].reshape(done, n_cols, valid)[...] = blurred[first_valid : first_valid + done, :,
+                                                                          first_valid : first_valid + valid]
+    return out[:, :cols]
 
 
 def _blur_channel(channel, psf, padding, background, dtype):
@@ -248,7 +248,7 @@ def blur_image(
     array = np.asarray(image)
     if array.ndim not in (2, 3) or min(array.shape[:2]) < 1:
         raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not (np.isfinite(array.min()) and np.isfinite(array.max())):  # NaN propagates; no mask allocated
         raise VissimInputError("image has NaN or infinite pixels; blur needs finite linear-light values")
     channels = [array] if array.ndim == 2 else [array[..., c] for c in range(array.shape[2])]
     psfs = [psf] * len(channels) if isinstance(psf, PSF) else list(psf)
