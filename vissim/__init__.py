@@ -1,11 +1,67 @@
-"""vissim: simulate and validate how refractive errors blur what an eye or a camera sees."""
+"""vissim: simulate and validate how refractive errors blur what an eye or a camera sees.
+
+The names a user needs are importable from here; each loads its module on first use, so
+``import vissim`` stays light and never imports Mitsuba (only rendering does).
+
+* Prescriptions and wavefronts: :class:`Prescription`, :func:`parse_spherocylinder`,
+  :class:`Wavefront`.
+* PSFs and their metrics: :func:`compute_psf`, :class:`PSF`, :func:`strehl_ratio`,
+  :func:`mtf`, :func:`otf`, :func:`diffraction_mtf`, :func:`frequencies_cyc_per_deg`.
+* Images: :func:`blur_image`; charts: :func:`etdrs_chart_spec`, :func:`single_letter_spec`,
+  :func:`render_chart_angular`, :func:`render_chart_print`.
+* Fitting a prescription to a capture: :func:`fit_rx`, :class:`RxFit`.
+* Validation campaigns: :func:`load_campaign`, :func:`run_campaign`.
+* ATV data: :func:`load_subject`, :func:`load_directory`, :func:`analyse_subject`,
+  :func:`fit_quadratic`.
+"""
 
 from __future__ import annotations
 
+import importlib
 import logging
 
 __version__ = "0.1.0"
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
 
-__all__ = ["__version__"]
+#: Public name -> the module that defines it (loaded on first access).
+_PUBLIC = {
+    "Prescription": "vissim.optics.prescription",
+    "parse_spherocylinder": "vissim.optics.prescription",
+    "Wavefront": "vissim.optics.wavefront",
+    "PSF": "vissim.optics.psf",
+    "compute_psf": "vissim.optics.psf",
+    "strehl_ratio": "vissim.optics.psf",
+    "mtf": "vissim.optics.psf_metrics",
+    "otf": "vissim.optics.psf_metrics",
+    "diffraction_mtf": "vissim.optics.psf_metrics",
+    "frequencies_cyc_per_deg": "vissim.optics.psf_metrics",
+    "blur_image": "vissim.optics.blur",
+    "etdrs_chart_spec": "vissim.charts",
+    "single_letter_spec": "vissim.charts",
+    "render_chart_angular": "vissim.charts",
+    "render_chart_print": "vissim.charts",
+    "fit_rx": "vissim.fit.rx_fit",
+    "RxFit": "vissim.fit.rx_fit",
+    "load_campaign": "vissim.validation.campaign",
+    "run_campaign": "vissim.validation.runner",
+    "load_subject": "vissim.atv.data",
+    "load_directory": "vissim.atv.data",
+    "analyse_subject": "vissim.atv.analysis",
+    "fit_quadratic": "vissim.atv.analysis",
+}
+
+__all__ = ["__version__", *_PUBLIC]
+
+
+def __getattr__(name: str):
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'vissim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

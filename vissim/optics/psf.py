@@ -199,27 +199,53 @@ def compute_psf(
 
     Parameters
     ----------
-    wavefront
+    wavefront : Wavefront or OpdMap
         A Zernike :class:`~vissim.optics.wavefront.Wavefront` or a sampled
         :class:`~vissim.optics.opd_map.OpdMap` (a traced or measured OPD map).
-    wavelength_nm, weights
-        One wavelength, or several with relative spectral weights: each wavelength's PSF carries
+    pupil_diameter_mm : float, optional
+        Pupil diameter in mm, at most the wavefront's measurement pupil.
+    wavelength_nm, weights : float or sequence of float, optional
+        Wavelength(s) in nm (default 550); one wavelength, or several with relative spectral weights: each wavelength's PSF carries
         its weight of the total energy (inside and outside the field), and their sum is
         normalised to unit sum over the field.
-    lca_reference_nm
+    lca_reference_nm : float, optional
         If given, add the eye's longitudinal chromatic aberration (Thibos 1992) relative to
         this wavelength: each wavelength gets its chromatic defocus.
-    arcmin_per_px, size_px
-        Output sampling and square field (pixels).  The result is pixel-integrated.
-    mode
+    arcmin_per_px, size_px : float, int
+        Output sampling (arcmin per pixel, default 0.25) and the side of the square field
+        (pixels, default 256).  A field that would leave more than 1 % of the energy outside
+        raises :class:`~vissim.errors.FieldTooSmallError` naming the size that holds it.
+    mode : {"wave", "geometric"}
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
-    pixel
+    pixel : {"integrate", "sample"}
         ``"integrate"`` (default): each value is the PSF integrated over its pixel, what a
         sensor records.  ``"sample"``: band-limited point samples, the exact kernel for
         blurring well-sampled images (see :mod:`vissim.optics.blur` for when it matters).
-    method
+    dtype : numpy.float64 or numpy.float32
+        dtype of ``PSF.data``.
+    method : {"mft", "fft"}, optional
         Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,
         recorded in ``PSF.sampling``.  Both give the same PSF to round-off.
+
+    Returns
+    -------
+    PSF
+        ``data`` is a read-only ndarray of shape ``(size_px, size_px)`` with unit sum over the
+        field, sampled at ``arcmin_per_px`` (carried by the result).  Orientation
+        (``docs/conventions.md``): ``data[row, col]`` is the observer's visual field, row 0 at
+        the top (+y up is decreasing row), columns increasing to the observer's right, the
+        chief ray at ``[size_px // 2, size_px // 2]``.  ``energy_in_field`` is the fraction of
+        the energy the field held before normalising.
+
+    Examples
+    --------
+    A -2.00 D myope (uncorrected) through a 3 mm pupil, at 550 nm:
+
+    >>> import vissim
+    >>> front = vissim.Wavefront.from_prescription(vissim.Prescription(-2.0), pupil_diameter_mm=3.0)
+    >>> psf = vissim.compute_psf(front, arcmin_per_px=0.5, size_px=128)
+    >>> psf.data.shape, round(float(psf.data.sum()), 6)
+    ((128, 128), 1.0)
     """
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     if diameter > wavefront.pupil_diameter_mm * (1 + 1e-12):

@@ -33,6 +33,10 @@ def otf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
 
 
 def mtf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
+    """Modulation transfer function ``|OTF|``, centred like :func:`otf`, MTF(0) = 1.
+
+    Frequencies along each axis are :func:`frequencies_cyc_per_deg` (cycles/degree).
+    """
     return np.abs(otf(psf, remove_pixel=remove_pixel))
 
 
