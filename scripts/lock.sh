@@ -9,7 +9,7 @@ PYTHON="${PYTHON:-$(command -v python3.11 || command -v python3)}"
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 "$PYTHON" -m venv "$scratch/venv"
-"$scratch/venv/bin/python" -m pip install --quiet --disable-pip-version-check ".[test,bench,peers]"
+"$scratch/venv/bin/python" -m pip install --quiet --disable-pip-version-check ".[test,bench,peers,docs]"
 {
     echo "# The stack the test suite passes on, installed by scripts/setup.sh (pip -c)."
     echo "# Made by scripts/lock.sh on $(date -u +%Y-%m-%d) with $("$PYTHON" --version 2>&1) on $(uname -m)."
