@@ -10,7 +10,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("t*.py"))
 FIGURES = {"t1_rx_to_blurred_chart.py": ["t1_psf_log.png", "t1_mtf.png", "t1_chart.png"],
-           "t5_fit_prescription.py": ["t5_fit.png"]}
+           "t5_fit_prescription.py": ["t5_fit.png"],
+           "t6_atv_data.py": ["t6_subject_001_fits.png"]}
 
 
 def test_every_tutorial_is_listed_here():
