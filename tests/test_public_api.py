@@ -6,11 +6,12 @@ import sys
 import vissim
 
 # The user's path through the library (issue 16): Rx -> wavefront -> PSF -> image, charts,
-# fitting, campaigns, ATV data.
+# depth scenes, the bench render, fitting, campaigns, ATV data.
 EXPECTED = {
     "Prescription", "parse_spherocylinder", "Wavefront", "PSF", "compute_psf", "strehl_ratio", "mtf",
     "otf", "diffraction_mtf", "frequencies_cyc_per_deg", "blur_image", "etdrs_chart_spec",
-    "single_letter_spec", "render_chart_angular", "render_chart_print", "fit_rx", "RxFit",
+    "single_letter_spec", "render_chart_angular", "render_chart_print", "blur_depth", "DslrBench",
+    "render_bench", "fit_rx", "RxFit",
     "load_campaign", "run_campaign", "load_subject", "load_directory", "analyse_subject", "fit_quadratic",
 }
 

@@ -7,8 +7,10 @@ The names a user needs are importable from here; each loads its module on first 
   :class:`Wavefront`.
 * PSFs and their metrics: :func:`compute_psf`, :class:`PSF`, :func:`strehl_ratio`,
   :func:`mtf`, :func:`otf`, :func:`diffraction_mtf`, :func:`frequencies_cyc_per_deg`.
-* Images: :func:`blur_image`; charts: :func:`etdrs_chart_spec`, :func:`single_letter_spec`,
+* Images: :func:`blur_image`, and scenes with depth: :func:`blur_depth`; charts: :func:`etdrs_chart_spec`, :func:`single_letter_spec`,
   :func:`render_chart_angular`, :func:`render_chart_print`.
+* Rendering the bench with Mitsuba (imported only when a render runs): :class:`DslrBench`,
+  :func:`render_bench`.
 * Fitting a prescription to a capture: :func:`fit_rx`, :class:`RxFit`.
 * Validation campaigns: :func:`load_campaign`, :func:`run_campaign`.
 * ATV data: :func:`load_subject`, :func:`load_directory`, :func:`analyse_subject`,
@@ -37,10 +39,13 @@ _PUBLIC = {
     "diffraction_mtf": "vissim.optics.psf_metrics",
     "frequencies_cyc_per_deg": "vissim.optics.psf_metrics",
     "blur_image": "vissim.optics.blur",
+    "blur_depth": "vissim.optics.depth",
     "etdrs_chart_spec": "vissim.charts",
     "single_letter_spec": "vissim.charts",
     "render_chart_angular": "vissim.charts",
     "render_chart_print": "vissim.charts",
+    "DslrBench": "vissim.bench.dslr",
+    "render_bench": "vissim.render.run",
     "fit_rx": "vissim.fit.rx_fit",
     "RxFit": "vissim.fit.rx_fit",
     "load_campaign": "vissim.validation.campaign",
