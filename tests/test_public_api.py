@@ -48,3 +48,19 @@ def test_the_psf_docstring_example_runs():
 
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted >= 3 and result.failed == 0
+
+
+def test_the_cheap_docstring_examples_run():
+    """The Examples of the public names that need neither Mitsuba nor files (those are +SKIP)."""
+    import doctest
+    import importlib
+
+    modules = ("vissim.optics.prescription", "vissim.optics.wavefront", "vissim.optics.blur", "vissim.charts",
+               "vissim.fit.rx_fit", "vissim.validation.campaign", "vissim.validation.runner", "vissim.atv.analysis",
+               "vissim.render.run")
+    attempted = 0
+    for name in modules:
+        result = doctest.testmod(importlib.import_module(name), optionflags=doctest.NORMALIZE_WHITESPACE)
+        assert result.failed == 0, name
+        attempted += result.attempted
+    assert attempted >= 20

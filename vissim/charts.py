@@ -396,7 +396,34 @@ def render_chart_angular(
     snap_to_pixels: bool = False,
     supersample: int = 16,
 ) -> Chart:
-    """Render ``spec`` on a grid in visual angle (for simulation); see :func:`layout_chart`."""
+    """Render ``spec`` on a grid in visual angle (for simulation); see :func:`layout_chart`.
+
+    Parameters
+    ----------
+    spec : ChartSpec
+        From :func:`etdrs_chart_spec` or :func:`single_letter_spec`.
+    arcmin_per_px : float
+        Angular sampling, arcmin per pixel.
+    shape_px : (int, int), optional
+        Image size (rows, cols); default: just large enough for the chart and its margin.
+    snap_to_pixels : bool
+        Round letter positions and sizes to whole pixels.
+    supersample : int
+        Subsamples per pixel side for anti-aliasing.
+
+    Returns
+    -------
+    Chart
+        ``pixels``: float32 (H, W) linear reflectance (dark letters on white by default), row 0
+        at the top, columns to the observer's right; ``layout``; ``spec``.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> chart = vissim.render_chart_angular(vissim.single_letter_spec("K", 1.0), arcmin_per_px=1.0)
+    >>> chart.pixels.shape, chart.pixels.dtype.name, chart.arcmin_per_px
+    ((150, 150), 'float32', 1.0)
+    """
     layout = layout_chart(spec, arcmin_per_px=arcmin_per_px, shape_px=shape_px, snap_to_pixels=snap_to_pixels)
     return _render(spec, layout, supersample)
 

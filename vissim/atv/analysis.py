@@ -390,7 +390,35 @@ def analyse_curve(
 def analyse_subject(
     subject: SubjectData, *, level: float = 0.95, average_sessions: bool = True, window_diopters: float | None = None
 ) -> tuple[CurveAnalysis, ...]:
-    """Both eyes, with and without drops (conditions without sessions are skipped)."""
+    """Both eyes, with and without drops (conditions without sessions are skipped).
+
+    Parameters
+    ----------
+    subject : SubjectData
+        From :func:`vissim.load_subject`.
+    level : float
+        Confidence level of the vertex intervals (0-1).
+    average_sessions : bool
+        Average the sessions at each trial-lens power before fitting.
+    window_diopters : float, optional
+        Fit only lens powers within this many dioptres of the curve's minimum.
+
+    Returns
+    -------
+    tuple of CurveAnalysis
+        One per eye and condition: the points (lens power in D, minimum visible code), the
+        quadratic fit, the vertex (best lens, D) with Fieller and delta-method intervals and
+        the comparison with the measured spherical equivalent.
+
+    Examples
+    --------
+    Needs ATV data files; see tutorial 6:
+
+    >>> import vissim
+    >>> subject = vissim.load_subject("subject_01.json")  # doctest: +SKIP
+    >>> [(a.eye, a.condition) for a in vissim.analyse_subject(subject)]  # doctest: +SKIP
+    [('OD', 'without_drops'), ('OS', 'without_drops')]
+    """
     results = []
     for condition in CONDITIONS:
         drops = condition == "with_drops"

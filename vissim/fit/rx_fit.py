@@ -481,6 +481,29 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     model_error_diopters
         The model's own error per power-vector component (one standard deviation), added to the
         noise in the intervals; the default was measured on Mitsuba bench renders (module doc).
+
+    Returns
+    -------
+    RxFit
+        ``status``, the best power vector ``best.power_vector`` = (M, J0, J45) in dioptres (the
+        power the blur adds; :meth:`Solution.spherocylinder` writes it), its covariance and
+        intervals, the other sign combinations and residual statistics.  ``image`` and
+        ``reference`` are (H, W) arrays in the same orientation (row 0 at the top).
+
+    Examples
+    --------
+    A letter blurred by 1 D of pure defocus (geometric optics, no magnification change); the
+    sign of pure defocus cannot be told from the blur alone, so the status says so:
+
+    >>> import vissim
+    >>> chart = vissim.render_chart_angular(vissim.single_letter_spec("K", 1.0), arcmin_per_px=1.0)
+    >>> front = vissim.Wavefront.from_prescription(vissim.Prescription(-1.0), pupil_diameter_mm=3.0)
+    >>> psf = vissim.compute_psf(front, arcmin_per_px=1.0, mode="geometric")
+    >>> blurred = vissim.blur_image(chart.pixels, psf, arcmin_per_px=1.0)
+    >>> fit = vissim.fit_rx(blurred, chart.pixels, arcmin_per_px=1.0, pupil_diameter_mm=3.0,
+    ...                     magnification="none")
+    >>> fit.status, round(abs(fit.best.power_vector[0]), 1)
+    ('sign undetermined', 1.0)
     """
     started = time.perf_counter()
     step = check_arcmin_per_px(arcmin_per_px)

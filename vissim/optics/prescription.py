@@ -91,7 +91,26 @@ class SpheroCylinder:
     # -- notation ---------------------------------------------------------------------
     @classmethod
     def parse(cls, text: str) -> Self:
-        """Parse a written sphero-cylinder; see :func:`parse_spherocylinder`."""
+        """Parse a written sphero-cylinder; see :func:`parse_spherocylinder` for the notations.
+
+        Parameters
+        ----------
+        text : str
+            Sphere and cylinder in dioptres, TABO axis in degrees, e.g. ``"-2.00 -1.25 x 180"``.
+
+        Returns
+        -------
+        The same class (:class:`Prescription`, ...), as written (cylinder sign kept).
+
+        Examples
+        --------
+        >>> import vissim
+        >>> rx = vissim.Prescription.parse("-2.00/-1.25x180")
+        >>> rx.sphere_diopters, rx.cylinder_diopters, rx.axis_deg
+        (-2.0, -1.25, 180.0)
+        >>> print(rx)
+        -2.00 -1.25 x 180
+        """
         sphere, cyl, axis = parse_spherocylinder(text)
         return cls(sphere, cyl, axis)
 

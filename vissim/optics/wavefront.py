@@ -93,6 +93,20 @@ class Wavefront:
     """OSA Zernike expansion of a wavefront error, in µm, over ``pupil_diameter_mm``.
 
     ``coefficients_um`` maps ``(n, m)`` to the coefficient in micrometres.
+
+    Parameters
+    ----------
+    coefficients_um : mapping of (int, int) to float
+        OSA/ANSI Zernike coefficients (radial order ``n``, azimuthal frequency ``m``) in µm;
+        zeros are dropped.
+    pupil_diameter_mm : float
+        Diameter of the pupil over which the coefficients are defined, mm.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> vissim.Wavefront({(2, 0): 0.5, (4, 0): 0.1}, pupil_diameter_mm=6.0)
+    Wavefront({(2,0)=0.5, (4,0)=0.1} um over 6 mm)
     """
 
     coefficients_um: Mapping[tuple[int, int], float]
@@ -117,14 +131,62 @@ class Wavefront:
     # -- construction -----------------------------------------------------------------
     @classmethod
     def from_prescription(cls, rx: Prescription, pupil_diameter_mm: float) -> Wavefront:
+        """The wavefront error of an uncorrected eye whose correcting lens is ``rx``.
+
+        Parameters
+        ----------
+        rx : Prescription
+            The correcting lens (myope: negative sphere), D; TABO axis in degrees.
+        pupil_diameter_mm : float
+            Pupil diameter, mm.
+
+        Returns
+        -------
+        Wavefront
+            Defocus ``(2, 0)`` and astigmatism ``(2, ±2)`` coefficients in µm.
+
+        Examples
+        --------
+        >>> import vissim
+        >>> rx = vissim.Prescription.parse("-2.00 -1.00 x 180")
+        >>> vissim.Wavefront.from_prescription(rx, pupil_diameter_mm=4.0)
+        Wavefront({(2,0)=1.44338, (2,2)=-0.408248} um over 4 mm)
+        """
         return cls(prescription_to_zernike_um(rx, pupil_diameter_mm), pupil_diameter_mm)
 
     @classmethod
     def parse(cls, text: str, pupil_diameter_mm: float) -> Wavefront:
+        """Parse Zernike terms written ``"n,m=µm;n,m=µm"``; repeated terms add up.
+
+        Parameters
+        ----------
+        text : str
+            Terms such as ``"2,0=0.5;4,0=0.1"`` (OSA indices, coefficients in µm).
+        pupil_diameter_mm : float
+            Pupil over which the coefficients are defined, mm.
+
+        Returns
+        -------
+        Wavefront
+
+        Examples
+        --------
+        >>> import vissim
+        >>> vissim.Wavefront.parse("2,0=0.5;4,0=0.1", pupil_diameter_mm=6.0)
+        Wavefront({(2,0)=0.5, (4,0)=0.1} um over 6 mm)
+        """
         return cls(parse_zernike_terms(text), pupil_diameter_mm)
 
     @classmethod
     def zero(cls, pupil_diameter_mm: float) -> Wavefront:
+        """A perfect (aberration-free) wavefront over a pupil of ``pupil_diameter_mm`` mm.
+
+        Examples
+        --------
+        >>> import vissim
+        >>> vissim.Wavefront.zero(3.0)
+        Wavefront({} um over 3 mm)
+        """
         return cls({}, pupil_diameter_mm)
 
     def __add__(self, other: Wavefront) -> Wavefront:

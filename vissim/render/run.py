@@ -211,6 +211,39 @@ def render_bench(
     theory (added power, blur, magnification), chart, variant, spp taken, seed, ``mitsuba_render``
     (:meth:`RenderResult.render_record`: spp asked and taken, pass seeds, determinism), vissim,
     Mitsuba and Dr.Jit versions.
+
+    Parameters
+    ----------
+    bench : DslrBench
+        Camera (focal length mm, f-number), trial lenses, distances (mm), sampling
+        (arcmin per pixel, ``size_px`` = (rows, cols)), spp and seed.
+    chart : ChartSpec or Chart
+        What the camera looks at, at ``bench.chart_distance_mm``.
+    kind : {"mono", "rgb"}
+        One channel or three.
+    variant : str, optional
+        Mitsuba variant (default: the fastest that works here, :mod:`vissim.render.backend`).
+    pass_spp : int, optional
+        Samples per pixel per pass (default: split large renders).
+    progress : callable, optional
+        ``progress(done_spp, total_spp)`` after each pass.
+
+    Returns
+    -------
+    RenderResult
+        ``pixels``: float32 linear radiance, (H, W) for ``"mono"`` or (H, W, 3) for ``"rgb"``,
+        row 0 at the top and columns to the observer's right (as the camera sees the chart,
+        not mirrored); ``provenance``, ``spp``, ``seed``, ``variant``, ``seconds``.
+
+    Examples
+    --------
+    Needs Mitsuba 3 (seconds on a CPU at this size):
+
+    >>> import vissim
+    >>> bench = vissim.DslrBench(size_px=(64, 64), spp=16)
+    >>> result = vissim.render_bench(bench, vissim.single_letter_spec("K", 1.0))  # doctest: +SKIP
+    >>> result.pixels.shape  # doctest: +SKIP
+    (64, 64)
     """
     from vissim.bench.dslr import chart_mm_per_texel, dslr_scene
     from vissim.optics.trial_lens import trial_lens_effect

@@ -141,6 +141,29 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
 
     With ``check_memory`` the memory each item will need is estimated and a campaign this
     machine cannot hold is refused now (:func:`vissim.validation.preflight.check_campaign_memory`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The campaign TOML file (fields: docs' File formats page).
+    check_memory : bool
+        Estimate each item's memory and refuse a campaign this machine cannot hold.
+
+    Returns
+    -------
+    Campaign
+        The validated campaign: its settings and configurations (prescriptions in D, pupils
+        in mm, sampling in arcmin per pixel).
+
+    Raises
+    ------
+    VissimInputError
+        A field is missing, unknown or out of range (the message names the file and field).
+
+    Examples
+    --------
+    >>> import vissim
+    >>> campaign = vissim.load_campaign("campaign.toml")  # doctest: +SKIP
     """
     path = Path(path)
     source = str(path)

@@ -251,6 +251,40 @@ def run_campaign(
     :func:`vissim.validation.renders.render_spec`); it must be picklable for workers.  Every
     check (options, captures, the scheduler) runs before the first file is written; a campaign
     whose every item would be skipped raises :class:`VissimInputError` and writes nothing.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        From :func:`vissim.load_campaign`.
+    run_dir : str or Path
+        Directory for renders, simulations, metrics and the report; an existing run there is
+        resumed (finished items are reused).
+    workers : int
+        Parallel worker processes.
+    scheduler : str, optional
+        How items are scheduled across workers (default: chosen from ``workers``).
+    spp : int, optional
+        Override the campaign's samples per pixel for every render.
+    render : callable, optional
+        ``render(spec) -> ndarray (H, W)`` linear light, row 0 at the top.
+    show_progress : bool
+        Print a progress bar.
+
+    Returns
+    -------
+    RunSummary
+        ``run_dir``, items total and reused, renders made and reused, and one message per
+        skipped item.
+
+    Examples
+    --------
+    Needs Mitsuba (the default ``render``) and a campaign file; see tutorial 3:
+
+    >>> import vissim
+    >>> campaign = vissim.load_campaign("campaign.toml")  # doctest: +SKIP
+    >>> summary = vissim.run_campaign(campaign, "runs/demo", workers=2)  # doctest: +SKIP
+    >>> summary.renders_made  # doctest: +SKIP
+    4
     """
     render = render or render_spec
     run_dir = Path(run_dir)
