@@ -12,7 +12,7 @@ NEEDS_MITSUBA = {"t2_bench_render_vs_simulation.py", "t3_small_campaign.py", "t4
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("t*.py"))
 FIGURES = {"t2_bench_render_vs_simulation.py": ["t2_render_vs_simulation.png"],
-           "t1_rx_to_blurred_chart.py": ["t1_psf_log.png", "t1_mtf.png", "t1_chart.png"],
+           "t1_rx_to_blurred_chart.py": ["t1_psf_log.png", "t1_mtf.png", "t1_chart.png", "t1_through_focus.png"],
            "t3_small_campaign.py": ["t3_run/figure_geometric.png", "t3_run/figure_wave.png", "t3_run/report.html"],
            "t4_depth_scene.py": ["t4_depth.png"],
            "t5_fit_prescription.py": ["t5_fit.png"],

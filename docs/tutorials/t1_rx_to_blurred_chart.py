@@ -1,4 +1,5 @@
-"""Tutorial 1: a prescription -> its wavefront -> the PSF -> a blurred letter chart, and the MTF.
+"""Tutorial 1: a prescription -> its wavefront -> the PSF -> a blurred letter chart, the MTF, and
+through focus.
 
 Run it as ``python docs/tutorials/t1_rx_to_blurred_chart.py OUT_DIR [--small]``; figures go to
 OUT_DIR (default: the ``VISSIM_TUTORIAL_OUT`` environment variable, else ``./tutorial_out``).
@@ -75,5 +76,32 @@ for ax, image, title in zip(axes, (chart.pixels, blurred), ("sharp", f"seen with
     ax.set_title(title)
     ax.axis("off")
 fig.savefig(out / "t1_chart.png", dpi=100, bbox_inches="tight")
+plt.close(fig)
+
+# 6. Through focus: the eye now wears a lens whose sphere is off its prescription by -0.5 ...
+#    +0.5 D (cylinder and axis right), so pure defocus is left over: a lens 0.25 D too strong
+#    (more minus) leaves the residual of Prescription(+0.25).  Sharpest at 0; the PSF at the
+#    top, a 20/63 letter (logMAR 0.5) seen through it below.
+offsets = (-0.5, -0.25, 0.0, 0.25, 0.5)
+letter = vissim.render_chart_angular(vissim.single_letter_spec("K", 0.5), arcmin_per_px=step)
+crop = 12  # PSF pixels shown each side of the chief ray (6 arcmin)
+fig, axes = plt.subplots(2, len(offsets), figsize=(2.2 * len(offsets), 4.6))
+for column, offset in enumerate(offsets):
+    residual = vissim.Prescription(-offset)  # what the worn lens (rx + offset sphere) leaves uncorrected
+    focus_psf = vissim.compute_psf(vissim.Wavefront.from_prescription(residual, pupil_diameter_mm=pupil_mm),
+                                   wavelength_nm=550.0, arcmin_per_px=step, size_px=size)
+    c = size // 2
+    extent = (-crop * step, crop * step, -crop * step, crop * step)
+    axes[0, column].imshow(focus_psf.data[c - crop:c + crop, c - crop:c + crop], extent=extent,
+                           origin="upper", cmap="magma")
+    axes[0, column].set_title(f"{offset:+.2f} D", fontsize=9)
+    axes[0, column].set_xlabel("arcmin", fontsize=8)
+    seen = vissim.blur_image(letter.pixels, focus_psf, arcmin_per_px=step)
+    axes[1, column].imshow(seen, cmap="gray", vmin=0, vmax=1)
+    axes[1, column].axis("off")
+axes[0, 0].set_ylabel("PSF (linear)")
+fig.suptitle(f"through focus: worn sphere minus prescribed ({rx} prescribed), {pupil_mm:g} mm pupil, 550 nm",
+             fontsize=10)
+fig.savefig(out / "t1_through_focus.png", dpi=100, bbox_inches="tight")
 plt.close(fig)
 print("figures in", out)
