@@ -17,7 +17,7 @@ import time
 import numpy as np
 import scipy.fft
 
-from vissim.optics.blur import _padding_width, _tile_px, blur_image
+from vissim.optics.blur import _tile_px, blur_image, padded_shape
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront
@@ -37,8 +37,7 @@ def main() -> None:
     image = np.random.default_rng(0).random((rows, cols), dtype=np.float32)
     front = Wavefront.from_prescription(Prescription(-2.0), 3.0)
     psf = compute_psf(front, arcmin_per_px=1.0, size_px=suggested_size_px(front, 1.0))
-    width = _padding_width(psf)
-    shape = (scipy.fft.next_fast_len(rows + 2 * width, real=True), scipy.fft.next_fast_len(cols + 2 * width, real=True))
+    shape = padded_shape((rows, cols), psf.data.shape[0])
     padded = np.zeros(shape, np.float32)
 
     def fft_pair():

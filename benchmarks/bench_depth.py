@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import scipy.fft
 
-from vissim.optics.blur import BlurKernel, blur_image
+from vissim.optics.blur import BlurKernel, blur_image, padded_shape, padding_width_px
 from vissim.optics.depth import _cached_psf, blur_depth
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront
@@ -113,8 +113,8 @@ def main() -> None:
     widest = max(result.layers, key=lambda layer: layer.psf_size_px)
     front = Wavefront.from_prescription(EYE, PUPIL_MM).with_defocus_diopters(widest.proximity_diopters)
     single_psf = _cached_psf(tuple(front.coefficients_um.items()), PUPIL_MM, 550.0, STEP, "wave")
-    offset = widest.psf_size_px // 2 + 1
-    frame = (scipy.fft.next_fast_len(ROWS + 2 * offset, real=True), scipy.fft.next_fast_len(COLS + 2 * offset, real=True))
+    offset = padding_width_px(widest.psf_size_px)
+    frame = padded_shape((ROWS, COLS), widest.psf_size_px)
     planes = np.ascontiguousarray(np.moveaxis(np.concatenate([image, image[..., :1]], axis=-1), -1, 0))
 
     timings = {"cold": [], "warm": [], "single": [], "floor": []}

@@ -95,8 +95,19 @@ def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.
     return scipy.fft.fft(scattered, axis=0, workers=-1, overwrite_x=True)
 
 
+def padding_width_px(kernel_px: int) -> int:
+    """Pixels of padding on each side for linear (not circular) convolution by a ``kernel_px`` kernel."""
+    return kernel_px // 2 + 1
+
+
+def padded_shape(shape: tuple[int, int], kernel_px: int) -> tuple[int, int]:
+    """The full-frame FFT's grid: the image plus the kernel's reach on each side, at a fast size."""
+    width = padding_width_px(kernel_px)
+    return tuple(scipy.fft.next_fast_len(n + 2 * width, real=True) for n in shape)
+
+
 def _padding_width(psf: PSF) -> int:
-    return psf.data.shape[0] // 2 + 1
+    return padding_width_px(psf.data.shape[0])
 
 
 def _pad(channel: np.ndarray, width: int, shape: tuple[int, int], mode: str, background: float | None) -> np.ndarray:
@@ -142,15 +153,9 @@ def _fft_cost(shape) -> float:
     return n * math.log2(n)
 
 
-def _padded_shape(shape: tuple[int, int], kernel_px: int) -> tuple[int, int]:
-    """The full-frame FFT's grid: the image plus the kernel's reach on each side, at a fast size."""
-    width = kernel_px // 2 + 1
-    return tuple(scipy.fft.next_fast_len(n + 2 * width, real=True) for n in shape)
-
-
 def _tile_px(shape: tuple[int, int], kernel_px: int) -> int | None:
     """The overlap-save tile size for an image of ``shape`` that beats one full-frame FFT, or None."""
-    best, best_cost = None, _fft_cost(_padded_shape(shape, kernel_px))
+    best, best_cost = None, _fft_cost(padded_shape(shape, kernel_px))
     for tile in TILE_SIZES_PX:
         valid = tile - kernel_px + 1
         if valid < 3 * kernel_px or tile >= min(shape):
@@ -204,7 +209,7 @@ def _blur_channel(channel, psf, padding, background, dtype):
         padded, offset = channel, 0
     else:
         offset = _padding_width(psf)
-        shape = _padded_shape((rows, cols), psf.data.shape[0])
+        shape = padded_shape((rows, cols), psf.data.shape[0])
         tile = _tile_px((rows, cols), psf.data.shape[0])
         if tile is not None:
             log.debug("blur by overlap-save in %d px tiles", tile)

@@ -13,11 +13,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-import scipy.fft
 
 from vissim.errors import VissimInputError
 from vissim.optics.array_backend import array_backend
-from vissim.optics.blur import PADDING_MODES, BlurKernel, _border_mean, _check_sampling, _padding_width
+from vissim.optics.blur import PADDING_MODES, BlurKernel, _border_mean, _check_sampling, _padding_width, padded_shape
 from vissim.optics.psf import PSF
 
 __all__ = ["blur_image_on"]
@@ -63,8 +62,7 @@ def blur_image_on(
             padded = backend.asarray(channels[members])
         else:
             offset = _padding_width(group)
-            shape = (scipy.fft.next_fast_len(rows + 2 * offset, real=True),
-                     scipy.fft.next_fast_len(cols + 2 * offset, real=True))
+            shape = padded_shape((rows, cols), group.data.shape[0])
             widths = ((offset, shape[0] - rows - offset), (offset, shape[1] - cols - offset))
             padded = xp.stack([_pad(backend.asarray(channels[c]), widths, padding, backgrounds[c], channels[c], xp)
                                for c in members])

@@ -69,7 +69,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
@@ -77,7 +76,7 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.array_backend import CPU as CPU_BACKEND
 from vissim.optics.array_backend import ArrayBackend, array_backend, array_module
-from vissim.optics.blur import BlurKernel
+from vissim.optics.blur import BlurKernel, padded_shape, padding_width_px
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
 from vissim.optics.pullpush import pull_push, upsample2
@@ -577,8 +576,8 @@ def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend 
     """
     xp = backend.xp
     n, h, w = planes.shape
-    offset = psf.data.shape[0] // 2 + 1
-    shape = (scipy.fft.next_fast_len(h + 2 * offset, real=True), scipy.fft.next_fast_len(w + 2 * offset, real=True))
+    offset = padding_width_px(psf.data.shape[0])
+    shape = padded_shape((h, w), psf.data.shape[0])
     extra_r, extra_c = shape[0] - h - 2 * offset, shape[1] - w - 2 * offset
     padded = xp.pad(planes, ((0, 0), (offset, offset + extra_r), (offset, offset + extra_c)),
                     mode="symmetric" if padding == "reflect" else "edge")
