@@ -222,6 +222,30 @@ def _blur_channel(channel, psf, padding, background, dtype):
     return out[offset : offset + rows, offset : offset + cols]
 
 
+def checked_blur_inputs(image, psf, arcmin_per_px: float, padding: str, background):
+    """The image as an array, one PSF and one background per channel; every refusal of a blur's inputs."""
+    if padding not in PADDING_MODES:
+        raise VissimInputError(f"padding must be one of {', '.join(PADDING_MODES)}; got {padding!r}")
+    array = np.asarray(image)
+    if array.ndim not in (2, 3) or min(array.shape[:2]) < 1:
+        raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {array.shape}")
+    if not (np.isfinite(array.min()) and np.isfinite(array.max())):  # NaN propagates; no mask allocated
+        raise VissimInputError("image has NaN or infinite pixels; blur needs finite linear-light values")
+    n_channels = 1 if array.ndim == 2 else array.shape[2]
+    psfs = [psf] * n_channels if isinstance(psf, PSF) else list(psf)
+    if len(psfs) != n_channels:
+        raise VissimInputError(f"got {len(psfs)} PSFs for an image with {n_channels} channels")
+    if background is None or np.ndim(background) == 0:
+        backgrounds = [background] * n_channels
+    else:
+        backgrounds = [float(b) for b in background]
+        if len(backgrounds) != n_channels:
+            raise VissimInputError(f"got {len(backgrounds)} background values for {n_channels} channels")
+    for p in psfs:
+        _check_sampling(p, arcmin_per_px)
+    return array, psfs, backgrounds
+
+
 def blur_image(
     image: np.ndarray,
     psf: PSF | Sequence[PSF],
@@ -267,27 +291,10 @@ def blur_image(
     >>> bool(blurred.min() > chart.pixels.min())  # the black strokes are washed out
     True
     """
-    if padding not in PADDING_MODES:
-        raise VissimInputError(f"padding must be one of {', '.join(PADDING_MODES)}; got {padding!r}")
     if dtype not in (np.float32, np.float64):
         raise VissimInputError(f"dtype must be float32 or float64, got {dtype!r}")
-    array = np.asarray(image)
-    if array.ndim not in (2, 3) or min(array.shape[:2]) < 1:
-        raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {array.shape}")
-    if not (np.isfinite(array.min()) and np.isfinite(array.max())):  # NaN propagates; no mask allocated
-        raise VissimInputError("image has NaN or infinite pixels; blur needs finite linear-light values")
+    array, psfs, backgrounds = checked_blur_inputs(image, psf, arcmin_per_px, padding, background)
     channels = [array] if array.ndim == 2 else [array[..., c] for c in range(array.shape[2])]
-    psfs = [psf] * len(channels) if isinstance(psf, PSF) else list(psf)
-    if len(psfs) != len(channels):
-        raise VissimInputError(f"got {len(psfs)} PSFs for an image with {len(channels)} channels")
-    if background is None or np.ndim(background) == 0:
-        backgrounds = [background] * len(channels)
-    else:
-        backgrounds = [float(b) for b in background]
-        if len(backgrounds) != len(channels):
-            raise VissimInputError(f"got {len(backgrounds)} background values for {len(channels)} channels")
-    for p in psfs:
-        _check_sampling(p, arcmin_per_px)
     blurred = [
         _blur_channel(np.asarray(c, dtype=dtype), p, padding, b, dtype)
         for c, p, b in zip(channels, psfs, backgrounds)

@@ -16,7 +16,7 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 from vissim.optics.array_backend import array_backend
-from vissim.optics.blur import PADDING_MODES, BlurKernel, _border_mean, _check_sampling, _padding_width, padded_shape
+from vissim.optics.blur import BlurKernel, _border_mean, _padding_width, checked_blur_inputs, padded_shape
 from vissim.optics.psf import PSF
 
 __all__ = ["blur_image_on"]
@@ -34,22 +34,9 @@ def blur_image_on(
     """:func:`vissim.optics.blur.blur_image` on ``device`` (``"cpu"``, ``"cuda"`` or ``"auto"``); float32, on the host."""
     backend = array_backend(device)
     xp = backend.xp
-    if padding not in PADDING_MODES:
-        raise VissimInputError(f"padding must be one of {', '.join(PADDING_MODES)}; got {padding!r}")
-    array = np.asarray(image, dtype=np.float32)
-    if array.ndim not in (2, 3) or min(array.shape[:2]) < 1:
-        raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise VissimInputError("image has NaN or infinite pixels; blur needs finite linear-light values")
+    array, psfs, backgrounds = checked_blur_inputs(image, psf, arcmin_per_px, padding, background)
+    array = array.astype(np.float32, copy=False)
     channels = array[np.newaxis] if array.ndim == 2 else np.moveaxis(array, -1, 0)
-    psfs = [psf] * len(channels) if isinstance(psf, PSF) else list(psf)
-    if len(psfs) != len(channels):
-        raise VissimInputError(f"got {len(psfs)} PSFs for an image with {len(channels)} channels")
-    backgrounds = [background] * len(channels) if background is None or np.ndim(background) == 0 else list(background)
-    if len(backgrounds) != len(channels):
-        raise VissimInputError(f"got {len(backgrounds)} background values for {len(channels)} channels")
-    for p in psfs:
-        _check_sampling(p, arcmin_per_px)
     rows, cols = array.shape[:2]
     out = np.empty(channels.shape, np.float32)
     for group in {id(p): p for p in psfs}.values():
