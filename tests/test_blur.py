@@ -21,7 +21,9 @@ def delta(size=33, step=1.0):
 
 @pytest.fixture(scope="module")
 def defocus_psf():
-    return compute_psf(Wavefront.from_prescription(Prescription(-2.0), 3.0), arcmin_per_px=1.0, size_px=46)
+    # float64: these tests pin the blur's float64 arithmetic to 1e-9
+    return compute_psf(Wavefront.from_prescription(Prescription(-2.0), 3.0), arcmin_per_px=1.0, size_px=46,
+                       dtype=np.float64)
 
 
 def random_image(seed=0, shape=(64, 80)):

@@ -391,5 +391,6 @@ def test_a_layer_of_opposite_defocus_reuses_the_reflected_psf(mode):
                            size_px=suggested_size_px(front, STEP, pupil_diameter_mm=PUPIL_MM))
     assert minus.data.shape[0] % 2 == 1 and minus is not plus
     assert minus.wavefront.coefficients_um == pytest.approx(front.coefficients_um, abs=1e-12)
-    np.testing.assert_allclose(minus.data, computed.data, rtol=0, atol=1e-12)
+    # float32 PSFs (the default): the same PSF to its round-off, < 2e-6 of the peak
+    np.testing.assert_allclose(minus.data, computed.data, rtol=0, atol=2e-6 * computed.data.max())
     np.testing.assert_array_equal(minus.data, plus.data[::-1, ::-1])

@@ -116,8 +116,9 @@ def test_large_defocus_approaches_the_geometric_disc(waves):
 
 def test_transposed_prescriptions_give_identical_psfs():
     rx = Prescription.parse("-1.00 -1.50 x 30")
-    a = compute_psf(Wavefront.from_prescription(rx, PUPIL_MM), arcmin_per_px=0.5, size_px=96)
-    b = compute_psf(Wavefront.from_prescription(rx.transposed(), PUPIL_MM), arcmin_per_px=0.5, size_px=96)
+    a = compute_psf(Wavefront.from_prescription(rx, PUPIL_MM), arcmin_per_px=0.5, size_px=96, dtype=np.float64)
+    b = compute_psf(Wavefront.from_prescription(rx.transposed(), PUPIL_MM), arcmin_per_px=0.5, size_px=96,
+                    dtype=np.float64)
     np.testing.assert_allclose(a.data, b.data, atol=1e-12)
 
 
@@ -189,20 +190,26 @@ coefficient = st.floats(-0.4, 0.4)
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(coefficient, coefficient, coefficient, coefficient, st.sampled_from(["wave", "geometric"]))
-def test_psf_is_non_negative_and_sums_to_one(c2m2, c20, c22, c31, mode):
+@given(coefficient, coefficient, coefficient, coefficient, st.sampled_from(["wave", "geometric"]),
+       st.sampled_from([np.float32, np.float64]))
+def test_psf_is_non_negative_and_sums_to_one(c2m2, c20, c22, c31, mode, dtype):
+    # Unit sum to the dtype's round-off over 160^2 pixels: 1e-9 (float64), 1e-5 (float32, eps 6e-8).
     front = Wavefront({(2, -2): c2m2, (2, 0): c20, (2, 2): c22, (3, 1): c31}, PUPIL_MM)
-    psf = compute_psf(front, arcmin_per_px=0.5, size_px=160, mode=mode)
+    psf = compute_psf(front, arcmin_per_px=0.5, size_px=160, mode=mode, dtype=dtype)
     assert np.all(psf.data >= 0)
-    assert float(psf.data.sum()) == pytest.approx(1.0, abs=1e-9)
+    assert float(psf.data.sum(dtype=np.float64)) == pytest.approx(1.0, abs=1e-9 if dtype == np.float64 else 1e-5)
 
 
-def test_float32_on_request():
-    front = Wavefront.from_prescription(Prescription(-1.0), PUPIL_MM)
-    a = compute_psf(front, arcmin_per_px=0.5, size_px=64, dtype=np.float32)
-    b = compute_psf(front, arcmin_per_px=0.5, size_px=64)
+@pytest.mark.parametrize("method", ["mft", "fft"])
+def test_float32_by_default_float64_on_request(method):
+    # The default is float32 (docs/conventions.md); its round-off stays below 2e-6 of the peak
+    # (the wave PSF's accuracy bar is 2e-3 of the peak).
+    front = Wavefront({**Wavefront.from_prescription(Prescription(-1.0, -0.5, 30), PUPIL_MM).coefficients_um,
+                       (3, 1): 0.1}, PUPIL_MM)
+    a = compute_psf(front, arcmin_per_px=0.5, size_px=64, method=method)
+    b = compute_psf(front, arcmin_per_px=0.5, size_px=64, method=method, dtype=np.float64)
     assert a.data.dtype == np.float32 and b.data.dtype == np.float64
-    np.testing.assert_allclose(a.data, b.data, atol=1e-6)
+    np.testing.assert_allclose(a.data, b.data, rtol=0, atol=2e-6 * b.data.max())
 
 
 def test_chromatic_eye_values():

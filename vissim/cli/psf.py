@@ -30,7 +30,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
     parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="wave (default) or geometric optics")
-    parser.add_argument("--float32", action="store_true", help="compute in float32 (default float64; files are float32)")
+    parser.add_argument("--float64", action="store_true", help="compute in float64 (default float32; files are float32)")
     parser.add_argument("-o", "--output", required=True, type=Path, help="out.exr or out.png")
     parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     parser.set_defaults(func=run)
@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     psf = compute_psf(wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
                       lca_reference_nm=args.lca_reference_nm if args.lca else None,
                       arcmin_per_px=args.arcmin_per_px, size_px=args.size, mode=args.mode,
-                      dtype=np.float32 if args.float32 else np.float64)
+                      dtype=np.float64 if args.float64 else np.float32)
     provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike)
     output = args.output
     exr_path = output.with_suffix(".exr") if output.suffix.lower() == ".png" else output

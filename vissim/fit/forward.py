@@ -152,7 +152,7 @@ class ForwardModel:
         size = suggested_size_px(front, self.arcmin_per_px, wavelength_nm=self.wavelength_nm)
         size = min(size, 2 * self.margin_px - 1)
         psf = compute_psf(front, wavelength_nm=self.wavelength_nm, arcmin_per_px=self.arcmin_per_px, size_px=size,
-                          mode="wave", pixel="sample")
+                          mode="wave", pixel="sample", dtype=np.float64)  # differentiated numerically
         return kernel_transfer(np.asarray(psf.data, dtype=np.float64), self.padded_shape, np.float64)
 
     # -- the model -----------------------------------------------------------------------

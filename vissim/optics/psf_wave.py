@@ -187,14 +187,14 @@ def _fold_rows(source: np.ndarray, even: np.ndarray, odd: np.ndarray) -> None:
     even[0] *= 0.5
 
 
-def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
-    """|A G A^T|^2 for ``A = cos - i sin`` on the four quadrants of non-negative |theta|; ``G`` as (real, imag).
+def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray, sin: np.ndarray,
+                          total: np.ndarray, accumulate: bool) -> None:
+    """|A G A^T|^2 for ``A = cos - i sin``, ``G`` as (real, imag), written (or, with ``accumulate``,
+    added) into the M x M intensity ``total`` centred on [M/2, M/2].
 
     The cell grid is symmetric about its centre, so each axis splits into even and odd parts
     that transform by real cosines and sines over half the cells, and the output's four
     quadrants follow from the non-negative one: a quarter of the multiply-adds of ``A G A^T``.
-    Returns the quadrants (+,+), (-,-), (+,-), (-,+) (signs of theta_row, theta_col), each
-    indexed ``[|theta_row|, |theta_col|]``, in a scratch array valid until the next call.
     """
     n, h, m = pupil[0].shape[0], pupil[0].shape[0] // 2, cos.shape[0]
     work = functools.partial(_WORKSPACE.get, dtype=cos.dtype)
@@ -219,33 +219,25 @@ def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray,
     np.add(ps[:, :2], pc[:, 2:], out=bd[0])
     np.subtract(ps[:, :2], pc[:, 2:], out=bd[1])
     # |E(+-,+-)|^2 = |A|^2 + |B|^2 +- 2 (Ar Bi - Ai Br), likewise with C and D.
-    total, cross, scratch = work("sum", (2, m, m)), work("cross", (2, m, m)), work("scratch", (2, m, m))
-    np.multiply(ac[:, :, 0], ac[:, :, 0], out=total)
+    both, cross, scratch = work("sum", (2, m, m)), work("cross", (2, m, m)), work("scratch", (2, m, m))
+    np.multiply(ac[:, :, 0], ac[:, :, 0], out=both)
     for source, part in ((ac, 1), (bd, 0), (bd, 1)):
-        total += np.multiply(source[:, :, part], source[:, :, part], out=scratch)
+        both += np.multiply(source[:, :, part], source[:, :, part], out=scratch)
     np.multiply(ac[:, :, 0], bd[:, :, 1], out=cross)
     cross -= np.multiply(ac[:, :, 1], bd[:, :, 0], out=scratch)
     cross *= 2
-    out = work("quadrants", (4, m, m))
-    np.add(total, cross, out=out[0::2])  # (+,+), (+,-)
-    np.subtract(total, cross, out=out[1::2])  # (-,-), (-,+)
-    return out
-
-
-#: The quadrants' order in :func:`_quadrant_intensities`: signs of (theta_row, theta_col).
-QUADRANTS = ((1, 1), (-1, -1), (1, -1), (-1, 1))
-
-
-def _add_quadrants(total: np.ndarray, quadrants: np.ndarray, weight: float) -> None:
-    """Add the quadrants (|k| = 0..M/2 each way) to an M x M intensity centred on [M/2, M/2]."""
-    h = total.shape[0] // 2
-    index = {1: (slice(h, None), slice(0, h)), -1: (slice(h - 1, None, -1), slice(1, h + 1))}
-    for (sr, sc), values in zip(QUADRANTS, quadrants):
-        (rows_out, rows_in), (cols_out, cols_in) = index[sr], index[sc]
-        if weight == 1.0:
-            total[rows_out, cols_out] += values[rows_in, cols_in]
-        else:
-            total[rows_out, cols_out] += weight * values[rows_in, cols_in]
+    # Quadrant (signs of theta_row, theta_col) -> its place in ``total``: |k| = 0..M/2 - 1 up, 1..M/2 down.
+    half = total.shape[0] // 2
+    place = {1: (slice(half, None), slice(0, half)), -1: (slice(half - 1, None, -1), slice(1, half + 1))}
+    for pair, ((row_sign, col_sign), combine) in enumerate((((1, 1), np.add), ((1, -1), np.add))):
+        for rs, cs, op in ((row_sign, col_sign, combine), (-row_sign, -col_sign, np.subtract)):
+            (rows_out, rows_in), (cols_out, cols_in) = place[rs], place[cs]
+            target = total[rows_out, cols_out]
+            if accumulate:
+                target += op(both[pair, rows_in, cols_in], cross[pair, rows_in, cols_in],
+                             out=scratch[pair, rows_in, cols_in])
+            else:
+                op(both[pair, rows_in, cols_in], cross[pair, rows_in, cols_in], out=target)
 
 
 def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
@@ -253,14 +245,17 @@ def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
     plan = plans[0]
     grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
     m = plan.internal_size
-    total = np.zeros((m, m), dtype=dtype)
-    for front, weight, each in zip(fronts, weights, plans):
-        pupil = generalised_pupil_parts(grid, opd_on_points_um(grid, front), each.wavelength_nm, dtype)
+    total = np.empty((m, m), dtype=dtype)
+    for index, (front, weight, each) in enumerate(zip(fronts, weights, plans)):
+        real, imag = generalised_pupil_parts(grid, opd_on_points_um(grid, front), each.wavelength_nm, dtype)
         cos, sin = _folded_matrices(m, plan.internal_arcmin_per_px, plan.pupil_step_mm, grid.half,
                                     each.wavelength_nm, dtype)
         scale = (plan.pupil_step_mm * float(arcmin_to_rad(plan.internal_arcmin_per_px))
                  / nm_to_mm(each.wavelength_nm)) ** 2 / grid.area_cells
-        _add_quadrants(total, _quadrant_intensities(pupil, cos, sin), weight * scale)
+        amplitude = math.sqrt(weight * scale)  # the intensity's weight, applied to the (smaller) pupil
+        real *= amplitude
+        imag *= amplitude
+        _quadrant_intensities((real, imag), cos, sin, total, accumulate=index > 0)
     return total
 
 
