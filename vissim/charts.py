@@ -58,6 +58,8 @@ _SIDECAR_SCHEMA = "vissim.chart-letters/1"
 _BOX_KEYS = ("top", "left", "bottom", "right")
 
 
+#: Viewing distances a chart may be made for (m): a near card to a far landmark; beyond, its sizes overflow.
+VIEWING_DISTANCE_RANGE_M = (0.01, 1000.0)
 #: Linear reflectances of laser-printed paper and toner ink (the charts' defaults).
 PAPER_REFLECTANCE = 0.9
 INK_REFLECTANCE = 0.04
@@ -98,7 +100,9 @@ class ChartSpec:
         if not rows or not all(isinstance(r, ChartRow) for r in rows):
             raise VissimInputError(f"a chart needs at least one ChartRow, got {self.rows!r}")
         object.__setattr__(self, "rows", rows)
-        _number(self.viewing_distance_m, "viewing distance", "m", positive=True)
+        distance_m = _number(self.viewing_distance_m, "viewing distance", "m", positive=True)
+        if not VIEWING_DISTANCE_RANGE_M[0] <= distance_m <= VIEWING_DISTANCE_RANGE_M[1]:
+            raise VissimInputError("viewing distance must be {:g}-{:g} m, got {:g} m".format(*VIEWING_DISTANCE_RANGE_M, distance_m))
         if self.polarity not in POLARITIES:
             raise VissimInputError(f"polarity must be one of {', '.join(POLARITIES)}; got {self.polarity!r}")
         paper = _number(self.paper_reflectance, "paper reflectance", "fraction 0-1")

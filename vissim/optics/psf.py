@@ -323,7 +323,32 @@ def compute_psf(
 
 
 def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = 550.0, pupil_diameter_mm: float | None = None) -> float:
-    """Strehl ratio |<exp(ikW)>|^2 over the pupil (cell-averaged quadrature, sampling from the slope)."""
+    """Strehl ratio |<exp(ikW)>|^2 over the pupil (cell-averaged quadrature, sampling from the slope).
+
+    Parameters
+    ----------
+    wavefront : Wavefront
+        The aberration (OPD in micrometres over its measurement pupil).
+    wavelength_nm : float
+        Wavelength, nm.
+    pupil_diameter_mm : float, optional
+        Pupil diameter, mm, at most the wavefront's (default: the wavefront's pupil).
+
+    Returns
+    -------
+    float
+        The peak of the PSF relative to the diffraction-limited peak of the same pupil: 1 without
+        aberration, ~exp(-(2 pi RMS / lambda)^2) for small ones.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> round(vissim.strehl_ratio(vissim.Wavefront.zero(3.0)), 6)
+    1.0
+    >>> front = vissim.Wavefront.from_prescription(vissim.Prescription(-0.25), 3.0)
+    >>> round(vissim.strehl_ratio(front), 2)
+    0.39
+    """
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else float(pupil_diameter_mm)
     cells = max(256, psf_sampling(diameter, wavelength_nm, 1.0, 1, geometric_blur_radius_arcmin(wavefront, diameter),
                                   "mft").pupil_cells)
