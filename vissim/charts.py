@@ -71,7 +71,27 @@ def _number(value: Any, name: str, unit: str, *, positive: bool = False) -> floa
 
 @dataclasses.dataclass(frozen=True)
 class ChartRow:
-    """One chart row: its LogMAR and its letters, left to right."""
+    """One chart row: its LogMAR and its letters, left to right.
+
+    Parameters
+    ----------
+    logmar : float
+        Letter size, log10 of the minimum angle of resolution in arcmin (1.0 = 20/200, 0.0 = 20/20:
+        a letter 5 x 10^logmar arcmin tall at the chart's viewing distance).
+    letters : str
+        Sloan letters (C D H K N O R S V Z), left to right; spaces are ignored.
+
+    Raises
+    ------
+    VissimInputError
+        A LogMAR that is not a finite number, no letters, or a letter that is not a Sloan letter.
+
+    Examples
+    --------
+    >>> from vissim.charts import ChartRow
+    >>> ChartRow(0.5, "K N Z")
+    ChartRow(logmar=0.5, letters='KNZ')
+    """
 
     logmar: float
     letters: str
@@ -86,7 +106,46 @@ class ChartRow:
 
 @dataclasses.dataclass(frozen=True)
 class ChartSpec:
-    """What a chart shows and how it is printed; rendering resolution is chosen later."""
+    """What a chart shows and how it is printed; rendering resolution is chosen later.
+
+    Build one with :func:`etdrs_chart_spec` or :func:`single_letter_spec`; render it with
+    :func:`render_chart_angular` (pixels of so many arcmin) or :func:`render_chart_print` (its
+    physical size at a dpi).
+
+    Parameters
+    ----------
+    rows : tuple of ChartRow
+        The rows, top to bottom (at least one).
+    viewing_distance_m : float
+        The distance the chart is printed for, metres: each row's letters subtend their LogMAR
+        there (default: the thesis's 3 ft, 0.9144 m).
+    polarity : {"black-on-white", "white-on-black"}
+        Dark letters on paper, or the reverse.
+    paper_reflectance, ink_reflectance : float
+        Linear reflectances (fractions, 0 <= ink < paper <= 1) of the paper and the ink
+        (defaults 0.9 and 0.04, laser-printed paper and toner).
+    letter_seed : int, optional
+        The seed that chose the letters, when they were chosen at random (recorded, not used).
+
+    Attributes
+    ----------
+    background_reflectance, letter_reflectance : float
+        The reflectance around and inside the letters for the polarity.
+
+    Raises
+    ------
+    VissimInputError
+        No rows, an unknown polarity, a distance <= 0 or reflectances out of order.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> spec = vissim.single_letter_spec("K", 1.0, polarity="white-on-black")
+    >>> spec.viewing_distance_m, spec.background_reflectance, spec.letter_reflectance
+    (0.9144, 0.04, 0.9)
+    >>> len(vissim.etdrs_chart_spec().rows)  # LogMAR 1.0 down to -0.3
+    14
+    """
 
     rows: tuple[ChartRow, ...]
     viewing_distance_m: float = THESIS_VIEWING_DISTANCE_M
@@ -159,10 +218,31 @@ def etdrs_chart_spec(
 ) -> ChartSpec:
     """An ETDRS-style chart, one row per LogMAR step (default 1.0 down to -0.3, as the thesis).
 
-    ``letters``: None picks 5 distinct Sloan letters per row with ``numpy.random.default_rng(seed)``;
-    a string such as ``"NCKZO"`` is used for every row; rows separated by spaces, commas or
-    slashes (``"NCKZO HVORS ..."``) or a sequence give each row its own letters.
-    ``spec_kwargs`` go to :class:`ChartSpec` (viewing distance, polarity, reflectances).
+    Parameters
+    ----------
+    logmar_range : (float, float)
+        The first (top) and last (bottom) rows' LogMAR, both included.
+    logmar_step : float
+        LogMAR between rows (0.1: the ETDRS progression).
+    letters : str or sequence of str, optional
+        None picks 5 distinct Sloan letters per row with ``numpy.random.default_rng(seed)``;
+        a string such as ``"NCKZO"`` is used for every row; rows separated by spaces, commas or
+        slashes (``"NCKZO HVORS ..."``) or a sequence give each row its own letters.
+    seed : int
+        Seed of the random letters.
+    **spec_kwargs
+        Passed to :class:`ChartSpec` (viewing distance, polarity, reflectances).
+
+    Returns
+    -------
+    ChartSpec
+
+    Examples
+    --------
+    >>> import vissim
+    >>> spec = vissim.etdrs_chart_spec((1.0, 0.8), letters="NCKZO", viewing_distance_m=6.0)
+    >>> [(row.logmar, row.letters) for row in spec.rows]
+    [(1.0, 'NCKZO'), (0.9, 'NCKZO'), (0.8, 'NCKZO')]
     """
     logmars = logmar_steps(*logmar_range, logmar_step)
     groups = _row_letters(letters, len(logmars), seed)
@@ -171,7 +251,27 @@ def etdrs_chart_spec(
 
 
 def single_letter_spec(letter: str, logmar: float, **spec_kwargs: Any) -> ChartSpec:
-    """A chart of one optotype: one row of one letter, with the usual one-letter margins."""
+    """A chart of one optotype: one row of one letter, with the usual one-letter margins.
+
+    Parameters
+    ----------
+    letter : str
+        One Sloan letter (C D H K N O R S V Z).
+    logmar : float
+        Its size, LogMAR (log10 arcmin of the stroke width; the letter is 5 strokes tall).
+    **spec_kwargs
+        Passed to :class:`ChartSpec` (viewing distance, polarity, reflectances).
+
+    Returns
+    -------
+    ChartSpec
+
+    Examples
+    --------
+    >>> import vissim
+    >>> vissim.single_letter_spec("Z", 0.5).rows
+    (ChartRow(logmar=0.5, letters='Z'),)
+    """
     return ChartSpec((ChartRow(logmar, letter),), **spec_kwargs)
 
 
@@ -433,7 +533,36 @@ def render_chart_angular(
 
 
 def render_chart_print(spec: ChartSpec, dpi: float = 360.0, *, supersample: int = 16) -> Chart:
-    """Render ``spec`` at its physical size for its viewing distance, ``dpi`` pixels per inch."""
+    """Render ``spec`` at its physical size for its viewing distance, ``dpi`` pixels per inch.
+
+    The letters are sized so that each row subtends its LogMAR at ``spec.viewing_distance_m``;
+    the page is what a printer should print at ``dpi`` (see :func:`save_chart_pdf` and
+    :func:`save_chart_png` for files).
+
+    Parameters
+    ----------
+    spec : ChartSpec
+        What to draw.
+    dpi : float
+        Pixels per inch of the page (25.4 / dpi mm per pixel).
+    supersample : int
+        Sub-samples per pixel per axis when rasterising the letters' edges (area coverage).
+
+    Returns
+    -------
+    Chart
+        ``pixels``: float32 linear reflectance of shape (rows, cols), row 0 at the top of the
+        page, columns left to right as the observer sees the chart; ``mm_per_px`` and
+        ``arcmin_per_px`` (at the viewing distance) give its sampling; ``sidecar()`` the
+        letter boxes.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> chart = vissim.render_chart_print(vissim.single_letter_spec("K", 1.0, viewing_distance_m=6.0), dpi=100)
+    >>> chart.pixels.shape, chart.pixels.dtype.name, round(chart.mm_per_px, 3)
+    ((1031, 1031), 'float32', 0.254)
+    """
     return _render(spec, layout_chart(spec, dpi=dpi), supersample)
 
 

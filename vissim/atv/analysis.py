@@ -229,7 +229,37 @@ class QuadraticFit:
 
 
 def fit_quadratic(x_diopters: Sequence[float], y_code: Sequence[float]) -> QuadraticFit:
-    """Least-squares parabola with its coefficient covariance (needs >= 4 points, >= 3 distinct x)."""
+    """Least-squares parabola with its coefficient covariance (needs >= 4 points, >= 3 distinct x).
+
+    Fits ``y = a x^2 + b x + c`` by ordinary least squares (QR on centred, scaled lens powers,
+    so the covariance is well conditioned).
+
+    Parameters
+    ----------
+    x_diopters : sequence of float
+        Trial-lens powers, dioptres.
+    y_code : sequence of float
+        The minimum visible code value at each lens (one per power, same length).
+
+    Returns
+    -------
+    QuadraticFit
+        ``coefficients`` (a in code/D^2, b in code/D, c in code), their ``covariance``, the
+        residual SD (code), degrees of freedom, and the vertex (``vertex_diopters``, a minimum
+        when ``has_minimum``).
+
+    Raises
+    ------
+    VissimInputError
+        Lengths that differ, values that are not finite, or fewer than 4 points at 3 lenses.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> fit = vissim.fit_quadratic([-1.0, -0.5, 0.0, 0.5, 1.0], [3.0, 1.2, 0.5, 1.3, 2.9])
+    >>> round(fit.a, 3), fit.has_minimum, round(fit.vertex_diopters, 3), fit.dof
+    (2.371, True, 0.004, 2)
+    """
     x = np.asarray(x_diopters, dtype=float).ravel()
     y = np.asarray(y_code, dtype=float).ravel()
     if x.shape != y.shape:

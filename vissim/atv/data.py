@@ -206,7 +206,38 @@ def _report(subject: SubjectData, strict: bool) -> SubjectData:
 
 
 def load_subject(path: str | Path, *, strict: bool = False) -> SubjectData:
-    """Read, validate and check one subject file; see the module docstring."""
+    """Read, validate and check one subject file; see the module docstring.
+
+    Parameters
+    ----------
+    path : str or Path
+        A subject file (JSON, schema ``vissim.atv.subject`` version 1).
+    strict : bool
+        Raise :class:`AtvDataDiscrepancyError` when a printed value disagrees with what the
+        thesis's own numbers give; by default each disagreement is logged and kept in
+        ``SubjectData.discrepancies``.
+
+    Returns
+    -------
+    SubjectData
+        The subject: autorefractions, examinations (each trial's lens in dioptres and minimum
+        visible code value), the printed summary without eye drops, and the discrepancies found.
+
+    Raises
+    ------
+    VissimInputError
+        An unreadable file, invalid JSON, or a field that breaks the schema (the message names
+        the file, the field's JSON path, the value and its unit).
+    AtvDataDiscrepancyError
+        With ``strict=True``, the first discrepancy.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> subject = vissim.load_subject("validation/atv/subject_001.json")  # doctest: +SKIP
+    >>> subject.subject_id, len(subject.examinations)  # doctest: +SKIP
+    ('001', 4)
+    """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -220,7 +251,34 @@ def load_subject(path: str | Path, *, strict: bool = False) -> SubjectData:
 
 
 def load_directory(directory: str | Path, *, strict: bool = False, pattern: str = "subject_*.json") -> tuple[SubjectData, ...]:
-    """All subject files in ``directory`` (not recursive), sorted by subject id."""
+    """All subject files in ``directory`` (not recursive), sorted by subject id.
+
+    Parameters
+    ----------
+    directory : str or Path
+        The folder holding the subject files.
+    strict : bool
+        As in :func:`load_subject`.
+    pattern : str
+        Glob of the subject files' names.
+
+    Returns
+    -------
+    tuple of SubjectData
+        One per file, sorted by ``subject_id``.
+
+    Raises
+    ------
+    VissimInputError
+        No such folder, no file matching ``pattern``, a file :func:`load_subject` refuses, or two
+        files with one subject id.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> [s.subject_id for s in vissim.load_directory("validation/atv")]  # doctest: +SKIP
+    ['001']
+    """
     directory = Path(directory)
     if not directory.is_dir():
         raise VissimInputError(f"ATV data directory {directory} does not exist or is not a directory")

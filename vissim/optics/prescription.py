@@ -235,6 +235,38 @@ def parse_spherocylinder(text: str) -> tuple[float, float, float]:
     Accepted: ``-2.00 -1.25 x 180``, ``-2.00/-1.25x180``, ``+1.50 DS``, ``plano -0.75 x 90``,
     ``+0.50 +1.00 x 90``, ``-2.00 DS -1.25 DC x 180``, ``+2.00 DC x 90`` (a pure cylinder),
     ``plano``; ``x``, ``×`` or ``@`` before the axis; any spacing.
+
+    Parameters
+    ----------
+    text : str
+        A sphero-cylinder as written on a prescription: sphere and cylinder in dioptres, axis in
+        degrees (TABO, 0-180).
+
+    Returns
+    -------
+    sphere_diopters, cylinder_diopters, axis_deg : float
+        As written: the cylinder's sign is kept (no transposition); the axis is 180 when none is
+        given (a sphere, or a cylinder written without one).
+
+    Raises
+    ------
+    VissimInputError
+        Text that is not a prescription (the message names what is wrong), an axis outside
+        0-180 degrees or a power beyond the library's limit.
+
+    See Also
+    --------
+    Prescription.parse : the same text into a :class:`Prescription`.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> vissim.parse_spherocylinder("-2.00 -1.25 x 180")
+    (-2.0, -1.25, 180.0)
+    >>> vissim.parse_spherocylinder("+1.50 DS")
+    (1.5, 0.0, 180.0)
+    >>> vissim.parse_spherocylinder("plano -0.75 @ 90")
+    (0.0, -0.75, 90.0)
     """
     if not isinstance(text, str):
         raise VissimInputError(f"a prescription must be text such as '-2.00 -1.25 x 180', got {text!r}")

@@ -77,7 +77,43 @@ PLAIN_ESTIMATE_MARGIN = 1.5
 
 @dataclass(frozen=True, eq=False)
 class PSF:
-    """A PSF with its sampling: ``data`` sums to 1 over the field, origin at ``[N//2, N//2]``."""
+    """A PSF with its sampling: ``data`` sums to 1 over the field, origin at ``[N//2, N//2]``.
+
+    Made by :func:`compute_psf` (or :meth:`PSF.from_array` for a kernel of your own); used by
+    :func:`vissim.blur_image` and the metrics (:func:`vissim.mtf`, :func:`vissim.otf`).
+
+    Attributes
+    ----------
+    data : ndarray of float, shape (N, N)
+        Read-only. ``[row, col]``: row 0 at the top (+y up), columns to the observer's right;
+        the chief ray at ``[N//2, N//2]``; sums to 1 over the field.
+    arcmin_per_px : float
+        Sampling, arcmin per pixel (both axes); the field is ``N * arcmin_per_px`` arcmin.
+    wavelengths_nm, weights : tuple of float
+        The wavelengths (nm) and their relative spectral weights (one wavelength: weight 1).
+    pupil_diameter_mm : float
+        The pupil the PSF was computed for, mm.
+    mode : str
+        ``"wave"`` (diffraction), ``"geometric"`` (ray optics) or ``"user"`` (:meth:`from_array`).
+    energy_in_field : float
+        Fraction of the energy through the pupil that lands inside the field (<= 1).
+    wavefront : Wavefront
+        The aberration the PSF is of.
+    lca_reference_nm : float or None
+        In-focus wavelength of the eye's longitudinal chromatic aberration, if modelled.
+    sampling : tuple
+        The internal pupil and field sampling per wavelength (:func:`psf_sampling`).
+    pixel : {"integrate", "sample"}
+        ``"integrate"``: each value is the PSF integrated over its pixel (what a sensor
+        records); ``"sample"``: point samples of the continuous PSF (a convolution kernel).
+
+    Examples
+    --------
+    >>> import vissim
+    >>> psf = vissim.compute_psf(vissim.Wavefront.zero(3.0), arcmin_per_px=0.5, size_px=64)
+    >>> psf.size_px, psf.field_arcmin, psf.pupil_diameter_mm, psf.mode
+    ((64, 64), 32.0, 3.0, 'wave')
+    """
 
     data: np.ndarray
     arcmin_per_px: float

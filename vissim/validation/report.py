@@ -25,6 +25,7 @@ from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  #
 from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
 from vissim.validation.fit_report import fit_table  # noqa: E402
+from vissim.validation.optics_figures import optics_figures  # noqa: E402
 from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
 from vissim.validation.wave_bench_report import is_wave_bench_row, self_check_table, wave_bench_tables  # noqa: E402
 
@@ -357,8 +358,12 @@ def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
 
 
 def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[dict], tables_md: str,
-                       figures: dict[str, tuple[str, bytes]]) -> list[Path]:
-    """metrics.json, metrics.csv, tables.md, the figures (file name -> PNG, with sidecars) and report.html."""
+                       figures: dict[str, tuple]) -> list[Path]:
+    """metrics.json, metrics.csv, tables.md, the figures and report.html.
+
+    ``figures``: name -> ``(file name, PNG)`` or ``(file name, PNG, provenance extras)``; each is written
+    with its sidecar and linked from tables.md (Markdown images) and shown in report.html.
+    """
     campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
     provenance = report_provenance(run_dir, campaign, metrics["items"])
     written = [write_json_atomic(run_dir / "metrics.json", {**metrics, "provenance": provenance}, overwrite=True)]
@@ -370,11 +375,12 @@ def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[d
     written.append(run_dir / "metrics.csv")
     made = (f"Made by vissim {provenance['vissim_version']} on {provenance['created_utc']} from "
             f"{campaign.get('source', 'an unknown campaign file')}; provenance in metrics.json.")
-    text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables_md}\n{made}\n"
+    links = "".join(f"### {name}\n\n![{name}]({entry[0]})\n\n" for name, entry in figures.items())
+    text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables_md}\n{links}{made}\n"
     written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
     pngs = {}
-    for name, (file_name, png) in figures.items():
-        pngs[name] = write_figure(run_dir / file_name, png, {**provenance, "figure": name})
+    for name, (file_name, png, *extra) in figures.items():
+        pngs[name] = write_figure(run_dir / file_name, png, {**provenance, **(extra[0] if extra else {}), "figure": name})
         written += [run_dir / file_name, run_dir / f"{file_name}.json"]
     page = html_report(title, tables_md, pngs, footer=made)
     written.append(write_text_atomic(run_dir / "report.html", page, overwrite=True))
@@ -387,7 +393,11 @@ def campaign_name(run_dir: Path) -> str:
 
 
 def build_report(run_dir: str | Path) -> list[Path]:
-    """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``."""
+    """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``.
+
+    The figures: Fig. 4.8-style panels per simulation, and per group the wave PSF (log scale), its
+    MTF against the diffraction limit and a through-focus strip (:mod:`vissim.validation.optics_figures`).
+    """
     run_dir = Path(run_dir)
     results = load_results(run_dir)
     rows = metrics_rows(results)
@@ -400,6 +410,8 @@ def build_report(run_dir: str | Path) -> list[Path]:
     if png is not None:
         name = "wave simulation on the synthetic chart against the wave bench"
         figures[name] = (f"figure_wave_{WAVE_BENCH}.png", png)
+    for name, (file_name, fig, extra) in optics_figures(results, run_dir, reflectance_norm).items():
+        figures[name] = (file_name, png_bytes(fig), extra)  # per group: the PSF (log), its MTF, through focus
     written = write_report_files(run_dir, title=f"vissim validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=markdown_tables(results), figures=figures)

@@ -1,0 +1,134 @@
+"""The report's optics figures (issue 16): the wave PSF on a log scale, its MTF against the diffraction limit,
+through focus; written with provenance, linked from tables.md and shown in report.html."""
+
+import json
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from fake_bench import fake_render
+
+from vissim.optics.prescription import Prescription
+from vissim.validation.campaign import load_campaign
+from vissim.validation.item import SYNTHETIC_OVERSAMPLE
+from vissim.validation.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
+                                              optics_cases, psf_figure_of, sampling_label)
+from vissim.validation.report import build_report, load_results
+from vissim.validation.runner import run_campaign
+
+SMALL = """
+[campaign]
+name = "figures"
+spp = 4
+seeds = [1, 2]
+tile_px = [64, 64]
+simulations = ["wave"]
+inputs = ["synthetic"]
+wave_truth = false
+
+[[sweep]]
+name = "myopia"
+letters = ["K"]
+logmars = [0.7]
+spheres = [0.0, 1.0]
+
+[[item]]
+name = "cylinder"
+letter = "N"
+logmar = 0.7
+lenses = [{ cylinder = 1.5, axis = 90 }]
+"""
+
+FIGURES = ("figure_psf.png", "figure_mtf.png", "figure_through_focus.png")
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("figures")
+    (folder / "figures.toml").write_text(SMALL)
+    run = folder / "run"
+    run_campaign(load_campaign(folder / "figures.toml"), run, render=fake_render, show_progress=False)
+    build_report(run)
+    return run
+
+
+@pytest.fixture(scope="module")
+def cases(run_dir):
+    return optics_cases(load_results(run_dir), run_dir)
+
+
+def test_one_case_per_group_with_lenses_and_the_wave_setup_it_recorded(run_dir, cases):
+    assert sorted(c.group for c in cases) == ["cylinder", "myopia"]
+    results = {r["configuration"]["name"]: r for r in load_results(run_dir)}
+    for case in cases:
+        assert results[case.configuration]["lens_label"] != "no lens"  # not the sweep's plano member
+        wave = next(c for c in results[case.configuration]["comparisons"] if c["simulation"] == "wave")
+        assert case.prescription.format(4) == Prescription.parse(wave["setup"]["camera_prescription"]).format(4)
+        assert case.pupil_diameter_mm == wave["setup"]["pupil_diameter_mm"]
+        assert case.psf_arcmin_per_px == pytest.approx(case.arcmin_per_px / SYNTHETIC_OVERSAMPLE)
+
+
+def test_figures_are_written_with_provenance_and_linked(run_dir, cases):
+    tables = (run_dir / "tables.md").read_text()
+    page = (run_dir / "report.html").read_text()
+    for name in FIGURES:
+        png = run_dir / name
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        sidecar = json.loads((run_dir / f"{name}.json").read_text())
+        assert sidecar["inputs"]["campaign"] == "figures" and sidecar["figure"]
+        assert [o["camera_prescription"] for o in sidecar["optics"]] == [c.prescription.format(4) for c in cases]
+        assert f"]({name})" in tables  # a Markdown image link beside the tables
+        assert sidecar["figure"] in page
+    assert page.count("data:image/png;base64,") == len(list(run_dir.glob("figure_*.png")))
+
+
+def test_log_psf_panels_state_the_sampling_they_show(cases):
+    psfs = [case_psf(case) for case in cases]
+    fig = psf_figure_of(cases, psfs)
+    try:
+        for ax, case, psf in zip(fig.axes, cases, psfs):
+            assert psf.arcmin_per_px == pytest.approx(case.psf_arcmin_per_px)
+            label = ax.get_xlabel()
+            assert sampling_label(psf) in label
+            assert f"{psf.arcmin_per_px:.3g} arcmin/px" in label and f"{case.pupil_diameter_mm:.3g} mm pupil" in label
+            image = ax.get_images()[0]
+            left, right, bottom, top = image.get_extent()
+            rows, cols = image.get_array().shape
+            # the axes are in arcmin at the PSF's own sampling, centred on the chief ray, +y up
+            assert (right - left) / cols == pytest.approx(psf.arcmin_per_px)
+            assert (top - bottom) / rows == pytest.approx(psf.arcmin_per_px)
+            assert left == pytest.approx(-right) and top > bottom
+            assert image.get_array().max() == pytest.approx(0.0)  # log10 of the peak
+    finally:
+        plt.close(fig)
+
+
+def test_mtf_plotted_is_below_the_diffraction_limit(cases):
+    psfs = [case_psf(case) for case in cases]
+    fig = mtf_figure_of(cases, psfs)
+    try:
+        for ax, psf in zip(fig.axes, psfs):
+            lines = {line.get_label(): line for line in ax.get_lines()}
+            limit = lines["diffraction limit"]
+            # The PSF is normalised over its field (energy E inside): |OTF| <= (diffraction + 1 - E) / E.
+            e = psf.energy_in_field
+            for label in ("along x (horizontal)", "along y (vertical)"):
+                np.testing.assert_array_equal(lines[label].get_xdata(), limit.get_xdata())
+                assert np.all(lines[label].get_ydata() <= (limit.get_ydata() + 1.0 - e) / e + 1e-9), label
+            curves = mtf_curves(psf)
+            assert np.all(curves["radial"] <= (curves["radial_diffraction"] + 1.0 - e) / e + 1e-9)
+            np.testing.assert_allclose(lines["radial mean"].get_ydata(), curves["radial"])
+            assert curves["horizontal"][0] == pytest.approx(1.0)
+            # defocused: well under the limit at a tenth of the cutoff
+            tenth = np.searchsorted(curves["frequency_cyc_per_deg"], 0.1 * float(curves["cutoff_cyc_per_deg"]))
+            assert curves["radial"][tenth] < 0.5 * curves["radial_diffraction"][tenth]
+    finally:
+        plt.close(fig)
+
+
+def test_through_focus_steps_move_the_sphere_of_the_prescription(cases):
+    myope = next(c for c in cases if c.group == "myopia")  # a +1 D lens: the camera's prescription is about -1 DS
+    assert myope.prescription.sphere_diopters == pytest.approx(-1.0, abs=0.05)
+    assert 1.0 in THROUGH_FOCUS_STEPS_D
+    peaks = [case_psf(myope, myope.arcmin_per_px, step).data.max() for step in (-1.0, 0.0, 1.0)]
+    assert peaks[0] < peaks[1] < peaks[2]  # +1 D brings it to plano: the sharpest
