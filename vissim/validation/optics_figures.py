@@ -249,7 +249,7 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
             ax.set_xticks([])
             ax.set_yticks([])
             if i == 0:
-                ax.set_title("as simulated" if step == 0 else f"Rx sphere {step:+.2f} D", fontsize=8)
+                ax.set_title("as simulated (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it", fontsize=8)
         axes[i, 0].set_ylabel(f"{case.configuration}\nRx {case.prescription.format(2)}", fontsize=7)
     first = cases[0]
     fig.suptitle(f"Through focus: the synthetic chart through the wave PSF of the camera prescription with its sphere "
