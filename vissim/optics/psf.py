@@ -66,7 +66,7 @@ log = logging.getLogger(__name__)
 
 #: The Fourier simulator's revision: campaign item keys include it, so that results of an older
 #: core are recomputed, not reused.  Change it whenever a change moves simulated numbers.
-SIMULATOR_REVISION = "3 (issue 12: cell-averaged pupil from centre phase and its differences, matrix or FFT, 1 % field rule)"
+SIMULATOR_REVISION = "4 (issue 12: float32 by default; cell-averaged pupil, matrix or FFT, 1 % field rule)"
 #: How output pixels relate to the continuous PSF (see :func:`~vissim.optics.psf_wave.to_output_pixels`).
 PIXEL_MODES = ("integrate", "sample")
 #: Largest PSF field, pixels.
