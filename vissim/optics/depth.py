@@ -211,25 +211,11 @@ class DepthBlurResult:
     padded_shape: tuple[int, int]
 
     def as_json(self) -> dict:
-        return {
-            "n_layers": self.n_layers,
-            "n_blurred_layers": len(self.layers),
-            "max_layer_spacing_diopters": self.max_layer_spacing_diopters,
-            "occlusion_threshold_diopters": self.occlusion_threshold_diopters,
-            "accommodation_diopters": self.accommodation_diopters,
-            "in_focus_proximity_diopters": self.in_focus_proximity_diopters,
-            "padded_shape": list(self.padded_shape),
-            "layers": [
-                {
-                    "proximity_diopters": la.proximity_diopters,
-                    "defocus_sphere_diopters": la.defocus_sphere_diopters,
-                    "blur_diameter_arcmin": la.blur_diameter_arcmin,
-                    "psf_size_px": la.psf_size_px,
-                    "coverage_fraction": la.coverage_fraction,
-                }
-                for la in self.layers
-            ],
-        }
+        out = {"n_layers": self.n_layers, "n_blurred_layers": len(self.layers)}
+        out |= {f.name: getattr(self, f.name) for f in dataclasses.fields(self)[3:]}  # the plan's numbers
+        out["padded_shape"] = list(self.padded_shape)
+        out["layers"] = [{k: v for k, v in dataclasses.asdict(la).items() if k != "index"} for la in self.layers]
+        return out
 
 
 # -- validation helpers ---------------------------------------------------------------

@@ -53,7 +53,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from scipy import ndimage
@@ -101,9 +101,7 @@ class LayeredBlurResult:
     mode: str
 
     def as_json(self) -> dict:
-        return {"n_layers": self.n_layers, "n_slices": self.n_slices, "n_rays": self.n_rays, "n_terms": self.n_terms,
-                "overlapping_layers": self.overlapping_layers, "accommodation_diopters": self.accommodation_diopters,
-                "mode": self.mode}
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "image"}
 
 
 @functools.lru_cache(maxsize=8)

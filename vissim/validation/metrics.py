@@ -63,15 +63,8 @@ class Comparison:
 
     def as_json(self) -> dict[str, Any]:
         """The numbers (no maps), JSON-ready; an infinite PSNR is written as the string ``"inf"``."""
-        return {
-            "ssim": self.ssim,
-            "psnr_db": self.psnr_db if math.isfinite(self.psnr_db) else "inf",
-            "mse": self.mse,
-            "mean_abs_diff": self.mean_abs_diff,
-            "max_abs_diff": self.max_abs_diff,
-            "data_range": self.data_range,
-            "shape": list(self.shape),
-        }
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if not f.name.endswith("_map")}
+        return out | {"psnr_db": self.psnr_db if math.isfinite(self.psnr_db) else "inf", "shape": list(self.shape)}
 
 
 def _check_data_range(data_range: Any) -> float:
