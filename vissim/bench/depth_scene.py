@@ -245,13 +245,14 @@ def _geometry(scene: DepthScene, index: int, panel: Panel) -> PanelGeometry:
     left_m, right_m = (panel.distance_m,) * 2 if fronto else (panel.distance_left_m, panel.distance_right_m)
     spec = panel.chart.spec(min(left_m, right_m))
     mm_per_texel = m_to_mm(left_m) * texel_tan
-    layout = layout_chart(spec, dpi=MM_PER_INCH / mm_per_texel) if fronto else layout_chart(spec, arcmin_per_px=texel_arcmin)
+    sampling = {"dpi": MM_PER_INCH / mm_per_texel} if fronto else {"arcmin_per_px": texel_arcmin}
+    layout = layout_chart(spec, **sampling)
     shape = (layout.shape_px[0] + 2 * pad, layout.shape_px[1] + 2 * pad)
     half_w, half_h = 0.5 * shape[1] * texel_tan, 0.5 * shape[0] * texel_tan
     box = (cx - half_w, cx + half_w, cy - half_h, cy + half_h)
     if not fronto:
-        return PanelGeometry(index, f"tilted {left_m:g}-{right_m:g} m", "tilted", box, left_m, right_m, shape, pad, spec,
-                             texel_arcmin)
+        name = f"tilted {left_m:g}-{right_m:g} m"
+        return PanelGeometry(index, name, "tilted", box, left_m, right_m, shape, pad, spec, texel_arcmin)
     top, _, bottom, _ = layout.letters[0].box_mm
     return PanelGeometry(index, f"panel {left_m:g} m", "panel", box, left_m, right_m, shape, pad, spec, texel_arcmin,
                          mm_per_texel, (shape[0] * mm_per_texel, shape[1] * mm_per_texel), bottom - top)

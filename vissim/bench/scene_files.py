@@ -229,8 +229,9 @@ def load_atv_toml(path: str | os.PathLike[str]):
     lens = checked("trial_lens", "sphere_diopters", "cylinder_diopters", "axis_deg", "distance_mm", "fresnel_loss")
     trial = None
     if "sphere_diopters" in lens or "cylinder_diopters" in lens:
-        trial = atv_trial_lens(*(value("trial_lens", key, default, float, unit) for key, default, unit in (
-            ("sphere_diopters", 0.0, "dioptres"), ("cylinder_diopters", 0.0, "dioptres"), ("axis_deg", 180.0, "degrees"))))
+        powers = (("sphere_diopters", 0.0, "dioptres"), ("cylinder_diopters", 0.0, "dioptres"),
+                  ("axis_deg", 180.0, "degrees"))
+        trial = atv_trial_lens(*(value("trial_lens", key, default, float, unit) for key, default, unit in powers))
     return AtvConfig(tube=tube, eye=eye, trial_lens=trial,
                      trial_lens_distance_mm=value("trial_lens", "distance_mm", 15.0, float, "mm"),
                      fresnel_loss=value("trial_lens", "fresnel_loss", False, bool, "(true/false)"))
