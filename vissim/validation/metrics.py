@@ -118,11 +118,8 @@ def compare_images(reference: Any, test: Any, *, data_range: float) -> Compariso
     if ref.shape != tst.shape:
         raise VissimInputError(f"reference is {ref.shape} px but test is {tst.shape} px; shapes must match")
     channel_axis = -1 if ref.ndim == 3 else None
-    ssim, ssim_map = structural_similarity(
-        ref, tst, data_range=data_range, channel_axis=channel_axis, full=True,
-        gaussian_weights=SSIM_SETTINGS["gaussian_weights"], sigma=SSIM_SETTINGS["sigma"],
-        use_sample_covariance=SSIM_SETTINGS["use_sample_covariance"], K1=SSIM_SETTINGS["K1"], K2=SSIM_SETTINGS["K2"],
-    )
+    ssim, ssim_map = structural_similarity(ref, tst, data_range=data_range, channel_axis=channel_axis, full=True,
+                                           **SSIM_SETTINGS)
     diff = ref - tst
     squared = diff * diff
     absolute = np.abs(diff)
