@@ -19,7 +19,7 @@ from vissim.bench.dslr import DslrBench
 from vissim.errors import VissimInputError
 from vissim.fit.rx_fit import RxFit, fit_rx
 from vissim.optics.prescription import LensPower
-from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_power
+from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_lens_power
 
 __all__ = ["bench_from_provenance", "rendered_bench", "fit_capture", "compare_with_theory", "fit_bench_item"]
 
@@ -98,17 +98,11 @@ def compare_with_theory(fit: RxFit, bench_with_lenses: DslrBench) -> dict:
     no_lens = dataclasses.replace(bench_with_lenses, lenses=()).viewing_setup()
     added = np.asarray(setup.defocus_matrix_diopters) - np.asarray(no_lens.defocus_matrix_diopters)
     theory = LensPower.from_power_matrix(added)
-    total = sum((np.asarray(lens.marked_power.power_matrix()) for lens in bench_with_lenses.lenses), np.zeros((2, 2)))
-    summed = LensPower.from_power_matrix(total)
-    table = None
-    if bench_with_lenses.lenses:
-        axis = summed.axis_deg
-        p_axis = thesis_table_4_2_power(summed.meridian_power(axis), bench_with_lenses.vertex_distance_mm)
-        p_perp = thesis_table_4_2_power(summed.meridian_power(axis + 90.0), bench_with_lenses.vertex_distance_mm)
-        table = LensPower(p_axis, p_perp - p_axis, axis).minus_cylinder()
+    lenses, vertex_mm = bench_with_lenses.lenses, bench_with_lenses.vertex_distance_mm
+    table = thesis_table_4_2_lens_power(lenses, vertex_mm).minus_cylinder() if lenses else None
     record = fit.as_json()
     out: dict[str, Any] = {
-        "trial_lenses": [str(lens.marked_power) for lens in bench_with_lenses.lenses],
+        "trial_lenses": [str(lens.marked_power) for lens in lenses],
         "vergence_theory": str(theory.minus_cylinder().format(4)),
         "vergence_theory_power_vector": list(theory.power_vector()),
         "table_4_2": None if table is None else table.format(4),
