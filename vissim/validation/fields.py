@@ -159,14 +159,14 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
     for key, allowed in lists.items():
         if key in head:
             kwargs[key] = choices(head[key], allowed, source, f"{where}.{key}")
+    for key in texts:
+        if key in head:
+            text(head[key], source, f"{where}.{key}")
     for key in switches:
         if key in head:
             if not isinstance(head[key], bool):
                 raise field_error(source, f"{where}.{key}", f"must be true or false, got {head[key]!r}")
             kwargs[key] = head[key]
-    for key in texts:
-        if key in head:
-            text(head[key], source, f"{where}.{key}")
     return kwargs
 
 
