@@ -12,6 +12,7 @@ from vissim.optics.blur import blur_image
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
 from vissim.optics.wavefront import Wavefront
+from vissim.validation.campaign import load_campaign
 from vissim.validation.renders import bench_for
 from vissim.optics.resample import magnify
 
@@ -29,3 +30,14 @@ def fake_render(spec):
         tile = blur_image(magnify(tile, effect.magnification_matrix), psf, arcmin_per_px=spec.arcmin_per_px, padding="edge")
     rng = np.random.default_rng(spec.seed)
     return (tile + rng.normal(0, 0.005, tile.shape)).astype(np.float32)
+
+
+def refuse(spec):  # a renderer that must not be called
+    raise AssertionError(f"re-rendered {spec}")
+
+
+def write_campaign(directory, text: str, name: str = "tiny.toml"):
+    """The campaign ``text`` written as ``directory / name`` and loaded."""
+    path = directory / name
+    path.write_text(text)
+    return load_campaign(path)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fake_bench import fake_render
+from fake_bench import fake_render, refuse
 from provenance_walk import image_provenance, json_without_provenance
 
 from vissim.bench.depth_scene import default_panels_scene, panel_geometries
@@ -87,10 +87,6 @@ def tiny(tmp_path):
     path = tmp_path / "tiny.toml"
     path.write_text(TINY_CAMPAIGN)
     return path
-
-
-def refuse(spec):  # a renderer that must not be called
-    raise AssertionError(f"re-rendered {spec}")
 
 
 def test_shipped_depth_campaign_loads():

@@ -4,7 +4,6 @@ import json
 
 from fake_bench import fake_render
 
-from vissim.validation.campaign import load_campaign
 from vissim.validation.report import build_report, load_results
 from vissim.validation.runner import run_campaign
 
@@ -32,10 +31,8 @@ logmar = 0.7
 """
 
 
-def test_a_campaign_with_fit_rx_fits_each_capture_and_reports_it_beside_vergence_theory(tmp_path):
-    path = tmp_path / "fit.toml"
-    path.write_text(FIT_CAMPAIGN)
-    campaign = load_campaign(path)
+def test_a_campaign_with_fit_rx_fits_each_capture_and_reports_it_beside_vergence_theory(tmp_path, campaign_file):
+    campaign = campaign_file(FIT_CAMPAIGN, "fit.toml")
     assert campaign.settings.fit_rx
     run_dir = tmp_path / "run"
     run_campaign(campaign, run_dir, render=fake_render, show_progress=False)
@@ -57,13 +54,10 @@ def test_a_campaign_with_fit_rx_fits_each_capture_and_reports_it_beside_vergence
     assert "agrees" in row
 
 
-def test_fit_rx_is_off_unless_asked_for(tmp_path):
-    path = tmp_path / "nofit.toml"
-    path.write_text(FIT_CAMPAIGN.replace("fit_rx = true", ""))
-    assert load_campaign(path).settings.fit_rx is False
-    path.write_text(FIT_CAMPAIGN.replace("fit_rx = true", 'fit_rx = "yes"'))
+def test_fit_rx_is_off_unless_asked_for(campaign_file):
+    assert campaign_file(FIT_CAMPAIGN.replace("fit_rx = true", ""), "nofit.toml").settings.fit_rx is False
     try:
-        load_campaign(path)
+        campaign_file(FIT_CAMPAIGN.replace("fit_rx = true", 'fit_rx = "yes"'), "nofit.toml")
     except Exception as exc:  # noqa: BLE001 - the message is what is checked
         assert "campaign.fit_rx" in str(exc) and "true or false" in str(exc)
     else:

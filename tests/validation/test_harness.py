@@ -4,7 +4,7 @@ import json
 import shutil
 
 import pytest
-from fake_bench import fake_render
+from fake_bench import fake_render, refuse
 
 from vissim.cli import main
 from vissim.errors import VissimInputError
@@ -37,18 +37,12 @@ lenses = [{ cylinder = 2.0, axis = 90 }]
 
 
 @pytest.fixture
-def tiny(tmp_path):
-    path = tmp_path / "tiny.toml"
-    path.write_text(TINY)
-    return load_campaign(path)
+def tiny(campaign_file):
+    return campaign_file(TINY)
 
 
 def numbers(run_dir):
     return [(r["configuration"], r["simulation"], r["input"], r["ssim"], r["psnr_db"]) for r in metrics_rows(load_results(run_dir))]
-
-
-def refuse(spec):  # a renderer that must not be called
-    raise AssertionError(f"re-rendered {spec}")
 
 
 def test_a_tiny_campaign_runs_and_reports(tiny, tmp_path):

@@ -8,10 +8,9 @@ import json
 import math
 
 import pytest
-from fake_bench import fake_render
+from fake_bench import fake_render, refuse, write_campaign
 
 from vissim.errors import VissimInputError
-from vissim.validation.campaign import load_campaign
 from vissim.validation.dispatch import _single_plane_lines
 from vissim.validation.report import build_report, load_results, metrics_rows
 from vissim.validation.runner import run_campaign
@@ -41,20 +40,10 @@ logmar = 0.7
 """
 
 
-def campaign(tmp_path, extra=""):
-    path = tmp_path / "tiny.toml"
-    path.write_text(TINY.format(extra=extra))
-    return load_campaign(path)
-
-
-def refuse(spec):  # a renderer that must not be called
-    raise AssertionError(f"re-rendered {spec}")
-
-
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     tmp_path = tmp_path_factory.mktemp("wave_bench")
-    tiny = campaign(tmp_path)
+    tiny = write_campaign(tmp_path, TINY.format(extra=""))
     run_dir = tmp_path / "run"
     run_campaign(tiny, run_dir, render=fake_render, show_progress=False)
     build_report(run_dir)
@@ -158,7 +147,7 @@ def test_a_rerun_reuses_every_item(run):
 
 def test_wave_truth_false_skips_the_wave_bench_and_keys_the_items_apart(run, tmp_path):
     tiny, _ = run
-    off = campaign(tmp_path, "wave_truth = false")
+    off = write_campaign(tmp_path, TINY.format(extra="wave_truth = false"))
     assert off.settings.wave_truth is False and tiny.settings.wave_truth is True
     assert {off.item_key(c) for c in off.configurations}.isdisjoint(tiny.item_key(c) for c in tiny.configurations)
     quiet = tmp_path / "off"
@@ -172,4 +161,4 @@ def test_wave_truth_false_skips_the_wave_bench_and_keys_the_items_apart(run, tmp
 
 def test_wave_truth_must_be_a_boolean(tmp_path):
     with pytest.raises(VissimInputError, match="campaign.wave_truth"):
-        campaign(tmp_path, 'wave_truth = "yes"')
+        write_campaign(tmp_path, TINY.format(extra='wave_truth = "yes"'))

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -170,7 +170,7 @@ class ThresholdResult:
             "interval_code": [self.lower_code, self.upper_code],
             "phase1_interval_code": list(self.phase1_interval_code),
             "never_seen": self.never_seen,
-            "presentations": [{"phase": p.phase, "intensity_code": p.intensity_code, "seen": p.seen} for p in self.presentations],
+            "presentations": [asdict(p) for p in self.presentations],
             "config": {
                 "minimum_code": self.config.minimum_code,
                 "maximum_code": self.config.maximum_code,

@@ -42,7 +42,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.glass import D_LINE_NM
 from vissim.optics.prescription import LensPower
 from vissim.optics.wavefront import Wavefront
-from vissim.optics.zernike import zernike_nm
+from vissim.optics.zernike import zernike_keys, zernike_nm
 from vissim.units import arcmin_to_rad, mm_to_m
 
 __all__ = ["TracedWavefront", "ShiftInvariance", "fit_zernike_um", "trace_bench_wavefront", "frame_field_points_deg",
@@ -51,10 +51,6 @@ __all__ = ["TracedWavefront", "ShiftInvariance", "fit_zernike_um", "trace_bench_
 #: Defaults: 65 x 65 samples (centre on a sample), Zernike radial order 8.
 DEFAULT_SAMPLES = 65
 DEFAULT_MAX_ORDER = 8
-
-
-def zernike_keys(max_order: int) -> list[tuple[int, int]]:
-    return [(n, m) for n in range(max_order + 1) for m in range(-n, n + 1, 2)]
 
 
 def fit_zernike_um(x_mm, y_mm, opd_um, pupil_diameter_mm: float, max_order: int = DEFAULT_MAX_ORDER):

@@ -235,40 +235,27 @@ class PanelGeometry:
         return 1.0 / ((1.0 - t) / self.distance_left_m + t / self.distance_right_m)
 
 
-def _texel_tan(scene: DepthScene) -> float:
-    return scene.tan_pitch / scene.texels_per_px
-
-
-def _padding_texels(padding_arcmin: float, texel_tan: float) -> int:
-    return int(round(math.tan(arcmin_to_rad(padding_arcmin)) / texel_tan)) if padding_arcmin > 0 else 0
-
-
 def _geometry(scene: DepthScene, index: int, panel: Panel) -> PanelGeometry:
-    texel_tan = _texel_tan(scene)
+    texel_tan = scene.tan_pitch / scene.texels_per_px
     texel_arcmin = float(rad_to_arcmin(math.atan(texel_tan)))
-    chart = panel.chart
-    pad = _padding_texels(chart.padding_arcmin, texel_tan)
+    padding = panel.chart.padding_arcmin
+    pad = int(round(math.tan(arcmin_to_rad(padding)) / texel_tan)) if padding > 0 else 0
     cx, cy = (math.tan(arcmin_to_rad(v)) for v in panel.center_arcmin)
-    if isinstance(panel, ChartPanel):
-        distance = panel.distance_m
-        spec = chart.spec(distance)
-        mm_per_texel = m_to_mm(distance) * texel_tan
-        layout = layout_chart(spec, dpi=MM_PER_INCH / mm_per_texel)
-        shape = (layout.shape_px[0] + 2 * pad, layout.shape_px[1] + 2 * pad)
-        half_w, half_h = 0.5 * shape[1] * texel_tan, 0.5 * shape[0] * texel_tan
-        top, left, bottom, _ = layout.letters[0].box_mm
-        return PanelGeometry(
-            index, f"panel {distance:g} m", "panel", (cx - half_w, cx + half_w, cy - half_h, cy + half_h),
-            distance, distance, shape, pad, spec, texel_arcmin, mm_per_texel,
-            (shape[0] * mm_per_texel, shape[1] * mm_per_texel), bottom - top,
-        )
-    spec = chart.spec(min(panel.distance_left_m, panel.distance_right_m))
-    layout = layout_chart(spec, arcmin_per_px=texel_arcmin)
+    fronto = isinstance(panel, ChartPanel)
+    left_m, right_m = (panel.distance_m,) * 2 if fronto else (panel.distance_left_m, panel.distance_right_m)
+    spec = panel.chart.spec(min(left_m, right_m))
+    mm_per_texel = m_to_mm(left_m) * texel_tan
+    sampling = {"dpi": MM_PER_INCH / mm_per_texel} if fronto else {"arcmin_per_px": texel_arcmin}
+    layout = layout_chart(spec, **sampling)
     shape = (layout.shape_px[0] + 2 * pad, layout.shape_px[1] + 2 * pad)
     half_w, half_h = 0.5 * shape[1] * texel_tan, 0.5 * shape[0] * texel_tan
-    name = f"tilted {panel.distance_left_m:g}-{panel.distance_right_m:g} m"
-    return PanelGeometry(index, name, "tilted", (cx - half_w, cx + half_w, cy - half_h, cy + half_h),
-                         panel.distance_left_m, panel.distance_right_m, shape, pad, spec, texel_arcmin)
+    box = (cx - half_w, cx + half_w, cy - half_h, cy + half_h)
+    if not fronto:
+        name = f"tilted {left_m:g}-{right_m:g} m"
+        return PanelGeometry(index, name, "tilted", box, left_m, right_m, shape, pad, spec, texel_arcmin)
+    top, _, bottom, _ = layout.letters[0].box_mm
+    return PanelGeometry(index, f"panel {left_m:g} m", "panel", box, left_m, right_m, shape, pad, spec, texel_arcmin,
+                         mm_per_texel, (shape[0] * mm_per_texel, shape[1] * mm_per_texel), bottom - top)
 
 
 def panel_geometries(scene: DepthScene) -> tuple[PanelGeometry, ...]:

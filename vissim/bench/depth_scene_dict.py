@@ -47,13 +47,9 @@ _MESH_SCHEMA = "vissim.tilted-chart-mesh/1"
 _FAR_CLIP_FACTOR = 10.0
 
 
-def _identity() -> list[list[float]]:
-    return [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
-
-
 def _pinhole(scene: DepthScene, kind: str, far_clip_mm: float) -> dict:
     return {"type": "perspective", "fov": scene.fov_x_deg(), "fov_axis": "x", "near_clip": NEAR_CLIP_MM,
-            "far_clip": far_clip_mm, "to_world": _identity(),
+            "far_clip": far_clip_mm, "to_world": np.eye(4).tolist(),
             "sampler": {"type": scene.sampler, "sample_count": 16, "seed": 0}, "film": hdr_film(scene.size_px, kind)}
 
 

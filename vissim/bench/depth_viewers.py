@@ -26,7 +26,7 @@ what :func:`vissim.optics.depth.blur_depth` is given to simulate a render of tha
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Union
 
 import numpy as np
@@ -88,15 +88,12 @@ class CameraViewer:
         ``scene`` (a :class:`~vissim.bench.depth_scene.DepthScene`) sets the grid, sampler and
         texel density, hence the lenses' clear aperture; None: an 8 x 8 grid at 1 arcmin/px.
         """
-        grid = {} if scene is None else {"arcmin_per_px": scene.arcmin_per_px, "size_px": scene.size_px,
-                                         "sampler": scene.sampler, "texels_per_px": scene.texels_per_px}
-        return DslrBench(
-            focal_length_mm=self.focal_length_mm, f_number=self.f_number,
-            focus_distance_mm=m_to_mm(self.focus_distance_m), chart_distance_mm=m_to_mm(self.focus_distance_m),
-            vertex_distance_mm=self.vertex_distance_mm, lens_gap_mm=self.lens_gap_mm, lenses=self.lenses,
-            refractive_index=self.refractive_index, clear_aperture_mm=self.clear_aperture_mm,
-            fresnel_loss=self.fresnel_loss, **({"size_px": (8, 8)} | grid),
-        )
+        grid = {"size_px": (8, 8)} if scene is None else {
+            key: getattr(scene, key) for key in ("arcmin_per_px", "size_px", "sampler", "texels_per_px")}
+        # every field but the focus distance is a DslrBench field of the same name
+        camera = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "focus_distance_m"}
+        distance_mm = m_to_mm(self.focus_distance_m)
+        return DslrBench(focus_distance_mm=distance_mm, chart_distance_mm=distance_mm, **camera, **grid)
 
     @property
     def pupil_diameter_mm(self) -> float:

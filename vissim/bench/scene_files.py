@@ -209,31 +209,29 @@ def load_atv_toml(path: str | os.PathLike[str]):
 
     doc, source = read_scene_toml(path)
     _check_keys(doc, ("tube", "eye", "trial_lens"), source)
-    tube_table = _table(doc, "tube", source)
-    _check_keys(tube_table, tuple(_ATV_TUBE_KEYS), f"{source} [tube]")
-    tube = AtvTube(**{k: _typed(v, _ATV_TUBE_KEYS[k][0], f"{source} [tube].{k}", _ATV_TUBE_KEYS[k][1])
-                      for k, v in tube_table.items()})
-    eye_table = _table(doc, "eye", source)
-    _check_keys(eye_table, ("pupil_diameter_mm", "prescription", "accommodation_diopters"), f"{source} [eye]")
-    rx = eye_table.get("prescription")
+    tables: dict[str, dict] = {}
+
+    def checked(name: str, *keys: str) -> dict:
+        tables[name] = _table(doc, name, source)
+        _check_keys(tables[name], keys, f"{source} [{name}]")
+        return tables[name]
+
+    def value(name: str, key: str, default: Any, kind: type, unit: str) -> Any:
+        return _typed(tables[name].get(key, default), kind, f"{source} [{name}].{key}", unit)
+
+    tube = AtvTube(**{k: value("tube", k, None, *_ATV_TUBE_KEYS[k]) for k in checked("tube", *_ATV_TUBE_KEYS)})
+    rx = checked("eye", "pupil_diameter_mm", "prescription", "accommodation_diopters").get("prescription")
     eye = AtvEye(
-        pupil_diameter_mm=_typed(eye_table.get("pupil_diameter_mm", 4.0), float, f"{source} [eye].pupil_diameter_mm", "mm"),
-        refractive_error=None if rx in (None, "") else Prescription.parse(_typed(rx, str, f"{source} [eye].prescription", "")),
-        accommodation_diopters=_typed(eye_table.get("accommodation_diopters", 0.0), float,
-                                      f"{source} [eye].accommodation_diopters", "dioptres"),
+        pupil_diameter_mm=value("eye", "pupil_diameter_mm", 4.0, float, "mm"),
+        refractive_error=None if rx in (None, "") else Prescription.parse(value("eye", "prescription", None, str, "")),
+        accommodation_diopters=value("eye", "accommodation_diopters", 0.0, float, "dioptres"),
     )
-    lens_table = _table(doc, "trial_lens", source)
-    _check_keys(lens_table, ("sphere_diopters", "cylinder_diopters", "axis_deg", "distance_mm", "fresnel_loss"),
-                f"{source} [trial_lens]")
+    lens = checked("trial_lens", "sphere_diopters", "cylinder_diopters", "axis_deg", "distance_mm", "fresnel_loss")
     trial = None
-    if "sphere_diopters" in lens_table or "cylinder_diopters" in lens_table:
-        trial = atv_trial_lens(
-            _typed(lens_table.get("sphere_diopters", 0.0), float, f"{source} [trial_lens].sphere_diopters", "dioptres"),
-            _typed(lens_table.get("cylinder_diopters", 0.0), float, f"{source} [trial_lens].cylinder_diopters", "dioptres"),
-            _typed(lens_table.get("axis_deg", 180.0), float, f"{source} [trial_lens].axis_deg", "degrees"),
-        )
-    return AtvConfig(
-        tube=tube, eye=eye, trial_lens=trial,
-        trial_lens_distance_mm=_typed(lens_table.get("distance_mm", 15.0), float, f"{source} [trial_lens].distance_mm", "mm"),
-        fresnel_loss=_typed(lens_table.get("fresnel_loss", False), bool, f"{source} [trial_lens].fresnel_loss", "(true/false)"),
-    )
+    if "sphere_diopters" in lens or "cylinder_diopters" in lens:
+        powers = (("sphere_diopters", 0.0, "dioptres"), ("cylinder_diopters", 0.0, "dioptres"),
+                  ("axis_deg", 180.0, "degrees"))
+        trial = atv_trial_lens(*(value("trial_lens", key, default, float, unit) for key, default, unit in powers))
+    return AtvConfig(tube=tube, eye=eye, trial_lens=trial,
+                     trial_lens_distance_mm=value("trial_lens", "distance_mm", 15.0, float, "mm"),
+                     fresnel_loss=value("trial_lens", "fresnel_loss", False, bool, "(true/false)"))

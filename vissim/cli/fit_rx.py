@@ -52,7 +52,7 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def _channel(image, path: Path) -> np.ndarray:
+def _channel(image) -> np.ndarray:
     pixels = image.pixels
     if pixels.ndim == 3:
         return np.tensordot(pixels, np.asarray(REC709_LUMINANCE, dtype=np.float32), axes=([2], [0]))
@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
                                "and --object-distance-m")
     rendered = isinstance(image.provenance.get("inputs"), dict) and "mitsuba_render" in image.provenance["inputs"]
     mode = args.mode or ("geometric" if rendered else "wave")
-    fit = fit_rx(_channel(image, args.image), _channel(reference, args.reference), arcmin_per_px=step,
+    fit = fit_rx(_channel(image), _channel(reference), arcmin_per_px=step,
                  pupil_diameter_mm=pupil, mode=mode, magnification=magnification, bench=bench,
                  wavelength_nm=args.wavelength_nm, fit_focus_offset=args.fit_focus_offset, fit_pupil=args.fit_pupil,
                  max_power_diopters=args.max_power_diopters,

@@ -96,12 +96,8 @@ def _chart_table(args, scene_doc: dict) -> dict:
     if args.letter is not None or args.logmar is not None:
         for key in ("letters", "logmar_range", "logmar_step", "seed"):
             table.pop(key, None)
-    if args.letter is not None:
-        table["letter"] = args.letter
-    if args.logmar is not None:
-        table["logmar"] = args.logmar
-    if args.polarity is not None:
-        table["polarity"] = args.polarity
+    given = {key: getattr(args, key) for key in ("letter", "logmar", "polarity")}
+    table.update({key: value for key, value in given.items() if value is not None})
     return table
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import logging
 import math
@@ -88,15 +89,7 @@ def run(args: argparse.Namespace) -> int:
     result = effect.to_json_dict()
     if args.json:
         result.update(
-            lens={
-                "marked_power": str(marked),
-                "sphere_diopters": lens.sphere_diopters,
-                "cylinder_diopters": lens.cylinder_diopters,
-                "axis_deg": lens.axis_deg,
-                "refractive_index": lens.refractive_index,
-                "center_thickness_mm": lens.center_thickness_mm,
-                "back_surface_diopters": lens.back_surface_diopters,
-            },
+            lens={"marked_power": str(marked), **dataclasses.asdict(lens)},
             thesis_table_4_2=thesis,
             vissim_version=__version__,
         )

@@ -19,10 +19,9 @@ from vissim.bench.dslr import DslrBench
 from vissim.errors import VissimInputError
 from vissim.fit.rx_fit import RxFit, fit_rx
 from vissim.optics.prescription import LensPower
-from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_power
+from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_lens_power
 
-__all__ = ["bench_from_provenance", "rendered_bench", "pupil_from_provenance", "fit_capture", "compare_with_theory",
-           "fit_bench_item"]
+__all__ = ["bench_from_provenance", "rendered_bench", "fit_capture", "compare_with_theory", "fit_bench_item"]
 
 #: Bench fields read from a render's provenance (``inputs.bench`` of ``vissim render bench``).
 _BENCH_FIELDS = ("focal_length_mm", "f_number", "focus_distance_mm", "chart_distance_mm", "vertex_distance_mm",
@@ -78,12 +77,6 @@ def rendered_bench(provenance: Any) -> DslrBench | None:
         return None
 
 
-def pupil_from_provenance(provenance: Any) -> float | None:
-    """The entrance pupil (focal length / f-number, mm) of the bench an image records, or None."""
-    bench = bench_from_provenance(provenance)
-    return None if bench is None else bench.entrance_pupil_diameter_mm
-
-
 def fit_capture(image: np.ndarray, reference: np.ndarray, *, arcmin_per_px: float, pupil_diameter_mm: float,
                 bench: DslrBench | None, mode: str = "geometric", **options: Any) -> RxFit:
     """Fit one bench capture against its no-lens reference; the campaign's entry point.
@@ -105,18 +98,11 @@ def compare_with_theory(fit: RxFit, bench_with_lenses: DslrBench) -> dict:
     no_lens = dataclasses.replace(bench_with_lenses, lenses=()).viewing_setup()
     added = np.asarray(setup.defocus_matrix_diopters) - np.asarray(no_lens.defocus_matrix_diopters)
     theory = LensPower.from_power_matrix(added)
-    total = sum((np.asarray(lens.marked_power.power_matrix()) for lens in bench_with_lenses.lenses), np.zeros((2, 2)))
-    summed = LensPower.from_power_matrix(total)
-    table = None
-    if bench_with_lenses.lenses:
-        axis = summed.axis_deg
-        p_axis = thesis_table_4_2_power(summed.meridian_power(axis), bench_with_lenses.vertex_distance_mm)
-        p_perp = thesis_table_4_2_power(summed.meridian_power(axis + 90.0), bench_with_lenses.vertex_distance_mm)
-        table = LensPower(p_axis, p_perp - p_axis, axis).minus_cylinder()
+    lenses, vertex_mm = bench_with_lenses.lenses, bench_with_lenses.vertex_distance_mm
+    table = thesis_table_4_2_lens_power(lenses, vertex_mm).minus_cylinder() if lenses else None
     record = fit.as_json()
     out: dict[str, Any] = {
-        "trial_lenses": [str(TrialLens(l.sphere_diopters, l.cylinder_diopters, l.axis_deg).marked_power)
-                         for l in bench_with_lenses.lenses],
+        "trial_lenses": [str(lens.marked_power) for lens in lenses],
         "vergence_theory": str(theory.minus_cylinder().format(4)),
         "vergence_theory_power_vector": list(theory.power_vector()),
         "table_4_2": None if table is None else table.format(4),
@@ -128,9 +114,8 @@ def compare_with_theory(fit: RxFit, bench_with_lenses: DslrBench) -> dict:
     if record["status"] != "ok":
         return out
     interval = record["interval_95"]
-    fitted = (record["power_vector"]["M_diopters"], record["power_vector"]["J0_diopters"],
-              record["power_vector"]["J45_diopters"])
     keys = ("M_diopters", "J0_diopters", "J45_diopters")
+    fitted = tuple(record["power_vector"][k] for k in keys)
     inside = [interval[k][0] <= t <= interval[k][1] for k, t in zip(keys, theory.power_vector())]
     fitted_rx = LensPower.from_power_vector(*fitted).minus_cylinder()
     out["fitted"] = (fitted_rx.format(4) if record["axis_determined"] else

@@ -171,6 +171,14 @@ def check_fit_inputs(image: Any, reference: Any) -> tuple[np.ndarray, np.ndarray
 
 
 # -- the result ----------------------------------------------------------------------------
+_VECTOR_KEYS = ("M_diopters", "J0_diopters", "J45_diopters")
+
+
+def _intervals_95(vector, sd) -> dict:
+    """``[v - 1.96 sd, v + 1.96 sd]`` per power-vector component, by name."""
+    return {k: [v - Z95 * s, v + Z95 * s] for k, v, s in zip(_VECTOR_KEYS, vector, sd)}
+
+
 @dataclass(frozen=True)
 class Solution:
     """One sign's best fit: effective power vector, its covariance, and the sum of squared residuals."""
@@ -203,23 +211,20 @@ class Solution:
             "sphere_diopters": rx.sphere_diopters,
             "cylinder_diopters": rx.cylinder_diopters,
             "axis_deg": rx.axis_deg if axis_determined else None,
-            "power_vector": {"M_diopters": m, "J0_diopters": j0, "J45_diopters": j45},
+            "power_vector": dict(zip(_VECTOR_KEYS, (m, j0, j45))),
             "interval_95": {
-                "M_diopters": [m - Z95 * sd[0], m + Z95 * sd[0]],
-                "J0_diopters": [j0 - Z95 * sd[1], j0 + Z95 * sd[1]],
-                "J45_diopters": [j45 - Z95 * sd[2], j45 + Z95 * sd[2]],
+                **_intervals_95((m, j0, j45), sd),
                 "sphere_diopters": [rx.sphere_diopters - Z95 * sd_sphere, rx.sphere_diopters + Z95 * sd_sphere],
                 "cylinder_diopters": [rx.cylinder_diopters - Z95 * sd_cyl, min(0.0, rx.cylinder_diopters + Z95 * sd_cyl)],
                 "axis_deg": ([rx.axis_deg - axis_half, rx.axis_deg + axis_half]
                              if axis_determined and axis_half < 90.0 else None),
             },
-            "standard_error": {"M_diopters": sd[0], "J0_diopters": sd[1], "J45_diopters": sd[2]},
+            "standard_error": dict(zip(_VECTOR_KEYS, sd)),
             "sum_squared_residuals": self.ssr,
         }
         if self.noise_covariance is not None:
             sd_noise = np.sqrt(np.maximum(np.diag(self.noise_covariance), 0.0))
-            out["interval_95_noise"] = {k: [v - Z95 * s, v + Z95 * s] for k, v, s in
-                                        zip(("M_diopters", "J0_diopters", "J45_diopters"), (m, j0, j45), sd_noise)}
+            out["interval_95_noise"] = _intervals_95((m, j0, j45), sd_noise)
             out["uncertainty"] = dict(self.uncertainty, note=UNCERTAINTY_NOTE)
         if self.marked_vector is not None:
             out["trial_lens_marked_power"] = str(LensPower.from_power_vector(*self.marked_vector).minus_cylinder())

@@ -211,25 +211,11 @@ class DepthBlurResult:
     padded_shape: tuple[int, int]
 
     def as_json(self) -> dict:
-        return {
-            "n_layers": self.n_layers,
-            "n_blurred_layers": len(self.layers),
-            "max_layer_spacing_diopters": self.max_layer_spacing_diopters,
-            "occlusion_threshold_diopters": self.occlusion_threshold_diopters,
-            "accommodation_diopters": self.accommodation_diopters,
-            "in_focus_proximity_diopters": self.in_focus_proximity_diopters,
-            "padded_shape": list(self.padded_shape),
-            "layers": [
-                {
-                    "proximity_diopters": la.proximity_diopters,
-                    "defocus_sphere_diopters": la.defocus_sphere_diopters,
-                    "blur_diameter_arcmin": la.blur_diameter_arcmin,
-                    "psf_size_px": la.psf_size_px,
-                    "coverage_fraction": la.coverage_fraction,
-                }
-                for la in self.layers
-            ],
-        }
+        out = {"n_layers": self.n_layers, "n_blurred_layers": len(self.layers)}
+        out |= {f.name: getattr(self, f.name) for f in dataclasses.fields(self)[3:]}  # the plan's numbers
+        out["padded_shape"] = list(self.padded_shape)
+        out["layers"] = [{k: v for k, v in dataclasses.asdict(la).items() if k != "index"} for la in self.layers]
+        return out
 
 
 # -- validation helpers ---------------------------------------------------------------
@@ -254,10 +240,12 @@ def _base_wavefront(eye_rx: Prescription, pupil_mm: float, extra: Wavefront | No
 
 
 @functools.lru_cache(maxsize=128)
-def _cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str) -> PSF:
-    """The PSF of one layer's wavefront, on a field that holds its blur (cached by wavefront)."""
+def _cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str,
+                size_px: int | None = None) -> PSF:
+    """The PSF of one layer's wavefront (cached by wavefront), on a field that holds its blur or of ``size_px``
+    (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
     front = Wavefront(dict(items), pupil_mm)
-    size = suggested_size_px(front, step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
+    size = size_px or suggested_size_px(front, step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
     return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step, size_px=size, mode=mode)
 
 
@@ -275,27 +263,15 @@ def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: fl
     defocus alone, the symmetric layer plan pairs every layer with one of opposite defocus.
     """
     key = _wavefront_key(front.coefficients_um)
-    mirror = seen.get(_wavefront_key(front.coefficients_um, -1.0))
-    if size_px is not None:
-        psf = _sized_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
-        seen[key] = psf
-        return psf
-    if mirror is not None and mirror.data.shape[0] % 2 == 1 and key not in seen:
+    mirror = None if size_px is not None or key in seen else seen.get(_wavefront_key(front.coefficients_um, -1.0))
+    if mirror is not None and mirror.data.shape[0] % 2 == 1:
         data = np.ascontiguousarray(mirror.data[::-1, ::-1])
         data.setflags(write=False)
         psf = dataclasses.replace(mirror, data=data, wavefront=front)
     else:
-        psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode)
+        psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
     seen[key] = psf
     return psf
-
-
-@functools.lru_cache(maxsize=128)
-def _sized_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str, size_px: int) -> PSF:
-    """A layer's PSF on a given field (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
-    front = Wavefront(dict(items), pupil_mm)
-    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step,
-                       size_px=size_px, mode=mode)
 
 
 # -- the layered blur -----------------------------------------------------------------
@@ -463,7 +439,6 @@ def blur_depth(
             if weight > 0:
                 _add_overlap(transmitted, window, weight * matte_j, window_j)
         xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-        section = (slice(r0, r1), slice(c0, c1))
         # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
         e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
         wide = (slice(e0, e1), slice(f0, f1))
@@ -616,12 +591,10 @@ def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend 
         padded[:, :, offset + w :] = 0.0
     transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
     if backend is not CPU_BACKEND:
-        key = (id(psf), shape)
-        if transfers is None or key not in transfers:
-            device_transfer = backend.asarray(transfer)
-            if transfers is not None:
-                transfers[key] = device_transfer
-        transfer = transfers[key] if transfers is not None else device_transfer
+        transfers = {} if transfers is None else transfers
+        if (id(psf), shape) not in transfers:
+            transfers[id(psf), shape] = backend.asarray(transfer)
+        transfer = transfers[id(psf), shape]
     spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
     spectrum *= transfer
     blurred = backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())

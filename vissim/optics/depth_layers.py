@@ -53,7 +53,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from scipy import ndimage
@@ -63,10 +63,10 @@ from vissim.checks import finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
-from vissim.optics.depth import (_base_wavefront, _cached_psf, _check_accommodation, _matte_indices,
+from vissim.optics.depth import (_base_wavefront, _cached_psf, _check_accommodation, _grow, _matte_indices,
                                  layer_spacing_diopters, plan_layers)
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
+from vissim.optics.psf import PSF, geometric_blur_radius_arcmin
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
@@ -101,9 +101,7 @@ class LayeredBlurResult:
     mode: str
 
     def as_json(self) -> dict:
-        return {"n_layers": self.n_layers, "n_slices": self.n_slices, "n_rays": self.n_rays, "n_terms": self.n_terms,
-                "overlapping_layers": self.overlapping_layers, "accommodation_diopters": self.accommodation_diopters,
-                "mode": self.mode}
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "image"}
 
 
 @functools.lru_cache(maxsize=8)
@@ -232,11 +230,6 @@ def _support(s: _Slice) -> tuple[int, int, int, int] | None:
     if rows.size == 0:
         return None
     return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
-
-
-def _grow(box, reach: int, shape) -> tuple[int, int, int, int]:
-    r0, r1, c0, c1 = box
-    return max(r0 - reach, 0), min(r1 + reach, shape[0]), max(c0 - reach, 0), min(c1 + reach, shape[1])
 
 
 def _meets(a, b) -> bool:
@@ -417,7 +410,7 @@ def composite_layers(
     if mode == "geometric":
         out = geometric
     else:
-        diffraction = _diffraction_psf(pupil, wavelength, step)
+        diffraction = _wave_psf(Wavefront.zero(pupil), pupil, wavelength, step)  # what the aperture's diffraction adds
         out = _fft_blur(geometric.astype(np.float32), diffraction)
         for k, layer in enumerate(by_layer):
             residual = sum(_fft_blur(s.radiance, _wave_psf(fronts[id(s)], pupil, wavelength, step))
@@ -448,12 +441,3 @@ def _fft_blur(colour: np.ndarray, psf: PSF) -> np.ndarray:
 
 def _wave_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float) -> PSF:
     return _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, "wave")
-
-
-@functools.lru_cache(maxsize=16)
-def _diffraction_psf(pupil_mm: float, wavelength_nm: float, step: float) -> PSF:
-    """The aberration-free wave PSF of the pupil: what the aperture's diffraction adds to a ray image."""
-    front = Wavefront.zero(pupil_mm)
-    size = suggested_size_px(front, step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
-    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step,
-                       size_px=size, mode="wave")

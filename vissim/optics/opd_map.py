@@ -23,8 +23,7 @@ from scipy.interpolate import RectBivariateSpline
 
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
-from vissim.optics.wavefront import Wavefront
-from vissim.optics.zernike import zernike_nm
+from vissim.optics.wavefront import Wavefront, _ring_fit_um
 
 __all__ = ["OpdMap"]
 
@@ -91,15 +90,8 @@ class OpdMap:
 
     def zernike_fit(self, max_order: int = 8) -> Wavefront:
         """Least-squares OSA Zernike fit over the pupil up to ``max_order`` (µm)."""
-        keys = [(n, m) for n in range(max_order + 1) for m in range(-n, n + 1, 2)]
-        n_r, n_t = 3 * max_order + 8, 6 * max_order + 16
-        rho = np.sqrt((np.arange(n_r) + 0.5) / n_r)  # equal-area rings
-        theta = 2 * np.pi * (np.arange(n_t) + 0.5) / n_t
-        rr, tt = np.meshgrid(rho, theta, indexing="ij")
-        radius = self.pupil_diameter_mm / 2.0
-        target = self.opd_um(radius * rr * np.cos(tt), radius * rr * np.sin(tt)).ravel()
-        basis = np.stack([zernike_nm(n, m, rr, tt).ravel() for n, m in keys], axis=1)
-        solution, *_ = np.linalg.lstsq(basis, target, rcond=None)
+        keys, solution = _ring_fit_um(self.opd_um, self.pupil_diameter_mm, max_order, 3 * max_order + 8,
+                                     6 * max_order + 16)
         return Wavefront({k: float(v) for k, v in zip(keys, solution)}, self.pupil_diameter_mm)
 
     def as_json(self) -> dict:

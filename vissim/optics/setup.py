@@ -35,10 +35,10 @@ from vissim.checks import finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.accommodation import object_proximity_diopters
-from vissim.optics.prescription import LensPower, Prescription, as_prescription
+from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, _as_tuple, _meridian_deg,
                                       _principal, entrance_pupil_diameter_mm, thesis_eye_pupil_diameter_mm,
-                                      thesis_table_4_2_power, trial_lens_effect)
+                                      thesis_table_4_2_lens_power, thesis_table_4_2_power, trial_lens_effect)
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
@@ -124,12 +124,7 @@ class ViewingSetup:
 
     def with_table_4_2_power(self, lenses: tuple[TrialLens, ...], vertex_distance_mm: float) -> ViewingSetup:
         """ERRATA item 4: Table 4.2's P / (1 - dP) per principal meridian of the lenses' summed power."""
-        total = sum((np.asarray(lens.marked_power.power_matrix()) for lens in lenses), np.zeros((2, 2)))
-        summed = LensPower.from_power_matrix(total)
-        axis = summed.axis_deg
-        p_axis = thesis_table_4_2_power(summed.meridian_power(axis), vertex_distance_mm)
-        p_perp = thesis_table_4_2_power(summed.meridian_power(axis + 90.0), vertex_distance_mm)
-        power = LensPower(p_axis, p_perp - p_axis, axis) if lenses else LensPower(0.0)
+        power = thesis_table_4_2_lens_power(lenses, vertex_distance_mm)
         return replace(self, defocus_matrix_diopters=power.power_matrix())
 
     def without_magnification(self) -> ViewingSetup:

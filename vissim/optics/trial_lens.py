@@ -40,7 +40,8 @@ from vissim.units import mm_to_m
 
 __all__ = ["CROWN_GLASS_INDEX", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
            "TrialLensEffect", "trial_lens_effect", "refraction_matrix", "transfer_matrix",
-           "entrance_pupil_diameter_mm", "thesis_eye_pupil_diameter_mm", "thesis_table_4_2_power"]
+           "entrance_pupil_diameter_mm", "thesis_eye_pupil_diameter_mm", "thesis_table_4_2_power",
+           "thesis_table_4_2_lens_power"]
 
 log = logging.getLogger(__name__)
 
@@ -450,3 +451,15 @@ def thesis_table_4_2_power(lens_diopters: float, vertex_distance_mm: float = THE
             f"a {power:g} D lens at {vertex_distance_mm:g} mm focuses on the camera principal plane"
         )
     return power / (1.0 - vertex_m * power)
+
+
+def thesis_table_4_2_lens_power(lenses, vertex_distance_mm: float) -> LensPower:
+    """Table 4.2's P / (1 - dP) per principal meridian of ``lenses``' summed marked power (0 D for none)."""
+    if not lenses:
+        return LensPower(0.0)
+    total = sum((np.asarray(lens.marked_power.power_matrix()) for lens in lenses), np.zeros((2, 2)))
+    summed = LensPower.from_power_matrix(total)
+    axis = summed.axis_deg
+    p_axis = thesis_table_4_2_power(summed.meridian_power(axis), vertex_distance_mm)
+    p_perp = thesis_table_4_2_power(summed.meridian_power(axis + 90.0), vertex_distance_mm)
+    return LensPower(p_axis, p_perp - p_axis, axis)

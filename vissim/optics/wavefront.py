@@ -30,7 +30,7 @@ import numpy as np
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.zernike import zernike_nm
+from vissim.optics.zernike import zernike_keys, zernike_nm
 
 __all__ = ["Wavefront", "prescription_to_zernike_um", "zernike_um_to_prescription", "parse_zernike_terms"]
 
@@ -86,6 +86,22 @@ def parse_zernike_terms(text: str) -> dict[tuple[int, int], float]:
         zernike_nm(*key, np.zeros(1), np.zeros(1))  # validates (n, m)
         terms[key] = terms.get(key, 0.0) + value
     return terms
+
+
+def _ring_fit_um(opd_um, pupil_diameter_mm: float, max_order: int, rings: int, spokes: int):
+    """Least-squares OSA Zernike fit up to ``max_order`` of the surface ``opd_um(x_mm, y_mm)`` (µm) over a pupil.
+
+    Sampled on ``rings`` equal-area rings of ``spokes`` points each; returns (the (n, m) keys, their µm).
+    """
+    keys = zernike_keys(max_order)
+    rho = np.sqrt((np.arange(rings) + 0.5) / rings)  # equal-area rings
+    theta = 2 * np.pi * (np.arange(spokes) + 0.5) / spokes
+    rr, tt = np.meshgrid(rho, theta, indexing="ij")
+    radius = pupil_diameter_mm / 2.0
+    target = opd_um(radius * rr * np.cos(tt), radius * rr * np.sin(tt)).ravel()
+    basis = np.stack([zernike_nm(n, m, rr, tt).ravel() for n, m in keys], axis=1)
+    solution, *_ = np.linalg.lstsq(basis, target, rcond=None)
+    return keys, solution
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,15 +270,7 @@ class Wavefront:
         if not self._items or new == self.pupil_diameter_mm:
             return Wavefront(dict(self.coefficients_um), new)
         order = self.max_order
-        keys = [(n, m) for n in range(order + 1) for m in range(-n, n + 1, 2)]
-        n_r, n_t = 2 * order + 4, 4 * order + 8
-        rho = np.sqrt((np.arange(n_r) + 0.5) / n_r)  # equal-area rings
-        theta = 2 * np.pi * (np.arange(n_t) + 0.5) / n_t
-        rr, tt = np.meshgrid(rho, theta, indexing="ij")
-        radius = new / 2.0
-        target = self.opd_um(radius * rr * np.cos(tt), radius * rr * np.sin(tt)).ravel()
-        basis = np.stack([zernike_nm(n, m, rr, tt).ravel() for n, m in keys], axis=1)
-        solution, *_ = np.linalg.lstsq(basis, target, rcond=None)
+        keys, solution = _ring_fit_um(self.opd_um, new, order, 2 * order + 4, 4 * order + 8)
         scale = max(1e-12, float(np.max(np.abs(solution))))
         return Wavefront({k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new)
 

@@ -23,8 +23,8 @@ from scipy.special import eval_jacobi
 
 from vissim.errors import VissimInputError
 
-__all__ = ["ansi_j_to_nm", "nm_to_ansi_j", "noll_to_nm", "nm_to_noll", "zernike_norm", "zernike_radial",
-           "zernike_nm"]
+__all__ = ["ansi_j_to_nm", "nm_to_ansi_j", "noll_to_nm", "nm_to_noll", "zernike_keys", "zernike_norm",
+           "zernike_radial", "zernike_nm"]
 
 
 def _check_nm(n: int, m: int) -> tuple[int, int]:
@@ -40,6 +40,11 @@ def nm_to_ansi_j(n: int, m: int) -> int:
     """OSA/ANSI single index (from 0) of the term (n, m)."""
     n, m = _check_nm(n, m)
     return (n * (n + 2) + m) // 2
+
+
+def zernike_keys(max_order: int) -> list[tuple[int, int]]:
+    """Every term (n, m) up to radial order ``max_order``, in OSA/ANSI order."""
+    return [(n, m) for n in range(max_order + 1) for m in range(-n, n + 1, 2)]
 
 
 def ansi_j_to_nm(j: int) -> tuple[int, int]:

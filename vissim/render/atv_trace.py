@@ -45,7 +45,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy.stats import qmc
@@ -129,11 +129,11 @@ def _atv_result(image: np.ndarray, std_image: np.ndarray, step: float, *, total_
 
     ``run`` holds the remaining :class:`AtvResult` fields (how the image was made).
     """
-    metrics = spot_metrics(image, step, std_image)
-    return AtvResult(image=image, std_image=std_image, arcmin_per_px=step,
-                     total_flux=metrics.total_flux if total_flux is None else total_flux, peak=metrics.peak,
-                     peak_pixel=metrics.peak_pixel, peak_relative_std=metrics.peak_relative_std,
-                     spot_diameter_arcmin=metrics.spot_diameter_arcmin, centroid_arcmin=metrics.centroid_arcmin, **run)
+    metrics = asdict(spot_metrics(image, step, std_image))  # SpotMetrics' fields are AtvResult's, but one
+    del metrics["peak_smoothing_px"]
+    if total_flux is not None:
+        metrics["total_flux"] = total_flux
+    return AtvResult(image=image, std_image=std_image, arcmin_per_px=step, **metrics, **run)
 
 
 def _check_sampling(arcmin_per_px, size_px, config: AtvConfig) -> tuple[float, int]:

@@ -121,18 +121,14 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
     kwargs = settings_kwargs(raw, CampaignSettings, source, "campaign", numbers=NUMBER_SETTINGS,
                              whole_numbers={"spp": ("samples per pixel", 1, MAX_SPP)},
                              lists={"simulations": SIMULATIONS, "inputs": INPUTS},
-                             texts=("name", "description", "manifest"), read_elsewhere=("f_number",))
+                             texts=("name", "description", "manifest"), switches=("wave_truth", "fit_rx"),
+                             read_elsewhere=("f_number",))
     if "tile_px" in raw:
         tile = raw["tile_px"]
         if not (isinstance(tile, list) and len(tile) == 2):
             raise field_error(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
         kwargs["tile_px"] = tuple(whole_number(t, source, f"campaign.tile_px[{i}]", "pixels", lo=16, hi=MAX_TILE_PX)
                                   for i, t in enumerate(tile))
-    for switch in ("wave_truth", "fit_rx"):
-        if switch in raw:
-            if not isinstance(raw[switch], bool):
-                raise field_error(source, f"campaign.{switch}", f"must be true or false, got {raw[switch]!r}")
-            kwargs[switch] = raw[switch]
     return CampaignSettings(**kwargs)
 
 

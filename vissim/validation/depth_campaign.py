@@ -117,15 +117,10 @@ def is_depth_campaign(doc: dict) -> bool:
 
 
 def _settings(head: dict, source: str) -> DepthCampaignSettings:
-    kwargs = settings_kwargs(
+    return DepthCampaignSettings(**settings_kwargs(
         head, DepthCampaignSettings, source, "depth_campaign", numbers=NUMBER_SETTINGS, whole_numbers=WHOLE_SETTINGS,
         lists={"simulations": DEPTH_SIMULATIONS, "inputs": DEPTH_INPUTS}, texts=("name", "description"),
-        read_elsewhere=("kind", "frame_margin"))
-    if "frame_margin" in head:
-        if not isinstance(head["frame_margin"], bool):
-            raise field_error(source, "depth_campaign.frame_margin", f"true or false, got {head['frame_margin']!r}")
-        kwargs["frame_margin"] = head["frame_margin"]
-    return DepthCampaignSettings(**kwargs)
+        switches=("frame_margin",), read_elsewhere=("kind",)))
 
 
 #: Camera fields: (unit, lowest, highest).

@@ -72,9 +72,8 @@ def render_depth_spec(spec: DepthRenderSpec):
         render_view,  # the Mitsuba door, imported where it runs
     )
 
-    result = render_view(spec.render_scene(), spec.viewer, view=spec.view, content=spec.content, spp=spec.spp,
-                         seed=spec.seed, panels=spec.panels)
-    return result
+    return render_view(spec.render_scene(), spec.viewer, view=spec.view, content=spec.content, spp=spec.spp,
+                       seed=spec.seed, panels=spec.panels)
 
 
 def render_specs(config: DepthConfiguration, settings: DepthCampaignSettings) -> dict[str, DepthRenderSpec]:

@@ -140,12 +140,13 @@ def choices(value: Any, allowed: tuple[str, ...], source: str, where: str) -> tu
 
 
 def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numbers: dict, whole_numbers: dict,
-                    lists: dict, texts: tuple[str, ...], read_elsewhere: tuple[str, ...] = ()) -> dict:
+                    lists: dict, texts: tuple[str, ...], switches: tuple[str, ...] = (),
+                    read_elsewhere: tuple[str, ...] = ()) -> dict:
     """Checked fields of ``settings_class`` found in a campaign's settings table ``head`` (named ``where``).
 
     ``numbers`` and ``whole_numbers`` as :func:`checked_numbers`, ``seeds`` by :func:`seed_pair`,
-    ``lists`` (``{key: allowed names}``) by :func:`choices`; ``texts`` must be strings and, like
-    ``read_elsewhere``, are no fields; any other key is refused.
+    ``lists`` (``{key: allowed names}``) by :func:`choices`, ``switches`` must be true or false;
+    ``texts`` must be strings and, like ``read_elsewhere``, are no fields; any other key is refused.
     """
     known = {f.name for f in fields(settings_class)}
     unknown = set(head) - known - set(texts) - set(read_elsewhere)
@@ -161,6 +162,11 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
     for key in texts:
         if key in head:
             text(head[key], source, f"{where}.{key}")
+    for key in switches:
+        if key in head:
+            if not isinstance(head[key], bool):
+                raise field_error(source, f"{where}.{key}", f"must be true or false, got {head[key]!r}")
+            kwargs[key] = head[key]
     return kwargs
 
 

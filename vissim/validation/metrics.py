@@ -63,15 +63,8 @@ class Comparison:
 
     def as_json(self) -> dict[str, Any]:
         """The numbers (no maps), JSON-ready; an infinite PSNR is written as the string ``"inf"``."""
-        return {
-            "ssim": self.ssim,
-            "psnr_db": self.psnr_db if math.isfinite(self.psnr_db) else "inf",
-            "mse": self.mse,
-            "mean_abs_diff": self.mean_abs_diff,
-            "max_abs_diff": self.max_abs_diff,
-            "data_range": self.data_range,
-            "shape": list(self.shape),
-        }
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if not f.name.endswith("_map")}
+        return out | {"psnr_db": self.psnr_db if math.isfinite(self.psnr_db) else "inf", "shape": list(self.shape)}
 
 
 def _check_data_range(data_range: Any) -> float:
@@ -125,11 +118,8 @@ def compare_images(reference: Any, test: Any, *, data_range: float) -> Compariso
     if ref.shape != tst.shape:
         raise VissimInputError(f"reference is {ref.shape} px but test is {tst.shape} px; shapes must match")
     channel_axis = -1 if ref.ndim == 3 else None
-    ssim, ssim_map = structural_similarity(
-        ref, tst, data_range=data_range, channel_axis=channel_axis, full=True,
-        gaussian_weights=SSIM_SETTINGS["gaussian_weights"], sigma=SSIM_SETTINGS["sigma"],
-        use_sample_covariance=SSIM_SETTINGS["use_sample_covariance"], K1=SSIM_SETTINGS["K1"], K2=SSIM_SETTINGS["K2"],
-    )
+    ssim, ssim_map = structural_similarity(ref, tst, data_range=data_range, channel_axis=channel_axis, full=True,
+                                           **SSIM_SETTINGS)
     diff = ref - tst
     squared = diff * diff
     absolute = np.abs(diff)
