@@ -83,9 +83,40 @@ def _positive(value: Any, name: str, unit: str, *, allow_zero: bool = False) -> 
 class DslrBench:
     """Camera, trial-lens holder and sampling of the DSLR bench (defaults: the thesis's bench).
 
-    ``lenses`` are ordered from the chart to the camera, as in
-    :class:`~vissim.optics.trial_lens.TrialLensSetup`.  ``size_px`` is (rows, cols).
-    ``clear_aperture_mm`` None sizes the lens meshes to the beam (:meth:`clear_aperture`).
+    Parameters
+    ----------
+    focal_length_mm, f_number : float
+        The camera lens (an ideal thin lens): focal length, mm, and f-number (its entrance
+        pupil is ``focal_length_mm / f_number`` across).
+    focus_distance_mm, chart_distance_mm : float
+        Where the camera is focused and where the chart stands, mm from the camera lens.
+    vertex_distance_mm, lens_gap_mm : float
+        From the camera lens to the nearest trial lens, and between lenses in the holder, mm.
+    lenses : tuple of TrialLens
+        Trial lenses, ordered from the chart to the camera, as in
+        :class:`~vissim.optics.trial_lens.TrialLensSetup` (at most the holder's slots).
+    refractive_index : float
+        The lenses' glass at the design wavelength (crown glass by default).
+    clear_aperture_mm : float or None
+        The lens meshes' diameter, mm; None sizes them to the beam (:meth:`clear_aperture`).
+    arcmin_per_px, size_px : float, (int, int)
+        The sensor's sampling, arcmin per pixel, and its size ``(rows, cols)``.
+    spp, seed, sampler : int, int, str
+        Samples per pixel, seed and Mitsuba sampler of the render.
+    fresnel_loss : bool
+        Whether the lens surfaces reflect (Fresnel) or transmit everything.
+    texels_per_px, radiance_scale : float
+        The chart texture's resolution per camera pixel and its radiance scale (relative).
+    mesh_rings, mesh_segments : int
+        Tessellation of each lens surface.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> from vissim.optics.trial_lens import TrialLens
+    >>> bench = vissim.DslrBench(lenses=(TrialLens(2.0),), size_px=(64, 64))
+    >>> bench.focal_length_mm, bench.f_number  # the thesis's camera: an 18 mm lens at f/5
+    (18.0, 5.0)
     """
 
     focal_length_mm: float = THESIS_FOCAL_LENGTH_MM

@@ -235,10 +235,40 @@ class Solution:
 class RxFit:
     """The result of :func:`fit_rx`; :meth:`as_json` is the record the CLI and a campaign write.
 
-    ``status`` is ``"ok"``, ``"unresolved"`` (the blur is below :data:`MIN_RESOLVED_BLUR_PX`: only a
-    bound on the power, ``power_bound_diopters``), ``"sign undetermined"`` (another combination of the principal powers'
-    signs fits as well: the record's sphere, cylinder, axis and power vector are None and
-    ``solutions`` lists the candidates with their delta chi2) or ``"failed"`` (``reason``).
+    Attributes
+    ----------
+    status : str
+        ``"ok"``, ``"unresolved"`` (the blur is below :data:`MIN_RESOLVED_BLUR_PX`: only a bound
+        on the power, ``power_bound_diopters`` in the record), ``"sign undetermined"`` (another
+        combination of the principal powers' signs fits as well: the record's sphere, cylinder,
+        axis and power vector are None and ``solutions`` lists the candidates with their delta
+        chi2) or ``"failed"`` (``reason``).
+    reason : str or None
+        Why the fit failed or is unresolved.
+    best : Solution
+        The best sign combination: its power vector (M, J0, J45 in D), covariance (D^2) and sum
+        of squared residuals.
+    alternatives : tuple of (Solution, float)
+        The other sign combinations and their delta chi2 over the best.
+    sign_delta_chi2 : float or None
+        The smallest delta chi2 of another sign combination (>= 9 for a determined sign).
+    axis_determined : bool
+        Whether the cylinder (>= 0.125 D) differs from zero at 95 %, so that its axis is reported.
+    residual_psnr_db, residual_sigma, unexplained_fraction : float
+        The fit's residual as a PSNR (dB), its standard deviation (image units) and the fraction
+        of the image's variance the model leaves.
+    nuisances, settings : dict
+        The fitted nuisance parameters (shift in px, gain, offset, ...) and the fit's settings.
+    evaluations : int
+        Forward-model evaluations.
+    seconds : float
+        Wall time of the fit, s.
+    model : ndarray
+        The best model image, the capture's shape.
+
+    Examples
+    --------
+    See :func:`fit_rx`; ``power_vector`` and ``prescription`` are None unless ``status`` is "ok".
     """
 
     status: str

@@ -194,7 +194,31 @@ class SpheroCylinder:
 
 @dataclass(frozen=True)
 class Prescription(SpheroCylinder):
-    """The correcting lens at the eye's (camera's) principal plane; a myope's sphere is < 0."""
+    """The correcting lens at the eye's (camera's) principal plane; a myope's sphere is < 0.
+
+    Parameters
+    ----------
+    sphere_diopters : float
+        Sphere, dioptres (D); negative for a myope.
+    cylinder_diopters : float, optional
+        Cylinder, D, either sign (default 0); :meth:`minus_cylinder` and :meth:`plus_cylinder`
+        give the two transposed forms.
+    axis_deg : float, optional
+        Cylinder axis, degrees, TABO (0-180, stored in (0, 180]; 180 when the cylinder is 0).
+
+    See ``docs/conventions.md`` for the sign, axis and power-vector conventions, and
+    :meth:`parse` for written prescriptions (``"-2.00 -1.25 x 180"``).  The eye's refractive
+    error, of the opposite sign, is :meth:`refractive_error`.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> rx = vissim.Prescription(-2.0, -1.25, 180)
+    >>> str(rx), rx.spherical_equivalent_diopters
+    ('-2.00 -1.25 x 180', -2.625)
+    >>> [round(p, 4) + 0.0 for p in rx.power_vector()]  # M, J0, J45 in D
+    [-2.625, 0.625, 0.0]
+    """
 
     def refractive_error(self) -> RefractiveError:
         """The eye's excess power that this lens corrects (opposite sign)."""

@@ -12,7 +12,27 @@ __all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_
 
 
 def frequencies_cyc_per_deg(psf: PSF) -> np.ndarray:
-    """Spatial frequencies (cycles/degree) of the OTF samples, zero at index N//2."""
+    """Spatial frequencies (cycles/degree) of the OTF samples, zero at index N//2.
+
+    Parameters
+    ----------
+    psf : PSF
+        An N x N PSF sampled at ``psf.arcmin_per_px``.
+
+    Returns
+    -------
+    ndarray of shape (N,)
+        The frequency of each row (and column) of :func:`otf` / :func:`mtf`, cycles/degree,
+        increasing, 0 at index N // 2; the Nyquist frequency is 30 / ``arcmin_per_px``.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> psf = vissim.compute_psf(vissim.Wavefront.zero(3.0), arcmin_per_px=0.5, size_px=64)
+    >>> f = vissim.frequencies_cyc_per_deg(psf)
+    >>> float(f[32]), float(-f[0])  # zero, and the Nyquist frequency 30 / 0.5 cycles/degree
+    (0.0, 60.0)
+    """
     n = psf.data.shape[0]
     return scipy.fft.fftshift(scipy.fft.fftfreq(n, d=psf.arcmin_per_px / 60.0))
 
