@@ -6,10 +6,9 @@ import json
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
-from fake_bench import fake_render
+from fake_bench import fake_render, write_campaign
 
 from vissim.optics.prescription import Prescription
-from vissim.validation.campaign import load_campaign
 from vissim.validation.item import SYNTHETIC_OVERSAMPLE
 from vissim.validation.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
                                               optics_cases, psf_figure_of, sampling_label)
@@ -45,9 +44,8 @@ FIGURES = ("figure_psf.png", "figure_mtf.png", "figure_through_focus.png")
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
     folder = tmp_path_factory.mktemp("figures")
-    (folder / "figures.toml").write_text(SMALL)
     run = folder / "run"
-    run_campaign(load_campaign(folder / "figures.toml"), run, render=fake_render, show_progress=False)
+    run_campaign(write_campaign(folder, SMALL, "figures.toml"), run, render=fake_render, show_progress=False)
     build_report(run)
     return run
 
