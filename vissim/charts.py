@@ -58,8 +58,8 @@ _SIDECAR_SCHEMA = "vissim.chart-letters/1"
 _BOX_KEYS = ("top", "left", "bottom", "right")
 
 
-#: Viewing distances a chart may be made for (m): a near card to a far landmark; beyond, its sizes overflow.
-VIEWING_DISTANCE_RANGE_M = (0.01, 1000.0)
+#: Viewing distances a chart (or a depth panel's chart) may be made for, m; far beyond, its sizes in mm overflow.
+VIEWING_DISTANCE_RANGE_M = (1e-3, 1e6)
 #: Linear reflectances of laser-printed paper and toner ink (the charts' defaults).
 PAPER_REFLECTANCE = 0.9
 INK_REFLECTANCE = 0.04
@@ -135,7 +135,8 @@ class ChartSpec:
     Raises
     ------
     VissimInputError
-        No rows, an unknown polarity, a distance <= 0 or reflectances out of order.
+        No rows, an unknown polarity, a viewing distance outside ``VIEWING_DISTANCE_RANGE_M``
+        (0.001-1e6 m) or reflectances out of order.
 
     Examples
     --------
