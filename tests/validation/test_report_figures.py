@@ -130,3 +130,24 @@ def test_through_focus_steps_move_the_sphere_of_the_prescription(cases):
     assert 1.0 in THROUGH_FOCUS_STEPS_D
     peaks = [case_psf(myope, myope.arcmin_per_px, step).data.max() for step in (-1.0, 0.0, 1.0)]
     assert peaks[0] < peaks[1] < peaks[2]  # +1 D brings it to plano: the sharpest
+
+
+def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path, monkeypatch, caplog):
+    # A run folder whose synthetic chart cannot be read: the figures are skipped with a warning,
+    # the tables and the other figures are still written.
+    import shutil
+
+    import vissim.validation.report as report
+
+    def unreadable(*args, **kwargs):
+        raise OSError("synthetic.exr: unreadable")
+
+    copy = tmp_path / "run"
+    shutil.copytree(run_dir, copy)
+    for name in FIGURES:
+        (copy / name).unlink()
+    monkeypatch.setattr(report, "optics_figures", unreadable)
+    build_report(copy)
+    assert (copy / "tables.md").exists() and (copy / "report.html").exists()
+    assert not any((copy / name).exists() for name in FIGURES)
+    assert "optics figures were skipped (OSError" in caplog.text

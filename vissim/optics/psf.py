@@ -162,6 +162,7 @@ class PSF:
             "energy_in_field": self.energy_in_field,
             "lca_reference_nm": self.lca_reference_nm,
             "pixel": self.pixel,
+            "dtype": self.data.dtype.name,  # compute_psf: the precision of its arithmetic
             "wavefront": self.wavefront.as_json(),
             "sampling": [s.as_json() for s in self.sampling],
         }
@@ -258,9 +259,9 @@ def compute_psf(
         sensor records.  ``"sample"``: band-limited point samples, the exact kernel for
         blurring well-sampled images (see :mod:`vissim.optics.blur` for when it matters).
     dtype : numpy.float32 (default) or numpy.float64
-        The arithmetic's and ``PSF.data``'s precision.  float32's round-off (below 1e-6 of the
-        peak) is far below the wave PSF's accuracy (2e-3 of the peak, ``docs/conventions.md``)
-        and it is about twice as fast; float64 for work that differentiates PSFs numerically
+        The arithmetic's and ``PSF.data``'s precision.  float32's round-off (1e-7 to 3e-6 of the
+        peak, growing with the pupil cells) is far below the wave PSF's accuracy (2e-3 of the
+        peak, ``docs/conventions.md``) and it is about twice as fast; float64 for work that differentiates PSFs numerically
         with small steps.
     method : {"mft", "fft"}, optional
         Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,

@@ -167,7 +167,7 @@ def psf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
 
 
 def mtf_curves(psf: PSF, pad: int = MTF_PADDING) -> dict[str, np.ndarray]:
-    """MTF of ``psf`` (pixel included) from 0 to Nyquist along x, y and averaged over rings; diffraction limit.
+    """MTF of ``psf`` (the pixel's sinc divided out: the optics alone) from 0 to Nyquist along x, y and averaged over rings; diffraction limit.
 
     The PSF is zero-padded to ``pad`` times its field first, so the MTF is sampled ``pad`` times
     finer in frequency (a defocused MTF's first zero lies at a few cycles/degree).  Keys:
@@ -177,7 +177,7 @@ def mtf_curves(psf: PSF, pad: int = MTF_PADDING) -> dict[str, np.ndarray]:
     n = psf.data.shape[0]
     before = (pad * n) // 2 - n // 2  # the origin stays at [N//2, N//2]
     padded = replace(psf, data=np.pad(np.asarray(psf.data, dtype=float), (before, pad * n - n - before)))
-    spectrum = mtf(padded)
+    spectrum = mtf(padded, remove_pixel=True)  # comparable with the diffraction limit, which has no pixel
     freq = frequencies_cyc_per_deg(padded)
     n = spectrum.shape[0]
     c = n // 2
@@ -220,7 +220,7 @@ def mtf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
         ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("MTF", fontsize=8)
     axes[0, 0].legend(fontsize=7, loc="upper right")
-    fig.suptitle("MTF of the wave simulation's PSF (pixel included) against the diffraction-limited MTF of its "
+    fig.suptitle("MTF of the wave simulation's PSF (pixel removed) against the diffraction-limited MTF of its "
                  "pupil", fontsize=9)
     return fig
 
@@ -249,7 +249,7 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
             ax.set_xticks([])
             ax.set_yticks([])
             if i == 0:
-                ax.set_title("as simulated (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it", fontsize=8)
+                ax.set_title("camera Rx (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it", fontsize=8)
         axes[i, 0].set_ylabel(f"{case.configuration}\nRx {case.prescription.format(2)}", fontsize=7)
     first = cases[0]
     fig.suptitle(f"Through focus: the synthetic chart through the wave PSF of the camera prescription with its sphere "

@@ -22,6 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
+from vissim.errors import VissimInputError  # noqa: E402
 from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
 from vissim.validation.fit_report import fit_table  # noqa: E402
@@ -410,8 +411,13 @@ def build_report(run_dir: str | Path) -> list[Path]:
     if png is not None:
         name = "wave simulation on the synthetic chart against the wave bench"
         figures[name] = (f"figure_wave_{WAVE_BENCH}.png", png)
-    for name, (file_name, fig, extra) in optics_figures(results, run_dir, reflectance_norm).items():
-        figures[name] = (file_name, png_bytes(fig), extra)  # per group: the PSF (log), its MTF, through focus
+    try:  # per group: the PSF (log), its MTF, through focus; the rest of the report does not depend on them
+        optics = optics_figures(results, run_dir, reflectance_norm)
+    except (KeyError, OSError, ValueError, VissimInputError) as error:
+        log.warning("report: the optics figures were skipped (%s: %s)", type(error).__name__, error)
+        optics = {}
+    for name, (file_name, fig, extra) in optics.items():
+        figures[name] = (file_name, png_bytes(fig), extra)
     written = write_report_files(run_dir, title=f"vissim validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=markdown_tables(results), figures=figures)
