@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import scipy.signal
@@ -278,11 +278,7 @@ class VirtualExperiment:
     def as_json(self) -> dict:
         s, a, d = self.subject, self.apparatus, self.detection
         return {
-            "subject": {
-                "prescription": s.prescription.format(), "pupil_diameter_mm": s.pupil_diameter_mm,
-                "accommodation_amplitude_diopters": s.accommodation_amplitude_diopters, "cycloplegia": s.cycloplegia,
-                "proximal_accommodation_diopters": s.proximal_accommodation_diopters,
-            },
+            "subject": {**asdict(s), "prescription": s.prescription.format()},
             "apparatus": {
                 "pixel_pitch_mm": a.pixel_pitch_mm, "collimator_focal_length_mm": a.collimator_focal_length_mm,
                 "source_size_arcmin": a.source_size_arcmin, "trial_lens_vertex_mm": a.trial_lens_vertex_mm,
