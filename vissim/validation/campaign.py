@@ -174,20 +174,16 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     head = table(raw.get("campaign", {}), source, "[campaign]")
     settings = _settings(head, source)
     f_number = _f_number(head.get("f_number", 5.0), source, "campaign.f_number")
-    configurations: list[Configuration] = []
-    for i, item in enumerate(tables(raw, "item", source)):
-        configurations.append(_configuration(item, settings, source, f"item[{i}]", f_number))
+    configurations = [_configuration(item, settings, source, f"item[{i}]", f_number)
+                      for i, item in enumerate(tables(raw, "item", source))]
     for i, sweep in enumerate(tables(raw, "sweep", source)):
         configurations += _sweep(sweep, settings, source, f"sweep[{i}]", f_number)
     if not configurations:
         raise field_error(source, "top level", "no configurations: add [[item]] or [[sweep]] tables")
-    seen: dict[str, Configuration] = {}
-    unique = []
+    unique: dict[str, Configuration] = {}
     for c in configurations:  # the same inputs twice run once
-        key = json.dumps({k: v for k, v in c.as_json().items() if k != "name"}, sort_keys=True, default=list)
-        if key not in seen:
-            seen[key] = c
-            unique.append(c)
+        unique.setdefault(json.dumps({k: v for k, v in c.as_json().items() if k != "name"}, sort_keys=True,
+                                     default=list), c)
     manifest = head.get("manifest")
     if manifest is not None:
         manifest = str((path.parent / manifest).resolve())
@@ -195,7 +191,7 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
         name=head.get("name", path.stem),
         description=head.get("description", ""),
         settings=settings,
-        configurations=tuple(unique),
+        configurations=tuple(unique.values()),
         source=source,
         manifest=manifest,
     )

@@ -43,10 +43,6 @@ def _region_table(comparison, masks, data_range: float) -> dict:
     return table
 
 
-def _crop(pixels: np.ndarray, margin: int) -> np.ndarray:
-    return pixels if margin == 0 else pixels[margin:-margin, margin:-margin]
-
-
 def _scene_layers(scene, images: dict) -> list:
     """Each panel rendered alone, as a :class:`~vissim.optics.depth_layers.SceneLayer` (campaign sampling / oversample).
 
@@ -94,7 +90,8 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     margin = config.frame_margin_px(settings)
 
     def frame(pixels):  # integrated onto the campaign's pixels, the margin cropped
-        return _crop(block_mean(pixels, s), margin)
+        pixels = block_mean(pixels, s)
+        return pixels if margin == 0 else pixels[margin:-margin, margin:-margin]
 
     proximity = frame(images["proximity"])
     geometries = panel_geometries(scene)
