@@ -17,7 +17,7 @@ for the whole image, each beside the same metric between the two seeds (the floo
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -150,8 +150,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     result_json = {
         "key": key,
         "configuration": config.as_json(),
-        "equivalent_eye": {"prescription": eye.prescription.format(4), "pupil_diameter_mm": eye.pupil_diameter_mm,
-                           "accommodation_diopters": eye.accommodation_diopters},
+        "equivalent_eye": {**asdict(eye), "prescription": eye.prescription.format(4)},
         "panels": [{"name": g.name, "letters": scene.panels[g.index].chart.letters,
                     "logmar": scene.panels[g.index].chart.logmar,
                     "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
