@@ -534,22 +534,20 @@ def to_preview_png(
     *,
     overwrite: bool = False,
     provenance: dict | None = None,
-    normalise: bool = True,
     arcmin_per_px: float | None = None,
 ) -> Path:
-    """Write an 8-bit sRGB PNG preview (e.g. of a PSF), scaled so its maximum is 1 if ``normalise``.
+    """Write an 8-bit sRGB PNG preview (e.g. of a PSF), scaled so its maximum is 1.
 
     ``arcmin_per_px`` is recorded as in :func:`write_image`.
     """
     path = Path(path)
     arr = _validated_pixels(path, pixels, None)
-    if normalise:
-        peak = float(arr.max())
-        if peak <= 0.0:
-            raise VissimInputError(
-                f"cannot write {path}: cannot normalise pixels "
-                f"whose maximum is {peak} (must be > 0)"
-            )
-        arr = arr / np.float32(peak)
+    peak = float(arr.max())
+    if peak <= 0.0:
+        raise VissimInputError(
+            f"cannot write {path}: cannot normalise pixels "
+            f"whose maximum is {peak} (must be > 0)"
+        )
+    arr = arr / np.float32(peak)
     return write_image(path, arr, provenance=provenance, overwrite=overwrite, encoding="srgb", bit_depth=8,
                        arcmin_per_px=arcmin_per_px)

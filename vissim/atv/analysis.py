@@ -29,7 +29,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -88,13 +88,8 @@ class VertexInterval:
         return "unbounded (whole line)"
 
     def as_json(self) -> dict:
-        return {
-            "lower_diopters": self.lower_diopters if math.isfinite(self.lower_diopters) else None,
-            "upper_diopters": self.upper_diopters if math.isfinite(self.upper_diopters) else None,
-            "kind": self.kind,
-            "method": self.method,
-            "level": self.level,
-        }
+        out = asdict(self)
+        return out | {k: out[k] if math.isfinite(out[k]) else None for k in ("lower_diopters", "upper_diopters")}
 
 
 class _Scaled(NamedTuple):

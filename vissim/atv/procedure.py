@@ -171,13 +171,7 @@ class ThresholdResult:
             "phase1_interval_code": list(self.phase1_interval_code),
             "never_seen": self.never_seen,
             "presentations": [asdict(p) for p in self.presentations],
-            "config": {
-                "minimum_code": self.config.minimum_code,
-                "maximum_code": self.config.maximum_code,
-                "phase1_step_code": self.config.phase1_step_code,
-                "resolution_code": self.config.resolution_code,
-                "phase2_method": self.config.method,
-            },
+            "config": {"phase2_method" if k == "method" else k: v for k, v in asdict(self.config).items()},
             "seed": self.seed,
         }
 

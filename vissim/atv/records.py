@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import datetime as _dt
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -163,7 +163,7 @@ class Discrepancy:
     computed: float | str | None = None
 
     def as_json(self) -> dict:
-        return {"kind": self.kind, "where": self.where, "message": self.message, "printed": self.printed, "computed": self.computed}
+        return asdict(self)
 
 
 @dataclass(frozen=True)

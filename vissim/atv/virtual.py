@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 import scipy.signal
@@ -233,12 +233,7 @@ class VirtualTrial:
         return self.result.threshold_code
 
     def as_json(self) -> dict:
-        return {
-            "trial_lens_diopters": self.trial_lens_diopters,
-            "trial_vergence_diopters": self.trial_vergence_diopters,
-            "accommodation_diopters": self.accommodation_diopters,
-            "residual_se_diopters": self.residual_se_diopters,
-            "summation_fraction": self.summation_fraction,
+        return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "result"} | {
             "model_threshold_code": self.model_threshold_code if math.isfinite(self.model_threshold_code) else None,
             "minimum_visible_code": self.minimum_visible_code,
             "never_seen": self.result.never_seen,
@@ -278,11 +273,7 @@ class VirtualExperiment:
     def as_json(self) -> dict:
         s, a, d = self.subject, self.apparatus, self.detection
         return {
-            "subject": {
-                "prescription": s.prescription.format(), "pupil_diameter_mm": s.pupil_diameter_mm,
-                "accommodation_amplitude_diopters": s.accommodation_amplitude_diopters, "cycloplegia": s.cycloplegia,
-                "proximal_accommodation_diopters": s.proximal_accommodation_diopters,
-            },
+            "subject": {**asdict(s), "prescription": s.prescription.format()},
             "apparatus": {
                 "pixel_pitch_mm": a.pixel_pitch_mm, "collimator_focal_length_mm": a.collimator_focal_length_mm,
                 "source_size_arcmin": a.source_size_arcmin, "trial_lens_vertex_mm": a.trial_lens_vertex_mm,

@@ -93,6 +93,12 @@ def _window(value: float) -> float | None:
     return value or None
 
 
+def _vertex(a) -> str:
+    if a.vertex_diopters is None:
+        return "no minimum"
+    return f"{a.vertex_diopters:+.2f} D, CI {a.vertex_interval.describe()}"
+
+
 def run_analyze(args: argparse.Namespace) -> int:
     from vissim.atv.report import analyse_directory
 
@@ -101,10 +107,9 @@ def run_analyze(args: argparse.Namespace) -> int:
         window_diopters=_window(args.window_diopters), overwrite=args.overwrite,
     )
     for a in analyses:
-        vertex = f"{a.vertex_diopters:+.2f} D, CI {a.vertex_interval.describe()}" if a.vertex_diopters is not None else "no minimum"
         se = f"SE {a.measured_se_diopters:+.3f} D" if a.measured_se_diopters is not None else "no SE"
         fit = "all lenses" if a.window_diopters is None else f"±{a.window_diopters:g} D"
-        print(f"subject {a.subject_id} {a.eye} {a.condition.replace('_', ' ')} ({fit}): vertex {vertex}; {se}")
+        print(f"subject {a.subject_id} {a.eye} {a.condition.replace('_', ' ')} ({fit}): vertex {_vertex(a)}; {se}")
     for path in written:
         print(f"wrote {path}")
     return 0
@@ -137,8 +142,7 @@ def run_simulate(args: argparse.Namespace) -> int:
               f"{t.minimum_visible_code:.4f} (model {t.model_threshold_code:.4f})")
     for a in analyses:
         fit = "all lenses" if a.window_diopters is None else f"±{a.window_diopters:g} D window"
-        vertex = f"{a.vertex_diopters:+.2f} D, CI {a.vertex_interval.describe()}" if a.vertex_diopters is not None else "no minimum"
-        print(f"fit over {fit}: vertex {vertex}; SE {a.measured_se_diopters:+.3f} D")
+        print(f"fit over {fit}: vertex {_vertex(a)}; SE {a.measured_se_diopters:+.3f} D")
     for path in written:
         print(f"wrote {path}")
     return 0

@@ -93,9 +93,8 @@ def _accommodation(args: argparse.Namespace, eye: Prescription, depth: np.ndarra
         amplitude = Accommodation.from_age(args.age)
     else:
         amplitude = Accommodation(math.inf if args.amplitude_diopters is None else args.amplitude_diopters, "given")
-    target = args.focus_distance_m
-    if target is None:
-        target = float(depth[depth.shape[0] // 2, depth.shape[1] // 2])
+    centre = float(depth[depth.shape[0] // 2, depth.shape[1] // 2])  # the default target
+    target = centre if args.focus_distance_m is None else args.focus_distance_m
     exerted = accommodation_for_target(eye, target, amplitude.amplitude_diopters)
     return exerted, {
         "accommodation_diopters": exerted,

@@ -131,8 +131,8 @@ def run(args: argparse.Namespace) -> int:
                           overwrite=args.overwrite)
     if args.json:
         print(json.dumps(record, indent=2, default=float))
-        return 0 if fit.status != "failed" else 1
-    _print_text(record, args)
+    else:
+        _print_text(record, args)
     return 0 if fit.status != "failed" else 1
 
 

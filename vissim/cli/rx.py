@@ -26,11 +26,10 @@ def add_parser(subparsers) -> None:
 
 def describe(rx: Prescription, pupil_mm: float | None) -> dict:
     minus = rx.minus_cylinder()
-    plus = rx.plus_cylinder()
     m, j0, j45 = rx.power_vector()
     out = {
         "prescription": str(minus),
-        "plus_cylinder_form": str(plus),
+        "plus_cylinder_form": str(rx.plus_cylinder()),
         "sphere_diopters": minus.sphere_diopters,
         "cylinder_diopters": minus.cylinder_diopters,
         "axis_deg": minus.axis_deg,

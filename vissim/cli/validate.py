@@ -45,9 +45,8 @@ def run_validate(args: argparse.Namespace) -> int:
         raise VissimInputError(f"cannot write {exc.filename or args.output}: {exc.strerror or exc}") from None
     for line in done.lines:
         print(line)
-    if done.summary.skipped:
-        for message in done.summary.skipped:
-            print(f"skipped: {message}")
+    for message in done.summary.skipped:
+        print(f"skipped: {message}")
     return 0
 
 

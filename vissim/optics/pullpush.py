@@ -14,14 +14,9 @@ from vissim.optics.array_backend import array_module
 __all__ = ["pull_push", "upsample2"]
 
 
-def upsample2(coarse: np.ndarray, shape: tuple[int, int], *, bilinear: bool = True) -> np.ndarray:
-    """x2 upsampling of (C, h, w) onto (C, *shape): bilinear (cell-centred, edges clamped) or nearest."""
+def upsample2(coarse: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """x2 bilinear upsampling of (C, h, w) onto (C, *shape) (cell-centred, edges clamped)."""
     xp = array_module(coarse)
-    n_ch, h, w = coarse.shape
-    if not bilinear:
-        fine = xp.empty((n_ch, h, 2, w, 2), coarse.dtype)
-        fine[...] = coarse[:, :, np.newaxis, :, np.newaxis]
-        return fine.reshape(n_ch, 2 * h, 2 * w)[:, : shape[0], : shape[1]]
     out = coarse
     for axis, size in ((1, shape[0]), (2, shape[1])):
         src = xp.moveaxis(out, axis, -1)
@@ -44,7 +39,7 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray) -> np.ndarray:
     takes ``1 - weight`` of the bilinearly upsampled coarser estimate, so a pixel of weight 1
     keeps its value and one of weight 0 gets a smooth estimate from its neighbourhood.  The
     estimate is returned at *half* resolution (level 1, cells of 2 x 2 pixels): the caller
-    uses it only where its own data are missing, nearest-upsampled (:func:`upsample2`).
+    uses it only where its own data are missing, nearest-upsampled.
     """
     xp = array_module(premultiplied)
     levels = []

@@ -78,33 +78,25 @@ class VariantChoice:
 _KINDS = ("mono", "rgb", "spectral")
 
 
+def _variant_works(mi, backend: str) -> bool:
+    """Whether ``<backend>_ad_mono`` sets and computes (``backend``: "cuda" or "llvm")."""
+    try:
+        mi.set_variant(f"{backend}_ad_mono")
+        import drjit as dr
+
+        return bool(dr.allclose(getattr(dr, backend).Float([1.0, 2.0]) * 2, [2.0, 4.0]))
+    except Exception as exc:  # no driver, no device, no usable library
+        log.debug("%s variant unavailable: %s", backend.upper(), exc)
+        return False
+
+
 def _cuda_works(mi) -> bool:
     if not any(v.startswith("cuda_") for v in mi.variants()):
         return False
     if not (glob.glob("/usr/lib/*-linux-gnu/libcuda.so*") or glob.glob("/usr/lib64/libcuda.so*")
             or glob.glob("/usr/local/nvidia/lib64/libcuda.so*") or os.environ.get("CUDA_VISIBLE_DEVICES")):
         return False
-    try:
-        mi.set_variant("cuda_ad_mono")
-        import drjit as dr
-
-        return bool(dr.allclose(dr.cuda.Float([1.0, 2.0]) * 2, [2.0, 4.0]))
-    except Exception as exc:  # no driver, no device
-        log.debug("CUDA variant unavailable: %s", exc)
-        return False
-
-
-def _llvm_works(mi) -> bool:
-    if not os.environ.get("DRJIT_LIBLLVM_PATH"):
-        return False
-    try:
-        mi.set_variant("llvm_ad_mono")
-        import drjit as dr
-
-        return bool(dr.allclose(dr.llvm.Float([1.0, 2.0]) * 2, [2.0, 4.0]))
-    except Exception as exc:
-        log.debug("LLVM variant unavailable: %s", exc)
-        return False
+    return _variant_works(mi, "cuda")
 
 
 @functools.lru_cache(maxsize=None)
@@ -116,7 +108,7 @@ def _backend_kind(requested: str | None) -> VariantChoice:
         return VariantChoice(requested, "requested")
     if _cuda_works(mi):
         return VariantChoice("cuda", "a CUDA device works")
-    if _llvm_works(mi):
+    if os.environ.get("DRJIT_LIBLLVM_PATH") and _variant_works(mi, "llvm"):
         return VariantChoice("llvm", f"LLVM at {os.environ['DRJIT_LIBLLVM_PATH']}")
     log.warning(
         "no usable LLVM >= %d found (install Debian's libllvm19); Mitsuba renders on its slow scalar variants",

@@ -76,15 +76,11 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
                                                      f"more than the {tile_arcmin:.3g} arcmin tile; enlarge tile_px")
     specs = lenses(raw.get("lenses", []), source, f"{where}.lenses")
     f_number = _f_number(raw.get("f_number", f_number), source, f"{where}.f_number")
-    capture = raw.get("capture")
-    if capture is not None:
-        capture = text(capture, source, f"{where}.capture")
-    name = raw.get("name")
-    if name is not None:
-        name = text(name, source, f"{where}.name")
-    config = Configuration("", letter, logmar, polarity, specs, f_number, capture)
-    name = name or f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}"
-    return Configuration(name, letter, logmar, polarity, specs, f_number, capture)
+    capture, name = (None if raw.get(k) is None else text(raw[k], source, f"{where}.{k}")
+                     for k in ("capture", "name"))
+    config = Configuration(name or "", letter, logmar, polarity, specs, f_number, capture)
+    label = f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}"
+    return config if name else replace(config, name=label)
 
 
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
@@ -104,11 +100,9 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
         lens_sets += [[table(c, source, f"{where}.cylinders[{i}]")] for i, c in enumerate(cylinders)]
     if "lenses" in raw:
         lens_sets += list(value_list(raw["lenses"], source, f"{where}.lenses", "[[2.0], [1.0, -0.5]] (lens sets)"))
-    if not lens_sets:
-        lens_sets = [[]]
     prefix = text(raw.get("name", ""), source, f"{where}.name")
     out = []
-    for letter, logmar, polarity, lens_set in itertools.product(letters, logmars, polarities, lens_sets):
+    for letter, logmar, polarity, lens_set in itertools.product(letters, logmars, polarities, lens_sets or [[]]):
         item = {"letter": letter, "logmar": logmar, "polarity": polarity, "lenses": lens_set,
                 "f_number": raw.get("f_number", f_number)}
         config = _configuration(item, settings, source, where, f_number)
@@ -174,20 +168,16 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     head = table(raw.get("campaign", {}), source, "[campaign]")
     settings = _settings(head, source)
     f_number = _f_number(head.get("f_number", 5.0), source, "campaign.f_number")
-    configurations: list[Configuration] = []
-    for i, item in enumerate(tables(raw, "item", source)):
-        configurations.append(_configuration(item, settings, source, f"item[{i}]", f_number))
+    configurations = [_configuration(item, settings, source, f"item[{i}]", f_number)
+                      for i, item in enumerate(tables(raw, "item", source))]
     for i, sweep in enumerate(tables(raw, "sweep", source)):
         configurations += _sweep(sweep, settings, source, f"sweep[{i}]", f_number)
     if not configurations:
         raise field_error(source, "top level", "no configurations: add [[item]] or [[sweep]] tables")
-    seen: dict[str, Configuration] = {}
-    unique = []
+    unique: dict[str, Configuration] = {}
     for c in configurations:  # the same inputs twice run once
-        key = json.dumps({k: v for k, v in c.as_json().items() if k != "name"}, sort_keys=True, default=list)
-        if key not in seen:
-            seen[key] = c
-            unique.append(c)
+        unique.setdefault(json.dumps({k: v for k, v in c.as_json().items() if k != "name"}, sort_keys=True,
+                                     default=list), c)
     manifest = head.get("manifest")
     if manifest is not None:
         manifest = str((path.parent / manifest).resolve())
@@ -195,7 +185,7 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
         name=head.get("name", path.stem),
         description=head.get("description", ""),
         settings=settings,
-        configurations=tuple(unique),
+        configurations=tuple(unique.values()),
         source=source,
         manifest=manifest,
     )

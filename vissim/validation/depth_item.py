@@ -17,7 +17,7 @@ for the whole image, each beside the same metric between the two seeds (the floo
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,10 +41,6 @@ def _region_table(comparison, masks, data_range: float) -> dict:
     table["all"] = comparison.as_json()
     table["all"]["n_px"] = int(np.prod(comparison.shape[:2]))
     return table
-
-
-def _crop(pixels: np.ndarray, margin: int) -> np.ndarray:
-    return pixels if margin == 0 else pixels[margin:-margin, margin:-margin]
 
 
 def _scene_layers(scene, images: dict) -> list:
@@ -94,7 +90,8 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     margin = config.frame_margin_px(settings)
 
     def frame(pixels):  # integrated onto the campaign's pixels, the margin cropped
-        return _crop(block_mean(pixels, s), margin)
+        pixels = block_mean(pixels, s)
+        return pixels if margin == 0 else pixels[margin:-margin, margin:-margin]
 
     proximity = frame(images["proximity"])
     geometries = panel_geometries(scene)
@@ -153,8 +150,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     result_json = {
         "key": key,
         "configuration": config.as_json(),
-        "equivalent_eye": {"prescription": eye.prescription.format(4), "pupil_diameter_mm": eye.pupil_diameter_mm,
-                           "accommodation_diopters": eye.accommodation_diopters},
+        "equivalent_eye": {**asdict(eye), "prescription": eye.prescription.format(4)},
         "panels": [{"name": g.name, "letters": scene.panels[g.index].chart.letters,
                     "logmar": scene.panels[g.index].chart.logmar,
                     "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,

@@ -39,14 +39,11 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
     path, out = Path(path), Path(out)
     depth = is_depth_campaign(read_campaign_toml(path))
     if depth:
-        summary = run_depth_campaign(load_depth_campaign(path), out, workers=workers, scheduler=scheduler, spp=spp,
-                                     show_progress=show_progress)
+        load, run = load_depth_campaign, run_depth_campaign
     else:
-        from vissim.validation.campaign import load_campaign
-        from vissim.validation.runner import run_campaign
-
-        summary = run_campaign(load_campaign(path), out, workers=workers, scheduler=scheduler, spp=spp,
-                               show_progress=show_progress)
+        from vissim.validation.campaign import load_campaign as load
+        from vissim.validation.runner import run_campaign as run
+    summary = run(load(path), out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress)
     build_report, summary_lines = _report_of(depth)
     written, lines = build_report(out), summary_lines(out)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "

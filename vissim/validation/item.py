@@ -21,7 +21,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -255,11 +255,7 @@ def compute_item(
         "key": key,
         "configuration": configuration.as_json(),
         "lens_label": configuration.lens_label(),
-        "lenses": [
-            {"sphere_diopters": l.sphere_diopters, "cylinder_diopters": l.cylinder_diopters, "axis_deg": l.axis_deg,
-             "refractive_index": l.refractive_index, "center_thickness_mm": l.center_thickness_mm}
-            for l in lenses
-        ],
+        "lenses": [{k: v for k, v in asdict(l).items() if k != "back_surface_diopters"} for l in lenses],
         "noise_floor": floors,
         "comparisons": comparisons,
         "wave_bench": budget,

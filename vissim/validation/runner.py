@@ -59,26 +59,21 @@ def _capture_plan(campaign: Campaign, config, captures: dict) -> tuple | str:
     """
     if campaign.manifest is None:
         return f"{config.name}: capture {config.capture!r} but the campaign names no manifest"
-    capture = captures.get(config.capture)
-    if capture is None:
-        return f"{config.name}: capture {config.capture!r} is not in {campaign.manifest}"
-    problem = capture_problem(capture)
-    if problem:
-        return f"{config.name}: skipped, {problem}"
-    if capture.no_lens_capture is None:
-        return f"{config.name}: capture {capture.id!r} names no no_lens_capture (the simulation input)"
-    plan = [capture]
-    for capture_id in (capture.repeat_capture, capture.no_lens_capture):
-        if capture_id is None:
-            plan.append(None)
-            continue
+
+    def checked(capture_id: str):  # the capture, or why the item is skipped
         if capture_id not in captures:
             return f"{config.name}: capture {capture_id!r} is not in {campaign.manifest}"
         problem = capture_problem(captures[capture_id])
-        if problem:
-            return f"{config.name}: skipped, {problem}"
-        plan.append(captures[capture_id])
-    return tuple(plan)
+        return f"{config.name}: skipped, {problem}" if problem else captures[capture_id]
+
+    capture = checked(config.capture)
+    if isinstance(capture, str):
+        return capture
+    if capture.no_lens_capture is None:
+        return f"{config.name}: capture {capture.id!r} names no no_lens_capture (the simulation input)"
+    references = (capture.repeat_capture, capture.no_lens_capture)
+    plan = [capture, *(None if c is None else checked(c) for c in references)]
+    return next((p for p in plan if isinstance(p, str)), tuple(plan))
 
 
 def _capture_inputs(campaign: Campaign, plan: tuple):

@@ -157,8 +157,7 @@ def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
         causes = Counter(budgets[n]["cause"] for n in names if n in budgets)
         out.append("| " + " | ".join([f"{group} ({len(names)})", *cells, f"{min(wave):.1f}" if wave else "—",
                                       ", ".join(f"{c} ({k})" for c, k in causes.most_common()) or "—"]) + " |")
-    out.append("")
-    out.append("### Residuals against the wave bench, explained\n")
+    out += ["", "### Residuals against the wave bench, explained\n"]
     out.append("Each residual of the wave simulation against the wave bench is named by the largest RMS part of "
                "the wavefront difference: dispersion (the trace at the campaign's wavelength against the trace at "
                "the d line, where the glass has the rendered index), the vergence approximation (the d-line trace "
