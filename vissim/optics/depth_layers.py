@@ -440,4 +440,5 @@ def _fft_blur(colour: np.ndarray, psf: PSF) -> np.ndarray:
 
 
 def _wave_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float) -> PSF:
-    return _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, "wave")
+    # size_px=None passed as depth._layer_psf passes it: lru_cache keys an omitted argument apart
+    return _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, "wave", None)
