@@ -267,8 +267,8 @@ def compute_psf(
         with small steps.
     method : {"mft", "fft"}, optional
         Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,
-        recorded in ``PSF.sampling``.  Chosen automatically, both give the same pixel energies to
-        1e-4 of the peak; forcing ``"mft"`` on a coarse field far wider than the PSF can fold up
+        recorded in ``PSF.sampling``.  At suggested field sizes both give the same pixel energies to
+        1e-3 of the peak; forcing ``"mft"`` on a coarse field far wider than the PSF can fold up
         to ~0.5 % of the energy into it (``energy_in_field`` overstated, ``data`` low by as much).
 
     Returns
