@@ -97,8 +97,7 @@ class PSF:
         ``"wave"`` (diffraction), ``"geometric"`` (ray optics) or ``"user"`` (:meth:`from_array`).
     energy_in_field : float
         Fraction of the energy through the pupil that lands inside the field (<= 1 up to the
-        light the pupil sampling folds back, ``docs/conventions.md``: a forced matrix transform
-        over a field far wider than the PSF can overstate it by up to ~0.5 %).
+        light the pupil sampling folds back: at most 0.2 %, ``docs/conventions.md``).
     wavefront : Wavefront
         The aberration the PSF is of.
     lca_reference_nm : float or None
@@ -268,8 +267,7 @@ def compute_psf(
     method : {"mft", "fft"}, optional
         Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,
         recorded in ``PSF.sampling``.  At suggested field sizes both give the same pixel energies to
-        1e-3 of the peak; forcing ``"mft"`` on a coarse field far wider than the PSF can fold up
-        to ~0.5 % of the energy into it (``energy_in_field`` overstated, ``data`` low by as much).
+        1e-3 of the peak.
 
     Returns
     -------

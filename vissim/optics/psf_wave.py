@@ -86,11 +86,47 @@ def _fft_seconds(size: int) -> float:
     return 5.0 * size**2 * math.log2(max(size, 2) ** 2) / FFT_FLOPS_PER_S
 
 
-def fold_radius_arcmin(blur_arcmin: float, lambda_over_d_arcmin: float) -> float:
-    """Radius beyond which at most ALIAS_MAX_ENERGY of the PSF lies: the Airy tail 2 / (pi^2 r),
-    widened for a defocused rim as in :mod:`vissim.optics.psf_field`, beyond the geometric blur."""
+#: The cell average's correction (1 / sinc, up to sinc(1/2)) lifts a folded skirt by at most pi / 2.
+FOLD_LIFT = math.pi / 2
+#: A diagonal replica's tail over the field, relative to a side replica's (a quadrant beyond
+#: (d, d) holds (2 - sqrt 2) / 2 of the half-plane beyond d, for a 1 / r^3 tail).
+DIAGONAL_SHARE = (2.0 - math.sqrt(2.0)) / 2.0
+
+
+def folded_energy(distance_arcmin: float, half_field_arcmin: float, blur_arcmin: float,
+                  lambda_over_d_arcmin: float) -> float:
+    """Energy the eight nearest replicas fold into a square field of half-width ``half_field_arcmin``
+    when the period exceeds it by ``distance_arcmin``.
+
+    Each replica's light beyond radius r is the Airy tail 2 / (pi^2 r) (r in lambda/D beyond the
+    geometric blur, widened for a defocused rim as in :mod:`vissim.optics.psf_field`).  With a
+    1 / r^3 density, 1 / pi of it lies beyond a line at distance d, and of that the fraction
+    (sqrt(d^2 + h^2) - d) / h within the field's strip |y| <= h; the four diagonal replicas add
+    at most DIAGONAL_SHARE each; the cell average's correction lifts it by up to FOLD_LIFT.
+    """
+    beyond = distance_arcmin - blur_arcmin
+    if beyond <= 0:
+        return math.inf
     widening = rim_widening(blur_arcmin, lambda_over_d_arcmin)
-    return blur_arcmin + widening * lambda_over_d_arcmin * airy_tail_radius_lambda_over_d(ALIAS_MAX_ENERGY)
+    tail = min(1.0, widening * 2.0 / (math.pi**2 * beyond / lambda_over_d_arcmin))
+    h, d = half_field_arcmin, distance_arcmin
+    strip = (math.hypot(d, h) - d) / h
+    return FOLD_LIFT * (4.0 / math.pi) * tail * strip * (1.0 + DIAGONAL_SHARE)
+
+
+def fold_distance_arcmin(half_field_arcmin: float, blur_arcmin: float, lambda_over_d_arcmin: float) -> float:
+    """The margin beyond the field's half-width for the period: the radius beyond which at most
+    ALIAS_MAX_ENERGY of one replica's light lies (what bounds the error pixel by pixel in a small
+    field), or, over a field far wider than the PSF, the distance at which the eight nearest
+    replicas fold at most ALIAS_MAX_ENERGY into it (:func:`folded_energy`, by bisection)."""
+    widening = rim_widening(blur_arcmin, lambda_over_d_arcmin)
+    one = blur_arcmin + widening * lambda_over_d_arcmin * airy_tail_radius_lambda_over_d(ALIAS_MAX_ENERGY)
+    args = (half_field_arcmin, blur_arcmin, lambda_over_d_arcmin)
+    low, high = blur_arcmin, blur_arcmin + 4.0 * (one - blur_arcmin)  # the folded share is at most ~3.3 x one's
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if folded_energy(middle, *args) > ALIAS_MAX_ENERGY else (low, middle)
+    return max(one, high)
 
 
 def plan_wave_psf(
@@ -104,9 +140,10 @@ def plan_wave_psf(
     """Internal sampling shared by the wavelengths, by the cheaper method unless ``method`` is given.
 
     The pupil cells repeat the PSF every lambda/step in angle (for the FFT, lambda/step is its
-    field).  That period must hold the internal field plus the radius beyond which at most
-    ALIAS_MAX_ENERGY of the light lies, so what folds back into the field is below that; the
-    light itself then lies where the cell average's sinc is divided out in full.
+    field).  That period must exceed the internal field by a margin over which at most
+    ALIAS_MAX_ENERGY of the light of the eight nearest replicas folds back into it
+    (:func:`folded_energy`); the light itself then lies where the cell average's sinc is
+    divided out in full.
     """
     d = pupil_diameter_mm
     lambda_over_d = [float(rad_to_arcmin(nm_to_mm(w) / d)) for w in wavelengths_nm]
@@ -117,7 +154,7 @@ def plan_wave_psf(
     size = max(int(math.ceil(field / internal - 1e-9)), oversample * size_px)
     size += size % 2
     half_field = size * internal / 2
-    period = [max(required_pupil_cells(b, d, w) * ld, half_field + fold_radius_arcmin(b, ld))
+    period = [max(required_pupil_cells(b, d, w) * ld, half_field + fold_distance_arcmin(half_field, b, ld))
               for b, w, ld in zip(blur_radii_arcmin, wavelengths_nm, lambda_over_d)]  # arcmin
     # Matrix transform: one pupil grid for every wavelength.
     mft_step = d / max(p / ld for p, ld in zip(period, lambda_over_d))
