@@ -196,13 +196,13 @@ def read_image(path: str | os.PathLike[str], *, encoding: str = "auto") -> Image
     if kind == "exr":
         if encoding == "srgb":
             raise VissimInputError(f"{path}: EXR files hold linear light; encoding='srgb' does not apply")
-        return _read_exr(path)
-    raw = _read_png(path) if kind == "png" else _read_tiff(path)
-    pixels = _to_linear(raw, encoding)
+        pixels, names, provenance = _read_exr(path)
+    else:
+        pixels = _to_linear(_read_png(path) if kind == "png" else _read_tiff(path), encoding)
+        names, provenance = (MONO_CHANNELS if pixels.ndim == 2 else RGB_CHANNELS), None
     if not np.all(np.isfinite(pixels)):
         raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
-    names = MONO_CHANNELS if pixels.ndim == 2 else RGB_CHANNELS
-    provenance = _read_sidecar(path)
+    provenance = _read_sidecar(path) if provenance is None else provenance  # read after the pixel check
     return Image(pixels, names, provenance, sampling_from_provenance(provenance))
 
 
@@ -236,7 +236,7 @@ def _open_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
     return channels, _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
 
 
-def _read_exr(path: Path) -> Image:
+def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict]:
     channels, provenance = _open_exr(path)
     names = set(channels)
     if set(RGB_CHANNELS) <= names:
@@ -256,10 +256,7 @@ def _read_exr(path: Path) -> Image:
         if plane.shape != planes[0].shape:
             raise VissimInputError(f"{path}: EXR channel {name!r} is subsampled ({plane.shape} vs {planes[0].shape})")
     pixels = planes[0] if len(planes) == 1 else np.stack(planes, axis=-1)
-    pixels = np.ascontiguousarray(pixels, dtype=np.float32)
-    if not np.all(np.isfinite(pixels)):
-        raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
-    return Image(pixels, wanted, provenance, sampling_from_provenance(provenance))
+    return np.ascontiguousarray(pixels, dtype=np.float32), wanted, provenance
 
 
 def _parse_provenance(path: Path, text: str) -> dict:

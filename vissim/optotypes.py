@@ -41,6 +41,7 @@ TOP of the image, so design y up maps to decreasing row.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 from typing import Any
@@ -203,11 +204,7 @@ class SloanLetter:
     def signed_margin(self, x: Any, y: Any) -> np.ndarray:
         """Max over primitives of their margins (>= 0 on ink); see :meth:`ConvexPolygon.signed_margin`."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-        out = None
-        for prim in self.primitives:
-            m = prim.signed_margin(x, y)
-            out = m if out is None else np.maximum(out, m)
-        return out
+        return functools.reduce(np.maximum, (prim.signed_margin(x, y) for prim in self.primitives))
 
     def inside(self, x: Any, y: Any) -> np.ndarray:
         """True where design point (x, y) (x right, y up, units of 1/5 letter height) is ink."""
@@ -222,10 +219,8 @@ class SloanLetter:
         """The letter as one compound :class:`matplotlib.path.Path`, to be filled with the nonzero rule."""
         from matplotlib.path import Path
 
-        return Path.make_compound_path(*(Path(ring, closed=False) for ring in self._closed(origin_xy, height)))
-
-    def _closed(self, origin_xy, height):
-        return [np.vstack([ring, ring[:1]]) for ring in self.outline(origin_xy, height)]
+        rings = self.outline(origin_xy, height)
+        return Path.make_compound_path(*(Path(np.vstack([ring, ring[:1]]), closed=False) for ring in rings))
 
     def patches(self, origin_xy: tuple[float, float] = (0.0, 0.0), height: float = DESIGN_UNITS, **patch_kwargs):
         """Matplotlib patches drawing the letter (lower-left corner at ``origin_xy``, y up, data units).

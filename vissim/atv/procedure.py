@@ -184,26 +184,20 @@ def run_procedure(observer: Observer, config: ProcedureConfig | None = None, *, 
     # Phase 1 on integer grid indices, so that 0.1-multiples stay exact.
     lo_i, hi_i = 0, round((config.maximum_code - config.minimum_code) / step)
     presentations: list[Presentation] = []
+
+    def seen(phase: int, intensity: float) -> bool:
+        presentations.append(Presentation(phase, intensity, bool(observer.seen(intensity))))
+        return presentations[-1].seen
+
     while hi_i - lo_i > 1:
         k = int(rng.integers(lo_i + 1, hi_i))  # strictly inside
-        intensity = config.minimum_code + k * step
-        seen = bool(observer.seen(intensity))
-        presentations.append(Presentation(1, intensity, seen))
-        if seen:
-            hi_i = k
-        else:
-            lo_i = k
+        lo_i, hi_i = (lo_i, k) if seen(1, config.minimum_code + k * step) else (k, hi_i)
     lo = config.minimum_code + lo_i * step
     hi = config.minimum_code + hi_i * step
     phase1 = (lo, hi)
     for _ in range(config.phase2_steps):
         mid = 0.5 * (lo + hi)
-        seen = bool(observer.seen(mid))
-        presentations.append(Presentation(2, mid, seen))
-        if seen:
-            hi = mid
-        else:
-            lo = mid
+        lo, hi = (lo, mid) if seen(2, mid) else (mid, hi)
     result = ThresholdResult(0.5 * (lo + hi), lo, hi, phase1, tuple(presentations), config, seed)
     log.debug("threshold %.4f in [%.4f, %.4f] after %d presentations", result.threshold_code, lo, hi, len(presentations))
     return result

@@ -35,6 +35,7 @@ _EYE_NAME = {"R": "right eye", "L": "left eye"}
 
 
 def _save(fig, path: Path, overwrite: bool) -> Path:
+    fig.tight_layout()
     with atomic_output(path, overwrite=overwrite) as tmp:
         fig.savefig(tmp, dpi=FIGURE_DPI, format="png", metadata={"Software": None})
     plt.close(fig)
@@ -97,7 +98,6 @@ def plot_fits(
         ax.set_title(panel_title, fontsize=9)
     if title:
         fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
     return _save(fig, Path(path), overwrite)
 
 
@@ -123,7 +123,6 @@ def plot_overview(analyses: Sequence[CurveAnalysis], path: str | Path, *, title:
     ax.legend(fontsize=7)
     if title:
         ax.set_title(title, fontsize=10)
-    fig.tight_layout()
     return _save(fig, Path(path), overwrite)
 
 

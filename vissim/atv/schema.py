@@ -30,24 +30,27 @@ class _Reader:
     def fail(self, where: str, message: str) -> VissimInputError:
         return VissimInputError(f"{self.origin}: {where}: {message}")
 
+    def fail_at(self, where: str, key: str, message: str) -> VissimInputError:
+        """:meth:`fail` at field ``key`` of the object at ``where``."""
+        return self.fail(f"{where}.{key}" if where else key, message)
+
     def get(self, obj: Any, key: str, where: str, *, optional: bool = False) -> Any:
         if not isinstance(obj, Mapping):
             raise self.fail(where, f"must be a JSON object, got {type(obj).__name__}")
         if key not in obj:
             if optional:
                 return None
-            raise self.fail(f"{where}.{key}" if where else key, "required field is missing")
+            raise self.fail_at(where, key, "required field is missing")
         return obj[key]
 
     def number(self, obj: Any, key: str, where: str, unit: str, *, optional: bool = False) -> float | None:
         value = self.get(obj, key, where, optional=optional)
-        path = f"{where}.{key}" if where else key
         if value is None and optional:
             return None
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(path, f"must be a number in {unit}, got {value!r}")
+            raise self.fail_at(where, key, f"must be a number in {unit}, got {value!r}")
         if not math.isfinite(value):
-            raise self.fail(path, f"must be a finite number in {unit}, got {value!r}")
+            raise self.fail_at(where, key, f"must be a finite number in {unit}, got {value!r}")
         return float(value)
 
     def integer(self, obj: Any, key: str, where: str, unit: str, *, optional: bool = False) -> int | None:
@@ -55,13 +58,13 @@ class _Reader:
         if value is None:
             return None
         if value != int(value):
-            raise self.fail(f"{where}.{key}" if where else key, f"must be a whole number of {unit}, got {value!r}")
+            raise self.fail_at(where, key, f"must be a whole number of {unit}, got {value!r}")
         return int(value)
 
     def boolean(self, obj: Any, key: str, where: str) -> bool:
         value = self.get(obj, key, where)
         if not isinstance(value, bool):
-            raise self.fail(f"{where}.{key}" if where else key, f"must be true or false, got {value!r}")
+            raise self.fail_at(where, key, f"must be true or false, got {value!r}")
         return value
 
     def text(self, obj: Any, key: str, where: str, *, optional: bool = False) -> str | None:
@@ -69,7 +72,7 @@ class _Reader:
         if value is None and optional:
             return None
         if not isinstance(value, str):
-            raise self.fail(f"{where}.{key}" if where else key, f"must be text, got {value!r}")
+            raise self.fail_at(where, key, f"must be text, got {value!r}")
         return value
 
     def date(self, obj: Any, key: str, where: str, *, optional: bool = False) -> _dt.date | None:
@@ -79,14 +82,14 @@ class _Reader:
         try:
             return _dt.date.fromisoformat(value)
         except ValueError:
-            raise self.fail(f"{where}.{key}" if where else key, f"must be an ISO date YYYY-MM-DD, got {value!r}") from None
+            raise self.fail_at(where, key, f"must be an ISO date YYYY-MM-DD, got {value!r}") from None
 
     def array(self, obj: Any, key: str, where: str, *, optional: bool = False) -> list:
         value = self.get(obj, key, where, optional=optional)
         if value is None and optional:
             return []
         if not isinstance(value, list):
-            raise self.fail(f"{where}.{key}" if where else key, f"must be a JSON array, got {type(value).__name__}")
+            raise self.fail_at(where, key, f"must be a JSON array, got {type(value).__name__}")
         return value
 
     def lines(self, obj: Any, key: str, where: str) -> tuple[int, int] | None:

@@ -274,16 +274,8 @@ class VirtualExperiment:
         s, a, d = self.subject, self.apparatus, self.detection
         return {
             "subject": {**asdict(s), "prescription": s.prescription.format()},
-            "apparatus": {
-                "pixel_pitch_mm": a.pixel_pitch_mm, "collimator_focal_length_mm": a.collimator_focal_length_mm,
-                "source_size_arcmin": a.source_size_arcmin, "trial_lens_vertex_mm": a.trial_lens_vertex_mm,
-                "wavelength_nm": a.wavelength_nm, "display_gamma": a.display_gamma,
-            },
-            "detection": {
-                "summation_diameter_arcmin": d.summation_diameter_arcmin, "threshold_code_full_capture": d.threshold_code_full_capture,
-                "psychometric": "Weibull in luminance, F(threshold) = 1/2", "psychometric_slope": d.psychometric_slope,
-                "guess_rate": d.guess_rate, "lapse_rate": d.lapse_rate,
-            },
+            "apparatus": asdict(a) | {"source_size_arcmin": a.source_size_arcmin},
+            "detection": asdict(d) | {"psychometric": "Weibull in luminance, F(threshold) = 1/2"},
             "retinal_image_model": self.retinal_image_model,
             "seed": self.seed,
             "trials": [t.as_json() for t in self.trials],

@@ -140,9 +140,8 @@ class TrialLens:
 
     def __post_init__(self) -> None:
         marked = LensPower(self.sphere_diopters, self.cylinder_diopters, self.axis_deg)
-        object.__setattr__(self, "sphere_diopters", marked.sphere_diopters)
-        object.__setattr__(self, "cylinder_diopters", marked.cylinder_diopters)
-        object.__setattr__(self, "axis_deg", marked.axis_deg)
+        for name in ("sphere_diopters", "cylinder_diopters", "axis_deg"):
+            object.__setattr__(self, name, getattr(marked, name))
         if self.refractive_index is not None:
             index = _number(self.refractive_index, "refractive index", "(dimensionless)")
             if index <= 1.0:
@@ -254,10 +253,8 @@ class TrialLensSetup:
     lens_gap_mm: float = 0.0
 
     def __post_init__(self) -> None:
-        if isinstance(self.lenses, TrialLens):
-            object.__setattr__(self, "lenses", (self.lenses,))
         try:
-            lenses = tuple(self.lenses)
+            lenses = (self.lenses,) if isinstance(self.lenses, TrialLens) else tuple(self.lenses)
         except TypeError:
             raise VissimInputError(f"lenses must be a tuple of TrialLens, got {self.lenses!r}") from None
         for lens in lenses:

@@ -63,10 +63,7 @@ def find_libllvm() -> str | None:
             major = _llvm_major(path)
             if major is not None and major >= MIN_LLVM_MAJOR and os.path.isfile(path):
                 candidates.append((major, len(path), path))
-    if not candidates:
-        return None
-    candidates.sort(key=lambda c: (-c[0], c[1]))
-    return candidates[0][2]
+    return min(candidates, key=lambda c: (-c[0], c[1]))[2] if candidates else None
 
 
 @dataclass(frozen=True)

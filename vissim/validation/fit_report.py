@@ -13,18 +13,9 @@ __all__ = ["fit_table"]
 _KEYS = ("M_diopters", "J0_diopters", "J45_diopters")
 
 
-def _half_widths(record: dict | None) -> str:
-    interval = (record or {}).get("interval_95")
-    if not interval:
-        return "—"
-    return " / ".join(f"{0.5 * (interval[k][1] - interval[k][0]):.3f}" for k in _KEYS)
-
-
-def _errors(comparison: dict) -> str:
-    errors = comparison.get("errors_diopters")
-    if not errors:
-        return "—"
-    return " / ".join(f"{errors[k]:+.3f}" for k in _KEYS)
+def _per_key(values: dict | None, fmt) -> str:
+    """``fmt`` of M / J0 / J45 joined by " / ", or "—" without values."""
+    return " / ".join(fmt(values[k]) for k in _KEYS) if values else "—"
 
 
 def _verdict(comparison: dict) -> str:
@@ -48,12 +39,14 @@ def fit_table(results: list[dict]) -> str:
            "|---|---|---|---|---|---|---|---|"]
     for result in rows:
         comparison = result["fit_rx"]["comparison"]
-        record = result["fit_rx"].get("fit")
+        record = result["fit_rx"].get("fit") or {}
+        half_widths = _per_key(record.get("interval_95"), lambda lo_hi: f"{0.5 * (lo_hi[1] - lo_hi[0]):.3f}")
+        errors = _per_key(comparison.get("errors_diopters"), lambda error: f"{error:+.3f}")
         name = result["configuration"]["name"]
         lenses = result.get("lens_label", "")
         out.append(f"| {name} | {lenses} | {comparison.get('vergence_theory', '—')} | "
                    f"{comparison.get('table_4_2') or '—'} | {comparison.get('fitted') or '—'} | "
-                   f"{_half_widths(record)} | {_errors(comparison)} | {_verdict(comparison)} |")
+                   f"{half_widths} | {errors} | {_verdict(comparison)} |")
     out.append("")
     out.append("The fit turns the no-lens render (or capture) into the capture through the lenses "
                "(`vissim fit-rx`: geometric optics for a render, wave optics for a photograph) with the "

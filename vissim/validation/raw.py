@@ -341,12 +341,9 @@ def resample_to_arcmin(
     box aperture, and needs no anti-aliasing filter (unlike interpolation, e.g.
     ``skimage.transform.rescale``, whose Gaussian prefilter is an approximation).
     """
-    if isinstance(image, RawImage):
-        factor = image.sensor_px_per_pixel if sensor_px_per_image_px is None else sensor_px_per_image_px
-        array = image.pixels
-    else:
-        factor = 1 if sensor_px_per_image_px is None else sensor_px_per_image_px
-        array = np.asarray(image)
+    array = image.pixels if isinstance(image, RawImage) else np.asarray(image)
+    default = image.sensor_px_per_pixel if isinstance(image, RawImage) else 1
+    factor = default if sensor_px_per_image_px is None else sensor_px_per_image_px
     if int(factor) != factor or factor < 1:
         raise VissimInputError(f"sensor_px_per_image_px must be a whole number >= 1 (photosites), got {factor!r}")
     if array.ndim not in (2, 3) or not np.issubdtype(array.dtype, np.floating) or not np.all(np.isfinite(array)):
