@@ -196,6 +196,10 @@ class SpheroCylinder:
 class Prescription(SpheroCylinder):
     """The correcting lens at the eye's (camera's) principal plane; a myope's sphere is < 0.
 
+    See ``docs/conventions.md`` for the sign, axis and power-vector conventions, and
+    :meth:`parse` for written prescriptions (``"-2.00 -1.25 x 180"``).  The eye's refractive
+    error, of the opposite sign, is :meth:`refractive_error`.
+
     Parameters
     ----------
     sphere_diopters : float
@@ -205,10 +209,6 @@ class Prescription(SpheroCylinder):
         give the two transposed forms.
     axis_deg : float, optional
         Cylinder axis, degrees, TABO (0-180, stored in (0, 180]; 180 when the cylinder is 0).
-
-    See ``docs/conventions.md`` for the sign, axis and power-vector conventions, and
-    :meth:`parse` for written prescriptions (``"-2.00 -1.25 x 180"``).  The eye's refractive
-    error, of the opposite sign, is :meth:`refractive_error`.
 
     Examples
     --------
