@@ -90,6 +90,7 @@ def test_parallel_workers_give_the_same_numbers(tiny, tmp_path):
     assert numbers(parallel) == numbers(serial)
 
 
+@pytest.mark.slow  # a local dask cluster takes ~5 s to start; the process-pool test above covers parallel runs by default
 def test_dask_local_cluster_gives_the_same_numbers(tiny, tmp_path):
     distributed = pytest.importorskip("distributed")
     serial, remote = tmp_path / "serial", tmp_path / "dask"
