@@ -178,3 +178,13 @@ def test_tiles_only_for_large_images_and_small_kernels():
     assert _tile_px((2160, 3840), 45) is not None  # 4K, a 45 px PSF
     assert _tile_px((150, 150), 45) is None  # a campaign tile: one FFT
     assert _tile_px((2160, 3840), 301) is None  # a kernel as large as the tiles
+
+
+def test_wrap_padding_refuses_a_psf_larger_than_the_image_on_both_paths(defocus_psf):
+    # The 46 px PSF cannot wrap around a 40 px image: one refusal, decided in checked_blur_inputs.
+    from vissim.optics.blur_device import blur_image_on
+
+    image = random_image(shape=(40, 60))
+    for blur in (blur_image, blur_image_on):
+        with pytest.raises(VissimInputError, match="46 px PSF is larger than the 40x60 px image"):
+            blur(image, defocus_psf, arcmin_per_px=1.0, padding="wrap")

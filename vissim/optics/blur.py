@@ -200,12 +200,8 @@ def _blur_tiled(channel, psf, padding, background, dtype, tile):
 
 def _blur_channel(channel, psf, padding, background, dtype):
     rows, cols = channel.shape
-    if padding == "wrap":
+    if padding == "wrap":  # the PSF's size against the image's is checked in checked_blur_inputs
         shape = (rows, cols)
-        if psf.data.shape[0] > min(rows, cols):
-            raise VissimInputError(
-                f"a {psf.data.shape[0]} px PSF is larger than the {rows}x{cols} px image; 'wrap' padding needs a smaller PSF"
-            )
         padded, offset = channel, 0
     else:
         offset = _padding_width(psf)
@@ -243,6 +239,11 @@ def checked_blur_inputs(image, psf, arcmin_per_px: float, padding: str, backgrou
             raise VissimInputError(f"got {len(backgrounds)} background values for {n_channels} channels")
     for p in psfs:
         _check_sampling(p, arcmin_per_px)
+        if padding == "wrap" and p.data.shape[0] > min(array.shape[:2]):
+            rows, cols = array.shape[:2]
+            raise VissimInputError(
+                f"a {p.data.shape[0]} px PSF is larger than the {rows}x{cols} px image; 'wrap' padding needs a smaller PSF"
+            )
     return array, psfs, backgrounds
 
 

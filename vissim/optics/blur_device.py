@@ -14,7 +14,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from vissim.errors import VissimInputError
 from vissim.optics.array_backend import array_backend
 from vissim.optics.blur import BlurKernel, _border_mean, _padding_width, checked_blur_inputs, padded_shape
 from vissim.optics.psf import PSF
@@ -41,10 +40,7 @@ def blur_image_on(
     out = np.empty(channels.shape, np.float32)
     for group in {id(p): p for p in psfs}.values():
         members = [c for c, p in enumerate(psfs) if p is group]
-        if padding == "wrap":
-            if group.data.shape[0] > min(rows, cols):
-                raise VissimInputError(f"a {group.data.shape[0]} px PSF is larger than the {rows}x{cols} px image; "
-                                       "'wrap' padding needs a smaller PSF")
+        if padding == "wrap":  # sizes checked in checked_blur_inputs
             offset, shape = 0, (rows, cols)
             padded = backend.asarray(channels[members])
         else:
