@@ -20,6 +20,7 @@ from vissim.errors import VissimInputError
 from vissim.fit.rx_fit import RxFit, fit_rx
 from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_lens_power
+from vissim.units import m_to_mm
 
 __all__ = ["bench_from_provenance", "rendered_bench", "fit_capture", "compare_with_theory", "fit_bench_item"]
 
@@ -38,7 +39,7 @@ def _bench_table(provenance: Any) -> dict | None:
     spec = inputs.get("render")  # a campaign render: its RenderSpec
     if isinstance(spec, dict) and "f_number" in spec and "chart_distance_m" in spec:
         return {"focal_length_mm": spec["focal_length_mm"], "f_number": spec["f_number"],
-                "focus_distance_mm": 1000.0 * spec["chart_distance_m"], "chart_distance_mm": 1000.0 * spec["chart_distance_m"],
+                "focus_distance_mm": m_to_mm(spec["chart_distance_m"]), "chart_distance_mm": m_to_mm(spec["chart_distance_m"]),
                 "vertex_distance_mm": spec["vertex_distance_mm"], "arcmin_per_px": spec["arcmin_per_px"],
                 "size_px": spec["tile_px"]}
     return None

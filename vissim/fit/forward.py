@@ -50,7 +50,7 @@ from vissim.optics.blur import kernel_transfer
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront
-from vissim.units import rad_to_arcmin
+from vissim.units import mrad_to_arcmin
 
 __all__ = ["ForwardModel", "FORWARD_MODES", "landing_matrix_rc_px"]
 
@@ -70,7 +70,7 @@ def landing_matrix_rc_px(defocus_xy, magnification_xy, arcmin_per_px: float) -> 
     d = np.asarray(defocus_xy, dtype=float)
     m_inv = np.linalg.inv(np.asarray(magnification_xy, dtype=float))
     scaled = m_inv @ d
-    return _rc(0.5 * (scaled + scaled.T)) * float(rad_to_arcmin(1e-3)) / arcmin_per_px
+    return _rc(0.5 * (scaled + scaled.T)) * float(mrad_to_arcmin(1.0)) / arcmin_per_px
 
 
 #: The jinc 2 J1(x) / x tabulated (step :data:`_JINC_STEP`), interpolated linearly: 20x faster than
@@ -119,7 +119,7 @@ class ForwardModel:
         self.mode = mode
         self.wavelength_nm = float(wavelength_nm)
         self.max_power_diopters = float(max_power_diopters)
-        blur_radius_px = rad_to_arcmin(1e-3 * self.max_power_diopters * self.pupil_diameter_mm / 2.0) / self.arcmin_per_px
+        blur_radius_px = mrad_to_arcmin(self.max_power_diopters * self.pupil_diameter_mm / 2.0) / self.arcmin_per_px
         self.margin_px = int(math.ceil(blur_radius_px + max_shift_px)) + MARGIN_EXTRA_PX
         rows, cols = (scipy.fft.next_fast_len(n + 2 * self.margin_px, real=True) for n in self.shape)
         extra = (rows - self.shape[0] - 2 * self.margin_px, cols - self.shape[1] - 2 * self.margin_px)

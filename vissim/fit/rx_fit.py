@@ -75,7 +75,7 @@ from vissim.errors import VissimInputError
 from vissim.fit.forward import FORWARD_MODES, ForwardModel
 from vissim.fit.power_model import MAGNIFICATION_MODELS, power_model
 from vissim.optics.prescription import LensPower
-from vissim.units import rad_to_arcmin
+from vissim.units import mrad_to_arcmin
 from vissim.validation.registration import register
 
 __all__ = ["RxFit", "fit_rx", "check_fit_inputs", "sandwich_covariance", "residual_correlation_lag_px",
@@ -620,7 +620,7 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     # decisions
     principal = np.abs(np.linalg.eigvalsh(np.array([[best.power_vector[0] + best.power_vector[1], best.power_vector[2]],
                                                      [best.power_vector[2], best.power_vector[0] - best.power_vector[1]]])))
-    to_px = float(rad_to_arcmin(1e-3 * pupil)) / step  # blur diameter in px per dioptre
+    to_px = float(mrad_to_arcmin(pupil)) / step  # blur diameter in px per dioptre
     largest_blur_px = float(principal.max()) * to_px
     resolution_power = MIN_RESOLVED_BLUR_PX / to_px
     status, reason = "ok", None

@@ -108,6 +108,11 @@ def mtf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
     return np.abs(otf(psf, remove_pixel=remove_pixel))
 
 
+def diffraction_cutoff_cyc_per_deg(pupil_diameter_mm: float, wavelength_nm: float) -> float:
+    """The incoherent cutoff frequency D / lambda of a circular pupil, cycles/degree."""
+    return float(cyc_per_rad_to_cyc_per_deg(pupil_diameter_mm / nm_to_mm(wavelength_nm)))
+
+
 def diffraction_mtf(frequency_cyc_per_deg, pupil_diameter_mm: float, wavelength_nm: float) -> np.ndarray:
     """MTF of an aberration-free circular pupil (Goodman 2005, Eq. 6-32).
 
@@ -132,7 +137,7 @@ def diffraction_mtf(frequency_cyc_per_deg, pupil_diameter_mm: float, wavelength_
     >>> vissim.diffraction_mtf([0.0, 30.0, 60.0, 200.0], 3.0, 550.0).round(3)
     array([1.   , 0.606, 0.254, 0.   ])
     """
-    cutoff = cyc_per_rad_to_cyc_per_deg(pupil_diameter_mm / nm_to_mm(wavelength_nm))  # D / lambda
+    cutoff = diffraction_cutoff_cyc_per_deg(pupil_diameter_mm, wavelength_nm)
     nu = np.clip(np.abs(np.asarray(frequency_cyc_per_deg, dtype=float)) / cutoff, 0.0, 1.0)
     return 2.0 / np.pi * (np.arccos(nu) - nu * np.sqrt(1.0 - nu**2))
 

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from vissim.optics.zernike import zernike_nm
+from vissim.units import nm_to_um
 
 __all__ = ["PupilGrid", "pupil_grid", "generalised_pupil", "generalised_pupil_parts"]
 
@@ -41,7 +42,7 @@ class PupilGrid:
     """Quadrature of the disc on ``(2 half + 1)^2`` cells of side ``step_mm``.
 
     Every cell's centre (inside cells are averaged from the phase there and its derivatives);
-    rim cells: one point list with the cell of each point in ``rim_cell``, weights fractions
+    rim cells: one point list, each point's cell ``rim_cells[rim_slot]``, weights fractions
     of a cell's area.
     """
 
@@ -52,7 +53,6 @@ class PupilGrid:
     inside_mask: np.ndarray  # (size, size) 1.0 on inside cells, 0.0 elsewhere
     centre_x_mm: np.ndarray  # (size, size) OSA coordinates of every cell's centre
     centre_y_mm: np.ndarray
-    rim_cell: np.ndarray  # (n_rim_points,) flat cell index of each rim point
     rim_cells: np.ndarray  # (n_rim_cells,) the distinct rim cells, flat indices
     rim_slot: np.ndarray  # (n_rim_points,) each rim point's position in rim_cells
     rim_x_mm: np.ndarray
@@ -122,7 +122,7 @@ def pupil_grid(step_mm: float, diameter_mm: float) -> PupilGrid:
     mask = np.zeros(size * size)
     mask[inside] = 1.0
     # image-oriented (u, v) -> OSA (x, y) = (-u, -v)
-    arrays = (inside, mask.reshape(size, size), -u.reshape(size, size), -v.reshape(size, size), cell, cells,
+    arrays = (inside, mask.reshape(size, size), -u.reshape(size, size), -v.reshape(size, size), cells,
               slot.ravel(), -ru[keep], -rv[keep], rw[keep])
     for array in arrays:
         array.setflags(write=False)
@@ -173,7 +173,7 @@ def generalised_pupil_parts(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: 
     centre (h the step; the linear phase averaged exactly, its curvature to leading order),
     derivatives by central differences of the centres' phase.  Rim cells: their quadrature.
     """
-    phase = (opd_um * (2.0 * math.pi / (wavelength_nm * 1e-3))).astype(dtype, copy=False)
+    phase = (opd_um * (2.0 * math.pi / nm_to_um(wavelength_nm))).astype(dtype, copy=False)
     n = grid.size
     centre = phase[: n * n].reshape(n, n)
     # Neighbours by edge padding: inside cells never touch the grid's border (it lies beyond the disc).

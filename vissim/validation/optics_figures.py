@@ -29,10 +29,10 @@ from vissim.imageio import read_image  # noqa: E402
 from vissim.optics.blur import blur_image  # noqa: E402
 from vissim.optics.prescription import Prescription  # noqa: E402
 from vissim.optics.psf import PSF, compute_psf, suggested_size_px  # noqa: E402
-from vissim.optics.psf_metrics import (diffraction_mtf, frequencies_cyc_per_deg, mtf,  # noqa: E402
+from vissim.optics.psf_metrics import (diffraction_cutoff_cyc_per_deg, diffraction_mtf,  # noqa: E402
+                                       frequencies_cyc_per_deg, mtf,
                                        radius_of_encircled_energy_arcmin)
 from vissim.optics.wavefront import Wavefront  # noqa: E402
-from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm  # noqa: E402
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
            "mtf_figure_of", "through_focus_figure_of", "optics_figures", "THROUGH_FOCUS_STEPS_D", "LOG_PSF_DECADES"]
@@ -197,7 +197,7 @@ def mtf_curves(psf: PSF, pad: int = MTF_PADDING) -> dict[str, np.ndarray]:
         "radial": ring_mtf,
         "diffraction": diffraction_mtf(freq[c:], pupil, wavelength),
         "radial_diffraction": diffraction_mtf(ring_freq, pupil, wavelength),
-        "cutoff_cyc_per_deg": np.asarray(cyc_per_rad_to_cyc_per_deg(pupil / nm_to_mm(wavelength))),
+        "cutoff_cyc_per_deg": np.asarray(diffraction_cutoff_cyc_per_deg(pupil, wavelength)),
     }
 
 
