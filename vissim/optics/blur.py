@@ -20,16 +20,19 @@
   which :class:`BlurKernel` keeps for the next image blurred by the same PSF on the same grid.
   Large images with small kernels are convolved by overlap-save instead, in squares of a few
   hundred pixels (:func:`_tile_px` picks the size from an operation count): the same numbers
-  to round-off, a kernel transform the size of one square, and FFTs that stay in cache.
+  to round-off, a kernel transform the size of one square, and FFTs that stay in cache, one
+  square per core at a time.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import os
 import weakref
 from collections import OrderedDict
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -168,34 +171,41 @@ def _tile_px(shape: tuple[int, int], kernel_px: int) -> int | None:
 
 
 def _blur_tiled(channel, psf, padding, background, dtype, tile):
-    """Overlap-save: the padded image cut into ``tile``-px squares, each convolved circularly.
+    """Overlap-save: the image cut into ``tile``-px squares, each convolved circularly.
 
     A square's circular convolution is exact on its ``tile - N + 1`` valid pixels per axis (those
     the kernel reaches without wrapping); squares step by that much, so their valid parts tile
-    the image.  One row of squares is padded and transformed at a time (arrays that the
-    allocator reuses, and that stay in cache).  Equal to the full-frame convolution to round-off.
+    the image.  Squares are read from the image in place and padded only where they cross its
+    edge.  They are independent: one thread per core takes them in turn, each square's transforms
+    single-threaded in that core's cache, and only its valid rows inverted along the rows.
+    Equal to the full-frame convolution to round-off.
     """
     rows, cols = channel.shape
     n = psf.data.shape[0]
     valid, first_valid = tile - n + 1, n - 1 - n // 2
-    n_cols = math.ceil(cols / valid)
-    right = n_cols * valid + n - 1 - first_valid - cols
     if padding == "constant" and background is None:
         background = _border_mean(channel)
-    transfer = BlurKernel.prepare(psf, (tile, tile), dtype=dtype).transfer[:, None, :]
-    out = np.empty((rows, n_cols * valid), dtype)  # whole squares wide; cropped on return
-    for top in range(0, rows, valid):  # output rows top .. top + valid
-        first, last = top - first_valid, top - first_valid + tile  # the squares' rows in the image
-        strip = _pad_widths(channel[max(first, 0) : min(last, rows)],
-                            ((max(-first, 0), max(last - rows, 0)), (first_valid, right)), padding, background)
-        squares = np.lib.stride_tricks.sliding_window_view(strip, tile, axis=1)[:, ::valid]  # (tile, n_cols, tile)
-        spectra = scipy.fft.rfft2(squares, axes=(0, 2), workers=-1)
-        spectra *= transfer
-        blurred = scipy.fft.irfft2(spectra, s=(tile, tile), axes=(0, 2), workers=-1, overwrite_x=True)
-        done = min(valid, rows - top)
-        out[top : top + done].reshape(done, n_cols, valid)[...] = blurred[first_valid : first_valid + done, :,
-                                                                          first_valid : first_valid + valid]
-    return out[:, :cols]
+    transfer = BlurKernel.prepare(psf, (tile, tile), dtype=dtype).transfer
+    out = np.empty((rows, cols), dtype)
+
+    def blur_square(top: int, left: int) -> None:  # the output from [top, left], valid x valid at most
+        r0, c0 = top - first_valid, left - first_valid  # the square's corner in the image
+        square = channel[max(r0, 0) : r0 + tile, max(c0, 0) : c0 + tile]
+        widths = ((max(-r0, 0), max(r0 + tile - rows, 0)), (max(-c0, 0), max(c0 + tile - cols, 0)))
+        if any(map(any, widths)):
+            square = _pad_widths(square, widths, padding, background)
+        spectrum = scipy.fft.rfft2(square, workers=1)
+        spectrum *= transfer
+        spectrum = scipy.fft.ifft(spectrum, axis=0, workers=1, overwrite_x=True)
+        height, width = min(valid, rows - top), min(valid, cols - left)
+        blurred = scipy.fft.irfft(spectrum[first_valid : first_valid + height], n=tile, axis=1, workers=1,
+                                  overwrite_x=True)
+        out[top : top + height, left : left + width] = blurred[:, first_valid : first_valid + width]
+
+    corners = [(top, left) for top in range(0, rows, valid) for left in range(0, cols, valid)]
+    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+        list(pool.map(lambda corner: blur_square(*corner), corners))  # re-raises a square's error
+    return out
 
 
 def _blur_channel(channel, psf, padding, background, dtype):
