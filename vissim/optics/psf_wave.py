@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import functools
 import math
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -32,6 +31,7 @@ import scipy.fft
 from vissim.errors import VissimInputError
 from vissim.optics.psf_field import airy_tail_radius_lambda_over_d, rim_widening
 from vissim.optics.pupil_grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
+from vissim.optics.workspace import scratch
 from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
 
 __all__ = ["PHASE_STEP_WAVES", "MIN_PUPIL_CELLS", "PsfSampling", "plan_wave_psf", "wave_psf", "to_output_pixels"]
@@ -196,25 +196,6 @@ def _folded_matrices(size: int, internal_arcmin: float, pupil_step_mm: float, ha
     return cos, sin
 
 
-class _Workspace(threading.local):
-    """Scratch arrays reused across calls: fresh memory costs a page fault per 4 KiB on first
-    touch, which at these sizes took as long as the arithmetic."""
-
-    def __init__(self):
-        self.arrays: dict = {}
-
-    def get(self, name: str, shape: tuple, dtype) -> np.ndarray:
-        key = (name, shape, np.dtype(dtype).str)
-        if key not in self.arrays:
-            if len(self.arrays) > 64:
-                self.arrays.clear()
-            self.arrays[key] = np.empty(shape, dtype)
-        return self.arrays[key]
-
-
-_WORKSPACE = _Workspace()
-
-
 def _fold_rows(source: np.ndarray, even: np.ndarray, odd: np.ndarray) -> None:
     """Even and odd parts of ``source`` about its centre row, on the centre row and below."""
     h = source.shape[0] // 2
@@ -234,7 +215,7 @@ def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray,
     quadrants follow from the non-negative one: a quarter of the multiply-adds of ``A G A^T``.
     """
     n, h, m = pupil[0].shape[0], pupil[0].shape[0] // 2, cos.shape[0]
-    work = functools.partial(_WORKSPACE.get, dtype=cos.dtype)
+    work = functools.partial(scratch, dtype=cos.dtype)
     # Columns: fold along them; rows of the products are (real | imag) x pupil rows.
     even, odd = work("even_columns", (2 * n, h + 1)), work("odd_columns", (2 * n, h + 1))
     for i, part in enumerate(pupil):  # real, imaginary
@@ -256,12 +237,12 @@ def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray,
     np.add(ps[:, :2], pc[:, 2:], out=bd[0])
     np.subtract(ps[:, :2], pc[:, 2:], out=bd[1])
     # |E(+-,+-)|^2 = |A|^2 + |B|^2 +- 2 (Ar Bi - Ai Br), likewise with C and D.
-    both, cross, scratch = work("sum", (2, m, m)), work("cross", (2, m, m)), work("scratch", (2, m, m))
+    both, cross, spare = work("sum", (2, m, m)), work("cross", (2, m, m)), work("spare", (2, m, m))
     np.multiply(ac[:, :, 0], ac[:, :, 0], out=both)
     for source, part in ((ac, 1), (bd, 0), (bd, 1)):
-        both += np.multiply(source[:, :, part], source[:, :, part], out=scratch)
+        both += np.multiply(source[:, :, part], source[:, :, part], out=spare)
     np.multiply(ac[:, :, 0], bd[:, :, 1], out=cross)
-    cross -= np.multiply(ac[:, :, 1], bd[:, :, 0], out=scratch)
+    cross -= np.multiply(ac[:, :, 1], bd[:, :, 0], out=spare)
     cross *= 2
     # Quadrant (signs of theta_row, theta_col) -> its place in ``total``: |k| = 0..M/2 - 1 up, 1..M/2 down.
     half = total.shape[0] // 2
@@ -272,7 +253,7 @@ def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray,
             target = total[rows_out, cols_out]
             if accumulate:
                 target += op(both[pair, rows_in, cols_in], cross[pair, rows_in, cols_in],
-                             out=scratch[pair, rows_in, cols_in])
+                             out=spare[pair, rows_in, cols_in])
             else:
                 op(both[pair, rows_in, cols_in], cross[pair, rows_in, cols_in], out=target)
 
@@ -283,8 +264,11 @@ def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
     grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
     m = plan.internal_size
     total = np.empty((m, m), dtype=dtype)
+    opd = scratch("opd", (grid.centre_x_mm.size + grid.rim_x_mm.size,), dtype)
+    parts = scratch("real", (grid.size, grid.size), dtype), scratch("imag", (grid.size, grid.size), dtype)
     for index, (front, weight, each) in enumerate(zip(fronts, weights, plans)):
-        real, imag = generalised_pupil_parts(grid, opd_on_points_um(grid, front), each.wavelength_nm, dtype)
+        real, imag = generalised_pupil_parts(grid, opd_on_points_um(grid, front, dtype, out=opd), each.wavelength_nm,
+                                             dtype, out=parts)
         cos, sin = _folded_matrices(m, plan.internal_arcmin_per_px, plan.pupil_step_mm, grid.half,
                                     each.wavelength_nm, dtype)
         scale = (plan.pupil_step_mm * float(arcmin_to_rad(plan.internal_arcmin_per_px))

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
+from vissim.optics.workspace import scratch
 from vissim.optics.zernike import zernike_nm
 from vissim.units import nm_to_um
 
@@ -130,25 +131,30 @@ def pupil_grid(step_mm: float, diameter_mm: float) -> PupilGrid:
 
 
 @functools.lru_cache(maxsize=96)
-def _zernike_on_points(grid: PupilGrid, measured_mm: float, n: int, m: int) -> np.ndarray:
+def _zernike_on_points(grid: PupilGrid, measured_mm: float, n: int, m: int, dtype=np.float64) -> np.ndarray:
     x, y = grid.points()
-    values = zernike_nm(n, m, np.hypot(x, y) / (measured_mm / 2.0), np.arctan2(y, x))
+    values = zernike_nm(n, m, np.hypot(x, y) / (measured_mm / 2.0), np.arctan2(y, x)).astype(dtype)
     values.setflags(write=False)
     return values
 
 
-def opd_on_points_um(grid: PupilGrid, wavefront) -> np.ndarray:
-    """The wavefront's optical path difference (µm) at :meth:`PupilGrid.points`.
+def opd_on_points_um(grid: PupilGrid, wavefront, dtype=np.float64, out: np.ndarray | None = None) -> np.ndarray:
+    """The wavefront's optical path difference (µm) at :meth:`PupilGrid.points`, of ``dtype``.
 
     Zernike wavefronts use cached polynomials on the points; any other wavefront (an
     :class:`~vissim.optics.opd_map.OpdMap`) is evaluated through its ``opd_um(x, y)``.
+    Written into ``out`` when given.
     """
+    size = grid.centre_x_mm.size + grid.rim_x_mm.size
+    opd = np.empty(size, dtype) if out is None else out
     if not hasattr(wavefront, "coefficients_um"):
-        return wavefront.opd_um(*grid.points())
-    opd = np.zeros(grid.centre_x_mm.size + grid.rim_x_mm.size)
+        opd[...] = wavefront.opd_um(*grid.points())
+        return opd
+    opd[...] = 0.0
+    term = scratch("zernike_term", (size,), dtype)
     for (n, m), value in wavefront.coefficients_um.items():
         if n > 0:  # piston changes nothing
-            opd += value * _zernike_on_points(grid, wavefront.pupil_diameter_mm, n, m)
+            opd += np.multiply(_zernike_on_points(grid, wavefront.pupil_diameter_mm, n, m, dtype), value, out=term)
     return opd
 
 
@@ -160,33 +166,59 @@ def generalised_pupil(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: float,
     return values
 
 
-def _sinc_of_half(step: np.ndarray) -> np.ndarray:
-    """sin(x) / x at x = step / 2 (the average of exp(i phi) over a cell with phase change ``step``)."""
-    half = 0.5 * step
-    return np.divide(np.sin(half), half, out=np.ones_like(half), where=half != 0)
+def _sinc_into(x: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """sin(x) / x (1 at 0) into ``out``: the average of exp(i phi) over a cell whose phase changes by 2x."""
+    np.sin(x, out=out)
+    zero = x == 0
+    np.divide(out, x, out=out, where=~zero)
+    out[zero] = 1.0
+    return out
 
 
-def generalised_pupil_parts(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: float, dtype=np.float64):
+@functools.lru_cache(maxsize=32)
+def _inside_mask(grid: PupilGrid, dtype) -> np.ndarray:
+    mask = grid.inside_mask.astype(dtype)
+    mask.setflags(write=False)
+    return mask
+
+
+def generalised_pupil_parts(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: float, dtype=np.float64,
+                            out: tuple[np.ndarray, np.ndarray] | None = None):
     """The cell averages' real and imaginary parts, each ``size x size`` of ``dtype`` (float32 or float64).
 
     Inside cells: ``exp(i phi) sinc(phi_x h / 2) sinc(phi_y h / 2) + i h^2 lap(phi) / 24`` at the
     centre (h the step; the linear phase averaged exactly, its curvature to leading order),
     derivatives by central differences of the centres' phase.  Rim cells: their quadrature.
+    Written into ``out`` (real, imaginary) when given; intermediates in :mod:`~vissim.optics.workspace`.
     """
-    phase = (opd_um * (2.0 * math.pi / nm_to_um(wavelength_nm))).astype(dtype, copy=False)
     n = grid.size
+    work = functools.partial(scratch, dtype=dtype)
+    phase = np.multiply(opd_um, 2.0 * math.pi / nm_to_um(wavelength_nm), out=work("phase", opd_um.shape))
     centre = phase[: n * n].reshape(n, n)
     # Neighbours by edge padding: inside cells never touch the grid's border (it lies beyond the disc).
-    padded = np.pad(centre, 1, mode="edge")
+    padded = work("padded", (n + 2, n + 2))
+    padded[1:-1, 1:-1] = centre
+    padded[0, 1:-1], padded[-1, 1:-1] = centre[0], centre[-1]
+    padded[:, 0], padded[:, -1] = padded[:, 1], padded[:, -2]
     up, down, left, right = padded[:-2, 1:-1], padded[2:, 1:-1], padded[1:-1, :-2], padded[1:-1, 2:]
-    linear = _sinc_of_half(0.5 * (down - up))
-    linear *= _sinc_of_half(0.5 * (right - left))
-    linear *= grid.inside_mask
-    curvature = (up + down + left + right - 4 * centre) * (grid.inside_mask / 24.0)
-    cos, sin = np.cos(centre), np.sin(centre)
-    real, imag = cos * linear, sin * linear
-    real -= sin * curvature
-    imag += cos * curvature
+    mask = _inside_mask(grid, np.dtype(dtype).type)
+    half_step, factor = work("half_step", (n, n)), work("factor", (n, n))
+    linear = _sinc_into(np.multiply(np.subtract(down, up, out=half_step), 0.25, out=half_step), work("linear", (n, n)))
+    linear *= _sinc_into(np.multiply(np.subtract(right, left, out=half_step), 0.25, out=half_step), factor)
+    linear *= mask
+    curvature = work("curvature", (n, n))
+    np.add(up, down, out=curvature)
+    curvature += left
+    curvature += right
+    curvature -= np.multiply(centre, 4.0, out=factor)
+    curvature *= mask
+    curvature *= 1.0 / 24.0
+    cos, sin = np.cos(centre, out=work("cos", (n, n))), np.sin(centre, out=work("sin", (n, n)))
+    real, imag = (np.empty((n, n), dtype), np.empty((n, n), dtype)) if out is None else out
+    np.multiply(cos, linear, out=real)
+    np.multiply(sin, linear, out=imag)
+    real -= np.multiply(sin, curvature, out=factor)
+    imag += np.multiply(cos, curvature, out=factor)
     rim = phase[n * n:]
     weights = grid.rim_weights.astype(dtype, copy=False)
     cells = grid.rim_cells
