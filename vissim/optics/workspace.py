@@ -17,6 +17,8 @@ __all__ = ["scratch"]
 
 #: Distinct (name, shape, dtype) arrays kept per thread before all are dropped.
 MAX_ARRAYS = 64
+#: Larger arrays are not kept (their faults cost little beside their arithmetic; memory is returned).
+MAX_KEPT_BYTES = 64 * 2**20
 
 
 class _Workspace(threading.local):
@@ -31,6 +33,8 @@ def scratch(name: str, shape: tuple, dtype) -> np.ndarray:
     """An uninitialised array of ``shape`` and ``dtype``, reused by later calls with the same name."""
     arrays = _WORKSPACE.arrays
     key = (name, tuple(shape), np.dtype(dtype).str)
+    if np.prod(shape, dtype=float) * np.dtype(dtype).itemsize > MAX_KEPT_BYTES:
+        return np.empty(shape, dtype)
     if key not in arrays:
         if len(arrays) >= MAX_ARRAYS:
             arrays.clear()
