@@ -31,7 +31,9 @@ pixel-integrated chart), so the kernel is the *point* PSF, not a second pixel in
 
 The reference is edge-padded by a margin that holds the largest blur allowed
 (``max_power_diopters``) and transformed once; each evaluation is one transfer function, one
-inverse FFT and one cubic-spline resampling (:func:`scipy.ndimage.affine_transform`).
+inverse FFT and one cubic-spline resampling (:func:`scipy.ndimage.affine_transform`).  The
+blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
+so the Jacobian's steps in the shift alone reuse it and pay only the ramp and the inverse FFT.
 Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame (``docs/conventions.md``), so a
 2 x 2 matrix in the x/y frame is the same matrix in (col, row) and is reordered for (row, col).
 """
@@ -39,6 +41,7 @@ Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame (``docs/conventio
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
 import numpy as np
 import scipy.fft
@@ -57,6 +60,8 @@ __all__ = ["ForwardModel", "FORWARD_MODES", "landing_matrix_rc_px"]
 FORWARD_MODES = ("geometric", "wave")
 #: Extra margin around the largest blur radius, px (the wave PSF's Airy tail, the shift).
 MARGIN_EXTRA_PX = 12
+#: Blurred spectra kept per model, by optics: a Jacobian's base point outlives its 3-4 power steps.
+SPECTRUM_CACHE_ENTRIES = 8
 
 
 def _rc(matrix_xy) -> np.ndarray:
@@ -134,6 +139,7 @@ class ForwardModel:
         fc = scipy.fft.rfftfreq(padded.shape[1])[None, :]
         self._freq = (fr, fc)
         self.centre_rc = (np.array(self.shape, dtype=float) - 1.0) / 2.0
+        self._spectra: OrderedDict[bytes, np.ndarray] = OrderedDict()
 
     # -- kernels -------------------------------------------------------------------------
     def _geometric_transfer(self, landing_rc: np.ndarray, pupil_diameter_mm: float) -> np.ndarray:
@@ -156,18 +162,34 @@ class ForwardModel:
         return kernel_transfer(np.asarray(psf.data, dtype=np.float64), self.padded_shape, np.float64)
 
     # -- the model -----------------------------------------------------------------------
+    def _blurred_spectrum(self, defocus_xy, magnification_xy, pupil_diameter_mm: float) -> np.ndarray:
+        """The reference's spectrum times the optics' transfer, cached by the optics (not the shift)."""
+        defocus = np.asarray(defocus_xy, dtype=np.float64)
+        magnification = np.asarray(magnification_xy, dtype=np.float64)
+        key = defocus.tobytes() + magnification.tobytes() + np.float64(pupil_diameter_mm).tobytes()
+        spectrum = self._spectra.get(key)
+        if spectrum is not None:
+            self._spectra.move_to_end(key)
+            return spectrum
+        if self.mode == "geometric":
+            landing = landing_matrix_rc_px(defocus, magnification, self.arcmin_per_px)
+            transfer = self._geometric_transfer(landing, pupil_diameter_mm)
+        else:
+            transfer = self._wave_transfer(defocus, magnification, pupil_diameter_mm)
+        spectrum = self._reference_fft * transfer
+        self._spectra[key] = spectrum
+        if len(self._spectra) > SPECTRUM_CACHE_ENTRIES:
+            self._spectra.popitem(last=False)
+        return spectrum
+
     def blurred(self, defocus_xy, magnification_xy, pupil_diameter_mm: float | None = None,
                 shift_rc=(0.0, 0.0)) -> np.ndarray:
         """The padded reference blurred by the magnification-scaled PSF and shifted (before magnifying)."""
         pupil = self.pupil_diameter_mm if pupil_diameter_mm is None else float(pupil_diameter_mm)
-        if self.mode == "geometric":
-            landing = landing_matrix_rc_px(defocus_xy, magnification_xy, self.arcmin_per_px)
-            transfer = self._geometric_transfer(landing, pupil)
-        else:
-            transfer = self._wave_transfer(defocus_xy, magnification_xy, pupil)
+        spectrum = self._blurred_spectrum(defocus_xy, magnification_xy, pupil)
         fr, fc = self._freq
         ramp = np.exp(-2j * math.pi * (fr * float(shift_rc[0]) + fc * float(shift_rc[1])))
-        return scipy.fft.irfft2(self._reference_fft * transfer * ramp, s=self.padded_shape, workers=-1)
+        return scipy.fft.irfft2(spectrum * ramp, s=self.padded_shape, workers=-1)
 
     def predict(self, defocus_xy, magnification_xy=((1.0, 0.0), (0.0, 1.0)), shift_rc=(0.0, 0.0),
                 pupil_diameter_mm: float | None = None) -> np.ndarray:
