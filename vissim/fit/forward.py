@@ -188,8 +188,10 @@ class ForwardModel:
         pupil = self.pupil_diameter_mm if pupil_diameter_mm is None else float(pupil_diameter_mm)
         spectrum = self._blurred_spectrum(defocus_xy, magnification_xy, pupil)
         fr, fc = self._freq
-        ramp = np.exp(-2j * math.pi * (fr * float(shift_rc[0]) + fc * float(shift_rc[1])))
-        return scipy.fft.irfft2(spectrum * ramp, s=self.padded_shape, workers=-1)
+        # the ramp is separable: two 1-D exponentials, not one over the grid
+        ramp_rows = np.exp(-2j * math.pi * float(shift_rc[0]) * fr)
+        ramp_cols = np.exp(-2j * math.pi * float(shift_rc[1]) * fc)
+        return scipy.fft.irfft2(spectrum * ramp_rows * ramp_cols, s=self.padded_shape, workers=-1)
 
     def predict(self, defocus_xy, magnification_xy=((1.0, 0.0), (0.0, 1.0)), shift_rc=(0.0, 0.0),
                 pupil_diameter_mm: float | None = None) -> np.ndarray:
