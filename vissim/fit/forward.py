@@ -30,7 +30,8 @@ pixel-integrated chart), so the kernel is the *point* PSF, not a second pixel in
 * ``wave``: :func:`vissim.optics.psf.compute_psf` (``pixel="sample"``), whose DFT is the OTF.
 
 The reference is edge-padded by a margin that holds the largest blur allowed
-(``max_power_diopters``) and transformed once; each evaluation is one transfer function, one
+(``max_power_diopters``), on the grid :func:`vissim.optics.blur.padded_shape` gives that widest
+kernel, and transformed once; each evaluation is one transfer function, one
 inverse FFT and one cubic-spline resampling (:func:`scipy.ndimage.affine_transform`).  The
 blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
 so the Jacobian's steps in the shift alone reuse it and pay only the ramp and the inverse FFT.
@@ -49,7 +50,7 @@ import scipy.ndimage
 import scipy.special
 
 from vissim.errors import VissimInputError
-from vissim.optics.blur import kernel_transfer
+from vissim.optics.blur import kernel_transfer, padded_shape, padding_width_px
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront
@@ -125,12 +126,14 @@ class ForwardModel:
         self.wavelength_nm = float(wavelength_nm)
         self.max_power_diopters = float(max_power_diopters)
         blur_radius_px = mrad_to_arcmin(self.max_power_diopters * self.pupil_diameter_mm / 2.0) / self.arcmin_per_px
-        self.margin_px = int(math.ceil(blur_radius_px + max_shift_px)) + MARGIN_EXTRA_PX
-        rows, cols = (scipy.fft.next_fast_len(n + 2 * self.margin_px, real=True) for n in self.shape)
-        extra = (rows - self.shape[0] - 2 * self.margin_px, cols - self.shape[1] - 2 * self.margin_px)
+        # the widest kernel the model applies (blur, shift, Airy tail): odd, its reach the margin
+        self.kernel_px = 2 * (int(math.ceil(blur_radius_px + max_shift_px)) + MARGIN_EXTRA_PX) - 1
+        self.margin_px = padding_width_px(self.kernel_px)
+        self.padded_shape = padded_shape(self.shape, self.kernel_px)
+        extra = (self.padded_shape[0] - self.shape[0] - 2 * self.margin_px,
+                 self.padded_shape[1] - self.shape[1] - 2 * self.margin_px)
         padded = np.pad(self.reference, ((self.margin_px, self.margin_px + extra[0]),
                                          (self.margin_px, self.margin_px + extra[1])), mode="edge")
-        self.padded_shape = padded.shape
         # the blurred image is resampled from a window this much larger than the tile on each side
         # (the shift, up to 10 % magnification at the tile's corners, the spline's reach)
         self.window_px = int(math.ceil(max_shift_px + 0.05 * max(self.shape) + 4))
@@ -156,7 +159,7 @@ class ForwardModel:
         rx = Prescription.from_power_matrix(-0.5 * (scaled + scaled.T))
         front = Wavefront.from_prescription(rx, pupil_diameter_mm)
         size = suggested_size_px(front, self.arcmin_per_px, wavelength_nm=self.wavelength_nm)
-        size = min(size, 2 * self.margin_px - 1)
+        size = min(size, self.kernel_px)
         psf = compute_psf(front, wavelength_nm=self.wavelength_nm, arcmin_per_px=self.arcmin_per_px, size_px=size,
                           mode="wave", pixel="sample", dtype=np.float64)  # differentiated numerically
         return kernel_transfer(np.asarray(psf.data, dtype=np.float64), self.padded_shape, np.float64)
