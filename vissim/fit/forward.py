@@ -35,8 +35,9 @@ kernel, and transformed once; each evaluation is one transfer function, one
 inverse FFT and one cubic-spline resampling (:func:`scipy.ndimage.affine_transform`).  The
 blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
 so the Jacobian's steps in the shift alone reuse it and pay only the ramp and the inverse FFT.
-Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame (``docs/conventions.md``), so a
-2 x 2 matrix in the x/y frame is the same matrix in (col, row) and is reordered for (row, col).
+Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame
+(:func:`vissim.units.osa_xy_to_image_colrow`), so a 2 x 2 matrix in the x/y frame is the same
+matrix in (col, row) and is reordered for (row, col).
 """
 
 from __future__ import annotations
@@ -54,7 +55,7 @@ from vissim.optics.blur import kernel_transfer, padded_shape, padding_width_px
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront
-from vissim.units import mrad_to_arcmin
+from vissim.units import mrad_to_arcmin, osa_xy_to_image_colrow
 
 __all__ = ["ForwardModel", "FORWARD_MODES", "landing_matrix_rc_px"]
 
@@ -66,9 +67,11 @@ SPECTRUM_CACHE_ENTRIES = 8
 
 
 def _rc(matrix_xy) -> np.ndarray:
-    """A 2 x 2 x/y-frame matrix in (row, col) order (the image frame is (col, row) = (-x, -y))."""
+    """A 2 x 2 x/y-frame matrix in the image's (row, col) order."""
     m = np.asarray(matrix_xy, dtype=float)
-    return np.array([[m[1, 1], m[1, 0]], [m[0, 1], m[0, 0]]])
+    signs = np.array(osa_xy_to_image_colrow(1.0, 1.0))  # (col, row) = S (x, y), S diagonal signs
+    colrow = m * np.outer(signs, signs)  # S m S^-1
+    return np.array([[colrow[1, 1], colrow[1, 0]], [colrow[0, 1], colrow[0, 0]]])
 
 
 def landing_matrix_rc_px(defocus_xy, magnification_xy, arcmin_per_px: float) -> np.ndarray:
