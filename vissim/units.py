@@ -1,4 +1,4 @@
-"""Unit conversions; each conversion lives in exactly one function here."""
+"""Unit and frame conversions; each conversion lives in exactly one function here."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 
 __all__ = ["ARCMIN_PER_RAD", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
            "cyc_per_rad_to_cyc_per_deg", "mrad_to_arcmin", "MM_PER_M", "mm_to_m", "m_to_mm", "diopters_to_mm",
-           "diopters_to_per_mm", "REC709_LUMINANCE"]
+           "diopters_to_per_mm", "REC709_LUMINANCE", "osa_xy_to_image_colrow", "image_colrow_to_osa_xy"]
 
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
 
@@ -66,3 +66,17 @@ def diopters_to_mm(diopters):
 def diopters_to_per_mm(diopters):
     """Dioptres (1/m) as curvature or power per mm."""
     return _number(diopters) / MM_PER_M
+
+
+def osa_xy_to_image_colrow(x, y):
+    """Image offsets (col, row) of a TABO/OSA pupil point or direction (x, y): (-x, -y).
+
+    The observer faces the examiner's way round (x mirrored) and rows grow down
+    (``docs/conventions.md``, "Pupil coordinates").
+    """
+    return -x, -y
+
+
+def image_colrow_to_osa_xy(col, row):
+    """The TABO/OSA (x, y) of image offsets (col, row): the map is its own inverse."""
+    return osa_xy_to_image_colrow(col, row)

@@ -66,3 +66,22 @@ def test_tabulated_jinc_matches_the_bessel_function():
     exact = np.ones_like(x)
     exact[1:] = 2.0 * scipy.special.j1(x[1:]) / x[1:]
     assert np.max(np.abs(_jinc(x) - exact)) < 2e-7
+
+
+def test_cached_spectra_give_what_a_fresh_model_gives_and_shift_steps_reuse_them(monkeypatch):
+    """The blurred spectrum is cached by optics only: a shift-only call builds no transfer, and an
+    interleaved sequence (other defocus, magnification, pupil, shift) equals fresh models to the bit."""
+    reference = _letter()
+    model = ForwardModel(reference, 1.0, 3.6, max_power_diopters=2.0)
+    builds = []
+    transfer = model._geometric_transfer
+    monkeypatch.setattr(model, "_geometric_transfer", lambda *a: builds.append(1) or transfer(*a))
+    d1, d2 = np.eye(2) * 0.5, np.array([[0.8, 0.2], [0.2, -0.3]])
+    m = np.array([[1.02, 0.0], [0.0, 0.99]])
+    calls = [(d1, np.eye(2), (0.0, 0.0), None), (d1, np.eye(2), (0.3, -0.7), None), (d2, np.eye(2), (0.3, -0.7), None),
+             (d2, m, (0.3, -0.7), None), (d2, m, (0.3, -0.7), 3.0), (d1, np.eye(2), (1.1, 0.2), None)]
+    for defocus, magnification, shift, pupil in calls:
+        fresh = ForwardModel(reference, 1.0, 3.6, max_power_diopters=2.0)
+        expected = fresh.predict(defocus, magnification, shift, pupil)
+        assert np.array_equal(model.predict(defocus, magnification, shift, pupil), expected)
+    assert len(builds) == 4  # d1; d2; d2 magnified; d2 magnified at 3 mm (the shift-only calls reuse)

@@ -30,15 +30,20 @@ pixel-integrated chart), so the kernel is the *point* PSF, not a second pixel in
 * ``wave``: :func:`vissim.optics.psf.compute_psf` (``pixel="sample"``), whose DFT is the OTF.
 
 The reference is edge-padded by a margin that holds the largest blur allowed
-(``max_power_diopters``) and transformed once; each evaluation is one transfer function, one
-inverse FFT and one cubic-spline resampling (:func:`scipy.ndimage.affine_transform`).
-Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame (``docs/conventions.md``), so a
-2 x 2 matrix in the x/y frame is the same matrix in (col, row) and is reordered for (row, col).
+(``max_power_diopters``), on the grid :func:`vissim.optics.blur.padded_shape` gives that widest
+kernel, and transformed once; each evaluation is one transfer function, one
+inverse FFT and one cubic-spline resampling (:func:`scipy.ndimage.affine_transform`).  The
+blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
+so the Jacobian's steps in the shift alone reuse it and pay only the ramp and the inverse FFT.
+Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame
+(:func:`vissim.units.osa_xy_to_image_colrow`), so a 2 x 2 matrix in the x/y frame is the same
+matrix in (col, row) and is reordered for (row, col).
 """
 
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
 import numpy as np
 import scipy.fft
@@ -46,23 +51,27 @@ import scipy.ndimage
 import scipy.special
 
 from vissim.errors import VissimInputError
-from vissim.optics.blur import kernel_transfer
+from vissim.optics.blur import kernel_transfer, padded_shape, padding_width_px
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront
-from vissim.units import mrad_to_arcmin
+from vissim.units import mrad_to_arcmin, osa_xy_to_image_colrow
 
 __all__ = ["ForwardModel", "FORWARD_MODES", "landing_matrix_rc_px"]
 
 FORWARD_MODES = ("geometric", "wave")
 #: Extra margin around the largest blur radius, px (the wave PSF's Airy tail, the shift).
 MARGIN_EXTRA_PX = 12
+#: Blurred spectra kept per model, by optics: a Jacobian's base point outlives its 3-4 power steps.
+SPECTRUM_CACHE_ENTRIES = 8
 
 
 def _rc(matrix_xy) -> np.ndarray:
-    """A 2 x 2 x/y-frame matrix in (row, col) order (the image frame is (col, row) = (-x, -y))."""
+    """A 2 x 2 x/y-frame matrix in the image's (row, col) order."""
     m = np.asarray(matrix_xy, dtype=float)
-    return np.array([[m[1, 1], m[1, 0]], [m[0, 1], m[0, 0]]])
+    signs = np.array(osa_xy_to_image_colrow(1.0, 1.0))  # (col, row) = S (x, y), S diagonal signs
+    colrow = m * np.outer(signs, signs)  # S m S^-1
+    return np.array([[colrow[1, 1], colrow[1, 0]], [colrow[0, 1], colrow[0, 0]]])
 
 
 def landing_matrix_rc_px(defocus_xy, magnification_xy, arcmin_per_px: float) -> np.ndarray:
@@ -120,12 +129,14 @@ class ForwardModel:
         self.wavelength_nm = float(wavelength_nm)
         self.max_power_diopters = float(max_power_diopters)
         blur_radius_px = mrad_to_arcmin(self.max_power_diopters * self.pupil_diameter_mm / 2.0) / self.arcmin_per_px
-        self.margin_px = int(math.ceil(blur_radius_px + max_shift_px)) + MARGIN_EXTRA_PX
-        rows, cols = (scipy.fft.next_fast_len(n + 2 * self.margin_px, real=True) for n in self.shape)
-        extra = (rows - self.shape[0] - 2 * self.margin_px, cols - self.shape[1] - 2 * self.margin_px)
+        # the widest kernel the model applies (blur, shift, Airy tail): odd, its reach the margin
+        self.kernel_px = 2 * (int(math.ceil(blur_radius_px + max_shift_px)) + MARGIN_EXTRA_PX) - 1
+        self.margin_px = padding_width_px(self.kernel_px)
+        self.padded_shape = padded_shape(self.shape, self.kernel_px)
+        extra = (self.padded_shape[0] - self.shape[0] - 2 * self.margin_px,
+                 self.padded_shape[1] - self.shape[1] - 2 * self.margin_px)
         padded = np.pad(self.reference, ((self.margin_px, self.margin_px + extra[0]),
                                          (self.margin_px, self.margin_px + extra[1])), mode="edge")
-        self.padded_shape = padded.shape
         # the blurred image is resampled from a window this much larger than the tile on each side
         # (the shift, up to 10 % magnification at the tile's corners, the spline's reach)
         self.window_px = int(math.ceil(max_shift_px + 0.05 * max(self.shape) + 4))
@@ -134,6 +145,7 @@ class ForwardModel:
         fc = scipy.fft.rfftfreq(padded.shape[1])[None, :]
         self._freq = (fr, fc)
         self.centre_rc = (np.array(self.shape, dtype=float) - 1.0) / 2.0
+        self._spectra: OrderedDict[bytes, np.ndarray] = OrderedDict()
 
     # -- kernels -------------------------------------------------------------------------
     def _geometric_transfer(self, landing_rc: np.ndarray, pupil_diameter_mm: float) -> np.ndarray:
@@ -150,24 +162,42 @@ class ForwardModel:
         rx = Prescription.from_power_matrix(-0.5 * (scaled + scaled.T))
         front = Wavefront.from_prescription(rx, pupil_diameter_mm)
         size = suggested_size_px(front, self.arcmin_per_px, wavelength_nm=self.wavelength_nm)
-        size = min(size, 2 * self.margin_px - 1)
+        size = min(size, self.kernel_px)
         psf = compute_psf(front, wavelength_nm=self.wavelength_nm, arcmin_per_px=self.arcmin_per_px, size_px=size,
                           mode="wave", pixel="sample", dtype=np.float64)  # differentiated numerically
         return kernel_transfer(np.asarray(psf.data, dtype=np.float64), self.padded_shape, np.float64)
 
     # -- the model -----------------------------------------------------------------------
+    def _blurred_spectrum(self, defocus_xy, magnification_xy, pupil_diameter_mm: float) -> np.ndarray:
+        """The reference's spectrum times the optics' transfer, cached by the optics (not the shift)."""
+        defocus = np.asarray(defocus_xy, dtype=np.float64)
+        magnification = np.asarray(magnification_xy, dtype=np.float64)
+        key = defocus.tobytes() + magnification.tobytes() + np.float64(pupil_diameter_mm).tobytes()
+        spectrum = self._spectra.get(key)
+        if spectrum is not None:
+            self._spectra.move_to_end(key)
+            return spectrum
+        if self.mode == "geometric":
+            landing = landing_matrix_rc_px(defocus, magnification, self.arcmin_per_px)
+            transfer = self._geometric_transfer(landing, pupil_diameter_mm)
+        else:
+            transfer = self._wave_transfer(defocus, magnification, pupil_diameter_mm)
+        spectrum = self._reference_fft * transfer
+        self._spectra[key] = spectrum
+        if len(self._spectra) > SPECTRUM_CACHE_ENTRIES:
+            self._spectra.popitem(last=False)
+        return spectrum
+
     def blurred(self, defocus_xy, magnification_xy, pupil_diameter_mm: float | None = None,
                 shift_rc=(0.0, 0.0)) -> np.ndarray:
         """The padded reference blurred by the magnification-scaled PSF and shifted (before magnifying)."""
         pupil = self.pupil_diameter_mm if pupil_diameter_mm is None else float(pupil_diameter_mm)
-        if self.mode == "geometric":
-            landing = landing_matrix_rc_px(defocus_xy, magnification_xy, self.arcmin_per_px)
-            transfer = self._geometric_transfer(landing, pupil)
-        else:
-            transfer = self._wave_transfer(defocus_xy, magnification_xy, pupil)
+        spectrum = self._blurred_spectrum(defocus_xy, magnification_xy, pupil)
         fr, fc = self._freq
-        ramp = np.exp(-2j * math.pi * (fr * float(shift_rc[0]) + fc * float(shift_rc[1])))
-        return scipy.fft.irfft2(self._reference_fft * transfer * ramp, s=self.padded_shape, workers=-1)
+        # the ramp is separable: two 1-D exponentials, not one over the grid
+        ramp_rows = np.exp(-2j * math.pi * float(shift_rc[0]) * fr)
+        ramp_cols = np.exp(-2j * math.pi * float(shift_rc[1]) * fc)
+        return scipy.fft.irfft2(spectrum * ramp_rows * ramp_cols, s=self.padded_shape, workers=-1)
 
     def predict(self, defocus_xy, magnification_xy=((1.0, 0.0), (0.0, 1.0)), shift_rc=(0.0, 0.0),
                 pupil_diameter_mm: float | None = None) -> np.ndarray:

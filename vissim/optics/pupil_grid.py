@@ -16,7 +16,8 @@ What is left is aliasing of light from ``lambda/step`` away, kept out of the fie
 sampling criterion (``docs/conventions.md``, "Pupil sampling").
 
 Orientation as in :mod:`vissim.optics.psf`: array columns run to the observer's right and rows
-down, so a cell at offsets (u, v) is the OSA pupil point (x, y) = (-u, -v).
+down, so a cell at offsets (u, v) is the OSA pupil point (x, y) = (-u, -v)
+(:func:`vissim.units.image_colrow_to_osa_xy`).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from numpy.polynomial.legendre import leggauss
 
 from vissim.optics.workspace import scratch
 from vissim.optics.zernike import zernike_nm
-from vissim.units import nm_to_um
+from vissim.units import image_colrow_to_osa_xy, nm_to_um
 
 __all__ = ["PupilGrid", "pupil_grid", "generalised_pupil", "generalised_pupil_parts"]
 
@@ -122,9 +123,9 @@ def pupil_grid(step_mm: float, diameter_mm: float) -> PupilGrid:
     size = 2 * half + 1
     mask = np.zeros(size * size)
     mask[inside] = 1.0
-    # image-oriented (u, v) -> OSA (x, y) = (-u, -v)
-    arrays = (inside, mask.reshape(size, size), -u.reshape(size, size), -v.reshape(size, size), cells,
-              slot.ravel(), -ru[keep], -rv[keep], rw[keep])
+    centre_x, centre_y = image_colrow_to_osa_xy(u.reshape(size, size), v.reshape(size, size))
+    rim_x, rim_y = image_colrow_to_osa_xy(ru[keep], rv[keep])
+    arrays = (inside, mask.reshape(size, size), centre_x, centre_y, cells, slot.ravel(), rim_x, rim_y, rw[keep])
     for array in arrays:
         array.setflags(write=False)
     return PupilGrid(step_mm, diameter_mm, half, *arrays)
