@@ -13,9 +13,11 @@ import math
 
 import numpy as np
 import pytest
+import scipy.fft
 
 from vissim.errors import VissimInputError
-from vissim.optics.array_backend import array_backend, array_module, cuda_available
+from vissim.optics import depth as depth_module
+from vissim.optics.array_backend import ArrayBackend, array_backend, array_module, cuda_available
 from vissim.optics.blur import blur_image
 from vissim.optics.blur_device import blur_image_on
 from vissim.optics.depth import blur_depth
@@ -92,3 +94,21 @@ def test_gpu_blur_depth_matches_the_cpu_within_60_db():
     kwargs = dict(eye_prescription=Prescription(-1.5), pupil_diameter_mm=4.0, arcmin_per_px=1.0)
     cpu = blur_depth(picture, depth, **kwargs).image
     assert psnr_db(blur_depth(picture, depth, device="cuda", **kwargs).image, cpu) >= 60.0
+
+
+def test_blur_depth_by_the_device_code_equals_the_cpus(monkeypatch):
+    # A NumPy backend that is not the CPU's takes the GPU's route (kernel spectra cached "on the
+    # device", transforms without scipy's workers): the same numbers as the CPU, to float32 round-off.
+    picture, depth = depth_scene()
+    kwargs = dict(eye_prescription=Prescription(-1.5), pupil_diameter_mm=4.0, arcmin_per_px=1.0, padding="reflect")
+    cpu = blur_depth(picture, depth, **kwargs).image
+    spectra_sent = []
+
+    class NumpyAsDevice(ArrayBackend):
+        def asarray(self, array, dtype=None):
+            spectra_sent.append(np.iscomplexobj(array))
+            return np.asarray(array, dtype=dtype)
+
+    monkeypatch.setattr(depth_module, "array_backend", lambda name: NumpyAsDevice("numpy-as-device", np, scipy.fft))
+    np.testing.assert_allclose(blur_depth(picture, depth, **kwargs).image, cpu, atol=1e-5)
+    assert any(spectra_sent)  # kernel spectra went to the "device"

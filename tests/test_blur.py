@@ -188,3 +188,16 @@ def test_wrap_padding_refuses_a_psf_larger_than_the_image_on_both_paths(defocus_
     for blur in (blur_image, blur_image_on):
         with pytest.raises(VissimInputError, match="46 px PSF is larger than the 40x60 px image"):
             blur(image, defocus_psf, arcmin_per_px=1.0, padding="wrap")
+
+
+def test_each_padding_mode_continues_the_image_as_named():
+    # Decided once (blur.NUMPY_PAD_MODES) for blur_image, the device blur and the depth blur.
+    from vissim.optics.blur import PADDING_MODES, pad_array
+
+    row = np.array([[1.0, 2.0, 3.0]])
+    expected = {"constant": [9, 9, 1, 2, 3, 9, 9], "edge": [1, 1, 1, 2, 3, 3, 3],
+                "reflect": [2, 1, 1, 2, 3, 3, 2], "wrap": [2, 3, 1, 2, 3, 1, 2]}
+    assert set(expected) == set(PADDING_MODES)
+    for mode, values in expected.items():
+        np.testing.assert_array_equal(pad_array(row, ((0, 0), (2, 2)), mode, background=9.0), [values], err_msg=mode)
+

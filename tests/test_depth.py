@@ -54,12 +54,12 @@ def texture(shape, seed=0):
     return np.random.default_rng(seed).random(shape).astype(np.float32)
 
 
-def single_psf_blur(image, rx: Prescription, mode="wave", pupil=PUPIL_MM, step=STEP):
-    """Reference: the whole image blurred with one PSF (edge padding, as blur_depth)."""
+def single_psf_blur(image, rx: Prescription, mode="wave", pupil=PUPIL_MM, step=STEP, padding="edge"):
+    """Reference: the whole image blurred with one PSF (edge padding: blur_depth's default)."""
     front = Wavefront.from_prescription(rx, pupil)
     size = suggested_size_px(front, step, pupil_diameter_mm=pupil)
     psf = compute_psf(front, pupil_diameter_mm=pupil, arcmin_per_px=step, size_px=size, mode=mode)
-    return blur_image(image, psf, arcmin_per_px=step, padding="edge")
+    return blur_image(image, psf, arcmin_per_px=step, padding=padding)
 
 
 def margin_px(result):
@@ -199,14 +199,25 @@ def test_finer_layers_change_the_result_by_less_than_a_percent():
     assert difference.max() < 0.01 * value_range and psnr_db > 40.0, (difference.max(), psnr_db)
 
 
-@pytest.mark.parametrize("distance_m", [6.0, math.inf])
-def test_constant_depth_is_exactly_the_single_psf_blur(distance_m):
+@pytest.mark.parametrize("distance_m, padding", [(6.0, "edge"), (math.inf, "edge"), (6.0, "reflect")])
+def test_constant_depth_is_exactly_the_single_psf_blur(distance_m, padding):
     image = texture((48, 64, 3), seed=3)
     depth = np.full((48, 64), distance_m)
-    result = blur_depth(image, depth, eye_prescription=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP)
+    result = blur_depth(image, depth, eye_prescription=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+                        padding=padding)
     assert result.n_layers == 1 and result.image.shape == image.shape and result.image.dtype == np.float32
     rx = effective_prescription(Prescription(-2.0), distance_m)
-    np.testing.assert_allclose(result.image, single_psf_blur(image, rx), atol=ATOL)
+    np.testing.assert_allclose(result.image, single_psf_blur(image, rx, padding=padding), atol=ATOL)
+
+
+@pytest.mark.parametrize("padding", ["constant", "wrap"])
+def test_paddings_without_a_meaning_for_depth_are_refused_not_replaced(padding):
+    # Outside the image a constant colour would need a depth and a coverage too, and wrapping would
+    # put the far side's depths beside the near; blur_depth refuses both rather than padding by "edge".
+    image, depth = texture((24, 32)), np.full((24, 32), 2.0)
+    with pytest.raises(VissimInputError, match="depth-blur padding must be one of edge, reflect"):
+        blur_depth(image, depth, eye_prescription=Prescription(-1.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+                   padding=padding)
 
 
 def test_two_depth_scene_equals_each_single_psf_blur_away_from_the_boundary():

@@ -76,6 +76,24 @@ def test_airy_encircled_energy_inside_the_first_zero(airy):
     assert encircled_energy(airy, radius) == pytest.approx(analytic, rel=0.005)
 
 
+def test_ring_means_centre_ring_k_on_k_widths():
+    # On a 7 x 7 grid about its centre, rings of width 1 hold r = 0 | 1, sqrt 2 | 2, sqrt 5 | sqrt 8, 3, sqrt 10 |
+    # sqrt 13, sqrt 18 (rint binning); the mean of r over each ring is exact; a width only rescales radii.
+    from vissim.optics.psf_metrics import ring_means
+
+    rows, cols = np.indices((7, 7)) - 3
+    radius = np.hypot(rows, cols)
+    where, mean_r = ring_means(radius, radius)
+    expected = [0.0, (4 + 4 * math.sqrt(2)) / 8, (4 * 2 + 8 * math.sqrt(5)) / 12,
+                (4 * math.sqrt(8) + 4 * 3 + 8 * math.sqrt(10)) / 16, (8 * math.sqrt(13) + 4 * math.sqrt(18)) / 12]
+    np.testing.assert_allclose(mean_r, expected, rtol=1e-12)
+    np.testing.assert_array_equal(where, mean_r)
+    assert np.all(np.abs(where - np.arange(where.size)) <= 0.5)  # ring k lies within half a width of k
+    scaled_where, ones = ring_means(np.ones_like(radius), 0.3 * radius, 0.3)
+    np.testing.assert_allclose(scaled_where, 0.3 * where, rtol=1e-12)
+    np.testing.assert_array_equal(ones, 1.0)
+
+
 def test_diffraction_limited_mtf():
     # Goodman 2005 Eq. 6-32; the pixel's sinc removed; a 128 arcmin field so that the skirt
     # outside it (0.2 % of the energy) is negligible; tolerance 0.005 in MTF.

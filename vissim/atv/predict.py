@@ -14,7 +14,8 @@ straight-ahead direction at ``[N//2, N//2]``, each pixel the integral over its s
 
 **Spot metrics** (:func:`spot_metrics`): ``total_flux`` is the image's integral;
 ``spot_diameter_arcmin`` the **full width at half maximum of the azimuthally averaged radial
-profile** about the centroid (1-pixel annuli; the outermost crossing of half the peak, linearly
+profile** about the centroid (1-pixel annuli centred on whole radii,
+:func:`vissim.optics.psf_metrics.ring_means`; the outermost crossing of half the peak, linearly
 interpolated).  For a uniform blur disc of diameter D it is D (the pixel's square blurs the
 edge symmetrically); for the in-focus square pixel of side s it is ``s / cos(22.5°) = 1.082 s``
 (the radius at which half of a circle lies inside the square).
@@ -40,6 +41,7 @@ from vissim.bench.atv_paraxial import AtvParaxial, atv_paraxial
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf
+from vissim.optics.psf_metrics import ring_means
 from vissim.optics.wavefront import Wavefront
 from vissim.units import arcmin_to_rad, mm_to_m
 
@@ -63,17 +65,6 @@ class SpotMetrics:
     spot_diameter_arcmin: float
     centroid_arcmin: tuple[float, float]  # (right, up) from straight ahead
     peak_smoothing_px: float  # sigma of the Gaussian behind ``peak`` (0: none)
-
-
-def _radial_profile(data: np.ndarray, cy: float, cx: float) -> tuple[np.ndarray, np.ndarray]:
-    """(mean radius, mean value) of the pixels in 1-pixel annuli about (cy, cx)."""
-    rows, cols = np.indices(data.shape)
-    radius = np.hypot(rows - cy, cols - cx).ravel()
-    ring = np.floor(radius).astype(int)
-    counts = np.bincount(ring)
-    used = counts > 0
-    return (np.bincount(ring, weights=radius)[used] / counts[used],
-            np.bincount(ring, weights=data.ravel())[used] / counts[used])
 
 
 def _half_max_diameter_px(where: np.ndarray, profile: np.ndarray, half: float) -> float:
@@ -106,7 +97,7 @@ def spot_metrics(image, arcmin_per_px: float, std_image=None) -> SpotMetrics:
         return SpotMetrics(0.0, 0.0, 0.0, math.nan, math.nan, (math.nan, math.nan), 0.0)
     rows, cols = np.indices(data.shape)
     cy, cx = float((rows * data).sum() / total), float((cols * data).sum() / total)
-    where, profile = _radial_profile(data, cy, cx)
+    where, profile = ring_means(data, np.hypot(rows - cy, cols - cx))
     first = _half_max_diameter_px(where, profile, 0.5 * profile.max())
     sigma = first / 20.0 if math.isfinite(first) and first >= 10.0 else 0.0
     smoothed = scipy.ndimage.gaussian_filter(data, sigma, mode="constant") if sigma else data

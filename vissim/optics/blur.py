@@ -46,6 +46,8 @@ __all__ = ["blur_image", "BlurKernel", "PADDING_MODES"]
 log = logging.getLogger(__name__)
 
 PADDING_MODES = ("constant", "edge", "reflect", "wrap")
+#: ``numpy.pad``'s (and CuPy's) name for each padding mode: "reflect" repeats the border pixel.
+NUMPY_PAD_MODES = {"constant": "constant", "edge": "edge", "reflect": "symmetric", "wrap": "wrap"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,13 +120,19 @@ def _pad(channel: np.ndarray, width: int, shape: tuple[int, int], mode: str, bac
     extra_r, extra_c = shape[0] - rows - 2 * width, shape[1] - cols - 2 * width
     if mode == "constant" and background is None:
         background = _border_mean(channel)
-    return _pad_widths(channel, ((width, width + extra_r), (width, width + extra_c)), mode, background)
+    return pad_array(channel, ((width, width + extra_r), (width, width + extra_c)), mode, background)
 
 
-def _pad_widths(channel: np.ndarray, widths, mode: str, background: float | None) -> np.ndarray:
+def pad_array(array, widths, mode: str, background: float | None = None, xp=np):
+    """``array`` padded by ``widths`` (``numpy.pad``'s) as padding ``mode`` says; ``xp``: NumPy or CuPy.
+
+    ``background`` is the value outside for ``"constant"`` (required there).
+    """
     if mode == "constant":
-        return np.pad(channel, widths, mode="constant", constant_values=background)
-    return np.pad(channel, widths, mode="symmetric" if mode == "reflect" else "edge")
+        if background is None:
+            raise AssertionError("constant padding needs a background value")  # pragma: no cover
+        return xp.pad(array, widths, mode="constant", constant_values=background)
+    return xp.pad(array, widths, mode=NUMPY_PAD_MODES[mode])
 
 
 def _border_mean(channel: np.ndarray) -> float:
@@ -193,7 +201,7 @@ def _blur_tiled(channel, psf, padding, background, dtype, tile):
         square = channel[max(r0, 0) : r0 + tile, max(c0, 0) : c0 + tile]
         widths = ((max(-r0, 0), max(r0 + tile - rows, 0)), (max(-c0, 0), max(c0 + tile - cols, 0)))
         if any(map(any, widths)):
-            square = _pad_widths(square, widths, padding, background)
+            square = pad_array(square, widths, padding, background)
         spectrum = scipy.fft.rfft2(square, workers=1)
         spectrum *= transfer
         spectrum = scipy.fft.ifft(spectrum, axis=0, workers=1, overwrite_x=True)

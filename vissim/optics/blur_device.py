@@ -14,11 +14,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from vissim.optics.array_backend import array_backend
-from vissim.optics.blur import BlurKernel, _border_mean, _padding_width, checked_blur_inputs, padded_shape
+from vissim.optics.array_backend import CPU, ArrayBackend, array_backend
+from vissim.optics.blur import BlurKernel, _border_mean, _padding_width, checked_blur_inputs, pad_array, padded_shape
 from vissim.optics.psf import PSF
 
-__all__ = ["blur_image_on"]
+__all__ = ["blur_image_on", "convolve_padded"]
 
 
 def blur_image_on(
@@ -49,16 +49,30 @@ def blur_image_on(
             widths = ((offset, shape[0] - rows - offset), (offset, shape[1] - cols - offset))
             padded = xp.stack([_pad(backend.asarray(channels[c]), widths, padding, backgrounds[c], channels[c], xp)
                                for c in members])
-        transfer = backend.asarray(BlurKernel.prepare(group, shape, dtype=np.float32).transfer)
-        spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
-        spectrum *= transfer
-        blurred = backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())
+        blurred = convolve_padded(padded, group, backend)
         out[members] = backend.to_numpy(blurred[:, offset : offset + rows, offset : offset + cols])
     return out[0] if array.ndim == 2 else np.moveaxis(out, 0, -1)
 
 
+def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: dict | None = None):
+    """Planes (C, H, W) on ``backend`` convolved circularly with ``psf``: one batched real FFT pair, float32.
+
+    Callers pad the planes first.  ``transfers`` caches the kernel's spectrum on a GPU, keyed by
+    the PSF and grid.
+    """
+    shape = tuple(padded.shape[-2:])
+    transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
+    if backend is not CPU:
+        transfers = {} if transfers is None else transfers
+        if (id(psf), shape) not in transfers:
+            transfers[id(psf), shape] = backend.asarray(transfer)
+        transfer = transfers[id(psf), shape]
+    spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
+    spectrum *= transfer
+    return backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())
+
+
 def _pad(channel, widths, mode: str, background, host_channel: np.ndarray, xp):
     if mode == "constant":
-        value = _border_mean(host_channel) if background is None else float(background)
-        return xp.pad(channel, widths, mode="constant", constant_values=value)
-    return xp.pad(channel, widths, mode="symmetric" if mode == "reflect" else "edge")
+        background = _border_mean(host_channel) if background is None else float(background)
+    return pad_array(channel, widths, mode, background, xp)

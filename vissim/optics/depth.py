@@ -47,10 +47,10 @@ focus; every output is a weighted mean of (extended) input colours.
 
 Cost: per non-empty layer one PSF (cached by wavefront; for an eye whose wavefront is defocus
 alone the symmetric plan pairs layers of opposite defocus, whose PSFs are point reflections of
-each other, so about half are computed), one pull-push and one batched real FFT pair of
-(colours, extended coverage), on the layer's *window*: the box of its tent matte grown by
-``2 (r_k + r_max)`` pixels (``r`` the PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's
-blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
+each other, so about half are computed), one pull-push and one batched convolution of
+(colours, extended coverage) (one real FFT pair, :func:`vissim.optics.blur_device.convolve_padded`;
+blur.py's overlap-save squares measured no faster on these windows), on the layer's *window*: the box of its tent matte grown by ``2 (r_k + r_max)`` pixels (``r`` the
+PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
 content's blur (``r_max``) lets it show, and both spread once more through partly occluding
 neighbours.  The continuation itself is estimated by pull-push on the window grown by another
 :data:`EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see the neighbourhood the whole
@@ -76,7 +76,8 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.array_backend import CPU as CPU_BACKEND
 from vissim.optics.array_backend import ArrayBackend, array_backend, array_module
-from vissim.optics.blur import BlurKernel, padded_shape, padding_width_px
+from vissim.optics.blur import pad_array, padded_shape, padding_width_px
+from vissim.optics.blur_device import convolve_padded
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
 from vissim.optics.pullpush import pull_push, upsample2
@@ -566,20 +567,21 @@ def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) 
 
 def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
                  transfers: dict | None = None) -> tuple:
-    """Blur (C, h, w) planes of a window with one PSF: one batched rfft2 / irfft2, sized to the window.
+    """Blur (C, h, w) planes of a window with one PSF (:func:`vissim.optics.blur_device.convolve_padded`).
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
     the image they are zero (the window already holds everything of the layer that reaches it).
     ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device.
+    Returns the blurred planes and the padded grid's shape.
     """
-    xp = backend.xp
+    if padding not in DEPTH_PADDING_MODES:
+        raise AssertionError(f"depth padding {padding!r}")  # pragma: no cover  (blur_depth refuses it)
     n, h, w = planes.shape
     offset = padding_width_px(psf.data.shape[0])
     shape = padded_shape((h, w), psf.data.shape[0])
-    extra_r, extra_c = shape[0] - h - 2 * offset, shape[1] - w - 2 * offset
-    padded = xp.pad(planes, ((0, 0), (offset, offset + extra_r), (offset, offset + extra_c)),
-                    mode="symmetric" if padding == "reflect" else "edge")
+    padded = pad_array(planes, ((0, 0), (offset, shape[0] - h - offset), (offset, shape[1] - w - offset)), padding,
+                       xp=backend.xp)
     top, bottom, left, right = touches
     if not top:
         padded[:, :offset] = 0.0
@@ -589,15 +591,7 @@ def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend 
         padded[:, :, :offset] = 0.0
     if not right:
         padded[:, :, offset + w :] = 0.0
-    transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
-    if backend is not CPU_BACKEND:
-        transfers = {} if transfers is None else transfers
-        if (id(psf), shape) not in transfers:
-            transfers[id(psf), shape] = backend.asarray(transfer)
-        transfer = transfers[id(psf), shape]
-    spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
-    spectrum *= transfer
-    blurred = backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())
+    blurred = convolve_padded(padded, psf, backend, transfers)
     return blurred[:, offset : offset + h, offset : offset + w], shape
 
 

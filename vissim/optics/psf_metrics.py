@@ -8,7 +8,24 @@ import scipy.fft
 from vissim.optics.psf import PSF
 from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm
 
-__all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_of_encircled_energy_arcmin", "diffraction_mtf"]
+__all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_of_encircled_energy_arcmin", "diffraction_mtf",
+           "ring_means"]
+
+
+def ring_means(values, radius, ring_width: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Means over rings: ``(mean radius, mean value)`` of each non-empty ring, inner to outer.
+
+    Ring ``k`` holds the samples whose ``radius`` lies within half a ``ring_width`` of
+    ``k * ring_width`` (``rint(radius / ring_width) == k``): ring 0 is the centre alone on a grid
+    centred on a sample, and ring ``k`` is centred on the ``k``-th sample along an axis.
+    ``values`` and ``radius`` are arrays of one shape, ``radius`` >= 0 in any unit.
+    """
+    radius = np.asarray(radius, dtype=float).ravel()
+    rings = np.rint(radius / ring_width).astype(np.int64)
+    counts = np.bincount(rings)
+    used = counts > 0
+    return (np.bincount(rings, weights=radius)[used] / counts[used],
+            np.bincount(rings, weights=np.asarray(values, dtype=float).ravel())[used] / counts[used])
 
 
 def frequencies_cyc_per_deg(psf: PSF) -> np.ndarray:

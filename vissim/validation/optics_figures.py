@@ -31,7 +31,7 @@ from vissim.optics.prescription import Prescription  # noqa: E402
 from vissim.optics.psf import PSF, compute_psf, suggested_size_px  # noqa: E402
 from vissim.optics.psf_metrics import (diffraction_cutoff_cyc_per_deg, diffraction_mtf,  # noqa: E402
                                        frequencies_cyc_per_deg, mtf,
-                                       radius_of_encircled_energy_arcmin)
+                                       radius_of_encircled_energy_arcmin, ring_means)
 from vissim.optics.wavefront import Wavefront  # noqa: E402
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
@@ -182,12 +182,8 @@ def mtf_curves(psf: PSF, pad: int = MTF_PADDING) -> dict[str, np.ndarray]:
     n = spectrum.shape[0]
     c = n // 2
     radii = np.hypot(freq[:, None], freq[None, :])
-    step = freq[c + 1] - freq[c]
-    rings = np.rint(radii / step).astype(int).ravel()
-    counts = np.bincount(rings)
-    keep = np.arange(n - c)  # rings inside the sampled square
-    ring_mtf = np.bincount(rings, weights=spectrum.ravel())[keep] / counts[keep]
-    ring_freq = np.bincount(rings, weights=radii.ravel())[keep] / counts[keep]
+    ring_freq, ring_mtf = ring_means(spectrum, radii, freq[c + 1] - freq[c])
+    ring_freq, ring_mtf = ring_freq[: n - c], ring_mtf[: n - c]  # rings inside the sampled square (none empty)
     pupil, wavelength = psf.pupil_diameter_mm, psf.wavelengths_nm[0]
     return {
         "frequency_cyc_per_deg": freq[c:],
