@@ -53,15 +53,19 @@ comparison = compare_images(rendered.blurred, blurred.image, data_range=1.0)
 print(f"blur_depth: {len(blurred.layers)} depth layers, in focus at {blurred.in_focus_proximity_diopters:.2f} D")
 print(f"blur_depth vs path-traced view: PSNR {comparison.psnr_db:.1f} dB, SSIM {comparison.ssim:.3f}")
 
-# The near (0.4 m) panel looks blurrier in the path-traced view than in blur_depth's, and at its
-# edges that is real: its edge against the sky spreads over 4.9 px (10-90 %; the 0.5 D disc, 6.9 arcmin
-# at 4 mm, gives 4.7) in the render but 3.2 px in blur_depth's.  A pinhole pixel half on the panel
-# has a depth averaged to ~0.53 m, near the eye's 0.5 m focus, so blur_depth leaves that row almost
-# sharp (given the nearest surface's depth instead: 4.6 px, and 32.0 dB over the frame instead of 25.6
-# at 256 spp).  Inside the panel they agree (a fitted disc: 0.500 D for both; 48.6 dB at 256 spp); what
-# differs there at --small's 16 spp is Monte-Carlo grain (35.8 dB, 0.045 RMS on the letter's edges).
+# The depth map gives a pixel its *nearest* surface: one half on the 0.4 m panel and half on the
+# sky is 0.4 m, not an in-between depth (vissim.render.depth_render).  That is the right depth for
+# a blur-by-depth model: the light there is the near panel's, which the eye blurs with the near
+# panel's PSF; what lies farther is at, and for much of the pupil behind, the panel's edge.  The
+# pixel mean, used before, put that row at 0.53 m, near the eye's 0.5 m focus, and left the edge
+# too sharp.  Measured 10-90 % across the panel's top edge against the sky at 256 spp: 4.8 px in
+# the path-traced view (the 0.5 D disc, 6.9 arcmin at 4 mm, over a pixel: 4.8), 4.6 px from
+# blur_depth (3.0 with the mean depth), and 32.2 dB over the frame (25.6 with the mean depth); this
+# script prints 31.7 dB at its 64 spp, 29.2 at --small's 16.  Inside the panel they agree (a
+# fitted disc: 0.500 D for both; 48.9 dB at 256 spp, 43.1 at 64); what differs there at --small's
+# 16 spp is Monte-Carlo grain (35.8 dB, 0.045 RMS on the letter's edges).
 near = np.isclose(rendered.depth_m[margin:-margin, margin:-margin], 0.4, rtol=0.02)
-inside = ndimage.binary_erosion(near, iterations=2)  # 2 px in from the panel's edges
+inside = ndimage.binary_erosion(near, iterations=3)  # 3 px in from its edge pixels
 inside_mse = float(np.mean((rendered.blurred - blurred.image)[inside] ** 2))
 print(f"inside the 0.4 m panel: PSNR {10 * np.log10(1.0 / inside_mse):.1f} dB at {loaded.spp} spp")
 

@@ -5,7 +5,9 @@ dict.  Views and contents (:func:`depth_scene_dict`): ``view="blurred"`` uses th
 optics, ``"all_in_focus"`` a pinhole (``perspective``) at the pupil centre with the same film and the
 same lenses, so both images share one pixel grid.  ``content="proximity"`` replaces every
 panel's radiance by its proximity ``1000 / z_mm`` dioptres (``z`` axial), a *depth pass*: a
-pinhole render of it gives each pixel's mean proximity (0 for empty sky), which
+pinhole render of it gives each pixel's mean proximity (0 for empty sky).  ``"surface_proximity"``
+(kind ``"rgb"``) adds each surface's label ``i + 1`` in G, so that a pixel can keep its *nearest*
+surface (:data:`DEPTH_PASS_STATISTIC`); that is the RGB-D depth pass, which
 :func:`vissim.render.depth_render.render_depth` turns into the axial depth in metres that
 :func:`vissim.optics.depth.blur_depth` expects.  Axial, because these thin lenses have flat focal
 planes: the blur is exactly ``pupil x |K - 1/z|`` at every field angle.
@@ -33,14 +35,22 @@ from vissim.bench.lens_mesh import mesh_cache_dir
 from vissim.errors import VissimInputError
 from vissim.units import m_to_mm
 
-__all__ = ["EYE_SENSOR", "VIEWS", "CONTENTS", "depth_scene_dict", "tilted_mesh"]
+__all__ = ["EYE_SENSOR", "VIEWS", "CONTENTS", "DEPTH_PASS_CONTENT", "DEPTH_PASS_STATISTIC", "depth_scene_dict",
+           "tilted_mesh"]
 
 log = logging.getLogger(__name__)
 
 #: Plugin name of the eye sensor; equals :data:`vissim.render.eye_sensor.EYE_SENSOR`.
 EYE_SENSOR = "vissim_eye"
 VIEWS = ("blurred", "all_in_focus")
-CONTENTS = ("radiance", "proximity", "coverage")
+CONTENTS = ("radiance", "proximity", "coverage", "surface_proximity")
+#: The RGB-D depth pass: every panel glows with (proximity, its label, 0), and each pixel keeps the
+#: mean proximity of its *nearest* surface over the part of the pixel that surface covers
+#: (:func:`vissim.render.run.nearest_surface`), not the mean over the pixel: a pixel half on a
+#: 0.4 m panel and half on the 6 m one behind it would get an in-between depth that neither has.
+#: A blur-by-depth model blurs the pixel's light with its depth's PSF, and the light there is the
+#: near surface's; the far surface lies behind it.  (A layer's own proximity pass keeps the mean.)
+DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC = "surface_proximity", "nearest_surface"
 #: Texels of a tilted chart's proximity ramp (bilinear; error <= slope x 0.5 / texels at the rim).
 PROXIMITY_TEXELS = 1024
 _MESH_SCHEMA = "vissim.tilted-chart-mesh/1"
@@ -130,12 +140,18 @@ def _tilted_ply(g: PanelGeometry, columns: int, cache_dir) -> Path:
 def _emitter(scene: DepthScene, g: PanelGeometry, content: str) -> dict:
     if content == "coverage":
         return {"type": "area", "radiance": 1.0}
-    if content == "proximity":
+    if content in ("proximity", "surface_proximity"):
+        label = content == "surface_proximity"
+        if g.kind == "panel" and label:
+            return {"type": "area", "radiance": {"type": "rgb", "value": [1.0 / g.distance_left_m, g.index + 1.0, 0.0]}}
         if g.kind == "panel":
             return {"type": "area", "radiance": 1.0 / g.distance_left_m}
         u = (np.arange(PROXIMITY_TEXELS) + 0.5) / PROXIMITY_TEXELS
         ramp = (1.0 - u) / g.distance_left_m + u / g.distance_right_m  # 1/z is linear in the tangent
         data = ramp.astype(np.float32)[None, :, None]
+        if label:
+            data = np.stack([ramp, np.full_like(ramp, g.index + 1.0), np.zeros_like(ramp)], axis=-1)
+            data = data.astype(np.float32)[None]
         return {"type": "area", "radiance": {"type": "bitmap", "data": data, "raw": True,
                                              "filter_type": "bilinear", "wrap_mode": "clamp"}}
     texture = panel_texture(g)[:, :, None] * np.float32(scene.radiance_scale)
@@ -168,6 +184,8 @@ def depth_scene_dict(
         raise VissimInputError(f"content must be one of {', '.join(CONTENTS)}, got {content!r}")
     if kind not in ("mono", "rgb"):
         raise VissimInputError(f"render kind must be 'mono' or 'rgb', got {kind!r}")
+    if content == "surface_proximity" and kind != "rgb":
+        raise VissimInputError("content 'surface_proximity' carries a label in G: render kind 'rgb'")
     if not isinstance(viewer, (EyeViewer, CameraViewer)):
         raise VissimInputError(f"viewer must be an EyeViewer or a CameraViewer, got {type(viewer).__name__}")
     far_clip = _FAR_CLIP_FACTOR * 1000.0 * scene.far_distance_m()

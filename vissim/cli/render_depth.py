@@ -6,7 +6,8 @@ scene file (:mod:`vissim.bench.depth_scene_files`), apply the options, call
 all-in-focus image and the axial depth map) with provenance, print a summary with the
 predicted blur of every panel.
 
-The depth map is metres along the view axis from the pupil, ``inf`` for sky: an EXR with one
+The depth map is metres along the view axis from the pupil to each pixel's nearest surface
+(docs/conventions.md), ``inf`` for sky: an EXR with one
 channel ``Z`` (or ``.npy``), which ``vissim blur-depth AIF.exr DEPTH.exr`` reads as is.
 
 The all-in-focus image and the depth map cover a margin beyond the blurred image's frame on

@@ -5,11 +5,14 @@ Three renders of one scene (:func:`vissim.bench.depth_scene_dict.depth_scene_dic
 * **blurred** -- the observer's optics (eye sensor or DSLR thin lens + trial lenses), seed ``seed``;
 * **all in focus** -- a pinhole at the pupil centre, same film, same lenses, seed ``seed + 1``;
 * **depth** -- the pinhole looking at the *proximity pass* (each panel glows with ``1/z``
-  dioptres, z axial), seed ``seed + 2``.  A pixel's value is its mean proximity over the pixel
-  (0 where it sees sky), and the depth map is ``1 / proximity`` metres, ``inf`` for sky: the
-  axial distance :func:`vissim.optics.depth.blur_depth` expects for these flat-focal-plane optics.
-  Averaging in dioptres is what ``blur_depth`` does between its layers, so a pixel split
-  between two panels gets the dioptric mean of their depths.  Through trial lenses the depth
+  dioptres, z axial, and carries its label), seed ``seed + 2``.  A pixel's value is the mean
+  proximity of its *nearest* surface over the part of the pixel it covers (0 where every sample
+  sees sky; :data:`vissim.bench.depth_scene_dict.DEPTH_PASS_STATISTIC`), and the depth map is
+  ``1 / proximity`` metres, ``inf`` for sky: the axial distance
+  :func:`vissim.optics.depth.blur_depth` expects for these flat-focal-plane optics.  A pixel
+  split between a near panel and the far one behind it takes the near panel's depth, not the
+  sample mean (an in-between depth no surface has, which left the near panel's edges too
+  sharp in tutorial 4).  Through trial lenses the depth
   pass sees what the pinhole sees (magnified), unlike Mitsuba's ``aov`` integrator, whose
   ``position``/``depth`` stop at the first surface (the lens).  :func:`render_aov_depth`
   gives that AOV's axial depth as an independent check on scenes without lenses (its
@@ -38,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.bench.depth_scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
@@ -58,7 +62,8 @@ SKY_PROXIMITY_D = 1e-6
 
 @dataclass(frozen=True, eq=False)
 class DepthRenderResult:
-    """float32 images on one grid (None when not asked for); ``depth_m`` axial metres, inf = sky."""
+    """float32 images on one grid (None when not asked for); ``depth_m`` axial metres of each pixel's
+    nearest surface (``proximity_diopters``: its proximity), inf = sky."""
 
     blurred: np.ndarray | None
     all_in_focus: np.ndarray | None
@@ -87,16 +92,17 @@ def proximity_to_depth_m(proximity_diopters) -> np.ndarray:
 def render_view(scene, viewer, *, view: str, content: str = "radiance", spp: int, seed: int = 0,
                 kind: str = "mono", variant: str | None = None, pass_spp: int | None = None,
                 progress: Callable[[int, int], None] | None = None, mesh_cache_dir=None,
-                panels: tuple[int, ...] | None = None):
-    """One render (:class:`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``."""
+                panels: tuple[int, ...] | None = None, statistic: str = "mean"):
+    """One render (:class:`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``;
+    ``statistic``: how a pixel comes from its samples (:data:`vissim.render.run.PIXEL_STATISTICS`)."""
     from vissim.bench.depth_scene_dict import depth_scene_dict
 
-    kind = "mono" if content in ("proximity", "coverage") else kind
+    kind = {"proximity": "mono", "coverage": "mono", DEPTH_PASS_CONTENT: "rgb"}.get(content, kind)
     register_eye_sensor(mitsuba(kind, variant))
     scene_dict = depth_scene_dict(scene, viewer, view=view, content=content, kind=kind, mesh_cache_dir=mesh_cache_dir,
                                   panels=panels)
     return render_scene(scene_dict, kind=kind, spp=spp, seed=seed, variant=variant, pass_spp=pass_spp,
-                        progress=progress)
+                        progress=progress, statistic=statistic)
 
 
 def render_depth(
@@ -130,25 +136,25 @@ def render_depth(
     start = time.perf_counter()
     aux = int(spp if aux_spp is None else aux_spp)
     wide = scene.with_margin(margin_px)
-    jobs = [("blurred", scene, "blurred", "radiance", seed, spp, None)] if blurred else []
+    jobs = [("blurred", scene, "blurred", "radiance", seed, spp, None, "mean")] if blurred else []
     if all_in_focus:
-        jobs.append(("all_in_focus", wide, "all_in_focus", "radiance", seed + 1, aux, None))
+        jobs.append(("all_in_focus", wide, "all_in_focus", "radiance", seed + 1, aux, None, "mean"))
     if depth:
-        jobs.append(("proximity", wide, "all_in_focus", "proximity", seed + 2, aux, None))
+        jobs.append(("proximity", wide, "all_in_focus", DEPTH_PASS_CONTENT, seed + 2, aux, None, DEPTH_PASS_STATISTIC))
     if layers:
         for i in range(len(scene.panels)):
-            jobs.append((f"layer_{i}", wide, "all_in_focus", "radiance", seed + 3 + 2 * i, aux, (i,)))
-            jobs.append((f"coverage_{i}", wide, "all_in_focus", "coverage", seed + 4 + 2 * i, aux, (i,)))
+            jobs.append((f"layer_{i}", wide, "all_in_focus", "radiance", seed + 3 + 2 * i, aux, (i,), "mean"))
+            jobs.append((f"coverage_{i}", wide, "all_in_focus", "coverage", seed + 4 + 2 * i, aux, (i,), "mean"))
     if not jobs:
         raise VissimInputError("nothing to render: ask for the blurred image, the all-in-focus image, the depth "
                                "or the layers")
     images: dict[str, np.ndarray] = {}
     results = {}
-    for name, grid, view, content, job_seed, job_spp, panels in jobs:
+    for name, grid, view, content, job_seed, job_spp, panels, statistic in jobs:
         report = None if progress is None else (lambda done, total, name=name: progress(name, done, total))
         result = render_view(grid, viewer, view=view, content=content, spp=job_spp, seed=job_seed, kind=kind,
                              variant=variant, pass_spp=pass_spp, progress=report, mesh_cache_dir=mesh_cache_dir,
-                             panels=panels)
+                             panels=panels, statistic=statistic)
         images[name], results[name] = result.pixels, result
     proximity = images.get("proximity")
     depth_m = None if proximity is None else proximity_to_depth_m(proximity)
@@ -169,7 +175,9 @@ def render_depth(
         margin_definition="the all-in-focus, depth and layer renders cover margin_px more pixels on every side "
                           "than the blurred render; crop them by margin_px to its frame",
         renders={name: {"spp": r.spp, **r.render_record()} for name, r in results.items()},
-        depth_definition="axial distance (m) along the view axis, from the pupil plane; inf = sky",
+        depth_definition="axial distance (m) along the view axis, from the pupil plane, of the nearest surface in "
+                         "the pixel: 1 / its mean proximity over the samples on it (renders.proximity."
+                         "pixel_statistic = nearest_surface), not over the whole pixel; inf = sky",
         kind=kind,
         variant=first.variant,
         **mitsuba_versions(),

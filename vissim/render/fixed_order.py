@@ -12,6 +12,11 @@ the same rays, the same ``integrator.sample`` -- but keeps each sample's channel
 ``spp`` samples of a pixel in NumPy (float64, a fixed order), then develops the film as Mitsuba
 does.  At 1 spp it equals ``mi.render`` bit for bit (tests/render/test_determinism.py).
 
+:func:`render_samples` returns the samples themselves (each pixel's R, G, B per sample, before any
+sum), for statistics other than the film's mean (:mod:`vissim.render.run`).  Mitsuba's films only
+average (a weighted sum over the reconstruction filter); on scalar variants with a box filter it
+takes ``spp`` one-sample renders instead (a one-sample box-filtered pixel is its sample).
+
 Scalar variants keep ``mi.render``: one thread renders each 32 x 32 tile, and with a box filter
 each pixel lies in one tile, so its sum has a fixed order already.  Scenes this module cannot
 reproduce (another filter, a sampled border, a special film, an integrator other than ``path``
@@ -28,7 +33,7 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["Rendered", "accumulation", "promises_determinism", "render_image"]
+__all__ = ["Rendered", "Samples", "accumulation", "promises_determinism", "render_image", "render_samples"]
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +51,16 @@ class Rendered:
     image: np.ndarray
     spp: int
     accumulation: str  # see accumulation()
+    deterministic: bool
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Each pixel's samples: ``values`` (H * W, spp, 3) float32 R, G, B, row-major pixels; how they were taken."""
+
+    values: np.ndarray
+    spp: int
+    accumulation: str
     deterministic: bool
 
 
@@ -90,7 +105,33 @@ def render_image(mi, scene, spp: int, seed: int) -> Rendered:
     return Rendered(image, used, method, promises_determinism(mi.variant(), method))
 
 
-def _fixed_order(mi, dr, scene, spp: int, seed: int) -> tuple[np.ndarray, int]:
+def render_samples(mi, scene, spp: int, seed: int) -> Samples:
+    """The R, G, B of each of ``spp`` samples per pixel of ``scene`` (loaded) from ``seed`` (module doc)."""
+    method = accumulation(mi, scene)
+    if method == "fixed-order":
+        import drjit as dr
+
+        with dr.suspend_grad():
+            channels, _, film, spp = _trace(mi, dr, scene, int(spp), int(seed))
+            width, height = (int(v) for v in film.crop_size())
+            values = np.stack([np.broadcast_to(np.asarray(c, dtype=np.float32), (width * height * spp,))
+                               for c in channels[:3]], axis=-1)
+        return Samples(values.reshape(width * height, spp, 3), spp, method,
+                       promises_determinism(mi.variant(), method))
+    if method != "tiles":  # a wider filter spreads a sample over several pixels: no pixel holds one sample
+        raise VissimInputError("per-sample values need a box filter without a sampled border and a path or "
+                               "direct integrator")
+    renders = []
+    for i in range(int(spp)):
+        sample_seed = int(np.random.SeedSequence([int(seed), i]).generate_state(1)[0])
+        image = np.asarray(mi.render(scene, spp=1, seed=sample_seed), dtype=np.float32)
+        image = np.repeat(image, 3, axis=2) if image.ndim == 3 and image.shape[2] == 1 else image
+        renders.append(image.reshape(-1, image.shape[2])[:, :3])
+    return Samples(np.stack(renders, axis=1), int(spp), method, promises_determinism(mi.variant(), method))
+
+
+def _trace(mi, dr, scene, spp: int, seed: int):
+    """Every sample's film channels (R, G, B, [A], W, AOVs; evaluated), the weight's index, the film, the spp."""
     # Mirrors SamplingIntegrator::render + render_sample (Mitsuba 3.9, one pass, JIT branch).
     sensor = scene.sensors()[0]
     film, sampler, integrator = sensor.film(), sensor.sampler(), scene.integrator()
@@ -137,7 +178,13 @@ def _fixed_order(mi, dr, scene, spp: int, seed: int) -> tuple[np.ndarray, int]:
         raise VissimInputError(f"film {film.class_name()} has {film.create_block().channel_count()} channels, "
                                f"expected {len(channels)} (R, G, B, [A], W, AOVs)")
     dr.eval(channels)
+    return channels, weight_channel, film, spp
 
+
+def _fixed_order(mi, dr, scene, spp: int, seed: int) -> tuple[np.ndarray, int]:
+    channels, weight_channel, film, spp = _trace(mi, dr, scene, spp, seed)
+    width, height = (int(v) for v in film.crop_size())
+    n_pixels = width * height
     means = np.empty((n_pixels, len(channels)), dtype=np.float32)
     done: dict[int, np.ndarray] = {}
     for k, channel in enumerate(channels):

@@ -9,7 +9,14 @@ by default when the image is small), each pass seeded from ``(seed, pass index)`
 averaged in float64.  Each pass goes through :func:`vissim.render.fixed_order.render_image`, which
 sums a pixel's samples in a fixed order, so the same scene, spp, seed and variant give
 bit-identical pixels on the llvm and scalar variants (``RenderResult.deterministic``; CUDA is
-untested and not promised).  A ``progress`` callback (and a log line per pass) reports long
+untested and not promised).
+
+``statistic="nearest_surface"`` makes a pixel from its samples otherwise: R holds a value (the
+depth pass's proximity, dioptres) and G a label of the surface the sample met (0: none), and the
+pixel is the mean R over the samples on the surface of its largest-R sample -- the nearest
+surface's mean proximity over the part of the pixel it covers (:func:`nearest_surface`).  The
+samples of all passes are kept (:func:`vissim.render.fixed_order.render_samples`) and reduced
+once; the pixels are (H, W).  A ``progress`` callback (and a log line per pass) reports long
 renders; nothing is written to disk here, so an interrupted render leaves no file behind.
 """
 
@@ -29,16 +36,22 @@ from vissim.checks import check_allocation, samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
-from vissim.render.fixed_order import render_image
+from vissim.render.fixed_order import render_image, render_samples
 from vissim.render.plugins import register_plugins
 from vissim.units import REC709_LUMINANCE
 
-__all__ = ["RenderResult", "to_mitsuba_dict", "render_scene", "render_bench", "pass_seeds", "mitsuba_versions", "render_memory_bytes", "DEFAULT_PASS_SAMPLES"]
+__all__ = ["RenderResult", "PIXEL_STATISTICS", "nearest_surface", "to_mitsuba_dict", "render_scene", "render_bench",
+           "pass_seeds", "mitsuba_versions", "render_memory_bytes", "DEFAULT_PASS_SAMPLES"]
 
 log = logging.getLogger(__name__)
 
 #: Samples (pixels x spp) per pass above which a render is split into passes.
 DEFAULT_PASS_SAMPLES = 1 << 22
+#: How a pixel's value comes from its samples: the film's mean, or :func:`nearest_surface`.
+PIXEL_STATISTICS = ("mean", "nearest_surface")
+#: Relative tolerance within which two samples' surface labels (G) are the same surface: labels are
+#: small integers, carried with weight 1 (to float32 round-off through refracting lenses).
+LABEL_RTOL = 1e-3
 #: Peak bytes per sample of a pass: the sampler's and the integrator's wavefront state, and the
 #: sample's channels kept for the fixed-order sum (:mod:`vissim.render.fixed_order`).
 BYTES_PER_SAMPLE = 64
@@ -66,6 +79,7 @@ class RenderResult:
     pass_spp: tuple[int, ...] = ()
     deterministic: bool | None = None
     accumulation: str = ""
+    statistic: str = "mean"  # PIXEL_STATISTICS
 
     def render_record(self) -> dict:
         """How the pixels were made: variant, spp asked and taken, seeds, passes, determinism."""
@@ -79,6 +93,7 @@ class RenderResult:
             "pass_spp_used": list(self.pass_spp),
             "deterministic": self.deterministic,
             "accumulation": self.accumulation,
+            "pixel_statistic": self.statistic,
             "seconds": round(self.seconds, 3),
         }
 
@@ -118,6 +133,20 @@ def _split(spp: int, pixels: int, pass_spp: int | None) -> list[int]:
     return [base + (1 if i < extra else 0) for i in range(passes)]
 
 
+def nearest_surface(samples: np.ndarray) -> np.ndarray:
+    """Per pixel, the mean R of the samples on the surface (label G) of its largest-R sample.
+
+    ``samples``: (pixels, spp, >= 2) float32, R a value that is larger on nearer surfaces (a
+    proximity, 0 for sky) and G the surface's label (0 for sky).  Returns (pixels,) float32.  A
+    pixel wholly on one surface gets its plain mean; one straddling an edge gets the near surface's
+    mean over the part it covers, never a blend with what lies behind.
+    """
+    value, label = samples[:, :, 0].astype(np.float64), samples[:, :, 1].astype(np.float64)
+    nearest = np.take_along_axis(label, np.argmax(value, axis=1)[:, None], axis=1)
+    on = np.abs(label - nearest) <= LABEL_RTOL * np.abs(nearest)
+    return ((value * on).sum(axis=1) / on.sum(axis=1)).astype(np.float32)
+
+
 def render_memory_bytes(n_pixels: float, spp: int, *, channels: int = 1, pass_spp: int | None = None) -> float:
     """Peak bytes of one render: the samples of its largest pass in flight, and the float64 sums."""
     largest_pass = max(_split(int(spp), max(int(n_pixels), 1), pass_spp))
@@ -136,14 +165,22 @@ def render_scene(
     variant: str | None = None,
     pass_spp: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    statistic: str = "mean",
 ) -> RenderResult:
     """Render ``scene_dict`` (plain, see module doc) with ``spp`` samples per pixel.
+
+    ``statistic`` (:data:`PIXEL_STATISTICS`): the film's ``"mean"``, or ``"nearest_surface"`` (module
+    doc; (H, W) pixels from a scene whose R is a proximity and G a surface label).
 
     ``progress(done_spp, total_spp)`` is called after each pass.  Returns float32 pixels:
     (H, W) for ``kind="mono"`` (the one channel; on a scalar_rgb fallback, Rec. 709 luminance),
     (H, W, 3) for ``"rgb"``.
     """
     spp = samples_per_pixel(spp)
+    if statistic not in PIXEL_STATISTICS:
+        raise VissimInputError(f"pixel statistic must be one of {', '.join(PIXEL_STATISTICS)}, got {statistic!r}")
+    if statistic != "mean" and kind != "rgb":
+        raise VissimInputError(f"the {statistic} statistic reads a value and a label: render kind 'rgb'")
     mi = mitsuba(kind, variant)
     register_plugins(mi)
     start = time.perf_counter()
@@ -151,14 +188,21 @@ def render_scene(
     film = scene.sensors()[0].film()
     width, height = (int(v) for v in film.crop_size())
     counts = _split(int(spp), width * height, pass_spp)
-    check_allocation(render_memory_bytes(width * height, spp, channels=3 if kind == "rgb" else 1, pass_spp=pass_spp),
-                     f"a {height} x {width} px render at {max(counts)} spp per pass")
+    kept = 0 if statistic == "mean" else width * height * spp * 3 * 4  # every sample's R, G, B, float32
+    check_allocation(render_memory_bytes(width * height, spp, channels=3 if kind == "rgb" else 1, pass_spp=pass_spp)
+                     + kept, f"a {height} x {width} px render at {max(counts)} spp per pass")
     seeds = pass_seeds(seed, len(counts))
     total = np.zeros((height, width, 3 if kind == "rgb" else 1), dtype=np.float64)
     done, used, deterministic, methods = 0, [], True, set()
+    samples = []
     for i, (count, pass_seed) in enumerate(zip(counts, seeds)):
-        rendered = render_image(mi, scene, count, pass_seed)
-        image = rendered.image.astype(np.float64)
+        if statistic != "mean":
+            rendered = render_samples(mi, scene, count, pass_seed)
+            samples.append(rendered.values)
+            image = np.zeros((height, width, total.shape[2]))  # reduced from the samples after the passes
+        else:
+            rendered = render_image(mi, scene, count, pass_seed)
+            image = rendered.image.astype(np.float64)
         count = rendered.spp  # stratified samplers round up to their grids
         used.append(count)
         deterministic = deterministic and rendered.deterministic
@@ -176,13 +220,15 @@ def render_scene(
         _ROUNDING_REPORTED.add((spp, done))  # once per process: a campaign renders many times
         log.warning("the sampler rounded %d spp up to %d (its grid); provenance records %d", spp, done, done)
     pixels = (total / done).astype(np.float32)
-    if kind != "rgb":
+    if statistic == "nearest_surface":
+        pixels = nearest_surface(np.concatenate(samples, axis=1)).reshape(height, width)
+    elif kind != "rgb":
         pixels = pixels[:, :, 0]
     seconds = time.perf_counter() - start
     log.info("rendered %d x %d px, %d spp on %s in %.1f s", width, height, done, mi.variant(), seconds)
     result = RenderResult(pixels, mi.variant(), done, int(seed), seconds, len(counts), spp_requested=int(spp),
                           pass_seeds=tuple(seeds), pass_spp=tuple(used), deterministic=deterministic,
-                          accumulation="+".join(sorted(methods)))
+                          accumulation="+".join(sorted(methods)), statistic=statistic)
     return dataclasses.replace(result, provenance=json_safe(make_provenance(mitsuba_render=result.render_record(),
                                                                             **mitsuba_versions())))
 

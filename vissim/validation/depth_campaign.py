@@ -39,7 +39,8 @@ DEPTH_SIMULATIONS = ("geometric", "wave")
 #: map (:func:`vissim.optics.depth.blur_depth`).
 DEPTH_INPUTS = ("layered", "rgbd")
 #: Bumped when the meaning of an item's inputs or results changes, so old results are not reused.
-SCHEMA_VERSION = 2
+#: 3: the RGB-D depth pass holds each pixel's nearest surface's proximity, no longer the pixel's mean.
+SCHEMA_VERSION = 3
 
 
 @dataclass(frozen=True)

@@ -3,9 +3,10 @@
 Run folder: as :mod:`vissim.validation.runner` (``campaign.json``, ``renders/<key>.exr`` keyed
 by their inputs, ``items/<key>/result.json`` written last), so re-runs resume.  Each item needs
 renders (:class:`DepthRenderSpec`): the blurred view at both seeds, the all-in-focus view and
-the proximity (depth) pass (the RGB-D input), and for the layered input each panel alone: its
-radiance and coverage (and, for a tilted chart, its proximity pass).  The pinhole renders
-extend ``margin_px`` beyond the frame on every side (the settings' ``frame_margin``);
+the proximity (depth) pass (the RGB-D input: each pixel's nearest surface,
+``DEPTH_PASS_STATISTIC``), and for the layered input each panel alone: its radiance and
+coverage (and, for a tilted chart, its proximity pass).  The pinhole renders extend
+``margin_px`` beyond the frame on every side (the settings' ``frame_margin``);
 :mod:`vissim.validation.depth_item` computes the item.
 """
 
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from vissim.bench.depth_scene import DepthScene
+from vissim.bench.depth_scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.imageio import read_image
 from vissim.provenance import json_safe
@@ -46,6 +48,7 @@ class DepthRenderSpec:
     oversample: int = 1
     margin_px: int = 0  # pixels (campaign grid) beyond the frame on every side
     panels: tuple[int, ...] | None = None  # only these panels (a layer); None: the whole scene
+    statistic: str = "mean"  # a pixel from its samples (render.run.PIXEL_STATISTICS)
 
     @property
     def key(self) -> str:
@@ -73,7 +76,7 @@ def render_depth_spec(spec: DepthRenderSpec):
     )
 
     return render_view(spec.render_scene(), spec.viewer, view=spec.view, content=spec.content, spp=spec.spp,
-                       seed=spec.seed, panels=spec.panels)
+                       seed=spec.seed, panels=spec.panels, statistic=spec.statistic)
 
 
 def render_specs(config: DepthConfiguration, settings: DepthCampaignSettings) -> dict[str, DepthRenderSpec]:
@@ -83,12 +86,12 @@ def render_specs(config: DepthConfiguration, settings: DepthCampaignSettings) ->
              for i, seed in enumerate(settings.seeds)}
     margin = config.frame_margin_px(settings)
 
-    def pinhole(content, seed, panels=None):
+    def pinhole(content, seed, panels=None, statistic="mean"):
         return DepthRenderSpec(config.scene, config.viewer, "all_in_focus", content, settings.aux_spp, seed,
-                               settings.oversample, margin, panels)
+                               settings.oversample, margin, panels, statistic)
 
     aux = {"all_in_focus": pinhole("radiance", settings.aux_seed),  # the RGB-D input; the masks need its depth
-           "proximity": pinhole("proximity", settings.aux_seed)}
+           "proximity": pinhole(DEPTH_PASS_CONTENT, settings.aux_seed, statistic=DEPTH_PASS_STATISTIC)}
     if "layered" in settings.inputs:
         for i, panel in enumerate(config.scene.panels):
             aux[f"layer_{i}"] = pinhole("radiance", settings.aux_seed, (i,))
