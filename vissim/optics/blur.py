@@ -156,6 +156,8 @@ TILE_SIZES_PX = tuple(n for n in range(256, 513, 2) if scipy.fft.next_fast_len(n
 #: A tiled blur is chosen when its estimated cost is below this fraction of the full FFT's.
 #: The estimate counts FFT operations (n log n); measured on 2 cores, the small tiles' FFTs run
 #: at about 1.6x the full-frame FFT's rate per operation (cache), so their count is scaled by this.
+#: (Measured for whole rows of squares; with one thread per square, at 0.5-1.9k px per side the
+#: chosen squares were at or below the full frame's time, 2026-12-02.)
 TILE_COST_FACTOR = 0.6
 
 
@@ -211,7 +213,7 @@ def _blur_tiled(channel, psf, padding, background, dtype, tile):
         out[top : top + height, left : left + width] = blurred[:, first_valid : first_valid + width]
 
     corners = [(top, left) for top in range(0, rows, valid) for left in range(0, cols, valid)]
-    with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
+    with ThreadPoolExecutor(len(os.sched_getaffinity(0))) as pool:  # the cores this process may use
         list(pool.map(lambda corner: blur_square(*corner), corners))  # re-raises a square's error
     return out
 

@@ -61,11 +61,12 @@ def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: di
     the PSF and grid.
     """
     shape = tuple(padded.shape[-2:])
-    transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
-    if backend is not CPU:
+    if backend is CPU:
+        transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
+    else:
         transfers = {} if transfers is None else transfers
         if (id(psf), shape) not in transfers:
-            transfers[id(psf), shape] = backend.asarray(transfer)
+            transfers[id(psf), shape] = backend.asarray(BlurKernel.prepare(psf, shape, dtype=np.float32).transfer)
         transfer = transfers[id(psf), shape]
     spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
     spectrum *= transfer

@@ -49,7 +49,7 @@ from vissim.optics.psf_field import (
 from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
 from vissim.optics.wavefront import Wavefront
-from vissim.units import nm_to_mm, rad_to_arcmin
+from vissim.units import image_colrow_to_osa_xy, nm_to_mm, osa_xy_to_image_colrow, rad_to_arcmin
 
 __all__ = [
     "PIXEL_MODES",
@@ -191,10 +191,11 @@ def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, 
     v = v + (rng.random(v.shape) - 0.5) * (2.0 / n_side)
     keep = u * u + v * v <= 1.0
     radius = diameter_mm / 2.0
-    x_osa, y_osa = -u[keep] * radius, -v[keep] * radius  # image-oriented pupil -> OSA
+    x_osa, y_osa = image_colrow_to_osa_xy(u[keep] * radius, v[keep] * radius)  # image-oriented pupil -> OSA
     sx, sy = wavefront.slopes_mrad(x_osa, y_osa)
-    col = rad_to_arcmin(-sx * 1e-3) / arcmin_per_px  # landing offsets in output pixels
-    row = rad_to_arcmin(-sy * 1e-3) / arcmin_per_px  # dW/dy > 0 lands up (+y), i.e. at -row
+    col_mrad, row_mrad = osa_xy_to_image_colrow(sx, sy)  # dW/dy > 0 lands up (+y), i.e. at -row
+    col = rad_to_arcmin(col_mrad * 1e-3) / arcmin_per_px  # landing offsets in output pixels
+    row = rad_to_arcmin(row_mrad * 1e-3) / arcmin_per_px
     if pixel == "integrate":  # the histogram on output pixels is the exact pixel integral
         edges = np.arange(size_px + 1) - size_px // 2 - 0.5
         counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))

@@ -33,7 +33,7 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["Rendered", "Samples", "accumulation", "promises_determinism", "render_image", "render_samples"]
+__all__ = ["Rendered", "Samples", "accumulation", "pass_seeds", "promises_determinism", "render_image", "render_samples"]
 
 log = logging.getLogger(__name__)
 
@@ -63,6 +63,13 @@ class Samples:
     accumulation: str
     deterministic: bool
 
+
+
+def pass_seeds(seed: int, passes: int) -> list[int]:
+    """Sampler seeds of the passes: one pass keeps ``seed``; more draw from SeedSequence([seed, i])."""
+    if passes == 1:
+        return [int(seed)]
+    return [int(np.random.SeedSequence([int(seed), i]).generate_state(1)[0]) for i in range(passes)]
 
 def promises_determinism(variant: str, method: str) -> bool:
     """Whether renders on ``variant`` accumulated by ``method`` (:func:`accumulation`) are bit-identical per seed.
@@ -122,8 +129,7 @@ def render_samples(mi, scene, spp: int, seed: int) -> Samples:
         raise VissimInputError("per-sample values need a box filter without a sampled border and a path or "
                                "direct integrator")
     renders = []
-    for i in range(int(spp)):
-        sample_seed = int(np.random.SeedSequence([int(seed), i]).generate_state(1)[0])
+    for sample_seed in pass_seeds(seed, int(spp)):  # one-sample passes
         image = np.asarray(mi.render(scene, spp=1, seed=sample_seed), dtype=np.float32)
         image = np.repeat(image, 3, axis=2) if image.ndim == 3 and image.shape[2] == 1 else image
         renders.append(image.reshape(-1, image.shape[2])[:, :3])

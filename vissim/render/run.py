@@ -36,7 +36,7 @@ from vissim.checks import check_allocation, samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
-from vissim.render.fixed_order import render_image, render_samples
+from vissim.render.fixed_order import pass_seeds, render_image, render_samples
 from vissim.render.plugins import register_plugins
 from vissim.units import REC709_LUMINANCE
 
@@ -52,6 +52,9 @@ PIXEL_STATISTICS = ("mean", "nearest_surface")
 #: Relative tolerance within which two samples' surface labels (G) are the same surface: labels are
 #: small integers, carried with weight 1 (to float32 round-off through refracting lenses).
 LABEL_RTOL = 1e-3
+#: Peak bytes per sample kept for :func:`nearest_surface`: R, G, B float32 per pass and their
+#: concatenation (24), R and G in float64 (16), the masked values and mask (9).
+NEAREST_SURFACE_BYTES_PER_SAMPLE = 50
 #: Peak bytes per sample of a pass: the sampler's and the integrator's wavefront state, and the
 #: sample's channels kept for the fixed-order sum (:mod:`vissim.render.fixed_order`).
 BYTES_PER_SAMPLE = 64
@@ -114,13 +117,6 @@ def to_mitsuba_dict(value: Any, mi) -> Any:
                 out[key] = to_mitsuba_dict(item, mi)
         return out
     return value
-
-
-def pass_seeds(seed: int, passes: int) -> list[int]:
-    """Sampler seeds of the passes: one pass keeps ``seed``; more draw from SeedSequence([seed, i])."""
-    if passes == 1:
-        return [int(seed)]
-    return [int(np.random.SeedSequence([int(seed), i]).generate_state(1)[0]) for i in range(passes)]
 
 
 def _split(spp: int, pixels: int, pass_spp: int | None) -> list[int]:
@@ -188,7 +184,7 @@ def render_scene(
     film = scene.sensors()[0].film()
     width, height = (int(v) for v in film.crop_size())
     counts = _split(int(spp), width * height, pass_spp)
-    kept = 0 if statistic == "mean" else width * height * spp * 3 * 4  # every sample's R, G, B, float32
+    kept = 0 if statistic == "mean" else width * height * spp * NEAREST_SURFACE_BYTES_PER_SAMPLE
     check_allocation(render_memory_bytes(width * height, spp, channels=3 if kind == "rgb" else 1, pass_spp=pass_spp)
                      + kept, f"a {height} x {width} px render at {max(counts)} spp per pass")
     seeds = pass_seeds(seed, len(counts))
