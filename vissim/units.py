@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-__all__ = ["ARCMIN_PER_RAD", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
+__all__ = ["xy_matrix_to_image_rowcol", "ARCMIN_PER_RAD", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
            "cyc_per_rad_to_cyc_per_deg", "mrad_to_arcmin", "MM_PER_M", "mm_to_m", "m_to_mm", "diopters_to_mm",
            "diopters_to_per_mm", "REC709_LUMINANCE", "osa_xy_to_image_colrow", "image_colrow_to_osa_xy"]
 
@@ -80,3 +80,15 @@ def osa_xy_to_image_colrow(x, y):
 def image_colrow_to_osa_xy(col, row):
     """The TABO/OSA (x, y) of image offsets (col, row): the map is its own inverse."""
     return osa_xy_to_image_colrow(col, row)
+
+
+def xy_matrix_to_image_rowcol(matrix_xy) -> np.ndarray:
+    """A 2 x 2 matrix acting on TABO/OSA (x, y) as the same map on image (row, col) offsets.
+
+    With (col, row) = S (x, y), S the diagonal signs of :func:`osa_xy_to_image_colrow`, the
+    matrix becomes S m S^-1 on (col, row), then its axes swap to (row, col).
+    """
+    m = np.asarray(matrix_xy, dtype=float)
+    signs = np.array(osa_xy_to_image_colrow(1.0, 1.0))
+    colrow = m * np.outer(signs, signs)
+    return np.array([[colrow[1, 1], colrow[1, 0]], [colrow[0, 1], colrow[0, 0]]])

@@ -55,7 +55,7 @@ from vissim.optics.blur import kernel_transfer, padded_shape, padding_width_px
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront
-from vissim.units import mrad_to_arcmin, osa_xy_to_image_colrow
+from vissim.units import mrad_to_arcmin, xy_matrix_to_image_rowcol
 
 __all__ = ["ForwardModel", "FORWARD_MODES", "landing_matrix_rc_px"]
 
@@ -66,20 +66,12 @@ MARGIN_EXTRA_PX = 12
 SPECTRUM_CACHE_ENTRIES = 8
 
 
-def _rc(matrix_xy) -> np.ndarray:
-    """A 2 x 2 x/y-frame matrix in the image's (row, col) order."""
-    m = np.asarray(matrix_xy, dtype=float)
-    signs = np.array(osa_xy_to_image_colrow(1.0, 1.0))  # (col, row) = S (x, y), S diagonal signs
-    colrow = m * np.outer(signs, signs)  # S m S^-1
-    return np.array([[colrow[1, 1], colrow[1, 0]], [colrow[0, 1], colrow[0, 0]]])
-
-
 def landing_matrix_rc_px(defocus_xy, magnification_xy, arcmin_per_px: float) -> np.ndarray:
     """Pixels of landing offset per mm of pupil, (row, col), of the magnification-scaled PSF: M^-1 D."""
     d = np.asarray(defocus_xy, dtype=float)
     m_inv = np.linalg.inv(np.asarray(magnification_xy, dtype=float))
     scaled = m_inv @ d
-    return _rc(0.5 * (scaled + scaled.T)) * float(mrad_to_arcmin(1.0)) / arcmin_per_px
+    return xy_matrix_to_image_rowcol(0.5 * (scaled + scaled.T)) * float(mrad_to_arcmin(1.0)) / arcmin_per_px
 
 
 #: The jinc 2 J1(x) / x tabulated (step :data:`_JINC_STEP`), interpolated linearly: 20x faster than
@@ -208,7 +200,7 @@ class ForwardModel:
         magnification = np.asarray(magnification_xy, dtype=float)
         if np.array_equal(magnification, np.eye(2)):
             return window[self.window_px:self.window_px + self.shape[0], self.window_px:self.window_px + self.shape[1]]
-        m_inv = np.linalg.inv(_rc(magnification))
+        m_inv = np.linalg.inv(xy_matrix_to_image_rowcol(magnification))
         c = self.centre_rc
         offset = self.window_px + c - m_inv @ c
         return scipy.ndimage.affine_transform(window, m_inv, offset=offset, output_shape=self.shape, order=3,

@@ -5,20 +5,21 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from vissim.units import xy_matrix_to_image_rowcol
+
 __all__ = ["magnify", "block_mean"]
 
 
 def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) -> np.ndarray:
     """Resample ``image`` magnified by a 2 x 2 matrix (TABO x/y frame) about its centre.
 
-    The image frame is (col, row) = (-x, -y), so the matrix is the same in image axes; the
+    In image axes the matrix is :func:`vissim.units.xy_matrix_to_image_rowcol` of it; the
     optical axis is the tile's centre.  Radiance is conserved: values are resampled, not scaled.
     """
     m = np.asarray(matrix_xy, dtype=float)
     if np.allclose(m, np.eye(2), atol=1e-12):
         return np.asarray(image, dtype=np.float32)
-    m_rc = np.array([[m[1, 1], m[1, 0]], [m[0, 1], m[0, 0]]])  # (row, col) order
-    inverse = np.linalg.inv(m_rc)
+    inverse = np.linalg.inv(xy_matrix_to_image_rowcol(m))
     centre = (np.array(image.shape[:2], dtype=float) - 1.0) / 2.0
     fill = float(np.median(np.concatenate([image[0], image[-1]]))) if background is None else background
     out = ndimage.affine_transform(
