@@ -192,22 +192,20 @@ def render_scene(
     done, used, deterministic, methods = 0, [], True, set()
     samples = []
     for i, (count, pass_seed) in enumerate(zip(counts, seeds)):
-        if statistic != "mean":
-            rendered = render_samples(mi, scene, count, pass_seed)
-            samples.append(rendered.values)
-            image = np.zeros((height, width, total.shape[2]))  # reduced from the samples after the passes
-        else:
-            rendered = render_image(mi, scene, count, pass_seed)
-            image = rendered.image.astype(np.float64)
+        rendered = (render_image if statistic == "mean" else render_samples)(mi, scene, count, pass_seed)
         count = rendered.spp  # stratified samplers round up to their grids
         used.append(count)
         deterministic = deterministic and rendered.deterministic
         methods.add(rendered.accumulation)
-        if image.ndim == 2:
-            image = image[:, :, None]
-        if kind == "mono" and image.shape[2] >= 3:  # scalar_rgb fallback
-            image = image[:, :, :3] @ np.array(REC709_LUMINANCE)[:, None]
-        total += image[:, :, : total.shape[2]] * count
+        if statistic == "mean":
+            image = rendered.image.astype(np.float64)
+            if image.ndim == 2:
+                image = image[:, :, None]
+            if kind == "mono" and image.shape[2] >= 3:  # scalar_rgb fallback
+                image = image[:, :, :3] @ np.array(REC709_LUMINANCE)[:, None]
+            total += image[:, :, : total.shape[2]] * count
+        else:  # reduced from the samples after the passes
+            samples.append(rendered.values)
         done += count
         log.info("render pass %d/%d: %d/%d spp, %.1f s", i + 1, len(counts), done, spp, time.perf_counter() - start)
         if progress is not None:
@@ -215,11 +213,11 @@ def render_scene(
     if done != spp and (spp, done) not in _ROUNDING_REPORTED:
         _ROUNDING_REPORTED.add((spp, done))  # once per process: a campaign renders many times
         log.warning("the sampler rounded %d spp up to %d (its grid); provenance records %d", spp, done, done)
-    pixels = (total / done).astype(np.float32)
     if statistic == "nearest_surface":
         pixels = nearest_surface(np.concatenate(samples, axis=1)).reshape(height, width)
-    elif kind != "rgb":
-        pixels = pixels[:, :, 0]
+    else:
+        pixels = (total / done).astype(np.float32)
+        pixels = pixels if kind == "rgb" else pixels[:, :, 0]
     seconds = time.perf_counter() - start
     log.info("rendered %d x %d px, %d spp on %s in %.1f s", width, height, done, mi.variant(), seconds)
     result = RenderResult(pixels, mi.variant(), done, int(seed), seconds, len(counts), spp_requested=int(spp),
