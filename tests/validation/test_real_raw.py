@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 import rawpy
 
+from vissim.errors import VissimInputError
 from vissim.units import REC709_LUMINANCE
 from vissim.validation.captures import capture_provenance, capture_tile, load_manifest, read_capture
 from vissim.validation.raw import read_raw_linear
@@ -123,6 +124,15 @@ def test_capture_path_reads_the_arw_and_records_its_provenance(arw_path, tmp_pat
     # with virtual captures in test_capture_path.py).
     tile = capture_tile(capture, 1.0, (64, 64), raw=raw)
     assert tile.shape == (64, 64) and np.all(np.isfinite(tile))
+
+
+def test_a_cut_short_arw_is_refused_not_read_as_repeated_rows(arw_path, tmp_path):
+    # LibRaw decodes a Sony ARW cut in half without complaint (the missing rows repeat earlier data).
+    half = tmp_path / "half.ARW"
+    data = arw_path.read_bytes()
+    half.write_bytes(data[: len(data) // 2])
+    with pytest.raises(VissimInputError, match=f"half.ARW is truncated: .* byte {len(data)} .* {len(data) // 2} bytes"):
+        read_raw_linear(half)
 
 
 def test_a_tampered_sdist_fails_and_leaves_nothing_in_the_cache(tmp_path):

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+import tifffile
 
 from vissim.charts import optotype_tile
 from vissim.errors import VissimInputError
@@ -37,6 +38,15 @@ def test_truncated_dng_is_an_input_error(tmp_path):
     for mode in ("planes", "demosaic"):
         with pytest.raises(VissimInputError, match="truncated.dng"):
             read_raw_linear(truncated, mode=mode)
+
+
+def test_plain_tiff_is_not_taken_for_sensor_data(tmp_path):
+    # LibRaw reads any uncompressed 16-bit TIFF as a Bayer RAW (RGGB, white 65535); vissim refuses it.
+    path = tmp_path / "scan.tif"
+    tifffile.imwrite(path, np.full((64, 64), 3000, np.uint16))
+    for mode in ("planes", "demosaic"):
+        with pytest.raises(VissimInputError, match="scan.tif is a plain TIFF image .* not a camera RAW file"):
+            read_raw_linear(path, mode=mode)
 
 
 def test_unknown_mode_is_refused(tmp_path):

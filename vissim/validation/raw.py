@@ -62,6 +62,7 @@ __all__ = ["RAW_MODES", "XYZ_FROM_SRGB", "LetterCrop", "RawImage", "ResampledIma
            "crop_letters", "file_sha256", "read_raw_linear", "resample_to_arcmin"]
 
 RAW_MODES = ("planes", "demosaic")
+_PHOTOMETRIC_CFA = 32803  # TIFF/EP PhotometricInterpretation of colour-filter-array data
 #: Linear sRGB (D65) -> CIE XYZ, IEC 61966-2-1; its Y row is the Rec. 709 luminance.
 XYZ_FROM_SRGB = ((0.4124, 0.3576, 0.1805), REC709_LUMINANCE, (0.0193, 0.1192, 0.9505))
 
@@ -150,6 +151,44 @@ def _camera_name(path: Path) -> str | None:
     return name or None
 
 
+def _tiff_ifds(tif: Any) -> list[Any]:
+    """The TIFF's IFDs and their sub-IFDs (where TIFF-based RAWs keep the sensor data)."""
+    ifds = list(tif.pages)
+    for page in list(ifds):
+        for k in range(len(getattr(page, "subifds", None) or ())):
+            ifds.append(tifffile.TiffPages(page, index=k).first)
+    return ifds
+
+
+def _check_tiff_structure(path: Path) -> None:
+    """Refuse a plain TIFF (LibRaw reads any uncompressed TIFF as sensor data) and a TIFF-based RAW cut short."""
+    try:
+        with tifffile.TiffFile(path) as tif:
+            ifds = _tiff_ifds(tif)
+            tags = ifds[0].tags
+            camera_tags = any(k in tags for k in ("Make", "Model", 50706, 50708))  # 50706 DNGVersion, 50708 model
+            cfa = any(int(getattr(ifd, "photometric", 0)) == _PHOTOMETRIC_CFA for ifd in ifds)
+            data_end = max((o + n for ifd in ifds for o, n in zip(ifd.dataoffsets, ifd.databytecounts)), default=0)
+    except Exception:  # noqa: BLE001 - not a TIFF (CR3, RAF, ...): LibRaw decides
+        return
+    if not (camera_tags or cfa):
+        raise VissimInputError(f"{path} is a plain TIFF image (no Make, Model or DNG tags), not a camera RAW file")
+    size = path.stat().st_size
+    if data_end > size:
+        raise VissimInputError(f"{path} is truncated: its image data runs to byte {data_end} but the file has "
+                               f"{size} bytes")
+
+
+def _refuse_truncated(raw: Any, path: Path) -> None:
+    """LibRaw fills raw data missing from a short file with 0 DN; no sensor reads 0 rows above a black level."""
+    black = min(float(b) for b in raw.black_level_per_channel)
+    visible = np.asarray(raw.raw_image_visible)
+    empty = np.flatnonzero(~visible.any(axis=1))
+    if black > 0 and empty.size:
+        raise VissimInputError(f"{path}: {empty.size} of {visible.shape[0]} sensor rows (from row {empty[0]}) are "
+                               f"all 0 DN, below the black level {black:g} DN: truncated or damaged raw data")
+
+
 def _nonzero(value: float) -> float | None:
     return float(value) if value and math.isfinite(value) and value > 0 else None
 
@@ -221,8 +260,10 @@ def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> Ra
     path = Path(path)
     if not path.is_file():
         raise VissimInputError(f"RAW file {path} {'is not a file' if path.exists() else 'does not exist'}")
+    _check_tiff_structure(path)
     try:
         with rawpy.imread(str(path)) as raw:
+            _refuse_truncated(raw, path)
             white = float(raw.white_level)
             # Read the CFA layout and levels before postprocess(), which rewrites them.
             pattern_indices = None if raw.raw_pattern is None else [int(i) for i in np.asarray(raw.raw_pattern).ravel()]
