@@ -5,13 +5,15 @@ The file is ``_DSC2164.ARW`` (Sony ILCE-7RM3, 14-bit compressed ARW), a test ima
 source distribution of libraw-cffi 0.19.0 on the Python package index (MIT licence).  pip is
 the only way this reaches the network::
 
-    python -m pip download --no-deps --no-binary :all: --require-hashes -r <libraw-cffi==0.19.0 --hash=...>
+    python -m pip download --no-deps --no-binary libraw-cffi --require-hashes -r <libraw-cffi==0.19.0 --hash=...>
 
-The sdist's sha256 is pinned (pip checks it before it builds anything, and so does this
-script), then only the ARW is extracted, its size and sha256 are checked against the pins, and
-it is moved into the cache in one rename.  Cache folder: ``$VISSIM_CACHE``, else
-``$XDG_CACHE_HOME/vissim``, else ``~/.cache/vissim``.  A cached file is checked again on
-every use.
+``--no-binary libraw-cffi`` (not ``:all:``) asks for the sdist alone: pip passes the option on
+to the build environment it sets up to read the sdist's metadata, and ``:all:`` would compile
+cffi there from source.  The sdist's sha256 is pinned (pip checks it before it builds anything,
+and so does this script), then only the ARW is extracted, its size and sha256 are checked
+against the pins, and it is moved into the cache in one rename, as
+``$VISSIM_CACHE_DIR/real_raw/_DSC2164.ARW`` (default ``~/.cache/vissim``).  A cached file is
+checked again on every use.
 
 Usage: ``python scripts/fetch_real_raw.py`` prints the cached file's path (exit 0), says why
 the package index could not be reached (exit 3), or reports a hash mismatch (exit 1).
@@ -48,12 +50,9 @@ class HashMismatch(RuntimeError):
 
 
 def cache_dir() -> Path:
-    """``$VISSIM_CACHE``, else ``$XDG_CACHE_HOME/vissim``, else ``~/.cache/vissim``."""
-    if os.environ.get("VISSIM_CACHE"):
-        return Path(os.environ["VISSIM_CACHE"])
-    if os.environ.get("XDG_CACHE_HOME"):
-        return Path(os.environ["XDG_CACHE_HOME"]) / "vissim"
-    return Path.home() / ".cache" / "vissim"
+    """``$VISSIM_CACHE_DIR`` when set, else ``~/.cache/vissim`` (the folder vissim's lens meshes use)."""
+    root = os.environ.get("VISSIM_CACHE_DIR")
+    return Path(root) if root else Path.home() / ".cache" / "vissim"
 
 
 def sha256_of(path: Path) -> str:
@@ -82,7 +81,7 @@ def download_sdist(into: Path) -> Path:
     """The libraw-cffi sdist, downloaded by pip into ``into`` and checked against its pinned sha256."""
     requirements = into / "requirements.txt"
     requirements.write_text(f"{PACKAGE}=={VERSION} --hash=sha256:{SDIST_SHA256}\n")
-    command = [sys.executable, "-m", "pip", "download", "--no-deps", "--no-binary", ":all:", "--require-hashes",
+    command = [sys.executable, "-m", "pip", "download", "--no-deps", "--no-binary", PACKAGE, "--require-hashes",
                "--disable-pip-version-check", "--retries", "1", "--timeout", "20", "-r", str(requirements),
                "-d", str(into)]
     prefix = f"could not fetch {PACKAGE} {VERSION} sdist from the package index"
