@@ -9,7 +9,9 @@ Oracle: ``rawpy.postprocess`` at half size (one output pixel per 2 x 2 CFA cell,
 interpolated: no demosaic differences), linear (``gamma=(1, 1)``, ``no_auto_bright``, 16 bits),
 with the camera's white balance, in the camera's colour space (``raw``) and in sRGB.  LibRaw
 subtracts the black level, scales and white-balances, converts colour and quantises on its
-own; vissim does each of these itself from the file's metadata.
+own; vissim does each of these itself from the file's metadata.  LibRaw takes the levels from
+the file too (its ``user_sat`` counts from the black level, measured: ``user_sat=16383`` put
+65535 at 16383 DN above black), so the stated levels are asserted directly.
 """
 
 import importlib.util
@@ -68,7 +70,7 @@ def test_sony_arw_levels_pattern_and_white_balance(arw):
     assert arw.camera == "SONY ILCE-7RM3"
     assert arw.black_levels == (512.0,) * 4 and arw.white_level == 16383.0
     assert arw.cfa_pattern == "RGGB" and arw.channel_names == ("R", "G", "G2", "B")
-    # As-shot white balance in the file: R : G : B = 2528 : 1024 : 1564.
+    # As-shot white balance, as LibRaw reads it from the file: R : G : B = 2528 : 1024 : 1564.
     assert arw.camera_wb == pytest.approx((2528 / 1024, 1.0, 1.0, 1564 / 1024), rel=1e-12)
     assert arw.iso == 3200 and arw.exposure_s == pytest.approx(1 / 640, rel=1e-6)
     assert arw.pixels.shape == (3464 // 2, 5184 // 2, 4) and arw.sha256 == fetcher.ARW_SHA256
@@ -145,6 +147,14 @@ def test_a_tampered_sdist_fails_and_leaves_nothing_in_the_cache(tmp_path):
     assert not any(target.parent.iterdir())
     with pytest.raises(fetcher.HashMismatch, match="expected " + fetcher.SDIST_SHA256):
         fetcher.check_sha256(sdist, fetcher.SDIST_SHA256, "the sdist")
+
+
+def test_a_damaged_cached_file_fails_rather_than_being_used(tmp_path):
+    cached = tmp_path / "real_raw" / fetcher.ARW_NAME
+    cached.parent.mkdir()
+    cached.write_bytes(b"II*\0 not the ARW")
+    with pytest.raises(fetcher.HashMismatch, match="delete it to fetch it again"):
+        fetcher.fetch_real_raw(tmp_path)
 
 
 def test_unreachable_index_is_a_skip_reason_not_a_failure(tmp_path, monkeypatch):
