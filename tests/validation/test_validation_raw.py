@@ -49,6 +49,16 @@ def test_plain_tiff_is_not_taken_for_sensor_data(tmp_path):
             read_raw_linear(path, mode=mode)
 
 
+def test_rows_of_zero_under_a_black_level_are_refused(tmp_path):
+    # What LibRaw returns for raw data a short file lacks: rows of 0 DN, which a sensor with a
+    # black level of 2048 DN cannot read.
+    dn = quantise(np.full((32, 32), 0.5), black_level=2048, white_level=15000)
+    dn[20:] = 0
+    path = write_dng(tmp_path / "zeros.dng", dn, black_level=2048, white_level=15000, pattern="RGGB")
+    with pytest.raises(VissimInputError, match="zeros.dng: 12 of 32 sensor rows .from row 20. are all 0 DN"):
+        read_raw_linear(path)
+
+
 def test_unknown_mode_is_refused(tmp_path):
     with pytest.raises(VissimInputError, match="planes, demosaic"):
         read_raw_linear(tmp_path / "x.dng", mode="half")

@@ -179,8 +179,9 @@ def _check_tiff_structure(path: Path) -> None:
                                f"{size} bytes")
 
 
-def _refuse_truncated(raw: Any, path: Path) -> None:
-    """LibRaw fills raw data missing from a short file with 0 DN; no sensor reads 0 rows above a black level."""
+def _refuse_zero_rows(raw: Any, path: Path) -> None:
+    """LibRaw fills raw data missing from a short file with 0 DN; a sensor whose black level is above 0 never
+    reads a whole row of 0 DN (TIFF-based files are caught earlier by their data offsets)."""
     black = min(float(b) for b in raw.black_level_per_channel)
     visible = np.asarray(raw.raw_image_visible)
     empty = np.flatnonzero(~visible.any(axis=1))
@@ -263,7 +264,7 @@ def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> Ra
     _check_tiff_structure(path)
     try:
         with rawpy.imread(str(path)) as raw:
-            _refuse_truncated(raw, path)
+            _refuse_zero_rows(raw, path)
             white = float(raw.white_level)
             # Read the CFA layout and levels before postprocess(), which rewrites them.
             pattern_indices = None if raw.raw_pattern is None else [int(i) for i in np.asarray(raw.raw_pattern).ravel()]
