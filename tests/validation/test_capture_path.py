@@ -5,6 +5,7 @@ import pytest
 from fake_bench import fake_render
 from provenance_walk import image_provenance
 
+from vissim.charts import optotype_tile
 from vissim.validation.campaign import load_campaign
 from vissim.validation.captures import capture_tile, file_sha256, load_manifest
 from vissim.validation.raw import camera_arcmin_per_px
@@ -68,6 +69,29 @@ def test_virtual_capture_tile_reproduces_the_linear_image(capture_campaign, tmp_
     tile = capture_tile(captures["k-plain"], 1.0, (64, 64))
     reference = fake_render(RenderSpec("K", 0.7, "black-on-white", (), 5.0, 18.0, 0.9144, 10.0, 1.0, (64, 64), 4, 99))
     # paper and ink levels come back (linear, gains removed); shot + read + render noise ~0.01
+    assert np.median(tile[:8]) == pytest.approx(0.9, abs=0.01)
+    assert np.percentile(tile, 1) == pytest.approx(0.04, abs=0.03)
+    assert abs(float(tile.mean()) - float(reference.mean())) < 0.02
+
+
+def test_paper_ring_is_measured_on_the_sky_for_a_long_lens(tmp_path):
+    # 68 mm at 3 m: 0.257 arcmin per sensor px, four times finer than the campaign's 1 arcmin/px.
+    # The letter O (LogMAR 0.7: 25 arcmin, ink between 7.5 and 12.5 arcmin from its centre) fills a
+    # ring of 0.75-1.5 tile half-widths counted in sensor px (6-12 arcmin: 84 % ink); counted on
+    # the sky (24-48 arcmin) the ring is all paper, so the paper comes back at 0.9.
+    scale = camera_arcmin_per_px(5.2, 68.0, object_distance_m=3.0)
+    chart = optotype_tile("O", 0.7, arcmin_per_px=scale, shape_px=(416, 416), viewing_distance_m=3.0,
+                          snap_to_pixels=False).pixels.astype(np.float64) / 0.9 * 0.6
+    noisy = add_sensor_noise(mosaic_bayer(chart[..., None] * GAINS, "RGGB"), full_well_electrons=30000,
+                             read_noise_electrons=2.0, rng=5)
+    write_dng(tmp_path / "o.dng", quantise(noisy, black_level=2048, white_level=15000), black_level=2048,
+              white_level=15000, pattern="RGGB")
+    (tmp_path / "manifest.toml").write_text(
+        '[[capture]]\nid = "o"\nfile = "o.dng"\nfocal_length_mm = 68.0\nchart_distance_m = 3.0\n'
+        'letter = "O"\nlogmar = 0.7\nletter_center_px = [208.0, 208.0]\n')
+    tile = capture_tile(load_manifest(tmp_path / "manifest.toml")["o"], 1.0, (64, 64))
+    reference = optotype_tile("O", 0.7, arcmin_per_px=1.0, shape_px=(64, 64), viewing_distance_m=3.0,
+                              snap_to_pixels=False).pixels
     assert np.median(tile[:8]) == pytest.approx(0.9, abs=0.01)
     assert np.percentile(tile, 1) == pytest.approx(0.04, abs=0.03)
     assert abs(float(tile.mean()) - float(reference.mean())) < 0.02

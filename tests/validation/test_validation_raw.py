@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+import tifffile
 
 from vissim.charts import optotype_tile
 from vissim.errors import VissimInputError
@@ -37,6 +38,25 @@ def test_truncated_dng_is_an_input_error(tmp_path):
     for mode in ("planes", "demosaic"):
         with pytest.raises(VissimInputError, match="truncated.dng"):
             read_raw_linear(truncated, mode=mode)
+
+
+def test_plain_tiff_is_not_taken_for_sensor_data(tmp_path):
+    # LibRaw reads any uncompressed 16-bit TIFF as a Bayer RAW (RGGB, white 65535); vissim refuses it.
+    path = tmp_path / "scan.tif"
+    tifffile.imwrite(path, np.full((64, 64), 3000, np.uint16))
+    for mode in ("planes", "demosaic"):
+        with pytest.raises(VissimInputError, match="scan.tif is a plain TIFF image .* not a camera RAW file"):
+            read_raw_linear(path, mode=mode)
+
+
+def test_rows_of_zero_under_a_black_level_are_refused(tmp_path):
+    # What LibRaw returns for raw data a short file lacks: rows of 0 DN, which a sensor with a
+    # black level of 2048 DN cannot read.
+    dn = quantise(np.full((32, 32), 0.5), black_level=2048, white_level=15000)
+    dn[20:] = 0
+    path = write_dng(tmp_path / "zeros.dng", dn, black_level=2048, white_level=15000, pattern="RGGB")
+    with pytest.raises(VissimInputError, match="zeros.dng: 12 of 32 sensor rows .from row 20. are all 0 DN"):
+        read_raw_linear(path)
 
 
 def test_unknown_mode_is_refused(tmp_path):

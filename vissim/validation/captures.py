@@ -21,17 +21,19 @@ A manifest (TOML) lists captures so real photographs can be dropped in::
 A campaign item with ``capture = "t3-k-plus2"`` takes its ground truth from the capture.
 Absent files are skipped with a clear message, never silently.
 
-Capture -> tile: the RAW is read linearly (:func:`vissim.validation.raw.read_raw_linear`,
-no demosaicing), the photosites are divided by their channel's gain (the median of the
-paper around the letter, so a neutral chart gives one grey level per photosite, at full
-sensor resolution and without interpolation), resampled by exact area integration onto the
-campaign's arcmin/px (camera scale from pitch, focal length and focus distance), cropped to
-the tile around the letter, and scaled so that the paper has the chart's paper reflectance.
+Capture -> tile: the RAW is read linearly (:func:`read_capture`, which checks the file's
+sha256 and uses :func:`vissim.validation.raw.read_raw_linear`, no demosaicing), the
+photosites are divided by their channel's gain (the median of the paper in a ring around the
+letter, 0.75 to 1.5 tile half-widths measured on the sky, so a neutral chart gives one grey
+level per photosite, at full sensor resolution and without interpolation), resampled by exact
+area integration onto the campaign's arcmin/px (camera scale from pitch, focal length and focus
+distance), cropped to the tile around the letter, and scaled so that the paper has the chart's
+paper reflectance.  :func:`capture_provenance` records what the file says: camera, black and
+white levels, CFA pattern, as-shot white balance and the file's sha256.
 """
 
 from __future__ import annotations
 
-import hashlib
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,9 +46,10 @@ from vissim.optics.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, 
 from vissim.units import mm_to_m
 from vissim.validation.fields import LensSpec
 from vissim.validation.fields import field_error, lenses, number, read_toml_file, tables, text
-from vissim.validation.raw import read_raw_linear, resample_to_arcmin
+from vissim.validation.raw import RawImage, camera_arcmin_per_px, file_sha256, read_raw_linear, resample_to_arcmin
 
-__all__ = ["Capture", "load_manifest", "capture_problem", "capture_tile", "file_sha256"]
+__all__ = ["Capture", "load_manifest", "capture_problem", "read_capture", "capture_tile", "capture_provenance",
+           "file_sha256"]
 
 log = logging.getLogger(__name__)
 
@@ -67,14 +70,6 @@ class Capture:
     letter_center_px: tuple[float, float]
     no_lens_capture: str | None = None
     repeat_capture: str | None = None
-
-
-def file_sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def _optional_text(entry: dict, key: str, source: str, where: str) -> str | None:
@@ -149,18 +144,32 @@ def _neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray) -> np.ndarray:
     return mosaic
 
 
-def capture_tile(capture: Capture, arcmin_per_px: float, tile_px: tuple[int, int]) -> np.ndarray:
-    """The capture's letter as a linear tile on the campaign's grid (paper = 0.9)."""
+def read_capture(capture: Capture) -> RawImage:
+    """The capture's RAW as linear CFA planes, after checking that it is present and matches its sha256."""
     problem = capture_problem(capture)
     if problem:
         raise VissimInputError(problem)
-    raw = read_raw_linear(capture.file, mode="planes")
+    return read_raw_linear(capture.file, mode="planes")
+
+
+def capture_provenance(capture: Capture, raw: RawImage) -> dict:
+    """What a capture's file says (camera, levels, CFA pattern, white balance), with its measured sha256."""
+    record = raw.as_json()
+    return {"capture": capture.id, "file": str(capture.file), "sha256": record.pop("sha256"), "raw": record}
+
+
+def capture_tile(capture: Capture, arcmin_per_px: float, tile_px: tuple[int, int], *,
+                 raw: RawImage | None = None) -> np.ndarray:
+    """The capture's letter as a linear tile on the campaign's grid (paper = 0.9); ``raw`` if already read."""
+    raw = read_capture(capture) if raw is None else raw
     row, col = capture.letter_center_px
-    # paper: a ring around the letter between 0.75 and 1.5 tile half-widths (sensor pixels;
-    # plane pixel (i, j) covers sensor pixels (2i..2i+1, 2j..2j+1))
+    # paper: a ring around the letter between 0.75 and 1.5 tile half-widths, converted to sensor
+    # pixels by the camera's scale (plane pixel (i, j) covers sensor pixels (2i..2i+1, 2j..2j+1))
     pr, pc = np.mgrid[: raw.pixels.shape[0], : raw.pixels.shape[1]]
     distance = np.hypot(2 * pr + 0.5 - row, 2 * pc + 0.5 - col)
-    reach = max(tile_px) / 2
+    sensor_arcmin_per_px = camera_arcmin_per_px(capture.pixel_pitch_um, capture.focal_length_mm,
+                                                object_distance_m=capture.chart_distance_m)
+    reach = max(tile_px) / 2 * arcmin_per_px / sensor_arcmin_per_px
     ring = (distance > 0.75 * reach) & (distance < 1.5 * reach)
     if capture.polarity == "white-on-black":
         ring = np.zeros_like(ring)  # background is ink: take the paper from the brightest letter pixels

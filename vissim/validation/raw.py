@@ -23,6 +23,14 @@ float32 values proportional to the light each photosite collected, normalised pe
   ``user_flip=0``, highlights clipped.  LibRaw clips negatives to 0 and quantises to 16 bits,
   so this mode is for looking at, not for measuring.
 
+Camera colour, recorded and never applied to ``pixels``: ``camera_wb`` is the file's as-shot
+white balance (multipliers per channel, green = 1) and ``camera_to_srgb`` the 3 x 3 matrix
+from white-balanced camera RGB to linear sRGB (D65), derived as LibRaw and dcraw do from the
+file's XYZ -> camera matrix (``raw.rgb_xyz_matrix``): ``cam_rgb = cam_xyz @ XYZ_FROM_SRGB``,
+rows scaled to sum to 1 (so camera white maps to sRGB white), inverted.
+:meth:`RawImage.luminance` combines them into relative linear luminance (Rec. 709 / sRGB
+``Y``): 1 = a neutral surface that takes the green photosites to the white level.
+
 :func:`crop_letters` cuts the chart's letter boxes out of a capture, and
 :func:`resample_to_arcmin` brings a capture onto the renders' angular grid by exact pixel-area
 integration.
@@ -31,6 +39,7 @@ integration.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
 import math
 import os
@@ -45,14 +54,17 @@ import tifffile
 from vissim.charts import Chart
 from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
-from vissim.units import m_to_mm, rad_to_arcmin
+from vissim.units import REC709_LUMINANCE, m_to_mm, rad_to_arcmin
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["RAW_MODES", "LetterCrop", "RawImage", "ResampledImage", "camera_arcmin_per_px", "crop_letters",
-           "read_raw_linear", "resample_to_arcmin"]
+__all__ = ["RAW_MODES", "XYZ_FROM_SRGB", "LetterCrop", "RawImage", "ResampledImage", "camera_arcmin_per_px",
+           "crop_letters", "file_sha256", "read_raw_linear", "resample_to_arcmin"]
 
 RAW_MODES = ("planes", "demosaic")
+_PHOTOMETRIC_CFA = 32803  # TIFF/EP PhotometricInterpretation of colour-filter-array data
+#: Linear sRGB (D65) -> CIE XYZ, IEC 61966-2-1; its Y row is the Rec. 709 luminance.
+XYZ_FROM_SRGB = ((0.4124, 0.3576, 0.1805), REC709_LUMINANCE, (0.0193, 0.1192, 0.9505))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -62,8 +74,10 @@ class RawImage:
     ``black_levels`` and ``white_level`` are in raw data numbers (DN), one black level per
     channel in ``channel_names`` order.  ``cfa_pattern`` is the 2 x 2 cell in raster order,
     e.g. ``"RGGB"``.  ``sensor_px_per_pixel`` is 2 for planes (one pixel per CFA cell) and 1
-    for demosaiced images.  ``camera``, ``iso`` and ``exposure_s`` are ``None`` when the file
-    does not say.
+    for demosaiced images.  ``camera_wb`` (one multiplier per channel, green = 1) and
+    ``camera_to_srgb`` (rows: sRGB R, G, B) are described in the module docstring.
+    ``camera``, ``iso``, ``exposure_s``, ``camera_wb`` and ``camera_to_srgb`` are ``None``
+    when the file does not say; ``sha256`` is the file's.
     """
 
     pixels: np.ndarray = dataclasses.field(repr=False)
@@ -77,6 +91,9 @@ class RawImage:
     iso: float | None = None
     exposure_s: float | None = None
     path: str | None = None
+    camera_wb: tuple[float, ...] | None = None
+    camera_to_srgb: tuple[tuple[float, float, float], ...] | None = None
+    sha256: str | None = None
 
     def channel(self, name: str) -> np.ndarray:
         """One channel by name (``"R"``, ``"G"``, ``"G2"``, ``"B"``)."""
@@ -91,12 +108,32 @@ class RawImage:
         groups = [[i for i, n in enumerate(self.channel_names) if n.rstrip("2") == c] for c in "RGB"]
         return np.stack([self.pixels[..., g].mean(axis=-1) for g in groups], axis=-1).astype(np.float32)
 
+    def luminance(self) -> np.ndarray:
+        """``(H, W)`` float32 relative linear luminance: camera white balance, colour matrix, Rec. 709 ``Y``."""
+        if self.camera_wb is None or self.camera_to_srgb is None:
+            missing = "white balance" if self.camera_wb is None else "colour matrix"
+            raise VissimInputError(f"{self.path} records no camera {missing}; its luminance is undefined")
+        wb_rgb = np.array([self.camera_wb[self.channel_names.index(c)] for c in "RGB"])
+        weights = (np.asarray(REC709_LUMINANCE) @ np.asarray(self.camera_to_srgb)) * wb_rgb
+        return (self.rgb().astype(np.float64) @ weights).astype(np.float32)
+
     def as_json(self) -> dict[str, Any]:
         """Everything but the pixels, JSON-ready (for a capture manifest)."""
         out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "pixels"}
         out.update(channel_names=list(self.channel_names), black_levels=list(self.black_levels),
-                   shape_px=list(self.pixels.shape))
+                   shape_px=list(self.pixels.shape),
+                   camera_wb=None if self.camera_wb is None else list(self.camera_wb),
+                   camera_to_srgb=None if self.camera_to_srgb is None else [list(r) for r in self.camera_to_srgb])
         return out
+
+
+def file_sha256(path: str | os.PathLike[str]) -> str:
+    """The sha256 of a file's bytes, hex."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def _camera_name(path: Path) -> str | None:
@@ -114,8 +151,71 @@ def _camera_name(path: Path) -> str | None:
     return name or None
 
 
+def _tiff_ifds(tif: Any) -> list[Any]:
+    """The TIFF's IFDs and their sub-IFDs (where TIFF-based RAWs keep the sensor data)."""
+    ifds = list(tif.pages)
+    for page in list(ifds):
+        for k in range(len(getattr(page, "subifds", None) or ())):
+            ifds.append(tifffile.TiffPages(page, index=k).first)
+    return ifds
+
+
+def _check_tiff_structure(path: Path) -> None:
+    """Refuse a plain TIFF (LibRaw reads any uncompressed TIFF as sensor data) and a TIFF-based RAW cut short."""
+    try:
+        with tifffile.TiffFile(path) as tif:
+            ifds = _tiff_ifds(tif)
+            tags = ifds[0].tags
+            camera_tags = any(k in tags for k in ("Make", "Model", 50706, 50708))  # 50706 DNGVersion, 50708 model
+            cfa = any(int(getattr(ifd, "photometric", 0)) == _PHOTOMETRIC_CFA for ifd in ifds)
+            data_end = max((o + n for ifd in ifds for o, n in zip(ifd.dataoffsets, ifd.databytecounts)), default=0)
+    except Exception:  # noqa: BLE001 - not a TIFF (CR3, RAF, ...): LibRaw decides
+        return
+    if not (camera_tags or cfa):
+        raise VissimInputError(f"{path} is a plain TIFF image (no Make, Model or DNG tags), not a camera RAW file")
+    size = path.stat().st_size
+    if data_end > size:
+        raise VissimInputError(f"{path} is truncated: its image data runs to byte {data_end} but the file has "
+                               f"{size} bytes")
+
+
+def _refuse_zero_rows(raw: Any, path: Path) -> None:
+    """LibRaw fills raw data missing from a short file with 0 DN; a sensor whose black level is above 0 never
+    reads a whole row of 0 DN (TIFF-based files are caught earlier by their data offsets)."""
+    black = min(float(b) for b in raw.black_level_per_channel)
+    visible = np.asarray(raw.raw_image_visible)
+    empty = np.flatnonzero(~visible.any(axis=1))
+    if black > 0 and empty.size:
+        raise VissimInputError(f"{path}: {empty.size} of {visible.shape[0]} sensor rows (from row {empty[0]}) are "
+                               f"all 0 DN, below the black level {black:g} DN: truncated or damaged raw data")
+
+
 def _nonzero(value: float) -> float | None:
     return float(value) if value and math.isfinite(value) and value > 0 else None
+
+
+def _camera_wb(raw: Any, colour_indices: list[int]) -> tuple[float, ...] | None:
+    """As-shot multipliers per CFA colour index (LibRaw order, e.g. R G B G2), green = 1; None if absent."""
+    wb = [float(w) for w in raw.camera_whitebalance]
+    if len(wb) > 3 and wb[3] == 0:
+        wb[3] = wb[1]  # LibRaw leaves the second green 0 when it equals the first
+    if wb[1] <= 0 or not all(math.isfinite(w) and w > 0 for w in (wb[i] for i in colour_indices)):
+        return None
+    return tuple(wb[i] / wb[1] for i in colour_indices)
+
+
+def _camera_to_srgb(raw: Any) -> tuple[tuple[float, float, float], ...] | None:
+    """White-balanced camera RGB -> linear sRGB from the file's XYZ -> camera matrix; None if it has none."""
+    cam_xyz = np.asarray(raw.rgb_xyz_matrix, dtype=np.float64)[:3]
+    cam_rgb = cam_xyz @ np.asarray(XYZ_FROM_SRGB)
+    sums = cam_rgb.sum(axis=1, keepdims=True)
+    if not np.all(np.isfinite(cam_rgb)) or np.any(sums <= 0):
+        return None
+    try:
+        matrix = np.linalg.inv(cam_rgb / sums)
+    except np.linalg.LinAlgError:
+        return None
+    return tuple(tuple(float(v) for v in row) for row in matrix)
 
 
 def _planes(raw: Any, path: Path) -> tuple[np.ndarray, tuple[str, ...], tuple[float, ...], str]:
@@ -161,19 +261,24 @@ def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> Ra
     path = Path(path)
     if not path.is_file():
         raise VissimInputError(f"RAW file {path} {'is not a file' if path.exists() else 'does not exist'}")
+    _check_tiff_structure(path)
     try:
         with rawpy.imread(str(path)) as raw:
+            _refuse_zero_rows(raw, path)
             white = float(raw.white_level)
             # Read the CFA layout and levels before postprocess(), which rewrites them.
             pattern_indices = None if raw.raw_pattern is None else [int(i) for i in np.asarray(raw.raw_pattern).ravel()]
             desc = raw.color_desc.decode("ascii")
             black_per_colour = [float(b) for b in raw.black_level_per_channel]
             other = raw.other
+            camera_to_srgb = _camera_to_srgb(raw)
             if mode == "planes":
                 pixels, names, blacks, cfa = _planes(raw, path)
+                wb = _camera_wb(raw, pattern_indices)
             else:
                 cfa = "".join(desc[i] for i in pattern_indices) if pattern_indices else ""
                 pixels, names, blacks = _demosaic(raw), ("R", "G", "B"), tuple(black_per_colour[:3])
+                wb = _camera_wb(raw, [0, 1, 2])
     except VissimInputError:
         raise
     except (rawpy.LibRawError, rawpy.NotSupportedError, OSError, ValueError) as exc:
@@ -188,6 +293,7 @@ def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> Ra
         pixels=pixels, mode=mode, channel_names=names, black_levels=blacks, white_level=white, cfa_pattern=cfa,
         sensor_px_per_pixel=2 if mode == "planes" else 1, camera=_camera_name(path),
         iso=_nonzero(other.iso_speed), exposure_s=_nonzero(other.shutter_speed), path=str(path),
+        camera_wb=wb, camera_to_srgb=camera_to_srgb, sha256=file_sha256(path),
     )
     logger.debug("read %s (%s): %s px, black %s DN, white %g DN", path, mode, pixels.shape, blacks, white)
     return image

@@ -32,7 +32,7 @@ from vissim.imageio import read_image, write_image
 from vissim.provenance import make_provenance
 from vissim.validation.campaign_types import Campaign
 from vissim.checks import samples_per_pixel
-from vissim.validation.captures import capture_problem, capture_tile, load_manifest
+from vissim.validation.captures import capture_problem, capture_provenance, capture_tile, load_manifest, read_capture
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
 
@@ -79,9 +79,11 @@ def _capture_plan(campaign: Campaign, config, captures: dict) -> tuple | str:
 def _capture_inputs(campaign: Campaign, plan: tuple):
     """(truth_a, truth_b | None, no_lens) tiles of a capture plan, and their provenance."""
     settings = campaign.settings
-    tiles = [None if c is None else capture_tile(c, settings.arcmin_per_px, settings.tile_px) for c in plan]
-    provenance = {name: None if c is None else {"capture": c.id, "file": str(c.file), "sha256": c.sha256}
-                  for name, c in zip(("truth_a", "truth_b", "no_lens"), plan)}
+    raws = [None if c is None else read_capture(c) for c in plan]
+    tiles = [None if c is None else capture_tile(c, settings.arcmin_per_px, settings.tile_px, raw=r)
+             for c, r in zip(plan, raws)]
+    provenance = {name: None if c is None else capture_provenance(c, r)
+                  for name, c, r in zip(("truth_a", "truth_b", "no_lens"), plan, raws)}
     return (*tiles, provenance)
 
 
