@@ -7,7 +7,7 @@ import os
 
 from vissim.errors import VissimInputError
 
-__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "size_px",
+__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
            "format_bytes", "check_allocation"]
 
@@ -109,6 +109,19 @@ def pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
     if not MIN_PUPIL_MM <= pupil <= MAX_PUPIL_MM:
         raise VissimInputError(f"{name} must be within {MIN_PUPIL_MM:g}-{MAX_PUPIL_MM:g} mm, got {pupil:g} mm")
     return pupil
+
+
+def size_text(shape, unit: str = "px") -> str:
+    """An image size as users read it, width x height: ``(480, 640)`` (rows, cols) -> '640 × 480 px (width × height)'.
+
+    ``shape`` is in array order, ``(rows, cols, ...)`` (a NumPy shape; channels are ignored). Every
+    message that states a size goes through here, so a size always reads width first; a square
+    needs no legend ('64 × 64 px').
+    """
+    rows, cols = (float(v) for v in tuple(shape)[:2])
+    width, height = (f"{int(v)}" if v.is_integer() else f"{v:.4g}" for v in (cols, rows))
+    text = f"{width} × {height} {unit}"
+    return text if rows == cols else f"{text} (width × height)"
 
 
 def size_px(value, name: str = "size_px") -> tuple[int, int]:

@@ -259,6 +259,9 @@ def checked_blur_inputs(image, psf, arcmin_per_px: float, padding: str, backgrou
             raise VissimInputError(f"got {len(backgrounds)} background values for {n_channels} channels")
     for p in psfs:
         _check_sampling(p, arcmin_per_px)
+        if p.normalisation != "field":
+            raise VissimInputError("a PSF image (normalised to its total energy) is no blur kernel; compute the "
+                                   "kernel with compute_psf(..., normalise='field'), which sums to 1 over its field")
         if padding == "wrap" and p.data.shape[0] > min(array.shape[:2]):
             rows, cols = array.shape[:2]
             raise VissimInputError(
