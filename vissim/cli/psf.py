@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
 from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.imageio import to_preview_png, write_image
@@ -26,10 +27,12 @@ def add_parser(subparsers) -> None:
         "beside it).",
     )
     add_aberration_args(parser)
-    parser.add_argument("--wavelength-nm", default="550", metavar="NM[,NM...]", help="wavelength(s) in nm (default 550)")
+    parser.add_argument("--wavelength-nm", default=f"{DEFAULT_WAVELENGTH_NM:g}", metavar="NM[,NM...]",
+                        help=f"wavelength(s) in nm (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--weights", metavar="W[,W...]", help="relative weight per wavelength (default equal)")
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
-    parser.add_argument("--lca-reference-nm", type=float, default=550.0, metavar="NM", help="in-focus wavelength for --lca")
+    parser.add_argument("--lca-reference-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
+                        help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
     parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="wave (default) or geometric optics")

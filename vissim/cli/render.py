@@ -131,8 +131,9 @@ def run_bench(args: argparse.Namespace) -> int:
                 arcmin_per_px=bench.arcmin_per_px)
     theory = result.provenance["inputs"]["theory"]
     blur = ", ".join(f"{d:.2f}' along {m:g}°" for d, m in theory["blur_diameter_arcmin"])
+    added = "no trial lens" if theory["added_power"] is None else f"added {theory['added_power']}"
     print(f"wrote {output}: {result.pixels.shape[1]} x {result.pixels.shape[0]} px, {result.spp} spp, "
-          f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, added {theory['added_power']}")
+          f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, {added}")
     return 0
 
 

@@ -68,6 +68,7 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.bench.dslr import DslrBench
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
@@ -494,7 +495,7 @@ def _solution(problem: _Problem, result, shape: tuple[int, int], model_error_dio
 
 
 def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_mm: float, mode: str = "geometric",
-           magnification: str = "bench", bench: DslrBench | None = None, wavelength_nm: float = 550.0,
+           magnification: str = "bench", bench: DslrBench | None = None, wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
            fit_focus_offset: bool = False, fit_pupil: bool = False, max_power_diopters: float = 6.0,
            max_shift_px: float = 8.0, model_error_diopters: float = MODEL_ERROR_DIOPTERS) -> RxFit:
     """Fit the sphero-cylinder added at the camera that turns ``reference`` into ``image`` (module doc).

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
@@ -142,7 +143,7 @@ class PSF:
     normalisation: str = "field"  # "field" (a kernel, unit sum) or "total" (an image, sums to energy_in_field)
 
     @classmethod
-    def from_array(cls, data, arcmin_per_px: float, *, wavelength_nm: float = 550.0, pupil_diameter_mm: float = 0.0) -> PSF:
+    def from_array(cls, data, arcmin_per_px: float, *, wavelength_nm: float = DEFAULT_WAVELENGTH_NM, pupil_diameter_mm: float = 0.0) -> PSF:
         """Wrap a user-supplied kernel (origin at ``[N//2, N//2]``), normalised to unit sum."""
         array = np.array(data, dtype=float)
         if array.ndim != 2 or array.shape[0] != array.shape[1] or not np.all(np.isfinite(array)):
@@ -243,7 +244,7 @@ def compute_psf(
     wavefront: Wavefront,
     *,
     pupil_diameter_mm: float | None = None,
-    wavelength_nm: float | Sequence[float] = 550.0,
+    wavelength_nm: float | Sequence[float] = DEFAULT_WAVELENGTH_NM,
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     arcmin_per_px: float = 0.25,
@@ -396,7 +397,7 @@ def compute_psf(
     )
 
 
-def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = 550.0, pupil_diameter_mm: float | None = None) -> float:
+def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = DEFAULT_WAVELENGTH_NM, pupil_diameter_mm: float | None = None) -> float:
     """Strehl ratio |<exp(ikW)>|^2 over the pupil (cell-averaged quadrature, sampling from the slope).
 
     Parameters

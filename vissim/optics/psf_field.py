@@ -27,6 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.special import j0, j1
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
@@ -100,7 +101,7 @@ def suggested_size_px(
     arcmin_per_px: float,
     *,
     pupil_diameter_mm: float | None = None,
-    wavelength_nm: float | Sequence[float] = 550.0,
+    wavelength_nm: float | Sequence[float] = DEFAULT_WAVELENGTH_NM,
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     mode: str = "wave",
