@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm
+from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
 from vissim.cli._common import add_rx_arg
 from vissim.cli._parser import Number
 from vissim.cli.blur import image_sampling
@@ -112,8 +112,8 @@ def run(args: argparse.Namespace) -> int:
     step = image_sampling(image, args.arcmin_per_px, args.input)
     crop = recorded_margin_px(image.provenance) if args.crop_px is None else args.crop_px
     if crop < 0 or 2 * crop >= min(image.pixels.shape[:2]):
-        raise VissimInputError(f"cannot crop {crop} px from every side of a {image.pixels.shape[1]} x "
-                               f"{image.pixels.shape[0]} px image (--crop-px)")
+        raise VissimInputError(f"cannot crop {crop} px from every side of a {size_text(image.pixels.shape)} image "
+                               "(--crop-px)")
     eye_pupil_diameter_mm(args.pupil_mm, "--pupil-mm")
     depth = read_depth_m(args.depth)
     eye = Prescription.parse(args.rx)

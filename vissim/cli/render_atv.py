@@ -14,7 +14,7 @@ import json
 from pathlib import Path
 
 from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
-from vissim.checks import EYE_PUPIL_RANGE_MM
+from vissim.checks import EYE_PUPIL_RANGE_MM, size_text
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 
@@ -150,7 +150,7 @@ def run_atv(args: argparse.Namespace) -> int:
         print(json.dumps(json_safe({**summary, "output": str(output), "prediction_geometric": prediction}),
                          indent=2, sort_keys=True, allow_nan=False))
     else:
-        print(f"wrote {output}: {result.image.shape[1]} x {result.image.shape[0]} px at {result.arcmin_per_px:g} "
+        print(f"wrote {output}: {size_text(result.image.shape)} at {result.arcmin_per_px:g} "
               f"arcmin/px, {result.method} ({result.n_rays} {'rays' if result.method == 'trace' else 'camera paths'}, "
               f"{result.variant}, {result.seconds:.1f} s)")
         print(f"peak {result.peak:.5g} per arcmin^2 (±{100 * result.peak_relative_std:.2g} %), spot diameter "

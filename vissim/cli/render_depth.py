@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm
+from vissim.checks import EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
 from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
 from vissim.errors import VissimInputError
 
@@ -173,10 +173,10 @@ def run_depth(args: argparse.Namespace) -> int:
         write_depth(args.depth, result.depth_m, provenance=depth, overwrite=args.overwrite, arcmin_per_px=step)
         written.append(str(args.depth))
     rows, cols = loaded.scene.size_px
-    print(f"wrote {', '.join(written)}: {cols} x {rows} px, {result.spp} spp, {result.variant}, "
+    print(f"wrote {', '.join(written)}: {size_text((rows, cols))}, {result.spp} spp, {result.variant}, "
           f"{result.seconds:.1f} s; {viewer.label()}")
     if result.margin_px:
-        print(f"  all-in-focus and depth: {cols + 2 * result.margin_px} x {rows + 2 * result.margin_px} px "
+        print(f"  all-in-focus and depth: {size_text((rows + 2 * result.margin_px, cols + 2 * result.margin_px))} "
               f"(a {result.margin_px} px margin beyond the frame; blur-depth crops it)")
     setup = viewing_setup(viewer, loaded.scene)
     for g in panel_geometries(loaded.scene):
