@@ -427,7 +427,7 @@ class Chart:
         if not (isinstance(self.pixels, np.ndarray) and self.pixels.dtype == np.float32 and self.pixels.ndim == 2):
             raise VissimInputError(f"Chart.pixels must be a 2-D float32 array, got {getattr(self.pixels, 'dtype', '?')}")
         if self.pixels.shape != tuple(self.layout.shape_px):
-            raise VissimInputError(f"Chart.pixels shape {self.pixels.shape} != layout {self.layout.shape_px} px")
+            raise VissimInputError(f"Chart.pixels are {size_text(self.pixels.shape)}, its layout {size_text(self.layout.shape_px)}")
 
     arcmin_per_px = property(lambda self: self.layout.arcmin_per_px)
     mm_per_px = property(lambda self: self.layout.mm_per_px)
