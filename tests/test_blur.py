@@ -186,7 +186,7 @@ def test_wrap_padding_refuses_a_psf_larger_than_the_image_on_both_paths(defocus_
 
     image = random_image(shape=(40, 60))
     for blur in (blur_image, blur_image_on):
-        with pytest.raises(VissimInputError, match="46 px PSF is larger than the 40x60 px image"):
+        with pytest.raises(VissimInputError, match=r"46 × 46 px PSF is larger than the 60 × 40 px \(width × height\) image"):
             blur(image, defocus_psf, arcmin_per_px=1.0, padding="wrap")
 
 

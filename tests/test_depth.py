@@ -320,7 +320,7 @@ def test_depth_must_be_positive_metres_or_inf(bad):
 
 def test_other_bad_inputs():
     kwargs = dict(eye_prescription=Prescription(0.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
-    with pytest.raises(VissimInputError, match="does not match the image"):
+    with pytest.raises(VissimInputError, match=r"the depth map is 9 × 8 px \(width × height\) but the image 8 × 8 px"):
         blur_depth(texture((8, 8)), np.ones((8, 9)), **kwargs)
     with pytest.raises(VissimInputError, match="accommodation exerted must be >= 0 dioptres"):
         blur_depth(texture((8, 8)), np.ones((8, 8)), accommodation_diopters=-1.0, **kwargs)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.atomic import write_json_atomic
 from vissim.charts import etdrs_chart_spec, render_chart_angular
 from vissim.imageio import to_preview_png, write_image
@@ -30,7 +31,7 @@ DEMO_PRESCRIPTIONS = {"myopia": "-2.00 DS", "astigmatism": "-2.00 DC x 90"}
 @dataclass(frozen=True)
 class DemoSettings:
     pupil_diameter_mm: float = 3.0
-    wavelength_nm: float = 550.0
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM
     arcmin_per_px: float = 1.0
     logmar_top: float = 1.0
     logmar_bottom: float = 0.3

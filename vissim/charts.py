@@ -36,6 +36,7 @@ import numpy as np
 
 from vissim.acuity import (THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, letter_height_mm,
                            logmar_to_snellen, subtense_arcmin, subtense_mm)
+from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, finite_number, positive_number
 from vissim.errors import VissimInputError
@@ -388,7 +389,7 @@ def layout_chart(
         content = [(h - l) * px_per_unit for l, h in zip(lo, hi)]
         if any(c > s + 1e-9 for c, s in zip(content, shape)) or min(shape) < 1:
             raise VissimInputError(
-                f"letters {content[0]:.1f} x {content[1]:.1f} px do not fit a {shape[0]} x {shape[1]} px image"
+                f"letters {size_text([round(c, 1) for c in content])} do not fit a {size_text(shape)} image"
             )
         offset = tuple(0.5 * (s - c) - l * px_per_unit for s, c, l in zip(shape, content, lo))
     letters = []
@@ -426,7 +427,7 @@ class Chart:
         if not (isinstance(self.pixels, np.ndarray) and self.pixels.dtype == np.float32 and self.pixels.ndim == 2):
             raise VissimInputError(f"Chart.pixels must be a 2-D float32 array, got {getattr(self.pixels, 'dtype', '?')}")
         if self.pixels.shape != tuple(self.layout.shape_px):
-            raise VissimInputError(f"Chart.pixels shape {self.pixels.shape} != layout {self.layout.shape_px} px")
+            raise VissimInputError(f"Chart.pixels are {size_text(self.pixels.shape)}, its layout {size_text(self.layout.shape_px)}")
 
     arcmin_per_px = property(lambda self: self.layout.arcmin_per_px)
     mm_per_px = property(lambda self: self.layout.mm_per_px)
@@ -477,7 +478,7 @@ def _render(spec: ChartSpec, layout: ChartLayout, supersample: int) -> Chart:
     tallest = max((box.height_px for box in layout.letters), default=0.0)
     letter_px = tallest * tallest
     check_allocation(float(rows) * cols * _BYTES_PER_CHART_PX + letter_px * _BYTES_PER_LETTER_PX,
-                     f"a {float(rows):.6g} x {float(cols):.6g} px chart ({layout.rendering})")
+                     f"a {size_text((rows, cols))} chart ({layout.rendering})")
     coverage = np.zeros(layout.shape_px, dtype=float)
     for box in layout.letters:
         window = letter_coverage_window(box.letter, box.height_px, layout.shape_px, box.center_rc,

@@ -7,8 +7,8 @@ import os
 
 from vissim.errors import VissimInputError
 
-__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "size_px",
-           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
+__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
+           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
            "format_bytes", "check_allocation"]
 
 
@@ -33,6 +33,10 @@ def positive_number(value, name: str, unit: str, *, allow_inf: bool = False) -> 
 
 #: Wavelengths a PSF may be computed at (nm): the near UV to the near IR.
 WAVELENGTH_RANGE_NM = (200.0, 2000.0)
+#: The wavelength every command and function uses when none is given, nm: the thesis's, near the
+#: photopic peak (docs/conventions.md, "Defaults"). The bench's wave truth alone differs: it is
+#: traced at the glass's d line, where the lenses have the index Mitsuba renders.
+DEFAULT_WAVELENGTH_NM = 550.0
 
 
 def wavelength_nm(value, name: str = "wavelength") -> float:
@@ -99,16 +103,43 @@ def arcmin_per_px(value, name: str = "angular sampling") -> float:
     return step
 
 
-#: Pupil diameters vissim takes, mm: an eye's are 1-9, the thesis camera's 3.6.
-MIN_PUPIL_MM, MAX_PUPIL_MM = 0.01, 1000.0
+#: Entrance pupils of any optics (a camera, a telescope, an eye), mm: the thesis camera's is 3.6
+#: (18 mm at f/5); a 50 mm f/1.4 lens's 36.
+ENTRANCE_PUPIL_RANGE_MM = MIN_PUPIL_MM, MAX_PUPIL_MM = 0.01, 1000.0
+#: A human eye's pupil, mm: about 1.5 in bright light to 8-9 dark-adapted in the young, with a margin.
+#: Commands whose viewer is an eye (render atv, atv simulate, blur-depth, render depth's eye) take these.
+EYE_PUPIL_RANGE_MM = 1.0, 10.0
 
 
 def pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
-    """A pupil diameter within [:data:`MIN_PUPIL_MM`, :data:`MAX_PUPIL_MM`] mm."""
+    """An entrance pupil diameter within :data:`ENTRANCE_PUPIL_RANGE_MM` mm."""
+    return _pupil_within(value, name, ENTRANCE_PUPIL_RANGE_MM, "")
+
+
+def eye_pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
+    """An eye's pupil diameter within :data:`EYE_PUPIL_RANGE_MM` mm."""
+    return _pupil_within(value, name, EYE_PUPIL_RANGE_MM, " (a human eye's pupil)")
+
+
+def _pupil_within(value, name: str, bounds: tuple[float, float], what: str) -> float:
     pupil = positive_number(value, name, "mm")
-    if not MIN_PUPIL_MM <= pupil <= MAX_PUPIL_MM:
-        raise VissimInputError(f"{name} must be within {MIN_PUPIL_MM:g}-{MAX_PUPIL_MM:g} mm, got {pupil:g} mm")
+    low, high = bounds
+    if not low <= pupil <= high:
+        raise VissimInputError(f"{name} must be within {low:g}-{high:g} mm{what}, got {pupil:g} mm")
     return pupil
+
+
+def size_text(shape, unit: str = "px") -> str:
+    """An image size as users read it, width x height: ``(480, 640)`` (rows, cols) -> '640 × 480 px (width × height)'.
+
+    ``shape`` is in array order, ``(rows, cols, ...)`` (a NumPy shape; channels are ignored). Every
+    message that states a size goes through here, so a size always reads width first; a square
+    needs no legend ('64 × 64 px').
+    """
+    rows, cols = (float(v) for v in tuple(shape)[:2])
+    width, height = (f"{int(v)}" if v.is_integer() else f"{v:.4g}" for v in (cols, rows))
+    text = f"{width} × {height} {unit}"
+    return text if rows == cols else f"{text} (width × height)"
 
 
 def size_px(value, name: str = "size_px") -> tuple[int, int]:

@@ -56,7 +56,7 @@ def test_simulate_rejects_a_bad_pupil(capsys, tmp_path):
 
 def test_run_with_a_simulated_observer_writes_the_result(capsys, tmp_path):
     target = tmp_path / "result.json"
-    code, out, _ = run(capsys, "atv", "run", "--threshold", "0.0669", "--slope", "inf", "--seed", "2", "-o", str(target))
+    code, out, _ = run(capsys, "atv", "run", "--threshold", "0.0669", "--code-value-slope", "inf", "--seed", "2", "-o", str(target))
     assert code == 0 and "threshold 0.06" in out
     result = json.loads(target.read_text())["result"]
     assert result["interval_code"][0] < 0.0669 <= result["interval_code"][1]

@@ -60,7 +60,7 @@ def test_render_bench_strong_sphere_is_refused_for_memory(capsys, tmp_path):
 
 def test_render_bench_huge_frame_is_refused_for_memory_not_a_negative_aperture(capsys, tmp_path):
     code, _, err = run(capsys, "render", "bench", "--size", "100000x100000", "-o", tmp_path / "x.exr")
-    assert_one_error_line(code, err, "100000 x 100000 px", "would need")
+    assert_one_error_line(code, err, "100000 × 100000 px", "would need")
     assert "clear aperture" not in err
 
 
@@ -74,7 +74,7 @@ def test_render_bench_impossible_sphere_names_the_lens(capsys, tmp_path):
 
 def test_chart_at_a_microscopic_sampling_is_refused_for_memory(capsys, tmp_path):
     code, _, err = run(capsys, "chart", "--logmar", "1", "--arcmin-per-px", "1e-6", "-o", tmp_path / "c.exr")
-    assert_one_error_line(code, err, "px chart", "would need", "EiB")
+    assert_one_error_line(code, err, "(width × height) chart", "would need", "EiB")
     assert not list(tmp_path.iterdir())
 
 

@@ -1,6 +1,7 @@
 """The rx, psf, blur and demo commands, as a user runs them."""
 
 import json
+import logging
 
 import numpy as np
 import pytest
@@ -40,14 +41,15 @@ def test_rx_bad_input_is_one_line_and_exit_2(capsys, bad):
     assert err.startswith("vissim: error:") and err.count("\n") == 1
 
 
-def test_psf_writes_a_unit_sum_y_exr_with_its_sampling(capsys, tmp_path):
+def test_psf_writes_a_y_exr_summing_to_its_recorded_energy_in_field(capsys, tmp_path):
     target = tmp_path / "psf.exr"
     code, out, _ = run(capsys, "psf", "--rx", "-1.00 DS", "--pupil-mm", "3", "--arcmin-per-px", "0.5", "--size", "64", "-o", str(target))
-    assert code == 0 and "wrote" in out
+    assert code == 0 and "wrote" in out and "PSF 64 × 64 px at 0.5 arcmin/px" in out
     image = read_image(target)
     assert image.channel_names == ("Y",) and image.pixels.dtype == np.float32
-    assert float(image.pixels.sum(dtype=np.float64)) == pytest.approx(1.0, abs=1e-5)
     psf_info = image.provenance["inputs"]["psf"]
+    assert psf_info["normalisation"] == "total" and 0.99 < psf_info["energy_in_field"] < 1.0
+    assert float(image.pixels.sum(dtype=np.float64)) == pytest.approx(psf_info["energy_in_field"], rel=1e-5)
     assert psf_info["arcmin_per_px"] == 0.5 and psf_info["pupil_diameter_mm"] == 3.0
     # refuses to overwrite
     code, _, err = run(capsys, "psf", "--rx", "-1.00 DS", "--pupil-mm", "3", "--size", "64", "--arcmin-per-px", "0.5", "-o", str(target))
@@ -69,9 +71,17 @@ def test_psf_of_no_aberration(capsys, tmp_path, rx):
     assert code == 0
 
 
-def test_psf_field_too_small_is_a_clear_error(capsys, tmp_path):
-    code, _, err = run(capsys, "psf", "--rx", "-4 DS", "--pupil-mm", "6", "--size", "32", "--arcmin-per-px", "1", "-o", str(tmp_path / "a.exr"))
-    assert code == 2 and "at least" in err
+def test_psf_of_a_field_smaller_than_the_blur_is_written_with_one_warning(capsys, caplog, tmp_path):
+    # The field holds 19 % of a -4 D, 6 mm PSF (blur radius 41'): an image of what it holds.
+    target = tmp_path / "a.exr"
+    with caplog.at_level(logging.WARNING):  # the CLI shows it as one 'vissim: WARNING:' line
+        code, out, _ = run(capsys, "psf", "--rx", "-4 DS", "--pupil-mm", "6", "--size", "32", "--arcmin-per-px", "1",
+                           "-o", str(target))
+    assert code == 0 and "19.23 % of the energy in the field" in out
+    assert [r.getMessage().split(";")[0] for r in caplog.records if r.levelno >= logging.WARNING] == [
+        "80.8 % of the PSF's energy falls outside the 32 px field (32 arcmin)"]
+    energy = read_image(target).provenance["inputs"]["psf"]["energy_in_field"]
+    assert float(read_image(target).pixels.sum(dtype=np.float64)) == pytest.approx(energy, rel=1e-5)
 
 
 def test_blur_uses_the_sampling_in_the_image_provenance(capsys, tmp_path):

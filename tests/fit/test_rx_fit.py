@@ -80,7 +80,7 @@ def test_no_lens_is_reported_unresolved_with_a_bound_not_a_power():
 
 def test_sizes_that_differ_are_refused():
     image, reference, _ = capture(TrialLens(1.0))
-    with pytest.raises(VissimInputError, match=r"96 x 96 px but the reference is 96 x 95 px"):
+    with pytest.raises(VissimInputError, match=r"96 × 96 px but the reference is 95 × 96 px \(width × height\)"):
         _fit(image, reference[:, :95])
 
 

@@ -272,8 +272,8 @@ def test_cli_refuses_mismatched_budgets_and_bad_values(tmp_path, capsys):
     out = str(tmp_path / "spot.exr")
     with pytest.raises(VissimInputError, match="--spp goes with --method camera"):
         _cli(tmp_path, capsys, "--spp", "8", "-o", out)
-    with pytest.raises(VissimInputError, match="pupil diameter must be >= 2 mm"):
-        _cli(tmp_path, capsys, "--pupil-mm", "1", "-o", out)
+    with pytest.raises(VissimInputError, match="pupil diameter must be within 1-10 mm"):
+        _cli(tmp_path, capsys, "--pupil-mm", "0.5", "-o", out)
     with pytest.raises(VissimInputError, match=r"\.exr"):
         _cli(tmp_path, capsys, "-o", str(tmp_path / "spot.png"))
     with pytest.raises(VissimInputError, match=r"display code must lie in \[0, 1\]"):

@@ -71,12 +71,12 @@ def test_data_range_is_required_and_never_guessed():
 
 
 def test_shapes_must_match():
-    with pytest.raises(VissimInputError, match="shapes must match"):
+    with pytest.raises(VissimInputError, match="sizes must match"):
         compare_images(np.zeros((32, 32)), np.zeros((32, 33)), data_range=1.0)
 
 
 def test_images_smaller_than_the_ssim_window_are_refused():
-    with pytest.raises(VissimInputError, match="11 x 11"):
+    with pytest.raises(VissimInputError, match=r"image is 32 × 8 px \(width × height\); SSIM.s Gaussian window needs at least 11 × 11 px"):
         compare_images(np.zeros((8, 32)), np.zeros((8, 32)), data_range=1.0)
 
 

@@ -93,7 +93,7 @@ def test_implausibly_large_shift_is_refused(letter):
 
 
 def test_bad_inputs_are_refused(letter):
-    with pytest.raises(VissimInputError, match="shapes must match"):
+    with pytest.raises(VissimInputError, match="sizes must match"):
         register(letter, letter[:-1])
     with pytest.raises(VissimInputError, match="2-D"):
         register(np.stack([letter] * 3, -1), np.stack([letter] * 3, -1))

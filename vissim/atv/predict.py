@@ -36,6 +36,7 @@ import numpy as np
 import scipy.ndimage
 import scipy.signal
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.bench.atv import AtvConfig
 from vissim.bench.atv_paraxial import AtvParaxial, atv_paraxial
 from vissim.errors import VissimInputError
@@ -190,7 +191,7 @@ def _pixel_kernel(par: AtvParaxial, pitch_mm: float, offset_mm, fine_arcmin: flo
 
 
 def predicted_spot(config: AtvConfig, *, arcmin_per_px: float = 0.5, size_px: int | None = None,
-                   mode: str = "geometric", wavelength_nm: float = 555.0) -> AtvPrediction:
+                   mode: str = "geometric", wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> AtvPrediction:
     """The retinal image of the pixel by first-order optics (module doc).
 
     ``mode="geometric"`` convolves the pixel's square with the geometric blur of the defocus

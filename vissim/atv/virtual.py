@@ -41,13 +41,14 @@ from dataclasses import asdict, dataclass, field, fields
 import numpy as np
 import scipy.signal
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.atv.analysis import CurveAnalysis, analyse_curve
 from vissim.atv.data import THESIS_TRIAL_LENSES_DIOPTERS
 from vissim.atv.procedure import (ProcedureConfig, PsychometricFunction, SimulatedObserver, ThresholdResult,
                                   run_procedure)
 from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM, IPHONE5_PPI, AtvTube, pixel_pitch_mm
 from vissim.checks import finite_number, positive_number
-from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.checks import eye_pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
@@ -98,7 +99,7 @@ class AtvApparatus:
     pixel_pitch_mm: float = IPHONE5_PIXEL_PITCH_MM
     collimator_focal_length_mm: float = ATV_COLLIMATOR_FOCAL_LENGTH_MM
     trial_lens_vertex_mm: float = ATV_TRIAL_LENS_DISTANCE_MM  # the bench's slot (one value for both)
-    wavelength_nm: float = 555.0
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM
     display_gamma: float = 2.2
 
     def __post_init__(self) -> None:

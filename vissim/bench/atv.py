@@ -27,7 +27,7 @@ Choices, and why:
   ``trial_lens_distance_mm`` in front of the pupil (15 mm: a 12 mm vertex distance plus 3 mm
   from the cornea to the entrance pupil).  :func:`atv_trial_lens` makes one of realistic
   thickness.
-* **Eye**: pupil 2-8 mm, its own :class:`~vissim.optics.prescription.RefractiveError` (a
+* **Eye**: pupil within ``vissim.checks.EYE_PUPIL_RANGE_MM`` (1-10 mm), its own :class:`~vissim.optics.prescription.RefractiveError` (a
   :class:`~vissim.optics.prescription.Prescription` is converted) and accommodation >= 0 D.  A ray
   through pupil point x (mm) with direction angle u lands at visual angle
   ``-u + (E + A) x`` milliradians: the thin lens is the eye's excess power E plus accommodation.
@@ -46,12 +46,12 @@ import numpy as np
 from vissim.bench.lens_mesh import (lens_surface_curvatures_per_mm, realistic_center_thickness_mm,
                                     rim_thickness_mm, sag_mm)
 from vissim.charts import MM_PER_INCH
-from vissim.checks import finite_number
+from vissim.checks import eye_pupil_diameter_mm, finite_number
 from vissim.errors import VissimInputError
 from vissim.imageio import srgb_decode
 from vissim.optics.prescription import LensPower, Prescription, RefractiveError
 from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
+from vissim.optics.trial_lens import CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, TrialLens
 from vissim.units import diopters_to_mm, m_to_mm, mm_to_m
 
 __all__ = ["IPHONE5_PPI", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout",
@@ -59,10 +59,10 @@ __all__ = ["IPHONE5_PPI", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig",
 
 #: Pixel density of the iPhone 5's Retina display (thesis section 5.4).
 IPHONE5_PPI = 326.0
-#: From the trial lens's back vertex to the eye's pupil in the eyecup slot (mm); the thesis gives none.
-ATV_TRIAL_LENS_DISTANCE_MM = 15.0
+#: From the trial lens's back vertex to the eye's pupil in the eyecup slot (mm); the thesis gives none,
+#: so it is an eye's default (12 mm spectacle vertex distance + 3 mm cornea to entrance pupil).
+ATV_TRIAL_LENS_DISTANCE_MM = EYE_VERTEX_DISTANCE_MM
 DISPLAY_TRANSFERS = ("srgb", "gamma2.2")
-PUPIL_RANGE_MM = (2.0, 8.0)
 MAX_ACCOMMODATION_DIOPTERS = 15.0
 #: Tube radius beyond the largest clear aperture, mm (the lenses sit in the tube).
 TUBE_CLEARANCE_MM = 0.05
@@ -190,9 +190,7 @@ class AtvEye:
     accommodation_diopters: float = 0.0
 
     def __post_init__(self) -> None:
-        lo, hi = PUPIL_RANGE_MM
-        object.__setattr__(self, "pupil_diameter_mm", _number(self.pupil_diameter_mm, "pupil diameter", "mm",
-                                                              lo=lo, hi=hi))
+        object.__setattr__(self, "pupil_diameter_mm", eye_pupil_diameter_mm(self.pupil_diameter_mm))
         error = self.refractive_error
         if error is None:
             error = RefractiveError(0.0)

@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm
+from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, samples_per_pixel
 from vissim.checks import size_px as check_size_px
@@ -253,7 +254,7 @@ def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm
     channels = pixels.shape[2] if pixels.ndim == 3 else 1
     rows, cols = bench.size_px
     check_allocation(TEXTURE_BYTES_PER_TEXEL * channels * need_px[0] * need_px[1],
-                     f"the bench's {need_px[0]} x {need_px[1]} texel chart texture ({rows} x {cols} px frame, "
+                     f"the bench's {size_text(need_px, 'texel')} chart texture ({size_text((rows, cols))} frame, "
                      f"blur {max(d for d, _ in setup.blur_diameter_arcmin):.3g} arcmin)")
     out = pixels
     for axis, need in enumerate(need_px):

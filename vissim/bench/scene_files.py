@@ -23,7 +23,7 @@ from typing import Any
 from vissim.bench.dslr import DslrBench
 from vissim.charts import DEFAULT_LETTER_SEED, ChartSpec, etdrs_chart_spec, single_letter_spec
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.trial_lens import EYE_VERTEX_DISTANCE_MM, TrialLens
 from vissim.units import mm_to_m
 
 __all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables", "read_scene_toml"]
@@ -233,5 +233,5 @@ def load_atv_toml(path: str | os.PathLike[str]):
                   ("axis_deg", 180.0, "degrees"))
         trial = atv_trial_lens(*(value("trial_lens", key, default, float, unit) for key, default, unit in powers))
     return AtvConfig(tube=tube, eye=eye, trial_lens=trial,
-                     trial_lens_distance_mm=value("trial_lens", "distance_mm", 15.0, float, "mm"),
+                     trial_lens_distance_mm=value("trial_lens", "distance_mm", EYE_VERTEX_DISTANCE_MM, float, "mm"),
                      fresnel_loss=value("trial_lens", "fresnel_loss", False, bool, "(true/false)"))

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import size_text
 from vissim.bench.bench_wavefront import D_LINE_NM, TracedWavefront, trace_bench_wavefront
 from vissim.bench.dslr import DslrBench
 from vissim.charts import ChartSpec, chart_sidecar, render_chart_angular
@@ -99,8 +100,9 @@ def image_through_traced_lenses(
     _check(bench, oversample, mode)
     rows, cols = bench.size_px
     if np.shape(fine) != (rows * oversample, cols * oversample):
-        raise VissimInputError(f"the fine image must be {rows * oversample} x {cols * oversample} px (rows, cols: the "
-                               f"bench's {rows} x {cols} px frame, {oversample} x finer), got {np.shape(fine)}")
+        raise VissimInputError(f"the fine image must be {size_text((rows * oversample, cols * oversample))} (the "
+                               f"bench's {size_text((rows, cols))} frame, {oversample} times finer), got "
+                               f"{size_text(np.shape(fine)) if np.ndim(fine) >= 2 else np.shape(fine)}")
     setup = bench.viewing_setup()
     step = bench.arcmin_per_px / oversample
     wavelengths = [float(w) for w in wavelengths_nm]

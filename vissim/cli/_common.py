@@ -6,6 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
+from vissim.checks import ENTRANCE_PUPIL_RANGE_MM
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
@@ -48,7 +49,9 @@ def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = Tru
                        help="OSA Zernike terms in µm, 'n,m=µm;n,m=µm' (e.g. '2,0=0.5;4,0=0.1'); adds to --rx")
     group.add_argument("--zernike-pupil-mm", type=float, metavar="D",
                        help="pupil diameter the --zernike coefficients were measured over (default: --pupil-mm)")
-    group.add_argument("--pupil-mm", type=float, required=required, metavar="D", help="pupil diameter in mm")
+    group.add_argument("--pupil-mm", type=float, required=required, metavar="D",
+                       help="entrance pupil diameter in mm, an eye's or a camera's "
+                            f"({ENTRANCE_PUPIL_RANGE_MM[0]:g}-{ENTRANCE_PUPIL_RANGE_MM[1]:g})")
     parser.set_defaults(_aberration_required=required)
 
 

@@ -98,7 +98,7 @@ _INTS_BY_DEST = {
 }
 #: Powers, dioptres: within +-MAX_POWER_DIOPTERS.
 _POWERS = {"sphere", "cylinder", "back_surface_diopters",
-           "accommodation_diopters", "amplitude_diopters", "proximal_diopters"}
+           "accommodation_diopters", "amplitude_diopters", "accommodation_amplitude_diopters", "proximal_diopters"}
 #: Plain ``type=float`` options that only make sense positive.
 _POSITIVE_FLOATS = {
     "pupil_mm", "zernike_pupil_mm", "arcmin_per_px", "wavelength_nm", "lca_reference_nm", "channel_fwhm_nm",

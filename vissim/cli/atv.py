@@ -1,7 +1,7 @@
 """``vissim atv``: the absolute threshold for vision (thesis Ch. 5).
 
 * ``vissim atv analyze DIR -o OUT`` -- fit every subject file in DIR; figures, report.md/.html, analysis.json.
-* ``vissim atv simulate --rx RX --pupil-mm D [--accommodation-diopters A] [--cycloplegia] -o OUT`` -- a virtual subject.
+* ``vissim atv simulate --rx RX --pupil-mm D [--accommodation-amplitude-diopters A] [--cycloplegia] -o OUT`` -- a virtual subject.
 * ``vissim atv run [--observer simulated|person] -o result.json`` -- one threshold by Listing 5.1.
 """
 
@@ -11,9 +11,11 @@ import argparse
 import math
 from pathlib import Path
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import add_rx_arg, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
+from vissim.optics.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 
 
 def add_parser(subparsers) -> None:
@@ -44,13 +46,18 @@ def add_parser(subparsers) -> None:
                          "threshold by spatial summation, Listing 5.1 with a simulated observer at every lens.")
     add_rx_arg(sim, required=True)
     sim.add_argument("--pupil-mm", type=float, required=True, metavar="D", help="pupil diameter in mm")
-    sim.add_argument("--accommodation-diopters", type=float, default=8.0, metavar="A", help="accommodation amplitude in D (default 8)")
+    sim.add_argument("--accommodation-amplitude-diopters", type=float, default=8.0, metavar="A",
+                     help="amplitude of accommodation, D: the most the subject can exert (default 8); the "
+                          "accommodation exerted at each lens follows from it")
     sim.add_argument("--cycloplegia", action="store_true", help="no accommodation (cycloplegic drops)")
     sim.add_argument("--proximal-diopters", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
     sim.add_argument("--lenses", metavar="D[,D...]", help="trial lenses in D (default: the thesis's 17)")
     sim.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
-                     help="vertex distance: trial lens back vertex to the eye's pupil (default: the ATV bench's 15)")
-    sim.add_argument("--wavelength-nm", type=float, default=555.0, help="wavelength, nm (default 555)")
+                     help=f"vertex distance: trial lens back vertex to the eye's pupil (default "
+                          f"{EYE_VERTEX_DISTANCE_MM:g}: a {SPECTACLE_VERTEX_DISTANCE_MM:g} mm spectacle vertex "
+                          f"distance + {CORNEA_TO_ENTRANCE_PUPIL_MM:g} mm cornea to pupil)")
+    sim.add_argument("--wavelength-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
+                     help=f"wavelength, nm (default {DEFAULT_WAVELENGTH_NM:g})")
     sim.add_argument("--summation-arcmin", type=float, default=10.0, help="summation (Ricco) diameter, arcmin (default 10)")
     sim.add_argument("--full-capture-code", type=float, default=0.06, help="threshold code value with all flux summed (default 0.06)")
     sim.add_argument("--gamma", type=float, default=2.2, help="display gamma, code value -> luminance (default 2.2)")
@@ -78,11 +85,16 @@ def add_parser(subparsers) -> None:
 
 def _observer_args(parser: argparse.ArgumentParser, *, threshold: bool) -> None:
     group = parser.add_argument_group("simulated observer (Weibull psychometric function)")
+    exponent = Number(float, positive=True, allow_inf=True, unit="(Weibull exponent)")
     if threshold:
         group.add_argument("--threshold", type=float, default=0.1, help="50 %% point, code value (default 0.1)")
-        group.add_argument("--slope", type=Number(float, positive=True, allow_inf=True), default=20.0, help="Weibull exponent in code values (default 20)")
+        group.add_argument("--code-value-slope", type=exponent, default=20.0, metavar="B",
+                           help="Weibull exponent of P(seen) as a function of the display code value (default 20; "
+                                "inf: a step at --threshold)")
     else:
-        group.add_argument("--slope", type=Number(float, positive=True, allow_inf=True), default=4.0, help="Weibull exponent in luminance (default 4)")
+        group.add_argument("--luminance-slope", type=exponent, default=4.0, metavar="B",
+                           help="Weibull exponent of P(seen) as a function of luminance (default 4); as a function "
+                                "of the code value it is --gamma times this")
     group.add_argument("--guess", type=float, default=0.0, help="false-alarm rate (default 0)")
     group.add_argument("--lapse", type=float, default=0.0, help="lapse rate (default 0)")
 
@@ -122,14 +134,14 @@ def run_simulate(args: argparse.Namespace) -> int:
     from vissim.optics.prescription import Prescription
 
     subject = VirtualSubject(
-        Prescription.parse(args.rx), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_diopters,
+        Prescription.parse(args.rx), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_amplitude_diopters,
         cycloplegia=args.cycloplegia, proximal_accommodation_diopters=args.proximal_diopters,
     )
     vertex = {} if args.vertex_mm is None else {"trial_lens_vertex_mm": args.vertex_mm}
     apparatus = AtvApparatus(**vertex, wavelength_nm=args.wavelength_nm, display_gamma=args.gamma)
     detection = DetectionModel(
         summation_diameter_arcmin=args.summation_arcmin, threshold_code_full_capture=args.full_capture_code,
-        psychometric_slope=args.slope, guess_rate=args.guess, lapse_rate=args.lapse,
+        psychometric_slope=args.luminance_slope, guess_rate=args.guess, lapse_rate=args.lapse,
     )
     kwargs = {}
     if args.lenses:
@@ -157,9 +169,10 @@ def run_procedure_command(args: argparse.Namespace) -> int:
     refuse_existing(args.output, overwrite=args.overwrite)  # fail before a person spends minutes answering
     observer_record: dict = {"kind": args.observer}
     if args.observer == "simulated":
-        psychometric = PsychometricFunction(args.threshold, args.slope, args.guess, args.lapse)
+        psychometric = PsychometricFunction(args.threshold, args.code_value_slope, args.guess, args.lapse)
         observer = SimulatedObserver(psychometric, seed=args.seed)
-        observer_record.update(threshold_code=args.threshold, slope=args.slope, guess_rate=args.guess, lapse_rate=args.lapse)
+        observer_record.update(threshold_code=args.threshold, code_value_slope=args.code_value_slope,
+                               guess_rate=args.guess, lapse_rate=args.lapse)
     else:
         from vissim.atv.interactive import make_person_observer
 

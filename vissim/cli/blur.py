@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
 from vissim.imageio import Image, read_image, write_image
@@ -35,7 +36,7 @@ def add_parser(subparsers) -> None:
         help="the image's angular sampling (default: the one its file records, e.g. a vissim chart or render)",
     )
     colour = parser.add_mutually_exclusive_group()
-    colour.add_argument("--wavelength-nm", metavar="NM[,NM...]", help="wavelength(s) for every channel (default 550)")
+    colour.add_argument("--wavelength-nm", metavar="NM[,NM...]", help=f"wavelength(s) for every channel (default {DEFAULT_WAVELENGTH_NM:g})")
     colour.add_argument("--channels-nm", metavar="R,G,B", help="one wavelength per RGB channel (default 610,550,465)")
     parser.add_argument(
         "--channel-fwhm-nm",
@@ -44,7 +45,8 @@ def add_parser(subparsers) -> None:
         help="spectral weighting per channel: a Gaussian band of this FWHM around each channel's wavelength",
     )
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
-    parser.add_argument("--lca-reference-nm", type=float, default=550.0, metavar="NM", help="in-focus wavelength for --lca")
+    parser.add_argument("--lca-reference-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
+                        help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="PSF optics (default wave)")
     parser.add_argument("--padding", choices=PADDING_MODES, default="constant", help="outside the image (default constant: border mean)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
@@ -71,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
         if len(per_channel) != 3:
             raise VissimInputError(f"--channels-nm needs three wavelengths (R,G,B) in nm, got {args.channels_nm!r}")
     elif args.wavelength_nm is not None or n_channels == 1:
-        wavelengths = parse_float_list(args.wavelength_nm or "550", "--wavelength-nm", "nm")
+        wavelengths = parse_float_list(args.wavelength_nm or f"{DEFAULT_WAVELENGTH_NM:g}", "--wavelength-nm", "nm")
         per_channel = [wavelengths] * n_channels
     else:
         per_channel = [[w] for w in DEFAULT_CHANNELS_NM]

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
 from vissim.cli._common import add_rx_arg
 from vissim.cli._parser import Number
 from vissim.cli.blur import image_sampling
@@ -36,19 +37,21 @@ def add_parser(subparsers) -> None:
     parser.add_argument("depth", type=Path, help="depth in metres: .npy, or .exr with one channel (Z/depth/Y); inf = sky")
     parser.add_argument("-o", "--output", required=True, type=Path, help="output image (.exr, .png, .tif)")
     add_rx_arg(parser, required=True)
-    parser.add_argument("--pupil-mm", required=True, type=float, metavar="D", help="pupil diameter in mm")
+    parser.add_argument("--pupil-mm", required=True, type=float, metavar="D",
+                        help=f"the eye's pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm")
     focus = parser.add_argument_group(
-        "accommodation (default relaxed, 0 D)",
-        "Either --accommodation-diopters, or a focus target (--focus-distance-m, default the depth at the image "
-        "centre) reached as far as the amplitude allows (--age: Hofstetter 1950 mean; --amplitude-diopters; "
-        "neither: unlimited).",
+        "accommodation (none of these options: relaxed, 0 D exerted)",
+        "Give the accommodation exerted (--accommodation-diopters), or let the eye focus a target as far as "
+        "its amplitude allows: any of --focus-distance-m (the target; if omitted, the depth at the image "
+        "centre), --age (amplitude by Hofstetter 1950's mean) or --amplitude-diopters (if neither, unlimited).",
     )
     focus.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres")
     focus.add_argument("--age", type=float, metavar="Y", help="age in years: amplitude 18.5 - 0.3 Y D (Hofstetter 1950)")
     focus.add_argument("--amplitude-diopters", type=float, metavar="A", help="amplitude of accommodation, dioptres")
     focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres")
     parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: the one the image file records)")
-    parser.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM", help="wavelength (default 550)")
+    parser.add_argument("--wavelength-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
+                        help=f"wavelength, nm (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="PSF optics (default wave)")
     parser.add_argument("--layer-spacing-fraction", type=float, default=0.5, metavar="F", help="max blur step between layers, pixels")
     parser.add_argument("--max-layers", type=Number(int, positive=True), default=DEFAULT_MAX_LAYERS, metavar="N",
@@ -109,8 +112,9 @@ def run(args: argparse.Namespace) -> int:
     step = image_sampling(image, args.arcmin_per_px, args.input)
     crop = recorded_margin_px(image.provenance) if args.crop_px is None else args.crop_px
     if crop < 0 or 2 * crop >= min(image.pixels.shape[:2]):
-        raise VissimInputError(f"cannot crop {crop} px from every side of a {image.pixels.shape[1]} x "
-                               f"{image.pixels.shape[0]} px image (--crop-px)")
+        raise VissimInputError(f"cannot crop {crop} px from every side of a {size_text(image.pixels.shape)} image "
+                               "(--crop-px)")
+    eye_pupil_diameter_mm(args.pupil_mm, "--pupil-mm")
     depth = read_depth_m(args.depth)
     eye = Prescription.parse(args.rx)
     accommodation, focus_info = _accommodation(args, eye, depth)

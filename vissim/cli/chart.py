@@ -6,6 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from vissim.checks import size_text
 from vissim.acuity import THESIS_VIEWING_DISTANCE_M
 from vissim.atomic import write_json_atomic
 from vissim.charts import (DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTANCE, POLARITIES,
@@ -117,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             save_chart_png(spec, out, dpi=args.dpi, overwrite=args.overwrite, provenance=provenance)
         height_mm, width_mm = layout.page_size_mm
-        what = f"print chart {width_mm:.1f} x {height_mm:.1f} mm" + ("" if suffix == ".pdf" else f" at {args.dpi:g} dpi")
+        what = f"print chart {size_text((round(height_mm, 1), round(width_mm, 1)), 'mm')}" + ("" if suffix == ".pdf" else f" at {args.dpi:g} dpi")
         sidecar = chart_sidecar(spec, layout)
     else:
         from vissim.imageio import write_image
@@ -129,8 +130,7 @@ def run(args: argparse.Namespace) -> int:
             chart = render_chart_angular(spec, args.arcmin_per_px)
         write_image(out, chart.pixels, provenance=provenance, overwrite=args.overwrite, encoding="srgb",
                     arcmin_per_px=args.arcmin_per_px)
-        rows, cols = chart.pixels.shape
-        what = f"{'tile' if args.tile else 'chart'} {cols} x {rows} px at {args.arcmin_per_px:g} arcmin/px"
+        what = f"{'tile' if args.tile else 'chart'} {size_text(chart.pixels.shape)} at {args.arcmin_per_px:g} arcmin/px"
         sidecar = chart.sidecar()
     n = len(sidecar["letters"])
     print(f"wrote {out} ({what}, {n} letter{'s' if n != 1 else ''})")

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
@@ -38,7 +39,8 @@ def add_parser(subparsers) -> None:
                              "isotropic scale) or none; only bench determines the sign")
     parser.add_argument("--vertex-mm", type=Number(float, nonnegative=True, maximum=1000.0), metavar="MM", help="trial lens back vertex to the camera (with --object-distance-m: a bench tie for a capture from elsewhere)")
     parser.add_argument("--object-distance-m", type=Number(float, positive=True), metavar="M", help="camera to the chart, metres (with --vertex-mm)")
-    parser.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM", help="wave mode: wavelength (default 550)")
+    parser.add_argument("--wavelength-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
+                        help=f"wave mode: wavelength (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--fit-focus-offset", action="store_true", help="also fit a focus offset (dioptres)")
     parser.add_argument("--fit-pupil", action="store_true", help="also fit the pupil diameter (trades against power)")
     parser.add_argument("--max-power-diopters", type=Number(float, positive=True, maximum=20.0), default=6.0, metavar="D",

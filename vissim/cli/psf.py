@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.checks import size_text
 from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.imageio import to_preview_png, write_image
 from vissim.optics.psf import compute_psf
@@ -18,15 +20,19 @@ def add_parser(subparsers) -> None:
         "psf",
         help="compute a point-spread function",
         description="Compute the PSF of a prescription or Zernike wavefront at a stated angular "
-        "sampling. Writes a float32 single-channel (Y) EXR that sums to 1, origin at [N//2, N//2], "
-        "row 0 at the top of the visual field; when -o ends in .png, also a peak-normalised PNG "
-        "preview (the EXR goes beside it).",
+        "sampling, over any field. Writes a float32 single-channel (Y) EXR normalised to the PSF's total "
+        "energy, so it sums to the fraction the field holds (recorded as energy_in_field in the file's "
+        "provenance; a warning when more than 1 % falls outside), origin at [N//2, N//2], row 0 at the "
+        "top of the visual field; when -o ends in .png, also a peak-normalised PNG preview (the EXR goes "
+        "beside it).",
     )
     add_aberration_args(parser)
-    parser.add_argument("--wavelength-nm", default="550", metavar="NM[,NM...]", help="wavelength(s) in nm (default 550)")
+    parser.add_argument("--wavelength-nm", default=f"{DEFAULT_WAVELENGTH_NM:g}", metavar="NM[,NM...]",
+                        help=f"wavelength(s) in nm (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--weights", metavar="W[,W...]", help="relative weight per wavelength (default equal)")
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
-    parser.add_argument("--lca-reference-nm", type=float, default=550.0, metavar="NM", help="in-focus wavelength for --lca")
+    parser.add_argument("--lca-reference-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
+                        help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
     parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="wave (default) or geometric optics")
@@ -43,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     psf = compute_psf(wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
                       lca_reference_nm=args.lca_reference_nm if args.lca else None,
                       arcmin_per_px=args.arcmin_per_px, size_px=args.size, mode=args.mode,
-                      dtype=np.float64 if args.float64 else np.float32)
+                      dtype=np.float64 if args.float64 else np.float32, normalise="total")
     provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike)
     output = args.output
     exr_path = output.with_suffix(".exr") if output.suffix.lower() == ".png" else output
@@ -55,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     for path in written:
         print(f"wrote {path}")
     print(
-        f"PSF {psf.size_px[0]}x{psf.size_px[1]} px at {psf.arcmin_per_px:g} arcmin/px, pupil "
+        f"PSF {size_text(psf.size_px)} at {psf.arcmin_per_px:g} arcmin/px, pupil "
         f"{psf.pupil_diameter_mm:g} mm, {psf.mode} optics, {100 * psf.energy_in_field:.2f} % of the energy in the field"
     )
     return 0

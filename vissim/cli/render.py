@@ -12,6 +12,7 @@ import logging
 import sys
 from pathlib import Path
 
+from vissim.checks import size_text
 from vissim.charts import POLARITIES
 from vissim.cli._common import add_trial_lens_args, refuse_existing, trial_lens_powers
 from vissim.cli.render_atv import add_atv_parser
@@ -131,8 +132,9 @@ def run_bench(args: argparse.Namespace) -> int:
                 arcmin_per_px=bench.arcmin_per_px)
     theory = result.provenance["inputs"]["theory"]
     blur = ", ".join(f"{d:.2f}' along {m:g}°" for d, m in theory["blur_diameter_arcmin"])
-    print(f"wrote {output}: {result.pixels.shape[1]} x {result.pixels.shape[0]} px, {result.spp} spp, "
-          f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, added {theory['added_power']}")
+    added = "no trial lens" if theory["added_power"] is None else f"added {theory['added_power']}"
+    print(f"wrote {output}: {size_text(result.pixels.shape)}, {result.spp} spp, "
+          f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, {added}")
     return 0
 
 
@@ -151,7 +153,7 @@ def _write_wave_truth(bench, chart, args, output: Path) -> int:
     write_image(output, truth.pixels, provenance=make_provenance(command="render bench --optics wave", **truth.provenance),
                 overwrite=args.overwrite, arcmin_per_px=bench.arcmin_per_px)
     traced = truth.provenance["traced"][0]
-    print(f"wrote {output}: {truth.pixels.shape[1]} x {truth.pixels.shape[0]} px, wave truth at "
+    print(f"wrote {output}: {size_text(truth.pixels.shape)}, wave truth at "
           f"{', '.join(f'{w:g}' for w in wavelengths)} nm; traced RMS {traced['rms_um']:.4g} µm over "
           f"{traced['pupil_diameter_mm']:g} mm")
     return 0

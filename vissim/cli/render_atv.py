@@ -14,7 +14,9 @@ import json
 from pathlib import Path
 
 from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
+from vissim.checks import EYE_PUPIL_RANGE_MM, size_text
 from vissim.errors import VissimInputError
+from vissim.optics.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 
 __all__ = ["add_atv_parser", "run_atv"]
 
@@ -35,9 +37,12 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
     lens = parser.add_argument_group("trial lens in the eyecup slot (default: none)")
     add_trial_lens_args(lens)
     lens.add_argument("--vertex-mm", type=float, metavar="MM",
-                      help="vertex distance: trial lens back vertex to the eye's pupil (default 15)")
+                      help=f"vertex distance: trial lens back vertex to the eye's pupil (default "
+                           f"{EYE_VERTEX_DISTANCE_MM:g}: a {SPECTACLE_VERTEX_DISTANCE_MM:g} mm spectacle vertex "
+                           f"distance + {CORNEA_TO_ENTRANCE_PUPIL_MM:g} mm cornea to pupil)")
     eye = parser.add_argument_group("eye")
-    eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter, 2-8 mm (default 4)")
+    eye.add_argument("--pupil-mm", type=float, metavar="D",
+                     help=f"pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm (default 4)")
     add_rx_arg(eye, default_text=" (default: emmetropic)")
     eye.add_argument("--accommodation-diopters", type=float, metavar="A",
                      help="accommodation in dioptres, >= 0 (default 0: focused at infinity)")
@@ -145,7 +150,7 @@ def run_atv(args: argparse.Namespace) -> int:
         print(json.dumps(json_safe({**summary, "output": str(output), "prediction_geometric": prediction}),
                          indent=2, sort_keys=True, allow_nan=False))
     else:
-        print(f"wrote {output}: {result.image.shape[1]} x {result.image.shape[0]} px at {result.arcmin_per_px:g} "
+        print(f"wrote {output}: {size_text(result.image.shape)} at {result.arcmin_per_px:g} "
               f"arcmin/px, {result.method} ({result.n_rays} {'rays' if result.method == 'trace' else 'camera paths'}, "
               f"{result.variant}, {result.seconds:.1f} s)")
         print(f"peak {result.peak:.5g} per arcmin^2 (±{100 * result.peak_relative_std:.2g} %), spot diameter "

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.checks import EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
 from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
 from vissim.errors import VissimInputError
 
@@ -46,7 +47,8 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("scene", type=Path, help="depth scene TOML, e.g. scenes/depth_panels.toml")
     eye = parser.add_argument_group("eye (an eye focused at 1 / (A - Rx) metres; Rx not worn)")
     add_rx_arg(eye)
-    eye.add_argument("--pupil-mm", type=float, metavar="D", help="pupil diameter in mm")
+    eye.add_argument("--pupil-mm", type=float, metavar="D",
+                     help=f"the eye's pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm")
     eye.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres >= 0")
     camera = parser.add_argument_group("DSLR bench camera (thin lens, entrance pupil focal length / f-number)")
     camera.add_argument("--f-number", type=float, metavar="N", help="f-number (default 5)")
@@ -83,6 +85,8 @@ def _viewer(args: argparse.Namespace, loaded):
     if eye_given and camera_given:
         raise VissimInputError("give eye options (--rx/--pupil-mm/--accommodation-diopters) or camera options, not both")
     if eye_given:
+        if args.pupil_mm is not None:
+            eye_pupil_diameter_mm(args.pupil_mm, "--pupil-mm")
         base = loaded.viewer if isinstance(loaded.viewer, EyeViewer) else EyeViewer()
         changes = {"prescription": None if args.rx is None else Prescription.parse(args.rx),
                    "pupil_diameter_mm": args.pupil_mm, "accommodation_diopters": args.accommodation_diopters}
@@ -169,10 +173,10 @@ def run_depth(args: argparse.Namespace) -> int:
         write_depth(args.depth, result.depth_m, provenance=depth, overwrite=args.overwrite, arcmin_per_px=step)
         written.append(str(args.depth))
     rows, cols = loaded.scene.size_px
-    print(f"wrote {', '.join(written)}: {cols} x {rows} px, {result.spp} spp, {result.variant}, "
+    print(f"wrote {', '.join(written)}: {size_text((rows, cols))}, {result.spp} spp, {result.variant}, "
           f"{result.seconds:.1f} s; {viewer.label()}")
     if result.margin_px:
-        print(f"  all-in-focus and depth: {cols + 2 * result.margin_px} x {rows + 2 * result.margin_px} px "
+        print(f"  all-in-focus and depth: {size_text((rows + 2 * result.margin_px, cols + 2 * result.margin_px))} "
               f"(a {result.margin_px} px margin beyond the frame; blur-depth crops it)")
     setup = viewing_setup(viewer, loaded.scene)
     for g in panel_geometries(loaded.scene):

@@ -10,8 +10,8 @@ import math
 
 from vissim import __version__
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, thesis_table_4_2_power,
-                                      trial_lens_effect)
+from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, THESIS_VERTEX_DISTANCE_MM, TrialLens,
+                                      TrialLensSetup, thesis_table_4_2_power, trial_lens_effect)
 
 log = logging.getLogger(__name__)
 
@@ -26,7 +26,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
             "Trace a trial lens in front of a camera (or an eye) by astigmatic ray transfer: the "
             "power it adds at the camera principal plane, the camera's resulting prescription and "
             "the spectacle magnification per principal meridian.  The thesis's Table 4.2 value "
-            "P/(1-dP), right only for an object at infinity, is shown for comparison."
+            "P/(1-dP), right only for an object at infinity, is shown for comparison.  Every power is "
+            "printed in minus-cylinder form (a plus-cylinder lens is transposed)."
         ),
     )
     parser.add_argument("--sphere", type=float, required=True, metavar="D",
@@ -35,8 +36,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="marked cylinder in dioptres (needs --axis)")
     parser.add_argument("--axis", type=float, default=None, metavar="DEG",
                         help="cylinder axis, TABO degrees 0-180")
-    parser.add_argument("--vertex-mm", type=float, default=10.0, metavar="MM",
-                        help="vertex distance: back surface of the lens to the camera principal plane (default 10)")
+    parser.add_argument("--vertex-mm", type=float, default=THESIS_VERTEX_DISTANCE_MM, metavar="MM",
+                        help=f"vertex distance: back surface of the lens to the camera principal plane (default "
+                             f"{THESIS_VERTEX_DISTANCE_MM:g}, the thesis's DSLR bench; an eye's is "
+                             f"{EYE_VERTEX_DISTANCE_MM:g}, to its pupil)")
     parser.add_argument("--object-distance-m", default="inf", metavar="M|inf",
                         help="camera principal plane to the object, metres, or 'inf' (default)")
     parser.add_argument("--index", type=float, default=None, metavar="N",
@@ -79,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     setup = TrialLensSetup(lenses=(lens,), vertex_distance_mm=args.vertex_mm,
                            object_distance_m=_object_distance_m(args.object_distance_m))
     effect = trial_lens_effect(setup)
-    marked = lens.marked_power
+    marked = lens.marked_power.minus_cylinder()  # the meridians in the order the added power lists them
     lens_meridians = (marked.axis_deg, (marked.axis_deg + 90.0) % 180.0 or 180.0)
     thesis = [
         {"meridian_deg": m,
@@ -90,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         result.update(
             lens={"marked_power": str(marked), **dataclasses.asdict(lens)},
+            cylinder_form="minus",
             thesis_table_4_2=thesis,
             vissim_version=__version__,
         )
@@ -98,14 +102,13 @@ def run(args: argparse.Namespace) -> int:
 
     kind = "thin" if lens.is_thin else f"{lens.center_thickness_mm:g} mm thick, n = {lens.refractive_index:g}"
     where = "infinity" if result["object_distance_m"] is None else f"{setup.object_distance_m:g} m"
-    added = effect.added_power.minus_cylinder()
-    print(f"trial lens {marked} ({kind}) at {setup.vertex_distance_mm:g} mm, object at {where}")
-    cylinder = "DS" if added.cylinder_diopters == 0.0 else f"{added.cylinder_diopters:+.4f} x {added.axis_deg:g}"
-    print(f"added power at the camera:   {added.sphere_diopters:+.4f} {cylinder}")
+    print(f"trial lens {marked} ({kind}) at {setup.vertex_distance_mm:g} mm, object at {where}; "
+          "powers in minus-cylinder form")
+    print(f"added power at the camera:   {effect.added_power.minus_cylinder().format(4)}")
     print("  per meridian:              " + ",  ".join(
         f"{row['meridian_deg']:g}: {row['power_diopters']:+.4f} D"
         for row in result["added_power_meridians"]))
-    print(f"camera prescription:         {effect.camera_prescription.format(4)}")
+    print(f"camera prescription:         {effect.camera_prescription.minus_cylinder().format(4)}")
     print(f"magnification:               {effect.magnification:.4f}  (" + ",  ".join(
         f"{meridian:g}: {mag:.4f}" for mag, meridian in effect.magnification_principal) + ")")
     print("thesis Table 4.2, P/(1-dP):  " + ",  ".join(

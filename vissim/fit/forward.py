@@ -50,6 +50,7 @@ import scipy.fft
 import scipy.ndimage
 import scipy.special
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.errors import VissimInputError
 from vissim.optics.blur import kernel_transfer, padded_shape, padding_width_px
 from vissim.optics.prescription import Prescription
@@ -109,7 +110,7 @@ class ForwardModel:
     """
 
     def __init__(self, reference: np.ndarray, arcmin_per_px: float, pupil_diameter_mm: float, *,
-                 mode: str = "geometric", wavelength_nm: float = 550.0, max_power_diopters: float = 10.0,
+                 mode: str = "geometric", wavelength_nm: float = DEFAULT_WAVELENGTH_NM, max_power_diopters: float = 10.0,
                  max_shift_px: float = 10.0) -> None:
         if mode not in FORWARD_MODES:
             raise VissimInputError(f"fit mode must be one of {', '.join(FORWARD_MODES)}, got {mode!r}")

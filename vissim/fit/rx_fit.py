@@ -68,6 +68,7 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.bench.dslr import DslrBench
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
@@ -155,8 +156,8 @@ def check_fit_inputs(image: Any, reference: Any) -> tuple[np.ndarray, np.ndarray
     img = _as_image(image, "image")
     ref = _as_image(reference, "reference")
     if img.shape != ref.shape:
-        raise VissimInputError(f"the image is {img.shape[0]} x {img.shape[1]} px but the reference is "
-                               f"{ref.shape[0]} x {ref.shape[1]} px (rows x cols); they must match, pixel for pixel")
+        raise VissimInputError(f"the image is {size_text(img.shape)} but the reference is {size_text(ref.shape)}; "
+                               "they must match, pixel for pixel")
     for array, name in ((img, "image"), (ref, "reference")):
         contrast, noise = _contrast(array), _pixel_noise(array)
         if contrast <= max(MIN_CONTRAST_OVER_NOISE * noise, 1e-9 * max(1.0, float(np.abs(array).max()))):
@@ -494,7 +495,7 @@ def _solution(problem: _Problem, result, shape: tuple[int, int], model_error_dio
 
 
 def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_mm: float, mode: str = "geometric",
-           magnification: str = "bench", bench: DslrBench | None = None, wavelength_nm: float = 550.0,
+           magnification: str = "bench", bench: DslrBench | None = None, wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
            fit_focus_offset: bool = False, fit_pupil: bool = False, max_power_diopters: float = 6.0,
            max_shift_px: float = 8.0, model_error_diopters: float = MODEL_ERROR_DIOPTERS) -> RxFit:
     """Fit the sphero-cylinder added at the camera that turns ``reference`` into ``image`` (module doc).

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
+from vissim.checks import size_text
 from vissim.errors import VissimInputError
 from vissim.optics.psf import PSF
 
@@ -259,11 +260,12 @@ def checked_blur_inputs(image, psf, arcmin_per_px: float, padding: str, backgrou
             raise VissimInputError(f"got {len(backgrounds)} background values for {n_channels} channels")
     for p in psfs:
         _check_sampling(p, arcmin_per_px)
+        if p.normalisation != "field":
+            raise VissimInputError("a PSF image (normalised to its total energy) is no blur kernel; compute the "
+                                   "kernel with compute_psf(..., normalise='field'), which sums to 1 over its field")
         if padding == "wrap" and p.data.shape[0] > min(array.shape[:2]):
-            rows, cols = array.shape[:2]
-            raise VissimInputError(
-                f"a {p.data.shape[0]} px PSF is larger than the {rows}x{cols} px image; 'wrap' padding needs a smaller PSF"
-            )
+            raise VissimInputError(f"a {size_text(p.data.shape)} PSF is larger than the {size_text(array.shape)} "
+                                   "image; 'wrap' padding needs a smaller PSF")
     return array, psfs, backgrounds
 
 

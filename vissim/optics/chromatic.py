@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import wavelength_nm
 from vissim.errors import VissimInputError
 
@@ -31,7 +32,7 @@ def _thibos_rx(wavelength_nm: float) -> float:
     return THIBOS_1992["p"] - THIBOS_1992["q"] / (wavelength * 1e-3 - THIBOS_1992["c_um"])
 
 
-def chromatic_difference_of_refraction_diopters(wavelength_nm: float, reference_nm: float = 550.0) -> float:
+def chromatic_difference_of_refraction_diopters(wavelength_nm: float, reference_nm: float = DEFAULT_WAVELENGTH_NM) -> float:
     """Prescription-sphere change at ``wavelength_nm`` relative to ``reference_nm`` (D)."""
     return _thibos_rx(wavelength_nm) - _thibos_rx(reference_nm)
 

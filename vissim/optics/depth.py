@@ -70,6 +70,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
@@ -284,7 +285,7 @@ def blur_depth(
     pupil_diameter_mm: float,
     arcmin_per_px: float,
     accommodation_diopters: float = 0.0,
-    wavelength_nm: float = 550.0,
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
     mode: str = "wave",
     extra_wavefront: Wavefront | None = None,
     layer_spacing_fraction: float = 0.5,
@@ -378,10 +379,10 @@ def blur_depth(
         raise VissimInputError("image has NaN or infinite pixels; blur needs finite linear-light values")
     proximity = depth_to_proximity_diopters(depth_m)
     if proximity.shape != pixels.shape[:2]:
-        raise VissimInputError(f"depth map {proximity.shape} does not match the image {pixels.shape[:2]} (rows, cols)")
+        raise VissimInputError(f"the depth map is {size_text(proximity.shape)} but the image {size_text(pixels.shape)}")
     if int(crop_px) != crop_px or crop_px < 0 or 2 * crop_px >= min(proximity.shape):
         raise VissimInputError(f"crop_px must be whole pixels >= 0 leaving an image; got {crop_px!r} px for "
-                               f"{proximity.shape[1]} x {proximity.shape[0]} px")
+                               f"{size_text(proximity.shape)}")
     crop = int(crop_px)
     colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
     rows, cols = proximity.shape

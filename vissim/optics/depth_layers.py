@@ -58,6 +58,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy import ndimage
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
@@ -308,7 +309,7 @@ def composite_layers(
     pupil_diameter_mm: float,
     arcmin_per_px: float,
     accommodation_diopters: float = 0.0,
-    wavelength_nm: float = 550.0,
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
     mode: str = "geometric",
     extra_wavefront: Wavefront | None = None,
     layer_spacing_fraction: float = 0.5,

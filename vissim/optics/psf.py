@@ -7,10 +7,13 @@ transformed (matrix transform or FFT, whichever is cheaper) and ``PSF = |transfo
 then *integrated* over the requested output pixels (ERRATA item 6); the integration is exact,
 done as the pixel's sinc in the Fourier domain.  ``pixel="sample"`` gives instead the
 band-limited point samples, whose DFT is the OTF: the exact kernel for blurring a
-*well-sampled* image (see :mod:`vissim.optics.blur`).  A field that would leave more than
+*well-sampled* image (see :mod:`vissim.optics.blur`).  A blur kernel (``normalise="field"``,
+unit sum over the field) whose field would leave more than
 :data:`~vissim.optics.psf_field.MAX_ENERGY_OUTSIDE` of the energy outside raises
-:class:`~vissim.errors.FieldTooSmallError` with the size that would hold it; nothing wraps
-around silently.
+:class:`~vissim.errors.FieldTooSmallError` with the size that would hold it, since truncating a
+kernel changes the blur; a PSF image (``normalise="total"``) is computed for any field, sums to
+the energy the field holds, and logs a warning beyond that fraction.  Nothing wraps around
+silently.
 
 Geometric optics: rays through a stratified pupil sample land at the visual direction given
 by the wavefront slope; their histogram on the output pixels is the ray-optics PSF of the
@@ -33,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
@@ -40,6 +44,7 @@ from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.optics.psf_field import (
     MAX_ENERGY_OUTSIDE,
     front_at_wavelength,
+    leaves_too_much_outside,
     airy_tail,
     energy_outside_field,
     geometric_blur_radius_arcmin,
@@ -52,6 +57,7 @@ from vissim.optics.wavefront import Wavefront
 from vissim.units import image_colrow_to_osa_xy, nm_to_mm, osa_xy_to_image_colrow, rad_to_arcmin
 
 __all__ = [
+    "NORMALISATIONS",
     "PIXEL_MODES",
     "PSF",
     "PsfSampling",
@@ -69,6 +75,9 @@ log = logging.getLogger(__name__)
 SIMULATOR_REVISION = "4 (issue 12: float32 by default; cell-averaged pupil, matrix or FFT, 1 % field rule)"
 #: How output pixels relate to the continuous PSF (see :func:`~vissim.optics.psf_wave.to_output_pixels`).
 PIXEL_MODES = ("integrate", "sample")
+#: What a PSF's ``data`` is normalised to: "field" (unit sum over the field, a blur kernel) or
+#: "total" (unit total energy, so it sums to ``energy_in_field``: a PSF image).
+NORMALISATIONS = ("field", "total")
 #: Largest PSF field, pixels.
 MAX_PSF_SIZE_PX = 16384
 #: A field is refused before computing when the plain estimate exceeds this many times the limit.
@@ -77,7 +86,7 @@ PLAIN_ESTIMATE_MARGIN = 1.5
 
 @dataclass(frozen=True, eq=False)
 class PSF:
-    """A PSF with its sampling: ``data`` sums to 1 over the field, origin at ``[N//2, N//2]``.
+    """A PSF with its sampling, origin at ``[N//2, N//2]``; ``data`` sums to :attr:`data_sum`.
 
     Made by :func:`compute_psf` (or :meth:`PSF.from_array` for a kernel of your own); used by
     :func:`vissim.blur_image` and the metrics (:func:`vissim.mtf`, :func:`vissim.otf`).
@@ -86,7 +95,8 @@ class PSF:
     ----------
     data : ndarray of float, shape (N, N)
         Read-only. ``[row, col]``: row 0 at the top (+y up), columns to the observer's right;
-        the chief ray at ``[N//2, N//2]``; sums to 1 over the field.
+        the chief ray at ``[N//2, N//2]``; sums to 1 over the field (``normalisation="field"``)
+        or to ``energy_in_field`` (``"total"``).
     arcmin_per_px : float
         Sampling, arcmin per pixel (both axes); the field is ``N * arcmin_per_px`` arcmin.
     wavelengths_nm, weights : tuple of float
@@ -107,6 +117,9 @@ class PSF:
     pixel : {"integrate", "sample"}
         ``"integrate"``: each value is the PSF integrated over its pixel (what a sensor
         records); ``"sample"``: point samples of the continuous PSF (a convolution kernel).
+    normalisation : {"field", "total"}
+        ``"field"``: ``data`` sums to 1 over the field (a blur kernel); ``"total"``: to the
+        PSF's total energy, so ``data`` sums to ``energy_in_field`` (a PSF image).
 
     Examples
     --------
@@ -127,9 +140,10 @@ class PSF:
     lca_reference_nm: float | None = None
     sampling: tuple = field(default=(), repr=False)
     pixel: str = "integrate"  # "integrate" (sensor values) or "sample" (convolution kernel)
+    normalisation: str = "field"  # "field" (a kernel, unit sum) or "total" (an image, sums to energy_in_field)
 
     @classmethod
-    def from_array(cls, data, arcmin_per_px: float, *, wavelength_nm: float = 550.0, pupil_diameter_mm: float = 0.0) -> PSF:
+    def from_array(cls, data, arcmin_per_px: float, *, wavelength_nm: float = DEFAULT_WAVELENGTH_NM, pupil_diameter_mm: float = 0.0) -> PSF:
         """Wrap a user-supplied kernel (origin at ``[N//2, N//2]``), normalised to unit sum."""
         array = np.array(data, dtype=float)
         if array.ndim != 2 or array.shape[0] != array.shape[1] or not np.all(np.isfinite(array)):
@@ -150,6 +164,11 @@ class PSF:
     def field_arcmin(self) -> float:
         return self.data.shape[0] * self.arcmin_per_px
 
+    @property
+    def data_sum(self) -> float:
+        """What ``data`` sums to: 1 (normalised over the field) or ``energy_in_field`` (over the total)."""
+        return self.energy_in_field if self.normalisation == "total" else 1.0
+
     def as_json(self) -> dict:
         return {
             "arcmin_per_px": self.arcmin_per_px,
@@ -163,6 +182,7 @@ class PSF:
             "energy_in_field": self.energy_in_field,
             "lca_reference_nm": self.lca_reference_nm,
             "pixel": self.pixel,
+            "normalisation": self.normalisation,
             "dtype": self.data.dtype.name,  # compute_psf: the precision of its arithmetic
             "wavefront": self.wavefront.as_json(),
             "sampling": [s.as_json() for s in self.sampling],
@@ -224,7 +244,7 @@ def compute_psf(
     wavefront: Wavefront,
     *,
     pupil_diameter_mm: float | None = None,
-    wavelength_nm: float | Sequence[float] = 550.0,
+    wavelength_nm: float | Sequence[float] = DEFAULT_WAVELENGTH_NM,
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     arcmin_per_px: float = 0.25,
@@ -233,6 +253,7 @@ def compute_psf(
     pixel: str = "integrate",
     dtype=np.float32,
     method: str | None = None,
+    normalise: str = "field",
 ) -> PSF:
     """PSF of ``wavefront`` over a ``pupil_diameter_mm`` pupil (default: its measurement pupil).
 
@@ -246,14 +267,15 @@ def compute_psf(
     wavelength_nm, weights : float or sequence of float, optional
         Wavelength(s) in nm (default 550); one wavelength, or several with relative spectral weights: each wavelength's PSF carries
         its weight of the total energy (inside and outside the field), and their sum is
-        normalised to unit sum over the field.
+        normalised as ``normalise`` says.
     lca_reference_nm : float, optional
         If given, add the eye's longitudinal chromatic aberration (Thibos 1992) relative to
         this wavelength: each wavelength gets its chromatic defocus.
     arcmin_per_px, size_px : float, int
         Output sampling (arcmin per pixel, default 0.25) and the side of the square field
-        (pixels, default 256).  A field that would leave more than 1 % of the energy outside
-        raises :class:`~vissim.errors.FieldTooSmallError` naming the size that holds it.
+        (pixels, default 256).  With ``normalise="field"``, a field that would leave more than
+        1 % of the energy outside raises :class:`~vissim.errors.FieldTooSmallError` naming the
+        size that holds it.
     mode : {"wave", "geometric"}
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
     pixel : {"integrate", "sample"}
@@ -269,16 +291,22 @@ def compute_psf(
         Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,
         recorded in ``PSF.sampling``.  At suggested field sizes both give the same pixel energies to
         1e-3 of the peak.
+    normalise : {"field", "total"}
+        ``"field"`` (default): a blur kernel, unit sum over the field; a field leaving more than
+        :data:`~vissim.optics.psf_field.MAX_ENERGY_OUTSIDE` outside is refused, because
+        truncating a kernel changes the blur.  ``"total"``: a PSF image, normalised to the
+        total energy through the pupil, so it sums to ``energy_in_field``; any field is
+        computed, with a logged warning when more than that fraction falls outside.
 
     Returns
     -------
     PSF
-        ``data`` is a read-only ndarray of shape ``(size_px, size_px)`` with unit sum over the
-        field, sampled at ``arcmin_per_px`` (carried by the result).  Orientation
+        ``data`` is a read-only ndarray of shape ``(size_px, size_px)``, summing to 1 (``"field"``)
+        or to ``energy_in_field`` (``"total"``), sampled at ``arcmin_per_px`` (carried by the result).  Orientation
         (``docs/conventions.md``): ``data[row, col]`` is the observer's visual field, row 0 at
         the top (+y up is decreasing row), columns increasing to the observer's right, the
         chief ray at ``[size_px // 2, size_px // 2]``.  ``energy_in_field`` is the fraction of
-        the energy the field held before normalising.
+        the total energy the field holds.
 
     Examples
     --------
@@ -315,6 +343,9 @@ def compute_psf(
 
     if method is not None and method not in ("mft", "fft"):
         raise VissimInputError(f"PSF method must be 'mft' or 'fft', got {method!r}")
+    if normalise not in NORMALISATIONS:
+        raise VissimInputError(f"PSF normalise must be one of {', '.join(NORMALISATIONS)}, got {normalise!r}")
+    kernel = normalise == "field"
 
     def too_small(outside: float) -> FieldTooSmallError:
         needed = size_holding_px(wavefront, diameter, wavelengths, weights_t, step, size_px, mode=mode,
@@ -327,8 +358,8 @@ def compute_psf(
 
     fronts = [front_at_wavelength(wavefront, w, lca_reference_nm) for w in wavelengths]
     blurs = [geometric_blur_radius_arcmin(front, diameter) for front in fronts]
-    # Refuse at once what is plainly too small (the plain estimate, with a margin); else measure.
-    if not _clearly_holds(diameter, wavelengths, blurs, step, size_px, mode):
+    # A kernel: refuse at once what is plainly too small (the plain estimate, with a margin); else measure.
+    if kernel and not _clearly_holds(diameter, wavelengths, blurs, step, size_px, mode):
         outside = energy_outside_field(wavefront, diameter, wavelengths, weights_t, step, size_px, mode=mode,
                                        lca_reference_nm=lca_reference_nm, conservative=False)
         if outside > PLAIN_ESTIMATE_MARGIN * MAX_ENERGY_OUTSIDE:
@@ -343,9 +374,12 @@ def compute_psf(
         accumulated = sum(weight * _geometric_psf(front, diameter, step, size_px, blur, pixel)
                           for front, weight, blur in zip(fronts, weights_t, blurs))
     energy = float(accumulated.sum())
-    if energy < 1.0 - MAX_ENERGY_OUTSIDE:
-        raise too_small(1.0 - energy)
-    data = (accumulated / energy).astype(dtype)
+    if leaves_too_much_outside(energy):
+        if kernel:
+            raise too_small(1.0 - energy)
+        log.warning("%.1f %% of the PSF's energy falls outside the %d px field (%g arcmin); the image sums to "
+                    "the %.4f it holds", 100 * (1.0 - energy), size_px, size_px * step, energy)
+    data = (accumulated / energy if kernel else accumulated).astype(dtype)
     data.setflags(write=False)
     return PSF(
         data=data,
@@ -359,10 +393,11 @@ def compute_psf(
         lca_reference_nm=lca_reference_nm,
         sampling=samplings,
         pixel=pixel,
+        normalisation=normalise,
     )
 
 
-def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = 550.0, pupil_diameter_mm: float | None = None) -> float:
+def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = DEFAULT_WAVELENGTH_NM, pupil_diameter_mm: float | None = None) -> float:
     """Strehl ratio |<exp(ikW)>|^2 over the pupil (cell-averaged quadrature, sampling from the slope).
 
     Parameters

@@ -27,6 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.special import j0, j1
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
@@ -36,14 +37,21 @@ from vissim.units import nm_to_mm, rad_to_arcmin
 
 __all__ = [
     "MAX_ENERGY_OUTSIDE",
+    "leaves_too_much_outside",
     "energy_outside_field",
     "geometric_blur_radius_arcmin",
     "size_holding_px",
     "suggested_size_px",
 ]
 
-#: Largest fraction of a PSF's energy that may fall outside its field.
+#: Largest fraction of a PSF's energy that may fall outside its field: a blur kernel leaving more
+#: is refused, a PSF image leaving more is computed with a warning.
 MAX_ENERGY_OUTSIDE = 0.01
+
+
+def leaves_too_much_outside(energy_in_field: float) -> bool:
+    """True when a field holding ``energy_in_field`` of a PSF leaves more than :data:`MAX_ENERGY_OUTSIDE` outside."""
+    return 1.0 - energy_in_field > MAX_ENERGY_OUTSIDE
 #: Rays per pupil side for the estimate (about 0.8 x this squared inside the pupil).
 ESTIMATE_RAYS_PER_SIDE = 32
 #: Directions over which each ray's diffraction pattern is integrated.
@@ -93,7 +101,7 @@ def suggested_size_px(
     arcmin_per_px: float,
     *,
     pupil_diameter_mm: float | None = None,
-    wavelength_nm: float | Sequence[float] = 550.0,
+    wavelength_nm: float | Sequence[float] = DEFAULT_WAVELENGTH_NM,
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     mode: str = "wave",

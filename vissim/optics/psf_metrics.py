@@ -171,7 +171,7 @@ def encircled_energy(psf: PSF, radius_arcmin: float, *, of_total: bool = True) -
     With ``of_total`` (default) the fraction of all the PSF's energy, including what fell
     outside the field (``psf.energy_in_field``); otherwise of the energy in the field.
     """
-    inside = float(np.sum(psf.data[_radii_arcmin(psf) <= radius_arcmin]))
+    inside = float(np.sum(psf.data[_radii_arcmin(psf) <= radius_arcmin])) / psf.data_sum  # of the field's energy
     return inside * (psf.energy_in_field if of_total else 1.0)
 
 
@@ -179,5 +179,5 @@ def radius_of_encircled_energy_arcmin(psf: PSF, fraction: float) -> float:
     """Smallest radius holding ``fraction`` of the energy, interpolated between pixel rings."""
     radii = _radii_arcmin(psf).ravel()
     order = np.argsort(radii, kind="stable")
-    cumulative = np.cumsum(np.asarray(psf.data, dtype=float).ravel()[order]) * psf.energy_in_field
+    cumulative = np.cumsum(np.asarray(psf.data, dtype=float).ravel()[order]) * (psf.energy_in_field / psf.data_sum)
     return float(np.interp(fraction, cumulative, radii[order]))

@@ -31,7 +31,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from vissim.checks import finite_number
+from vissim.checks import DEFAULT_WAVELENGTH_NM, finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.accommodation import object_proximity_diopters
@@ -44,8 +44,6 @@ from vissim.units import rad_to_arcmin
 
 __all__ = ["ViewingSetup", "DEFAULT_WAVELENGTH_NM"]
 
-#: Reference (in-focus) wavelength when none is given, nm.
-DEFAULT_WAVELENGTH_NM = 550.0
 _IDENTITY: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
 
 

@@ -53,6 +53,13 @@ THESIS_FOCAL_LENGTH_MM = 18.0
 THESIS_F_NUMBER = 5.0
 THESIS_CHART_DISTANCE_MM = 914.4
 THESIS_VERTEX_DISTANCE_MM = 10.0
+#: An eye's trial or spectacle lens: 12 mm from the cornea (clinical practice, 12-14 mm) and the
+#: entrance pupil 3 mm behind the cornea, so 15 mm from the lens's back vertex to the pupil, where
+#: vissim's eye has its thin lens (docs/conventions.md, "Defaults").  A camera's default is the
+#: thesis bench's measured THESIS_VERTEX_DISTANCE_MM, to its principal plane.
+SPECTACLE_VERTEX_DISTANCE_MM = 12.0
+CORNEA_TO_ENTRANCE_PUPIL_MM = 3.0
+EYE_VERTEX_DISTANCE_MM = SPECTACLE_VERTEX_DISTANCE_MM + CORNEA_TO_ENTRANCE_PUPIL_MM
 #: The thesis's lens holder takes up to three trial lenses (section 4.4).
 MAX_LENSES_IN_HOLDER = 3
 #: Focal length of the thesis's simplified eye, 18 mm / 1.333 (section 4.4, Table 4.1).
@@ -343,7 +350,7 @@ class TrialLensEffect:
             "added_power_meridians": [
                 {"meridian_deg": m, "power_diopters": added.meridian_power(m)} for m in meridians
             ],
-            "camera_prescription": str(self.camera_prescription),
+            "camera_prescription": str(self.camera_prescription.minus_cylinder()),
             "magnification": self.magnification,
             "magnification_principal": [
                 {"magnification": mag, "meridian_deg": meridian}

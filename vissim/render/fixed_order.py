@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import size_text
 from vissim.errors import VissimInputError
 
 __all__ = ["Rendered", "Samples", "accumulation", "pass_seeds", "promises_determinism", "render_image", "render_samples"]
@@ -147,7 +148,7 @@ def _trace(mi, dr, scene, spp: int, seed: int):
     n_pixels = width * height
     wavefront = n_pixels * spp
     if wavefront > MAX_WAVEFRONT:
-        raise VissimInputError(f"{width} x {height} px at {spp} spp is {wavefront} samples in one pass, over "
+        raise VissimInputError(f"{size_text((height, width))} at {spp} spp is {wavefront} samples in one pass, over "
                                f"2^32; render in passes (pass_spp)")
     film.prepare(integrator.aov_names())
     sampler.set_samples_per_wavefront(spp)

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from vissim.checks import check_allocation, samples_per_pixel
+from vissim.checks import check_allocation, samples_per_pixel, size_text
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
@@ -186,7 +186,7 @@ def render_scene(
     counts = _split(int(spp), width * height, pass_spp)
     kept = 0 if statistic == "mean" else width * height * spp * NEAREST_SURFACE_BYTES_PER_SAMPLE
     check_allocation(render_memory_bytes(width * height, spp, channels=3 if kind == "rgb" else 1, pass_spp=pass_spp)
-                     + kept, f"a {height} x {width} px render at {max(counts)} spp per pass")
+                     + kept, f"a {size_text((height, width))} render at {max(counts)} spp per pass")
     seeds = pass_seeds(seed, len(counts))
     total = np.zeros((height, width, 3 if kind == "rgb" else 1), dtype=np.float64)
     done, used, deterministic, methods = 0, [], True, set()

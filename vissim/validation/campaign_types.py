@@ -10,6 +10,7 @@ import hashlib
 import json
 from dataclasses import asdict, dataclass
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER,
                                       THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM)
@@ -56,7 +57,7 @@ class CampaignSettings:
     focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
     chart_distance_m: float = mm_to_m(THESIS_CHART_DISTANCE_MM)
     vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
-    wavelength_nm: float = 550.0
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM
     refractive_index: float = CROWN_GLASS_INDEX
     simulations: tuple[str, ...] = ("wave", "geometric", "thesis")
     inputs: tuple[str, ...] = INPUTS

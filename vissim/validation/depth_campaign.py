@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
@@ -71,7 +72,7 @@ class DepthCampaignSettings:
     aux_seed: int = 3
     oversample: int = 1
     simulations: tuple[str, ...] = DEPTH_SIMULATIONS
-    wavelength_nm: float = 550.0
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM
     data_range: float = 1.0
     margin_px: float = 1.0
     layer_spacing_fraction: float = 0.5

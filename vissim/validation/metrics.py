@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
+from vissim.checks import size_text
 from vissim.errors import VissimInputError
 
 logger = logging.getLogger(__name__)
@@ -89,8 +90,8 @@ def _as_image(image: Any, name: str) -> np.ndarray:
         raise VissimInputError(f"{name} image must have shape (H, W) or (H, W, C), got {array.shape}")
     if min(array.shape[:2]) < _SSIM_WINDOW_PX:
         raise VissimInputError(
-            f"{name} image is {array.shape[0]} x {array.shape[1]} px; SSIM's Gaussian window needs at least "
-            f"{_SSIM_WINDOW_PX} x {_SSIM_WINDOW_PX} px"
+            f"{name} image is {size_text(array.shape)}; SSIM's Gaussian window needs at least "
+            f"{size_text((_SSIM_WINDOW_PX, _SSIM_WINDOW_PX))}"
         )
     if not np.all(np.isfinite(array)):
         raise VissimInputError(f"{name} image has NaN or infinite pixels")
@@ -116,7 +117,7 @@ def compare_images(reference: Any, test: Any, *, data_range: float) -> Compariso
     ref = _as_image(reference, "reference")
     tst = _as_image(test, "test")
     if ref.shape != tst.shape:
-        raise VissimInputError(f"reference is {ref.shape} px but test is {tst.shape} px; shapes must match")
+        raise VissimInputError(f"reference is {size_text(ref.shape)} but test is {size_text(tst.shape)}; sizes must match")
     channel_axis = -1 if ref.ndim == 3 else None
     ssim, ssim_map = structural_similarity(ref, tst, data_range=data_range, channel_axis=channel_axis, full=True,
                                            **SSIM_SETTINGS)

@@ -11,7 +11,7 @@ texture's needs are the renderer's own estimates (:func:`vissim.render.run.rende
 from __future__ import annotations
 
 from vissim.bench.dslr import TEXTURE_BYTES_PER_TEXEL, chart_mm_per_texel, chart_texture_shape
-from vissim.checks import check_allocation
+from vissim.checks import check_allocation, size_text
 from vissim.errors import VissimInputError
 from vissim.optics.psf import MAX_PSF_SIZE_PX, geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
 from vissim.optics.wavefront import Wavefront
@@ -53,7 +53,7 @@ def item_memory_bytes(configuration, settings) -> tuple[float, str]:
     theory = bench.viewing_setup(settings.wavelength_nm)
     texels = chart_texture_shape(bench, theory, chart_mm_per_texel(bench))
     steps = [(render_memory_bytes(rows * cols, settings.spp) + texels[0] * texels[1] * TEXTURE_BYTES_PER_TEXEL,
-              f"its bench render ({rows} x {cols} px, {texels[0]} x {texels[1]} texel chart)")]
+              f"its bench render ({size_text((rows, cols))}, {size_text(texels, 'texel')} chart)")]
     for kind in settings.simulations:
         sim = simulation_setup(kind, theory, bench.physical_lenses, configuration, settings)
         front = sim.setup.wavefront
@@ -67,7 +67,7 @@ def item_memory_bytes(configuration, settings) -> tuple[float, str]:
             except VissimInputError as exc:
                 raise VissimInputError(f"the {kind} simulation of the {name} input: {exc}") from None
             image = float(rows * s + size) * float(cols * s + size) * BYTES_PER_BLUR_PX
-            steps.append((psf + image, f"the {kind} simulation of the {name} input ({rows * s} x {cols * s} px, "
+            steps.append((psf + image, f"the {kind} simulation of the {name} input ({size_text((rows * s, cols * s))}, "
                                        f"{size} px PSF)"))
     return max(steps)
 
@@ -93,7 +93,7 @@ def check_depth_campaign_memory(campaign) -> None:
         need = max(render_memory_bytes(rows * cols, settings.spp), render_memory_bytes(fine, settings.aux_spp),
                    fine * (BYTES_PER_DEPTH_PX + layered))
         try:
-            check_allocation(need, f"its {rows * settings.oversample} x {cols * settings.oversample} px renders "
+            check_allocation(need, f"its {size_text((rows * settings.oversample, cols * settings.oversample))} renders "
                                    f"and layered blur")
         except VissimInputError as exc:
             raise VissimInputError(f"{campaign.source}: {config.name}: {exc}") from None

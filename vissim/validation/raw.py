@@ -52,6 +52,7 @@ import scipy.sparse
 import tifffile
 
 from vissim.charts import Chart
+from vissim.checks import size_text
 from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
 from vissim.units import REC709_LUMINANCE, m_to_mm, rad_to_arcmin
@@ -365,7 +366,7 @@ def crop_letters(
         if r0 < 0 or c0 < 0 or r1 > array.shape[0] or c1 > array.shape[1]:
             raise VissimInputError(
                 f"letter {entry['letter']} (row {entry['row']}, position {entry['position']}) falls at capture "
-                f"px rows {r0}-{r1}, cols {c0}-{c1}, outside the {array.shape[0]} x {array.shape[1]} px image"
+                f"px rows {r0}-{r1}, cols {c0}-{c1}, outside the {size_text(array.shape)} image"
             )
         crops.append(LetterCrop(letter=entry["letter"], logmar=float(entry["logmar"]), row=int(entry["row"]),
                                 position=int(entry["position"]), box_px=(r0, c0, r1, c1),

@@ -39,6 +39,7 @@ import numpy as np
 import scipy.ndimage
 from skimage.registration import phase_cross_correlation
 
+from vissim.checks import size_text
 from vissim.errors import VissimInputError
 
 logger = logging.getLogger(__name__)
@@ -111,7 +112,7 @@ def register(
     ref = _as_2d(reference, "reference")
     mov = _as_2d(moving, "moving")
     if ref.shape != mov.shape:
-        raise VissimInputError(f"reference is {ref.shape} px but moving is {mov.shape} px; shapes must match")
+        raise VissimInputError(f"reference is {size_text(ref.shape)} but moving is {size_text(mov.shape)}; sizes must match")
     if int(upsample_factor) != upsample_factor or not 1 <= upsample_factor <= 10000:
         raise VissimInputError(f"upsample_factor must be an integer in 1-10000 (1/px), got {upsample_factor!r}")
     if max_shift_px is not None and not (math.isfinite(float(max_shift_px)) and max_shift_px >= 0):

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 import tifffile
 
+from vissim.checks import size_text
 from vissim.atomic import atomic_output
 from vissim.errors import VissimInputError
 from vissim.provenance import to_json
@@ -181,7 +182,7 @@ def write_dng(
         raise VissimInputError(f"the CFA mosaic must be a 2-D uint16 array, got {cfa.dtype} {cfa.shape}")
     if min(cfa.shape) < _LIBRAW_MIN_SIDE_PX:
         raise VissimInputError(
-            f"the CFA mosaic is {cfa.shape[0]} x {cfa.shape[1]} px; LibRaw (rawpy) refuses RAW images with a side "
+            f"the CFA mosaic is {size_text(cfa.shape)}; LibRaw (rawpy) refuses RAW images with a side "
             f"under {_LIBRAW_MIN_SIDE_PX} px"
         )
     white = _level(white_level, "white level")
