@@ -11,7 +11,7 @@ import argparse
 import math
 from pathlib import Path
 
-from vissim.cli._common import add_rx_arg, refuse_existing
+from vissim.cli._common import add_rx_arg, check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 
@@ -102,6 +102,7 @@ def _vertex(a) -> str:
 def run_analyze(args: argparse.Namespace) -> int:
     from vissim.atv.report import analyse_directory
 
+    check_outputs_apart([args.data_dir], folders=[args.output])
     written, analyses = analyse_directory(
         args.data_dir, args.output, strict=args.strict, level=args.level, average_sessions=not args.all_sessions,
         window_diopters=_window(args.window_diopters), overwrite=args.overwrite,

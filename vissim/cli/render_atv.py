@@ -13,7 +13,8 @@ import argparse
 import json
 from pathlib import Path
 
-from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
+from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, refuse_existing,
+                                trial_lens_powers)
 from vissim.errors import VissimInputError
 
 __all__ = ["add_atv_parser", "run_atv"]
@@ -110,6 +111,7 @@ def run_atv(args: argparse.Namespace) -> int:
     from vissim.render.atv_trace import DEFAULT_N_RAYS, render_atv_camera, trace_atv
 
     output = Path(args.output)
+    check_outputs_apart([args.scene], [output])
     if output.suffix.lower() != ".exr":
         raise VissimInputError(f"render atv writes a linear float EXR; give an output ending in .exr, got {output}")
     refuse_existing(output, overwrite=args.overwrite)
