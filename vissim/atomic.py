@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import errno
 import json
 import logging
 import os
@@ -106,13 +107,21 @@ def check_outputs_apart(inputs: Iterable[str | os.PathLike[str] | None],
                                        "replaces an input: choose a folder of its own")
 
 
+#: System errors a writer may report only inside its own message (OpenEXR's RuntimeError does).
+_WRITE_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EACCES, errno.EIO)
+
+
 def _write_failure(path: Path, tmp: Path, exc: BaseException) -> VissimInputError:
     """One line naming ``path`` for a write that failed (OSError: a full disk; RuntimeError: OpenEXR's)."""
+    text = " ".join(str(exc).split())
+    known = [os.strerror(code) for code in _WRITE_ERRNOS if os.strerror(code) in text]
     if isinstance(exc, OSError) and exc.strerror:
         reason = exc.strerror
+    elif known:
+        reason = known[0]
     else:
-        reason = " ".join(str(exc).split()).replace(str(tmp), str(path)) or type(exc).__name__
-    return VissimInputError(f"cannot write {path}: {reason}; nothing was written there")
+        reason = text.replace(str(tmp), str(path)).rstrip(".") or type(exc).__name__
+    return VissimInputError(f"cannot write {path}: {reason}; nothing there was changed")
 
 
 @contextlib.contextmanager

@@ -49,8 +49,8 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
         from vissim.validation.campaign import load_campaign as load
         from vissim.validation.runner import run_campaign as run
     campaign = load(path)
-    check_run_options(out, workers, spp)
     check_outputs_apart(campaign_inputs(campaign, path), folders=[out])
+    check_run_options(out, workers, spp)
     build_report, summary_lines = _report_of(depth)
     with run_folder_lock(out):
         summary = run(campaign, out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress)
