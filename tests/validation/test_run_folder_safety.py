@@ -6,13 +6,16 @@
 * A run folder that holds the campaign's inputs is refused (an output never replaces an input).
 """
 
+import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 from fake_bench import fake_render
 
+import vissim
 from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.validation import runner
@@ -78,13 +81,15 @@ def test_validate_refuses_duplicate_names_in_one_line(tmp_path, capsys):
 def held(tmp_path):
     """A run folder locked by another process (started here, stopped at the end); yields (folder, its pid)."""
     run = tmp_path / "run"
+    package_root = str(Path(vissim.__file__).resolve().parents[1])  # this vissim, however pytest found it
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [package_root, os.environ.get("PYTHONPATH")]))}
     holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
         import sys, time
         from vissim.validation.run_lock import run_folder_lock
         with run_folder_lock({str(run)!r}):
             print("held", flush=True)
             sys.stdin.read()  # until the test closes our stdin
-    """)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    """)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
     try:
         assert holder.stdout.readline().strip() == "held"
         yield run, holder.pid
