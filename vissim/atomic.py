@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import dataclasses
 import errno
 import json
 import logging
@@ -45,8 +46,36 @@ __all__ = ["atomic_output", "cache_output", "check_outputs_apart", "existing_out
            "refuse_existing", "write_json_atomic", "write_text_atomic"]
 
 _NAME_ATTEMPTS = 16
-#: Renames an open :func:`output_transaction` holds back: (temporary path, final path, overwrite).
-_PENDING: contextvars.ContextVar[list | None] = contextvars.ContextVar("vissim_pending_outputs", default=None)
+
+
+@dataclasses.dataclass
+class _Pending:
+    """What an open :func:`output_transaction` holds: renames to do, folders its writes created."""
+
+    renames: list[tuple[Path, Path, bool]] = dataclasses.field(default_factory=list)  # (tmp, final, overwrite)
+    folders: list[Path] = dataclasses.field(default_factory=list)  # in the order they were made
+
+
+#: The open :func:`output_transaction` of this context, if any.
+_PENDING: contextvars.ContextVar[_Pending | None] = contextvars.ContextVar("vissim_pending_outputs", default=None)
+
+
+def _make_parents(folder: Path) -> list[Path]:
+    """Create ``folder`` and its missing parents; return the ones made, outermost first."""
+    missing = []
+    while not folder.exists() and folder != folder.parent:
+        missing.append(folder)
+        folder = folder.parent
+    if missing:
+        missing[0].mkdir(parents=True, exist_ok=True)
+    return missing[::-1]
+
+
+def _remove_empty(folders: list[Path]) -> None:
+    """Remove the folders a failed write made, innermost first, where they are still empty."""
+    for folder in reversed(folders):
+        with contextlib.suppress(OSError):
+            folder.rmdir()
 
 
 def existing_output_error(path: str | os.PathLike[str]) -> VissimInputError:
@@ -150,24 +179,27 @@ def output_transaction() -> Iterator[None]:
     if _PENDING.get() is not None:
         yield
         return
-    pending: list[tuple[Path, Path, bool]] = []
+    pending = _Pending()
     token = _PENDING.set(pending)
     try:
         yield
-        for _, path, overwrite in pending:
+        for _, path, overwrite in pending.renames:
             if path.exists() and not overwrite:
                 _refuse_existing(path)
-        for tmp, path, _ in pending:
+        for tmp, path, _ in pending.renames:
             try:
                 os.replace(tmp, path)
             except OSError as exc:
                 raise _write_failure(path, tmp, exc) from exc
             logger.debug("wrote %s", path)
-    finally:
-        _PENDING.reset(token)
-        for tmp, _, _ in pending:
+    except BaseException:
+        for tmp, _, _ in pending.renames:
             with contextlib.suppress(OSError):
                 tmp.unlink(missing_ok=True)
+        _remove_empty(pending.folders)
+        raise
+    finally:
+        _PENDING.reset(token)
 
 
 def _reserve_temp_path(path: Path) -> Path:
@@ -211,20 +243,24 @@ def atomic_output(path: str | os.PathLike[str], *, overwrite: bool = False) -> I
     if path.exists() and not overwrite:
         _refuse_existing(path)
     pending = _PENDING.get()
-    if pending is not None and any(_same_file(path, target) for _, target, _ in pending):
+    if pending is not None and any(_same_file(path, target) for _, target, _ in pending.renames):
         raise VissimInputError(f"{path} is written twice by one command; give each output its own path")
+    created: list[Path] = []
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
+        created = _make_parents(path.parent)
         tmp = _reserve_temp_path(path)
     except OSError as exc:
+        _remove_empty(created)
         raise _write_failure(path, path, exc) from exc
+    if pending is not None:
+        pending.folders += created
 
     try:
         yield tmp
         if not tmp.exists():
             raise VissimInputError(f"cannot write {path}: the writer removed its temporary file {tmp.name}")
         if pending is not None:  # output_transaction renames it with the others
-            pending.append((tmp, path, overwrite))
+            pending.renames.append((tmp, path, overwrite))
             return
         if path.exists() and not overwrite:
             _refuse_existing(path)
@@ -232,10 +268,12 @@ def atomic_output(path: str | os.PathLike[str], *, overwrite: bool = False) -> I
     except (OSError, RuntimeError) as exc:  # a full disk, no permission; OpenEXR raises RuntimeError
         with contextlib.suppress(OSError):
             tmp.unlink(missing_ok=True)
+        _remove_empty(created)
         raise _write_failure(path, tmp, exc) from exc
     except BaseException:
         with contextlib.suppress(OSError):
             tmp.unlink(missing_ok=True)
+        _remove_empty(created)
         raise
     logger.debug("wrote %s", path)
 

@@ -155,3 +155,11 @@ def test_the_refusal_to_overwrite_has_one_wording(tmp_path, capsys):
     assert code == 2 and one_error_line(capsys) == f"vissim: error: {expected}"
     assert str(library.value) == str(writer.value) == expected
     assert "--overwrite" in expected and "overwrite=True" in expected
+
+
+def test_a_failed_command_leaves_no_folder_it_made(tmp_path, capsys, monkeypatch):
+    """demo -o new/demo on a full disk: no file, and not the folders made to hold them."""
+    monkeypatch.setattr(vissim.imageio.OpenEXR, "File", FullDiskExr)
+    assert main(["demo", "-o", str(tmp_path / "new" / "demo")]) == 2
+    assert "cannot write" in one_error_line(capsys)
+    assert list(tmp_path.iterdir()) == []
