@@ -44,8 +44,8 @@ from vissim.provenance import from_json, to_json
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["Image", "image_files", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode", "srgb_encode",
-           "to_preview_png", "write_data_map", "write_image"]
+__all__ = ["Image", "image_files", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode",
+           "srgb_encode", "to_preview_png", "write_data_map", "write_image"]
 
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 #: Top-level provenance key holding an image's angular sampling, arcmin per pixel.

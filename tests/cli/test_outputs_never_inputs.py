@@ -80,7 +80,8 @@ def render_depth(root):
 def validate(root):
     campaign = root / "in" / "campaign.toml"
     campaign.parent.mkdir(parents=True)
-    campaign.write_text('[campaign]\nname = "tiny"\nspp = 4\ntile_px = [48, 48]\n[[item]]\nletter = "K"\nlogmar = 0.5\n')
+    campaign.write_text('[campaign]\nname = "tiny"\nspp = 4\ntile_px = [48, 48]\n'
+                        '[[item]]\nletter = "K"\nlogmar = 0.5\n')
     return [campaign, campaign.parent, root], lambda out, _: ["validate", str(campaign), "-o", out]
 
 
@@ -148,7 +149,8 @@ def test_no_command_writes_over_its_input(command, how, overwrite, pick):
         targets, argv = CASES[command](root)
         target = targets[pick % len(targets)]
         target, option = target if isinstance(target, tuple) else (target, None)
-        words = argv(spelled(target, how, root), option) + (["--overwrite"] if overwrite and command in HAS_OVERWRITE else [])
+        words = argv(spelled(target, how, root), option)
+        words += ["--overwrite"] if overwrite and command in HAS_OVERWRITE else []
         before = snapshot(root)
         with CapturedStderr() as err:
             code = main(words)

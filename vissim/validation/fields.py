@@ -15,9 +15,9 @@ from typing import Any
 from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP
 from vissim.errors import VissimInputError
 
-__all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_campaign_toml", "number", "whole_number", "checked_numbers",
-           "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs", "lens", "lenses",
-           "LensSpec", "MAX_SPP", "MAX_SEED", "MAX_LENS_DIOPTERS", "CAMPAIGN_TABLES"]
+__all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_campaign_toml", "number", "whole_number",
+           "checked_numbers", "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs",
+           "lens", "lenses", "LensSpec", "MAX_SPP", "MAX_SEED", "MAX_LENS_DIOPTERS", "CAMPAIGN_TABLES"]
 
 #: Campaign seeds: the no-lens render uses seed_a + seed_b + 1, which must stay a sampler seed.
 MAX_SEED = (MAX_SAMPLER_SEED - 1) // 2
