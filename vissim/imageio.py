@@ -37,15 +37,15 @@ import OpenEXR
 import tifffile
 from PIL import Image as _PILImage
 
-from vissim.atomic import atomic_output, write_text_atomic
+from vissim.atomic import atomic_output, output_transaction, refuse_existing, write_text_atomic
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.errors import VissimInputError
 from vissim.provenance import from_json, to_json
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["Image", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode", "srgb_encode",
-           "to_preview_png", "write_data_map", "write_image"]
+__all__ = ["Image", "image_files", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode",
+           "srgb_encode", "to_preview_png", "write_data_map", "write_image"]
 
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 #: Top-level provenance key holding an image's angular sampling, arcmin per pixel.
@@ -359,6 +359,12 @@ def _sidecar_path(path: Path) -> Path:
     return path.with_name(path.name + ".json")
 
 
+def image_files(path: str | os.PathLike[str]) -> tuple[Path, ...]:
+    """Every file an image path stands for: the image, and for PNG/TIFF its provenance sidecar."""
+    path = Path(path)
+    return (path,) if path.suffix.lower() in (".exr", ".npy") else (path, _sidecar_path(path))
+
+
 def _validated_pixels(path: Path, pixels: Any, channel_names: Any) -> np.ndarray:
     arr = np.asarray(pixels)
     if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
@@ -435,20 +441,18 @@ def write_image(
         return path
 
     sidecar = _sidecar_path(path)
-    if not overwrite:
-        for existing in (path, sidecar):
-            if existing.exists():
-                raise VissimInputError(f"{existing} already exists; pass overwrite=True (--overwrite) to replace it")
+    refuse_existing(path, sidecar, overwrite=overwrite)
     codes = _quantise(path, arr, encoding, bit_depth)
-    with atomic_output(path, overwrite=overwrite) as tmp:
-        if kind == "png":
-            _PILImage.fromarray(codes).save(tmp, format="PNG")
-        else:
-            photometric = "minisblack" if codes.ndim == 2 else "rgb"
-            tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib")
-    if provenance is not None:
-        write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
-    elif sidecar.exists():
+    with output_transaction():  # the image and its sidecar appear together, or neither
+        with atomic_output(path, overwrite=overwrite) as tmp:
+            if kind == "png":
+                _PILImage.fromarray(codes).save(tmp, format="PNG")
+            else:
+                photometric = "minisblack" if codes.ndim == 2 else "rgb"
+                tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib")
+        if provenance is not None:
+            write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
+    if provenance is None and sidecar.exists():
         sidecar.unlink()
         logger.info("removed stale provenance sidecar %s", sidecar)
     return path

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from vissim.atomic import atomic_output
+from vissim.atomic import atomic_output, cache_output
 from vissim.bench.depth_scene import DepthScene, PanelGeometry, panel_geometries
 from vissim.bench.depth_textures import panel_texture
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer, Viewer, viewing_setup
@@ -131,7 +131,7 @@ def _tilted_ply(g: PanelGeometry, columns: int, cache_dir) -> Path:
     directory = Path(cache_dir) if cache_dir is not None else mesh_cache_dir()
     path = directory / f"tilted-{hashlib.sha256(data).hexdigest()[:24]}.ply"
     if not path.is_file():
-        with atomic_output(path, overwrite=True) as tmp:  # a concurrent writer writes the same bytes
+        with cache_output(), atomic_output(path, overwrite=True) as tmp:  # a concurrent writer: the same bytes
             tmp.write_bytes(data)
         log.info("wrote tilted chart mesh %s (%d faces)", path, len(faces))
     return path

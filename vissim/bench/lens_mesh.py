@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.atomic import atomic_output
+from vissim.atomic import atomic_output, cache_output
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens
@@ -324,6 +324,7 @@ def cached_lens_ply(
         log.debug("lens mesh cache hit %s", path)
         return path
     mesh = lens_mesh(lens, aperture, rings=rings, segments=segments)
-    write_ply(mesh, path, overwrite=True)  # a concurrent writer produces the same bytes
+    with cache_output():  # read back at once by the renderer
+        write_ply(mesh, path, overwrite=True)  # a concurrent writer produces the same bytes
     log.info("wrote lens mesh %s (%d vertices, %d faces)", path, len(mesh.vertices_mm), len(mesh.faces))
     return path

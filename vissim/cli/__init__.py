@@ -4,17 +4,23 @@ Each sub-command lives in its own module exposing ``add_parser(subparsers)``; th
 registers its parser and sets ``func`` (a callable taking the parsed namespace and returning
 an exit code) with ``parser.set_defaults(func=...)``.  Bad input raises
 :class:`vissim.errors.VissimInputError`; :func:`main` prints its one line and exits 2.
+
+A command's files appear together when it succeeds, or not at all
+(:func:`vissim.atomic.output_transaction`); a command that resumes from what it already wrote
+(``validate``, ``report``) sets ``writes_progressively=True`` and writes file by file.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
 import re
 import sys
 
 from vissim import __version__
+from vissim.atomic import output_transaction
 from vissim.cli._parser import VissimArgumentParser
 from vissim.errors import VissimError
 
@@ -84,8 +90,10 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    together = contextlib.nullcontext() if getattr(args, "writes_progressively", False) else output_transaction()
     try:
-        return int(args.func(args) or 0)
+        with together:
+            return int(args.func(args) or 0)
     except VissimError as exc:
         print(f"vissim: error: {exc}", file=sys.stderr)
         return 2

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 
+from vissim.atomic import check_outputs_apart, refuse_existing  # noqa: F401  (the commands' one door)
 from vissim.checks import ENTRANCE_PUPIL_RANGE_MM
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
@@ -69,13 +69,6 @@ def wavefront_from_args(args: argparse.Namespace) -> Wavefront:
     if args.rx is not None:
         front = front + Wavefront.from_prescription(Prescription.parse(args.rx), front.pupil_diameter_mm)
     return front
-
-
-def refuse_existing(*paths: Path | None, overwrite: bool) -> None:
-    """Stop before any work when an output (``None``: not asked for) exists and ``--overwrite`` was not given."""
-    for path in paths:
-        if path is not None and path.exists() and not overwrite:
-            raise VissimInputError(f"{path} already exists; pass --overwrite to replace it")
 
 
 def parse_float_list(text: str, name: str, unit: str, *, positive: bool = True) -> list[float]:

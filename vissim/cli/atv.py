@@ -12,7 +12,7 @@ import math
 from pathlib import Path
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.cli._common import add_rx_arg, refuse_existing
+from vissim.cli._common import add_rx_arg, check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
@@ -114,6 +114,7 @@ def _vertex(a) -> str:
 def run_analyze(args: argparse.Namespace) -> int:
     from vissim.atv.report import analyse_directory
 
+    check_outputs_apart([args.data_dir], folders=[args.output])
     written, analyses = analyse_directory(
         args.data_dir, args.output, strict=args.strict, level=args.level, average_sessions=not args.all_sessions,
         window_diopters=_window(args.window_diopters), overwrite=args.overwrite,

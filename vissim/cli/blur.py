@@ -6,9 +6,9 @@ import argparse
 from pathlib import Path
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
+from vissim.cli._common import add_aberration_args, check_outputs_apart, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
-from vissim.imageio import Image, read_image, write_image
+from vissim.imageio import Image, image_files, read_image, write_image
 from vissim.optics.blur import PADDING_MODES, blur_image
 from vissim.optics.chromatic import gaussian_band
 from vissim.optics.psf import compute_psf, suggested_size_px
@@ -62,6 +62,7 @@ def image_sampling(image: Image, given: float | None, path: Path) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_outputs_apart(image_files(args.input), image_files(args.output))
     image = read_image(args.input)
     step = image_sampling(image, args.arcmin_per_px, args.input)
     wavefront = wavefront_from_args(args)

@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import add_rx_arg
+from vissim.cli._common import add_rx_arg, check_outputs_apart
 from vissim.cli._parser import Number
 from vissim.cli.blur import image_sampling
 from vissim.errors import VissimInputError
-from vissim.imageio import read_data_map, read_image, write_image
+from vissim.imageio import image_files, read_data_map, read_image, write_image
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
 from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
 from vissim.optics.prescription import Prescription
@@ -108,6 +108,7 @@ def _accommodation(args: argparse.Namespace, eye: Prescription, depth: np.ndarra
 
 
 def run(args: argparse.Namespace) -> int:
+    check_outputs_apart((*image_files(args.input), args.depth), image_files(args.output))
     image = read_image(args.input)
     step = image_sampling(image, args.arcmin_per_px, args.input)
     crop = recorded_margin_px(image.provenance) if args.crop_px is None else args.crop_px

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.cli._common import refuse_existing
+from vissim.cli._common import check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.units import REC709_LUMINANCE
@@ -92,9 +92,10 @@ def run(args: argparse.Namespace) -> int:
     from vissim.checks import pupil_diameter_mm as check_pupil
     from vissim.fit.capture import compare_with_theory, rendered_bench
     from vissim.fit.rx_fit import fit_rx
-    from vissim.imageio import read_image
+    from vissim.imageio import image_files, read_image
     from vissim.provenance import make_provenance, to_json
 
+    check_outputs_apart((*image_files(args.image), *image_files(args.reference)), [args.output])
     refuse_existing(args.output, overwrite=args.overwrite)
     if args.max_power_diopters < 0.5:
         raise VissimInputError(f"--max-power-diopters must be within 0.5-20 dioptres, got {args.max_power_diopters:g} D")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from vissim.checks import size_text
 from vissim.charts import POLARITIES
-from vissim.cli._common import add_trial_lens_args, refuse_existing, trial_lens_powers
+from vissim.cli._common import add_trial_lens_args, check_outputs_apart, refuse_existing, trial_lens_powers
 from vissim.cli.render_atv import add_atv_parser
 from vissim.cli.render_depth import add_depth_parser
 from vissim.errors import VissimInputError
@@ -108,6 +108,7 @@ def run_bench(args: argparse.Namespace) -> int:
     from vissim.imageio import write_image
 
     output = Path(args.output)
+    check_outputs_apart((args.scene, args.chart), [output])
     if output.suffix.lower() != ".exr":
         raise VissimInputError(f"the bench writes linear float EXR; give an output ending in .exr, got {output}")
     refuse_existing(output, overwrite=args.overwrite)

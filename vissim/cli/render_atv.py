@@ -13,8 +13,9 @@ import argparse
 import json
 from pathlib import Path
 
-from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
 from vissim.checks import EYE_PUPIL_RANGE_MM, size_text
+from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, refuse_existing,
+                                trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 
@@ -115,6 +116,7 @@ def run_atv(args: argparse.Namespace) -> int:
     from vissim.render.atv_trace import DEFAULT_N_RAYS, render_atv_camera, trace_atv
 
     output = Path(args.output)
+    check_outputs_apart([args.scene], [output])
     if output.suffix.lower() != ".exr":
         raise VissimInputError(f"render atv writes a linear float EXR; give an output ending in .exr, got {output}")
     refuse_existing(output, overwrite=args.overwrite)

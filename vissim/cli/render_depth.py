@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import add_rx_arg, add_trial_lens_args, refuse_existing, trial_lens_powers
+from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, refuse_existing,
+                                trial_lens_powers)
 from vissim.errors import VissimInputError
 
 __all__ = ["add_depth_parser", "run_depth", "write_depth"]
@@ -104,6 +105,7 @@ def _viewer(args: argparse.Namespace, loaded):
 
 def _check_outputs(args: argparse.Namespace) -> None:
     paths = [p for p in (args.output, args.all_in_focus, args.depth) if p is not None]
+    check_outputs_apart([args.scene], paths)
     if len({p.resolve() for p in paths}) != len(paths):
         raise VissimInputError("the blurred, all-in-focus and depth outputs must be different files")
     for path, allowed in ((args.output, (".exr",)), (args.all_in_focus, (".exr",)), (args.depth, (".exr", ".npy"))):

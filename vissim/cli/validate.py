@@ -24,7 +24,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--workers", type=int, default=1, metavar="N", help="render in N local processes")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="send renders to a Dask distributed scheduler")
     parser.add_argument("--spp", type=int, metavar="N", help="override the campaign's samples per pixel")
-    parser.set_defaults(func=run_validate)
+    parser.set_defaults(func=run_validate, writes_progressively=True)
 
     report = subparsers.add_parser(
         "report",
@@ -32,7 +32,7 @@ def add_parser(subparsers) -> None:
         description="Rebuild metrics.json/csv, tables.md, figures and report.html of a run folder without rendering.",
     )
     report.add_argument("run", type=Path, help="run folder written by vissim validate")
-    report.set_defaults(func=run_report)
+    report.set_defaults(func=run_report, writes_progressively=True)
 
 
 def run_validate(args: argparse.Namespace) -> int:

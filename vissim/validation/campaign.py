@@ -24,6 +24,7 @@ from vissim.validation.fields import (
     lenses,
     number,
     read_campaign_toml,
+    refuse_duplicate_names,
     settings_kwargs,
     table,
     tables,
@@ -81,6 +82,12 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
     config = Configuration(name or "", letter, logmar, polarity, specs, f_number, capture)
     label = f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}"
     return config if name else replace(config, name=label)
+
+
+def _describe(c: Configuration) -> str:
+    """What a configuration compares, for messages: letter, LogMAR, polarity, lenses, f-number, capture."""
+    capture = f", capture {c.capture}" if c.capture else ""
+    return f"letter {c.letter}, LogMAR {c.logmar:g}, {c.polarity}, {c.lens_label()}, f/{c.f_number:g}{capture}"
 
 
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
@@ -168,16 +175,18 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     head = table(raw.get("campaign", {}), source, "[campaign]")
     settings = _settings(head, source)
     f_number = _f_number(head.get("f_number", 5.0), source, "campaign.f_number")
-    configurations = [_configuration(item, settings, source, f"item[{i}]", f_number)
+    configurations = [(f"item[{i}]", _configuration(item, settings, source, f"item[{i}]", f_number))
                       for i, item in enumerate(tables(raw, "item", source))]
     for i, sweep in enumerate(tables(raw, "sweep", source)):
-        configurations += _sweep(sweep, settings, source, f"sweep[{i}]", f_number)
+        configurations += [(f"sweep[{i}] #{k + 1}", c)
+                           for k, c in enumerate(_sweep(sweep, settings, source, f"sweep[{i}]", f_number))]
     if not configurations:
         raise field_error(source, "top level", "no configurations: add [[item]] or [[sweep]] tables")
-    unique: dict[str, Configuration] = {}
-    for c in configurations:  # the same inputs twice run once
+    unique: dict[str, tuple[str, Configuration]] = {}
+    for where, c in configurations:  # the same inputs twice run once
         unique.setdefault(json.dumps({k: v for k, v in c.as_json().items() if k != "name"}, sort_keys=True,
-                                     default=list), c)
+                                     default=list), (where, c))
+    refuse_duplicate_names(source, unique.values(), _describe)
     manifest = head.get("manifest")
     if manifest is not None:
         manifest = str((path.parent / manifest).resolve())
@@ -185,7 +194,7 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
         name=head.get("name", path.stem),
         description=head.get("description", ""),
         settings=settings,
-        configurations=tuple(unique.values()),
+        configurations=tuple(c for _, c in unique.values()),
         source=source,
         manifest=manifest,
     )

@@ -29,7 +29,8 @@ from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
 from vissim.validation.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
-                                      read_campaign_toml, settings_kwargs, table, tables, text)
+                                      read_campaign_toml, refuse_duplicate_names, settings_kwargs, table, tables,
+                                      text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
            "is_depth_campaign", "DEPTH_SIMULATIONS", "DEPTH_INPUTS", "SCHEMA_VERSION"]
@@ -209,6 +210,8 @@ def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> Depth
                for i, c in enumerate(tables(raw, "config", source))]
     if not configs:
         raise field_error(source, "top level", "no configurations: add [[config]] tables")
+    refuse_duplicate_names(source, [(f"config[{i}]", c) for i, c in enumerate(configs)],
+                           lambda c: f"scene {Path(c.scene_file).name}, {c.viewer.label()}")
     campaign = DepthCampaign(head.get("name", path.stem), head.get("description", ""), settings, tuple(configs), source)
     if check_memory:
         from vissim.validation.preflight import check_depth_campaign_memory

@@ -3,6 +3,9 @@
 A depth campaign (:mod:`vissim.validation.depth_campaign`) or a single-plane one
 (:mod:`vissim.validation.campaign`) is told apart by its tables when run, and by the ``kind`` in
 ``campaign.json`` when its report is rebuilt; each is handed to its own runner and report.
+
+The run folder is checked to hold none of the campaign's inputs (:func:`campaign_inputs`) and
+is locked for the whole run or rebuild (:mod:`vissim.validation.run_lock`).
 """
 
 from __future__ import annotations
@@ -11,13 +14,15 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from vissim.atomic import check_outputs_apart
 from vissim.errors import VissimInputError
 from vissim.validation.depth_campaign import is_depth_campaign, load_depth_campaign
 from vissim.validation.depth_runner import run_depth_campaign
 from vissim.validation.fields import read_campaign_toml
-from vissim.validation.runner import RunSummary
+from vissim.validation.run_lock import run_folder_lock
+from vissim.validation.runner import RunSummary, check_run_options
 
-__all__ = ["CampaignRun", "run_any_campaign", "rebuild_any_report"]
+__all__ = ["CampaignRun", "campaign_inputs", "run_any_campaign", "rebuild_any_report"]
 
 
 @dataclass(frozen=True)
@@ -43,9 +48,13 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
     else:
         from vissim.validation.campaign import load_campaign as load
         from vissim.validation.runner import run_campaign as run
-    summary = run(load(path), out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress)
+    campaign = load(path)
+    check_outputs_apart(campaign_inputs(campaign, path), folders=[out])
+    check_run_options(out, workers, spp)
     build_report, summary_lines = _report_of(depth)
-    written, lines = build_report(out), summary_lines(out)
+    with run_folder_lock(out):
+        summary = run(campaign, out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress)
+        written, lines = build_report(out), summary_lines(out)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
@@ -60,7 +69,21 @@ def rebuild_any_report(run_dir: str | Path) -> tuple[list[Path], list[str]]:
     if not order.exists():
         raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
     build_report, summary_lines = _report_of(json.loads(order.read_text()).get("kind") == "depth")
-    return build_report(run_dir), summary_lines(run_dir)
+    with run_folder_lock(run_dir):
+        return build_report(run_dir), summary_lines(run_dir)
+
+
+def campaign_inputs(campaign, path: Path) -> list[Path]:
+    """Every file a campaign run reads: the campaign file, its depth scenes, its manifest and captures."""
+    inputs = [path, *(Path(c.scene_file) for c in campaign.configurations if getattr(c, "scene_file", None))]
+    manifest = getattr(campaign, "manifest", None)
+    if manifest is not None:
+        inputs.append(Path(manifest))
+        if Path(manifest).is_file() and any(getattr(c, "capture", None) for c in campaign.configurations):
+            from vissim.validation.captures import load_manifest
+
+            inputs += [capture.file for capture in load_manifest(manifest).values()]
+    return inputs
 
 
 def _report_of(depth: bool):

@@ -15,9 +15,9 @@ from typing import Any
 from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP
 from vissim.errors import VissimInputError
 
-__all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number", "checked_numbers",
-           "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs", "lens", "lenses",
-           "LensSpec", "MAX_SPP", "MAX_SEED", "MAX_LENS_DIOPTERS", "CAMPAIGN_TABLES"]
+__all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_campaign_toml", "number", "whole_number",
+           "checked_numbers", "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs",
+           "lens", "lenses", "LensSpec", "MAX_SPP", "MAX_SEED", "MAX_LENS_DIOPTERS", "CAMPAIGN_TABLES"]
 
 #: Campaign seeds: the no-lens render uses seed_a + seed_b + 1, which must stay a sampler seed.
 MAX_SEED = (MAX_SAMPLER_SEED - 1) // 2
@@ -29,6 +29,21 @@ CAMPAIGN_TABLES = ("campaign", "item", "sweep", "depth_campaign", "config")
 
 def field_error(source: str, where: str, message: str) -> VissimInputError:
     return VissimInputError(f"{source}: {where}: {message}")
+
+
+def refuse_duplicate_names(source: str, entries, describe) -> None:
+    """Refuse two configurations with one name (a report shows one row per name, hiding the other).
+
+    ``entries`` are ``(where, configuration)`` pairs; ``describe(configuration)`` says what it compares.
+    """
+    seen: dict[str, tuple[str, object]] = {}
+    for where, config in entries:
+        if config.name in seen:
+            first_where, first = seen[config.name]
+            raise field_error(source, f"{first_where} and {where}",
+                              f"two configurations named {config.name!r} ({describe(first)}; {describe(config)}); "
+                              "give each its own name")
+        seen[config.name] = (where, config)
 
 
 def read_toml_file(path: str | Path, what: str = "campaign file") -> dict:
