@@ -65,3 +65,93 @@ def test_the_cheap_docstring_examples_run():
         assert result.failed == 0, name
         attempted += result.attempted
     assert attempted >= 20
+
+
+# -- wrong argument types: one error at once, saying what is accepted ------------------------
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from vissim.errors import VissimInputError, VissimTypeError  # noqa: E402
+
+
+def _front():
+    return vissim.Wavefront.from_prescription(vissim.Prescription(-1.0), 3.0)
+
+
+def _psf():
+    return vissim.compute_psf(_front(), arcmin_per_px=1.0, size_px=64)
+
+
+IMAGE = np.ones((32, 32), np.float32)
+
+# (call, a fragment of what the error says is accepted); each used to fail deep inside (or not at all)
+WRONG_TYPES = [
+    (lambda: vissim.compute_psf("-2.00 DS", pupil_diameter_mm=3.0), "must be a Wavefront or an OpdMap"),
+    (lambda: vissim.compute_psf(vissim.Prescription(-2.0)), "must be a Wavefront or an OpdMap"),
+    (lambda: vissim.strehl_ratio(_psf()), "must be a Wavefront or an OpdMap"),
+    (lambda: vissim.blur_image(IMAGE, _front(), arcmin_per_px=1.0), "psf must be a PSF"),
+    (lambda: vissim.blur_image(IMAGE, "psf", arcmin_per_px=1.0), "psf must be a PSF"),
+    (lambda: vissim.blur_image("chart.png", _psf(), arcmin_per_px=1.0), "image must be an ndarray"),
+    (lambda: vissim.Prescription("-2.00 DS"), "Prescription.parse"),
+    (lambda: vissim.Wavefront("2,0=0.5", 3.0), "must be a mapping {(n, m): µm}"),
+    (lambda: vissim.Wavefront(vissim.Prescription(-1.0), 3.0), "Wavefront.from_prescription"),
+    (lambda: vissim.Wavefront({"defocus": 0.5}, 3.0), "tuple (n, m) of integers"),
+    (lambda: vissim.Wavefront.from_prescription("-2 DS", 3.0), "vissim.Prescription.parse"),
+    (lambda: vissim.mtf(_front()), "must be a PSF"),
+    (lambda: vissim.otf(IMAGE), "must be a PSF"),  # an ndarray has a .data buffer: it used to pass
+    (lambda: vissim.frequencies_cyc_per_deg(_front()), "must be a PSF"),
+    (lambda: vissim.fit_rx("a.png", "b.png", arcmin_per_px=1.0, pupil_diameter_mm=3.0), "must be an ndarray"),
+    (lambda: vissim.blur_depth(IMAGE, "depth.exr", eye_prescription=vissim.Prescription(-1.0),
+                               pupil_diameter_mm=3.0, arcmin_per_px=1.0), "depth_m must be an ndarray"),
+    (lambda: vissim.etdrs_chart_spec(letters=5), "letters must be a str"),
+    (lambda: vissim.render_chart_angular("K"), "must be a ChartSpec"),
+]
+
+
+@pytest.mark.parametrize("call, accepted", WRONG_TYPES)
+def test_a_wrong_argument_type_is_one_type_error_saying_what_is_accepted(call, accepted):
+    with pytest.raises(VissimTypeError) as caught:
+        call()
+    assert isinstance(caught.value, TypeError) and isinstance(caught.value, VissimInputError)
+    message = str(caught.value)
+    assert accepted in message and "\n" not in message and len(message) < 300, message
+
+
+@pytest.mark.parametrize("call, fragment", [
+    (lambda: vissim.strehl_ratio(_front(), wavelength_nm="green"), "wavelength must be a number in nm"),
+    (lambda: vissim.strehl_ratio(_front(), pupil_diameter_mm=-1.0), "pupil diameter must be a positive"),
+    (lambda: vissim.strehl_ratio(_front(), pupil_diameter_mm=9.0), "larger than the 3 mm pupil"),
+    (lambda: vissim.compute_psf(_front(), size_px=None), "PSF size must be an integer"),
+    (lambda: vissim.compute_psf(_front(), weights="heavy"), "one non-negative weight per wavelength"),
+    (lambda: vissim.compute_psf(_front(), lca_reference_nm=-5.0), "LCA reference wavelength"),
+    (lambda: vissim.diffraction_mtf("high", 3.0, 550.0), "cycles/degree"),
+    (lambda: vissim.blur_image(IMAGE, _psf(), arcmin_per_px=float("nan")), "arcmin per pixel"),
+])
+def test_a_bad_value_is_one_input_error_naming_it_and_its_unit(call, fragment):
+    with pytest.raises(VissimInputError, match=fragment.replace("(", r"\(")):
+        call()
+
+
+def test_right_types_still_give_the_physics():
+    """Oracle: a zero wavefront's Strehl ratio is 1 by definition, and a PSF's MTF is 1 at zero frequency."""
+    assert vissim.strehl_ratio(vissim.Wavefront.zero(3.0)) == pytest.approx(1.0, abs=1e-9)
+    psf = _psf()
+    assert vissim.mtf(psf)[32, 32] == pytest.approx(1.0, abs=1e-6)
+
+
+def test_dir_lists_only_the_public_names():
+    assert dir(vissim) == sorted(vissim.__all__)
+    assert not {"annotations", "importlib", "logging"} & set(dir(vissim))
+    assert not [name for name in vars(vissim) if not name.startswith("_") and name not in vissim.__all__
+                and not isinstance(getattr(vissim, name), type(vissim))]  # submodules aside
+
+
+def test_the_rx_fit_repr_is_one_short_line_with_the_fitted_power_and_residual():
+    from tests.fit.synthetic import BENCH, capture
+    from vissim.optics.trial_lens import TrialLens
+
+    image, reference, _ = capture(TrialLens(-2.0))
+    fit = vissim.fit_rx(image, reference, arcmin_per_px=1.0, pupil_diameter_mm=3.6, bench=BENCH)
+    text = repr(fit)
+    assert len(text) < 300 and "\n" not in text, text
+    assert f"M {fit.power_vector[0]:+.3f} D" in text and "residual PSNR" in text and "status='ok'" in text

@@ -5,11 +5,28 @@ from __future__ import annotations
 import math
 import os
 
-from vissim.errors import VissimInputError
+from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "size_px",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
-           "format_bytes", "check_allocation"]
+           "format_bytes", "check_allocation", "instance_of", "describe"]
+
+
+def describe(value) -> str:
+    """A short account of ``value`` for an error line: "str '-2.00 DS'", "a PSF", "ndarray of shape (4, 4)"."""
+    if isinstance(value, (str, bytes, int, float, complex, type(None), list, tuple, dict)):
+        text = repr(value)
+        return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+    if hasattr(value, "shape") and hasattr(value, "dtype"):
+        return f"{type(value).__name__} of shape {tuple(value.shape)}"
+    return f"a {type(value).__name__}"
+
+
+def instance_of(value, types, name: str, accepted: str):
+    """``value`` if it is an instance of ``types``; else a :class:`VissimTypeError` saying what ``name`` accepts."""
+    if isinstance(value, types):
+        return value
+    raise VissimTypeError(f"{name} must be {accepted}, got {describe(value)}")
 
 
 def finite_number(value, name: str, unit: str, *, allow_inf: bool = False) -> float:
