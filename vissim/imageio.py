@@ -24,11 +24,16 @@ existing file unless ``overwrite=True``.  Anything wrong with a file raises one
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import dataclasses
+import io
 import logging
 import math
 import os
 import struct
+import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -218,18 +223,74 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _open_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
-    """The first part's channels ``{name: pixels}`` and provenance; one clean error for a file that is no EXR."""
+def _flush_all() -> None:
+    """Flush Python's streams and the C library's (native code's buffered output lands before a redirect ends)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
     try:
-        exr = OpenEXR.File(str(path), separate_channels=True)
-        n_parts = len(exr.parts)
-        header = exr.parts[0].header
-        channels = {name: ch.pixels for name, ch in exr.parts[0].channels.items()}
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # pragma: no cover - no C library to flush
+        pass
+
+
+@contextlib.contextmanager
+def _native_output_captured():
+    """Collect what native code writes to file descriptors 1 and 2 (OpenEXR prints its own errors there).
+
+    Yields a list that holds the captured lines once the block ends; Python's own streams are
+    flushed first, so nothing of vissim's is caught.
+    """
+    lines: list[str] = []
+    _flush_all()
+    saved = [os.dup(fd) for fd in (1, 2)]
+    python_side = io.StringIO()  # what the binding may print through sys.stdout
+    try:
+        with tempfile.TemporaryFile() as sink:
+            for fd in (1, 2):
+                os.dup2(sink.fileno(), fd)
+            try:
+                with contextlib.redirect_stdout(python_side), contextlib.redirect_stderr(python_side):
+                    yield lines
+            finally:
+                _flush_all()
+                for fd, copy in zip((1, 2), saved):
+                    os.dup2(copy, fd)
+                sink.seek(0)
+                text = sink.read().decode("utf-8", "replace") + python_side.getvalue()
+                lines.extend(line.strip() for line in text.splitlines() if line.strip())
+    finally:
+        for copy in saved:
+            os.close(copy)
+
+
+def _exr_reason(path: Path, exc: BaseException, printed: list[str]) -> str:
+    """Why OpenEXR could not read ``path``: its first printed message (without the file name), else the exception."""
+    for line in printed:
+        message = line.removeprefix(f"{path}:").strip()
+        if message and not message.startswith("Warning:"):
+            return message
+    return str(exc).replace(f"'{path}'", "the file").strip() or type(exc).__name__
+
+
+def _open_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
+    """The first part's channels ``{name: pixels}`` and provenance; one clean error for a file that is no EXR.
+
+    OpenEXR's own messages are kept off the terminal; the first of them names the fault.
+    """
+    try:
+        with _native_output_captured() as printed:
+            exr = OpenEXR.File(str(path), separate_channels=True)
+            n_parts = len(exr.parts)
+            header = exr.parts[0].header
+            channels = {name: ch.pixels for name, ch in exr.parts[0].channels.items()}
     except Exception as exc:  # OpenEXR raises RuntimeError, ValueError, IndexError ...
+        size = path.stat().st_size
         raise VissimInputError(
-            f"{path}: cannot read as OpenEXR (truncated, "
-            f"corrupt or not an EXR file): {_one_line(exc)}"
+            f"{path}: cannot read as OpenEXR (truncated, corrupt or not an EXR file; {size} bytes): "
+            f"{_exr_reason(path, exc, printed)}"
         ) from exc
+    if printed:
+        logger.debug("OpenEXR said, reading %s: %s", path, " | ".join(printed))
     if n_parts > 1:
         logger.info("%s has %d parts; reading only the first", path, n_parts)
     prov_text = header.get(PROVENANCE_ATTRIBUTE)

@@ -35,6 +35,7 @@ from vissim.checks import samples_per_pixel
 from vissim.validation.captures import capture_problem, capture_tile, load_manifest
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
+from vissim.validation.scheduler_probe import probe_scheduler
 
 __all__ = ["run_campaign", "RunSummary", "plan_run", "make_missing_renders"]
 
@@ -113,6 +114,8 @@ def connect_scheduler(address: str):
     except ImportError:  # pragma: no cover
         raise VissimInputError("--scheduler needs Dask distributed: pip install 'dask[distributed]'") from None
     hint = "expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786"
+    if not address.strip():
+        raise VissimInputError(f"--scheduler is empty; {hint} (leave the option out to render here)")
     try:
         scheme, location = parse_address(address)
     except (ValueError, TypeError) as exc:
@@ -120,6 +123,8 @@ def connect_scheduler(address: str):
     host, _, port = location.rpartition(":")
     if scheme in ("tcp", "tls", "ws", "wss") and not (host and port.isdigit() and 0 < int(port) < 65536):
         raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address; {hint}")
+    if scheme == "tcp":  # a web server or another service would keep Dask waiting, or ask for exabytes
+        probe_scheduler(address, host.strip("[]"), int(port))
     try:
         return Client(address, timeout=SCHEDULER_TIMEOUT_S)
     except (OSError, TimeoutError):
@@ -217,7 +222,7 @@ def make_missing_renders(run_dir: Path, needed: dict, record: dict, *, workers: 
     Returns the number of renders made.
     """
     pending = [s for s in needed.values() if not _render_path(run_dir, s).exists()]
-    client = connect_scheduler(scheduler) if scheduler and pending else None
+    client = connect_scheduler(scheduler) if scheduler is not None and pending else None
     try:
         provenance = make_provenance(campaign=record["source"])
         write_json_atomic(run_dir / "campaign.json", {**record, "provenance": provenance}, overwrite=True)
