@@ -11,6 +11,13 @@ shape ``(H, W)`` (mono, channel ``Y``) or ``(H, W, 3)`` (channels ``R, G, B``), 
   Float TIFFs are read as linear.  16-bit *colour* PNG is refused both ways, because
   Pillow silently truncates it to 8 bits; use TIFF or EXR for that.
 
+An alpha channel (PNG/TIFF extra sample, EXR ``A``) is read into :attr:`Image.alpha`
+(coverage in [0, 1], never light: stored linearly, no transfer function) and written back
+when ``write_image(..., alpha=...)`` is given: vissim blurs the colour and carries alpha
+through unchanged.  :attr:`Image.bit_depth` is the integer depth a PNG/TIFF was stored at
+(8 or 16; ``None`` for float data), so that a command can write its result at the depth of
+its input (:func:`output_bit_depth`).
+
 Images carry their angular sampling: ``write_image(..., arcmin_per_px=S)`` records it in
 the provenance record's top-level key ``"arcmin_per_px"`` (:data:`SAMPLING_KEY`; the EXR
 header attribute or the sidecar, as above), and :func:`read_image` returns it as
@@ -49,8 +56,8 @@ from vissim.provenance import from_json, to_json
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["Image", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode", "srgb_encode",
-           "to_preview_png", "write_data_map", "write_image"]
+__all__ = ["Image", "output_bit_depth", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode",
+           "srgb_encode", "to_preview_png", "write_data_map", "write_image"]
 
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 #: Top-level provenance key holding an image's angular sampling, arcmin per pixel.
@@ -112,13 +119,17 @@ class Image:
 
     ``pixels`` is float32 of shape ``(H, W)`` with ``channel_names == ("Y",)`` or
     ``(H, W, 3)`` with ``("R", "G", "B")``.  ``arcmin_per_px`` is the angular pixel size,
-    or ``None`` when the file does not record one.
+    or ``None`` when the file does not record one.  ``alpha`` is the file's alpha channel,
+    float32 ``(H, W)`` in [0, 1], or ``None``; ``bit_depth`` the integer depth the file
+    stored (8 or 16), ``None`` for float data.
     """
 
     pixels: np.ndarray
     channel_names: tuple[str, ...]
-    provenance: dict = dataclasses.field(default_factory=dict)
+    provenance: dict = dataclasses.field(default_factory=dict, repr=False)
     arcmin_per_px: float | None = None
+    alpha: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    bit_depth: int | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.pixels, np.ndarray) or self.pixels.dtype != np.float32:
@@ -132,6 +143,10 @@ class Image:
                 f"Image.channel_names {self.channel_names} do "
                 f"not match pixels of shape {self.pixels.shape}"
             )
+        if self.alpha is not None and (not isinstance(self.alpha, np.ndarray) or self.alpha.dtype != np.float32
+                                       or self.alpha.shape != self.pixels.shape[:2]):
+            raise VissimInputError(f"Image.alpha must be a float32 ndarray of shape {self.pixels.shape[:2]} or None, got "
+                                   f"{getattr(self.alpha, 'dtype', type(self.alpha))} {getattr(self.alpha, 'shape', '')}")
         if self.arcmin_per_px is not None:
             step = _sampling_value(self.arcmin_per_px)
             if step is None:
@@ -201,14 +216,38 @@ def read_image(path: str | os.PathLike[str], *, encoding: str = "auto") -> Image
     if kind == "exr":
         if encoding == "srgb":
             raise VissimInputError(f"{path}: EXR files hold linear light; encoding='srgb' does not apply")
-        pixels, names, provenance = _read_exr(path)
+        pixels, names, provenance, alpha = _read_exr(path)
+        bits = None
     else:
-        pixels = _to_linear(_read_png(path) if kind == "png" else _read_tiff(path), encoding)
+        raw, alpha = _split_alpha(_read_png(path) if kind == "png" else _read_tiff(path))
+        bits = 8 * raw.dtype.itemsize if np.issubdtype(raw.dtype, np.integer) else None
+        pixels = _to_linear(raw, encoding)
+        alpha = None if alpha is None else _to_linear(alpha, "linear")
         names, provenance = (MONO_CHANNELS if pixels.ndim == 2 else RGB_CHANNELS), None
     if not np.all(np.isfinite(pixels)):
         raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
     provenance = _read_sidecar(path) if provenance is None else provenance  # read after the pixel check
-    return Image(pixels, names, provenance, sampling_from_provenance(provenance))
+    return Image(pixels, names, provenance, sampling_from_provenance(provenance), alpha, bits)
+
+
+def _split_alpha(data: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """(colour, alpha | None) of PNG/TIFF samples: grey + alpha has 2 samples, RGB + alpha 4."""
+    if data.ndim == 3 and data.shape[-1] in (2, 4):
+        return data[..., :-1] if data.shape[-1] == 4 else data[..., 0], data[..., -1]
+    return data, None
+
+
+def output_bit_depth(image: Image, path: str | os.PathLike[str]) -> int:
+    """The integer depth to write ``image``'s result at ``path`` with: its own (8 or 16), else 8.
+
+    A 16-bit colour source written to PNG (which Pillow cannot write at 16 bits) gets 8 bits
+    and one warning naming .tif and .exr, which keep them.
+    """
+    bits = image.bit_depth if image.bit_depth in (8, 16) else 8
+    if bits == 16 and Path(path).suffix.lower() == ".png" and image.pixels.ndim == 3:
+        logger.warning("%s: 16-bit colour PNG cannot be written; writing 8 bits (use .tif or .exr to keep 16)", path)
+        return 8
+    return bits
 
 
 def _kind(path: Path) -> str:
@@ -297,7 +336,7 @@ def _open_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
     return channels, _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
 
 
-def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict]:
+def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict, np.ndarray | None]:
     channels, provenance = _open_exr(path)
     names = set(channels)
     if set(RGB_CHANNELS) <= names:
@@ -309,7 +348,7 @@ def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict]:
             f"{path}: EXR channels {sorted(names)} are not supported (need 'Y' for mono or 'R', 'G', 'B' for colour)"
         )
     if names - set(wanted) - {"A"}:
-        logger.info("%s: ignoring EXR channels %s", path, sorted(names - set(wanted)))
+        logger.info("%s: ignoring EXR channels %s", path, sorted(names - set(wanted) - {"A"}))
     planes = [channels[c] for c in wanted]
     for name, plane in zip(wanted, planes):
         if plane.dtype not in (np.float16, np.float32):
@@ -317,7 +356,11 @@ def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict]:
         if plane.shape != planes[0].shape:
             raise VissimInputError(f"{path}: EXR channel {name!r} is subsampled ({plane.shape} vs {planes[0].shape})")
     pixels = planes[0] if len(planes) == 1 else np.stack(planes, axis=-1)
-    return np.ascontiguousarray(pixels, dtype=np.float32), wanted, provenance
+    alpha = channels.get("A")
+    if alpha is not None and alpha.shape != planes[0].shape:
+        raise VissimInputError(f"{path}: EXR channel 'A' is subsampled ({alpha.shape} vs {planes[0].shape})")
+    alpha = None if alpha is None else np.ascontiguousarray(alpha, dtype=np.float32)
+    return np.ascontiguousarray(pixels, dtype=np.float32), wanted, provenance, alpha
 
 
 def _parse_provenance(path: Path, text: str) -> dict:
@@ -361,7 +404,7 @@ def _read_png(path: Path) -> np.ndarray:
     if mode in ("L", "RGB"):
         return data
     if mode in ("LA", "RGBA"):
-        return data[..., 0] if mode == "LA" else data[..., :3]
+        return data  # the alpha channel last; split by _split_alpha
     raise VissimInputError(f"{path}: PNG mode {mode!r} is not supported (expected greyscale or RGB, 8 or 16 bit)")
 
 
@@ -385,11 +428,8 @@ def _read_tiff(path: Path) -> np.ndarray:
             "(expected a single greyscale or RGB image)"
         )
     samples = 1 if axes == "YX" else data.shape[-1]
-    if photometric == tifffile.PHOTOMETRIC.MINISBLACK and samples in (1, 2):
-        data = data if samples == 1 else data[..., 0]
-    elif photometric == tifffile.PHOTOMETRIC.RGB and samples in (3, 4):
-        data = data[..., :3]
-    else:
+    if not ((photometric == tifffile.PHOTOMETRIC.MINISBLACK and samples in (1, 2))
+            or (photometric == tifffile.PHOTOMETRIC.RGB and samples in (3, 4))):
         raise VissimInputError(
             f"{path}: TIFF with photometric {getattr(photometric, 'name', photometric)} and {samples} samples "
             "is not supported (expected greyscale or RGB)"
@@ -418,6 +458,18 @@ def _to_linear(raw: np.ndarray, encoding: str) -> np.ndarray:
 
 def _sidecar_path(path: Path) -> Path:
     return path.with_name(path.name + ".json")
+
+
+def _validated_alpha(path: Path, alpha: Any, shape: tuple[int, ...]) -> np.ndarray | None:
+    """``alpha`` as float32 of the image's ``(H, W)`` with finite values in [0, 1], or None."""
+    if alpha is None:
+        return None
+    plane = np.asarray(alpha, dtype=np.float32)
+    if plane.shape != tuple(shape):
+        raise VissimInputError(f"cannot write {path}: alpha has shape {plane.shape}; expected the image's {tuple(shape)}")
+    if not np.all(np.isfinite(plane)) or plane.min() < 0.0 or plane.max() > 1.0:
+        raise VissimInputError(f"cannot write {path}: alpha values must be finite and within [0, 1]")
+    return plane
 
 
 def _validated_pixels(path: Path, pixels: Any, channel_names: Any) -> np.ndarray:
@@ -457,6 +509,7 @@ def write_image(
     encoding: str = "srgb",
     bit_depth: int = 8,
     arcmin_per_px: float | None = None,
+    alpha: Any = None,
 ) -> Path:
     """Write linear-light ``pixels`` to ``path``; the format follows the suffix.
 
@@ -477,6 +530,10 @@ def write_image(
         PNG/TIFF only: ``"srgb"`` (default) encodes with IEC 61966-2-1, ``"linear"`` does
         not; values are clipped to [0, 1] and rounded to ``bit_depth`` (8 or 16) bits.
         EXR always stores linear float32.
+    alpha:
+        Optional alpha channel, shape ``(H, W)``, values in [0, 1]: written as the last
+        sample of a PNG/TIFF (linearly quantised, no transfer function) or as EXR ``A``.
+        8-bit only for PNG (Pillow writes no 16-bit alpha PNG).
     """
     path = Path(path)
     kind = _kind(path)
@@ -485,6 +542,10 @@ def write_image(
     if bit_depth not in (8, 16):
         raise VissimInputError(f"cannot write {path}: bit_depth must be 8 or 16 bits, got {bit_depth!r}")
     arr = _validated_pixels(path, pixels, channel_names)
+    alpha_plane = _validated_alpha(path, alpha, arr.shape[:2])
+    if kind == "png" and bit_depth == 16 and alpha_plane is not None:
+        raise VissimInputError(f"cannot write {path}: 16-bit PNG with alpha is not supported (Pillow cannot write it); "
+                               "use .tif or .exr")
     provenance = _with_sampling(provenance, arcmin_per_px, path)
     if kind == "png" and bit_depth == 16 and arr.ndim == 3:
         raise VissimInputError(
@@ -492,7 +553,9 @@ def write_image(
             "supported (Pillow cannot write it); use .tif or .exr"
         )
     if kind == "exr":
-        _write_exr(path, arr, provenance, overwrite)
+        planes = arr if alpha_plane is None else np.dstack([arr, alpha_plane])
+        names = None if alpha_plane is None else (*(MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS), "A")
+        _write_exr(path, planes, provenance, overwrite, names=names)
         return path
 
     sidecar = _sidecar_path(path)
@@ -501,12 +564,16 @@ def write_image(
             if existing.exists():
                 raise VissimInputError(f"{existing} already exists; pass overwrite=True (--overwrite) to replace it")
     codes = _quantise(path, arr, encoding, bit_depth)
+    extra: dict[str, Any] = {}
+    if alpha_plane is not None:
+        codes = np.dstack([codes, _quantise(path, alpha_plane, "linear", bit_depth)])
+        extra["extrasamples"] = ["unassalpha"]
     with atomic_output(path, overwrite=overwrite) as tmp:
         if kind == "png":
             _PILImage.fromarray(codes).save(tmp, format="PNG")
         else:
-            photometric = "minisblack" if codes.ndim == 2 else "rgb"
-            tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib")
+            photometric = "minisblack" if arr.ndim == 2 else "rgb"
+            tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib", **extra)
     if provenance is not None:
         write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
     elif sidecar.exists():
@@ -527,7 +594,7 @@ def _quantise(path: Path, arr: np.ndarray, encoding: str, bit_depth: int) -> np.
 
 def _write_exr(path: Path, arr: np.ndarray, provenance: dict | None, overwrite: bool, names=None) -> None:
     names = names or (MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS)
-    planes = [arr] if arr.ndim == 2 else [arr[..., i] for i in range(3)]
+    planes = [arr] if arr.ndim == 2 else [arr[..., i] for i in range(arr.shape[-1])]
     # OpenEXR.Channel ignores strides: a non-contiguous view is written scrambled.
     channels = {n: OpenEXR.Channel(np.ascontiguousarray(p, dtype=np.float32)) for n, p in zip(names, planes)}
     header: dict[str, Any] = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}

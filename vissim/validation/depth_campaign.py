@@ -28,7 +28,7 @@ from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
 from vissim.validation.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
-                                      read_campaign_toml, settings_kwargs, table, tables, text)
+                                      name_text, read_campaign_toml, settings_kwargs, table, tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
            "is_depth_campaign", "DEPTH_SIMULATIONS", "DEPTH_INPUTS", "SCHEMA_VERSION"]
@@ -185,7 +185,7 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
         viewer = _eye(raw, viewer, source, where)
     elif "camera" in raw:
         viewer = _camera(raw["camera"], viewer, source, f"{where}.camera")
-    name = text(raw["name"], source, f"{where}.name") if "name" in raw else ""
+    name = name_text(raw["name"], source, f"{where}.name") if "name" in raw else ""
     return DepthConfiguration(name or f"{scene_file.stem}: {viewer.label()}", str(scene_file), loaded.scene, viewer)
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP
+from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP, name_problem
 from vissim.errors import VissimInputError
 
 __all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number", "checked_numbers",
@@ -77,11 +77,12 @@ def number(value: Any, source: str, where: str, unit: str, *, lo: float | None =
 
 
 def whole_number(value: Any, source: str, where: str, unit: str, *, lo: int, hi: int) -> int:
-    """An integer (not a bool) within ``[lo, hi]``."""
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise field_error(source, where, f"expected a whole number of {unit}, got {value!r}")
-    if not lo <= value <= hi:
+    """An integer (not a bool) within ``[lo, hi]``; a number outside the range is told so first (1e9, not 'whole')."""
+    is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if is_number and not lo <= value <= hi:  # NaN and infinity too
         raise field_error(source, where, f"must be {lo} to {hi} {unit}, got {value!r}")
+    if not is_number or not isinstance(value, int):
+        raise field_error(source, where, f"expected a whole number of {unit} in {lo} to {hi}, got {value!r}")
     return value
 
 
@@ -105,6 +106,14 @@ def seed_pair(value: Any, source: str, where: str) -> tuple[int, int]:
 def text(value: Any, source: str, where: str) -> str:
     if not isinstance(value, str):
         raise field_error(source, where, f"expected a string, got {value!r}")
+    return value
+
+
+def name_text(value: Any, source: str, where: str) -> str:
+    """A campaign or configuration name: a string within :data:`vissim.checks.MAX_NAME_CHARS`, printable."""
+    problem = name_problem(text(value, source, where))
+    if problem:
+        raise field_error(source, where, problem)
     return value
 
 
@@ -161,7 +170,7 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
             kwargs[key] = choices(head[key], allowed, source, f"{where}.{key}")
     for key in texts:
         if key in head:
-            text(head[key], source, f"{where}.{key}")
+            (name_text if key == "name" else text)(head[key], source, f"{where}.{key}")
     for key in switches:
         if key in head:
             if not isinstance(head[key], bool):
