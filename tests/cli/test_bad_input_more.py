@@ -141,3 +141,155 @@ def test_a_real_scheduler_passes_the_probe():
         address = cluster.scheduler_address
         host, port = address.removeprefix("tcp://").rsplit(":", 1)
         probe_scheduler(address, host, int(port))  # returns: no error
+
+
+# -- alpha and bit depth survive a blur --------------------------------------------------------
+def _edge_rgba(tmp_path):
+    """A sharp vertical edge in RGB with a patterned alpha (the oracle for 'carried unchanged')."""
+    from PIL import Image as PILImage
+
+    rgba = np.zeros((40, 40, 4), np.uint8)
+    rgba[:, 20:, :3] = 230
+    rgba[:, :, 3] = (np.arange(40)[:, None] * 6 + np.arange(40)[None, :]) % 256
+    path = tmp_path / "edge.png"
+    PILImage.fromarray(rgba, mode="RGBA").save(path)
+    return path, rgba
+
+
+BLUR = ["--rx", "-2 DS", "--pupil-mm", "3", "--arcmin-per-px", "1"]
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif", ".exr"])
+def test_blur_keeps_the_alpha_channel_unchanged_and_blurs_the_colour(capfd, tmp_path, suffix):
+    from vissim.imageio import read_image
+
+    path, rgba = _edge_rgba(tmp_path)
+    out = tmp_path / f"out{suffix}"
+    code, _, err = run(capfd, "blur", path, "-o", out, *BLUR)
+    assert code == 0, err
+    result = read_image(out)
+    assert result.alpha is not None
+    np.testing.assert_allclose(result.alpha * 255.0, rgba[..., 3], atol=1e-3)  # code for code
+    sharp = read_image(path).pixels
+    assert np.abs(result.pixels[:, 18:22] - sharp[:, 18:22]).max() > 0.05  # the edge was blurred
+
+
+def test_a_16_bit_png_is_written_back_at_16_bits(capfd, tmp_path):
+    """Oracle: blur preserves a uniform image (the PSF sums to 1, the padding is the border mean), so each
+    16-bit code comes back within one code; at 8 bits the level 12345/65535 would be off by ~50 codes."""
+    from PIL import Image as PILImage
+
+    path, out = tmp_path / "flat16.png", tmp_path / "out.png"
+    PILImage.fromarray(np.full((40, 40), 12345, np.uint16)).save(path)
+    code, _, err = run(capfd, "blur", path, "-o", out, *BLUR)
+    assert code == 0, err
+    with PILImage.open(out) as written:
+        assert written.mode.startswith("I;16")
+        assert np.abs(np.asarray(written).astype(int) - 12345).max() <= 1
+
+
+def test_a_16_bit_colour_tiff_stays_16_bit_as_tiff_and_warns_once_as_png(capfd, tmp_path, caplog):
+    import tifffile
+
+    path = tmp_path / "flat16.tif"
+    tifffile.imwrite(path, np.full((40, 40, 3), 40000, np.uint16), photometric="rgb")
+    code, _, err = run(capfd, "blur", path, "-o", tmp_path / "out.tif", *BLUR)
+    assert code == 0, err
+    assert tifffile.imread(tmp_path / "out.tif").dtype == np.uint16
+    code, _, err = run(capfd, "blur", path, "-o", tmp_path / "out.png", *BLUR)
+    assert code == 0, err
+    assert [r.getMessage() for r in caplog.records if r.levelname == "WARNING"] == [
+        f"{tmp_path / 'out.png'}: 16-bit colour PNG cannot be written; writing 8 bits (use .tif or .exr to keep 16)"]
+
+
+# -- --arcmin-per-px against the file's own sampling -------------------------------------------
+def test_an_overriding_sampling_is_one_warning_line_naming_both(tmp_path, valid_exr):
+    import subprocess
+    import sys
+
+    def blur(step):
+        out = tmp_path / f"out{step}.exr"
+        argv = [sys.executable, "-m", "vissim", "blur", str(valid_exr), "-o", str(out), "--rx", "-1 DS",
+                "--pupil-mm", "3", "--arcmin-per-px", step]
+        done = subprocess.run(argv, capture_output=True, text=True, check=False)
+        assert done.returncode == 0, done.stderr
+        return done.stderr.splitlines()
+
+    assert blur("0.5") == [f"vissim: warning: --arcmin-per-px 0.5 overrides the 1 arcmin/px that {valid_exr} records"]
+    assert blur("1") == []  # the same sampling: nothing to say
+
+
+# -- an image smaller than its blur ------------------------------------------------------------
+@pytest.mark.parametrize("rows, cols", [(1, 1), (3, 5)])
+def test_a_tiny_image_is_refused_naming_its_size_width_by_height(capfd, tmp_path, rows, cols):
+    path, out = tmp_path / "tiny.exr", tmp_path / "out.exr"
+    write_image(path, np.ones((rows, cols), np.float32), arcmin_per_px=1.0)
+    code, _, err = run(capfd, "blur", path, "-o", out, "--rx", "-1 DS", "--pupil-mm", "3")
+    assert_one_error_line(code, err, str(path), f"the image is {cols} × {rows} px (width × height)", "at least")
+    assert not out.exists()
+
+
+# -- samples per pixel out of range ------------------------------------------------------------
+def spp_campaign(tmp_path, spp: str):
+    path = tmp_path / "spp.toml"
+    path.write_text(TINY_CAMPAIGN.replace("spp = 4", f"spp = {spp}"))
+    return path
+
+
+@pytest.mark.parametrize("spp", ["1e9", "1e400", "0", "-3"])
+def test_spp_out_of_range_says_the_range_not_whole_number(capfd, tmp_path, spp):
+    code, _, err = run(capfd, "validate", spp_campaign(tmp_path, spp), "-o", tmp_path / "out")
+    assert_one_error_line(code, err, "campaign.spp", "must be 1 to 65536 samples per pixel")
+    assert "whole number" not in err and not (tmp_path / "out").exists()
+
+
+def test_spp_in_range_but_fractional_says_whole_number(capfd, tmp_path):
+    code, _, err = run(capfd, "validate", spp_campaign(tmp_path, "2.5"), "-o", tmp_path / "out")
+    assert_one_error_line(code, err, "campaign.spp", "whole number", "1 to 65536")
+
+
+def test_the_spp_check_of_the_library_names_the_range_first():
+    from vissim.checks import MAX_SPP, samples_per_pixel
+    from vissim.errors import VissimInputError
+
+    with pytest.raises(VissimInputError, match=f"must be 1-{MAX_SPP} samples per pixel, got 1000000000.0"):
+        samples_per_pixel(1e9)
+    assert samples_per_pixel(4.0) == 4
+
+
+# -- configuration names -----------------------------------------------------------------------
+def named_campaign(tmp_path, name: str, where: str = "item"):
+    path = tmp_path / "named.toml"
+    entry = 'letter = "K"\nlogmar = 0.5\n' if where == "item" else 'letters = ["K"]\nlogmars = [0.5]\n'
+    path.write_text(TINY_CAMPAIGN.split("[[item]]")[0] + f"[[{where}]]\nname = {name}\n{entry}")
+    return path
+
+
+def test_a_10_mb_configuration_name_is_refused_stating_the_limit(capfd, tmp_path):
+    from vissim.checks import MAX_NAME_CHARS
+
+    code, _, err = run(capfd, "validate", named_campaign(tmp_path, '"' + "x" * 10**7 + '"'), "-o", tmp_path / "out")
+    assert_one_error_line(code, err, "item[0].name", f"at most {MAX_NAME_CHARS} characters", "got 10000000")
+    assert len(err) < 300 and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("name, where", [('"a\\nb"', "sweep"), ('"tab\\there"', "item")])
+def test_a_configuration_name_with_a_control_character_is_refused(capfd, tmp_path, name, where):
+    code, _, err = run(capfd, "validate", named_campaign(tmp_path, name, where), "-o", tmp_path / "out")
+    assert_one_error_line(code, err, f"{where}[0].name", "one line of printable text")
+
+
+def test_a_name_at_the_limit_loads():
+    from vissim.checks import MAX_NAME_CHARS, name_problem
+
+    assert name_problem("K +0.5 black: +2.00 D, f/5 ±0.25 D") is None
+    assert name_problem("n" * MAX_NAME_CHARS) is None and name_problem("n" * (MAX_NAME_CHARS + 1))
+
+
+# -- --lenses '' -------------------------------------------------------------------------------
+@pytest.mark.parametrize("lenses", ["", " , "])
+def test_empty_lenses_are_an_error_not_the_default_lenses(capfd, tmp_path, lenses):
+    out = tmp_path / "atv"
+    code, _, err = run(capfd, "atv", "simulate", "--rx", "-1 DS", "--pupil-mm", "3", "--lenses", lenses, "-o", out)
+    assert_one_error_line(code, err, "--lenses is empty")
+    assert not out.exists()
