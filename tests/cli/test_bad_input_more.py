@@ -8,6 +8,7 @@ import http.server
 import socket
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -284,6 +285,8 @@ def test_a_name_at_the_limit_loads():
 
     assert name_problem("K +0.5 black: +2.00 D, f/5 ±0.25 D") is None
     assert name_problem("n" * MAX_NAME_CHARS) is None and name_problem("n" * (MAX_NAME_CHARS + 1))
+    docs = Path(__file__).parents[2] / "docs"
+    assert f"at most {MAX_NAME_CHARS} printable characters" in (docs / "formats.md").read_text(encoding="utf-8")
 
 
 # -- --lenses '' -------------------------------------------------------------------------------
