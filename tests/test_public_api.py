@@ -147,11 +147,18 @@ def test_dir_lists_only_the_public_names():
 
 
 def test_the_rx_fit_repr_is_one_short_line_with_the_fitted_power_and_residual():
-    from tests.fit.synthetic import BENCH, capture
-    from vissim.optics.trial_lens import TrialLens
+    """A fit's record (as_json) runs to kilobytes; its repr is one line with the power and the residual."""
+    from vissim.fit.rx_fit import RxFit, Solution
 
-    image, reference, _ = capture(TrialLens(-2.0))
-    fit = vissim.fit_rx(image, reference, arcmin_per_px=1.0, pupil_diameter_mm=3.6, bench=BENCH)
+    best = Solution(power_vector=(-2.25, 0.5, 0.0), covariance=np.eye(3) * 1e-4, ssr=1.5, parameters=np.zeros(5))
+    fit = RxFit(status="ok", reason=None, best=best, alternatives=((best, 120.0),) * 3, sign_delta_chi2=120.0,
+                axis_determined=True, residual_psnr_db=42.5, residual_sigma=0.003, unexplained_fraction=0.0012,
+                nuisances={"shift_px": [0.1, -0.2], "gain": 1.01}, settings={"mode": "geometric"}, evaluations=694,
+                seconds=1.6, model=np.zeros((64, 64)))
     text = repr(fit)
-    assert len(text) < 300 and "\n" not in text, text
-    assert f"M {fit.power_vector[0]:+.3f} D" in text and "residual PSNR" in text and "status='ok'" in text
+    assert len(text) < 250 and "\n" not in text, text
+    assert str(fit.effective_power) in text and "M -2.250 D" in text and "residual PSNR 42.5 dB" in text
+    failed = RxFit(status="failed", reason="no letter found", best=best, alternatives=(), sign_delta_chi2=None,
+                   axis_determined=False, residual_psnr_db=3.0, residual_sigma=0.3, unexplained_fraction=0.9,
+                   nuisances={}, settings={}, evaluations=10, seconds=0.1, model=np.zeros((4, 4)))
+    assert "status='failed'" in repr(failed) and "no letter found" in repr(failed)

@@ -224,8 +224,9 @@ def read_image(path: str | os.PathLike[str], *, encoding: str = "auto") -> Image
         pixels = _to_linear(raw, encoding)
         alpha = None if alpha is None else _to_linear(alpha, "linear")
         names, provenance = (MONO_CHANNELS if pixels.ndim == 2 else RGB_CHANNELS), None
-    if not np.all(np.isfinite(pixels)):
-        raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
+    for what, plane in (("pixel", pixels), ("alpha", alpha)):
+        if plane is not None and not np.all(np.isfinite(plane)):
+            raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(plane)))} NaN or infinite {what} values")
     provenance = _read_sidecar(path) if provenance is None else provenance  # read after the pixel check
     return Image(pixels, names, provenance, sampling_from_provenance(provenance), alpha, bits)
 
@@ -240,12 +241,13 @@ def _split_alpha(data: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
 def output_bit_depth(image: Image, path: str | os.PathLike[str]) -> int:
     """The integer depth to write ``image``'s result at ``path`` with: its own (8 or 16), else 8.
 
-    A 16-bit colour source written to PNG (which Pillow cannot write at 16 bits) gets 8 bits
-    and one warning naming .tif and .exr, which keep them.
+    A 16-bit colour or alpha source written to PNG (which Pillow cannot write at 16 bits) gets
+    8 bits and one warning naming .tif and .exr, which keep them.
     """
     bits = image.bit_depth if image.bit_depth in (8, 16) else 8
-    if bits == 16 and Path(path).suffix.lower() == ".png" and image.pixels.ndim == 3:
-        logger.warning("%s: 16-bit colour PNG cannot be written; writing 8 bits (use .tif or .exr to keep 16)", path)
+    if bits == 16 and Path(path).suffix.lower() == ".png" and (image.pixels.ndim == 3 or image.alpha is not None):
+        what = "colour" if image.pixels.ndim == 3 else "grey + alpha"
+        logger.warning("%s: 16-bit %s PNG cannot be written; writing 8 bits (use .tif or .exr to keep 16)", path, what)
         return 8
     return bits
 
@@ -461,14 +463,14 @@ def _sidecar_path(path: Path) -> Path:
 
 
 def _validated_alpha(path: Path, alpha: Any, shape: tuple[int, ...]) -> np.ndarray | None:
-    """``alpha`` as float32 of the image's ``(H, W)`` with finite values in [0, 1], or None."""
+    """``alpha`` as float32 of the image's ``(H, W)`` with finite values, or None (PNG/TIFF clip it to [0, 1])."""
     if alpha is None:
         return None
     plane = np.asarray(alpha, dtype=np.float32)
     if plane.shape != tuple(shape):
         raise VissimInputError(f"cannot write {path}: alpha has shape {plane.shape}; expected the image's {tuple(shape)}")
-    if not np.all(np.isfinite(plane)) or plane.min() < 0.0 or plane.max() > 1.0:
-        raise VissimInputError(f"cannot write {path}: alpha values must be finite and within [0, 1]")
+    if not np.all(np.isfinite(plane)):
+        raise VissimInputError(f"cannot write {path}: {int(np.sum(~np.isfinite(plane)))} alpha values are NaN or infinite")
     return plane
 
 

@@ -114,13 +114,15 @@ def run(args: argparse.Namespace) -> int:
         key = (wavelengths, weights)
         if key not in cache:
             size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
+            field_px = min(size, 2 * max(image.pixels.shape[:2]) + 1)  # no pixel sees farther
             try:
                 cache[key] = compute_psf(
                     wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
-                    lca_reference_nm=lca, arcmin_per_px=step, size_px=min(size, 2 * max(image.pixels.shape[:2]) + 1),
-                    mode=args.mode,
+                    lca_reference_nm=lca, arcmin_per_px=step, size_px=field_px, mode=args.mode,
                 )
             except FieldTooSmallError:
+                if field_px == size:
+                    raise
                 raise image_too_small(args.input, image.pixels.shape, size, step) from None
         psfs.append(cache[key])
     blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)
