@@ -105,6 +105,18 @@ WRONG_TYPES = [
                                pupil_diameter_mm=3.0, arcmin_per_px=1.0), "depth_m must be an ndarray"),
     (lambda: vissim.etdrs_chart_spec(letters=5), "letters must be a str"),
     (lambda: vissim.render_chart_angular("K"), "must be a ChartSpec"),
+    (lambda: vissim.etdrs_chart_spec("1,0"), "logmar_range must be (first, last) LogMAR"),
+    (lambda: vissim.parse_spherocylinder(-2.0), "must be text such as '-2.00 -1.25 x 180'"),
+    (lambda: vissim.PSF.from_array("kernel", 1.0), "a PSF's data must be a number or a sequence of numbers"),
+    (lambda: vissim.render_bench("bench", vissim.single_letter_spec("K", 1.0)), "must be a DslrBench"),
+    (lambda: vissim.render_bench(vissim.DslrBench(), IMAGE), "must be a ChartSpec"),
+    (lambda: vissim.load_campaign(5), "must be a path (str or pathlib.Path)"),
+    (lambda: vissim.run_campaign("validation/quick.toml", "runs/x"), "must be a Campaign (from vissim.load_campaign"),
+    (lambda: vissim.load_subject(None), "must be a path (str or pathlib.Path)"),
+    (lambda: vissim.load_directory(5), "must be a path (str or pathlib.Path)"),
+    (lambda: vissim.analyse_subject("subject_001.json"), "must be a SubjectData (from vissim.load_subject"),
+    (lambda: vissim.fit_quadratic("a", "b"), "must be a number or a sequence of numbers in D"),
+    (lambda: vissim.render_chart_print("K"), "must be a ChartSpec"),
 ]
 
 
@@ -126,10 +138,24 @@ def test_a_wrong_argument_type_is_one_type_error_saying_what_is_accepted(call, a
     (lambda: vissim.compute_psf(_front(), lca_reference_nm=-5.0), "LCA reference wavelength"),
     (lambda: vissim.diffraction_mtf("high", 3.0, 550.0), "cycles/degree"),
     (lambda: vissim.blur_image(IMAGE, _psf(), arcmin_per_px=float("nan")), "arcmin per pixel"),
+    (lambda: vissim.DslrBench(focal_length_mm="long"), "focal length mm must be a number in mm"),
+    (lambda: vissim.single_letter_spec(5, 1.0), "unknown Sloan letter '5'"),
 ])
 def test_a_bad_value_is_one_input_error_naming_it_and_its_unit(call, fragment):
     with pytest.raises(VissimInputError, match=fragment.replace("(", r"\(")):
         call()
+
+
+def test_every_public_entry_point_is_called_with_a_wrong_argument_above():
+    """The two lists above reach every public function and class: a new one must join them."""
+    import inspect
+
+    source = inspect.getsource(inspect.getmodule(test_every_public_entry_point_is_called_with_a_wrong_argument_above))
+    listed = source[source.index("WRONG_TYPES = ["):source.index("def test_right_types_still_give_the_physics")]
+    made_by_vissim = {"__version__", "RxFit"}  # RxFit is fit_rx's result, not built by users
+    missing = [n for n in vissim.__all__ if n not in made_by_vissim and f"vissim.{n}(" not in listed
+               and f"vissim.{n}." not in listed]
+    assert not missing, missing
 
 
 def test_right_types_still_give_the_physics():

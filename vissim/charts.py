@@ -247,6 +247,8 @@ def etdrs_chart_spec(
     >>> [(row.logmar, row.letters) for row in spec.rows]
     [(1.0, 'NCKZO'), (0.9, 'NCKZO'), (0.8, 'NCKZO')]
     """
+    if not isinstance(logmar_range, (tuple, list)) or len(logmar_range) != 2:
+        raise VissimTypeError(f"logmar_range must be (first, last) LogMAR, e.g. (1.0, -0.3), got {describe(logmar_range)}")
     logmars = logmar_steps(*logmar_range, logmar_step)
     groups = _row_letters(letters, len(logmars), seed)
     rows = tuple(ChartRow(lm, g) for lm, g in zip(logmars, groups))

@@ -5,12 +5,14 @@ from __future__ import annotations
 import math
 import os
 import unicodedata
+from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "size_px",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
-           "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "name_problem"]
+           "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "name_problem",
+           "path_arg", "number_array"]
 
 
 def describe(value) -> str:
@@ -28,6 +30,23 @@ def instance_of(value, types, name: str, accepted: str):
     if isinstance(value, types):
         return value
     raise VissimTypeError(f"{name} must be {accepted}, got {describe(value)}")
+
+
+def path_arg(value, name: str) -> Path:
+    """``value`` as a :class:`~pathlib.Path` if it is a ``str`` or path-like; else what ``name`` accepts."""
+    if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
+        return Path(value)
+    raise VissimTypeError(f"{name} must be a path (str or pathlib.Path), got {describe(value)}")
+
+
+def number_array(value, name: str, unit: str):
+    """``value`` as a float ndarray; something that is no number (a str, an object) refused with what is accepted."""
+    import numpy as np  # here: checks stays importable without numpy's start-up cost
+
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise VissimTypeError(f"{name} must be a number or a sequence of numbers in {unit}, got {describe(value)}") from None
 
 
 def finite_number(value, name: str, unit: str, *, allow_inf: bool = False) -> float:

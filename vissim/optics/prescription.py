@@ -299,7 +299,7 @@ def parse_spherocylinder(text: str) -> tuple[float, float, float]:
     (0.0, -0.75, 90.0)
     """
     if not isinstance(text, str):
-        raise VissimInputError(f"a prescription must be text such as '-2.00 -1.25 x 180', got {text!r}")
+        raise VissimTypeError(f"a prescription must be text such as '-2.00 -1.25 x 180', got {describe(text)}")
     cleaned = re.sub(r"(?i)(?<=\d)\s*ds\b", " DS", text.strip())
     match = _RX_RE.match(cleaned)
     if match is None:

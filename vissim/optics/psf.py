@@ -34,7 +34,7 @@ import numpy as np
 import scipy.fft
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import instance_of
+from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import FieldTooSmallError, VissimInputError
@@ -133,7 +133,7 @@ class PSF:
     @classmethod
     def from_array(cls, data, arcmin_per_px: float, *, wavelength_nm: float = 550.0, pupil_diameter_mm: float = 0.0) -> PSF:
         """Wrap a user-supplied kernel (origin at ``[N//2, N//2]``), normalised to unit sum."""
-        array = np.array(data, dtype=float)
+        array = np.array(number_array(data, "a PSF's data", "relative energy"))
         if array.ndim != 2 or array.shape[0] != array.shape[1] or not np.all(np.isfinite(array)):
             raise VissimInputError(f"a PSF must be a finite square 2-D array, got shape {array.shape}")
         if np.any(array < 0) or array.sum() <= 0:

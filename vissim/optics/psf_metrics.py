@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
-from vissim.checks import describe, instance_of
+from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
-from vissim.errors import VissimInputError
 from vissim.optics.psf import PSF
 from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm
 
@@ -18,15 +17,6 @@ __all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_
 
 #: What the metrics of a sampled PSF take.
 PSF_ACCEPTED = "a PSF (from vissim.compute_psf or PSF.from_array)"
-
-
-def _frequencies(value) -> np.ndarray:
-    """Spatial frequencies (cycles/degree) as a float array; anything that is no number refused."""
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise VissimInputError(f"frequency_cyc_per_deg must be a number or an array of numbers in cycles/degree, "
-                               f"got {describe(value)}") from None
 
 
 def ring_means(values, radius, ring_width: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -174,7 +164,7 @@ def diffraction_mtf(frequency_cyc_per_deg, pupil_diameter_mm: float, wavelength_
     array([1.   , 0.606, 0.254, 0.   ])
     """
     cutoff = diffraction_cutoff_cyc_per_deg(check_pupil_mm(pupil_diameter_mm), check_wavelength_nm(wavelength_nm))
-    nu = np.clip(np.abs(_frequencies(frequency_cyc_per_deg)) / cutoff, 0.0, 1.0)
+    nu = np.clip(np.abs(number_array(frequency_cyc_per_deg, "frequency_cyc_per_deg", "cycles/degree")) / cutoff, 0.0, 1.0)
     return 2.0 / np.pi * (np.arccos(nu) - nu * np.sqrt(1.0 - nu**2))
 
 

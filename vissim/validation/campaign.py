@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from vissim.charts import POLARITIES
+from vissim.checks import path_arg
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.campaign_types import INPUTS, SIMULATIONS, Campaign, CampaignSettings, Configuration
 from vissim.validation.fields import (
@@ -156,7 +157,7 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     >>> import vissim
     >>> campaign = vissim.load_campaign("campaign.toml")  # doctest: +SKIP
     """
-    path = Path(path)
+    path = path_arg(path, "load_campaign's path")
     source = str(path)
     raw = read_campaign_toml(path)
     if "depth_campaign" in raw or "config" in raw:

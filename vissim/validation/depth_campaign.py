@@ -21,7 +21,7 @@ from typing import Any
 from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
-from vissim.checks import WAVELENGTH_RANGE_NM
+from vissim.checks import WAVELENGTH_RANGE_NM, path_arg
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import SIMULATOR_REVISION
@@ -191,7 +191,7 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
 
 def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> DepthCampaign:
     """Read and validate a depth campaign TOML file (module doc); ``check_memory`` as :func:`load_campaign`."""
-    path = Path(path)
+    path = path_arg(path, "load_depth_campaign's path")
     source = str(path)
     raw = read_campaign_toml(path)
     if not is_depth_campaign(raw):

@@ -12,7 +12,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP, name_problem
+from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP, name_problem, path_arg
 from vissim.errors import VissimInputError
 
 __all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number", "checked_numbers",
@@ -33,7 +33,7 @@ def field_error(source: str, where: str, message: str) -> VissimInputError:
 
 def read_toml_file(path: str | Path, what: str = "campaign file") -> dict:
     """The TOML document at ``path``; one clean error naming it if it is absent, a folder, binary or not TOML."""
-    path = Path(path)
+    path = path_arg(path, f"the {what}'s path")
     if not path.exists():
         raise VissimInputError(f"{what} {path} does not exist")
     if path.is_dir():

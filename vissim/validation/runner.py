@@ -31,7 +31,7 @@ from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.provenance import make_provenance
 from vissim.validation.campaign_types import Campaign
-from vissim.checks import samples_per_pixel
+from vissim.checks import instance_of, path_arg, samples_per_pixel
 from vissim.validation.captures import capture_problem, capture_tile, load_manifest
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
@@ -286,8 +286,9 @@ def run_campaign(
     >>> summary.renders_made  # doctest: +SKIP
     4
     """
+    instance_of(campaign, Campaign, "run_campaign's campaign", "a Campaign (from vissim.load_campaign(path))")
     render = render or render_spec
-    run_dir = Path(run_dir)
+    run_dir = path_arg(run_dir, "run_campaign's run_dir")
     campaign, keys, todo = plan_run(campaign, run_dir, workers, spp)
     settings = campaign.settings
     captures = load_manifest(campaign.manifest) if campaign.manifest and any(c.capture for _, c in todo) else {}
