@@ -175,6 +175,20 @@ def test_blur_keeps_the_alpha_channel_unchanged_and_blurs_the_colour(capfd, tmp_
     assert np.abs(result.pixels[:, 18:22] - sharp[:, 18:22]).max() > 0.05  # the edge was blurred
 
 
+def test_blur_depth_keeps_the_alpha_channel_cropped_like_the_image(capfd, tmp_path):
+    from vissim.imageio import read_image
+
+    path, rgba = _edge_rgba(tmp_path)
+    depth = tmp_path / "depth.npy"
+    np.save(depth, np.full((40, 40), 2.0))
+    out = tmp_path / "out.png"
+    code, _, err = run(capfd, "blur-depth", path, depth, "-o", out, "--rx", "-2 DS", "--pupil-mm", "3",
+                       "--arcmin-per-px", "1", "--crop-px", "4")
+    assert code == 0, err
+    result = read_image(out)
+    np.testing.assert_allclose(result.alpha * 255.0, rgba[4:-4, 4:-4, 3], atol=1e-3)
+
+
 def test_a_16_bit_png_is_written_back_at_16_bits(capfd, tmp_path):
     """Oracle: blur preserves a uniform image (the PSF sums to 1, the padding is the border mean), so each
     16-bit code comes back within one code; at 8 bits the level 12345/65535 would be off by ~50 codes."""
