@@ -125,6 +125,15 @@ def test_another_service_as_scheduler_fails_within_seconds_naming_what_it_said(c
     assert "EiB" not in err and seconds < WITHIN_S and not (tmp_path / "out").exists()
 
 
+def test_a_silent_service_as_scheduler_fails_within_seconds(capfd, tmp_path):
+    """A listener that accepts and never speaks (nor answers a web request): Dask would wait for minutes."""
+    with socket.create_server(("127.0.0.1", 0)) as listener:  # the kernel accepts; nothing reads or writes
+        address = f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+        code, err, seconds = validate_with_scheduler(capfd, tmp_path, address)
+    assert_one_error_line(code, err, address, "accepted the connection but sent nothing")
+    assert seconds < WITHIN_S and not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("address", ["", "  "])
 def test_an_empty_scheduler_is_an_error_not_a_local_run(capfd, tmp_path, address):
     code, err, _ = validate_with_scheduler(capfd, tmp_path, address)

@@ -69,14 +69,14 @@ def probe_scheduler(address: str, host: str, port: int, timeout_s: float = PROBE
                                "start one (dask scheduler) or check the address") from None
     with sock:
         first = _read_some(sock, 16)
-        if _is_dask_handshake(first):
-            return
-        if not first:
+        if not first:  # silence: a web server waits for a request (a slow scheduler's handshake may still come)
             try:
                 sock.sendall(_HTTP_REQUEST)
             except OSError:
                 pass
             first = _read_some(sock, 16)
+    if _is_dask_handshake(first):
+        return
     if first.startswith(b"HTTP/"):
         what = f"answered HTTP ({_DASHBOARD_HINT})"
     elif first:
