@@ -41,6 +41,7 @@ import os
 import struct
 import sys
 import tempfile
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -274,34 +275,35 @@ def _flush_all() -> None:
         pass
 
 
+_CAPTURE_LOCK = threading.Lock()
+
+
 @contextlib.contextmanager
 def _native_output_captured():
     """Collect what native code writes to file descriptors 1 and 2 (OpenEXR prints its own errors there).
 
     Yields a list that holds the captured lines once the block ends; Python's own streams are
-    flushed first, so nothing of vissim's is caught.
+    flushed first, so nothing of vissim's is caught.  One capture at a time (a lock): interleaved
+    ones would leave descriptors 1 and 2 on a dead file.
     """
     lines: list[str] = []
-    _flush_all()
-    saved = [os.dup(fd) for fd in (1, 2)]
     python_side = io.StringIO()  # what the binding may print through sys.stdout
-    try:
-        with tempfile.TemporaryFile() as sink:
+    with _CAPTURE_LOCK, tempfile.TemporaryFile() as sink:
+        _flush_all()
+        saved = [os.dup(fd) for fd in (1, 2)]
+        try:
             for fd in (1, 2):
                 os.dup2(sink.fileno(), fd)
-            try:
-                with contextlib.redirect_stdout(python_side), contextlib.redirect_stderr(python_side):
-                    yield lines
-            finally:
-                _flush_all()
-                for fd, copy in zip((1, 2), saved):
-                    os.dup2(copy, fd)
-                sink.seek(0)
-                text = sink.read().decode("utf-8", "replace") + python_side.getvalue()
-                lines.extend(line.strip() for line in text.splitlines() if line.strip())
-    finally:
-        for copy in saved:
-            os.close(copy)
+            with contextlib.redirect_stdout(python_side), contextlib.redirect_stderr(python_side):
+                yield lines
+        finally:
+            _flush_all()
+            for fd, copy in zip((1, 2), saved):
+                os.dup2(copy, fd)
+                os.close(copy)
+            sink.seek(0)
+            text = sink.read().decode("utf-8", "replace") + python_side.getvalue()
+            lines.extend(line.strip() for line in text.splitlines() if line.strip())
 
 
 def _exr_reason(path: Path, exc: BaseException, printed: list[str]) -> str:
