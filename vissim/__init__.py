@@ -17,14 +17,12 @@ The names a user needs are importable from here; each loads its module on first 
   :func:`fit_quadratic`.
 """
 
-from __future__ import annotations
-
-import importlib
-import logging
+import importlib as _importlib
+import logging as _logging
 
 __version__ = "0.1.0"
 
-logging.getLogger(__name__).addHandler(logging.NullHandler())
+_logging.getLogger(__name__).addHandler(_logging.NullHandler())
 
 #: Public name -> the module that defines it (loaded on first access).
 _PUBLIC = {
@@ -63,10 +61,11 @@ def __getattr__(name: str):
     module = _PUBLIC.get(name)
     if module is None:
         raise AttributeError(f"module 'vissim' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
+    value = getattr(_importlib.import_module(module), name)
     globals()[name] = value  # later look-ups skip this function
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_PUBLIC))
+    """The public names only (``__all__``), not the helpers this module imports."""
+    return sorted(__all__)

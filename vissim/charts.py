@@ -38,8 +38,8 @@ from vissim.acuity import (THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, lett
                            logmar_to_snellen, subtense_arcmin, subtense_mm)
 from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import check_allocation, finite_number, positive_number
-from vissim.errors import VissimInputError
+from vissim.checks import check_allocation, describe, finite_number, instance_of, positive_number
+from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window, sloan_letter
 
 logger = logging.getLogger(__name__)
@@ -200,6 +200,8 @@ def _row_letters(letters: str | Sequence[str] | None, n_rows: int, seed: int) ->
             raise VissimInputError(f"the letter seed must be a whole number >= 0, got {seed!r}")
         rng = np.random.default_rng(seed)
         return ["".join(rng.choice(list(SLOAN_LETTERS), _LETTERS_PER_ROW, replace=False)) for _ in range(n_rows)]
+    if not isinstance(letters, (str, list, tuple)) or not all(isinstance(g, str) for g in letters):
+        raise VissimTypeError(f"letters must be a str such as 'NCKZO' or a list of str, one per row, got {describe(letters)}")
     if isinstance(letters, str):
         groups = letters.replace(",", " ").replace("/", " ").split()
         groups = groups if len(groups) > 1 else groups * n_rows
@@ -246,6 +248,8 @@ def etdrs_chart_spec(
     >>> [(row.logmar, row.letters) for row in spec.rows]
     [(1.0, 'NCKZO'), (0.9, 'NCKZO'), (0.8, 'NCKZO')]
     """
+    if not isinstance(logmar_range, (tuple, list)) or len(logmar_range) != 2:
+        raise VissimTypeError(f"logmar_range must be (first, last) LogMAR, e.g. (1.0, -0.3), got {describe(logmar_range)}")
     logmars = logmar_steps(*logmar_range, logmar_step)
     groups = _row_letters(letters, len(logmars), seed)
     rows = tuple(ChartRow(lm, g) for lm, g in zip(logmars, groups))
@@ -358,6 +362,7 @@ def layout_chart(
     the margins; ``snap_to_pixels`` moves each letter's top-left corner to the nearest pixel
     corner (by < 0.5 px) so that letters a whole number of pixels tall have crisp edges.
     """
+    instance_of(spec, ChartSpec, "the chart spec", "a ChartSpec (from vissim.etdrs_chart_spec or vissim.single_letter_spec)")
     if (arcmin_per_px is None) == (dpi is None):
         raise VissimInputError("give exactly one of arcmin_per_px (angular grid) or dpi (print grid)")
     counts = [len(r.letters) for r in spec.rows]

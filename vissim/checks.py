@@ -4,12 +4,49 @@ from __future__ import annotations
 
 import math
 import os
+import unicodedata
+from pathlib import Path
 
-from vissim.errors import VissimInputError
+from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
-           "format_bytes", "check_allocation"]
+           "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "name_problem",
+           "path_arg", "number_array"]
+
+
+def describe(value) -> str:
+    """A short account of ``value`` for an error line: "str '-2.00 DS'", "a PSF", "ndarray of shape (4, 4)"."""
+    if isinstance(value, (str, bytes, int, float, complex, type(None), list, tuple, dict)):
+        text = repr(value)
+        return f"{type(value).__name__} {text if len(text) <= 40 else text[:37] + '...'}"
+    if hasattr(value, "shape") and hasattr(value, "dtype"):
+        return f"{type(value).__name__} of shape {tuple(value.shape)}"
+    return f"a {type(value).__name__}"
+
+
+def instance_of(value, types, name: str, accepted: str):
+    """``value`` if it is an instance of ``types``; else a :class:`VissimTypeError` saying what ``name`` accepts."""
+    if isinstance(value, types):
+        return value
+    raise VissimTypeError(f"{name} must be {accepted}, got {describe(value)}")
+
+
+def path_arg(value, name: str) -> Path:
+    """``value`` as a :class:`~pathlib.Path` if it is a ``str`` or path-like; else what ``name`` accepts."""
+    if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
+        return Path(value)
+    raise VissimTypeError(f"{name} must be a path (str or pathlib.Path), got {describe(value)}")
+
+
+def number_array(value, name: str, unit: str):
+    """``value`` as a float ndarray; something that is no number (a str, an object) refused with what is accepted."""
+    import numpy as np  # here: checks stays importable without numpy's start-up cost
+
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise VissimTypeError(f"{name} must be a number or a sequence of numbers in {unit}, got {describe(value)}") from None
 
 
 def finite_number(value, name: str, unit: str, *, allow_inf: bool = False) -> float:
@@ -163,10 +200,29 @@ MAX_SAMPLER_SEED = 2**32 - 1
 
 
 def samples_per_pixel(value, name: str = "spp") -> int:
-    """A whole number of samples per pixel in 1-:data:`MAX_SPP`."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value) or not 1 <= value <= MAX_SPP:
+    """A whole number of samples per pixel in 1-:data:`MAX_SPP`; a number out of range is told so first."""
+    is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if is_number and not 1 <= value <= MAX_SPP:  # NaN and infinity too
+        raise VissimInputError(f"{name} must be 1-{MAX_SPP} samples per pixel, got {value!r}")
+    if not is_number or value != int(value):
         raise VissimInputError(f"{name} must be a whole number of samples per pixel in 1-{MAX_SPP}, got {value!r}")
     return int(value)
+
+
+#: Longest name a campaign or configuration may have, characters: a label in tables, figures and the
+#: report (never part of a file name), so one line of printable text of a readable length.
+MAX_NAME_CHARS = 100
+
+
+def name_problem(value: str) -> str | None:
+    """Why ``value`` cannot be a campaign or configuration name (too long, a control character), or None."""
+    if len(value) > MAX_NAME_CHARS:
+        return (f"a name is at most {MAX_NAME_CHARS} characters, got {len(value)} "
+                f"({value[:24]!r}...)")
+    control = next((c for c in value if unicodedata.category(c).startswith("C")), None)
+    if control is not None:
+        return f"a name is one line of printable text, got the control character {control!r} in {describe(value)}"
+    return None
 
 
 #: Largest lens power vissim reads from a user, dioptres (a 1 mm focal length: far beyond any

@@ -16,5 +16,9 @@ class VissimInputError(VissimError, ValueError):
     """Bad input: a malformed prescription, an out-of-range value, an unreadable file."""
 
 
+class VissimTypeError(VissimInputError, TypeError):
+    """An argument of the wrong type (a str where a Wavefront is expected); the line says what is accepted."""
+
+
 class FieldTooSmallError(VissimInputError):
     """A requested PSF field cannot hold the blur without truncating or wrapping it."""

@@ -11,6 +11,13 @@ shape ``(H, W)`` (mono, channel ``Y``) or ``(H, W, 3)`` (channels ``R, G, B``), 
   Float TIFFs are read as linear.  16-bit *colour* PNG is refused both ways, because
   Pillow silently truncates it to 8 bits; use TIFF or EXR for that.
 
+An alpha channel (PNG/TIFF extra sample, EXR ``A``) is read into :attr:`Image.alpha`
+(coverage in [0, 1], never light: stored linearly, no transfer function) and written back
+when ``write_image(..., alpha=...)`` is given: vissim blurs the colour and carries alpha
+through unchanged.  :attr:`Image.bit_depth` is the integer depth a PNG/TIFF was stored at
+(8 or 16; ``None`` for float data), so that a command can write its result at the depth of
+its input (:func:`output_bit_depth`).
+
 Images carry their angular sampling: ``write_image(..., arcmin_per_px=S)`` records it in
 the provenance record's top-level key ``"arcmin_per_px"`` (:data:`SAMPLING_KEY`; the EXR
 header attribute or the sidecar, as above), and :func:`read_image` returns it as
@@ -24,11 +31,17 @@ existing file unless ``overwrite=True``.  Anything wrong with a file raises one
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import dataclasses
+import io
 import logging
 import math
 import os
 import struct
+import sys
+import tempfile
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -44,7 +57,7 @@ from vissim.provenance import from_json, to_json
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["Image", "image_files", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode",
+__all__ = ["Image", "image_files", "output_bit_depth", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode",
            "srgb_encode", "to_preview_png", "write_data_map", "write_image"]
 
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
@@ -107,13 +120,17 @@ class Image:
 
     ``pixels`` is float32 of shape ``(H, W)`` with ``channel_names == ("Y",)`` or
     ``(H, W, 3)`` with ``("R", "G", "B")``.  ``arcmin_per_px`` is the angular pixel size,
-    or ``None`` when the file does not record one.
+    or ``None`` when the file does not record one.  ``alpha`` is the file's alpha channel,
+    float32 ``(H, W)`` in [0, 1], or ``None``; ``bit_depth`` the integer depth the file
+    stored (8 or 16), ``None`` for float data.
     """
 
     pixels: np.ndarray
     channel_names: tuple[str, ...]
-    provenance: dict = dataclasses.field(default_factory=dict)
+    provenance: dict = dataclasses.field(default_factory=dict, repr=False)
     arcmin_per_px: float | None = None
+    alpha: np.ndarray | None = dataclasses.field(default=None, repr=False)
+    bit_depth: int | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.pixels, np.ndarray) or self.pixels.dtype != np.float32:
@@ -127,6 +144,10 @@ class Image:
                 f"Image.channel_names {self.channel_names} do "
                 f"not match pixels of shape {self.pixels.shape}"
             )
+        if self.alpha is not None and (not isinstance(self.alpha, np.ndarray) or self.alpha.dtype != np.float32
+                                       or self.alpha.shape != self.pixels.shape[:2]):
+            raise VissimInputError(f"Image.alpha must be a float32 ndarray of shape {self.pixels.shape[:2]} or None, got "
+                                   f"{getattr(self.alpha, 'dtype', type(self.alpha))} {getattr(self.alpha, 'shape', '')}")
         if self.arcmin_per_px is not None:
             step = _sampling_value(self.arcmin_per_px)
             if step is None:
@@ -196,14 +217,40 @@ def read_image(path: str | os.PathLike[str], *, encoding: str = "auto") -> Image
     if kind == "exr":
         if encoding == "srgb":
             raise VissimInputError(f"{path}: EXR files hold linear light; encoding='srgb' does not apply")
-        pixels, names, provenance = _read_exr(path)
+        pixels, names, provenance, alpha = _read_exr(path)
+        bits = None
     else:
-        pixels = _to_linear(_read_png(path) if kind == "png" else _read_tiff(path), encoding)
+        raw, alpha = _split_alpha(_read_png(path) if kind == "png" else _read_tiff(path))
+        bits = 8 * raw.dtype.itemsize if np.issubdtype(raw.dtype, np.integer) else None
+        pixels = _to_linear(raw, encoding)
+        alpha = None if alpha is None else _to_linear(alpha, "linear")
         names, provenance = (MONO_CHANNELS if pixels.ndim == 2 else RGB_CHANNELS), None
-    if not np.all(np.isfinite(pixels)):
-        raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(pixels)))} NaN or infinite pixel values")
+    for what, plane in (("pixel", pixels), ("alpha", alpha)):
+        if plane is not None and not np.all(np.isfinite(plane)):
+            raise VissimInputError(f"{path}: contains {int(np.sum(~np.isfinite(plane)))} NaN or infinite {what} values")
     provenance = _read_sidecar(path) if provenance is None else provenance  # read after the pixel check
-    return Image(pixels, names, provenance, sampling_from_provenance(provenance))
+    return Image(pixels, names, provenance, sampling_from_provenance(provenance), alpha, bits)
+
+
+def _split_alpha(data: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """(colour, alpha | None) of PNG/TIFF samples: grey + alpha has 2 samples, RGB + alpha 4."""
+    if data.ndim == 3 and data.shape[-1] in (2, 4):
+        return data[..., :-1] if data.shape[-1] == 4 else data[..., 0], data[..., -1]
+    return data, None
+
+
+def output_bit_depth(image: Image, path: str | os.PathLike[str]) -> int:
+    """The integer depth to write ``image``'s result at ``path`` with: its own (8 or 16), else 8.
+
+    A 16-bit colour or alpha source written to PNG (which Pillow cannot write at 16 bits) gets
+    8 bits and one warning naming .tif and .exr, which keep them.
+    """
+    bits = image.bit_depth if image.bit_depth in (8, 16) else 8
+    if bits == 16 and Path(path).suffix.lower() == ".png" and (image.pixels.ndim == 3 or image.alpha is not None):
+        what = "colour" if image.pixels.ndim == 3 else "grey + alpha"
+        logger.warning("%s: 16-bit %s PNG cannot be written; writing 8 bits (use .tif or .exr to keep 16)", path, what)
+        return 8
+    return bits
 
 
 def _kind(path: Path) -> str:
@@ -218,25 +265,82 @@ def _one_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
-def _open_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
-    """The first part's channels ``{name: pixels}`` and provenance; one clean error for a file that is no EXR."""
+def _flush_all() -> None:
+    """Flush Python's streams and the C library's (native code's buffered output lands before a redirect ends)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
     try:
-        exr = OpenEXR.File(str(path), separate_channels=True)
-        n_parts = len(exr.parts)
-        header = exr.parts[0].header
-        channels = {name: ch.pixels for name, ch in exr.parts[0].channels.items()}
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # pragma: no cover - no C library to flush
+        pass
+
+
+_CAPTURE_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def _native_output_captured():
+    """Collect what native code writes to file descriptors 1 and 2 (OpenEXR prints its own errors there).
+
+    Yields a list that holds the captured lines once the block ends; Python's own streams are
+    flushed first, so nothing of vissim's is caught.  One capture at a time (a lock): interleaved
+    ones would leave descriptors 1 and 2 on a dead file.
+    """
+    lines: list[str] = []
+    python_side = io.StringIO()  # what the binding may print through sys.stdout
+    with _CAPTURE_LOCK, tempfile.TemporaryFile() as sink:
+        _flush_all()
+        saved = [os.dup(fd) for fd in (1, 2)]
+        try:
+            for fd in (1, 2):
+                os.dup2(sink.fileno(), fd)
+            with contextlib.redirect_stdout(python_side), contextlib.redirect_stderr(python_side):
+                yield lines
+        finally:
+            _flush_all()
+            for fd, copy in zip((1, 2), saved):
+                os.dup2(copy, fd)
+                os.close(copy)
+            sink.seek(0)
+            text = sink.read().decode("utf-8", "replace") + python_side.getvalue()
+            lines.extend(line.strip() for line in text.splitlines() if line.strip())
+
+
+def _exr_reason(path: Path, exc: BaseException, printed: list[str]) -> str:
+    """Why OpenEXR could not read ``path``: its first printed message (without the file name), else the exception."""
+    for line in printed:
+        message = line.removeprefix(f"{path}:").strip()
+        if message and not message.startswith("Warning:"):
+            return message
+    return str(exc).replace(f"'{path}'", "the file").strip() or type(exc).__name__
+
+
+def _open_exr(path: Path) -> tuple[dict[str, np.ndarray], dict]:
+    """The first part's channels ``{name: pixels}`` and provenance; one clean error for a file that is no EXR.
+
+    OpenEXR's own messages are kept off the terminal; the first of them names the fault.
+    """
+    try:
+        with _native_output_captured() as printed:
+            exr = OpenEXR.File(str(path), separate_channels=True)
+            n_parts = len(exr.parts)
+            header = exr.parts[0].header
+            channels = {name: ch.pixels for name, ch in exr.parts[0].channels.items()}
     except Exception as exc:  # OpenEXR raises RuntimeError, ValueError, IndexError ...
+        size = path.stat().st_size
         raise VissimInputError(
-            f"{path}: cannot read as OpenEXR (truncated, "
-            f"corrupt or not an EXR file): {_one_line(exc)}"
+            f"{path}: cannot read as OpenEXR (truncated, corrupt or not an EXR file; {size} bytes): "
+            f"{_exr_reason(path, exc, printed)}"
         ) from exc
+    if printed:
+        logger.debug("OpenEXR said, reading %s: %s", path, " | ".join(printed))
     if n_parts > 1:
         logger.info("%s has %d parts; reading only the first", path, n_parts)
     prov_text = header.get(PROVENANCE_ATTRIBUTE)
     return channels, _parse_provenance(path, prov_text) if isinstance(prov_text, str) else {}
 
 
-def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict]:
+def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict, np.ndarray | None]:
     channels, provenance = _open_exr(path)
     names = set(channels)
     if set(RGB_CHANNELS) <= names:
@@ -248,7 +352,7 @@ def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict]:
             f"{path}: EXR channels {sorted(names)} are not supported (need 'Y' for mono or 'R', 'G', 'B' for colour)"
         )
     if names - set(wanted) - {"A"}:
-        logger.info("%s: ignoring EXR channels %s", path, sorted(names - set(wanted)))
+        logger.info("%s: ignoring EXR channels %s", path, sorted(names - set(wanted) - {"A"}))
     planes = [channels[c] for c in wanted]
     for name, plane in zip(wanted, planes):
         if plane.dtype not in (np.float16, np.float32):
@@ -256,7 +360,11 @@ def _read_exr(path: Path) -> tuple[np.ndarray, tuple[str, ...], dict]:
         if plane.shape != planes[0].shape:
             raise VissimInputError(f"{path}: EXR channel {name!r} is subsampled ({plane.shape} vs {planes[0].shape})")
     pixels = planes[0] if len(planes) == 1 else np.stack(planes, axis=-1)
-    return np.ascontiguousarray(pixels, dtype=np.float32), wanted, provenance
+    alpha = channels.get("A")
+    if alpha is not None and alpha.shape != planes[0].shape:
+        raise VissimInputError(f"{path}: EXR channel 'A' is subsampled ({alpha.shape} vs {planes[0].shape})")
+    alpha = None if alpha is None else np.ascontiguousarray(alpha, dtype=np.float32)
+    return np.ascontiguousarray(pixels, dtype=np.float32), wanted, provenance, alpha
 
 
 def _parse_provenance(path: Path, text: str) -> dict:
@@ -300,7 +408,7 @@ def _read_png(path: Path) -> np.ndarray:
     if mode in ("L", "RGB"):
         return data
     if mode in ("LA", "RGBA"):
-        return data[..., 0] if mode == "LA" else data[..., :3]
+        return data  # the alpha channel last; split by _split_alpha
     raise VissimInputError(f"{path}: PNG mode {mode!r} is not supported (expected greyscale or RGB, 8 or 16 bit)")
 
 
@@ -324,11 +432,8 @@ def _read_tiff(path: Path) -> np.ndarray:
             "(expected a single greyscale or RGB image)"
         )
     samples = 1 if axes == "YX" else data.shape[-1]
-    if photometric == tifffile.PHOTOMETRIC.MINISBLACK and samples in (1, 2):
-        data = data if samples == 1 else data[..., 0]
-    elif photometric == tifffile.PHOTOMETRIC.RGB and samples in (3, 4):
-        data = data[..., :3]
-    else:
+    if not ((photometric == tifffile.PHOTOMETRIC.MINISBLACK and samples in (1, 2))
+            or (photometric == tifffile.PHOTOMETRIC.RGB and samples in (3, 4))):
         raise VissimInputError(
             f"{path}: TIFF with photometric {getattr(photometric, 'name', photometric)} and {samples} samples "
             "is not supported (expected greyscale or RGB)"
@@ -363,6 +468,18 @@ def image_files(path: str | os.PathLike[str]) -> tuple[Path, ...]:
     """Every file an image path stands for: the image, and for PNG/TIFF its provenance sidecar."""
     path = Path(path)
     return (path,) if path.suffix.lower() in (".exr", ".npy") else (path, _sidecar_path(path))
+
+
+def _validated_alpha(path: Path, alpha: Any, shape: tuple[int, ...]) -> np.ndarray | None:
+    """``alpha`` as float32 of the image's ``(H, W)`` with finite values, or None (PNG/TIFF clip it to [0, 1])."""
+    if alpha is None:
+        return None
+    plane = np.asarray(alpha, dtype=np.float32)
+    if plane.shape != tuple(shape):
+        raise VissimInputError(f"cannot write {path}: alpha has shape {plane.shape}; expected the image's {tuple(shape)}")
+    if not np.all(np.isfinite(plane)):
+        raise VissimInputError(f"cannot write {path}: {int(np.sum(~np.isfinite(plane)))} alpha values are NaN or infinite")
+    return plane
 
 
 def _validated_pixels(path: Path, pixels: Any, channel_names: Any) -> np.ndarray:
@@ -402,6 +519,7 @@ def write_image(
     encoding: str = "srgb",
     bit_depth: int = 8,
     arcmin_per_px: float | None = None,
+    alpha: Any = None,
 ) -> Path:
     """Write linear-light ``pixels`` to ``path``; the format follows the suffix.
 
@@ -422,6 +540,10 @@ def write_image(
         PNG/TIFF only: ``"srgb"`` (default) encodes with IEC 61966-2-1, ``"linear"`` does
         not; values are clipped to [0, 1] and rounded to ``bit_depth`` (8 or 16) bits.
         EXR always stores linear float32.
+    alpha:
+        Optional alpha channel, shape ``(H, W)``, values in [0, 1]: written as the last
+        sample of a PNG/TIFF (linearly quantised, no transfer function) or as EXR ``A``.
+        8-bit only for PNG (Pillow writes no 16-bit alpha PNG).
     """
     path = Path(path)
     kind = _kind(path)
@@ -430,6 +552,10 @@ def write_image(
     if bit_depth not in (8, 16):
         raise VissimInputError(f"cannot write {path}: bit_depth must be 8 or 16 bits, got {bit_depth!r}")
     arr = _validated_pixels(path, pixels, channel_names)
+    alpha_plane = _validated_alpha(path, alpha, arr.shape[:2])
+    if kind == "png" and bit_depth == 16 and alpha_plane is not None:
+        raise VissimInputError(f"cannot write {path}: 16-bit PNG with alpha is not supported (Pillow cannot write it); "
+                               "use .tif or .exr")
     provenance = _with_sampling(provenance, arcmin_per_px, path)
     if kind == "png" and bit_depth == 16 and arr.ndim == 3:
         raise VissimInputError(
@@ -437,19 +563,25 @@ def write_image(
             "supported (Pillow cannot write it); use .tif or .exr"
         )
     if kind == "exr":
-        _write_exr(path, arr, provenance, overwrite)
+        planes = arr if alpha_plane is None else np.dstack([arr, alpha_plane])
+        names = None if alpha_plane is None else (*(MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS), "A")
+        _write_exr(path, planes, provenance, overwrite, names=names)
         return path
 
     sidecar = _sidecar_path(path)
     refuse_existing(path, sidecar, overwrite=overwrite)
     codes = _quantise(path, arr, encoding, bit_depth)
+    extra: dict[str, Any] = {}
+    if alpha_plane is not None:
+        codes = np.dstack([codes, _quantise(path, alpha_plane, "linear", bit_depth)])
+        extra["extrasamples"] = ["unassalpha"]
     with output_transaction():  # the image and its sidecar appear together, or neither
         with atomic_output(path, overwrite=overwrite) as tmp:
             if kind == "png":
                 _PILImage.fromarray(codes).save(tmp, format="PNG")
             else:
-                photometric = "minisblack" if codes.ndim == 2 else "rgb"
-                tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib")
+                photometric = "minisblack" if arr.ndim == 2 else "rgb"
+                tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib", **extra)
         if provenance is not None:
             write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
     if provenance is None and sidecar.exists():
@@ -470,7 +602,7 @@ def _quantise(path: Path, arr: np.ndarray, encoding: str, bit_depth: int) -> np.
 
 def _write_exr(path: Path, arr: np.ndarray, provenance: dict | None, overwrite: bool, names=None) -> None:
     names = names or (MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS)
-    planes = [arr] if arr.ndim == 2 else [arr[..., i] for i in range(3)]
+    planes = [arr] if arr.ndim == 2 else [arr[..., i] for i in range(arr.shape[-1])]
     # OpenEXR.Channel ignores strides: a non-contiguous view is written scrambled.
     channels = {n: OpenEXR.Channel(np.ascontiguousarray(p, dtype=np.float32)) for n, p in zip(names, planes)}
     header: dict[str, Any] = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}

@@ -68,7 +68,7 @@ def test_every_option_at_bad_values(path, tmp_path, capsys):
                 for a in argv]
         code = main(argv)
         _, err = capsys.readouterr()
-        lines = [line for line in err.splitlines() if line.strip() and ": WARNING: " not in line]
+        lines = [line for line in err.splitlines() if line.strip() and ": warning: " not in line]
         return code, lines
 
     code, lines = invoke(BASES[path])

@@ -37,7 +37,7 @@ import scipy.linalg
 import scipy.stats
 
 from vissim.atv.data import EYES, SubjectData
-from vissim.checks import finite_number
+from vissim.checks import finite_number, instance_of, number_array
 from vissim.errors import VissimInputError
 
 __all__ = ["CONDITIONS", "CurveAnalysis", "QuadraticFit", "VertexInterval", "analyse_curve",
@@ -255,8 +255,8 @@ def fit_quadratic(x_diopters: Sequence[float], y_code: Sequence[float]) -> Quadr
     >>> round(fit.a, 3), fit.has_minimum, round(fit.vertex_diopters, 3), fit.dof
     (2.371, True, 0.004, 2)
     """
-    x = np.asarray(x_diopters, dtype=float).ravel()
-    y = np.asarray(y_code, dtype=float).ravel()
+    x = number_array(x_diopters, "x_diopters (trial-lens powers)", "D").ravel()
+    y = number_array(y_code, "y_code (minimum visible code values)", "code values").ravel()
     if x.shape != y.shape:
         raise VissimInputError(f"need one minimum-visible value per trial lens, got {x.size} lenses and {y.size} values")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
@@ -444,6 +444,7 @@ def analyse_subject(
     >>> [(a.eye, a.condition) for a in vissim.analyse_subject(subject)]  # doctest: +SKIP
     [('OD', 'without_drops'), ('OS', 'without_drops')]
     """
+    instance_of(subject, SubjectData, "analyse_subject's subject", "a SubjectData (from vissim.load_subject(path))")
     results = []
     for condition in CONDITIONS:
         drops = condition == "with_drops"

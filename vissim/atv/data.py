@@ -30,6 +30,7 @@ import numpy as np
 from vissim.atv.records import (EYES, THESIS_TRIAL_LENSES_DIOPTERS, Autorefraction, AutorefractorEye,
                                 Discrepancy, Examination, SubjectData, SummaryRow, Trial)
 from vissim.atv.schema import SCHEMA, SCHEMA_VERSION, parse_subject
+from vissim.checks import path_arg
 from vissim.errors import VissimInputError
 
 __all__ = ["AtvDataDiscrepancyError", "Autorefraction", "AutorefractorEye", "Discrepancy", "Examination",
@@ -238,7 +239,7 @@ def load_subject(path: str | Path, *, strict: bool = False) -> SubjectData:
     >>> subject.subject_id, len(subject.examinations)  # doctest: +SKIP
     ('001', 4)
     """
-    path = Path(path)
+    path = path_arg(path, "load_subject's path")
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
@@ -279,7 +280,7 @@ def load_directory(directory: str | Path, *, strict: bool = False, pattern: str 
     >>> [s.subject_id for s in vissim.load_directory("validation/atv")]  # doctest: +SKIP
     ['001']
     """
-    directory = Path(directory)
+    directory = path_arg(directory, "load_directory's directory")
     if not directory.is_dir():
         raise VissimInputError(f"ATV data directory {directory} does not exist or is not a directory")
     files = sorted(directory.glob(pattern))

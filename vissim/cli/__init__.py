@@ -79,14 +79,22 @@ def _unprotect(args: argparse.Namespace) -> argparse.Namespace:
     return args
 
 
+class _LogLineFormatter(logging.Formatter):
+    """Log records as the command line's other lines: 'vissim: warning: ...', like 'vissim: error: ...'."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return f"vissim: {record.levelname.lower()}: {super().format(record)}"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     try:
         args = _unprotect(parser.parse_args(_protect_negative_values(sys.argv[1:] if argv is None else list(argv))))
     except SystemExit as exc:  # --help, --version, or one 'vissim: error:' line already printed
         return exc.code if isinstance(exc.code, int) else 2
-    logging.basicConfig(level=logging.WARNING - 10 * min(args.verbose, 2),
-                        format="vissim: %(levelname)s: %(message)s")
+    handler = logging.StreamHandler()
+    handler.setFormatter(_LogLineFormatter("%(message)s"))
+    logging.basicConfig(level=logging.WARNING - 10 * min(args.verbose, 2), handlers=[handler])
     if not getattr(args, "func", None):
         parser.print_help()
         return 2

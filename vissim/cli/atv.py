@@ -145,7 +145,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         psychometric_slope=args.luminance_slope, guess_rate=args.guess, lapse_rate=args.lapse,
     )
     kwargs = {}
-    if args.lenses:
+    if args.lenses is not None:  # an empty --lenses is an error, not the default lenses
         kwargs["lenses_diopters"] = parse_float_list(args.lenses, "--lenses", "D", positive=False)
     experiment = run_virtual_experiment(subject, apparatus=apparatus, detection=detection, seed=args.seed, **kwargs)
     written, analyses = write_simulation_report(experiment, args.output, window_diopters=_window(args.window_diopters), overwrite=args.overwrite)

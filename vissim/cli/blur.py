@@ -3,18 +3,22 @@
 from __future__ import annotations
 
 import argparse
+import logging
+import math
 from pathlib import Path
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import add_aberration_args, check_outputs_apart, parse_float_list, wavefront_from_args
-from vissim.errors import VissimInputError
-from vissim.imageio import Image, image_files, read_image, write_image
+from vissim.errors import FieldTooSmallError, VissimInputError
+from vissim.imageio import Image, image_files, output_bit_depth, read_image, write_image
 from vissim.optics.blur import PADDING_MODES, blur_image
 from vissim.optics.chromatic import gaussian_band
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.provenance import make_provenance
 
 DEFAULT_CHANNELS_NM = (610.0, 550.0, 465.0)
+
+log = logging.getLogger(__name__)
 
 
 def add_parser(subparsers) -> None:
@@ -24,7 +28,8 @@ def add_parser(subparsers) -> None:
         description="Blur an image (EXR linear; PNG/TIFF decoded from sRGB) with the PSF of an "
         "aberration, in linear light. Mono images use --wavelength-nm; RGB images use one "
         "wavelength per channel (--channels-nm, default 610,550,465), or the thesis's single "
-        "550 nm for all channels with --wavelength-nm 550.",
+        "550 nm for all channels with --wavelength-nm 550. An alpha channel is carried through "
+        "unchanged (the colour is blurred, the coverage is not); PNG/TIFF outputs keep the input's bit depth.",
     )
     parser.add_argument("input", type=Path, help="image file (.exr, .png, .tif)")
     parser.add_argument("-o", "--output", required=True, type=Path, help="output image (.exr, .png, .tif)")
@@ -54,11 +59,31 @@ def add_parser(subparsers) -> None:
 
 
 def image_sampling(image: Image, given: float | None, path: Path) -> float:
-    """``--arcmin-per-px`` if given, else the sampling the image file records (``Image.arcmin_per_px``)."""
-    step = given if given is not None else image.arcmin_per_px
+    """``--arcmin-per-px`` if given, else the sampling the image file records (``Image.arcmin_per_px``).
+
+    When both exist and differ, the option wins and one warning names both.
+    """
+    recorded = image.arcmin_per_px
+    if given is not None and recorded is not None and not math.isclose(given, recorded, rel_tol=1e-9):
+        log.warning("--arcmin-per-px %g overrides the %g arcmin/px that %s records", given, recorded, path)
+    step = given if given is not None else recorded
     if step is None:
         raise VissimInputError(f"{path} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)")
     return step
+
+
+def image_too_small(path: Path, shape: tuple[int, ...], psf_px: int, step: float) -> VissimInputError:
+    """The error for an image smaller than its blur: its size, the PSF field the blur needs, the side that holds it.
+
+    A blur's PSF field is cut to twice the image's longer side plus one (no pixel sees farther);
+    an image whose cut field loses more than 1 % of the energy is too small.
+    """
+    rows, cols = shape[:2]
+    side = math.ceil((psf_px - 1) / 2)
+    return VissimInputError(
+        f"{path}: the image is {cols} × {rows} px (width × height), too small for this blur: its PSF needs a "
+        f"{psf_px} px field at {step:g} arcmin/px, so the image needs at least {side} px on its longer side "
+        "(or a coarser --arcmin-per-px)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -92,16 +117,22 @@ def run(args: argparse.Namespace) -> int:
         key = (wavelengths, weights)
         if key not in cache:
             size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
-            size = min(size, 2 * max(image.pixels.shape[:2]) + 1)
-            cache[key] = compute_psf(
-                wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
-                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode,
-            )
+            field_px = min(size, 2 * max(image.pixels.shape[:2]) + 1)  # no pixel sees farther
+            try:
+                cache[key] = compute_psf(
+                    wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
+                    lca_reference_nm=lca, arcmin_per_px=step, size_px=field_px, mode=args.mode,
+                )
+            except FieldTooSmallError:
+                if field_px == size:
+                    raise
+                raise image_too_small(args.input, image.pixels.shape, size, step) from None
         psfs.append(cache[key])
     blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)
     provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
                                  arcmin_per_px=step, padding=args.padding,
                                  psfs=[p.as_json() for p in cache.values()], rx=args.rx, zernike=args.zernike)
-    written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
+    written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
+                          alpha=image.alpha, bit_depth=output_bit_depth(image, args.output))
     print(f"wrote {written}")
     return 0

@@ -18,7 +18,7 @@ from vissim.cli._common import add_rx_arg, check_outputs_apart
 from vissim.cli._parser import Number
 from vissim.cli.blur import image_sampling
 from vissim.errors import VissimInputError
-from vissim.imageio import image_files, read_data_map, read_image, write_image
+from vissim.imageio import image_files, output_bit_depth, read_data_map, read_image, write_image
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
 from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
 from vissim.optics.prescription import Prescription
@@ -131,7 +131,10 @@ def run(args: argparse.Namespace) -> int:
                                  wavelength_nm=args.wavelength_nm, mode=args.mode, focus=focus_info, crop_px=crop,
                                  coarse_blur_px=args.coarse_blur_px,
                                  depth_blur=result.as_json())
-    written = write_image(args.output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)
+    rows, cols = image.pixels.shape[:2]
+    alpha = None if image.alpha is None else image.alpha[crop:rows - crop, crop:cols - crop]  # carried, not blurred
+    written = write_image(args.output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
+                          alpha=alpha, bit_depth=output_bit_depth(image, args.output))
     print(
         f"wrote {written} ({result.n_layers} depth layers, {len(result.layers)} non-empty, "
         f"accommodation {accommodation:.3f} D)"

@@ -38,6 +38,9 @@ def add_parser(subparsers) -> None:
 def run_validate(args: argparse.Namespace) -> int:
     from vissim.validation.dispatch import run_any_campaign
 
+    if args.scheduler is not None and not args.scheduler.strip():
+        raise VissimInputError("--scheduler is empty; expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786 "
+                               "(leave the option out to render here)")
     try:
         done = run_any_campaign(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler,
                                 spp=args.spp)

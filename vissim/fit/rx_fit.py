@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import logging
 import math
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -71,8 +72,9 @@ import scipy.signal
 from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.bench.dslr import DslrBench
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import describe
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
-from vissim.errors import VissimInputError
+from vissim.errors import VissimInputError, VissimTypeError
 from vissim.fit.forward import FORWARD_MODES, ForwardModel
 from vissim.fit.power_model import MAGNIFICATION_MODELS, power_model
 from vissim.optics.prescription import LensPower
@@ -121,6 +123,9 @@ _SCAN_STEP_DIOPTERS = 0.25
 
 # -- input checks --------------------------------------------------------------------------
 def _as_image(value: Any, name: str) -> np.ndarray:
+    if isinstance(value, (str, bytes, os.PathLike)):
+        raise VissimTypeError(f"the {name} must be an ndarray of linear light (read a file with "
+                              f"vissim.imageio.read_image(path).pixels), got {describe(value)}")
     array = np.asarray(value)
     if array.ndim == 3 and array.shape[2] == 3:
         raise VissimInputError(f"the {name} has 3 channels; fit one channel (or luminance) at a time")
@@ -290,6 +295,20 @@ class RxFit:
     @property
     def ok(self) -> bool:
         return self.status == "ok"
+
+    def __repr__(self) -> str:
+        """One short line: the fitted power, the residual and the fit's cost (:meth:`as_json` has the rest)."""
+        if self.status == "ok":
+            rx, m = self.effective_power, self.best.power_vector[0]
+            power = (f"{rx} D" if self.axis_determined else
+                     f"{rx.sphere_diopters:+.2f} D sphere, {rx.cylinder_diopters:+.2f} D cylinder (axis not determined)")
+            found = f"effective power {power}, M {m:+.3f} D"
+        else:
+            found = f"reason {self.reason!r}"
+        delta = "" if self.sign_delta_chi2 is None else f", sign delta chi2 {self.sign_delta_chi2:.3g}"
+        return (f"RxFit(status={self.status!r}, {found}, residual PSNR {self.residual_psnr_db:.1f} dB, "
+                f"unexplained {100 * self.unexplained_fraction:.2g} %{delta}, "
+                f"{self.evaluations} evaluations in {self.seconds:.1f} s)")
 
     @property
     def power_vector(self) -> tuple[float, float, float] | None:

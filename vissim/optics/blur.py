@@ -38,8 +38,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
-from vissim.checks import size_text
-from vissim.errors import VissimInputError
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import describe, size_text
+from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.psf import PSF
 
 __all__ = ["blur_image", "BlurKernel", "PADDING_MODES"]
@@ -239,17 +240,36 @@ def _blur_channel(channel, psf, padding, background, dtype):
     return out[offset : offset + rows, offset : offset + cols]
 
 
+def pixel_array(image) -> np.ndarray:
+    """``image`` as a numeric array; a path or an object that is no pixel array refused with what is accepted."""
+    array = np.asarray(image) if not isinstance(image, (str, bytes, os.PathLike)) else np.asarray(None)
+    if array.dtype.kind not in "biuf":
+        raise VissimTypeError(f"image must be an ndarray of linear light, shape (H, W) or (H, W, C) (read a file with "
+                              f"vissim.imageio.read_image(path).pixels), got {describe(image)}")
+    return array
+
+
+def _psf_list(psf) -> list[PSF]:
+    """A list or tuple of PSFs (one per channel); anything else refused with what is accepted."""
+    psfs = list(psf) if isinstance(psf, (list, tuple)) else [None]
+    if not psfs or not all(isinstance(p, PSF) for p in psfs):
+        raise VissimTypeError("psf must be a PSF (from vissim.compute_psf) or a list of PSFs, one per channel, "
+                              f"got {describe(psf)}")
+    return psfs
+
+
 def checked_blur_inputs(image, psf, arcmin_per_px: float, padding: str, background):
     """The image as an array, one PSF and one background per channel; every refusal of a blur's inputs."""
     if padding not in PADDING_MODES:
         raise VissimInputError(f"padding must be one of {', '.join(PADDING_MODES)}; got {padding!r}")
-    array = np.asarray(image)
+    array = pixel_array(image)
     if array.ndim not in (2, 3) or min(array.shape[:2]) < 1:
         raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {array.shape}")
     if not (np.isfinite(array.min()) and np.isfinite(array.max())):  # NaN propagates; no mask allocated
         raise VissimInputError("image has NaN or infinite pixels; blur needs finite linear-light values")
     n_channels = 1 if array.ndim == 2 else array.shape[2]
-    psfs = [psf] * n_channels if isinstance(psf, PSF) else list(psf)
+    psfs = [psf] * n_channels if isinstance(psf, PSF) else _psf_list(psf)
+    arcmin_per_px = check_arcmin_per_px(arcmin_per_px, "the image's arcmin_per_px")
     if len(psfs) != n_channels:
         raise VissimInputError(f"got {len(psfs)} PSFs for an image with {n_channels} channels")
     if background is None or np.ndim(background) == 0:

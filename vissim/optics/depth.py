@@ -66,18 +66,19 @@ import dataclasses
 import functools
 import logging
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import finite_number, positive_number
+from vissim.checks import describe, finite_number, instance_of, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
-from vissim.errors import VissimInputError
+from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.array_backend import CPU as CPU_BACKEND
 from vissim.optics.array_backend import ArrayBackend, array_backend, array_module
-from vissim.optics.blur import pad_array, padded_shape, padding_width_px
+from vissim.optics.blur import pad_array, padded_shape, padding_width_px, pixel_array
 from vissim.optics.blur_device import convolve_padded
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
@@ -169,7 +170,13 @@ def plan_layers(
 
 def depth_to_proximity_diopters(depth_m) -> np.ndarray:
     """``1/depth`` (float64) for a depth map in metres; ``inf`` (sky) gives 0."""
-    depth = np.asarray(depth_m, dtype=np.float64)
+    if isinstance(depth_m, (str, bytes, os.PathLike)):
+        raise VissimTypeError(f"depth_m must be an ndarray of metres, shape (H, W) (read a file with "
+                              f"vissim.imageio.read_data_map(path).pixels), got {depth_m!r}")
+    try:
+        depth = np.asarray(depth_m, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise VissimTypeError(f"depth_m must be an ndarray of metres, shape (H, W), got {describe(depth_m)}") from None
     if depth.ndim != 2 or min(depth.shape) < 1:
         raise VissimInputError(f"depth map must have shape (H, W) in metres, got {depth.shape}")
     bad = ~((depth > 0) & (np.isfinite(depth) | (depth == np.inf)))
@@ -372,7 +379,9 @@ def blur_depth(
         coarse_blur_px = positive_number(coarse_blur_px, "coarse-grid blur threshold", "pixels of blur diameter")
     if max_layers is not None and (int(max_layers) != max_layers or max_layers < 1):
         raise VissimInputError(f"max_layers must be a positive whole number of layers, got {max_layers!r}")
-    pixels = np.asarray(image)
+    if extra_wavefront is not None:
+        instance_of(extra_wavefront, Wavefront, "extra_wavefront", "a Wavefront (higher-order terms) or None")
+    pixels = pixel_array(image)
     if pixels.ndim not in (2, 3) or min(pixels.shape[:2]) < 1:
         raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {pixels.shape}")
     if not np.all(np.isfinite(pixels)):

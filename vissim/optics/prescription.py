@@ -28,8 +28,9 @@ from dataclasses import dataclass
 from typing import Self
 
 from vissim.checks import MAX_POWER_DIOPTERS
+from vissim.checks import describe
 from vissim.checks import finite_number as _finite
-from vissim.errors import VissimInputError
+from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["SpheroCylinder", "Prescription", "RefractiveError", "LensPower", "as_prescription",
            "parse_spherocylinder"]
@@ -79,6 +80,10 @@ class SpheroCylinder:
     axis_deg: float = 180.0
 
     def __post_init__(self) -> None:
+        for name in ("sphere_diopters", "cylinder_diopters", "axis_deg"):
+            if isinstance(getattr(self, name), (str, bytes)):
+                raise VissimTypeError(f"{type(self).__name__}'s {name} must be a number, got {describe(getattr(self, name))}; "
+                                      f"read written notation with {type(self).__name__}.parse('-2.00 -1.25 x 180')")
         sphere = _finite(self.sphere_diopters, "sphere", "dioptres")
         cyl = _finite(self.cylinder_diopters, "cylinder", "dioptres")
         axis = _finite(self.axis_deg, "axis", "degrees")
@@ -246,10 +251,11 @@ class LensPower(SpheroCylinder):
 def as_prescription(value) -> Prescription:
     """``value``, which must be a :class:`Prescription` (a :class:`RefractiveError` has the opposite sign)."""
     if isinstance(value, RefractiveError):
-        raise TypeError("got the eye's RefractiveError where its Prescription (correcting lens) is expected; "
+        raise VissimTypeError("got the eye's RefractiveError where its Prescription (correcting lens) is expected; "
                         "convert explicitly with .prescription()")
     if not isinstance(value, Prescription):
-        raise TypeError(f"expected a Prescription (the correcting lens), got {type(value).__name__}")
+        hint = "; read written notation with vissim.Prescription.parse(text)" if isinstance(value, str) else ""
+        raise VissimTypeError(f"expected a Prescription (the correcting lens), got {describe(value)}{hint}")
     return value
 
 
@@ -293,7 +299,7 @@ def parse_spherocylinder(text: str) -> tuple[float, float, float]:
     (0.0, -0.75, 90.0)
     """
     if not isinstance(text, str):
-        raise VissimInputError(f"a prescription must be text such as '-2.00 -1.25 x 180', got {text!r}")
+        raise VissimTypeError(f"a prescription must be text such as '-2.00 -1.25 x 180', got {describe(text)}")
     cleaned = re.sub(r"(?i)(?<=\d)\s*ds\b", " DS", text.strip())
     match = _RX_RE.match(cleaned)
     if match is None:

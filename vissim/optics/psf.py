@@ -38,6 +38,7 @@ import scipy.fft
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import FieldTooSmallError, VissimInputError
@@ -53,6 +54,7 @@ from vissim.optics.psf_field import (
 )
 from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
+from vissim.optics.opd_map import OpdMap
 from vissim.optics.wavefront import Wavefront
 from vissim.units import image_colrow_to_osa_xy, nm_to_mm, osa_xy_to_image_colrow, rad_to_arcmin
 
@@ -145,7 +147,7 @@ class PSF:
     @classmethod
     def from_array(cls, data, arcmin_per_px: float, *, wavelength_nm: float = DEFAULT_WAVELENGTH_NM, pupil_diameter_mm: float = 0.0) -> PSF:
         """Wrap a user-supplied kernel (origin at ``[N//2, N//2]``), normalised to unit sum."""
-        array = np.array(data, dtype=float)
+        array = np.array(number_array(data, "a PSF's data", "relative energy"))
         if array.ndim != 2 or array.shape[0] != array.shape[1] or not np.all(np.isfinite(array)):
             raise VissimInputError(f"a PSF must be a finite square 2-D array, got shape {array.shape}")
         if np.any(array < 0) or array.sum() <= 0:
@@ -240,6 +242,34 @@ def _clearly_holds(diameter_mm, wavelengths_nm, blurs_arcmin, arcmin_per_px, siz
     return True
 
 
+#: What :func:`compute_psf` and :func:`strehl_ratio` take as the aberration.
+WAVEFRONT_ACCEPTED = ("a Wavefront or an OpdMap, e.g. vissim.Wavefront.from_prescription("
+                      "vissim.Prescription.parse('-2.00 DS'), pupil_diameter_mm=3.0)")
+
+
+def _checked_front(wavefront, pupil_diameter_mm, what: str) -> float:
+    """The pupil diameter (mm) a PSF or Strehl ratio of ``wavefront`` is computed over; wrong types refused."""
+    instance_of(wavefront, (Wavefront, OpdMap), f"{what}'s wavefront", WAVEFRONT_ACCEPTED)
+    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
+    if diameter > wavefront.pupil_diameter_mm * (1 + 1e-12):
+        raise VissimInputError(
+            f"pupil {diameter:g} mm is larger than the {wavefront.pupil_diameter_mm:g} mm pupil the "
+            "wavefront was measured over"
+        )
+    return diameter
+
+
+def _checked_weights(weights, wavelengths: tuple[float, ...]) -> tuple[float, ...]:
+    """One non-negative relative weight per wavelength, normalised to unit sum."""
+    try:
+        weights_t = tuple(float(w) for w in (weights if weights is not None else [1.0] * len(wavelengths)))
+    except (TypeError, ValueError):
+        weights_t = ()
+    if len(weights_t) != len(wavelengths) or any(not math.isfinite(w) or w < 0 for w in weights_t) or sum(weights_t) <= 0:
+        raise VissimInputError(f"need one non-negative weight per wavelength, got {weights!r} for {wavelengths!r} nm")
+    return tuple(w / sum(weights_t) for w in weights_t)
+
+
 def compute_psf(
     wavefront: Wavefront,
     *,
@@ -318,14 +348,10 @@ def compute_psf(
     >>> psf.data.shape, round(float(psf.data.sum()), 6)
     ((128, 128), 1.0)
     """
-    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
-    if diameter > wavefront.pupil_diameter_mm * (1 + 1e-12):
-        raise VissimInputError(
-            f"pupil {diameter:g} mm is larger than the {wavefront.pupil_diameter_mm:g} mm pupil the "
-            "Zernike coefficients were measured over"
-        )
+    diameter = _checked_front(wavefront, pupil_diameter_mm, "compute_psf")
     step = check_arcmin_per_px(arcmin_per_px)
-    if int(size_px) != size_px or not 1 <= size_px <= MAX_PSF_SIZE_PX:
+    if (isinstance(size_px, bool) or not isinstance(size_px, (int, float, np.integer, np.floating))
+            or int(size_px) != size_px or not 1 <= size_px <= MAX_PSF_SIZE_PX):
         raise VissimInputError(f"PSF size must be an integer number of pixels in 1-{MAX_PSF_SIZE_PX}, got {size_px!r}")
     size_px = int(size_px)
     if mode not in ("wave", "geometric"):
@@ -335,11 +361,9 @@ def compute_psf(
     if dtype not in (np.float32, np.float64):
         raise VissimInputError(f"PSF dtype must be float32 or float64, got {dtype!r}")
     wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))
-    weights_t = tuple(float(w) for w in (weights if weights is not None else [1.0] * len(wavelengths)))
-    if len(weights_t) != len(wavelengths) or any(not math.isfinite(w) or w < 0 for w in weights_t) or sum(weights_t) <= 0:
-        raise VissimInputError(f"need one non-negative weight per wavelength, got {weights_t!r} for {wavelengths!r} nm")
-    total_weight = sum(weights_t)
-    weights_t = tuple(w / total_weight for w in weights_t)
+    weights_t = _checked_weights(weights, wavelengths)
+    if lca_reference_nm is not None:
+        lca_reference_nm = check_wavelength_nm(lca_reference_nm, "LCA reference wavelength")
 
     if method is not None and method not in ("mft", "fft"):
         raise VissimInputError(f"PSF method must be 'mft' or 'fft', got {method!r}")
@@ -424,7 +448,8 @@ def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = DEFAULT_WAVELENGTH
     >>> round(vissim.strehl_ratio(front), 2)
     0.39
     """
-    diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else float(pupil_diameter_mm)
+    diameter = _checked_front(wavefront, pupil_diameter_mm, "strehl_ratio")
+    wavelength_nm = check_wavelength_nm(wavelength_nm)
     cells = max(256, psf_sampling(diameter, wavelength_nm, 1.0, 1, geometric_blur_radius_arcmin(wavefront, diameter),
                                   "mft").pupil_cells)
     grid = pupil_grid(diameter / cells, diameter)

@@ -5,11 +5,18 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from vissim.checks import instance_of, number_array
+from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.optics.psf import PSF
 from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm
 
 __all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_of_encircled_energy_arcmin", "diffraction_mtf",
            "ring_means"]
+
+
+#: What the metrics of a sampled PSF take.
+PSF_ACCEPTED = "a PSF (from vissim.compute_psf or PSF.from_array)"
 
 
 def ring_means(values, radius, ring_width: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -50,6 +57,7 @@ def frequencies_cyc_per_deg(psf: PSF) -> np.ndarray:
     >>> float(f[32]), float(-f[0])  # zero, and the Nyquist frequency 30 / 0.5 cycles/degree
     (0.0, 60.0)
     """
+    instance_of(psf, PSF, "frequencies_cyc_per_deg's psf", PSF_ACCEPTED)
     n = psf.data.shape[0]
     return scipy.fft.fftshift(scipy.fft.fftfreq(n, d=psf.arcmin_per_px / 60.0))
 
@@ -82,6 +90,7 @@ def otf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
     >>> h.shape, complex(h[64, 64])
     ((128, 128), (1+0j))
     """
+    instance_of(psf, PSF, "the psf", PSF_ACCEPTED)
     data = np.asarray(psf.data, dtype=float)
     spectrum = scipy.fft.fftshift(scipy.fft.fft2(scipy.fft.ifftshift(data)))
     spectrum /= spectrum[data.shape[0] // 2, data.shape[1] // 2]
@@ -154,8 +163,8 @@ def diffraction_mtf(frequency_cyc_per_deg, pupil_diameter_mm: float, wavelength_
     >>> vissim.diffraction_mtf([0.0, 30.0, 60.0, 200.0], 3.0, 550.0).round(3)
     array([1.   , 0.606, 0.254, 0.   ])
     """
-    cutoff = diffraction_cutoff_cyc_per_deg(pupil_diameter_mm, wavelength_nm)
-    nu = np.clip(np.abs(np.asarray(frequency_cyc_per_deg, dtype=float)) / cutoff, 0.0, 1.0)
+    cutoff = diffraction_cutoff_cyc_per_deg(check_pupil_mm(pupil_diameter_mm), check_wavelength_nm(wavelength_nm))
+    nu = np.clip(np.abs(number_array(frequency_cyc_per_deg, "frequency_cyc_per_deg", "cycles/degree")) / cutoff, 0.0, 1.0)
     return 2.0 / np.pi * (np.arccos(nu) - nu * np.sqrt(1.0 - nu**2))
 
 

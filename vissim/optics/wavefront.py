@@ -27,8 +27,9 @@ from types import MappingProxyType
 
 import numpy as np
 
+from vissim.checks import describe, finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
-from vissim.errors import VissimInputError
+from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.zernike import zernike_keys, zernike_nm
 
@@ -104,6 +105,15 @@ def _ring_fit_um(opd_um, pupil_diameter_mm: float, max_order: int, rings: int, s
     return keys, solution
 
 
+def _zernike_key(key) -> tuple[int, int]:
+    """A Zernike index ``(n, m)`` of whole numbers; anything else refused with what is accepted."""
+    if (not isinstance(key, (tuple, list)) or len(key) != 2
+            or not all(isinstance(k, (int, float, np.integer, np.floating)) and not isinstance(k, bool)
+                       and float(k).is_integer() for k in key)):
+        raise VissimTypeError(f"a Zernike term's key must be a tuple (n, m) of integers (OSA), got {describe(key)}")
+    return int(key[0]), int(key[1])
+
+
 @dataclass(frozen=True, eq=False)
 class Wavefront:
     """OSA Zernike expansion of a wavefront error, in µm, over ``pupil_diameter_mm``.
@@ -131,13 +141,15 @@ class Wavefront:
 
     def __post_init__(self) -> None:
         diameter = _check_pupil(self.pupil_diameter_mm, "measurement pupil diameter")
+        if not isinstance(self.coefficients_um, Mapping):
+            raise VissimTypeError("Wavefront's coefficients_um must be a mapping {(n, m): µm} of OSA Zernike terms, "
+                                  f"got {describe(self.coefficients_um)}; for a prescription use "
+                                  "Wavefront.from_prescription(rx, pupil_diameter_mm), for text Wavefront.parse(text, pupil_diameter_mm)")
         clean: dict[tuple[int, int], float] = {}
         for key, value in dict(self.coefficients_um).items():
-            n, m = (int(k) for k in key)
+            n, m = _zernike_key(key)
             zernike_nm(n, m, np.zeros(1), np.zeros(1))  # validates (n, m)
-            value = float(value)
-            if not math.isfinite(value):
-                raise VissimInputError(f"Zernike coefficient ({n},{m}) must be finite µm, got {value!r}")
+            value = finite_number(value, f"Zernike coefficient ({n},{m})", "µm")
             if value != 0.0:
                 clean[(n, m)] = clean.get((n, m), 0.0) + value
         object.__setattr__(self, "coefficients_um", MappingProxyType(dict(sorted(clean.items()))))

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from vissim.checks import check_allocation, samples_per_pixel, size_text
+from vissim.checks import check_allocation, instance_of, samples_per_pixel, size_text
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
@@ -285,14 +285,15 @@ def render_bench(
     >>> result.pixels.shape  # doctest: +SKIP
     (64, 64)
     """
-    from vissim.bench.dslr import chart_mm_per_texel, dslr_scene
+    from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
     from vissim.optics.trial_lens import trial_lens_effect
     from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
 
+    instance_of(bench, DslrBench, "render_bench's bench", "a DslrBench (vissim.DslrBench(...))")
+    instance_of(chart, (ChartSpec, Chart), "render_bench's chart",
+                "a ChartSpec (vissim.single_letter_spec('K', 1.0)) or a Chart (vissim.render_chart_print(spec))")
     if isinstance(chart, ChartSpec):
         chart = render_chart_print(chart, MM_PER_INCH / chart_mm_per_texel(bench))
-    if not isinstance(chart, Chart):
-        raise VissimInputError(f"chart must be a vissim ChartSpec or Chart, got {type(chart).__name__}")
     scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind=kind)
     result = render_scene(scene, kind=kind, spp=bench.spp, seed=bench.seed, variant=variant,
                           pass_spp=pass_spp, progress=progress)

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from vissim.charts import POLARITIES
+from vissim.checks import path_arg
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.campaign_types import INPUTS, SIMULATIONS, Campaign, CampaignSettings, Configuration
 from vissim.validation.fields import (
@@ -22,6 +23,7 @@ from vissim.validation.fields import (
     LensSpec,
     field_error,
     lenses,
+    name_text,
     number,
     read_campaign_toml,
     refuse_duplicate_names,
@@ -77,8 +79,8 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
                                                      f"more than the {tile_arcmin:.3g} arcmin tile; enlarge tile_px")
     specs = lenses(raw.get("lenses", []), source, f"{where}.lenses")
     f_number = _f_number(raw.get("f_number", f_number), source, f"{where}.f_number")
-    capture, name = (None if raw.get(k) is None else text(raw[k], source, f"{where}.{k}")
-                     for k in ("capture", "name"))
+    capture, name = (None if raw.get(k) is None else check(raw[k], source, f"{where}.{k}")
+                     for k, check in (("capture", text), ("name", name_text)))
     config = Configuration(name or "", letter, logmar, polarity, specs, f_number, capture)
     label = f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}"
     return config if name else replace(config, name=label)
@@ -107,7 +109,7 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
         lens_sets += [[table(c, source, f"{where}.cylinders[{i}]")] for i, c in enumerate(cylinders)]
     if "lenses" in raw:
         lens_sets += list(value_list(raw["lenses"], source, f"{where}.lenses", "[[2.0], [1.0, -0.5]] (lens sets)"))
-    prefix = text(raw.get("name", ""), source, f"{where}.name")
+    prefix = name_text(raw.get("name", ""), source, f"{where}.name")
     out = []
     for letter, logmar, polarity, lens_set in itertools.product(letters, logmars, polarities, lens_sets or [[]]):
         item = {"letter": letter, "logmar": logmar, "polarity": polarity, "lenses": lens_set,
@@ -162,7 +164,7 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     >>> import vissim
     >>> campaign = vissim.load_campaign("campaign.toml")  # doctest: +SKIP
     """
-    path = Path(path)
+    path = path_arg(path, "load_campaign's path")
     source = str(path)
     raw = read_campaign_toml(path)
     if "depth_campaign" in raw or "config" in raw:

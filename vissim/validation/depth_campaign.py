@@ -22,15 +22,15 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
-from vissim.checks import WAVELENGTH_RANGE_NM
+from vissim.checks import WAVELENGTH_RANGE_NM, path_arg
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
 from vissim.validation.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
-                                      read_campaign_toml, refuse_duplicate_names, settings_kwargs, table, tables,
-                                      text)
+                                      name_text, read_campaign_toml, refuse_duplicate_names, settings_kwargs, table,
+                                      tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
            "is_depth_campaign", "DEPTH_SIMULATIONS", "DEPTH_INPUTS", "SCHEMA_VERSION"]
@@ -187,13 +187,13 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
         viewer = _eye(raw, viewer, source, where)
     elif "camera" in raw:
         viewer = _camera(raw["camera"], viewer, source, f"{where}.camera")
-    name = text(raw["name"], source, f"{where}.name") if "name" in raw else ""
+    name = name_text(raw["name"], source, f"{where}.name") if "name" in raw else ""
     return DepthConfiguration(name or f"{scene_file.stem}: {viewer.label()}", str(scene_file), loaded.scene, viewer)
 
 
 def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> DepthCampaign:
     """Read and validate a depth campaign TOML file (module doc); ``check_memory`` as :func:`load_campaign`."""
-    path = Path(path)
+    path = path_arg(path, "load_depth_campaign's path")
     source = str(path)
     raw = read_campaign_toml(path)
     if not is_depth_campaign(raw):

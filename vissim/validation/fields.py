@@ -12,7 +12,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP
+from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP, name_problem, path_arg
 from vissim.errors import VissimInputError
 
 __all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_campaign_toml", "number", "whole_number",
@@ -48,7 +48,7 @@ def refuse_duplicate_names(source: str, entries, describe) -> None:
 
 def read_toml_file(path: str | Path, what: str = "campaign file") -> dict:
     """The TOML document at ``path``; one clean error naming it if it is absent, a folder, binary or not TOML."""
-    path = Path(path)
+    path = path_arg(path, f"the {what}'s path")
     if not path.exists():
         raise VissimInputError(f"{what} {path} does not exist")
     if path.is_dir():
@@ -92,11 +92,12 @@ def number(value: Any, source: str, where: str, unit: str, *, lo: float | None =
 
 
 def whole_number(value: Any, source: str, where: str, unit: str, *, lo: int, hi: int) -> int:
-    """An integer (not a bool) within ``[lo, hi]``."""
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise field_error(source, where, f"expected a whole number of {unit}, got {value!r}")
-    if not lo <= value <= hi:
+    """An integer (not a bool) within ``[lo, hi]``; a number outside the range is told so first (1e9, not 'whole')."""
+    is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if is_number and not lo <= value <= hi:  # NaN and infinity too
         raise field_error(source, where, f"must be {lo} to {hi} {unit}, got {value!r}")
+    if not is_number or not isinstance(value, int):
+        raise field_error(source, where, f"expected a whole number of {unit} in {lo} to {hi}, got {value!r}")
     return value
 
 
@@ -120,6 +121,14 @@ def seed_pair(value: Any, source: str, where: str) -> tuple[int, int]:
 def text(value: Any, source: str, where: str) -> str:
     if not isinstance(value, str):
         raise field_error(source, where, f"expected a string, got {value!r}")
+    return value
+
+
+def name_text(value: Any, source: str, where: str) -> str:
+    """A campaign or configuration name: a string within :data:`vissim.checks.MAX_NAME_CHARS`, printable."""
+    problem = name_problem(text(value, source, where))
+    if problem:
+        raise field_error(source, where, problem)
     return value
 
 
@@ -176,7 +185,7 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
             kwargs[key] = choices(head[key], allowed, source, f"{where}.{key}")
     for key in texts:
         if key in head:
-            text(head[key], source, f"{where}.{key}")
+            (name_text if key == "name" else text)(head[key], source, f"{where}.{key}")
     for key in switches:
         if key in head:
             if not isinstance(head[key], bool):

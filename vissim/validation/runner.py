@@ -31,10 +31,11 @@ from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
 from vissim.provenance import make_provenance
 from vissim.validation.campaign_types import Campaign
-from vissim.checks import samples_per_pixel
+from vissim.checks import instance_of, path_arg, samples_per_pixel
 from vissim.validation.captures import capture_problem, capture_provenance, capture_tile, load_manifest, read_capture
 from vissim.validation.item import compute_item
 from vissim.validation.renders import RenderSpec, no_lens_spec, render_spec, truth_specs
+from vissim.validation.scheduler_probe import probe_scheduler
 
 __all__ = ["run_campaign", "RunSummary", "plan_run", "make_missing_renders"]
 
@@ -115,6 +116,8 @@ def connect_scheduler(address: str):
     except ImportError:  # pragma: no cover
         raise VissimInputError("--scheduler needs Dask distributed: pip install 'dask[distributed]'") from None
     hint = "expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786"
+    if not address.strip():
+        raise VissimInputError(f"--scheduler is empty; {hint} (leave the option out to render here)")
     try:
         scheme, location = parse_address(address)
     except (ValueError, TypeError) as exc:
@@ -122,6 +125,8 @@ def connect_scheduler(address: str):
     host, _, port = location.rpartition(":")
     if scheme in ("tcp", "tls", "ws", "wss") and not (host and port.isdigit() and 0 < int(port) < 65536):
         raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address; {hint}")
+    if scheme == "tcp":  # a web server or another service would keep Dask waiting, or ask for exabytes
+        probe_scheduler(address, host.strip("[]"), int(port))
     try:
         return Client(address, timeout=SCHEDULER_TIMEOUT_S)
     except (OSError, TimeoutError):
@@ -219,7 +224,7 @@ def make_missing_renders(run_dir: Path, needed: dict, record: dict, *, workers: 
     Returns the number of renders made.
     """
     pending = [s for s in needed.values() if not _render_path(run_dir, s).exists()]
-    client = connect_scheduler(scheduler) if scheduler and pending else None
+    client = connect_scheduler(scheduler) if scheduler is not None and pending else None
     try:
         provenance = make_provenance(campaign=record["source"])
         write_json_atomic(run_dir / "campaign.json", {**record, "provenance": provenance}, overwrite=True)
@@ -283,8 +288,9 @@ def run_campaign(
     >>> summary.renders_made  # doctest: +SKIP
     4
     """
+    instance_of(campaign, Campaign, "run_campaign's campaign", "a Campaign (from vissim.load_campaign(path))")
     render = render or render_spec
-    run_dir = Path(run_dir)
+    run_dir = path_arg(run_dir, "run_campaign's run_dir")
     campaign, keys, todo = plan_run(campaign, run_dir, workers, spp)
     settings = campaign.settings
     captures = load_manifest(campaign.manifest) if campaign.manifest and any(c.capture for _, c in todo) else {}
