@@ -1,7 +1,7 @@
 """Atomic file output: a file appears complete at its final path, or not at all.
 
-Every file vissim writes goes through :func:`atomic_output`.  The writer is handed a
-temporary path in the same directory as the target (so the final :func:`os.replace` is a
+Every file vissim writes goes through `atomic_output`.  The writer is handed a
+temporary path in the same directory as the target (so the final `os.replace` is a
 rename on one filesystem); the temporary name keeps the real suffix, e.g.
 ``.out.png.3f9c1a2b.tmp.png``, so libraries that choose a format from the suffix still
 work.  If anything goes wrong inside the ``with`` block -- including ``KeyboardInterrupt``
@@ -63,7 +63,7 @@ def atomic_output(path: str | os.PathLike[str], *, overwrite: bool = False) -> I
     path:
         Final destination.  Missing parent directories are created.
     overwrite:
-        If False (default) and ``path`` exists, raise :class:`VissimInputError` before
+        If False (default) and ``path`` exists, raise `VissimInputError` before
         anything is written.
 
     Yields
@@ -109,7 +109,7 @@ def write_json_atomic(path: str | os.PathLike[str], obj: Any, overwrite: bool = 
     """Write ``obj`` as JSON (indent=2, sorted keys, finite floats only) to ``path`` atomically.
 
     The object is serialised before any file is touched, so a value JSON cannot hold
-    (NaN, infinity, an arbitrary object) raises :class:`VissimInputError` and writes nothing.
+    (NaN, infinity, an arbitrary object) raises `VissimInputError` and writes nothing.
     """
     path = Path(path)
     try:

@@ -36,7 +36,7 @@ WAVELENGTH_RANGE_NM = (200.0, 2000.0)
 
 
 def wavelength_nm(value, name: str = "wavelength") -> float:
-    """A wavelength within :data:`WAVELENGTH_RANGE_NM`."""
+    """A wavelength within `WAVELENGTH_RANGE_NM`."""
     number = finite_number(value, name, "nm")
     low, high = WAVELENGTH_RANGE_NM
     if not low <= number <= high:
@@ -86,12 +86,12 @@ def check_allocation(n_bytes: float, what: str) -> None:
 
 
 #: Angular samplings vissim takes, arcmin per pixel (the thesis's is 1): finer ones need more
-#: memory than any machine has (checked by :func:`check_allocation`), coarser ones are no image.
+#: memory than any machine has (checked by `check_allocation`), coarser ones are no image.
 MIN_ARCMIN_PER_PX, MAX_ARCMIN_PER_PX = 1e-6, 60.0
 
 
 def arcmin_per_px(value, name: str = "angular sampling") -> float:
-    """An angular pixel size within [:data:`MIN_ARCMIN_PER_PX`, :data:`MAX_ARCMIN_PER_PX`] (1 degree)."""
+    """An angular pixel size within [`MIN_ARCMIN_PER_PX`, `MAX_ARCMIN_PER_PX`] (1 degree)."""
     step = positive_number(value, name, "arcmin per pixel")
     if not MIN_ARCMIN_PER_PX <= step <= MAX_ARCMIN_PER_PX:
         raise VissimInputError(
@@ -104,7 +104,7 @@ MIN_PUPIL_MM, MAX_PUPIL_MM = 0.01, 1000.0
 
 
 def pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
-    """A pupil diameter within [:data:`MIN_PUPIL_MM`, :data:`MAX_PUPIL_MM`] mm."""
+    """A pupil diameter within [`MIN_PUPIL_MM`, `MAX_PUPIL_MM`] mm."""
     pupil = positive_number(value, name, "mm")
     if not MIN_PUPIL_MM <= pupil <= MAX_PUPIL_MM:
         raise VissimInputError(f"{name} must be within {MIN_PUPIL_MM:g}-{MAX_PUPIL_MM:g} mm, got {pupil:g} mm")
@@ -132,7 +132,7 @@ MAX_SAMPLER_SEED = 2**32 - 1
 
 
 def samples_per_pixel(value, name: str = "spp") -> int:
-    """A whole number of samples per pixel in 1-:data:`MAX_SPP`."""
+    """A whole number of samples per pixel in 1-`MAX_SPP`."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value) or not 1 <= value <= MAX_SPP:
         raise VissimInputError(f"{name} must be a whole number of samples per pixel in 1-{MAX_SPP}, got {value!r}")
     return int(value)

@@ -12,14 +12,14 @@ shape ``(H, W)`` (mono, channel ``Y``) or ``(H, W, 3)`` (channels ``R, G, B``), 
   Pillow silently truncates it to 8 bits; use TIFF or EXR for that.
 
 Images carry their angular sampling: ``write_image(..., arcmin_per_px=S)`` records it in
-the provenance record's top-level key ``"arcmin_per_px"`` (:data:`SAMPLING_KEY`; the EXR
-header attribute or the sidecar, as above), and :func:`read_image` returns it as
-:attr:`Image.arcmin_per_px` (``None`` when the file does not say).  Files written before
-that key existed are read from where their writer put it (:func:`sampling_from_provenance`).
+the provenance record's top-level key ``"arcmin_per_px"`` (`SAMPLING_KEY`; the EXR
+header attribute or the sidecar, as above), and `read_image` returns it as
+`Image.arcmin_per_px` (``None`` when the file does not say).  Files written before
+that key existed are read from where their writer put it (`sampling_from_provenance`).
 
-Every write goes through :func:`vissim.atomic.atomic_output` and refuses to replace an
+Every write goes through `vissim.atomic.atomic_output` and refuses to replace an
 existing file unless ``overwrite=True``.  Anything wrong with a file raises one
-:class:`~vissim.errors.VissimInputError` naming the file.
+`VissimInputError` naming the file.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ __all__ = ["Image", "read_data_map", "read_image", "sampling_from_provenance", "
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 #: Top-level provenance key holding an image's angular sampling, arcmin per pixel.
 SAMPLING_KEY = "arcmin_per_px"
-#: Where files written before :data:`SAMPLING_KEY` existed keep their sampling, in order.
+#: Where files written before `SAMPLING_KEY` existed keep their sampling, in order.
 _LEGACY_SAMPLING_PATHS = (
     ("inputs", "arcmin_per_px"),             # blur, blur-depth, demo chart, render depth
     ("inputs", "options", "arcmin_per_px"),  # vissim chart
@@ -144,8 +144,8 @@ def _sampling_value(value: Any) -> float | None:
 def sampling_from_provenance(provenance: Any) -> float | None:
     """The angular sampling (arcmin per pixel) a provenance record states, or ``None``.
 
-    The top-level :data:`SAMPLING_KEY` first; then the places older vissim files kept it
-    (:data:`_LEGACY_SAMPLING_PATHS`: chart options, bench parameters, campaign settings ...).
+    The top-level `SAMPLING_KEY` first; then the places older vissim files kept it
+    (`_LEGACY_SAMPLING_PATHS`: chart options, bench parameters, campaign settings ...).
     """
     if not isinstance(provenance, dict):
         return None
@@ -163,7 +163,7 @@ def sampling_from_provenance(provenance: Any) -> float | None:
 
 
 def _with_sampling(provenance: dict | None, arcmin_per_px: Any, path: Path) -> dict | None:
-    """``provenance`` with the sampling at :data:`SAMPLING_KEY` (unchanged when ``arcmin_per_px`` is None)."""
+    """``provenance`` with the sampling at `SAMPLING_KEY` (unchanged when ``arcmin_per_px`` is None)."""
     if arcmin_per_px is None:
         return provenance
     try:
@@ -411,7 +411,7 @@ def write_image(
     arcmin_per_px:
         The image's angular sampling, stored at the provenance record's top-level key
         ``"arcmin_per_px"`` (a record is written even without ``provenance``); read back as
-        :attr:`Image.arcmin_per_px`.  ``None`` (default) records none.
+        `Image.arcmin_per_px`.  ``None`` (default) records none.
     encoding, bit_depth:
         PNG/TIFF only: ``"srgb"`` (default) encodes with IEC 61966-2-1, ``"linear"`` does
         not; values are clipped to [0, 1] and rounded to ``bit_depth`` (8 or 16) bits.
@@ -513,7 +513,7 @@ def write_data_map(path: str | os.PathLike[str], data: Any, *, channel: str = "Z
                    overwrite: bool = False, arcmin_per_px: float | None = None) -> Path:
     """Write a single-channel float32 EXR data map (e.g. depth in metres, channel ``Z``).
 
-    ``arcmin_per_px`` is recorded as in :func:`write_image`.
+    ``arcmin_per_px`` is recorded as in `write_image`.
     """
     path = Path(path)
     if path.suffix.lower() != ".exr":
@@ -535,7 +535,7 @@ def to_preview_png(
 ) -> Path:
     """Write an 8-bit sRGB PNG preview (e.g. of a PSF), scaled so its maximum is 1.
 
-    ``arcmin_per_px`` is recorded as in :func:`write_image`.
+    ``arcmin_per_px`` is recorded as in `write_image`.
     """
     path = Path(path)
     arr = _validated_pixels(path, pixels, None)

@@ -2,7 +2,7 @@
 
 World frame (millimetres): the camera's principal plane (and entrance pupil) at z = 0, looking
 along +z with +y up; the chart at z = ``chart_distance_mm``.  World x is the examiner's right
-(TABO frame of :mod:`vissim.optics.trial_lens`), so the camera's image right is world -x.  Light
+(TABO frame of `vissim.optics.trial_lens`), so the camera's image right is world -x.  Light
 travels towards -z: chart, trial lenses (the last lens's back vertex at ``vertex_distance_mm``,
 the others stacked towards the chart with ``lens_gap_mm`` of air), camera.
 
@@ -19,19 +19,19 @@ Choices, and why:
   the chart's mean reflectance over it: a clean ground truth.  A diffuse chart lit by lamps
   would add light-sampling noise and an illumination falloff that tells nothing about blur.
 * **Texture**: the print raster, ``nearest`` filtered, at >= 4 texels per camera pixel
-  (:func:`chart_mm_per_texel`).  Nearest reproduces the printed raster exactly (piecewise
+  (`chart_mm_per_texel`).  Nearest reproduces the printed raster exactly (piecewise
   constant, like ink dots); bilinear would add a one-texel triangle blur.  The raster is
   cropped around the axis, or padded with its edge values, to cover the field plus blur and
   magnification margins.
-* **Lenses**: PLY meshes with exact normals (:mod:`vissim.bench.lens_mesh`), made of the
-  refraction-only ``vissim_refract`` BSDF (:mod:`vissim.render.plugins`).  Thin lenses
+* **Lenses**: PLY meshes with exact normals (`vissim.bench.lens_mesh`), made of the
+  refraction-only ``vissim_refract`` BSDF (`vissim.render.plugins`).  Thin lenses
   (``refractive_index`` None) become crown-glass lenses of realistic centre thickness for the
-  clear aperture, and the theory (:meth:`DslrBench.viewing_setup`, a
-  :class:`~vissim.optics.setup.ViewingSetup`) uses those same lenses and gives the aperture.
+  clear aperture, and the theory (`DslrBench.viewing_setup`, a
+  `ViewingSetup`) uses those same lenses and gives the aperture.
 
 The dict is Mitsuba's scene-dict format with plain values only: transforms are 4 x 4 row-major
 nested lists under ``to_world`` and bitmap textures carry a float32 numpy array under
-``data``; :func:`vissim.render.run.to_mitsuba_dict` converts them.  Nothing here imports Mitsuba.
+``data``; `vissim.render.run.to_mitsuba_dict` converts them.  Nothing here imports Mitsuba.
 """
 
 from __future__ import annotations
@@ -94,11 +94,11 @@ class DslrBench:
         From the camera lens to the nearest trial lens, and between lenses in the holder, mm.
     lenses : tuple of TrialLens
         Trial lenses, ordered from the chart to the camera, as in
-        :class:`~vissim.optics.trial_lens.TrialLensSetup` (at most the holder's slots).
+        `TrialLensSetup` (at most the holder's slots).
     refractive_index : float
         The lenses' glass at the design wavelength (crown glass by default).
     clear_aperture_mm : float or None
-        The lens meshes' diameter, mm; None sizes them to the beam (:meth:`clear_aperture`).
+        The lens meshes' diameter, mm; None sizes them to the beam (`clear_aperture`).
     arcmin_per_px, size_px : float, (int, int)
         The sensor's sampling, arcmin per pixel, and its size ``(rows, cols)``.
     spp, seed, sampler : int, int, str
@@ -202,7 +202,7 @@ class DslrBench:
         return tuple(self._make_physical(lens) for lens in self.lenses)
 
     def trial_lens_setup(self) -> TrialLensSetup:
-        """The rendered lenses as a :class:`TrialLensSetup` (object distance = chart distance)."""
+        """The rendered lenses as a `TrialLensSetup` (object distance = chart distance)."""
         distance_m = mm_to_m(self.chart_distance_mm)
         return TrialLensSetup(self.physical_lenses, self.vertex_distance_mm, distance_m, self.lens_gap_mm)
 

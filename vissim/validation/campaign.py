@@ -130,7 +130,7 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     """Read and validate a campaign TOML file.
 
     With ``check_memory`` the memory each item will need is estimated and a campaign this
-    machine cannot hold is refused now (:func:`vissim.validation.preflight.check_campaign_memory`).
+    machine cannot hold is refused now (`vissim.validation.preflight.check_campaign_memory`).
 
     Parameters
     ----------

@@ -21,7 +21,7 @@ A manifest (TOML) lists captures so real photographs can be dropped in::
 A campaign item with ``capture = "t3-k-plus2"`` takes its ground truth from the capture.
 Absent files are skipped with a clear message, never silently.
 
-Capture -> tile: the RAW is read linearly (:func:`vissim.validation.raw.read_raw_linear`,
+Capture -> tile: the RAW is read linearly (`vissim.validation.raw.read_raw_linear`,
 no demosaicing), the photosites are divided by their channel's gain (the median of the
 paper around the letter, so a neutral chart gives one grey level per photosite, at full
 sensor resolution and without interpolation), resampled by exact area integration onto the
@@ -116,7 +116,7 @@ def _capture(entry: dict, path: Path, i: int) -> Capture:
 
 
 def load_manifest(path: str | Path) -> dict[str, Capture]:
-    """Read a capture manifest; every field is checked, files are not (see :func:`capture_problem`)."""
+    """Read a capture manifest; every field is checked, files are not (see `capture_problem`)."""
     path = Path(path)
     raw = read_toml_file(path, "capture manifest")
     captures = {}

@@ -1,7 +1,7 @@
 """Report of a depth campaign run: metrics (JSON, CSV), Markdown tables, figures, HTML.
 
-Rebuilt from the finished items' ``result.json`` and images (:mod:`vissim.validation.depth_campaign`),
-like :mod:`vissim.validation.report` for the single-plane harness.  Every region is reported
+Rebuilt from the finished items' ``result.json`` and images (`vissim.validation.depth_campaign`),
+like `vissim.validation.report` for the single-plane harness.  Every region is reported
 beside its noise floor (the two seeds of the render compared over the same pixels): a
 perfect, noise-free simulation scores 3 dB above the floor's PSNR.  Occlusion bands are a row
 of their own, so boundary errors are shown, not averaged away.

@@ -1,7 +1,7 @@
 """Either kind of campaign file: run it or rebuild its report (``vissim validate`` / ``vissim report``).
 
-A depth campaign (:mod:`vissim.validation.depth_campaign`) or a single-plane one
-(:mod:`vissim.validation.campaign`) is told apart by its tables when run, and by the ``kind`` in
+A depth campaign (`vissim.validation.depth_campaign`) or a single-plane one
+(`vissim.validation.campaign`) is told apart by its tables when run, and by the ``kind`` in
 ``campaign.json`` when its report is rebuilt; each is handed to its own runner and report.
 """
 
@@ -22,7 +22,7 @@ __all__ = ["CampaignRun", "run_any_campaign", "rebuild_any_report"]
 
 @dataclass(frozen=True)
 class CampaignRun:
-    """What :func:`run_any_campaign` did: the kind, the run summary, the report files and summary lines."""
+    """What `run_any_campaign` did: the kind, the run summary, the report files and summary lines."""
 
     kind: str  # "depth" or "single-plane"
     summary: RunSummary

@@ -2,8 +2,8 @@
 
 One configuration stands for each group (a sweep, or one item): of those with lenses, the one of
 median defocus.  Its wave simulation's PSF is recomputed with the public functions
-(:func:`vissim.compute_psf`, :func:`vissim.mtf`, :func:`vissim.diffraction_mtf`,
-:func:`vissim.blur_image`) from what the item recorded: the camera prescription and pupil of the
+(`vissim.compute_psf`, `vissim.mtf`, `vissim.diffraction_mtf`,
+`vissim.blur_image`) from what the item recorded: the camera prescription and pupil of the
 ``wave`` comparison (``setup`` in ``result.json``, written to 4 decimals, so to 1e-4 D), the
 campaign's wavelength and sampling.  The PSF is the one the simulation of the synthetic chart
 used (the campaign's arcmin/px over ``SYNTHETIC_OVERSAMPLE``); the through-focus strip blurs the
@@ -75,7 +75,7 @@ def _largest_defocus(prescription: Prescription) -> float:
 
 
 def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
-    """One :class:`OpticsCase` per group, in campaign order: the configuration with lenses of median defocus."""
+    """One `OpticsCase` per group, in campaign order: the configuration with lenses of median defocus."""
     from vissim.validation.item import SYNTHETIC_OVERSAMPLE
     from vissim.validation.wave_bench_report import group_of
 
@@ -257,7 +257,7 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
 def optics_figures(results: list[dict], run_dir: str | Path, image_norm=None) -> dict[str, tuple[str, object, dict]]:
     """The report's optics figures: name -> (file name, matplotlib figure, provenance extras); empty without wave items.
 
-    ``image_norm`` as in :func:`through_focus_figure_of`.
+    ``image_norm`` as in `through_focus_figure_of`.
     """
     cases = optics_cases(results, run_dir)
     if not cases:

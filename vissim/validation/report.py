@@ -350,7 +350,7 @@ def report_provenance(run_dir: Path, campaign: dict, results: list[dict]) -> dic
 
 
 def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
-    """A figure's PNG through :func:`vissim.imageio.write_image` (so it gets its provenance sidecar); its bytes."""
+    """A figure's PNG through `vissim.imageio.write_image` (so it gets its provenance sidecar); its bytes."""
     from PIL import Image as PILImage
 
     codes = np.asarray(PILImage.open(io.BytesIO(png)).convert("RGB"), dtype=np.float32) / 255.0
@@ -397,7 +397,7 @@ def build_report(run_dir: str | Path) -> list[Path]:
     """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``.
 
     The figures: Fig. 4.8-style panels per simulation, and per group the wave PSF (log scale), its
-    MTF against the diffraction limit and a through-focus strip (:mod:`vissim.validation.optics_figures`).
+    MTF against the diffraction limit and a through-focus strip (`vissim.validation.optics_figures`).
     """
     run_dir = Path(run_dir)
     results = load_results(run_dir)

@@ -1,6 +1,6 @@
 """The report's sections on the traced lenses: the wave bench, each residual's cause, the geometric self-check.
 
-The wave bench is noise-free (:mod:`vissim.validation.wave_bench`): its rows have no noise
+The wave bench is noise-free (`vissim.validation.wave_bench`): its rows have no noise
 floor, so they are summarised as absolute PSNR, never as "PSNR minus the floor", and kept out
 of the tables against the render.  The geometric self-check (simulation ``traced_rays``) is
 compared with the render and summarised, like the simulations, as PSNR minus the noise floor.
