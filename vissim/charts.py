@@ -121,9 +121,11 @@ class ChartSpec:
         there (default: the thesis's 3 ft, 0.9144 m).
     polarity : {"black-on-white", "white-on-black"}
         Dark letters on paper, or the reverse.
-    paper_reflectance, ink_reflectance : float
-        Linear reflectances (fractions, 0 <= ink < paper <= 1) of the paper and the ink
-        (defaults 0.9 and 0.04, laser-printed paper and toner).
+    paper_reflectance : float
+        Linear reflectance (a fraction, ink < paper <= 1) of the paper (default 0.9,
+        laser-printed paper).
+    ink_reflectance : float
+        Linear reflectance (a fraction, 0 <= ink < paper) of the ink (default 0.04, toner).
     letter_seed : int, optional
         The seed that chose the letters, when they were chosen at random (recorded, not used).
 

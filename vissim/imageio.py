@@ -412,10 +412,11 @@ def write_image(
         The image's angular sampling, stored at the provenance record's top-level key
         ``"arcmin_per_px"`` (a record is written even without ``provenance``); read back as
         `Image.arcmin_per_px`.  ``None`` (default) records none.
-    encoding, bit_depth:
+    encoding
         PNG/TIFF only: ``"srgb"`` (default) encodes with IEC 61966-2-1, ``"linear"`` does
-        not; values are clipped to [0, 1] and rounded to ``bit_depth`` (8 or 16) bits.
-        EXR always stores linear float32.
+        not.  EXR always stores linear float32.
+    bit_depth
+        PNG/TIFF only: values are clipped to [0, 1] and rounded to this many bits (8 or 16).
     """
     path = Path(path)
     kind = _kind(path)

@@ -85,13 +85,18 @@ class DslrBench:
 
     Parameters
     ----------
-    focal_length_mm, f_number : float
-        The camera lens (an ideal thin lens): focal length, mm, and f-number (its entrance
-        pupil is ``focal_length_mm / f_number`` across).
-    focus_distance_mm, chart_distance_mm : float
-        Where the camera is focused and where the chart stands, mm from the camera lens.
-    vertex_distance_mm, lens_gap_mm : float
-        From the camera lens to the nearest trial lens, and between lenses in the holder, mm.
+    focal_length_mm : float
+        The camera lens (an ideal thin lens): focal length, mm.
+    f_number : float
+        Its f-number (the entrance pupil is ``focal_length_mm / f_number`` across).
+    focus_distance_mm : float
+        Where the camera is focused, mm from the camera lens.
+    chart_distance_mm : float
+        Where the chart stands, mm from the camera lens.
+    vertex_distance_mm : float
+        From the camera lens to the nearest trial lens, mm.
+    lens_gap_mm : float
+        Between lenses in the holder, mm.
     lenses : tuple of TrialLens
         Trial lenses, ordered from the chart to the camera, as in
         `TrialLensSetup` (at most the holder's slots).
@@ -99,16 +104,26 @@ class DslrBench:
         The lenses' glass at the design wavelength (crown glass by default).
     clear_aperture_mm : float or None
         The lens meshes' diameter, mm; None sizes them to the beam (`clear_aperture`).
-    arcmin_per_px, size_px : float, (int, int)
-        The sensor's sampling, arcmin per pixel, and its size ``(rows, cols)``.
-    spp, seed, sampler : int, int, str
-        Samples per pixel, seed and Mitsuba sampler of the render.
+    arcmin_per_px : float
+        The sensor's sampling, arcmin per pixel.
+    size_px : (int, int)
+        The sensor's size ``(rows, cols)``.
+    spp : int
+        Samples per pixel of the render.
+    seed : int
+        The render's seed.
+    sampler : str
+        The render's Mitsuba sampler.
     fresnel_loss : bool
         Whether the lens surfaces reflect (Fresnel) or transmit everything.
-    texels_per_px, radiance_scale : float
-        The chart texture's resolution per camera pixel and its radiance scale (relative).
-    mesh_rings, mesh_segments : int
-        Tessellation of each lens surface.
+    texels_per_px : float
+        The chart texture's resolution per camera pixel.
+    radiance_scale : float
+        The chart's radiance scale (relative).
+    mesh_rings : int
+        Tessellation of each lens surface: rings.
+    mesh_segments : int
+        Tessellation of each lens surface: segments per ring.
 
     Examples
     --------

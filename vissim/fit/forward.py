@@ -102,8 +102,12 @@ class ForwardModel:
     ----------
     reference : ndarray (H, W)
         Linear light, pixel-integrated, at ``arcmin_per_px``.
-    pupil_diameter_mm, wavelength_nm, mode
-        The camera's entrance pupil, the wavelength (wave mode) and ``"geometric"`` or ``"wave"``.
+    pupil_diameter_mm
+        The camera's entrance pupil, mm.
+    wavelength_nm
+        The wavelength (wave mode), nm.
+    mode
+        ``"geometric"`` or ``"wave"``.
     max_power_diopters
         The largest principal defocus the model is asked for; sets the padding.
     """

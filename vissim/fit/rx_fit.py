@@ -501,18 +501,26 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
 
     Parameters
     ----------
-    image, reference : ndarray (H, W)
-        Linear light, one channel, the same size and sampling; the reference sharp (no lens).
-    arcmin_per_px, pupil_diameter_mm
-        The images' sampling and the camera's entrance pupil.
+    image : ndarray (H, W)
+        Linear light, one channel: the capture through the lenses.
+    reference : ndarray (H, W)
+        The same size and sampling as ``image``, sharp (no lens).
+    arcmin_per_px
+        The images' sampling.
+    pupil_diameter_mm
+        The camera's entrance pupil, mm.
     mode
         ``"geometric"`` (ray optics: a Mitsuba render has no diffraction) or ``"wave"``.
-    magnification, bench
-        How magnification follows power (`vissim.fit.power_model`); ``"bench"`` needs the
-        ``bench`` (its lenses are ignored: only vertex, chart and focus distances, glass).
-    fit_focus_offset, fit_pupil
-        Fit a focus offset (dioptres) and the pupil (a log scale) as nuisances.  Both trade
-        against the power: use them only when magnification or diffraction can separate them.
+    magnification
+        How magnification follows power (`vissim.fit.power_model`); ``"bench"`` needs ``bench``.
+    bench
+        The bench of ``magnification="bench"`` (its lenses are ignored: only vertex, chart and
+        focus distances, glass).
+    fit_focus_offset
+        Fit a focus offset (dioptres) as a nuisance.  It trades against the power: use it only
+        when magnification or diffraction can separate them.
+    fit_pupil
+        Fit the pupil (a log scale) as a nuisance; the same caution.
     model_error_diopters
         The model's own error per power-vector component (one standard deviation), added to the
         noise in the intervals; the default was measured on Mitsuba bench renders (module doc).

@@ -322,8 +322,16 @@ def composite_layers(
     layers : sequence of SceneLayer
         Each layer alone on one pixel grid: premultiplied radiance (H, W) or (H, W, C), coverage
         (H, W) in [0, 1], proximity in dioptres (a value, or an (H, W) map for a slanted layer).
-    eye_prescription, pupil_diameter_mm, accommodation_diopters, wavelength_nm, extra_wavefront
-        The eye, as `vissim.optics.depth.blur_depth`.
+    eye_prescription
+        The eye's prescription, as in `vissim.optics.depth.blur_depth`.
+    pupil_diameter_mm
+        The eye's pupil, mm, as in `vissim.optics.depth.blur_depth`.
+    accommodation_diopters
+        The eye's accommodation, D, as in `vissim.optics.depth.blur_depth`.
+    wavelength_nm
+        The eye's wavelength, nm, as in `vissim.optics.depth.blur_depth`.
+    extra_wavefront
+        The eye's further aberrations, as in `vissim.optics.depth.blur_depth`.
     mode : {"geometric", "wave"}
     layer_spacing_fraction : float
         A slanted layer's slices differ in blur by at most this many pixels.

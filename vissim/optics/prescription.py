@@ -67,8 +67,10 @@ class SpheroCylinder:
 
     Parameters
     ----------
-    sphere_diopters, cylinder_diopters : float
-        Powers in dioptres.
+    sphere_diopters : float
+        Sphere power in dioptres.
+    cylinder_diopters : float
+        Cylinder power in dioptres.
     axis_deg : float
         Cylinder axis in degrees, TABO, 0-180 inclusive (stored in (0, 180]).  Ignored and
         stored as 180 when the cylinder is zero.

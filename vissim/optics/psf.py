@@ -243,17 +243,20 @@ def compute_psf(
         `OpdMap` (a traced or measured OPD map).
     pupil_diameter_mm : float, optional
         Pupil diameter in mm, at most the wavefront's measurement pupil.
-    wavelength_nm, weights : float or sequence of float, optional
-        Wavelength(s) in nm (default 550); one wavelength, or several with relative spectral weights: each wavelength's PSF carries
-        its weight of the total energy (inside and outside the field), and their sum is
+    wavelength_nm : float or sequence of float, optional
+        Wavelength(s) in nm (default 550): one wavelength, or several.
+    weights : sequence of float, optional
+        Relative spectral weights of several wavelengths (default equal): each wavelength's PSF
+        carries its weight of the total energy (inside and outside the field), and their sum is
         normalised to unit sum over the field.
     lca_reference_nm : float, optional
         If given, add the eye's longitudinal chromatic aberration (Thibos 1992) relative to
         this wavelength: each wavelength gets its chromatic defocus.
-    arcmin_per_px, size_px : float, int
-        Output sampling (arcmin per pixel, default 0.25) and the side of the square field
-        (pixels, default 256).  A field that would leave more than 1 % of the energy outside
-        raises `FieldTooSmallError` naming the size that holds it.
+    arcmin_per_px : float
+        Output sampling, arcmin per pixel (default 0.25).
+    size_px : int
+        The side of the square field, pixels (default 256).  A field that would leave more
+        than 1 % of the energy outside raises `FieldTooSmallError` naming the size that holds it.
     mode : {"wave", "geometric"}
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
     pixel : {"integrate", "sample"}
@@ -265,8 +268,8 @@ def compute_psf(
         peak, growing with the pupil cells) is far below the wave PSF's accuracy (2e-3 of the
         peak, ``docs/conventions.md``) and it is about twice as fast; float64 for work that differentiates PSFs numerically
         with small steps.
-    method : {"mft", "fft"}, optional
-        Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,
+    method : str or None, optional
+        Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; None (default): the cheaper,
         recorded in ``PSF.sampling``.  At suggested field sizes both give the same pixel energies to
         1e-3 of the peak.
 

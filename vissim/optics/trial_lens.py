@@ -115,11 +115,15 @@ class TrialLens:
 
     Parameters
     ----------
-    sphere_diopters, cylinder_diopters, axis_deg : float
-        The marked power (plus lens > 0), TABO axis.  For a thick lens this is the **back
-        vertex power**, the power trial-case lenses are conventionally marked with (ISO 9801,
-        trial case lenses).  The thesis does not say how its lenses were marked, so this is
-        an assumption; for a thin lens the distinction vanishes.
+    sphere_diopters : float
+        The marked sphere power, D (plus lens > 0).  For a thick lens the marked power is the
+        **back vertex power**, the power trial-case lenses are conventionally marked with (ISO
+        9801, trial case lenses).  The thesis does not say how its lenses were marked, so this
+        is an assumption; for a thin lens the distinction vanishes.
+    cylinder_diopters : float
+        The marked cylinder power, D (back vertex, like the sphere).
+    axis_deg : float
+        The cylinder's TABO axis, degrees.
     refractive_index : float or None
         None for a thin lens (the default); otherwise the glass index, > 1
         (`CROWN_GLASS_INDEX` = 1.523 for crown).

@@ -102,8 +102,10 @@ def compare_images(reference: Any, test: Any, *, data_range: float) -> Compariso
 
     Parameters
     ----------
-    reference, test : array_like
-        The images, in the same units (e.g. linear light).  Computed in float64.
+    reference : array_like
+        The reference image (e.g. linear light).  Computed in float64.
+    test : array_like
+        The image compared with it, in the same units and shape.
     data_range : float
         The value range of the images' units (max possible minus min possible value), e.g.
         1.0 for linear light in [0, 1].  Required: never inferred from the dtype.

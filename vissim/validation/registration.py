@@ -94,9 +94,11 @@ def register(
 
     Parameters
     ----------
-    reference, moving : ndarray of shape (H, W)
-        One channel each, same shape.  Their means are removed before correlating (this
-        leaves the peak where it is and keeps a bright background from dominating the sums).
+    reference : ndarray of shape (H, W)
+        One channel.  Its mean is removed before correlating (this leaves the peak where it
+        is and keeps a bright background from dominating the sums), as is ``moving``'s.
+    moving : ndarray of shape (H, W)
+        One channel, the shape of ``reference``: the image registered onto it.
     upsample_factor : int
         The shift is found to ``1 / upsample_factor`` px (default 1/100 px).
     max_shift_px : float, optional
