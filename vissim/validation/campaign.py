@@ -79,8 +79,15 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
     capture, name = (None if raw.get(k) is None else text(raw[k], source, f"{where}.{k}")
                      for k in ("capture", "name"))
     config = Configuration(name or "", letter, logmar, polarity, specs, f_number, capture)
-    label = f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}"
+    label = f"{letter} LogMAR {logmar:.1f} {polarity.split('-')[0]}, {trial_lens_phrase(config)}"
     return config if name else replace(config, name=label)
+
+
+def trial_lens_phrase(config: Configuration) -> str:
+    """``trial lens +2.00 DS``, ``trial lenses +1.00 DS + -0.50 DC x 30`` or ``no lens``: a name's lens part."""
+    if not config.lenses:
+        return "no lens"
+    return f"trial lens{'es' if len(config.lenses) > 1 else ''} {config.lens_label()}"
 
 
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:

@@ -79,11 +79,13 @@ def _single_plane_lines(run_dir: Path) -> list[str]:
     from vissim.validation.report import format_number, load_results, metrics_rows
     from vissim.validation.wave_bench_report import is_wave_bench_row
 
-    lines = [(f"{'configuration':44s} {'simulation':>16s} {'input':>9s} {'SSIM':>7s} {'PSNR dB':>8s} {'floor dB':>8s} "
-              f"{'against':>10s}")]
-    for r in metrics_rows(load_results(run_dir)):
+    rows = metrics_rows(load_results(run_dir))
+    width = min(max([len("configuration"), *(len(r["configuration"]) for r in rows)]), 72)  # names whole, up to 72
+    lines = [(f"{'configuration':{width}s} {'simulation':>16s} {'input':>9s} {'SSIM':>7s} {'PSNR dB':>8s} "
+              f"{'floor dB':>8s} {'against':>10s}")]
+    for r in rows:
         against = "wave bench" if is_wave_bench_row(r) else "render"
-        lines.append(f"{r['configuration'][:44]:44s} {r['simulation']:>16s} {r['input']:>9s} {r['ssim']:7.4f} "
+        lines.append(f"{r['configuration'][:width]:{width}s} {r['simulation']:>16s} {r['input']:>9s} {r['ssim']:7.4f} "
                      f"{format_number(r['psnr_db'], 2):>8s} {format_number(r['noise_floor_psnr_db'], 2):>8s} "
                      f"{against:>10s}")
     return lines
