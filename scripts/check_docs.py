@@ -12,7 +12,8 @@ Each problem is printed on one line and the exit status is 1 if there is any. Wh
   the first of a ``{'x', 'y'}`` choice set as the default, so both are checked from the sources;
   the site check compares every rendered parameter table with ``inspect.signature``;
 * ``pip install`` of an extra that pyproject.toml does not declare;
-* a link or a file name (``README.md``) in the site that is not on the site.
+* a link or a file name (``README.md``) in the site that is not on the site;
+* an image without alt text.
 """
 
 from __future__ import annotations
@@ -172,7 +173,7 @@ class _Page(HTMLParser):
 
     def __init__(self):
         super().__init__()
-        self.text, self.links, self.codes, self.tables = [], [], [], {}
+        self.text, self.links, self.codes, self.tables, self.no_alt = [], [], [], {}, []
         self._object, self._stack, self._cells, self._row, self._code = None, [], [], None, None
         self._table_head = []
 
@@ -184,6 +185,8 @@ class _Page(HTMLParser):
             target = attrs.get("href") or attrs.get("src")
             if target:
                 self.links.append(target)
+        if tag == "img" and not (attrs.get("alt") or "").strip():
+            self.no_alt.append(attrs.get("src") or "?")
         if tag == "tr":
             self._row = []
         if tag in ("td", "th") and self._row is not None:
@@ -292,6 +295,7 @@ def site_problems(site: Path, root: Path = ROOT) -> list[str]:
                 target = target / "index.html"
             if not target.exists():
                 problems.append(f"{where}: link to {link}, which is not on the site")
+        problems += [f"{where}: image {src[:60]} has no alt text" for src in page.no_alt]
         for code in set(page.codes):
             name = html.unescape(code).strip()
             if re.fullmatch(r"[\w./-]+\.md", name) and not _page_exists(name, where, root):
