@@ -169,7 +169,8 @@ def _rows(margins: list[float], lenses: str = "+1.00 DS") -> list[dict]:
 
 def test_a_score_above_three_db_is_explained_with_the_runs_numbers():
     assert PERFECT_MARGIN_DB == pytest.approx(10 * math.log10(2))
-    text = summary_notes(_rows([2.5, 3.31]), [("geometric", "synthetic")])
+    outside = {**_rows([3.5])[0], "configuration": "g: other", "simulation": "traced_rays"}  # not a summary column
+    text = summary_notes(_rows([2.5, 3.31]) + [outside], [("geometric", "synthetic")])
     # 10**(3.31/10) = 2.143: the floor's MSE over the simulation's; 14 % beyond 2
     assert "10·log10(2) = +3.01 dB" in text
     assert "This run's highest is +3.31 dB (g: c1, geometric / synthetic)" in text

@@ -75,9 +75,10 @@ def _span(values: list[float], spec: str) -> str:
     return low if low == high else f"{low}…{high}"
 
 
-def _above_perfect(rows: list[dict]) -> str:
-    """The sentence on this run's highest margin, if it is above the perfect simulation's."""
-    scored = [(margin(r), r) for r in rows if r["lenses"] != NO_LENS and math.isfinite(margin(r))]
+def _above_perfect(rows: list[dict], columns: list[tuple[str, str]]) -> str:
+    """The sentence on the highest margin in the summary's columns, if it is above the perfect simulation's."""
+    scored = [(margin(r), r) for r in rows if r["lenses"] != NO_LENS and math.isfinite(margin(r))
+              and (r["simulation"], r["input"]) in columns]
     if not scored:
         return ""
     best, row = max(scored, key=lambda s: s[0])
@@ -100,7 +101,7 @@ def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
          "tile, and the noise lives only in the pixels that see an edge of the blurred letter (a uniform "
          "background has none). Where the first render's noise happens to be weaker than the second's over those "
          "pixels, or the two renders' noise is slightly anticorrelated, a perfect simulation scores more. The fewer "
-         "the noisy pixels (small letters, little blur), the larger the swing." + _above_perfect(rows) + "\n"),
+         "the noisy pixels (small letters, little blur), the larger the swing." + _above_perfect(rows, columns) + "\n"),
     ]
     bare = [r for r in rows if r["lenses"] == NO_LENS and (r["simulation"], r["input"]) in columns]
     if not bare:
