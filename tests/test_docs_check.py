@@ -61,3 +61,33 @@ def test_a_pip_extra_not_in_pyproject_is_reported(tmp_path):
     ('"mft"', "None", False), ("0.25", "256", False)])
 def test_defaults_compare_by_value_not_spelling(documented, signature, same):
     assert check_docs.same_default(documented, signature) is same
+
+
+PAGE = """<html><body><h1 id="psf">PSF</h1>
+<h2 id="vissim.optics.psf.compute_psf" class="doc doc-heading">compute_psf</h2>
+<p>See :class:<code>PSF</code>, <code>README.md</code> and <code>docs/conventions.md</code>.</p>
+<table><thead><tr><th>Name</th><th>Type</th><th>Description</th><th>Default</th></tr></thead><tbody>
+<tr class="doc-section-item"><td><code>wavefront</code></td><td>Wavefront</td><td>x</td><td><em>required</em></td></tr>
+<tr class="doc-section-item"><td><code>wavelength_nm</code></td><td>float</td><td>x</td><td><code>550.0</code></td></tr>
+<tr class="doc-section-item"><td><code>size_px</code></td><td>int</td><td>x</td><td><code>0.25</code></td></tr>
+<tr class="doc-section-item"><td><code>mode</code></td><td>str</td><td>x</td><td><code>"wave"</code></td></tr>
+</tbody></table>
+<a href="../missing/">gone</a> <a href="../psf/">here</a> <img src="x.png"> <img src="y.png" alt="a plot">
+</body></html>"""
+
+
+def test_the_site_check_reports_each_fault_on_a_rendered_page(tmp_path):
+    # A page as mkdocstrings renders it, against vissim.compute_psf's real signature (size_px=256).
+    page = tmp_path / "api" / "psf" / "index.html"
+    page.parent.mkdir(parents=True)
+    page.write_text(PAGE)
+    for image in ("x.png", "y.png"):
+        (page.parent / image).write_bytes(b"")
+    problems = check_docs.site_problems(tmp_path)
+    text = "\n".join(problems)
+    assert "raw Sphinx role ':class:'" in text
+    assert "compute_psf parameter size_px: shown default 0.25, signature 256" in text
+    assert "link to ../missing/" in text and "../psf/" not in text.replace("../missing/", "")
+    assert "image x.png has no alt text" in text and "y.png" not in text
+    assert "names the file README.md" in text and "docs/conventions.md" not in text
+    assert len(problems) == 5, problems
