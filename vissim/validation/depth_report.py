@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 from vissim.imageio import read_image  # noqa: E402
 from vissim.validation.report import _num, campaign_name, load_results, png_bytes  # noqa: E402
 from vissim.validation.report_figures import Figure, display_norm, radiance_colorbar  # noqa: E402
+from vissim.validation.report_summary import PERFECT_MARGIN_DB  # noqa: E402
 from vissim.validation.report import json_rows, write_report_files  # noqa: E402
 from vissim.validation.report import format_number as _fmt  # noqa: E402
 
@@ -144,7 +145,10 @@ def depth_tables(results: list[dict]) -> str:
         "is the border strip where the render sees beyond the image and the simulation pads it; `all` is the "
         "whole image. `geometric ...` is compared with the render, `wave ...` with the render convolved with the "
         "aperture's diffraction (Mitsuba renders none). The floor compares the two seeds' renders over the same "
-        "pixels: a perfect, noise-free simulation scores +3 dB above it (margin 3.0).\n")
+        f"pixels: a perfect, noise-free simulation scores 10·log10(2) = +{PERFECT_MARGIN_DB:.2f} dB above it on "
+        "average, not at most: each region's floor and score are measured once, over its own pixels, so where the "
+        "first render's noise happens to be weaker than the second's a perfect simulation scores more, and the "
+        "fewer the noisy pixels, the larger the swing.\n")
     return "\n".join(out)
 
 
