@@ -7,6 +7,9 @@
 #   committed reports (validation/reports/, validation/atv/report/) into docs/reports/; both are build products.
 # * mkdocs build --strict: a warning (a broken link or reference, a missing docstring target)
 #   fails the build.
+# * scripts/check_docs.py fails it too, before mkdocs on the sources (a Sphinx role, a documented
+#   default that differs from the signature's, a pip extra pyproject.toml lacks) and after it on
+#   the HTML (a raw role, a shown default against inspect.signature, a link or file not on the site).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ -x .venv/bin/python ] || { echo "docs: no .venv; run bash scripts/setup.sh first" >&2; exit 1; }
@@ -15,5 +18,7 @@ cd "$(dirname "$0")/.."
 rm -rf docs/reports/thesis docs/reports/depth docs/reports/atv
 for report in validation/reports/*/; do cp -r "$report" docs/reports/; done
 cp -r validation/atv/report docs/reports/atv
+.venv/bin/python scripts/check_docs.py --sources
 NO_MKDOCS_2_WARNING=1 .venv/bin/python -m mkdocs build --strict --clean --site-dir site
+.venv/bin/python scripts/check_docs.py --site site
 echo "docs: site/index.html"

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-NEEDS_MITSUBA = {"t2_bench_render_vs_simulation.py", "t3_small_campaign.py", "t4_depth_scene.py"}  # render with Mitsuba (the vissim[render] extra)
+NEEDS_MITSUBA = {"t2_bench_render_vs_simulation.py", "t3_small_campaign.py", "t4_depth_scene.py"}  # render with Mitsuba (a dependency)
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("t*.py"))
 FIGURES = {"t2_bench_render_vs_simulation.py": ["t2_render_vs_simulation.png"],
@@ -26,7 +26,7 @@ def test_every_tutorial_is_listed_here():
 @pytest.mark.parametrize("tutorial", TUTORIALS, ids=lambda p: p.stem)
 def test_tutorial_runs_and_writes_its_figures(tutorial, tmp_path):
     if tutorial.name in NEEDS_MITSUBA and importlib.util.find_spec("mitsuba") is None:  # pragma: no cover
-        pytest.skip("needs Mitsuba (pip install -e '.[render]')")
+        pytest.skip("needs Mitsuba (a vissim dependency: bash scripts/setup.sh installs it)")
     env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")  # this checkout's vissim
     done = subprocess.run([sys.executable, str(tutorial), str(tmp_path), "--small"], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=120)

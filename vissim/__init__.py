@@ -3,18 +3,18 @@
 The names a user needs are importable from here; each loads its module on first use, so
 ``import vissim`` stays light and never imports Mitsuba (only rendering does).
 
-* Prescriptions and wavefronts: :class:`Prescription`, :func:`parse_spherocylinder`,
-  :class:`Wavefront`.
-* PSFs and their metrics: :func:`compute_psf`, :class:`PSF`, :func:`strehl_ratio`,
-  :func:`mtf`, :func:`otf`, :func:`diffraction_mtf`, :func:`frequencies_cyc_per_deg`.
-* Images: :func:`blur_image`, and scenes with depth: :func:`blur_depth`; charts: :func:`etdrs_chart_spec`, :func:`single_letter_spec`,
-  :func:`render_chart_angular`, :func:`render_chart_print`.
-* Rendering the bench with Mitsuba (imported only when a render runs): :class:`DslrBench`,
-  :func:`render_bench`.
-* Fitting a prescription to a capture: :func:`fit_rx`, :class:`RxFit`.
-* Validation campaigns: :func:`load_campaign`, :func:`run_campaign`.
-* ATV data: :func:`load_subject`, :func:`load_directory`, :func:`analyse_subject`,
-  :func:`fit_quadratic`.
+* Prescriptions and wavefronts: `Prescription`, `parse_spherocylinder`,
+  `Wavefront`.
+* PSFs and their metrics: `compute_psf`, `PSF`, `strehl_ratio`,
+  `mtf`, `otf`, `diffraction_mtf`, `frequencies_cyc_per_deg`.
+* Images: `blur_image`, and scenes with depth: `blur_depth`; charts: `etdrs_chart_spec`, `single_letter_spec`,
+  `render_chart_angular`, `render_chart_print`.
+* Rendering the bench with Mitsuba (imported only when a render runs): `DslrBench`,
+  `render_bench`.
+* Fitting a prescription to a capture: `fit_rx`, `RxFit`.
+* Validation campaigns: `load_campaign`, `run_campaign`.
+* ATV data: `load_subject`, `load_directory`, `analyse_subject`,
+  `fit_quadratic`.
 """
 
 import importlib as _importlib

@@ -71,7 +71,7 @@ def logmar_to_snellen(logmar: float, test_distance: float = 20, *, significant_f
     ``test_distance`` is the numerator (20 for feet, 6 for metres).  The denominator is
     ``test_distance / decimal`` rounded to ``significant_figures`` (LogMAR 0.1 -> ``"20/25.2"``;
     charts print the nearest preferred number, 20/25), so a round trip through
-    :func:`snellen_to_logmar` is exact to within ``log10(1 + 5 * 10**-significant_figures)``.
+    `snellen_to_logmar` is exact to within ``log10(1 + 5 * 10**-significant_figures)``.
     """
     test_distance = _positive(test_distance, "Snellen test distance", "(ft or m)")
     if int(significant_figures) < 1:
@@ -112,7 +112,7 @@ def subtense_mm(arcmin: float, viewing_distance_m: float) -> float:
 
 def subtense_arcmin(size_mm: float, viewing_distance_m: float) -> float:
     """Visual angle (arcmin) of an object ``size_mm`` tall centred on the line of sight; inverse of
-    :func:`subtense_mm`."""
+    `subtense_mm`."""
     distance_m = _positive(viewing_distance_m, "viewing distance", "m")
     size_mm = _positive(size_mm, "size", "mm")
     return rad_to_arcmin(2.0 * math.atan(size_mm / 2000.0 / distance_m))

@@ -1,7 +1,7 @@
 """Atomic file output: a file appears complete at its final path, or not at all.
 
-Every file vissim writes goes through :func:`atomic_output`.  The writer is handed a
-temporary path in the same directory as the target (so the final :func:`os.replace` is a
+Every file vissim writes goes through `atomic_output`.  The writer is handed a
+temporary path in the same directory as the target (so the final `os.replace` is a
 rename on one filesystem); the temporary name keeps the real suffix, e.g.
 ``.out.png.3f9c1a2b.tmp.png``, so libraries that choose a format from the suffix still
 work.  If anything goes wrong inside the ``with`` block -- including ``KeyboardInterrupt``
@@ -15,11 +15,11 @@ readers seeing half-written files, not against power loss.
 The output-safety rules (docs/conventions.md, "Outputs") are decided here:
 
 * a write that fails (a full disk, no permission, a writer's own error) raises one
-  :class:`VissimInputError` naming the final path, and leaves no temporary file;
-* inside :func:`output_transaction` every final rename waits for the end, so a command's
+  `VissimInputError` naming the final path, and leaves no temporary file;
+* inside `output_transaction` every final rename waits for the end, so a command's
   files all appear, or none does;
-* :func:`refuse_existing` is the one refusal to replace an existing file;
-* :func:`check_outputs_apart` refuses an output that is one of the command's inputs (by
+* `refuse_existing` is the one refusal to replace an existing file;
+* `check_outputs_apart` refuses an output that is one of the command's inputs (by
   resolved path or by inode, so ``./a/../in.png``, symlinks and hard links count), and an
   output folder that holds an input, with or without ``--overwrite``.
 """
@@ -50,13 +50,13 @@ _NAME_ATTEMPTS = 16
 
 @dataclasses.dataclass
 class _Pending:
-    """What an open :func:`output_transaction` holds: renames to do, folders its writes created."""
+    """What an open `output_transaction` holds: renames to do, folders its writes created."""
 
     renames: list[tuple[Path, Path, bool]] = dataclasses.field(default_factory=list)  # (tmp, final, overwrite)
     folders: list[Path] = dataclasses.field(default_factory=list)  # in the order they were made
 
 
-#: The open :func:`output_transaction` of this context, if any.
+#: The open `output_transaction` of this context, if any.
 _PENDING: contextvars.ContextVar[_Pending | None] = contextvars.ContextVar("vissim_pending_outputs", default=None)
 
 
@@ -155,7 +155,7 @@ def _write_failure(path: Path, tmp: Path, exc: BaseException) -> VissimInputErro
 
 @contextlib.contextmanager
 def cache_output() -> Iterator[None]:
-    """Writes inside this block land at once, even within an :func:`output_transaction`.
+    """Writes inside this block land at once, even within an `output_transaction`.
 
     For cache files (lens meshes) that are read back as soon as they are written; they are
     no command's output, and a complete one is as good as a missing one.
@@ -169,7 +169,7 @@ def cache_output() -> Iterator[None]:
 
 @contextlib.contextmanager
 def output_transaction() -> Iterator[None]:
-    """Hold back every :func:`atomic_output` rename until the block ends: all the files appear, or none.
+    """Hold back every `atomic_output` rename until the block ends: all the files appear, or none.
 
     On success every refusal to overwrite is checked again, then the files are renamed into
     place in the order they were written; on any error every temporary file is removed and
@@ -228,7 +228,7 @@ def atomic_output(path: str | os.PathLike[str], *, overwrite: bool = False) -> I
     path:
         Final destination.  Missing parent directories are created.
     overwrite:
-        If False (default) and ``path`` exists, raise :class:`VissimInputError` before
+        If False (default) and ``path`` exists, raise `VissimInputError` before
         anything is written.
 
     Yields
@@ -290,7 +290,7 @@ def write_json_atomic(path: str | os.PathLike[str], obj: Any, overwrite: bool = 
     """Write ``obj`` as JSON (indent=2, sorted keys, finite floats only) to ``path`` atomically.
 
     The object is serialised before any file is touched, so a value JSON cannot hold
-    (NaN, infinity, an arbitrary object) raises :class:`VissimInputError` and writes nothing.
+    (NaN, infinity, an arbitrary object) raises `VissimInputError` and writes nothing.
     """
     path = Path(path)
     try:

@@ -5,15 +5,15 @@ five Sloan letters per row (any number on request), the gap between neighbouring
 is one letter width, the gap between a row's baseline and the top of the next row is the
 height of the letters in that next row, rows are centred on the chart's vertical midline,
 and every margin is one letter width of the largest row.  Letter height is
-``5 * 10**LogMAR`` arcmin (:mod:`vissim.acuity`).
+``5 * 10**LogMAR`` arcmin (`vissim.acuity`).
 
-One :class:`ChartSpec` gives two renderings of the same layout:
+One `ChartSpec` gives two renderings of the same layout:
 
-* :func:`render_chart_angular` -- a pixel grid in visual angle (``arcmin_per_px``), the
+* `render_chart_angular` -- a pixel grid in visual angle (``arcmin_per_px``), the
   input to a blur simulation; the thesis used 1 arcmin per pixel.
-* :func:`render_chart_print` / :func:`save_chart_pdf` / :func:`save_chart_png` -- the chart
+* `render_chart_print` / `save_chart_pdf` / `save_chart_png` -- the chart
   at its physical size for the viewing distance (letter heights from
-  :func:`vissim.acuity.letter_height_mm`, thesis Eq. 4.1 generalised).
+  `vissim.acuity.letter_height_mm`, thesis Eq. 4.1 generalised).
 
 Pixels are float32 *linear reflectance*: ``paper_reflectance`` where there is no ink and
 ``ink_reflectance`` under ink, mixed by the ink's area in each pixel.  "black-on-white"
@@ -109,8 +109,8 @@ class ChartRow:
 class ChartSpec:
     """What a chart shows and how it is printed; rendering resolution is chosen later.
 
-    Build one with :func:`etdrs_chart_spec` or :func:`single_letter_spec`; render it with
-    :func:`render_chart_angular` (pixels of so many arcmin) or :func:`render_chart_print` (its
+    Build one with `etdrs_chart_spec` or `single_letter_spec`; render it with
+    `render_chart_angular` (pixels of so many arcmin) or `render_chart_print` (its
     physical size at a dpi).
 
     Parameters
@@ -122,9 +122,11 @@ class ChartSpec:
         there (default: the thesis's 3 ft, 0.9144 m).
     polarity : {"black-on-white", "white-on-black"}
         Dark letters on paper, or the reverse.
-    paper_reflectance, ink_reflectance : float
-        Linear reflectances (fractions, 0 <= ink < paper <= 1) of the paper and the ink
-        (defaults 0.9 and 0.04, laser-printed paper and toner).
+    paper_reflectance : float
+        Linear reflectance (a fraction, ink < paper <= 1) of the paper (default 0.9,
+        laser-printed paper).
+    ink_reflectance : float
+        Linear reflectance (a fraction, 0 <= ink < paper) of the ink (default 0.04, toner).
     letter_seed : int, optional
         The seed that chose the letters, when they were chosen at random (recorded, not used).
 
@@ -235,7 +237,7 @@ def etdrs_chart_spec(
     seed : int
         Seed of the random letters.
     **spec_kwargs
-        Passed to :class:`ChartSpec` (viewing distance, polarity, reflectances).
+        Passed to `ChartSpec` (viewing distance, polarity, reflectances).
 
     Returns
     -------
@@ -266,7 +268,7 @@ def single_letter_spec(letter: str, logmar: float, **spec_kwargs: Any) -> ChartS
     logmar : float
         Its size, LogMAR (log10 arcmin of the stroke width; the letter is 5 strokes tall).
     **spec_kwargs
-        Passed to :class:`ChartSpec` (viewing distance, polarity, reflectances).
+        Passed to `ChartSpec` (viewing distance, polarity, reflectances).
 
     Returns
     -------
@@ -448,7 +450,7 @@ class Chart:
 
 
 def chart_sidecar(spec: ChartSpec, layout: ChartLayout) -> dict[str, Any]:
-    """The sidecar dict of :meth:`Chart.sidecar`, from a spec and a layout (no pixels needed)."""
+    """The sidecar dict of `Chart.sidecar`, from a spec and a layout (no pixels needed)."""
     return {
         "schema": _SIDECAR_SCHEMA,
         "rendering": layout.rendering,
@@ -507,12 +509,12 @@ def render_chart_angular(
     snap_to_pixels: bool = False,
     supersample: int = 16,
 ) -> Chart:
-    """Render ``spec`` on a grid in visual angle (for simulation); see :func:`layout_chart`.
+    """Render ``spec`` on a grid in visual angle (for simulation); see `layout_chart`.
 
     Parameters
     ----------
     spec : ChartSpec
-        From :func:`etdrs_chart_spec` or :func:`single_letter_spec`.
+        From `etdrs_chart_spec` or `single_letter_spec`.
     arcmin_per_px : float
         Angular sampling, arcmin per pixel.
     shape_px : (int, int), optional
@@ -543,8 +545,8 @@ def render_chart_print(spec: ChartSpec, dpi: float = 360.0, *, supersample: int 
     """Render ``spec`` at its physical size for its viewing distance, ``dpi`` pixels per inch.
 
     The letters are sized so that each row subtends its LogMAR at ``spec.viewing_distance_m``;
-    the page is what a printer should print at ``dpi`` (see :func:`save_chart_pdf` and
-    :func:`save_chart_png` for files).
+    the page is what a printer should print at ``dpi`` (see `save_chart_pdf` and
+    `save_chart_png` for files).
 
     Parameters
     ----------
@@ -606,7 +608,7 @@ def save_chart_pdf(
     """Write ``spec`` as a vector PDF whose page is the chart's physical size; return the path.
 
     Ink is filled black on the unprinted (white) page; one compound path per letter from
-    :meth:`vissim.optotypes.SloanLetter.patches`.  ``provenance`` goes into the PDF's
+    `vissim.optotypes.SloanLetter.patches`.  ``provenance`` goes into the PDF's
     Keywords as JSON.  The write is atomic and refuses to replace a file unless ``overwrite``.
     """
     from matplotlib.figure import Figure

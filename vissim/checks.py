@@ -26,14 +26,14 @@ def describe(value) -> str:
 
 
 def instance_of(value, types, name: str, accepted: str):
-    """``value`` if it is an instance of ``types``; else a :class:`VissimTypeError` saying what ``name`` accepts."""
+    """``value`` if it is an instance of ``types``; else a `VissimTypeError` saying what ``name`` accepts."""
     if isinstance(value, types):
         return value
     raise VissimTypeError(f"{name} must be {accepted}, got {describe(value)}")
 
 
 def path_arg(value, name: str) -> Path:
-    """``value`` as a :class:`~pathlib.Path` if it is a ``str`` or path-like; else what ``name`` accepts."""
+    """``value`` as a `Path` if it is a ``str`` or path-like; else what ``name`` accepts."""
     if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
         return Path(value)
     raise VissimTypeError(f"{name} must be a path (str or pathlib.Path), got {describe(value)}")
@@ -77,7 +77,7 @@ DEFAULT_WAVELENGTH_NM = 550.0
 
 
 def wavelength_nm(value, name: str = "wavelength") -> float:
-    """A wavelength within :data:`WAVELENGTH_RANGE_NM`."""
+    """A wavelength within `WAVELENGTH_RANGE_NM`."""
     number = finite_number(value, name, "nm")
     low, high = WAVELENGTH_RANGE_NM
     if not low <= number <= high:
@@ -127,12 +127,12 @@ def check_allocation(n_bytes: float, what: str) -> None:
 
 
 #: Angular samplings vissim takes, arcmin per pixel (the thesis's is 1): finer ones need more
-#: memory than any machine has (checked by :func:`check_allocation`), coarser ones are no image.
+#: memory than any machine has (checked by `check_allocation`), coarser ones are no image.
 MIN_ARCMIN_PER_PX, MAX_ARCMIN_PER_PX = 1e-6, 60.0
 
 
 def arcmin_per_px(value, name: str = "angular sampling") -> float:
-    """An angular pixel size within [:data:`MIN_ARCMIN_PER_PX`, :data:`MAX_ARCMIN_PER_PX`] (1 degree)."""
+    """An angular pixel size within [`MIN_ARCMIN_PER_PX`, `MAX_ARCMIN_PER_PX`] (1 degree)."""
     step = positive_number(value, name, "arcmin per pixel")
     if not MIN_ARCMIN_PER_PX <= step <= MAX_ARCMIN_PER_PX:
         raise VissimInputError(
@@ -149,12 +149,12 @@ EYE_PUPIL_RANGE_MM = 1.0, 10.0
 
 
 def pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
-    """An entrance pupil diameter within :data:`ENTRANCE_PUPIL_RANGE_MM` mm."""
+    """An entrance pupil diameter within `ENTRANCE_PUPIL_RANGE_MM` mm."""
     return _pupil_within(value, name, ENTRANCE_PUPIL_RANGE_MM, "")
 
 
 def eye_pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
-    """An eye's pupil diameter within :data:`EYE_PUPIL_RANGE_MM` mm."""
+    """An eye's pupil diameter within `EYE_PUPIL_RANGE_MM` mm."""
     return _pupil_within(value, name, EYE_PUPIL_RANGE_MM, " (a human eye's pupil)")
 
 
@@ -200,7 +200,7 @@ MAX_SAMPLER_SEED = 2**32 - 1
 
 
 def samples_per_pixel(value, name: str = "spp") -> int:
-    """A whole number of samples per pixel in 1-:data:`MAX_SPP`; a number out of range is told so first."""
+    """A whole number of samples per pixel in 1-`MAX_SPP`; a number out of range is told so first."""
     is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
     if is_number and not 1 <= value <= MAX_SPP:  # NaN and infinity too
         raise VissimInputError(f"{name} must be 1-{MAX_SPP} samples per pixel, got {value!r}")

@@ -1,6 +1,6 @@
 """The one exception type vissim raises for bad input.
 
-A :class:`VissimInputError` carries a single human-readable line that names the bad
+A `VissimInputError` carries a single human-readable line that names the bad
 value and its unit.  The command line catches it and prints that line; it never shows a
 traceback for bad input.
 """

@@ -11,22 +11,22 @@ shape ``(H, W)`` (mono, channel ``Y``) or ``(H, W, 3)`` (channels ``R, G, B``), 
   Float TIFFs are read as linear.  16-bit *colour* PNG is refused both ways, because
   Pillow silently truncates it to 8 bits; use TIFF or EXR for that.
 
-An alpha channel (PNG/TIFF extra sample, EXR ``A``) is read into :attr:`Image.alpha`
+An alpha channel (PNG/TIFF extra sample, EXR ``A``) is read into `Image.alpha`
 (coverage in [0, 1], never light: stored linearly, no transfer function) and written back
 when ``write_image(..., alpha=...)`` is given: vissim blurs the colour and carries alpha
-through unchanged.  :attr:`Image.bit_depth` is the integer depth a PNG/TIFF was stored at
+through unchanged.  `Image.bit_depth` is the integer depth a PNG/TIFF was stored at
 (8 or 16; ``None`` for float data), so that a command can write its result at the depth of
-its input (:func:`output_bit_depth`).
+its input (`output_bit_depth`).
 
 Images carry their angular sampling: ``write_image(..., arcmin_per_px=S)`` records it in
-the provenance record's top-level key ``"arcmin_per_px"`` (:data:`SAMPLING_KEY`; the EXR
-header attribute or the sidecar, as above), and :func:`read_image` returns it as
-:attr:`Image.arcmin_per_px` (``None`` when the file does not say).  Files written before
-that key existed are read from where their writer put it (:func:`sampling_from_provenance`).
+the provenance record's top-level key ``"arcmin_per_px"`` (`SAMPLING_KEY`; the EXR
+header attribute or the sidecar, as above), and `read_image` returns it as
+`Image.arcmin_per_px` (``None`` when the file does not say).  Files written before
+that key existed are read from where their writer put it (`sampling_from_provenance`).
 
-Every write goes through :func:`vissim.atomic.atomic_output` and refuses to replace an
+Every write goes through `vissim.atomic.atomic_output` and refuses to replace an
 existing file unless ``overwrite=True``.  Anything wrong with a file raises one
-:class:`~vissim.errors.VissimInputError` naming the file.
+`VissimInputError` naming the file.
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ __all__ = ["Image", "image_files", "output_bit_depth", "read_data_map", "read_im
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 #: Top-level provenance key holding an image's angular sampling, arcmin per pixel.
 SAMPLING_KEY = "arcmin_per_px"
-#: Where files written before :data:`SAMPLING_KEY` existed keep their sampling, in order.
+#: Where files written before `SAMPLING_KEY` existed keep their sampling, in order.
 _LEGACY_SAMPLING_PATHS = (
     ("inputs", "arcmin_per_px"),             # blur, blur-depth, demo chart, render depth
     ("inputs", "options", "arcmin_per_px"),  # vissim chart
@@ -165,8 +165,8 @@ def _sampling_value(value: Any) -> float | None:
 def sampling_from_provenance(provenance: Any) -> float | None:
     """The angular sampling (arcmin per pixel) a provenance record states, or ``None``.
 
-    The top-level :data:`SAMPLING_KEY` first; then the places older vissim files kept it
-    (:data:`_LEGACY_SAMPLING_PATHS`: chart options, bench parameters, campaign settings ...).
+    The top-level `SAMPLING_KEY` first; then the places older vissim files kept it
+    (`_LEGACY_SAMPLING_PATHS`: chart options, bench parameters, campaign settings ...).
     """
     if not isinstance(provenance, dict):
         return None
@@ -184,7 +184,7 @@ def sampling_from_provenance(provenance: Any) -> float | None:
 
 
 def _with_sampling(provenance: dict | None, arcmin_per_px: Any, path: Path) -> dict | None:
-    """``provenance`` with the sampling at :data:`SAMPLING_KEY` (unchanged when ``arcmin_per_px`` is None)."""
+    """``provenance`` with the sampling at `SAMPLING_KEY` (unchanged when ``arcmin_per_px`` is None)."""
     if arcmin_per_px is None:
         return provenance
     try:
@@ -535,12 +535,13 @@ def write_image(
     arcmin_per_px:
         The image's angular sampling, stored at the provenance record's top-level key
         ``"arcmin_per_px"`` (a record is written even without ``provenance``); read back as
-        :attr:`Image.arcmin_per_px`.  ``None`` (default) records none.
-    encoding, bit_depth:
+        `Image.arcmin_per_px`.  ``None`` (default) records none.
+    encoding
         PNG/TIFF only: ``"srgb"`` (default) encodes with IEC 61966-2-1, ``"linear"`` does
-        not; values are clipped to [0, 1] and rounded to ``bit_depth`` (8 or 16) bits.
-        EXR always stores linear float32.
-    alpha:
+        not.  EXR always stores linear float32.
+    bit_depth
+        PNG/TIFF only: values are clipped to [0, 1] and rounded to this many bits (8 or 16).
+    alpha
         Optional alpha channel, shape ``(H, W)``, values in [0, 1]: written as the last
         sample of a PNG/TIFF (linearly quantised, no transfer function) or as EXR ``A``.
         8-bit only for PNG (Pillow writes no 16-bit alpha PNG).
@@ -649,7 +650,7 @@ def write_data_map(path: str | os.PathLike[str], data: Any, *, channel: str = "Z
                    overwrite: bool = False, arcmin_per_px: float | None = None) -> Path:
     """Write a single-channel float32 EXR data map (e.g. depth in metres, channel ``Z``).
 
-    ``arcmin_per_px`` is recorded as in :func:`write_image`.
+    ``arcmin_per_px`` is recorded as in `write_image`.
     """
     path = Path(path)
     if path.suffix.lower() != ".exr":
@@ -671,7 +672,7 @@ def to_preview_png(
 ) -> Path:
     """Write an 8-bit sRGB PNG preview (e.g. of a PSF), scaled so its maximum is 1.
 
-    ``arcmin_per_px`` is recorded as in :func:`write_image`.
+    ``arcmin_per_px`` is recorded as in `write_image`.
     """
     path = Path(path)
     arr = _validated_pixels(path, pixels, None)

@@ -18,7 +18,7 @@ The shapes are built from the published design rules, not traced from a font fil
   corner.  **S** bars at y = 4..5, 2..3, 0..1 joined by two half-annulus bowls (radii 0.5 / 1.5),
   the upper one on the left, the lower one on the right.
 * Slanted strokes are parallelograms with horizontal ends whose *perpendicular* width is
-  exactly 1 unit (:func:`_slanted_stroke`).  **N**: two stems and a diagonal whose outer
+  exactly 1 unit (`_slanted_stroke`).  **N**: two stems and a diagonal whose outer
   corners are the top-left (0, 5) and bottom-right (5, 0).  **V**: two strokes from the top
   corners meeting in a flat foot centred at x = 2.5.  **Z**: bars at y = 4..5 and 0..1 and a
   diagonal from the top bar's right end to the bottom bar's left end.  **K**: a stem, an arm
@@ -26,12 +26,12 @@ The shapes are built from the published design rules, not traced from a font fil
   the arm's lower edge (at x = 2) to the bottom-right corner.
 
 Each letter is a union of primitives -- convex polygons and annuli clipped to a convex
-polygon -- with (a) an exact vectorised :meth:`SloanLetter.inside` test and (b)
-:meth:`SloanLetter.patches` for vector output (one compound path per letter, filled with
+polygon -- with (a) an exact vectorised `SloanLetter.inside` test and (b)
+`SloanLetter.patches` for vector output (one compound path per letter, filled with
 the nonzero rule, so abutting pieces leave no seams; arcs are polygonised to within
 1e-4 design units, i.e. 2e-5 of the letter height).
 
-Rasterisation (:func:`rasterize_letter`) gives each pixel the fraction of its area that is
+Rasterisation (`rasterize_letter`) gives each pixel the fraction of its area that is
 ink, by exact classification of pixels far from an edge and supersampling of the rest with
 at least n x n (default 16 x 16) points of a Fibonacci lattice.
 Pixel ``(r, c)`` covers ``[r, r+1) x [c, c+1)`` in continuous pixel coordinates; row 0 is the
@@ -61,7 +61,7 @@ DESIGN_UNITS = 5.0
 #: The ten Sloan letters, in alphabetical order.
 SLOAN_LETTERS = "CDHKNORSVZ"
 
-#: Largest distance between a true arc and its polygon in :meth:`SloanLetter.patches`, in design units.
+#: Largest distance between a true arc and its polygon in `SloanLetter.patches`, in design units.
 _ARC_TOLERANCE_UNITS = 1e-4
 
 #: Samples evaluated at once while supersampling (bounds memory).
@@ -202,7 +202,7 @@ class SloanLetter:
     primitives: tuple[Primitive, ...]
 
     def signed_margin(self, x: Any, y: Any) -> np.ndarray:
-        """Max over primitives of their margins (>= 0 on ink); see :meth:`ConvexPolygon.signed_margin`."""
+        """Max over primitives of their margins (>= 0 on ink); see `ConvexPolygon.signed_margin`."""
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         return functools.reduce(np.maximum, (prim.signed_margin(x, y) for prim in self.primitives))
 
@@ -216,7 +216,7 @@ class SloanLetter:
         return [np.asarray(origin_xy, dtype=float) + scale * ring for p in self.primitives for ring in p.outline()]
 
     def path(self, origin_xy: tuple[float, float] = (0.0, 0.0), height: float = DESIGN_UNITS):
-        """The letter as one compound :class:`matplotlib.path.Path`, to be filled with the nonzero rule."""
+        """The letter as one compound `matplotlib.path.Path`, to be filled with the nonzero rule."""
         from matplotlib.path import Path
 
         rings = self.outline(origin_xy, height)
@@ -225,7 +225,7 @@ class SloanLetter:
     def patches(self, origin_xy: tuple[float, float] = (0.0, 0.0), height: float = DESIGN_UNITS, **patch_kwargs):
         """Matplotlib patches drawing the letter (lower-left corner at ``origin_xy``, y up, data units).
 
-        ``patch_kwargs`` go to :class:`matplotlib.patches.PathPatch` (default: black fill, no edge).
+        ``patch_kwargs`` go to `matplotlib.patches.PathPatch` (default: black fill, no edge).
         """
         from matplotlib.patches import PathPatch
 
@@ -362,7 +362,7 @@ def letter_coverage_window(
 
     ``coverage[i, j]`` belongs to pixel ``(row0 + i, col0 + j)``.  Pixels whose centre lies at
     least half a pixel diagonal from every edge are classified exactly; the others average
-    at least ``supersample**2`` point samples on a Fibonacci lattice (:func:`_fibonacci_lattice`).
+    at least ``supersample**2`` point samples on a Fibonacci lattice (`_fibonacci_lattice`).
     """
     glyph = sloan_letter(letter)
     height_px, n = _validate_raster(height_px, supersample)

@@ -1,7 +1,7 @@
 """Provenance records: which vissim, Python and NumPy made an output, when, and from what.
 
 A provenance record is a plain JSON-safe dict; it travels inside EXR headers and in
-``<file>.json`` sidecars next to PNG/TIFF files (see :mod:`vissim.imageio`).
+``<file>.json`` sidecars next to PNG/TIFF files (see `vissim.imageio`).
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def make_provenance(**inputs: Any) -> dict[str, Any]:
     """Return a provenance record for an output made from ``inputs``.
 
     Keys: ``vissim_version``, ``python``, ``numpy``, ``created_utc`` (ISO 8601, UTC) and
-    ``inputs`` (the keyword arguments, made JSON-safe by :func:`json_safe`).
+    ``inputs`` (the keyword arguments, made JSON-safe by `json_safe`).
     """
     return {
         "vissim_version": __version__,
@@ -77,7 +77,7 @@ def to_json(prov: Mapping[str, Any]) -> str:
 
 
 def from_json(s: str) -> dict[str, Any]:
-    """Parse a provenance record written by :func:`to_json`."""
+    """Parse a provenance record written by `to_json`."""
     try:
         prov = json.loads(s)
     except json.JSONDecodeError as exc:

@@ -85,7 +85,7 @@ def image_colrow_to_osa_xy(col, row):
 def xy_matrix_to_image_rowcol(matrix_xy) -> np.ndarray:
     """A 2 x 2 matrix acting on TABO/OSA (x, y) as the same map on image (row, col) offsets.
 
-    With (col, row) = S (x, y), S the diagonal signs of :func:`osa_xy_to_image_colrow`, the
+    With (col, row) = S (x, y), S the diagonal signs of `osa_xy_to_image_colrow`, the
     matrix becomes S m S^-1 on (col, row), then its axes swap to (row, col).
     """
     m = np.asarray(matrix_xy, dtype=float)

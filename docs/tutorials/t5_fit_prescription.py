@@ -1,4 +1,4 @@
-"""Tutorial 5: fitting a prescription to a capture with :func:`vissim.fit_rx`.
+"""Tutorial 5: fitting a prescription to a capture with `vissim.fit_rx`.
 
 The capture here is synthetic, so the answer is known: the thesis's DSLR bench looks at a
 letter "K" through a trial lens of +0.50 -1.50 x 30 held 10 mm in front of the camera. The

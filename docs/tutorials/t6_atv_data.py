@@ -2,7 +2,7 @@
 
 The committed data (``validation/atv/subject_*.json``, transcribed from the thesis's appendix)
 give, per eye, trial lens and session, the least display code value the participant could see.
-:func:`vissim.analyse_subject` fits ``y = a x^2 + b x + c`` per eye and condition (with and
+`vissim.analyse_subject` fits ``y = a x^2 + b x + c`` per eye and condition (with and
 without cycloplegic drops) and compares the vertex, with its Fieller interval, with the
 measured spherical equivalent.
 

@@ -37,6 +37,7 @@ def test_every_image_of_a_run_has_provenance_with_its_renders(tmp_path, monkeypa
     found = image_provenance(run_dir)
     kinds = {p.relative_to(run_dir).parts[0] for p in found}
     assert kinds == {"renders", "items", "figure_geometric.png", "figure_wave.png", "figure_wave_wave_bench.png",
+                     "figure_geometric_synthetic.png", "figure_wave_synthetic.png",
                      "figure_psf.png", "figure_mtf.png", "figure_through_focus.png"}
     for image, provenance in found.items():
         where = image.relative_to(run_dir).parts[0]

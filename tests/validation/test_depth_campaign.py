@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -171,6 +172,11 @@ def test_tiny_depth_campaign_runs_resumes_and_reports(tiny, tmp_path):
     assert json_without_provenance(run_dir) == []
     tables = (run_dir / "tables.md").read_text()
     assert "| boundary |" in tables and "panel 3 m" in tables and "DSLR at 3 m" in tables
+    page = (run_dir / "report.html").read_text()  # reads on its own: code spans, alt text, no issue numbers
+    assert "`" not in page and "<code>boundary</code>" in page
+    figures = len(list(run_dir.glob("figure_depth_*.png")))
+    assert page.count("<img ") == len(re.findall(r"<img [^>]*alt='[^']{60,}'", page)) == figures >= 2
+    assert not re.search(r"\b[Ii]ssues? \d+", tables + page)
     before = (run_dir / "metrics.json").read_text()
     again = run_depth_campaign(load_depth_campaign(tiny), run_dir, render=refuse, show_progress=False)
     assert again.items_reused == 2 and again.renders_made == 0

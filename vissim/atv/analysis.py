@@ -135,7 +135,7 @@ class QuadraticFit:
 
     @property
     def vertex_diopters(self) -> float:
-        """Stationary point -b/(2a) (a minimum only if :attr:`has_minimum`); NaN for a == 0."""
+        """Stationary point -b/(2a) (a minimum only if `has_minimum`); NaN for a == 0."""
         sc = self._scaled()
         return sc.xc + sc.h * self._vertex_t() if self.a != 0.0 else math.nan
 
@@ -420,7 +420,7 @@ def analyse_subject(
     Parameters
     ----------
     subject : SubjectData
-        From :func:`vissim.load_subject`.
+        From `vissim.load_subject`.
     level : float
         Confidence level of the vertex intervals (0-1).
     average_sessions : bool

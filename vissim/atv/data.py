@@ -1,7 +1,7 @@
 """Participant data of the absolute-threshold-for-vision (ATV) experiment (thesis Appendix A).
 
 One JSON file per subject (``subject_<id>.json``, schema ``vissim.atv.subject`` version 1;
-``validation/atv/subject_001.json`` is the thesis's subject 001).  :func:`load_subject` checks
+``validation/atv/subject_001.json`` is the thesis's subject 001).  `load_subject` checks
 the schema (required fields, types, ranges) and stops at the first problem with one line that
 names the file, the field (a JSON path such as ``examinations[2].trials[5].minimum_visible_code``),
 the bad value and its unit.
@@ -9,9 +9,9 @@ the bad value and its unit.
 It then recomputes what the thesis derived from its own numbers -- the spherical equivalents,
 the examination durations (sum of the elapsed times), the summary table of the sessions without
 eye drops (mean, max and ``Diff`` = max - min per lens and eye) -- and compares them with what
-is printed.  Disagreements are *reported*, never fixed: each becomes a :class:`Discrepancy` in
+is printed.  Disagreements are *reported*, never fixed: each becomes a `Discrepancy` in
 ``SubjectData.discrepancies`` and a logged warning; ``strict=True`` raises
-:class:`AtvDataDiscrepancyError` instead.
+`AtvDataDiscrepancyError` instead.
 
 Tolerances (printed values are rounded): spherical equivalent 0.005 D (two decimals); summary
 mean and Diff 1e-4 code values (the mean of 4-decimal inputs, printed to 4 decimals: up to half
@@ -214,7 +214,7 @@ def load_subject(path: str | Path, *, strict: bool = False) -> SubjectData:
     path : str or Path
         A subject file (JSON, schema ``vissim.atv.subject`` version 1).
     strict : bool
-        Raise :class:`AtvDataDiscrepancyError` when a printed value disagrees with what the
+        Raise `AtvDataDiscrepancyError` when a printed value disagrees with what the
         thesis's own numbers give; by default each disagreement is logged and kept in
         ``SubjectData.discrepancies``.
 
@@ -259,7 +259,7 @@ def load_directory(directory: str | Path, *, strict: bool = False, pattern: str 
     directory : str or Path
         The folder holding the subject files.
     strict : bool
-        As in :func:`load_subject`.
+        As in `load_subject`.
     pattern : str
         Glob of the subject files' names.
 
@@ -271,7 +271,7 @@ def load_directory(directory: str | Path, *, strict: bool = False, pattern: str 
     Raises
     ------
     VissimInputError
-        No such folder, no file matching ``pattern``, a file :func:`load_subject` refuses, or two
+        No such folder, no file matching ``pattern``, a file `load_subject` refuses, or two
         files with one subject id.
 
     Examples

@@ -1,16 +1,16 @@
 """A person as the observer of the threshold procedure.
 
-* :class:`WindowObserver` -- a black window with a single lit pixel (matplotlib ``figimage``, so
+* `WindowObserver` -- a black window with a single lit pixel (matplotlib ``figimage``, so
   one array element is one screen pixel) at the requested code value; the person answers with
   the keys ``y`` (seen), ``n`` (not seen) or ``q`` (quit).  A screen shows 8-bit code values, so
   intensities are quantised to steps of 1/255 on the display: a phase-2 resolution finer than that
   only repeats the same stimulus.  This is a desktop stand-in, not the thesis's tube.
-* :class:`PromptObserver` -- a terminal fallback for headless use and for operating the real
+* `PromptObserver` -- a terminal fallback for headless use and for operating the real
   apparatus: the prompt names the code value for the operator to set on the device, and the
   answer (y/n/q) is read with an injected ``ask`` function (``input`` by default; tests pass a
   scripted one).
 
-:func:`make_person_observer` picks the window when a display and an interactive matplotlib backend
+`make_person_observer` picks the window when a display and an interactive matplotlib backend
 are available, else the prompt.  The library never prints: all I/O goes through ``ask`` or the window.
 """
 

@@ -3,7 +3,7 @@
 The tube is equivalent to a source at (or near) infinity of the pixel's angular extent: the
 retinal image is the pixel's square, mapped by the paraxial system (spectacle magnification
 included), convolved with the eye's blur for the defocus ``K = vergence + E + A`` at the pupil
-(:func:`vissim.bench.atv_paraxial.atv_paraxial`).  The blur comes from :func:`vissim.optics.psf.compute_psf` of
+(`vissim.bench.atv_paraxial.atv_paraxial`).  The blur comes from `vissim.optics.psf.compute_psf` of
 the prescription ``-K``: ``mode="geometric"`` (ray optics, comparable with the light tracer)
 or ``"wave"`` (diffraction).  Pure numpy; no Mitsuba.
 
@@ -12,10 +12,10 @@ or ``"wave"`` (diffraction).  Pure numpy; no Mitsuba.
 for a luminance in cd m⁻²), on the vissim grid: row 0 up, columns to the eye's right, the
 straight-ahead direction at ``[N//2, N//2]``, each pixel the integral over its square.
 
-**Spot metrics** (:func:`spot_metrics`): ``total_flux`` is the image's integral;
+**Spot metrics** (`spot_metrics`): ``total_flux`` is the image's integral;
 ``spot_diameter_arcmin`` the **full width at half maximum of the azimuthally averaged radial
 profile** about the centroid (1-pixel annuli centred on whole radii,
-:func:`vissim.optics.psf_metrics.ring_means`; the outermost crossing of half the peak, linearly
+`vissim.optics.psf_metrics.ring_means`; the outermost crossing of half the peak, linearly
 interpolated).  For a uniform blur disc of diameter D it is D (the pixel's square blurs the
 edge symmetrically); for the in-focus square pixel of side s it is ``s / cos(22.5°) = 1.082 s``
 (the radius at which half of a circle lies inside the square).
@@ -196,7 +196,7 @@ def predicted_spot(config: AtvConfig, *, arcmin_per_px: float = 0.5, size_px: in
 
     ``mode="geometric"`` convolves the pixel's square with the geometric blur of the defocus
     (what the light tracer should find); ``"wave"`` with the diffraction PSF at
-    ``wavelength_nm``.  ``size_px`` defaults to :func:`suggested_atv_size_px`.
+    ``wavelength_nm``.  ``size_px`` defaults to `suggested_atv_size_px`.
     """
     if mode not in ("geometric", "wave"):
         raise VissimInputError(f"prediction mode must be 'geometric' or 'wave', got {mode!r}")

@@ -81,7 +81,7 @@ class PsychometricFunction:
 
 @dataclass(frozen=True)
 class SimulatedObserver:
-    """A seeded observer answering by a :class:`PsychometricFunction`.
+    """A seeded observer answering by a `PsychometricFunction`.
 
     ``slope=math.inf`` is the ideal observer: "seen" iff intensity >= threshold (no guesses,
     no lapses).  Each call draws one uniform number, so a run is reproducible from the seed.

@@ -1,8 +1,8 @@
 """Records of the ATV participant data (thesis Appendix A): frozen dataclasses validated on construction.
 
-Each record checks its own ranges and raises :class:`~vissim.errors.VissimInputError` naming the
-field, the value and its unit; :mod:`vissim.atv.schema` adds the file and the JSON path.
-Public names are re-exported by :mod:`vissim.atv.data`.
+Each record checks its own ranges and raises `VissimInputError` naming the
+field, the value and its unit; `vissim.atv.schema` adds the file and the JSON path.
+Public names are re-exported by `vissim.atv.data`.
 """
 
 from __future__ import annotations

@@ -314,7 +314,7 @@ procedure with a bisection phase 2 (seed {seed}). The trial lens that corrects t
 
 def write_simulation_report(experiment, out_dir: str | Path, *, window_diopters: float | None = 2.5, level: float = 0.95,
                             overwrite: bool = False) -> tuple[list[Path], list[CurveAnalysis]]:
-    """Write the figure, ``report.md``/``.html`` and ``simulation.json`` of a :class:`VirtualExperiment`."""
+    """Write the figure, ``report.md``/``.html`` and ``simulation.json`` of a `VirtualExperiment`."""
     from vissim.provenance import make_provenance
 
     out_dir = Path(out_dir)

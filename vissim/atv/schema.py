@@ -31,7 +31,7 @@ class _Reader:
         return VissimInputError(f"{self.origin}: {where}: {message}")
 
     def fail_at(self, where: str, key: str, message: str) -> VissimInputError:
-        """:meth:`fail` at field ``key`` of the object at ``where``."""
+        """`fail` at field ``key`` of the object at ``where``."""
         return self.fail(f"{where}.{key}" if where else key, message)
 
     def get(self, obj: Any, key: str, where: str, *, optional: bool = False) -> Any:
@@ -121,7 +121,7 @@ _RECORD_FIELDS = {
 
 
 def _parse_record(r: _Reader, cls, obj: Any, where: str):
-    """One of the flat records of :data:`_RECORD_FIELDS`."""
+    """One of the flat records of `_RECORD_FIELDS`."""
     values = {name: r.text(obj, name, where) if unit is None else r.number(obj, name, where, unit)
               for name, unit in _RECORD_FIELDS[cls]}
     return r.build(cls, where, **values, line=r.integer(obj, "line", where, "(line number)", optional=True))
@@ -165,7 +165,7 @@ def _parse_examination(r: _Reader, obj: Any, where: str) -> Examination:
 
 
 def parse_subject(obj: Any, origin: str = "<subject>", path: Path | None = None) -> SubjectData:
-    """Validate a decoded subject JSON object and build :class:`SubjectData` (no consistency checks)."""
+    """Validate a decoded subject JSON object and build `SubjectData` (no consistency checks)."""
     r = _Reader(origin)
     if not isinstance(obj, Mapping):
         raise VissimInputError(f"{origin}: the file must hold a JSON object, got {type(obj).__name__}")

@@ -5,9 +5,9 @@ one pixel (iPhone 5: 326 ppi, 77.9 µm) is a source at infinity subtending 77.9 
 0.623 mrad = 2.14 arcmin.  A trial lens of power P at ``trial_lens_vertex_mm`` (d) in front of the
 eye adds the vergence ``P / (1 - d P)`` at the eye -- exact here, the source being at infinity
 (ERRATA item 4 concerns finite distances).  What the eye then focuses, and through which pupil,
-is :meth:`vissim.optics.setup.ViewingSetup.atv_observer`.  The eye's correction (a :class:`Prescription`, at the
+is `vissim.optics.setup.ViewingSetup.atv_observer`.  The eye's correction (a `Prescription`, at the
 eye's principal plane) minus that vergence minus the accommodation exerted is the *residual*
-correction still needed; its wavefront gives the Fourier PSF (:func:`vissim.optics.psf.compute_psf`,
+correction still needed; its wavefront gives the Fourier PSF (`vissim.optics.psf.compute_psf`,
 wave optics, monochromatic at ``wavelength_nm``), which is convolved with the pixel's square.
 
 Accommodation: under cycloplegia none.  Otherwise the eye adds plus power to minimise the blur,
@@ -25,10 +25,10 @@ measurement of any subject.  Luminance becomes a display code value through a ga
 (ERRATA item 9: the thesis's [0, 1] intensity is a code value): ``code = code_full * f^(-1/gamma)``
 with ``code_full`` the threshold when all the flux is inside the disc.  The simulated observer
 answers by a Weibull psychometric function of luminance (exponent ``psychometric_slope``), i.e.
-exponent ``gamma * slope`` in code values (:class:`vissim.atv.procedure.PsychometricFunction`).
+exponent ``gamma * slope`` in code values (`vissim.atv.procedure.PsychometricFunction`).
 
 The retinal-image function is pluggable (``retinal_image=``): anything mapping a
-:class:`SpotRequest` to a :class:`RetinalSpot`, e.g. a ray-traced spot of the whole tube.
+`SpotRequest` to a `RetinalSpot`, e.g. a ray-traced spot of the whole tube.
 """
 
 from __future__ import annotations

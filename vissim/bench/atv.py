@@ -5,7 +5,7 @@ plano-convex lens with an eyecup at the other; the phone sits in the lens's foca
 lit pixel reaches the eye as parallel light, "equivalent to observing a point at infinity".
 Trial lenses (-5 ... +5 D) go in a slot between the lens and the eye.
 
-World frame (millimetres), the same as :mod:`vissim.bench.dslr`: the eye's pupil -- a reduced
+World frame (millimetres), the same as `vissim.bench.dslr`: the eye's pupil -- a reduced
 eye, a thin lens at its pupil -- at z = 0, looking along +z with +y up; world x is the
 examiner's right (TABO and OSA pupil x), so the eye's right is world -x.  Light travels toward
 -z: pixel (``phone_z_mm``), collimator, trial lens, pupil.
@@ -21,19 +21,19 @@ Choices, and why:
   not say); ``lens_convex_side="phone"`` turns it round.  3 mm thick over a 22 mm clear aperture.
 * **Pixel**: a Lambertian square of side 25.4 / ppi mm (77.9 µm at 326 ppi) whose *linear*
   radiance is ``pixel_radiance``.  The thesis's "iPhone intensity [0, 1]" is a display code
-  value (ERRATA item 9); :func:`display_code_to_linear` is the separate transfer step.
-* **Trial lens**: a thick crown-glass :class:`~vissim.optics.trial_lens.TrialLens` (marked with its back
-  vertex power, as meshed by :mod:`vissim.bench.lens_mesh`), back vertex
+  value (ERRATA item 9); `display_code_to_linear` is the separate transfer step.
+* **Trial lens**: a thick crown-glass `TrialLens` (marked with its back
+  vertex power, as meshed by `vissim.bench.lens_mesh`), back vertex
   ``trial_lens_distance_mm`` in front of the pupil (15 mm: a 12 mm vertex distance plus 3 mm
-  from the cornea to the entrance pupil).  :func:`atv_trial_lens` makes one of realistic
+  from the cornea to the entrance pupil).  `atv_trial_lens` makes one of realistic
   thickness.
-* **Eye**: pupil within ``vissim.checks.EYE_PUPIL_RANGE_MM`` (1-10 mm), its own :class:`~vissim.optics.prescription.RefractiveError` (a
-  :class:`~vissim.optics.prescription.Prescription` is converted) and accommodation >= 0 D.  A ray
+* **Eye**: pupil within ``vissim.checks.EYE_PUPIL_RANGE_MM`` (1-10 mm), its own `RefractiveError` (a
+  `Prescription` is converted) and accommodation >= 0 D.  A ray
   through pupil point x (mm) with direction angle u lands at visual angle
   ``-u + (E + A) x`` milliradians: the thin lens is the eye's excess power E plus accommodation.
 
-The paraxial theory is :mod:`vissim.bench.atv_paraxial`, the Mitsuba scene dict
-:mod:`vissim.bench.atv_scene`.
+The paraxial theory is `vissim.bench.atv_paraxial`, the Mitsuba scene dict
+`vissim.bench.atv_scene`.
 """
 
 from __future__ import annotations
@@ -97,9 +97,9 @@ ATV_DISPLAY_TRANSFER = "gamma2.2"
 def display_code_to_linear(code, transfer: str = ATV_DISPLAY_TRANSFER):
     """Relative linear luminance in [0, 1] of a display code value in [0, 1] (ERRATA item 9).
 
-    ``"srgb"``: the IEC 61966-2-1 decoding (:func:`vissim.imageio.srgb_decode`); ``"gamma2.2"``:
+    ``"srgb"``: the IEC 61966-2-1 decoding (`vissim.imageio.srgb_decode`); ``"gamma2.2"``:
     a pure power law ``code ** 2.2``.  Multiply by the display's white radiance to get
-    :attr:`AtvTube.pixel_radiance`.  Scalars give floats, arrays arrays.
+    `AtvTube.pixel_radiance`.  Scalars give floats, arrays arrays.
     """
     if transfer not in DISPLAY_TRANSFERS:
         raise VissimInputError(f"display transfer must be one of {', '.join(DISPLAY_TRANSFERS)}, got {transfer!r}")
@@ -168,7 +168,7 @@ class AtvTube:
         return pixel_pitch_mm(self.pixels_per_inch)
 
     def collimator_lens(self) -> TrialLens:
-        """The plano-convex collimator as a :class:`TrialLens` (front = phone side) of equivalent power P."""
+        """The plano-convex collimator as a `TrialLens` (front = phone side) of equivalent power P."""
         power, n, t = self.lens_power_diopters, self.lens_refractive_index, self.lens_center_thickness_mm
         if self.lens_convex_side == "eye":  # plano front, F2 = P: back vertex power = P
             return TrialLens(power, refractive_index=n, center_thickness_mm=t, back_surface_diopters=power)
@@ -204,7 +204,7 @@ class AtvEye:
             self.accommodation_diopters, "accommodation", "dioptres", lo=0.0, hi=MAX_ACCOMMODATION_DIOPTERS))
 
     def viewing_setup(self, vergence_diopters=None) -> ViewingSetup:
-        """This eye's :meth:`ViewingSetup.eye <vissim.optics.setup.ViewingSetup.eye>`; its defocus matrix
+        """This eye's `ViewingSetup.eye`; its defocus matrix
         is the eye's excess power, error + accommodation, plus ``vergence_diopters`` at the pupil (0 if None)."""
         return ViewingSetup.eye(self.refractive_error.prescription(), self.pupil_diameter_mm,
                                 self.accommodation_diopters, vergence_diopters=vergence_diopters)

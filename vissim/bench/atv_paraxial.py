@@ -1,11 +1,11 @@
 """Paraxial theory of the ATV tube: first-order optics from the phone's screen to the eye's pupil.
 
-Ray transfer matrices (:func:`vissim.optics.trial_lens.transfer_matrix`) of the gaps and lenses
-laid out by :func:`vissim.bench.atv.atv_layout` give where a pixel's light lands: the pixel's
+Ray transfer matrices (`vissim.optics.trial_lens.transfer_matrix`) of the gaps and lenses
+laid out by `vissim.bench.atv.atv_layout` give where a pixel's light lands: the pixel's
 visual angle and size, the eye's defocus and blur diameter (from
-:meth:`vissim.optics.setup.ViewingSetup.eye`, given the tube's vergence at the pupil), the etendue and the cone of
+`vissim.optics.setup.ViewingSetup.eye`, given the tube's vergence at the pupil), the etendue and the cone of
 directions that reach the pupil.  This is the theory both renderers are checked against;
-:func:`vissim.atv.predict.predicted_spot` turns it into a retinal image.
+`vissim.atv.predict.predicted_spot` turns it into a retinal image.
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def _system_matrix(config: AtvConfig) -> np.ndarray:
 
 
 def atv_paraxial(config: AtvConfig) -> AtvParaxial:
-    """The paraxial theory of ``config`` (see :class:`AtvParaxial`)."""
+    """The paraxial theory of ``config`` (see `AtvParaxial`)."""
     s = _system_matrix(config)
     a, b, c, d = s[:2, :2], s[:2, 2:], s[2:, :2], s[2:, 2:]
     b_inv = np.linalg.inv(b)

@@ -1,8 +1,8 @@
 """The ATV tube as a Mitsuba scene dict: lenses, black tube, the lit pixel, and the eye as a camera.
 
 Scene dicts hold plain values (4 x 4 row-major ``to_world`` lists), converted by
-:func:`vissim.render.run.to_mitsuba_dict`; nothing here imports Mitsuba.  The lenses are PLY
-meshes (:func:`vissim.bench.lens_mesh.cached_lens_ply`) with the refraction-only BSDF; the
+`vissim.render.run.to_mitsuba_dict`; nothing here imports Mitsuba.  The lenses are PLY
+meshes (`vissim.bench.lens_mesh.cached_lens_ply`) with the refraction-only BSDF; the
 optional camera is a ``thinlens`` at the pupil, the cross-check of the light tracer.
 """
 
@@ -20,7 +20,7 @@ from vissim.units import arcmin_to_rad, diopters_to_mm
 
 __all__ = ["LENS_BSDF", "MAX_DEPTH", "NEAR_CLIP_MM", "atv_scene"]
 
-#: Plugin name of the refraction-only BSDF; equals :data:`vissim.render.plugins.REFRACT_BSDF`.
+#: Plugin name of the refraction-only BSDF; equals `vissim.render.plugins.REFRACT_BSDF`.
 LENS_BSDF = "vissim_refract"
 NEAR_CLIP_MM = 1.0
 #: Path depth of the camera cross-check: two lenses, four refractions, the pixel, some slack.

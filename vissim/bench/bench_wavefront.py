@@ -1,4 +1,4 @@
-"""The wavefront the bench's trial lenses add at the camera, from the exact trace (:mod:`vissim.bench.lens_trace`).
+"""The wavefront the bench's trial lenses add at the camera, from the exact trace (`vissim.bench.lens_trace`).
 
 The ``thinlens`` camera is an ideal lens in its aperture plane z = 0, focused on the chart: it
 turns the spherical wave from a chart point into a perfect image.  With trial lenses, the
@@ -24,7 +24,7 @@ a PSF is centred on its image point and the magnification is applied to the char
 Amplitude: the pupil stays uniformly lit; the lenses' ray-density change over a 3.6 mm pupil
 (relative order d P r, ~1e-4) is left out.
 
-The samples are on the grid of :class:`vissim.optics.opd_map.OpdMap` (square, circumscribing
+The samples are on the grid of `vissim.optics.opd_map.OpdMap` (square, circumscribing
 the pupil, row 0 at +y): every grid point, corners too, is a real aimed ray, so outside the
 disc the map is the traced continuation.
 """
@@ -130,7 +130,7 @@ class TracedWavefront:
         return LensPower.from_power_matrix(-np.asarray(rx.power_matrix(), dtype=float)).minus_cylinder()
 
     def as_opd_map(self):
-        """The samples as a :class:`vissim.optics.opd_map.OpdMap` (same grid and sign)."""
+        """The samples as a `vissim.optics.opd_map.OpdMap` (same grid and sign)."""
         from vissim.optics.opd_map import OpdMap
 
         return OpdMap(self.samples_um, self.pupil_diameter_mm)
@@ -230,6 +230,6 @@ class ShiftInvariance:
 
 def shift_invariance(bench, field_points_deg=None, **kwargs) -> ShiftInvariance:
     """Trace the centre and corners of the frame (or ``field_points_deg``, centre first); kwargs as
-    :func:`trace_bench_wavefront`."""
+    `trace_bench_wavefront`."""
     points = frame_field_points_deg(bench) if field_points_deg is None else tuple(field_points_deg)
     return ShiftInvariance(tuple(trace_bench_wavefront(bench, field_deg=p, **kwargs) for p in points))

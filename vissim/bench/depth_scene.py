@@ -1,6 +1,6 @@
 """Depth scenes: letter charts at several distances and a tilted chart, as Mitsuba scene dicts.
 
-World frame (millimetres), the one of :mod:`vissim.bench.dslr`: the observer's pupil (the
+World frame (millimetres), the one of `vissim.bench.dslr`: the observer's pupil (the
 DSLR's entrance pupil, or the eye's) at z = 0 looking along +z with +y up; world x is the
 examiner's right (TABO), so the observer's image right is world -x.  Directions in the view
 are *image tangents* ``(right, up)``: a pixel's centre looks along ``(-tx, ty, 1)``, and
@@ -8,12 +8,12 @@ pixels are uniform in tangent with pitch ``tan(arcmin_per_px)`` (as in the DSLR 
 
 What is in a scene:
 
-* **Chart panels** (:class:`ChartPanel`): a letter chart printed for *its own* distance (letters
-  ``letter_height_mm(logmar, distance)`` tall, :func:`vissim.acuity.letter_height_mm`),
+* **Chart panels** (`ChartPanel`): a letter chart printed for *its own* distance (letters
+  ``letter_height_mm(logmar, distance)`` tall, `vissim.acuity.letter_height_mm`),
   ETDRS-spaced, with an optional blank paper border, on a self-emitting rectangle facing the
   observer (as the DSLR bench's chart: radiance = linear reflectance, no lamp noise).  Panels
   may overlap in the view; the nearer one occludes the farther, by geometry.
-* **Tilted charts** (:class:`TiltedChart`): a plane rotated about the vertical axis whose axial
+* **Tilted charts** (`TiltedChart`): a plane rotated about the vertical axis whose axial
   distance runs from ``distance_left_m`` at its left edge to ``distance_right_m`` at its right
   edge (continuous depth).  Its print is *anamorphic*: letters keep their LogMAR size in visual
   angle at every depth, so the observer sees an ordinary chart whose depth varies.  On a plane,
@@ -21,17 +21,17 @@ What is in a scene:
   chart's angular rectangle; it is a PLY mesh whose texture coordinates are image tangents,
   with columns at most half a pixel apart (texture error < 0.01 px).
 
-Observers (a ``viewer``, :mod:`vissim.bench.depth_viewers`): an ``EyeViewer`` -- Mitsuba
-sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), an ideal thin lens at the pupil
+Observers (a ``viewer``, `vissim.bench.depth_viewers`): an ``EyeViewer`` -- Mitsuba
+sensor ``vissim_eye`` (`vissim.render.eye_sensor`), an ideal thin lens at the pupil
 focusing the vergence matrix ``K = A I - Rx``, so an object at axial distance ``z`` is blurred
 by ``pupil x (K - I/z)``: the defocus ``Rx + 1/z - A`` of
-:meth:`vissim.optics.setup.ViewingSetup.eye`, cylinders and hyperopia (focus "beyond infinity",
+`vissim.optics.setup.ViewingSetup.eye`, cylinders and hyperopia (focus "beyond infinity",
 ``K < 0``) included, which a Mitsuba ``thinlens`` (focus distance > 0, no astigmatism) cannot
 express -- or a ``CameraViewer``, the DSLR bench camera (``thinlens``, f/N entrance pupil)
-with optional trial lenses, taken from :func:`vissim.bench.dslr.dslr_scene` itself.
+with optional trial lenses, taken from `vissim.bench.dslr.dslr_scene` itself.
 
-The scene dicts are :mod:`vissim.bench.depth_scene_dict`, the chart textures
-:mod:`vissim.bench.depth_textures`.
+The scene dicts are `vissim.bench.depth_scene_dict`, the chart textures
+`vissim.bench.depth_textures`.
 """
 from __future__ import annotations
 
@@ -259,7 +259,7 @@ def _geometry(scene: DepthScene, index: int, panel: Panel) -> PanelGeometry:
 
 
 def panel_geometries(scene: DepthScene) -> tuple[PanelGeometry, ...]:
-    """Every panel's :class:`PanelGeometry`, in the scene's order."""
+    """Every panel's `PanelGeometry`, in the scene's order."""
     return tuple(_geometry(scene, i, p) for i, p in enumerate(scene.panels))
 
 

@@ -1,19 +1,19 @@
 """Depth scenes as Mitsuba scene dicts: the observer's camera, the panels' shapes and emitters.
 
-The scene (:mod:`vissim.bench.depth_scene`) says where panels are; this module turns it into a
-dict.  Views and contents (:func:`depth_scene_dict`): ``view="blurred"`` uses the observer's
+The scene (`vissim.bench.depth_scene`) says where panels are; this module turns it into a
+dict.  Views and contents (`depth_scene_dict`): ``view="blurred"`` uses the observer's
 optics, ``"all_in_focus"`` a pinhole (``perspective``) at the pupil centre with the same film and the
 same lenses, so both images share one pixel grid.  ``content="proximity"`` replaces every
 panel's radiance by its proximity ``1000 / z_mm`` dioptres (``z`` axial), a *depth pass*: a
 pinhole render of it gives each pixel's mean proximity (0 for empty sky).  ``"surface_proximity"``
 (kind ``"rgb"``) adds each surface's label ``i + 1`` in G, so that a pixel can keep its *nearest*
-surface (:data:`DEPTH_PASS_STATISTIC`); that is the RGB-D depth pass, which
-:func:`vissim.render.depth_render.render_depth` turns into the axial depth in metres that
-:func:`vissim.optics.depth.blur_depth` expects.  Axial, because these thin lenses have flat focal
+surface (`DEPTH_PASS_STATISTIC`); that is the RGB-D depth pass, which
+`vissim.render.depth_render.render_depth` turns into the axial depth in metres that
+`vissim.optics.depth.blur_depth` expects.  Axial, because these thin lenses have flat focal
 planes: the blur is exactly ``pupil x |K - 1/z|`` at every field angle.
 
 Nothing here imports Mitsuba; dicts hold plain values (``to_world`` as nested lists, bitmap
-``data`` as float32 arrays), converted by :func:`vissim.render.run.to_mitsuba_dict`.
+``data`` as float32 arrays), converted by `vissim.render.run.to_mitsuba_dict`.
 """
 
 from __future__ import annotations
@@ -40,13 +40,13 @@ __all__ = ["EYE_SENSOR", "VIEWS", "CONTENTS", "DEPTH_PASS_CONTENT", "DEPTH_PASS_
 
 log = logging.getLogger(__name__)
 
-#: Plugin name of the eye sensor; equals :data:`vissim.render.eye_sensor.EYE_SENSOR`.
+#: Plugin name of the eye sensor; equals `vissim.render.eye_sensor.EYE_SENSOR`.
 EYE_SENSOR = "vissim_eye"
 VIEWS = ("blurred", "all_in_focus")
 CONTENTS = ("radiance", "proximity", "coverage", "surface_proximity")
 #: The RGB-D depth pass: every panel glows with (proximity, its label, 0), and each pixel keeps the
 #: mean proximity of its *nearest* surface over the part of the pixel that surface covers
-#: (:func:`vissim.render.run.nearest_surface`), not the mean over the pixel: a pixel half on a
+#: (`vissim.render.run.nearest_surface`), not the mean over the pixel: a pixel half on a
 #: 0.4 m panel and half on the 6 m one behind it would get an in-between depth that neither has.
 #: A blur-by-depth model blurs the pixel's light with its depth's PSF, and the light there is the
 #: near surface's; the far surface lies behind it.  (A layer's own proximity pass keeps the mean.)

@@ -11,7 +11,7 @@ Tables: ``[image]`` (``arcmin_per_px``, ``size_px`` = [rows, cols]), ``[sampling
 ``padding_arcmin``, ``polarity``, ``paper_reflectance``, ``ink_reflectance``.  No observer
 table means an emmetropic eye with a 4 mm pupil.  ``scenes/depth_panels.toml`` and
 ``scenes/depth_tilted.toml`` are the commented examples.  Unknown keys and wrong types raise
-:class:`~vissim.errors.VissimInputError` naming the file, the key and the unit.
+`VissimInputError` naming the file, the key and the unit.
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ def _viewer(doc: dict, source: str) -> EyeViewer | CameraViewer:
 
 
 def depth_scene_from_doc(doc: dict, source: str) -> DepthSceneFile:
-    """The :class:`DepthSceneFile` of a parsed TOML document (module doc)."""
+    """The `DepthSceneFile` of a parsed TOML document (module doc)."""
     _check_keys(doc, _TABLES, source)
     image = _values(_table(doc, "image", source), _IMAGE, f"{source} [image]")
     sampling = _values(_table(doc, "sampling", source), _SAMPLING, f"{source} [sampling]")
@@ -131,7 +131,7 @@ def depth_scene_from_doc(doc: dict, source: str) -> DepthSceneFile:
 
 
 def load_depth_scene_toml(path: str | os.PathLike[str], **overrides: Any) -> DepthSceneFile:
-    """Load a depth scene file; ``overrides`` (not None) replace :class:`DepthSceneFile` fields."""
+    """Load a depth scene file; ``overrides`` (not None) replace `DepthSceneFile` fields."""
     doc, source = read_scene_toml(path)
     loaded = depth_scene_from_doc(doc, source)
     return dataclasses.replace(loaded, **{k: v for k, v in overrides.items() if v is not None})

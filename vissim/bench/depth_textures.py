@@ -1,8 +1,8 @@
 """Depth-scene chart textures: each panel's linear-reflectance raster.
 
-A fronto panel is printed for its own distance (:func:`vissim.charts.render_chart_print`), a
-tilted chart anamorphically in visual angle (:func:`vissim.charts.render_chart_angular`); both are
-padded with blank paper to the panel's :class:`~vissim.bench.depth_scene.PanelGeometry` texture
+A fronto panel is printed for its own distance (`vissim.charts.render_chart_print`), a
+tilted chart anamorphically in visual angle (`vissim.charts.render_chart_angular`); both are
+padded with blank paper to the panel's `PanelGeometry` texture
 shape.  Rasters are cached per chart spec and resolution.
 """
 

@@ -5,22 +5,22 @@ vergence matrix ``K`` (dioptres, TABO x/y frame) they focus: an object point at 
 distance ``z`` is sharp in the meridians where ``1/z = K``, and blurred elsewhere by a
 geometric spot of ``pupil x (K - I/z)`` milliradians (pupil in mm; conventions: D x mm = mrad).
 
-* :class:`EyeViewer` -- ``K = A I - Rx``: the eye's correcting lens ``Rx`` (a
-  :class:`~vissim.optics.prescription.Prescription`, myope negative, *not* worn) and accommodation
+* `EyeViewer` -- ``K = A I - Rx``: the eye's correcting lens ``Rx`` (a
+  `Prescription`, myope negative, *not* worn) and accommodation
   ``A >= 0``.  So defocus at distance d is ``Rx + 1/d - A``, exactly
-  :meth:`vissim.optics.setup.ViewingSetup.eye`: a -2 D myope focuses 0.5 m (K = +2 D), an
+  `vissim.optics.setup.ViewingSetup.eye`: a -2 D myope focuses 0.5 m (K = +2 D), an
   emmetrope accommodating 3 D focuses 1/3 m, a relaxed +1 D hyperope has K = -1 D (focus
   "beyond infinity": blur at 6 m is pupil x (1 + 1/6) D), and ``plano -2.00 x 90`` has
   K = diag(2, 0) D (excess power in the horizontal meridian: horizontal blur).  Both come from
-  :class:`vissim.optics.setup.ViewingSetup` (:func:`viewing_setup`), which decides them.  Rendered by
-  the Mitsuba sensor ``vissim_eye`` (:mod:`vissim.render.eye_sensor`), which takes any such K.
-* :class:`CameraViewer` -- the DSLR of :mod:`vissim.bench.dslr` (Mitsuba ``thinlens``,
+  `vissim.optics.setup.ViewingSetup` (`viewing_setup`), which decides them.  Rendered by
+  the Mitsuba sensor ``vissim_eye`` (`vissim.render.eye_sensor`), which takes any such K.
+* `CameraViewer` -- the DSLR of `vissim.bench.dslr` (Mitsuba ``thinlens``,
   entrance pupil = focal length / f-number): ``K = I / focus distance`` plus the power its
-  trial lenses add (:func:`vissim.optics.trial_lens.trial_lens_effect`, for an object at the focus
+  trial lenses add (`vissim.optics.trial_lens.trial_lens_effect`, for an object at the focus
   distance; the lenses' vergence effect changes it by < 1 % between 0.4 m and infinity).
 
-:func:`equivalent_eye` is the eye that blurs like a viewer (``Rx = -K``, same pupil, A = 0):
-what :func:`vissim.optics.depth.blur_depth` is given to simulate a render of that viewer.
+`equivalent_eye` is the eye that blurs like a viewer (``Rx = -K``, same pupil, A = 0):
+what `vissim.optics.depth.blur_depth` is given to simulate a render of that viewer.
 """
 
 from __future__ import annotations
@@ -83,9 +83,9 @@ class CameraViewer:
         self.bench()  # validates through DslrBench
 
     def bench(self, scene=None) -> DslrBench:
-        """The :class:`DslrBench` of this camera on ``scene``'s pixel grid (object distance = focus).
+        """The `DslrBench` of this camera on ``scene``'s pixel grid (object distance = focus).
 
-        ``scene`` (a :class:`~vissim.bench.depth_scene.DepthScene`) sets the grid, sampler and
+        ``scene`` (a `DepthScene`) sets the grid, sampler and
         texel density, hence the lenses' clear aperture; None: an 8 x 8 grid at 1 arcmin/px.
         """
         grid = {"size_px": (8, 8)} if scene is None else {
@@ -109,9 +109,9 @@ Viewer = Union[EyeViewer, CameraViewer]
 
 
 def viewing_setup(viewer: Viewer, scene=None) -> ViewingSetup:
-    """The viewer's :class:`~vissim.optics.setup.ViewingSetup`: its focus matrix, blur and pupil.
+    """The viewer's `ViewingSetup`: its focus matrix, blur and pupil.
 
-    An eye looks at infinity; the camera is its bench on ``scene``'s grid (:meth:`CameraViewer.bench`,
+    An eye looks at infinity; the camera is its bench on ``scene``'s grid (`CameraViewer.bench`,
     which sizes the trial lenses), looking at its focus distance (the lenses' vergence effect is
     taken there, module doc).
     """
@@ -123,14 +123,14 @@ def viewing_setup(viewer: Viewer, scene=None) -> ViewingSetup:
 
 
 def equivalent_eye(viewer: Viewer, scene=None) -> EyeViewer:
-    """The :class:`EyeViewer` that blurs like ``viewer``: Rx = -K, same pupil, no accommodation."""
+    """The `EyeViewer` that blurs like ``viewer``: Rx = -K, same pupil, no accommodation."""
     if isinstance(viewer, EyeViewer):
         return viewer
     setup = viewing_setup(viewer, scene)
     return EyeViewer(Prescription.from_power_matrix(-setup.focus_matrix_diopters), setup.pupil_diameter_mm, 0.0)
 
 
-#: Pixels added to the largest blur radius in :func:`frame_margin_px`: the pixel's own width and
+#: Pixels added to the largest blur radius in `frame_margin_px`: the pixel's own width and
 #: the diffraction PSF's core (the Airy radius of a 3 mm pupil at 550 nm is 0.77 arcmin).
 FRAME_MARGIN_EXTRA_PX = 2
 
@@ -139,7 +139,7 @@ def frame_margin_px(viewer: Viewer, scene) -> int:
     """Pixels to render and simulate beyond each side of ``scene``'s frame, then crop.
 
     The largest geometric blur radius of any panel depth (a tilted chart's blur is largest at an
-    end: ``|K - 1/z|`` is convex in ``1/z``) rounded up, plus :data:`FRAME_MARGIN_EXTRA_PX`.  A pixel
+    end: ``|K - 1/z|`` is convex in ``1/z``) rounded up, plus `FRAME_MARGIN_EXTRA_PX`.  A pixel
     of the frame then receives light only from inside the margin, so a simulation on the
     enlarged grid sees what the observer sees beyond the frame.
     """

@@ -2,7 +2,7 @@
 
 World frame (millimetres): the camera's principal plane (and entrance pupil) at z = 0, looking
 along +z with +y up; the chart at z = ``chart_distance_mm``.  World x is the examiner's right
-(TABO frame of :mod:`vissim.optics.trial_lens`), so the camera's image right is world -x.  Light
+(TABO frame of `vissim.optics.trial_lens`), so the camera's image right is world -x.  Light
 travels towards -z: chart, trial lenses (the last lens's back vertex at ``vertex_distance_mm``,
 the others stacked towards the chart with ``lens_gap_mm`` of air), camera.
 
@@ -19,19 +19,19 @@ Choices, and why:
   the chart's mean reflectance over it: a clean ground truth.  A diffuse chart lit by lamps
   would add light-sampling noise and an illumination falloff that tells nothing about blur.
 * **Texture**: the print raster, ``nearest`` filtered, at >= 4 texels per camera pixel
-  (:func:`chart_mm_per_texel`).  Nearest reproduces the printed raster exactly (piecewise
+  (`chart_mm_per_texel`).  Nearest reproduces the printed raster exactly (piecewise
   constant, like ink dots); bilinear would add a one-texel triangle blur.  The raster is
   cropped around the axis, or padded with its edge values, to cover the field plus blur and
   magnification margins.
-* **Lenses**: PLY meshes with exact normals (:mod:`vissim.bench.lens_mesh`), made of the
-  refraction-only ``vissim_refract`` BSDF (:mod:`vissim.render.plugins`).  Thin lenses
+* **Lenses**: PLY meshes with exact normals (`vissim.bench.lens_mesh`), made of the
+  refraction-only ``vissim_refract`` BSDF (`vissim.render.plugins`).  Thin lenses
   (``refractive_index`` None) become crown-glass lenses of realistic centre thickness for the
-  clear aperture, and the theory (:meth:`DslrBench.viewing_setup`, a
-  :class:`~vissim.optics.setup.ViewingSetup`) uses those same lenses and gives the aperture.
+  clear aperture, and the theory (`DslrBench.viewing_setup`, a
+  `ViewingSetup`) uses those same lenses and gives the aperture.
 
 The dict is Mitsuba's scene-dict format with plain values only: transforms are 4 x 4 row-major
 nested lists under ``to_world`` and bitmap textures carry a float32 numpy array under
-``data``; :func:`vissim.render.run.to_mitsuba_dict` converts them.  Nothing here imports Mitsuba.
+``data``; `vissim.render.run.to_mitsuba_dict` converts them.  Nothing here imports Mitsuba.
 """
 
 from __future__ import annotations
@@ -86,30 +86,45 @@ class DslrBench:
 
     Parameters
     ----------
-    focal_length_mm, f_number : float
-        The camera lens (an ideal thin lens): focal length, mm, and f-number (its entrance
-        pupil is ``focal_length_mm / f_number`` across).
-    focus_distance_mm, chart_distance_mm : float
-        Where the camera is focused and where the chart stands, mm from the camera lens.
-    vertex_distance_mm, lens_gap_mm : float
-        From the camera lens to the nearest trial lens, and between lenses in the holder, mm.
+    focal_length_mm : float
+        The camera lens (an ideal thin lens): focal length, mm.
+    f_number : float
+        Its f-number (the entrance pupil is ``focal_length_mm / f_number`` across).
+    focus_distance_mm : float
+        Where the camera is focused, mm from the camera lens.
+    chart_distance_mm : float
+        Where the chart stands, mm from the camera lens.
+    vertex_distance_mm : float
+        From the camera lens to the nearest trial lens, mm.
+    lens_gap_mm : float
+        Between lenses in the holder, mm.
     lenses : tuple of TrialLens
         Trial lenses, ordered from the chart to the camera, as in
-        :class:`~vissim.optics.trial_lens.TrialLensSetup` (at most the holder's slots).
+        `TrialLensSetup` (at most the holder's slots).
     refractive_index : float
         The lenses' glass at the design wavelength (crown glass by default).
     clear_aperture_mm : float or None
-        The lens meshes' diameter, mm; None sizes them to the beam (:meth:`clear_aperture`).
-    arcmin_per_px, size_px : float, (int, int)
-        The sensor's sampling, arcmin per pixel, and its size ``(rows, cols)``.
-    spp, seed, sampler : int, int, str
-        Samples per pixel, seed and Mitsuba sampler of the render.
+        The lens meshes' diameter, mm; None sizes them to the beam (`clear_aperture`).
+    arcmin_per_px : float
+        The sensor's sampling, arcmin per pixel.
+    size_px : (int, int)
+        The sensor's size ``(rows, cols)``.
+    spp : int
+        Samples per pixel of the render.
+    seed : int
+        The render's seed.
+    sampler : str
+        The render's Mitsuba sampler.
     fresnel_loss : bool
         Whether the lens surfaces reflect (Fresnel) or transmit everything.
-    texels_per_px, radiance_scale : float
-        The chart texture's resolution per camera pixel and its radiance scale (relative).
-    mesh_rings, mesh_segments : int
-        Tessellation of each lens surface.
+    texels_per_px : float
+        The chart texture's resolution per camera pixel.
+    radiance_scale : float
+        The chart's radiance scale (relative).
+    mesh_rings : int
+        Tessellation of each lens surface: rings.
+    mesh_segments : int
+        Tessellation of each lens surface: segments per ring.
 
     Examples
     --------
@@ -203,7 +218,7 @@ class DslrBench:
         return tuple(self._make_physical(lens) for lens in self.lenses)
 
     def trial_lens_setup(self) -> TrialLensSetup:
-        """The rendered lenses as a :class:`TrialLensSetup` (object distance = chart distance)."""
+        """The rendered lenses as a `TrialLensSetup` (object distance = chart distance)."""
         distance_m = mm_to_m(self.chart_distance_mm)
         return TrialLensSetup(self.physical_lenses, self.vertex_distance_mm, distance_m, self.lens_gap_mm)
 

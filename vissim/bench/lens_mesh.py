@@ -2,7 +2,7 @@
 
 Frame and sign conventions (millimetres; the bench's world frame up to a translation):
 
-* x is the examiner's right (TABO frame, :mod:`vissim.optics.trial_lens`), y is up, +z points from
+* x is the examiner's right (TABO frame, `vissim.optics.trial_lens`), y is up, +z points from
   the camera towards the chart.  Light travels towards -z.
 * The back vertex (camera side) is at z = 0, the front vertex (chart side) at z = t.
 * A surface of 2x2 curvature matrix K (1/mm) is ``z = z_vertex - sag(x)`` with
@@ -20,7 +20,7 @@ Frame and sign conventions (millimetres; the bench's world frame up to a transla
   wrong blur size and PSNR < 30 dB, while 16 rings with exact normals matched a 160-ring mesh.
 * Faces wind counter-clockwise seen from outside, so the winding normal is outward too.
 
-Nothing here imports Mitsuba; :func:`cached_lens_ply` hands the renderer a file path.
+Nothing here imports Mitsuba; `cached_lens_ply` hands the renderer a file path.
 """
 
 from __future__ import annotations
@@ -274,7 +274,7 @@ def ply_bytes(mesh: LensMesh) -> bytes:
 
 
 def write_ply(mesh: LensMesh, path: str | os.PathLike[str], *, overwrite: bool = False) -> Path:
-    """Write ``mesh`` as PLY (:func:`ply_bytes`: same mesh, same bytes) atomically; return the path."""
+    """Write ``mesh`` as PLY (`ply_bytes`: same mesh, same bytes) atomically; return the path."""
     path = Path(path)
     data = ply_bytes(mesh)
     with atomic_output(path, overwrite=overwrite) as tmp:

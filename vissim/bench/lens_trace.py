@@ -1,7 +1,7 @@
 """Exact ray trace through the bench's trial lenses, for optical path length (pure numpy).
 
-The surfaces are the analytic ones :mod:`vissim.bench.lens_mesh` meshes, not the facets: in the
-bench's world frame (:mod:`vissim.bench.dslr`; mm, x the examiner's right, y up, +z from the
+The surfaces are the analytic ones `vissim.bench.lens_mesh` meshes, not the facets: in the
+bench's world frame (`vissim.bench.dslr`; mm, x the examiner's right, y up, +z from the
 camera towards the chart, light travelling towards -z) a surface of curvature matrix K with
 its vertex at ``z_v`` is ``z = z_v - sag(K, x)``.  Lens i's back vertex is at
 ``DslrBench.lens_back_vertex_z_mm()[i]``, its front vertex ``t`` further towards the chart.
@@ -9,7 +9,7 @@ its vertex at ``z_v`` is ``z = z_v - sag(K, x)``.  Lens i's back vertex is at
 * **Intersection**: Newton's method on ``f(s) = p_z + s d_z - z_v + sag(p_xy + s d_xy)`` from the
   vertex plane, to 1e-12 mm.
 * **Refraction**: vector Snell's law with the exact normal ``(d sag/dx, d sag/dy, 1)``; the glass
-  index comes from :mod:`vissim.optics.glass` at the traced wavelength (the bench's lenses keep
+  index comes from `vissim.optics.glass` at the traced wavelength (the bench's lenses keep
   the shape they were built with at n_d, as real glass does).  Air is n = 1, as in Mitsuba's
   ``vissim_refract``.
 * **Aiming**: rays from one object point are aimed at a regular grid on the entrance-pupil
@@ -70,8 +70,8 @@ class RayBundle:
 def bench_surfaces(bench, wavelength_nm: float = D_LINE_NM) -> tuple[Surface, ...]:
     """The surfaces of ``bench.physical_lenses`` in the order light meets them (chart to camera).
 
-    Each lens is glass of its own n_d with crown's Abbe number (:func:`~vissim.optics.glass.glass_like_crown`),
-    so at :data:`~vissim.optics.glass.D_LINE_NM` the index is exactly the rendered ``int_ior``.
+    Each lens is glass of its own n_d with crown's Abbe number (`glass_like_crown`),
+    so at `D_LINE_NM` the index is exactly the rendered ``int_ior``.
     """
     radius = 0.5 * bench.clear_aperture()
     surfaces: list[Surface] = []
@@ -157,8 +157,8 @@ def aim_rays(surfaces, object_point_mm, targets_xy_mm, stop_z_mm: float = 0.0, *
     Newton's method on the landing error, the launch direction parametrised by where the
     undeviated ray would cross the stop plane; Jacobian by finite differences.  Returns the
     bundle (its ``opl_mm`` corrected to first order to the exact targets, by the ray slope) and
-    the launch directions.  Converges to :data:`AIM_TOL_MM` in 3-5 steps for trial lenses.
-    ``apertured`` as in :func:`trace_rays`.
+    the launch directions.  Converges to `AIM_TOL_MM` in 3-5 steps for trial lenses.
+    ``apertured`` as in `trace_rays`.
     """
     origin = np.asarray(object_point_mm, dtype=float).reshape(3)
     targets = np.asarray(targets_xy_mm, dtype=float).reshape(-1, 2)

@@ -1,12 +1,12 @@
-"""Bench scene files (TOML): read, validate, and turn into a :class:`DslrBench` and a chart.
+"""Bench scene files (TOML): read, validate, and turn into a `DslrBench` and a chart.
 
 A scene file has the tables ``[camera]``, ``[holder]`` (with ``[[holder.lenses]]``, chart side
 first), ``[chart]``, ``[image]`` and ``[sampling]``; ``scenes/dslr_bench.toml`` is the
 commented example.  Every table and key is optional (defaults: the thesis's bench, an empty
 holder, the Sloan letter R at LogMAR 1.0); unknown tables or keys, and values of the wrong
-type, raise :class:`~vissim.errors.VissimInputError` naming the file, the key and the unit.
+type, raise `VissimInputError` naming the file, the key and the unit.
 
-The ``[chart]`` table alone also makes a *chart file* (:func:`load_chart_toml`): either one
+The ``[chart]`` table alone also makes a *chart file* (`load_chart_toml`): either one
 letter (``letter``, ``logmar``) or an ETDRS chart (``letters``, ``logmar_range``,
 ``logmar_step``, ``seed``), with ``polarity``, ``paper_reflectance``, ``ink_reflectance``.  The
 chart's viewing distance is the bench's chart distance.
@@ -161,7 +161,7 @@ def chart_spec_from_table(table: dict, source: str, chart_distance_mm: float) ->
 
 
 def bench_from_tables(doc: dict, source: str, **overrides: Any) -> DslrBench:
-    """A :class:`DslrBench` from parsed scene tables; ``overrides`` replace fields last."""
+    """A `DslrBench` from parsed scene tables; ``overrides`` replace fields last."""
     _check_keys(doc, _TABLES, source)
     fields: dict[str, Any] = {}
     for name, schema in (("camera", _CAMERA), ("holder", _HOLDER), ("image", _IMAGE), ("sampling", _SAMPLING)):
@@ -203,7 +203,7 @@ _ATV_TUBE_KEYS = {
 
 
 def load_atv_toml(path: str | os.PathLike[str]):
-    """The :class:`~vissim.bench.atv.AtvConfig` of an ATV scene file (``scenes/atv_tube.toml``)."""
+    """The `AtvConfig` of an ATV scene file (``scenes/atv_tube.toml``)."""
     from vissim.bench.atv import AtvConfig, AtvEye, AtvTube, atv_trial_lens
     from vissim.optics.prescription import Prescription
 

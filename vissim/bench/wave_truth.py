@@ -1,13 +1,13 @@
 """The bench's wave-optical ground truth: the chart imaged through the traced trial lenses.
 
 Mitsuba renders ray optics.  The wave truth images the same chart with the wavefront the
-bench's own lenses add, traced exactly (:mod:`vissim.bench.bench_wavefront`), by wave optics:
+bench's own lenses add, traced exactly (`vissim.bench.bench_wavefront`), by wave optics:
 
 1. the chart on a grid ``oversample`` times finer than the camera's pixels, in visual angle
-   (:func:`~vissim.charts.render_chart_angular`, the chart's real distance);
-2. magnified by the lenses' spectacle magnification (the bench's :class:`ViewingSetup`; the
+   (`render_chart_angular`, the chart's real distance);
+2. magnified by the lenses' spectacle magnification (the bench's `ViewingSetup`; the
    trace's tilt at the frame's corners agrees with it to 2e-5);
-3. convolved with the wave PSF of the traced OPD map (:class:`~vissim.optics.opd_map.OpdMap`)
+3. convolved with the wave PSF of the traced OPD map (`OpdMap`)
    over the camera's entrance pupil, pixel-integrated at the fine sampling;
 4. integrated onto the camera's pixels (block means).
 
@@ -18,9 +18,9 @@ traced wavefront varies by < 0.5 nm RMS over the frame (``shift_invariance``), s
 shift-invariant to that.  The camera must be focused on the chart: its own focus error is
 not part of the lenses' wavefront.
 
-Steps 2-4 are :func:`image_through_traced_lenses`, for any fine image laid out on the bench's
+Steps 2-4 are `image_through_traced_lenses`, for any fine image laid out on the bench's
 frame (a campaign passes its own synthetic chart); with ``mode="geometric"`` they use the
-trace's ray PSF instead, the geometric self-check (:mod:`vissim.validation.wave_bench`).
+trace's ray PSF instead, the geometric self-check (`vissim.validation.wave_bench`).
 """
 
 from __future__ import annotations

@@ -3,10 +3,10 @@
 Each sub-command lives in its own module exposing ``add_parser(subparsers)``; the module
 registers its parser and sets ``func`` (a callable taking the parsed namespace and returning
 an exit code) with ``parser.set_defaults(func=...)``.  Bad input raises
-:class:`vissim.errors.VissimInputError`; :func:`main` prints its one line and exits 2.
+`vissim.errors.VissimInputError`; `main` prints its one line and exits 2.
 
 A command's files appear together when it succeeds, or not at all
-(:func:`vissim.atomic.output_transaction`); a command that resumes from what it already wrote
+(`vissim.atomic.output_transaction`); a command that resumes from what it already wrote
 (``validate``, ``report``) sets ``writes_progressively=True`` and writes file by file.
 """
 
@@ -59,13 +59,13 @@ def _protect_negative_values(argv: list[str]) -> list[str]:
     """Let '-2.00/-1.25x180' be a value: argparse would take it for an option.
 
     No vissim option starts with a digit, so a leading space marks such tokens as values while
-    argparse reads them; :func:`_unprotect` takes it off again.
+    argparse reads them; `_unprotect` takes it off again.
     """
     return [" " + a if _NEGATIVE_VALUE.match(a) else a for a in argv]
 
 
 def _unprotect(args: argparse.Namespace) -> argparse.Namespace:
-    """Strip the leading space :func:`_protect_negative_values` added to string values."""
+    """Strip the leading space `_protect_negative_values` added to string values."""
 
     def strip(value):
         if isinstance(value, str) and value.startswith(" ") and _NEGATIVE_VALUE.match(value[1:]):

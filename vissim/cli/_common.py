@@ -23,7 +23,7 @@ def add_rx_arg(parser, *, required: bool = False, default_text: str = "") -> Non
 
 
 def add_trial_lens_args(group) -> None:
-    """``--sphere`` / ``--cylinder`` / ``--axis``: one trial lens (read with :func:`trial_lens_powers`)."""
+    """``--sphere`` / ``--cylinder`` / ``--axis``: one trial lens (read with `trial_lens_powers`)."""
     group.add_argument("--sphere", type=float, metavar="D", help="trial lens sphere in dioptres (plus lens > 0)")
     group.add_argument("--cylinder", type=float, metavar="D", help="trial lens cylinder in dioptres (needs --axis)")
     group.add_argument("--axis", type=float, metavar="DEG", help="trial lens cylinder axis, TABO degrees 0-180")

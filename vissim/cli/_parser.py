@@ -4,10 +4,10 @@
   ``vissim: error: <message>``, and exit 2 (no usage block).
 * ``type=float`` / ``type=int`` options refuse NaN and infinity and name the option's unit;
   counts (``--spp``, ``--size``, ...), pupils, samplings and wavelengths must be positive, and
-  seeds 32-bit.  :class:`Number` adds a
+  seeds 32-bit.  `Number` adds a
   range (``Number(float, positive=True)``) or allows infinity.
 * The unit is the option's own name where it ends in one (``--pupil-mm``, ``--arcmin-per-px``,
-  ``--accommodation-diopters``), else its metavar (``D``, ``DEG``, ``MM``), else :data:`UNITS_BY_DEST`.
+  ``--accommodation-diopters``), else its metavar (``D``, ``DEG``, ``MM``), else `UNITS_BY_DEST`.
 """
 
 from __future__ import annotations
@@ -119,7 +119,7 @@ def _number_type(action: argparse.Action) -> Number | None:
 
 
 class VissimArgumentParser(argparse.ArgumentParser):
-    """:class:`argparse.ArgumentParser` with one-line errors and checked numbers (module doc)."""
+    """`argparse.ArgumentParser` with one-line errors and checked numbers (module doc)."""
 
     def _get_value(self, action, arg_string):
         number = _number_type(action)

@@ -7,7 +7,7 @@ import logging
 import math
 from pathlib import Path
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.cli._common import add_aberration_args, check_outputs_apart, parse_float_list, wavefront_from_args
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import Image, image_files, output_bit_depth, read_image, write_image
@@ -78,10 +78,9 @@ def image_too_small(path: Path, shape: tuple[int, ...], psf_px: int, step: float
     A blur's PSF field is cut to twice the image's longer side plus one (no pixel sees farther);
     an image whose cut field loses more than 1 % of the energy is too small.
     """
-    rows, cols = shape[:2]
     side = math.ceil((psf_px - 1) / 2)
     return VissimInputError(
-        f"{path}: the image is {cols} × {rows} px (width × height), too small for this blur: its PSF needs a "
+        f"{path}: the image is {size_text(shape)}, too small for this blur: its PSF needs a "
         f"{psf_px} px field at {step:g} arcmin/px, so the image needs at least {side} px on its longer side "
         "(or a coarser --arcmin-per-px)")
 

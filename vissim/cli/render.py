@@ -1,8 +1,8 @@
 """``vissim render``: render the virtual optical bench with Mitsuba 3 to a linear EXR.
 
-Sub-commands: ``render bench`` (the DSLR bench, :mod:`vissim.bench.dslr`), ``render atv``
-(the ATV tube, :mod:`vissim.bench.atv`) and ``render depth`` (depth scenes,
-:mod:`vissim.bench.depth_scene`).
+Sub-commands: ``render bench`` (the DSLR bench, `vissim.bench.dslr`), ``render atv``
+(the ATV tube, `vissim.bench.atv`) and ``render depth`` (depth scenes,
+`vissim.bench.depth_scene`).
 """
 
 from __future__ import annotations

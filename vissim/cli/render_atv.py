@@ -1,8 +1,8 @@
 """``vissim render atv``: the retinal image of one lit phone pixel seen through the ATV tube.
 
-Registered by :mod:`vissim.cli.render` through :func:`add_atv_parser`.  Thin: parse, build an
-:class:`~vissim.bench.atv.AtvConfig`, call :func:`~vissim.render.atv_trace.trace_atv` (default)
-or :func:`~vissim.render.atv_trace.render_atv_camera`, write a float32 EXR (flux per arcmin²,
+Registered by `vissim.cli.render` through `add_atv_parser`.  Thin: parse, build an
+`AtvConfig`, call `trace_atv` (default)
+or `render_atv_camera`, write a float32 EXR (flux per arcmin²,
 row 0 up, columns to the eye's right) whose provenance holds the inputs, the metrics and the
 paraxial prediction, and print a summary (``--json``: one JSON object).
 """

@@ -1,8 +1,8 @@
 """``vissim render depth``: a depth scene (charts at several distances, a tilted chart) through an eye or the DSLR.
 
-Registered by :mod:`vissim.cli.render` through :func:`add_depth_parser`.  Thin: load the
-scene file (:mod:`vissim.bench.depth_scene_files`), apply the options, call
-:func:`vissim.render.depth_render.render_depth`, write the blurred image (and on request the
+Registered by `vissim.cli.render` through `add_depth_parser`.  Thin: load the
+scene file (`vissim.bench.depth_scene_files`), apply the options, call
+`vissim.render.depth_render.render_depth`, write the blurred image (and on request the
 all-in-focus image and the axial depth map) with provenance, print a summary with the
 predicted blur of every panel.
 
@@ -12,7 +12,7 @@ channel ``Z`` (or ``.npy``), which ``vissim blur-depth AIF.exr DEPTH.exr`` reads
 
 The all-in-focus image and the depth map cover a margin beyond the blurred image's frame on
 every side (``--margin-px``; default the scene's largest blur radius,
-:func:`vissim.bench.depth_viewers.frame_margin_px`), recorded as ``margin_px`` in their
+`vissim.bench.depth_viewers.frame_margin_px`), recorded as ``margin_px`` in their
 provenance: ``blur-depth`` simulates on the larger grid, so it sees what the observer sees
 beyond the frame, and crops its output to the blurred image's frame.
 """

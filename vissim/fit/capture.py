@@ -1,8 +1,8 @@
 """Fitting a bench capture: the setup from an image's provenance, the campaign's entry point, the comparison with theory.
 
-:func:`fit_capture` is what a campaign item calls with (image, reference, sampling, pupil,
-bench): it fits with the magnification tied to the bench (:class:`~vissim.fit.power_model.BenchLensModel`)
-and returns the :class:`~vissim.fit.rx_fit.RxFit` record.  :func:`compare_with_theory` puts the
+`fit_capture` is what a campaign item calls with (image, reference, sampling, pupil,
+bench): it fits with the magnification tied to the bench (`BenchLensModel`)
+and returns the `RxFit` record.  `compare_with_theory` puts the
 fit beside vergence theory and Table 4.2 for the lenses that were on the bench, and says when
 the fit and theory disagree beyond the fit's interval.
 """
@@ -63,7 +63,7 @@ def rendered_bench(provenance: Any) -> DslrBench | None:
     """The bench a render records *with* its trial lenses (to compare a fit with theory), or None.
 
     Only ``vissim render bench``'s record (``inputs.bench.lenses``) has them; None when there are
-    none, or they cannot be rebuilt.  The fit itself never sees them (:func:`bench_from_provenance`).
+    none, or they cannot be rebuilt.  The fit itself never sees them (`bench_from_provenance`).
     """
     bench = bench_from_provenance(provenance)
     table = _bench_table(provenance)
@@ -84,7 +84,7 @@ def fit_capture(image: np.ndarray, reference: np.ndarray, *, arcmin_per_px: floa
 
     ``bench`` gives the magnification tie (its lenses are ignored); without it the fit uses no
     magnification and reports the sign undetermined.  ``mode`` is ``"geometric"`` for Mitsuba
-    renders (no diffraction), ``"wave"`` for real captures.  ``options`` go to :func:`fit_rx`.
+    renders (no diffraction), ``"wave"`` for real captures.  ``options`` go to `fit_rx`.
     """
     return fit_rx(image, reference, arcmin_per_px=arcmin_per_px, pupil_diameter_mm=pupil_diameter_mm, mode=mode,
                   magnification="bench" if bench is not None else "none", bench=bench, **options)

@@ -5,7 +5,7 @@ The capture is modelled as ``gain * (PSF_M * R shifted) o M^-1 + offset``: the r
 chart) blurred by the PSF of the defocus matrix D (dioptres, TABO x/y frame, positive for a
 myopic camera) and shifted by a sub-pixel translation, then magnified by the spectacle
 magnification matrix M about the tile's centre (the optical axis, as
-:func:`vissim.optics.resample.magnify`).  Gain and offset are solved in closed form by the fit.
+`vissim.optics.resample.magnify`).  Gain and offset are solved in closed form by the fit.
 
 **The shift is a phase ramp** on the transfer function, not a spline: a spline resampling of
 the sharp, under-sampled reference attenuates its highest frequencies by up to ~30 % at half a
@@ -26,17 +26,17 @@ pixel-integrated chart), so the kernel is the *point* PSF, not a second pixel in
   the pupil mapped linearly by the landing matrix A (arcmin per mm of pupil): uniform over an
   ellipse.  Its transfer function is analytic, ``2 J1(2 pi R |A^T f|) / (2 pi R |A^T f|)``, and
   smooth in the parameters, which is what a least-squares Jacobian needs.  Checked against the
-  ray histogram of :func:`vissim.optics.psf.compute_psf` in ``tests/fit/test_forward.py``.
-* ``wave``: :func:`vissim.optics.psf.compute_psf` (``pixel="sample"``), whose DFT is the OTF.
+  ray histogram of `vissim.optics.psf.compute_psf` in ``tests/fit/test_forward.py``.
+* ``wave``: `vissim.optics.psf.compute_psf` (``pixel="sample"``), whose DFT is the OTF.
 
 The reference is edge-padded by a margin that holds the largest blur allowed
-(``max_power_diopters``), on the grid :func:`vissim.optics.blur.padded_shape` gives that widest
+(``max_power_diopters``), on the grid `vissim.optics.blur.padded_shape` gives that widest
 kernel, and transformed once; each evaluation is one transfer function, one
-inverse FFT and one cubic-spline resampling (:func:`scipy.ndimage.affine_transform`).  The
+inverse FFT and one cubic-spline resampling (`scipy.ndimage.affine_transform`).  The
 blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
 so the Jacobian's steps in the shift alone reuse it and pay only the ramp and the inverse FFT.
 Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame
-(:func:`vissim.units.osa_xy_to_image_colrow`), so a 2 x 2 matrix in the x/y frame is the same
+(`vissim.units.osa_xy_to_image_colrow`), so a 2 x 2 matrix in the x/y frame is the same
 matrix in (col, row) and is reordered for (row, col).
 """
 
@@ -75,8 +75,8 @@ def landing_matrix_rc_px(defocus_xy, magnification_xy, arcmin_per_px: float) -> 
     return xy_matrix_to_image_rowcol(0.5 * (scaled + scaled.T)) * float(mrad_to_arcmin(1.0)) / arcmin_per_px
 
 
-#: The jinc 2 J1(x) / x tabulated (step :data:`_JINC_STEP`), interpolated linearly: 20x faster than
-#: :func:`scipy.special.j1` on a transfer-function grid, within 2e-7 of it.
+#: The jinc 2 J1(x) / x tabulated (step `_JINC_STEP`), interpolated linearly: 20x faster than
+#: `scipy.special.j1` on a transfer-function grid, within 2e-7 of it.
 _JINC_STEP = 1e-3
 _JINC_TABLE = np.empty(0)
 
@@ -103,8 +103,12 @@ class ForwardModel:
     ----------
     reference : ndarray (H, W)
         Linear light, pixel-integrated, at ``arcmin_per_px``.
-    pupil_diameter_mm, wavelength_nm, mode
-        The camera's entrance pupil, the wavelength (wave mode) and ``"geometric"`` or ``"wave"``.
+    pupil_diameter_mm
+        The camera's entrance pupil, mm.
+    wavelength_nm
+        The wavelength (wave mode), nm.
+    mode
+        ``"geometric"`` or ``"wave"``.
     max_power_diopters
         The largest principal defocus the model is asked for; sets the padding.
     """

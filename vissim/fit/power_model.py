@@ -7,21 +7,21 @@ centrosymmetric).  On the bench the sign is carried by the trial lens's spectacl
 magnification: a plus lens magnifies, a minus lens minifies.  A model says how magnification
 follows power:
 
-``bench`` (:class:`BenchLensModel`)
+``bench`` (`BenchLensModel`)
     The fitted vector q is the marked power (M, J0, J45) of one trial lens in the bench's holder,
     made physical exactly as the bench makes it (crown glass, realistic thickness:
-    :meth:`vissim.bench.dslr.DslrBench.physical_lenses`).  Vergence theory
-    (:meth:`~vissim.bench.dslr.DslrBench.viewing_setup`) gives the power it adds at the camera,
+    `vissim.bench.dslr.DslrBench.physical_lenses`).  Vergence theory
+    (`viewing_setup`) gives the power it adds at the camera,
     the *effective* power reported (what ``vissim trial-lens`` prints as ``effective_*``), and
     its magnification matrix.  The sign is then in the data.
-``free`` (:class:`FreeMagnificationModel`)
+``free`` (`FreeMagnificationModel`)
     q is the effective power; an isotropic magnification is a separate nuisance.  Blur carries
     no sign, so the sign is reported undetermined.
-``none`` (:class:`NoMagnificationModel`)
+``none`` (`NoMagnificationModel`)
     q is the effective power, no magnification (a capture whose sharp reference was taken
     through the same optics but for the refraction).  The sign is undetermined.
 
-Each model maps q (and its own nuisances) to :class:`ModelOptics`.
+Each model maps q (and its own nuisances) to `ModelOptics`.
 """
 
 from __future__ import annotations
@@ -130,7 +130,7 @@ class BenchLensModel:
 
 
 def power_model(name: str, bench: DslrBench | None = None):
-    """The model called ``name`` (:data:`MAGNIFICATION_MODELS`); ``bench`` is needed for ``"bench"``."""
+    """The model called ``name`` (`MAGNIFICATION_MODELS`); ``bench`` is needed for ``"bench"``."""
     if bench is not None:
         bench = dataclasses.replace(bench, lenses=())  # the fit must not see the lenses, only the holder
     if name == "bench":

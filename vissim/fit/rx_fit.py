@@ -1,19 +1,19 @@
-"""Fit the refraction a capture shows: :func:`fit_rx` and its result record :class:`RxFit`.
+"""Fit the refraction a capture shows: `fit_rx` and its result record `RxFit`.
 
 **What is fitted.**  The sphero-cylinder added at the camera (``vissim trial-lens``'s
 ``effective_*``; positive for a plus lens), in power vectors (M, J0, J45) so that the axis
 never wraps.  The parameters are the power vector q of the magnification model
-(:mod:`vissim.fit.power_model`: the trial lens's marked power on the bench, or the effective
+(`vissim.fit.power_model`: the trial lens's marked power on the bench, or the effective
 power itself), the sub-pixel shift (rows, cols), and optional nuisances: a focus offset (a
 sphere added to the defocus but not to the magnification), the pupil diameter (as a log
 scale), an isotropic magnification (model ``free``).  Gain and offset are solved in closed
 form at every evaluation (variable projection), so an exposure or paper-level difference
 between capture and reference costs nothing.
 
-**How.**  :func:`scipy.optimize.least_squares` (trust region, finite-difference Jacobian) on
-the pixel residual of :class:`vissim.fit.forward.ForwardModel`.  Multi-started:
+**How.**  `scipy.optimize.least_squares` (trust region, finite-difference Jacobian) on
+the pixel residual of `vissim.fit.forward.ForwardModel`.  Multi-started:
 
-1. the shift is initialised by cross-correlation (:func:`vissim.validation.registration.register`)
+1. the shift is initialised by cross-correlation (`vissim.validation.registration.register`)
    and then re-solved inside every least-squares step as two of the fitted parameters;
 2. stage A fits the blur alone: the effective power with a free isotropic magnification, from
    the best sphere of a scan (J = 0) and four cylinders around it (axes 0, 45, 90, 135);
@@ -24,35 +24,35 @@ the pixel residual of :class:`vissim.fit.forward.ForwardModel`.  Multi-started:
 
 **Sign.**  Blur is even in each principal power; the signs are in the magnification (model
 ``bench``: the trial lens magnifies each meridian by its own power).  The candidates other than
-the best (those that differ from it by more than :data:`SAME_SOLUTION_DIOPTERS`: a principal
+the best (those that differ from it by more than `SAME_SOLUTION_DIOPTERS`: a principal
 power near zero has no sign to decide) are kept with ``delta_chi2 = (SSR - SSR_best) / (sigma^2 kappa)``,
 ``kappa >= 1`` the largest ratio of the measured (sandwich) to the white variance of a power component;
 the signs are *determined* when every one of them is worse by at least
-:data:`SIGN_MIN_DELTA_CHI2`.  Otherwise all plausible solutions are reported and the top-level
+`SIGN_MIN_DELTA_CHI2`.  Otherwise all plausible solutions are reported and the top-level
 sphere, cylinder, axis and power vector are ``None``.
 
 **Intervals.**  95 % intervals, ``+-1.96 sqrt(sigma_noise^2 + sigma_model^2)`` per power-vector
 component.  The noise part is the curvature of the objective scaled by the measured residuals,
-as a sandwich ``(J^T J)^-1 J^T S J (J^T J)^-1`` (:func:`sandwich_covariance`): a render's
+as a sandwich ``(J^T J)^-1 J^T S J (J^T J)^-1`` (`sandwich_covariance`): a render's
 Monte-Carlo noise is uneven (it lives on the letter's blurred edges, where ``J`` is large, not on
 the flat paper) and the model's mismatch is spatially correlated, so the textbook
 ``sigma^2 (J^T J)^-1`` with ``sigma^2 = SSR / (N - k)`` (kept in the record as
 ``white_standard_error``) was 2.5-2.9x too narrow on bench renders, measured against 40
-re-renders with other seeds (``tests/fit/test_fit_coverage.py``), where the sandwich is within 10 %.  The model part, :data:`MODEL_ERROR_DIOPTERS`, is the fit's error against
+re-renders with other seeds (``tests/fit/test_fit_coverage.py``), where the sandwich is within 10 %.  The model part, `MODEL_ERROR_DIOPTERS`, is the fit's error against
 vergence theory on bench renders that noise does not explain (measured, see the constant);
 ``model_error_diopters=0`` gives noise-only intervals (also in the record, ``interval_95_noise``).
 The effective power's covariance is carried from q by the model's Jacobian.  The axis is
 *determined* when the cylinder differs from zero at 95 % (the 2-dof test
-``J^T Cov_J^-1 J >=`` :data:`AXIS_MIN_CHI2`); its interval is 1.96 sigma_perp / (2 |J|).
+``J^T Cov_J^-1 J >=`` `AXIS_MIN_CHI2`); its interval is 1.96 sigma_perp / (2 |J|).
 
 **Resolution.**  At coarse sampling a sub-pixel shift of the sharp reference and a small blur
 look alike (measured: about 0.1 D of spurious power on a synthetic no-lens capture at 1 arcmin/px
-and 3.6 mm), so a fit whose largest blur is below :data:`MIN_RESOLVED_BLUR_PX` reports status
+and 3.6 mm), so a fit whose largest blur is below `MIN_RESOLVED_BLUR_PX` reports status
 ``"unresolved"`` with a bound on the power, not a value.
 
 **Failure.**  Bad inputs (shapes, non-finite pixels, no structure, a blurred reference) raise
-:class:`~vissim.errors.VissimInputError`.  A fit is *failed* (``status == "failed"``, with a
-reason, and no prescription) when the model leaves more than :data:`MAX_UNEXPLAINED_FRACTION`
+`VissimInputError`.  A fit is *failed* (``status == "failed"``, with a
+reason, and no prescription) when the model leaves more than `MAX_UNEXPLAINED_FRACTION`
 of the capture's variance unexplained, or a parameter ends on its bound.
 """
 
@@ -157,7 +157,7 @@ def reference_sharpness(reference: np.ndarray) -> float:
 
 
 def check_fit_inputs(image: Any, reference: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The two images as float64 arrays, or one :class:`VissimInputError` naming what is wrong."""
+    """The two images as float64 arrays, or one `VissimInputError` naming what is wrong."""
     img = _as_image(image, "image")
     ref = _as_image(reference, "reference")
     if img.shape != ref.shape:
@@ -239,12 +239,12 @@ class Solution:
 
 @dataclass(frozen=True)
 class RxFit:
-    """The result of :func:`fit_rx`; :meth:`as_json` is the record the CLI and a campaign write.
+    """The result of `fit_rx`; `as_json` is the record the CLI and a campaign write.
 
     Attributes
     ----------
     status : str
-        ``"ok"``, ``"unresolved"`` (the blur is below :data:`MIN_RESOLVED_BLUR_PX`: only a bound
+        ``"ok"``, ``"unresolved"`` (the blur is below `MIN_RESOLVED_BLUR_PX`: only a bound
         on the power, ``power_bound_diopters`` in the record), ``"sign undetermined"`` (another
         combination of the principal powers' signs fits as well: the record's sphere, cylinder,
         axis and power vector are None and ``solutions`` lists the candidates with their delta
@@ -274,7 +274,7 @@ class RxFit:
 
     Examples
     --------
-    See :func:`fit_rx`; ``power_vector`` and ``prescription`` are None unless ``status`` is "ok".
+    See `fit_rx`; ``power_vector`` and ``prescription`` are None unless ``status`` is "ok".
     """
 
     status: str
@@ -297,7 +297,7 @@ class RxFit:
         return self.status == "ok"
 
     def __repr__(self) -> str:
-        """One short line: the fitted power, the residual and the fit's cost (:meth:`as_json` has the rest)."""
+        """One short line: the fitted power, the residual and the fit's cost (`as_json` has the rest)."""
         if self.status == "ok":
             rx, m = self.effective_power, self.best.power_vector[0]
             power = (f"{rx} D" if self.axis_determined else
@@ -470,7 +470,7 @@ def sandwich_covariance(jac: np.ndarray, residual: np.ndarray, shape: tuple[int,
 
 def residual_correlation_lag_px(residual_image: np.ndarray, max_lag_px: int = MAX_CORRELATION_LAG_PX) -> int:
     """The residual's correlation length: the smallest lag (px) where its autocorrelation, averaged over
-    rows and columns, falls below :data:`CORRELATION_CUTOFF` (at most ``max_lag_px``)."""
+    rows and columns, falls below `CORRELATION_CUTOFF` (at most ``max_lag_px``)."""
     r = residual_image - residual_image.mean()
     var = float(np.mean(r * r))
     if var <= 0:
@@ -521,18 +521,26 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
 
     Parameters
     ----------
-    image, reference : ndarray (H, W)
-        Linear light, one channel, the same size and sampling; the reference sharp (no lens).
-    arcmin_per_px, pupil_diameter_mm
-        The images' sampling and the camera's entrance pupil.
+    image : ndarray (H, W)
+        Linear light, one channel: the capture through the lenses.
+    reference : ndarray (H, W)
+        The same size and sampling as ``image``, sharp (no lens).
+    arcmin_per_px
+        The images' sampling.
+    pupil_diameter_mm
+        The camera's entrance pupil, mm.
     mode
         ``"geometric"`` (ray optics: a Mitsuba render has no diffraction) or ``"wave"``.
-    magnification, bench
-        How magnification follows power (:mod:`vissim.fit.power_model`); ``"bench"`` needs the
-        ``bench`` (its lenses are ignored: only vertex, chart and focus distances, glass).
-    fit_focus_offset, fit_pupil
-        Fit a focus offset (dioptres) and the pupil (a log scale) as nuisances.  Both trade
-        against the power: use them only when magnification or diffraction can separate them.
+    magnification
+        How magnification follows power (`vissim.fit.power_model`); ``"bench"`` needs ``bench``.
+    bench
+        The bench of ``magnification="bench"`` (its lenses are ignored: only vertex, chart and
+        focus distances, glass).
+    fit_focus_offset
+        Fit a focus offset (dioptres) as a nuisance.  It trades against the power: use it only
+        when magnification or diffraction can separate them.
+    fit_pupil
+        Fit the pupil (a log scale) as a nuisance; the same caution.
     model_error_diopters
         The model's own error per power-vector component (one standard deviation), added to the
         noise in the intervals; the default was measured on Mitsuba bench renders (module doc).
@@ -541,7 +549,7 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     -------
     RxFit
         ``status``, the best power vector ``best.power_vector`` = (M, J0, J45) in dioptres (the
-        power the blur adds; :meth:`Solution.spherocylinder` writes it), its covariance and
+        power the blur adds; `Solution.spherocylinder` writes it), its covariance and
         intervals, the other sign combinations and residual statistics.  ``image`` and
         ``reference`` are (H, W) arrays in the same orientation (row 0 at the top).
 

@@ -1,6 +1,6 @@
 """Accommodation: how much extra power an eye can add, and how much it adds for a target.
 
-Sign derivation (``docs/conventions.md``: a :class:`~vissim.optics.prescription.Prescription` is the
+Sign derivation (``docs/conventions.md``: a `Prescription` is the
 correcting lens at the eye's principal plane, a myope's sphere is negative).  Write ``M`` for
 the prescription's spherical equivalent, ``E = -M`` for the eye's excess power, ``A >= 0``
 for the accommodation exerted (extra power, dioptres) and ``L = 1/d`` for the *proximity* of
@@ -84,7 +84,7 @@ def amplitude_from_age_diopters(age_years, statistic: str = "mean") -> float:
 class Accommodation:
     """An eye's amplitude of accommodation in dioptres, with where the number came from.
 
-    Build it with :meth:`from_age`, :meth:`cycloplegic`, :meth:`absolute_presbyopia`, or
+    Build it with `from_age`, `cycloplegic`, `absolute_presbyopia`, or
     directly with a measured amplitude (``Accommodation(3.0)``).
     """
 
@@ -112,7 +112,7 @@ class Accommodation:
         return cls(0.0, "absolute presbyopia")
 
     def for_target(self, eye_rx: Prescription, target_distance_m: float) -> float:
-        """Accommodation this eye exerts to look at a target (see :func:`accommodation_for_target`)."""
+        """Accommodation this eye exerts to look at a target (see `accommodation_for_target`)."""
         return accommodation_for_target(eye_rx, target_distance_m, self.amplitude_diopters)
 
 

@@ -4,7 +4,7 @@ CuPy, not PyTorch: vissim's blur is NumPy and ``scipy.fft`` code (``rfft2``/``ir
 ``axes`` and ``s``, ``pad`` with ``edge``/``symmetric`` modes, ufuncs with ``out=``, fancy
 indexing, ``bincount``), and CuPy implements those same calls under the same names
 (``cupy`` for ``numpy``, ``cupyx.scipy.fft`` for ``scipy.fft``).  So one code path serves both
-devices: every function takes its array module from its inputs (:func:`array_module`), and
+devices: every function takes its array module from its inputs (`array_module`), and
 the CPU path, which the test suite runs, is the GPU path's code.  PyTorch would mean a second
 implementation in its own vocabulary (``torch.fft``, ``torch.nn.functional.pad``) and a far
 larger dependency for no function this code needs.

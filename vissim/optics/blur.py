@@ -1,6 +1,6 @@
 """Blurring images with PSFs, in linear light, by FFT convolution.
 
-* The image must be linear light (:mod:`vissim.imageio` decodes files) and its angular
+* The image must be linear light (`vissim.imageio` decodes files) and its angular
   sampling must equal the PSF's: a PSF travels with its sampling and a mismatch is an error.
 * The PSF's origin ``[N//2, N//2]`` is moved to the FFT origin, so even-sized kernels do
   not shift the image.
@@ -16,10 +16,10 @@
   vissim's default is the non-negative integrated PSF.  Simulate sharp inputs on a finer grid
   and integrate (as the validation harness does) when the last dB matters.
 * One greyscale image with one PSF costs one forward and one inverse real FFT of the padded
-  size plus the kernel's transform, pruned to the kernel's support (:func:`kernel_transfer`),
-  which :class:`BlurKernel` keeps for the next image blurred by the same PSF on the same grid.
+  size plus the kernel's transform, pruned to the kernel's support (`kernel_transfer`),
+  which `BlurKernel` keeps for the next image blurred by the same PSF on the same grid.
   Large images with small kernels are convolved by overlap-save instead, in squares of a few
-  hundred pixels (:func:`_tile_px` picks the size from an operation count): the same numbers
+  hundred pixels (`_tile_px` picks the size from an operation count): the same numbers
   to round-off, a kernel transform the size of one square, and FFTs that stay in cache, one
   square per core at a time.
 """

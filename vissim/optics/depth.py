@@ -1,6 +1,6 @@
 """Depth-dependent blur: one eye, one accommodation state, a scene with a depth map.
 
-Defocus per depth (derivation in :mod:`vissim.optics.accommodation`).  An object ``d`` metres away
+Defocus per depth (derivation in `vissim.optics.accommodation`).  An object ``d`` metres away
 has *proximity* ``L = 1/d`` dioptres (``L = 0`` for sky at infinity).  An eye whose correcting
 lens is ``Rx`` (myope negative), exerting accommodation ``A``, is corrected *for that object*
 by the lens::
@@ -48,12 +48,12 @@ focus; every output is a weighted mean of (extended) input colours.
 Cost: per non-empty layer one PSF (cached by wavefront; for an eye whose wavefront is defocus
 alone the symmetric plan pairs layers of opposite defocus, whose PSFs are point reflections of
 each other, so about half are computed), one pull-push and one batched convolution of
-(colours, extended coverage) (one real FFT pair, :func:`vissim.optics.blur_device.convolve_padded`;
+(colours, extended coverage) (one real FFT pair, `vissim.optics.blur_device.convolve_padded`;
 blur.py's overlap-save squares measured no faster on these windows), on the layer's *window*: the box of its tent matte grown by ``2 (r_k + r_max)`` pixels (``r`` the
 PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
 content's blur (``r_max``) lets it show, and both spread once more through partly occluding
 neighbours.  The continuation itself is estimated by pull-push on the window grown by another
-:data:`EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see the neighbourhood the whole
+`EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see the neighbourhood the whole
 frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
 (same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
 60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
@@ -140,7 +140,7 @@ def plan_layers(
     ``symmetric``: with an anchor inside the range, step by exactly ``max_spacing_diopters`` from
     it both ways, and end at the range's ends (at most one layer more per side), so layers
     pair up at equal and opposite defocus: for an eye whose wavefront is defocus alone their
-    PSFs are point reflections of each other (one computed PSF serves both, :func:`blur_depth`).
+    PSFs are point reflections of each other (one computed PSF serves both, `blur_depth`).
     """
     low, high = float(min_proximity_diopters), float(max_proximity_diopters)
     if high < low:
@@ -315,7 +315,7 @@ def blur_depth(
         The eye's correcting lens (myope negative), *not worn*: the eye is uncorrected.
     accommodation_diopters : float
         Accommodation exerted (D, >= 0), the same for the whole scene; see
-        :func:`vissim.optics.accommodation.accommodation_for_target`.
+        `vissim.optics.accommodation.accommodation_for_target`.
     extra_wavefront : Wavefront, optional
         Further aberrations of the eye (higher orders), the same at every depth.
     layer_spacing_fraction : float
@@ -332,11 +332,11 @@ def blur_depth(
         wanted (as ``render depth`` writes it), so the frame sees what lies beyond it.
     coarse_blur_px : float, optional
         Blur layers whose geometric blur diameter is at least this many pixels on a grid twice
-        as coarse (:func:`_blur_coarse`); ``None`` (default): every layer on the image's grid.
-        At :data:`COARSE_BLUR_PX` (14 px) a layer of white noise, the hardest input, comes out
-        within :data:`COARSE_MIN_DB` (44 dB PSNR) of its fine blur; wider blurs come closer.
+        as coarse (`_blur_coarse`); ``None`` (default): every layer on the image's grid.
+        At `COARSE_BLUR_PX` (14 px) a layer of white noise, the hardest input, comes out
+        within `COARSE_MIN_DB` (44 dB PSNR) of its fine blur; wider blurs come closer.
     device : {"cpu", "cuda", "auto"}
-        Where the layers are blurred (:mod:`vissim.optics.array_backend`): ``"cuda"`` on a GPU
+        Where the layers are blurred (`vissim.optics.array_backend`): ``"cuda"`` on a GPU
         through CuPy (the ``gpu`` extra), ``"auto"`` there when one is present.  PSFs are computed
         on the CPU either way.
 
@@ -503,11 +503,11 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
 
     ``lower``/``upper`` are each pixel's two layers and ``frac`` (float32) its weight in
     ``upper`` (the tent matte).  ``hidden`` is the part of each pixel that occludes layer ``k``
-    (its mattes on nearer layers, weighted by :func:`_occlusion_weight`); there layer ``k``
+    (its mattes on nearer layers, weighted by `_occlusion_weight`); there layer ``k``
     continues with the pull-push estimate of its own colour and coverage from the rest of the
     image (where its coverage is 0 the estimate is 0 too: no layer grows sideways).  The
     extended coverage also occludes the layers behind it: they are behind its continuation.
-    ``work`` (from :func:`_workspace`) holds reused buffers; the result may be one of them.
+    ``work`` (from `_workspace`) holds reused buffers; the result may be one of them.
     """
     xp = array_module(colour)
     n_ch = colour.shape[0]
@@ -577,7 +577,7 @@ def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) 
 
 def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
                  transfers: dict | None = None) -> tuple:
-    """Blur (C, h, w) planes of a window with one PSF (:func:`vissim.optics.blur_device.convolve_padded`).
+    """Blur (C, h, w) planes of a window with one PSF (`vissim.optics.blur_device.convolve_padded`).
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
@@ -605,7 +605,7 @@ def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend 
     return blurred[:, offset : offset + h, offset : offset + w], shape
 
 
-#: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of :func:`blur_depth`).
+#: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of `blur_depth`).
 COARSE_FACTOR = 2
 
 
@@ -615,7 +615,7 @@ def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: 
 
     ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
     image holds little above the coarse grid's Nyquist frequency, so this is close to the fine
-    blur (:data:`COARSE_MIN_DB` at :data:`COARSE_BLUR_PX`) at a quarter of the FFT work.
+    blur (`COARSE_MIN_DB` at `COARSE_BLUR_PX`) at a quarter of the FFT work.
     """
     n, h, w = planes.shape
     q = factor
@@ -631,7 +631,7 @@ def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: 
 
 
 def _workspace(shape: tuple[int, int, int], xp=np) -> dict:
-    """Buffers for :func:`_extended_layer` (``xp``: the array module, NumPy or CuPy)."""
+    """Buffers for `_extended_layer` (``xp``: the array module, NumPy or CuPy)."""
     n_ch, rows, cols = shape
     return {
         "stack": xp.empty((n_ch + 1, rows, cols), np.float32),

@@ -4,18 +4,18 @@ When the scene is known (every vissim depth scene), each of its layers -- a pane
 surface that never occludes itself -- can be rendered alone, unoccluded: its premultiplied
 radiance ``C_k`` and its coverage ``A_k`` (alpha) per pixel, and its proximity ``L`` (dioptres;
 one value for a fronto-parallel layer, a map for a slanted one).  Then nothing has to be
-guessed behind an edge, unlike the RGB-D path (:func:`vissim.optics.depth.blur_depth`).
+guessed behind an edge, unlike the RGB-D path (`vissim.optics.depth.blur_depth`).
 
 Geometric optics (``mode="geometric"``).  A ray through pupil point ``p`` that ends on pixel
 ``x`` left layer ``k`` at ``x - n_k(p)``, where ``n_k(p)`` is the landing offset of that ray
-for the layer's defocus (``-grad W_k(p)``, as in :func:`vissim.optics.psf.compute_psf`); it meets
+for the layer's defocus (``-grad W_k(p)``, as in `vissim.optics.psf.compute_psf`); it meets
 the nearer layers first, so the pixel sees the front-to-back *over* of the layers, each
 shifted by its own parallax for that pupil point, averaged over the pupil::
 
     out(x) = < sum_k C_k(x - n_k(p)) prod_{j nearer than k} (1 - A_j(x - n_j(p))) >_p
 
 exactly what a thin lens images of planar layers (for the eye and the DSLR of
-:mod:`vissim.bench.depth_viewers`: the ray through ``p`` of the pixel with chief-ray tangent ``t``
+`vissim.bench.depth_viewers`: the ray through ``p`` of the pixel with chief-ray tangent ``t``
 leaves along ``t - K p``), so it converges to the render.  The pupil is sampled as the
 geometric PSF is (a stratified, jittered grid of 250 000 to 4 million rays, fixed seed) and
 each ray's offsets are rounded to whole pixels: for one layer alone the average is then
@@ -24,7 +24,7 @@ is the PSF integrated over pixels).  Rays with the same rounded offsets on every
 involved form one term, weighted by their share of the pupil.  A layer that no nearer layer
 overlaps (after both are blurred) is blurred by one FFT; the others are composited term by
 term on the window their blur can reach.  A slanted layer is cut into proximity slices by
-the tent matte of :func:`vissim.optics.depth.blur_depth` (its slices add: a plane never
+the tent matte of `vissim.optics.depth.blur_depth` (its slices add: a plane never
 occludes itself), each slice with its own offsets, and their sum is divided by the same sum
 for the plane's uniform continuation (``_density``: the lens gathers radiance along rays, the
 slice sum scatters light, and they differ by a few per cent on a steep slant).
@@ -109,7 +109,7 @@ class LayeredBlurResult:
 def pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
     """Image-oriented unit-disc pupil points ``(u, v)``: a jittered ``n x n`` grid (fixed seed), inside the disc.
 
-    The sampling of the geometric PSF (:func:`vissim.optics.psf.compute_psf`): every cell of the
+    The sampling of the geometric PSF (`vissim.optics.psf.compute_psf`): every cell of the
     grid holds one ray, so each ray stands for an equal share of the pupil's area.
     """
     n_side = int(math.ceil(math.sqrt(n_rays * 4.0 / math.pi)))
@@ -182,7 +182,7 @@ def _check_layer(layer: SceneLayer, shape, index: int):
 def _slices(index: int, colour, coverage, proximity, spacing_diopters: float, anchor_diopters: float) -> list[_Slice]:
     """A layer cut into proximity slices by the tent matte (one slice for a constant proximity).
 
-    As :func:`vissim.optics.depth.blur_depth` plans its layers (:func:`vissim.optics.depth.plan_layers`,
+    As `vissim.optics.depth.blur_depth` plans its layers (`vissim.optics.depth.plan_layers`,
     symmetric): exact ends, and steps of the largest spacing from the in-focus proximity
     ``anchor_diopters`` when the layer spans it.
     """
@@ -217,7 +217,7 @@ def _density(layer: list[_Slice]) -> np.ndarray | None:
     uniform plane images uniformly, while the scatter sum bunches light where the blur grows
     (by about ``1 - slope x p``, a few per cent on a steep slant).  Dividing by the scatter sum
     of the plane's own mattes ``M_s`` (its slices continued over the grid) makes a uniform
-    plane exactly uniform, as :func:`vissim.optics.depth.blur_depth` normalises by its blurred coverage.
+    plane exactly uniform, as `vissim.optics.depth.blur_depth` normalises by its blurred coverage.
     """
     if len(layer) < 2:
         return None
@@ -323,8 +323,16 @@ def composite_layers(
     layers : sequence of SceneLayer
         Each layer alone on one pixel grid: premultiplied radiance (H, W) or (H, W, C), coverage
         (H, W) in [0, 1], proximity in dioptres (a value, or an (H, W) map for a slanted layer).
-    eye_prescription, pupil_diameter_mm, accommodation_diopters, wavelength_nm, extra_wavefront
-        The eye, as :func:`vissim.optics.depth.blur_depth`.
+    eye_prescription
+        The eye's prescription, as in `vissim.optics.depth.blur_depth`.
+    pupil_diameter_mm
+        The eye's pupil, mm, as in `vissim.optics.depth.blur_depth`.
+    accommodation_diopters
+        The eye's accommodation, D, as in `vissim.optics.depth.blur_depth`.
+    wavelength_nm
+        The eye's wavelength, nm, as in `vissim.optics.depth.blur_depth`.
+    extra_wavefront
+        The eye's further aberrations, as in `vissim.optics.depth.blur_depth`.
     mode : {"geometric", "wave"}
     layer_spacing_fraction : float
         A slanted layer's slices differ in blur by at most this many pixels.

@@ -8,8 +8,8 @@ crown is of this type).  ``V_d = (n_d - 1) / (n_F - n_C)`` with the Fraunhofer l
 The fit ``n(λ) = A + B / λ²`` passes through ``n_d`` at the d line and has ``n_F - n_C = (n_d - 1)
 / V_d`` exactly.  It is written ``n_d + B (1/λ² - 1/λ_d²)`` so that the d line returns ``n_d``
 bit for bit: the bench's lenses are built with the fixed index 1.523
-(:data:`vissim.optics.trial_lens.CROWN_GLASS_INDEX`, also Mitsuba's ``int_ior``), so a trace at
-:data:`D_LINE_NM` reproduces the render's glass exactly.  How good two Cauchy terms are: the same
+(`vissim.optics.trial_lens.CROWN_GLASS_INDEX`, also Mitsuba's ``int_ior``), so a trace at
+`D_LINE_NM` reproduces the render's glass exactly.  How good two Cauchy terms are: the same
 fit to Schott N-BK7's n_d and V_d departs from its catalogue Sellmeier formula by at most 1.3e-4
 in index over 400-700 nm (most at 700 nm), i.e. 0.03 % of the power of a lens.
 """
@@ -62,7 +62,7 @@ class CauchyGlass:
         return self.n_d - self.b_nm2 / D_LINE_NM**2
 
     def index(self, wavelength_nm: float) -> float:
-        """Refractive index at ``wavelength_nm`` (in air; exactly ``n_d`` at :data:`D_LINE_NM`)."""
+        """Refractive index at ``wavelength_nm`` (in air; exactly ``n_d`` at `D_LINE_NM`)."""
         wavelength = finite_number(wavelength_nm, "wavelength", "nm")
         if not 200.0 <= wavelength <= 2500.0:
             raise VissimInputError(f"wavelength must be within 200-2500 nm for a glass index, got {wavelength:g} nm")

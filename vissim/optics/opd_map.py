@@ -1,7 +1,7 @@
 """A wavefront given as sampled optical path difference: a traced or measured OPD map.
 
-:func:`~vissim.optics.psf.compute_psf` accepts an :class:`OpdMap` wherever it accepts a Zernike
-:class:`~vissim.optics.wavefront.Wavefront`: the PSF core evaluates it at its own pupil
+`compute_psf` accepts an `OpdMap` wherever it accepts a Zernike
+`Wavefront`: the PSF core evaluates it at its own pupil
 quadrature points (bicubic spline through the samples), and its slopes give the ray-optics PSF
 and the field size.
 

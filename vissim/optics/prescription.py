@@ -3,17 +3,17 @@
 Three quantities share the sphere/cylinder/axis notation but mean different things, and
 their signs differ.  vissim keeps them as distinct types so they cannot be mixed up:
 
-* :class:`Prescription` -- the **correcting lens** (what an optometrist writes), at the
+* `Prescription` -- the **correcting lens** (what an optometrist writes), at the
   eye's or camera's principal plane.  A myope has a negative sphere.
-* :class:`RefractiveError` -- the **eye's refractive error** as excess dioptric power at
+* `RefractiveError` -- the **eye's refractive error** as excess dioptric power at
   the same plane.  A myope has a *positive* sphere here: ``error == -prescription``.
-* :class:`LensPower` -- the power of a physical lens, or the power a trial lens *adds* at the
+* `LensPower` -- the power of a physical lens, or the power a trial lens *adds* at the
   camera's principal plane (positive for a plus lens).  A camera with an added +2 D lens is
   made myopic: its prescription is the negative of the added power.
 
 Axes follow TABO (degrees counter-clockwise from the examiner's right, facing the subject;
 0 and 180 are the same meridian and vissim writes 180).  Cylinders are stored as written;
-:meth:`SpheroCylinder.minus_cylinder` / :meth:`plus_cylinder` transpose.
+`SpheroCylinder.minus_cylinder` / `plus_cylinder` transpose.
 
 Power vectors follow Thibos, Wheeler & Horner (1997)::
 
@@ -68,8 +68,10 @@ class SpheroCylinder:
 
     Parameters
     ----------
-    sphere_diopters, cylinder_diopters : float
-        Powers in dioptres.
+    sphere_diopters : float
+        Sphere power in dioptres.
+    cylinder_diopters : float
+        Cylinder power in dioptres.
     axis_deg : float
         Cylinder axis in degrees, TABO, 0-180 inclusive (stored in (0, 180]).  Ignored and
         stored as 180 when the cylinder is zero.
@@ -96,7 +98,7 @@ class SpheroCylinder:
     # -- notation ---------------------------------------------------------------------
     @classmethod
     def parse(cls, text: str) -> Self:
-        """Parse a written sphero-cylinder; see :func:`parse_spherocylinder` for the notations.
+        """Parse a written sphero-cylinder; see `parse_spherocylinder` for the notations.
 
         Parameters
         ----------
@@ -105,7 +107,7 @@ class SpheroCylinder:
 
         Returns
         -------
-        The same class (:class:`Prescription`, ...), as written (cylinder sign kept).
+        The same class (`Prescription`, ...), as written (cylinder sign kept).
 
         Examples
         --------
@@ -158,7 +160,7 @@ class SpheroCylinder:
 
     @classmethod
     def from_power_vector(cls, m_diopters: float, j0_diopters: float, j45_diopters: float) -> Self:
-        """Inverse of :meth:`power_vector`, in minus-cylinder form."""
+        """Inverse of `power_vector`, in minus-cylinder form."""
         m = _finite(m_diopters, "M", "dioptres")
         j0 = _finite(j0_diopters, "J0", "dioptres")
         j45 = _finite(j45_diopters, "J45", "dioptres")
@@ -184,7 +186,7 @@ class SpheroCylinder:
 
     @classmethod
     def from_power_matrix(cls, matrix) -> Self:
-        """Inverse of :meth:`power_matrix` (the antisymmetric part, if any, is dropped)."""
+        """Inverse of `power_matrix` (the antisymmetric part, if any, is dropped)."""
         (fxx, fxy), (fyx, fyy) = matrix
         off = 0.5 * (float(fxy) + float(fyx))
         return cls.from_power_vector(0.5 * (fxx + fyy), 0.5 * (fxx - fyy), off)
@@ -202,15 +204,15 @@ class Prescription(SpheroCylinder):
     """The correcting lens at the eye's (camera's) principal plane; a myope's sphere is < 0.
 
     See ``docs/conventions.md`` for the sign, axis and power-vector conventions, and
-    :meth:`parse` for written prescriptions (``"-2.00 -1.25 x 180"``).  The eye's refractive
-    error, of the opposite sign, is :meth:`refractive_error`.
+    `parse` for written prescriptions (``"-2.00 -1.25 x 180"``).  The eye's refractive
+    error, of the opposite sign, is `refractive_error`.
 
     Parameters
     ----------
     sphere_diopters : float
         Sphere, dioptres (D); negative for a myope.
     cylinder_diopters : float, optional
-        Cylinder, D, either sign (default 0); :meth:`minus_cylinder` and :meth:`plus_cylinder`
+        Cylinder, D, either sign (default 0); `minus_cylinder` and `plus_cylinder`
         give the two transposed forms.
     axis_deg : float, optional
         Cylinder axis, degrees, TABO (0-180, stored in (0, 180]; 180 when the cylinder is 0).
@@ -249,7 +251,7 @@ class LensPower(SpheroCylinder):
 
 
 def as_prescription(value) -> Prescription:
-    """``value``, which must be a :class:`Prescription` (a :class:`RefractiveError` has the opposite sign)."""
+    """``value``, which must be a `Prescription` (a `RefractiveError` has the opposite sign)."""
     if isinstance(value, RefractiveError):
         raise VissimTypeError("got the eye's RefractiveError where its Prescription (correcting lens) is expected; "
                         "convert explicitly with .prescription()")
@@ -286,7 +288,7 @@ def parse_spherocylinder(text: str) -> tuple[float, float, float]:
 
     See Also
     --------
-    Prescription.parse : the same text into a :class:`Prescription`.
+    Prescription.parse : the same text into a `Prescription`.
 
     Examples
     --------

@@ -1,16 +1,16 @@
 """Point-spread functions from wavefronts, alias-safe at any angular sampling.
 
-Wave optics (:mod:`vissim.optics.psf_wave`): the generalised pupil ``P exp(i k W)``, sampled
+Wave optics (`vissim.optics.psf_wave`): the generalised pupil ``P exp(i k W)``, sampled
 as cell averages on as many cells as the wavefront's steepest slope needs, is Fourier
 transformed (matrix transform or FFT, whichever is cheaper) and ``PSF = |transform|^2``
 (Goodman 2005, Ch. 6), on an internal grid finer than the Nyquist interval lambda/(2D), and
 then *integrated* over the requested output pixels (ERRATA item 6); the integration is exact,
 done as the pixel's sinc in the Fourier domain.  ``pixel="sample"`` gives instead the
 band-limited point samples, whose DFT is the OTF: the exact kernel for blurring a
-*well-sampled* image (see :mod:`vissim.optics.blur`).  A blur kernel (``normalise="field"``,
+*well-sampled* image (see `vissim.optics.blur`).  A blur kernel (``normalise="field"``,
 unit sum over the field) whose field would leave more than
-:data:`~vissim.optics.psf_field.MAX_ENERGY_OUTSIDE` of the energy outside raises
-:class:`~vissim.errors.FieldTooSmallError` with the size that would hold it, since truncating a
+`MAX_ENERGY_OUTSIDE` of the energy outside raises
+`FieldTooSmallError` with the size that would hold it, since truncating a
 kernel changes the blur; a PSF image (``normalise="total"``) is computed for any field, sums to
 the energy the field holds, and logs a warning beyond that fraction.  Nothing wraps around
 silently.
@@ -75,7 +75,7 @@ log = logging.getLogger(__name__)
 #: The Fourier simulator's revision: campaign item keys include it, so that results of an older
 #: core are recomputed, not reused.  Change it whenever a change moves simulated numbers.
 SIMULATOR_REVISION = "4 (issue 12: float32 by default; cell-averaged pupil, matrix or FFT, 1 % field rule)"
-#: How output pixels relate to the continuous PSF (see :func:`~vissim.optics.psf_wave.to_output_pixels`).
+#: How output pixels relate to the continuous PSF (see `to_output_pixels`).
 PIXEL_MODES = ("integrate", "sample")
 #: What a PSF's ``data`` is normalised to: "field" (unit sum over the field, a blur kernel) or
 #: "total" (unit total energy, so it sums to ``energy_in_field``: a PSF image).
@@ -88,10 +88,10 @@ PLAIN_ESTIMATE_MARGIN = 1.5
 
 @dataclass(frozen=True, eq=False)
 class PSF:
-    """A PSF with its sampling, origin at ``[N//2, N//2]``; ``data`` sums to :attr:`data_sum`.
+    """A PSF with its sampling, origin at ``[N//2, N//2]``; ``data`` sums to `data_sum`.
 
-    Made by :func:`compute_psf` (or :meth:`PSF.from_array` for a kernel of your own); used by
-    :func:`vissim.blur_image` and the metrics (:func:`vissim.mtf`, :func:`vissim.otf`).
+    Made by `compute_psf` (or `PSF.from_array` for a kernel of your own); used by
+    `vissim.blur_image` and the metrics (`vissim.mtf`, `vissim.otf`).
 
     Attributes
     ----------
@@ -106,7 +106,7 @@ class PSF:
     pupil_diameter_mm : float
         The pupil the PSF was computed for, mm.
     mode : str
-        ``"wave"`` (diffraction), ``"geometric"`` (ray optics) or ``"user"`` (:meth:`from_array`).
+        ``"wave"`` (diffraction), ``"geometric"`` (ray optics) or ``"user"`` (`from_array`).
     energy_in_field : float
         Fraction of the energy through the pupil that lands inside the field (<= 1 up to the
         light the pupil sampling folds back: at most 0.2 %, ``docs/conventions.md``).
@@ -115,7 +115,7 @@ class PSF:
     lca_reference_nm : float or None
         In-focus wavelength of the eye's longitudinal chromatic aberration, if modelled.
     sampling : tuple
-        The internal pupil and field sampling per wavelength (:func:`psf_sampling`).
+        The internal pupil and field sampling per wavelength (`psf_sampling`).
     pixel : {"integrate", "sample"}
         ``"integrate"``: each value is the PSF integrated over its pixel (what a sensor
         records); ``"sample"``: point samples of the continuous PSF (a convolution kernel).
@@ -242,7 +242,7 @@ def _clearly_holds(diameter_mm, wavelengths_nm, blurs_arcmin, arcmin_per_px, siz
     return True
 
 
-#: What :func:`compute_psf` and :func:`strehl_ratio` take as the aberration.
+#: What `compute_psf` and `strehl_ratio` take as the aberration.
 WAVEFRONT_ACCEPTED = ("a Wavefront or an OpdMap, e.g. vissim.Wavefront.from_prescription("
                       "vissim.Prescription.parse('-2.00 DS'), pupil_diameter_mm=3.0)")
 
@@ -290,40 +290,43 @@ def compute_psf(
     Parameters
     ----------
     wavefront : Wavefront or OpdMap
-        A Zernike :class:`~vissim.optics.wavefront.Wavefront` or a sampled
-        :class:`~vissim.optics.opd_map.OpdMap` (a traced or measured OPD map).
+        A Zernike `Wavefront` or a sampled
+        `OpdMap` (a traced or measured OPD map).
     pupil_diameter_mm : float, optional
         Pupil diameter in mm, at most the wavefront's measurement pupil.
-    wavelength_nm, weights : float or sequence of float, optional
-        Wavelength(s) in nm (default 550); one wavelength, or several with relative spectral weights: each wavelength's PSF carries
-        its weight of the total energy (inside and outside the field), and their sum is
+    wavelength_nm : float or sequence of float, optional
+        Wavelength(s) in nm (default 550): one wavelength, or several.
+    weights : sequence of float, optional
+        Relative spectral weights of several wavelengths (default equal): each wavelength's PSF
+        carries its weight of the total energy (inside and outside the field), and their sum is
         normalised as ``normalise`` says.
     lca_reference_nm : float, optional
         If given, add the eye's longitudinal chromatic aberration (Thibos 1992) relative to
         this wavelength: each wavelength gets its chromatic defocus.
-    arcmin_per_px, size_px : float, int
-        Output sampling (arcmin per pixel, default 0.25) and the side of the square field
-        (pixels, default 256).  With ``normalise="field"``, a field that would leave more than
-        1 % of the energy outside raises :class:`~vissim.errors.FieldTooSmallError` naming the
-        size that holds it.
+    arcmin_per_px : float
+        Output sampling, arcmin per pixel (default 0.25).
+    size_px : int
+        The side of the square field, pixels (default 256).  With ``normalise="field"``, a field
+        that would leave more than 1 % of the energy outside raises `FieldTooSmallError` naming
+        the size that holds it.
     mode : {"wave", "geometric"}
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
     pixel : {"integrate", "sample"}
         ``"integrate"`` (default): each value is the PSF integrated over its pixel, what a
         sensor records.  ``"sample"``: band-limited point samples, the exact kernel for
-        blurring well-sampled images (see :mod:`vissim.optics.blur` for when it matters).
+        blurring well-sampled images (see `vissim.optics.blur` for when it matters).
     dtype : numpy.float32 (default) or numpy.float64
         The arithmetic's and ``PSF.data``'s precision.  float32's round-off (1e-7 to 3e-6 of the
         peak, growing with the pupil cells) is far below the wave PSF's accuracy (2e-3 of the
         peak, ``docs/conventions.md``) and it is about twice as fast; float64 for work that differentiates PSFs numerically
         with small steps.
-    method : {"mft", "fft"}, optional
-        Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,
+    method : str or None, optional
+        Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; None (default): the cheaper,
         recorded in ``PSF.sampling``.  At suggested field sizes both give the same pixel energies to
         1e-3 of the peak.
     normalise : {"field", "total"}
         ``"field"`` (default): a blur kernel, unit sum over the field; a field leaving more than
-        :data:`~vissim.optics.psf_field.MAX_ENERGY_OUTSIDE` outside is refused, because
+        `MAX_ENERGY_OUTSIDE` outside is refused, because
         truncating a kernel changes the blur.  ``"total"``: a PSF image, normalised to the
         total energy through the pupil, so it sums to ``energy_in_field``; any field is
         computed, with a logged warning when more than that fraction falls outside.

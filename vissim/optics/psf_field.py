@@ -1,6 +1,6 @@
 """How large a field a PSF needs: blur radius, and the energy that would fall outside a field.
 
-:func:`energy_outside_field` estimates the fraction of a PSF's energy outside a square field
+`energy_outside_field` estimates the fraction of a PSF's energy outside a square field
 before the PSF is computed: the PSF is modelled as the ray-optics PSF convolved with the
 aberration-free pupil's Airy pattern.  Rays through a stratified pupil sample land at the
 visual direction given by the wavefront slope; each ray's Airy pattern is integrated over the
@@ -13,8 +13,8 @@ does: its Fresnel zone spreads the edge over about sqrt(2 N_F) lambda/D, N_F = t
 Fresnel number (waves of equivalent defocus).  The conservative estimate widens each ray's
 Airy pattern by sqrt(1 + EDGE_BROADENING N_F); measured against computed PSFs from 0 to 16
 waves of defocus, astigmatism and coma (``tests/test_psf_field.py``) it is 0.9-2.2 times
-the true fraction outside.  :func:`~vissim.optics.psf.compute_psf` refuses on the energy it
-measures; the conservative estimate sizes fields (:func:`suggested_size_px`) and names the
+the true fraction outside.  `compute_psf` refuses on the energy it
+measures; the conservative estimate sizes fields (`suggested_size_px`) and names the
 size that would hold the PSF.
 """
 
@@ -50,7 +50,7 @@ MAX_ENERGY_OUTSIDE = 0.01
 
 
 def leaves_too_much_outside(energy_in_field: float) -> bool:
-    """True when a field holding ``energy_in_field`` of a PSF leaves more than :data:`MAX_ENERGY_OUTSIDE` outside."""
+    """True when a field holding ``energy_in_field`` of a PSF leaves more than `MAX_ENERGY_OUTSIDE` outside."""
     return 1.0 - energy_in_field > MAX_ENERGY_OUTSIDE
 #: Rays per pupil side for the estimate (about 0.8 x this squared inside the pupil).
 ESTIMATE_RAYS_PER_SIDE = 32
@@ -108,7 +108,7 @@ def suggested_size_px(
     minimum_px: int = 33,
 ) -> int:
     """The smallest odd field size (px, at least ``minimum_px``) that holds all but
-    :data:`MAX_ENERGY_OUTSIDE` of the PSF's energy (:func:`energy_outside_field`)."""
+    `MAX_ENERGY_OUTSIDE` of the PSF's energy (`energy_outside_field`)."""
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
     wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))

@@ -1,4 +1,4 @@
-"""Quantities derived from a sampled :class:`~vissim.optics.psf.PSF`: OTF, MTF, encircled energy."""
+"""Quantities derived from a sampled `PSF`: OTF, MTF, encircled energy."""
 
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ def frequencies_cyc_per_deg(psf: PSF) -> np.ndarray:
     Returns
     -------
     ndarray of shape (N,)
-        The frequency of each row (and column) of :func:`otf` / :func:`mtf`, cycles/degree,
+        The frequency of each row (and column) of `otf` / `mtf`, cycles/degree,
         increasing, 0 at index N // 2; the Nyquist frequency is 30 / ``arcmin_per_px``.
 
     Examples
@@ -71,7 +71,7 @@ def otf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
     Parameters
     ----------
     psf : PSF
-        A square PSF (origin at ``[N//2, N//2]``), e.g. from :func:`vissim.compute_psf`.
+        A square PSF (origin at ``[N//2, N//2]``), e.g. from `vissim.compute_psf`.
     remove_pixel : bool
         Divide out the pixel's ``sinc(f) sinc(g)``.
 
@@ -79,7 +79,7 @@ def otf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
     -------
     ndarray of complex, shape (N, N)
         ``[row, col]`` = (vertical frequency, horizontal frequency), both
-        :func:`frequencies_cyc_per_deg` (cycles/degree), zero at ``[N//2, N//2]``. The OTF is of
+        `frequencies_cyc_per_deg` (cycles/degree), zero at ``[N//2, N//2]``. The OTF is of
         the PSF as sampled: its energy outside the field is not in it (OTF(0) = 1 over the field).
 
     Examples
@@ -101,16 +101,16 @@ def otf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
 
 
 def mtf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
-    """Modulation transfer function ``|OTF|``, centred like :func:`otf`, MTF(0) = 1.
+    """Modulation transfer function ``|OTF|``, centred like `otf`, MTF(0) = 1.
 
-    Frequencies along each axis are :func:`frequencies_cyc_per_deg` (cycles/degree).
+    Frequencies along each axis are `frequencies_cyc_per_deg` (cycles/degree).
 
     Parameters
     ----------
     psf : PSF
         A square PSF (origin at ``[N//2, N//2]``).
     remove_pixel : bool
-        Divide out the pixel's sinc, as in :func:`otf`.
+        Divide out the pixel's sinc, as in `otf`.
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """Wave-optical PSFs: the pupil's Fourier transform by matrix products or by one FFT.
 
-The generalised pupil is sampled as cell averages (:mod:`vissim.optics.pupil_grid`), on as
+The generalised pupil is sampled as cell averages (`vissim.optics.pupil_grid`), on as
 many cells as the wavefront needs (``docs/conventions.md``, "Pupil sampling"), independently
 of the output grid.  Its Fraunhofer transform is evaluated on an internal grid finer than the
 intensity's Nyquist interval lambda/(2D), over a field that holds the output pixels and the
@@ -99,7 +99,7 @@ def folded_energy(distance_arcmin: float, half_field_arcmin: float, blur_arcmin:
     when the period exceeds it by ``distance_arcmin``.
 
     Each replica's light beyond radius r is the Airy tail 2 / (pi^2 r) (r in lambda/D beyond the
-    geometric blur, widened for a defocused rim as in :mod:`vissim.optics.psf_field`).  With a
+    geometric blur, widened for a defocused rim as in `vissim.optics.psf_field`).  With a
     1 / r^3 density, 1 / pi of it lies beyond a line at distance d, and of that the fraction
     (sqrt(d^2 + h^2) - d) / h within the field's strip |y| <= h; the four diagonal replicas add
     at most DIAGONAL_SHARE each; the cell average's correction lifts it by up to FOLD_LIFT.
@@ -118,7 +118,7 @@ def fold_distance_arcmin(half_field_arcmin: float, blur_arcmin: float, lambda_ov
     """The margin beyond the field's half-width for the period: the radius beyond which at most
     ALIAS_MAX_ENERGY of one replica's light lies (what bounds the error pixel by pixel in a small
     field), or, over a field far wider than the PSF, the distance at which the eight nearest
-    replicas fold at most ALIAS_MAX_ENERGY into it (:func:`folded_energy`, by bisection)."""
+    replicas fold at most ALIAS_MAX_ENERGY into it (`folded_energy`, by bisection)."""
     widening = rim_widening(blur_arcmin, lambda_over_d_arcmin)
     one = blur_arcmin + widening * lambda_over_d_arcmin * airy_tail_radius_lambda_over_d(ALIAS_MAX_ENERGY)
     args = (half_field_arcmin, blur_arcmin, lambda_over_d_arcmin)
@@ -142,7 +142,7 @@ def plan_wave_psf(
     The pupil cells repeat the PSF every lambda/step in angle (for the FFT, lambda/step is its
     field).  That period must exceed the internal field by a margin over which at most
     ALIAS_MAX_ENERGY of the light of the eight nearest replicas folds back into it
-    (:func:`folded_energy`); the light itself then lies where the cell average's sinc is
+    (`folded_energy`); the light itself then lies where the cell average's sinc is
     divided out in full.
     """
     d = pupil_diameter_mm

@@ -1,6 +1,6 @@
 """Pull-push interpolation (Gortler et al. 1996): filling data behind occluders.
 
-Used by :mod:`vissim.optics.depth` to extend each depth layer's colour and coverage behind nearer
+Used by `vissim.optics.depth` to extend each depth layer's colour and coverage behind nearer
 content, as in Kraus & Strengert (2007), so a blurred near edge shows the background's
 continuation instead of a dark or bright halo.
 """

@@ -11,13 +11,13 @@ axis).  Each cell carries the *average over the cell* of the generalised pupil
 
 Sampling cell averages makes the grid's discrete Fourier sum the transform of the pupil
 convolved with the cell: at angle ``a`` it carries the factor ``sinc(a_x step/lambda)
-sinc(a_y step/lambda)`` for every wavefront, which :mod:`vissim.optics.psf_wave` divides out.
+sinc(a_y step/lambda)`` for every wavefront, which `vissim.optics.psf_wave` divides out.
 What is left is aliasing of light from ``lambda/step`` away, kept out of the field by the
 sampling criterion (``docs/conventions.md``, "Pupil sampling").
 
-Orientation as in :mod:`vissim.optics.psf`: array columns run to the observer's right and rows
+Orientation as in `vissim.optics.psf`: array columns run to the observer's right and rows
 down, so a cell at offsets (u, v) is the OSA pupil point (x, y) = (-u, -v)
-(:func:`vissim.units.image_colrow_to_osa_xy`).
+(`vissim.units.image_colrow_to_osa_xy`).
 """
 
 from __future__ import annotations
@@ -140,10 +140,10 @@ def _zernike_on_points(grid: PupilGrid, measured_mm: float, n: int, m: int, dtyp
 
 
 def opd_on_points_um(grid: PupilGrid, wavefront, dtype=np.float64, out: np.ndarray | None = None) -> np.ndarray:
-    """The wavefront's optical path difference (µm) at :meth:`PupilGrid.points`, of ``dtype``.
+    """The wavefront's optical path difference (µm) at `PupilGrid.points`, of ``dtype``.
 
     Zernike wavefronts use cached polynomials on the points; any other wavefront (an
-    :class:`~vissim.optics.opd_map.OpdMap`) is evaluated through its ``opd_um(x, y)``.
+    `OpdMap`) is evaluated through its ``opd_um(x, y)``.
     Written into ``out`` when given.
     """
     size = grid.centre_x_mm.size + grid.rim_x_mm.size
@@ -190,7 +190,7 @@ def generalised_pupil_parts(grid: PupilGrid, opd_um: np.ndarray, wavelength_nm: 
     Inside cells: ``exp(i phi) sinc(phi_x h / 2) sinc(phi_y h / 2) + i h^2 lap(phi) / 24`` at the
     centre (h the step; the linear phase averaged exactly, its curvature to leading order),
     derivatives by central differences of the centres' phase.  Rim cells: their quadrature.
-    Written into ``out`` (real, imaginary) when given; intermediates in :mod:`~vissim.optics.workspace`.
+    Written into ``out`` (real, imaginary) when given; intermediates in `workspace`.
     """
     n = grid.size
     work = functools.partial(scratch, dtype=dtype)

@@ -13,7 +13,7 @@ __all__ = ["magnify", "block_mean"]
 def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) -> np.ndarray:
     """Resample ``image`` magnified by a 2 x 2 matrix (TABO x/y frame) about its centre.
 
-    In image axes the matrix is :func:`vissim.units.xy_matrix_to_image_rowcol` of it; the
+    In image axes the matrix is `vissim.units.xy_matrix_to_image_rowcol` of it; the
     optical axis is the tile's centre.  Radiance is conserved: values are resampled, not scaled.
     """
     m = np.asarray(matrix_xy, dtype=float)

@@ -1,6 +1,6 @@
 """What a viewer focuses, through which pupil, with which magnification: decided once, here.
 
-A :class:`ViewingSetup` is one viewer (the DSLR bench camera, an eye, the ATV observer) looking
+A `ViewingSetup` is one viewer (the DSLR bench camera, an eye, the ATV observer) looking
 at an object at ``object_distance_m``.  It holds
 
 * ``pupil_diameter_mm`` -- the entrance pupil (the camera's is focal length / f-number);
@@ -8,7 +8,7 @@ at an object at ``object_distance_m``.  It holds
   the viewer's excess power over what the object's light needs, ``D = E + A I + V`` (E the eye's
   refractive error or the power trial lenses add, A accommodation, V the vergence arriving
   at the pupil: ``-1/d`` for an object at d).  **A myopic viewer has D > 0**; it sees sharply
-  where D = 0.  Its prescription (the correcting lens, :mod:`vissim.optics.prescription`) is
+  where D = 0.  Its prescription (the correcting lens, `vissim.optics.prescription`) is
   ``-D``;
 * ``magnification_matrix`` -- maps a chief-ray angle without the trial lenses onto the angle
   with them (spectacle magnification, ERRATA item 5);
@@ -17,10 +17,10 @@ at an object at ``object_distance_m``.  It holds
 From these follow the wavefront (``W = -P r^2 / 2`` of the prescription P) and the geometric
 blur: pupil (mm) x |principal defocus| (D) milliradians per principal meridian.
 
-Named constructors only: :meth:`ViewingSetup.dslr`, :meth:`ViewingSetup.eye`,
-:meth:`ViewingSetup.atv_observer`.  The thesis's choices are named replacements, each one field
-changed (``dataclasses.replace``): :meth:`~ViewingSetup.with_thesis_pupil` (ERRATA item 3),
-:meth:`~ViewingSetup.with_table_4_2_power` (item 4), :meth:`~ViewingSetup.without_magnification`
+Named constructors only: `ViewingSetup.dslr`, `ViewingSetup.eye`,
+`ViewingSetup.atv_observer`.  The thesis's choices are named replacements, each one field
+changed (``dataclasses.replace``): `with_thesis_pupil` (ERRATA item 3),
+`with_table_4_2_power` (item 4), `without_magnification`
 (item 5).  Pinned by ``tests/test_setup.py``.
 """
 
@@ -68,7 +68,7 @@ class ViewingSetup:
         """The bench camera (pupil f/N) focused at ``focus_distance_m``, looking through ``lenses``.
 
         ``lenses.object_distance_m`` is the chart's distance; the lenses add their power at the
-        pupil by :func:`~vissim.optics.trial_lens.trial_lens_effect`, and the focus error adds
+        pupil by `trial_lens_effect`, and the focus error adds
         ``1/focus - 1/chart``.
         """
         chart_m = lenses.object_distance_m
@@ -109,7 +109,7 @@ class ViewingSetup:
         """The ATV observer: a collimated pixel (source at infinity) through a thin trial lens.
 
         The lens of power P at d mm adds the vergence ``P / (1 - dP)`` at the eye, exact for a
-        source at infinity (:func:`~vissim.optics.trial_lens.thesis_table_4_2_power`).
+        source at infinity (`thesis_table_4_2_power`).
         """
         vergence = thesis_table_4_2_power(trial_lens_diopters, vertex_distance_mm)
         return cls.eye(prescription, pupil_diameter_mm, accommodation_diopters, vergence_diopters=vergence,

@@ -7,7 +7,7 @@ stood at 914.4 mm.  It also ignores spectacle magnification (ERRATA item 5).  Th
 both properly, by generalized (astigmatic) paraxial ray transfer:
 
 * a ray is the 4-vector ``(x, y, n u_x, n u_y)``: heights in metres, reduced angles in radians,
-  in the TABO frame used by :meth:`vissim.optics.prescription.SpheroCylinder.power_matrix`
+  in the TABO frame used by `vissim.optics.prescription.SpheroCylinder.power_matrix`
   (x to the examiner's right, y up), z from the object towards the camera;
 * a refracting surface with 2x2 dioptric power matrix F is ``[[I, 0], [-F, I]]``, a gap of
   thickness t in a medium of index n is ``[[I, (t/n) I], [0, I]]`` (Keating 1981; Harris 1997),
@@ -122,14 +122,18 @@ class TrialLens:
 
     Parameters
     ----------
-    sphere_diopters, cylinder_diopters, axis_deg : float
-        The marked power (plus lens > 0), TABO axis.  For a thick lens this is the **back
-        vertex power**, the power trial-case lenses are conventionally marked with (ISO 9801,
-        trial case lenses).  The thesis does not say how its lenses were marked, so this is
-        an assumption; for a thin lens the distinction vanishes.
+    sphere_diopters : float
+        The marked sphere power, D (plus lens > 0).  For a thick lens the marked power is the
+        **back vertex power**, the power trial-case lenses are conventionally marked with (ISO
+        9801, trial case lenses).  The thesis does not say how its lenses were marked, so this
+        is an assumption; for a thin lens the distinction vanishes.
+    cylinder_diopters : float
+        The marked cylinder power, D (back vertex, like the sphere).
+    axis_deg : float
+        The cylinder's TABO axis, degrees.
     refractive_index : float or None
         None for a thin lens (the default); otherwise the glass index, > 1
-        (:data:`CROWN_GLASS_INDEX` = 1.523 for crown).
+        (`CROWN_GLASS_INDEX` = 1.523 for crown).
     center_thickness_mm : float
         Centre thickness, >= 0; a thick lens needs ``refractive_index``.
     back_surface_diopters : float
@@ -243,7 +247,7 @@ class TrialLensSetup:
     Parameters
     ----------
     lenses : tuple of TrialLens
-        Up to :data:`MAX_LENSES_IN_HOLDER`, ordered from the object to the camera.
+        Up to `MAX_LENSES_IN_HOLDER`, ordered from the object to the camera.
     vertex_distance_mm : float
         From the back surface of the last lens to the camera's principal plane, which is also
         where its entrance pupil is.  The thesis used 10 mm.
@@ -435,7 +439,7 @@ def thesis_eye_pupil_diameter_mm(
     f/4 -> 3.375 (printed 3.4), f/4.5 -> 3.0, f/5 -> 2.7 mm.  ERRATA item 3: this is the wrong
     invariant for images sampled in angle -- the angular blur scales with the entrance-pupil
     diameter itself (3.6 mm for the thesis's camera at f/5, see
-    :func:`entrance_pupil_diameter_mm`), so this pupil shrinks the blur by 25 %.  Offered as a
+    `entrance_pupil_diameter_mm`), so this pupil shrinks the blur by 25 %.  Offered as a
     named option for reproducing the thesis, never as a default.
     """
     return entrance_pupil_diameter_mm(eye_focal_length_mm, f_number)
@@ -444,7 +448,7 @@ def thesis_eye_pupil_diameter_mm(
 def thesis_table_4_2_power(lens_diopters: float, vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM) -> float:
     """The thesis's Table 4.2 value P / (1 - dP), dioptres: right only for an object at infinity.
 
-    ERRATA item 4: with the chart at a finite distance use :func:`trial_lens_effect`.
+    ERRATA item 4: with the chart at a finite distance use `trial_lens_effect`.
     """
     power = _number(lens_diopters, "lens power", "dioptres")
     vertex_m = mm_to_m(_number(vertex_distance_mm, "vertex distance", "mm"))

@@ -1,8 +1,8 @@
 """Wavefront aberrations: OSA Zernike coefficients over a stated pupil, and prescriptions.
 
-A :class:`Wavefront` holds coefficients in micrometres (``opd_um``) over the pupil diameter
+A `Wavefront` holds coefficients in micrometres (``opd_um``) over the pupil diameter
 on which they were measured.  Evaluating it inside a smaller pupil is exact (the
-polynomials are evaluated at ``r / R_measured``); :meth:`Wavefront.rescaled` re-expresses the
+polynomials are evaluated at ``r / R_measured``); `Wavefront.rescaled` re-expresses the
 same surface on the smaller pupil's own basis.
 
 Prescription <-> second-order Zernike uses the standard formulas (Thibos et al. 2004; Dai
@@ -12,7 +12,7 @@ Prescription <-> second-order Zernike uses the standard formulas (Thibos et al. 
     c(2,2)  = -J0  R^2 / (2 sqrt 6)   = C R^2 cos 2a / (4 sqrt 6)
     c(2,-2) = -J45 R^2 / (2 sqrt 6)   = C R^2 sin 2a / (4 sqrt 6)
 
-with (M, J0, J45) the power vector of the *correcting lens* (:class:`Prescription`), so a
+with (M, J0, J45) the power vector of the *correcting lens* (`Prescription`), so a
 myopic eye (negative sphere) has c(2,0) > 0: its wavefront, leaving the eye, leads at the
 pupil's edge (OSA sign: W > 0 is phase advance).
 """

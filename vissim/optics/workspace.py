@@ -3,7 +3,7 @@
 Fresh memory costs a page fault per 4 KiB on first touch; on this project's 2-core virtual
 machines a fault took about 2 µs, as long as the arithmetic on the page, and a 512^2 wave PSF
 made ~2200 of them (4 of its 17 ms).  The wave PSF's hot paths therefore write their
-intermediates into arrays that persist between calls.  An array from :func:`scratch` is valid
+intermediates into arrays that persist between calls.  An array from `scratch` is valid
 until the next request for the same name in the same thread: never return one to a caller.
 """
 

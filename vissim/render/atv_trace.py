@@ -1,7 +1,7 @@
 """The ATV tube rendered two ways: light tracing from the pixel (primary) and a camera-side check.
 
-**Light tracing** (:func:`trace_atv`).  Rays start on the lit pixel (a Lambertian square of
-radiance L) and are traced through the Mitsuba scene of :func:`vissim.bench.atv_scene.atv_scene` with
+**Light tracing** (`trace_atv`).  Rays start on the lit pixel (a Lambertian square of
+radiance L) and are traced through the Mitsuba scene of `vissim.bench.atv_scene.atv_scene` with
 ``scene.ray_intersect`` (vectorised Dr.Jit arrays), refracting by vector Snell's law at every
 lens hit with the mesh's interpolated vertex normal ``si.sh_frame.n`` (the exact analytic
 normal at the vertices; ``si.n`` is the flat face normal), oriented against the ray.  Hits on
@@ -12,18 +12,18 @@ to the pupil plane z = 0; inside the pupil the eye is a thin lens: the ray throu
 x (mm) with direction tangent u lands at visual angle ``-u + (E + A) x`` mrad, and its flux is
 binned onto the arcmin grid (row 0 up, columns to the eye's right = world -x).
 
-Sampling: scrambled Sobol points (:class:`scipy.stats.qmc.Sobol`, seeded; ``n_rays`` is rounded
+Sampling: scrambled Sobol points (`scipy.stats.qmc.Sobol`, seeded; ``n_rays`` is rounded
 up to a power of two), dimensions 0-1 the direction and 2-3 the point on the pixel.  Directions
 are cosine-distributed over a cone -- a disc of direction cosines -- around the paraxial
 direction to the pupil, just wide enough that every ray able to reach the pupil is sampled
-(:attr:`~vissim.bench.atv_paraxial.AtvParaxial.cone_radius_rad` x 1.05 + 0.1 mrad; a ray in the pupil
+(`cone_radius_rad` x 1.05 + 0.1 mrad; a ray in the pupil
 from the cone's outer 2 % widens the cone and traces again).  Each ray carries
 ``L x pixel area x pi sin^2(cone) / n_rays``, so image pixels hold flux per arcmin²
-(:mod:`vissim.atv.predict`).  Putting the direction first in the Sobol sequence cut the
+(`vissim.atv.predict`).  Putting the direction first in the Sobol sequence cut the
 noise at the blur plateau by 1.7x against pseudo-random sampling (3.6 % vs 6.1 % at ~260 rays
 per pixel); the pixel dimensions, spread over ~4 image pixels, gain nothing.
 
-**Camera side** (:func:`render_atv_camera`).  The eye is Mitsuba's ``thinlens`` (aperture radius
+**Camera side** (`render_atv_camera`).  The eye is Mitsuba's ``thinlens`` (aperture radius
 pupil / 2, focused where the eye is), the lenses use ``vissim_refract`` and a ``path`` integrator
 without Russian roulette finds the pixel by chance: noisy, since each camera ray must land on a
 78 µm square through the lenses.  Light tracing cannot do this side's job in Mitsuba (its
@@ -82,7 +82,7 @@ class AtvResult:
     passes).  ``total_flux`` counts all light in the pupil (tracer) or the field (camera);
     ``peak`` (the largest value after a light smoothing that removes sampling noise),
     ``peak_pixel`` and ``spot_diameter_arcmin`` (the radial-profile FWHM) are defined in
-    :func:`vissim.atv.predict.spot_metrics`.
+    `vissim.atv.predict.spot_metrics`.
     """
 
     image: np.ndarray
@@ -127,7 +127,7 @@ def _atv_result(image: np.ndarray, std_image: np.ndarray, step: float, *, total_
                 **run) -> AtvResult:
     """``image`` and its standard error with their spot metrics; ``total_flux`` None: the image's integral.
 
-    ``run`` holds the remaining :class:`AtvResult` fields (how the image was made).
+    ``run`` holds the remaining `AtvResult` fields (how the image was made).
     """
     metrics = asdict(spot_metrics(image, step, std_image))  # SpotMetrics' fields are AtvResult's, but one
     del metrics["peak_smoothing_px"]
@@ -161,7 +161,7 @@ def _concentric_disc(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 class _Tracer:
-    """The scene loaded once; :meth:`batch` traces one batch of pixel rays to the pupil."""
+    """The scene loaded once; `batch` traces one batch of pixel rays to the pupil."""
 
     def __init__(self, config: AtvConfig, variant: str | None):
         self.mi = mitsuba("mono", variant)
@@ -256,7 +256,7 @@ def trace_atv(config: AtvConfig, *, n_rays: int = DEFAULT_N_RAYS, seed: int = 0,
     """Light-trace the ATV tube (module doc): the retinal image of the pixel, flux per arcmin².
 
     ``n_rays`` (rounded up to a power of two) are emitted into the cone that reaches the pupil;
-    ``size_px`` defaults to :func:`vissim.atv.predict.suggested_atv_size_px`.
+    ``size_px`` defaults to `vissim.atv.predict.suggested_atv_size_px`.
     """
     if not isinstance(config, AtvConfig):
         raise VissimInputError(f"trace_atv needs an AtvConfig, got {type(config).__name__}")
@@ -318,7 +318,7 @@ def render_atv_camera(config: AtvConfig, *, spp: int = 1024, seed: int = 0, arcm
 
     Pixel values are radiance averaged over the pupil and the pixel's solid angle; times the
     pupil area (m²) and the solid angle of one arcmin² they become flux per arcmin², like
-    :func:`trace_atv`.  The standard error comes from the spread of the passes.
+    `trace_atv`.  The standard error comes from the spread of the passes.
     """
     if not isinstance(config, AtvConfig):
         raise VissimInputError(f"render_atv_camera needs an AtvConfig, got {type(config).__name__}")

@@ -1,7 +1,7 @@
-"""Mitsuba 3 / Dr.Jit import and variant choice (the door of :mod:`vissim.render`).
+"""Mitsuba 3 / Dr.Jit import and variant choice (the door of `vissim.render`).
 
-:mod:`vissim.bench` builds plain scene dicts; only :mod:`vissim.render` imports Mitsuba, and
-always through :func:`mitsuba` here, which chooses the variant:
+`vissim.bench` builds plain scene dicts; only `vissim.render` imports Mitsuba, and
+always through `mitsuba` here, which chooses the variant:
 
 1. ``VISSIM_MITSUBA_VARIANT`` (or the ``variant=`` argument) when given;
 2. ``cuda_ad_*`` when a CUDA device works;
@@ -9,8 +9,8 @@ always through :func:`mitsuba` here, which chooses the variant:
    Dr.Jit 1.5 with "Cannot select fminimum");
 4. ``scalar_*`` otherwise, with a one-line warning.
 
-The LLVM library must be known to Dr.Jit *before* it is imported, so :func:`mitsuba` sets
-``DRJIT_LIBLLVM_PATH`` from :func:`find_libllvm` the first time it is called.
+The LLVM library must be known to Dr.Jit *before* it is imported, so `mitsuba` sets
+``DRJIT_LIBLLVM_PATH`` from `find_libllvm` the first time it is called.
 """
 
 from __future__ import annotations

@@ -1,35 +1,35 @@
 """Render depth scenes: the blurred image, and on request the all-in-focus image and a depth map.
 
-Three renders of one scene (:func:`vissim.bench.depth_scene_dict.depth_scene_dict`), one pixel grid:
+Three renders of one scene (`vissim.bench.depth_scene_dict.depth_scene_dict`), one pixel grid:
 
 * **blurred** -- the observer's optics (eye sensor or DSLR thin lens + trial lenses), seed ``seed``;
 * **all in focus** -- a pinhole at the pupil centre, same film, same lenses, seed ``seed + 1``;
 * **depth** -- the pinhole looking at the *proximity pass* (each panel glows with ``1/z``
   dioptres, z axial, and carries its label), seed ``seed + 2``.  A pixel's value is the mean
   proximity of its *nearest* surface over the part of the pixel it covers (0 where every sample
-  sees sky; :data:`vissim.bench.depth_scene_dict.DEPTH_PASS_STATISTIC`), and the depth map is
+  sees sky; `vissim.bench.depth_scene_dict.DEPTH_PASS_STATISTIC`), and the depth map is
   ``1 / proximity`` metres, ``inf`` for sky: the axial distance
-  :func:`vissim.optics.depth.blur_depth` expects for these flat-focal-plane optics.  A pixel
+  `vissim.optics.depth.blur_depth` expects for these flat-focal-plane optics.  A pixel
   split between a near panel and the far one behind it takes the near panel's depth, not the
   sample mean (an in-between depth no surface has, which left the near panel's edges too
   sharp in tutorial 4).  Through trial lenses the depth
   pass sees what the pinhole sees (magnified), unlike Mitsuba's ``aov`` integrator, whose
-  ``position``/``depth`` stop at the first surface (the lens).  :func:`render_aov_depth`
+  ``position``/``depth`` stop at the first surface (the lens).  `render_aov_depth`
   gives that AOV's axial depth as an independent check on scenes without lenses (its
   ``depth`` type is measured from the near-clip plane along the ray, so ``position.z`` is
   used instead);
 * **layers** (on request) -- each panel alone (the scene's other panels removed), through the
   same pinhole: its radiance and its coverage (the panel glowing with 1), seeds ``seed + 3 +
   2 i`` and ``seed + 4 + 2 i``.  What the pupil sees *behind* a nearer panel's edge is there,
-  for :func:`vissim.optics.depth_layers.composite_layers`.
+  for `vissim.optics.depth_layers.composite_layers`.
 
 The frame: the pinhole renders (all in focus, depth, layers) cover ``margin_px`` more pixels on
-every side than the blurred render (:meth:`vissim.bench.depth_scene.DepthScene.with_margin`; the
+every side than the blurred render (`vissim.bench.depth_scene.DepthScene.with_margin`; the
 blurred render's pixel ``[i, j]`` is their ``[i + m, j + m]``), so a simulation from them sees what
-the observer sees beyond the frame; :func:`vissim.bench.depth_viewers.frame_margin_px` is the
+the observer sees beyond the frame; `vissim.bench.depth_viewers.frame_margin_px` is the
 margin that holds the scene's largest blur.
 
-Only this package imports Mitsuba (through :func:`vissim.render.backend.mitsuba`).
+Only this package imports Mitsuba (through `vissim.render.backend.mitsuba`).
 """
 
 from __future__ import annotations
@@ -93,8 +93,8 @@ def render_view(scene, viewer, *, view: str, content: str = "radiance", spp: int
                 kind: str = "mono", variant: str | None = None, pass_spp: int | None = None,
                 progress: Callable[[int, int], None] | None = None, mesh_cache_dir=None,
                 panels: tuple[int, ...] | None = None, statistic: str = "mean"):
-    """One render (:class:`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``;
-    ``statistic``: how a pixel comes from its samples (:data:`vissim.render.run.PIXEL_STATISTICS`)."""
+    """One render (`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``;
+    ``statistic``: how a pixel comes from its samples (`vissim.render.run.PIXEL_STATISTICS`)."""
     from vissim.bench.depth_scene_dict import depth_scene_dict
 
     kind = {"proximity": "mono", "coverage": "mono", DEPTH_PASS_CONTENT: "rgb"}.get(content, kind)

@@ -17,7 +17,7 @@ symmetric K: negative (focus beyond infinity: a relaxed hyperope) and astigmatic
 Properties: ``fov`` (degrees, horizontal), ``aperture_radius`` (mm, 0 = pinhole),
 ``power_xx_diopters``, ``power_xy_diopters``, ``power_yy_diopters`` (K), ``near_clip``,
 ``far_clip`` (mm), ``to_world``, ``film``, ``sampler``.  Register with
-:func:`register_eye_sensor` (idempotent) before loading a scene that uses it.
+`register_eye_sensor` (idempotent) before loading a scene that uses it.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ __all__ = ["EYE_SENSOR", "register_eye_sensor"]
 
 log = logging.getLogger(__name__)
 
-#: Plugin name; equals :data:`vissim.bench.depth_scene_dict.EYE_SENSOR`.
+#: Plugin name; equals `vissim.bench.depth_scene_dict.EYE_SENSOR`.
 EYE_SENSOR = "vissim_eye"
 
 
@@ -94,5 +94,5 @@ def _make_class(mi, dr):
 
 
 def register_eye_sensor(mi) -> None:
-    """Register :data:`EYE_SENSOR` with the current Mitsuba variant (once per variant)."""
+    """Register `EYE_SENSOR` with the current Mitsuba variant (once per variant)."""
     register_once(mi, EYE_SENSOR, "sensor", _make_class)

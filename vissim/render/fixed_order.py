@@ -1,4 +1,4 @@
-"""One Mitsuba render whose pixels do not depend on thread timing: :func:`render_image`.
+"""One Mitsuba render whose pixels do not depend on thread timing: `render_image`.
 
 Why: on the JIT variants Mitsuba's ``SamplingIntegrator::render`` adds every sample into the
 film with an atomic scatter-add.  Dr.Jit's LLVM backend runs the kernel as blocks of 16384
@@ -7,13 +7,13 @@ not divide the block, the samples of one pixel fall in two blocks, two threads a
 sums into it in a racing order, and float32 rounding makes the pixel differ from run to run
 (the bench at 132 spp: a few pixels per image, up to 6e-7).  Power-of-two ``spp`` only hid it.
 
-:func:`render_image` does what that render does -- the same sampler calls in the same order,
+`render_image` does what that render does -- the same sampler calls in the same order,
 the same rays, the same ``integrator.sample`` -- but keeps each sample's channels and sums the
 ``spp`` samples of a pixel in NumPy (float64, a fixed order), then develops the film as Mitsuba
 does.  At 1 spp it equals ``mi.render`` bit for bit (tests/render/test_determinism.py).
 
-:func:`render_samples` returns the samples themselves (each pixel's R, G, B per sample, before any
-sum), for statistics other than the film's mean (:mod:`vissim.render.run`).  Mitsuba's films only
+`render_samples` returns the samples themselves (each pixel's R, G, B per sample, before any
+sum), for statistics other than the film's mean (`vissim.render.run`).  Mitsuba's films only
 average (a weighted sum over the reconstruction filter); on scalar variants with a box filter it
 takes ``spp`` one-sample renders instead (a one-sample box-filtered pixel is its sample).
 
@@ -73,7 +73,7 @@ def pass_seeds(seed: int, passes: int) -> list[int]:
     return [int(np.random.SeedSequence([int(seed), i]).generate_state(1)[0]) for i in range(passes)]
 
 def promises_determinism(variant: str, method: str) -> bool:
-    """Whether renders on ``variant`` accumulated by ``method`` (:func:`accumulation`) are bit-identical per seed.
+    """Whether renders on ``variant`` accumulated by ``method`` (`accumulation`) are bit-identical per seed.
 
     Verified (tests/render/test_determinism.py): ``llvm_*`` with "fixed-order" sums, ``scalar_*``
     with "tiles".  CUDA uses the same fixed-order sums but is untested here: not promised.
@@ -84,7 +84,7 @@ def promises_determinism(variant: str, method: str) -> bool:
 
 
 def accumulation(mi, scene) -> str:
-    """How a render of ``scene`` sums samples: "fixed-order" (:func:`render_image` itself, JIT
+    """How a render of ``scene`` sums samples: "fixed-order" (`render_image` itself, JIT
     variants), "tiles" (Mitsuba's scalar render, each pixel in one tile) or "mitsuba" (anything else:
     atomic or overlapping adds)."""
     sensor = scene.sensors()[0]

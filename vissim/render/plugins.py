@@ -22,7 +22,7 @@ The index does not depend on wavelength (no dispersion): a spectral path carries
 wavelengths along one geometric path, so dispersion would need hero-wavelength handling
 that this plugin does not attempt.
 
-Register with :func:`register_plugins` (idempotent) before loading a scene that uses it.
+Register with `register_plugins` (idempotent) before loading a scene that uses it.
 """
 
 from __future__ import annotations
@@ -117,5 +117,5 @@ def register_once(mi, name: str, kind: str, make_class) -> None:
 
 
 def register_plugins(mi) -> None:
-    """Register :data:`REFRACT_BSDF` with the current Mitsuba variant (once per variant)."""
+    """Register `REFRACT_BSDF` with the current Mitsuba variant (once per variant)."""
     register_once(mi, REFRACT_BSDF, "bsdf", _make_class)

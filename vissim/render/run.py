@@ -1,12 +1,12 @@
 """Render a plain scene dict with Mitsuba: conversion, sample passes, progress, provenance.
 
-:func:`render_scene` is the one place that hands a scene to Mitsuba.  Scene dicts from
-:mod:`vissim.bench` hold plain values only; :func:`to_mitsuba_dict` turns ``to_world`` 4 x 4
+`render_scene` is the one place that hands a scene to Mitsuba.  Scene dicts from
+`vissim.bench` hold plain values only; `to_mitsuba_dict` turns ``to_world`` 4 x 4
 nested lists into transforms and bitmap ``data`` arrays into ``mi.Bitmap``.
 
 Rendering happens in passes of at most ``pass_spp`` samples per pixel (all of them in one pass
 by default when the image is small), each pass seeded from ``(seed, pass index)``; passes are
-averaged in float64.  Each pass goes through :func:`vissim.render.fixed_order.render_image`, which
+averaged in float64.  Each pass goes through `vissim.render.fixed_order.render_image`, which
 sums a pixel's samples in a fixed order, so the same scene, spp, seed and variant give
 bit-identical pixels on the llvm and scalar variants (``RenderResult.deterministic``; CUDA is
 untested and not promised).
@@ -14,8 +14,8 @@ untested and not promised).
 ``statistic="nearest_surface"`` makes a pixel from its samples otherwise: R holds a value (the
 depth pass's proximity, dioptres) and G a label of the surface the sample met (0: none), and the
 pixel is the mean R over the samples on the surface of its largest-R sample -- the nearest
-surface's mean proximity over the part of the pixel it covers (:func:`nearest_surface`).  The
-samples of all passes are kept (:func:`vissim.render.fixed_order.render_samples`) and reduced
+surface's mean proximity over the part of the pixel it covers (`nearest_surface`).  The
+samples of all passes are kept (`vissim.render.fixed_order.render_samples`) and reduced
 once; the pixels are (H, W).  A ``progress`` callback (and a log line per pass) reports long
 renders; nothing is written to disk here, so an interrupted render leaves no file behind.
 """
@@ -47,16 +47,16 @@ log = logging.getLogger(__name__)
 
 #: Samples (pixels x spp) per pass above which a render is split into passes.
 DEFAULT_PASS_SAMPLES = 1 << 22
-#: How a pixel's value comes from its samples: the film's mean, or :func:`nearest_surface`.
+#: How a pixel's value comes from its samples: the film's mean, or `nearest_surface`.
 PIXEL_STATISTICS = ("mean", "nearest_surface")
 #: Relative tolerance within which two samples' surface labels (G) are the same surface: labels are
 #: small integers, carried with weight 1 (to float32 round-off through refracting lenses).
 LABEL_RTOL = 1e-3
-#: Peak bytes per sample kept for :func:`nearest_surface`: R, G, B float32 per pass and their
+#: Peak bytes per sample kept for `nearest_surface`: R, G, B float32 per pass and their
 #: concatenation (24), R and G in float64 (16), the masked values and mask (9).
 NEAREST_SURFACE_BYTES_PER_SAMPLE = 50
 #: Peak bytes per sample of a pass: the sampler's and the integrator's wavefront state, and the
-#: sample's channels kept for the fixed-order sum (:mod:`vissim.render.fixed_order`).
+#: sample's channels kept for the fixed-order sum (`vissim.render.fixed_order`).
 BYTES_PER_SAMPLE = 64
 
 
@@ -165,7 +165,7 @@ def render_scene(
 ) -> RenderResult:
     """Render ``scene_dict`` (plain, see module doc) with ``spp`` samples per pixel.
 
-    ``statistic`` (:data:`PIXEL_STATISTICS`): the film's ``"mean"``, or ``"nearest_surface"`` (module
+    ``statistic`` (`PIXEL_STATISTICS`): the film's ``"mean"``, or ``"nearest_surface"`` (module
     doc; (H, W) pixels from a scene whose R is a proximity and G a surface label).
 
     ``progress(done_spp, total_spp)`` is called after each pass.  Returns float32 pixels:
@@ -243,13 +243,13 @@ def render_bench(
     pass_spp: int | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> RenderResult:
-    """Render a :class:`~vissim.bench.dslr.DslrBench` looking at ``chart``.
+    """Render a `DslrBench` looking at ``chart``.
 
-    ``chart`` is a :class:`vissim.charts.ChartSpec` (rendered for print at the bench's texel
-    size, :func:`vissim.bench.dslr.chart_mm_per_texel`) or a :class:`vissim.charts.Chart`
+    ``chart`` is a `vissim.charts.ChartSpec` (rendered for print at the bench's texel
+    size, `vissim.bench.dslr.chart_mm_per_texel`) or a `vissim.charts.Chart`
     already rendered for print.  The result carries a provenance record: bench parameters,
     theory (added power, blur, magnification), chart, variant, spp taken, seed, ``mitsuba_render``
-    (:meth:`RenderResult.render_record`: spp asked and taken, pass seeds, determinism), vissim,
+    (`RenderResult.render_record`: spp asked and taken, pass seeds, determinism), vissim,
     Mitsuba and Dr.Jit versions.
 
     Parameters
@@ -262,7 +262,7 @@ def render_bench(
     kind : {"mono", "rgb"}
         One channel or three.
     variant : str, optional
-        Mitsuba variant (default: the fastest that works here, :mod:`vissim.render.backend`).
+        Mitsuba variant (default: the fastest that works here, `vissim.render.backend`).
     pass_spp : int, optional
         Samples per pixel per pass (default: split large renders).
     progress : callable, optional

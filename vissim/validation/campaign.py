@@ -82,7 +82,7 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
     capture, name = (None if raw.get(k) is None else check(raw[k], source, f"{where}.{k}")
                      for k, check in (("capture", text), ("name", name_text)))
     config = Configuration(name or "", letter, logmar, polarity, specs, f_number, capture)
-    label = f"{letter} {logmar:+.1f} {polarity.split('-')[0]} {config.lens_label()}"
+    label = f"{letter} LogMAR {logmar:.1f} {polarity.split('-')[0]}, {trial_lens_phrase(config)}"
     return config if name else replace(config, name=label)
 
 
@@ -90,6 +90,13 @@ def _describe(c: Configuration) -> str:
     """What a configuration compares, for messages: letter, LogMAR, polarity, lenses, f-number, capture."""
     capture = f", capture {c.capture}" if c.capture else ""
     return f"letter {c.letter}, LogMAR {c.logmar:g}, {c.polarity}, {c.lens_label()}, f/{c.f_number:g}{capture}"
+
+
+def trial_lens_phrase(config: Configuration) -> str:
+    """``trial lens +2.00 DS``, ``trial lenses +1.00 DS + -0.50 DC x 30`` or ``no lens``: a name's lens part."""
+    if not config.lenses:
+        return "no lens"
+    return f"trial lens{'es' if len(config.lenses) > 1 else ''} {config.lens_label()}"
 
 
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
@@ -139,7 +146,7 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     """Read and validate a campaign TOML file.
 
     With ``check_memory`` the memory each item will need is estimated and a campaign this
-    machine cannot hold is refused now (:func:`vissim.validation.preflight.check_campaign_memory`).
+    machine cannot hold is refused now (`vissim.validation.preflight.check_campaign_memory`).
 
     Parameters
     ----------

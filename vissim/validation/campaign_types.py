@@ -1,6 +1,6 @@
 """What a single-plane campaign is: its settings, its configurations, and an item's key.
 
-The TOML loader (:mod:`vissim.validation.campaign`) builds these; the harness's modules
+The TOML loader (`vissim.validation.campaign`) builds these; the harness's modules
 (simulations, renders, items, the runner) take them, without importing the loader.
 """
 

@@ -21,14 +21,14 @@ A manifest (TOML) lists captures so real photographs can be dropped in::
 A campaign item with ``capture = "t3-k-plus2"`` takes its ground truth from the capture.
 Absent files are skipped with a clear message, never silently.
 
-Capture -> tile: the RAW is read linearly (:func:`read_capture`, which checks the file's
-sha256 and uses :func:`vissim.validation.raw.read_raw_linear`, no demosaicing), the
+Capture -> tile: the RAW is read linearly (`read_capture`, which checks the file's
+sha256 and uses `vissim.validation.raw.read_raw_linear`, no demosaicing), the
 photosites are divided by their channel's gain (the median of the paper in a ring around the
 letter, 0.75 to 1.5 tile half-widths measured on the sky, so a neutral chart gives one grey
 level per photosite, at full sensor resolution and without interpolation), resampled by exact
 area integration onto the campaign's arcmin/px (camera scale from pitch, focal length and focus
 distance), cropped to the tile around the letter, and scaled so that the paper has the chart's
-paper reflectance.  :func:`capture_provenance` records what the file says: camera, black and
+paper reflectance.  `capture_provenance` records what the file says: camera, black and
 white levels, CFA pattern, as-shot white balance and the file's sha256.
 """
 
@@ -111,7 +111,7 @@ def _capture(entry: dict, path: Path, i: int) -> Capture:
 
 
 def load_manifest(path: str | Path) -> dict[str, Capture]:
-    """Read a capture manifest; every field is checked, files are not (see :func:`capture_problem`)."""
+    """Read a capture manifest; every field is checked, files are not (see `capture_problem`)."""
     path = Path(path)
     raw = read_toml_file(path, "capture manifest")
     captures = {}

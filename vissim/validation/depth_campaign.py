@@ -5,8 +5,8 @@ of settings and ``[[config]]`` tables, each a scene file (``scene``, relative to
 file) and an observer: an eye (``eye`` = prescription, ``pupil_mm``, ``accommodation_diopters``), the
 DSLR (``camera = {f_number, focus_distance_m, focal_length_mm, lenses}``), or none (the scene
 file's).  ``validation/depth.toml`` is the commented example.  Items are computed by
-:mod:`vissim.validation.depth_item`, run by :mod:`vissim.validation.depth_runner`, and either
-kind of campaign file is dispatched by :mod:`vissim.validation.dispatch`.
+`vissim.validation.depth_item`, run by `vissim.validation.depth_runner`, and either
+kind of campaign file is dispatched by `vissim.validation.dispatch`.
 """
 
 from __future__ import annotations
@@ -37,8 +37,8 @@ __all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load
 
 DEPTH_SIMULATIONS = ("geometric", "wave")
 #: What a simulation starts from: the scene's layers rendered alone (radiance and coverage,
-#: :func:`vissim.optics.depth_layers.composite_layers`) or one all-in-focus image and its depth
-#: map (:func:`vissim.optics.depth.blur_depth`).
+#: `vissim.optics.depth_layers.composite_layers`) or one all-in-focus image and its depth
+#: map (`vissim.optics.depth.blur_depth`).
 DEPTH_INPUTS = ("layered", "rgbd")
 #: Bumped when the meaning of an item's inputs or results changes, so old results are not reused.
 #: 3: the RGB-D depth pass holds each pixel's nearest surface's proximity, no longer the pixel's mean.
@@ -192,7 +192,7 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
 
 
 def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> DepthCampaign:
-    """Read and validate a depth campaign TOML file (module doc); ``check_memory`` as :func:`load_campaign`."""
+    """Read and validate a depth campaign TOML file (module doc); ``check_memory`` as `load_campaign`."""
     path = path_arg(path, "load_depth_campaign's path")
     source = str(path)
     raw = read_campaign_toml(path)

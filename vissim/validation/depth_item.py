@@ -3,14 +3,14 @@
 Per configuration: the blurred render twice (``seeds``: the ground truth and its Monte-Carlo
 noise floor) and the pinhole all-in-focus and depth renders (``aux_seed``, optionally
 ``oversample`` times finer); ``blur_depth`` of the all-in-focus image and depth for the
-observer's equivalent eye (:func:`vissim.bench.depth_viewers.equivalent_eye`), in geometric
+observer's equivalent eye (`vissim.bench.depth_viewers.equivalent_eye`), in geometric
 and wave optics; and the same from the *layered* input -- every panel rendered alone, radiance
-and coverage -- by :func:`vissim.optics.depth_layers.composite_layers`, which needs no guess
+and coverage -- by `vissim.optics.depth_layers.composite_layers`, which needs no guess
 behind occluding edges.  The pinhole renders extend beyond the frame by the scene's largest blur
 radius (``frame_margin``), and the simulations are cropped to the frame.  Mitsuba renders no diffraction, so ``geometric`` is compared with the render
 and ``wave`` with the render convolved with the aperture's in-focus diffraction PSF (as
-:func:`vissim.validation.simulate.add_bench_diffraction` does for the single-plane harness).
-Metrics (:mod:`vissim.validation.depth_masks`) per panel interior, for the occlusion band and
+`vissim.validation.simulate.add_bench_diffraction` does for the single-plane harness).
+Metrics (`vissim.validation.depth_masks`) per panel interior, for the occlusion band and
 for the whole image, each beside the same metric between the two seeds (the floor).
 """
 
@@ -44,7 +44,7 @@ def _region_table(comparison, masks, data_range: float) -> dict:
 
 
 def _scene_layers(scene, images: dict) -> list:
-    """Each panel rendered alone, as a :class:`~vissim.optics.depth_layers.SceneLayer` (campaign sampling / oversample).
+    """Each panel rendered alone, as a `SceneLayer` (campaign sampling / oversample).
 
     A fronto panel's proximity is ``1 / distance``; a tilted chart's is its own proximity pass
     divided by its coverage (the pass holds the pixel's mean proximity, 0 where it sees nothing).

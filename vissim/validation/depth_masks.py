@@ -1,13 +1,13 @@
 """Where to compare a depth render with its simulation: panel interiors, occlusion bands, the frame.
 
-From a rendered proximity map (dioptres, 0 = sky; :mod:`vissim.render.depth_render`) and the
-observer's blur (:meth:`vissim.optics.setup.ViewingSetup.blur_diameter_at_arcmin`), every pixel gets one
+From a rendered proximity map (dioptres, 0 = sky; `vissim.render.depth_render`) and the
+observer's blur (`vissim.optics.setup.ViewingSetup.blur_diameter_at_arcmin`), every pixel gets one
 class:
 
 * a **depth discontinuity** is a pixel whose 3 x 3 neighbourhood spans more than
   ``jump_diopters`` dioptres of proximity.  The default ``jump_diopters`` is the proximity step over which
   two blur discs differ by one pixel (``theta / pupil``): the occlusion threshold of
-  :func:`vissim.optics.depth.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
+  `vissim.optics.depth.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
   depth stays below it; a panel edge (or a panel against the sky) does not.  A pixel split
   between two depths carries the whole jump in its window, so mixed pixels are caught;
 * the **boundary band** is every pixel within ``r + margin_px`` of a discontinuity, where
@@ -80,7 +80,7 @@ def depth_regions(
 ) -> RegionMasks:
     """Classify the pixels of a proximity map (module doc).
 
-    ``geometries``: the scene's :class:`~vissim.bench.depth_scene.PanelGeometry` list (names
+    ``geometries``: the scene's `PanelGeometry` list (names
     and proximity ranges).  ``blur_radius_px``: callable mapping proximity (D, array) to the
     geometric blur radius in pixels (largest meridian).
     """

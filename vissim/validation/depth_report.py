@@ -1,7 +1,7 @@
 """Report of a depth campaign run: metrics (JSON, CSV), Markdown tables, figures, HTML.
 
-Rebuilt from the finished items' ``result.json`` and images (:mod:`vissim.validation.depth_campaign`),
-like :mod:`vissim.validation.report` for the single-plane harness.  Every region is reported
+Rebuilt from the finished items' ``result.json`` and images (`vissim.validation.depth_campaign`),
+like `vissim.validation.report` for the single-plane harness.  Every region is reported
 beside its noise floor (the two seeds of the render compared over the same pixels): a
 perfect, noise-free simulation scores 3 dB above the floor's PSNR.  Occlusion bands are a row
 of their own, so boundary errors are shown, not averaged away.
@@ -22,7 +22,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vissim.imageio import read_image  # noqa: E402
-from vissim.validation.report import _num, campaign_name, load_results, png_bytes, reflectance_norm  # noqa: E402
+from vissim.validation.report import _num, campaign_name, load_results, png_bytes  # noqa: E402
+from vissim.validation.report_figures import Figure, display_norm, radiance_colorbar  # noqa: E402
+from vissim.validation.report_summary import PERFECT_MARGIN_DB  # noqa: E402
 from vissim.validation.report import json_rows, write_report_files  # noqa: E402
 from vissim.validation.report import format_number as _fmt  # noqa: E402
 
@@ -143,7 +145,10 @@ def depth_tables(results: list[dict]) -> str:
         "is the border strip where the render sees beyond the image and the simulation pads it; `all` is the "
         "whole image. `geometric ...` is compared with the render, `wave ...` with the render convolved with the "
         "aperture's diffraction (Mitsuba renders none). The floor compares the two seeds' renders over the same "
-        "pixels: a perfect, noise-free simulation scores +3 dB above it (margin 3.0).\n")
+        f"pixels: a perfect, noise-free simulation scores 10·log10(2) = +{PERFECT_MARGIN_DB:.2f} dB above it on "
+        "average, not at most: each region's floor and score are measured once, over its own pixels, so where the "
+        "first render's noise happens to be weaker than the second's a perfect simulation scores more, and the "
+        "fewer the noisy pixels, the larger the swing.\n")
     return "\n".join(out)
 
 
@@ -165,7 +170,7 @@ def _region_names(result: dict) -> list[str]:
     return ["frame", "boundary"] + [r for r in result["masks"]["regions"] if r not in ("boundary", "frame")]
 
 
-def _figure(results: list[dict], run_dir: Path, simulation: str) -> bytes | None:
+def _figure(results: list[dict], run_dir: Path, simulation: str) -> Figure | None:
     """Rows: configurations; columns: render (reference), simulation, |difference|, regions; with colour bars."""
     from matplotlib.colors import BoundaryNorm, ListedColormap, Normalize
 
@@ -184,8 +189,8 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> bytes | None
         names = _region_names(result)
         names += [f"region {k}" for k in range(len(names), int(regions.max()) + 1)]
         palette = plt.get_cmap("tab10" if len(names) <= 10 else "tab20").colors
-        panels = [(truth, "gray", reflectance_norm(), "render"),
-                  (sim, "gray", reflectance_norm(), f"{simulation} simulation"),
+        panels = [(truth, "gray", display_norm(), "render"),
+                  (sim, "gray", display_norm(), f"{simulation} simulation"),
                   (ad, "magma", Normalize(0, ad_max), "|difference|"),
                   (regions, ListedColormap(palette[: len(names)]), BoundaryNorm(np.arange(len(names) + 1) - 0.5,
                                                                                  len(names)), "regions")]
@@ -206,12 +211,19 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> bytes | None
         axes[i, 0].set_xlabel(_panels_label(result), fontsize=7)
         axes[i, 2].set_xlabel(f"PSNR dB: {psnr}; boundary {_fmt(_num(comp['regions']['boundary']['psnr_db']), 1)}",
                               fontsize=7)
-    for j, bar_label in enumerate(("reflectance", "reflectance", "|difference| (reflectance)")):
+    for j in range(3):
         bar = fig.colorbar(shown[j], ax=axes[:, j], location="bottom", shrink=0.9, aspect=30, pad=0.01)
-        bar.set_label(bar_label, fontsize=8)
         bar.ax.tick_params(labelsize=7)
+        if j < 2:
+            radiance_colorbar(bar)
+        else:
+            bar.set_label("|difference| (relative radiance, linear)", fontsize=8)
     fig.suptitle(f"depth campaign: {simulation} blur_depth against the render", fontsize=10)
-    return png_bytes(fig)
+    alt = (f"The depth campaign's {simulation} simulation against the render, one row per configuration "
+           f"({'; '.join(r['configuration']['name'] for r, _ in rows)}); columns: the render, the simulation, "
+           "the absolute difference and the map of regions (frame, occlusion boundary, panels), with each "
+           "row's PSNR per region.")
+    return Figure("", png_bytes(fig), alt)
 
 
 def build_depth_report(run_dir: str | Path) -> list[Path]:
@@ -221,10 +233,10 @@ def build_depth_report(run_dir: str | Path) -> list[Path]:
     rows = depth_rows(results)
     figures = {}
     for simulation in dict.fromkeys(r["simulation"] for r in rows):
-        png = _figure(results, run_dir, simulation)
-        if png is not None:
+        figure = _figure(results, run_dir, simulation)
+        if figure is not None:
             name = simulation.replace(" ", "_")
-            figures[f"{simulation} simulation against the render"] = (f"figure_depth_{name}.png", png)
+            figures[f"{simulation} simulation against the render"] = figure._replace(file_name=f"figure_depth_{name}.png")
     written = write_report_files(run_dir, title=f"vissim depth validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=depth_tables(results), figures=figures)

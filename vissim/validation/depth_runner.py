@@ -1,13 +1,13 @@
 """Running a depth campaign: its render specs, the renders, then every item.
 
-Run folder: as :mod:`vissim.validation.runner` (``campaign.json``, ``renders/<key>.exr`` keyed
+Run folder: as `vissim.validation.runner` (``campaign.json``, ``renders/<key>.exr`` keyed
 by their inputs, ``items/<key>/result.json`` written last), so re-runs resume.  Each item needs
-renders (:class:`DepthRenderSpec`): the blurred view at both seeds, the all-in-focus view and
+renders (`DepthRenderSpec`): the blurred view at both seeds, the all-in-focus view and
 the proximity (depth) pass (the RGB-D input: each pixel's nearest surface,
 ``DEPTH_PASS_STATISTIC``), and for the layered input each panel alone: its radiance and
 coverage (and, for a tilted chart, its proximity pass).  The pinhole renders extend
 ``margin_px`` beyond the frame on every side (the settings' ``frame_margin``);
-:mod:`vissim.validation.depth_item` computes the item.
+`vissim.validation.depth_item` computes the item.
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ class DepthRenderSpec:
 def render_depth_spec(spec: DepthRenderSpec):
     """Render one spec with Mitsuba on this machine (a worker process or a Dask worker).
 
-    Returns the :class:`vissim.render.run.RenderResult`: pixels, variant and the spp used.
+    Returns the `vissim.render.run.RenderResult`: pixels, variant and the spp used.
     """
     from vissim.render.depth_render import (
         render_view,  # the Mitsuba door, imported where it runs

@@ -1,11 +1,11 @@
 """Either kind of campaign file: run it or rebuild its report (``vissim validate`` / ``vissim report``).
 
-A depth campaign (:mod:`vissim.validation.depth_campaign`) or a single-plane one
-(:mod:`vissim.validation.campaign`) is told apart by its tables when run, and by the ``kind`` in
+A depth campaign (`vissim.validation.depth_campaign`) or a single-plane one
+(`vissim.validation.campaign`) is told apart by its tables when run, and by the ``kind`` in
 ``campaign.json`` when its report is rebuilt; each is handed to its own runner and report.
 
-The run folder is checked to hold none of the campaign's inputs (:func:`campaign_inputs`) and
-is locked for the whole run or rebuild (:mod:`vissim.validation.run_lock`).
+The run folder is checked to hold none of the campaign's inputs (`campaign_inputs`) and
+is locked for the whole run or rebuild (`vissim.validation.run_lock`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ __all__ = ["CampaignRun", "campaign_inputs", "run_any_campaign", "rebuild_any_re
 
 @dataclass(frozen=True)
 class CampaignRun:
-    """What :func:`run_any_campaign` did: the kind, the run summary, the report files and summary lines."""
+    """What `run_any_campaign` did: the kind, the run summary, the report files and summary lines."""
 
     kind: str  # "depth" or "single-plane"
     summary: RunSummary
@@ -102,11 +102,13 @@ def _single_plane_lines(run_dir: Path) -> list[str]:
     from vissim.validation.report import format_number, load_results, metrics_rows
     from vissim.validation.wave_bench_report import is_wave_bench_row
 
-    lines = [(f"{'configuration':44s} {'simulation':>16s} {'input':>9s} {'SSIM':>7s} {'PSNR dB':>8s} {'floor dB':>8s} "
-              f"{'against':>10s}")]
-    for r in metrics_rows(load_results(run_dir)):
+    rows = metrics_rows(load_results(run_dir))
+    width = min(max([len("configuration"), *(len(r["configuration"]) for r in rows)]), 72)  # names whole, up to 72
+    lines = [(f"{'configuration':{width}s} {'simulation':>16s} {'input':>9s} {'SSIM':>7s} {'PSNR dB':>8s} "
+              f"{'floor dB':>8s} {'against':>10s}")]
+    for r in rows:
         against = "wave bench" if is_wave_bench_row(r) else "render"
-        lines.append(f"{r['configuration'][:44]:44s} {r['simulation']:>16s} {r['input']:>9s} {r['ssim']:7.4f} "
+        lines.append(f"{r['configuration'][:width]:{width}s} {r['simulation']:>16s} {r['input']:>9s} {r['ssim']:7.4f} "
                      f"{format_number(r['psnr_db'], 2):>8s} {format_number(r['noise_floor_psnr_db'], 2):>8s} "
                      f"{against:>10s}")
     return lines

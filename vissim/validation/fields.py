@@ -1,7 +1,7 @@
 """Checks of campaign-file values: each bad value gets one line naming the file, the field and its unit.
 
-Shared by the single-plane (:mod:`vissim.validation.campaign`) and depth
-(:mod:`vissim.validation.depth_campaign`) campaign loaders and the capture manifest.
+Shared by the single-plane (`vissim.validation.campaign`) and depth
+(`vissim.validation.depth_campaign`) campaign loaders and the capture manifest.
 """
 
 from __future__ import annotations
@@ -125,7 +125,7 @@ def text(value: Any, source: str, where: str) -> str:
 
 
 def name_text(value: Any, source: str, where: str) -> str:
-    """A campaign or configuration name: a string within :data:`vissim.checks.MAX_NAME_CHARS`, printable."""
+    """A campaign or configuration name: a string within `vissim.checks.MAX_NAME_CHARS`, printable."""
     problem = name_problem(text(value, source, where))
     if problem:
         raise field_error(source, where, problem)
@@ -168,8 +168,8 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
                     read_elsewhere: tuple[str, ...] = ()) -> dict:
     """Checked fields of ``settings_class`` found in a campaign's settings table ``head`` (named ``where``).
 
-    ``numbers`` and ``whole_numbers`` as :func:`checked_numbers`, ``seeds`` by :func:`seed_pair`,
-    ``lists`` (``{key: allowed names}``) by :func:`choices`, ``switches`` must be true or false;
+    ``numbers`` and ``whole_numbers`` as `checked_numbers`, ``seeds`` by `seed_pair`,
+    ``lists`` (``{key: allowed names}``) by `choices`, ``switches`` must be true or false;
     ``texts`` must be strings and, like ``read_elsewhere``, are no fields; any other key is refused.
     """
     known = {f.name for f in fields(settings_class)}

@@ -3,7 +3,7 @@
 One row per configuration with trial lenses: the lenses, the power vergence theory says they
 add at the camera (the lenses as rendered), the thesis's Table 4.2 power, the fitted power
 with its 95 % interval (half-widths in M, J0, J45) and the verdict: where vergence theory lies
-outside the interval the row says so (:func:`vissim.fit.capture.compare_with_theory`).
+outside the interval the row says so (`vissim.fit.capture.compare_with_theory`).
 """
 
 from __future__ import annotations

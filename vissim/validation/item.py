@@ -1,7 +1,7 @@
 """One campaign item: simulations against the ground truth(s), with metrics, maps and images.
 
 The truths: the bench render (and, for wave-optical simulations, the render convolved with the
-aperture's diffraction) and, with ``wave_truth``, the wave bench (:mod:`vissim.validation.wave_bench`).
+aperture's diffraction) and, with ``wave_truth``, the wave bench (`vissim.validation.wave_bench`).
 With the wave bench, a rendered item also gets the geometric self-check: the lens trace's ray
 optics applied to the synthetic chart (simulation ``traced_rays``), against the render.
 
@@ -9,7 +9,7 @@ optics applied to the synthetic chart (simulation ``traced_rays``), against the 
 shifted there (cubic spline): that render exists only at the campaign's sampling.  A
 simulation of the synthetic chart is aligned on the fine grid instead: the fine chart is
 shifted by the accumulated offset, simulated and registered again, until the remaining
-registration is below :data:`ALIGN_TOLERANCE_PX` (at most :data:`MAX_ALIGN_PASSES` passes);
+registration is below `ALIGN_TOLERANCE_PX` (at most `MAX_ALIGN_PASSES` passes);
 the simulated image is compared as it comes, never resampled.  One registration of the
 under-sampled result is biased by 0.01-0.03 px, and shifting it by a spline costs accuracy:
 together they held six astigmatic configurations of the thesis campaign (N, K x 180, Z x 90)

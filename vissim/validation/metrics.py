@@ -7,12 +7,12 @@ range, and SSIM's stabilising constants and PSNR's peak both depend on it.
 
 * **SSIM** is Wang, Bovik, Sheikh & Simoncelli 2004 (IEEE TIP 13:600), as the paper computes
   it: an 11 x 11 Gaussian window with sigma 1.5 px, population (not sample) covariances,
-  K1 = 0.01 and K2 = 0.03 -- :func:`skimage.metrics.structural_similarity` with
+  K1 = 0.01 and K2 = 0.03 -- `skimage.metrics.structural_similarity` with
   ``gaussian_weights=True, sigma=1.5, use_sample_covariance=False``.  The mean SSIM is the mean
   of the SSIM map *after* removing a 5 px border (half the window) where the window leaves the
   image; the map itself is returned full-size.
 * **PSNR** is ``10 log10(data_range**2 / MSE)`` dB
-  (:func:`skimage.metrics.peak_signal_noise_ratio`); identical images give ``inf``.
+  (`skimage.metrics.peak_signal_noise_ratio`); identical images give ``inf``.
 * **Absolute difference** is ``|reference - test|`` per pixel and its mean.
 
 Images are ``(H, W)`` or ``(H, W, C)`` with channels last; SSIM of a colour image is the mean
@@ -103,8 +103,10 @@ def compare_images(reference: Any, test: Any, *, data_range: float) -> Compariso
 
     Parameters
     ----------
-    reference, test : array_like
-        The images, in the same units (e.g. linear light).  Computed in float64.
+    reference : array_like
+        The reference image (e.g. linear light).  Computed in float64.
+    test : array_like
+        The image compared with it, in the same units and shape.
     data_range : float
         The value range of the images' units (max possible minus min possible value), e.g.
         1.0 for linear light in [0, 1].  Required: never inferred from the dtype.
@@ -138,7 +140,7 @@ def compare_images(reference: Any, test: Any, *, data_range: float) -> Compariso
 
 
 def noise_floor(render_a: Any, render_b: Any, data_range: float) -> Comparison:
-    """The Monte-Carlo noise floor: :func:`compare_images` of two renders of one scene, two seeds.
+    """The Monte-Carlo noise floor: `compare_images` of two renders of one scene, two seeds.
 
     A render cannot match a reference better than it matches itself re-rendered with another
     seed; metrics against a reference are read against this comparison.  Identical inputs (the

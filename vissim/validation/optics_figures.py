@@ -2,8 +2,8 @@
 
 One configuration stands for each group (a sweep, or one item): of those with lenses, the one of
 median defocus.  Its wave simulation's PSF is recomputed with the public functions
-(:func:`vissim.compute_psf`, :func:`vissim.mtf`, :func:`vissim.diffraction_mtf`,
-:func:`vissim.blur_image`) from what the item recorded: the camera prescription and pupil of the
+(`vissim.compute_psf`, `vissim.mtf`, `vissim.diffraction_mtf`,
+`vissim.blur_image`) from what the item recorded: the camera prescription and pupil of the
 ``wave`` comparison (``setup`` in ``result.json``, written to 4 decimals, so to 1e-4 D), the
 campaign's wavelength and sampling.  The PSF is the one the simulation of the synthetic chart
 used (the campaign's arcmin/px over ``SYNTHETIC_OVERSAMPLE``); the through-focus strip blurs the
@@ -33,6 +33,7 @@ from vissim.optics.psf_metrics import (diffraction_cutoff_cyc_per_deg, diffracti
                                        frequencies_cyc_per_deg, mtf,
                                        radius_of_encircled_energy_arcmin, ring_means)
 from vissim.optics.wavefront import Wavefront  # noqa: E402
+from vissim.validation.report_figures import display_norm, lens_words, radiance_colorbar, scale_bar  # noqa: E402
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
            "mtf_figure_of", "through_focus_figure_of", "optics_figures", "THROUGH_FOCUS_STEPS_D", "LOG_PSF_DECADES"]
@@ -61,9 +62,10 @@ class OpticsCase:
     arcmin_per_px: float  # the campaign's (the through-focus strip's) sampling
     psf_arcmin_per_px: float  # the sampling of the simulation of the synthetic chart
     synthetic: Path | None  # the item's synthetic chart at the campaign's sampling
+    trial_lenses: str = ""  # the lenses in the holder (their label), which give the camera ``prescription``
 
     def as_json(self) -> dict:
-        return {"group": self.group, "configuration": self.configuration,
+        return {"group": self.group, "configuration": self.configuration, "trial_lenses": self.trial_lenses,
                 "camera_prescription": self.prescription.format(4), "pupil_diameter_mm": self.pupil_diameter_mm,
                 "wavelength_nm": self.wavelength_nm, "psf_arcmin_per_px": self.psf_arcmin_per_px,
                 "through_focus_arcmin_per_px": self.arcmin_per_px,
@@ -75,7 +77,7 @@ def _largest_defocus(prescription: Prescription) -> float:
 
 
 def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
-    """One :class:`OpticsCase` per group, in campaign order: the configuration with lenses of median defocus."""
+    """One `OpticsCase` per group, in campaign order: the configuration with lenses of median defocus."""
     from vissim.validation.item import SYNTHETIC_OVERSAMPLE
     from vissim.validation.wave_bench_report import group_of
 
@@ -92,7 +94,7 @@ def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
                           Prescription.parse(wave["setup"]["camera_prescription"]),
                           float(wave["setup"]["pupil_diameter_mm"]), float(settings["wavelength_nm"]),
                           float(settings["arcmin_per_px"]), float(settings["arcmin_per_px"]) / SYNTHETIC_OVERSAMPLE,
-                          run_dir / synthetic if synthetic else None)
+                          run_dir / synthetic if synthetic else None, result["lens_label"])
         groups.setdefault(case.group, []).append((result["lens_label"] != "no lens", case))
     cases = []
     for members in groups.values():
@@ -124,7 +126,7 @@ def sampling_label(psf: PSF) -> str:
 
 
 def _panel_title(case: OpticsCase) -> str:
-    return f"{case.configuration}\ncamera Rx {case.prescription.format(2)}"
+    return f"{case.configuration}\n{lens_words(case.trial_lenses)} → camera Rx {case.prescription.format(2)}"
 
 
 def _grid(n: int, rows: int = 1, width: float = 3.0, height: float = 3.0):
@@ -224,11 +226,9 @@ def mtf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
 def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
     """The through-focus strip (a row per case with a synthetic chart, a column per sphere step), or None.
 
-    ``image_norm``: a callable making the images' colour norm (default: linear 0-1).
+    ``image_norm``: a callable making the images' colour norm (default: relative radiance at display gamma).
     """
-    from matplotlib.colors import Normalize
-
-    image_norm = image_norm or (lambda: Normalize(0, 1))
+    image_norm = image_norm or display_norm
     cases = [c for c in cases if c.synthetic is not None and c.synthetic.exists()]
     if not cases:
         return None
@@ -241,35 +241,49 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
             psf = case_psf(case, case.arcmin_per_px, step)
             seen = blur_image(chart, psf, arcmin_per_px=case.arcmin_per_px, padding="edge")
             ax = axes[i, j]
-            ax.imshow(seen, cmap="gray", norm=image_norm(), interpolation="nearest")
+            shown = ax.imshow(seen, cmap="gray", norm=image_norm(), interpolation="nearest")
             ax.set_xticks([])
             ax.set_yticks([])
             if i == 0:
                 ax.set_title("camera Rx (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it", fontsize=8)
-        axes[i, 0].set_ylabel(f"{case.configuration}\nRx {case.prescription.format(2)}", fontsize=7)
+        scale_bar(axes[i, 0], chart.shape[1], case.arcmin_per_px)
+        axes[i, 0].set_ylabel(f"{case.group}\n{lens_words(case.trial_lenses)}\ncamera Rx "
+                              f"{case.prescription.format(2)}", fontsize=7)
+    radiance_colorbar(fig.colorbar(shown, ax=axes[:, :], shrink=0.8, pad=0.02, aspect=25))
     first = cases[0]
     fig.suptitle(f"Through focus: the synthetic chart through the wave PSF of the camera prescription with its sphere "
                  f"stepped\n({first.arcmin_per_px:g} arcmin/px, {first.pupil_diameter_mm:g} mm pupil, "
-                 f"{first.wavelength_nm:g} nm, no spectacle magnification)", fontsize=9)
+                 f"{first.wavelength_nm:g} nm, no spectacle magnification; scale bars in arcmin)", fontsize=9)
     return fig
 
 
-def optics_figures(results: list[dict], run_dir: str | Path, image_norm=None) -> dict[str, tuple[str, object, dict]]:
-    """The report's optics figures: name -> (file name, matplotlib figure, provenance extras); empty without wave items.
+def optics_figures(results: list[dict], run_dir: str | Path,
+                   image_norm=None) -> dict[str, tuple[str, object, dict, str]]:
+    """The report's optics figures: name -> (file name, matplotlib figure, provenance extras, alt text).
 
-    ``image_norm`` as in :func:`through_focus_figure_of`.
+    Empty without wave items.
+
+    ``image_norm`` as in `through_focus_figure_of`.
     """
     cases = optics_cases(results, run_dir)
     if not cases:
         return {}
     psfs = [case_psf(case) for case in cases]
     extra = {"optics": [case.as_json() for case in cases]}
+    panels = "; ".join(_panel_title(c).replace("\n", ", ") for c in cases)
     figures = {
-        "wave PSF (log scale) per group": ("figure_psf.png", psf_figure_of(cases, psfs), extra),
-        "MTF against the diffraction limit per group": ("figure_mtf.png", mtf_figure_of(cases, psfs), extra),
+        "wave PSF (log scale) per group": ("figure_psf.png", psf_figure_of(cases, psfs), extra, (
+            f"The wave simulation's point spread function, log10 of PSF over peak down to 1e-{LOG_PSF_DECADES}, axes "
+            f"in arcmin, one panel per group: {panels}.")),
+        "MTF against the diffraction limit per group": ("figure_mtf.png", mtf_figure_of(cases, psfs), extra, (
+            "MTF of the wave simulation's PSF against cycles per degree (log scale), along x, along y and the ring "
+            f"mean, with the diffraction-limited MTF of the pupil, one panel per group: {panels}.")),
     }
     strip = through_focus_figure_of(cases, image_norm)
     if strip is not None:
-        figures["through focus per group"] = ("figure_through_focus.png", strip, extra)
-    log.info("optics figures of %d groups: %s", len(cases), ", ".join(f for f, _, _ in figures.values()))
+        steps = ", ".join(f"{s:+g} D" for s in THROUGH_FOCUS_STEPS_D)
+        figures["through focus per group"] = ("figure_through_focus.png", strip, extra, (
+            f"The synthetic letter blurred by the wave PSF with the camera prescription's sphere stepped by {steps}, "
+            f"one row per group ({panels}), with an angular scale bar in arcmin."))
+    log.info("optics figures of %d groups: %s", len(cases), ", ".join(f for f, *_ in figures.values()))
     return figures

@@ -3,9 +3,9 @@
 The estimates are rough upper bounds of the largest single step (a bench render, a PSF, one
 blurred image), enough to refuse a campaign that cannot fit (a 1e9 px tile, a PSF wider than
 the tile by orders of magnitude) with a message saying what it would need, before a file is
-written.  The machine's memory is :func:`vissim.checks.check_allocation`'s; a render's and the chart
-texture's needs are the renderer's own estimates (:func:`vissim.render.run.render_memory_bytes`,
-:func:`vissim.bench.dslr.chart_texture_shape`).
+written.  The machine's memory is `vissim.checks.check_allocation`'s; a render's and the chart
+texture's needs are the renderer's own estimates (`vissim.render.run.render_memory_bytes`,
+`vissim.bench.dslr.chart_texture_shape`).
 """
 
 from __future__ import annotations

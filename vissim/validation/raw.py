@@ -1,6 +1,6 @@
 """Camera RAW files in as linear light, letter crops, and resampling to an angular grid.
 
-This is the one module that imports :mod:`rawpy` (LibRaw).  :func:`read_raw_linear` returns
+This is the one module that imports `rawpy` (LibRaw).  `read_raw_linear` returns
 float32 values proportional to the light each photosite collected, normalised per channel as
 ``(raw - black_c) / (white - black_c)``: black -> 0, the file's white (saturation) level -> 1.
 
@@ -13,7 +13,7 @@ float32 values proportional to the light each photosite collected, normalised pe
   second green as ``"G2"`` (RGGB -> ``R, G, G2, B``).  Nothing is interpolated, clipped or
   white-balanced; values below black (read noise) stay negative so that means are unbiased.
   The planes are half-size: one pixel spans **two** photosite pitches, and the four planes
-  are offset from each other by half a plane pixel (:meth:`RawImage.rgb` averages the greens
+  are offset from each other by half a plane pixel (`RawImage.rgb` averages the greens
   regardless).
 * ``mode="demosaic"``: LibRaw's bilinear demosaic (``DemosaicAlgorithm.LINEAR``, a linear
   operator, unlike AHD) with every non-linear step off: ``gamma=(1, 1)``,
@@ -28,11 +28,11 @@ white balance (multipliers per channel, green = 1) and ``camera_to_srgb`` the 3 
 from white-balanced camera RGB to linear sRGB (D65), derived as LibRaw and dcraw do from the
 file's XYZ -> camera matrix (``raw.rgb_xyz_matrix``): ``cam_rgb = cam_xyz @ XYZ_FROM_SRGB``,
 rows scaled to sum to 1 (so camera white maps to sRGB white), inverted.
-:meth:`RawImage.luminance` combines them into relative linear luminance (Rec. 709 / sRGB
+`RawImage.luminance` combines them into relative linear luminance (Rec. 709 / sRGB
 ``Y``): 1 = a neutral surface that takes the green photosites to the white level.
 
-:func:`crop_letters` cuts the chart's letter boxes out of a capture, and
-:func:`resample_to_arcmin` brings a capture onto the renders' angular grid by exact pixel-area
+`crop_letters` cuts the chart's letter boxes out of a capture, and
+`resample_to_arcmin` brings a capture onto the renders' angular grid by exact pixel-area
 integration.
 """
 
@@ -255,7 +255,7 @@ def _demosaic(raw: Any) -> np.ndarray:
 def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> RawImage:
     """Read a camera RAW (CR2, NEF, DNG, ...) as linear light; see the module docstring.
 
-    Raises :class:`VissimInputError` for a missing, unreadable or unsupported file.
+    Raises `VissimInputError` for a missing, unreadable or unsupported file.
     """
     if mode not in RAW_MODES:
         raise VissimInputError(f"RAW mode must be one of {', '.join(RAW_MODES)}; got {mode!r}")
@@ -439,8 +439,8 @@ def resample_to_arcmin(
 ) -> ResampledImage:
     """Resample a capture from camera pixels onto a grid of ``target_arcmin_per_px``.
 
-    The camera's scale is :func:`camera_arcmin_per_px` times ``sensor_px_per_image_px`` (2 for
-    planes-mode pixels, which span two photosites; taken from a :class:`RawImage`, default 1
+    The camera's scale is `camera_arcmin_per_px` times ``sensor_px_per_image_px`` (2 for
+    planes-mode pixels, which span two photosites; taken from a `RawImage`, default 1
     for an array).  Resampling is exact pixel-area integration: output pixel ``k`` is the
     area-weighted mean of the input over ``[k, k+1) * target / source`` input pixels, separably
     in rows and columns, starting at the top-left corner; only whole output pixels are kept.

@@ -1,6 +1,6 @@
 """Sub-pixel registration of a capture (or render) onto a reference image.
 
-:func:`register` finds the translation with :func:`skimage.registration.phase_cross_correlation`
+`register` finds the translation with `skimage.registration.phase_cross_correlation`
 (Guizar-Sicairos, Thurman & Fienup 2008: an upsampled DFT around the correlation peak, here to
 1/100 px) and applies it to the moving image.
 
@@ -14,7 +14,7 @@ shifts each): worst error 0.007 px with ``None``, 0.25 px with ``"phase"``; at s
 0.03 px versus 1.7 px.  ``tests/validation/test_validation_registration.py`` pins the difference.
 
 **Applying the shift: cubic spline, not a Fourier shift.**  The moving image is resampled with
-:func:`scipy.ndimage.shift` (``order=3``, ``mode="nearest"``).  A Fourier shift is exact only
+`scipy.ndimage.shift` (``order=3``, ``mode="nearest"``).  A Fourier shift is exact only
 for band-limited, periodic images; a capture is neither (pixel-integrated edges, content cut at
 the border), so it rings and wraps unless padded.  Measured on pixel-integrated letters shifted
 by exactly (2.3, -1.7), (-0.4, 0.8) and (5.5, 3.2) px (rendered at 0.1 arcmin/px, rolled and
@@ -49,7 +49,7 @@ __all__ = ["Registration", "register"]
 
 @dataclasses.dataclass(frozen=True)
 class Registration:
-    """A translation found by :func:`register` and the moving image with it applied.
+    """A translation found by `register` and the moving image with it applied.
 
     ``shift_rows_px`` / ``shift_cols_px`` move ``moving`` onto the reference (positive = toward
     higher row / column index).  ``registered`` has the moving image's shape and dtype float64.
@@ -95,13 +95,15 @@ def register(
 
     Parameters
     ----------
-    reference, moving : ndarray of shape (H, W)
-        One channel each, same shape.  Their means are removed before correlating (this
-        leaves the peak where it is and keeps a bright background from dominating the sums).
+    reference : ndarray of shape (H, W)
+        One channel.  Its mean is removed before correlating (this leaves the peak where it
+        is and keeps a bright background from dominating the sums), as is ``moving``'s.
+    moving : ndarray of shape (H, W)
+        One channel, the shape of ``reference``: the image registered onto it.
     upsample_factor : int
         The shift is found to ``1 / upsample_factor`` px (default 1/100 px).
     max_shift_px : float, optional
-        Raise :class:`VissimInputError` if the shift found is larger than this in either axis
+        Raise `VissimInputError` if the shift found is larger than this in either axis
         (an implausible shift usually means the wrong crop or the wrong letter).
 
     Returns

@@ -23,7 +23,7 @@ def _dslr_bench(grid, f_number: float, lenses: tuple[TrialLens, ...], **extra) -
 
 
 def campaign_bench(configuration: Configuration, settings: CampaignSettings) -> DslrBench:
-    """The configuration's bench; its :meth:`~DslrBench.viewing_setup` is what the simulations assume."""
+    """The configuration's bench; its `viewing_setup` is what the simulations assume."""
     thin = tuple(TrialLens(l.sphere_diopters, l.cylinder_diopters, l.axis_deg) for l in configuration.lenses)
     return _dslr_bench(settings, configuration.f_number, thin, refractive_index=settings.refractive_index)
 
@@ -79,14 +79,14 @@ def no_lens_spec(configuration: Configuration, settings: CampaignSettings) -> Re
 
 
 def bench_for(spec: RenderSpec) -> DslrBench:
-    """The :class:`DslrBench` that renders ``spec`` (its lenses are already physical)."""
+    """The `DslrBench` that renders ``spec`` (its lenses are already physical)."""
     return _dslr_bench(spec, spec.f_number, spec.lenses, spp=spec.spp, seed=spec.seed)
 
 
 def render_spec(spec: RenderSpec):
     """Render one spec with Mitsuba on this machine (a worker process or a Dask worker).
 
-    Returns the :class:`vissim.render.run.RenderResult`: float32 ``pixels``, ``variant``, ``spp``
+    Returns the `vissim.render.run.RenderResult`: float32 ``pixels``, ``variant``, ``spp``
     (taken) and ``provenance``, whose ``inputs.mitsuba_render`` records the spp asked and taken,
     variant, seeds, passes and determinism; the campaign runner writes it in the EXR header.
     """

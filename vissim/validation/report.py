@@ -23,10 +23,13 @@ import numpy as np  # noqa: E402
 
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.errors import VissimInputError  # noqa: E402
-from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
+from vissim.imageio import read_image, write_image  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
 from vissim.validation.fit_report import fit_table  # noqa: E402
 from vissim.validation.optics_figures import optics_figures  # noqa: E402
+from vissim.validation.report_figures import (Figure, arcmin_per_px_of, display_norm, lens_words,  # noqa: E402
+                                              radiance_colorbar, scale_bar, tiles_alt)
+from vissim.validation.report_summary import summary_table  # noqa: E402
 from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
 from vissim.validation.wave_bench_report import is_wave_bench_row, self_check_table, wave_bench_tables  # noqa: E402
 
@@ -41,6 +44,7 @@ __all__ = [
     "format_number",
     "json_rows",
     "reference_note",
+    "Figure",
 ]
 
 log = logging.getLogger(__name__)
@@ -56,6 +60,8 @@ REFERENCE_NOTE = {
 }
 ORDER = ["wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification", TRACED_RAYS]
 FIGURE_COLUMNS = 8
+#: Simulations whose results on the synthetic chart get a figure of their own (besides the wave bench's).
+SYNTHETIC_FIGURES = ("wave", "geometric", "thesis")
 
 
 def load_results(run_dir: str | Path) -> list[dict]:
@@ -72,6 +78,12 @@ def load_results(run_dir: str | Path) -> list[dict]:
     stale = set(results) - set(order)
     if stale:  # items of another campaign (or of an older simulator) left in the folder: not this run's
         log.info("ignoring %d finished items in %s that are not in its campaign", len(stale), run_dir / "items")
+    # A configuration's name is not part of its item's key: a reused item takes the campaign's current name.
+    configurations = json.loads(order_file.read_text()).get("configurations") or []
+    names = {key: c.get("name") for key, c in zip(order, configurations) if isinstance(c, dict)}
+    for key, result in results.items():
+        if names.get(key) and isinstance(result.get("configuration"), dict):
+            result["configuration"]["name"] = names[key]
     return [results[k] for k in order if k in results]
 
 
@@ -151,7 +163,9 @@ def markdown_tables(results: list[dict]) -> str:
     columns = sorted({(r["simulation"], r["input"]) for r in rows}, key=lambda c: (ORDER.index(c[0]), c[1]))
     by_config: dict[str, dict] = {}
     for r in rows:
-        by_config.setdefault(r["configuration"], {"_floor": {}})[(r["simulation"], r["input"])] = r
+        by_config.setdefault(r["configuration"], {"_floor": {}, "_rx": "—"})[(r["simulation"], r["input"])] = r
+        if r["simulation"] in ("wave", "geometric"):  # the bench's own optics (thesis mode has its own Rx)
+            by_config[r["configuration"]]["_rx"] = r["camera_prescription"]
         by_config[r["configuration"]]["_floor"][REFERENCE_NOTE[r["simulation"]]] = (r["noise_floor_psnr_db"], r["noise_floor_ssim"])
     out = [summary_table(rows, [c for c in columns if c[0] != TRACED_RAYS])]
     self_check = self_check_table(rows)
@@ -159,8 +173,12 @@ def markdown_tables(results: list[dict]) -> str:
         out.append(self_check)
     for metric, label, digits in (("psnr_db", "PSNR (dB)", 2), ("ssim", "SSIM", 4)):
         floor_idx = 0 if metric == "psnr_db" else 1
-        header = ["configuration"] + [f"{s} / {i}" for s, i in columns] + ["noise floor (render)", "noise floor (+diffraction)"]
+        powers = ["trial lens(es)", "camera Rx (result)"] if metric == "psnr_db" else []
+        header = ["configuration", *powers] + [f"{s} / {i}" for s, i in columns] + ["noise floor (render)",
+                                                                                   "noise floor (+diffraction)"]
         out.append(f"### {label} against the bench\n")
+        if metric == "psnr_db":
+            out.append(COLUMNS_NOTE)
         out.append("| " + " | ".join(header) + " |")
         out.append("|" + "---|" * len(header))
         for name, cells in by_config.items():
@@ -169,18 +187,10 @@ def markdown_tables(results: list[dict]) -> str:
                 _fmt(cells["_floor"][note][floor_idx], digits) if note in cells["_floor"] else "—"
                 for note in (REFERENCE_NOTE["geometric"], REFERENCE_NOTE["wave"])
             ]
-            out.append("| " + " | ".join([name] + values + floors) + " |")
+            shown = [cells[c] for c in columns if c in cells][0]
+            rx = [shown["lenses"], cells["_rx"]] if powers else []
+            out.append("| " + " | ".join([name, *rx] + values + floors) + " |")
         out.append("")
-    out.append(
-        "Columns are simulation / input: `render` = applied to the bench's no-lens render (as the thesis "
-        "did), `synthetic` = applied to the synthetic chart. `wave` and `thesis` are compared with the "
-        "render convolved with the bench aperture's diffraction (Mitsuba renders none); `geometric` and "
-        "the one-erratum variants (`thesis_power`, `thesis_pupil`, `no_magnification`, geometric optics) "
-        "with the render as it is. The noise floor compares the two ground-truth renders (seeds differ): "
-        "each simulation is compared with the first, so a perfect, noise-free simulation would score "
-        "3.0 dB above the floor's PSNR (MSE sigma^2 instead of 2 sigma^2); a score near floor + 3 dB "
-        "means the agreement is as good as the renders' Monte-Carlo noise can show.\n"
-    )
     wave_bench = wave_bench_tables(results, all_rows)
     if wave_bench:
         out.append(wave_bench)
@@ -190,29 +200,15 @@ def markdown_tables(results: list[dict]) -> str:
     return "\n".join(out)
 
 
-def summary_table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
-    """Median PSNR minus the noise floor per group of configurations (a sweep, or one item).
-
-    0 dB is the floor; +3 dB is what a perfect, noise-free simulation would score.
-    """
-    groups: dict[str, dict] = {}
-    for r in rows:
-        group = r["configuration"].split(":")[0]
-        margin = r["psnr_db"] - r["noise_floor_psnr_db"]
-        groups.setdefault(group, {}).setdefault((r["simulation"], r["input"]), []).append(margin)
-    header = ["group (configurations)"] + [f"{s} / {i}" for s, i in columns]
-    lines = [
-        "### Summary: median PSNR minus the noise floor (dB)\n",
-        "A perfect, noise-free simulation scores +3 dB; 0 dB means it differs from the bench as much "
-        "as two renders differ from each other.\n",
-        "| " + " | ".join(header) + " |",
-        "|" + "---|" * len(header),
-    ]
-    for group, cells in groups.items():
-        n = max(len(v) for v in cells.values())
-        values = [_fmt(float(np.median(cells[c])), 1) if c in cells else "—" for c in columns]
-        lines.append("| " + " | ".join([f"{group} ({n})"] + values) + " |")
-    return "\n".join(lines) + "\n"
+COLUMNS_NOTE = (
+    "Columns are simulation / input: `render` = applied to the bench's no-lens render (as the thesis did), "
+    "`synthetic` = applied to the synthetic chart. `wave` and `thesis` are compared with the render convolved "
+    "with the bench aperture's diffraction (Mitsuba renders none); `geometric` and the one-erratum variants "
+    "(`thesis_power`, `thesis_pupil`, `no_magnification`, geometric optics) with the render as it is. The trial "
+    "lens is the power in the holder in front of the camera; the camera Rx is the prescription the camera then "
+    "has (the correcting lens at its pupil, minus cylinder), which the simulations blur with. The noise floor "
+    "compares the two renders of the bench (seeds differ); the summary above explains how to read a score "
+    "against it.\n")
 
 
 def _load(result: dict, run_dir: Path, name: str) -> np.ndarray | None:
@@ -226,17 +222,20 @@ def _load(result: dict, run_dir: Path, name: str) -> np.ndarray | None:
 DISSIMILARITY_RANGE = (1e-4, 1.0)
 
 
-def reflectance_norm():
-    """Grey images as the eye sees them (sRGB), colour bars in linear reflectance."""
-    from matplotlib.colors import FuncNorm
-
-    return FuncNorm((lambda x: srgb_encode(np.clip(x, 0, 1)), lambda y: srgb_decode(np.clip(y, 0, 1))), vmin=0, vmax=1)
-
-
-def column_title(result: dict) -> str:
-    """A figure column's header: the letter, its LogMAR and the lenses."""
+def column_title(result: dict, comparison: dict | None = None) -> str:
+    """A figure column's header: the letter and its LogMAR, the trial lens, the camera's resulting Rx (`camera_rx`)."""
     config = result["configuration"]
-    return f"{config['letter']}, LogMAR {config['logmar']:.1f}\n{result['lens_label']}"
+    title = f"{config['letter']}, LogMAR {config['logmar']:.1f}\n{lens_words(result['lens_label'])}"
+    if comparison is not None:
+        title += f"\ncamera Rx {camera_rx(result, comparison)}"
+    return title
+
+
+def camera_rx(result: dict, comparison: dict | None = None) -> str:
+    """The camera's resulting prescription behind the trial lenses: the bench's (the matched wave or geometric
+    simulation's), which thesis mode replaces with its own; that comparison's if neither ran."""
+    matched = next((c for c in result["comparisons"] if c["simulation"] in ("wave", "geometric")), comparison)
+    return matched["setup"]["camera_prescription"] if matched else "—"
 
 
 def png_bytes(fig) -> bytes:
@@ -246,33 +245,39 @@ def png_bytes(fig) -> bytes:
     return buffer.getvalue()
 
 
-def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str,
-            wave_bench: bool = False) -> bytes | None:
-    """Fig. 4.8-style: rows ground truth, simulation, 1 - SSIM map, AD map; a column per configuration.
-
-    ``wave_bench``: the comparisons against the wave bench, else those against the render.
-    """
-    from matplotlib.colors import LogNorm, Normalize
-
+def _columns(results: list[dict], simulation: str, input_kind: str, wave_bench: bool) -> list[tuple[dict, dict]]:
     columns = []
     for result in results:
         comp = next((c for c in result["comparisons"] if c["simulation"] == simulation and c["input"] == input_kind
                      and (c.get("reference_kind") == WAVE_BENCH) == wave_bench), None)
         if comp is not None:
             columns.append((result, comp))
+    return columns[:FIGURE_COLUMNS]
+
+
+def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str,
+            wave_bench: bool = False, campaign: dict | None = None) -> Figure | None:
+    """Fig. 4.8-style: rows ground truth, simulation, 1 - SSIM map, AD map; a column per configuration.
+
+    ``wave_bench``: the comparisons against the wave bench, else those against the render.
+    """
+    from matplotlib.colors import LogNorm, Normalize
+
+    columns = _columns(results, simulation, input_kind, wave_bench)
     if not columns:
         return None
-    columns = columns[:FIGURE_COLUMNS]
     highest = max(float(np.percentile(read_image(run_dir / c["images"]["abs_diff_map"]).pixels, 99.9)) for _, c in columns)
     ad_max = max(1e-4 if wave_bench else 0.01, highest)  # the wave bench's differences are 100x smaller
     lo, hi = DISSIMILARITY_RANGE
-    rows = [("wave bench (truth)" if wave_bench else "bench (truth)", "gray", reflectance_norm, "reflectance"),
-            (f"{simulation} sim.", "gray", reflectance_norm, "reflectance"),
+    truth_label = "wave bench (truth)" if wave_bench else "bench (truth)"
+    rows = [(truth_label, "gray", display_norm, None),
+            (f"{simulation} sim.", "gray", display_norm, None),
             ("1 − SSIM (log)", "viridis", lambda: LogNorm(lo, hi), "1 − SSIM"),
-            ("|difference|", "magma", lambda: Normalize(0, ad_max), "|difference| (reflectance)")]
-    fig, axes = plt.subplots(4, len(columns), figsize=(1.9 * len(columns) + 1.6, 8.8), squeeze=False,
+            ("|difference|", "magma", lambda: Normalize(0, ad_max), "|difference| (relative radiance, linear)")]
+    fig, axes = plt.subplots(4, len(columns), figsize=(1.9 * len(columns) + 1.8, 9.2), squeeze=False,
                              layout="constrained")
     shown = [None] * len(rows)
+    bar_arcmin = None
     for j, (result, comp) in enumerate(columns):
         truth = _load(result, run_dir, comp["reference_image"])
         sim = read_image(run_dir / comp["images"]["simulation"]).pixels
@@ -284,41 +289,73 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
             shown[i] = ax.imshow(img, cmap=cmap, norm=norm(), interpolation="nearest")
             ax.set_xticks([])
             ax.set_yticks([])
-        axes[0, j].set_title(column_title(result), fontsize=8)
+        step = arcmin_per_px_of(result, campaign)
+        if step is not None:
+            bar_arcmin = scale_bar(axes[0, j], truth.shape[1], step)
+        axes[0, j].set_title(column_title(result, comp), fontsize=7)
         axes[3, j].set_xlabel(f"SSIM {comp['metrics']['ssim']:.3f}\nPSNR {_fmt(_num(comp['metrics']['psnr_db']), 1)} dB", fontsize=8)
     for i, (label, _, _, bar_label) in enumerate(rows):
         axes[i, 0].set_ylabel(label, fontsize=9)
         bar = fig.colorbar(shown[i], ax=axes[i, :], shrink=0.9, pad=0.02, aspect=15)
-        bar.set_label(bar_label, fontsize=8)
         bar.ax.tick_params(labelsize=7)
-    fig.suptitle(f"{simulation} simulation applied to the {input_kind} input, against {reference_note(columns[0][1])}",
-                 fontsize=10)
-    return png_bytes(fig)
+        if bar_label is None:
+            radiance_colorbar(bar)
+        else:
+            bar.set_label(bar_label, fontsize=8)
+    scale = f"; scale bars {bar_arcmin:g} arcmin" if bar_arcmin else ""
+    fig.suptitle(f"{simulation} simulation applied to the {input_kind} input, against {reference_note(columns[0][1])}"
+                 f"{scale}", fontsize=10)
+    alt = tiles_alt(f"{simulation} simulation of the {input_kind} input against {reference_note(columns[0][1])}, "
+                    "as letter tiles with an angular scale bar",
+                    [truth_label, f"the {simulation} simulation", "1 − SSIM map on a log scale",
+                     "absolute difference map"],
+                    [f"{r['configuration']['name']}: SSIM {c['metrics']['ssim']:.3f}, "
+                     f"PSNR {_fmt(_num(c['metrics']['psnr_db']), 1)} dB" for r, c in columns])
+    return Figure("", png_bytes(fig), alt)
 
 
-def html_report(title: str, tables_md: str, figures: dict[str, bytes], footer: str = "") -> str:
-    """A self-contained HTML page: the Markdown tables as HTML tables, figures inline (base64)."""
-    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
-             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}"
-             "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px;"
-             "text-align:right}td:first-child{text-align:left}</style></head><body>",
-             f"<h1>{html.escape(title)}</h1>"]
-    for block in tables_md.split("### ")[1:]:
-        lines = [line for line in block.strip().splitlines() if line.strip()]
-        parts.append(f"<h2>{html.escape(lines[0])}</h2>")
-        rows = [line for line in lines[1:] if line.startswith("|") and not line.startswith("|---")]
-        parts += [f"<p>{html.escape(t)}</p>" for t in lines[1:] if not t.startswith("|")]
+def _inline(text: str) -> str:
+    """A line of Markdown as HTML: escaped, ``code`` spans as <code>."""
+    parts = html.escape(text).split("`")
+    return "".join(f"<code>{part}</code>" if k % 2 else part for k, part in enumerate(parts))
+
+
+def _html_block(block: str) -> list[str]:
+    """One ``### `` section of the Markdown: its heading, paragraphs and table (if any)."""
+    lines = [line for line in block.strip().splitlines() if line.strip()]
+    parts, body = [f"<h2>{_inline(lines[0])}</h2>"], lines[1:]
+    rows = [line for line in body if line.startswith("|") and not line.startswith("|---")]
+    first = next((k for k, line in enumerate(body) if line.startswith("|")), len(body))
+    before, after = ([t for t in part if not t.startswith("|")] for part in (body[:first], body[first:]))
+    parts += [f"<p>{_inline(t)}</p>" for t in before]
+    if rows:
         parts.append("<table>")
         for k, line in enumerate(rows):
             tag = "th" if k == 0 else "td"
             cells = [c.strip() for c in line.strip("|").split("|")]
-            parts.append("<tr>" + "".join(f"<{tag}>{html.escape(c)}</{tag}>" for c in cells) + "</tr>")
+            parts.append("<tr>" + "".join(f"<{tag}>{_inline(c)}</{tag}>" for c in cells) + "</tr>")
         parts.append("</table>")
-    for name, png in figures.items():
-        parts.append(f"<h2>{html.escape(name)}</h2><img style='max-width:100%' "
-                     f"src='data:image/png;base64,{base64.b64encode(png).decode()}'>")
+    parts += [f"<p>{_inline(t)}</p>" for t in after]
+    return parts
+
+
+def html_report(title: str, tables_md: str, figures: dict[str, Figure], footer: str = "", description: str = "") -> str:
+    """A self-contained HTML page: the Markdown tables as HTML tables, figures inline (base64) with alt text."""
+    parts = [f"<!doctype html><html lang='en'><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
+             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto;padding:0 8px}"
+             "table{border-collapse:collapse;font-size:12px;display:block;overflow-x:auto}"
+             "td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}td:first-child{text-align:left}"
+             "code{background:#f3f3f3;padding:0 2px}</style></head><body>",
+             f"<h1>{html.escape(title)}</h1>"]
+    if description:
+        parts.append(f"<p>{_inline(description)}</p>")
+    for block in tables_md.split("### ")[1:]:
+        parts += _html_block(block)
+    for name, figure in figures.items():
+        parts.append(f"<h2>{html.escape(name)}</h2><img style='max-width:100%' alt='{html.escape(figure.alt, quote=True)}' "
+                     f"src='data:image/png;base64,{base64.b64encode(figure.png).decode()}'>")
     if footer:
-        parts.append(f"<p><small>{html.escape(footer)}</small></p>")
+        parts.append(f"<p><small>{_inline(footer)}</small></p>")
     parts.append("</body></html>")
     return "\n".join(parts)
 
@@ -350,7 +387,7 @@ def report_provenance(run_dir: Path, campaign: dict, results: list[dict]) -> dic
 
 
 def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
-    """A figure's PNG through :func:`vissim.imageio.write_image` (so it gets its provenance sidecar); its bytes."""
+    """A figure's PNG through `vissim.imageio.write_image` (so it gets its provenance sidecar); its bytes."""
     from PIL import Image as PILImage
 
     codes = np.asarray(PILImage.open(io.BytesIO(png)).convert("RGB"), dtype=np.float32) / 255.0
@@ -359,11 +396,12 @@ def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
 
 
 def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[dict], tables_md: str,
-                       figures: dict[str, tuple]) -> list[Path]:
+                       figures: dict[str, Figure]) -> list[Path]:
     """metrics.json, metrics.csv, tables.md, the figures and report.html.
 
-    ``figures``: name -> ``(file name, PNG)`` or ``(file name, PNG, provenance extras)``; each is written
-    with its sidecar and linked from tables.md (Markdown images) and shown in report.html.
+    ``figures``: name -> `Figure` (file name, PNG, alt text, provenance extras); each is written
+    with its sidecar and linked from tables.md (a Markdown image with its alt text) and shown in
+    report.html.
     """
     campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
     provenance = report_provenance(run_dir, campaign, metrics["items"])
@@ -376,16 +414,24 @@ def write_report_files(run_dir: Path, *, title: str, metrics: dict, rows: list[d
     written.append(run_dir / "metrics.csv")
     made = (f"Made by vissim {provenance['vissim_version']} on {provenance['created_utc']} from "
             f"{campaign.get('source', 'an unknown campaign file')}; provenance in metrics.json.")
-    links = "".join(f"### {name}\n\n![{name}]({entry[0]})\n\n" for name, entry in figures.items())
-    text = f"# {title}\n\n{campaign.get('description', '')}\n\n{tables_md}\n{links}{made}\n"
+    links = "".join(f"### {name}\n\n![{_markdown_alt(f.alt)}]({f.file_name})\n\n" for name, f in figures.items())
+    description = campaign.get("description", "")
+    text = f"# {title}\n\n{description}\n\n{tables_md}\n{links}{made}\n"
     written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
-    pngs = {}
-    for name, (file_name, png, *extra) in figures.items():
-        pngs[name] = write_figure(run_dir / file_name, png, {**provenance, **(extra[0] if extra else {}), "figure": name})
-        written += [run_dir / file_name, run_dir / f"{file_name}.json"]
-    page = html_report(title, tables_md, pngs, footer=made)
+    shown = {}
+    for name, figure in figures.items():
+        png = write_figure(run_dir / figure.file_name, figure.png,
+                           {**provenance, **figure.extra, "figure": name, "alt": figure.alt})
+        shown[name] = figure._replace(png=png)
+        written += [run_dir / figure.file_name, run_dir / f"{figure.file_name}.json"]
+    page = html_report(title, tables_md, shown, footer=made, description=description)
     written.append(write_text_atomic(run_dir / "report.html", page, overwrite=True))
     return written
+
+
+def _markdown_alt(text: str) -> str:
+    """Alt text inside ``![...]``: no brackets or line breaks."""
+    return " ".join(text.replace("[", "(").replace("]", ")").split())
 
 
 def campaign_name(run_dir: Path) -> str:
@@ -396,28 +442,31 @@ def campaign_name(run_dir: Path) -> str:
 def build_report(run_dir: str | Path) -> list[Path]:
     """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``.
 
-    The figures: Fig. 4.8-style panels per simulation, and per group the wave PSF (log scale), its
-    MTF against the diffraction limit and a through-focus strip (:mod:`vissim.validation.optics_figures`).
+    The figures: Fig. 4.8-style panels per simulation on the no-lens render and, for the main
+    simulations, on the synthetic chart; and per group the wave PSF (log scale), its MTF against the
+    diffraction limit and a through-focus strip (`vissim.validation.optics_figures`).
     """
     run_dir = Path(run_dir)
     results = load_results(run_dir)
+    campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
     rows = metrics_rows(results)
     figures = {}
-    for simulation in ORDER:
-        png = _figure(results, run_dir, simulation, "render")
-        if png is not None:
-            figures[f"{simulation} simulation on the no-lens render"] = (f"figure_{simulation}.png", png)
-    png = _figure(results, run_dir, "wave", "synthetic", wave_bench=True)
-    if png is not None:
-        name = "wave simulation on the synthetic chart against the wave bench"
-        figures[name] = (f"figure_wave_{WAVE_BENCH}.png", png)
+    wanted = [(s, "render", False, f"{s} simulation on the no-lens render", f"figure_{s}.png") for s in ORDER]
+    wanted += [(s, "synthetic", False, f"{s} simulation on the synthetic chart", f"figure_{s}_synthetic.png")
+               for s in SYNTHETIC_FIGURES]
+    wanted.append(("wave", "synthetic", True, "wave simulation on the synthetic chart against the wave bench",
+                   f"figure_wave_{WAVE_BENCH}.png"))
+    for simulation, input_kind, wave_bench, name, file_name in wanted:
+        figure = _figure(results, run_dir, simulation, input_kind, wave_bench=wave_bench, campaign=campaign)
+        if figure is not None:
+            figures[name] = figure._replace(file_name=file_name)
     try:  # per group: the PSF (log), its MTF, through focus; the rest of the report does not depend on them
-        optics = optics_figures(results, run_dir, reflectance_norm)
+        optics = optics_figures(results, run_dir, display_norm)
     except (KeyError, OSError, ValueError, VissimInputError) as error:
         log.warning("report: the optics figures were skipped (%s: %s)", type(error).__name__, error)
         optics = {}
-    for name, (file_name, fig, extra) in optics.items():
-        figures[name] = (file_name, png_bytes(fig), extra)
+    for name, (file_name, fig, extra, alt) in optics.items():
+        figures[name] = Figure(file_name, png_bytes(fig), alt, extra)
     written = write_report_files(run_dir, title=f"vissim validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=markdown_tables(results), figures=figures)

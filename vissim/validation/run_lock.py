@@ -66,7 +66,7 @@ def _acquire(path: Path, run_dir: Path) -> int:
 def run_folder_lock(run_dir: str | os.PathLike[str]) -> Iterator[Path]:
     """Hold ``run_dir`` for this process (created if missing) for the duration of the block.
 
-    Raises :class:`VissimInputError` at once when another process holds it.  A folder this
+    Raises `VissimInputError` at once when another process holds it.  A folder this
     call created and that is still empty when the block ends is removed again.
     """
     run_dir = Path(run_dir)

@@ -151,7 +151,7 @@ def render_file_provenance(spec, result) -> dict:
 
     ``result`` is an array, or an object with ``pixels`` and optionally ``variant``, ``spp``
     (recorded as ``variant``, ``spp_used``) and ``provenance`` (e.g.
-    :class:`vissim.render.run.RenderResult`), whose keys win and whose ``inputs`` are merged.
+    `vissim.render.run.RenderResult`), whose keys win and whose ``inputs`` are merged.
     """
     provenance = make_provenance(render=spec.as_json())
     for attribute, key in (("variant", "variant"), ("spp", "spp_used")):
@@ -249,15 +249,15 @@ def run_campaign(
 ) -> RunSummary:
     """Run (or resume) ``campaign`` into ``run_dir``; returns what was made and reused.
 
-    ``render`` makes one bench render from a :class:`RenderSpec` (default: Mitsuba via
-    :func:`vissim.validation.renders.render_spec`); it must be picklable for workers.  Every
+    ``render`` makes one bench render from a `RenderSpec` (default: Mitsuba via
+    `vissim.validation.renders.render_spec`); it must be picklable for workers.  Every
     check (options, captures, the scheduler) runs before the first file is written; a campaign
-    whose every item would be skipped raises :class:`VissimInputError` and writes nothing.
+    whose every item would be skipped raises `VissimInputError` and writes nothing.
 
     Parameters
     ----------
     campaign : Campaign
-        From :func:`vissim.load_campaign`.
+        From `vissim.load_campaign`.
     run_dir : str or Path
         Directory for renders, simulations, metrics and the report; an existing run there is
         resumed (finished items are reused).

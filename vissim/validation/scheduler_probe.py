@@ -4,7 +4,7 @@ Dask's client waits long, or asks for absurd memory, when the address belongs to
 service: a web server (the Dask dashboard, port 8787, is an easy mistake) never answers
 Dask's handshake, and another service's bytes read as a message length of exabytes. A
 scheduler speaks first: on a new connection it sends its handshake, a message whose first
-8 bytes are its length (little-endian ``uint64``, a few hundred bytes). :func:`probe_scheduler`
+8 bytes are its length (little-endian ``uint64``, a few hundred bytes). `probe_scheduler`
 connects, reads those bytes, and names whatever answered instead.
 """
 

@@ -3,8 +3,8 @@
 Three simulations, each applicable to any linear-light input image (the bench's no-lens
 render, as the thesis did, or the synthetic chart):
 
-Every simulation starts from the bench's own :class:`~vissim.optics.setup.ViewingSetup` (the one
-its scene is built from, :meth:`vissim.bench.dslr.DslrBench.viewing_setup`).
+Every simulation starts from the bench's own `ViewingSetup` (the one
+its scene is built from, `vissim.bench.dslr.DslrBench.viewing_setup`).
 
 ``wave``
     Physically matched: the power the trial lenses add at the camera's principal plane for
@@ -21,7 +21,7 @@ its scene is built from, :meth:`vissim.bench.dslr.DslrBench.viewing_setup`).
     items 4, 3 and 5), compared with the render: each erratum's effect is a measured number.
 
 Mitsuba renders no diffraction, so a ``wave`` or ``thesis`` result is compared with the
-render convolved with the bench aperture's diffraction PSF (:func:`add_bench_diffraction`),
+render convolved with the bench aperture's diffraction PSF (`add_bench_diffraction`),
 and a ``geometric`` result with the render as it is.
 """
 
@@ -42,7 +42,7 @@ __all__ = ["SimulationSetup", "simulation_setup", "simulate", "add_bench_diffrac
 
 
 #: kind -> (the thesis's choices put back, optics).  Each choice is one field of the bench's
-#: :class:`~vissim.optics.setup.ViewingSetup` replaced: "pupil" (ERRATA item 3), "power"
+#: `ViewingSetup` replaced: "pupil" (ERRATA item 3), "power"
 #: (item 4), "magnification" (item 5).  The three ``thesis_*``/``no_*`` kinds each put back ONE
 #: of them into the matched *geometric* simulation and are compared with the render itself,
 #: which geometric optics matches to the noise limit: each erratum's cost is then measured
@@ -60,7 +60,7 @@ SIMULATION_PARTS = {
 
 @dataclass(frozen=True)
 class SimulationSetup:
-    """What one simulation assumes: a :class:`ViewingSetup` and the optics it is blurred with."""
+    """What one simulation assumes: a `ViewingSetup` and the optics it is blurred with."""
 
     kind: str
     setup: ViewingSetup

@@ -1,13 +1,13 @@
 """A virtual DSLR: mosaic a linear image, add sensor noise, quantise, and write a DNG.
 
 The chain mirrors a real capture, so that the RAW side of the validation
-(:func:`vissim.validation.raw.read_raw_linear`) can be tested on files whose contents are
+(`vissim.validation.raw.read_raw_linear`) can be tested on files whose contents are
 known exactly::
 
     linear (H, W[, 3]) --mosaic_bayer--> CFA mosaic in [0, 1] (1 = full well = white level)
         --add_sensor_noise--> noisy mosaic --quantise--> uint16 data numbers --write_dng--> .dng
 
-:func:`write_dng` writes a minimal DNG 1.4 with :mod:`tifffile`: one uncompressed 16-bit CFA
+`write_dng` writes a minimal DNG 1.4 with `tifffile`: one uncompressed 16-bit CFA
 IFD.  What LibRaw (rawpy) actually needs to read it as a Bayer RAW with the right levels is
 ``PhotometricInterpretation = 32803`` (CFA), ``CFAPattern``, ``BlackLevel`` and ``WhiteLevel``
 (without ``CFAPattern`` LibRaw sees a 4-colour CMYG sensor; without ``WhiteLevel`` it assumes
@@ -92,8 +92,8 @@ def add_sensor_noise(
 
     Electrons = ``mosaic * full_well_electrons``; each pixel gets a Poisson draw of that mean
     plus Gaussian read noise of ``read_noise_electrons`` (rms), and is divided by the full well
-    again.  Results can be negative (read noise below black) or above 1; :func:`quantise` clips
-    as a sensor would.  ``rng`` is a :class:`numpy.random.Generator` or a seed: always seeded.
+    again.  Results can be negative (read noise below black) or above 1; `quantise` clips
+    as a sensor would.  ``rng`` is a `numpy.random.Generator` or a seed: always seeded.
     """
     array = np.asarray(mosaic, dtype=np.float64)
     if array.ndim != 2 or not np.all(np.isfinite(array)) or np.any(array < 0):

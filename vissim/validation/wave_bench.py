@@ -1,16 +1,16 @@
 """The wave bench as a campaign truth, and the numbers that say why a simulation differs from it.
 
 Per configuration (``wave_truth = true`` in ``[campaign]``) the item computes the bench's wave
-truth (:func:`vissim.bench.wave_truth.wave_truth`): the configuration's chart through the
+truth (`vissim.bench.wave_truth.wave_truth`): the configuration's chart through the
 trial lenses' traced wave PSF, magnified and pixel-integrated. Choices:
 
 * **One wavelength, the campaign's** ``wavelength_nm``, **traced through the dispersive glass**
-  (spectacle crown, :mod:`vissim.optics.glass`). The simulations diffract at that wavelength
+  (spectacle crown, `vissim.optics.glass`). The simulations diffract at that wavelength
   too, but take the lenses' power from vergence theory at the rendered index (1.523, the d
   line's). At 550 nm the glass is 0.0023 denser and a +2 D lens adds 0.37 % more; that
   *dispersion* is a physical difference the truth has and the simulations lack, so it shows in
   the residual and is measured, not hidden.
-* **The synthetic chart's layout**: the same :class:`~vissim.charts.ChartSpec` the bench renders,
+* **The synthetic chart's layout**: the same `ChartSpec` the bench renders,
   on the tile's grid (``tile_px`` at ``arcmin_per_px``) refined by the synthetic chart's
   oversampling. So only simulations of the synthetic chart are compared with it: a simulation
   of the no-lens render carries that render's Monte-Carlo noise, which a noise-free truth
@@ -20,7 +20,7 @@ trial lenses' traced wave PSF, magnified and pixel-integrated. Choices:
   spline shift alone costs more than the 60 dB aimed at).
 * **No noise floor**: the truth is deterministic.
 
-:func:`residual_budget` explains the wave simulation's residual by named physical differences,
+`residual_budget` explains the wave simulation's residual by named physical differences,
 each as a number: dispersion (the trace at ``wavelength_nm`` against the trace at the d line),
 the vergence approximation (the d-line trace against the simulation's paraxial power),
 spherical aberration (the traced terms of radial order >= 3, which vergence theory has none
@@ -28,7 +28,7 @@ of), and, as checks that they are *not* in the residual, the trial lenses' thick
 have it) and obliquity (neither has it: both use the frame centre's wavefront). The largest
 RMS wavefront part is the residual's named cause.
 
-:func:`traced_ray_image` is the **geometric self-check** (simulation kind :data:`TRACED_RAYS`):
+`traced_ray_image` is the **geometric self-check** (simulation kind `TRACED_RAYS`):
 the same trace's ray optics (the PSF of its ray landing points) applied to the synthetic
 chart, at the d line, where the glass has the index Mitsuba renders (the render has no
 dispersion).  It is compared with the render, like the geometric simulations, and must sit at
@@ -81,7 +81,7 @@ NEGLIGIBLE_RMS_UM = 1e-6
 
 
 def wave_bench_chart(configuration: Configuration, settings: CampaignSettings) -> ChartSpec:
-    """The chart the bench renders for ``configuration`` (:func:`vissim.validation.renders.render_spec`'s)."""
+    """The chart the bench renders for ``configuration`` (`vissim.validation.renders.render_spec`'s)."""
     return single_letter_spec(configuration.letter, configuration.logmar, viewing_distance_m=settings.chart_distance_m,
                               polarity=configuration.polarity)
 
@@ -97,7 +97,7 @@ def traced_ray_image(bench: DslrBench, fine: np.ndarray, oversample: int) -> np.
     """``fine`` (the synthetic chart, ``oversample`` x finer) through the traced lenses' ray PSF at the d line.
 
     Magnified by the bench's spectacle magnification and integrated onto the camera's pixels,
-    as the wave truth (:func:`~vissim.bench.wave_truth.image_through_traced_lenses`).
+    as the wave truth (`image_through_traced_lenses`).
     """
     return image_through_traced_lenses(bench, fine, oversample=oversample, wavelengths_nm=(D_LINE_NM,),
                                        mode="geometric").pixels
