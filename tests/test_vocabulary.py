@@ -180,6 +180,8 @@ def test_trial_lens_prints_one_cylinder_form(capsys):
     assert record["cylinder_form"] == "minus"
     for text in (record["lens"]["marked_power"], record["added_power"], record["camera_prescription"]):
         assert Prescription.parse(text).cylinder_diopters < 0, text
+    lens = record["lens"]  # +1.00 +2.00 x 30 is +3.00 -2.00 x 120
+    assert (lens["sphere_diopters"], lens["cylinder_diopters"], lens["axis_deg"]) == pytest.approx((3.0, -2.0, 120.0))
 
 
 def test_a_render_without_a_lens_says_so(capsys, tmp_path):

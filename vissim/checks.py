@@ -11,7 +11,7 @@ from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
-           "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "name_problem",
+           "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "MAX_DESCRIPTION_CHARS", "name_problem",
            "path_arg", "number_array"]
 
 
@@ -212,6 +212,8 @@ def samples_per_pixel(value, name: str = "spp") -> int:
 #: Longest name a campaign or configuration may have, characters: a label in tables, figures and the
 #: report (never part of a file name), so one line of printable text of a readable length.
 MAX_NAME_CHARS = 100
+#: Longest campaign description, characters: a paragraph or two, shown at the top of the report.
+MAX_DESCRIPTION_CHARS = 2000
 
 
 def name_problem(value: str) -> str | None:

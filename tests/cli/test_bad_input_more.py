@@ -319,3 +319,17 @@ def test_empty_lenses_are_an_error_not_the_default_lenses(capfd, tmp_path, lense
     code, _, err = run(capfd, "atv", "simulate", "--rx", "-1 DS", "--pupil-mm", "3", "--lenses", lenses, "-o", out)
     assert_one_error_line(code, err, "--lenses is empty")
     assert not out.exists()
+
+
+def test_a_10_mb_campaign_description_is_refused_stating_the_limit(capfd, tmp_path):
+    from vissim.checks import MAX_DESCRIPTION_CHARS
+
+    path = tmp_path / "described.toml"
+    head, items = TINY_CAMPAIGN.split("[[item]]")
+    path.write_text(head.replace("[campaign]\n", '[campaign]\ndescription = "' + "d" * 10**7 + '"\n')
+                    + "[[item]]" + items)
+    code, _, err = run(capfd, "validate", path, "-o", tmp_path / "out")
+    assert_one_error_line(code, err, "description", f"at most {MAX_DESCRIPTION_CHARS} characters", "got 10000000")
+    assert not (tmp_path / "out").exists()
+    docs = Path(__file__).parents[2] / "docs"
+    assert f"at most {MAX_DESCRIPTION_CHARS} characters" in (docs / "formats.md").read_text(encoding="utf-8")

@@ -118,8 +118,17 @@ def test_chart_whose_letter_boxes_cannot_be_written_leaves_no_chart(tmp_path, ca
 
     monkeypatch.setattr(Path, "write_text", write_text)
     code = main(["chart", "--tile", "--letter", "N", "--logmar", "0.5", "-o", str(tmp_path / "tile.png")])
-    assert code == 2 and "tile.png.letters.json" in one_error_line(capsys)
+    said = capsys.readouterr()
+    assert code == 2 and said.out == "", "a 'wrote' line for a file that was then taken back"
+    assert len(said.err.splitlines()) == 1 and "tile.png.letters.json" in said.err
     assert snapshot(tmp_path) == {}
+
+
+def test_a_command_says_what_it_wrote_once_it_is_written(tmp_path, capsys):
+    code = main(["chart", "--tile", "--letter", "N", "--logmar", "0.5", "-o", str(tmp_path / "tile.png")])
+    assert code == 0
+    wrote = [line.split()[1] for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")]
+    assert wrote and all(Path(path).exists() for path in wrote)
 
 
 def test_a_transaction_renames_nothing_when_a_later_write_fails(tmp_path):

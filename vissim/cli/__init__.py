@@ -8,6 +8,7 @@ an exit code) with ``parser.set_defaults(func=...)``.  Bad input raises
 A command's files appear together when it succeeds, or not at all
 (`vissim.atomic.output_transaction`); a command that resumes from what it already wrote
 (``validate``, ``report``) sets ``writes_progressively=True`` and writes file by file.
+A transactional command's ``wrote ...`` lines are printed once its files are in place.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import io
 import logging
 import re
 import sys
@@ -86,6 +88,20 @@ class _LogLineFormatter(logging.Formatter):
         return f"vissim: {record.levelname.lower()}: {super().format(record)}"
 
 
+def _run_command(args: argparse.Namespace) -> int:
+    """Run the command; a transactional one's stdout ('wrote ...') is shown only once its files are in place."""
+    if getattr(args, "writes_progressively", False):
+        return int(args.func(args) or 0)
+    if getattr(args, "observer", None) == "person":  # a person reads prompts as they come
+        with output_transaction():
+            return int(args.func(args) or 0)
+    said = io.StringIO()
+    with output_transaction(), contextlib.redirect_stdout(said):
+        code = int(args.func(args) or 0)
+    sys.stdout.write(said.getvalue())
+    return code
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     try:
@@ -98,10 +114,8 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
-    together = contextlib.nullcontext() if getattr(args, "writes_progressively", False) else output_transaction()
     try:
-        with together:
-            return int(args.func(args) or 0)
+        return _run_command(args)
     except VissimError as exc:
         print(f"vissim: error: {exc}", file=sys.stderr)
         return 2

@@ -92,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
     result = effect.to_json_dict()
     if args.json:
         result.update(
-            lens={"marked_power": str(marked), **dataclasses.asdict(lens)},
+            lens={**dataclasses.asdict(lens), "marked_power": str(marked), "sphere_diopters": marked.sphere_diopters,
+                  "cylinder_diopters": marked.cylinder_diopters, "axis_deg": marked.axis_deg},
             cylinder_form="minus",
             thesis_table_4_2=thesis,
             vissim_version=__version__,

@@ -380,7 +380,8 @@ def compute_psf(
         return FieldTooSmallError(
             f"a {size_px} px field at {step:g} arcmin/px ({size_px * step:g} arcmin) would leave "
             f"{100 * outside:.1f} % of the PSF's energy outside (at most {100 * MAX_ENERGY_OUTSIDE:g} %); "
-            f"use a size of at least {needed} px or coarser sampling"
+            f"use a size of at least {needed} px or coarser sampling: a blur kernel is never cut "
+            "(a PSF image, normalise='total', may be)"
         )
 
     fronts = [front_at_wavelength(wavefront, w, lca_reference_nm) for w in wavelengths]

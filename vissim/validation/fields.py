@@ -12,7 +12,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from vissim.checks import MAX_SAMPLER_SEED, MAX_SPP, name_problem, path_arg
+from vissim.checks import MAX_DESCRIPTION_CHARS, MAX_SAMPLER_SEED, MAX_SPP, name_problem, path_arg
 from vissim.errors import VissimInputError
 
 __all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_campaign_toml", "number", "whole_number",
@@ -124,6 +124,13 @@ def text(value: Any, source: str, where: str) -> str:
     return value
 
 
+def description_text(value: Any, source: str, where: str) -> str:
+    """A campaign description: a string of at most `vissim.checks.MAX_DESCRIPTION_CHARS`."""
+    if len(text(value, source, where)) > MAX_DESCRIPTION_CHARS:
+        raise field_error(source, where, f"a description is at most {MAX_DESCRIPTION_CHARS} characters, got {len(value)}")
+    return value
+
+
 def name_text(value: Any, source: str, where: str) -> str:
     """A campaign or configuration name: a string within `vissim.checks.MAX_NAME_CHARS`, printable."""
     problem = name_problem(text(value, source, where))
@@ -185,7 +192,7 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
             kwargs[key] = choices(head[key], allowed, source, f"{where}.{key}")
     for key in texts:
         if key in head:
-            (name_text if key == "name" else text)(head[key], source, f"{where}.{key}")
+            {"name": name_text, "description": description_text}.get(key, text)(head[key], source, f"{where}.{key}")
     for key in switches:
         if key in head:
             if not isinstance(head[key], bool):

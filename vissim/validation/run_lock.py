@@ -48,7 +48,7 @@ def _acquire(path: Path, run_dir: Path) -> int:
             holder = _holder(fd)
             os.close(fd)
             raise VissimInputError(f"run folder {run_dir} is in use by {holder} (another vissim run); wait for it "
-                                   "to finish or choose another -o") from None
+                                   "to finish, or use another run folder") from None
         try:
             on_disk = os.stat(path)
         except FileNotFoundError:
