@@ -29,6 +29,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import threading
 import weakref
 from collections import OrderedDict
 from collections.abc import Sequence
@@ -62,21 +63,24 @@ class BlurKernel:
     def prepare(cls, psf: PSF, padded_shape: tuple[int, int], dtype=np.float32) -> BlurKernel:
         """The PSF's transfer function on this grid, reused across calls while the PSF lives."""
         key = (id(psf), tuple(padded_shape), np.dtype(dtype).name)
-        cached = _TRANSFERS.get(key)
-        if cached is not None and cached[0]() is psf:
-            _TRANSFERS.move_to_end(key)
-            return cls(psf, padded_shape, cached[1])
+        with _TRANSFERS_LOCK:  # threads blurring layers at once share the cache
+            cached = _TRANSFERS.get(key)
+            if cached is not None and cached[0]() is psf:
+                _TRANSFERS.move_to_end(key)
+                return cls(psf, padded_shape, cached[1])
         transfer = kernel_transfer(psf.data, padded_shape, dtype)
         transfer.setflags(write=False)
-        _TRANSFERS[key] = (weakref.ref(psf), transfer)
-        while sum(t.nbytes for _, t in _TRANSFERS.values()) > TRANSFER_CACHE_BYTES and len(_TRANSFERS) > 1:
-            _TRANSFERS.popitem(last=False)
+        with _TRANSFERS_LOCK:
+            _TRANSFERS[key] = (weakref.ref(psf), transfer)
+            while sum(t.nbytes for _, t in _TRANSFERS.values()) > TRANSFER_CACHE_BYTES and len(_TRANSFERS) > 1:
+                _TRANSFERS.popitem(last=False)
         return cls(psf, padded_shape, transfer)
 
 
 #: Transfer functions kept for reuse (least recently used dropped beyond this many bytes).
 TRANSFER_CACHE_BYTES = 256 * 2**20
 _TRANSFERS: OrderedDict = OrderedDict()
+_TRANSFERS_LOCK = threading.Lock()
 
 
 def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.float32) -> np.ndarray:

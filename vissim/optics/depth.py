@@ -66,6 +66,8 @@ import dataclasses
 import functools
 import logging
 import math
+from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,6 +83,7 @@ from vissim.optics.blur_device import convolve_padded
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
 from vissim.optics.pullpush import pull_push, upsample2
+from vissim.optics.threads import available_cores, single_threaded_blas
 from vissim.optics.wavefront import Wavefront
 from vissim.units import arcmin_to_rad
 
@@ -266,13 +269,68 @@ def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: fl
     key = _wavefront_key(front.coefficients_um)
     mirror = None if size_px is not None or key in seen else seen.get(_wavefront_key(front.coefficients_um, -1.0))
     if mirror is not None and mirror.data.shape[0] % 2 == 1:
-        data = np.ascontiguousarray(mirror.data[::-1, ::-1])
-        data.setflags(write=False)
-        psf = dataclasses.replace(mirror, data=data, wavefront=front)
+        psf = _reflected(mirror, front)
     else:
         psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
     seen[key] = psf
     return psf
+
+
+def _reflected(psf: PSF, front: Wavefront) -> PSF:
+    """``psf`` reflected through its centre, as the PSF of ``front`` (the negative of its wavefront)."""
+    data = np.ascontiguousarray(psf.data[::-1, ::-1])
+    data.setflags(write=False)
+    return dataclasses.replace(psf, data=data, wavefront=front)
+
+
+class _LayerOptics:
+    """Each non-empty layer's PSF (as :func:`_layer_psf` chooses them), computed at most once.
+
+    ``fronts`` and ``scales`` (the grid's pixel, in image pixels) by layer, far to near.  A layer
+    either computes its PSF (cached by wavefront) or reflects that of an earlier layer whose
+    wavefront is its negative.  ``sizes``: each PSF's side (px of its grid).  :meth:`prefetch`
+    computes a layer's PSF in a thread pool; :meth:`psf` waits for it.
+    """
+
+    def __init__(self, fronts: dict, scales: dict, pupil_mm: float, wavelength_nm: float, step: float, mode: str):
+        self.fronts, self.scales = fronts, scales
+        self.optics = (pupil_mm, wavelength_nm, step, mode)
+        self.sizes, self.source, seen = {}, {}, {}
+        for k, front in fronts.items():
+            key = (scales[k], _wavefront_key(front.coefficients_um))
+            opposite = seen.get((scales[k], _wavefront_key(front.coefficients_um, -1.0)))
+            reflect = scales[k] == 1 and key not in seen and opposite is not None and self.sizes[opposite] % 2 == 1
+            self.source[k] = opposite if reflect else None
+            self.sizes[k] = self.sizes[opposite] if reflect else self._size(k)
+            seen[key] = k
+        self.futures: dict = {}
+
+    def _size(self, k: int) -> int:
+        pupil_mm, wavelength_nm, step, _ = self.optics
+        size = suggested_size_px(self.fronts[k], step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
+        if self.scales[k] == 1:
+            return size
+        size //= self.scales[k]  # the fine grid's field (arcmin) on the coarse grid: windows as wide as the fine's
+        return size + 1 - size % 2
+
+    def _compute(self, k: int) -> PSF:
+        pupil_mm, wavelength_nm, step, mode = self.optics
+        items = tuple(self.fronts[k].coefficients_um.items())
+        if self.scales[k] == 1:  # size_px=None as depth_layers passes it: one lru_cache entry
+            return _cached_psf(items, pupil_mm, wavelength_nm, step, mode, None)
+        return _cached_psf(items, pupil_mm, wavelength_nm, step * self.scales[k], mode, size_px=self.sizes[k])
+
+    def prefetch(self, pool, k: int) -> None:
+        """Start computing the PSF layer ``k`` needs in ``pool`` (once)."""
+        while self.source[k] is not None:
+            k = self.source[k]
+        if k not in self.futures:
+            self.futures[k] = pool.submit(self._compute, k)
+
+    def psf(self, k: int) -> PSF:
+        if self.source[k] is not None:
+            return _reflected(self.psf(self.source[k]), self.fronts[k])
+        return self.futures[k].result() if k in self.futures else self._compute(k)
 
 
 # -- the layered blur -----------------------------------------------------------------
@@ -294,6 +352,7 @@ def blur_depth(
     crop_px: int = 0,
     coarse_blur_px: float | None = None,
     device: str = "cpu",
+    progress: Callable[[int, int], None] | None = None,
 ) -> DepthBlurResult:
     """Blur a linear-light image whose pixels lie at different depths, with occlusion.
 
@@ -330,7 +389,10 @@ def blur_depth(
     device : {"cpu", "cuda", "auto"}
         Where the layers are blurred (:mod:`vissim.optics.array_backend`): ``"cuda"`` on a GPU
         through CuPy (the ``gpu`` extra), ``"auto"`` there when one is present.  PSFs are computed
-        on the CPU either way.
+        on the CPU either way.  On the CPU, layers are blurred on as many threads as the process
+        has cores.
+    progress : callable, optional
+        ``progress(done, total)`` after each non-empty layer is composited (``total`` of them).
 
     Returns
     -------
@@ -400,22 +462,15 @@ def blur_depth(
     lower, frac = lower.astype(np.int32), frac.astype(np.float32)
     active = [k for k in range(plan.n_layers) if coverage[k] > 0]
 
-    psfs, scales, layers, by_wavefront = {}, {}, [], {1: {}, COARSE_FACTOR: {}}
-    for k in active:
-        front = base.with_defocus_diopters(layer_diopters[k] - accommodation)
-        blur_arcmin = 2.0 * geometric_blur_radius_arcmin(front, pupil)
-        scales[k] = COARSE_FACTOR if coarse_blur_px is not None and blur_arcmin / step >= coarse_blur_px else 1
-        if scales[k] == 1:
-            psfs[k] = _layer_psf(front, pupil, wavelength, step, mode, by_wavefront[1])
-        else:  # the fine grid's field (arcmin) on the coarse grid: windows as wide as the fine grid's
-            size = suggested_size_px(front, step, pupil_diameter_mm=pupil, wavelength_nm=wavelength) // COARSE_FACTOR
-            psfs[k] = _layer_psf(front, pupil, wavelength, step * scales[k], mode, by_wavefront[scales[k]],
-                                 size_px=size + 1 - size % 2)
-        layers.append(DepthLayer(
-            k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
-            blur_arcmin, psfs[k].data.shape[0] * scales[k], float(coverage[k] / lower.size),
-        ))
-    reach = {k: (psfs[k].data.shape[0] // 2 + 1) * scales[k] for k in active}
+    fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in active}
+    blurs_arcmin = {k: 2.0 * geometric_blur_radius_arcmin(fronts[k], pupil) for k in active}
+    scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
+              for k in active}
+    optics = _LayerOptics(fronts, scales, pupil, wavelength, step, mode)
+    sizes = optics.sizes
+    layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
+                         blurs_arcmin[k], sizes[k] * scales[k], float(coverage[k] / lower.size)) for k in active]
+    reach = {k: (sizes[k] // 2 + 1) * scales[k] for k in active}
     reach_max = max(reach.values())
     boxes = _layer_boxes(lower, upper, frac, plan.n_layers)
     xp, transfers = backend.xp, {}
@@ -426,13 +481,33 @@ def blur_depth(
     pending: list[tuple[float, tuple, np.ndarray]] = []  # nearer layers' blurred coverage (window), occluding in part
     farthest = layer_diopters[active[0]]
     largest = (0, 0)
-    for k in reversed(active):  # near to far
-        while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:
-            _, (r0, r1, c0, c1), matte_j = pending.pop(0)
-            occluders[r0:r1, c0:c1] += matte_j
+    threads = _worker_threads(backend)
+
+    def blurred_layer(k: int) -> tuple:
         # Layer k reaches its matte's box grown by its own PSF; its continuation behind nearer content
         # matters only where that content's blur leaves it visible: the largest PSF's reach further.
         window = _grow(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
+        # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
+        e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
+        wide = (slice(e0, e1), slice(f0, f1))
+        planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
+                                 threshold_diopters)
+        if scales[k] == 1:  # the blur reaches only the planes' nonzero box grown by the PSF
+            window = _grow(_nonzero_box(planes, (e0, f0)), reach[k], (rows, cols), within=window)
+        r0, r1, c0, c1 = window
+        planes = planes[:, r0 - e0 : r1 - e0, c0 - f0 : c1 - f0]
+        touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
+        if scales[k] == 1:
+            blurred, shape = _blur_window(planes, optics.psf(k), padding, touches, backend, transfers, threads)
+        else:
+            blurred, shape = _blur_coarse(planes, optics.psf(k), padding, touches, scales[k], backend, transfers,
+                                          threads)
+        return window, blurred, shape
+
+    for done, (k, (window, blurred, shape)) in enumerate(_in_order(blurred_layer, optics, reversed(active), threads), 1):
+        while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:  # near to far
+            _, (r0, r1, c0, c1), matte_j = pending.pop(0)
+            occluders[r0:r1, c0:c1] += matte_j
         r0, r1, c0, c1 = window
         transmitted = occluders[r0:r1, c0:c1].copy()
         for proximity_j, window_j, matte_j in pending:
@@ -440,22 +515,14 @@ def blur_depth(
             if weight > 0:
                 _add_overlap(transmitted, window, weight * matte_j, window_j)
         xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-        # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
-        e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
-        wide = (slice(e0, e1), slice(f0, f1))
-        planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
-                                 threshold_diopters)[:, r0 - e0 : r1 - e0, c0 - f0 : c1 - f0]
-        touches = (window[0] == 0, window[1] == rows, window[2] == 0, window[3] == cols)
-        if scales[k] == 1:
-            blurred, shape = _blur_window(planes, psfs[k], padding, touches, backend, transfers)
-        else:
-            blurred, shape = _blur_coarse(planes, psfs[k], padding, touches, scales[k], backend, transfers)
         largest = max(largest, shape)
         if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind it: keep its blurred coverage
             pending.append((layer_diopters[k], window, blurred[-1].copy()))
         blurred *= transmitted
         numerator[:, r0:r1, c0:c1] += blurred[:-1]
         denominator[r0:r1, c0:c1] += blurred[-1]
+        if progress is not None:
+            progress(done, len(active))
     log.info("depth blur: %d layers planned, %d non-empty, largest padded window %s", plan.n_layers, len(active), largest)
     shape = largest
     low = int((denominator < 0.5).sum())
@@ -551,9 +618,57 @@ def _layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int,
     return boxes
 
 
-def _grow(box, reach: int, shape) -> tuple[int, int, int, int]:
+def _grow(box, reach: int, shape, within=None) -> tuple[int, int, int, int]:
+    """``box`` grown by ``reach`` on every side, inside the image (``shape``) and ``within`` a window."""
     r0, r1, c0, c1 = box
-    return max(r0 - reach, 0), min(r1 + reach, shape[0]), max(c0 - reach, 0), min(c1 + reach, shape[1])
+    w0, w1, v0, v1 = within or (0, shape[0], 0, shape[1])
+    return max(r0 - reach, w0), min(r1 + reach, w1), max(c0 - reach, v0), min(c1 + reach, v1)
+
+
+def _nonzero_box(planes, origin: tuple[int, int]) -> tuple[int, int, int, int]:
+    """The box (row0, row1, col0, col1) of the image holding every nonzero pixel of (C, h, w) ``planes``
+    whose pixel [0, 0] is the image's ``origin``; all of them if none is nonzero."""
+    nonzero = planes.any(axis=0)
+    rows = np.flatnonzero(_to_host(nonzero.any(axis=1)))
+    cols = np.flatnonzero(_to_host(nonzero.any(axis=0)))
+    if rows.size == 0:
+        rows, cols = np.arange(planes.shape[1]), np.arange(planes.shape[2])
+    return origin[0] + int(rows[0]), origin[0] + int(rows[-1]) + 1, origin[1] + int(cols[0]), origin[1] + int(cols[-1]) + 1
+
+
+def _to_host(array) -> np.ndarray:
+    return array.get() if hasattr(array, "get") and not isinstance(array, np.ndarray) else np.asarray(array)
+
+
+def _worker_threads(backend: ArrayBackend) -> int:
+    """Threads that blur layers at once: the cores this process may use on the CPU; one on a GPU."""
+    return available_cores() if backend is CPU_BACKEND else 1
+
+
+def _in_order(work, optics: _LayerOptics, order, threads: int):
+    """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
+
+    With ``threads > 1`` the layers are worked on ahead in a thread pool (at most ``2 threads``
+    ahead of the caller, each layer's PSF submitted before it): a layer's extension and blur
+    depend on no other layer, only its compositing (the caller's) does.  A layer's task waits
+    only for PSF tasks submitted before it, which have therefore started: no deadlock.
+    """
+    order = list(order)
+    if threads <= 1:
+        for k in order:
+            yield k, work(k)
+        return
+    futures: dict = {}
+    with single_threaded_blas(), ThreadPoolExecutor(threads) as pool:  # our threads, not OpenBLAS's, use the cores
+        try:
+            for i, k in enumerate(order):
+                for later in order[i : i + 2 * threads + 1]:
+                    if later not in futures:
+                        optics.prefetch(pool, later)
+                        futures[later] = pool.submit(work, later)
+                yield k, futures.pop(k).result()
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -> None:
@@ -566,14 +681,14 @@ def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) 
 
 
 def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None) -> tuple:
+                 transfers: dict | None = None, threads: int | None = None) -> tuple:
     """Blur (C, h, w) planes of a window with one PSF (:func:`vissim.optics.blur_device.convolve_padded`).
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
     the image they are zero (the window already holds everything of the layer that reaches it).
-    ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device.
-    Returns the blurred planes and the padded grid's shape.
+    ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device;
+    ``threads``: the CPU FFT's threads (default all).  Returns the blurred planes and the padded grid's shape.
     """
     if padding not in DEPTH_PADDING_MODES:
         raise AssertionError(f"depth padding {padding!r}")  # pragma: no cover  (blur_depth refuses it)
@@ -591,7 +706,7 @@ def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend 
         padded[:, :, :offset] = 0.0
     if not right:
         padded[:, :, offset + w :] = 0.0
-    blurred = convolve_padded(padded, psf, backend, transfers)
+    blurred = convolve_padded(padded, psf, backend, transfers, threads=threads)
     return blurred[:, offset : offset + h, offset : offset + w], shape
 
 
@@ -600,7 +715,7 @@ COARSE_FACTOR = 2
 
 
 def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None) -> tuple:
+                 transfers: dict | None = None, threads: int | None = None) -> tuple:
     """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
 
     ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
@@ -613,7 +728,7 @@ def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: 
     even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
     coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
     blurred, shape = _blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
-                                  transfers)
+                                  transfers, threads)
     fine = blurred
     for _ in range(int(round(math.log2(q)))):
         fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))
