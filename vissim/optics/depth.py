@@ -491,7 +491,7 @@ def blur_depth(
         e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
         wide = (slice(e0, e1), slice(f0, f1))
         planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
-                                 threshold_diopters)
+                                 threshold_diopters, rows=(boxes[k][0] - e0, boxes[k][1] - e0))
         if scales[k] == 1:  # the blur reaches only the planes' nonzero box grown by the PSF
             window = _grow(_nonzero_box(planes, (e0, f0)), reach[k], (rows, cols), within=window)
         r0, r1, c0, c1 = window
@@ -555,7 +555,8 @@ def _occlusion_weight(proximity_gap_diopters, threshold_diopters: float):
     return np.clip(np.asarray(proximity_gap_diopters) / threshold_diopters - 1.0, 0.0, 1.0)
 
 
-def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None):
+def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None,
+                    rows: tuple[int, int] | None = None):
     """Layer ``k``: premultiplied colours and coverage (C + 1, H, W), extended behind its occluders.
 
     ``lower``/``upper`` are each pixel's two layers and ``frac`` (float32) its weight in
@@ -565,36 +566,51 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     image (where its coverage is 0 the estimate is 0 too: no layer grows sideways).  The
     extended coverage also occludes the layers behind it: they are behind its continuation.
     ``work`` (from :func:`_workspace`) holds reused buffers; the result may be one of them.
+    ``rows`` (first, end): the rows outside which layer ``k``'s matte is zero (default: unknown).
     """
     xp = array_module(colour)
     n_ch = colour.shape[0]
     work = _workspace(colour.shape, xp) if work is None else work
     stack, hidden, scratch = work["stack"], work["hidden"], work["scratch"]
-    matte = stack[n_ch]
-    matte[...] = xp.where(lower == k, 1.0 - frac, xp.where(upper == k, frac, 0.0))
-    xp.multiply(colour, matte, out=stack[:n_ch])
+    first, end = rows or (0, colour.shape[1])
+    stack[:, :first] = 0.0
+    stack[:, end:] = 0.0
+    band = (slice(first, end), slice(None))
+    matte = stack[n_ch, first:end]
+    matte[...] = _matte(lower[band], upper[band], frac[band], k, xp)
+    xp.multiply(colour[:, first:end], matte, out=stack[:n_ch, first:end])
     weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
     if not weights.any():
         return stack
     weights = xp.asarray(weights)
-    hidden[...] = weights[lower]
-    scratch[...] = weights[upper]
+    xp.take(weights, lower, out=hidden)
+    xp.take(weights, upper, out=scratch)
     scratch -= hidden
     scratch *= frac
     hidden += scratch
-    if not bool(hidden.any()):
+    hidden_rows = np.flatnonzero(_to_host(hidden.any(axis=1)))
+    if hidden_rows.size == 0:
         return stack
     xp.subtract(1.0, hidden, out=scratch)
     estimate = pull_push(stack, scratch)
     # Where hidden > 0 the pixel has no coverage of its own on layer k (its layers are nearer),
-    # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again.
-    upsampled = work["upsampled"]
-    upsampled.reshape(n_ch + 1, estimate.shape[1], 2, estimate.shape[2], 2)[...] = estimate[:, :, None, :, None]
-    upsampled = upsampled[:, : hidden.shape[0], : hidden.shape[1]]
+    # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again
+    # (rows without hidden pixels: nothing to add).
+    r0, r1 = int(hidden_rows[0]) // 2, (int(hidden_rows[-1]) + 2) // 2  # estimate rows: 2 x 2 cells
+    upsampled = work["upsampled"][:, 2 * r0 : 2 * r1]
+    upsampled.reshape(n_ch + 1, r1 - r0, 2, estimate.shape[2], 2)[...] = estimate[:, r0:r1, None, :, None]
+    rows_hidden = slice(2 * r0, min(2 * r1, hidden.shape[0]))
+    upsampled = upsampled[:, : rows_hidden.stop - rows_hidden.start, : hidden.shape[1]]
+    hidden = hidden[rows_hidden]
     hidden *= hidden
     upsampled *= hidden
-    stack += upsampled
+    stack[:, rows_hidden] += upsampled
     return stack
+
+
+def _matte(lower, upper, frac, k: int, xp):
+    """Layer ``k``'s tent matte: ``1 - frac`` where it is the pixel's farther layer, ``frac`` where the nearer."""
+    return xp.where(lower == k, 1.0 - frac, xp.where(upper == k, frac, 0.0))
 
 
 def _layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int, int, int]]:

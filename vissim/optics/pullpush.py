@@ -19,16 +19,19 @@ def upsample2(coarse: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     xp = array_module(coarse)
     out = coarse
     for axis, size in ((1, shape[0]), (2, shape[1])):
-        src = xp.moveaxis(out, axis, -1)
-        fine = xp.empty(src.shape[:-1] + (2 * src.shape[-1],), src.dtype)
-        fine[..., 0::2] = src
-        fine[..., 1::2] = src
-        fine *= 0.75
-        fine[..., 2::2] += 0.25 * src[..., :-1]
-        fine[..., 0] += 0.25 * src[..., 0]
-        fine[..., 1:-1:2] += 0.25 * src[..., 1:]
-        fine[..., -1] += 0.25 * src[..., -1]
-        out = xp.moveaxis(fine[..., :size], -1, axis)
+        def at(part, axis=axis):  # ``part`` (a slice) along ``axis``
+            return (slice(None),) * axis + (part,)
+
+        n = out.shape[axis]
+        fine = xp.empty(out.shape[:axis] + (2 * n,) + out.shape[axis + 1 :], out.dtype)
+        xp.multiply(out, 0.75, out=fine[at(slice(0, None, 2))])
+        fine[at(slice(1, None, 2))] = fine[at(slice(0, None, 2))]
+        quarter = out * 0.25
+        fine[at(slice(2, None, 2))] += quarter[at(slice(None, -1))]
+        fine[at(slice(0, 1))] += quarter[at(slice(0, 1))]
+        fine[at(slice(1, -1, 2))] += quarter[at(slice(1, None))]
+        fine[at(slice(-1, None))] += quarter[at(slice(-1, None))]
+        out = fine[at(slice(0, size))]
     return out
 
 
@@ -49,8 +52,8 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray) -> np.ndarray:
         if h % 2 or wd % 2:
             q = xp.pad(q, ((0, 0), (0, h % 2), (0, wd % 2)))
             w = xp.pad(w, ((0, h % 2), (0, wd % 2)))
-        q = q[:, 0::2, 0::2] + q[:, 1::2, 0::2] + q[:, 0::2, 1::2] + q[:, 1::2, 1::2]
-        w = w[0::2, 0::2] + w[1::2, 0::2] + w[0::2, 1::2] + w[1::2, 1::2]
+        q = _box_sum(q[:, 0::2, 0::2], q[:, 1::2, 0::2], q[:, 0::2, 1::2], q[:, 1::2, 1::2], xp)
+        w = _box_sum(w[0::2, 0::2], w[1::2, 0::2], w[0::2, 1::2], w[1::2, 1::2], xp)
         scale = 1.0 / xp.maximum(w, 1.0)
         q *= scale
         w *= scale
@@ -60,5 +63,15 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray) -> np.ndarray:
     q, w = levels[-1]
     value = q / xp.where(w > 0, w, 1.0)
     for q, w in reversed(levels[:-1]):
-        value = q + (1.0 - w) * upsample2(value, w.shape)
+        value = upsample2(value, w.shape)  # q + (1 - w) x the coarser estimate, in place
+        value *= 1.0 - w
+        value += q
     return value
+
+
+def _box_sum(a, b, c, d, xp):
+    """``a + b + c + d``, summed in that order into one new array."""
+    out = xp.add(a, b)
+    out += c
+    out += d
+    return out
