@@ -40,10 +40,10 @@ def test_layers_blurred_on_threads_equal_one_thread(monkeypatch, padding):
 def test_progress_counts_every_layer_once_in_order():
     image, depth_m = ramp_scene()
     calls = []
-    result = blur_depth(image, depth_m, progress=lambda done, total: calls.append((done, total)), **EYE)
+    result = blur_depth(image, depth_m, progress=lambda *call: calls.append(call), **EYE)
     total = len(result.layers)
-    assert [done for done, _ in calls] == list(range(1, total + 1))
-    assert {t for _, t in calls} == {total}
+    assert [done for _, done, _ in calls] == list(range(1, total + 1))
+    assert {(stage, t) for stage, _, t in calls} == {("depth layers", total)}
 
 
 def test_an_error_in_a_layer_reaches_the_caller(monkeypatch):

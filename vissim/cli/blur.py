@@ -5,12 +5,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
 from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
 from vissim.imageio import Image, read_image, write_image
 from vissim.optics.blur import PADDING_MODES, blur_image
 from vissim.optics.chromatic import gaussian_band
 from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
 
 DEFAULT_CHANNELS_NM = (610.0, 550.0, 465.0)
@@ -59,6 +62,36 @@ def image_sampling(image: Image, given: float | None, path: Path) -> float:
     return step
 
 
+def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> tuple[list, dict]:
+    """One PSF per channel (computed once per distinct band), and the distinct ones by band."""
+    psfs, cache = [], {}
+    advance = counter(progress, "PSFs", len(set(bands)))
+    for wavelengths, weights in bands:
+        key = (wavelengths, weights)
+        if key not in cache:
+            size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
+            size = min(size, 2 * max(shape) + 1)
+            cache[key] = compute_psf(
+                wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
+                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode,
+            )
+            advance()
+        psfs.append(cache[key])
+    return psfs, cache
+
+
+def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, progress):
+    """``pixels`` blurred channel by channel (each with its PSF), reporting each channel done."""
+    if pixels.ndim == 2:
+        return blur_image(pixels, psfs[0], arcmin_per_px=step, padding=padding)
+    advance = counter(progress, "blurring channels", pixels.shape[2])
+    channels = []
+    for c, psf in enumerate(psfs):
+        channels.append(blur_image(pixels[..., c], psf, arcmin_per_px=step, padding=padding))
+        advance()
+    return np.stack(channels, axis=-1)
+
+
 def run(args: argparse.Namespace) -> int:
     image = read_image(args.input)
     step = image_sampling(image, args.arcmin_per_px, args.input)
@@ -84,18 +117,9 @@ def run(args: argparse.Namespace) -> int:
             bands.append(gaussian_band(wavelengths[0], args.channel_fwhm_nm))
         else:
             bands.append((tuple(wavelengths), None))
-    psfs, cache = [], {}
-    for wavelengths, weights in bands:
-        key = (wavelengths, weights)
-        if key not in cache:
-            size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
-            size = min(size, 2 * max(image.pixels.shape[:2]) + 1)
-            cache[key] = compute_psf(
-                wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
-                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode,
-            )
-        psfs.append(cache[key])
-    blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)
+    with terminal_progress() as progress:
+        psfs, cache = _channel_psfs(bands, wavefront, step, args, lca, image.pixels.shape[:2], progress)
+        blurred = _blur_channels(image.pixels, psfs, step, args.padding, progress)
     provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
                                  arcmin_per_px=step, padding=args.padding,
                                  psfs=[p.as_json() for p in cache.values()], rx=args.rx, zernike=args.zernike)

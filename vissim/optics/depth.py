@@ -67,7 +67,6 @@ import functools
 import logging
 import math
 from concurrent.futures import ThreadPoolExecutor
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,6 +84,7 @@ from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, su
 from vissim.optics.pullpush import pull_push, upsample2
 from vissim.optics.threads import available_cores, single_threaded_blas
 from vissim.optics.wavefront import Wavefront
+from vissim.progress import Progress
 from vissim.units import arcmin_to_rad
 
 __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to_proximity_diopters",
@@ -352,7 +352,7 @@ def blur_depth(
     crop_px: int = 0,
     coarse_blur_px: float | None = None,
     device: str = "cpu",
-    progress: Callable[[int, int], None] | None = None,
+    progress: Progress | None = None,
 ) -> DepthBlurResult:
     """Blur a linear-light image whose pixels lie at different depths, with occlusion.
 
@@ -392,7 +392,8 @@ def blur_depth(
         on the CPU either way.  On the CPU, layers are blurred on as many threads as the process
         has cores.
     progress : callable, optional
-        ``progress(done, total)`` after each non-empty layer is composited (``total`` of them).
+        ``progress("depth layers", done, total)`` after each non-empty layer is composited
+        (``total`` of them; :mod:`vissim.progress`).
 
     Returns
     -------
@@ -522,7 +523,7 @@ def blur_depth(
         numerator[:, r0:r1, c0:c1] += blurred[:-1]
         denominator[r0:r1, c0:c1] += blurred[-1]
         if progress is not None:
-            progress(done, len(active))
+            progress("depth layers", done, len(active))
     log.info("depth blur: %d layers planned, %d non-empty, largest padded window %s", plan.n_layers, len(active), largest)
     shape = largest
     low = int((denominator < 0.5).sum())

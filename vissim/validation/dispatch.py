@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from vissim.errors import VissimInputError
+from vissim.progress import Progress
 from vissim.validation.depth_campaign import is_depth_campaign, load_depth_campaign
 from vissim.validation.depth_runner import run_depth_campaign
 from vissim.validation.fields import read_campaign_toml
@@ -34,8 +35,12 @@ class CampaignRun:
 
 
 def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: str | None = None,
-                     spp: int | None = None, show_progress: bool = True) -> CampaignRun:
-    """Run the campaign file at ``path`` into ``out`` -- a depth campaign or a single-plane one -- and report it."""
+                     spp: int | None = None, show_progress: bool = True,
+                     progress: Progress | None = None) -> CampaignRun:
+    """Run the campaign file at ``path`` into ``out`` -- a depth campaign or a single-plane one -- and report it.
+
+    ``progress(stage, done, total)`` (:mod:`vissim.progress`): renders, items, then the report's steps.
+    """
     path, out = Path(path), Path(out)
     depth = is_depth_campaign(read_campaign_toml(path))
     if depth:
@@ -43,9 +48,10 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
     else:
         from vissim.validation.campaign import load_campaign as load
         from vissim.validation.runner import run_campaign as run
-    summary = run(load(path), out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress)
+    summary = run(load(path), out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress,
+                  progress=progress)
     build_report, summary_lines = _report_of(depth)
-    written, lines = build_report(out), summary_lines(out)
+    written, lines = build_report(out, progress=progress), summary_lines(out)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
@@ -53,14 +59,17 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
                        (head, *lines, f"report: {report} ({len(written)} files)"))
 
 
-def rebuild_any_report(run_dir: str | Path) -> tuple[list[Path], list[str]]:
-    """Rebuild the report of a run folder of either kind (``vissim report``): (files written, summary lines)."""
+def rebuild_any_report(run_dir: str | Path, progress: Progress | None = None) -> tuple[list[Path], list[str]]:
+    """Rebuild the report of a run folder of either kind (``vissim report``): (files written, summary lines).
+
+    ``progress(stage, done, total)`` after each of the report's steps (:mod:`vissim.progress`).
+    """
     run_dir = Path(run_dir)
     order = run_dir / "campaign.json"
     if not order.exists():
         raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
     build_report, summary_lines = _report_of(json.loads(order.read_text()).get("kind") == "depth")
-    return build_report(run_dir), summary_lines(run_dir)
+    return build_report(run_dir, progress=progress), summary_lines(run_dir)
 
 
 def _report_of(depth: bool):

@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.errors import VissimInputError  # noqa: E402
 from vissim.imageio import read_image, srgb_decode, srgb_encode, write_image  # noqa: E402
+from vissim.progress import Progress, counter  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
 from vissim.validation.fit_report import fit_table  # noqa: E402
 from vissim.validation.optics_figures import optics_figures  # noqa: E402
@@ -393,24 +394,28 @@ def campaign_name(run_dir: Path) -> str:
     return json.loads(order.read_text()).get("name", run_dir.name) if order.exists() else run_dir.name
 
 
-def build_report(run_dir: str | Path) -> list[Path]:
+def build_report(run_dir: str | Path, progress: Progress | None = None) -> list[Path]:
     """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``.
 
     The figures: Fig. 4.8-style panels per simulation, and per group the wave PSF (log scale), its
     MTF against the diffraction limit and a through-focus strip (:mod:`vissim.validation.optics_figures`).
+    ``progress(stage, done, total)`` after each figure and the files (:mod:`vissim.progress`).
     """
     run_dir = Path(run_dir)
     results = load_results(run_dir)
     rows = metrics_rows(results)
     figures = {}
+    advance = counter(progress, "report", len(ORDER) + 3)
     for simulation in ORDER:
         png = _figure(results, run_dir, simulation, "render")
         if png is not None:
             figures[f"{simulation} simulation on the no-lens render"] = (f"figure_{simulation}.png", png)
+        advance()
     png = _figure(results, run_dir, "wave", "synthetic", wave_bench=True)
     if png is not None:
         name = "wave simulation on the synthetic chart against the wave bench"
         figures[name] = (f"figure_wave_{WAVE_BENCH}.png", png)
+    advance()
     try:  # per group: the PSF (log), its MTF, through focus; the rest of the report does not depend on them
         optics = optics_figures(results, run_dir, reflectance_norm)
     except (KeyError, OSError, ValueError, VissimInputError) as error:
@@ -418,8 +423,10 @@ def build_report(run_dir: str | Path) -> list[Path]:
         optics = {}
     for name, (file_name, fig, extra) in optics.items():
         figures[name] = (file_name, png_bytes(fig), extra)
+    advance()
     written = write_report_files(run_dir, title=f"vissim validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=markdown_tables(results), figures=figures)
+    advance()
     log.info("report of %d items written to %s", len(results), run_dir)
     return written
