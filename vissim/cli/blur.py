@@ -71,9 +71,12 @@ def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> 
         if key not in cache:
             size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
             size = min(size, 2 * max(shape) + 1)
+            label = f"at {', '.join(f'{w:g}' for w in wavelengths)} nm"
+            stages = None if progress is None else (lambda stage, done, total, label=label:
+                                                    progress(f"{stage} {label}", done, total))
             cache[key] = compute_psf(
                 wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
-                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode,
+                lca_reference_nm=lca, arcmin_per_px=step, size_px=size, mode=args.mode, progress=stages,
             )
             advance()
         psfs.append(cache[key])

@@ -49,6 +49,7 @@ from vissim.optics.psf_field import (
 from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
 from vissim.optics.wavefront import Wavefront
+from vissim.progress import Progress
 from vissim.units import image_colrow_to_osa_xy, nm_to_mm, osa_xy_to_image_colrow, rad_to_arcmin
 
 __all__ = [
@@ -233,6 +234,7 @@ def compute_psf(
     pixel: str = "integrate",
     dtype=np.float32,
     method: str | None = None,
+    progress: Progress | None = None,
 ) -> PSF:
     """PSF of ``wavefront`` over a ``pupil_diameter_mm`` pupil (default: its measurement pupil).
 
@@ -269,6 +271,8 @@ def compute_psf(
         Wave PSFs only: ``"mft"`` (matrix transform) or ``"fft"``; by default the cheaper,
         recorded in ``PSF.sampling``.  At suggested field sizes both give the same pixel energies to
         1e-3 of the peak.
+    progress : callable, optional
+        Wave PSFs: ``progress("wave PSF", done, total)`` after each stage (:mod:`vissim.progress`).
 
     Returns
     -------
@@ -338,7 +342,7 @@ def compute_psf(
         samplings = plan_wave_psf(diameter, wavelengths, step, size_px, blurs, method)
         log.debug("wave PSF by %s: %d^2 internal, %.0f pupil cells", samplings[0].method,
                   samplings[0].internal_size, samplings[0].pupil_cells)
-        accumulated = wave_psf(fronts, weights_t, diameter, samplings, size_px, dtype, pixel)
+        accumulated = wave_psf(fronts, weights_t, diameter, samplings, size_px, dtype, pixel, progress)
     else:
         accumulated = sum(weight * _geometric_psf(front, diameter, step, size_px, blur, pixel)
                           for front, weight, blur in zip(fronts, weights_t, blurs))

@@ -48,12 +48,7 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray) -> np.ndarray:
     levels = []
     q, w = premultiplied, weight
     while max(w.shape) > 1:
-        h, wd = w.shape
-        if h % 2 or wd % 2:
-            q = xp.pad(q, ((0, 0), (0, h % 2), (0, wd % 2)))
-            w = xp.pad(w, ((0, h % 2), (0, wd % 2)))
-        q = _box_sum(q[:, 0::2, 0::2], q[:, 1::2, 0::2], q[:, 0::2, 1::2], q[:, 1::2, 1::2], xp)
-        w = _box_sum(w[0::2, 0::2], w[1::2, 0::2], w[0::2, 1::2], w[1::2, 1::2], xp)
+        q, w = _box_sum(q, xp), _box_sum(w, xp)
         scale = 1.0 / xp.maximum(w, 1.0)
         q *= scale
         w *= scale
@@ -69,9 +64,15 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray) -> np.ndarray:
     return value
 
 
-def _box_sum(a, b, c, d, xp):
-    """``a + b + c + d``, summed in that order into one new array."""
-    out = xp.add(a, b)
-    out += c
-    out += d
+def _box_sum(array, xp):
+    """Sums of 2 x 2 cells over the last two axes (an odd last row or column: cells of its pixels alone).
+
+    Each cell adds its pixels in the order (0, 0), (1, 0), (0, 1), (1, 1), as if the array were
+    padded with zeros to even sizes (x + 0 = x), without copying it.
+    """
+    h, w = array.shape[-2:]
+    out = array[..., 0::2, 0::2].copy()
+    out[..., : h // 2, :] += array[..., 1::2, 0::2]
+    out[..., :, : w // 2] += array[..., 0::2, 1::2]
+    out[..., : h // 2, : w // 2] += array[..., 1::2, 1::2]
     return out
