@@ -492,11 +492,14 @@ def blur_depth(
         e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
         wide = (slice(e0, e1), slice(f0, f1))
         planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
-                                 threshold_diopters, rows=(boxes[k][0] - e0, boxes[k][1] - e0))
+                                 threshold_diopters, rows=(boxes[k][0] - e0, boxes[k][1] - e0),
+                                 keep=(window[0] - e0, window[1] - e0))
+        window_rows = window[0]
+        planes = planes[:, window[0] - e0 : window[1] - e0]  # the rows extended: those of the window
         if scales[k] == 1:  # the blur reaches only the planes' nonzero box grown by the PSF
-            window = _grow(_nonzero_box(planes, (e0, f0)), reach[k], (rows, cols), within=window)
+            window = _grow(_nonzero_box(planes, (window_rows, f0)), reach[k], (rows, cols), within=window)
         r0, r1, c0, c1 = window
-        planes = planes[:, r0 - e0 : r1 - e0, c0 - f0 : c1 - f0]
+        planes = planes[:, r0 - window_rows : r1 - window_rows, c0 - f0 : c1 - f0]
         touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
         if scales[k] == 1:
             blurred, shape = _blur_window(planes, optics.psf(k), padding, touches, backend, transfers, threads)
@@ -557,7 +560,7 @@ def _occlusion_weight(proximity_gap_diopters, threshold_diopters: float):
 
 
 def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None,
-                    rows: tuple[int, int] | None = None):
+                    rows: tuple[int, int] | None = None, keep: tuple[int, int] | None = None):
     """Layer ``k``: premultiplied colours and coverage (C + 1, H, W), extended behind its occluders.
 
     ``lower``/``upper`` are each pixel's two layers and ``frac`` (float32) its weight in
@@ -568,14 +571,19 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     extended coverage also occludes the layers behind it: they are behind its continuation.
     ``work`` (from :func:`_workspace`) holds reused buffers; the result may be one of them.
     ``rows`` (first, end): the rows outside which layer ``k``'s matte is zero (default: unknown).
+    ``keep`` (first, end): the rows of the result the caller uses; others are left undefined
+    (default: all).
     """
     xp = array_module(colour)
     n_ch = colour.shape[0]
     work = _workspace(colour.shape, xp) if work is None else work
     stack, hidden, scratch = work["stack"], work["hidden"], work["scratch"]
-    first, end = rows or (0, colour.shape[1])
-    stack[:, :first] = 0.0
-    stack[:, end:] = 0.0
+    height = colour.shape[1]
+    first, end = rows or (0, height)
+    keep_first, keep_end = keep or (0, height)
+    # zero beside the matte: in the rows kept, and a row either side (pull-push's first 2 x 2 cells read it)
+    stack[:, min(keep_first, max(first - 1, 0)) : first] = 0.0
+    stack[:, end : max(keep_end, min(end + 1, height))] = 0.0
     band = (slice(first, end), slice(None))
     matte = stack[n_ch, first:end]
     matte[...] = _matte(lower[band], upper[band], frac[band], k, xp)
@@ -589,23 +597,23 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     scratch -= hidden
     scratch *= frac
     hidden += scratch
-    hidden_rows = np.flatnonzero(_to_host(hidden.any(axis=1)))
-    if hidden_rows.size == 0:
+    hidden_rows = keep_first + np.flatnonzero(_to_host(hidden[keep_first:keep_end].any(axis=1)))
+    if hidden_rows.size == 0:  # nothing of layer k is hidden in the rows kept
         return stack
     xp.subtract(1.0, hidden, out=scratch)
-    estimate = pull_push(stack, scratch)
+    estimate = pull_push(stack, scratch, rows=(first, end))
     # Where hidden > 0 the pixel has no coverage of its own on layer k (its layers are nearer),
     # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again
     # (rows without hidden pixels: nothing to add).
     r0, r1 = int(hidden_rows[0]) // 2, (int(hidden_rows[-1]) + 2) // 2  # estimate rows: 2 x 2 cells
     upsampled = work["upsampled"][:, 2 * r0 : 2 * r1]
     upsampled.reshape(n_ch + 1, r1 - r0, 2, estimate.shape[2], 2)[...] = estimate[:, r0:r1, None, :, None]
-    rows_hidden = slice(2 * r0, min(2 * r1, hidden.shape[0]))
-    upsampled = upsampled[:, : rows_hidden.stop - rows_hidden.start, : hidden.shape[1]]
-    hidden = hidden[rows_hidden]
+    low, high = max(2 * r0, keep_first), min(2 * r1, keep_end)
+    upsampled = upsampled[:, low - 2 * r0 : high - 2 * r0, : hidden.shape[1]]
+    hidden = hidden[low:high]
     hidden *= hidden
     upsampled *= hidden
-    stack[:, rows_hidden] += upsampled
+    stack[:, low:high] += upsampled
     return stack
 
 

@@ -35,22 +35,27 @@ def upsample2(coarse: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return out
 
 
-def pull_push(premultiplied: np.ndarray, weight: np.ndarray) -> np.ndarray:
+def pull_push(premultiplied: np.ndarray, weight: np.ndarray, rows: tuple[int, int] | None = None) -> np.ndarray:
     """Estimate ``premultiplied / weight`` (C, H, W) where ``weight`` (H, W) < 1 (Gortler et al. 1996).
 
     Pull: 2 x 2 box sums, weights saturated at 1.  Push: each level keeps its own data and
     takes ``1 - weight`` of the bilinearly upsampled coarser estimate, so a pixel of weight 1
     keeps its value and one of weight 0 gets a smooth estimate from its neighbourhood.  The
     estimate is returned at *half* resolution (level 1, cells of 2 x 2 pixels): the caller
-    uses it only where its own data are missing, nearest-upsampled.
+    uses it only where its own data are missing, nearest-upsampled.  ``rows`` (first, end): the
+    rows outside which ``premultiplied`` is zero, whose sums need not be formed (default: all).
     """
     xp = array_module(premultiplied)
     levels = []
     q, w = premultiplied, weight
+    first, end = rows or (0, weight.shape[0])
     while max(w.shape) > 1:
-        q, w = _box_sum(q, xp), _box_sum(w, xp)
+        first, end = first // 2, min((end + 1) // 2, (w.shape[0] + 1) // 2)  # this level's rows holding data
+        coarse = xp.zeros((q.shape[0], (w.shape[0] + 1) // 2, (w.shape[1] + 1) // 2), q.dtype)
+        coarse[:, first:end] = _box_sum(q[:, 2 * first : 2 * end], xp)  # elsewhere sums of zeros
+        q, w = coarse, _box_sum(w, xp)
         scale = 1.0 / xp.maximum(w, 1.0)
-        q *= scale
+        q[:, first:end] *= scale[first:end]
         w *= scale
         levels.append((q, w))
     if not levels:  # a single pixel
