@@ -674,9 +674,10 @@ def _in_order(work, optics: _LayerOptics, order, threads: int):
     """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
 
     With ``threads > 1`` the layers are worked on ahead in a thread pool (at most ``2 threads``
-    ahead of the caller, each layer's PSF submitted before it): a layer's extension and blur
-    depend on no other layer, only its compositing (the caller's) does.  A layer's task waits
-    only for PSF tasks submitted before it, which have therefore started: no deadlock.
+    ahead of the caller; their PSFs twice as far ahead, so that a layer seldom waits for its own):
+    a layer's extension and blur depend on no other layer, only its compositing (the caller's)
+    does.  A layer's task waits only for PSF tasks submitted before it, which have therefore
+    started: no deadlock.
     """
     order = list(order)
     if threads <= 1:
@@ -687,9 +688,10 @@ def _in_order(work, optics: _LayerOptics, order, threads: int):
     with single_threaded_blas(), ThreadPoolExecutor(threads) as pool:  # our threads, not OpenBLAS's, use the cores
         try:
             for i, k in enumerate(order):
+                for later in order[i : i + 4 * threads + 1]:
+                    optics.prefetch(pool, later)
                 for later in order[i : i + 2 * threads + 1]:
                     if later not in futures:
-                        optics.prefetch(pool, later)
                         futures[later] = pool.submit(work, later)
                 yield k, futures.pop(k).result()
         finally:
