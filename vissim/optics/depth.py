@@ -57,16 +57,22 @@ neighbours.  The continuation itself is estimated by pull-push on the window gro
 frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
 (same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
 60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
-a floor, each window is a few per cent of the frame.
+a floor, each window is a few per cent of the frame.  Within it, the FFT covers only the box of
+the extended layer's nonzero pixels grown by ``r_k`` (beyond it the blur is exactly zero), and
+pull-push sums only the rows that hold the layer's matte (the rest are sums of zeros).
+
+Threads: a layer's extension and blur depend on no other layer; only its compositing (the
+transmission through nearer layers) does.  On the CPU, one thread per core extends and blurs
+layers ahead (their PSFs computed in the same pool, OpenBLAS held at one thread meanwhile:
+:mod:`vissim.optics.threads`) while the calling thread composites them near to far, in order:
+the result equals the one-thread blur to float32 round-off (``tests/test_depth_threads.py``).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import math
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,14 +81,13 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.optics.array_backend import CPU as CPU_BACKEND
-from vissim.optics.array_backend import ArrayBackend, array_backend, array_module
-from vissim.optics.blur import pad_array, padded_shape, padding_width_px
-from vissim.optics.blur_device import convolve_padded
+from vissim.optics.array_backend import array_backend
+from vissim.optics.depth_psfs import _cached_psf, _layer_psf  # noqa: F401  (depth_layers, tests and benchmarks use them)
+from vissim.optics.depth_psfs import _in_order, _LayerOptics, _worker_threads
+from vissim.optics.depth_windows import (COARSE_FACTOR, DEPTH_PADDING_MODES, _add_overlap, _blur_coarse, _blur_window,
+                                         _extended_layer, _grow, _layer_boxes, _nonzero_box, _occlusion_weight)
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
-from vissim.optics.pullpush import pull_push, upsample2
-from vissim.optics.threads import available_cores, single_threaded_blas
+from vissim.optics.psf import geometric_blur_radius_arcmin
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import arcmin_to_rad
@@ -100,7 +105,6 @@ COARSE_BLUR_PX = 14.0
 COARSE_MIN_DB = 44.0
 #: Plans with more layers are refused unless ``max_layers`` is raised (or None: no limit).
 DEFAULT_MAX_LAYERS = 256
-DEPTH_PADDING_MODES = ("edge", "reflect")
 
 
 # -- the optics of one depth ------------------------------------------------------------
@@ -241,96 +245,6 @@ def _base_wavefront(eye_rx: Prescription, pupil_mm: float, extra: Wavefront | No
             f"extra_wavefront is measured over {extra.pupil_diameter_mm:g} mm, smaller than the {pupil_mm:g} mm pupil"
         )
     return front + extra.rescaled(pupil_mm)
-
-
-@functools.lru_cache(maxsize=128)
-def _cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str,
-                size_px: int | None = None) -> PSF:
-    """The PSF of one layer's wavefront (cached by wavefront), on a field that holds its blur or of ``size_px``
-    (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
-    front = Wavefront(dict(items), pupil_mm)
-    size = size_px or suggested_size_px(front, step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
-    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step, size_px=size, mode=mode)
-
-
-def _wavefront_key(coefficients: dict, sign: float = 1.0) -> tuple:
-    return tuple(sorted((k, round(sign * v, 12)) for k, v in coefficients.items() if round(v, 12) != 0.0))
-
-
-def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict,
-               size_px: int | None = None) -> PSF:
-    """A layer's PSF; the point reflection of an already computed one when its wavefront is that one's negative.
-
-    ``|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2``, and the geometric PSF's rays land at
-    ``-grad W``: both PSFs of ``-W`` are those of ``W`` reflected through the origin (to round-off;
-    odd sizes only, whose origin ``[N//2, N//2]`` is the centre).  For an eye whose wavefront is
-    defocus alone, the symmetric layer plan pairs every layer with one of opposite defocus.
-    """
-    key = _wavefront_key(front.coefficients_um)
-    mirror = None if size_px is not None or key in seen else seen.get(_wavefront_key(front.coefficients_um, -1.0))
-    if mirror is not None and mirror.data.shape[0] % 2 == 1:
-        psf = _reflected(mirror, front)
-    else:
-        psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
-    seen[key] = psf
-    return psf
-
-
-def _reflected(psf: PSF, front: Wavefront) -> PSF:
-    """``psf`` reflected through its centre, as the PSF of ``front`` (the negative of its wavefront)."""
-    data = np.ascontiguousarray(psf.data[::-1, ::-1])
-    data.setflags(write=False)
-    return dataclasses.replace(psf, data=data, wavefront=front)
-
-
-class _LayerOptics:
-    """Each non-empty layer's PSF (as :func:`_layer_psf` chooses them), computed at most once.
-
-    ``fronts`` and ``scales`` (the grid's pixel, in image pixels) by layer, far to near.  A layer
-    either computes its PSF (cached by wavefront) or reflects that of an earlier layer whose
-    wavefront is its negative.  ``sizes``: each PSF's side (px of its grid).  :meth:`prefetch`
-    computes a layer's PSF in a thread pool; :meth:`psf` waits for it.
-    """
-
-    def __init__(self, fronts: dict, scales: dict, pupil_mm: float, wavelength_nm: float, step: float, mode: str):
-        self.fronts, self.scales = fronts, scales
-        self.optics = (pupil_mm, wavelength_nm, step, mode)
-        self.sizes, self.source, seen = {}, {}, {}
-        for k, front in fronts.items():
-            key = (scales[k], _wavefront_key(front.coefficients_um))
-            opposite = seen.get((scales[k], _wavefront_key(front.coefficients_um, -1.0)))
-            reflect = scales[k] == 1 and key not in seen and opposite is not None and self.sizes[opposite] % 2 == 1
-            self.source[k] = opposite if reflect else None
-            self.sizes[k] = self.sizes[opposite] if reflect else self._size(k)
-            seen[key] = k
-        self.futures: dict = {}
-
-    def _size(self, k: int) -> int:
-        pupil_mm, wavelength_nm, step, _ = self.optics
-        size = suggested_size_px(self.fronts[k], step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
-        if self.scales[k] == 1:
-            return size
-        size //= self.scales[k]  # the fine grid's field (arcmin) on the coarse grid: windows as wide as the fine's
-        return size + 1 - size % 2
-
-    def _compute(self, k: int) -> PSF:
-        pupil_mm, wavelength_nm, step, mode = self.optics
-        items = tuple(self.fronts[k].coefficients_um.items())
-        if self.scales[k] == 1:  # size_px=None as depth_layers passes it: one lru_cache entry
-            return _cached_psf(items, pupil_mm, wavelength_nm, step, mode, None)
-        return _cached_psf(items, pupil_mm, wavelength_nm, step * self.scales[k], mode, size_px=self.sizes[k])
-
-    def prefetch(self, pool, k: int) -> None:
-        """Start computing the PSF layer ``k`` needs in ``pool`` (once)."""
-        while self.source[k] is not None:
-            k = self.source[k]
-        if k not in self.futures:
-            self.futures[k] = pool.submit(self._compute, k)
-
-    def psf(self, k: int) -> PSF:
-        if self.source[k] is not None:
-            return _reflected(self.psf(self.source[k]), self.fronts[k])
-        return self.futures[k].result() if k in self.futures else self._compute(k)
 
 
 # -- the layered blur -----------------------------------------------------------------
@@ -552,222 +466,3 @@ def _matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[n
     lower[snap_up] += 1
     frac[snap_up | (frac < 1e-6)] = 0.0
     return lower, frac
-
-
-def _occlusion_weight(proximity_gap_diopters, threshold_diopters: float):
-    """How much nearer content occludes: 0 up to the threshold, rising to 1 at twice it."""
-    return np.clip(np.asarray(proximity_gap_diopters) / threshold_diopters - 1.0, 0.0, 1.0)
-
-
-def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None,
-                    rows: tuple[int, int] | None = None, keep: tuple[int, int] | None = None):
-    """Layer ``k``: premultiplied colours and coverage (C + 1, H, W), extended behind its occluders.
-
-    ``lower``/``upper`` are each pixel's two layers and ``frac`` (float32) its weight in
-    ``upper`` (the tent matte).  ``hidden`` is the part of each pixel that occludes layer ``k``
-    (its mattes on nearer layers, weighted by :func:`_occlusion_weight`); there layer ``k``
-    continues with the pull-push estimate of its own colour and coverage from the rest of the
-    image (where its coverage is 0 the estimate is 0 too: no layer grows sideways).  The
-    extended coverage also occludes the layers behind it: they are behind its continuation.
-    ``work`` (from :func:`_workspace`) holds reused buffers; the result may be one of them.
-    ``rows`` (first, end): the rows outside which layer ``k``'s matte is zero (default: unknown).
-    ``keep`` (first, end): the rows of the result the caller uses; others are left undefined
-    (default: all).
-    """
-    xp = array_module(colour)
-    n_ch = colour.shape[0]
-    work = _workspace(colour.shape, xp) if work is None else work
-    stack, hidden, scratch = work["stack"], work["hidden"], work["scratch"]
-    height = colour.shape[1]
-    first, end = rows or (0, height)
-    keep_first, keep_end = keep or (0, height)
-    # zero beside the matte: in the rows kept, and a row either side (pull-push's first 2 x 2 cells read it)
-    stack[:, min(keep_first, max(first - 1, 0)) : first] = 0.0
-    stack[:, end : max(keep_end, min(end + 1, height))] = 0.0
-    band = (slice(first, end), slice(None))
-    matte = stack[n_ch, first:end]
-    matte[...] = _matte(lower[band], upper[band], frac[band], k, xp)
-    xp.multiply(colour[:, first:end], matte, out=stack[:n_ch, first:end])
-    weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
-    if not weights.any():
-        return stack
-    weights = xp.asarray(weights)
-    xp.take(weights, lower, out=hidden)
-    xp.take(weights, upper, out=scratch)
-    scratch -= hidden
-    scratch *= frac
-    hidden += scratch
-    hidden_rows = keep_first + np.flatnonzero(_to_host(hidden[keep_first:keep_end].any(axis=1)))
-    if hidden_rows.size == 0:  # nothing of layer k is hidden in the rows kept
-        return stack
-    xp.subtract(1.0, hidden, out=scratch)
-    estimate = pull_push(stack, scratch, rows=(first, end))
-    # Where hidden > 0 the pixel has no coverage of its own on layer k (its layers are nearer),
-    # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again
-    # (rows without hidden pixels: nothing to add).
-    r0, r1 = int(hidden_rows[0]) // 2, (int(hidden_rows[-1]) + 2) // 2  # estimate rows: 2 x 2 cells
-    upsampled = work["upsampled"][:, 2 * r0 : 2 * r1]
-    upsampled.reshape(n_ch + 1, r1 - r0, 2, estimate.shape[2], 2)[...] = estimate[:, r0:r1, None, :, None]
-    low, high = max(2 * r0, keep_first), min(2 * r1, keep_end)
-    upsampled = upsampled[:, low - 2 * r0 : high - 2 * r0, : hidden.shape[1]]
-    hidden = hidden[low:high]
-    hidden *= hidden
-    upsampled *= hidden
-    stack[:, low:high] += upsampled
-    return stack
-
-
-def _matte(lower, upper, frac, k: int, xp):
-    """Layer ``k``'s tent matte: ``1 - frac`` where it is the pixel's farther layer, ``frac`` where the nearer."""
-    return xp.where(lower == k, 1.0 - frac, xp.where(upper == k, frac, 0.0))
-
-
-def _layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int, int, int]]:
-    """Each layer's bounding box (row0, row1, col0, col1) of the pixels its tent matte touches."""
-    rows, cols = lower.shape
-    row_index = np.arange(rows, dtype=np.int64)[:, None]
-    col_index = np.arange(cols, dtype=np.int64)[None, :]
-    in_lower, in_upper = (frac < 1.0).astype(np.float32), (frac > 0.0).astype(np.float32)
-    hits = []
-    for index, size in ((row_index, rows), (col_index, cols)):
-        count = np.zeros(n_layers * size)
-        for layer, present in ((lower, in_lower), (upper, in_upper)):
-            count += np.bincount((layer.astype(np.int64) * size + index).ravel(), weights=present.ravel(),
-                                 minlength=n_layers * size)
-        hits.append(count.reshape(n_layers, size) > 0)
-    boxes = {}
-    for k in range(n_layers):
-        r, c = np.flatnonzero(hits[0][k]), np.flatnonzero(hits[1][k])
-        if r.size:
-            boxes[k] = (int(r[0]), int(r[-1]) + 1, int(c[0]), int(c[-1]) + 1)
-    return boxes
-
-
-def _grow(box, reach: int, shape, within=None) -> tuple[int, int, int, int]:
-    """``box`` grown by ``reach`` on every side, inside the image (``shape``) and ``within`` a window."""
-    r0, r1, c0, c1 = box
-    w0, w1, v0, v1 = within or (0, shape[0], 0, shape[1])
-    return max(r0 - reach, w0), min(r1 + reach, w1), max(c0 - reach, v0), min(c1 + reach, v1)
-
-
-def _nonzero_box(planes, origin: tuple[int, int]) -> tuple[int, int, int, int]:
-    """The box (row0, row1, col0, col1) of the image holding every nonzero pixel of (C, h, w) ``planes``
-    whose pixel [0, 0] is the image's ``origin``; all of them if none is nonzero."""
-    nonzero = planes.any(axis=0)
-    rows = np.flatnonzero(_to_host(nonzero.any(axis=1)))
-    cols = np.flatnonzero(_to_host(nonzero.any(axis=0)))
-    if rows.size == 0:
-        rows, cols = np.arange(planes.shape[1]), np.arange(planes.shape[2])
-    return origin[0] + int(rows[0]), origin[0] + int(rows[-1]) + 1, origin[1] + int(cols[0]), origin[1] + int(cols[-1]) + 1
-
-
-def _to_host(array) -> np.ndarray:
-    return array.get() if hasattr(array, "get") and not isinstance(array, np.ndarray) else np.asarray(array)
-
-
-def _worker_threads(backend: ArrayBackend) -> int:
-    """Threads that blur layers at once: the cores this process may use on the CPU; one on a GPU."""
-    return available_cores() if backend is CPU_BACKEND else 1
-
-
-def _in_order(work, optics: _LayerOptics, order, threads: int):
-    """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
-
-    With ``threads > 1`` the layers are worked on ahead in a thread pool (at most ``2 threads``
-    ahead of the caller; their PSFs twice as far ahead, so that a layer seldom waits for its own):
-    a layer's extension and blur depend on no other layer, only its compositing (the caller's)
-    does.  A layer's task waits only for PSF tasks submitted before it, which have therefore
-    started: no deadlock.
-    """
-    order = list(order)
-    if threads <= 1:
-        for k in order:
-            yield k, work(k)
-        return
-    futures: dict = {}
-    with single_threaded_blas(), ThreadPoolExecutor(threads) as pool:  # our threads, not OpenBLAS's, use the cores
-        try:
-            for i, k in enumerate(order):
-                for later in order[i : i + 4 * threads + 1]:
-                    optics.prefetch(pool, later)
-                for later in order[i : i + 2 * threads + 1]:
-                    if later not in futures:
-                        futures[later] = pool.submit(work, later)
-                yield k, futures.pop(k).result()
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -> None:
-    """``target`` (on ``window``) += ``source`` (on ``source_window``) where the two windows overlap."""
-    r0, r1 = max(window[0], source_window[0]), min(window[1], source_window[1])
-    c0, c1 = max(window[2], source_window[2]), min(window[3], source_window[3])
-    if r0 < r1 and c0 < c1:
-        target[r0 - window[0] : r1 - window[0], c0 - window[2] : c1 - window[2]] += \
-            source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
-
-
-def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None, threads: int | None = None) -> tuple:
-    """Blur (C, h, w) planes of a window with one PSF (:func:`vissim.optics.blur_device.convolve_padded`).
-
-    ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
-    Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
-    the image they are zero (the window already holds everything of the layer that reaches it).
-    ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device;
-    ``threads``: the CPU FFT's threads (default all).  Returns the blurred planes and the padded grid's shape.
-    """
-    if padding not in DEPTH_PADDING_MODES:
-        raise AssertionError(f"depth padding {padding!r}")  # pragma: no cover  (blur_depth refuses it)
-    n, h, w = planes.shape
-    offset = padding_width_px(psf.data.shape[0])
-    shape = padded_shape((h, w), psf.data.shape[0])
-    padded = pad_array(planes, ((0, 0), (offset, shape[0] - h - offset), (offset, shape[1] - w - offset)), padding,
-                       xp=backend.xp)
-    top, bottom, left, right = touches
-    if not top:
-        padded[:, :offset] = 0.0
-    if not bottom:
-        padded[:, offset + h :] = 0.0
-    if not left:
-        padded[:, :, :offset] = 0.0
-    if not right:
-        padded[:, :, offset + w :] = 0.0
-    blurred = convolve_padded(padded, psf, backend, transfers, threads=threads)
-    return blurred[:, offset : offset + h, offset : offset + w], shape
-
-
-#: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of :func:`blur_depth`).
-COARSE_FACTOR = 2
-
-
-def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None, threads: int | None = None) -> tuple:
-    """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
-
-    ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
-    image holds little above the coarse grid's Nyquist frequency, so this is close to the fine
-    blur (:data:`COARSE_MIN_DB` at :data:`COARSE_BLUR_PX`) at a quarter of the FFT work.
-    """
-    n, h, w = planes.shape
-    q = factor
-    xp = backend.xp
-    even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
-    coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
-    blurred, shape = _blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
-                                  transfers, threads)
-    fine = blurred
-    for _ in range(int(round(math.log2(q)))):
-        fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))
-    return fine[:, :h, :w], shape
-
-
-def _workspace(shape: tuple[int, int, int], xp=np) -> dict:
-    """Buffers for :func:`_extended_layer` (``xp``: the array module, NumPy or CuPy)."""
-    n_ch, rows, cols = shape
-    return {
-        "stack": xp.empty((n_ch + 1, rows, cols), np.float32),
-        "hidden": xp.empty((rows, cols), np.float32),
-        "scratch": xp.empty((rows, cols), np.float32),
-        "upsampled": xp.empty((n_ch + 1, rows + rows % 2, cols + cols % 2), np.float32),
-    }
