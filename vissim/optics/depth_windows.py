@@ -66,13 +66,13 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     if hidden_rows.size == 0:  # nothing of layer k is hidden in the rows kept
         return stack
     xp.subtract(1.0, hidden, out=scratch)
-    estimate = pull_push(stack, scratch, rows=(first, end))
     # Where hidden > 0 the pixel has no coverage of its own on layer k (its layers are nearer),
     # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again
     # (rows without hidden pixels: nothing to add).
     r0, r1 = int(hidden_rows[0]) // 2, (int(hidden_rows[-1]) + 2) // 2  # estimate rows: 2 x 2 cells
+    estimate = pull_push(stack, scratch, rows=(first, end), wanted=(r0, r1))
     upsampled = work["upsampled"][:, 2 * r0 : 2 * r1]
-    upsampled.reshape(n_ch + 1, r1 - r0, 2, estimate.shape[2], 2)[...] = estimate[:, r0:r1, None, :, None]
+    upsampled.reshape(n_ch + 1, r1 - r0, 2, estimate.shape[2], 2)[...] = estimate[:, :, None, :, None]
     low, high = max(2 * r0, keep_first), min(2 * r1, keep_end)
     upsampled = upsampled[:, low - 2 * r0 : high - 2 * r0, : hidden.shape[1]]
     hidden = hidden[low:high]

@@ -35,7 +35,8 @@ def upsample2(coarse: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return out
 
 
-def pull_push(premultiplied: np.ndarray, weight: np.ndarray, rows: tuple[int, int] | None = None) -> np.ndarray:
+def pull_push(premultiplied: np.ndarray, weight: np.ndarray, rows: tuple[int, int] | None = None,
+              wanted: tuple[int, int] | None = None) -> np.ndarray:
     """Estimate ``premultiplied / weight`` (C, H, W) where ``weight`` (H, W) < 1 (Gortler et al. 1996).
 
     Pull: 2 x 2 box sums, weights saturated at 1.  Push: each level keeps its own data and
@@ -44,6 +45,8 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray, rows: tuple[int, in
     estimate is returned at *half* resolution (level 1, cells of 2 x 2 pixels): the caller
     uses it only where its own data are missing, nearest-upsampled.  ``rows`` (first, end): the
     rows outside which ``premultiplied`` is zero, whose sums need not be formed (default: all).
+    ``wanted`` (first, end): the estimate's rows (at half resolution) the caller uses; only those
+    are returned, pushed from only the coarser rows they depend on (default: all).
     """
     xp = array_module(premultiplied)
     levels = []
@@ -60,12 +63,22 @@ def pull_push(premultiplied: np.ndarray, weight: np.ndarray, rows: tuple[int, in
         levels.append((q, w))
     if not levels:  # a single pixel
         return premultiplied / xp.where(weight > 0, weight, 1.0)
+    # The rows each level must push: a fine row of the cell-centred bilinear upsampling reads its
+    # own coarse row and the next one up or down.
+    spans = [wanted or (0, levels[0][1].shape[0])]
+    for _, w in levels[1:]:
+        first, end = spans[-1]
+        spans.append((max(first // 2 - 1, 0), min((end - 1) // 2 + 2, w.shape[0])))
     q, w = levels[-1]
-    value = q / xp.where(w > 0, w, 1.0)
-    for q, w in reversed(levels[:-1]):
-        value = upsample2(value, w.shape)  # q + (1 - w) x the coarser estimate, in place
-        value *= 1.0 - w
-        value += q
+    first, end = spans[-1]
+    value = q[:, first:end] / xp.where(w[first:end] > 0, w[first:end], 1.0)
+    for (q, w), (fine_first, fine_end), coarse_first in zip(reversed(levels[:-1]), reversed(spans[:-1]),
+                                                            reversed([s[0] for s in spans[1:]])):
+        # q + (1 - w) x the coarser estimate, in place, on the rows needed
+        value = upsample2(value, (2 * value.shape[1], w.shape[1]))[:, fine_first - 2 * coarse_first :
+                                                                    fine_end - 2 * coarse_first]
+        value *= 1.0 - w[fine_first:fine_end]
+        value += q[:, fine_first:fine_end]
     return value
 
 
