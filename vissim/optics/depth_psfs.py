@@ -5,6 +5,7 @@ Used by :func:`vissim.optics.depth.blur_depth` (module doc there: "Cost" and "Th
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 from concurrent.futures import ThreadPoolExecutor
@@ -63,21 +64,30 @@ class _LayerOptics:
 
     ``fronts`` and ``scales`` (the grid's pixel, in image pixels) by layer, far to near.  A layer
     either computes its PSF (cached by wavefront) or reflects that of an earlier layer whose
-    wavefront is its negative.  ``sizes``: each PSF's side (px of its grid).  :meth:`prefetch`
-    computes a layer's PSF in a thread pool; :meth:`psf` waits for it.
+    wavefront is its negative (and whose size is odd).  ``sizes``: each PSF's side (px of its
+    grid), found on ``pool``'s threads if given.  :meth:`prefetch` computes a layer's PSF in
+    ``pool``; :meth:`psf` waits for it.
     """
 
-    def __init__(self, fronts: dict, scales: dict, pupil_mm: float, wavelength_nm: float, step: float, mode: str):
+    def __init__(self, fronts: dict, scales: dict, pupil_mm: float, wavelength_nm: float, step: float, mode: str,
+                 pool: ThreadPoolExecutor | None = None):
         self.fronts, self.scales = fronts, scales
         self.optics = (pupil_mm, wavelength_nm, step, mode)
-        self.sizes, self.source, seen = {}, {}, {}
+        self.source, seen = {}, {}
         for k, front in fronts.items():
             key = (scales[k], _wavefront_key(front.coefficients_um))
             opposite = seen.get((scales[k], _wavefront_key(front.coefficients_um, -1.0)))
-            reflect = scales[k] == 1 and key not in seen and opposite is not None and self.sizes[opposite] % 2 == 1
-            self.source[k] = opposite if reflect else None
-            self.sizes[k] = self.sizes[opposite] if reflect else self._size(k)
+            self.source[k] = opposite if scales[k] == 1 and key not in seen and opposite is not None else None
             seen[key] = k
+        own = [k for k in fronts if self.source[k] is None]
+        self.sizes = dict(zip(own, (map if pool is None else pool.map)(self._size, own)))
+        for k in fronts:  # far to near: a layer's source comes first
+            if self.source[k] is None:
+                continue
+            if self.sizes[self.source[k]] % 2 == 1:
+                self.sizes[k] = self.sizes[self.source[k]]
+            else:  # an even field has no centre pixel to reflect through
+                self.source[k], self.sizes[k] = None, self._size(k)
         self.futures: dict = {}
 
     def _size(self, k: int) -> int:
@@ -114,29 +124,38 @@ def _worker_threads(backend: ArrayBackend) -> int:
     return available_cores() if backend is CPU_BACKEND else 1
 
 
-def _in_order(work, optics: _LayerOptics, order, threads: int):
+@contextlib.contextmanager
+def _layer_pool(threads: int):
+    """A pool of ``threads`` threads, OpenBLAS on one thread meanwhile (ours use the cores); None for one thread."""
+    if threads <= 1:
+        yield None
+        return
+    with single_threaded_blas(), ThreadPoolExecutor(threads) as pool:
+        try:
+            yield pool
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _in_order(work, optics: _LayerOptics, order, pool: ThreadPoolExecutor | None, threads: int):
     """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
 
-    With ``threads > 1`` the layers are worked on ahead in a thread pool (at most ``2 threads``
-    ahead of the caller; their PSFs twice as far ahead, so that a layer seldom waits for its own):
+    With a ``pool`` (of ``threads``) the layers are worked on ahead on it (at most ``2 threads`` ahead
+    of the caller; their PSFs twice as far ahead, so that a layer seldom waits for its own):
     a layer's extension and blur depend on no other layer, only its compositing (the caller's)
     does.  A layer's task waits only for PSF tasks submitted before it, which have therefore
     started: no deadlock.
     """
     order = list(order)
-    if threads <= 1:
+    if pool is None:
         for k in order:
             yield k, work(k)
         return
     futures: dict = {}
-    with single_threaded_blas(), ThreadPoolExecutor(threads) as pool:  # our threads, not OpenBLAS's, use the cores
-        try:
-            for i, k in enumerate(order):
-                for later in order[i : i + 4 * threads + 1]:
-                    optics.prefetch(pool, later)
-                for later in order[i : i + 2 * threads + 1]:
-                    if later not in futures:
-                        futures[later] = pool.submit(work, later)
-                yield k, futures.pop(k).result()
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+    for i, k in enumerate(order):
+        for later in order[i : i + 4 * threads + 1]:
+            optics.prefetch(pool, later)
+        for later in order[i : i + 2 * threads + 1]:
+            if later not in futures:
+                futures[later] = pool.submit(work, later)
+        yield k, futures.pop(k).result()

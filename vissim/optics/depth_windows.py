@@ -123,7 +123,8 @@ def _nonzero_box(planes, origin: tuple[int, int]) -> tuple[int, int, int, int]:
     cols = np.flatnonzero(_to_host(nonzero.any(axis=0)))
     if rows.size == 0:
         rows, cols = np.arange(planes.shape[1]), np.arange(planes.shape[2])
-    return origin[0] + int(rows[0]), origin[0] + int(rows[-1]) + 1, origin[1] + int(cols[0]), origin[1] + int(cols[-1]) + 1
+    r0, c0 = origin
+    return r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1
 
 
 def _to_host(array) -> np.ndarray:
