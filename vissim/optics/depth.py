@@ -378,12 +378,13 @@ def blur_depth(
     active = [k for k in range(plan.n_layers) if coverage[k] > 0]
 
     fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in active}
-    blurs_arcmin = {k: 2.0 * geometric_blur_radius_arcmin(fronts[k], pupil) for k in active}
-    scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
-              for k in active}
     threads = _worker_threads(backend)
-    with _layer_pool(threads) as pool:  # one thread per core on the CPU: PSF sizes, PSFs, layers
+    with _layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
         boxes_job = None if pool is None else pool.submit(_layer_boxes, lower, upper, frac, plan.n_layers)
+        blurs = (map if pool is None else pool.map)(lambda f: geometric_blur_radius_arcmin(f, pupil), fronts.values())
+        blurs_arcmin = {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
+        scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
+                  for k in active}
         optics = _LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
         sizes = optics.sizes
         layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
@@ -462,9 +463,12 @@ def _matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[n
     """Each pixel's farther layer index ``i`` and its weight ``t`` in layer ``i + 1`` (tent matte)."""
     if layer_diopters.size == 1:
         return np.zeros(proximity.shape, np.int64), np.zeros(proximity.shape)
-    lower = np.clip(np.searchsorted(layer_diopters, proximity, side="right") - 1, 0, layer_diopters.size - 2)
-    gap = layer_diopters[lower + 1] - layer_diopters[lower]
-    frac = np.clip((proximity - layer_diopters[lower]) / gap, 0.0, 1.0)
+    lower = np.searchsorted(layer_diopters, proximity, side="right")
+    lower -= 1
+    np.clip(lower, 0, layer_diopters.size - 2, out=lower)
+    frac = proximity - layer_diopters[lower]
+    frac /= np.diff(layer_diopters)[lower]  # the gap above each pixel's farther layer
+    np.clip(frac, 0.0, 1.0, out=frac)
     snap_up = frac > 1.0 - 1e-6  # on a layer (to rounding): that layer only
     lower[snap_up] += 1
     frac[snap_up | (frac < 1e-6)] = 0.0
