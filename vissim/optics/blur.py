@@ -60,15 +60,15 @@ class BlurKernel:
     transfer: np.ndarray
 
     @classmethod
-    def prepare(cls, psf: PSF, padded_shape: tuple[int, int], dtype=np.float32) -> BlurKernel:
-        """The PSF's transfer function on this grid, reused across calls while the PSF lives."""
+    def prepare(cls, psf: PSF, padded_shape: tuple[int, int], dtype=np.float32, workers: int = -1) -> BlurKernel:
+        """The PSF's transfer function on this grid, reused while the PSF lives (``workers``: FFT threads)."""
         key = (id(psf), tuple(padded_shape), np.dtype(dtype).name)
         with _TRANSFERS_LOCK:  # threads blurring layers at once share the cache
             cached = _TRANSFERS.get(key)
             if cached is not None and cached[0]() is psf:
                 _TRANSFERS.move_to_end(key)
                 return cls(psf, padded_shape, cached[1])
-        transfer = kernel_transfer(psf.data, padded_shape, dtype)
+        transfer = kernel_transfer(psf.data, padded_shape, dtype, workers)
         transfer.setflags(write=False)
         with _TRANSFERS_LOCK:
             _TRANSFERS[key] = (weakref.ref(psf), transfer)
@@ -83,7 +83,8 @@ _TRANSFERS: OrderedDict = OrderedDict()
 _TRANSFERS_LOCK = threading.Lock()
 
 
-def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.float32) -> np.ndarray:
+def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.float32,
+                    workers: int = -1) -> np.ndarray:
     """``rfft2`` of ``kernel`` placed with its origin ``[N//2, M//2]`` at ``[0, 0]`` of a zero grid.
 
     Pruned to the kernel's support: only its rows are real-FFT'd along the columns, then the
@@ -98,10 +99,10 @@ def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     placed = np.zeros((n_rows, cols), dtype=dtype)
     placed[:, (np.arange(n_cols) - n_cols // 2) % cols] = kernel
-    along_cols = scipy.fft.rfft(placed, axis=1, workers=-1)
+    along_cols = scipy.fft.rfft(placed, axis=1, workers=workers)
     scattered = np.zeros((rows, along_cols.shape[1]), dtype=complex_dtype)
     scattered[(np.arange(n_rows) - n_rows // 2) % rows] = along_cols
-    return scipy.fft.fft(scattered, axis=0, workers=-1, overwrite_x=True)
+    return scipy.fft.fft(scattered, axis=0, workers=workers, overwrite_x=True)
 
 
 def padding_width_px(kernel_px: int) -> int:

@@ -64,7 +64,7 @@ def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: di
     """
     shape = tuple(padded.shape[-2:])
     if backend is CPU:
-        transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
+        transfer = BlurKernel.prepare(psf, shape, dtype=np.float32, workers=-1 if threads is None else threads).transfer
     else:
         transfers = {} if transfers is None else transfers
         if (id(psf), shape) not in transfers:
