@@ -1,6 +1,6 @@
 """Benchmark: depth-dependent blur of a 1080p RGB-D image against one blur_image and the naive layer floor.
 
-    .venv/bin/python benchmarks/bench_depth.py [--cli] [--repeats N]
+    .venv/bin/python benchmarks/bench_depth.py [--cli | --cli-only] [--repeats N]
 
 Scene (synthetic, linear RGB noise textures, the hardest case for every FFT shortcut): a wall at
 8 m over the top half, a floor sloping from 8 m (horizon) to 0.33 m (bottom row), and panels at
@@ -14,14 +14,17 @@ Measured in the same run, best of ``--repeats`` each, interleaved:
 * the naive per-layer floor: per non-empty layer, the kernel's transform and one batched
   real FFT pair of 3 colour planes + coverage on the full padded frame (what the layered blur
   cost before it cropped each layer to its support), times the number of layers;
-* with ``--cli``: ``vissim blur-depth`` and ``vissim blur`` of the same files, each a fresh
-  process (imports, EXR reading and writing, PSFs: everything a user waits for).
+* with ``--cli`` (``--cli-only``: this alone): ``vissim blur-depth`` and ``vissim blur`` of the
+  same files, each a fresh process (imports, EXR reading and writing, PSFs: everything a user
+  waits for), so every run is cold (nothing is cached across processes).  Printed per run: the
+  wall and CPU seconds of each and their ratio; then the best-of ratio and the runs' spread.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -74,7 +77,8 @@ def best(function, repeats: int) -> float:
     return min(times)
 
 
-def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px=None) -> tuple[float, float]:
+def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px=None) -> dict[str, list]:
+    """Wall and CPU seconds (user + system) of each command, per repeat: {name: [(wall_s, cpu_s), ...]}."""
     from vissim.imageio import write_data_map, write_image
 
     with tempfile.TemporaryDirectory() as folder:
@@ -89,19 +93,24 @@ def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px
         env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
         for _ in range(repeats):  # interleaved, so a busy machine slows both alike
             for name, argv in commands.items():
-                start = time.perf_counter()
+                before, start = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
                 subprocess.run([sys.executable, "-m", "vissim", *argv], check=True, capture_output=True, env=env)
-                times[name].append(time.perf_counter() - start)
-    return min(times["blur-depth"]), min(times["blur"])
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+                cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+                times[name].append((time.perf_counter() - start, cpu))
+    return times
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="best of N (default 3)")
     parser.add_argument("--cli", action="store_true", help="also time the two commands (fresh processes)")
+    parser.add_argument("--cli-only", action="store_true", help="time only the two commands")
     parser.add_argument("--coarse-blur-px", type=float, help="blur_depth's coarse_blur_px (default: off)")
     args = parser.parse_args()
     image, depth = scene()
+    if args.cli_only:
+        return print_cli_times(image, depth, args)
     kwargs = dict(eye_prescription=EYE, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
                   coarse_blur_px=args.coarse_blur_px)
 
@@ -137,9 +146,18 @@ def main() -> None:
     print(f"ratios: blur_depth / blur_image {cold_s / single_s:5.1f} (cold), {warm_s / single_s:5.1f} (warm); "
           f"blur_depth (warm) / naive floor {warm_s / (n * floor_s):5.2f}")
     if args.cli:
-        depth_cli, blur_cli = cli_times(image, depth, args.repeats, args.coarse_blur_px)
-        print(f"command line: vissim blur-depth {depth_cli:5.2f} s, vissim blur {blur_cli:5.2f} s, "
-              f"ratio {depth_cli / blur_cli:4.1f}")
+        print_cli_times(image, depth, args)
+
+
+def print_cli_times(image: np.ndarray, depth: np.ndarray, args) -> None:
+    times = cli_times(image, depth, args.repeats, args.coarse_blur_px)
+    for i, ((depth_wall, depth_cpu), (blur_wall, blur_cpu)) in enumerate(zip(times["blur-depth"], times["blur"])):
+        print(f"command line, cold run {i + 1}: vissim blur-depth {depth_wall:5.2f} s (cpu {depth_cpu:5.2f} s), "
+              f"vissim blur {blur_wall:5.2f} s (cpu {blur_cpu:5.2f} s), ratio {depth_wall / blur_wall:4.2f}")
+    ratios = sorted(d[0] / b[0] for d, b in zip(times["blur-depth"], times["blur"]))
+    best = min(t[0] for t in times["blur-depth"]) / min(t[0] for t in times["blur"])
+    print(f"command line, cold: ratio blur-depth / blur {best:4.2f} (best of {args.repeats} each); per run "
+          f"{ratios[0]:4.2f}-{ratios[-1]:4.2f} (median {ratios[len(ratios) // 2]:4.2f})")
 
 
 if __name__ == "__main__":

@@ -7,6 +7,8 @@ import logging
 import math
 from pathlib import Path
 
+import numpy as np
+
 from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.cli._common import add_aberration_args, check_outputs_apart, parse_float_list, wavefront_from_args
 from vissim.errors import FieldTooSmallError, VissimInputError
@@ -14,6 +16,7 @@ from vissim.imageio import Image, image_files, output_bit_depth, read_image, wri
 from vissim.optics.blur import PADDING_MODES, blur_image
 from vissim.optics.chromatic import gaussian_band
 from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
 
 DEFAULT_CHANNELS_NM = (610.0, 550.0, 465.0)
@@ -85,6 +88,48 @@ def image_too_small(path: Path, shape: tuple[int, ...], psf_px: int, step: float
         "(or a coarser --arcmin-per-px)")
 
 
+def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> tuple[list, dict]:
+    """One PSF per channel (computed once per distinct band), and the distinct ones by band.
+
+    A PSF's field is cut to twice the image's longer side plus one (no pixel sees farther); an
+    image too small for the field its blur needs is refused with `image_too_small`.
+    """
+    psfs, cache = [], {}
+    advance = counter(progress, "PSFs", len(set(bands)))
+    for wavelengths, weights in bands:
+        key = (wavelengths, weights)
+        if key not in cache:
+            size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
+            field_px = min(size, 2 * max(shape) + 1)
+            label = f"at {', '.join(f'{w:g}' for w in wavelengths)} nm"
+            stages = None if progress is None else (lambda stage, done, total, label=label:
+                                                    progress(f"{stage} {label}", done, total))
+            try:
+                cache[key] = compute_psf(
+                    wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
+                    lca_reference_nm=lca, arcmin_per_px=step, size_px=field_px, mode=args.mode, progress=stages,
+                )
+            except FieldTooSmallError:
+                if field_px == size:
+                    raise
+                raise image_too_small(args.input, shape, size, step) from None
+            advance()
+        psfs.append(cache[key])
+    return psfs, cache
+
+
+def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, progress):
+    """``pixels`` blurred channel by channel (each with its PSF), reporting each channel done."""
+    if pixels.ndim == 2:
+        return blur_image(pixels, psfs[0], arcmin_per_px=step, padding=padding)
+    advance = counter(progress, "blurring channels", pixels.shape[2])
+    channels = []
+    for c, psf in enumerate(psfs):
+        channels.append(blur_image(pixels[..., c], psf, arcmin_per_px=step, padding=padding))
+        advance()
+    return np.stack(channels, axis=-1)
+
+
 def run(args: argparse.Namespace) -> int:
     check_outputs_apart(image_files(args.input), image_files(args.output))
     image = read_image(args.input)
@@ -111,23 +156,9 @@ def run(args: argparse.Namespace) -> int:
             bands.append(gaussian_band(wavelengths[0], args.channel_fwhm_nm))
         else:
             bands.append((tuple(wavelengths), None))
-    psfs, cache = [], {}
-    for wavelengths, weights in bands:
-        key = (wavelengths, weights)
-        if key not in cache:
-            size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
-            field_px = min(size, 2 * max(image.pixels.shape[:2]) + 1)  # no pixel sees farther
-            try:
-                cache[key] = compute_psf(
-                    wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
-                    lca_reference_nm=lca, arcmin_per_px=step, size_px=field_px, mode=args.mode,
-                )
-            except FieldTooSmallError:
-                if field_px == size:
-                    raise
-                raise image_too_small(args.input, image.pixels.shape, size, step) from None
-        psfs.append(cache[key])
-    blurred = blur_image(image.pixels, psfs if n_channels > 1 else psfs[0], arcmin_per_px=step, padding=args.padding)
+    with terminal_progress() as progress:
+        psfs, cache = _channel_psfs(bands, wavefront, step, args, lca, image.pixels.shape[:2], progress)
+        blurred = _blur_channels(image.pixels, psfs, step, args.padding, progress)
     provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
                                  arcmin_per_px=step, padding=args.padding,
                                  psfs=[p.as_json() for p in cache.values()], rx=args.rx, zernike=args.zernike)

@@ -22,6 +22,7 @@ from vissim.imageio import image_files, output_bit_depth, read_data_map, read_im
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
 from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
 from vissim.optics.prescription import Prescription
+from vissim.progress import terminal_progress
 from vissim.provenance import make_provenance
 
 
@@ -119,12 +120,13 @@ def run(args: argparse.Namespace) -> int:
     depth = read_depth_m(args.depth)
     eye = Prescription.parse(args.rx)
     accommodation, focus_info = _accommodation(args, eye, depth)
-    result = blur_depth(
-        image.pixels, depth, eye_prescription=eye, pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
-        accommodation_diopters=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
-        layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers, crop_px=crop,
-        coarse_blur_px=args.coarse_blur_px, device=args.device,
-    )
+    with terminal_progress() as progress:
+        result = blur_depth(
+            image.pixels, depth, eye_prescription=eye, pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
+            accommodation_diopters=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
+            layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers, crop_px=crop,
+            coarse_blur_px=args.coarse_blur_px, device=args.device, progress=progress,
+        )
     provenance = make_provenance(command="blur-depth", input=str(args.input), depth=str(args.depth),
                                  input_provenance=image.provenance, eye=eye.format(),
                                  pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,

@@ -13,6 +13,7 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
+from vissim.progress import terminal_progress
 from vissim.units import REC709_LUMINANCE
 
 
@@ -115,11 +116,12 @@ def run(args: argparse.Namespace) -> int:
                                "and --object-distance-m")
     rendered = isinstance(image.provenance.get("inputs"), dict) and "mitsuba_render" in image.provenance["inputs"]
     mode = args.mode or ("geometric" if rendered else "wave")
-    fit = fit_rx(_channel(image), _channel(reference), arcmin_per_px=step,
-                 pupil_diameter_mm=pupil, mode=mode, magnification=magnification, bench=bench,
-                 wavelength_nm=args.wavelength_nm, fit_focus_offset=args.fit_focus_offset, fit_pupil=args.fit_pupil,
-                 max_power_diopters=args.max_power_diopters,
-                 **({} if args.model_error_diopters is None else {"model_error_diopters": args.model_error_diopters}))
+    with terminal_progress() as progress:
+        fit = fit_rx(_channel(image), _channel(reference), arcmin_per_px=step,
+                     pupil_diameter_mm=pupil, mode=mode, magnification=magnification, bench=bench,
+                     wavelength_nm=args.wavelength_nm, fit_focus_offset=args.fit_focus_offset, fit_pupil=args.fit_pupil,
+                     max_power_diopters=args.max_power_diopters, progress=progress,
+                     **({} if args.model_error_diopters is None else {"model_error_diopters": args.model_error_diopters}))
     record = fit.as_json()
     rendered_with = rendered_bench(image.provenance)
     if rendered_with is not None:  # a bench render: the fit beside vergence theory for its lenses

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import sys
 from pathlib import Path
 
 from vissim.checks import size_text
@@ -18,6 +17,7 @@ from vissim.cli._common import add_trial_lens_args, check_outputs_apart, refuse_
 from vissim.cli.render_atv import add_atv_parser
 from vissim.cli.render_depth import add_depth_parser
 from vissim.errors import VissimInputError
+from vissim.progress import terminal_progress
 
 log = logging.getLogger(__name__)
 
@@ -163,12 +163,6 @@ def _write_wave_truth(bench, chart, args, output: Path) -> int:
 def _render_with_progress(bench, chart, kind: str, variant: str | None):
     from vissim.render.run import render_bench
 
-    if not sys.stderr.isatty():
-        return render_bench(bench, chart, kind=kind, variant=variant)
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-    with Progress(TextColumn("rendering"), BarColumn(), TextColumn("{task.completed}/{task.total} spp"),
-                  TimeRemainingColumn(), transient=True) as progress:
-        task = progress.add_task("render", total=bench.spp)
-        return render_bench(bench, chart, kind=kind, variant=variant,
-                            progress=lambda done, total: progress.update(task, completed=done))
+    with terminal_progress() as progress:
+        report = None if progress is None else (lambda done, total: progress("rendering (samples per pixel)", done, total))
+        return render_bench(bench, chart, kind=kind, variant=variant, progress=report)

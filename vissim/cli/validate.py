@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from vissim.errors import VissimInputError
+from vissim.progress import terminal_progress
 
 
 def add_parser(subparsers) -> None:
@@ -42,8 +43,9 @@ def run_validate(args: argparse.Namespace) -> int:
         raise VissimInputError("--scheduler is empty; expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786 "
                                "(leave the option out to render here)")
     try:
-        done = run_any_campaign(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler,
-                                spp=args.spp)
+        with terminal_progress() as progress:
+            done = run_any_campaign(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler,
+                                    spp=args.spp, show_progress=False, progress=progress)
     except OSError as exc:  # the run folder cannot be written (permissions, a full disk)
         raise VissimInputError(f"cannot write {exc.filename or args.output}: {exc.strerror or exc}") from None
     for line in done.lines:
@@ -56,7 +58,8 @@ def run_validate(args: argparse.Namespace) -> int:
 def run_report(args: argparse.Namespace) -> int:
     from vissim.validation.dispatch import rebuild_any_report
 
-    written, lines = rebuild_any_report(args.run)
+    with terminal_progress() as progress:
+        written, lines = rebuild_any_report(args.run, progress=progress)
     for line in lines:
         print(line)
     print(f"report: {args.run / 'report.html'} ({len(written)} files)")

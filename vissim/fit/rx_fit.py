@@ -78,6 +78,7 @@ from vissim.errors import VissimInputError, VissimTypeError
 from vissim.fit.forward import FORWARD_MODES, ForwardModel
 from vissim.fit.power_model import MAGNIFICATION_MODELS, power_model
 from vissim.optics.prescription import LensPower
+from vissim.progress import Progress, counter
 from vissim.units import mrad_to_arcmin
 from vissim.validation.registration import register
 
@@ -441,6 +442,12 @@ def _least_squares(problem: _Problem, start: np.ndarray, lower, upper, forward: 
                                         xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
 
 
+def _fitted(result, advance):
+    """``result``, after reporting one fit done (``advance``)."""
+    advance()
+    return result
+
+
 def _effective_vector(model, q, nuisances) -> np.ndarray:
     p = model.optics(q, nuisances).effective_power
     return np.array([0.5 * (p[0, 0] + p[1, 1]), 0.5 * (p[0, 0] - p[1, 1]), 0.5 * (p[0, 1] + p[1, 0])])
@@ -516,7 +523,8 @@ def _solution(problem: _Problem, result, shape: tuple[int, int], model_error_dio
 def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_mm: float, mode: str = "geometric",
            magnification: str = "bench", bench: DslrBench | None = None, wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
            fit_focus_offset: bool = False, fit_pupil: bool = False, max_power_diopters: float = 6.0,
-           max_shift_px: float = 8.0, model_error_diopters: float = MODEL_ERROR_DIOPTERS) -> RxFit:
+           max_shift_px: float = 8.0, model_error_diopters: float = MODEL_ERROR_DIOPTERS,
+           progress: Progress | None = None) -> RxFit:
     """Fit the sphero-cylinder added at the camera that turns ``reference`` into ``image`` (module doc).
 
     Parameters
@@ -544,6 +552,9 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     model_error_diopters
         The model's own error per power-vector component (one standard deviation), added to the
         noise in the intervals; the default was measured on Mitsuba bench renders (module doc).
+    progress
+        ``progress(stage, done, total)`` after each least-squares fit: the blur's starts, the
+        sign candidates, the wave refinements (`vissim.progress`).
 
     Returns
     -------
@@ -597,18 +608,22 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     blur_lower, blur_upper = _bounds(blur_problem, max_power_diopters, max_shift_px)
     base = np.zeros(len(blur_problem.names))
     base[3:5] = np.clip(shift, -max_shift_px * 0.9, max_shift_px * 0.9)
-    stage_a = min((_least_squares(blur_problem, start, blur_lower, blur_upper)
-                   for start in _blur_starts(blur_problem, base, max_power_diopters)), key=lambda r: r.cost)
+    starts = list(_blur_starts(blur_problem, base, max_power_diopters))
+    advance = counter(progress, "fit: blur from each start", len(starts))
+    stage_a = min((_fitted(_least_squares(blur_problem, start, blur_lower, blur_upper), advance) for start in starts),
+                  key=lambda r: r.cost)
     problem.evaluations += blur_problem.evaluations
     # 3. stage B: each principal power's sign, under the chosen model
     results = []
-    for vector in _sign_combinations(stage_a.x[:3]):
+    signs = list(_sign_combinations(stage_a.x[:3]))
+    advance = counter(progress if model.determines_sign else None, "fit: each sign of the powers", len(signs))
+    for vector in signs:
         theta = np.zeros(len(problem.names))
         theta[:5] = (*vector, *stage_a.x[3:5])
         for name in problem.names[5:]:
             theta[problem.names.index(name)] = stage_a.x[blur_problem.names.index(name)]
         if model.determines_sign:
-            results.append(_least_squares(problem, theta, lower, upper))
+            results.append(_fitted(_least_squares(problem, theta, lower, upper), advance))
         else:  # the blur is even in each principal power: every combination fits alike
             results.append(scipy.optimize.OptimizeResult(x=np.clip(theta, lower, upper), cost=stage_a.cost,
                                                          jac=stage_a.jac, fun=stage_a.fun))
@@ -617,7 +632,8 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     if mode == "wave":
         forward = ForwardModel(ref, step, pupil, mode="wave", wavelength_nm=wavelength_nm,
                                max_power_diopters=reach * widest / pupil, max_shift_px=max_shift_px)
-        results = [_least_squares(problem, r.x, lower, upper, forward) for r in results]
+        advance = counter(progress, "fit: wave refinement", len(results))
+        results = [_fitted(_least_squares(problem, r.x, lower, upper, forward), advance) for r in results]
         problem.forward = forward
 
     results.sort(key=lambda r: r.cost)

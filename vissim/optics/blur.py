@@ -29,6 +29,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import threading
 import weakref
 from collections import OrderedDict
 from collections.abc import Sequence
@@ -61,27 +62,31 @@ class BlurKernel:
     transfer: np.ndarray
 
     @classmethod
-    def prepare(cls, psf: PSF, padded_shape: tuple[int, int], dtype=np.float32) -> BlurKernel:
-        """The PSF's transfer function on this grid, reused across calls while the PSF lives."""
+    def prepare(cls, psf: PSF, padded_shape: tuple[int, int], dtype=np.float32, workers: int = -1) -> BlurKernel:
+        """The PSF's transfer function on this grid, reused while the PSF lives (``workers``: FFT threads)."""
         key = (id(psf), tuple(padded_shape), np.dtype(dtype).name)
-        cached = _TRANSFERS.get(key)
-        if cached is not None and cached[0]() is psf:
-            _TRANSFERS.move_to_end(key)
-            return cls(psf, padded_shape, cached[1])
-        transfer = kernel_transfer(psf.data, padded_shape, dtype)
+        with _TRANSFERS_LOCK:  # threads blurring layers at once share the cache
+            cached = _TRANSFERS.get(key)
+            if cached is not None and cached[0]() is psf:
+                _TRANSFERS.move_to_end(key)
+                return cls(psf, padded_shape, cached[1])
+        transfer = kernel_transfer(psf.data, padded_shape, dtype, workers)
         transfer.setflags(write=False)
-        _TRANSFERS[key] = (weakref.ref(psf), transfer)
-        while sum(t.nbytes for _, t in _TRANSFERS.values()) > TRANSFER_CACHE_BYTES and len(_TRANSFERS) > 1:
-            _TRANSFERS.popitem(last=False)
+        with _TRANSFERS_LOCK:
+            _TRANSFERS[key] = (weakref.ref(psf), transfer)
+            while sum(t.nbytes for _, t in _TRANSFERS.values()) > TRANSFER_CACHE_BYTES and len(_TRANSFERS) > 1:
+                _TRANSFERS.popitem(last=False)
         return cls(psf, padded_shape, transfer)
 
 
 #: Transfer functions kept for reuse (least recently used dropped beyond this many bytes).
 TRANSFER_CACHE_BYTES = 256 * 2**20
 _TRANSFERS: OrderedDict = OrderedDict()
+_TRANSFERS_LOCK = threading.Lock()
 
 
-def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.float32) -> np.ndarray:
+def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.float32,
+                    workers: int = -1) -> np.ndarray:
     """``rfft2`` of ``kernel`` placed with its origin ``[N//2, M//2]`` at ``[0, 0]`` of a zero grid.
 
     Pruned to the kernel's support: only its rows are real-FFT'd along the columns, then the
@@ -96,10 +101,10 @@ def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     placed = np.zeros((n_rows, cols), dtype=dtype)
     placed[:, (np.arange(n_cols) - n_cols // 2) % cols] = kernel
-    along_cols = scipy.fft.rfft(placed, axis=1, workers=-1)
+    along_cols = scipy.fft.rfft(placed, axis=1, workers=workers)
     scattered = np.zeros((rows, along_cols.shape[1]), dtype=complex_dtype)
     scattered[(np.arange(n_rows) - n_rows // 2) % rows] = along_cols
-    return scipy.fft.fft(scattered, axis=0, workers=-1, overwrite_x=True)
+    return scipy.fft.fft(scattered, axis=0, workers=workers, overwrite_x=True)
 
 
 def padding_width_px(kernel_px: int) -> int:

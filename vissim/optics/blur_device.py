@@ -54,23 +54,26 @@ def blur_image_on(
     return out[0] if array.ndim == 2 else np.moveaxis(out, 0, -1)
 
 
-def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: dict | None = None):
+def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: dict | None = None, *,
+                    threads: int | None = None):
     """Planes (C, H, W) on ``backend`` convolved circularly with ``psf``: one batched real FFT pair, float32.
 
     Callers pad the planes first.  ``transfers`` caches the kernel's spectrum on a GPU, keyed by
-    the PSF and grid.
+    the PSF and grid.  ``threads``: the CPU FFT's threads (default all; 1 for a caller that runs
+    several convolutions at once).
     """
     shape = tuple(padded.shape[-2:])
     if backend is CPU:
-        transfer = BlurKernel.prepare(psf, shape, dtype=np.float32).transfer
+        transfer = BlurKernel.prepare(psf, shape, dtype=np.float32, workers=-1 if threads is None else threads).transfer
     else:
         transfers = {} if transfers is None else transfers
         if (id(psf), shape) not in transfers:
             transfers[id(psf), shape] = backend.asarray(BlurKernel.prepare(psf, shape, dtype=np.float32).transfer)
         transfer = transfers[id(psf), shape]
-    spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **backend.fft_kwargs())
+    kwargs = backend.fft_kwargs() if threads is None or backend is not CPU else {"workers": threads}
+    spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **kwargs)
     spectrum *= transfer
-    return backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **backend.fft_kwargs())
+    return backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **kwargs)
 
 
 def _pad(channel, widths, mode: str, background, host_channel: np.ndarray, xp):

@@ -57,13 +57,20 @@ neighbours.  The continuation itself is estimated by pull-push on the window gro
 frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
 (same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
 60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
-a floor, each window is a few per cent of the frame.
+a floor, each window is a few per cent of the frame.  Within it, the FFT covers only the box of
+the extended layer's nonzero pixels grown by ``r_k`` (beyond it the blur is exactly zero), and
+pull-push sums only the rows that hold the layer's matte (the rest are sums of zeros).
+
+Threads: a layer's extension and blur depend on no other layer; only its compositing (the
+transmission through nearer layers) does.  On the CPU, one thread per core extends and blurs
+layers ahead (their PSFs computed in the same pool, OpenBLAS held at one thread meanwhile:
+`vissim.optics.threads`) while the calling thread composites them near to far, in order:
+the result equals the one-thread blur to float32 round-off (``tests/test_depth_threads.py``).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import math
 import os
@@ -76,14 +83,16 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe, finite_number, instance_of, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
-from vissim.optics.array_backend import CPU as CPU_BACKEND
-from vissim.optics.array_backend import ArrayBackend, array_backend, array_module
-from vissim.optics.blur import pad_array, padded_shape, padding_width_px, pixel_array
-from vissim.optics.blur_device import convolve_padded
+from vissim.optics.array_backend import array_backend
+from vissim.optics.blur import pixel_array
+from vissim.optics.depth_psfs import _cached_psf, _layer_psf  # noqa: F401  (depth_layers, tests, benchmarks)
+from vissim.optics.depth_psfs import _in_order, _layer_pool, _LayerOptics, _worker_threads
+from vissim.optics.depth_windows import (COARSE_FACTOR, DEPTH_PADDING_MODES, _add_overlap, _blur_coarse, _blur_window,
+                                         _extended_layer, _grow, _layer_boxes, _nonzero_box, _occlusion_weight)
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.psf import PSF, compute_psf, geometric_blur_radius_arcmin, suggested_size_px
-from vissim.optics.pullpush import pull_push, upsample2
+from vissim.optics.psf import geometric_blur_radius_arcmin
 from vissim.optics.wavefront import Wavefront
+from vissim.progress import Progress
 from vissim.units import arcmin_to_rad
 
 __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to_proximity_diopters",
@@ -99,7 +108,6 @@ COARSE_BLUR_PX = 14.0
 COARSE_MIN_DB = 44.0
 #: Plans with more layers are refused unless ``max_layers`` is raised (or None: no limit).
 DEFAULT_MAX_LAYERS = 256
-DEPTH_PADDING_MODES = ("edge", "reflect")
 
 
 # -- the optics of one depth ------------------------------------------------------------
@@ -248,41 +256,6 @@ def _base_wavefront(eye_rx: Prescription, pupil_mm: float, extra: Wavefront | No
     return front + extra.rescaled(pupil_mm)
 
 
-@functools.lru_cache(maxsize=128)
-def _cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str,
-                size_px: int | None = None) -> PSF:
-    """The PSF of one layer's wavefront (cached by wavefront), on a field that holds its blur or of ``size_px``
-    (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
-    front = Wavefront(dict(items), pupil_mm)
-    size = size_px or suggested_size_px(front, step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
-    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step, size_px=size, mode=mode)
-
-
-def _wavefront_key(coefficients: dict, sign: float = 1.0) -> tuple:
-    return tuple(sorted((k, round(sign * v, 12)) for k, v in coefficients.items() if round(v, 12) != 0.0))
-
-
-def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict,
-               size_px: int | None = None) -> PSF:
-    """A layer's PSF; the point reflection of an already computed one when its wavefront is that one's negative.
-
-    ``|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2``, and the geometric PSF's rays land at
-    ``-grad W``: both PSFs of ``-W`` are those of ``W`` reflected through the origin (to round-off;
-    odd sizes only, whose origin ``[N//2, N//2]`` is the centre).  For an eye whose wavefront is
-    defocus alone, the symmetric layer plan pairs every layer with one of opposite defocus.
-    """
-    key = _wavefront_key(front.coefficients_um)
-    mirror = None if size_px is not None or key in seen else seen.get(_wavefront_key(front.coefficients_um, -1.0))
-    if mirror is not None and mirror.data.shape[0] % 2 == 1:
-        data = np.ascontiguousarray(mirror.data[::-1, ::-1])
-        data.setflags(write=False)
-        psf = dataclasses.replace(mirror, data=data, wavefront=front)
-    else:
-        psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
-    seen[key] = psf
-    return psf
-
-
 # -- the layered blur -----------------------------------------------------------------
 def blur_depth(
     image,
@@ -302,6 +275,7 @@ def blur_depth(
     crop_px: int = 0,
     coarse_blur_px: float | None = None,
     device: str = "cpu",
+    progress: Progress | None = None,
 ) -> DepthBlurResult:
     """Blur a linear-light image whose pixels lie at different depths, with occlusion.
 
@@ -338,7 +312,11 @@ def blur_depth(
     device : {"cpu", "cuda", "auto"}
         Where the layers are blurred (`vissim.optics.array_backend`): ``"cuda"`` on a GPU
         through CuPy (the ``gpu`` extra), ``"auto"`` there when one is present.  PSFs are computed
-        on the CPU either way.
+        on the CPU either way.  On the CPU, layers are blurred on as many threads as the process
+        has cores.
+    progress : callable, optional
+        ``progress("depth layers", done, total)`` after each non-empty layer is composited
+        (``total`` of them; `vissim.progress`).
 
     Returns
     -------
@@ -410,62 +388,74 @@ def blur_depth(
     lower, frac = lower.astype(np.int32), frac.astype(np.float32)
     active = [k for k in range(plan.n_layers) if coverage[k] > 0]
 
-    psfs, scales, layers, by_wavefront = {}, {}, [], {1: {}, COARSE_FACTOR: {}}
-    for k in active:
-        front = base.with_defocus_diopters(layer_diopters[k] - accommodation)
-        blur_arcmin = 2.0 * geometric_blur_radius_arcmin(front, pupil)
-        scales[k] = COARSE_FACTOR if coarse_blur_px is not None and blur_arcmin / step >= coarse_blur_px else 1
-        if scales[k] == 1:
-            psfs[k] = _layer_psf(front, pupil, wavelength, step, mode, by_wavefront[1])
-        else:  # the fine grid's field (arcmin) on the coarse grid: windows as wide as the fine grid's
-            size = suggested_size_px(front, step, pupil_diameter_mm=pupil, wavelength_nm=wavelength) // COARSE_FACTOR
-            psfs[k] = _layer_psf(front, pupil, wavelength, step * scales[k], mode, by_wavefront[scales[k]],
-                                 size_px=size + 1 - size % 2)
-        layers.append(DepthLayer(
-            k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
-            blur_arcmin, psfs[k].data.shape[0] * scales[k], float(coverage[k] / lower.size),
-        ))
-    reach = {k: (psfs[k].data.shape[0] // 2 + 1) * scales[k] for k in active}
-    reach_max = max(reach.values())
-    boxes = _layer_boxes(lower, upper, frac, plan.n_layers)
-    xp, transfers = backend.xp, {}
-    colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
-    numerator = xp.zeros_like(colour)
-    denominator = xp.zeros((rows, cols), np.float32)
-    occluders = xp.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
-    pending: list[tuple[float, tuple, np.ndarray]] = []  # nearer layers' blurred coverage (window), occluding in part
-    farthest = layer_diopters[active[0]]
-    largest = (0, 0)
-    for k in reversed(active):  # near to far
-        while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:
-            _, (r0, r1, c0, c1), matte_j = pending.pop(0)
-            occluders[r0:r1, c0:c1] += matte_j
-        # Layer k reaches its matte's box grown by its own PSF; its continuation behind nearer content
-        # matters only where that content's blur leaves it visible: the largest PSF's reach further.
-        window = _grow(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
-        r0, r1, c0, c1 = window
-        transmitted = occluders[r0:r1, c0:c1].copy()
-        for proximity_j, window_j, matte_j in pending:
-            weight = _occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
-            if weight > 0:
-                _add_overlap(transmitted, window, weight * matte_j, window_j)
-        xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-        # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
-        e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
-        wide = (slice(e0, e1), slice(f0, f1))
-        planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
-                                 threshold_diopters)[:, r0 - e0 : r1 - e0, c0 - f0 : c1 - f0]
-        touches = (window[0] == 0, window[1] == rows, window[2] == 0, window[3] == cols)
-        if scales[k] == 1:
-            blurred, shape = _blur_window(planes, psfs[k], padding, touches, backend, transfers)
-        else:
-            blurred, shape = _blur_coarse(planes, psfs[k], padding, touches, scales[k], backend, transfers)
-        largest = max(largest, shape)
-        if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind it: keep its blurred coverage
-            pending.append((layer_diopters[k], window, blurred[-1].copy()))
-        blurred *= transmitted
-        numerator[:, r0:r1, c0:c1] += blurred[:-1]
-        denominator[r0:r1, c0:c1] += blurred[-1]
+    fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in active}
+    threads = _worker_threads(backend)
+    with _layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
+        boxes_job = None if pool is None else pool.submit(_layer_boxes, lower, upper, frac, plan.n_layers)
+        blurs = (map if pool is None else pool.map)(lambda f: geometric_blur_radius_arcmin(f, pupil), fronts.values())
+        blurs_arcmin = {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
+        scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
+                  for k in active}
+        optics = _LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
+        sizes = optics.sizes
+        layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
+                             blurs_arcmin[k], sizes[k] * scales[k], float(coverage[k] / lower.size)) for k in active]
+        reach = {k: (sizes[k] // 2 + 1) * scales[k] for k in active}
+        reach_max = max(reach.values())
+        boxes = _layer_boxes(lower, upper, frac, plan.n_layers) if boxes_job is None else boxes_job.result()
+        xp, transfers = backend.xp, {}
+        colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
+        numerator = xp.zeros_like(colour)
+        denominator = xp.zeros((rows, cols), np.float32)
+        occluders = xp.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
+        pending: list[tuple[float, tuple, np.ndarray]] = []  # nearer layers' blurred coverage, partly occluding
+        farthest = layer_diopters[active[0]]
+        largest = (0, 0)
+
+        def blurred_layer(k: int) -> tuple:
+            # Layer k reaches its matte's box grown by its own PSF; its continuation behind nearer content
+            # matters only where that content's blur leaves it visible: the largest PSF's reach further.
+            window = _grow(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
+            # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
+            e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
+            wide = (slice(e0, e1), slice(f0, f1))
+            planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
+                                     threshold_diopters, rows=(boxes[k][0] - e0, boxes[k][1] - e0),
+                                     keep=(window[0] - e0, window[1] - e0))
+            window_rows = window[0]
+            planes = planes[:, window[0] - e0 : window[1] - e0]  # the rows extended: those of the window
+            if scales[k] == 1:  # the blur reaches only the planes' nonzero box grown by the PSF
+                window = _grow(_nonzero_box(planes, (window_rows, f0)), reach[k], (rows, cols), within=window)
+            r0, r1, c0, c1 = window
+            planes = planes[:, r0 - window_rows : r1 - window_rows, c0 - f0 : c1 - f0]
+            touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
+            if scales[k] == 1:
+                blurred, shape = _blur_window(planes, optics.psf(k), padding, touches, backend, transfers, threads)
+            else:
+                blurred, shape = _blur_coarse(planes, optics.psf(k), padding, touches, scales[k], backend, transfers,
+                                              threads)
+            return window, blurred, shape
+
+        near_to_far = _in_order(blurred_layer, optics, reversed(active), pool, threads)
+        for done, (k, (window, blurred, shape)) in enumerate(near_to_far, 1):
+            while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:  # near to far
+                _, (r0, r1, c0, c1), matte_j = pending.pop(0)
+                occluders[r0:r1, c0:c1] += matte_j
+            r0, r1, c0, c1 = window
+            transmitted = occluders[r0:r1, c0:c1].copy()
+            for proximity_j, window_j, matte_j in pending:
+                weight = _occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
+                if weight > 0:
+                    _add_overlap(transmitted, window, weight * matte_j, window_j)
+            xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
+            largest = max(largest, shape)
+            if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind: keep its coverage
+                pending.append((layer_diopters[k], window, blurred[-1].copy()))
+            blurred *= transmitted
+            numerator[:, r0:r1, c0:c1] += blurred[:-1]
+            denominator[r0:r1, c0:c1] += blurred[-1]
+            if progress is not None:
+                progress("depth layers", done, len(active))
     log.info("depth blur: %d layers planned, %d non-empty, largest padded window %s", plan.n_layers, len(active), largest)
     shape = largest
     low = int((denominator < 0.5).sum())
@@ -484,158 +474,13 @@ def _matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[n
     """Each pixel's farther layer index ``i`` and its weight ``t`` in layer ``i + 1`` (tent matte)."""
     if layer_diopters.size == 1:
         return np.zeros(proximity.shape, np.int64), np.zeros(proximity.shape)
-    lower = np.clip(np.searchsorted(layer_diopters, proximity, side="right") - 1, 0, layer_diopters.size - 2)
-    gap = layer_diopters[lower + 1] - layer_diopters[lower]
-    frac = np.clip((proximity - layer_diopters[lower]) / gap, 0.0, 1.0)
+    lower = np.searchsorted(layer_diopters, proximity, side="right")
+    lower -= 1
+    np.clip(lower, 0, layer_diopters.size - 2, out=lower)
+    frac = proximity - layer_diopters[lower]
+    frac /= np.diff(layer_diopters)[lower]  # the gap above each pixel's farther layer
+    np.clip(frac, 0.0, 1.0, out=frac)
     snap_up = frac > 1.0 - 1e-6  # on a layer (to rounding): that layer only
     lower[snap_up] += 1
     frac[snap_up | (frac < 1e-6)] = 0.0
     return lower, frac
-
-
-def _occlusion_weight(proximity_gap_diopters, threshold_diopters: float):
-    """How much nearer content occludes: 0 up to the threshold, rising to 1 at twice it."""
-    return np.clip(np.asarray(proximity_gap_diopters) / threshold_diopters - 1.0, 0.0, 1.0)
-
-
-def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None):
-    """Layer ``k``: premultiplied colours and coverage (C + 1, H, W), extended behind its occluders.
-
-    ``lower``/``upper`` are each pixel's two layers and ``frac`` (float32) its weight in
-    ``upper`` (the tent matte).  ``hidden`` is the part of each pixel that occludes layer ``k``
-    (its mattes on nearer layers, weighted by `_occlusion_weight`); there layer ``k``
-    continues with the pull-push estimate of its own colour and coverage from the rest of the
-    image (where its coverage is 0 the estimate is 0 too: no layer grows sideways).  The
-    extended coverage also occludes the layers behind it: they are behind its continuation.
-    ``work`` (from `_workspace`) holds reused buffers; the result may be one of them.
-    """
-    xp = array_module(colour)
-    n_ch = colour.shape[0]
-    work = _workspace(colour.shape, xp) if work is None else work
-    stack, hidden, scratch = work["stack"], work["hidden"], work["scratch"]
-    matte = stack[n_ch]
-    matte[...] = xp.where(lower == k, 1.0 - frac, xp.where(upper == k, frac, 0.0))
-    xp.multiply(colour, matte, out=stack[:n_ch])
-    weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
-    if not weights.any():
-        return stack
-    weights = xp.asarray(weights)
-    hidden[...] = weights[lower]
-    scratch[...] = weights[upper]
-    scratch -= hidden
-    scratch *= frac
-    hidden += scratch
-    if not bool(hidden.any()):
-        return stack
-    xp.subtract(1.0, hidden, out=scratch)
-    estimate = pull_push(stack, scratch)
-    # Where hidden > 0 the pixel has no coverage of its own on layer k (its layers are nearer),
-    # so level 0 of the push is hidden * (upsampled estimate); it enters weighted by hidden again.
-    upsampled = work["upsampled"]
-    upsampled.reshape(n_ch + 1, estimate.shape[1], 2, estimate.shape[2], 2)[...] = estimate[:, :, None, :, None]
-    upsampled = upsampled[:, : hidden.shape[0], : hidden.shape[1]]
-    hidden *= hidden
-    upsampled *= hidden
-    stack += upsampled
-    return stack
-
-
-def _layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int, int, int]]:
-    """Each layer's bounding box (row0, row1, col0, col1) of the pixels its tent matte touches."""
-    rows, cols = lower.shape
-    row_index = np.arange(rows, dtype=np.int64)[:, None]
-    col_index = np.arange(cols, dtype=np.int64)[None, :]
-    in_lower, in_upper = (frac < 1.0).astype(np.float32), (frac > 0.0).astype(np.float32)
-    hits = []
-    for index, size in ((row_index, rows), (col_index, cols)):
-        count = np.zeros(n_layers * size)
-        for layer, present in ((lower, in_lower), (upper, in_upper)):
-            count += np.bincount((layer.astype(np.int64) * size + index).ravel(), weights=present.ravel(),
-                                 minlength=n_layers * size)
-        hits.append(count.reshape(n_layers, size) > 0)
-    boxes = {}
-    for k in range(n_layers):
-        r, c = np.flatnonzero(hits[0][k]), np.flatnonzero(hits[1][k])
-        if r.size:
-            boxes[k] = (int(r[0]), int(r[-1]) + 1, int(c[0]), int(c[-1]) + 1)
-    return boxes
-
-
-def _grow(box, reach: int, shape) -> tuple[int, int, int, int]:
-    r0, r1, c0, c1 = box
-    return max(r0 - reach, 0), min(r1 + reach, shape[0]), max(c0 - reach, 0), min(c1 + reach, shape[1])
-
-
-def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -> None:
-    """``target`` (on ``window``) += ``source`` (on ``source_window``) where the two windows overlap."""
-    r0, r1 = max(window[0], source_window[0]), min(window[1], source_window[1])
-    c0, c1 = max(window[2], source_window[2]), min(window[3], source_window[3])
-    if r0 < r1 and c0 < c1:
-        target[r0 - window[0] : r1 - window[0], c0 - window[2] : c1 - window[2]] += \
-            source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
-
-
-def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None) -> tuple:
-    """Blur (C, h, w) planes of a window with one PSF (`vissim.optics.blur_device.convolve_padded`).
-
-    ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
-    Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
-    the image they are zero (the window already holds everything of the layer that reaches it).
-    ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device.
-    Returns the blurred planes and the padded grid's shape.
-    """
-    if padding not in DEPTH_PADDING_MODES:
-        raise AssertionError(f"depth padding {padding!r}")  # pragma: no cover  (blur_depth refuses it)
-    n, h, w = planes.shape
-    offset = padding_width_px(psf.data.shape[0])
-    shape = padded_shape((h, w), psf.data.shape[0])
-    padded = pad_array(planes, ((0, 0), (offset, shape[0] - h - offset), (offset, shape[1] - w - offset)), padding,
-                       xp=backend.xp)
-    top, bottom, left, right = touches
-    if not top:
-        padded[:, :offset] = 0.0
-    if not bottom:
-        padded[:, offset + h :] = 0.0
-    if not left:
-        padded[:, :, :offset] = 0.0
-    if not right:
-        padded[:, :, offset + w :] = 0.0
-    blurred = convolve_padded(padded, psf, backend, transfers)
-    return blurred[:, offset : offset + h, offset : offset + w], shape
-
-
-#: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of `blur_depth`).
-COARSE_FACTOR = 2
-
-
-def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None) -> tuple:
-    """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
-
-    ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
-    image holds little above the coarse grid's Nyquist frequency, so this is close to the fine
-    blur (`COARSE_MIN_DB` at `COARSE_BLUR_PX`) at a quarter of the FFT work.
-    """
-    n, h, w = planes.shape
-    q = factor
-    xp = backend.xp
-    even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
-    coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
-    blurred, shape = _blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
-                                  transfers)
-    fine = blurred
-    for _ in range(int(round(math.log2(q)))):
-        fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))
-    return fine[:, :h, :w], shape
-
-
-def _workspace(shape: tuple[int, int, int], xp=np) -> dict:
-    """Buffers for `_extended_layer` (``xp``: the array module, NumPy or CuPy)."""
-    n_ch, rows, cols = shape
-    return {
-        "stack": xp.empty((n_ch + 1, rows, cols), np.float32),
-        "hidden": xp.empty((rows, cols), np.float32),
-        "scratch": xp.empty((rows, cols), np.float32),
-        "upsampled": xp.empty((n_ch + 1, rows + rows % 2, cols + cols % 2), np.float32),
-    }

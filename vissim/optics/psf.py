@@ -56,6 +56,7 @@ from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels,
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
 from vissim.optics.opd_map import OpdMap
 from vissim.optics.wavefront import Wavefront
+from vissim.progress import Progress
 from vissim.units import image_colrow_to_osa_xy, nm_to_mm, osa_xy_to_image_colrow, rad_to_arcmin
 
 __all__ = [
@@ -284,6 +285,7 @@ def compute_psf(
     dtype=np.float32,
     method: str | None = None,
     normalise: str = "field",
+    progress: Progress | None = None,
 ) -> PSF:
     """PSF of ``wavefront`` over a ``pupil_diameter_mm`` pupil (default: its measurement pupil).
 
@@ -330,6 +332,8 @@ def compute_psf(
         truncating a kernel changes the blur.  ``"total"``: a PSF image, normalised to the
         total energy through the pupil, so it sums to ``energy_in_field``; any field is
         computed, with a logged warning when more than that fraction falls outside.
+    progress : callable, optional
+        Wave PSFs: ``progress("wave PSF", done, total)`` after each stage (`vissim.progress`).
 
     Returns
     -------
@@ -397,7 +401,7 @@ def compute_psf(
         samplings = plan_wave_psf(diameter, wavelengths, step, size_px, blurs, method)
         log.debug("wave PSF by %s: %d^2 internal, %.0f pupil cells", samplings[0].method,
                   samplings[0].internal_size, samplings[0].pupil_cells)
-        accumulated = wave_psf(fronts, weights_t, diameter, samplings, size_px, dtype, pixel)
+        accumulated = wave_psf(fronts, weights_t, diameter, samplings, size_px, dtype, pixel, progress)
     else:
         accumulated = sum(weight * _geometric_psf(front, diameter, step, size_px, blur, pixel)
                           for front, weight, blur in zip(fronts, weights_t, blurs))

@@ -29,6 +29,7 @@ import numpy as np
 import scipy.fft
 
 from vissim.errors import VissimInputError
+from vissim.progress import Progress, counter
 from vissim.optics.psf_field import airy_tail_radius_lambda_over_d, rim_widening
 from vissim.optics.pupil_grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
 from vissim.optics.workspace import scratch
@@ -258,10 +259,14 @@ def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray,
                 op(both[pair, rows_in, cols_in], cross[pair, rows_in, cols_in], out=target)
 
 
-def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
-    """Sum over wavelengths of weight x unit-energy intensity on the internal grid (origin at [M/2, M/2])."""
+def _mft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: None) -> np.ndarray:
+    """Sum over wavelengths of weight x unit-energy intensity on the internal grid (origin at [M/2, M/2]).
+
+    ``advance()`` after the pupil grid, and after each wavelength's pupil and transform.
+    """
     plan = plans[0]
     grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
+    advance()
     m = plan.internal_size
     total = np.empty((m, m), dtype=dtype)
     opd = scratch("opd", (grid.centre_x_mm.size + grid.rim_x_mm.size,), dtype)
@@ -269,6 +274,7 @@ def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
     for index, (front, weight, each) in enumerate(zip(fronts, weights, plans)):
         real, imag = generalised_pupil_parts(grid, opd_on_points_um(grid, front, dtype, out=opd), each.wavelength_nm,
                                              dtype, out=parts)
+        advance()
         cos, sin = _folded_matrices(m, plan.internal_arcmin_per_px, plan.pupil_step_mm, grid.half,
                                     each.wavelength_nm, dtype)
         scale = (plan.pupil_step_mm * float(arcmin_to_rad(plan.internal_arcmin_per_px))
@@ -277,6 +283,7 @@ def _mft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
         real *= amplitude
         imag *= amplitude
         _quadrant_intensities((real, imag), cos, sin, total, accumulate=index > 0)
+        advance()
     return total
 
 
@@ -286,7 +293,8 @@ def _cell_transfer(size: int) -> np.ndarray:
     return 1.0 / np.sinc(scipy.fft.fftfreq(size))
 
 
-def _fft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
+def _fft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: None) -> np.ndarray:
+    """As `_mft_intensity`, by one FFT per wavelength: ``advance()`` after its pupil and after its transform."""
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     m = plans[0].internal_size
     total = np.zeros((m, m), dtype=dtype)
@@ -299,10 +307,12 @@ def _fft_intensity(fronts, weights, diameter_mm, plans, dtype) -> np.ndarray:
         pupil = np.zeros((m, m), dtype=complex_dtype)
         pupil[np.ix_(window, window)] = (generalised_pupil(grid, opd_on_points_um(grid, front), plan.wavelength_nm,
                                                            complex_dtype) * checker[:, None] * checker[None, :])
+        advance()
         spectrum = scipy.fft.fft2(pupil, workers=-1, overwrite_x=True)
         spectrum *= correction[:, None]
         spectrum *= correction[None, :]
         total += (weight / (m * m * grid.area_cells)) * (np.square(spectrum.real) + np.square(spectrum.imag))
+        advance()
     return total
 
 
@@ -347,11 +357,17 @@ def to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixel
     return averaged * oversample**2 if oversample != 1 else averaged
 
 
-def wave_psf(fronts, weights, diameter_mm, plans, size_px, dtype, pixel) -> np.ndarray:
-    """Weighted wave PSF on the output pixels; each wavelength carries its weight of the total energy."""
-    engine = _mft_intensity if plans[0].method == "mft" else _fft_intensity
-    intensity = engine(fronts, weights, diameter_mm, plans, dtype)
+def wave_psf(fronts, weights, diameter_mm, plans, size_px, dtype, pixel, progress: Progress | None = None) -> np.ndarray:
+    """Weighted wave PSF on the output pixels; each wavelength carries its weight of the total energy.
+
+    ``progress("wave PSF", done, total)`` after each stage: the pupil grid, each wavelength's
+    pupil and transform, the output pixels (`vissim.progress`).
+    """
+    mft = plans[0].method == "mft"
+    advance = counter(progress, "wave PSF", 2 * len(plans) + (2 if mft else 1))
+    intensity = (_mft_intensity if mft else _fft_intensity)(fronts, weights, diameter_mm, plans, dtype, advance)
     out = to_output_pixels(intensity, size_px, plans[0].oversample, pixel)
+    advance()
     if pixel == "integrate":
         np.maximum(out, 0.0, out=out)  # round-off only: integrals of an intensity are >= 0
     return out

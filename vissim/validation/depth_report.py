@@ -22,6 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from vissim.imageio import read_image  # noqa: E402
+from vissim.progress import Progress, counter  # noqa: E402
 from vissim.validation.report import _num, campaign_name, load_results, png_bytes  # noqa: E402
 from vissim.validation.report_figures import Figure, display_norm, radiance_colorbar  # noqa: E402
 from vissim.validation.report_summary import PERFECT_MARGIN_DB  # noqa: E402
@@ -226,20 +227,27 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> Figure | Non
     return Figure("", png_bytes(fig), alt)
 
 
-def build_depth_report(run_dir: str | Path) -> list[Path]:
-    """Write metrics.json, metrics.csv, tables.md, figure_depth_*.png and report.html into ``run_dir``."""
+def build_depth_report(run_dir: str | Path, progress: Progress | None = None) -> list[Path]:
+    """Write metrics.json, metrics.csv, tables.md, figure_depth_*.png and report.html into ``run_dir``.
+
+    ``progress(stage, done, total)`` after each figure and the files (`vissim.progress`).
+    """
     run_dir = Path(run_dir)
     results = current_results(run_dir)
     rows = depth_rows(results)
     figures = {}
-    for simulation in dict.fromkeys(r["simulation"] for r in rows):
+    simulations = list(dict.fromkeys(r["simulation"] for r in rows))
+    advance = counter(progress, "report", len(simulations) + 1)
+    for simulation in simulations:
         figure = _figure(results, run_dir, simulation)
         if figure is not None:
             name = simulation.replace(" ", "_")
             figures[f"{simulation} simulation against the render"] = figure._replace(file_name=f"figure_depth_{name}.png")
+        advance()
     written = write_report_files(run_dir, title=f"vissim depth validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=depth_tables(results), figures=figures)
+    advance()
     log.info("depth report of %d items written to %s", len(results), run_dir)
     return written
 

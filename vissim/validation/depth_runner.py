@@ -24,11 +24,12 @@ from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.imageio import read_image
+from vissim.progress import Progress, counter
 from vissim.provenance import json_safe
 from vissim.validation.depth_campaign import (SCHEMA_VERSION, DepthCampaign, DepthCampaignSettings,
                                               DepthConfiguration)
 from vissim.validation.depth_item import compute_depth_item
-from vissim.validation.runner import RunSummary, make_missing_renders, plan_run
+from vissim.validation.runner import RunSummary, make_missing_renders, plan_run, progress_of
 
 __all__ = ["DepthRenderSpec", "render_depth_spec", "render_specs", "run_depth_campaign"]
 
@@ -103,10 +104,11 @@ def render_specs(config: DepthConfiguration, settings: DepthCampaignSettings) ->
 
 def run_depth_campaign(campaign: DepthCampaign, run_dir: str | Path, *, workers: int = 1, scheduler: str | None = None,
                        spp: int | None = None, render: Callable[[DepthRenderSpec], Any] | None = None,
-                       show_progress: bool = True) -> RunSummary:
+                       show_progress: bool = True, progress: Progress | None = None) -> RunSummary:
     """Run (or resume) a depth campaign into ``run_dir``; renders are reused by key.
 
-    Options and the scheduler are checked before the first file is written.
+    Options and the scheduler are checked before the first file is written.  ``progress`` and
+    ``show_progress`` as `vissim.validation.runner.run_campaign`'s.
     """
     render = render or render_depth_spec
     run_dir = Path(run_dir)
@@ -115,12 +117,15 @@ def run_depth_campaign(campaign: DepthCampaign, run_dir: str | Path, *, workers:
     record = {"kind": "depth", "name": campaign.name, "description": campaign.description, "source": campaign.source,
               "settings": json_safe(campaign.settings), "items": keys,
               "configurations": [c.as_json() for c in campaign.configurations]}
-    made = make_missing_renders(run_dir, needed, record, workers=workers, scheduler=scheduler, render=render,
-                                show_progress=show_progress, items=f"{len(todo)} of {len(keys)} depth items")
-    for key, config in todo:
-        renders = {name: read_image(run_dir / "renders" / f"{spec.key}.exr")
-                   for name, spec in render_specs(config, campaign.settings).items()}
-        compute_depth_item(key, config, campaign.settings, {name: r.pixels for name, r in renders.items()},
-                           run_dir / "items" / key,
-                           render_provenance={name: r.provenance for name, r in renders.items()})
+    with progress_of(show_progress, progress) as report:
+        made = make_missing_renders(run_dir, needed, record, workers=workers, scheduler=scheduler, render=render,
+                                    progress=report, items=f"{len(todo)} of {len(keys)} depth items")
+        advance = counter(report, "items", len(todo))
+        for key, config in todo:
+            renders = {name: read_image(run_dir / "renders" / f"{spec.key}.exr")
+                       for name, spec in render_specs(config, campaign.settings).items()}
+            compute_depth_item(key, config, campaign.settings, {name: r.pixels for name, r in renders.items()},
+                               run_dir / "items" / key,
+                               render_provenance={name: r.provenance for name, r in renders.items()})
+            advance()
     return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made)

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from vissim.atomic import check_outputs_apart
 from vissim.errors import VissimInputError
+from vissim.progress import Progress
 from vissim.validation.depth_campaign import is_depth_campaign, load_depth_campaign
 from vissim.validation.depth_runner import run_depth_campaign
 from vissim.validation.fields import read_campaign_toml
@@ -39,8 +40,12 @@ class CampaignRun:
 
 
 def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: str | None = None,
-                     spp: int | None = None, show_progress: bool = True) -> CampaignRun:
-    """Run the campaign file at ``path`` into ``out`` -- a depth campaign or a single-plane one -- and report it."""
+                     spp: int | None = None, show_progress: bool = True,
+                     progress: Progress | None = None) -> CampaignRun:
+    """Run the campaign file at ``path`` into ``out`` -- a depth campaign or a single-plane one -- and report it.
+
+    ``progress(stage, done, total)`` (`vissim.progress`): renders, items, then the report's steps.
+    """
     path, out = Path(path), Path(out)
     depth = is_depth_campaign(read_campaign_toml(path))
     if depth:
@@ -53,8 +58,9 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
     check_run_options(out, workers, spp)
     build_report, summary_lines = _report_of(depth)
     with run_folder_lock(out):
-        summary = run(campaign, out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress)
-        written, lines = build_report(out), summary_lines(out)
+        summary = run(campaign, out, workers=workers, scheduler=scheduler, spp=spp, show_progress=show_progress,
+                      progress=progress)
+        written, lines = build_report(out, progress=progress), summary_lines(out)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
@@ -62,15 +68,18 @@ def run_any_campaign(path: str | Path, out: str | Path, *, workers: int = 1, sch
                        (head, *lines, f"report: {report} ({len(written)} files)"))
 
 
-def rebuild_any_report(run_dir: str | Path) -> tuple[list[Path], list[str]]:
-    """Rebuild the report of a run folder of either kind (``vissim report``): (files written, summary lines)."""
+def rebuild_any_report(run_dir: str | Path, progress: Progress | None = None) -> tuple[list[Path], list[str]]:
+    """Rebuild the report of a run folder of either kind (``vissim report``): (files written, summary lines).
+
+    ``progress(stage, done, total)`` after each of the report's steps (`vissim.progress`).
+    """
     run_dir = Path(run_dir)
     order = run_dir / "campaign.json"
     if not order.exists():
         raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
     build_report, summary_lines = _report_of(json.loads(order.read_text()).get("kind") == "depth")
     with run_folder_lock(run_dir):
-        return build_report(run_dir), summary_lines(run_dir)
+        return build_report(run_dir, progress=progress), summary_lines(run_dir)
 
 
 def campaign_inputs(campaign, path: Path) -> list[Path]:

@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.errors import VissimInputError  # noqa: E402
 from vissim.imageio import read_image, write_image  # noqa: E402
+from vissim.progress import Progress, counter  # noqa: E402
 from vissim.provenance import make_provenance  # noqa: E402
 from vissim.validation.fit_report import fit_table  # noqa: E402
 from vissim.validation.optics_figures import optics_figures  # noqa: E402
@@ -439,12 +440,13 @@ def campaign_name(run_dir: Path) -> str:
     return json.loads(order.read_text()).get("name", run_dir.name) if order.exists() else run_dir.name
 
 
-def build_report(run_dir: str | Path) -> list[Path]:
+def build_report(run_dir: str | Path, progress: Progress | None = None) -> list[Path]:
     """Write metrics.json, metrics.csv, tables.md, figure_*.png and report.html into ``run_dir``.
 
     The figures: Fig. 4.8-style panels per simulation on the no-lens render and, for the main
     simulations, on the synthetic chart; and per group the wave PSF (log scale), its MTF against the
     diffraction limit and a through-focus strip (`vissim.validation.optics_figures`).
+    ``progress(stage, done, total)`` after each figure and the files (`vissim.progress`).
     """
     run_dir = Path(run_dir)
     results = load_results(run_dir)
@@ -456,10 +458,12 @@ def build_report(run_dir: str | Path) -> list[Path]:
                for s in SYNTHETIC_FIGURES]
     wanted.append(("wave", "synthetic", True, "wave simulation on the synthetic chart against the wave bench",
                    f"figure_wave_{WAVE_BENCH}.png"))
+    advance = counter(progress, "report", len(wanted) + 2)
     for simulation, input_kind, wave_bench, name, file_name in wanted:
         figure = _figure(results, run_dir, simulation, input_kind, wave_bench=wave_bench, campaign=campaign)
         if figure is not None:
             figures[name] = figure._replace(file_name=file_name)
+        advance()
     try:  # per group: the PSF (log), its MTF, through focus; the rest of the report does not depend on them
         optics = optics_figures(results, run_dir, display_norm)
     except (KeyError, OSError, ValueError, VissimInputError) as error:
@@ -467,8 +471,10 @@ def build_report(run_dir: str | Path) -> list[Path]:
         optics = {}
     for name, (file_name, fig, extra, alt) in optics.items():
         figures[name] = Figure(file_name, png_bytes(fig), alt, extra)
+    advance()
     written = write_report_files(run_dir, title=f"vissim validation: {campaign_name(run_dir)}",
                                  metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
                                  tables_md=markdown_tables(results), figures=figures)
+    advance()
     log.info("report of %d items written to %s", len(results), run_dir)
     return written

@@ -18,6 +18,7 @@ cluster needs no shared file system.
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import logging
 import multiprocessing
 from dataclasses import asdict, dataclass, replace
@@ -29,6 +30,7 @@ import numpy as np
 from vissim.atomic import write_json_atomic
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
+from vissim.progress import Progress, counter, terminal_progress
 from vissim.provenance import make_provenance
 from vissim.validation.campaign_types import Campaign
 from vissim.checks import instance_of, path_arg, samples_per_pixel
@@ -92,15 +94,11 @@ def _render_path(run_dir: Path, spec: RenderSpec) -> Path:
     return run_dir / "renders" / f"{spec.key}.exr"
 
 
-def _progress(total: int, label: str):
-    try:
-        from rich.progress import Progress
-
-        progress = Progress(transient=False)
-        task = progress.add_task(label, total=total)
-        return progress, lambda: progress.advance(task)
-    except ImportError:  # pragma: no cover
-        return None, lambda: None
+def progress_of(show_progress: bool, progress: Progress | None):
+    """The campaign's progress reports: to ``progress`` if given, else bars on a terminal if ``show_progress``."""
+    if progress is not None or not show_progress:
+        return contextlib.nullcontext(progress)
+    return terminal_progress()
 
 
 #: How long ``--scheduler`` waits for a Dask scheduler to answer.
@@ -165,39 +163,34 @@ def render_file_provenance(spec, result) -> dict:
     return provenance
 
 
-def _make_renders(pending: list, run_dir: Path, workers: int, client, render: Callable, show_progress: bool) -> None:
+def _make_renders(pending: list, run_dir: Path, workers: int, client, render: Callable,
+                  progress: Progress | None) -> None:
     """Render ``pending`` specs into ``run_dir/renders``: on a connected Dask ``client``, or locally."""
     def save(spec, result) -> None:
         pixels = np.asarray(getattr(result, "pixels", result), np.float32)
         write_image(_render_path(run_dir, spec), pixels, provenance=render_file_provenance(spec, result),
                     overwrite=True)
 
-    progress, advance = _progress(len(pending), "rendering") if show_progress else (None, lambda: None)
-    if progress:
-        progress.start()
-    try:
-        if client is not None:
-            from distributed import as_completed
+    advance = counter(progress, "rendering", len(pending))
+    if client is not None:
+        from distributed import as_completed
 
-            futures = {client.submit(render, spec, pure=False): spec for spec in pending}
-            for future in as_completed(futures):
+        futures = {client.submit(render, spec, pure=False): spec for spec in pending}
+        for future in as_completed(futures):
+            save(futures[future], future.result())
+            advance()
+    elif workers > 1 and len(pending) > 1:
+        context = multiprocessing.get_context("spawn")  # Dr.Jit state does not survive fork
+        with concurrent.futures.ProcessPoolExecutor(max_workers=min(workers, len(pending)),
+                                                    mp_context=context) as pool:
+            futures = {pool.submit(render, spec): spec for spec in pending}
+            for future in concurrent.futures.as_completed(futures):
                 save(futures[future], future.result())
                 advance()
-        elif workers > 1 and len(pending) > 1:
-            context = multiprocessing.get_context("spawn")  # Dr.Jit state does not survive fork
-            with concurrent.futures.ProcessPoolExecutor(max_workers=min(workers, len(pending)),
-                                                        mp_context=context) as pool:
-                futures = {pool.submit(render, spec): spec for spec in pending}
-                for future in concurrent.futures.as_completed(futures):
-                    save(futures[future], future.result())
-                    advance()
-        else:
-            for spec in pending:
-                save(spec, render(spec))
-                advance()
-    finally:
-        if progress:
-            progress.stop()
+    else:
+        for spec in pending:
+            save(spec, render(spec))
+            advance()
 
 
 def nothing_to_compare(source: str, total: int, skipped: list[str]) -> VissimInputError:
@@ -217,7 +210,7 @@ def plan_run(campaign, run_dir: Path, workers: int, spp: int | None):
 
 
 def make_missing_renders(run_dir: Path, needed: dict, record: dict, *, workers: int, scheduler: str | None,
-                         render: Callable, show_progress: bool, items: str) -> int:
+                         render: Callable, progress: Progress | None, items: str) -> int:
     """Write ``campaign.json`` (``record``) and the ``needed`` renders ({key: spec}) not yet in ``run_dir``.
 
     The scheduler is connected before anything is written; ``items`` ("3 of 5 items") is logged.
@@ -230,7 +223,7 @@ def make_missing_renders(run_dir: Path, needed: dict, record: dict, *, workers: 
         write_json_atomic(run_dir / "campaign.json", {**record, "provenance": provenance}, overwrite=True)
         log.info("%s to do; %d renders to make, %d reused", items, len(pending), len(needed) - len(pending))
         if pending:
-            _make_renders(pending, run_dir, workers, client, render, show_progress)
+            _make_renders(pending, run_dir, workers, client, render, progress)
     finally:
         if client is not None:
             client.close()
@@ -246,6 +239,7 @@ def run_campaign(
     spp: int | None = None,
     render: Callable[[RenderSpec], np.ndarray] | None = None,
     show_progress: bool = True,
+    progress: Progress | None = None,
 ) -> RunSummary:
     """Run (or resume) ``campaign`` into ``run_dir``; returns what was made and reused.
 
@@ -270,7 +264,10 @@ def run_campaign(
     render : callable, optional
         ``render(spec) -> ndarray (H, W)`` linear light, row 0 at the top.
     show_progress : bool
-        Print a progress bar.
+        Without ``progress``: draw progress bars on a terminal (`vissim.progress.terminal_progress`).
+    progress : callable, optional
+        ``progress(stage, done, total)`` after each render ("rendering") and item ("items")
+        (`vissim.progress`).
 
     Returns
     -------
@@ -311,11 +308,19 @@ def run_campaign(
     record = {"name": campaign.name, "description": campaign.description, "source": campaign.source,
               "settings": asdict(settings), "items": keys,
               "configurations": [c.as_json() for c in campaign.configurations]}
-    made = make_missing_renders(run_dir, needed, record, workers=workers, scheduler=scheduler, render=render,
-                                show_progress=show_progress, items=f"{len(todo)} of {len(keys)} items")
+    with progress_of(show_progress, progress) as report:
+        made = make_missing_renders(run_dir, needed, record, workers=workers, scheduler=scheduler, render=render,
+                                    progress=report, items=f"{len(todo)} of {len(keys)} items")
+        _compute_items(run_dir, todo, settings, capture_inputs, counter(report, "items", len(todo)))
+    return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped))
+
+
+def _compute_items(run_dir: Path, todo: list, settings, capture_inputs: dict, advance: Callable[[], None]) -> None:
+    """Each item to do, from its renders (or capture tiles) in ``run_dir``; ``advance()`` after each."""
     for key, config in todo:
         if config.capture:
             if key not in capture_inputs:
+                advance()
                 continue  # skipped
             truth_a, truth_b, no_lens, render_provenance = capture_inputs[key]
             source = {"ground_truth": "capture", "capture": config.capture}
@@ -328,4 +333,4 @@ def run_campaign(
             source = {"ground_truth": "bench render", "render_keys": [spec.key for spec in roles.values()]}
         compute_item(key, config, settings, truth_a, truth_b, no_lens, run_dir / "items" / key, source=source,
                      render_provenance=render_provenance)
-    return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped))
+        advance()

@@ -1,0 +1,69 @@
+"""The depth blur's threads, window cropping and progress reports change nothing but speed.
+
+Oracles: the same blur computed on one thread, layer after layer (the pooled path must composite
+the same layers in the same order: equal to float32 round-off, abs 1e-6 on a [0, 1] image); the
+count of non-empty layers the result itself lists (progress); OpenBLAS's own thread count, read
+back through its C interface (the BLAS guard).
+"""
+
+import numpy as np
+import pytest
+
+import vissim.optics.depth as depth_module
+from vissim.optics.depth import blur_depth
+from vissim.optics.prescription import Prescription
+from vissim.optics.threads import _openblas_controls, single_threaded_blas
+
+
+def ramp_scene(rows=96, cols=160):
+    """White noise on a floor from 6 m (top) to 0.4 m (bottom), with a near panel: many layers, occlusion."""
+    image = np.random.default_rng(3).random((rows, cols, 3), dtype=np.float32)
+    depth_m = np.repeat((1.0 / np.linspace(1 / 6.0, 1 / 0.4, rows))[:, None], cols, axis=1)
+    depth_m[30:70, 50:90] = 0.5
+    return image, depth_m
+
+
+EYE = dict(eye_prescription=Prescription(-1.5), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
+
+
+@pytest.mark.parametrize("padding", ["edge", "reflect"])
+def test_layers_blurred_on_threads_equal_one_thread(monkeypatch, padding):
+    image, depth_m = ramp_scene()
+    monkeypatch.setattr(depth_module, "_worker_threads", lambda backend: 3)
+    pooled = blur_depth(image, depth_m, padding=padding, **EYE)
+    monkeypatch.setattr(depth_module, "_worker_threads", lambda backend: 1)
+    serial = blur_depth(image, depth_m, padding=padding, **EYE)
+    assert len(pooled.layers) > 10  # enough layers to be ahead of the compositing
+    np.testing.assert_allclose(pooled.image, serial.image, rtol=0, atol=1e-6)
+
+
+def test_progress_counts_every_layer_once_in_order():
+    image, depth_m = ramp_scene()
+    calls = []
+    result = blur_depth(image, depth_m, progress=lambda *call: calls.append(call), **EYE)
+    total = len(result.layers)
+    assert [done for _, done, _ in calls] == list(range(1, total + 1))
+    assert {(stage, t) for stage, _, t in calls} == {("depth layers", total)}
+
+
+def test_an_error_in_a_layer_reaches_the_caller(monkeypatch):
+    image, depth_m = ramp_scene()
+    monkeypatch.setattr(depth_module, "_worker_threads", lambda backend: 2)
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("layer failed")
+
+    monkeypatch.setattr(depth_module, "_extended_layer", broken)
+    with pytest.raises(RuntimeError, match="layer failed"):
+        blur_depth(image, depth_m, **EYE)
+
+
+@pytest.mark.skipif(not _openblas_controls(), reason="no OpenBLAS found among the loaded libraries")
+def test_blas_runs_on_one_thread_inside_the_guard_and_as_before_after_it():
+    _, get = _openblas_controls()[0]
+    before = get()
+    with single_threaded_blas():
+        with single_threaded_blas():  # nested: still one, and the outer block restores
+            assert get() == 1
+        assert get() == 1
+    assert get() == before
