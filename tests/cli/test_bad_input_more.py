@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from vissim.cli import main
+from vissim.errors import VissimInputError
 from vissim.imageio import write_image
 from vissim.validation import runner
 from vissim.validation.scheduler_probe import PROBE_TIMEOUT_S
@@ -241,6 +242,23 @@ def test_an_overriding_sampling_is_one_warning_line_naming_both(tmp_path, valid_
 
     assert blur("0.5") == [f"vissim: warning: --arcmin-per-px 0.5 overrides the 1 arcmin/px that {valid_exr} records"]
     assert blur("1") == []  # the same sampling: nothing to say
+
+
+def test_fit_rx_warns_when_its_sampling_overrides_what_the_files_record(capfd, caplog, tmp_path, valid_exr,
+                                                                        monkeypatch):
+    import vissim.fit.rx_fit
+
+    def stop(*args, **kwargs):
+        raise VissimInputError("stopped before fitting")
+
+    monkeypatch.setattr(vissim.fit.rx_fit, "fit_rx", stop)
+    reference = tmp_path / "ref.exr"
+    reference.write_bytes(valid_exr.read_bytes())
+    code, _, err = run(capfd, "fit-rx", valid_exr, "--reference", reference, "--arcmin-per-px", "2",
+                       "--pupil-mm", "3", "--magnification", "none")
+    assert code == 2 and "stopped before fitting" in err
+    assert [r.getMessage() for r in caplog.records if r.levelname == "WARNING"] == [
+        f"--arcmin-per-px 2 overrides the 1 arcmin/px that {path} records" for path in (valid_exr, reference)]
 
 
 # -- an image smaller than its blur ------------------------------------------------------------

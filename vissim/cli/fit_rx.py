@@ -12,6 +12,7 @@ import numpy as np
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
+from vissim.cli.blur import image_sampling
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
 from vissim.units import REC709_LUMINANCE
@@ -66,6 +67,8 @@ def _sampling(args, image, reference) -> float:
     from vissim.checks import arcmin_per_px as check
 
     if args.arcmin_per_px is not None:
+        for im, path in ((image, args.image), (reference, args.reference)):
+            image_sampling(im, args.arcmin_per_px, path)  # warns when the option overrides what a file records
         return check(args.arcmin_per_px)
     steps = {name: im.arcmin_per_px for name, im in (("IMAGE", image), ("REF", reference)) if im.arcmin_per_px}
     if not steps:
