@@ -35,7 +35,8 @@ import numpy as np
 import scipy.fft
 
 from vissim.optics.blur import BlurKernel, blur_image, padded_shape, padding_width_px
-from vissim.optics.depth import _cached_psf, blur_depth
+from vissim.optics.depth import blur_depth
+from vissim.optics.depth_psfs import cached_psf
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront
 
@@ -115,13 +116,13 @@ def main() -> None:
                   coarse_blur_px=args.coarse_blur_px)
 
     def cold():
-        _cached_psf.cache_clear()
+        cached_psf.cache_clear()
         return blur_depth(image, depth, **kwargs)
 
     result = cold()
     widest = max(result.layers, key=lambda layer: layer.psf_size_px)
     front = Wavefront.from_prescription(EYE, PUPIL_MM).with_defocus_diopters(widest.proximity_diopters)
-    single_psf = _cached_psf(tuple(front.coefficients_um.items()), PUPIL_MM, 550.0, STEP, "wave")
+    single_psf = cached_psf(tuple(front.coefficients_um.items()), PUPIL_MM, 550.0, STEP, "wave")
     offset = padding_width_px(widest.psf_size_px)
     frame = padded_shape((ROWS, COLS), widest.psf_size_px)
     planes = np.ascontiguousarray(np.moveaxis(np.concatenate([image, image[..., :1]], axis=-1), -1, 0))

@@ -27,9 +27,9 @@ from vissim.imageio import read_image, write_image
 from vissim.optics.accommodation import accommodation_for_target
 from vissim.optics.blur import blur_image
 from vissim.optics.depth import (
-    _extended_layer,
+    extended_layer,
     _matte_indices,
-    _occlusion_weight,
+    occlusion_weight,
     blur_depth,
     layer_spacing_diopters,
     plan_layers,
@@ -247,9 +247,9 @@ def test_layers_without_blur_give_back_the_input():
     lower, frac = _matte_indices(proximity, layer_diopters)
     upper, frac = np.minimum(lower + 1, plan.n_layers - 1), frac.astype(np.float32)
     numerator, denominator = np.zeros_like(colour), np.zeros((40, 50), np.float32)
-    layers = [_extended_layer(colour, lower, upper, frac, layer_diopters, k, threshold_diopters) for k in range(plan.n_layers)]
+    layers = [extended_layer(colour, lower, upper, frac, layer_diopters, k, threshold_diopters) for k in range(plan.n_layers)]
     for k, planes in enumerate(layers):
-        weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters)
+        weights = occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters)
         transmitted = np.clip(1.0 - sum(w * other[-1] for w, other in zip(weights, layers)), 0, 1)
         numerator += planes[:-1] * transmitted
         denominator += planes[-1] * transmitted
@@ -391,12 +391,12 @@ def test_coarse_grid_for_wide_blurs_stays_within_its_stated_db():
 def test_a_layer_of_opposite_defocus_reuses_the_reflected_psf(mode):
     """|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2 and rays land at -grad W: the PSF of -W is that of W
     turned through 180 degrees, so the symmetric plan's mirrored layers need not compute it again."""
-    from vissim.optics.depth import _layer_psf
+    from vissim.optics.depth_psfs import layer_psf
 
     base = Wavefront.from_prescription(Prescription(-1.5), PUPIL_MM)
     seen = {}
-    plus = _layer_psf(base.with_defocus_diopters(1.5 + 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
-    minus = _layer_psf(base.with_defocus_diopters(1.5 - 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
+    plus = layer_psf(base.with_defocus_diopters(1.5 + 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
+    minus = layer_psf(base.with_defocus_diopters(1.5 - 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
     front = base.with_defocus_diopters(1.5 - 0.6)
     computed = compute_psf(front, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode=mode,
                            size_px=suggested_size_px(front, STEP, pupil_diameter_mm=PUPIL_MM))

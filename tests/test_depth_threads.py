@@ -29,9 +29,9 @@ EYE = dict(eye_prescription=Prescription(-1.5), pupil_diameter_mm=3.0, arcmin_pe
 @pytest.mark.parametrize("padding", ["edge", "reflect"])
 def test_layers_blurred_on_threads_equal_one_thread(monkeypatch, padding):
     image, depth_m = ramp_scene()
-    monkeypatch.setattr(depth_module, "_worker_threads", lambda backend: 3)
+    monkeypatch.setattr(depth_module, "worker_threads", lambda backend: 3)
     pooled = blur_depth(image, depth_m, padding=padding, **EYE)
-    monkeypatch.setattr(depth_module, "_worker_threads", lambda backend: 1)
+    monkeypatch.setattr(depth_module, "worker_threads", lambda backend: 1)
     serial = blur_depth(image, depth_m, padding=padding, **EYE)
     assert len(pooled.layers) > 10  # enough layers to be ahead of the compositing
     np.testing.assert_allclose(pooled.image, serial.image, rtol=0, atol=1e-6)
@@ -48,12 +48,12 @@ def test_progress_counts_every_layer_once_in_order():
 
 def test_an_error_in_a_layer_reaches_the_caller(monkeypatch):
     image, depth_m = ramp_scene()
-    monkeypatch.setattr(depth_module, "_worker_threads", lambda backend: 2)
+    monkeypatch.setattr(depth_module, "worker_threads", lambda backend: 2)
 
     def broken(*args, **kwargs):
         raise RuntimeError("layer failed")
 
-    monkeypatch.setattr(depth_module, "_extended_layer", broken)
+    monkeypatch.setattr(depth_module, "extended_layer", broken)
     with pytest.raises(RuntimeError, match="layer failed"):
         blur_depth(image, depth_m, **EYE)
 

@@ -85,10 +85,9 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.array_backend import array_backend
 from vissim.optics.blur import pixel_array
-from vissim.optics.depth_psfs import _cached_psf, _layer_psf  # noqa: F401  (depth_layers, tests, benchmarks)
-from vissim.optics.depth_psfs import _in_order, _layer_pool, _LayerOptics, _worker_threads
-from vissim.optics.depth_windows import (COARSE_FACTOR, DEPTH_PADDING_MODES, _add_overlap, _blur_coarse, _blur_window,
-                                         _extended_layer, _grow, _layer_boxes, _nonzero_box, _occlusion_weight)
+from vissim.optics.depth_psfs import LayerOptics, in_order, layer_pool, worker_threads
+from vissim.optics.depth_windows import (COARSE_FACTOR, DEPTH_PADDING_MODES, add_overlap, blur_coarse, blur_window,
+                                         extended_layer, grow_box, layer_boxes, nonzero_box, occlusion_weight)
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import geometric_blur_radius_arcmin
 from vissim.optics.wavefront import Wavefront
@@ -306,7 +305,7 @@ def blur_depth(
         wanted (as ``render depth`` writes it), so the frame sees what lies beyond it.
     coarse_blur_px : float, optional
         Blur layers whose geometric blur diameter is at least this many pixels on a grid twice
-        as coarse (`_blur_coarse`); ``None`` (default): every layer on the image's grid.
+        as coarse (`blur_coarse`); ``None`` (default): every layer on the image's grid.
         At `COARSE_BLUR_PX` (14 px) a layer of white noise, the hardest input, comes out
         within `COARSE_MIN_DB` (44 dB PSNR) of its fine blur; wider blurs come closer.
     device : {"cpu", "cuda", "auto"}
@@ -389,20 +388,20 @@ def blur_depth(
     active = [k for k in range(plan.n_layers) if coverage[k] > 0]
 
     fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in active}
-    threads = _worker_threads(backend)
-    with _layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
-        boxes_job = None if pool is None else pool.submit(_layer_boxes, lower, upper, frac, plan.n_layers)
+    threads = worker_threads(backend)
+    with layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
+        boxes_job = None if pool is None else pool.submit(layer_boxes, lower, upper, frac, plan.n_layers)
         blurs = (map if pool is None else pool.map)(lambda f: geometric_blur_radius_arcmin(f, pupil), fronts.values())
         blurs_arcmin = {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
         scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
                   for k in active}
-        optics = _LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
+        optics = LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
         sizes = optics.sizes
         layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
                              blurs_arcmin[k], sizes[k] * scales[k], float(coverage[k] / lower.size)) for k in active]
         reach = {k: (sizes[k] // 2 + 1) * scales[k] for k in active}
         reach_max = max(reach.values())
-        boxes = _layer_boxes(lower, upper, frac, plan.n_layers) if boxes_job is None else boxes_job.result()
+        boxes = layer_boxes(lower, upper, frac, plan.n_layers) if boxes_job is None else boxes_job.result()
         xp, transfers = backend.xp, {}
         colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
         numerator = xp.zeros_like(colour)
@@ -415,28 +414,28 @@ def blur_depth(
         def blurred_layer(k: int) -> tuple:
             # Layer k reaches its matte's box grown by its own PSF; its continuation behind nearer content
             # matters only where that content's blur leaves it visible: the largest PSF's reach further.
-            window = _grow(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
+            window = grow_box(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
             # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
-            e0, e1, f0, f1 = _grow(window, EXTENSION_HALO_PX, (rows, cols))
+            e0, e1, f0, f1 = grow_box(window, EXTENSION_HALO_PX, (rows, cols))
             wide = (slice(e0, e1), slice(f0, f1))
-            planes = _extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
+            planes = extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
                                      threshold_diopters, rows=(boxes[k][0] - e0, boxes[k][1] - e0),
                                      keep=(window[0] - e0, window[1] - e0))
             window_rows = window[0]
             planes = planes[:, window[0] - e0 : window[1] - e0]  # the rows extended: those of the window
             if scales[k] == 1:  # the blur reaches only the planes' nonzero box grown by the PSF
-                window = _grow(_nonzero_box(planes, (window_rows, f0)), reach[k], (rows, cols), within=window)
+                window = grow_box(nonzero_box(planes, (window_rows, f0)), reach[k], (rows, cols), within=window)
             r0, r1, c0, c1 = window
             planes = planes[:, r0 - window_rows : r1 - window_rows, c0 - f0 : c1 - f0]
             touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
             if scales[k] == 1:
-                blurred, shape = _blur_window(planes, optics.psf(k), padding, touches, backend, transfers, threads)
+                blurred, shape = blur_window(planes, optics.psf(k), padding, touches, backend, transfers, threads)
             else:
-                blurred, shape = _blur_coarse(planes, optics.psf(k), padding, touches, scales[k], backend, transfers,
+                blurred, shape = blur_coarse(planes, optics.psf(k), padding, touches, scales[k], backend, transfers,
                                               threads)
             return window, blurred, shape
 
-        near_to_far = _in_order(blurred_layer, optics, reversed(active), pool, threads)
+        near_to_far = in_order(blurred_layer, optics, reversed(active), pool, threads)
         for done, (k, (window, blurred, shape)) in enumerate(near_to_far, 1):
             while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:  # near to far
                 _, (r0, r1, c0, c1), matte_j = pending.pop(0)
@@ -444,9 +443,9 @@ def blur_depth(
             r0, r1, c0, c1 = window
             transmitted = occluders[r0:r1, c0:c1].copy()
             for proximity_j, window_j, matte_j in pending:
-                weight = _occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
+                weight = occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
                 if weight > 0:
-                    _add_overlap(transmitted, window, weight * matte_j, window_j)
+                    add_overlap(transmitted, window, weight * matte_j, window_j)
             xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
             largest = max(largest, shape)
             if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind: keep its coverage

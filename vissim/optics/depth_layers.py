@@ -64,8 +64,10 @@ from vissim.checks import finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
-from vissim.optics.depth import (_base_wavefront, _cached_psf, _check_accommodation, _grow, _matte_indices,
-                                 layer_spacing_diopters, plan_layers)
+from vissim.optics.depth import (_base_wavefront, _check_accommodation, _matte_indices, layer_spacing_diopters,
+                                 plan_layers)
+from vissim.optics.depth_psfs import cached_psf
+from vissim.optics.depth_windows import grow_box
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, geometric_blur_radius_arcmin
 from vissim.optics.wavefront import Wavefront
@@ -385,7 +387,7 @@ def composite_layers(
     boxes = {}
     for s in slices:
         box = _support(s)
-        boxes[id(s)] = None if box is None else _grow(box, reach[id(s)], (rows, cols))
+        boxes[id(s)] = None if box is None else grow_box(box, reach[id(s)], (rows, cols))
 
     geometric = np.zeros((n_ch, rows, cols), np.float64)
     transmission = {}  # layer -> (visible coverage V_k, unoccluded blurred coverage A_k * G_k) on its window
@@ -449,5 +451,5 @@ def _fft_blur(colour: np.ndarray, psf: PSF) -> np.ndarray:
 
 
 def _wave_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float) -> PSF:
-    # size_px=None passed as depth._layer_psf passes it: lru_cache keys an omitted argument apart
-    return _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, "wave", None)
+    # size_px=None passed as depth.layer_psf passes it: lru_cache keys an omitted argument apart
+    return cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, "wave", None)

@@ -18,9 +18,10 @@ from vissim.optics.psf import PSF, compute_psf, suggested_size_px
 from vissim.optics.threads import available_cores, single_threaded_blas
 from vissim.optics.wavefront import Wavefront
 
+__all__ = ["cached_psf", "layer_psf", "LayerOptics", "worker_threads", "layer_pool", "in_order"]
 
 @functools.lru_cache(maxsize=128)
-def _cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str,
+def cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str,
                 size_px: int | None = None) -> PSF:
     """The PSF of one layer's wavefront (cached by wavefront), on a field that holds its blur or of ``size_px``
     (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
@@ -33,7 +34,7 @@ def _wavefront_key(coefficients: dict, sign: float = 1.0) -> tuple:
     return tuple(sorted((k, round(sign * v, 12)) for k, v in coefficients.items() if round(v, 12) != 0.0))
 
 
-def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict,
+def layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict,
                size_px: int | None = None) -> PSF:
     """A layer's PSF; the point reflection of an already computed one when its wavefront is that one's negative.
 
@@ -47,7 +48,7 @@ def _layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: fl
     if mirror is not None and mirror.data.shape[0] % 2 == 1:
         psf = _reflected(mirror, front)
     else:
-        psf = _cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
+        psf = cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
     seen[key] = psf
     return psf
 
@@ -59,8 +60,8 @@ def _reflected(psf: PSF, front: Wavefront) -> PSF:
     return dataclasses.replace(psf, data=data, wavefront=front)
 
 
-class _LayerOptics:
-    """Each non-empty layer's PSF (as `_layer_psf` chooses them), computed at most once.
+class LayerOptics:
+    """Each non-empty layer's PSF (as `layer_psf` chooses them), computed at most once.
 
     ``fronts`` and ``scales`` (the grid's pixel, in image pixels) by layer, far to near.  A layer
     either computes its PSF (cached by wavefront) or reflects that of an earlier layer whose
@@ -102,8 +103,8 @@ class _LayerOptics:
         pupil_mm, wavelength_nm, step, mode = self.optics
         items = tuple(self.fronts[k].coefficients_um.items())
         if self.scales[k] == 1:  # size_px=None as depth_layers passes it: one lru_cache entry
-            return _cached_psf(items, pupil_mm, wavelength_nm, step, mode, None)
-        return _cached_psf(items, pupil_mm, wavelength_nm, step * self.scales[k], mode, size_px=self.sizes[k])
+            return cached_psf(items, pupil_mm, wavelength_nm, step, mode, None)
+        return cached_psf(items, pupil_mm, wavelength_nm, step * self.scales[k], mode, size_px=self.sizes[k])
 
     def prefetch(self, pool, k: int) -> None:
         """Start computing the PSF layer ``k`` needs in ``pool`` (once)."""
@@ -119,13 +120,13 @@ class _LayerOptics:
 
 
 
-def _worker_threads(backend: ArrayBackend) -> int:
+def worker_threads(backend: ArrayBackend) -> int:
     """Threads that blur layers at once: the cores this process may use on the CPU; one on a GPU."""
     return available_cores() if backend is CPU_BACKEND else 1
 
 
 @contextlib.contextmanager
-def _layer_pool(threads: int):
+def layer_pool(threads: int):
     """A pool of ``threads`` threads, OpenBLAS on one thread meanwhile (ours use the cores); None for one thread."""
     if threads <= 1:
         yield None
@@ -137,7 +138,7 @@ def _layer_pool(threads: int):
             pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _in_order(work, optics: _LayerOptics, order, pool: ThreadPoolExecutor | None, threads: int):
+def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, threads: int):
     """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
 
     With a ``pool`` (of ``threads``) the layers are worked on ahead on it (at most ``2 threads`` ahead

@@ -16,21 +16,24 @@ from vissim.optics.blur_device import convolve_padded
 from vissim.optics.psf import PSF
 from vissim.optics.pullpush import pull_push, upsample2
 
+__all__ = ["DEPTH_PADDING_MODES", "COARSE_FACTOR", "occlusion_weight", "extended_layer", "layer_boxes", "grow_box",
+           "nonzero_box", "add_overlap", "blur_window", "blur_coarse"]
+
 DEPTH_PADDING_MODES = ("edge", "reflect")
 
 
-def _occlusion_weight(proximity_gap_diopters, threshold_diopters: float):
+def occlusion_weight(proximity_gap_diopters, threshold_diopters: float):
     """How much nearer content occludes: 0 up to the threshold, rising to 1 at twice it."""
     return np.clip(np.asarray(proximity_gap_diopters) / threshold_diopters - 1.0, 0.0, 1.0)
 
 
-def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None,
+def extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: int, threshold_diopters: float, work=None,
                     rows: tuple[int, int] | None = None, keep: tuple[int, int] | None = None):
     """Layer ``k``: premultiplied colours and coverage (C + 1, H, W), extended behind its occluders.
 
     ``lower``/``upper`` are each pixel's two layers and ``frac`` (float32) its weight in
     ``upper`` (the tent matte).  ``hidden`` is the part of each pixel that occludes layer ``k``
-    (its mattes on nearer layers, weighted by `_occlusion_weight`); there layer ``k``
+    (its mattes on nearer layers, weighted by `occlusion_weight`); there layer ``k``
     continues with the pull-push estimate of its own colour and coverage from the rest of the
     image (where its coverage is 0 the estimate is 0 too: no layer grows sideways).  The
     extended coverage also occludes the layers behind it: they are behind its continuation.
@@ -53,7 +56,7 @@ def _extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: i
     matte = stack[n_ch, first:end]
     matte[...] = _matte(lower[band], upper[band], frac[band], k, xp)
     xp.multiply(colour[:, first:end], matte, out=stack[:n_ch, first:end])
-    weights = _occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
+    weights = occlusion_weight(layer_diopters - layer_diopters[k], threshold_diopters).astype(np.float32)
     if not weights.any():
         return stack
     weights = xp.asarray(weights)
@@ -87,7 +90,7 @@ def _matte(lower, upper, frac, k: int, xp):
     return xp.where(lower == k, 1.0 - frac, xp.where(upper == k, frac, 0.0))
 
 
-def _layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int, int, int]]:
+def layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int, int, int]]:
     """Each layer's bounding box (row0, row1, col0, col1) of the pixels its tent matte touches."""
     rows, cols = lower.shape
     row_index = np.arange(rows, dtype=np.int64)[:, None]
@@ -108,14 +111,14 @@ def _layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int,
     return boxes
 
 
-def _grow(box, reach: int, shape, within=None) -> tuple[int, int, int, int]:
+def grow_box(box, reach: int, shape, within=None) -> tuple[int, int, int, int]:
     """``box`` grown by ``reach`` on every side, inside the image (``shape``) and ``within`` a window."""
     r0, r1, c0, c1 = box
     w0, w1, v0, v1 = within or (0, shape[0], 0, shape[1])
     return max(r0 - reach, w0), min(r1 + reach, w1), max(c0 - reach, v0), min(c1 + reach, v1)
 
 
-def _nonzero_box(planes, origin: tuple[int, int]) -> tuple[int, int, int, int]:
+def nonzero_box(planes, origin: tuple[int, int]) -> tuple[int, int, int, int]:
     """The box (row0, row1, col0, col1) of the image holding every nonzero pixel of (C, h, w) ``planes``
     whose pixel [0, 0] is the image's ``origin``; all of them if none is nonzero."""
     nonzero = planes.any(axis=0)
@@ -131,7 +134,7 @@ def _to_host(array) -> np.ndarray:
     return array.get() if hasattr(array, "get") and not isinstance(array, np.ndarray) else np.asarray(array)
 
 
-def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -> None:
+def add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -> None:
     """``target`` (on ``window``) += ``source`` (on ``source_window``) where the two windows overlap."""
     r0, r1 = max(window[0], source_window[0]), min(window[1], source_window[1])
     c0, c1 = max(window[2], source_window[2]), min(window[3], source_window[3])
@@ -140,7 +143,7 @@ def _add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) 
             source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
 
 
-def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
+def blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
                  transfers: dict | None = None, threads: int | None = None) -> tuple:
     """Blur (C, h, w) planes of a window with one PSF (`vissim.optics.blur_device.convolve_padded`).
 
@@ -174,7 +177,7 @@ def _blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend 
 COARSE_FACTOR = 2
 
 
-def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
+def blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
                  transfers: dict | None = None, threads: int | None = None) -> tuple:
     """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
 
@@ -187,7 +190,7 @@ def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: 
     xp = backend.xp
     even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
     coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
-    blurred, shape = _blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
+    blurred, shape = blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
                                   transfers, threads)
     fine = blurred
     for _ in range(int(round(math.log2(q)))):
@@ -196,7 +199,7 @@ def _blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: 
 
 
 def _workspace(shape: tuple[int, int, int], xp=np) -> dict:
-    """Buffers for `_extended_layer` (``xp``: the array module, NumPy or CuPy)."""
+    """Buffers for `extended_layer` (``xp``: the array module, NumPy or CuPy)."""
     n_ch, rows, cols = shape
     return {
         "stack": xp.empty((n_ch + 1, rows, cols), np.float32),
