@@ -351,3 +351,8 @@ def test_a_10_mb_campaign_description_is_refused_stating_the_limit(capfd, tmp_pa
     assert not (tmp_path / "out").exists()
     docs = Path(__file__).parents[2] / "docs"
     assert f"at most {MAX_DESCRIPTION_CHARS} characters" in (docs / "formats.md").read_text(encoding="utf-8")
+
+
+def test_an_unknown_option_points_to_its_own_command_s_help(capfd):
+    code, _, err = run(capfd, "atv", "simulate", "--rx", "+1.00 DS", "--pupil-mm", "4", "--slope", "3", "-o", "x")
+    assert_one_error_line(code, err, "unrecognized arguments: --slope 3", "(see 'vissim atv simulate --help')")

@@ -131,7 +131,22 @@ class VissimArgumentParser(argparse.ArgumentParser):
         except argparse.ArgumentTypeError as exc:
             raise argparse.ArgumentError(None, str(exc)) from None
 
+    def parse_args(self, args=None, namespace=None):
+        self._help_prog = self._command_prog(list(sys.argv[1:] if args is None else args))
+        return super().parse_args(args, namespace)
+
+    def _command_prog(self, argv: list[str]) -> str:
+        """``vissim atv simulate`` for argv naming that command: the help an error points to."""
+        parser = self
+        for token in argv:
+            commands = next((a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction)), {})
+            if token in commands:
+                parser = commands[token]
+            elif not token.startswith("-"):
+                break
+        return parser.prog
+
     def error(self, message: str):
         message = " ".join(message.split())
-        sys.stderr.write(f"vissim: error: {message} (see '{self.prog} --help')\n")
+        sys.stderr.write(f"vissim: error: {message} (see '{getattr(self, '_help_prog', self.prog)} --help')\n")
         sys.exit(2)

@@ -42,7 +42,8 @@ def refuse_duplicate_names(source: str, entries, describe) -> None:
             first_where, first = seen[config.name]
             raise field_error(source, f"{first_where} and {where}",
                               f"two configurations named {config.name!r} ({describe(first)}; {describe(config)}); "
-                              "give each its own name")
+                              "give each its own name (a sweep's generated names round lens powers to 0.01 D and "
+                              "LogMAR to 0.1: make such values differ by more, or list them as named items)")
         seen[config.name] = (where, config)
 
 
