@@ -1,0 +1,157 @@
+"""Imports run down the layers, never to another module's private name, and packages form no loop.
+
+Read from the source with ``ast`` (nothing is imported), every ``import`` at any depth. The
+layers, lowest first (docs/conventions.md, "Layers"):
+
+0. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``
+1. ``optics``: the physics (prescriptions, wavefronts, PSFs, blur, depth)
+2. imaging: ``imageio``, ``imaging`` (image registration), ``optotypes``, ``acuity``,
+   ``charts``, ``chart_demo``
+3. ``bench``: the benches' geometry and scenes as plain data
+4. ``render`` (the Mitsuba door) and ``fit`` (prescriptions fitted to captures)
+5. ``validation`` (campaigns) and ``atv`` (ATV data, predictions, procedures)
+6. ``cli``, ``__main__`` and the package root ``vissim`` (the lazy public API)
+
+A module may import its own layer or any below it. Packages in one layer may import each
+other, but not in a loop. The root's dunder metadata (``from vissim import __version__``) is
+not an import of the API. A name or module whose last part starts with one underscore is
+private to its module (a private module, such as ``cli/_common.py``, to its package).
+"""
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "vissim"
+
+LAYERS = [
+    {"units", "errors", "checks", "atomic", "provenance", "progress"},
+    {"optics"},
+    {"imageio", "imaging", "optotypes", "acuity", "charts", "chart_demo"},
+    {"bench"},
+    {"render", "fit"},
+    {"validation", "atv"},
+    {"cli", "__main__", ""},  # "": the package root, vissim/__init__.py
+]
+
+
+def _modules() -> dict[str, Path]:
+    found = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        found[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return found
+
+
+MODULES = _modules()
+
+
+def _owner(name: str) -> str:
+    """The vissim module a dotted name lives in."""
+    while name and name not in MODULES:
+        name = name.rpartition(".")[0]
+    return name
+
+
+def _package(module: str) -> str:
+    """``vissim.optics.psf`` -> ``optics``; the root -> ``""``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _layer(module: str) -> int:
+    package = _package(module)
+    found = [i for i, layer in enumerate(LAYERS) if package in layer]
+    assert found, f"{module}: package {package!r} has no layer; add it to LAYERS and the docstring"
+    return found[0]
+
+
+def _private(part: str) -> bool:
+    return part.startswith("_") and not part.startswith("__")
+
+
+def _imports(path: Path) -> list[tuple[str, int]]:
+    """(dotted vissim name, line) for every import and every ``module._name`` use of an imported module."""
+    tree = ast.parse(path.read_text())
+    found, aliases = [], {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                found.append((alias.name, node.lineno))
+                aliases[alias.asname or alias.name.split(".")[0]] = alias.name if alias.asname else alias.name.split(".")[0]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module == "vissim" and all(a.name.startswith("__") for a in node.names):
+                continue  # the root's metadata (__version__)
+            for alias in node.names:
+                full = f"{node.module}.{alias.name}"
+                found.append((full, node.lineno))
+                if full in MODULES:
+                    aliases[alias.asname or alias.name] = full
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _private(node.attr):
+            chain, value = [node.attr], node.value
+            while isinstance(value, ast.Attribute):
+                chain.append(value.attr)
+                value = value.value
+            if isinstance(value, ast.Name) and value.id in aliases:
+                found.append((".".join([aliases[value.id], *reversed(chain)]), node.lineno))
+    return [(name, line) for name, line in found if name.split(".")[0] == "vissim"]
+
+
+def _edges():
+    """(importer, imported module, imported dotted name, line) for every import of a vissim name."""
+    for module, path in sorted(MODULES.items()):
+        for name, line in _imports(path):
+            target = _owner(name)
+            if target and target != module:
+                yield module, target, name, line
+
+
+def test_imports_run_down_the_layers():
+    upward = sorted({f"{m} (layer {_layer(m)}) imports {t} (layer {_layer(t)}), line {line}"
+                     for m, t, _, line in _edges() if _layer(t) > _layer(m)})
+    assert not upward, "imports up the layers:\n" + "\n".join(upward)
+
+
+def test_no_module_imports_another_modules_private_name():
+    wrong = []
+    for module, target, name, line in _edges():
+        parts = name.split(".")
+        for i, part in enumerate(parts[1:], start=2):
+            home = ".".join(parts[:i - 1])  # a private part belongs to the module or package above it
+            if _private(part) and not (module == home or module.startswith(home + ".")):
+                wrong.append(f"{module} imports {name}, line {line}")
+                break
+    assert not wrong, "private names used outside their module:\n" + "\n".join(sorted(set(wrong)))
+
+
+def test_no_loops_between_packages():
+    graph: dict[str, set[str]] = {}
+    for module, target, _, _ in _edges():
+        if _package(module) != _package(target):
+            graph.setdefault(_package(module), set()).add(_package(target))
+    loops, state = [], {}
+
+    def visit(node, path):
+        state[node] = 1
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                loops.append(" -> ".join(path[path.index(nxt):] + [nxt]))
+            elif nxt not in state:
+                visit(nxt, path + [nxt])
+        state[node] = 2
+
+    for start in sorted(graph):
+        if start not in state:
+            visit(start, [start])
+    assert not loops, "loops between packages: " + "; ".join(loops)
+
+
+def test_the_rules_catch_what_they_name(tmp_path):
+    """The parser sees an upward import, a private name and a private attribute of a module."""
+    source = tmp_path / "probe.py"
+    source.write_text("import vissim.optics.blur as b\nfrom vissim.optics.depth import _x\n"
+                      "from vissim.cli import blur\nb._padding(1)\nblur._y\n")
+    names = {name for name, _ in _imports(source)}
+    assert {"vissim.optics.blur", "vissim.optics.depth._x", "vissim.cli.blur",
+            "vissim.optics.blur._padding", "vissim.cli.blur._y"} <= names
+    assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr") > _layer("vissim.optics.psf") > _layer("vissim.units")
