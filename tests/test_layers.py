@@ -19,6 +19,8 @@ private to its module (a private module, such as ``cli/_common.py``, to its pack
 """
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "vissim"
@@ -155,3 +157,17 @@ def test_the_rules_catch_what_they_name(tmp_path):
     assert {"vissim.optics.blur", "vissim.optics.depth._x", "vissim.cli.blur",
             "vissim.optics.blur._padding", "vissim.cli.blur._y"} <= names
     assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr") > _layer("vissim.optics.psf") > _layer("vissim.units")
+
+
+def test_loading_a_campaign_imports_neither_the_harness_nor_scikit_image():
+    """Parsing a campaign file needs the loader and the memory preflight, not the item, fit or registration."""
+    root = PACKAGE.parent
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); from vissim.validation.campaign import load_campaign; "
+            "load_campaign(sys.argv[2]); "
+            "print(sorted(m for m in ('skimage', 'vissim.fit', 'vissim.validation.item', 'vissim.imaging.registration', "
+            "'mitsuba', 'rawpy') if m in sys.modules))")
+    for toml in ("quick.toml", "thesis.toml"):
+        done = subprocess.run([sys.executable, "-c", code, str(root), str(root / "validation" / toml)],
+                              capture_output=True, text=True, cwd=root, timeout=120)
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.strip() == "[]", f"{toml}: {done.stdout}"

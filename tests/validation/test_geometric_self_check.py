@@ -15,9 +15,9 @@ from scipy import ndimage
 from vissim.render.backend import choose_variant
 from vissim.validation.campaign import CampaignSettings, Configuration, LensSpec
 from vissim.optics.resample import block_mean
-from vissim.validation.item import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, SYNTHETIC_OVERSAMPLE, align, synthetic_tile
+from vissim.validation.item import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align, synthetic_tile
 from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import simulate, simulation_setup
+from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE, simulate, simulation_setup
 from vissim.validation.wave_bench import TRACED_RAYS, traced_ray_image
 from vissim.validation.wave_bench_report import SELF_CHECK_MARGIN_DB
 

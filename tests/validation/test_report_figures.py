@@ -10,7 +10,7 @@ from fake_bench import fake_render, write_campaign
 
 from vissim.optics.prescription import Prescription
 from vissim.units import arcmin_to_rad, cyc_per_rad_to_cyc_per_deg
-from vissim.validation.item import SYNTHETIC_OVERSAMPLE
+from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE
 from vissim.validation.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
                                               optics_cases, psf_figure_of, sampling_label)
 from vissim.validation.report import build_report, load_results

@@ -11,7 +11,7 @@ from vissim.optics.blur import blur_image
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf
 from vissim.optics.wavefront import Wavefront
-from vissim.validation.registration import register
+from vissim.imaging.registration import register
 
 NOISE_SIGMA = 0.005  # linear units on a 0.04-0.9 chart: about what a well-exposed DSLR plane shows
 

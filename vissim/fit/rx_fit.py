@@ -13,7 +13,7 @@ between capture and reference costs nothing.
 **How.**  `scipy.optimize.least_squares` (trust region, finite-difference Jacobian) on
 the pixel residual of `vissim.fit.forward.ForwardModel`.  Multi-started:
 
-1. the shift is initialised by cross-correlation (`vissim.validation.registration.register`)
+1. the shift is initialised by cross-correlation (`vissim.imaging.registration.register`)
    and then re-solved inside every least-squares step as two of the fitted parameters;
 2. stage A fits the blur alone: the effective power with a free isotropic magnification, from
    the best sphere of a scan (J = 0) and four cylinders around it (axes 0, 45, 90, 135);
@@ -80,7 +80,7 @@ from vissim.fit.power_model import MAGNIFICATION_MODELS, power_model
 from vissim.optics.prescription import LensPower
 from vissim.progress import Progress, counter
 from vissim.units import mrad_to_arcmin
-from vissim.validation.registration import register
+from vissim.imaging.registration import register
 
 __all__ = ["RxFit", "fit_rx", "check_fit_inputs", "sandwich_covariance", "residual_correlation_lag_px",
            "SIGN_MIN_DELTA_CHI2", "AXIS_MIN_CHI2", "MAX_UNEXPLAINED_FRACTION", "MODEL_ERROR_DIOPTERS", "Z95"]

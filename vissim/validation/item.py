@@ -34,9 +34,9 @@ from vissim.imageio import write_image
 from vissim.provenance import json_safe, make_provenance
 from vissim.validation.campaign_types import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
-from vissim.validation.registration import Registration, register
+from vissim.imaging.registration import Registration, register
 from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import add_bench_diffraction, block_mean, simulate, simulation_setup
+from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE, add_bench_diffraction, block_mean, simulate, simulation_setup
 from vissim.validation.wave_bench import (
     TRACED_RAYS,
     WAVE_BENCH,
@@ -52,10 +52,6 @@ log = logging.getLogger(__name__)
 
 #: Registration may not move an image further than this (px); more means a wrong crop.
 MAX_SHIFT_PX = 6.0
-
-
-#: The synthetic chart is simulated at this many sub-pixels per campaign pixel (per axis).
-SYNTHETIC_OVERSAMPLE = 5
 
 
 def synthetic_tile(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> np.ndarray:

@@ -78,7 +78,7 @@ def _largest_defocus(prescription: Prescription) -> float:
 
 def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
     """One `OpticsCase` per group, in campaign order: the configuration with lenses of median defocus."""
-    from vissim.validation.item import SYNTHETIC_OVERSAMPLE
+    from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE
     from vissim.validation.wave_bench_report import group_of
 
     run_dir = Path(run_dir)

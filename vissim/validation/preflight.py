@@ -16,9 +16,8 @@ from vissim.errors import VissimInputError
 from vissim.optics.psf import MAX_PSF_SIZE_PX, geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
 from vissim.optics.wavefront import Wavefront
 from vissim.render.run import render_memory_bytes  # no Mitsuba import: that happens when a render starts
-from vissim.validation.item import SYNTHETIC_OVERSAMPLE
 from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import simulation_setup
+from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE, simulation_setup
 
 __all__ = ["item_memory_bytes", "check_campaign_memory", "check_depth_campaign_memory"]
 
