@@ -16,7 +16,8 @@ import re
 import numpy as np
 import pytest
 
-from vissim.atv.predict import fresnel_transmittance, predicted_spot, spot_metrics
+from vissim.atv.predict import fresnel_transmittance, predicted_spot
+from vissim.bench.atv_spot import spot_metrics
 from vissim.bench.atv import (
     AtvConfig,
     AtvEye,

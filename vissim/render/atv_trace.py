@@ -50,7 +50,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.stats import qmc
 
-from vissim.atv.predict import spot_metrics, suggested_atv_size_px
+from vissim.bench.atv_spot import spot_metrics, suggested_atv_size_px
 from vissim.bench.atv import AtvConfig
 from vissim.bench.atv_paraxial import atv_paraxial
 from vissim.bench.atv_scene import atv_scene
@@ -82,7 +82,7 @@ class AtvResult:
     passes).  ``total_flux`` counts all light in the pupil (tracer) or the field (camera);
     ``peak`` (the largest value after a light smoothing that removes sampling noise),
     ``peak_pixel`` and ``spot_diameter_arcmin`` (the radial-profile FWHM) are defined in
-    `vissim.atv.predict.spot_metrics`.
+    `vissim.bench.atv_spot.spot_metrics`.
     """
 
     image: np.ndarray
@@ -256,7 +256,7 @@ def trace_atv(config: AtvConfig, *, n_rays: int = DEFAULT_N_RAYS, seed: int = 0,
     """Light-trace the ATV tube (module doc): the retinal image of the pixel, flux per arcmin².
 
     ``n_rays`` (rounded up to a power of two) are emitted into the cone that reaches the pupil;
-    ``size_px`` defaults to `vissim.atv.predict.suggested_atv_size_px`.
+    ``size_px`` defaults to `vissim.bench.atv_spot.suggested_atv_size_px`.
     """
     if not isinstance(config, AtvConfig):
         raise VissimInputError(f"trace_atv needs an AtvConfig, got {type(config).__name__}")
