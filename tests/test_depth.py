@@ -28,7 +28,7 @@ from vissim.optics.accommodation import accommodation_for_target
 from vissim.optics.blur import blur_image
 from vissim.optics.depth import (
     extended_layer,
-    _matte_indices,
+    matte_indices,
     occlusion_weight,
     blur_depth,
     layer_spacing_diopters,
@@ -244,7 +244,7 @@ def test_layers_without_blur_give_back_the_input():
     threshold_diopters = 0.2
     plan = plan_layers(float(proximity.min()), float(proximity.max()), 0.05)
     layer_diopters = np.array(plan.proximities_diopters)
-    lower, frac = _matte_indices(proximity, layer_diopters)
+    lower, frac = matte_indices(proximity, layer_diopters)
     upper, frac = np.minimum(lower + 1, plan.n_layers - 1), frac.astype(np.float32)
     numerator, denominator = np.zeros_like(colour), np.zeros((40, 50), np.float32)
     layers = [extended_layer(colour, lower, upper, frac, layer_diopters, k, threshold_diopters) for k in range(plan.n_layers)]

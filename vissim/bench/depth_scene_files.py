@@ -23,7 +23,8 @@ from typing import Any
 
 from vissim.bench.depth_scene import ChartPanel, DepthScene, PanelChart, TiltedChart
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
-from vissim.bench.scene_files import _check_keys, _size_px, _table, _trial_lenses, _typed, _values, read_scene_toml
+from vissim.bench.scene_files import (check_keys, checked_values, image_size_px, parse_trial_lenses, read_scene_toml,
+                                      sub_table, typed_value)
 from vissim.checks import samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
@@ -72,7 +73,7 @@ def _center(values: dict, where: str) -> tuple[float, float]:
     center = values.pop("center_arcmin", [0.0, 0.0])
     if len(center) != 2:
         raise VissimInputError(f"{where} center_arcmin must be [right, up] in arcmin, got {center!r}")
-    return tuple(_typed(v, float, f"{where} center_arcmin", "arcmin") for v in center)
+    return tuple(typed_value(v, float, f"{where} center_arcmin", "arcmin") for v in center)
 
 
 def _panels(doc: dict, source: str) -> tuple:
@@ -83,7 +84,7 @@ def _panels(doc: dict, source: str) -> tuple:
             raise VissimInputError(f"{source}: [[{table_name}]] must be an array of tables, got {entries!r}")
         for i, entry in enumerate(entries):
             where = f"{source} [[{table_name}]] #{i + 1}"
-            values = _values(entry, schema, where)
+            values = checked_values(entry, schema, where)
             center = _center(values, where)
             chart = PanelChart(**{k: values.pop(k) for k in list(values) if k in _CHART})
             if table_name == "panel":
@@ -103,21 +104,22 @@ def _viewer(doc: dict, source: str) -> EyeViewer | CameraViewer:
         raise VissimInputError(f"{source}: give one observer, [eye] or [camera], not both")
     if "camera" in doc:
         where = f"{source} [camera]"
-        values = _values(doc["camera"], _CAMERA, where)
-        return CameraViewer(lenses=_trial_lenses(values.pop("lenses", []), f"{source} [[camera.lenses]]"), **values)
-    values = _values(doc.get("eye", {}), _EYE, f"{source} [eye]")
+        values = checked_values(doc["camera"], _CAMERA, where)
+        lenses = parse_trial_lenses(values.pop("lenses", []), f"{source} [[camera.lenses]]")
+        return CameraViewer(lenses=lenses, **values)
+    values = checked_values(doc.get("eye", {}), _EYE, f"{source} [eye]")
     rx = Prescription.parse(values.pop("prescription", "plano"))
     return EyeViewer(rx, **values)
 
 
 def depth_scene_from_doc(doc: dict, source: str) -> DepthSceneFile:
     """The `DepthSceneFile` of a parsed TOML document (module doc)."""
-    _check_keys(doc, _TABLES, source)
-    image = _values(_table(doc, "image", source), _IMAGE, f"{source} [image]")
-    sampling = _values(_table(doc, "sampling", source), _SAMPLING, f"{source} [sampling]")
+    check_keys(doc, _TABLES, source)
+    image = checked_values(sub_table(doc, "image", source), _IMAGE, f"{source} [image]")
+    sampling = checked_values(sub_table(doc, "sampling", source), _SAMPLING, f"{source} [sampling]")
     fields: dict[str, Any] = {}
     if "size_px" in image:
-        fields["size_px"] = _size_px(image["size_px"], source)
+        fields["size_px"] = image_size_px(image["size_px"], source)
     if "arcmin_per_px" in image:
         fields["arcmin_per_px"] = image["arcmin_per_px"]
     for key in ("sampler", "texels_per_px"):

@@ -26,7 +26,8 @@ from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import EYE_VERTEX_DISTANCE_MM, TrialLens
 from vissim.units import mm_to_m
 
-__all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables", "read_scene_toml"]
+__all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables", "read_scene_toml",
+           "typed_value", "sub_table", "check_keys", "checked_values", "parse_trial_lenses", "image_size_px"]
 
 # key -> (DslrBench field, type, unit)
 _CAMERA = {
@@ -72,7 +73,8 @@ _CHART = {
 _TABLES = ("camera", "holder", "chart", "image", "sampling")
 
 
-def _typed(value: Any, kind: type, where: str, unit: str) -> Any:
+def typed_value(value: Any, kind: type, where: str, unit: str) -> Any:
+    """``value`` as ``kind`` (a finite float, an int, or any type), or an error naming ``where`` and ``unit``."""
     if kind is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise VissimInputError(f"{where} must be a number in {unit}, got {value!r}")
@@ -86,33 +88,35 @@ def _typed(value: Any, kind: type, where: str, unit: str) -> Any:
     return value
 
 
-def _table(doc: dict, name: str, source: str) -> dict:
+def sub_table(doc: dict, name: str, source: str) -> dict:
+    """The table ``[name]`` of ``doc`` (empty when absent)."""
     table = doc.get(name, {})
     if not isinstance(table, dict):
         raise VissimInputError(f"{source}: [{name}] must be a table, got {table!r}")
     return table
 
 
-def _check_keys(table: dict, allowed, where: str) -> None:
+def check_keys(table: dict, allowed, where: str) -> None:
+    """Refuse a key of ``table`` that is not in ``allowed``."""
     for key in table:
         if key not in allowed:
             raise VissimInputError(f"{where}: unknown key {key!r}; expected one of {', '.join(allowed)}")
 
 
-def _values(table: Any, schema: dict, where: str) -> dict:
+def checked_values(table: Any, schema: dict, where: str) -> dict:
     """The keys of ``table`` checked against ``schema`` ``{key: (type, unit)}``."""
     if not isinstance(table, dict):
         raise VissimInputError(f"{where} must be a table, got {table!r}")
-    _check_keys(table, schema, where)
-    return {key: _typed(value, schema[key][0], f"{where} {key}", schema[key][1]) for key, value in table.items()}
+    check_keys(table, schema, where)
+    return {key: typed_value(value, schema[key][0], f"{where} {key}", schema[key][1]) for key, value in table.items()}
 
 
-def _trial_lenses(entries: list, where: str) -> tuple[TrialLens, ...]:
+def parse_trial_lenses(entries: list, where: str) -> tuple[TrialLens, ...]:
     """The trial lenses of an array of ``_LENS`` tables called ``where`` (e.g. ``[[holder.lenses]]``)."""
     lenses = []
     for i, entry in enumerate(entries):
         lens_where = f"{where} #{i + 1}"
-        kwargs = _values(entry, _LENS, lens_where)
+        kwargs = checked_values(entry, _LENS, lens_where)
         if "sphere_diopters" not in kwargs and "cylinder_diopters" not in kwargs:
             raise VissimInputError(f"{lens_where} needs sphere_diopters and/or cylinder_diopters (D)")
         kwargs.setdefault("sphere_diopters", 0.0)
@@ -120,7 +124,8 @@ def _trial_lenses(entries: list, where: str) -> tuple[TrialLens, ...]:
     return tuple(lenses)
 
 
-def _size_px(size: list, source: str) -> tuple[int, int]:
+def image_size_px(size: list, source: str) -> tuple[int, int]:
+    """``[image] size_px`` as (rows, cols) in whole pixels."""
     if len(size) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) for v in size):
         raise VissimInputError(f"{source} [image] size_px must be [rows, cols] in whole px, got {size!r}")
     return tuple(size)  # type: ignore[return-value]
@@ -142,7 +147,7 @@ def read_scene_toml(path: str | os.PathLike[str]) -> tuple[dict, str]:
 def chart_spec_from_table(table: dict, source: str, chart_distance_mm: float) -> ChartSpec:
     """The chart of a ``[chart]`` table (module doc) at ``chart_distance_mm``."""
     where = f"{source} [chart]"
-    values = _values(table, _CHART, where)
+    values = checked_values(table, _CHART, where)
     style = {key: values[key] for key in ("polarity", "paper_reflectance", "ink_reflectance") if key in values}
     style["viewing_distance_m"] = mm_to_m(chart_distance_mm)
     if "letters" in values or "logmar_range" in values:
@@ -151,7 +156,7 @@ def chart_spec_from_table(table: dict, source: str, chart_distance_mm: float) ->
         span = values.get("logmar_range", [1.0, -0.3])
         if len(span) != 2:
             raise VissimInputError(f"{where} logmar_range must be [start, stop] in LogMAR, got {span!r}")
-        start, stop = (_typed(v, float, f"{where} logmar_range", "LogMAR") for v in span)
+        start, stop = (typed_value(v, float, f"{where} logmar_range", "LogMAR") for v in span)
         return etdrs_chart_spec((start, stop), values.get("logmar_step", 0.1), letters=values.get("letters"),
                                 seed=values.get("seed", DEFAULT_LETTER_SEED), **style)
     for key in ("logmar_step", "seed"):
@@ -162,21 +167,22 @@ def chart_spec_from_table(table: dict, source: str, chart_distance_mm: float) ->
 
 def bench_from_tables(doc: dict, source: str, **overrides: Any) -> DslrBench:
     """A `DslrBench` from parsed scene tables; ``overrides`` replace fields last."""
-    _check_keys(doc, _TABLES, source)
+    check_keys(doc, _TABLES, source)
     fields: dict[str, Any] = {}
     for name, schema in (("camera", _CAMERA), ("holder", _HOLDER), ("image", _IMAGE), ("sampling", _SAMPLING)):
-        table = _table(doc, name, source)
-        _check_keys(table, schema, f"{source} [{name}]")
+        table = sub_table(doc, name, source)
+        check_keys(table, schema, f"{source} [{name}]")
         for key, value in table.items():
             field, kind, unit = schema[key]
             if field is not None:
-                fields[field] = _typed(value, kind, f"{source} [{name}] {key}", unit)
+                fields[field] = typed_value(value, kind, f"{source} [{name}] {key}", unit)
     if "size_px" in fields:
-        fields["size_px"] = _size_px(fields["size_px"], source)
-    fields["lenses"] = _trial_lenses(_table(doc, "holder", source).get("lenses", []), f"{source} [[holder.lenses]]")
-    chart = _table(doc, "chart", source)
+        fields["size_px"] = image_size_px(fields["size_px"], source)
+    holder_lenses = sub_table(doc, "holder", source).get("lenses", [])
+    fields["lenses"] = parse_trial_lenses(holder_lenses, f"{source} [[holder.lenses]]")
+    chart = sub_table(doc, "chart", source)
     if "distance_mm" in chart:
-        fields["chart_distance_mm"] = _typed(chart["distance_mm"], float, f"{source} [chart] distance_mm", "mm")
+        fields["chart_distance_mm"] = typed_value(chart["distance_mm"], float, f"{source} [chart] distance_mm", "mm")
     fields.update({key: value for key, value in overrides.items() if value is not None})
     return DslrBench(**fields)
 
@@ -185,13 +191,13 @@ def load_bench_toml(path: str | os.PathLike[str], **overrides: Any) -> tuple[Dsl
     """(bench, chart spec) of the scene file at ``path``; ``overrides`` (not None) replace bench fields."""
     doc, source = read_scene_toml(path)
     bench = bench_from_tables(doc, source, **overrides)
-    return bench, chart_spec_from_table(_table(doc, "chart", source), source, bench.chart_distance_mm)
+    return bench, chart_spec_from_table(sub_table(doc, "chart", source), source, bench.chart_distance_mm)
 
 
 def load_chart_toml(path: str | os.PathLike[str], chart_distance_mm: float) -> ChartSpec:
     """The chart of the ``[chart]`` table of ``path`` (other tables are ignored)."""
     doc, source = read_scene_toml(path)
-    return chart_spec_from_table(_table(doc, "chart", source), source, chart_distance_mm)
+    return chart_spec_from_table(sub_table(doc, "chart", source), source, chart_distance_mm)
 
 
 _ATV_TUBE_KEYS = {
@@ -208,16 +214,16 @@ def load_atv_toml(path: str | os.PathLike[str]):
     from vissim.optics.prescription import Prescription
 
     doc, source = read_scene_toml(path)
-    _check_keys(doc, ("tube", "eye", "trial_lens"), source)
+    check_keys(doc, ("tube", "eye", "trial_lens"), source)
     tables: dict[str, dict] = {}
 
     def checked(name: str, *keys: str) -> dict:
-        tables[name] = _table(doc, name, source)
-        _check_keys(tables[name], keys, f"{source} [{name}]")
+        tables[name] = sub_table(doc, name, source)
+        check_keys(tables[name], keys, f"{source} [{name}]")
         return tables[name]
 
     def value(name: str, key: str, default: Any, kind: type, unit: str) -> Any:
-        return _typed(tables[name].get(key, default), kind, f"{source} [{name}].{key}", unit)
+        return typed_value(tables[name].get(key, default), kind, f"{source} [{name}].{key}", unit)
 
     tube = AtvTube(**{k: value("tube", k, None, *_ATV_TUBE_KEYS[k]) for k in checked("tube", *_ATV_TUBE_KEYS)})
     rx = checked("eye", "pupil_diameter_mm", "prescription", "accommodation_diopters").get("prescription")

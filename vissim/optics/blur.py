@@ -44,7 +44,7 @@ from vissim.checks import describe, size_text
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.psf import PSF
 
-__all__ = ["blur_image", "BlurKernel", "PADDING_MODES"]
+__all__ = ["blur_image", "BlurKernel", "PADDING_MODES", "border_mean", "psf_padding_width_px"]
 
 log = logging.getLogger(__name__)
 
@@ -118,7 +118,8 @@ def padded_shape(shape: tuple[int, int], kernel_px: int) -> tuple[int, int]:
     return tuple(scipy.fft.next_fast_len(n + 2 * width, real=True) for n in shape)
 
 
-def _padding_width(psf: PSF) -> int:
+def psf_padding_width_px(psf: PSF) -> int:
+    """The padding (px) each side of an image blurred by ``psf``: its half-width."""
     return padding_width_px(psf.data.shape[0])
 
 
@@ -126,7 +127,7 @@ def _pad(channel: np.ndarray, width: int, shape: tuple[int, int], mode: str, bac
     rows, cols = channel.shape
     extra_r, extra_c = shape[0] - rows - 2 * width, shape[1] - cols - 2 * width
     if mode == "constant" and background is None:
-        background = _border_mean(channel)
+        background = border_mean(channel)
     return pad_array(channel, ((width, width + extra_r), (width, width + extra_c)), mode, background)
 
 
@@ -142,7 +143,8 @@ def pad_array(array, widths, mode: str, background: float | None = None, xp=np):
     return xp.pad(array, widths, mode=NUMPY_PAD_MODES[mode])
 
 
-def _border_mean(channel: np.ndarray) -> float:
+def border_mean(channel: np.ndarray) -> float:
+    """The mean of a channel's outermost pixels: the background ``"constant"`` padding fills in."""
     border = np.concatenate([channel[0], channel[-1], channel[1:-1, 0], channel[1:-1, -1]])
     return float(np.mean(border))
 
@@ -201,7 +203,7 @@ def _blur_tiled(channel, psf, padding, background, dtype, tile):
     n = psf.data.shape[0]
     valid, first_valid = tile - n + 1, n - 1 - n // 2
     if padding == "constant" and background is None:
-        background = _border_mean(channel)
+        background = border_mean(channel)
     transfer = BlurKernel.prepare(psf, (tile, tile), dtype=dtype).transfer
     out = np.empty((rows, cols), dtype)
 
@@ -231,7 +233,7 @@ def _blur_channel(channel, psf, padding, background, dtype):
         shape = (rows, cols)
         padded, offset = channel, 0
     else:
-        offset = _padding_width(psf)
+        offset = psf_padding_width_px(psf)
         shape = padded_shape((rows, cols), psf.data.shape[0])
         tile = _tile_px((rows, cols), psf.data.shape[0])
         if tile is not None:

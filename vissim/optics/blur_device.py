@@ -15,7 +15,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from vissim.optics.array_backend import CPU, ArrayBackend, array_backend
-from vissim.optics.blur import BlurKernel, _border_mean, _padding_width, checked_blur_inputs, pad_array, padded_shape
+from vissim.optics.blur import (BlurKernel, border_mean, checked_blur_inputs, pad_array, padded_shape,
+                                psf_padding_width_px)
 from vissim.optics.psf import PSF
 
 __all__ = ["blur_image_on", "convolve_padded"]
@@ -44,7 +45,7 @@ def blur_image_on(
             offset, shape = 0, (rows, cols)
             padded = backend.asarray(channels[members])
         else:
-            offset = _padding_width(group)
+            offset = psf_padding_width_px(group)
             shape = padded_shape((rows, cols), group.data.shape[0])
             widths = ((offset, shape[0] - rows - offset), (offset, shape[1] - cols - offset))
             padded = xp.stack([_pad(backend.asarray(channels[c]), widths, padding, backgrounds[c], channels[c], xp)
@@ -78,5 +79,5 @@ def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: di
 
 def _pad(channel, widths, mode: str, background, host_channel: np.ndarray, xp):
     if mode == "constant":
-        background = _border_mean(host_channel) if background is None else float(background)
+        background = border_mean(host_channel) if background is None else float(background)
     return pad_array(channel, widths, mode, background, xp)

@@ -95,7 +95,7 @@ from vissim.progress import Progress
 from vissim.units import arcmin_to_rad
 
 __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to_proximity_diopters",
-           "layer_spacing_diopters", "plan_layers"]
+           "layer_spacing_diopters", "plan_layers", "check_accommodation_diopters", "base_wavefront", "matte_indices"]
 
 log = logging.getLogger(__name__)
 
@@ -235,14 +235,16 @@ class DepthBlurResult:
 
 
 # -- validation helpers ---------------------------------------------------------------
-def _check_accommodation(accommodation_diopters) -> float:
+def check_accommodation_diopters(accommodation_diopters) -> float:
+    """The accommodation exerted (D), refused unless finite and >= 0."""
     value = finite_number(accommodation_diopters, "accommodation", "dioptres")
     if value < 0:
         raise VissimInputError(f"accommodation exerted must be >= 0 dioptres, got {accommodation_diopters!r} D")
     return value
 
 
-def _base_wavefront(eye_rx: Prescription, pupil_mm: float, extra: Wavefront | None) -> Wavefront:
+def base_wavefront(eye_rx: Prescription, pupil_mm: float, extra: Wavefront | None) -> Wavefront:
+    """The eye's wavefront over ``pupil_mm``: its prescription plus ``extra`` rescaled to that pupil."""
     front = Wavefront.from_prescription(eye_rx, pupil_mm)
     if extra is None:
         return front
@@ -344,7 +346,7 @@ def blur_depth(
     rx = as_prescription(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
-    accommodation = _check_accommodation(accommodation_diopters)
+    accommodation = check_accommodation_diopters(accommodation_diopters)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
     if padding not in DEPTH_PADDING_MODES:
@@ -373,14 +375,14 @@ def blur_depth(
     colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
     rows, cols = proximity.shape
 
-    base = _base_wavefront(rx, pupil, extra_wavefront)
+    base = base_wavefront(rx, pupil, extra_wavefront)
     in_focus_diopters = accommodation - base.to_prescription().spherical_equivalent_diopters
     spacing_max = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
     plan = plan_layers(float(proximity.min()), float(proximity.max()), spacing_max, max_layers,
                        anchor_diopters=in_focus_diopters, symmetric=True)
     layer_diopters = np.array(plan.proximities_diopters)
     threshold_diopters = max(layer_spacing_diopters(step, pupil, threshold_px), spacing_max * (1 + 1e-9))
-    lower, frac = _matte_indices(proximity, layer_diopters)
+    lower, frac = matte_indices(proximity, layer_diopters)
     coverage = np.bincount(lower.ravel(), weights=(1.0 - frac).ravel(), minlength=plan.n_layers + 1)
     coverage += np.bincount((lower + 1).ravel(), weights=frac.ravel(), minlength=plan.n_layers + 1)
     upper = np.minimum(lower + 1, plan.n_layers - 1).astype(np.int32)
@@ -469,7 +471,7 @@ def blur_depth(
     )
 
 
-def _matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's farther layer index ``i`` and its weight ``t`` in layer ``i + 1`` (tent matte)."""
     if layer_diopters.size == 1:
         return np.zeros(proximity.shape, np.int64), np.zeros(proximity.shape)

@@ -64,7 +64,7 @@ from vissim.checks import finite_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
-from vissim.optics.depth import (_base_wavefront, _check_accommodation, _matte_indices, layer_spacing_diopters,
+from vissim.optics.depth import (base_wavefront, check_accommodation_diopters, layer_spacing_diopters, matte_indices,
                                  plan_layers)
 from vissim.optics.depth_psfs import cached_psf
 from vissim.optics.depth_windows import grow_box
@@ -201,7 +201,7 @@ def _slices(index: int, colour, coverage, proximity, spacing_diopters: float, an
     continued = np.clip(proximity[tuple(nearest)], low, high)
     plan = np.array(plan_layers(low, high, spacing_diopters, None, anchor_diopters=anchor_diopters,
                                 symmetric=True).proximities_diopters)
-    lower, frac = _matte_indices(continued, plan)
+    lower, frac = matte_indices(continued, plan)
     out = []
     for k in range(plan.size):
         plane = (np.where(lower == k, 1.0 - frac, 0.0) + np.where((lower + 1 == k), frac, 0.0)).astype(np.float32)
@@ -346,7 +346,7 @@ def composite_layers(
     rx = as_prescription(eye_prescription)
     pupil = check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
-    accommodation = _check_accommodation(accommodation_diopters)
+    accommodation = check_accommodation_diopters(accommodation_diopters)
     wavelength = finite_number(wavelength_nm, "wavelength", "nm")
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
@@ -369,7 +369,7 @@ def composite_layers(
         return float((proximity * coverage).sum() / coverage.sum())
 
     checked.sort(key=depth_order, reverse=True)  # near (large proximity) first
-    base = _base_wavefront(rx, pupil, extra_wavefront)
+    base = base_wavefront(rx, pupil, extra_wavefront)
     spacing = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
     in_focus = accommodation - base.to_prescription().spherical_equivalent_diopters
     by_layer = [_slices(i, *item, spacing, in_focus) for i, item in enumerate(checked)]

@@ -23,7 +23,7 @@ from scipy.interpolate import RectBivariateSpline
 
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
-from vissim.optics.wavefront import Wavefront, _ring_fit_um
+from vissim.optics.wavefront import Wavefront, ring_fit_um
 
 __all__ = ["OpdMap"]
 
@@ -90,7 +90,7 @@ class OpdMap:
 
     def zernike_fit(self, max_order: int = 8) -> Wavefront:
         """Least-squares OSA Zernike fit over the pupil up to ``max_order`` (µm)."""
-        keys, solution = _ring_fit_um(self.opd_um, self.pupil_diameter_mm, max_order, 3 * max_order + 8,
+        keys, solution = ring_fit_um(self.opd_um, self.pupil_diameter_mm, max_order, 3 * max_order + 8,
                                      6 * max_order + 16)
         return Wavefront({k: float(v) for k, v in zip(keys, solution)}, self.pupil_diameter_mm)
 

@@ -36,8 +36,8 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.accommodation import object_proximity_diopters
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, _as_tuple, _meridian_deg,
-                                      _principal, entrance_pupil_diameter_mm, thesis_eye_pupil_diameter_mm,
+from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, entrance_pupil_diameter_mm, matrix2_tuple,
+                                      principal_pairs, tabo_meridian_deg, thesis_eye_pupil_diameter_mm,
                                       thesis_table_4_2_lens_power, thesis_table_4_2_power, trial_lens_effect)
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
@@ -77,7 +77,7 @@ class ViewingSetup:
         if lenses.lenses:
             effect = trial_lens_effect(lenses)
             added, magnification = np.asarray(effect.added_power_matrix), effect.magnification_matrix
-        return cls(entrance_pupil_diameter_mm(focal_length_mm, f_number), _as_tuple(added + focus_error * np.eye(2)),
+        return cls(entrance_pupil_diameter_mm(focal_length_mm, f_number), matrix2_tuple(added + focus_error * np.eye(2)),
                    magnification, wavelength_nm, chart_m)
 
     @classmethod
@@ -99,7 +99,7 @@ class ViewingSetup:
             vergence = np.asarray(vergence_diopters, dtype=float)
             vergence = vergence * np.eye(2) if vergence.ndim == 0 else vergence
         defocus = accommodation * np.eye(2) - np.asarray(prescription.power_matrix(), dtype=float) + vergence
-        return cls(check_pupil_mm(pupil_diameter_mm), _as_tuple(defocus), _IDENTITY, wavelength_nm,
+        return cls(check_pupil_mm(pupil_diameter_mm), matrix2_tuple(defocus), _IDENTITY, wavelength_nm,
                    float(object_distance_m))
 
     @classmethod
@@ -152,7 +152,7 @@ class ViewingSetup:
     def blur_diameter_arcmin(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """Geometric blur ((diameter arcmin, meridian deg), ...) per principal meridian, larger defocus first."""
         values, vectors = np.linalg.eigh(np.asarray(self.defocus_matrix_diopters, dtype=float))
-        return tuple((float(rad_to_arcmin(abs(value) * self.pupil_diameter_mm / 1000.0)), _meridian_deg(vector))
+        return tuple((float(rad_to_arcmin(abs(value) * self.pupil_diameter_mm / 1000.0)), tabo_meridian_deg(vector))
                      for value, vector in zip(values[::-1], vectors.T[::-1]))  # type: ignore[return-value]
 
     def blur_diameter_at_arcmin(self, distance_m) -> np.ndarray:
@@ -168,4 +168,4 @@ class ViewingSetup:
     def magnification_principal(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """Spectacle magnification per principal meridian ((mag, meridian_deg), ...), larger first."""
         m = np.asarray(self.magnification_matrix, dtype=float)
-        return _principal(0.5 * (m + m.T))
+        return principal_pairs(0.5 * (m + m.T))

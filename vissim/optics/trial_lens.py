@@ -41,7 +41,7 @@ from vissim.units import mm_to_m
 __all__ = ["CROWN_GLASS_INDEX", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
            "TrialLensEffect", "trial_lens_effect", "refraction_matrix", "transfer_matrix",
            "entrance_pupil_diameter_mm", "thesis_eye_pupil_diameter_mm", "thesis_table_4_2_power",
-           "thesis_table_4_2_lens_power"]
+           "thesis_table_4_2_lens_power", "Matrix2", "matrix2_tuple", "tabo_meridian_deg", "principal_pairs"]
 
 log = logging.getLogger(__name__)
 
@@ -70,23 +70,25 @@ _I2 = np.eye(2)
 _SINGULAR_TOL = 1e-12
 
 
-def _as_tuple(matrix: np.ndarray) -> Matrix2:
+def matrix2_tuple(matrix: np.ndarray) -> Matrix2:
+    """A 2 x 2 array as nested tuples of floats (-0.0 made 0.0)."""
     return tuple(tuple(float(v) + 0.0 for v in row) for row in matrix)  # type: ignore[return-value]
 
 
-def _meridian_deg(vector: np.ndarray) -> float:
+def tabo_meridian_deg(vector: np.ndarray) -> float:
     """TABO meridian (0, 180] of the direction ``(x, y)``; the horizontal is 180."""
     angle = round(math.degrees(math.atan2(float(vector[1]), float(vector[0]))) % 180.0, 9)
     return 180.0 if angle in (0.0, 180.0) else angle
 
 
-def _principal(symmetric: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]]:
+def principal_pairs(symmetric: np.ndarray) -> tuple[tuple[float, float], tuple[float, float]]:
     """Eigen-pairs ``((value, meridian_deg), ...)`` of a symmetric 2x2 matrix, larger first."""
     values, vectors = np.linalg.eigh(symmetric)
     if abs(values[1] - values[0]) <= 1e-12 * max(1.0, abs(values[1])):
         mean = float(values.mean())
         return (mean, 180.0), (mean, 90.0)
-    return ((float(values[1]), _meridian_deg(vectors[:, 1])), (float(values[0]), _meridian_deg(vectors[:, 0])))
+    return ((float(values[1]), tabo_meridian_deg(vectors[:, 1])),
+            (float(values[0]), tabo_meridian_deg(vectors[:, 0])))
 
 
 def refraction_matrix(power_matrix_diopters) -> np.ndarray:
@@ -202,7 +204,7 @@ class TrialLens:
 
     def front_surface_power_matrix(self) -> Matrix2:
         """2x2 power matrix of the front (object-side) surface, dioptres, TABO x/y frame."""
-        return _as_tuple(self._front_surface())
+        return matrix2_tuple(self._front_surface())
 
     def ray_transfer_matrix(self) -> np.ndarray:
         """4x4 ray transfer from the front vertex to the back vertex (metres, radians, dioptres)."""
@@ -230,7 +232,7 @@ class TrialLens:
                 return math.inf
             return 1000.0 * sign * n_minus_1 / power_diopters
 
-        (f_a, m_a), (f_b, m_b) = _principal(self._front_surface())
+        (f_a, m_a), (f_b, m_b) = principal_pairs(self._front_surface())
         front = SurfaceRadii((radius_mm(f_a, 1.0), radius_mm(f_b, 1.0)), (m_a, m_b))
         back_r = radius_mm(self.back_surface_diopters, -1.0)
         return front, SurfaceRadii((back_r, back_r), (180.0, 90.0))
@@ -397,7 +399,7 @@ def trial_lens_effect(setup: TrialLensSetup) -> TrialLensEffect:
             "the trial lenses image the object onto the camera's pupil; magnification undefined"
         )
     magnification_matrix = np.linalg.inv(object_b).T
-    principal = _principal(0.5 * (magnification_matrix + magnification_matrix.T))
+    principal = principal_pairs(0.5 * (magnification_matrix + magnification_matrix.T))
     (mag_a, _), (mag_b, _) = principal
     if mag_a * mag_b <= 0.0:
         raise VissimInputError(
@@ -410,11 +412,11 @@ def trial_lens_effect(setup: TrialLensSetup) -> TrialLensEffect:
 
     added_power = LensPower.from_power_matrix(added)
     log.debug("trial lenses %s: added %s, magnification %s", setup, added_power, principal)
-    return TrialLensEffect(setup=setup, added_power=added_power, added_power_matrix=_as_tuple(added),
+    return TrialLensEffect(setup=setup, added_power=added_power, added_power_matrix=matrix2_tuple(added),
                            camera_prescription=added_power.prescription_of_camera(),
                            magnification_principal=principal,
                            magnification=math.copysign(math.sqrt(mag_a * mag_b), mag_a),
-                           magnification_matrix=_as_tuple(magnification_matrix))
+                           magnification_matrix=matrix2_tuple(magnification_matrix))
 
 
 # -- the thesis's rules, kept for explicit comparison --------------------------------------

@@ -33,7 +33,8 @@ from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.zernike import zernike_keys, zernike_nm
 
-__all__ = ["Wavefront", "prescription_to_zernike_um", "zernike_um_to_prescription", "parse_zernike_terms"]
+__all__ = ["Wavefront", "prescription_to_zernike_um", "zernike_um_to_prescription", "parse_zernike_terms",
+           "ring_fit_um"]
 
 _SQRT3 = math.sqrt(3.0)
 _SQRT6 = math.sqrt(6.0)
@@ -89,7 +90,7 @@ def parse_zernike_terms(text: str) -> dict[tuple[int, int], float]:
     return terms
 
 
-def _ring_fit_um(opd_um, pupil_diameter_mm: float, max_order: int, rings: int, spokes: int):
+def ring_fit_um(opd_um, pupil_diameter_mm: float, max_order: int, rings: int, spokes: int):
     """Least-squares OSA Zernike fit up to ``max_order`` of the surface ``opd_um(x_mm, y_mm)`` (µm) over a pupil.
 
     Sampled on ``rings`` equal-area rings of ``spokes`` points each; returns (the (n, m) keys, their µm).
@@ -282,7 +283,7 @@ class Wavefront:
         if not self._items or new == self.pupil_diameter_mm:
             return Wavefront(dict(self.coefficients_um), new)
         order = self.max_order
-        keys, solution = _ring_fit_um(self.opd_um, new, order, 2 * order + 4, 4 * order + 8)
+        keys, solution = ring_fit_um(self.opd_um, new, order, 2 * order + 4, 4 * order + 8)
         scale = max(1e-12, float(np.max(np.abs(solution))))
         return Wavefront({k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new)
 

@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 
 from vissim.imageio import read_image  # noqa: E402
 from vissim.progress import Progress, counter  # noqa: E402
-from vissim.validation.report import _num, campaign_name, load_results, png_bytes  # noqa: E402
+from vissim.validation.report import campaign_name, load_results, metric_float, png_bytes  # noqa: E402
 from vissim.validation.report_figures import Figure, display_norm, radiance_colorbar  # noqa: E402
 from vissim.validation.report_summary import PERFECT_MARGIN_DB  # noqa: E402
 from vissim.validation.report import json_rows, write_report_files  # noqa: E402
@@ -55,7 +55,7 @@ def depth_rows(results: list[dict]) -> list[dict]:
         for comp in result["comparisons"]:
             for region, metrics in comp["regions"].items():
                 floor = comp["noise_floor"][region]
-                psnr, floor_psnr = _num(metrics["psnr_db"]), _num(floor["psnr_db"])
+                psnr, floor_psnr = metric_float(metrics["psnr_db"]), metric_float(floor["psnr_db"])
                 rows.append({
                     "configuration": config["name"],
                     "observer": config["viewer_label"],
@@ -66,9 +66,9 @@ def depth_rows(results: list[dict]) -> list[dict]:
                     "noise_floor_psnr_db": floor_psnr,
                     "psnr_minus_floor_db": psnr - floor_psnr if math.isfinite(psnr) and math.isfinite(floor_psnr)
                     else math.nan,
-                    "ssim": _num(metrics["ssim"]),
-                    "noise_floor_ssim": _num(floor["ssim"]),
-                    "mean_abs_diff": _num(metrics["mean_abs_diff"]),
+                    "ssim": metric_float(metrics["ssim"]),
+                    "noise_floor_ssim": metric_float(floor["ssim"]),
+                    "mean_abs_diff": metric_float(metrics["mean_abs_diff"]),
                     "n_layers": comp["depth_blur"]["n_layers"],
                     "key": result["key"],
                 })
@@ -207,10 +207,10 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> Figure | Non
         bar.set_ticks(range(len(names)), labels=names)
         bar.ax.tick_params(labelsize=6)
         interior = [r for r in comp["regions"] if r not in ("boundary", "frame", "all")]
-        psnr = ", ".join(f"{r} {_fmt(_num(comp['regions'][r]['psnr_db']), 1)}" for r in interior[:3])
+        psnr = ", ".join(f"{r} {_fmt(metric_float(comp['regions'][r]['psnr_db']), 1)}" for r in interior[:3])
         axes[i, 0].set_ylabel(textwrap.fill(result["configuration"]["name"], 28), fontsize=7)
         axes[i, 0].set_xlabel(_panels_label(result), fontsize=7)
-        axes[i, 2].set_xlabel(f"PSNR dB: {psnr}; boundary {_fmt(_num(comp['regions']['boundary']['psnr_db']), 1)}",
+        axes[i, 2].set_xlabel(f"PSNR dB: {psnr}; boundary {_fmt(metric_float(comp['regions']['boundary']['psnr_db']), 1)}",
                               fontsize=7)
     for j in range(3):
         bar = fig.colorbar(shown[j], ax=axes[:, j], location="bottom", shrink=0.9, aspect=30, pad=0.01)

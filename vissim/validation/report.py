@@ -43,6 +43,7 @@ __all__ = [
     "html_report",
     "write_report_files",
     "format_number",
+    "metric_float",
     "json_rows",
     "reference_note",
     "Figure",
@@ -88,7 +89,7 @@ def load_results(run_dir: str | Path) -> list[dict]:
     return [results[k] for k in order if k in results]
 
 
-def _num(value) -> float:
+def metric_float(value) -> float:
     """A JSON metric back to a float: ``"inf"`` is infinite, None unknown (NaN)."""
     if value is None:
         return math.nan
@@ -114,10 +115,10 @@ def metrics_rows(results: list[dict]) -> list[dict]:
                     "input": comp["input"],
                     "reference": reference_note(comp),
                     "ssim": comp["metrics"]["ssim"],
-                    "psnr_db": _num(comp["metrics"]["psnr_db"]),
+                    "psnr_db": metric_float(comp["metrics"]["psnr_db"]),
                     "mean_abs_diff": comp["metrics"]["mean_abs_diff"],
                     "noise_floor_ssim": floor["ssim"],
-                    "noise_floor_psnr_db": _num(floor["psnr_db"]),
+                    "noise_floor_psnr_db": metric_float(floor["psnr_db"]),
                     "shift_rows_px": comp["registration"]["shift_rows_px"],
                     "shift_cols_px": comp["registration"]["shift_cols_px"],
                     "camera_prescription": comp["setup"]["camera_prescription"],
@@ -294,7 +295,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
         if step is not None:
             bar_arcmin = scale_bar(axes[0, j], truth.shape[1], step)
         axes[0, j].set_title(column_title(result, comp), fontsize=7)
-        axes[3, j].set_xlabel(f"SSIM {comp['metrics']['ssim']:.3f}\nPSNR {_fmt(_num(comp['metrics']['psnr_db']), 1)} dB", fontsize=8)
+        axes[3, j].set_xlabel(f"SSIM {comp['metrics']['ssim']:.3f}\nPSNR {_fmt(metric_float(comp['metrics']['psnr_db']), 1)} dB", fontsize=8)
     for i, (label, _, _, bar_label) in enumerate(rows):
         axes[i, 0].set_ylabel(label, fontsize=9)
         bar = fig.colorbar(shown[i], ax=axes[i, :], shrink=0.9, pad=0.02, aspect=15)
@@ -311,7 +312,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
                     [truth_label, f"the {simulation} simulation", "1 − SSIM map on a log scale",
                      "absolute difference map"],
                     [f"{r['configuration']['name']}: SSIM {c['metrics']['ssim']:.3f}, "
-                     f"PSNR {_fmt(_num(c['metrics']['psnr_db']), 1)} dB" for r, c in columns])
+                     f"PSNR {_fmt(metric_float(c['metrics']['psnr_db']), 1)} dB" for r, c in columns])
     return Figure("", png_bytes(fig), alt)
 
 
