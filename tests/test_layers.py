@@ -3,18 +3,18 @@
 Read from the source with ``ast`` (nothing is imported), every ``import`` at any depth. The
 layers, lowest first (docs/conventions.md, "Layers"):
 
-0. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``
-1. ``optics``: the physics (prescriptions, wavefronts, PSFs, blur, depth)
-2. imaging: ``imageio``, ``imaging`` (image registration), ``optotypes``, ``acuity``,
+1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``
+2. ``optics``: the physics (prescriptions, wavefronts, PSFs, blur, depth)
+3. imaging: ``imageio``, ``imaging`` (image registration), ``optotypes``, ``acuity``,
    ``charts``, ``chart_demo``
-3. ``bench``: the benches' geometry and scenes as plain data
-4. ``render`` (the Mitsuba door) and ``fit`` (prescriptions fitted to captures)
-5. ``validation`` (campaigns) and ``atv`` (ATV data, predictions, procedures)
-6. ``cli``, ``__main__`` and the package root ``vissim`` (the lazy public API)
+4. ``bench``: the benches' geometry and scenes as plain data
+5. ``render`` (the Mitsuba door) and ``fit`` (prescriptions fitted to captures)
+6. ``validation`` (campaigns) and ``atv`` (ATV data, predictions, procedures)
+7. ``cli``, ``__main__`` and the package root ``vissim`` (the lazy public API)
 
 A module may import its own layer or any below it. Packages in one layer may import each
 other, but not in a loop. The root's dunder metadata (``from vissim import __version__``) is
-not an import of the API. A name or module whose last part starts with one underscore is
+not an import of the API. A name or module starting with one underscore is
 private to its module (a private module, such as ``cli/_common.py``, to its package).
 """
 
@@ -109,7 +109,7 @@ def _edges():
 
 
 def test_imports_run_down_the_layers():
-    upward = sorted({f"{m} (layer {_layer(m)}) imports {t} (layer {_layer(t)}), line {line}"
+    upward = sorted({f"{m} (layer {_layer(m) + 1}) imports {t} (layer {_layer(t) + 1}), line {line}"
                      for m, t, _, line in _edges() if _layer(t) > _layer(m)})
     assert not upward, "imports up the layers:\n" + "\n".join(upward)
 
