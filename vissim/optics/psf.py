@@ -55,6 +55,7 @@ from vissim.optics.psf_field import (
 from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
 from vissim.optics.pupil_rays import ray_count, stratified_pupil_rays
+from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.optics.opd_map import OpdMap
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
@@ -199,10 +200,6 @@ def psf_sampling(pupil_diameter_mm: float, wavelength_nm: float, arcmin_per_px: 
     return plan_wave_psf(pupil_diameter_mm, [wavelength_nm], arcmin_per_px, size_px, [blur_radius_arcmin], method)[0]
 
 
-#: Sub-pixels per output pixel for band-limiting a geometric PSF (``pixel="sample"``).
-GEOMETRIC_SAMPLE_OVERSAMPLE = 5
-
-
 def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, pixel):
     u, v = stratified_pupil_rays(ray_count(blur_arcmin / arcmin_per_px))
     radius = diameter_mm / 2.0
@@ -215,7 +212,7 @@ def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, 
         edges = np.arange(size_px + 1) - size_px // 2 - 0.5
         counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
         return counts / len(u)
-    q = GEOMETRIC_SAMPLE_OVERSAMPLE
+    q = SUBPIXELS_PER_PX  # band-limits the histogram (``pixel="sample"``)
     fine = q * size_px
     edges = (np.arange(fine + 1) - fine // 2 - 0.5) / q
     counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
