@@ -127,3 +127,29 @@ def test_huge_values_are_refused_before_anything_is_allocated(tmp_path, text, fr
     with pytest.raises(VissimInputError) as caught:
         load_campaign(path)
     assert all(f in str(caught.value) for f in fragments), str(caught.value)
+
+
+@pytest.mark.parametrize("field, value, fragments", [
+    ("wavelength_nm", 2200.0, ["campaign.wavelength_nm", "within 200 to 2000 nm"]),
+    ("vertex_distance_mm", 201.0, ["campaign.vertex_distance_mm", "within 0 to 200 mm"]),
+])
+def test_single_plane_campaigns_take_the_ranges_of_checks(tmp_path, field, value, fragments):
+    path = tmp_path / "range.toml"
+    path.write_text(toml_document(mutate(SINGLE_PLANE, ("campaign", field), value)))
+    with pytest.raises(VissimInputError) as caught:
+        load_campaign(path)
+    assert all(f in str(caught.value) for f in fragments), str(caught.value)
+
+
+@pytest.mark.parametrize("where, value, fragments", [
+    (("depth_campaign", "wavelength_nm"), 2200.0, ["depth_campaign.wavelength_nm", "within 200 to 2000 nm"]),
+    (("config", 1, "camera", "vertex_distance_mm"), 201.0, ["vertex_distance_mm", "within 0 to 200 mm"]),
+    (("config", 0, "pupil_mm"), 0.5, ["config[0].pupil_mm", "within 1 to 10 mm"]),
+])
+def test_depth_campaigns_take_the_ranges_of_checks(tmp_path, where, value, fragments):
+    (tmp_path / "scene.toml").write_text(SCENE)
+    path = tmp_path / "range.toml"
+    path.write_text(toml_document(mutate(DEPTH, where, value)))
+    with pytest.raises(VissimInputError) as caught:
+        load_depth_campaign(path)
+    assert all(f in str(caught.value) for f in fragments), str(caught.value)

@@ -14,10 +14,10 @@ from scipy import ndimage
 
 from vissim.render.backend import choose_variant
 from vissim.validation.campaign import CampaignSettings, Configuration, LensSpec
-from vissim.optics.resample import block_mean
+from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean
 from vissim.validation.item import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align, synthetic_tile
 from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE, simulate, simulation_setup
+from vissim.validation.simulate import simulate, simulation_setup
 from vissim.validation.wave_bench import TRACED_RAYS, traced_ray_image
 from vissim.validation.wave_bench_report import SELF_CHECK_MARGIN_DB
 
@@ -48,11 +48,11 @@ def test_the_trace_s_ray_image_is_the_vergence_geometric_simulation():
     for lenses in ((LensSpec(2.0),), (LensSpec(0.0, 2.0, 90.0),)):
         configuration = Configuration("c", "N", 0.7, lenses=lenses)
         bench = campaign_bench(configuration, settings)
-        fine = synthetic_tile(configuration, settings, SYNTHETIC_OVERSAMPLE)
+        fine = synthetic_tile(configuration, settings, SUBPIXELS_PER_PX)
         setup = simulation_setup("geometric", bench.viewing_setup(settings.wavelength_nm), bench.physical_lenses,
                                  configuration, settings)
-        vergence = simulate(setup, fine, settings, oversample=SYNTHETIC_OVERSAMPLE)
-        traced = traced_ray_image(bench, fine, SYNTHETIC_OVERSAMPLE)
+        vergence = simulate(setup, fine, settings, oversample=SUBPIXELS_PER_PX)
+        traced = traced_ray_image(bench, fine, SUBPIXELS_PER_PX)
         assert traced.shape == vergence.shape == settings.tile_px
         psnr = 10 * np.log10(float(traced.max()) ** 2 / float(np.mean((traced - vergence) ** 2)))
         assert psnr >= 80.0, (lenses, psnr)

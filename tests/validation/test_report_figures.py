@@ -10,7 +10,7 @@ from fake_bench import fake_render, write_campaign
 
 from vissim.optics.prescription import Prescription
 from vissim.units import arcmin_to_rad, cyc_per_rad_to_cyc_per_deg
-from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE
+from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.validation.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
                                               optics_cases, psf_figure_of, sampling_label)
 from vissim.validation.report import build_report, load_results
@@ -64,7 +64,7 @@ def test_one_case_per_group_with_lenses_and_the_wave_setup_it_recorded(run_dir, 
         wave = next(c for c in results[case.configuration]["comparisons"] if c["simulation"] == "wave")
         assert case.prescription.format(4) == Prescription.parse(wave["setup"]["camera_prescription"]).format(4)
         assert case.pupil_diameter_mm == wave["setup"]["pupil_diameter_mm"]
-        assert case.psf_arcmin_per_px == pytest.approx(case.arcmin_per_px / SYNTHETIC_OVERSAMPLE)
+        assert case.psf_arcmin_per_px == pytest.approx(case.arcmin_per_px / SUBPIXELS_PER_PX)
 
 
 def test_figures_are_written_with_provenance_and_linked(run_dir, cases):

@@ -48,6 +48,8 @@ from vissim.atv.procedure import (ProcedureConfig, PsychometricFunction, Simulat
                                   run_procedure)
 from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM, IPHONE5_PPI, AtvTube, pixel_pitch_mm
 from vissim.checks import finite_number, positive_number
+from vissim.checks import vertex_distance_mm as check_vertex_mm
+from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.checks import eye_pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
@@ -105,9 +107,8 @@ class AtvApparatus:
     def __post_init__(self) -> None:
         positive_number(self.pixel_pitch_mm, "pixel pitch", "mm")
         positive_number(self.collimator_focal_length_mm, "collimator focal length", "mm")
-        if finite_number(self.trial_lens_vertex_mm, "trial lens vertex distance", "mm") < 0:
-            raise VissimInputError(f"trial lens vertex distance must be >= 0 mm, got {self.trial_lens_vertex_mm:g} mm")
-        positive_number(self.wavelength_nm, "wavelength", "nm")
+        check_vertex_mm(self.trial_lens_vertex_mm, "trial lens vertex distance")
+        check_wavelength_nm(self.wavelength_nm)
         if not 0.1 <= positive_number(self.display_gamma, "display gamma", "(exponent)") <= 10.0:
             raise VissimInputError(f"display gamma must be within 0.1-10 (displays are near 2.2), got {self.display_gamma:g}")
 

@@ -49,6 +49,7 @@ from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, samples_per_pixel
 from vissim.checks import size_px as check_size_px
+from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, THESIS_CHART_DISTANCE_MM,
                                       THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM,
@@ -160,9 +161,8 @@ class DslrBench:
                            ("chart_distance_mm", "mm"), ("arcmin_per_px", "arcmin/px"),
                            ("texels_per_px", "texels per camera pixel"), ("radiance_scale", "(relative)")):
             object.__setattr__(self, name, _positive(getattr(self, name), name.replace("_", " "), unit))
-        for name in ("vertex_distance_mm", "lens_gap_mm"):
-            value = _positive(getattr(self, name), name.replace("_", " "), "mm", allow_zero=True)
-            object.__setattr__(self, name, value)
+        object.__setattr__(self, "vertex_distance_mm", check_vertex_mm(self.vertex_distance_mm))
+        object.__setattr__(self, "lens_gap_mm", _positive(self.lens_gap_mm, "lens gap mm", "mm", allow_zero=True))
         index = _positive(self.refractive_index, "refractive index", "(dimensionless)")
         if index <= 1.0:
             raise VissimInputError(f"refractive index must exceed 1, got {index:g}")

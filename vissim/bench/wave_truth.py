@@ -39,16 +39,12 @@ from vissim.charts import ChartSpec, chart_sidecar, render_chart_angular
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
 from vissim.optics.psf import PSF, compute_psf, suggested_size_px
-from vissim.optics.resample import block_mean, magnify
+from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean, magnify
 from vissim.provenance import json_safe
 
-__all__ = ["WaveTruth", "image_through_traced_lenses", "wave_truth", "WAVE_TRUTH_OVERSAMPLE"]
+__all__ = ["WaveTruth", "image_through_traced_lenses", "wave_truth"]
 
 log = logging.getLogger(__name__)
-
-#: Sub-pixels per camera pixel (per axis) at which the chart is imaged before integration.
-WAVE_TRUTH_OVERSAMPLE = 5
-
 
 @dataclass(frozen=True, eq=False)
 class WaveTruth:
@@ -134,7 +130,7 @@ def wave_truth(
     *,
     wavelengths_nm: Sequence[float] = (D_LINE_NM,),
     weights: Sequence[float] | None = None,
-    oversample: int = WAVE_TRUTH_OVERSAMPLE,
+    oversample: int = SUBPIXELS_PER_PX,
     mode: str = "wave",
 ) -> WaveTruth:
     """The wave-optical image of ``chart`` on ``bench``'s sensor (module docstring).

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.checks import DEFAULT_WAVELENGTH_NM, VERTEX_DISTANCE_RANGE_MM
 from vissim.cli._common import check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.cli.blur import image_sampling
@@ -39,7 +39,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--magnification", choices=("bench", "free", "none"),
                         help="how magnification follows power: bench (default when a bench is known), free (a fitted "
                              "isotropic scale) or none; only bench determines the sign")
-    parser.add_argument("--vertex-mm", type=Number(float, nonnegative=True, maximum=1000.0), metavar="MM", help="trial lens back vertex to the camera (with --object-distance-m: a bench tie for a capture from elsewhere)")
+    parser.add_argument("--vertex-mm", type=Number(float, nonnegative=True, maximum=VERTEX_DISTANCE_RANGE_MM[1]), metavar="MM", help="trial lens back vertex to the camera (with --object-distance-m: a bench tie for a capture from elsewhere)")
     parser.add_argument("--object-distance-m", type=Number(float, positive=True), metavar="M", help="camera to the chart, metres (with --vertex-mm)")
     parser.add_argument("--wavelength-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
                         help=f"wave mode: wavelength (default {DEFAULT_WAVELENGTH_NM:g})")

@@ -52,7 +52,6 @@ from __future__ import annotations
 
 import functools
 import logging
-import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -70,8 +69,9 @@ from vissim.optics.depth_psfs import cached_psf
 from vissim.optics.depth_windows import grow_box
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import PSF, geometric_blur_radius_arcmin
+from vissim.optics.pupil_rays import ray_count, stratified_pupil_rays
 from vissim.optics.wavefront import Wavefront
-from vissim.units import rad_to_arcmin
+from vissim.units import image_colrow_to_osa_xy, osa_xy_to_image_colrow, rad_to_arcmin
 
 __all__ = ["SceneLayer", "LayeredBlurResult", "composite_layers", "pupil_rays"]
 
@@ -109,19 +109,8 @@ class LayeredBlurResult:
 
 @functools.lru_cache(maxsize=8)
 def pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
-    """Image-oriented unit-disc pupil points ``(u, v)``: a jittered ``n x n`` grid (fixed seed), inside the disc.
-
-    The sampling of the geometric PSF (`vissim.optics.psf.compute_psf`): every cell of the
-    grid holds one ray, so each ray stands for an equal share of the pupil's area.
-    """
-    n_side = int(math.ceil(math.sqrt(n_rays * 4.0 / math.pi)))
-    rng = np.random.default_rng(20151218)
-    cells = (np.arange(n_side) + 0.5) / n_side * 2.0 - 1.0
-    u, v = np.meshgrid(cells, cells)
-    u = u + (rng.random(u.shape) - 0.5) * (2.0 / n_side)
-    v = v + (rng.random(v.shape) - 0.5) * (2.0 / n_side)
-    keep = u * u + v * v <= 1.0
-    u, v = u[keep], v[keep]
+    """The geometric PSF's pupil rays (`vissim.optics.pupil_rays.stratified_pupil_rays`), cached read-only."""
+    u, v = stratified_pupil_rays(n_rays)
     u.setflags(write=False)
     v.setflags(write=False)
     return u, v
@@ -131,9 +120,10 @@ def _offsets_px(front: Wavefront, pupil_mm: float, step: float, rays) -> np.ndar
     """Each ray's landing offset (row, col) rounded to whole pixels, int32 (n, 2)."""
     u, v = rays
     radius = pupil_mm / 2.0
-    sx, sy = front.slopes_mrad(-u * radius, -v * radius)  # image-oriented pupil -> OSA, as compute_psf
-    col = rad_to_arcmin(-sx * 1e-3) / step
-    row = rad_to_arcmin(-sy * 1e-3) / step
+    sx, sy = front.slopes_mrad(*image_colrow_to_osa_xy(u * radius, v * radius))  # as compute_psf
+    col_mrad, row_mrad = osa_xy_to_image_colrow(sx, sy)
+    col = rad_to_arcmin(col_mrad * 1e-3) / step
+    row = rad_to_arcmin(row_mrad * 1e-3) / step
     return np.stack([np.floor(row + 0.5), np.floor(col + 0.5)], axis=1).astype(np.int32)
 
 
@@ -378,7 +368,7 @@ def composite_layers(
     fronts = {id(s): base.with_defocus_diopters(s.proximity_diopters - accommodation) for s in slices}
     if n_rays is None:
         blur_px = max(geometric_blur_radius_arcmin(f, pupil) for f in fronts.values()) / step
-        n_rays = int(min(4_000_000, max(250_000, 400 * math.pi * (blur_px + 1.0) ** 2)))
+        n_rays = ray_count(blur_px)
     rays = pupil_rays(int(n_rays))
     for s in slices:
         s.offsets = _offsets_px(fronts[id(s)], pupil, step, rays)

@@ -54,6 +54,8 @@ from vissim.optics.psf_field import (
 )
 from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
+from vissim.optics.pupil_rays import ray_count, stratified_pupil_rays
+from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.optics.opd_map import OpdMap
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
@@ -198,23 +200,10 @@ def psf_sampling(pupil_diameter_mm: float, wavelength_nm: float, arcmin_per_px: 
     return plan_wave_psf(pupil_diameter_mm, [wavelength_nm], arcmin_per_px, size_px, [blur_radius_arcmin], method)[0]
 
 
-#: Sub-pixels per output pixel for band-limiting a geometric PSF (``pixel="sample"``).
-GEOMETRIC_SAMPLE_OVERSAMPLE = 5
-
-
 def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, pixel):
-    blur_px = blur_arcmin / arcmin_per_px
-    covered_px = math.pi * (blur_px + 1.0) ** 2
-    n_rays = int(min(4_000_000, max(250_000, 400 * covered_px)))
-    n_side = int(math.ceil(math.sqrt(n_rays * 4.0 / math.pi)))
-    rng = np.random.default_rng(20151218)  # fixed: the same wavefront gives the same PSF
-    cells = (np.arange(n_side) + 0.5) / n_side * 2.0 - 1.0
-    u, v = np.meshgrid(cells, cells)
-    u = u + (rng.random(u.shape) - 0.5) * (2.0 / n_side)
-    v = v + (rng.random(v.shape) - 0.5) * (2.0 / n_side)
-    keep = u * u + v * v <= 1.0
+    u, v = stratified_pupil_rays(ray_count(blur_arcmin / arcmin_per_px))
     radius = diameter_mm / 2.0
-    x_osa, y_osa = image_colrow_to_osa_xy(u[keep] * radius, v[keep] * radius)  # image-oriented pupil -> OSA
+    x_osa, y_osa = image_colrow_to_osa_xy(u * radius, v * radius)  # image-oriented pupil -> OSA
     sx, sy = wavefront.slopes_mrad(x_osa, y_osa)
     col_mrad, row_mrad = osa_xy_to_image_colrow(sx, sy)  # dW/dy > 0 lands up (+y), i.e. at -row
     col = rad_to_arcmin(col_mrad * 1e-3) / arcmin_per_px  # landing offsets in output pixels
@@ -222,12 +211,12 @@ def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, 
     if pixel == "integrate":  # the histogram on output pixels is the exact pixel integral
         edges = np.arange(size_px + 1) - size_px // 2 - 0.5
         counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
-        return counts / keep.sum()
-    q = GEOMETRIC_SAMPLE_OVERSAMPLE
+        return counts / len(u)
+    q = SUBPIXELS_PER_PX  # band-limits the histogram (``pixel="sample"``)
     fine = q * size_px
     edges = (np.arange(fine + 1) - fine // 2 - 0.5) / q
     counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
-    return to_output_pixels(counts, size_px, q, pixel) / keep.sum()
+    return to_output_pixels(counts, size_px, q, pixel) / len(u)
 
 
 def _clearly_holds(diameter_mm, wavelengths_nm, blurs_arcmin, arcmin_per_px, size_px, mode) -> bool:

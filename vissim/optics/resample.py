@@ -7,7 +7,12 @@ from scipy import ndimage
 
 from vissim.units import xy_matrix_to_image_rowcol
 
-__all__ = ["magnify", "block_mean"]
+__all__ = ["magnify", "block_mean", "SUBPIXELS_PER_PX"]
+
+#: Sub-pixels per output pixel (per axis) where vissim works on a finer grid and then integrates
+#: onto the output pixels: a geometric PSF's ``pixel="sample"`` histogram, a campaign's synthetic
+#: chart and the bench's wave truth (which images that chart, so the two must agree).
+SUBPIXELS_PER_PX = 5
 
 
 def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) -> np.ndarray:

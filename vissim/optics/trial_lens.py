@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.checks import finite_number as _number
+from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription
 from vissim.units import mm_to_m
@@ -238,7 +239,7 @@ class TrialLens:
         return front, SurfaceRadii((back_r, back_r), (180.0, 90.0))
 
 
-#: Longest vertex distance or lens gap, mm: a trial frame holds lenses within centimetres of the eye.
+#: Longest lens gap, mm (the vertex distance: `vissim.checks.VERTEX_DISTANCE_RANGE_MM`).
 MAX_HOLDER_DISTANCE_MM = 1000.0
 
 
@@ -278,11 +279,11 @@ class TrialLensSetup:
                 f"the holder takes at most {MAX_LENSES_IN_HOLDER} trial lenses, got {len(lenses)}"
             )
         object.__setattr__(self, "lenses", lenses)
-        for field, label in (("vertex_distance_mm", "vertex distance"), ("lens_gap_mm", "lens gap")):
-            value = _number(getattr(self, field), label, "mm")
-            if not 0.0 <= value <= MAX_HOLDER_DISTANCE_MM:
-                raise VissimInputError(f"{label} must be within 0-{MAX_HOLDER_DISTANCE_MM:g} mm, got {value:g} mm")
-            object.__setattr__(self, field, value + 0.0)
+        object.__setattr__(self, "vertex_distance_mm", check_vertex_mm(self.vertex_distance_mm))
+        gap = _number(self.lens_gap_mm, "lens gap", "mm")
+        if not 0.0 <= gap <= MAX_HOLDER_DISTANCE_MM:
+            raise VissimInputError(f"lens gap must be within 0-{MAX_HOLDER_DISTANCE_MM:g} mm, got {gap:g} mm")
+        object.__setattr__(self, "lens_gap_mm", gap + 0.0)
         distance = _number(self.object_distance_m, "object distance", "m", allow_inf=True)
         if distance <= mm_to_m(self.span_mm):
             raise VissimInputError(
@@ -453,9 +454,7 @@ def thesis_table_4_2_power(lens_diopters: float, vertex_distance_mm: float = THE
     ERRATA item 4: with the chart at a finite distance use `trial_lens_effect`.
     """
     power = _number(lens_diopters, "lens power", "dioptres")
-    vertex_m = mm_to_m(_number(vertex_distance_mm, "vertex distance", "mm"))
-    if vertex_m < 0.0:
-        raise VissimInputError(f"vertex distance must be >= 0 mm, got {vertex_distance_mm:g} mm")
+    vertex_m = mm_to_m(check_vertex_mm(vertex_distance_mm))
     if abs(1.0 - vertex_m * power) < _SINGULAR_TOL:
         raise VissimInputError(
             f"a {power:g} D lens at {vertex_distance_mm:g} mm focuses on the camera principal plane"

@@ -15,7 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from vissim.charts import POLARITIES
-from vissim.checks import path_arg
+from vissim.checks import (F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, MAX_ARCMIN_PER_PX, OBJECT_DISTANCE_RANGE_M,
+                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM, path_arg)
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.campaign_types import INPUTS, SIMULATIONS, Campaign, CampaignSettings, Configuration
 from vissim.validation.fields import (
@@ -38,17 +39,16 @@ from vissim.validation.preflight import check_campaign_memory
 
 __all__ = ["LensSpec", "Configuration", "CampaignSettings", "Campaign", "load_campaign", "SIMULATIONS", "INPUTS"]
 
-#: [campaign] numbers: (unit, lowest, highest); ranges are physical (a DSLR bench, visible light).
+#: [campaign] numbers: (unit, lowest, highest), the ranges of `vissim.checks`; the finest sampling is a campaign's own.
 NUMBER_SETTINGS = {
-    "arcmin_per_px": ("arcmin/px", 1e-3, 60.0),
-    "focal_length_mm": ("mm", 1.0, 1000.0),
-    "chart_distance_m": ("m", 0.01, 1000.0),
-    "vertex_distance_mm": ("mm", 0.0, 200.0),
-    "wavelength_nm": ("nm", 200.0, 2500.0),
+    "arcmin_per_px": ("arcmin/px", 1e-3, MAX_ARCMIN_PER_PX),
+    "focal_length_mm": ("mm", *FOCAL_LENGTH_RANGE_MM),
+    "chart_distance_m": ("m", *OBJECT_DISTANCE_RANGE_M),
+    "vertex_distance_mm": ("mm", *VERTEX_DISTANCE_RANGE_MM),
+    "wavelength_nm": ("nm", *WAVELENGTH_RANGE_NM),
     "refractive_index": ("(refractive index)", 1.01, 3.0),
     "data_range": ("(linear reflectance)", 1e-3, 1e3),
 }
-F_NUMBER_RANGE = (0.5, 128.0)
 LOGMAR_RANGE = (-1.0, 2.0)
 #: Sloan letters are 5 strokes tall: 5 arcmin at LogMAR 0.
 LETTER_ARCMIN_AT_LOGMAR_0 = 5.0

@@ -22,7 +22,8 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
-from vissim.checks import WAVELENGTH_RANGE_NM, path_arg
+from vissim.checks import (EYE_PUPIL_RANGE_MM, F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, OBJECT_DISTANCE_RANGE_M,
+                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM, path_arg)
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import SIMULATOR_REVISION
@@ -128,10 +129,10 @@ def _settings(head: dict, source: str) -> DepthCampaignSettings:
 
 #: Camera fields: (unit, lowest, highest).
 CAMERA_FIELDS = {
-    "f_number": ("(f-number)", 0.5, 128.0),
-    "focus_distance_m": ("m", 0.01, 1000.0),
-    "focal_length_mm": ("mm", 1.0, 1000.0),
-    "vertex_distance_mm": ("mm", 0.0, 200.0),
+    "f_number": ("(f-number)", *F_NUMBER_RANGE),
+    "focus_distance_m": ("m", *OBJECT_DISTANCE_RANGE_M),
+    "focal_length_mm": ("mm", *FOCAL_LENGTH_RANGE_MM),
+    "vertex_distance_mm": ("mm", *VERTEX_DISTANCE_RANGE_MM),
 }
 
 
@@ -143,7 +144,8 @@ def _eye(raw: dict, viewer, source: str, where: str) -> EyeViewer:
             rx = Prescription.parse(text(raw["eye"], source, f"{where}.eye"))
         except VissimInputError as exc:
             raise field_error(source, f"{where}.eye", str(exc)) from None
-    pupil = number(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm", lo=0.5, hi=10.0)
+    pupil = number(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm",
+                   lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1])
     accommodation = number(raw.get("accommodation_diopters", base_eye.accommodation_diopters), source, f"{where}.accommodation_diopters",
                            "dioptres", lo=0.0, hi=20.0)
     try:

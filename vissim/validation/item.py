@@ -31,12 +31,13 @@ from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
 from vissim.fit.capture import fit_bench_item
 from vissim.imageio import write_image
+from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.provenance import json_safe, make_provenance
 from vissim.validation.campaign_types import CampaignSettings, Configuration
 from vissim.validation.metrics import compare_images, noise_floor
 from vissim.imaging.registration import Registration, register
 from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE, add_bench_diffraction, block_mean, simulate, simulation_setup
+from vissim.validation.simulate import add_bench_diffraction, block_mean, simulate, simulation_setup
 from vissim.validation.wave_bench import (
     TRACED_RAYS,
     WAVE_BENCH,
@@ -192,19 +193,19 @@ def compute_item(
             "geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
             "wave": noise_floor(truth_wave_a, truth_wave_b, settings.data_range).as_json(),
         }
-    fine_synthetic = synthetic_tile(configuration, settings, SYNTHETIC_OVERSAMPLE)
-    inputs = {"render": (no_lens, 1), "synthetic": (fine_synthetic, SYNTHETIC_OVERSAMPLE)}
+    fine_synthetic = synthetic_tile(configuration, settings, SUBPIXELS_PER_PX)
+    inputs = {"render": (no_lens, 1), "synthetic": (fine_synthetic, SUBPIXELS_PER_PX)}
     images = {
         "truth": save("truth", truth_a),
         "truth_diffracted": save("truth_diffracted", truth_wave_a),
         "no_lens_render": save("no_lens_render", no_lens),
-        "synthetic": save("synthetic", block_mean(fine_synthetic, SYNTHETIC_OVERSAMPLE)),
+        "synthetic": save("synthetic", block_mean(fine_synthetic, SUBPIXELS_PER_PX)),
     }
     # The wave bench (module wave_bench): the bench's chart through the traced lenses' wave PSF.
     # A capture's truth is the photograph; the virtual bench's wave optics does not stand in for it.
     traced_truth, budget = None, None
     if settings.wave_truth and not captured:
-        traced_truth = compute_wave_bench(bench, configuration, settings, SYNTHETIC_OVERSAMPLE)
+        traced_truth = compute_wave_bench(bench, configuration, settings, SUBPIXELS_PER_PX)
         images["wave_truth"] = save_item_image(item_dir, "wave_truth", traced_truth.pixels,
                                                {**provenance, "wave_truth": json_safe(traced_truth.provenance)})
         budget = residual_budget(bench, bench_setup, settings.wavelength_nm)
@@ -236,14 +237,14 @@ def compute_item(
                                                                                            oversample=oversample))
         if traced_truth is not None and setup.mode == "wave":
             # the synthetic chart as laid out, unshifted: the truth is laid out from the same chart
-            simulated = simulate(setup, fine_synthetic, settings, oversample=SYNTHETIC_OVERSAMPLE)
+            simulated = simulate(setup, fine_synthetic, settings, oversample=SUBPIXELS_PER_PX)
             comparison = compare_images(traced_truth.pixels, simulated, data_range=settings.data_range)
             comparisons.append(_comparison(kind, "synthetic", WAVE_BENCH, "wave_truth", setup.as_json(), UNREGISTERED,
                                            simulated, comparison, save, f"{kind}_synthetic_{WAVE_BENCH}"))
     if traced_truth is not None:
         # The geometric self-check (module wave_bench): the trace's ray optics against the render.
         compare_with_render(TRACED_RAYS, "synthetic", "geometric", traced_rays_setup(bench),
-                            lambda image: traced_ray_image(bench, image, SYNTHETIC_OVERSAMPLE))
+                            lambda image: traced_ray_image(bench, image, SUBPIXELS_PER_PX))
     fit = None
     if settings.fit_rx and configuration.lenses:  # the refraction the capture shows, beside vergence theory
         fit = fit_bench_item(truth_a, no_lens, bench, arcmin_per_px=settings.arcmin_per_px, photograph=captured)

@@ -6,7 +6,7 @@ median defocus.  Its wave simulation's PSF is recomputed with the public functio
 `vissim.blur_image`) from what the item recorded: the camera prescription and pupil of the
 ``wave`` comparison (``setup`` in ``result.json``, written to 4 decimals, so to 1e-4 D), the
 campaign's wavelength and sampling.  The PSF is the one the simulation of the synthetic chart
-used (the campaign's arcmin/px over ``SYNTHETIC_OVERSAMPLE``); the through-focus strip blurs the
+used (the campaign's arcmin/px over ``SUBPIXELS_PER_PX``); the through-focus strip blurs the
 item's synthetic chart at the campaign's sampling.  Spectacle magnification is left out (the PSF
 has none; the simulation magnifies the image before blurring).  ``vissim report RUN`` redraws
 them from a run folder, like the other figures.
@@ -78,7 +78,7 @@ def _largest_defocus(prescription: Prescription) -> float:
 
 def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
     """One `OpticsCase` per group, in campaign order: the configuration with lenses of median defocus."""
-    from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE
+    from vissim.optics.resample import SUBPIXELS_PER_PX
     from vissim.validation.wave_bench_report import group_of
 
     run_dir = Path(run_dir)
@@ -93,7 +93,7 @@ def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
         case = OpticsCase(group_of(result["configuration"]["name"]), result["configuration"]["name"],
                           Prescription.parse(wave["setup"]["camera_prescription"]),
                           float(wave["setup"]["pupil_diameter_mm"]), float(settings["wavelength_nm"]),
-                          float(settings["arcmin_per_px"]), float(settings["arcmin_per_px"]) / SYNTHETIC_OVERSAMPLE,
+                          float(settings["arcmin_per_px"]), float(settings["arcmin_per_px"]) / SUBPIXELS_PER_PX,
                           run_dir / synthetic if synthetic else None, result["lens_label"])
         groups.setdefault(case.group, []).append((result["lens_label"] != "no lens", case))
     cases = []

@@ -16,8 +16,9 @@ from vissim.errors import VissimInputError
 from vissim.optics.psf import MAX_PSF_SIZE_PX, geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
 from vissim.optics.wavefront import Wavefront
 from vissim.render.run import render_memory_bytes  # no Mitsuba import: that happens when a render starts
+from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import SYNTHETIC_OVERSAMPLE, simulation_setup
+from vissim.validation.simulate import simulation_setup
 
 __all__ = ["item_memory_bytes", "check_campaign_memory", "check_depth_campaign_memory"]
 
@@ -59,7 +60,7 @@ def item_memory_bytes(configuration, settings) -> tuple[float, str]:
         # against the wave bench, wave-optical simulations run on the synthetic chart (as the truth does)
         extra = ("synthetic",) if settings.wave_truth and sim.mode == "wave" else ()
         for name in dict.fromkeys((*settings.inputs, *extra)):
-            s = SYNTHETIC_OVERSAMPLE if name == "synthetic" else 1
+            s = SUBPIXELS_PER_PX if name == "synthetic" else 1
             step = settings.arcmin_per_px / s
             try:
                 psf, size = _psf_bytes(front, sim.setup.pupil_diameter_mm, step, settings.wavelength_nm, sim.mode)

@@ -38,11 +38,7 @@ from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLens
 from vissim.validation.campaign_types import CampaignSettings, Configuration
 
-__all__ = ["SYNTHETIC_OVERSAMPLE", "SimulationSetup", "simulation_setup", "simulate", "add_bench_diffraction"]
-
-#: The synthetic chart is simulated at this many sub-pixels per campaign pixel (per axis).
-SYNTHETIC_OVERSAMPLE = 5
-
+__all__ = ["SimulationSetup", "simulation_setup", "simulate", "add_bench_diffraction"]
 
 #: kind -> (the thesis's choices put back, optics).  Each choice is one field of the bench's
 #: `ViewingSetup` replaced: "pupil" (ERRATA item 3), "power"
