@@ -53,8 +53,8 @@ blur.py's overlap-save squares measured no faster on these windows), on the laye
 PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
 content's blur (``r_max``) lets it show, and both spread once more through partly occluding
 neighbours.  The continuation itself is estimated by pull-push on the window grown by another
-`EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see the neighbourhood the whole
-frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
+`vissim.optics.depth_composite.EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see
+the neighbourhood the whole frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
 (same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
 60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
 a floor, each window is a few per cent of the frame.  Within it, the FFT covers only the box of
@@ -86,9 +86,9 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.array_backend import array_backend
 from vissim.optics.blur import pixel_array
+from vissim.optics.depth_composite import Compositor, LayerScene, blurred_layer
 from vissim.optics.depth_psfs import LayerOptics, in_order, layer_pool, worker_threads
-from vissim.optics.depth_windows import (COARSE_FACTOR, DEPTH_PADDING_MODES, add_overlap, blur_coarse, blur_window,
-                                         extended_layer, grow_box, layer_boxes, nonzero_box, occlusion_weight)
+from vissim.optics.depth_windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import geometric_blur_radius_arcmin
 from vissim.optics.wavefront import Wavefront
@@ -100,8 +100,6 @@ __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to
 
 log = logging.getLogger(__name__)
 
-#: Pixels by which a layer's continuation behind nearer content is estimated beyond its window.
-EXTENSION_HALO_PX = 64
 #: A blur diameter (px) from which a layer may go on the coarse grid, and the PSNR (dB, unit range)
 #: of its coarse blur against the fine one on white noise there (``tests/test_depth.py``).
 COARSE_BLUR_PX = 14.0
@@ -228,7 +226,7 @@ class DepthBlurResult:
     padded_shape: tuple[int, int]
 
     def as_json(self) -> dict:
-        out = {"n_layers": self.n_layers, "n_blurred_layers": len(self.layers)}
+        out = {"n_layers": self.n_layers, "nblurred_layers": len(self.layers)}
         out |= {f.name: getattr(self, f.name) for f in dataclasses.fields(self)[3:]}  # the plan's numbers
         out["padded_shape"] = list(self.padded_shape)
         out["layers"] = [{k: v for k, v in dataclasses.asdict(la).items() if k != "index"} for la in self.layers]
@@ -360,18 +358,13 @@ def blur_depth(
     threads = worker_threads(backend)
     with layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
         boxes_job = None if pool is None else pool.submit(layer_boxes, matte.lower, matte.upper, matte.frac, plan.n_layers)
-        fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in matte.active}
-        blurs_arcmin = _blur_diameters_arcmin(fronts, pupil, pool)
-        scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
-                  for k in matte.active}
-        optics = LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
-        layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
-                             blurs_arcmin[k], optics.sizes[k] * scales[k], float(matte.coverage[k] / matte.lower.size))
-                  for k in matte.active]
+        optics, layers = _layer_optics(rx, base, layer_diopters, accommodation, matte, pupil, wavelength, step, mode,
+                                       coarse_blur_px, pool)
         boxes = layer_boxes(matte.lower, matte.upper, matte.frac, plan.n_layers) if boxes_job is None else boxes_job.result()
-        scene = _LayerScene.on(backend, colour, matte, layer_diopters, threshold_diopters, boxes, optics, padding, threads)
-        compositor = _Compositor(scene, layer_diopters[matte.active[0]])
-        near_to_far = in_order(functools.partial(_blurred_layer, scene), optics, reversed(matte.active), pool, threads)
+        scene = LayerScene.on(backend, colour, (matte.lower, matte.upper, matte.frac), layer_diopters,
+                              threshold_diopters, boxes, optics, padding, threads)
+        compositor = Compositor(scene, layer_diopters[matte.active[0]])
+        near_to_far = in_order(functools.partial(blurred_layer, scene), optics, reversed(matte.active), pool, threads)
         for done, (k, (window, blurred, shape)) in enumerate(near_to_far, 1):
             compositor.add(k, window, blurred, shape)
             if progress is not None:
@@ -455,119 +448,21 @@ def _tent_matte(proximity: np.ndarray, layer_diopters: np.ndarray) -> _TentMatte
     return _TentMatte(lower.astype(np.int32), upper, frac.astype(np.float32), coverage, active)
 
 
-def _blur_diameters_arcmin(fronts: dict, pupil: float, pool) -> dict:
-    """Each layer's geometric blur diameter (arcmin), on ``pool``'s threads if given."""
+def _layer_optics(rx: Prescription, base: Wavefront, layer_diopters: np.ndarray, accommodation: float,
+                  matte: _TentMatte, pupil: float, wavelength: float, step: float, mode: str,
+                  coarse_blur_px: float | None, pool) -> tuple[LayerOptics, list[DepthLayer]]:
+    """Each non-empty layer's wavefront, blur diameter, grid (coarse from ``coarse_blur_px``) and PSF (on
+    ``pool``'s threads if given), and its record."""
+    fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in matte.active}
     blurs = (map if pool is None else pool.map)(lambda f: geometric_blur_radius_arcmin(f, pupil), fronts.values())
-    return {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
-
-
-@dataclass(frozen=True, eq=False)
-class _LayerScene:
-    """What blurring one layer needs: the scene and its matte on the array backend, each layer's box,
-    PSF (``optics``) and reach (px: its PSF's half-width + 1, on the image's grid)."""
-
-    colour: object
-    lower: object
-    upper: object
-    frac: object
-    layer_diopters: np.ndarray
-    threshold_diopters: float
-    boxes: dict
-    reach: dict
-    optics: LayerOptics
-    padding: str
-    backend: object
-    threads: int
-    transfers: dict
-
-    @classmethod
-    def on(cls, backend, colour, matte: _TentMatte, layer_diopters, threshold_diopters, boxes, optics: LayerOptics,
-           padding: str, threads: int) -> _LayerScene:
-        """The scene moved to ``backend``, the reach of each layer found from its PSF's size."""
-        reach = {k: (optics.sizes[k] // 2 + 1) * optics.scales[k] for k in matte.active}
-        colour, lower, upper, frac = (backend.asarray(a) for a in (colour, matte.lower, matte.upper, matte.frac))
-        return cls(colour, lower, upper, frac, layer_diopters, threshold_diopters, boxes, reach, optics, padding,
-                   backend, threads, {})
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return self.lower.shape
-
-
-def _blurred_layer(scene: _LayerScene, k: int) -> tuple:
-    """Layer ``k`` extended behind nearer content and blurred on its window: (window, blurred planes, padded shape).
-
-    The planes are the premultiplied colours and, last, the extended coverage.  Layer k reaches
-    its matte's box grown by its own PSF; its continuation behind nearer content matters only
-    where that content's blur leaves it visible: the largest PSF's reach further.  The
-    continuation is estimated on a larger window: pull-push's coarse levels see farther.
-    """
-    rows, cols = scene.shape
-    boxes, reach, scale = scene.boxes, scene.reach, scene.optics.scales[k]
-    window = grow_box(boxes[k], 2 * (reach[k] + max(reach.values())), (rows, cols))
-    e0, e1, f0, f1 = grow_box(window, EXTENSION_HALO_PX, (rows, cols))
-    wide = (slice(e0, e1), slice(f0, f1))
-    planes = extended_layer(scene.colour[:, e0:e1, f0:f1], scene.lower[wide], scene.upper[wide], scene.frac[wide],
-                            scene.layer_diopters, k, scene.threshold_diopters, rows=(boxes[k][0] - e0, boxes[k][1] - e0),
-                            keep=(window[0] - e0, window[1] - e0))
-    window_rows = window[0]
-    planes = planes[:, window[0] - e0 : window[1] - e0]  # the rows extended: those of the window
-    if scale == 1:  # the blur reaches only the planes' nonzero box grown by the PSF
-        window = grow_box(nonzero_box(planes, (window_rows, f0)), reach[k], (rows, cols), within=window)
-    r0, r1, c0, c1 = window
-    planes = planes[:, r0 - window_rows : r1 - window_rows, c0 - f0 : c1 - f0]
-    touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
-    if scale == 1:
-        blurred, shape = blur_window(planes, scene.optics.psf(k), scene.padding, touches, scene.backend,
-                                     scene.transfers, scene.threads)
-    else:
-        blurred, shape = blur_coarse(planes, scene.optics.psf(k), scene.padding, touches, scale, scene.backend,
-                                     scene.transfers, scene.threads)
-    return window, blurred, shape
-
-
-class _Compositor:
-    """Blurred layers composited near to far (module doc, "Compositing"): ``sum_k T_k B_k(P_k)`` and
-    ``sum_k T_k B_k(A_k)``, with each nearer layer's blurred coverage kept while it may occlude."""
-
-    def __init__(self, scene: _LayerScene, farthest_diopters: float):
-        xp, (rows, cols) = scene.backend.xp, scene.shape
-        self.scene, self.farthest = scene, farthest_diopters
-        self.numerator = xp.zeros_like(scene.colour)
-        self.denominator = xp.zeros((rows, cols), np.float32)
-        self.occluders = xp.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
-        self.pending: list[tuple[float, tuple, np.ndarray]] = []  # nearer layers' blurred coverage, partly occluding
-        self.largest = (0, 0)  # the largest padded window blurred
-
-    def add(self, k: int, window: tuple, blurred, shape: tuple[int, int]) -> None:
-        """Layer ``k`` (nearer ones added before it), through its transmission ``T_k``."""
-        proximity, threshold = self.scene.layer_diopters[k], self.scene.threshold_diopters
-        while self.pending and self.pending[0][0] - proximity >= 2 * threshold:  # near to far
-            _, (r0, r1, c0, c1), matte_j = self.pending.pop(0)
-            self.occluders[r0:r1, c0:c1] += matte_j
-        r0, r1, c0, c1 = window
-        transmitted = self.occluders[r0:r1, c0:c1].copy()
-        for proximity_j, window_j, matte_j in self.pending:
-            weight = occlusion_weight(proximity_j - proximity, threshold)
-            if weight > 0:
-                add_overlap(transmitted, window, weight * matte_j, window_j)
-        self.scene.backend.xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-        self.largest = max(self.largest, shape)
-        if proximity - threshold > self.farthest:  # it occludes layers behind: keep its coverage
-            self.pending.append((proximity, window, blurred[-1].copy()))
-        blurred *= transmitted
-        self.numerator[:, r0:r1, c0:c1] += blurred[:-1]
-        self.denominator[r0:r1, c0:c1] += blurred[-1]
-
-    def image(self, crop: int) -> np.ndarray:
-        """The composite, normalised by the blurred coverage, ``crop`` px cut from each side: (C, H', W') on the CPU."""
-        xp, (rows, cols) = self.scene.backend.xp, self.scene.shape
-        low = int((self.denominator < 0.5).sum())
-        if low:
-            log.info("depth blur: %d pixels have total blurred coverage below 0.5 (min %.3g)", low,
-                     float(self.denominator.min()))
-        out = self.numerator / xp.maximum(self.denominator, 1e-6)
-        return self.scene.backend.to_numpy(out[:, crop : rows - crop, crop : cols - crop])
+    blurs_arcmin = {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
+    scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
+              for k in matte.active}
+    optics = LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
+    layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
+                         blurs_arcmin[k], optics.sizes[k] * scales[k], float(matte.coverage[k] / matte.lower.size))
+              for k in matte.active]
+    return optics, layers
 
 
 def _matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
