@@ -27,13 +27,12 @@ from vissim.imageio import read_image, write_image
 from vissim.optics.accommodation import accommodation_for_target
 from vissim.optics.blur import blur_image
 from vissim.optics.depth import (
-    extended_layer,
     matte_indices,
-    occlusion_weight,
     blur_depth,
     layer_spacing_diopters,
     plan_layers,
 )
+from vissim.optics.depth_windows import extended_layer, occlusion_weight
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.wavefront import Wavefront

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import vissim.optics.depth as depth_module
+import vissim.optics.depth_composite as composite_module
 from vissim.optics.depth import blur_depth
 from vissim.optics.prescription import Prescription
 from vissim.optics.threads import _openblas_controls, single_threaded_blas
@@ -53,7 +54,7 @@ def test_an_error_in_a_layer_reaches_the_caller(monkeypatch):
     def broken(*args, **kwargs):
         raise RuntimeError("layer failed")
 
-    monkeypatch.setattr(depth_module, "extended_layer", broken)
+    monkeypatch.setattr(composite_module, "extended_layer", broken)
     with pytest.raises(RuntimeError, match="layer failed"):
         blur_depth(image, depth_m, **EYE)
 

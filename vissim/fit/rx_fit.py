@@ -580,6 +580,51 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     ('sign undetermined', 1.0)
     """
     started = time.perf_counter()
+    step, pupil, img, ref, model_error_diopters = _checked_arguments(image, reference, arcmin_per_px, pupil_diameter_mm,
+                                                                     mode, magnification, model_error_diopters)
+    model = power_model(magnification, bench)
+    reach = _forward_reach_diopters(max_power_diopters, pupil, fit_focus_offset, fit_pupil)
+    geometric = ForwardModel(ref, step, pupil, mode="geometric", max_power_diopters=reach, max_shift_px=max_shift_px)
+    problem = _Problem(geometric, img, model, fit_focus_offset, fit_pupil)
+    lower, upper = _bounds(problem, max_power_diopters, max_shift_px)
+
+    stage_a, blur_names = _fit_blur(problem, ref, bench, max_power_diopters, max_shift_px, progress)
+    results = _fit_signs(problem, stage_a, blur_names, lower, upper, progress)
+    forward = geometric
+    if mode == "wave":
+        forward = ForwardModel(ref, step, pupil, mode="wave", wavelength_nm=wavelength_nm, max_power_diopters=reach,
+                               max_shift_px=max_shift_px)
+        results = _refine_in_wave_optics(problem, results, forward, lower, upper, progress)
+    ranked = _rank_solutions(problem, results, img.shape, model_error_diopters)
+    residual = _residual_statistics(problem, ranked.best_result.x, forward, img)
+    largest_blur_px, resolution_power = _blur_size(ranked.best, pupil, step)
+    on_bound = _parameters_on_bound(problem, ranked.best_result.x, lower, upper)
+    status, reason = _status(residual.unexplained, on_bound, largest_blur_px, resolution_power, ranked.delta_chi2, model)
+    axis_determined = status == "ok" and _axis_is_determined(ranked.best)
+
+    nuisance_record = _nuisance_record(problem, ranked, residual, fit_pupil)
+    settings = {"arcmin_per_px": step, "pupil_diameter_mm": pupil, "mode": mode, "wavelength_nm": wavelength_nm,
+                "magnification_model": model.as_json(), "fit_focus_offset": fit_focus_offset, "fit_pupil": fit_pupil,
+                "max_power_diopters": max_power_diopters, "max_shift_px": max_shift_px, "pixels": int(img.size),
+                "parameters": problem.names, "sign_min_delta_chi2": SIGN_MIN_DELTA_CHI2,
+                "axis_min_chi2": AXIS_MIN_CHI2, "max_unexplained_fraction": MAX_UNEXPLAINED_FRACTION,
+                "min_resolved_blur_px": MIN_RESOLVED_BLUR_PX, "resolution_power_diopters": resolution_power,
+                "axis_min_cylinder_diopters": AXIS_MIN_CYLINDER_DIOPTERS, "same_solution_diopters": SAME_SOLUTION_DIOPTERS,
+                "model_error_diopters": model_error_diopters, "sign_chi2_deflation": ranked.inflation}
+    seconds = time.perf_counter() - started
+    log.info("fit-rx: %s, effective %s, PSNR %.1f dB, %d evaluations, %.1f s", status,
+             ranked.best.spherocylinder().format(3), residual.psnr_db, problem.evaluations, seconds)
+    return RxFit(status=status, reason=reason, best=ranked.best, alternatives=tuple(ranked.alternatives),
+                 sign_delta_chi2=ranked.delta_chi2, axis_determined=axis_determined, residual_psnr_db=residual.psnr_db,
+                 residual_sigma=math.sqrt(ranked.sigma2), unexplained_fraction=residual.unexplained,
+                 nuisances=nuisance_record, settings=settings, evaluations=problem.evaluations, seconds=seconds,
+                 model=residual.fitted)
+
+
+# -- the stages of fit_rx ------------------------------------------------------------------
+def _checked_arguments(image, reference, arcmin_per_px, pupil_diameter_mm, mode: str, magnification: str,
+                       model_error_diopters) -> tuple[float, float, np.ndarray, np.ndarray, float]:
+    """Checks: (arcmin per px, pupil mm, image, reference, model error D), or a `VissimInputError`."""
     step = check_arcmin_per_px(arcmin_per_px)
     pupil = check_pupil_mm(pupil_diameter_mm)
     if mode not in FORWARD_MODES:
@@ -590,21 +635,32 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     model_error_diopters = float(model_error_diopters)
     if not (math.isfinite(model_error_diopters) and 0.0 <= model_error_diopters <= 10.0):
         raise VissimInputError(f"the model error must be within 0-10 D, got {model_error_diopters!r} D")
-    model = power_model(magnification, bench)
-    # the largest principal defocus the bounds allow (|M| + |J|, J0 and J45 within half of it),
-    # with the trial lens's vergence gain at the vertex, plus the focus offset; the largest pupil
+    return step, pupil, img, ref, model_error_diopters
+
+
+def _forward_reach_diopters(max_power_diopters: float, pupil: float, fit_focus_offset: bool, fit_pupil: bool) -> float:
+    """The largest defocus the forward model must reach, as a power at the nominal pupil (D).
+
+    The largest principal defocus the bounds allow (|M| + |J|, J0 and J45 within half of it),
+    with the trial lens's vergence gain at the vertex, plus the focus offset; scaled up by the
+    widest pupil the fit may try (mm; ``pupil`` the nominal one).
+    """
     reach = max_power_diopters * (1.0 + math.sqrt(0.5)) * 1.1 + (3.0 if fit_focus_offset else 0.0)
     widest = pupil * (math.exp(0.7) if fit_pupil else 1.0)
-    geometric = ForwardModel(ref, step, pupil, mode="geometric", max_power_diopters=reach * widest / pupil,
-                             max_shift_px=max_shift_px)
-    problem = _Problem(geometric, img, model, fit_focus_offset, fit_pupil)
-    lower, upper = _bounds(problem, max_power_diopters, max_shift_px)
+    return reach * widest / pupil
 
-    # 1. shift from cross-correlation (content of the image relative to the reference)
-    shift = register(img, ref, upsample_factor=20).shift_px
-    # 2. stage A, the blur alone: effective power with a free isotropic magnification, principal powers >= 0
-    blur_model = power_model("free", bench) if model.determines_sign else model
-    blur_problem = _Problem(geometric, img, blur_model, fit_focus_offset, fit_pupil)
+
+def _fit_blur(problem: _Problem, ref: np.ndarray, bench: DslrBench | None, max_power_diopters: float,
+              max_shift_px: float, progress: Progress | None):
+    """Stages 1 and 2: the shift by cross-correlation, then the blur alone (module doc).
+
+    The effective power with a free isotropic magnification (principal powers >= 0), from the
+    best sphere of a scan and four cylinders around it; the best of those fits, and the names of
+    its parameters.  Its evaluations count in ``problem``'s.
+    """
+    shift = register(problem.image, ref, upsample_factor=20).shift_px  # the image's content relative to the reference
+    blur_model = power_model("free", bench) if problem.model.determines_sign else problem.model
+    blur_problem = _Problem(problem.forward, problem.image, blur_model, problem.fit_focus, problem.fit_pupil)
     blur_lower, blur_upper = _bounds(blur_problem, max_power_diopters, max_shift_px)
     base = np.zeros(len(blur_problem.names))
     base[3:5] = np.clip(shift, -max_shift_px * 0.9, max_shift_px * 0.9)
@@ -613,46 +669,90 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     stage_a = min((_fitted(_least_squares(blur_problem, start, blur_lower, blur_upper), advance) for start in starts),
                   key=lambda r: r.cost)
     problem.evaluations += blur_problem.evaluations
-    # 3. stage B: each principal power's sign, under the chosen model
+    return stage_a, blur_problem.names
+
+
+def _fit_signs(problem: _Problem, stage_a, blur_names: list[str], lower, upper, progress: Progress | None) -> list:
+    """Stage 3: the chosen model from each combination of the principal powers' signs of ``stage_a``.
+
+    A model that does not tie magnification to power cannot tell them apart: each combination
+    is then ``stage_a``'s fit, its powers' signs flipped, without a new fit.
+    """
     results = []
     signs = list(_sign_combinations(stage_a.x[:3]))
-    advance = counter(progress if model.determines_sign else None, "fit: each sign of the powers", len(signs))
+    determines_sign = problem.model.determines_sign
+    advance = counter(progress if determines_sign else None, "fit: each sign of the powers", len(signs))
     for vector in signs:
         theta = np.zeros(len(problem.names))
         theta[:5] = (*vector, *stage_a.x[3:5])
         for name in problem.names[5:]:
-            theta[problem.names.index(name)] = stage_a.x[blur_problem.names.index(name)]
-        if model.determines_sign:
+            theta[problem.names.index(name)] = stage_a.x[blur_names.index(name)]
+        if determines_sign:
             results.append(_fitted(_least_squares(problem, theta, lower, upper), advance))
         else:  # the blur is even in each principal power: every combination fits alike
             results.append(scipy.optimize.OptimizeResult(x=np.clip(theta, lower, upper), cost=stage_a.cost,
                                                          jac=stage_a.jac, fun=stage_a.fun))
-    # 4. wave refinement of each distinct candidate
-    forward = geometric
-    if mode == "wave":
-        forward = ForwardModel(ref, step, pupil, mode="wave", wavelength_nm=wavelength_nm,
-                               max_power_diopters=reach * widest / pupil, max_shift_px=max_shift_px)
-        advance = counter(progress, "fit: wave refinement", len(results))
-        results = [_fitted(_least_squares(problem, r.x, lower, upper, forward), advance) for r in results]
-        problem.forward = forward
+    return results
 
-    results.sort(key=lambda r: r.cost)
+
+def _refine_in_wave_optics(problem: _Problem, results: list, wave: ForwardModel, lower, upper,
+                           progress: Progress | None) -> list:
+    """Stage 4 (wave mode): each candidate refitted in wave optics; ``problem`` predicts in wave optics from then on."""
+    advance = counter(progress, "fit: wave refinement", len(results))
+    results = [_fitted(_least_squares(problem, r.x, lower, upper, wave), advance) for r in results]
+    problem.forward = wave
+    return results
+
+
+@dataclass(frozen=True)
+class _Ranking:
+    """The candidates ranked: the best fit and its statistics, the distinct others with their delta chi2."""
+
+    best_result: Any
+    best: Solution
+    cov_theta: np.ndarray
+    sigma2: float
+    inflation: float
+    alternatives: list
+    delta_chi2: float | None
+
+
+def _rank_solutions(problem: _Problem, results: list, shape: tuple[int, int], model_error_diopters: float) -> _Ranking:
+    """Statistics: the best candidate's solution, and each distinct other's delta chi2 (module doc, "Sign").
+
+    The residual variance counts white noise; the measured spread (sandwich) is wider on renders,
+    so chi-square differences are deflated by the largest ratio of the two (never by less than 1).
+    """
+    results = sorted(results, key=lambda r: r.cost)
     best_result = results[0]
-    best, cov_theta, sigma2 = _solution(problem, best_result, img.shape, model_error_diopters)
-    # The residual variance counts white noise; the measured spread (sandwich) is wider on renders, so
-    # chi-square differences are deflated by the largest ratio of the two (never by less than 1).
+    best, cov_theta, sigma2 = _solution(problem, best_result, shape, model_error_diopters)
     white, measured = (np.square(best.uncertainty[k]) for k in ("white_standard_error", "noise_standard_error"))
     inflation = float(max(1.0, np.max(np.divide(measured, white, out=np.ones(3), where=white > 0))))
     alternatives: list[tuple[Solution, float]] = []
     for result in results[1:]:
-        candidate = _solution(problem, result, img.shape, model_error_diopters)[0]
+        candidate = _solution(problem, result, shape, model_error_diopters)[0]
         distinct = np.max(np.abs(np.subtract(candidate.power_vector, best.power_vector))) > SAME_SOLUTION_DIOPTERS
         if distinct and all(np.max(np.abs(np.subtract(candidate.power_vector, a.power_vector))) > SAME_SOLUTION_DIOPTERS
                             for a, _ in alternatives):
             alternatives.append((candidate, (candidate.ssr - best.ssr) / (sigma2 * inflation)))
     delta_chi2 = min((d for _, d in alternatives), default=None)
+    return _Ranking(best_result, best, cov_theta, sigma2, inflation, alternatives, delta_chi2)
 
-    prediction = problem.prediction(best_result.x, forward)
+
+@dataclass(frozen=True)
+class _Residual:
+    """The best model image (gain and offset applied) and how much of the capture it leaves."""
+
+    fitted: np.ndarray
+    gain: float
+    offset: float
+    unexplained: float  # fraction of the capture's variance
+    psnr_db: float
+
+
+def _residual_statistics(problem: _Problem, theta: np.ndarray, forward: ForwardModel, img: np.ndarray) -> _Residual:
+    """The model image at ``theta`` and its residual against the capture: unexplained variance, PSNR."""
+    prediction = problem.prediction(theta, forward)
     fitted, gain, offset = problem.projected(prediction)
     residual = img - fitted
     sst = float(np.sum((img - img.mean()) ** 2))
@@ -660,34 +760,46 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     data_range = float(img.max() - img.min())
     mse = float(np.mean(residual ** 2))
     psnr = math.inf if mse == 0 else 10.0 * math.log10(data_range ** 2 / mse)
+    return _Residual(fitted, gain, offset, unexplained, psnr)
 
-    # decisions
-    principal = np.abs(np.linalg.eigvalsh(np.array([[best.power_vector[0] + best.power_vector[1], best.power_vector[2]],
-                                                     [best.power_vector[2], best.power_vector[0] - best.power_vector[1]]])))
+
+def _blur_size(best: Solution, pupil: float, step: float) -> tuple[float, float]:
+    """The best fit's largest blur diameter (px), and the power whose blur is `MIN_RESOLVED_BLUR_PX` (D)."""
+    m, j0, j45 = best.power_vector
+    principal = np.abs(np.linalg.eigvalsh(np.array([[m + j0, j45], [j45, m - j0]])))
     to_px = float(mrad_to_arcmin(pupil)) / step  # blur diameter in px per dioptre
-    largest_blur_px = float(principal.max()) * to_px
-    resolution_power = MIN_RESOLVED_BLUR_PX / to_px
-    status, reason = "ok", None
-    on_bound = [name for name, x, lo, hi in zip(problem.names, best_result.x, lower, upper)
-                if min(x - lo, hi - x) <= 1e-6 * (hi - lo)]
+    return float(principal.max()) * to_px, MIN_RESOLVED_BLUR_PX / to_px
+
+
+def _parameters_on_bound(problem: _Problem, theta: np.ndarray, lower, upper) -> list[str]:
+    """The names of the parameters that ended on (within 1e-6 of the range from) a bound."""
+    return [name for name, x, lo, hi in zip(problem.names, theta, lower, upper) if min(x - lo, hi - x) <= 1e-6 * (hi - lo)]
+
+
+def _status(unexplained: float, on_bound: list[str], largest_blur_px: float, resolution_power: float,
+            delta_chi2: float | None, model) -> tuple[str, str | None]:
+    """Decisions, first that applies: failed (unexplained variance, a bound), unresolved, sign undetermined, ok."""
     if unexplained > MAX_UNEXPLAINED_FRACTION:
-        status = "failed"
-        reason = (f"the model leaves {100 * unexplained:.1f} % of the image's variance unexplained (at most "
-                  f"{100 * MAX_UNEXPLAINED_FRACTION:g} %): a different chart, crop, sampling or optics")
-    elif on_bound:
-        status = "failed"
-        reason = f"the fit ended on the bound of {', '.join(on_bound)}"
-    elif largest_blur_px < MIN_RESOLVED_BLUR_PX:
-        status = "unresolved"
-        reason = (f"the fitted blur ({largest_blur_px:.2f} px across) is below {MIN_RESOLVED_BLUR_PX:g} px: at this "
-                  "sampling a sub-pixel shift of the sharp reference and a small power look alike; the power added is "
-                  f"below about {resolution_power:.2f} D in each meridian, its value and sign are not determined")
-    elif delta_chi2 is not None and delta_chi2 < SIGN_MIN_DELTA_CHI2:
-        status = "sign undetermined"
-        reason = (f"a solution with other signs of the principal powers fits as well (delta chi2 {delta_chi2:.2f} < "
-                  f"{SIGN_MIN_DELTA_CHI2:g})" if model.determines_sign else
-                  f"magnification model {model.name!r} does not tie magnification to power; blur alone is even in "
-                  "each principal power")
+        return "failed", (f"the model leaves {100 * unexplained:.1f} % of the image's variance unexplained (at most "
+                          f"{100 * MAX_UNEXPLAINED_FRACTION:g} %): a different chart, crop, sampling or optics")
+    if on_bound:
+        return "failed", f"the fit ended on the bound of {', '.join(on_bound)}"
+    if largest_blur_px < MIN_RESOLVED_BLUR_PX:
+        return "unresolved", (
+            f"the fitted blur ({largest_blur_px:.2f} px across) is below {MIN_RESOLVED_BLUR_PX:g} px: at this "
+            "sampling a sub-pixel shift of the sharp reference and a small power look alike; the power added is "
+            f"below about {resolution_power:.2f} D in each meridian, its value and sign are not determined")
+    if delta_chi2 is not None and delta_chi2 < SIGN_MIN_DELTA_CHI2:
+        return "sign undetermined", (
+            f"a solution with other signs of the principal powers fits as well (delta chi2 {delta_chi2:.2f} < "
+            f"{SIGN_MIN_DELTA_CHI2:g})" if model.determines_sign else
+            f"magnification model {model.name!r} does not tie magnification to power; blur alone is even in "
+            "each principal power")
+    return "ok", None
+
+
+def _axis_is_determined(best: Solution) -> bool:
+    """The cylinder differs from zero at 95 % (`AXIS_MIN_CHI2`) and is at least `AXIS_MIN_CYLINDER_DIOPTERS`."""
     j = np.array(best.power_vector[1:])
     cov_j = best.covariance[1:, 1:]
     try:
@@ -695,33 +807,23 @@ def fit_rx(image: Any, reference: Any, *, arcmin_per_px: float, pupil_diameter_m
     except np.linalg.LinAlgError:
         axis_chi2 = 0.0
     cylinder = 2.0 * float(np.hypot(*j))
-    axis_determined = status == "ok" and axis_chi2 >= AXIS_MIN_CHI2 and cylinder >= AXIS_MIN_CYLINDER_DIOPTERS
+    return axis_chi2 >= AXIS_MIN_CHI2 and cylinder >= AXIS_MIN_CYLINDER_DIOPTERS
 
-    _, shift_fit, nuisances, focus, pupil_fit = problem.unpack(best_result.x)
-    sd_theta = np.sqrt(np.maximum(np.diag(cov_theta), 0.0))
-    nuisance_record = {
+
+def _nuisance_record(problem: _Problem, ranked: _Ranking, residual: _Residual, fit_pupil: bool) -> dict:
+    """The record's nuisances: shift, gain, offset, magnification, and each fitted nuisance with its standard error."""
+    theta = ranked.best_result.x
+    _, shift_fit, nuisances, _, pupil_fit = problem.unpack(theta)
+    sd_theta = np.sqrt(np.maximum(np.diag(ranked.cov_theta), 0.0))
+    record = {
         "shift_rows_px": float(shift_fit[0]), "shift_cols_px": float(shift_fit[1]),
         "shift_sign": "the image's content relative to the reference (positive: down, right)",
-        "gain": gain, "offset": offset,
-        "magnification_matrix": model.optics(best_result.x[:3], nuisances).magnification.tolist(),
+        "gain": residual.gain, "offset": residual.offset,
+        "magnification_matrix": problem.model.optics(theta[:3], nuisances).magnification.tolist(),
     }
     for k, name in enumerate(problem.names[5:], start=5):
-        nuisance_record[name] = float(best_result.x[k])
-        nuisance_record[name + "_standard_error"] = float(sd_theta[k])
+        record[name] = float(theta[k])
+        record[name + "_standard_error"] = float(sd_theta[k])
     if fit_pupil:
-        nuisance_record["pupil_diameter_mm"] = pupil_fit
-    settings = {"arcmin_per_px": step, "pupil_diameter_mm": pupil, "mode": mode, "wavelength_nm": wavelength_nm,
-                "magnification_model": model.as_json(), "fit_focus_offset": fit_focus_offset, "fit_pupil": fit_pupil,
-                "max_power_diopters": max_power_diopters, "max_shift_px": max_shift_px, "pixels": int(img.size),
-                "parameters": problem.names, "sign_min_delta_chi2": SIGN_MIN_DELTA_CHI2,
-                "axis_min_chi2": AXIS_MIN_CHI2, "max_unexplained_fraction": MAX_UNEXPLAINED_FRACTION,
-                "min_resolved_blur_px": MIN_RESOLVED_BLUR_PX, "resolution_power_diopters": resolution_power,
-                "axis_min_cylinder_diopters": AXIS_MIN_CYLINDER_DIOPTERS, "same_solution_diopters": SAME_SOLUTION_DIOPTERS,
-                "model_error_diopters": model_error_diopters, "sign_chi2_deflation": inflation}
-    seconds = time.perf_counter() - started
-    log.info("fit-rx: %s, effective %s, PSNR %.1f dB, %d evaluations, %.1f s", status,
-             best.spherocylinder().format(3), psnr, problem.evaluations, seconds)
-    return RxFit(status=status, reason=reason, best=best, alternatives=tuple(alternatives), sign_delta_chi2=delta_chi2,
-                 axis_determined=axis_determined, residual_psnr_db=psnr, residual_sigma=math.sqrt(sigma2),
-                 unexplained_fraction=unexplained, nuisances=nuisance_record, settings=settings,
-                 evaluations=problem.evaluations, seconds=seconds, model=fitted)
+        record["pupil_diameter_mm"] = pupil_fit
+    return record

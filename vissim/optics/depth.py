@@ -53,8 +53,8 @@ blur.py's overlap-save squares measured no faster on these windows), on the laye
 PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
 content's blur (``r_max``) lets it show, and both spread once more through partly occluding
 neighbours.  The continuation itself is estimated by pull-push on the window grown by another
-`EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see the neighbourhood the whole
-frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
+`vissim.optics.depth_composite.EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see
+the neighbourhood the whole frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
 (same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
 60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
 a floor, each window is a few per cent of the frame.  Within it, the FFT covers only the box of
@@ -71,6 +71,7 @@ the result equals the one-thread blur to float32 round-off (``tests/test_depth_t
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 import os
@@ -85,9 +86,9 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.array_backend import array_backend
 from vissim.optics.blur import pixel_array
+from vissim.optics.depth_composite import Compositor, LayerScene, blurred_layer
 from vissim.optics.depth_psfs import LayerOptics, in_order, layer_pool, worker_threads
-from vissim.optics.depth_windows import (COARSE_FACTOR, DEPTH_PADDING_MODES, add_overlap, blur_coarse, blur_window,
-                                         extended_layer, grow_box, layer_boxes, nonzero_box, occlusion_weight)
+from vissim.optics.depth_windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import geometric_blur_radius_arcmin
 from vissim.optics.wavefront import Wavefront
@@ -99,8 +100,6 @@ __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to
 
 log = logging.getLogger(__name__)
 
-#: Pixels by which a layer's continuation behind nearer content is estimated beyond its window.
-EXTENSION_HALO_PX = 64
 #: A blur diameter (px) from which a layer may go on the coarse grid, and the PSNR (dB, unit range)
 #: of its coarse blur against the fine one on white noise there (``tests/test_depth.py``).
 COARSE_BLUR_PX = 14.0
@@ -227,7 +226,7 @@ class DepthBlurResult:
     padded_shape: tuple[int, int]
 
     def as_json(self) -> dict:
-        out = {"n_layers": self.n_layers, "n_blurred_layers": len(self.layers)}
+        out = {"n_layers": self.n_layers, "nblurred_layers": len(self.layers)}
         out |= {f.name: getattr(self, f.name) for f in dataclasses.fields(self)[3:]}  # the plan's numbers
         out["padded_shape"] = list(self.padded_shape)
         out["layers"] = [{k: v for k, v in dataclasses.asdict(la).items() if k != "index"} for la in self.layers]
@@ -347,6 +346,45 @@ def blur_depth(
     pupil = check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
     accommodation = check_accommodation_diopters(accommodation_diopters)
+    wavelength, threshold_px, coarse_blur_px, backend = _checked_options(
+        mode, padding, wavelength_nm, occlusion_threshold_px, coarse_blur_px, max_layers, extra_wavefront, device)
+    pixels, proximity, crop = _checked_image_and_depth(image, depth_m, crop_px)
+    colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
+
+    base = base_wavefront(rx, pupil, extra_wavefront)
+    in_focus_diopters = accommodation - base.to_prescription().spherical_equivalent_diopters
+    plan, threshold_diopters = _depth_plan(proximity, in_focus_diopters, step, pupil, layer_spacing_fraction,
+                                           threshold_px, max_layers)
+    layer_diopters = np.array(plan.proximities_diopters)
+    matte = _tent_matte(proximity, layer_diopters)
+    threads = worker_threads(backend)
+    with layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
+        boxes_job = None if pool is None else pool.submit(layer_boxes, matte.lower, matte.upper, matte.frac, plan.n_layers)
+        optics, layers = _layer_optics(rx, base, layer_diopters, accommodation, matte, pupil, wavelength, step, mode,
+                                       coarse_blur_px, pool)
+        boxes = layer_boxes(matte.lower, matte.upper, matte.frac, plan.n_layers) if boxes_job is None else boxes_job.result()
+        scene = LayerScene.on(backend, colour, (matte.lower, matte.upper, matte.frac), layer_diopters,
+                              threshold_diopters, boxes, optics, padding, threads)
+        compositor = Compositor(scene, layer_diopters[matte.active[0]])
+        near_to_far = in_order(functools.partial(blurred_layer, scene), optics, reversed(matte.active), pool, threads)
+        for done, (k, (window, blurred, shape)) in enumerate(near_to_far, 1):
+            compositor.add(k, window, blurred, shape)
+            if progress is not None:
+                progress("depth layers", done, len(matte.active))
+    log.info("depth blur: %d layers planned, %d non-empty, largest padded window %s", plan.n_layers, len(matte.active),
+             compositor.largest)
+    out = compositor.image(crop)
+    result = out[0] if pixels.ndim == 2 else np.moveaxis(out, 0, -1)
+    return DepthBlurResult(
+        np.ascontiguousarray(result, dtype=np.float32), tuple(layers), plan.n_layers, plan.max_spacing_diopters,
+        threshold_diopters, accommodation, in_focus_diopters, compositor.largest,
+    )
+
+
+# -- the stages of blur_depth ---------------------------------------------------------
+def _checked_options(mode: str, padding: str, wavelength_nm, occlusion_threshold_px, coarse_blur_px, max_layers,
+                     extra_wavefront, device: str):
+    """Checks: (wavelength nm, occlusion threshold px, coarse-grid blur px or None, array backend)."""
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
     if padding not in DEPTH_PADDING_MODES:
@@ -360,6 +398,11 @@ def blur_depth(
         raise VissimInputError(f"max_layers must be a positive whole number of layers, got {max_layers!r}")
     if extra_wavefront is not None:
         instance_of(extra_wavefront, Wavefront, "extra_wavefront", "a Wavefront (higher-order terms) or None")
+    return wavelength, threshold_px, coarse_blur_px, backend
+
+
+def _checked_image_and_depth(image, depth_m, crop_px) -> tuple[np.ndarray, np.ndarray, int]:
+    """Checks: the image's pixels, each pixel's proximity (D) and the crop (px)."""
     pixels = pixel_array(image)
     if pixels.ndim not in (2, 3) or min(pixels.shape[:2]) < 1:
         raise VissimInputError(f"image must have shape (H, W) or (H, W, C), got {pixels.shape}")
@@ -371,104 +414,57 @@ def blur_depth(
     if int(crop_px) != crop_px or crop_px < 0 or 2 * crop_px >= min(proximity.shape):
         raise VissimInputError(f"crop_px must be whole pixels >= 0 leaving an image; got {crop_px!r} px for "
                                f"{size_text(proximity.shape)}")
-    crop = int(crop_px)
-    colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
-    rows, cols = proximity.shape
+    return pixels, proximity, int(crop_px)
 
-    base = base_wavefront(rx, pupil, extra_wavefront)
-    in_focus_diopters = accommodation - base.to_prescription().spherical_equivalent_diopters
-    spacing_max = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
+
+def _depth_plan(proximity: np.ndarray, in_focus_diopters: float, step: float, pupil: float, spacing_fraction: float,
+                threshold_px: float, max_layers: int | None) -> tuple[LayerPlan, float]:
+    """The layers (symmetric about the in-focus proximity) and the occlusion threshold in dioptres (module doc)."""
+    spacing_max = layer_spacing_diopters(step, pupil, spacing_fraction)
     plan = plan_layers(float(proximity.min()), float(proximity.max()), spacing_max, max_layers,
                        anchor_diopters=in_focus_diopters, symmetric=True)
-    layer_diopters = np.array(plan.proximities_diopters)
     threshold_diopters = max(layer_spacing_diopters(step, pupil, threshold_px), spacing_max * (1 + 1e-9))
+    return plan, threshold_diopters
+
+
+@dataclass(frozen=True, eq=False)
+class _TentMatte:
+    """Each pixel's farther layer ``lower``, nearer ``upper`` (int32) and weight ``frac`` in the nearer
+    (float32); each layer's summed matte ``coverage`` (px) and the non-empty layers, far to near."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    frac: np.ndarray
+    coverage: np.ndarray
+    active: list[int]
+
+
+def _tent_matte(proximity: np.ndarray, layer_diopters: np.ndarray) -> _TentMatte:
+    """Matting: each pixel split linearly in dioptres between its two neighbouring layers (module doc)."""
+    n_layers = layer_diopters.size
     lower, frac = matte_indices(proximity, layer_diopters)
-    coverage = np.bincount(lower.ravel(), weights=(1.0 - frac).ravel(), minlength=plan.n_layers + 1)
-    coverage += np.bincount((lower + 1).ravel(), weights=frac.ravel(), minlength=plan.n_layers + 1)
-    upper = np.minimum(lower + 1, plan.n_layers - 1).astype(np.int32)
-    lower, frac = lower.astype(np.int32), frac.astype(np.float32)
-    active = [k for k in range(plan.n_layers) if coverage[k] > 0]
+    coverage = np.bincount(lower.ravel(), weights=(1.0 - frac).ravel(), minlength=n_layers + 1)
+    coverage += np.bincount((lower + 1).ravel(), weights=frac.ravel(), minlength=n_layers + 1)
+    upper = np.minimum(lower + 1, n_layers - 1).astype(np.int32)
+    active = [k for k in range(n_layers) if coverage[k] > 0]
+    return _TentMatte(lower.astype(np.int32), upper, frac.astype(np.float32), coverage, active)
 
-    fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in active}
-    threads = worker_threads(backend)
-    with layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
-        boxes_job = None if pool is None else pool.submit(layer_boxes, lower, upper, frac, plan.n_layers)
-        blurs = (map if pool is None else pool.map)(lambda f: geometric_blur_radius_arcmin(f, pupil), fronts.values())
-        blurs_arcmin = {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
-        scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
-                  for k in active}
-        optics = LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
-        sizes = optics.sizes
-        layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
-                             blurs_arcmin[k], sizes[k] * scales[k], float(coverage[k] / lower.size)) for k in active]
-        reach = {k: (sizes[k] // 2 + 1) * scales[k] for k in active}
-        reach_max = max(reach.values())
-        boxes = layer_boxes(lower, upper, frac, plan.n_layers) if boxes_job is None else boxes_job.result()
-        xp, transfers = backend.xp, {}
-        colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
-        numerator = xp.zeros_like(colour)
-        denominator = xp.zeros((rows, cols), np.float32)
-        occluders = xp.zeros((rows, cols), np.float32)  # blurred coverage of layers that fully occlude this one
-        pending: list[tuple[float, tuple, np.ndarray]] = []  # nearer layers' blurred coverage, partly occluding
-        farthest = layer_diopters[active[0]]
-        largest = (0, 0)
 
-        def blurred_layer(k: int) -> tuple:
-            # Layer k reaches its matte's box grown by its own PSF; its continuation behind nearer content
-            # matters only where that content's blur leaves it visible: the largest PSF's reach further.
-            window = grow_box(boxes[k], 2 * (reach[k] + reach_max), (rows, cols))
-            # The continuation is estimated on a larger window: pull-push's coarse levels see farther.
-            e0, e1, f0, f1 = grow_box(window, EXTENSION_HALO_PX, (rows, cols))
-            wide = (slice(e0, e1), slice(f0, f1))
-            planes = extended_layer(colour[:, e0:e1, f0:f1], lower[wide], upper[wide], frac[wide], layer_diopters, k,
-                                     threshold_diopters, rows=(boxes[k][0] - e0, boxes[k][1] - e0),
-                                     keep=(window[0] - e0, window[1] - e0))
-            window_rows = window[0]
-            planes = planes[:, window[0] - e0 : window[1] - e0]  # the rows extended: those of the window
-            if scales[k] == 1:  # the blur reaches only the planes' nonzero box grown by the PSF
-                window = grow_box(nonzero_box(planes, (window_rows, f0)), reach[k], (rows, cols), within=window)
-            r0, r1, c0, c1 = window
-            planes = planes[:, r0 - window_rows : r1 - window_rows, c0 - f0 : c1 - f0]
-            touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
-            if scales[k] == 1:
-                blurred, shape = blur_window(planes, optics.psf(k), padding, touches, backend, transfers, threads)
-            else:
-                blurred, shape = blur_coarse(planes, optics.psf(k), padding, touches, scales[k], backend, transfers,
-                                              threads)
-            return window, blurred, shape
-
-        near_to_far = in_order(blurred_layer, optics, reversed(active), pool, threads)
-        for done, (k, (window, blurred, shape)) in enumerate(near_to_far, 1):
-            while pending and pending[0][0] - layer_diopters[k] >= 2 * threshold_diopters:  # near to far
-                _, (r0, r1, c0, c1), matte_j = pending.pop(0)
-                occluders[r0:r1, c0:c1] += matte_j
-            r0, r1, c0, c1 = window
-            transmitted = occluders[r0:r1, c0:c1].copy()
-            for proximity_j, window_j, matte_j in pending:
-                weight = occlusion_weight(proximity_j - layer_diopters[k], threshold_diopters)
-                if weight > 0:
-                    add_overlap(transmitted, window, weight * matte_j, window_j)
-            xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-            largest = max(largest, shape)
-            if layer_diopters[k] - threshold_diopters > farthest:  # it occludes layers behind: keep its coverage
-                pending.append((layer_diopters[k], window, blurred[-1].copy()))
-            blurred *= transmitted
-            numerator[:, r0:r1, c0:c1] += blurred[:-1]
-            denominator[r0:r1, c0:c1] += blurred[-1]
-            if progress is not None:
-                progress("depth layers", done, len(active))
-    log.info("depth blur: %d layers planned, %d non-empty, largest padded window %s", plan.n_layers, len(active), largest)
-    shape = largest
-    low = int((denominator < 0.5).sum())
-    if low:
-        log.info("depth blur: %d pixels have total blurred coverage below 0.5 (min %.3g)", low, float(denominator.min()))
-    out = numerator / xp.maximum(denominator, 1e-6)
-    out = backend.to_numpy(out[:, crop : rows - crop, crop : cols - crop])
-    result = out[0] if pixels.ndim == 2 else np.moveaxis(out, 0, -1)
-    return DepthBlurResult(
-        np.ascontiguousarray(result, dtype=np.float32), tuple(layers), plan.n_layers, plan.max_spacing_diopters,
-        threshold_diopters, accommodation, in_focus_diopters, shape,
-    )
+def _layer_optics(rx: Prescription, base: Wavefront, layer_diopters: np.ndarray, accommodation: float,
+                  matte: _TentMatte, pupil: float, wavelength: float, step: float, mode: str,
+                  coarse_blur_px: float | None, pool) -> tuple[LayerOptics, list[DepthLayer]]:
+    """Each non-empty layer's wavefront, blur diameter, grid (coarse from ``coarse_blur_px``) and PSF (on
+    ``pool``'s threads if given), and its record."""
+    fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in matte.active}
+    blurs = (map if pool is None else pool.map)(lambda f: geometric_blur_radius_arcmin(f, pupil), fronts.values())
+    blurs_arcmin = {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
+    scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
+              for k in matte.active}
+    optics = LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
+    layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
+                         blurs_arcmin[k], optics.sizes[k] * scales[k], float(matte.coverage[k] / matte.lower.size))
+              for k in matte.active]
+    return optics, layers
 
 
 def matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -340,6 +340,36 @@ def composite_layers(
     wavelength = finite_number(wavelength_nm, "wavelength", "nm")
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
+    checked, shape = _checked_layers(layers, crop_px)
+    n_ch, rows, cols = checked[0][0].shape
+
+    checked.sort(key=_depth_order, reverse=True)  # near (large proximity) first
+    base = base_wavefront(rx, pupil, extra_wavefront)
+    spacing = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
+    in_focus = accommodation - base.to_prescription().spherical_equivalent_diopters
+    by_layer = [_slices(i, *item, spacing, in_focus) for i, item in enumerate(checked)]
+    slices = [s for layer in by_layer for s in layer]
+    fronts = {id(s): base.with_defocus_diopters(s.proximity_diopters - accommodation) for s in slices}
+    rays = _trace_slices(slices, fronts, pupil, step, wavelength, n_rays)
+
+    density = {layer[0].layer: _density(layer) for layer in by_layer}
+    geometric, transmission, n_terms, overlapping = _geometric_composite(by_layer, density, (n_ch, rows, cols), mode)
+    if mode == "geometric":
+        out = geometric
+    else:
+        out = _wave_composite(geometric, by_layer, density, transmission, fronts, pupil, wavelength, step)
+    c = int(crop_px)
+    out = out[:, c : rows - c, c : cols - c]
+    image = out[0] if len(shape) == 2 else np.moveaxis(out, 0, -1)
+    log.info("layered depth blur: %d layers, %d slices, %d rays, %d terms", len(by_layer), len(slices), len(rays[0]),
+             n_terms)
+    return LayeredBlurResult(np.ascontiguousarray(image, dtype=np.float32), len(by_layer), len(slices), len(rays[0]),
+                             n_terms, overlapping, accommodation, mode)
+
+
+# -- the stages of composite_layers ---------------------------------------------------
+def _checked_layers(layers, crop_px) -> tuple[list, tuple]:
+    """Checks: each layer's (colour (C, H, W), coverage, proximity), and the radiance's shape (H, W[, C])."""
     layers = list(layers)
     if not layers:
         raise VissimInputError("a layered scene needs at least one layer")
@@ -348,24 +378,26 @@ def composite_layers(
         colour, coverage, proximity = _check_layer(layer, shape, i)
         shape = np.asarray(layer.radiance).shape
         checked.append((colour, coverage, proximity))
-    n_ch, rows, cols = checked[0][0].shape
+    _, rows, cols = checked[0][0].shape
     if int(crop_px) != crop_px or crop_px < 0 or 2 * crop_px >= min(rows, cols):
         raise VissimInputError(f"crop_px must be whole pixels >= 0 leaving an image; got {crop_px!r} px")
+    return checked, shape
 
-    def depth_order(item):
-        colour, coverage, proximity = item
-        if proximity.ndim == 0 or coverage.sum() == 0:
-            return float(proximity.mean())
-        return float((proximity * coverage).sum() / coverage.sum())
 
-    checked.sort(key=depth_order, reverse=True)  # near (large proximity) first
-    base = base_wavefront(rx, pupil, extra_wavefront)
-    spacing = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
-    in_focus = accommodation - base.to_prescription().spherical_equivalent_diopters
-    by_layer = [_slices(i, *item, spacing, in_focus) for i, item in enumerate(checked)]
-    slices = [s for layer in by_layer for s in layer]
+def _depth_order(item) -> float:
+    """A checked layer's coverage-weighted mean proximity (D): its place in the near-to-far order."""
+    colour, coverage, proximity = item
+    if proximity.ndim == 0 or coverage.sum() == 0:
+        return float(proximity.mean())
+    return float((proximity * coverage).sum() / coverage.sum())
 
-    fronts = {id(s): base.with_defocus_diopters(s.proximity_diopters - accommodation) for s in slices}
+
+def _trace_slices(slices: list[_Slice], fronts: dict, pupil: float, step: float, wavelength: float,
+                  n_rays: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """Each slice's rays' rounded offsets and their histogram PSF (set on the slices); the pupil rays.
+
+    ``n_rays`` None: as the geometric PSF, 250 000 to 4 million with the widest blur's area.
+    """
     if n_rays is None:
         blur_px = max(geometric_blur_radius_arcmin(f, pupil) for f in fronts.values()) / step
         n_rays = ray_count(blur_px)
@@ -373,17 +405,26 @@ def composite_layers(
     for s in slices:
         s.offsets = _offsets_px(fronts[id(s)], pupil, step, rays)
         s.psf = _histogram_psf(s.offsets, step, pupil, wavelength)
+    return rays
+
+
+def _geometric_composite(by_layer: list[list[_Slice]], density: dict, shape: tuple[int, int, int], mode: str):
+    """Ray optics: each layer blurred by one FFT, or composited term by term where a nearer layer overlaps it.
+
+    Returns the composite (C, H, W), each overlapped layer's (visible, unoccluded blurred) coverage
+    in wave mode (``tau_k``'s parts, module doc), the pupil terms composited and the layers overlapped.
+    """
+    n_ch, rows, cols = shape
+    slices = [s for layer in by_layer for s in layer]
     reach = {id(s): int(np.abs(s.offsets).max()) for s in slices}
     boxes = {}
     for s in slices:
         box = _support(s)
         boxes[id(s)] = None if box is None else grow_box(box, reach[id(s)], (rows, cols))
-
     geometric = np.zeros((n_ch, rows, cols), np.float64)
     transmission = {}  # layer -> (visible coverage V_k, unoccluded blurred coverage A_k * G_k) on its window
     pad = max(reach.values()) + 1
     padded = {id(s): (np.pad(s.radiance, ((0, 0), (pad, pad), (pad, pad))), np.pad(s.coverage, pad)) for s in slices}
-    density = {layer[0].layer: _density(layer) for layer in by_layer}
     n_terms = overlapping = 0
     for k, layer in enumerate(by_layer):
         own = [boxes[id(s)] for s in layer if boxes[id(s)] is not None]
@@ -408,28 +449,26 @@ def composite_layers(
             transmission[k] = (visible, whole)
         n_terms += terms
         overlapping += 1
-    if mode == "geometric":
-        out = geometric
-    else:
-        diffraction = _wave_psf(Wavefront.zero(pupil), pupil, wavelength, step)  # what the aperture's diffraction adds
-        out = _fft_blur(geometric.astype(np.float32), diffraction)
-        for k, layer in enumerate(by_layer):
-            residual = sum(_fft_blur(s.radiance, _wave_psf(fronts[id(s)], pupil, wavelength, step))
-                           - _fft_blur(_fft_blur(s.radiance, s.psf).astype(np.float32), diffraction) for s in layer)
-            if density[k] is not None:
-                residual = residual / density[k]
-            if k in transmission:
-                visible, whole = (_fft_blur(a[np.newaxis].astype(np.float32), diffraction)[0] for a in transmission[k])
-                tau = np.where(whole > 1e-6, visible / np.maximum(whole, 1e-6), 1.0)
-                residual = residual * np.clip(tau, 0.0, 1.0)
-            out += residual
-    c = int(crop_px)
-    out = out[:, c : rows - c, c : cols - c]
-    image = out[0] if len(shape) == 2 else np.moveaxis(out, 0, -1)
-    log.info("layered depth blur: %d layers, %d slices, %d rays, %d terms", len(by_layer), len(slices), len(rays[0]),
-             n_terms)
-    return LayeredBlurResult(np.ascontiguousarray(image, dtype=np.float32), len(by_layer), len(slices), len(rays[0]),
-                             n_terms, overlapping, accommodation, mode)
+    return geometric, transmission, n_terms, overlapping
+
+
+def _wave_composite(geometric: np.ndarray, by_layer: list[list[_Slice]], density: dict, transmission: dict,
+                    fronts: dict, pupil: float, wavelength: float, step: float) -> np.ndarray:
+    """Wave optics: the ray composite diffracted by the pupil in focus, plus each layer's wave PSF's
+    excess over its diffracted ray disc, dimmed by ``tau_k`` (module doc)."""
+    diffraction = _wave_psf(Wavefront.zero(pupil), pupil, wavelength, step)  # what the aperture's diffraction adds
+    out = _fft_blur(geometric.astype(np.float32), diffraction)
+    for k, layer in enumerate(by_layer):
+        residual = sum(_fft_blur(s.radiance, _wave_psf(fronts[id(s)], pupil, wavelength, step))
+                       - _fft_blur(_fft_blur(s.radiance, s.psf).astype(np.float32), diffraction) for s in layer)
+        if density[k] is not None:
+            residual = residual / density[k]
+        if k in transmission:
+            visible, whole = (_fft_blur(a[np.newaxis].astype(np.float32), diffraction)[0] for a in transmission[k])
+            tau = np.where(whole > 1e-6, visible / np.maximum(whole, 1e-6), 1.0)
+            residual = residual * np.clip(tau, 0.0, 1.0)
+        out += residual
+    return out
 
 
 def _fft_blur(colour: np.ndarray, psf: PSF) -> np.ndarray:
