@@ -63,8 +63,9 @@ __all__ = ["Image", "image_files", "output_bit_depth", "read_data_map", "read_im
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 #: Top-level provenance key holding an image's angular sampling, arcmin per pixel.
 SAMPLING_KEY = "arcmin_per_px"
-#: Where files written before `SAMPLING_KEY` existed keep their sampling, in order.
-_LEGACY_SAMPLING_PATHS = (
+#: Where each command's provenance inputs record the sampling, in the order looked at: the
+#: fallback for a file without `SAMPLING_KEY` (one written without ``arcmin_per_px``, or by an older vissim).
+_INPUT_SAMPLING_PATHS = (
     ("inputs", "arcmin_per_px"),             # blur, blur-depth, demo chart, render depth
     ("inputs", "options", "arcmin_per_px"),  # vissim chart
     ("inputs", "bench", "arcmin_per_px"),    # render bench; campaign renders
@@ -165,15 +166,15 @@ def _sampling_value(value: Any) -> float | None:
 def sampling_from_provenance(provenance: Any) -> float | None:
     """The angular sampling (arcmin per pixel) a provenance record states, or ``None``.
 
-    The top-level `SAMPLING_KEY` first; then the places older vissim files kept it
-    (`_LEGACY_SAMPLING_PATHS`: chart options, bench parameters, campaign settings ...).
+    The top-level `SAMPLING_KEY` first; then where the writing command's inputs record it
+    (`_INPUT_SAMPLING_PATHS`: chart options, bench parameters, campaign settings ...).
     """
     if not isinstance(provenance, dict):
         return None
     found = _sampling_value(provenance.get(SAMPLING_KEY))
     if found is not None:
         return found
-    for keys in _LEGACY_SAMPLING_PATHS:
+    for keys in _INPUT_SAMPLING_PATHS:
         node: Any = provenance
         for key in keys:
             node = node.get(key) if isinstance(node, dict) else None

@@ -16,14 +16,13 @@ import numpy as np
 import pytest
 
 from vissim.acuity import letter_height_mm
+from tests.bench.depth_scenes import default_panels_scene, default_tilted_scene
 from vissim.bench.depth_scene import (
     ChartPanel,
     DepthScene,
     PanelChart,
     TiltedChart,
     axial_depth_map,
-    default_panels_scene,
-    default_tilted_scene,
     panel_geometries,
     pixel_tangents,
 )

@@ -8,6 +8,8 @@ import pytest
 
 from vissim.cli import main
 from vissim.imageio import read_image, write_image
+from vissim.optics.array_backend import cuda_available
+from vissim.optics.blur_device import blur_image_on
 
 
 def run(capsys, *argv):
@@ -145,3 +147,35 @@ def test_blur_with_spectral_bands_per_channel(capsys, tmp_path):
     assert code == 0
     info = read_image(tmp_path / "o.exr").provenance["inputs"]["psfs"]
     assert len(info) == 3 and all(len(p["wavelengths_nm"]) == 7 for p in info)
+
+
+@pytest.mark.skipif(cuda_available(), reason="auto would run on the GPU: tests/test_array_backend.py compares that")
+def test_blur_on_device_auto_without_a_gpu_runs_the_device_code_and_equals_the_cpu_blur(capsys, tmp_path, monkeypatch):
+    import vissim.cli.blur as blur_cli
+
+    source = tmp_path / "rgb.exr"
+    rgb = np.full((40, 56, 3), 0.8, np.float32)
+    rgb[12:28, 20:30] = (0.05, 0.1, 0.2)
+    write_image(source, rgb, provenance={"inputs": {"arcmin_per_px": 1.0}})
+    calls = []
+    monkeypatch.setattr(blur_cli, "blur_image_on", lambda *a, **k: calls.append(k["device"]) or blur_image_on(*a, **k))
+    outputs = {}
+    for device in ("cpu", "auto"):
+        target = tmp_path / f"{device}.exr"
+        code, _, _ = run(capsys, "blur", str(source), "-o", str(target), "--rx", "-1.50 -1.00 x 30",
+                         "--pupil-mm", "3", "--device", device)
+        assert code == 0
+        outputs[device] = read_image(target)
+    assert calls == ["auto"]  # cpu stays on blur_image's path
+    assert outputs["auto"].provenance["inputs"]["device"] == "auto"
+    np.testing.assert_allclose(outputs["auto"].pixels, outputs["cpu"].pixels, atol=1e-5)
+
+
+@pytest.mark.skipif(cuda_available(), reason="a GPU is present")
+def test_blur_on_cuda_without_a_gpu_is_one_error_line(capsys, tmp_path):
+    source = tmp_path / "in.exr"
+    write_image(source, np.full((32, 32), 0.5, np.float32), provenance={"inputs": {"arcmin_per_px": 1.0}})
+    code, _, err = run(capsys, "blur", str(source), "-o", str(tmp_path / "out.exr"), "--rx", "-1", "--pupil-mm", "3",
+                       "--device", "cuda")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "device 'cuda'" in err
+    assert not (tmp_path / "out.exr").exists()

@@ -20,13 +20,12 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares, minimize_scalar
 
+from tests.bench.depth_scenes import default_panels_scene, default_tilted_scene
 from vissim.bench.depth_scene import (
     ChartPanel,
     DepthScene,
     PanelChart,
     axial_depth_map,
-    default_panels_scene,
-    default_tilted_scene,
     panel_geometries,
     pixel_tangents,
 )

@@ -20,7 +20,8 @@ import pytest
 from fake_bench import fake_render, refuse
 from provenance_walk import image_provenance, json_without_provenance
 
-from vissim.bench.depth_scene import default_panels_scene, panel_geometries
+from tests.bench.depth_scenes import default_panels_scene
+from vissim.bench.depth_scene import panel_geometries
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription

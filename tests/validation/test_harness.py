@@ -138,3 +138,45 @@ def test_shipped_campaigns_load():
     keys = [thesis.item_key(c) for c in thesis.configurations]
     assert len(set(keys)) == len(keys)
     json.dumps([c.as_json() for c in quick.configurations])
+
+
+GROUPS = """
+[campaign]
+name = "groups"
+spp = 4
+seeds = [1, 2]
+tile_px = [64, 64]
+simulations = ["geometric"]
+inputs = ["synthetic"]
+wave_truth = false
+
+[[sweep]]
+name = "myopia"
+letters = ["K"]
+logmars = [0.7]
+spheres = [0.5, 1.0]
+
+[[item]]
+name = "myopia: not in the sweep"
+letter = "K"
+logmar = 0.7
+lenses = [2.0]
+"""
+
+
+def test_rows_are_grouped_by_the_configurations_group_field_not_by_their_names(campaign_file, tmp_path):
+    from dataclasses import replace
+
+    campaign = campaign_file(GROUPS)
+    groups = {c.name: c.group for c in campaign.configurations}
+    assert groups.pop("myopia: not in the sweep") == "myopia: not in the sweep"  # an item is its own group
+    assert set(groups.values()) == {"myopia"} and len(groups) == 2
+    for c in campaign.configurations:  # a label: the item keys do not see it
+        assert campaign.item_key(replace(c, group="another")) == campaign.item_key(c)
+    run_dir = tmp_path / "run"
+    run_campaign(campaign, run_dir, render=fake_render, show_progress=False)
+    build_report(run_dir)
+    rows = metrics_rows(load_results(run_dir))
+    assert {r["configuration"]: r["group"] for r in rows} == {c.name: c.group for c in campaign.configurations}
+    tables = (run_dir / "tables.md").read_text()
+    assert "| myopia (2) |" in tables and "| myopia: not in the sweep (1) |" in tables

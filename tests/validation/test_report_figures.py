@@ -1,4 +1,4 @@
-"""The report's optics figures (issue 16): the wave PSF on a log scale, its MTF against the diffraction limit,
+"""The report's optics figures: the wave PSF on a log scale, its MTF against the diffraction limit,
 through focus; written with provenance, linked from tables.md and shown in report.html."""
 
 import json
@@ -8,12 +8,14 @@ import numpy as np
 import pytest
 from fake_bench import fake_render, write_campaign
 
-from vissim.optics.prescription import Prescription
+from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
 from vissim.units import arcmin_to_rad, cyc_per_rad_to_cyc_per_deg
 from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.validation.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
                                               optics_cases, psf_figure_of, sampling_label)
+from vissim.validation.campaign import load_campaign
 from vissim.validation.report import build_report, load_results
+from vissim.validation.renders import campaign_bench
 from vissim.validation.runner import run_campaign
 
 SMALL = """
@@ -56,15 +58,27 @@ def cases(run_dir):
     return optics_cases(load_results(run_dir), run_dir)
 
 
-def test_one_case_per_group_with_lenses_and_the_wave_setup_it_recorded(run_dir, cases):
-    assert sorted(c.group for c in cases) == ["cylinder", "myopia"]
-    results = {r["configuration"]["name"]: r for r in load_results(run_dir)}
+def test_one_case_per_group_with_lenses_and_the_optics_of_its_bench(run_dir, cases):
+    # Oracle: the campaign above (the myopia sweep's only lens is +1 D; the cylinder item is its
+    # own group) and the bench's ray-transfer matrices (`trial_lens_effect`, as fake_bench uses),
+    # not the setup string result.json records, which optics_cases parses.
+    campaign = load_campaign(run_dir.parent / "figures.toml")
+    configurations = {c.name: c for c in campaign.configurations}
+    picked = {c.group: configurations[c.configuration] for c in cases}
+    assert sorted(picked) == ["cylinder", "myopia"]
+    assert [(l.sphere_diopters, l.cylinder_diopters) for l in picked["myopia"].lenses] == [(1.0, 0.0)]
+    assert picked["cylinder"].name == "cylinder"
+    settings = campaign.settings
     for case in cases:
-        assert results[case.configuration]["lens_label"] != "no lens"  # not the sweep's plano member
-        wave = next(c for c in results[case.configuration]["comparisons"] if c["simulation"] == "wave")
-        assert case.prescription.format(4) == Prescription.parse(wave["setup"]["camera_prescription"]).format(4)
-        assert case.pupil_diameter_mm == wave["setup"]["pupil_diameter_mm"]
-        assert case.psf_arcmin_per_px == pytest.approx(case.arcmin_per_px / SUBPIXELS_PER_PX)
+        bench = campaign_bench(picked[case.group], settings)
+        expected = trial_lens_effect(bench.trial_lens_setup()).camera_prescription
+        got = case.prescription
+        # result.json keeps the prescription to 4 decimals (compared as power matrices: axis-free)
+        np.testing.assert_allclose(got.power_matrix(), expected.power_matrix(), atol=1e-4)
+        expected_pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, picked[case.group].f_number)
+        assert case.pupil_diameter_mm == pytest.approx(expected_pupil)
+        assert case.wavelength_nm == settings.wavelength_nm
+        assert case.psf_arcmin_per_px == pytest.approx(settings.arcmin_per_px / SUBPIXELS_PER_PX)
 
 
 def test_figures_are_written_with_provenance_and_linked(run_dir, cases):

@@ -13,7 +13,9 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.cli._common import add_aberration_args, check_outputs_apart, parse_float_list, wavefront_from_args
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import Image, image_files, output_bit_depth, read_image, write_image
+from vissim.optics.array_backend import DEVICES, array_backend
 from vissim.optics.blur import PADDING_MODES, blur_image
+from vissim.optics.blur_device import blur_image_on
 from vissim.optics.chromatic import gaussian_band
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.progress import counter, terminal_progress
@@ -57,6 +59,10 @@ def add_parser(subparsers) -> None:
                         help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="PSF optics (default wave)")
     parser.add_argument("--padding", choices=PADDING_MODES, default="constant", help="outside the image (default constant: border mean)")
+    parser.add_argument("--device", choices=DEVICES, default="cpu",
+                        help="where to blur: cpu (default), cuda (a GPU through CuPy, the gpu extra), auto (cuda "
+                             "when present, else the same code on the CPU); cuda and auto take one full-frame FFT "
+                             "per PSF and equal cpu to float32 round-off")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
     parser.set_defaults(func=run)
 
@@ -118,8 +124,14 @@ def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> 
     return psfs, cache
 
 
-def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, progress):
-    """``pixels`` blurred channel by channel (each with its PSF), reporting each channel done."""
+def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, device: str, progress):
+    """``pixels`` blurred channel by channel (each with its PSF), reporting each channel done.
+
+    Off the ``"cpu"`` device: all channels at once by `vissim.optics.blur_device.blur_image_on`.
+    """
+    if device != "cpu":
+        return blur_image_on(pixels, psfs if pixels.ndim == 3 else psfs[0], arcmin_per_px=step, padding=padding,
+                             device=device)
     if pixels.ndim == 2:
         return blur_image(pixels, psfs[0], arcmin_per_px=step, padding=padding)
     advance = counter(progress, "blurring channels", pixels.shape[2])
@@ -132,6 +144,8 @@ def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, pr
 
 def run(args: argparse.Namespace) -> int:
     check_outputs_apart(image_files(args.input), image_files(args.output))
+    if args.device == "cuda":
+        array_backend("cuda")  # no GPU: refused before the PSFs are computed
     image = read_image(args.input)
     step = image_sampling(image, args.arcmin_per_px, args.input)
     wavefront = wavefront_from_args(args)
@@ -158,9 +172,9 @@ def run(args: argparse.Namespace) -> int:
             bands.append((tuple(wavelengths), None))
     with terminal_progress() as progress:
         psfs, cache = _channel_psfs(bands, wavefront, step, args, lca, image.pixels.shape[:2], progress)
-        blurred = _blur_channels(image.pixels, psfs, step, args.padding, progress)
+        blurred = _blur_channels(image.pixels, psfs, step, args.padding, args.device, progress)
     provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
-                                 arcmin_per_px=step, padding=args.padding,
+                                 arcmin_per_px=step, padding=args.padding, device=args.device,
                                  psfs=[p.as_json() for p in cache.values()], rx=args.rx, zernike=args.zernike)
     written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
                           alpha=image.alpha, bit_depth=output_bit_depth(image, args.output))

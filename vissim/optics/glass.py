@@ -1,7 +1,7 @@
 """Dispersion of the trial lenses' glass: a two-term Cauchy fit to n_d and the Abbe number.
 
 Spectacle crown (white ophthalmic crown glass): ``n_d = 1.523`` at the helium d line and Abbe
-number ``V_d = 58.6``, the values issue 13 asks for and the ones ophthalmic-lens tables give for
+number ``V_d = 58.6``, the values ophthalmic-lens tables give for
 standard crown (e.g. Jalie, *The Principles of Ophthalmic Lenses*; Schott's B 270 spectacle
 crown is of this type).  ``V_d = (n_d - 1) / (n_F - n_C)`` with the Fraunhofer lines below.
 
@@ -30,7 +30,7 @@ __all__ = ["D_LINE_NM", "F_LINE_NM", "C_LINE_NM", "CROWN_ABBE_NUMBER", "CauchyGl
 D_LINE_NM = 587.5618
 F_LINE_NM = 486.1327
 C_LINE_NM = 656.2725
-#: Abbe number V_d of spectacle crown (issue 13; ophthalmic crown tables).
+#: Abbe number V_d of spectacle crown (ophthalmic crown tables).
 CROWN_ABBE_NUMBER = 58.6
 
 

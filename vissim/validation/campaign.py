@@ -83,7 +83,7 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
                      for k, check in (("capture", text), ("name", name_text)))
     config = Configuration(name or "", letter, logmar, polarity, specs, f_number, capture)
     label = f"{letter} LogMAR {logmar:.1f} {polarity.split('-')[0]}, {trial_lens_phrase(config)}"
-    return config if name else replace(config, name=label)
+    return replace(config, name=name or label, group=name or label)
 
 
 def _describe(c: Configuration) -> str:
@@ -123,7 +123,7 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
                 "f_number": raw.get("f_number", f_number)}
         config = _configuration(item, settings, source, where, f_number)
         label = f"{prefix}: {config.name}" if prefix else config.name
-        out.append(replace(config, name=label))
+        out.append(replace(config, name=label, group=prefix or label))
     return out
 
 
@@ -193,8 +193,8 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
         raise field_error(source, "top level", "no configurations: add [[item]] or [[sweep]] tables")
     unique: dict[str, tuple[str, Configuration]] = {}
     for where, c in configurations:  # the same inputs twice run once
-        unique.setdefault(json.dumps({k: v for k, v in c.as_json().items() if k != "name"}, sort_keys=True,
-                                     default=list), (where, c))
+        inputs = {k: v for k, v in c.as_json().items() if k not in ("name", "group")}
+        unique.setdefault(json.dumps(inputs, sort_keys=True, default=list), (where, c))
     refuse_duplicate_names(source, unique.values(), _describe)
     manifest = head.get("manifest")
     if manifest is not None:

@@ -40,6 +40,7 @@ class Configuration:
     lenses: tuple[LensSpec, ...] = ()
     f_number: float = THESIS_F_NUMBER
     capture: str | None = None  # id of a real RAW capture in the manifest, if any
+    group: str = ""  # the report's group: its sweep's name, or its own name (empty: its own name)
 
     def lens_label(self) -> str:
         return " + ".join(l.label() for l in self.lenses) if self.lenses else "no lens"
@@ -81,5 +82,6 @@ class Campaign:
         payload = {"schema": SCHEMA_VERSION, "simulator": SIMULATOR_REVISION, "settings": asdict(self.settings),
                    "configuration": configuration.as_json()}
         payload["configuration"].pop("name")
+        payload["configuration"].pop("group")  # names and groups label results; they do not change them
         text = json.dumps(payload, sort_keys=True, default=list)
         return hashlib.sha256(text.encode()).hexdigest()[:16]

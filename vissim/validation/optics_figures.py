@@ -90,7 +90,7 @@ def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
             continue
         settings = campaign.get("settings") or result["provenance"]["inputs"]["settings"]
         synthetic = result["images"].get("synthetic")
-        case = OpticsCase(group_of(result["configuration"]["name"]), result["configuration"]["name"],
+        case = OpticsCase(group_of(result["configuration"]), result["configuration"]["name"],
                           Prescription.parse(wave["setup"]["camera_prescription"]),
                           float(wave["setup"]["pupil_diameter_mm"]), float(settings["wavelength_nm"]),
                           float(settings["arcmin_per_px"]), float(settings["arcmin_per_px"]) / SUBPIXELS_PER_PX,

@@ -32,7 +32,7 @@ from vissim.validation.report_figures import (Figure, arcmin_per_px_of, display_
                                               radiance_colorbar, scale_bar, tiles_alt)
 from vissim.validation.report_summary import summary_table  # noqa: E402
 from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE  # noqa: E402
-from vissim.validation.wave_bench_report import is_wave_bench_row, self_check_table, wave_bench_tables  # noqa: E402
+from vissim.validation.wave_bench_report import group_of, is_wave_bench_row, self_check_table, wave_bench_tables  # noqa: E402
 
 __all__ = [
     "load_results",
@@ -80,12 +80,14 @@ def load_results(run_dir: str | Path) -> list[dict]:
     stale = set(results) - set(order)
     if stale:  # items of another campaign (or of an older simulator) left in the folder: not this run's
         log.info("ignoring %d finished items in %s that are not in its campaign", len(stale), run_dir / "items")
-    # A configuration's name is not part of its item's key: a reused item takes the campaign's current name.
+    # A configuration's name and group are not part of its item's key: a reused item takes the campaign's current ones.
     configurations = json.loads(order_file.read_text()).get("configurations") or []
-    names = {key: c.get("name") for key, c in zip(order, configurations) if isinstance(c, dict)}
+    labels = {key: c for key, c in zip(order, configurations) if isinstance(c, dict)}
     for key, result in results.items():
-        if names.get(key) and isinstance(result.get("configuration"), dict):
-            result["configuration"]["name"] = names[key]
+        if isinstance(result.get("configuration"), dict):
+            for field in ("name", "group"):
+                if labels.get(key, {}).get(field):
+                    result["configuration"][field] = labels[key][field]
     return [results[k] for k in order if k in results]
 
 
@@ -107,6 +109,7 @@ def metrics_rows(results: list[dict]) -> list[dict]:
             rows.append(
                 {
                     "configuration": config["name"],
+                    "group": group_of(config),
                     "letter": config["letter"],
                     "logmar": config["logmar"],
                     "polarity": config["polarity"],

@@ -11,7 +11,6 @@ import math
 
 import numpy as np
 
-from vissim.validation.wave_bench_report import group_of
 
 __all__ = ["PERFECT_MARGIN_DB", "summary_table", "summary_notes", "margin", "NO_LENS"]
 
@@ -39,7 +38,7 @@ def _table(rows: list[dict], columns: list[tuple[str, str]], mark_no_lens: bool)
     groups: dict[str, dict] = {}
     bare: dict[str, set] = {}
     for r in rows:
-        group = group_of(r["configuration"])
+        group = r["group"]
         groups.setdefault(group, {}).setdefault((r["simulation"], r["input"]), []).append(margin(r))
         if r["lenses"] == NO_LENS:
             bare.setdefault(group, set()).add(r["configuration"])
@@ -106,7 +105,7 @@ def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
     bare = [r for r in rows if r["lenses"] == NO_LENS and (r["simulation"], r["input"]) in columns]
     if not bare:
         return "\n".join(out)
-    groups = sorted({group_of(r["configuration"]) for r in bare})
+    groups = sorted({r["group"] for r in bare})
     margins = [margin(r) for r in bare if math.isfinite(margin(r))]
     floors = [r["noise_floor_psnr_db"] for r in bare if math.isfinite(r["noise_floor_psnr_db"])]
     out.append(
@@ -120,6 +119,6 @@ def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
         "group of two one such row moves the median by half its distance from the other. The table below gives "
         "the medians of these groups over the configurations with lenses only.\n")
     out.append("### Summary of the groups with no-lens configurations, over those with lenses only (dB)\n")
-    with_lenses = [r for r in rows if r["lenses"] != NO_LENS and group_of(r["configuration"]) in groups]
+    with_lenses = [r for r in rows if r["lenses"] != NO_LENS and r["group"] in groups]
     out += _table(with_lenses, columns, mark_no_lens=False) if with_lenses else ["No configuration with lenses."]
     return "\n".join(out) + "\n"

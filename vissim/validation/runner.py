@@ -256,9 +256,11 @@ def run_campaign(
         Directory for renders, simulations, metrics and the report; an existing run there is
         resumed (finished items are reused).
     workers : int
-        Parallel worker processes.
+        Local processes that make the renders (1: in this process).  Items are computed here,
+        one after another.
     scheduler : str, optional
-        How items are scheduled across workers (default: chosen from ``workers``).
+        A Dask scheduler's address (``host:port``) to make the renders on instead of
+        ``workers``; checked to answer before anything is written (`connect_scheduler`).
     spp : int, optional
         Override the campaign's samples per pixel for every render.
     render : callable, optional

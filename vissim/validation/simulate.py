@@ -1,10 +1,9 @@
 """The Fourier-side simulations a campaign compares with the bench (pure numpy, no Mitsuba).
 
-Three simulations, each applicable to any linear-light input image (the bench's no-lens
-render, as the thesis did, or the synthetic chart):
-
-Every simulation starts from the bench's own `ViewingSetup` (the one
-its scene is built from, `vissim.bench.dslr.DslrBench.viewing_setup`).
+Six simulations (`SIMULATION_PARTS`), each applicable to any linear-light input image (the
+bench's no-lens render, as the thesis did, or the synthetic chart).  Every simulation starts
+from the bench's own `ViewingSetup` (the one its scene is built from,
+`vissim.bench.dslr.DslrBench.viewing_setup`).
 
 ``wave``
     Physically matched: the power the trial lenses add at the camera's principal plane for

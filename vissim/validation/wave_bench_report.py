@@ -22,9 +22,9 @@ def is_wave_bench_row(row: dict) -> bool:
     return row["reference"] == WAVE_BENCH_NOTE
 
 
-def group_of(configuration_name: str) -> str:
-    """A configuration's group: its sweep's name, or the item itself."""
-    return configuration_name.split(":")[0]
+def group_of(configuration: dict) -> str:
+    """A configuration's group (its ``group`` field: its sweep's name, or the item itself); else its name."""
+    return configuration.get("group") or configuration["name"]
 
 
 #: The geometric self-check passes at PSNR at least this far over the noise floor (dB).
@@ -37,7 +37,7 @@ def _margins(rows: list[dict], simulation: str) -> dict[str, list[tuple[float, s
     for r in rows:
         if r["simulation"] == simulation and r["input"] == "synthetic" and not is_wave_bench_row(r):
             margin = r["psnr_db"] - r["noise_floor_psnr_db"]
-            groups.setdefault(group_of(r["configuration"]), []).append((margin, r["configuration"]))
+            groups.setdefault(r["group"], []).append((margin, r["configuration"]))
     return groups
 
 
@@ -139,8 +139,8 @@ def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
     psnr = {(r["configuration"], r["simulation"]): r["psnr_db"] for r in wave_rows}
     budgets = {r["configuration"]["name"]: r["wave_bench"] for r in results if r.get("wave_bench")}
     groups: dict[str, list[str]] = {}
-    for name in dict.fromkeys(r["configuration"] for r in wave_rows):
-        groups.setdefault(group_of(name), []).append(name)
+    for name, group in dict.fromkeys((r["configuration"], r["group"]) for r in wave_rows):
+        groups.setdefault(group, []).append(name)
     wavelengths = sorted({b["wavelength_nm"] for b in budgets.values()})
     header = ["group (configurations)", *[f"{s} / wave bench" for s in simulations], "wave / wave bench, lowest",
               "residual's cause"]
