@@ -60,7 +60,7 @@ def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: di
     """Planes (C, H, W) on ``backend`` convolved circularly with ``psf``: one batched real FFT pair, float32.
 
     Callers pad the planes first.  ``transfers`` caches the kernel's spectrum on a GPU, keyed by
-    the PSF and grid.  ``threads``: the CPU FFT's threads (default all; 1 for a caller that runs
+    the PSF object (not its ``id``, which a later PSF may reuse) and grid.  ``threads``: the CPU FFT's threads (default all; 1 for a caller that runs
     several convolutions at once).
     """
     shape = tuple(padded.shape[-2:])
@@ -68,9 +68,10 @@ def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: di
         transfer = BlurKernel.prepare(psf, shape, dtype=np.float32, workers=-1 if threads is None else threads).transfer
     else:
         transfers = {} if transfers is None else transfers
-        if (id(psf), shape) not in transfers:
-            transfers[id(psf), shape] = backend.asarray(BlurKernel.prepare(psf, shape, dtype=np.float32).transfer)
-        transfer = transfers[id(psf), shape]
+        key = (psf, shape)  # the PSF itself (hashed by identity), kept alive by the key: its id is never reused
+        if key not in transfers:
+            transfers[key] = backend.asarray(BlurKernel.prepare(psf, shape, dtype=np.float32).transfer)
+        transfer = transfers[key]
     kwargs = backend.fft_kwargs() if threads is None or backend is not CPU else {"workers": threads}
     spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **kwargs)
     spectrum *= transfer
