@@ -468,7 +468,9 @@ def _sidecar_path(path: Path) -> Path:
 def image_files(path: str | os.PathLike[str]) -> tuple[Path, ...]:
     """Every file an image path stands for: the image, and for PNG/TIFF its provenance sidecar."""
     path = Path(path)
-    return (path,) if path.suffix.lower() in (".exr", ".npy") else (path, _sidecar_path(path))
+    if not path.name or path.suffix.lower() in (".exr", ".npy"):  # '.', '/': no file, no sidecar (a reader says so)
+        return (path,)
+    return path, _sidecar_path(path)
 
 
 def _validated_alpha(path: Path, alpha: Any, shape: tuple[int, ...]) -> np.ndarray | None:

@@ -356,3 +356,10 @@ def test_a_10_mb_campaign_description_is_refused_stating_the_limit(capfd, tmp_pa
 def test_an_unknown_option_points_to_its_own_command_s_help(capfd):
     code, _, err = run(capfd, "atv", "simulate", "--rx", "+1.00 DS", "--pupil-mm", "4", "--slope", "3", "-o", "x")
     assert_one_error_line(code, err, "unrecognized arguments: --slope 3", "(see 'vissim atv simulate --help')")
+
+
+@pytest.mark.parametrize("argv", [("fit-rx", ".", "--reference", "."), ("blur", ".", "-o", "x.png", "--rx", "plano",
+                                                                         "--pupil-mm", "3")])
+def test_a_folder_spelled_dot_as_an_image_is_one_error_line(capfd, argv):
+    code, _, err = run(capfd, *argv)
+    assert_one_error_line(code, err, "unsupported image suffix")
