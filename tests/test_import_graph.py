@@ -7,17 +7,7 @@ only closes at run time is caught too.
 import ast
 from pathlib import Path
 
-import vissim
-
-PACKAGE = Path(vissim.__file__).parent
-
-
-def _modules() -> dict[str, Path]:
-    found = {}
-    for path in PACKAGE.rglob("*.py"):
-        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
-        found[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
-    return found
+from source_modules import MODULES, loops, owner
 
 
 def _imports(path: Path) -> set[str]:
@@ -32,15 +22,8 @@ def _imports(path: Path) -> set[str]:
 
 
 def _graph() -> dict[str, set[str]]:
-    modules = _modules()
-
-    def owner(name):  # the vissim module a dotted name lives in
-        while name and name not in modules:
-            name = name.rpartition(".")[0]
-        return name
-
     graph = {}
-    for name, path in modules.items():
+    for name, path in MODULES.items():
         targets = {owner(n) for n in _imports(path) if n.split(".")[0] == "vissim"}
         # a package's __init__ is not a dependency of its own modules' imports of siblings
         graph[name] = {t for t in targets if t and t != name and t != "vissim"}
@@ -48,29 +31,14 @@ def _graph() -> dict[str, set[str]]:
 
 
 def test_no_import_loops():
-    graph = _graph()
-    state: dict[str, int] = {}  # 1 on the path, 2 done
-    loops = []
-
-    def visit(node, path):
-        state[node] = 1
-        for nxt in sorted(graph[node]):
-            if state.get(nxt) == 1:
-                loops.append(path[path.index(nxt):] + [nxt])
-            elif nxt not in state:
-                visit(nxt, path + [nxt])
-        state[node] = 2
-
-    for start in sorted(graph):
-        if start not in state:
-            visit(start, [start])
-    assert not loops, "import loops: " + "; ".join(" -> ".join(loop) for loop in loops)
+    found = loops(_graph())
+    assert not found, "import loops: " + "; ".join(found)
 
 
 def test_heavy_dependencies_stay_behind_their_doors():
     doors = {"mitsuba": "vissim.render", "drjit": "vissim.render", "rawpy": "vissim.validation.raw",
              "OpenEXR": "vissim.imageio", "cupy": "vissim.optics.array_backend"}
-    for name, path in _modules().items():
+    for name, path in MODULES.items():
         for imported in _imports(path):
             door = doors.get(imported.split(".")[0])
             assert door is None or name == door or name.startswith(door + "."), f"{name} imports {imported}"

@@ -23,7 +23,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parents[1] / "vissim"
+from source_modules import MODULES, PACKAGE, loops, owner
 
 LAYERS = [
     {"units", "errors", "checks", "atomic", "provenance", "progress"},
@@ -34,24 +34,6 @@ LAYERS = [
     {"validation", "atv"},
     {"cli", "__main__", ""},  # "": the package root, vissim/__init__.py
 ]
-
-
-def _modules() -> dict[str, Path]:
-    found = {}
-    for path in PACKAGE.rglob("*.py"):
-        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
-        found[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
-    return found
-
-
-MODULES = _modules()
-
-
-def _owner(name: str) -> str:
-    """The vissim module a dotted name lives in."""
-    while name and name not in MODULES:
-        name = name.rpartition(".")[0]
-    return name
 
 
 def _package(module: str) -> str:
@@ -103,7 +85,7 @@ def _edges():
     """(importer, imported module, imported dotted name, line) for every import of a vissim name."""
     for module, path in sorted(MODULES.items()):
         for name, line in _imports(path):
-            target = _owner(name)
+            target = owner(name)
             if target and target != module:
                 yield module, target, name, line
 
@@ -131,21 +113,8 @@ def test_no_loops_between_packages():
     for module, target, _, _ in _edges():
         if _package(module) != _package(target):
             graph.setdefault(_package(module), set()).add(_package(target))
-    loops, state = [], {}
-
-    def visit(node, path):
-        state[node] = 1
-        for nxt in sorted(graph.get(node, ())):
-            if state.get(nxt) == 1:
-                loops.append(" -> ".join(path[path.index(nxt):] + [nxt]))
-            elif nxt not in state:
-                visit(nxt, path + [nxt])
-        state[node] = 2
-
-    for start in sorted(graph):
-        if start not in state:
-            visit(start, [start])
-    assert not loops, "loops between packages: " + "; ".join(loops)
+    found = loops(graph)
+    assert not found, "loops between packages: " + "; ".join(found)
 
 
 def test_the_rules_catch_what_they_name(tmp_path):
