@@ -20,9 +20,10 @@ from vissim.provenance import make_provenance
 BAD_NUMBERS = ["0", "-1", "nan", "inf", "-inf", "1e300", "-1e300", "1e-300", "abc", ""]
 
 
-def run(capsys, *argv):
+def run(capture, *argv):
+    """Exit code, stdout and stderr of one command (``capture``: capsys, or capfd for native output too)."""
     code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
+    out, err = capture.readouterr()
     return code, out, err
 
 

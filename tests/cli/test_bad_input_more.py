@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vissim.cli import main
+from test_bad_input import assert_one_error_line, run  # run(capfd, ...) captures native output too
+
 from vissim.errors import VissimInputError
 from vissim.imageio import write_image
 from vissim.validation import runner
@@ -21,21 +22,6 @@ from vissim.validation.scheduler_probe import PROBE_TIMEOUT_S
 
 TINY_CAMPAIGN = ('[campaign]\nname = "tiny"\nspp = 4\ntile_px = [48, 48]\nsimulations = ["geometric"]\n'
                  '[[item]]\nletter = "K"\nlogmar = 0.5\nlenses = [2.0]\n')
-
-
-def run(capfd, *argv):
-    """Exit code, stdout and stderr of one command, captured at the file descriptors (native output too)."""
-    code = main([str(a) for a in argv])
-    out, err = capfd.readouterr()
-    return code, out, err
-
-
-def assert_one_error_line(code, err, *fragments):
-    assert code == 2, err
-    lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("vissim: error: "), err
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
 
 
 # -- a truncated EXR ---------------------------------------------------------------------------
