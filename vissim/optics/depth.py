@@ -226,7 +226,7 @@ class DepthBlurResult:
     padded_shape: tuple[int, int]
 
     def as_json(self) -> dict:
-        out = {"n_layers": self.n_layers, "nblurred_layers": len(self.layers)}
+        out = {"n_layers": self.n_layers, "n_blurred_layers": len(self.layers)}
         out |= {f.name: getattr(self, f.name) for f in dataclasses.fields(self)[3:]}  # the plan's numbers
         out["padded_shape"] = list(self.padded_shape)
         out["layers"] = [{k: v for k, v in dataclasses.asdict(la).items() if k != "index"} for la in self.layers]
@@ -364,7 +364,7 @@ def blur_depth(
                                        coarse_blur_px, pool)
         boxes = layer_boxes(matte.lower, matte.upper, matte.frac, plan.n_layers) if boxes_job is None else boxes_job.result()
         scene = LayerScene.on(backend, colour, (matte.lower, matte.upper, matte.frac), layer_diopters,
-                              threshold_diopters, boxes, optics, padding, threads)
+                              threshold_diopters, boxes, optics, padding, 1 if pool is not None else None)
         compositor = Compositor(scene, layer_diopters[matte.active[0]])
         near_to_far = in_order(functools.partial(blurred_layer, scene), optics, reversed(matte.active), pool, threads)
         for done, (k, (window, blurred, shape)) in enumerate(near_to_far, 1):

@@ -41,12 +41,12 @@ class LayerScene:
     optics: LayerOptics
     padding: str
     backend: object
-    threads: int
+    threads: int | None  # FFT threads per convolution: 1 while the pool's threads blur layers at once
     transfers: dict
 
     @classmethod
     def on(cls, backend, colour, matte: tuple, layer_diopters, threshold_diopters, boxes, optics: LayerOptics,
-           padding: str, threads: int) -> LayerScene:
+           padding: str, threads: int | None) -> LayerScene:
         """The scene and its tent ``matte`` (lower, upper, frac) moved to ``backend``; each non-empty layer's
         reach found from its PSF's size."""
         reach = {k: (optics.sizes[k] // 2 + 1) * optics.scales[k] for k in optics.fronts}
