@@ -43,7 +43,7 @@ from vissim.errors import VissimInputError
 logger = logging.getLogger(__name__)
 
 __all__ = ["atomic_output", "cache_output", "check_outputs_apart", "existing_output_error", "output_transaction",
-           "refuse_existing", "write_json_atomic", "write_text_atomic"]
+           "refuse_existing", "remove_output", "write_json_atomic", "write_text_atomic"]
 
 _NAME_ATTEMPTS = 16
 
@@ -54,6 +54,7 @@ class _Pending:
 
     renames: list[tuple[Path, Path, bool]] = dataclasses.field(default_factory=list)  # (tmp, final, overwrite)
     folders: list[Path] = dataclasses.field(default_factory=list)  # in the order they were made
+    removals: list[Path] = dataclasses.field(default_factory=list)  # stale files to delete once all is in place
 
 
 #: The open `output_transaction` of this context, if any.
@@ -186,12 +187,18 @@ def output_transaction() -> Iterator[None]:
         for _, path, overwrite in pending.renames:
             if path.exists() and not overwrite:
                 _refuse_existing(path)
-        for tmp, path, _ in pending.renames:
+        for done, (tmp, path, _) in enumerate(pending.renames):
             try:
                 os.replace(tmp, path)
             except OSError as exc:
+                if done:  # the rename of one file failed after others were in place: say which
+                    placed = ", ".join(str(p) for _, p, _ in pending.renames[:done])
+                    raise VissimInputError(f"cannot write {path}: {exc.strerror or exc}; already written: "
+                                           f"{placed}") from exc
                 raise _write_failure(path, tmp, exc) from exc
             logger.debug("wrote %s", path)
+        for path in pending.removals:
+            _unlink_stale(path)
     except BaseException:
         for tmp, _, _ in pending.renames:
             with contextlib.suppress(OSError):
@@ -200,6 +207,22 @@ def output_transaction() -> Iterator[None]:
         raise
     finally:
         _PENDING.reset(token)
+
+
+def remove_output(path: str | os.PathLike[str]) -> None:
+    """Delete a stale file a command's write makes obsolete (a sidecar): at once, or, inside an
+    `output_transaction`, only once every file of it is in place."""
+    pending = _PENDING.get()
+    if pending is not None:
+        pending.removals.append(Path(path))
+    else:
+        _unlink_stale(Path(path))
+
+
+def _unlink_stale(path: Path) -> None:
+    if path.exists():
+        path.unlink()
+        logger.info("removed stale %s", path)
 
 
 def _reserve_temp_path(path: Path) -> Path:

@@ -50,7 +50,7 @@ import OpenEXR
 import tifffile
 from PIL import Image as _PILImage
 
-from vissim.atomic import atomic_output, output_transaction, refuse_existing, write_text_atomic
+from vissim.atomic import atomic_output, output_transaction, refuse_existing, remove_output, write_text_atomic
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.errors import VissimInputError
 from vissim.provenance import from_json, to_json
@@ -588,9 +588,8 @@ def write_image(
                 tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib", **extra)
         if provenance is not None:
             write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
-    if provenance is None and sidecar.exists():
-        sidecar.unlink()
-        logger.info("removed stale provenance sidecar %s", sidecar)
+    if provenance is None:
+        remove_output(sidecar)  # a stale provenance sidecar: gone once the image is in place
     return path
 
 

@@ -11,6 +11,7 @@ import os
 from pathlib import Path
 
 import matplotlib.figure
+import numpy as np
 import OpenEXR
 import PIL.Image
 import pytest
@@ -172,3 +173,17 @@ def test_a_failed_command_leaves_no_folder_it_made(tmp_path, capsys, monkeypatch
     assert main(["demo", "-o", str(tmp_path / "new" / "demo")]) == 2
     assert "cannot write" in one_error_line(capsys)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_stale_sidecar_is_removed_only_when_the_command_succeeds(tmp_path):
+    """An image rewritten without provenance drops its old sidecar, but not if the command then fails."""
+    path = tmp_path / "a.png"
+    write_image(path, np.full((4, 4), 0.5), provenance={"command": "first"})
+    with pytest.raises(RuntimeError, match="later failure"):
+        with output_transaction():
+            write_image(path, np.full((4, 4), 0.25), overwrite=True)
+            raise RuntimeError("later failure")
+    assert (tmp_path / "a.png.json").exists()
+    with output_transaction():
+        write_image(path, np.full((4, 4), 0.25), overwrite=True)
+    assert not (tmp_path / "a.png.json").exists()
