@@ -132,3 +132,21 @@ def test_a_run_folder_holding_the_manifest_is_refused(tmp_path, capsys):
     assert main(["validate", str(path), "-o", str(tmp_path / "data")]) == 2
     line = one_error_line(capsys)
     assert f"output folder {tmp_path / 'data'} holds input {tmp_path / 'data' / 'manifest.toml'}" in line, line
+
+
+def test_report_refuses_a_run_folder_that_now_holds_its_campaign_file(tmp_path, capsys, monkeypatch):
+    # A rebuilt report writes tables.md, metrics.*, figures into the folder: never over the campaign file.
+    monkeypatch.setattr(runner, "render_spec", fake_render)
+    run = tmp_path / "run"
+    path = tmp_path / "tiny.toml"
+    path.write_text(HEAD + "[[item]]\nletter = 'K'\nlogmar = 0.7\nlenses = [2.0]\n")
+    assert main(["validate", str(path), "-o", str(run)]) == 0
+    capsys.readouterr()
+    moved = run / "tables.md"  # the user keeps the campaign file where the report writes
+    os.replace(path, moved)
+    record = (run / "campaign.json").read_text().replace(str(path), str(moved))
+    (run / "campaign.json").write_text(record)
+    before = moved.read_bytes()
+    assert main(["report", str(run)]) == 2
+    assert f"output folder {run} holds input {moved}" in one_error_line(capsys)
+    assert moved.read_bytes() == before

@@ -77,18 +77,34 @@ def rebuild_any_report(run_dir: str | Path, progress: Progress | None = None) ->
     order = run_dir / "campaign.json"
     if not order.exists():
         raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
-    build_report, summary_lines = _report_of(json.loads(order.read_text()).get("kind") == "depth")
+    record = json.loads(order.read_text())
+    check_outputs_apart(recorded_inputs(record), folders=[run_dir])
+    build_report, summary_lines = _report_of(record.get("kind") == "depth")
     with run_folder_lock(run_dir):
         return build_report(run_dir, progress=progress), summary_lines(run_dir)
 
 
 def campaign_inputs(campaign, path: Path) -> list[Path]:
     """Every file a campaign run reads: the campaign file, its depth scenes, its manifest and captures."""
-    inputs = [path, *(Path(c.scene_file) for c in campaign.configurations if getattr(c, "scene_file", None))]
-    manifest = getattr(campaign, "manifest", None)
+    configurations = campaign.configurations
+    return _input_files(path, getattr(campaign, "manifest", None),
+                        [getattr(c, "scene_file", None) for c in configurations],
+                        any(getattr(c, "capture", None) for c in configurations))
+
+
+def recorded_inputs(record: dict) -> list[Path]:
+    """The files a run folder's ``campaign.json`` says its campaign read (those that still exist)."""
+    configurations = record.get("configurations", [])
+    inputs = _input_files(record.get("source"), record.get("manifest"), [c.get("scene_file") for c in configurations],
+                          any(c.get("capture") for c in configurations))
+    return [p for p in inputs if p.exists()]
+
+
+def _input_files(source, manifest, scene_files, uses_captures: bool) -> list[Path]:
+    inputs = [Path(p) for p in (source, *scene_files) if p]
     if manifest is not None:
         inputs.append(Path(manifest))
-        if Path(manifest).is_file() and any(getattr(c, "capture", None) for c in campaign.configurations):
+        if Path(manifest).is_file() and uses_captures:
             from vissim.validation.captures import load_manifest
 
             inputs += [capture.file for capture in load_manifest(manifest).values()]

@@ -308,6 +308,7 @@ def run_campaign(
         for spec in (*truth_specs(config, settings), no_lens_spec(config, settings)):
             needed[spec.key] = spec
     record = {"name": campaign.name, "description": campaign.description, "source": campaign.source,
+              "manifest": campaign.manifest,
               "settings": asdict(settings), "items": keys,
               "configurations": [c.as_json() for c in campaign.configurations]}
     with progress_of(show_progress, progress) as report:
