@@ -404,3 +404,13 @@ def test_a_layer_of_opposite_defocus_reuses_the_reflected_psf(mode):
     # float32 PSFs (the default): the same PSF to its round-off, < 2e-6 of the peak
     np.testing.assert_allclose(minus.data, computed.data, rtol=0, atol=2e-6 * computed.data.max())
     np.testing.assert_array_equal(minus.data, plus.data[::-1, ::-1])
+
+
+@pytest.mark.parametrize("wavelength_nm", [5.0, -550.0, 3000.0])
+def test_blur_depth_refuses_a_wavelength_outside_the_checks_range(wavelength_nm):
+    from vissim.checks import WAVELENGTH_RANGE_NM
+
+    image, depth = np.ones((16, 16), np.float32), np.full((16, 16), 2.0)
+    with pytest.raises(VissimInputError, match=f"{WAVELENGTH_RANGE_NM[0]:g}.*{WAVELENGTH_RANGE_NM[1]:g}"):
+        blur_depth(image, depth, eye_prescription=Prescription(-1.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0,
+                   wavelength_nm=wavelength_nm)

@@ -83,6 +83,7 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe, finite_number, instance_of, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
+from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.array_backend import array_backend
 from vissim.optics.blur import pixel_array
@@ -389,7 +390,7 @@ def _checked_options(mode: str, padding: str, wavelength_nm, occlusion_threshold
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
     if padding not in DEPTH_PADDING_MODES:
         raise VissimInputError(f"depth-blur padding must be one of {', '.join(DEPTH_PADDING_MODES)}; got {padding!r}")
-    wavelength = finite_number(wavelength_nm, "wavelength", "nm")
+    wavelength = check_wavelength_nm(wavelength_nm)
     threshold_px = positive_number(occlusion_threshold_px, "occlusion threshold", "pixels of blur")
     backend = array_backend(device)
     if coarse_blur_px is not None:

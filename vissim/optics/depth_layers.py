@@ -59,7 +59,7 @@ from scipy import ndimage
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import finite_number
+from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
@@ -337,7 +337,7 @@ def composite_layers(
     pupil = check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
     accommodation = check_accommodation_diopters(accommodation_diopters)
-    wavelength = finite_number(wavelength_nm, "wavelength", "nm")
+    wavelength = check_wavelength_nm(wavelength_nm)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
     checked, shape = _checked_layers(layers, crop_px)

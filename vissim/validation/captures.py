@@ -146,10 +146,12 @@ def _neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray) -> np.ndarray:
 
 def read_capture(capture: Capture) -> RawImage:
     """The capture's RAW as linear CFA planes, after checking that it is present and matches its sha256."""
-    problem = capture_problem(capture)
-    if problem:
-        raise VissimInputError(problem)
-    return read_raw_linear(capture.file, mode="planes")
+    if not capture.file.exists():
+        raise VissimInputError(capture_problem(capture))
+    raw = read_raw_linear(capture.file, mode="planes")  # hashes the file as it reads it: once
+    if capture.sha256 and raw.sha256 != capture.sha256.lower():
+        raise VissimInputError(f"capture {capture.id!r}: {capture.file} does not match its sha256 in the manifest")
+    return raw
 
 
 def capture_provenance(capture: Capture, raw: RawImage) -> dict:
