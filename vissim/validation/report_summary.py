@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 
-__all__ = ["PERFECT_MARGIN_DB", "summary_table", "summary_notes", "margin", "NO_LENS"]
+__all__ = ["PERFECT_MARGIN_DB", "summary_table", "summary_notes", "margin", "NO_LENS", "value_span"]
 
 #: What a perfect, noise-free simulation scores over the noise floor on average: the floor's two
 #: renders hold the noise twice (MSE 2 sigma^2), a comparison with one render once (sigma^2).
@@ -69,7 +69,8 @@ def summary_table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
     return "\n".join(lines) + "\n" + summary_notes(rows, columns)
 
 
-def _span(values: list[float], spec: str) -> str:
+def value_span(values: list[float], spec: str) -> str:
+    """``lowest…highest`` in ``spec`` (one value if they agree to the format)."""
     low, high = format(min(values), spec), format(max(values), spec)
     return low if low == high else f"{low}…{high}"
 
@@ -112,10 +113,10 @@ def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
         f"The configurations without a lens ({len({r['configuration'] for r in bare})}, in "
         f"{', '.join(groups)}) count in their groups' medians. With no lens the bench renders a sharp letter: its "
         "two renders differ only in the few pixels on the letter's edges, so the floor is high "
-        f"({_span(floors, '.1f')} dB here), and PSNR minus the floor then measures how the simulation's input "
+        f"({value_span(floors, '.1f')} dB here), and PSNR minus the floor then measures how the simulation's input "
         "differs from the render (the synthetic chart is a second rasterisation of the letter; the wave simulation "
         "adds a diffraction of its own), not the optics of a lens. Their scores: "
-        f"{_span(margins, '+.1f') if margins else '—'} dB over the floor. A median of two is their mean, so in a "
+        f"{value_span(margins, '+.1f') if margins else '—'} dB over the floor. A median of two is their mean, so in a "
         "group of two one such row moves the median by half its distance from the other. The table below gives "
         "the medians of these groups over the configurations with lenses only.\n")
     out.append("### Summary of the groups with no-lens configurations, over those with lenses only (dB)\n")

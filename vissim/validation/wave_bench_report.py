@@ -13,6 +13,7 @@ from collections import Counter
 
 import numpy as np
 
+from vissim.validation.report_summary import NO_LENS, margin, value_span
 from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH_NOTE
 
 __all__ = ["group_of", "is_wave_bench_row", "self_check_table", "wave_bench_tables", "SELF_CHECK_MARGIN_DB"]
@@ -36,8 +37,7 @@ def _margins(rows: list[dict], simulation: str) -> dict[str, list[tuple[float, s
     groups: dict[str, list[tuple[float, str]]] = {}
     for r in rows:
         if r["simulation"] == simulation and r["input"] == "synthetic" and not is_wave_bench_row(r):
-            margin = r["psnr_db"] - r["noise_floor_psnr_db"]
-            groups.setdefault(r["group"], []).append((margin, r["configuration"]))
+            groups.setdefault(r["group"], []).append((margin(r), r["configuration"]))
     return groups
 
 
@@ -45,7 +45,7 @@ def self_check_table(rows: list[dict]) -> str:
     """Markdown: the geometric self-check per group (median, lowest and where), configurations without lenses apart."""
     if not any(r["simulation"] == TRACED_RAYS for r in rows):
         return ""
-    with_lenses = [r for r in rows if r["lenses"] != "no lens"]
+    with_lenses = [r for r in rows if r["lenses"] != NO_LENS]
     traced, geometric = _margins(with_lenses, TRACED_RAYS), _margins(with_lenses, "geometric")
     header = ["group (configurations with lenses)", "traced rays, median", "traced rays, lowest", "lowest at",
               "geometric / synthetic, median", "geometric / synthetic, lowest"]
@@ -65,26 +65,20 @@ def self_check_table(rows: list[dict]) -> str:
         out.append("| " + " | ".join([
             f"{group} ({len(values)})", f"{np.median([m for m, _ in values]):+.2f}", f"{lowest[0]:+.2f}", lowest[1],
             f"{np.median(other):+.2f}" if other else "—", f"{min(other):+.2f}" if other else "—"]) + " |")
-    bare = [r for r in rows if r["lenses"] == "no lens" and r["simulation"] == TRACED_RAYS]
+    bare = [r for r in rows if r["lenses"] == NO_LENS and r["simulation"] == TRACED_RAYS]
     if bare:
-        margins = [r["psnr_db"] - r["noise_floor_psnr_db"] for r in bare]
-        out += ["", (f"Without lenses ({len(bare)}): {_span(margins, '+.1f')} dB over the floor "
-                     f"({_span([r['psnr_db'] for r in bare], '.1f')} dB against "
-                     f"{_span([r['noise_floor_psnr_db'] for r in bare], '.1f')} dB). With no lens the trace's PSF is a "
+        margins = [margin(r) for r in bare]
+        out += ["", (f"Without lenses ({len(bare)}): {value_span(margins, '+.1f')} dB over the floor "
+                     f"({value_span([r['psnr_db'] for r in bare], '.1f')} dB against "
+                     f"{value_span([r['noise_floor_psnr_db'] for r in bare], '.1f')} dB). With no lens the trace's PSF is a "
                      "point and nothing is traced: the synthetic chart is compared with the render's chart texture, "
                      "two rasterisations of one letter (the geometric simulation of the synthetic chart scores the "
                      "same).")]
         if min(margins) < SELF_CHECK_MARGIN_DB:
-            out[-1] += (f" They differ by {_span([r['mean_abs_diff'] for r in bare], '.1e')} on average, which a "
+            out[-1] += (f" They differ by {value_span([r['mean_abs_diff'] for r in bare], '.1e')} on average, which a "
                         "lens's blur and the Monte-Carlo noise hide; without a lens two renders with different seeds "
                         "agree far better than that, so the floor exposes the rasterisation, not the trace.")
     return "\n".join(out) + "\n"
-
-
-def _span(values: list[float], spec: str) -> str:
-    """``lowest-highest`` (one value if they agree to the format)."""
-    low, high = format(min(values), spec), format(max(values), spec)
-    return low if low == high else f"{low}…{high}"
 
 
 def _cell(values: list[float], digits: int = 1) -> str:
@@ -163,7 +157,7 @@ def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
     bare = [psnr[(n, "wave")] for r in results if r.get("lens_label") == "no lens"
             for n in [r["configuration"]["name"]] if (n, "wave") in psnr]
     if bare:
-        out += ["", (f"Configurations without a lens ({len(bare)}) score {_span(bare, '.1f')} dB here: with nothing "
+        out += ["", (f"Configurations without a lens ({len(bare)}) score {value_span(bare, '.1f')} dB here: with nothing "
                      "traced, only the float32 round-off of the two computations is left. They raise their groups' "
                      "medians, not the lowest, which a configuration with lenses sets whenever the group has one.")]
     out += ["", "### Residuals against the wave bench, explained\n"]
