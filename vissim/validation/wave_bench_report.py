@@ -154,7 +154,7 @@ def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
         out.append("| " + " | ".join([f"{group} ({len(names)})", *cells, f"{min(wave):.1f}" if wave else "—",
                                       ", ".join(f"{c} ({k})" for c, k in causes.most_common()) or "—"]) + " |")
     rendered = sorted({n for b in budgets.values() for n in b["rendered_index"]})
-    bare = [psnr[(n, "wave")] for r in results if r.get("lens_label") == "no lens"
+    bare = [psnr[(n, "wave")] for r in results if r.get("lens_label") == NO_LENS
             for n in [r["configuration"]["name"]] if (n, "wave") in psnr]
     if bare:
         out += ["", (f"Configurations without a lens ({len(bare)}) score {value_span(bare, '.1f')} dB here: with nothing "
