@@ -114,22 +114,21 @@ def test_blur_depth_by_the_device_code_equals_the_cpus(monkeypatch):
     assert any(spectra_sent)  # kernel spectra went to the "device"
 
 
-def test_a_device_s_spectrum_cache_never_serves_one_psf_s_spectrum_for_another():
+def test_a_device_convolves_each_psf_as_the_cpu_does():
     # Transient PSFs (as blur_depth's reflected layers are) die after use, and CPython may give the
-    # next one the same id: a cache keyed by id would then serve the dead PSF's spectrum.  Oracle:
-    # the CPU's convolution of the same planes with each PSF, no cache shared.
+    # next one the same id: each must still be convolved with its own spectrum.  Oracle: the CPU's
+    # convolution of the same planes with each PSF.
     from vissim.optics.blur_device import convolve_padded
     from vissim.optics.psf import PSF
 
     device = ArrayBackend("numpy-as-device", np, scipy.fft)
     rng = np.random.default_rng(3)
     planes = rng.random((2, 32, 32), dtype=np.float32)
-    shared: dict = {}
     for width in range(1, 13):
         kernel = np.zeros((9, 9))
         kernel[4, 4 - width // 3 : 5 + width // 3] = 1.0
         kernel[4 - width % 4 : 5 + width % 4, 4] += 1.0
         psf = PSF.from_array(kernel / kernel.sum(), arcmin_per_px=1.0)
         expected = convolve_padded(planes, psf)
-        np.testing.assert_allclose(convolve_padded(planes, psf, device, shared), expected, atol=1e-6)
+        np.testing.assert_allclose(convolve_padded(planes, psf, device), expected, atol=1e-6)
         del psf

@@ -35,6 +35,7 @@ from vissim.optics.depth import (
 from vissim.optics.depth_windows import extended_layer, occlusion_weight
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
+from vissim.optics.setup import Eye
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
@@ -326,6 +327,22 @@ def test_other_bad_inputs():
     with pytest.raises(TypeError, match="RefractiveError"):
         blur_depth(texture((8, 8)), np.ones((8, 8)), eye_prescription=Prescription(-1.0).refractive_error(),
                    pupil_diameter_mm=3.0, arcmin_per_px=1.0)
+    with pytest.raises(VissimInputError, match="not both .also given: pupil_diameter_mm"):
+        blur_depth(texture((8, 8)), np.ones((8, 8)), eye=Eye(Prescription(0.0), 3.0), pupil_diameter_mm=3.0,
+                   arcmin_per_px=1.0)
+    with pytest.raises(TypeError, match="the eye is needed"):
+        blur_depth(texture((8, 8)), np.ones((8, 8)), arcmin_per_px=1.0)
+
+
+def test_an_eye_object_blurs_as_its_keywords_do():
+    rx, extra = Prescription(-1.0, -0.5, 20.0), Wavefront({(3, 1): 0.05}, 4.0)
+    image, depth = texture((24, 24)), np.where(np.arange(24) < 12, 0.5, 2.0)[None, :].repeat(24, axis=0)
+    kwargs = dict(arcmin_per_px=1.0, mode="geometric")
+    by_keywords = blur_depth(image, depth, eye_prescription=rx, pupil_diameter_mm=3.0, accommodation_diopters=0.5,
+                             extra_wavefront=extra, **kwargs)
+    by_eye = blur_depth(image, depth, eye=Eye(rx, 3.0, 0.5, extra), **kwargs)
+    np.testing.assert_array_equal(by_eye.image, by_keywords.image)
+    assert by_eye.as_json() == by_keywords.as_json()
 
 
 # -- the command ---------------------------------------------------------------------------
@@ -390,13 +407,14 @@ def test_coarse_grid_for_wide_blurs_stays_within_its_stated_db():
 def test_a_layer_of_opposite_defocus_reuses_the_reflected_psf(mode):
     """|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2 and rays land at -grad W: the PSF of -W is that of W
     turned through 180 degrees, so the symmetric plan's mirrored layers need not compute it again."""
-    from vissim.optics.depth_psfs import layer_psf
+    from vissim.optics.depth_psfs import LayerOptics
 
     base = Wavefront.from_prescription(Prescription(-1.5), PUPIL_MM)
-    seen = {}
-    plus = layer_psf(base.with_defocus_diopters(1.5 + 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
-    minus = layer_psf(base.with_defocus_diopters(1.5 - 0.6), PUPIL_MM, 550.0, STEP, mode, seen)
     front = base.with_defocus_diopters(1.5 - 0.6)
+    optics = LayerOptics({0: base.with_defocus_diopters(1.5 + 0.6), 1: front}, {0: 1, 1: 1}, PUPIL_MM, 550.0, STEP,
+                         mode)
+    assert optics.source == {0: None, 1: 0}  # the second layer reflects the first's PSF
+    plus, minus = optics.psf(0), optics.psf(1)
     computed = compute_psf(front, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode=mode,
                            size_px=suggested_size_px(front, STEP, pupil_diameter_mm=PUPIL_MM))
     assert minus.data.shape[0] % 2 == 1 and minus is not plus

@@ -22,6 +22,7 @@ from vissim.imageio import image_files, output_bit_depth, read_data_map, read_im
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
 from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
 from vissim.optics.prescription import Prescription
+from vissim.optics.setup import Eye
 from vissim.progress import terminal_progress
 from vissim.provenance import make_provenance
 
@@ -122,8 +123,8 @@ def run(args: argparse.Namespace) -> int:
     accommodation, focus_info = _accommodation(args, eye, depth)
     with terminal_progress() as progress:
         result = blur_depth(
-            image.pixels, depth, eye_prescription=eye, pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
-            accommodation_diopters=accommodation, wavelength_nm=args.wavelength_nm, mode=args.mode,
+            image.pixels, depth, eye=Eye(eye, args.pupil_mm, accommodation), arcmin_per_px=step,
+            wavelength_nm=args.wavelength_nm, mode=args.mode,
             layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers, crop_px=crop,
             coarse_blur_px=args.coarse_blur_px, device=args.device, progress=progress,
         )

@@ -55,23 +55,17 @@ def blur_image_on(
     return out[0] if array.ndim == 2 else np.moveaxis(out, 0, -1)
 
 
-def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, transfers: dict | None = None, *,
-                    threads: int | None = None):
+def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, *, threads: int | None = None):
     """Planes (C, H, W) on ``backend`` convolved circularly with ``psf``: one batched real FFT pair, float32.
 
-    Callers pad the planes first.  ``transfers`` caches the kernel's spectrum on a GPU, keyed by
-    the PSF object (not its ``id``, which a later PSF may reuse) and grid.  ``threads``: the CPU FFT's threads (default all; 1 for a caller that runs
-    several convolutions at once).
+    Callers pad the planes first.  ``threads``: the CPU FFT's threads (default all; 1 for a caller
+    that runs several convolutions at once).
     """
     shape = tuple(padded.shape[-2:])
     if backend is CPU:
         transfer = BlurKernel.prepare(psf, shape, dtype=np.float32, workers=-1 if threads is None else threads).transfer
-    else:
-        transfers = {} if transfers is None else transfers
-        key = (psf, shape)  # the PSF itself (hashed by identity), kept alive by the key: its id is never reused
-        if key not in transfers:
-            transfers[key] = backend.asarray(BlurKernel.prepare(psf, shape, dtype=np.float32).transfer)
-        transfer = transfers[key]
+    else:  # each (PSF, grid) is convolved once per call: its spectrum is sent, not kept
+        transfer = backend.asarray(BlurKernel.prepare(psf, shape, dtype=np.float32).transfer)
     kwargs = backend.fft_kwargs() if threads is None or backend is not CPU else {"workers": threads}
     spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **kwargs)
     spectrum *= transfer

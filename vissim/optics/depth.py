@@ -1,7 +1,8 @@
 """Depth-dependent blur: one eye, one accommodation state, a scene with a depth map.
 
-Defocus per depth (derivation in `vissim.optics.accommodation`).  An object ``d`` metres away
-has *proximity* ``L = 1/d`` dioptres (``L = 0`` for sky at infinity).  An eye whose correcting
+Defocus per depth (derivation in `vissim.optics.accommodation`; decided by
+`vissim.optics.setup.Eye`, `vissim.optics.setup.ViewingSetup.eye` at every depth).  An object
+``d`` metres away has *proximity* ``L = 1/d`` dioptres (``L = 0`` for sky at infinity).  An eye whose correcting
 lens is ``Rx`` (myope negative), exerting accommodation ``A``, is corrected *for that object*
 by the lens::
 
@@ -81,7 +82,7 @@ import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import describe, finite_number, instance_of, positive_number
+from vissim.checks import describe, instance_of, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError, VissimTypeError
@@ -90,14 +91,15 @@ from vissim.optics.blur import pixel_array
 from vissim.optics.depth_composite import Compositor, LayerScene, blurred_layer
 from vissim.optics.depth_psfs import LayerOptics, in_order, layer_pool, worker_threads
 from vissim.optics.depth_windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.prescription import Prescription
 from vissim.optics.psf import geometric_blur_radius_arcmin
+from vissim.optics.setup import Eye
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import arcmin_to_rad
 
 __all__ = ["DepthBlurResult", "DepthLayer", "LayerPlan", "blur_depth", "depth_to_proximity_diopters",
-           "layer_spacing_diopters", "plan_layers", "check_accommodation_diopters", "base_wavefront", "matte_indices"]
+           "layer_spacing_diopters", "plan_layers", "matte_indices", "eye_of"]
 
 log = logging.getLogger(__name__)
 
@@ -234,27 +236,22 @@ class DepthBlurResult:
         return out
 
 
-# -- validation helpers ---------------------------------------------------------------
-def check_accommodation_diopters(accommodation_diopters) -> float:
-    """The accommodation exerted (D), refused unless finite and >= 0."""
-    value = finite_number(accommodation_diopters, "accommodation", "dioptres")
-    if value < 0:
-        raise VissimInputError(f"accommodation exerted must be >= 0 dioptres, got {accommodation_diopters!r} D")
-    return value
-
-
-def base_wavefront(eye_rx: Prescription, pupil_mm: float, extra: Wavefront | None) -> Wavefront:
-    """The eye's wavefront over ``pupil_mm``: its prescription plus ``extra`` rescaled to that pupil."""
-    front = Wavefront.from_prescription(eye_rx, pupil_mm)
-    if extra is None:
-        return front
-    if not isinstance(extra, Wavefront):
-        raise TypeError(f"extra_wavefront must be a Wavefront, got {type(extra).__name__}")
-    if extra.pupil_diameter_mm < pupil_mm * (1 - 1e-12):
-        raise VissimInputError(
-            f"extra_wavefront is measured over {extra.pupil_diameter_mm:g} mm, smaller than the {pupil_mm:g} mm pupil"
-        )
-    return front + extra.rescaled(pupil_mm)
+# -- the eye ---------------------------------------------------------------------------
+def eye_of(eye: Eye | None, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront) -> Eye:
+    """``eye``, or the `Eye` the keywords describe (accommodation None: 0 D); both at once are refused."""
+    if eye is not None:
+        instance_of(eye, Eye, "eye", "a vissim.optics.setup.Eye")
+        given = [name for name, value in (("eye_prescription", eye_prescription), ("pupil_diameter_mm", pupil_diameter_mm),
+                                          ("accommodation_diopters", accommodation_diopters),
+                                          ("extra_wavefront", extra_wavefront)) if value is not None]
+        if given:
+            raise VissimInputError(f"give the eye as eye= or as its keywords, not both (also given: {', '.join(given)})")
+        return eye
+    if eye_prescription is None or pupil_diameter_mm is None:
+        raise VissimTypeError("the eye is needed: eye= (a vissim.optics.setup.Eye), or eye_prescription= and "
+                              "pupil_diameter_mm=")
+    accommodation = 0.0 if accommodation_diopters is None else accommodation_diopters
+    return Eye(eye_prescription, pupil_diameter_mm, accommodation, extra_wavefront)
 
 
 # -- the layered blur -----------------------------------------------------------------
@@ -262,13 +259,14 @@ def blur_depth(
     image,
     depth_m,
     *,
-    eye_prescription: Prescription,
-    pupil_diameter_mm: float,
+    eye_prescription: Prescription | None = None,
+    pupil_diameter_mm: float | None = None,
     arcmin_per_px: float,
-    accommodation_diopters: float = 0.0,
+    accommodation_diopters: float | None = None,
     wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
     mode: str = "wave",
     extra_wavefront: Wavefront | None = None,
+    eye: Eye | None = None,
     layer_spacing_fraction: float = 0.5,
     max_layers: int | None = DEFAULT_MAX_LAYERS,
     occlusion_threshold_px: float = 1.0,
@@ -288,11 +286,15 @@ def blur_depth(
         Distance of each pixel's surface from the eye, metres; ``inf`` for sky.
     eye_prescription : Prescription
         The eye's correcting lens (myope negative), *not worn*: the eye is uncorrected.
-    accommodation_diopters : float
-        Accommodation exerted (D, >= 0), the same for the whole scene; see
+    pupil_diameter_mm : float
+        The eye's pupil, mm.
+    accommodation_diopters : float, optional
+        Accommodation exerted (D, >= 0; default 0), the same for the whole scene; see
         `vissim.optics.accommodation.accommodation_for_target`.
     extra_wavefront : Wavefront, optional
         Further aberrations of the eye (higher orders), the same at every depth.
+    eye : Eye, optional
+        The eye as one object (`vissim.optics.setup.Eye`), instead of the four keywords above.
     layer_spacing_fraction : float
         Neighbouring layers' blur discs differ by at most this many pixels.
     max_layers : int, optional
@@ -343,17 +345,15 @@ def blur_depth(
     >>> [round(layer.proximity_diopters, 2) for layer in result.layers]  # far to near
     [0.5, 2.0]
     """
-    rx = as_prescription(eye_prescription)
-    pupil = check_pupil_mm(pupil_diameter_mm)
+    eye = eye_of(eye, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront)
+    pupil = eye.pupil_diameter_mm
     step = check_arcmin_per_px(arcmin_per_px)
-    accommodation = check_accommodation_diopters(accommodation_diopters)
     wavelength, threshold_px, coarse_blur_px, backend = _checked_options(
-        mode, padding, wavelength_nm, occlusion_threshold_px, coarse_blur_px, max_layers, extra_wavefront, device)
+        mode, padding, wavelength_nm, occlusion_threshold_px, coarse_blur_px, max_layers, device)
     pixels, proximity, crop = _checked_image_and_depth(image, depth_m, crop_px)
     colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
 
-    base = base_wavefront(rx, pupil, extra_wavefront)
-    in_focus_diopters = accommodation - base.to_prescription().spherical_equivalent_diopters
+    in_focus_diopters = eye.in_focus_proximity_diopters
     plan, threshold_diopters = _depth_plan(proximity, in_focus_diopters, step, pupil, layer_spacing_fraction,
                                            threshold_px, max_layers)
     layer_diopters = np.array(plan.proximities_diopters)
@@ -361,8 +361,7 @@ def blur_depth(
     threads = worker_threads(backend)
     with layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
         boxes_job = None if pool is None else pool.submit(layer_boxes, matte.lower, matte.upper, matte.frac, plan.n_layers)
-        optics, layers = _layer_optics(rx, base, layer_diopters, accommodation, matte, pupil, wavelength, step, mode,
-                                       coarse_blur_px, pool)
+        optics, layers = _layer_optics(eye, layer_diopters, matte, wavelength, step, mode, coarse_blur_px, pool)
         boxes = layer_boxes(matte.lower, matte.upper, matte.frac, plan.n_layers) if boxes_job is None else boxes_job.result()
         scene = LayerScene.on(backend, colour, (matte.lower, matte.upper, matte.frac), layer_diopters,
                               threshold_diopters, boxes, optics, padding, 1 if pool is not None else None)
@@ -378,13 +377,13 @@ def blur_depth(
     result = out[0] if pixels.ndim == 2 else np.moveaxis(out, 0, -1)
     return DepthBlurResult(
         np.ascontiguousarray(result, dtype=np.float32), tuple(layers), plan.n_layers, plan.max_spacing_diopters,
-        threshold_diopters, accommodation, in_focus_diopters, compositor.largest,
+        threshold_diopters, eye.accommodation_diopters, in_focus_diopters, compositor.largest,
     )
 
 
 # -- the stages of blur_depth ---------------------------------------------------------
 def _checked_options(mode: str, padding: str, wavelength_nm, occlusion_threshold_px, coarse_blur_px, max_layers,
-                     extra_wavefront, device: str):
+                     device: str):
     """Checks: (wavelength nm, occlusion threshold px, coarse-grid blur px or None, array backend)."""
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
@@ -397,8 +396,6 @@ def _checked_options(mode: str, padding: str, wavelength_nm, occlusion_threshold
         coarse_blur_px = positive_number(coarse_blur_px, "coarse-grid blur threshold", "pixels of blur diameter")
     if max_layers is not None and (int(max_layers) != max_layers or max_layers < 1):
         raise VissimInputError(f"max_layers must be a positive whole number of layers, got {max_layers!r}")
-    if extra_wavefront is not None:
-        instance_of(extra_wavefront, Wavefront, "extra_wavefront", "a Wavefront (higher-order terms) or None")
     return wavelength, threshold_px, coarse_blur_px, backend
 
 
@@ -451,18 +448,18 @@ def _tent_matte(proximity: np.ndarray, layer_diopters: np.ndarray) -> _TentMatte
     return _TentMatte(lower.astype(np.int32), upper, frac.astype(np.float32), coverage, active)
 
 
-def _layer_optics(rx: Prescription, base: Wavefront, layer_diopters: np.ndarray, accommodation: float,
-                  matte: _TentMatte, pupil: float, wavelength: float, step: float, mode: str,
+def _layer_optics(eye: Eye, layer_diopters: np.ndarray, matte: _TentMatte, wavelength: float, step: float, mode: str,
                   coarse_blur_px: float | None, pool) -> tuple[LayerOptics, list[DepthLayer]]:
-    """Each non-empty layer's wavefront, blur diameter, grid (coarse from ``coarse_blur_px``) and PSF (on
-    ``pool``'s threads if given), and its record."""
-    fronts = {k: base.with_defocus_diopters(layer_diopters[k] - accommodation) for k in matte.active}
+    """Each non-empty layer's wavefront (``eye`` at its proximity), blur diameter, grid (coarse from
+    ``coarse_blur_px``) and PSF (on ``pool``'s threads if given), and its record."""
+    pupil = eye.pupil_diameter_mm
+    fronts = {k: eye.wavefront_at(layer_diopters[k]) for k in matte.active}
     blurs = (map if pool is None else pool.map)(lambda f: geometric_blur_radius_arcmin(f, pupil), fronts.values())
     blurs_arcmin = {k: 2.0 * radius for k, radius in zip(fronts, blurs)}
     scales = {k: COARSE_FACTOR if coarse_blur_px is not None and blurs_arcmin[k] / step >= coarse_blur_px else 1
               for k in matte.active}
     optics = LayerOptics(fronts, scales, pupil, wavelength, step, mode, pool)
-    layers = [DepthLayer(k, float(layer_diopters[k]), rx.sphere_diopters + float(layer_diopters[k]) - accommodation,
+    layers = [DepthLayer(k, float(layer_diopters[k]), eye.sphere_at_diopters(float(layer_diopters[k])),
                          blurs_arcmin[k], optics.sizes[k] * scales[k], float(matte.coverage[k] / matte.lower.size))
               for k in matte.active]
     return optics, layers

@@ -42,7 +42,6 @@ class LayerScene:
     padding: str
     backend: object
     threads: int | None  # FFT threads per convolution: 1 while the pool's threads blur layers at once
-    transfers: dict
 
     @classmethod
     def on(cls, backend, colour, matte: tuple, layer_diopters, threshold_diopters, boxes, optics: LayerOptics,
@@ -52,7 +51,7 @@ class LayerScene:
         reach = {k: (optics.sizes[k] // 2 + 1) * optics.scales[k] for k in optics.fronts}
         colour, lower, upper, frac = (backend.asarray(a) for a in (colour, *matte))
         return cls(colour, lower, upper, frac, layer_diopters, threshold_diopters, boxes, reach, optics, padding,
-                   backend, threads, {})
+                   backend, threads)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -84,10 +83,10 @@ def blurred_layer(scene: LayerScene, k: int) -> tuple:
     touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
     if scale == 1:
         blurred, shape = blur_window(planes, scene.optics.psf(k), scene.padding, touches, scene.backend,
-                                     scene.transfers, scene.threads)
+                                     scene.threads)
     else:
         blurred, shape = blur_coarse(planes, scene.optics.psf(k), scene.padding, touches, scale, scene.backend,
-                                     scene.transfers, scene.threads)
+                                     scene.threads)
     return window, blurred, shape
 
 

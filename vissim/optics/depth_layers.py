@@ -60,20 +60,18 @@ from scipy import ndimage
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import wavelength_nm as check_wavelength_nm
-from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
-from vissim.optics.depth import (base_wavefront, check_accommodation_diopters, layer_spacing_diopters, matte_indices,
-                                 plan_layers)
+from vissim.optics.depth import eye_of, layer_spacing_diopters, matte_indices, plan_layers
 from vissim.optics.depth_psfs import cached_psf
 from vissim.optics.depth_windows import grow_box
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.prescription import Prescription
 from vissim.optics.psf import PSF, geometric_blur_radius_arcmin
-from vissim.optics.pupil_rays import ray_count, stratified_pupil_rays
+from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
+from vissim.optics.setup import Eye
 from vissim.optics.wavefront import Wavefront
-from vissim.units import image_colrow_to_osa_xy, osa_xy_to_image_colrow, rad_to_arcmin
 
-__all__ = ["SceneLayer", "LayeredBlurResult", "composite_layers", "pupil_rays"]
+__all__ = ["SceneLayer", "LayeredBlurResult", "composite_layers"]
 
 log = logging.getLogger(__name__)
 
@@ -108,7 +106,7 @@ class LayeredBlurResult:
 
 
 @functools.lru_cache(maxsize=8)
-def pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
+def _pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
     """The geometric PSF's pupil rays (`vissim.optics.pupil_rays.stratified_pupil_rays`), cached read-only."""
     u, v = stratified_pupil_rays(n_rays)
     u.setflags(write=False)
@@ -118,12 +116,8 @@ def pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _offsets_px(front: Wavefront, pupil_mm: float, step: float, rays) -> np.ndarray:
     """Each ray's landing offset (row, col) rounded to whole pixels, int32 (n, 2)."""
-    u, v = rays
-    radius = pupil_mm / 2.0
-    sx, sy = front.slopes_mrad(*image_colrow_to_osa_xy(u * radius, v * radius))  # as compute_psf
-    col_mrad, row_mrad = osa_xy_to_image_colrow(sx, sy)
-    col = rad_to_arcmin(col_mrad * 1e-3) / step
-    row = rad_to_arcmin(row_mrad * 1e-3) / step
+    col, row = landing_arcmin(front, pupil_mm, *rays)  # as compute_psf
+    col, row = col / step, row / step
     return np.stack([np.floor(row + 0.5), np.floor(col + 0.5)], axis=1).astype(np.int32)
 
 
@@ -297,13 +291,14 @@ def _composite_layer(target: list[_Slice], occluders: list[list[_Slice]], window
 def composite_layers(
     layers,
     *,
-    eye_prescription: Prescription,
-    pupil_diameter_mm: float,
+    eye_prescription: Prescription | None = None,
+    pupil_diameter_mm: float | None = None,
     arcmin_per_px: float,
-    accommodation_diopters: float = 0.0,
+    accommodation_diopters: float | None = None,
     wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
     mode: str = "geometric",
     extra_wavefront: Wavefront | None = None,
+    eye: Eye | None = None,
     layer_spacing_fraction: float = 0.5,
     n_rays: int | None = None,
     crop_px: int = 0,
@@ -325,6 +320,8 @@ def composite_layers(
         The eye's wavelength, nm, as in `vissim.optics.depth.blur_depth`.
     extra_wavefront
         The eye's further aberrations, as in `vissim.optics.depth.blur_depth`.
+    eye : Eye, optional
+        The eye as one object (`vissim.optics.setup.Eye`), instead of the four keywords above.
     mode : {"geometric", "wave"}
     layer_spacing_fraction : float
         A slanted layer's slices differ in blur by at most this many pixels.
@@ -333,10 +330,9 @@ def composite_layers(
     crop_px : int
         Pixels cut from every side of the result (the layers cover a margin beyond the frame).
     """
-    rx = as_prescription(eye_prescription)
-    pupil = check_pupil_mm(pupil_diameter_mm)
+    eye = eye_of(eye, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront)
+    pupil = eye.pupil_diameter_mm
     step = check_arcmin_per_px(arcmin_per_px)
-    accommodation = check_accommodation_diopters(accommodation_diopters)
     wavelength = check_wavelength_nm(wavelength_nm)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
@@ -344,12 +340,11 @@ def composite_layers(
     n_ch, rows, cols = checked[0][0].shape
 
     checked.sort(key=_depth_order, reverse=True)  # near (large proximity) first
-    base = base_wavefront(rx, pupil, extra_wavefront)
     spacing = layer_spacing_diopters(step, pupil, layer_spacing_fraction)
-    in_focus = accommodation - base.to_prescription().spherical_equivalent_diopters
+    in_focus = eye.in_focus_proximity_diopters
     by_layer = [_slices(i, *item, spacing, in_focus) for i, item in enumerate(checked)]
     slices = [s for layer in by_layer for s in layer]
-    fronts = {id(s): base.with_defocus_diopters(s.proximity_diopters - accommodation) for s in slices}
+    fronts = {id(s): eye.wavefront_at(s.proximity_diopters) for s in slices}
     rays = _trace_slices(slices, fronts, pupil, step, wavelength, n_rays)
 
     density = {layer[0].layer: _density(layer) for layer in by_layer}
@@ -364,7 +359,7 @@ def composite_layers(
     log.info("layered depth blur: %d layers, %d slices, %d rays, %d terms", len(by_layer), len(slices), len(rays[0]),
              n_terms)
     return LayeredBlurResult(np.ascontiguousarray(image, dtype=np.float32), len(by_layer), len(slices), len(rays[0]),
-                             n_terms, overlapping, accommodation, mode)
+                             n_terms, overlapping, eye.accommodation_diopters, mode)
 
 
 # -- the stages of composite_layers ---------------------------------------------------
@@ -401,7 +396,7 @@ def _trace_slices(slices: list[_Slice], fronts: dict, pupil: float, step: float,
     if n_rays is None:
         blur_px = max(geometric_blur_radius_arcmin(f, pupil) for f in fronts.values()) / step
         n_rays = ray_count(blur_px)
-    rays = pupil_rays(int(n_rays))
+    rays = _pupil_rays(int(n_rays))
     for s in slices:
         s.offsets = _offsets_px(fronts[id(s)], pupil, step, rays)
         s.psf = _histogram_psf(s.offsets, step, pupil, wavelength)
@@ -480,5 +475,5 @@ def _fft_blur(colour: np.ndarray, psf: PSF) -> np.ndarray:
 
 
 def _wave_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float) -> PSF:
-    # size_px=None passed as depth.layer_psf passes it: lru_cache keys an omitted argument apart
+    # size_px=None passed as depth_psfs.LayerOptics passes it: lru_cache keys an omitted argument apart
     return cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, "wave", None)

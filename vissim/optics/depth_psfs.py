@@ -18,7 +18,7 @@ from vissim.optics.psf import PSF, compute_psf, suggested_size_px
 from vissim.optics.threads import available_cores, single_threaded_blas
 from vissim.optics.wavefront import Wavefront
 
-__all__ = ["cached_psf", "layer_psf", "LayerOptics", "worker_threads", "layer_pool", "in_order"]
+__all__ = ["cached_psf", "LayerOptics", "worker_threads", "layer_pool", "in_order"]
 
 @functools.lru_cache(maxsize=128)
 def cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float, mode: str,
@@ -26,42 +26,29 @@ def cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float,
     """The PSF of one layer's wavefront (cached by wavefront), on a field that holds its blur or of ``size_px``
     (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
     front = Wavefront(dict(items), pupil_mm)
-    size = size_px or suggested_size_px(front, step, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm)
-    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step, size_px=size, mode=mode)
+    return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step,
+                       size_px=size_px, mode=mode)
 
 
 def _wavefront_key(coefficients: dict, sign: float = 1.0) -> tuple:
     return tuple(sorted((k, round(sign * v, 12)) for k, v in coefficients.items() if round(v, 12) != 0.0))
 
 
-def layer_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float, mode: str, seen: dict,
-               size_px: int | None = None) -> PSF:
-    """A layer's PSF; the point reflection of an already computed one when its wavefront is that one's negative.
+def _reflected(psf: PSF, front: Wavefront) -> PSF:
+    """``psf`` reflected through its centre, as the PSF of ``front`` (the negative of its wavefront).
 
     ``|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2``, and the geometric PSF's rays land at
     ``-grad W``: both PSFs of ``-W`` are those of ``W`` reflected through the origin (to round-off;
     odd sizes only, whose origin ``[N//2, N//2]`` is the centre).  For an eye whose wavefront is
     defocus alone, the symmetric layer plan pairs every layer with one of opposite defocus.
     """
-    key = _wavefront_key(front.coefficients_um)
-    mirror = None if size_px is not None or key in seen else seen.get(_wavefront_key(front.coefficients_um, -1.0))
-    if mirror is not None and mirror.data.shape[0] % 2 == 1:
-        psf = _reflected(mirror, front)
-    else:
-        psf = cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, mode, size_px)
-    seen[key] = psf
-    return psf
-
-
-def _reflected(psf: PSF, front: Wavefront) -> PSF:
-    """``psf`` reflected through its centre, as the PSF of ``front`` (the negative of its wavefront)."""
     data = np.ascontiguousarray(psf.data[::-1, ::-1])
     data.setflags(write=False)
     return dataclasses.replace(psf, data=data, wavefront=front)
 
 
 class LayerOptics:
-    """Each non-empty layer's PSF (as `layer_psf` chooses them), computed at most once.
+    """Each non-empty layer's PSF, computed at most once.
 
     ``fronts`` and ``scales`` (the grid's pixel, in image pixels) by layer, far to near.  A layer
     either computes its PSF (cached by wavefront) or reflects that of an earlier layer whose

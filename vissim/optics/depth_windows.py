@@ -144,13 +144,13 @@ def add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -
 
 
 def blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None, threads: int | None = None) -> tuple:
+                threads: int | None = None) -> tuple:
     """Blur (C, h, w) planes of a window with one PSF (`vissim.optics.blur_device.convolve_padded`).
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
     the image they are zero (the window already holds everything of the layer that reaches it).
-    ``backend`` holds the planes (NumPy or CuPy); ``transfers`` caches kernel spectra on its device;
+    ``backend`` holds the planes (NumPy or CuPy);
     ``threads``: the CPU FFT's threads (default all).  Returns the blurred planes and the padded grid's shape.
     """
     if padding not in DEPTH_PADDING_MODES:
@@ -169,7 +169,7 @@ def blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend =
         padded[:, :, :offset] = 0.0
     if not right:
         padded[:, :, offset + w :] = 0.0
-    blurred = convolve_padded(padded, psf, backend, transfers, threads=threads)
+    blurred = convolve_padded(padded, psf, backend, threads=threads)
     return blurred[:, offset : offset + h, offset : offset + w], shape
 
 
@@ -178,7 +178,7 @@ COARSE_FACTOR = 2
 
 
 def blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: ArrayBackend = CPU_BACKEND,
-                 transfers: dict | None = None, threads: int | None = None) -> tuple:
+                threads: int | None = None) -> tuple:
     """Blur on a grid ``factor`` times coarser: block means in, the coarse PSF, bilinear (cell-centred) back.
 
     ``psf`` is sampled at ``factor`` times the image's arcmin/px.  For a wide PSF the blurred
@@ -191,7 +191,7 @@ def blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: A
     even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
     coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
     blurred, shape = blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
-                                  transfers, threads)
+                                 threads)
     fine = blurred
     for _ in range(int(round(math.log2(q)))):
         fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))

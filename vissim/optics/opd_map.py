@@ -19,7 +19,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import RectBivariateSpline
 
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
@@ -35,7 +34,7 @@ class OpdMap:
     samples_um: np.ndarray
     pupil_diameter_mm: float
     added: Wavefront | None = None  # Zernike terms on top (e.g. chromatic defocus), same pupil
-    _spline: RectBivariateSpline = field(init=False, repr=False)
+    _spline: object = field(init=False, repr=False)  # scipy's RectBivariateSpline
 
     def __post_init__(self) -> None:
         values = np.array(self.samples_um, dtype=float)
@@ -49,6 +48,8 @@ class OpdMap:
         values.setflags(write=False)
         radius = diameter / 2.0
         axis = np.linspace(-radius, radius, values.shape[0])
+        from scipy.interpolate import RectBivariateSpline  # ~0.2 s to import: only when a map is made
+
         # The spline's first axis is x (columns), its second y ascending (rows reversed).
         spline = RectBivariateSpline(axis, axis, values[::-1, :].T, kx=3, ky=3)
         object.__setattr__(self, "samples_um", values)

@@ -54,12 +54,12 @@ from vissim.optics.psf_field import (
 )
 from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
 from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
-from vissim.optics.pupil_rays import ray_count, stratified_pupil_rays
+from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
 from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.optics.opd_map import OpdMap
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
-from vissim.units import image_colrow_to_osa_xy, nm_to_mm, osa_xy_to_image_colrow, rad_to_arcmin
+from vissim.units import nm_to_mm, rad_to_arcmin
 
 __all__ = [
     "NORMALISATIONS",
@@ -202,12 +202,8 @@ def psf_sampling(pupil_diameter_mm: float, wavelength_nm: float, arcmin_per_px: 
 
 def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, pixel):
     u, v = stratified_pupil_rays(ray_count(blur_arcmin / arcmin_per_px))
-    radius = diameter_mm / 2.0
-    x_osa, y_osa = image_colrow_to_osa_xy(u * radius, v * radius)  # image-oriented pupil -> OSA
-    sx, sy = wavefront.slopes_mrad(x_osa, y_osa)
-    col_mrad, row_mrad = osa_xy_to_image_colrow(sx, sy)  # dW/dy > 0 lands up (+y), i.e. at -row
-    col = rad_to_arcmin(col_mrad * 1e-3) / arcmin_per_px  # landing offsets in output pixels
-    row = rad_to_arcmin(row_mrad * 1e-3) / arcmin_per_px
+    col, row = landing_arcmin(wavefront, diameter_mm, u, v)
+    col, row = col / arcmin_per_px, row / arcmin_per_px  # landing offsets in output pixels
     if pixel == "integrate":  # the histogram on output pixels is the exact pixel integral
         edges = np.arange(size_px + 1) - size_px // 2 - 0.5
         counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
@@ -268,7 +264,7 @@ def compute_psf(
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     arcmin_per_px: float = 0.25,
-    size_px: int = 256,
+    size_px: int | None = 256,
     mode: str = "wave",
     pixel: str = "integrate",
     dtype=np.float32,
@@ -296,10 +292,11 @@ def compute_psf(
         this wavelength: each wavelength gets its chromatic defocus.
     arcmin_per_px : float
         Output sampling, arcmin per pixel (default 0.25).
-    size_px : int
+    size_px : int or None
         The side of the square field, pixels (default 256).  With ``normalise="field"``, a field
         that would leave more than 1 % of the energy outside raises `FieldTooSmallError` naming
-        the size that holds it.
+        the size that holds it.  None: the smallest odd field that holds the wave PSF
+        (`suggested_size_px`, whose estimate holds the geometric PSF of the same wavefront too).
     mode : {"wave", "geometric"}
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
     pixel : {"integrate", "sample"}
@@ -346,6 +343,9 @@ def compute_psf(
     """
     diameter = _checked_front(wavefront, pupil_diameter_mm, "compute_psf")
     step = check_arcmin_per_px(arcmin_per_px)
+    if size_px is None:
+        size_px = suggested_size_px(wavefront, step, pupil_diameter_mm=diameter, wavelength_nm=wavelength_nm,
+                                    weights=weights, lca_reference_nm=lca_reference_nm)
     if (isinstance(size_px, bool) or not isinstance(size_px, (int, float, np.integer, np.floating))
             or int(size_px) != size_px or not 1 <= size_px <= MAX_PSF_SIZE_PX):
         raise VissimInputError(f"PSF size must be an integer number of pixels in 1-{MAX_PSF_SIZE_PX}, got {size_px!r}")

@@ -32,6 +32,7 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.pupil_rays import landing_arcmin, pupil_cell_centres
 from vissim.optics.wavefront import Wavefront
 from vissim.units import nm_to_mm, rad_to_arcmin
 
@@ -162,13 +163,8 @@ def airy_tail_radius_lambda_over_d(fraction: float) -> float:
 
 
 def _rays(wavefront: Wavefront, diameter_mm: float) -> tuple[np.ndarray, np.ndarray]:
-    """Landing offsets (col, row) in arcmin of a stratified pupil sample of rays."""
-    n = ESTIMATE_RAYS_PER_SIDE
-    cells = (np.arange(n) + 0.5) / n * 2.0 - 1.0
-    u, v = np.meshgrid(cells, cells)
-    keep = u * u + v * v <= 1.0
-    sx, sy = wavefront.slopes_mrad(-u[keep] * diameter_mm / 2, -v[keep] * diameter_mm / 2)
-    return rad_to_arcmin(-1e-3 * sx), rad_to_arcmin(-1e-3 * sy)
+    """Landing offsets (col, row) in arcmin of the pupil grid's cell centres (`ESTIMATE_RAYS_PER_SIDE` a side)."""
+    return landing_arcmin(wavefront, diameter_mm, *pupil_cell_centres(ESTIMATE_RAYS_PER_SIDE))
 
 
 def _inside_fraction(col, row, low, high, lambda_over_d):

@@ -5,7 +5,9 @@ inside the unit disc: each ray stands for an equal share of the pupil's area.  T
 image-oriented (``u`` along columns, ``v`` along rows; `vissim.units.image_colrow_to_osa_xy`
 gives the OSA pupil point).  The geometric PSF (`vissim.optics.psf.compute_psf`) and the
 layered depth blur (`vissim.optics.depth_layers.composite_layers`) both draw their rays here,
-so that one layer alone blurs exactly by the geometric PSF.
+so that one layer alone blurs exactly by the geometric PSF; the field estimate
+(`vissim.optics.psf_field`) takes the grid's cell centres, unjittered.  `landing_arcmin` is
+where a ray lands in the image, for all of them.
 """
 
 from __future__ import annotations
@@ -14,7 +16,10 @@ import math
 
 import numpy as np
 
-__all__ = ["PUPIL_RAY_SEED", "MIN_RAYS", "MAX_RAYS", "RAYS_PER_COVERED_PX", "ray_count", "stratified_pupil_rays"]
+from vissim.units import image_colrow_to_osa_xy, osa_xy_to_image_colrow, rad_to_arcmin
+
+__all__ = ["PUPIL_RAY_SEED", "MIN_RAYS", "MAX_RAYS", "RAYS_PER_COVERED_PX", "ray_count", "stratified_pupil_rays",
+           "pupil_cell_centres", "landing_arcmin"]
 
 #: Fixed: the same wavefront gives the same rays, hence the same PSF.
 PUPIL_RAY_SEED = 20151218
@@ -33,9 +38,34 @@ def stratified_pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
     """Image-oriented unit-disc pupil points ``(u, v)``: about ``n_rays`` of them (the grid's cells inside the disc)."""
     n_side = int(math.ceil(math.sqrt(n_rays * 4.0 / math.pi)))
     rng = np.random.default_rng(PUPIL_RAY_SEED)
-    cells = (np.arange(n_side) + 0.5) / n_side * 2.0 - 1.0
-    u, v = np.meshgrid(cells, cells)
+    u, v = _cell_grid(n_side)
     u = u + (rng.random(u.shape) - 0.5) * (2.0 / n_side)
     v = v + (rng.random(v.shape) - 0.5) * (2.0 / n_side)
+    return _in_disc(u, v)
+
+
+def pupil_cell_centres(n_side: int) -> tuple[np.ndarray, np.ndarray]:
+    """The centres ``(u, v)`` of an ``n_side x n_side`` grid's cells inside the unit disc (no jitter)."""
+    return _in_disc(*_cell_grid(n_side))
+
+
+def _cell_grid(n_side: int) -> tuple[np.ndarray, np.ndarray]:
+    cells = (np.arange(n_side) + 0.5) / n_side * 2.0 - 1.0
+    return np.meshgrid(cells, cells)
+
+
+def _in_disc(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     keep = u * u + v * v <= 1.0
     return u[keep], v[keep]
+
+
+def landing_arcmin(wavefront, pupil_diameter_mm: float, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where the rays through image-oriented unit-disc points ``(u, v)`` land: image offsets (col, row), arcmin.
+
+    A ray lands at ``-grad W`` of ``wavefront`` (a Zernike `Wavefront` or an `OpdMap`) at its
+    OSA pupil point: a slope dW/dy > 0 lands up (+y), i.e. at -row (``docs/conventions.md``).
+    """
+    radius = pupil_diameter_mm / 2.0
+    sx, sy = wavefront.slopes_mrad(*image_colrow_to_osa_xy(u * radius, v * radius))  # image-oriented pupil -> OSA
+    col_mrad, row_mrad = osa_xy_to_image_colrow(sx, sy)
+    return rad_to_arcmin(col_mrad * 1e-3), rad_to_arcmin(row_mrad * 1e-3)

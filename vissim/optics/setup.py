@@ -17,6 +17,10 @@ at an object at ``object_distance_m``.  It holds
 From these follow the wavefront (``W = -P r^2 / 2`` of the prescription P) and the geometric
 blur: pupil (mm) x |principal defocus| (D) milliradians per principal meridian.
 
+An `Eye` is an uncorrected eye at every depth at once (the depth blurs,
+`vissim.optics.depth.blur_depth` and `vissim.optics.depth_layers.composite_layers`): the
+same decision per depth as `ViewingSetup.eye`, on the eye's wavefront.
+
 Named constructors only: `ViewingSetup.dslr`, `ViewingSetup.eye`,
 `ViewingSetup.atv_observer`.  The thesis's choices are named replacements, each one field
 changed (``dataclasses.replace``): `with_thesis_pupil` (ERRATA item 3),
@@ -26,12 +30,13 @@ changed (``dataclasses.replace``): `with_thesis_pupil` (ERRATA item 3),
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM, finite_number
+from vissim.checks import DEFAULT_WAVELENGTH_NM, finite_number, instance_of
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.accommodation import object_proximity_diopters
@@ -42,13 +47,21 @@ from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, entran
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
-__all__ = ["ViewingSetup", "DEFAULT_WAVELENGTH_NM"]
+__all__ = ["ViewingSetup", "Eye", "DEFAULT_WAVELENGTH_NM", "check_accommodation_diopters"]
 
 _IDENTITY: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
 
 
 def _proximity(distance_m: float) -> float:
     return object_proximity_diopters(distance_m, "object distance")
+
+
+def check_accommodation_diopters(accommodation_diopters) -> float:
+    """The accommodation exerted (D), refused unless finite and >= 0."""
+    accommodation = finite_number(accommodation_diopters, "accommodation", "dioptres")
+    if accommodation < 0.0:
+        raise VissimInputError(f"accommodation exerted must be >= 0 dioptres, got {accommodation:g} D")
+    return accommodation
 
 
 @dataclass(frozen=True)
@@ -90,9 +103,7 @@ class ViewingSetup:
         ``vergence_diopters`` (scalar or 2 x 2) of the light arriving at the pupil.
         """
         as_prescription(prescription)
-        accommodation = finite_number(accommodation_diopters, "accommodation", "dioptres")
-        if accommodation < 0.0:
-            raise VissimInputError(f"accommodation must be >= 0 dioptres, got {accommodation:g} D")
+        accommodation = check_accommodation_diopters(accommodation_diopters)
         if vergence_diopters is None:
             vergence = -_proximity(object_distance_m) * np.eye(2)
         else:
@@ -169,3 +180,63 @@ class ViewingSetup:
         """Spectacle magnification per principal meridian ((mag, meridian_deg), ...), larger first."""
         m = np.asarray(self.magnification_matrix, dtype=float)
         return principal_pairs(0.5 * (m + m.T))
+
+
+@dataclass(frozen=True, eq=False)
+class Eye:
+    """An uncorrected eye seen at every depth: its defocus there, on its wavefront.
+
+    ``prescription`` is the eye's correcting lens (myope < 0, *not* worn), ``pupil_diameter_mm``
+    its pupil, ``accommodation_diopters`` (>= 0) the accommodation it exerts for the whole
+    scene, ``extra_wavefront`` its further aberrations (higher orders, rescaled to the pupil).
+    An object at proximity ``L = 1/d`` (D) sees the eye of `ViewingSetup.eye` at ``d``:
+    ``D = A I - Rx - L I``, i.e. the prescription ``Rx + (L - A)`` on the sphere
+    (`vissim.optics.accommodation`); astigmatism and the extra terms are the same at every
+    depth.  `wavefront_at` is that decision on the wavefront, `viewing_setup` the setup itself.
+    """
+
+    prescription: Prescription
+    pupil_diameter_mm: float
+    accommodation_diopters: float = 0.0
+    extra_wavefront: Wavefront | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "prescription", as_prescription(self.prescription))
+        object.__setattr__(self, "pupil_diameter_mm", check_pupil_mm(self.pupil_diameter_mm))
+        object.__setattr__(self, "accommodation_diopters", check_accommodation_diopters(self.accommodation_diopters))
+        extra = self.extra_wavefront
+        if extra is not None:
+            instance_of(extra, Wavefront, "extra_wavefront", "a Wavefront (higher-order terms) or None")
+            if extra.pupil_diameter_mm < self.pupil_diameter_mm * (1 - 1e-12):
+                raise VissimInputError(f"extra_wavefront is measured over {extra.pupil_diameter_mm:g} mm, smaller "
+                                       f"than the {self.pupil_diameter_mm:g} mm pupil")
+
+    @functools.cached_property
+    def wavefront(self) -> Wavefront:
+        """The relaxed eye's wavefront over its pupil: its prescription plus the extra terms."""
+        front = Wavefront.from_prescription(self.prescription, self.pupil_diameter_mm)
+        extra = self.extra_wavefront
+        return front if extra is None else front + extra.rescaled(self.pupil_diameter_mm)
+
+    def defocus_change_diopters(self, proximity_diopters: float) -> float:
+        """``L - A``: the sphere an object at ``proximity_diopters`` adds to the relaxed eye's prescription."""
+        return proximity_diopters - self.accommodation_diopters
+
+    def wavefront_at(self, proximity_diopters: float) -> Wavefront:
+        """The wavefront for an object at ``proximity_diopters`` (D, 0 at infinity)."""
+        return self.wavefront.with_defocus_diopters(self.defocus_change_diopters(proximity_diopters))
+
+    def sphere_at_diopters(self, proximity_diopters: float) -> float:
+        """The effective prescription's sphere ``Rx_S + L - A`` for an object at ``proximity_diopters``."""
+        return self.prescription.sphere_diopters + proximity_diopters - self.accommodation_diopters
+
+    @property
+    def in_focus_proximity_diopters(self) -> float:
+        """``A - M`` (``M`` the wavefront's spherical equivalent): the proximity the eye focuses."""
+        return self.accommodation_diopters - self.wavefront.to_prescription().spherical_equivalent_diopters
+
+    def viewing_setup(self, object_distance_m: float = math.inf, *,
+                      wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
+        """This eye looking at ``object_distance_m`` (`ViewingSetup.eye`; the extra terms are not in a setup)."""
+        return ViewingSetup.eye(self.prescription, self.pupil_diameter_mm, self.accommodation_diopters,
+                                object_distance_m, wavelength_nm=wavelength_nm)

@@ -73,6 +73,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     """
     from vissim.optics.depth import blur_depth
     from vissim.optics.depth_layers import composite_layers
+    from vissim.optics.setup import Eye
     from vissim.render.depth_render import proximity_to_depth_m
     from vissim.validation.item import save_item_image
     from vissim.validation.simulate import add_bench_diffraction, block_mean
@@ -107,9 +108,8 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
                                                                                 frame(images["all_in_focus"])),
              "proximity": _save(item_dir, "proximity_diopters", proximity, preview=False),
              "regions": _save(item_dir, "regions", masks.label_image().astype(np.float32), preview=False)}
-    eye_kwargs = dict(eye_prescription=eye.prescription, pupil_diameter_mm=eye.pupil_diameter_mm,
-                      arcmin_per_px=scene.arcmin_per_px / s, accommodation_diopters=eye.accommodation_diopters,
-                      wavelength_nm=settings.wavelength_nm, layer_spacing_fraction=settings.layer_spacing_fraction)
+    eye_kwargs = dict(eye=Eye(eye.prescription, eye.pupil_diameter_mm, eye.accommodation_diopters),
+                      arcmin_per_px=scene.arcmin_per_px / s, wavelength_nm=settings.wavelength_nm, layer_spacing_fraction=settings.layer_spacing_fraction)
     layers = _scene_layers(scene, images) if "layered" in settings.inputs else None
     references = {}
     comparisons = []

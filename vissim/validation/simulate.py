@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from vissim.optics.blur import blur_image
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px
+from vissim.optics.psf import PSF, compute_psf
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLens
@@ -99,10 +99,8 @@ def _psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
 
 @functools.lru_cache(maxsize=64)
 def _cached_psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
-    front = setup.wavefront
-    size = suggested_size_px(front, arcmin_per_px, wavelength_nm=setup.wavelength_nm)
-    return compute_psf(front, wavelength_nm=setup.wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=size, mode=mode,
-                       pixel="integrate")
+    return compute_psf(setup.wavefront, wavelength_nm=setup.wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=None,
+                       mode=mode, pixel="integrate")
 
 
 def simulate(setup: SimulationSetup, image: np.ndarray, settings: CampaignSettings, *, oversample: int = 1) -> np.ndarray:
