@@ -343,3 +343,14 @@ def test_a_forced_matrix_transform_over_a_wide_field_folds_little_light_into_it(
     mft, fft = (compute_psf(front, arcmin_per_px=1.0, size_px=255, method=m, dtype=np.float64) for m in ("mft", "fft"))
     assert abs(mft.energy_in_field - fft.energy_in_field) <= 2e-3
     assert np.abs(mft.data - fft.data).max() <= 2e-3 * fft.data.max()
+
+
+@pytest.mark.parametrize("mode", ["wave", "geometric"])
+def test_an_auto_field_is_the_suggested_size(mode):
+    from vissim.optics.psf import suggested_size_px
+
+    front = Wavefront.from_prescription(Prescription(-1.0, -0.5, 60.0), 3.0)
+    auto = compute_psf(front, arcmin_per_px=0.5, size_px="auto", mode=mode)
+    size = suggested_size_px(front, 0.5)
+    assert auto.size_px == (size, size)
+    np.testing.assert_array_equal(auto.data, compute_psf(front, arcmin_per_px=0.5, size_px=size, mode=mode).data)

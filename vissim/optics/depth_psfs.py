@@ -27,7 +27,7 @@ def cached_psf(items: tuple, pupil_mm: float, wavelength_nm: float, step: float,
     (a coarse grid's, the fine field's arcmin; refused if it cannot hold it)."""
     front = Wavefront(dict(items), pupil_mm)
     return compute_psf(front, pupil_diameter_mm=pupil_mm, wavelength_nm=wavelength_nm, arcmin_per_px=step,
-                       size_px=size_px, mode=mode)
+                       size_px="auto" if size_px is None else size_px, mode=mode)
 
 
 def _wavefront_key(coefficients: dict, sign: float = 1.0) -> tuple:

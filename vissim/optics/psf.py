@@ -264,7 +264,7 @@ def compute_psf(
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     arcmin_per_px: float = 0.25,
-    size_px: int | None = 256,
+    size_px: int | str = 256,
     mode: str = "wave",
     pixel: str = "integrate",
     dtype=np.float32,
@@ -292,10 +292,10 @@ def compute_psf(
         this wavelength: each wavelength gets its chromatic defocus.
     arcmin_per_px : float
         Output sampling, arcmin per pixel (default 0.25).
-    size_px : int or None
+    size_px : int or "auto"
         The side of the square field, pixels (default 256).  With ``normalise="field"``, a field
         that would leave more than 1 % of the energy outside raises `FieldTooSmallError` naming
-        the size that holds it.  None: the smallest odd field that holds the wave PSF
+        the size that holds it.  ``"auto"``: the smallest odd field that holds the wave PSF
         (`suggested_size_px`, whose estimate holds the geometric PSF of the same wavefront too).
     mode : {"wave", "geometric"}
         ``"wave"`` (diffraction) or ``"geometric"`` (ray optics of the same wavefront).
@@ -343,12 +343,13 @@ def compute_psf(
     """
     diameter = _checked_front(wavefront, pupil_diameter_mm, "compute_psf")
     step = check_arcmin_per_px(arcmin_per_px)
-    if size_px is None:
+    if isinstance(size_px, str) and size_px == "auto":
         size_px = suggested_size_px(wavefront, step, pupil_diameter_mm=diameter, wavelength_nm=wavelength_nm,
                                     weights=weights, lca_reference_nm=lca_reference_nm)
     if (isinstance(size_px, bool) or not isinstance(size_px, (int, float, np.integer, np.floating))
             or int(size_px) != size_px or not 1 <= size_px <= MAX_PSF_SIZE_PX):
-        raise VissimInputError(f"PSF size must be an integer number of pixels in 1-{MAX_PSF_SIZE_PX}, got {size_px!r}")
+        raise VissimInputError(f"PSF size must be an integer number of pixels in 1-{MAX_PSF_SIZE_PX} (or 'auto'), "
+                               f"got {size_px!r}")
     size_px = int(size_px)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")

@@ -99,7 +99,7 @@ def _psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
 
 @functools.lru_cache(maxsize=64)
 def _cached_psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
-    return compute_psf(setup.wavefront, wavelength_nm=setup.wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=None,
+    return compute_psf(setup.wavefront, wavelength_nm=setup.wavelength_nm, arcmin_per_px=arcmin_per_px, size_px="auto",
                        mode=mode, pixel="integrate")
 
 
