@@ -109,7 +109,8 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
              "proximity": _save(item_dir, "proximity_diopters", proximity, preview=False),
              "regions": _save(item_dir, "regions", masks.label_image().astype(np.float32), preview=False)}
     eye_kwargs = dict(eye=Eye(eye.prescription, eye.pupil_diameter_mm, eye.accommodation_diopters),
-                      arcmin_per_px=scene.arcmin_per_px / s, wavelength_nm=settings.wavelength_nm, layer_spacing_fraction=settings.layer_spacing_fraction)
+                      arcmin_per_px=scene.arcmin_per_px / s, wavelength_nm=settings.wavelength_nm,
+                      layer_spacing_fraction=settings.layer_spacing_fraction)
     layers = _scene_layers(scene, images) if "layered" in settings.inputs else None
     references = {}
     comparisons = []
