@@ -131,9 +131,9 @@ def test_the_rules_catch_what_they_name(tmp_path):
 def test_loading_a_campaign_imports_neither_the_harness_nor_scikit_image():
     """Parsing a campaign file needs the loader and the memory preflight, not the item, fit or registration."""
     root = PACKAGE.parent
-    code = ("import sys; sys.path.insert(0, sys.argv[1]); from vissim.validation.campaign import load_campaign; "
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); from vissim.validation.engine.loader import load_campaign; "
             "load_campaign(sys.argv[2]); "
-            "print(sorted(m for m in ('skimage', 'vissim.fit', 'vissim.validation.item', 'vissim.imaging.registration', "
+            "print(sorted(m for m in ('skimage', 'vissim.fit', 'vissim.validation.dslr.item', 'vissim.imaging.registration', "
             "'mitsuba', 'rawpy') if m in sys.modules))")
     for toml in ("quick.toml", "thesis.toml"):
         done = subprocess.run([sys.executable, "-c", code, str(root), str(root / "validation" / toml)],

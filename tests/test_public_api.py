@@ -56,7 +56,7 @@ def test_the_cheap_docstring_examples_run():
     import importlib
 
     modules = ("vissim.optics.prescription", "vissim.optics.wavefront", "vissim.optics.blur", "vissim.charts",
-               "vissim.fit.rx_fit", "vissim.validation.campaign", "vissim.validation.runner", "vissim.atv.analysis",
+               "vissim.fit.rx_fit", "vissim.validation.engine.loader", "vissim.validation.engine.runner", "vissim.atv.analysis",
                "vissim.render.run", "vissim.optics.psf_metrics", "vissim.optics.depth", "vissim.atv.data",
                "vissim.bench.dslr")
     attempted = 0

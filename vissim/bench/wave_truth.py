@@ -20,7 +20,7 @@ not part of the lenses' wavefront.
 
 Steps 2-4 are `image_through_traced_lenses`, for any fine image laid out on the bench's
 frame (a campaign passes its own synthetic chart); with ``mode="geometric"`` they use the
-trace's ray PSF instead, the geometric self-check (`vissim.validation.wave_bench`).
+trace's ray PSF instead, the geometric self-check (`vissim.validation.dslr.wave_bench`).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Checks of campaign-file values: each bad value gets one line naming the file, the field and its unit.
 
-Shared by the single-plane (`vissim.validation.campaign`) and depth
-(`vissim.validation.depth_campaign`) campaign loaders and the capture manifest.
+Shared by the campaign loader (`vissim.validation.engine.loader`), every bench kind's part of
+the file and the capture manifest.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ __all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_camp
 MAX_SEED = (MAX_SAMPLER_SEED - 1) // 2
 #: Trial lens sets go to +-20 D; beyond +-30 D a lens is no trial lens.
 MAX_LENS_DIOPTERS = 30.0
-#: Top-level tables that make a TOML file a campaign (single-plane or depth).
-CAMPAIGN_TABLES = ("campaign", "item", "sweep", "depth_campaign", "config")
+#: Top-level tables that make a TOML file a campaign: its head and any bench kind's configurations.
+CAMPAIGN_TABLES = ("campaign", "item", "sweep", "config")
 
 
 def field_error(source: str, where: str, message: str) -> VissimInputError:
@@ -74,7 +74,7 @@ def read_campaign_toml(path: str | Path) -> dict:
     if not set(doc) & set(CAMPAIGN_TABLES):
         found = f"its tables: {', '.join(sorted(doc))}" if doc else "it is empty"
         raise VissimInputError(f"{path} is not a campaign file: it has no [campaign], [[item]], [[sweep]] or "
-                               f"[depth_campaign] table ({found})")
+                               f"[[config]] table ({found})")
     return doc
 
 

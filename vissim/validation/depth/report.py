@@ -1,7 +1,7 @@
-"""Report of a depth campaign run: metrics (JSON, CSV), Markdown tables, figures, HTML.
+"""The depth bench's report: metric rows per region, Markdown tables and a figure per simulation.
 
-Rebuilt from the finished items' ``result.json`` and images (`vissim.validation.depth_campaign`),
-like `vissim.validation.report` for the single-plane harness.  Every region is reported
+Read from the finished items' ``result.json`` and images; `vissim.validation.engine.report`
+writes the files.  Every region is reported
 beside its noise floor (the two seeds of the render compared over the same pixels): a
 perfect, noise-free simulation scores 3 dB above the floor's PSNR.  Occlusion bands are a row
 of their own, so boundary errors are shown, not averaged away.
@@ -9,42 +9,26 @@ of their own, so boundary errors are shown, not averaged away.
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 import textwrap
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from vissim.imageio import read_image
+from vissim.progress import counter
+from vissim.validation.engine.figures import Figure, display_norm, png_bytes, pyplot, radiance_colorbar
+from vissim.validation.engine.protocol import ReportParts
+from vissim.validation.engine.report import format_number as _fmt
+from vissim.validation.engine.report import metric_float
+from vissim.validation.engine.summary import PERFECT_MARGIN_DB
 
-from vissim.imageio import read_image  # noqa: E402
-from vissim.progress import Progress, counter  # noqa: E402
-from vissim.validation.report import campaign_name, load_results, metric_float, png_bytes  # noqa: E402
-from vissim.validation.report_figures import Figure, display_norm, radiance_colorbar  # noqa: E402
-from vissim.validation.report_summary import PERFECT_MARGIN_DB  # noqa: E402
-from vissim.validation.report import json_rows, write_report_files  # noqa: E402
-from vissim.validation.report import format_number as _fmt  # noqa: E402
-
-__all__ = ["current_results", "depth_rows", "depth_tables", "build_depth_report", "depth_summary_lines"]
+__all__ = ["depth_rows", "depth_tables", "depth_report", "summary_lines"]
 
 log = logging.getLogger(__name__)
 
 FIGURE_ROWS = 8
-
-
-def current_results(run_dir: str | Path) -> list[dict]:
-    """The finished items of the campaign last run into ``run_dir`` (items of earlier settings left out)."""
-    run_dir = Path(run_dir)
-    results = load_results(run_dir)
-    order_file = run_dir / "campaign.json"
-    if not order_file.exists():
-        return results
-    keys = set(json.loads(order_file.read_text())["items"])
-    return [r for r in results if r["key"] in keys]
 
 
 def depth_rows(results: list[dict]) -> list[dict]:
@@ -167,7 +151,7 @@ def _panels_label(result: dict) -> str:
 
 
 def _region_names(result: dict) -> list[str]:
-    """Names of the region labels 0, 1, 2... (``label_image`` of vissim.validation.depth_masks)."""
+    """Names of the region labels 0, 1, 2... (``label_image`` of vissim.validation.depth.masks)."""
     return ["frame", "boundary"] + [r for r in result["masks"]["regions"] if r not in ("boundary", "frame")]
 
 
@@ -181,7 +165,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> Figure | Non
         return None
     ads = [read_image(run_dir / c["images"]["abs_diff_map"]).pixels for _, c in rows]
     ad_max = max(0.01, max(float(np.percentile(a, 99.5)) for a in ads))
-    fig, axes = plt.subplots(len(rows), 4, figsize=(13.0, 2.3 * len(rows) + 1.2), squeeze=False, layout="constrained")
+    fig, axes = pyplot.subplots(len(rows), 4, figsize=(13.0, 2.3 * len(rows) + 1.2), squeeze=False, layout="constrained")
     shown = []
     for i, ((result, comp), ad) in enumerate(zip(rows, ads)):
         truth = read_image(run_dir / result["images"][comp["reference_image"]]).pixels
@@ -189,7 +173,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> Figure | Non
         regions = read_image(run_dir / result["images"]["regions"]).pixels
         names = _region_names(result)
         names += [f"region {k}" for k in range(len(names), int(regions.max()) + 1)]
-        palette = plt.get_cmap("tab10" if len(names) <= 10 else "tab20").colors
+        palette = pyplot.get_cmap("tab10" if len(names) <= 10 else "tab20").colors
         panels = [(truth, "gray", display_norm(), "render"),
                   (sim, "gray", display_norm(), f"{simulation} simulation"),
                   (ad, "magma", Normalize(0, ad_max), "|difference|"),
@@ -227,35 +211,25 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> Figure | Non
     return Figure("", png_bytes(fig), alt)
 
 
-def build_depth_report(run_dir: str | Path, progress: Progress | None = None) -> list[Path]:
-    """Write metrics.json, metrics.csv, tables.md, figure_depth_*.png and report.html into ``run_dir``.
-
-    ``progress(stage, done, total)`` after each figure and the files (`vissim.progress`).
-    """
-    run_dir = Path(run_dir)
-    results = current_results(run_dir)
+def depth_report(results: list[dict], run_dir: Path, record: dict, progress=None) -> ReportParts:
+    """The depth report's rows, tables and a figure per simulation (``progress`` after each figure)."""
     rows = depth_rows(results)
     figures = {}
     simulations = list(dict.fromkeys(r["simulation"] for r in rows))
-    advance = counter(progress, "report", len(simulations) + 1)
+    advance = counter(progress, "figures", len(simulations))
     for simulation in simulations:
         figure = _figure(results, run_dir, simulation)
         if figure is not None:
             name = simulation.replace(" ", "_")
             figures[f"{simulation} simulation against the render"] = figure._replace(file_name=f"figure_depth_{name}.png")
         advance()
-    written = write_report_files(run_dir, title=f"vissim depth validation: {campaign_name(run_dir)}",
-                                 metrics={"items": results, "rows": json_rows(rows)}, rows=rows,
-                                 tables_md=depth_tables(results), figures=figures)
-    advance()
-    log.info("depth report of %d items written to %s", len(results), run_dir)
-    return written
+    title = f"vissim depth validation: {record.get('name', run_dir.name)}"
+    return ReportParts(title, rows, depth_tables(results), figures)
 
-
-def depth_summary_lines(run_dir: str | Path) -> list[str]:
+def summary_lines(rows: list[dict]) -> list[str]:
     """A terminal summary: one line per (configuration, simulation, region)."""
     lines = [f"{'configuration':40s} {'simulation':>16s} {'region':>16s} {'PSNR dB':>8s} {'floor dB':>8s} {'SSIM':>7s}"]
-    for r in depth_rows(current_results(run_dir)):
+    for r in rows:
         lines.append(f"{r['configuration'][:40]:40s} {r['simulation']:>16s} {r['region'][:16]:>16s} "
                      f"{_fmt(r['psnr_db'], 2):>8s} {_fmt(r['noise_floor_psnr_db'], 2):>8s} {_fmt(r['ssim'], 4):>7s}")
     return lines

@@ -1,7 +1,7 @@
 """A virtual DSLR: mosaic a linear image, add sensor noise, quantise, and write a DNG.
 
 The chain mirrors a real capture, so that the RAW side of the validation
-(`vissim.validation.raw.read_raw_linear`) can be tested on files whose contents are
+(`vissim.imaging.raw.read_raw_linear`) can be tested on files whose contents are
 known exactly::
 
     linear (H, W[, 3]) --mosaic_bayer--> CFA mosaic in [0, 1] (1 = full well = white level)

@@ -1,49 +1,38 @@
-"""Depth validation campaigns: the campaign file's schema and its loader.
+"""A depth campaign's part of the campaign file: its settings and configurations.
 
-A campaign TOML has a ``[depth_campaign]`` table (or ``[campaign]`` with ``kind = "depth"``)
-of settings and ``[[config]]`` tables, each a scene file (``scene``, relative to the campaign
-file) and an observer: an eye (``eye`` = prescription, ``pupil_mm``, ``accommodation_diopters``), the
-DSLR (``camera = {f_number, focus_distance_m, focal_length_mm, lenses}``), or none (the scene
-file's).  ``validation/depth.toml`` is the commented example.  Items are computed by
-`vissim.validation.depth_item`, run by `vissim.validation.depth_runner`, and either
-kind of campaign file is dispatched by `vissim.validation.dispatch`.
+A depth campaign's ``[campaign]`` table has ``kind = "depth"`` and its settings; each
+``[[config]]`` table is a scene file (``scene``, relative to the campaign file) and an observer:
+an eye (``eye`` = prescription, ``pupil_mm``, ``accommodation_diopters``), the DSLR (``camera =
+{f_number, focus_distance_m, focal_length_mm, lenses}``), or none (the scene file's).
+``validation/depth.toml`` is the commented example; `vissim.validation.depth.kind` is the bench kind.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.bench.depth_scene import DepthScene
 from vissim.bench.depth_scene_files import load_depth_scene_toml
 from vissim.bench.depth_viewers import CameraViewer, EyeViewer
-from vissim.checks import (EYE_PUPIL_RANGE_MM, F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, OBJECT_DISTANCE_RANGE_M,
-                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM, path_arg)
+from vissim.checks import (DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, OBJECT_DISTANCE_RANGE_M,
+                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM, ACCOMMODATION_RANGE_DIOPTERS)
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
-from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
-from vissim.validation.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
-                                      name_text, read_campaign_toml, refuse_duplicate_names, settings_kwargs, table,
-                                      tables, text)
+from vissim.validation.engine.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
+                                      name_text, refuse_duplicate_names, settings_kwargs, tables, text)
 
-__all__ = ["DepthConfiguration", "DepthCampaignSettings", "DepthCampaign", "load_depth_campaign",
-           "is_depth_campaign", "DEPTH_SIMULATIONS", "DEPTH_INPUTS", "SCHEMA_VERSION"]
+__all__ = ["DepthConfiguration", "DepthCampaignSettings", "read_depth_part", "DEPTH_SIMULATIONS", "DEPTH_INPUTS"]
 
 DEPTH_SIMULATIONS = ("geometric", "wave")
 #: What a simulation starts from: the scene's layers rendered alone (radiance and coverage,
 #: `vissim.optics.depth_layers.composite_layers`) or one all-in-focus image and its depth
 #: map (`vissim.optics.depth.blur_depth`).
 DEPTH_INPUTS = ("layered", "rgbd")
-#: Bumped when the meaning of an item's inputs or results changes, so old results are not reused.
-#: 3: the RGB-D depth pass holds each pixel's nearest surface's proximity, no longer the pixel's mean.
-SCHEMA_VERSION = 3
 
 
 @dataclass(frozen=True)
@@ -58,6 +47,10 @@ class DepthConfiguration:
     def as_json(self) -> dict:
         return {"name": self.name, "scene_file": self.scene_file, "viewer": json_safe(self.viewer),
                 "viewer_label": self.viewer.label()}
+
+    def key_inputs(self) -> dict:
+        """What the item's results depend on: the scene's content and the observer (not the file's name)."""
+        return {"scene": self.scene, "viewer": self.viewer}
 
     def frame_margin_px(self, settings: DepthCampaignSettings) -> int:
         """Pixels (of the campaign's grid) the simulations' inputs extend beyond the frame on every side."""
@@ -82,30 +75,17 @@ class DepthCampaignSettings:
     frame_margin: bool = True  # render the simulations' inputs beyond the frame by the largest blur radius
 
 
-@dataclass(frozen=True)
-class DepthCampaign:
-    name: str
-    description: str
-    settings: DepthCampaignSettings
-    configurations: tuple[DepthConfiguration, ...]
-    source: str = ""
-
-    def item_key(self, configuration: DepthConfiguration) -> str:
-        """Stable key of one item's inputs (scene content, observer, settings): equal inputs, equal key."""
-        payload = {"schema": SCHEMA_VERSION, "simulator": SIMULATOR_REVISION, "settings": json_safe(self.settings),
-                   "scene": json_safe(configuration.scene), "viewer": json_safe(configuration.viewer)}
-        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
 
 # -- loading ---------------------------------------------------------------------------
-#: [depth_campaign] numbers: (unit, lowest, highest).
+#: [campaign] numbers: (unit, lowest, highest).
 NUMBER_SETTINGS = {
     "wavelength_nm": ("nm", *WAVELENGTH_RANGE_NM),
     "data_range": ("(linear reflectance)", 1e-3, 1e3),
     "margin_px": ("px", 0.0, 1000.0),
     "layer_spacing_fraction": ("(of a blur-free depth step)", 1e-3, 1.0),
 }
-#: [depth_campaign] whole numbers: (unit, lowest, highest).
+#: [campaign] whole numbers: (unit, lowest, highest).
 WHOLE_SETTINGS = {
     "spp": ("samples per pixel", 1, MAX_SPP),
     "aux_spp": ("samples per pixel", 1, MAX_SPP),
@@ -114,17 +94,10 @@ WHOLE_SETTINGS = {
 }
 
 
-def is_depth_campaign(doc: dict) -> bool:
-    """A ``[depth_campaign]`` table, or ``[campaign]`` with ``kind = "depth"``."""
-    head = doc.get("campaign", {})
-    return "depth_campaign" in doc or (isinstance(head, dict) and head.get("kind") == "depth")
-
-
 def _settings(head: dict, source: str) -> DepthCampaignSettings:
     return DepthCampaignSettings(**settings_kwargs(
-        head, DepthCampaignSettings, source, "depth_campaign", numbers=NUMBER_SETTINGS, whole_numbers=WHOLE_SETTINGS,
-        lists={"simulations": DEPTH_SIMULATIONS, "inputs": DEPTH_INPUTS}, texts=("name", "description"),
-        switches=("frame_margin",), read_elsewhere=("kind",)))
+        head, DepthCampaignSettings, source, "campaign", numbers=NUMBER_SETTINGS, whole_numbers=WHOLE_SETTINGS,
+        lists={"simulations": DEPTH_SIMULATIONS, "inputs": DEPTH_INPUTS}, texts=(), switches=("frame_margin",)))
 
 
 #: Camera fields: (unit, lowest, highest).
@@ -147,7 +120,7 @@ def _eye(raw: dict, viewer, source: str, where: str) -> EyeViewer:
     pupil = number(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm",
                    lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1])
     accommodation = number(raw.get("accommodation_diopters", base_eye.accommodation_diopters), source, f"{where}.accommodation_diopters",
-                           "dioptres", lo=0.0, hi=20.0)
+                           "dioptres", lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1])
     try:
         return EyeViewer(rx, pupil, accommodation)
     except VissimInputError as exc:
@@ -193,30 +166,11 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
     return DepthConfiguration(name or f"{scene_file.stem}: {viewer.label()}", str(scene_file), loaded.scene, viewer)
 
 
-def load_depth_campaign(path: str | Path, *, check_memory: bool = True) -> DepthCampaign:
-    """Read and validate a depth campaign TOML file (module doc); ``check_memory`` as `load_campaign`."""
-    path = path_arg(path, "load_depth_campaign's path")
+def read_depth_part(doc: dict, head: dict, path: Path) -> tuple[DepthCampaignSettings, tuple[DepthConfiguration, ...], None]:
+    """(settings, configurations, no manifest) of a depth campaign: its ``[campaign]`` settings and ``[[config]]``."""
     source = str(path)
-    raw = read_campaign_toml(path)
-    if not is_depth_campaign(raw):
-        raise field_error(source, "top level",
-                          "not a depth campaign: add [depth_campaign] (or kind = \"depth\" in [campaign])")
-    unknown = set(raw) - {"depth_campaign", "campaign", "config"}
-    if unknown:
-        raise field_error(source, "top level",
-                          f"unknown table(s) {sorted(unknown)}; use [depth_campaign] and [[config]]")
-    key = "depth_campaign" if "depth_campaign" in raw else "campaign"
-    head = table(raw[key], source, f"[{key}]")
     settings = _settings(head, source)
-    configs = [_configuration(c, path.parent, source, f"config[{i}]")
-               for i, c in enumerate(tables(raw, "config", source))]
-    if not configs:
-        raise field_error(source, "top level", "no configurations: add [[config]] tables")
+    configs = [_configuration(c, path.parent, source, f"config[{i}]") for i, c in enumerate(tables(doc, "config", source))]
     refuse_duplicate_names(source, [(f"config[{i}]", c) for i, c in enumerate(configs)],
                            lambda c: f"scene {Path(c.scene_file).name}, {c.viewer.label()}")
-    campaign = DepthCampaign(head.get("name", path.stem), head.get("description", ""), settings, tuple(configs), source)
-    if check_memory:
-        from vissim.validation.preflight import check_depth_campaign_memory
-
-        check_depth_campaign_memory(campaign)
-    return campaign
+    return settings, tuple(configs), None

@@ -8,9 +8,8 @@ and wave optics; and the same from the *layered* input -- every panel rendered a
 and coverage -- by `vissim.optics.depth_layers.composite_layers`, which needs no guess
 behind occluding edges.  The pinhole renders extend beyond the frame by the scene's largest blur
 radius (``frame_margin``), and the simulations are cropped to the frame.  Mitsuba renders no diffraction, so ``geometric`` is compared with the render
-and ``wave`` with the render convolved with the aperture's in-focus diffraction PSF (as
-`vissim.validation.simulate.add_bench_diffraction` does for the single-plane harness).
-Metrics (`vissim.validation.depth_masks`) per panel interior, for the occlusion band and
+and ``wave`` with the render convolved with the aperture's in-focus diffraction PSF (`vissim.validation.engine.truth.add_bench_diffraction`, as for the DSLR bench).
+Metrics (`vissim.validation.depth.masks`) per panel interior, for the occlusion band and
 for the whole image, each beside the same metric between the two seeds (the floor).
 """
 
@@ -24,11 +23,14 @@ import numpy as np
 
 from vissim.atomic import write_json_atomic
 from vissim.bench.depth_scene import panel_geometries
-from vissim.bench.depth_viewers import equivalent_eye, viewing_setup
 from vissim.provenance import make_provenance
-from vissim.validation.depth_campaign import DepthCampaignSettings, DepthConfiguration
-from vissim.validation.depth_masks import depth_regions, masked_metrics
-from vissim.validation.metrics import compare_images
+from vissim.imaging.metrics import compare_images, noise_floor
+from vissim.optics.resample import block_mean
+from vissim.validation.depth.masks import depth_regions, masked_metrics
+from vissim.validation.depth.renders import DepthBuilt
+from vissim.validation.depth.schema import DepthCampaignSettings
+from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.engine.truth import add_bench_diffraction
 
 __all__ = ["compute_depth_item"]
 
@@ -65,7 +67,7 @@ def _scene_layers(scene, images: dict) -> list:
     return layers
 
 
-def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCampaignSettings, images: dict,
+def compute_depth_item(key: str, built: DepthBuilt, settings: DepthCampaignSettings, images: dict,
                        item_dir: Path, *, render_provenance: dict | None = None) -> dict:
     """Simulate, compare per region, write images and ``result.json`` (last) for one configuration.
 
@@ -74,10 +76,9 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
     from vissim.optics.depth import blur_depth
     from vissim.optics.depth_layers import composite_layers
     from vissim.render.depth_render import proximity_to_depth_m
-    from vissim.validation.item import save_item_image
-    from vissim.validation.simulate import add_bench_diffraction, block_mean
 
     started = time.perf_counter()
+    config = built.configuration
     provenance = make_provenance(item=key, configuration=config.as_json(), settings=settings,
                                  render_provenance=render_provenance or {})
 
@@ -85,9 +86,8 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
         return save_item_image(item_dir, name, pixels, provenance, preview)
 
     scene, s = config.scene, settings.oversample
-    eye, setup = equivalent_eye(config.viewer, scene), viewing_setup(config.viewer, scene)
+    eye, setup, margin = built.eye, built.setup, built.margin_px
     truth_a, truth_b = images["truth_0"], images["truth_1"]
-    margin = config.frame_margin_px(settings)
 
     def frame(pixels):  # integrated onto the campaign's pixels, the margin cropped
         pixels = block_mean(pixels, s)
@@ -132,7 +132,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
                     references[mode] = (truth_a, truth_b)
             reference, other = references[mode]
             comparison = compare_images(reference, simulated, data_range=settings.data_range)
-            floor = compare_images(reference, other, data_range=settings.data_range)
+            floor = noise_floor(reference, other, settings.data_range)
             name = f"{mode} {source}"
             tag = f"{mode}_{source}"
             comparisons.append({
@@ -161,7 +161,7 @@ def compute_depth_item(key: str, config: DepthConfiguration, settings: DepthCamp
                   "regions": list(masks.interiors) + ["boundary", "frame"],
                   "definition": "interior: >= blur radius + margin from any depth discontinuity and the frame; "
                                 "boundary: within that of a discontinuity; frame: within the largest blur radius + "
-                                "margin of the image border (see vissim.validation.depth_masks)"},
+                                "margin of the image border (see vissim.validation.depth.masks)"},
         "comparisons": comparisons,
         "images": saved,
         "seconds": time.perf_counter() - started,

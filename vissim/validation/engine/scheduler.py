@@ -15,7 +15,7 @@ import struct
 
 from vissim.errors import VissimInputError
 
-__all__ = ["probe_scheduler", "PROBE_TIMEOUT_S"]
+__all__ = ["probe_scheduler", "connect_scheduler", "PROBE_TIMEOUT_S", "SCHEDULER_TIMEOUT_S"]
 
 #: Seconds to wait for the connection, then for the scheduler's first bytes, then for a web server's reply.
 PROBE_TIMEOUT_S = 1.5
@@ -84,3 +84,33 @@ def probe_scheduler(address: str, host: str, port: int, timeout_s: float = PROBE
     else:
         what = f"accepted the connection but sent nothing within {timeout_s:g} s (a Dask scheduler speaks first)"
     raise VissimInputError(f"{where}: not a Dask scheduler: {host}:{port} {what}")
+
+
+#: How long ``--scheduler`` waits for a Dask scheduler to answer.
+SCHEDULER_TIMEOUT_S = 2.0
+
+
+def connect_scheduler(address: str):
+    """A Dask ``Client`` of the scheduler at ``address``, or one clean error within SCHEDULER_TIMEOUT_S."""
+    try:
+        from distributed import Client
+        from distributed.comm import parse_address
+    except ImportError:  # pragma: no cover
+        raise VissimInputError("--scheduler needs Dask distributed: pip install 'dask[distributed]'") from None
+    hint = "expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786"
+    try:
+        scheme, location = parse_address(address)
+    except (ValueError, TypeError) as exc:
+        raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address ({exc}); {hint}") from None
+    host, _, port = location.rpartition(":")
+    if scheme in ("tcp", "tls", "ws", "wss") and not (host and port.isdigit() and 0 < int(port) < 65536):
+        raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address; {hint}")
+    if scheme == "tcp":  # a web server or another service would keep Dask waiting, or ask for exabytes
+        probe_scheduler(address, host.strip("[]"), int(port))
+    try:
+        return Client(address, timeout=SCHEDULER_TIMEOUT_S)
+    except (OSError, TimeoutError):
+        raise VissimInputError(f"--scheduler {address}: no Dask scheduler answered within {SCHEDULER_TIMEOUT_S:g} s; "
+                               "start one (dask scheduler) or check the address") from None
+    except (ValueError, TypeError) as exc:
+        raise VissimInputError(f"--scheduler {address!r} is not a Dask scheduler address ({exc}); {hint}") from None

@@ -1,6 +1,6 @@
 """The report's sections on the traced lenses: the wave bench, each residual's cause, the geometric self-check.
 
-The wave bench is noise-free (`vissim.validation.wave_bench`): its rows have no noise
+The wave bench is noise-free (`vissim.validation.dslr.wave_bench`): its rows have no noise
 floor, so they are summarised as absolute PSNR, never as "PSNR minus the floor", and kept out
 of the tables against the render.  The geometric self-check (simulation ``traced_rays``) is
 compared with the render and summarised, like the simulations, as PSNR minus the noise floor.
@@ -13,19 +13,14 @@ from collections import Counter
 
 import numpy as np
 
-from vissim.validation.report_summary import NO_LENS, margin, value_span
-from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH_NOTE
+from vissim.validation.engine.summary import NO_LENS, margin, value_span
+from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH_NOTE
 
-__all__ = ["group_of", "is_wave_bench_row", "self_check_table", "wave_bench_tables", "SELF_CHECK_MARGIN_DB"]
+__all__ = ["is_wave_bench_row", "self_check_table", "wave_bench_tables", "SELF_CHECK_MARGIN_DB"]
 
 
 def is_wave_bench_row(row: dict) -> bool:
     return row["reference"] == WAVE_BENCH_NOTE
-
-
-def group_of(configuration: dict) -> str:
-    """A configuration's group (its ``group`` field: its sweep's name, or the item itself); else its name."""
-    return configuration.get("group") or configuration["name"]
 
 
 #: The geometric self-check passes at PSNR at least this far over the noise floor (dB).

@@ -8,15 +8,19 @@ the display scale, labelled with the linear radiance they stand for.
 
 from __future__ import annotations
 
-import math
+import io
 from typing import NamedTuple
 
-import numpy as np
+import matplotlib
 
-from vissim.imageio import srgb_decode, srgb_encode
+matplotlib.use("Agg")
+import matplotlib.pyplot as pyplot  # noqa: E402
+import numpy as np  # noqa: E402
+
+from vissim.imageio import srgb_decode, srgb_encode  # noqa: E402
 
 __all__ = ["Figure", "display_norm", "radiance_colorbar", "RADIANCE_LABEL", "DISPLAY_TICKS", "scale_bar",
-           "scale_bar_arcmin", "arcmin_per_px_of", "tiles_alt", "lens_words"]
+           "scale_bar_arcmin", "tiles_alt", "png_bytes", "pyplot"]
 
 #: The label of every grey image's colour bar.
 RADIANCE_LABEL = "relative radiance, display gamma"
@@ -73,19 +77,15 @@ def scale_bar(ax, width_px: int, arcmin_per_px: float) -> float:
     return length
 
 
-def arcmin_per_px_of(result: dict, campaign: dict | None = None) -> float | None:
-    """The campaign's sampling (arcmin per pixel) an item's images are at, or None if not recorded."""
-    settings = (campaign or {}).get("settings") or (result.get("provenance") or {}).get("inputs", {}).get("settings")
-    value = (settings or {}).get("arcmin_per_px")
-    return float(value) if value is not None and math.isfinite(float(value)) else None
-
-
-def lens_words(lens_label: str) -> str:
-    """``trial lens +2.00 DS``, or ``no trial lens``."""
-    return "no trial lens" if lens_label == "no lens" else f"trial lens {lens_label}"
-
-
 def tiles_alt(what: str, rows: list[str], columns: list[str], extra: str = "") -> str:
     """Alt text of a grid of image tiles: what it shows, its rows, its columns."""
     text = (f"{what}. Rows: {'; '.join(rows)}. Columns, one per configuration: {'; '.join(columns)}.")
     return f"{text} {extra}".strip()
+
+
+def png_bytes(fig) -> bytes:
+    """A figure as PNG bytes (110 dpi); the figure is closed."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    pyplot.close(fig)
+    return buffer.getvalue()

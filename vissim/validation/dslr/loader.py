@@ -1,8 +1,7 @@
-"""Validation campaigns as TOML files: settings plus a list of configurations.
+"""A DSLR campaign's part of the campaign file: its settings and configurations.
 
-A campaign file has a ``[campaign]`` table of settings shared by every configuration, and
-configurations given one by one (``[[item]]``) or as sweeps (``[[sweep]]``, the product of its
-lists).  See ``validation/quick.toml`` for a commented example.  Every field is validated
+The ``[campaign]`` table holds settings shared by every configuration, and configurations are
+given one by one (``[[item]]``) or as sweeps (``[[sweep]]``, the product of its lists).  See ``validation/quick.toml`` for a commented example.  Every field is validated
 with a message naming the file, the field and its unit.
 """
 
@@ -16,17 +15,15 @@ from typing import Any
 
 from vissim.charts import POLARITIES
 from vissim.checks import (F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, MAX_ARCMIN_PER_PX, OBJECT_DISTANCE_RANGE_M,
-                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM, path_arg)
+                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM)
 from vissim.optotypes import SLOAN_LETTERS
-from vissim.validation.campaign_types import INPUTS, SIMULATIONS, Campaign, CampaignSettings, Configuration
-from vissim.validation.fields import (
+from vissim.validation.dslr.schema import INPUTS, SIMULATIONS, CampaignSettings, Configuration
+from vissim.validation.engine.fields import (
     MAX_SPP,
-    LensSpec,
     field_error,
     lenses,
     name_text,
     number,
-    read_campaign_toml,
     refuse_duplicate_names,
     settings_kwargs,
     table,
@@ -35,9 +32,8 @@ from vissim.validation.fields import (
     value_list,
     whole_number,
 )
-from vissim.validation.preflight import check_campaign_memory
 
-__all__ = ["LensSpec", "Configuration", "CampaignSettings", "Campaign", "load_campaign", "SIMULATIONS", "INPUTS"]
+__all__ = ["read_dslr_part", "trial_lens_phrase"]
 
 #: [campaign] numbers: (unit, lowest, highest), the ranges of `vissim.checks`; the finest sampling is a campaign's own.
 NUMBER_SETTINGS = {
@@ -131,7 +127,7 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
     kwargs = settings_kwargs(raw, CampaignSettings, source, "campaign", numbers=NUMBER_SETTINGS,
                              whole_numbers={"spp": ("samples per pixel", 1, MAX_SPP)},
                              lists={"simulations": SIMULATIONS, "inputs": INPUTS},
-                             texts=("name", "description", "manifest"), switches=("wave_truth", "fit_rx"),
+                             texts=("manifest",), switches=("wave_truth", "fit_rx"),
                              read_elsewhere=("f_number",))
     if "tile_px" in raw:
         tile = raw["tile_px"]
@@ -142,71 +138,24 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
     return CampaignSettings(**kwargs)
 
 
-def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
-    """Read and validate a campaign TOML file.
+def read_dslr_part(doc: dict, head: dict, path: Path) -> tuple[CampaignSettings, tuple[Configuration, ...], str | None]:
+    """(settings, configurations, manifest) of a DSLR campaign: its ``[campaign]`` settings, ``[[item]]`` and ``[[sweep]]``.
 
-    With ``check_memory`` the memory each item will need is estimated and a campaign this
-    machine cannot hold is refused now (`vissim.validation.preflight.check_campaign_memory`).
-
-    Parameters
-    ----------
-    path : str or Path
-        The campaign TOML file (fields: docs' File formats page).
-    check_memory : bool
-        Estimate each item's memory and refuse a campaign this machine cannot hold.
-
-    Returns
-    -------
-    Campaign
-        The validated campaign: its settings and configurations (prescriptions in D, pupils
-        in mm, sampling in arcmin per pixel).
-
-    Raises
-    ------
-    VissimInputError
-        A field is missing, unknown or out of range (the message names the file and field).
-
-    Examples
-    --------
-    >>> import vissim
-    >>> campaign = vissim.load_campaign("campaign.toml")  # doctest: +SKIP
+    The same inputs given twice run once; two configurations with one name are refused.
     """
-    path = path_arg(path, "load_campaign's path")
     source = str(path)
-    raw = read_campaign_toml(path)
-    if "depth_campaign" in raw or "config" in raw:
-        raise field_error(source, "top level", "a depth campaign ([depth_campaign], [[config]]); run it with "
-                                               "vissim validate, or load it with load_depth_campaign")
-    unknown = set(raw) - {"campaign", "item", "sweep"}
-    if unknown:
-        raise field_error(source, "top level",
-                          f"unknown table(s) {sorted(unknown)}; use [campaign], [[item]], [[sweep]]")
-    head = table(raw.get("campaign", {}), source, "[campaign]")
     settings = _settings(head, source)
     f_number = _f_number(head.get("f_number", 5.0), source, "campaign.f_number")
     configurations = [(f"item[{i}]", _configuration(item, settings, source, f"item[{i}]", f_number))
-                      for i, item in enumerate(tables(raw, "item", source))]
-    for i, sweep in enumerate(tables(raw, "sweep", source)):
+                      for i, item in enumerate(tables(doc, "item", source))]
+    for i, sweep in enumerate(tables(doc, "sweep", source)):
         configurations += [(f"sweep[{i}] #{k + 1}", c)
                            for k, c in enumerate(_sweep(sweep, settings, source, f"sweep[{i}]", f_number))]
-    if not configurations:
-        raise field_error(source, "top level", "no configurations: add [[item]] or [[sweep]] tables")
     unique: dict[str, tuple[str, Configuration]] = {}
     for where, c in configurations:  # the same inputs twice run once
-        inputs = {k: v for k, v in c.as_json().items() if k not in ("name", "group")}
-        unique.setdefault(json.dumps(inputs, sort_keys=True, default=list), (where, c))
+        unique.setdefault(json.dumps(c.key_inputs(), sort_keys=True, default=list), (where, c))
     refuse_duplicate_names(source, unique.values(), _describe)
     manifest = head.get("manifest")
     if manifest is not None:
         manifest = str((path.parent / manifest).resolve())
-    campaign = Campaign(
-        name=head.get("name", path.stem),
-        description=head.get("description", ""),
-        settings=settings,
-        configurations=tuple(c for _, c in unique.values()),
-        source=source,
-        manifest=manifest,
-    )
-    if check_memory:
-        check_campaign_memory(campaign)
-    return campaign
+    return settings, tuple(c for _, c in unique.values()), manifest

@@ -54,7 +54,7 @@ from vissim.optics.prescription import LensPower
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLensSetup
 from vissim.units import mm_to_m
-from vissim.validation.campaign_types import CampaignSettings, Configuration
+from vissim.validation.dslr.schema import CampaignSettings, Configuration
 
 __all__ = [
     "CAUSES",
@@ -81,7 +81,7 @@ NEGLIGIBLE_RMS_UM = 1e-6
 
 
 def wave_bench_chart(configuration: Configuration, settings: CampaignSettings) -> ChartSpec:
-    """The chart the bench renders for ``configuration`` (`vissim.validation.renders.render_spec`'s)."""
+    """The chart the bench renders for ``configuration`` (`vissim.validation.dslr.renders.render_spec`'s)."""
     return single_letter_spec(configuration.letter, configuration.logmar, viewing_distance_m=settings.chart_distance_m,
                               polarity=configuration.polarity)
 
@@ -107,9 +107,11 @@ def traced_rays_setup(bench: DslrBench) -> dict:
     """What the self-check assumes, as a simulation's ``setup`` record: the traced lenses at the d line."""
     traced = trace_bench_wavefront(bench)
     setup = bench.viewing_setup()
+    prescription = traced.wavefront.to_prescription()
     return {
         "kind": TRACED_RAYS,
-        "camera_prescription": traced.wavefront.to_prescription().format(4),
+        "camera_prescription": prescription.format(4),
+        "camera_power_matrix_diopters": [list(r) for r in prescription.power_matrix()],
         "pupil_diameter_mm": traced.pupil_diameter_mm,
         "magnification_matrix": [list(r) for r in setup.magnification_matrix],
         "mode": "geometric",

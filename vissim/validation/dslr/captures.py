@@ -22,7 +22,7 @@ A campaign item with ``capture = "t3-k-plus2"`` takes its ground truth from the 
 Absent files are skipped with a clear message, never silently.
 
 Capture -> tile: the RAW is read linearly (`read_capture`, which checks the file's
-sha256 and uses `vissim.validation.raw.read_raw_linear`, no demosaicing), the
+sha256 and uses `vissim.imaging.raw.read_raw_linear`, no demosaicing), the
 photosites are divided by their channel's gain (the median of the paper in a ring around the
 letter, 0.75 to 1.5 tile half-widths measured on the sky, so a neutral chart gives one grey
 level per photosite, at full sensor resolution and without interpolation), resampled by exact
@@ -44,9 +44,9 @@ from vissim.charts import PAPER_REFLECTANCE, POLARITIES
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM
 from vissim.units import mm_to_m
-from vissim.validation.fields import LensSpec
-from vissim.validation.fields import field_error, lenses, number, read_toml_file, tables, text
-from vissim.validation.raw import RawImage, camera_arcmin_per_px, file_sha256, read_raw_linear, resample_to_arcmin
+from vissim.validation.engine.fields import LensSpec
+from vissim.validation.engine.fields import field_error, lenses, number, read_toml_file, tables, text
+from vissim.imaging.raw import RawImage, camera_arcmin_per_px, file_sha256, read_raw_linear, resample_to_arcmin
 
 __all__ = ["Capture", "load_manifest", "capture_problem", "read_capture", "capture_tile", "capture_provenance",
            "file_sha256"]

@@ -20,24 +20,24 @@ from the bench's own `ViewingSetup` (the one its scene is built from,
     items 4, 3 and 5), compared with the render: each erratum's effect is a measured number.
 
 Mitsuba renders no diffraction, so a ``wave`` or ``thesis`` result is compared with the
-render convolved with the bench aperture's diffraction PSF (`add_bench_diffraction`),
+render convolved with the bench aperture's diffraction PSF
+(`vissim.validation.engine.truth.add_bench_diffraction`),
 and a ``geometric`` result with the render as it is.
 """
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 import numpy as np
 from vissim.optics.blur import blur_image
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
+from vissim.validation.engine.truth import cached_psf
 from vissim.optics.trial_lens import TrialLens
-from vissim.validation.campaign_types import CampaignSettings, Configuration
+from vissim.validation.dslr.schema import CampaignSettings, Configuration
 
-__all__ = ["SimulationSetup", "simulation_setup", "simulate", "add_bench_diffraction"]
+__all__ = ["SimulationSetup", "simulation_setup", "simulate"]
 
 #: kind -> (the thesis's choices put back, optics).  Each choice is one field of the bench's
 #: `ViewingSetup` replaced: "pupil" (ERRATA item 3), "power"
@@ -68,6 +68,7 @@ class SimulationSetup:
         return {
             "kind": self.kind,
             "camera_prescription": self.setup.camera_prescription.format(4),
+            "camera_power_matrix_diopters": [list(r) for r in self.setup.camera_prescription.power_matrix()],
             "pupil_diameter_mm": self.setup.pupil_diameter_mm,
             "magnification_matrix": [list(r) for r in self.setup.magnification_matrix],
             "mode": self.mode,
@@ -93,18 +94,6 @@ def simulation_setup(kind: str, bench: ViewingSetup, lenses: tuple[TrialLens, ..
     return SimulationSetup(kind, setup, mode)
 
 
-def _psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
-    return _cached_psf(setup.without_magnification(), arcmin_per_px, mode)
-
-
-@functools.lru_cache(maxsize=64)
-def _cached_psf(setup: ViewingSetup, arcmin_per_px: float, mode: str) -> PSF:
-    front = setup.wavefront
-    size = suggested_size_px(front, arcmin_per_px, wavelength_nm=setup.wavelength_nm)
-    return compute_psf(front, wavelength_nm=setup.wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=size, mode=mode,
-                       pixel="integrate")
-
-
 def simulate(setup: SimulationSetup, image: np.ndarray, settings: CampaignSettings, *, oversample: int = 1) -> np.ndarray:
     """Apply a simulation to a linear-light, pixel-integrated image.
 
@@ -116,12 +105,8 @@ def simulate(setup: SimulationSetup, image: np.ndarray, settings: CampaignSettin
     """
     step = settings.arcmin_per_px / oversample
     magnified = magnify(image, setup.setup.magnification_matrix)
-    psf = _psf(setup.setup, step, setup.mode)
+    psf = cached_psf(setup.setup, step, setup.mode)
     out = blur_image(magnified, psf, arcmin_per_px=step, padding="edge")
     return block_mean(out, oversample)
 
 
-def add_bench_diffraction(render: np.ndarray, bench: ViewingSetup, arcmin_per_px: float) -> np.ndarray:
-    """The render convolved with the diffraction PSF of ``bench``'s pupil, in focus (no aberration)."""
-    psf = _psf(bench.in_focus(), arcmin_per_px, "wave")
-    return blur_image(render, psf, arcmin_per_px=arcmin_per_px, padding="edge")

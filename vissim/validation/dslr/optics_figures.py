@@ -3,9 +3,8 @@
 One configuration stands for each group (a sweep, or one item): of those with lenses, the one of
 median defocus.  Its wave simulation's PSF is recomputed with the public functions
 (`vissim.compute_psf`, `vissim.mtf`, `vissim.diffraction_mtf`,
-`vissim.blur_image`) from what the item recorded: the camera prescription and pupil of the
-``wave`` comparison (``setup`` in ``result.json``, written to 4 decimals, so to 1e-4 D), the
-campaign's wavelength and sampling.  The PSF is the one the simulation of the synthetic chart
+`vissim.blur_image`) from the numbers the item recorded: the camera's power matrix and pupil of the
+``wave`` comparison (``setup`` in ``result.json``), the campaign's wavelength and sampling.  The PSF is the one the simulation of the synthetic chart
 used (the campaign's arcmin/px over ``SUBPIXELS_PER_PX``); the through-focus strip blurs the
 item's synthetic chart at the campaign's sampling.  Spectacle magnification is left out (the PSF
 has none; the simulation magnifies the image before blurring).  ``vissim report RUN`` redraws
@@ -14,26 +13,22 @@ them from a run folder, like the other figures.
 
 from __future__ import annotations
 
-import json
 import logging
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from vissim.imageio import read_image  # noqa: E402
-from vissim.optics.blur import blur_image  # noqa: E402
-from vissim.optics.prescription import Prescription  # noqa: E402
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px  # noqa: E402
-from vissim.optics.psf_metrics import (diffraction_cutoff_cyc_per_deg, diffraction_mtf,  # noqa: E402
+from vissim.imageio import read_image
+from vissim.optics.blur import blur_image
+from vissim.optics.prescription import Prescription
+from vissim.optics.psf import PSF, compute_psf, suggested_size_px
+from vissim.optics.psf_metrics import (diffraction_cutoff_cyc_per_deg, diffraction_mtf,
                                        frequencies_cyc_per_deg, mtf,
                                        radius_of_encircled_energy_arcmin, ring_means)
-from vissim.optics.wavefront import Wavefront  # noqa: E402
-from vissim.validation.report_figures import display_norm, lens_words, radiance_colorbar, scale_bar  # noqa: E402
+from vissim.optics.wavefront import Wavefront
+from vissim.validation.dslr.report_words import lens_words
+from vissim.validation.engine.figures import display_norm, pyplot, radiance_colorbar, scale_bar
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
            "mtf_figure_of", "through_focus_figure_of", "optics_figures", "THROUGH_FOCUS_STEPS_D", "LOG_PSF_DECADES"]
@@ -76,13 +71,15 @@ def _largest_defocus(prescription: Prescription) -> float:
     return float(np.max(np.abs(np.linalg.eigvalsh(np.asarray(prescription.power_matrix(), dtype=float)))))
 
 
-def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
-    """One `OpticsCase` per group, in campaign order: the configuration with lenses of median defocus."""
+def optics_cases(results: list[dict], run_dir: str | Path, campaign: dict) -> list[OpticsCase]:
+    """One `OpticsCase` per group, in campaign order: the configuration with lenses of median defocus.
+
+    ``campaign``: the run's ``campaign.json`` record (its settings).
+    """
     from vissim.optics.resample import SUBPIXELS_PER_PX
-    from vissim.validation.wave_bench_report import group_of
+    from vissim.validation.dslr.report_words import group_of
 
     run_dir = Path(run_dir)
-    campaign = json.loads((run_dir / "campaign.json").read_text()) if (run_dir / "campaign.json").exists() else {}
     groups: dict[str, list[OpticsCase]] = {}
     for result in results:
         wave = next((c for c in result["comparisons"] if c["simulation"] == "wave"), None)
@@ -91,7 +88,7 @@ def optics_cases(results: list[dict], run_dir: str | Path) -> list[OpticsCase]:
         settings = campaign.get("settings") or result["provenance"]["inputs"]["settings"]
         synthetic = result["images"].get("synthetic")
         case = OpticsCase(group_of(result["configuration"]), result["configuration"]["name"],
-                          Prescription.parse(wave["setup"]["camera_prescription"]),
+                          Prescription.from_power_matrix(wave["setup"]["camera_power_matrix_diopters"]),
                           float(wave["setup"]["pupil_diameter_mm"]), float(settings["wavelength_nm"]),
                           float(settings["arcmin_per_px"]), float(settings["arcmin_per_px"]) / SUBPIXELS_PER_PX,
                           run_dir / synthetic if synthetic else None, result["lens_label"])
@@ -130,7 +127,7 @@ def _panel_title(case: OpticsCase) -> str:
 
 
 def _grid(n: int, rows: int = 1, width: float = 3.0, height: float = 3.0):
-    fig, axes = plt.subplots(rows, n, figsize=(width * n + 1.0, height * rows + 0.8), squeeze=False,
+    fig, axes = pyplot.subplots(rows, n, figsize=(width * n + 1.0, height * rows + 0.8), squeeze=False,
                              layout="constrained")
     return fig, axes
 
@@ -233,7 +230,7 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
     if not cases:
         return None
     steps = THROUGH_FOCUS_STEPS_D
-    fig, axes = plt.subplots(len(cases), len(steps), figsize=(1.6 * len(steps) + 1.2, 1.9 * len(cases) + 0.9),
+    fig, axes = pyplot.subplots(len(cases), len(steps), figsize=(1.6 * len(steps) + 1.2, 1.9 * len(cases) + 0.9),
                              squeeze=False, layout="constrained")
     for i, case in enumerate(cases):
         chart = read_image(case.synthetic).pixels
@@ -257,15 +254,14 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
     return fig
 
 
-def optics_figures(results: list[dict], run_dir: str | Path,
+def optics_figures(results: list[dict], run_dir: str | Path, campaign: dict,
                    image_norm=None) -> dict[str, tuple[str, object, dict, str]]:
     """The report's optics figures: name -> (file name, matplotlib figure, provenance extras, alt text).
 
-    Empty without wave items.
-
-    ``image_norm`` as in `through_focus_figure_of`.
+    Empty without wave items.  ``campaign``: the run's ``campaign.json`` record; ``image_norm``
+    as in `through_focus_figure_of`.
     """
-    cases = optics_cases(results, run_dir)
+    cases = optics_cases(results, run_dir, campaign)
     if not cases:
         return {}
     psfs = [case_psf(case) for case in cases]

@@ -17,10 +17,9 @@ from vissim.optics.psf import MAX_PSF_SIZE_PX, geometric_blur_radius_arcmin, psf
 from vissim.optics.wavefront import Wavefront
 from vissim.render.run import render_memory_bytes  # no Mitsuba import: that happens when a render starts
 from vissim.optics.resample import SUBPIXELS_PER_PX
-from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import simulation_setup
+from vissim.validation.dslr.simulate import simulation_setup
 
-__all__ = ["item_memory_bytes", "check_campaign_memory", "check_depth_campaign_memory"]
+__all__ = ["item_memory_bytes", "check_campaign_memory"]
 
 #: Blurring one pixel: the float64 padded image, its complex128 spectrum, the product, the result.
 BYTES_PER_BLUR_PX = 64
@@ -28,10 +27,6 @@ BYTES_PER_BLUR_PX = 64
 BYTES_PER_FFT_PX = 48
 #: A geometric PSF's pixel (float64 accumulators).
 BYTES_PER_PSF_PX = 32
-#: Layered depth blur, per pixel of the (oversampled) image: layers' images, masks and spectra.
-BYTES_PER_DEPTH_PX = 256
-#: Layered input, per pixel and scene layer: its radiance and coverage, padded, and float64 composites.
-BYTES_PER_LAYER_PX = 64
 
 
 def _psf_bytes(front: Wavefront, pupil_mm: float, step: float, wavelength_nm: float, mode: str) -> tuple[float, int]:
@@ -46,11 +41,10 @@ def _psf_bytes(front: Wavefront, pupil_mm: float, step: float, wavelength_nm: fl
     return float(size) ** 2 * BYTES_PER_PSF_PX, size
 
 
-def item_memory_bytes(configuration, settings) -> tuple[float, str]:
-    """(peak bytes, the step that needs them) for one single-plane campaign item."""
+def item_memory_bytes(built, settings) -> tuple[float, str]:
+    """(peak bytes, the step that needs them) for one DSLR campaign item (``built``: its `DslrBuilt`)."""
     rows, cols = settings.tile_px
-    bench = campaign_bench(configuration, settings)
-    theory = bench.viewing_setup(settings.wavelength_nm)
+    bench, theory, configuration = built.bench, built.setup, built.configuration
     texels = chart_texture_shape(bench, theory, chart_mm_per_texel(bench))
     steps = [(render_memory_bytes(rows * cols, settings.spp) + texels[0] * texels[1] * TEXTURE_BYTES_PER_TEXEL,
               f"its bench render ({size_text((rows, cols))}, {size_text(texels, 'texel')} chart)")]
@@ -73,28 +67,10 @@ def item_memory_bytes(configuration, settings) -> tuple[float, str]:
 
 
 def check_campaign_memory(campaign) -> None:
-    """Refuse a single-plane campaign an item of which would not fit in this machine's memory."""
-    for config in campaign.configurations:
+    """Refuse a DSLR campaign an item of which would not fit in this machine's memory."""
+    for config, built in zip(campaign.configurations, campaign.built):
         try:
-            need, step = item_memory_bytes(config, campaign.settings)
+            need, step = item_memory_bytes(built, campaign.settings)
             check_allocation(need, step)
         except VissimInputError as exc:
             raise VissimInputError(f"{campaign.source}: {config.name}: {exc}") from None
-
-
-def check_depth_campaign_memory(campaign) -> None:
-    """Refuse a depth campaign an item of which would not fit in this machine's memory."""
-    settings = campaign.settings
-    for config in campaign.configurations:
-        rows, cols = config.scene.size_px
-        margin = config.frame_margin_px(settings)  # the simulations' inputs extend beyond the frame
-        fine = float(rows + 2 * margin) * (cols + 2 * margin) * settings.oversample**2
-        layered = BYTES_PER_LAYER_PX * len(config.scene.panels) if "layered" in settings.inputs else 0
-        need = max(render_memory_bytes(rows * cols, settings.spp), render_memory_bytes(fine, settings.aux_spp),
-                   fine * (BYTES_PER_DEPTH_PX + layered))
-        try:
-            check_allocation(need, f"its {size_text((rows * settings.oversample, cols * settings.oversample))} renders "
-                                   f"and layered blur")
-        except VissimInputError as exc:
-            raise VissimInputError(f"{campaign.source}: {config.name}: {exc}") from None
-

@@ -1,7 +1,7 @@
 """One campaign item: simulations against the ground truth(s), with metrics, maps and images.
 
 The truths: the bench render (and, for wave-optical simulations, the render convolved with the
-aperture's diffraction) and, with ``wave_truth``, the wave bench (`vissim.validation.wave_bench`).
+aperture's diffraction) and, with ``wave_truth``, the wave bench (`vissim.validation.dslr.wave_bench`).
 With the wave bench, a rendered item also gets the geometric self-check: the lens trace's ray
 optics applied to the synthetic chart (simulation ``traced_rays``), against the render.
 
@@ -30,15 +30,17 @@ from scipy import ndimage
 from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
 from vissim.fit.capture import fit_bench_item
-from vissim.imageio import write_image
 from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.provenance import json_safe, make_provenance
-from vissim.validation.campaign_types import CampaignSettings, Configuration
-from vissim.validation.metrics import compare_images, noise_floor
+from vissim.validation.dslr.schema import CampaignSettings, Configuration
+from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.imaging.registration import Registration, register
-from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import add_bench_diffraction, block_mean, simulate, simulation_setup
-from vissim.validation.wave_bench import (
+from vissim.validation.dslr.renders import DslrBuilt
+from vissim.optics.resample import block_mean
+from vissim.validation.dslr.simulate import simulate, simulation_setup
+from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.engine.truth import add_bench_diffraction
+from vissim.validation.dslr.wave_bench import (
     TRACED_RAYS,
     WAVE_BENCH,
     compute_wave_bench,
@@ -47,7 +49,7 @@ from vissim.validation.wave_bench import (
     traced_rays_setup,
 )
 
-__all__ = ["compute_item", "synthetic_tile", "save_item_image"]
+__all__ = ["compute_item", "synthetic_tile"]
 
 log = logging.getLogger(__name__)
 
@@ -71,16 +73,6 @@ def synthetic_tile(configuration: Configuration, settings: CampaignSettings, ove
         viewing_distance_m=settings.chart_distance_m,
         snap_to_pixels=False,
     ).pixels
-
-
-def save_item_image(item_dir: Path, name: str, pixels: np.ndarray, provenance: dict, preview: bool = True) -> str:
-    """``name``.exr (provenance in its header) and, with ``preview``, ``name``.png (provenance sidecar)."""
-    record = {**provenance, "image": name}
-    write_image(item_dir / f"{name}.exr", np.asarray(pixels, np.float32), provenance=record, overwrite=True)
-    if preview:
-        write_image(item_dir / f"{name}.png", np.clip(np.asarray(pixels, np.float32), 0, 1), provenance=record,
-                    overwrite=True)
-    return f"items/{item_dir.name}/{name}.exr"
 
 
 def _comparison(kind: str, input_name: str, reference_kind: str, reference_image: str, setup: dict,
@@ -156,7 +148,7 @@ UNREGISTERED = {"shift_rows_px": 0.0, "shift_cols_px": 0.0, "error": None, "upsa
 
 def compute_item(
     key: str,
-    configuration: Configuration,
+    built: DslrBuilt,
     settings: CampaignSettings,
     truth_a: np.ndarray,
     truth_b: np.ndarray | None,
@@ -173,15 +165,14 @@ def compute_item(
     of the renders or captures the item uses, by role) goes, as given, into every image's.
     """
     started = time.perf_counter()
+    configuration = built.configuration
     provenance = make_provenance(item=key, configuration=configuration.as_json(), settings=settings,
                                  source=source or {}, render_provenance=render_provenance or {})
 
     def save(name: str, pixels: np.ndarray, preview: bool = True) -> str:
         return save_item_image(item_dir, name, pixels, provenance, preview)
 
-    bench = campaign_bench(configuration, settings)
-    lenses = bench.physical_lenses
-    bench_setup = bench.viewing_setup(settings.wavelength_nm)  # trial_lens_effect once per item
+    bench, lenses, bench_setup = built.bench, built.lenses, built.setup
     captured = bool(source and source.get("ground_truth") == "capture")
     # A photograph already carries the lens's diffraction; a render carries none (module simulate).
     truth_wave_a = truth_a if captured else add_bench_diffraction(truth_a, bench_setup, settings.arcmin_per_px)

@@ -1,32 +1,25 @@
-"""What a single-plane campaign is: its settings, its configurations, and an item's key.
+"""What a DSLR campaign is: its settings and its configurations.
 
-The TOML loader (`vissim.validation.campaign`) builds these; the harness's modules
-(simulations, renders, items, the runner) take them, without importing the loader.
+Its part of the campaign file is read by `vissim.validation.dslr.loader`; the bench kind
+(`vissim.validation.dslr.kind`) builds each configuration once.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 from dataclasses import asdict, dataclass
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.optics.psf import SIMULATOR_REVISION
 from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER,
                                       THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM)
 from vissim.units import mm_to_m
-from vissim.validation.fields import LensSpec
+from vissim.validation.engine.fields import LensSpec
 
-__all__ = ["Configuration", "CampaignSettings", "Campaign", "SIMULATIONS", "INPUTS", "SCHEMA_VERSION"]
+__all__ = ["Configuration", "CampaignSettings", "SIMULATIONS", "INPUTS"]
 
-#: Simulations a campaign may ask for (see vissim.validation.simulate.SIMULATION_PARTS).
+#: Simulations a campaign may ask for (see vissim.validation.dslr.simulate.SIMULATION_PARTS).
 SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification")
 #: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
 INPUTS = ("render", "synthetic")
-#: Bumped when the meaning of an item's inputs or results changes, so old results are not reused
-#: (2: the geometric self-check's row, and synthetic inputs aligned on the fine grid; 3: the
-#: prescription fit of each capture, ``fit_rx``).
-SCHEMA_VERSION = 3
 
 
 @dataclass(frozen=True)
@@ -48,6 +41,10 @@ class Configuration:
     def as_json(self) -> dict:
         return asdict(self)
 
+    def key_inputs(self) -> dict:
+        """What the item's results depend on: every field but the name and group, which label them."""
+        return {"configuration": {k: v for k, v in self.as_json().items() if k not in ("name", "group")}}
+
 
 @dataclass(frozen=True)
 class CampaignSettings:
@@ -66,22 +63,3 @@ class CampaignSettings:
     wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth, and the geometric
     # self-check (the traced lenses' ray PSF against the render; validation.wave_bench)
     fit_rx: bool = False  # fit the refraction each capture with lenses shows (vissim.fit), beside vergence theory
-
-
-@dataclass(frozen=True)
-class Campaign:
-    name: str
-    description: str
-    settings: CampaignSettings
-    configurations: tuple[Configuration, ...]
-    source: str = ""
-    manifest: str | None = None
-
-    def item_key(self, configuration: Configuration) -> str:
-        """Stable key of one item's inputs: equal inputs, equal key (results are reused)."""
-        payload = {"schema": SCHEMA_VERSION, "simulator": SIMULATOR_REVISION, "settings": asdict(self.settings),
-                   "configuration": configuration.as_json()}
-        payload["configuration"].pop("name")
-        payload["configuration"].pop("group")  # names and groups label results; they do not change them
-        text = json.dumps(payload, sort_keys=True, default=list)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
