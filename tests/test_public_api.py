@@ -174,7 +174,7 @@ def test_dir_lists_only_the_public_names():
 
 def test_the_rx_fit_repr_is_one_short_line_with_the_fitted_power_and_residual():
     """A fit's record (as_json) runs to kilobytes; its repr is one line with the power and the residual."""
-    from vissim.fit.rx_fit import RxFit, Solution
+    from vissim.fit.result import RxFit, Solution
 
     best = Solution(power_vector=(-2.25, 0.5, 0.0), covariance=np.eye(3) * 1e-4, ssr=1.5, parameters=np.zeros(5))
     fit = RxFit(status="ok", reason=None, best=best, alternatives=((best, 120.0),) * 3, sign_delta_chi2=120.0,

@@ -45,7 +45,7 @@ _PUBLIC = {
     "DslrBench": "vissim.bench.dslr",
     "render_bench": "vissim.render.run",
     "fit_rx": "vissim.fit.rx_fit",
-    "RxFit": "vissim.fit.rx_fit",
+    "RxFit": "vissim.fit.result",
     "load_campaign": "vissim.validation.engine.loader",
     "run_campaign": "vissim.validation.engine.runner",
     "load_subject": "vissim.atv.data",

@@ -94,7 +94,7 @@ def test_a_virtual_dng_of_a_render_fits_as_the_render(tmp_path):
     (``tests/fit/virtual_dng.py``): the two fits differ by less than the DNG fit's 95 % noise
     half-width in each component, and by less than 0.02 D."""
     from tests.fit.virtual_dng import through_virtual_dng
-    from vissim.fit.rx_fit import Z95
+    from vissim.fit.result import Z95
 
     lens = TrialLens(1.0, -1.5, 30.0)
     bench = DslrBench(lenses=(lens,), size_px=(134, 114), spp=256, seed=21)

@@ -22,7 +22,7 @@ import pytest
 from vissim.bench.dslr import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.fit.capture import fit_capture
-from vissim.fit.rx_fit import Z95
+from vissim.fit.result import Z95
 from vissim.optics.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
 

@@ -115,7 +115,7 @@ def test_the_sandwich_covariance_matches_monte_carlo_for_uneven_correlated_noise
     lags), where the textbook sigma^2 (J^T J)^-1 gives under 0.6 of it (measured 0.39, 0.33)."""
     from scipy.ndimage import uniform_filter
 
-    from vissim.fit.rx_fit import residual_correlation_lag_px, sandwich_covariance
+    from vissim.fit.statistics import residual_correlation_lag_px, sandwich_covariance
 
     rng = np.random.default_rng(7)
     shape = (48, 48)
