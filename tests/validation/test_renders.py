@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import dslr_scene
+from vissim.bench.dslr.bench import dslr_scene
 from vissim.imageio import read_image, write_image
 from vissim.validation.campaign import CampaignSettings, Configuration
 from vissim.validation.fields import LensSpec

@@ -70,7 +70,7 @@ import scipy.optimize
 import scipy.signal
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe
 from vissim.checks import pupil_diameter_mm as check_pupil_mm

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from vissim.atomic import write_json_atomic
-from vissim.bench.depth_scene import panel_geometries
-from vissim.bench.depth_viewers import equivalent_eye, viewing_setup
+from vissim.bench.depth.scene import panel_geometries
+from vissim.bench.depth.viewers import equivalent_eye, viewing_setup
 from vissim.provenance import make_provenance
 from vissim.validation.depth_campaign import DepthCampaignSettings, DepthConfiguration
 from vissim.validation.depth_masks import depth_regions, masked_metrics

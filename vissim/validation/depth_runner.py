@@ -20,9 +20,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from vissim.bench.depth_scene import DepthScene
-from vissim.bench.depth_scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer
+from vissim.bench.depth.scene import DepthScene
+from vissim.bench.depth.scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer
 from vissim.imageio import read_image
 from vissim.progress import Progress, counter
 from vissim.provenance import json_safe

@@ -6,7 +6,7 @@ import hashlib
 import json
 from dataclasses import asdict, dataclass
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import m_to_mm
 from vissim.validation.campaign_types import CampaignSettings, Configuration
