@@ -3,7 +3,7 @@
 Read from the source with ``ast`` (nothing is imported), every ``import`` at any depth. The
 layers, lowest first (docs/conventions.md, "Layers"):
 
-1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``
+1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``, ``thesis``
 2. ``optics``: the physics (prescriptions, wavefronts, PSFs, blur, depth)
 3. imaging: ``imageio``, ``imaging`` (image registration), ``optotypes``, ``acuity``,
    ``charts``, ``chart_demo``
@@ -26,7 +26,7 @@ from pathlib import Path
 from source_modules import MODULES, PACKAGE, loops, owner
 
 LAYERS = [
-    {"units", "errors", "checks", "atomic", "provenance", "progress"},
+    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis"},
     {"optics"},
     {"imageio", "imaging", "optotypes", "acuity", "charts", "chart_demo"},
     {"bench"},
@@ -125,7 +125,7 @@ def test_the_rules_catch_what_they_name(tmp_path):
     names = {name for name, _ in _imports(source)}
     assert {"vissim.optics.blur", "vissim.optics.depth._x", "vissim.cli.blur",
             "vissim.optics.blur._padding", "vissim.cli.blur._y"} <= names
-    assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr") > _layer("vissim.optics.psf") > _layer("vissim.units")
+    assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr.bench") > _layer("vissim.optics.psf") > _layer("vissim.units")
 
 
 def test_loading_a_campaign_imports_neither_the_harness_nor_scikit_image():

@@ -42,7 +42,7 @@ _PUBLIC = {
     "single_letter_spec": "vissim.charts",
     "render_chart_angular": "vissim.charts",
     "render_chart_print": "vissim.charts",
-    "DslrBench": "vissim.bench.dslr",
+    "DslrBench": "vissim.bench.dslr.bench",
     "render_bench": "vissim.render.run",
     "fit_rx": "vissim.fit.rx_fit",
     "RxFit": "vissim.fit.result",

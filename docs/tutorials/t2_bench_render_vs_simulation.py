@@ -25,7 +25,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import vissim
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.optics.resample import magnify
 from vissim.optics.trial_lens import TrialLens

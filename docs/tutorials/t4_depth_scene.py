@@ -22,7 +22,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy import ndimage
 
-from vissim.bench.depth_scene_files import load_depth_scene_toml
+from vissim.bench.depth.scene_files import load_depth_scene_toml
 from vissim.optics.depth import blur_depth
 from vissim.render.depth_render import render_depth
 from vissim.imaging.metrics import compare_images

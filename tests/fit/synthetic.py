@@ -16,7 +16,7 @@ import dataclasses
 import numpy as np
 import scipy.ndimage
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import optotype_tile
 from vissim.optics.blur import blur_image
 from vissim.optics.psf import compute_psf, suggested_size_px

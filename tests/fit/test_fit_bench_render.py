@@ -2,7 +2,7 @@
 
 The image is the bench rendered through meshed crown-glass trial lenses; the reference is the
 same bench rendered without lenses (another seed).  Truth is vergence theory for the lenses as
-rendered (:meth:`vissim.bench.dslr.DslrBench.viewing_setup`, what ``vissim trial-lens`` prints as
+rendered (:meth:`vissim.bench.dslr.bench.DslrBench.viewing_setup`, what ``vissim trial-lens`` prints as
 ``effective_*`` for the thick lens), which the renders match to 0.25 % in blur and 0.02 % in
 magnification (README).  Geometric mode: Mitsuba renders no diffraction.
 """
@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.fit.capture import compare_with_theory, fit_capture
 from vissim.optics.prescription import LensPower

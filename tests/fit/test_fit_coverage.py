@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.fit.capture import fit_capture
 from vissim.fit.result import Z95

@@ -3,7 +3,7 @@
 Captures come from vissim's own forward chain (``tests/fit/synthetic.py``: fine chart, bench
 magnification, ray-traced or wave PSF, block means, Gaussian noise), not from the fit's model.
 Truth is the power the bench's lens adds at the camera by vergence theory
-(:meth:`vissim.bench.dslr.DslrBench.viewing_setup`): what ``vissim trial-lens`` prints as
+(:meth:`vissim.bench.dslr.bench.DslrBench.viewing_setup`): what ``vissim trial-lens`` prints as
 ``effective_*`` for the lens as rendered.
 """
 

@@ -9,7 +9,7 @@ from vissim.charts import optotype_tile
 from vissim.validation.engine.loader import load_campaign
 from vissim.validation.dslr.captures import capture_tile, file_sha256, load_manifest
 from vissim.imaging.raw import camera_arcmin_per_px
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.validation.dslr.renders import RenderSpec, build_dslr
 from vissim.validation.dslr.report import metrics_rows
 from vissim.validation.engine.report import load_results

@@ -21,8 +21,8 @@ from fake_bench import fake_render, refuse
 from provenance_walk import image_provenance, json_without_provenance
 
 from tests.bench.depth_scenes import default_panels_scene
-from vissim.bench.depth_scene import panel_geometries
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer
+from vissim.bench.depth.scene import panel_geometries
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.render.backend import choose_variant

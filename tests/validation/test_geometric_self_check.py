@@ -1,6 +1,6 @@
 """The geometric self-check (issue 13): the lens trace's ray optics against the Mitsuba render.
 
-The trace (vissim.bench.lens_trace, the trial lenses' analytic surfaces) and the renderer
+The trace (vissim.bench.lenses.trace, the trial lenses' analytic surfaces) and the renderer
 (Mitsuba, the lenses' meshes) are independent.  The trace's ray PSF applied to the synthetic
 chart must match the render to its noise floor: >= +2 dB over it, as the geometric simulations
 do (a perfect, noise-free image scores +3 dB).

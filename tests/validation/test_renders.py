@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import dslr_scene
+from vissim.bench.dslr.bench import dslr_scene
 from vissim.imageio import read_image, write_image
 from vissim.validation.dslr.schema import CampaignSettings, Configuration
 from vissim.validation.engine.fields import LensSpec
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.validation.dslr.renders import RenderSpec, build_dslr, render_dslr_spec, truth_specs
 from vissim.validation.dslr.simulate import simulation_setup
 from vissim.validation.engine.renders import render_file_provenance

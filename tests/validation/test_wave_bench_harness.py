@@ -1,7 +1,7 @@
 """The wave bench as a campaign truth (issue 13, harness): rows, tables, residual causes, caching.
 
 A tiny campaign with the stand-in bench (no Mitsuba); the wave bench itself is the real trace
-(vissim.bench.wave_truth), so its numbers are physics, not plumbing.
+(vissim.bench.dslr.wave_truth), so its numbers are physics, not plumbing.
 """
 
 import json

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.errors import VissimInputError
 from vissim.fit.result import RxFit
 from vissim.fit.rx_fit import fit_rx

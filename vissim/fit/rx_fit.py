@@ -69,7 +69,7 @@ from typing import Any
 
 import numpy as np
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.fit.decisions import (AXIS_MIN_CHI2, AXIS_MIN_CYLINDER_DIOPTERS, MAX_UNEXPLAINED_FRACTION,
                                   MIN_RESOLVED_BLUR_PX, SIGN_MIN_DELTA_CHI2, Decision, decide)

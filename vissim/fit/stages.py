@@ -15,7 +15,7 @@ import math
 import numpy as np
 import scipy.optimize
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.fit.forward import ForwardModel
 from vissim.fit.power_model import power_model
 from vissim.fit.problem import FitProblem, parameter_bounds

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from vissim.atomic import write_json_atomic
-from vissim.bench.depth_scene import panel_geometries
+from vissim.bench.depth.scene import panel_geometries
 from vissim.provenance import make_provenance
 from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.optics.resample import block_mean

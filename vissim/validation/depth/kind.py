@@ -1,6 +1,6 @@
 """The depth bench as a bench kind of the validation engine (``kind = "depth"``).
 
-A configuration is a depth scene (`vissim.bench.depth_scene`) seen by an observer: an eye, the
+A configuration is a depth scene (`vissim.bench.depth.scene`) seen by an observer: an eye, the
 DSLR, or the scene file's own (`vissim.validation.depth.schema`).  Its truth is the blurred view
 rendered at two seeds; the simulations start from pinhole renders (`vissim.validation.depth.renders`).
 """

@@ -14,9 +14,9 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from vissim.bench.depth_scene import DepthScene
-from vissim.bench.depth_scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
+from vissim.bench.depth.scene import DepthScene
+from vissim.bench.depth.scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
 from vissim.optics.setup import ViewingSetup
 from vissim.provenance import json_safe
 from vissim.validation.depth.schema import DepthCampaignSettings, DepthConfiguration

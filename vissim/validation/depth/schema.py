@@ -14,9 +14,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from vissim.bench.depth_scene import DepthScene
-from vissim.bench.depth_scene_files import load_depth_scene_toml
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer
+from vissim.bench.depth.scene import DepthScene
+from vissim.bench.depth.scene_files import load_depth_scene_toml
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer
 from vissim.checks import (DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, OBJECT_DISTANCE_RANGE_M,
                            VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM, ACCOMMODATION_RANGE_DIOPTERS)
 from vissim.errors import VissimInputError
@@ -54,7 +54,7 @@ class DepthConfiguration:
 
     def frame_margin_px(self, settings: DepthCampaignSettings) -> int:
         """Pixels (of the campaign's grid) the simulations' inputs extend beyond the frame on every side."""
-        from vissim.bench.depth_viewers import frame_margin_px
+        from vissim.bench.depth.viewers import frame_margin_px
 
         return frame_margin_px(self.viewer, self.scene) if settings.frame_margin else 0
 

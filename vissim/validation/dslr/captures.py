@@ -42,7 +42,7 @@ import numpy as np
 
 from vissim.charts import PAPER_REFLECTANCE, POLARITIES
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM
+from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM
 from vissim.units import mm_to_m
 from vissim.validation.engine.fields import LensSpec
 from vissim.validation.engine.fields import field_error, lenses, number, read_toml_file, tables, text

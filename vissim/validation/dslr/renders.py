@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import ClassVar
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe

@@ -41,13 +41,13 @@ import math
 
 import numpy as np
 
-from vissim.bench.bench_wavefront import (
+from vissim.bench.dslr.traced_wavefront import (
     ShiftInvariance,
     frame_field_points_deg,
     trace_bench_wavefront,
 )
-from vissim.bench.dslr import DslrBench
-from vissim.bench.wave_truth import WaveTruth, image_through_traced_lenses, wave_truth
+from vissim.bench.dslr.bench import DslrBench
+from vissim.bench.dslr.wave_truth import WaveTruth, image_through_traced_lenses, wave_truth
 from vissim.charts import ChartSpec, single_letter_spec
 from vissim.optics.glass import D_LINE_NM, glass_like_crown
 from vissim.optics.prescription import LensPower

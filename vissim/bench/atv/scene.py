@@ -2,7 +2,7 @@
 
 Scene dicts hold plain values (4 x 4 row-major ``to_world`` lists), converted by
 `vissim.render.run.to_mitsuba_dict`; nothing here imports Mitsuba.  The lenses are PLY
-meshes (`vissim.bench.lens_mesh.cached_lens_ply`) with the refraction-only BSDF; the
+meshes (`vissim.bench.lenses.mesh.cached_lens_ply`) with the refraction-only BSDF; the
 optional camera is a ``thinlens`` at the pupil, the cross-check of the light tracer.
 """
 
@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from vissim.bench.atv import AtvConfig
-from vissim.bench.lens_mesh import cached_lens_ply
+from vissim.bench.atv.tube import AtvConfig
+from vissim.bench.lenses.mesh import cached_lens_ply
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import samples_per_pixel
 from vissim.errors import VissimInputError

@@ -23,7 +23,7 @@ Choices, and why:
   constant, like ink dots); bilinear would add a one-texel triangle blur.  The raster is
   cropped around the axis, or padded with its edge values, to cover the field plus blur and
   magnification margins.
-* **Lenses**: PLY meshes with exact normals (`vissim.bench.lens_mesh`), made of the
+* **Lenses**: PLY meshes with exact normals (`vissim.bench.lenses.mesh`), made of the
   refraction-only ``vissim_refract`` BSDF (`vissim.render.plugins`).  Thin lenses
   (``refractive_index`` None) become crown-glass lenses of realistic centre thickness for the
   clear aperture, and the theory (`DslrBench.viewing_setup`, a
@@ -44,17 +44,17 @@ from typing import Any
 
 import numpy as np
 
-from vissim.bench.lens_mesh import cached_lens_ply, realistic_center_thickness_mm
+from vissim.bench.lenses.mesh import cached_lens_ply, realistic_center_thickness_mm
 from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, samples_per_pixel
 from vissim.checks import size_px as check_size_px
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, THESIS_CHART_DISTANCE_MM,
-                                      THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM,
-                                      TrialLens, TrialLensSetup, entrance_pupil_diameter_mm)
+from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup,
+                                      entrance_pupil_diameter_mm)
 from vissim.optics.setup import DEFAULT_WAVELENGTH_NM, ViewingSetup
+from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import REC709_LUMINANCE, arcmin_to_rad, mm_to_m
 
 __all__ = ["SAMPLERS", "DslrBench", "chart_mm_per_texel", "dslr_scene", "hdr_film"]

@@ -5,7 +5,7 @@ plano-convex lens with an eyecup at the other; the phone sits in the lens's foca
 lit pixel reaches the eye as parallel light, "equivalent to observing a point at infinity".
 Trial lenses (-5 ... +5 D) go in a slot between the lens and the eye.
 
-World frame (millimetres), the same as `vissim.bench.dslr`: the eye's pupil -- a reduced
+World frame (millimetres), the same as `vissim.bench.dslr.bench`: the eye's pupil -- a reduced
 eye, a thin lens at its pupil -- at z = 0, looking along +z with +y up; world x is the
 examiner's right (TABO and OSA pupil x), so the eye's right is world -x.  Light travels toward
 -z: pixel (``phone_z_mm``), collimator, trial lens, pupil.
@@ -23,7 +23,7 @@ Choices, and why:
   radiance is ``pixel_radiance``.  The thesis's "iPhone intensity [0, 1]" is a display code
   value (ERRATA item 9); `display_code_to_linear` is the separate transfer step.
 * **Trial lens**: a thick crown-glass `TrialLens` (marked with its back
-  vertex power, as meshed by `vissim.bench.lens_mesh`), back vertex
+  vertex power, as meshed by `vissim.bench.lenses.mesh`), back vertex
   ``trial_lens_distance_mm`` in front of the pupil (15 mm: a 12 mm vertex distance plus 3 mm
   from the cornea to the entrance pupil).  `atv_trial_lens` makes one of realistic
   thickness.
@@ -32,8 +32,8 @@ Choices, and why:
   through pupil point x (mm) with direction angle u lands at visual angle
   ``-u + (E + A) x`` milliradians: the thin lens is the eye's excess power E plus accommodation.
 
-The paraxial theory is `vissim.bench.atv_paraxial`, the Mitsuba scene dict
-`vissim.bench.atv_scene`.
+The paraxial theory is `vissim.bench.atv.paraxial`, the Mitsuba scene dict
+`vissim.bench.atv.scene`.
 """
 
 from __future__ import annotations
@@ -43,8 +43,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vissim.bench.lens_mesh import (lens_surface_curvatures_per_mm, realistic_center_thickness_mm,
-                                    rim_thickness_mm, sag_mm)
+from vissim.bench.lenses.mesh import (lens_surface_curvatures_per_mm, realistic_center_thickness_mm,
+                                      rim_thickness_mm, sag_mm)
 from vissim.charts import MM_PER_INCH
 from vissim.checks import eye_pupil_diameter_mm, finite_number
 from vissim.errors import VissimInputError

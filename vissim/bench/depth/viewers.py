@@ -14,7 +14,7 @@ geometric spot of ``pupil x (K - I/z)`` milliradians (pupil in mm; conventions: 
   K = diag(2, 0) D (excess power in the horizontal meridian: horizontal blur).  Both come from
   `vissim.optics.setup.ViewingSetup` (`viewing_setup`), which decides them.  Rendered by
   the Mitsuba sensor ``vissim_eye`` (`vissim.render.eye_sensor`), which takes any such K.
-* `CameraViewer` -- the DSLR of `vissim.bench.dslr` (Mitsuba ``thinlens``,
+* `CameraViewer` -- the DSLR of `vissim.bench.dslr.bench` (Mitsuba ``thinlens``,
   entrance pupil = focal length / f-number): ``K = I / focus distance`` plus the power its
   trial lenses add (`vissim.optics.trial_lens.trial_lens_effect`, for an object at the focus
   distance; the lenses' vergence effect changes it by < 1 % between 0.4 m and infinity).
@@ -31,14 +31,13 @@ from typing import Union
 
 import numpy as np
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.checks import positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER,
-                                      THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM, TrialLens,
-                                      entrance_pupil_diameter_mm)
+from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, entrance_pupil_diameter_mm
 from vissim.optics.setup import ViewingSetup
+from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import m_to_mm, mm_to_m
 
 __all__ = ["EyeViewer", "CameraViewer", "Viewer", "viewing_setup", "equivalent_eye", "frame_margin_px",

@@ -1,6 +1,6 @@
 """Depth scenes as Mitsuba scene dicts: the observer's camera, the panels' shapes and emitters.
 
-The scene (`vissim.bench.depth_scene`) says where panels are; this module turns it into a
+The scene (`vissim.bench.depth.scene`) says where panels are; this module turns it into a
 dict.  Views and contents (`depth_scene_dict`): ``view="blurred"`` uses the observer's
 optics, ``"all_in_focus"`` a pinhole (``perspective``) at the pupil centre with the same film and the
 same lenses, so both images share one pixel grid.  ``content="proximity"`` replaces every
@@ -27,11 +27,11 @@ from typing import Any
 import numpy as np
 
 from vissim.atomic import atomic_output, cache_output
-from vissim.bench.depth_scene import DepthScene, PanelGeometry, panel_geometries
-from vissim.bench.depth_textures import panel_texture
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer, Viewer, viewing_setup
-from vissim.bench.dslr import MAX_DEPTH, NEAR_CLIP_MM, dslr_scene, hdr_film
-from vissim.bench.lens_mesh import mesh_cache_dir
+from vissim.bench.depth.scene import DepthScene, PanelGeometry, panel_geometries
+from vissim.bench.depth.textures import panel_texture
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer, Viewer, viewing_setup
+from vissim.bench.dslr.bench import MAX_DEPTH, NEAR_CLIP_MM, dslr_scene, hdr_film
+from vissim.bench.lenses.mesh import mesh_cache_dir
 from vissim.errors import VissimInputError
 from vissim.units import m_to_mm
 
@@ -79,7 +79,7 @@ def _fronto_shape(g: PanelGeometry, emitter: dict) -> dict:
     z = m_to_mm(g.distance_left_m)
     cx, cy = 0.5 * (left + right) * z, 0.5 * (bottom + top) * z
     height, width = g.size_mm
-    # As the DSLR bench's chart (vissim.bench.dslr.dslr_scene, pinned by its render test): the
+    # As the DSLR bench's chart (vissim.bench.dslr.bench.dslr_scene, pinned by its render test): the
     # rectangle turned 180 deg about y faces the observer, texture u runs along world -x (image
     # right) and bitmap row 0 sits at the bottom, so the raster goes in upside down.
     return {"type": "rectangle",

@@ -1,6 +1,6 @@
 """Depth scenes: letter charts at several distances and a tilted chart, as Mitsuba scene dicts.
 
-World frame (millimetres), the one of `vissim.bench.dslr`: the observer's pupil (the
+World frame (millimetres), the one of `vissim.bench.dslr.bench`: the observer's pupil (the
 DSLR's entrance pupil, or the eye's) at z = 0 looking along +z with +y up; world x is the
 examiner's right (TABO), so the observer's image right is world -x.  Directions in the view
 are *image tangents* ``(right, up)``: a pixel's centre looks along ``(-tx, ty, 1)``, and
@@ -21,17 +21,17 @@ What is in a scene:
   chart's angular rectangle; it is a PLY mesh whose texture coordinates are image tangents,
   with columns at most half a pixel apart (texture error < 0.01 px).
 
-Observers (a ``viewer``, `vissim.bench.depth_viewers`): an ``EyeViewer`` -- Mitsuba
+Observers (a ``viewer``, `vissim.bench.depth.viewers`): an ``EyeViewer`` -- Mitsuba
 sensor ``vissim_eye`` (`vissim.render.eye_sensor`), an ideal thin lens at the pupil
 focusing the vergence matrix ``K = A I - Rx``, so an object at axial distance ``z`` is blurred
 by ``pupil x (K - I/z)``: the defocus ``Rx + 1/z - A`` of
 `vissim.optics.setup.ViewingSetup.eye`, cylinders and hyperopia (focus "beyond infinity",
 ``K < 0``) included, which a Mitsuba ``thinlens`` (focus distance > 0, no astigmatism) cannot
 express -- or a ``CameraViewer``, the DSLR bench camera (``thinlens``, f/N entrance pupil)
-with optional trial lenses, taken from `vissim.bench.dslr.dslr_scene` itself.
+with optional trial lenses, taken from `vissim.bench.dslr.bench.dslr_scene` itself.
 
-The scene dicts are `vissim.bench.depth_scene_dict`, the chart textures
-`vissim.bench.depth_textures`.
+The scene dicts are `vissim.bench.depth.scene_dict`, the chart textures
+`vissim.bench.depth.textures`.
 """
 from __future__ import annotations
 
@@ -42,7 +42,7 @@ from typing import Union
 
 import numpy as np
 
-from vissim.bench.dslr import SAMPLERS
+from vissim.bench.dslr.bench import SAMPLERS
 from vissim.charts import (INK_REFLECTANCE, MM_PER_INCH, PAPER_REFLECTANCE, POLARITIES, ChartRow, ChartSpec,
                            layout_chart)
 from vissim.checks import finite_number, positive_number

@@ -21,10 +21,10 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from vissim.bench.depth_scene import ChartPanel, DepthScene, PanelChart, TiltedChart
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer
-from vissim.bench.scene_files import (check_keys, checked_values, image_size_px, parse_trial_lenses, read_scene_toml,
-                                      sub_table, typed_value)
+from vissim.bench.depth.scene import ChartPanel, DepthScene, PanelChart, TiltedChart
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer
+from vissim.bench.scene_toml import (check_keys, checked_values, image_size_px, parse_trial_lenses, read_scene_toml,
+                                     sub_table, typed_value)
 from vissim.checks import samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription

@@ -1,7 +1,7 @@
 """Paraxial theory of the ATV tube: first-order optics from the phone's screen to the eye's pupil.
 
 Ray transfer matrices (`vissim.optics.trial_lens.transfer_matrix`) of the gaps and lenses
-laid out by `vissim.bench.atv.atv_layout` give where a pixel's light lands: the pixel's
+laid out by `vissim.bench.atv.tube.atv_layout` give where a pixel's light lands: the pixel's
 visual angle and size, the eye's defocus and blur diameter (from
 `vissim.optics.setup.ViewingSetup.eye`, given the tube's vergence at the pupil), the etendue and the cone of
 directions that reach the pupil.  This is the theory both renderers are checked against;
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.bench.atv import AtvConfig
+from vissim.bench.atv.tube import AtvConfig
 from vissim.optics.trial_lens import transfer_matrix
 from vissim.units import mm_to_m, mrad_to_arcmin
 

@@ -1,7 +1,7 @@
 """Exact ray trace through the bench's trial lenses, for optical path length (pure numpy).
 
-The surfaces are the analytic ones `vissim.bench.lens_mesh` meshes, not the facets: in the
-bench's world frame (`vissim.bench.dslr`; mm, x the examiner's right, y up, +z from the
+The surfaces are the analytic ones `vissim.bench.lenses.mesh` meshes, not the facets: in the
+bench's world frame (`vissim.bench.dslr.bench`; mm, x the examiner's right, y up, +z from the
 camera towards the chart, light travelling towards -z) a surface of curvature matrix K with
 its vertex at ``z_v`` is ``z = z_v - sag(K, x)``.  Lens i's back vertex is at
 ``DslrBench.lens_back_vertex_z_mm()[i]``, its front vertex ``t`` further towards the chart.
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.bench.lens_mesh import lens_surface_curvatures_per_mm, sag_gradient, sag_mm
+from vissim.bench.lenses.mesh import lens_surface_curvatures_per_mm, sag_gradient, sag_mm
 from vissim.errors import VissimInputError
 from vissim.optics.glass import D_LINE_NM, glass_like_crown
 

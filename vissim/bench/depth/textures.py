@@ -12,7 +12,7 @@ import functools
 
 import numpy as np
 
-from vissim.bench.depth_scene import PanelGeometry
+from vissim.bench.depth.scene import PanelGeometry
 from vissim.charts import MM_PER_INCH, ChartSpec, render_chart_angular, render_chart_print
 from vissim.errors import VissimInputError
 

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.ndimage
 
-from vissim.bench.atv import AtvConfig
-from vissim.bench.atv_paraxial import atv_paraxial
+from vissim.bench.atv.tube import AtvConfig
+from vissim.bench.atv.paraxial import atv_paraxial
 from vissim.errors import VissimInputError
 from vissim.optics.psf_metrics import ring_means
 

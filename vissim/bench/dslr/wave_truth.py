@@ -1,7 +1,7 @@
 """The bench's wave-optical ground truth: the chart imaged through the traced trial lenses.
 
 Mitsuba renders ray optics.  The wave truth images the same chart with the wavefront the
-bench's own lenses add, traced exactly (`vissim.bench.bench_wavefront`), by wave optics:
+bench's own lenses add, traced exactly (`vissim.bench.dslr.traced_wavefront`), by wave optics:
 
 1. the chart on a grid ``oversample`` times finer than the camera's pixels, in visual angle
    (`render_chart_angular`, the chart's real distance);
@@ -33,8 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.checks import size_text
-from vissim.bench.bench_wavefront import D_LINE_NM, TracedWavefront, trace_bench_wavefront
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.traced_wavefront import D_LINE_NM, TracedWavefront, trace_bench_wavefront
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import ChartSpec, chart_sidecar, render_chart_angular
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image

@@ -1,4 +1,4 @@
-"""The wavefront the bench's trial lenses add at the camera, from the exact trace (`vissim.bench.lens_trace`).
+"""The wavefront the bench's trial lenses add at the camera, from the exact trace (`vissim.bench.lenses.trace`).
 
 The ``thinlens`` camera is an ideal lens in its aperture plane z = 0, focused on the chart: it
 turns the spherical wave from a chart point into a perfect image.  With trial lenses, the
@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vissim.bench.lens_trace import aim_rays, bench_surfaces, object_point_mm
+from vissim.bench.lenses.trace import aim_rays, bench_surfaces, object_point_mm
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 from vissim.optics.glass import D_LINE_NM
