@@ -140,3 +140,17 @@ def test_loading_a_campaign_imports_neither_the_harness_nor_scikit_image():
                               capture_output=True, text=True, cwd=root, timeout=120)
         assert done.returncode == 0, done.stderr
         assert done.stdout.strip() == "[]", f"{toml}: {done.stdout}"
+
+
+#: Inside ``validation``: the engine knows no bench kind, and no bench kind knows another
+#: (each imports the engine and the layers below; the registry names kinds as strings).
+BENCH_KIND_PACKAGES = ("vissim.validation.dslr", "vissim.validation.depth")
+
+
+def test_the_engine_imports_no_bench_kind_and_kinds_not_each_other():
+    def kind_of(module):
+        return next((k for k in BENCH_KIND_PACKAGES if module == k or module.startswith(k + ".")), None)
+
+    wrong = sorted({f"{m} imports {t}, line {line}" for m, t, _, line in _edges()
+                    if kind_of(t) and (m.startswith("vissim.validation.engine") or kind_of(m) not in (None, kind_of(t)))})
+    assert not wrong, "bench kinds imported across the engine's plug-in line:\n" + "\n".join(wrong)
