@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
+from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
 from vissim.optics.trial_lens import TrialLens
 from vissim.render.backend import mitsuba

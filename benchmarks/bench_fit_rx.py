@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 
 from tests.fit import synthetic  # noqa: E402
-from vissim.bench.dslr import DslrBench  # noqa: E402
+from vissim.bench.dslr.bench import DslrBench  # noqa: E402
 from vissim.fit.rx_fit import fit_rx  # noqa: E402
 from vissim.optics.blur import blur_image  # noqa: E402
 from vissim.optics.psf import compute_psf, suggested_size_px  # noqa: E402

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from vissim.bench.dslr import SAMPLERS, DslrBench, chart_mm_per_texel, dslr_scene
+from vissim.bench.dslr.bench import SAMPLERS, DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
 from vissim.optics.trial_lens import TrialLens
 from vissim.render.run import render_scene

@@ -9,7 +9,6 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from vissim.acuity import (
-    THESIS_VIEWING_DISTANCE_M,
     decimal_to_logmar,
     letter_height_arcmin,
     letter_height_mm,
@@ -20,7 +19,10 @@ from vissim.acuity import (
     subtense_mm,
 )
 from vissim.errors import VissimInputError
+from vissim.thesis import THESIS_CHART_DISTANCE_MM
+from vissim.units import mm_to_m
 
+THREE_FEET_M = mm_to_m(THESIS_CHART_DISTANCE_MM)  # the thesis's chart distance (section 4.1)
 logmars = st.floats(min_value=-1.0, max_value=2.0, allow_nan=False)
 
 
@@ -31,7 +33,7 @@ def eq_4_1_mm(logmar: float, distance_m: float) -> float:
 
 def test_logmar_0_letter_is_1_33_mm_at_three_feet():
     # Thesis section 4.1 / Eq. 4.1: chart at 914.4 mm; 5 arcmin there is 1.330 mm.
-    assert letter_height_mm(0.0, THESIS_VIEWING_DISTANCE_M) == pytest.approx(1.330, abs=5e-4)
+    assert letter_height_mm(0.0, THREE_FEET_M) == pytest.approx(1.330, abs=5e-4)
 
 
 def test_logmar_0_letter_is_8_73_mm_at_6_m():
@@ -41,13 +43,13 @@ def test_logmar_0_letter_is_8_73_mm_at_6_m():
 
 def test_logmar_1_letter_is_13_3_mm_at_three_feet():
     # Thesis Figure 4.3: the top row (20/200 at three feet) is ten times the 20/20 letter.
-    assert letter_height_mm(1.0, THESIS_VIEWING_DISTANCE_M) == pytest.approx(13.30, abs=5e-3)
+    assert letter_height_mm(1.0, THREE_FEET_M) == pytest.approx(13.30, abs=5e-3)
 
 
 @pytest.mark.parametrize(("logmar", "bound"), [(-0.3, 1e-6), (0.0, 1e-6), (0.4, 1e-6), (1.0, 2e-5)])
 def test_letter_height_differs_from_eq_4_1_by_the_documented_amount(logmar, bound):
     # 2 d tan(theta/2) vs d tan(5') 10**LogMAR: relative difference ~ theta^2/12 - theta_0^2/3.
-    for distance_m in (THESIS_VIEWING_DISTANCE_M, 6.0):
+    for distance_m in (THREE_FEET_M, 6.0):
         rel = letter_height_mm(logmar, distance_m) / eq_4_1_mm(logmar, distance_m) - 1.0
         assert abs(rel) < bound
 

@@ -3,7 +3,7 @@
 Read from the source with ``ast`` (nothing is imported), every ``import`` at any depth. The
 layers, lowest first (docs/conventions.md, "Layers"):
 
-1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``
+1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``, ``thesis``
 2. ``optics``: the physics (prescriptions, wavefronts, PSFs, blur, depth)
 3. imaging: ``imageio``, ``imaging`` (image registration), ``optotypes``, ``acuity``,
    ``charts``, ``chart_demo``
@@ -26,7 +26,7 @@ from pathlib import Path
 from source_modules import MODULES, PACKAGE, loops, owner
 
 LAYERS = [
-    {"units", "errors", "checks", "atomic", "provenance", "progress"},
+    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis"},
     {"optics"},
     {"imageio", "imaging", "optotypes", "acuity", "charts", "chart_demo"},
     {"bench"},
@@ -125,18 +125,32 @@ def test_the_rules_catch_what_they_name(tmp_path):
     names = {name for name, _ in _imports(source)}
     assert {"vissim.optics.blur", "vissim.optics.depth._x", "vissim.cli.blur",
             "vissim.optics.blur._padding", "vissim.cli.blur._y"} <= names
-    assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr") > _layer("vissim.optics.psf") > _layer("vissim.units")
+    assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr.bench") > _layer("vissim.optics.psf") > _layer("vissim.units")
 
 
 def test_loading_a_campaign_imports_neither_the_harness_nor_scikit_image():
     """Parsing a campaign file needs the loader and the memory preflight, not the item, fit or registration."""
     root = PACKAGE.parent
-    code = ("import sys; sys.path.insert(0, sys.argv[1]); from vissim.validation.campaign import load_campaign; "
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); from vissim.validation.engine.loader import load_campaign; "
             "load_campaign(sys.argv[2]); "
-            "print(sorted(m for m in ('skimage', 'vissim.fit', 'vissim.validation.item', 'vissim.imaging.registration', "
+            "print(sorted(m for m in ('skimage', 'vissim.fit', 'vissim.validation.dslr.item', 'vissim.imaging.registration', "
             "'mitsuba', 'rawpy') if m in sys.modules))")
     for toml in ("quick.toml", "thesis.toml"):
         done = subprocess.run([sys.executable, "-c", code, str(root), str(root / "validation" / toml)],
                               capture_output=True, text=True, cwd=root, timeout=120)
         assert done.returncode == 0, done.stderr
         assert done.stdout.strip() == "[]", f"{toml}: {done.stdout}"
+
+
+#: Inside ``validation``: the engine knows no bench kind, and no bench kind knows another
+#: (each imports the engine and the layers below; the registry names kinds as strings).
+BENCH_KIND_PACKAGES = ("vissim.validation.dslr", "vissim.validation.depth")
+
+
+def test_the_engine_imports_no_bench_kind_and_kinds_not_each_other():
+    def kind_of(module):
+        return next((k for k in BENCH_KIND_PACKAGES if module == k or module.startswith(k + ".")), None)
+
+    wrong = sorted({f"{m} imports {t}, line {line}" for m, t, _, line in _edges()
+                    if kind_of(t) and (m.startswith("vissim.validation.engine") or kind_of(m) not in (None, kind_of(t)))})
+    assert not wrong, "bench kinds imported across the engine's plug-in line:\n" + "\n".join(wrong)

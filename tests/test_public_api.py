@@ -56,9 +56,9 @@ def test_the_cheap_docstring_examples_run():
     import importlib
 
     modules = ("vissim.optics.prescription", "vissim.optics.wavefront", "vissim.optics.blur", "vissim.charts",
-               "vissim.fit.rx_fit", "vissim.validation.campaign", "vissim.validation.runner", "vissim.atv.analysis",
+               "vissim.fit.rx_fit", "vissim.validation.engine.loader", "vissim.validation.engine.runner", "vissim.atv.analysis",
                "vissim.render.run", "vissim.optics.psf_metrics", "vissim.optics.depth", "vissim.atv.data",
-               "vissim.bench.dslr")
+               "vissim.bench.dslr.bench")
     attempted = 0
     for name in modules:
         result = doctest.testmod(importlib.import_module(name), optionflags=doctest.NORMALIZE_WHITESPACE)
@@ -174,7 +174,7 @@ def test_dir_lists_only_the_public_names():
 
 def test_the_rx_fit_repr_is_one_short_line_with_the_fitted_power_and_residual():
     """A fit's record (as_json) runs to kilobytes; its repr is one line with the power and the residual."""
-    from vissim.fit.rx_fit import RxFit, Solution
+    from vissim.fit.result import RxFit, Solution
 
     best = Solution(power_vector=(-2.25, 0.5, 0.0), covariance=np.eye(3) * 1e-4, ssr=1.5, parameters=np.zeros(5))
     fit = RxFit(status="ok", reason=None, best=best, alternatives=((best, 120.0),) * 3, sign_delta_chi2=120.0,

@@ -7,7 +7,7 @@ The vertex distance once had three limits (>= 0 in `DslrBench`, <= 200 mm in cam
 import pytest
 
 from vissim.atv.virtual import AtvApparatus
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.checks import VERTEX_DISTANCE_RANGE_MM, vertex_distance_mm
 from vissim.cli import main
 from vissim.errors import VissimInputError

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from vissim.atv.virtual import AtvApparatus, VirtualSubject
-from vissim.bench.atv import AtvConfig, AtvEye
+from vissim.bench.atv.tube import AtvConfig, AtvEye
 from vissim.checks import (DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, pupil_diameter_mm,
                            size_text)
 from vissim.cli import build_parser, main
@@ -21,8 +21,9 @@ from vissim.errors import VissimInputError
 from vissim.imageio import write_image
 from vissim.optics.glass import D_LINE_NM
 from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import EYE_VERTEX_DISTANCE_MM, THESIS_VERTEX_DISTANCE_MM
+from vissim.optics.trial_lens import EYE_VERTEX_DISTANCE_MM
 from vissim.provenance import make_provenance
+from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -24,15 +24,12 @@ from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, m_to_mm, rad_to_arcmin
 
-__all__ = ["LETTER_HEIGHT_MAR", "THESIS_VIEWING_DISTANCE_M", "decimal_to_logmar", "letter_height_arcmin",
+__all__ = ["LETTER_HEIGHT_MAR", "decimal_to_logmar", "letter_height_arcmin",
            "letter_height_mm", "logmar_to_decimal", "logmar_to_snellen", "snellen_to_logmar",
            "subtense_arcmin", "subtense_mm"]
 
 #: A Sloan letter is five strokes (five MAR) tall.
 LETTER_HEIGHT_MAR = 5.0
-
-#: The thesis's chart distance: three feet (Krueger 2015, section 4.1).
-THESIS_VIEWING_DISTANCE_M = 0.9144
 
 #: Beyond this 10**logmar leaves the range of a float.
 _MAX_ABS_LOGMAR = 300.0

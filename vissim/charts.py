@@ -34,24 +34,23 @@ from typing import Any
 
 import numpy as np
 
-from vissim.acuity import (THESIS_VIEWING_DISTANCE_M, letter_height_arcmin, letter_height_mm,
-                           logmar_to_snellen, subtense_arcmin, subtense_mm)
+from vissim.acuity import letter_height_arcmin, letter_height_mm, logmar_to_snellen, subtense_arcmin, subtense_mm
 from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, describe, finite_number, instance_of, positive_number
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optotypes import SLOAN_LETTERS, letter_coverage_window, sloan_letter
+from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_TILE_SHAPE_PX
+from vissim.units import mm_to_m
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["DEFAULT_LETTER_SEED", "MM_PER_INCH", "POLARITIES", "THESIS_TILE_SHAPE_PX", "Chart", "ChartLayout",
+__all__ = ["DEFAULT_LETTER_SEED", "MM_PER_INCH", "POLARITIES", "Chart", "ChartLayout",
            "ChartRow", "ChartSpec", "LetterBox", "etdrs_chart_spec", "layout_chart", "logmar_steps",
            "optotype_tile", "render_chart_angular", "render_chart_print", "save_chart_pdf", "save_chart_png",
            "single_letter_spec"]
 
 POLARITIES = ("black-on-white", "white-on-black")
-#: Thesis tiles: 113 px wide x 133 px tall at 1 arcmin/px (ERRATA item 8), as (rows, cols).
-THESIS_TILE_SHAPE_PX = (133, 113)
 DEFAULT_LETTER_SEED = 2015
 MM_PER_INCH = 25.4
 _LETTERS_PER_ROW = 5
@@ -152,7 +151,7 @@ class ChartSpec:
     """
 
     rows: tuple[ChartRow, ...]
-    viewing_distance_m: float = THESIS_VIEWING_DISTANCE_M
+    viewing_distance_m: float = mm_to_m(THESIS_CHART_DISTANCE_MM)
     polarity: str = "black-on-white"
     paper_reflectance: float = PAPER_REFLECTANCE
     ink_reflectance: float = INK_REFLECTANCE
@@ -584,7 +583,7 @@ def optotype_tile(
     polarity: str = "black-on-white",
     paper_reflectance: float = PAPER_REFLECTANCE,
     ink_reflectance: float = INK_REFLECTANCE,
-    viewing_distance_m: float = THESIS_VIEWING_DISTANCE_M,
+    viewing_distance_m: float = mm_to_m(THESIS_CHART_DISTANCE_MM),
     snap_to_pixels: bool = True,
     supersample: int = 16,
 ) -> Chart:

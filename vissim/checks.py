@@ -10,7 +10,7 @@ from pathlib import Path
 from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
-           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm", "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "F_NUMBER_RANGE",
+           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm", "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS", "F_NUMBER_RANGE",
            "FOCAL_LENGTH_RANGE_MM", "OBJECT_DISTANCE_RANGE_M", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
            "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "MAX_DESCRIPTION_CHARS", "name_problem",
            "path_arg", "number_array"]
@@ -89,6 +89,8 @@ def wavelength_nm(value, name: str = "wavelength") -> float:
 #: Trial-lens vertex distances, mm (the last lens's back vertex to the camera's or eye's principal
 #: plane): the thesis's bench used 10, spectacles sit at 12-15; past 20 cm a lens is no trial lens.
 VERTEX_DISTANCE_RANGE_MM = (0.0, 200.0)
+#: An eye's accommodation, dioptres: from relaxed to beyond a child's amplitude.
+ACCOMMODATION_RANGE_DIOPTERS = (0.0, 20.0)
 
 
 #: A camera's f-number, focal length (mm) and distance to what it images (m), as bench files take them.

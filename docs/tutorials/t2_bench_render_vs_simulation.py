@@ -5,7 +5,7 @@ twice: once bare, once through a +2.00 D trial lens held 10 mm in front. Both ar
 Mitsuba through the meshed lens (no PSF anywhere). vissim then simulates the lens from the bare
 render alone, as a validation campaign does: the bench's paraxial theory gives the power the
 lens adds at the camera and its spectacle magnification; the ray-optics (geometric) PSF of that
-defocus blurs the magnified bare render. PSNR and SSIM (`vissim.validation.metrics`) say
+defocus blurs the magnified bare render. PSNR and SSIM (`vissim.imaging.metrics`) say
 how close the simulation comes to the render -- and, for scale, how far the bare render is.
 
 Run it as ``python docs/tutorials/t2_bench_render_vs_simulation.py OUT_DIR``; the figure goes to
@@ -25,12 +25,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import vissim
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.optics.resample import magnify
 from vissim.optics.trial_lens import TrialLens
 from vissim.render.run import render_bench
-from vissim.validation.metrics import compare_images
+from vissim.imaging.metrics import compare_images
 
 small = "--small" in sys.argv
 args = [a for a in sys.argv[1:] if not a.startswith("--")]

@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 
 import vissim
-from vissim.validation.report import build_report
+from vissim.validation.engine.report import write_report
 
 small = "--small" in sys.argv
 args = [a for a in sys.argv[1:] if not a.startswith("--")]
@@ -65,6 +65,6 @@ summary = vissim.run_campaign(campaign, run_dir, show_progress=False)
 print(f"{summary.items_total} item(s), {summary.renders_made} render(s) made, into {run_dir}")
 
 # 3. The report, from the run directory alone.
-for path in build_report(run_dir):
+for path in write_report(run_dir)[0]:
     print("report:", path)
 print((run_dir / "tables.md").read_text()[:2000] if (run_dir / "tables.md").exists() else "")

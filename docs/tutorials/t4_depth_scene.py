@@ -22,10 +22,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy import ndimage
 
-from vissim.bench.depth_scene_files import load_depth_scene_toml
+from vissim.bench.depth.scene_files import load_depth_scene_toml
 from vissim.optics.depth import blur_depth
 from vissim.render.depth_render import render_depth
-from vissim.validation.metrics import compare_images
+from vissim.imaging.metrics import compare_images
 
 small = "--small" in sys.argv
 args = [a for a in sys.argv[1:] if not a.startswith("--")]

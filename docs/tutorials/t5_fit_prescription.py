@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import vissim
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import optotype_tile
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.trial_lens import TrialLens

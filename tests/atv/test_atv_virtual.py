@@ -21,7 +21,7 @@ from vissim.atv.virtual import (
     run_virtual_experiment,
     summation_fraction,
 )
-from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM
+from vissim.bench.atv.tube import ATV_TRIAL_LENS_DISTANCE_MM
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 

@@ -4,7 +4,7 @@ Tests build small variants from them (other distances, sizes, letters), and
 ``test_depth_scene.py`` pins the scene files against them.
 """
 
-from vissim.bench.depth_scene import ChartPanel, DepthScene, PanelChart, TiltedChart
+from vissim.bench.depth.scene import ChartPanel, DepthScene, PanelChart, TiltedChart
 from vissim.errors import VissimInputError
 
 #: The panels' distances: near work, the thesis's 3 ft, across the room, far.

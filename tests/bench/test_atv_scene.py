@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from vissim.atv.predict import fresnel_transmittance, predicted_spot
-from vissim.bench.atv_spot import spot_metrics
-from vissim.bench.atv import (
+from vissim.bench.atv.spot import spot_metrics
+from vissim.bench.atv.tube import (
     AtvConfig,
     AtvEye,
     AtvTube,
@@ -26,9 +26,9 @@ from vissim.bench.atv import (
     display_code_to_linear,
     pixel_pitch_mm,
 )
-from vissim.bench.atv_paraxial import atv_paraxial
-from vissim.bench.atv_scene import LENS_BSDF, atv_scene
-from vissim.bench.lens_mesh import rim_thickness_mm
+from vissim.bench.atv.paraxial import atv_paraxial
+from vissim.bench.atv.scene import LENS_BSDF, atv_scene
+from vissim.bench.lenses.mesh import rim_thickness_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription, RefractiveError
 from vissim.optics.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect

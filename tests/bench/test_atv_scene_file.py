@@ -2,8 +2,8 @@
 
 import pytest
 
-from vissim.bench.atv import AtvConfig, AtvTube
-from vissim.bench.scene_files import load_atv_toml
+from vissim.bench.atv.tube import AtvConfig, AtvTube
+from vissim.bench.atv.scene_files import load_atv_toml
 from vissim.errors import VissimInputError
 
 

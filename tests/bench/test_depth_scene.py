@@ -17,7 +17,7 @@ import pytest
 
 from vissim.acuity import letter_height_mm
 from tests.bench.depth_scenes import default_panels_scene, default_tilted_scene
-from vissim.bench.depth_scene import (
+from vissim.bench.depth.scene import (
     ChartPanel,
     DepthScene,
     PanelChart,
@@ -26,10 +26,10 @@ from vissim.bench.depth_scene import (
     panel_geometries,
     pixel_tangents,
 )
-from vissim.bench.depth_scene_dict import depth_scene_dict, tilted_mesh
-from vissim.bench.depth_scene_files import load_depth_scene_toml
-from vissim.bench.depth_textures import panel_texture
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
+from vissim.bench.depth.scene_dict import depth_scene_dict, tilted_mesh
+from vissim.bench.depth.scene_files import load_depth_scene_toml
+from vissim.bench.depth.textures import panel_texture
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import TrialLens
@@ -215,7 +215,7 @@ def test_a_camera_scene_file_with_a_trial_lens(tmp_path):
 
 
 def test_a_margin_adds_pixels_around_the_same_frame():
-    from vissim.bench.depth_scene import pixel_tangents
+    from vissim.bench.depth.scene import pixel_tangents
 
     scene = default_panels_scene()
     wide = scene.with_margin(7)
@@ -230,7 +230,7 @@ def test_a_margin_adds_pixels_around_the_same_frame():
 def test_frame_margin_holds_the_largest_blur_radius():
     """-2 D myope, 4 mm: the 0.4 m panel is |2 - 2.5| D, the 6 m one |2 - 1/6| D = 1.833 D:
     4 mm x 1.833 D = 7.33 mrad = 25.2 arcmin, radius 12.6 px -> 13 + 2."""
-    from vissim.bench.depth_viewers import frame_margin_px
+    from vissim.bench.depth.viewers import frame_margin_px
 
     scene = default_panels_scene()
     assert frame_margin_px(EyeViewer(Prescription(-2.0), 4.0, 0.0), scene) == 13 + 2

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
-from vissim.bench.lens_mesh import rim_thickness_mm
-from vissim.bench.scene_files import load_bench_toml, load_chart_toml
+from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
+from vissim.bench.lenses.mesh import rim_thickness_mm
+from vissim.bench.dslr.scene_files import load_bench_toml, load_chart_toml
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import TrialLens
 
@@ -81,7 +81,7 @@ def test_chart_covers_the_field_and_is_finer_than_the_camera_pixel():
 
 
 def test_scene_builders_do_not_import_mitsuba():
-    code = "import sys, vissim.bench.dslr, vissim.bench.scene_files; print('mitsuba' in sys.modules)"
+    code = "import sys, vissim.bench.dslr.bench, vissim.bench.dslr.scene_files; print('mitsuba' in sys.modules)"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "False"
 

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from vissim.bench.lens_mesh import (
+from vissim.bench.lenses.mesh import (
     cached_lens_ply,
     lens_mesh,
     lens_surface_curvatures_per_mm,

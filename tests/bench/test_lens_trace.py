@@ -1,6 +1,6 @@
 """The exact trace of the bench's trial lenses: path length, wavefront, dispersion (issue 13).
 
-Oracles, each independent of :mod:`vissim.bench.lens_trace`:
+Oracles, each independent of :mod:`vissim.bench.lenses.trace`:
 
 * vergence theory -- the 4x4 ray-transfer matrices of :mod:`vissim.optics.trial_lens` (paraxial);
 * optiland 0.6 (a peer ray tracer, test-only, skipped when absent) and a meridional trace of
@@ -18,10 +18,10 @@ import warnings
 import numpy as np
 import pytest
 
-from vissim.bench.bench_wavefront import shift_invariance, trace_bench_wavefront
-from vissim.bench.dslr import DslrBench
-from vissim.bench.lens_mesh import cached_lens_ply, lens_surface_curvatures_per_mm
-from vissim.bench.lens_trace import aim_rays, bench_surfaces, object_point_mm
+from vissim.bench.dslr.traced_wavefront import shift_invariance, trace_bench_wavefront
+from vissim.bench.dslr.bench import DslrBench
+from vissim.bench.lenses.mesh import cached_lens_ply, lens_surface_curvatures_per_mm
+from vissim.bench.lenses.trace import aim_rays, bench_surfaces, object_point_mm
 from vissim.optics.glass import C_LINE_NM, D_LINE_NM, F_LINE_NM, SPECTACLE_CROWN, crown_index
 from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, trial_lens_effect
 from vissim.optics.wavefront import Wavefront

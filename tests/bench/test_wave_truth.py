@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench
-from vissim.bench.wave_truth import wave_truth
+from vissim.bench.dslr.bench import DslrBench
+from vissim.bench.dslr.wave_truth import wave_truth
 from vissim.charts import render_chart_angular, single_letter_spec
 from vissim.cli import main
 from vissim.errors import VissimInputError
@@ -21,7 +21,7 @@ def vergence_simulation(bench, chart, oversample=5, mode="wave"):
     """The harness's matched simulation, by hand: vergence-theory wavefront at the d line.
 
     The PSF's field is sized by the wave estimate in both modes, as the harness and the bench
-    truth size it (vissim.validation.simulate, vissim.bench.wave_truth).
+    truth size it (vissim.validation.dslr.simulate, vissim.bench.dslr.wave_truth).
     """
     setup = bench.viewing_setup(D_LINE_NM)
     step = bench.arcmin_per_px / oversample

@@ -17,8 +17,8 @@ from test_bad_input import assert_one_error_line, run  # run(capfd, ...) capture
 
 from vissim.errors import VissimInputError
 from vissim.imageio import write_image
-from vissim.validation import runner
-from vissim.validation.scheduler_probe import PROBE_TIMEOUT_S
+from vissim.validation.engine import runner
+from vissim.validation.engine.scheduler import PROBE_TIMEOUT_S
 
 TINY_CAMPAIGN = ('[campaign]\nname = "tiny"\nspp = 4\ntile_px = [48, 48]\nsimulations = ["geometric"]\n'
                  '[[item]]\nletter = "K"\nlogmar = 0.5\nlenses = [2.0]\n')
@@ -58,7 +58,7 @@ def _no_rendering(monkeypatch):
     def refuse(spec):
         raise AssertionError(f"rendered {spec}")
 
-    monkeypatch.setattr(runner, "render_spec", refuse)
+    monkeypatch.setattr(runner, "render_any", refuse)
 
 
 @pytest.fixture
@@ -131,7 +131,7 @@ def test_an_empty_scheduler_is_an_error_not_a_local_run(capfd, tmp_path, address
 def test_a_real_scheduler_passes_the_probe():
     """Oracle: a Dask scheduler on loopback; the probe must let it through (else no cluster could be used)."""
     distributed = pytest.importorskip("distributed")
-    from vissim.validation.scheduler_probe import probe_scheduler
+    from vissim.validation.engine.scheduler import probe_scheduler
 
     with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None, host="127.0.0.1",
                                   scheduler_kwargs={"protocol": "tcp"}) as cluster:

@@ -85,7 +85,7 @@ def test_bad_input_gets_one_error_line_and_exit_2(tmp_path, plus_two, capsys, ca
 def test_a_render_whose_lenses_theory_contradicts_is_reported_as_a_disagreement(tmp_path, plus_two, capsys):
     """The image records a bench with a +2.25 D lens (as ``vissim render bench`` does) but shows +2 D:
     the fit (about +1.99 D, interval +-0.01 D) is printed beside theory (+2.24 D) and flagged."""
-    from vissim.bench.dslr import DslrBench
+    from vissim.bench.dslr.bench import DslrBench
 
     image, reference, _ = plus_two
     said = make_provenance(command="test", bench=DslrBench(lenses=(TrialLens(2.25),), size_px=(96, 96)))

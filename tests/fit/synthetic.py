@@ -5,7 +5,7 @@ spectacle magnification (:func:`vissim.optics.resample.magnify`), blurred by the
 bench's :class:`~vissim.optics.setup.ViewingSetup` (:func:`vissim.optics.psf.compute_psf`, ray
 histogram or wave optics), shifted, integrated onto the capture's pixels
 (:func:`~vissim.optics.resample.block_mean`) and given Gaussian noise: the path the campaign's
-simulations take (``vissim.validation.simulate.simulate(..., oversample=5)``).  The fit's own
+simulations take (``vissim.validation.dslr.simulate.simulate(..., oversample=5)``).  The fit's own
 model (analytic OTF, blur before magnification) shares none of it but the ViewingSetup.
 """
 
@@ -16,7 +16,7 @@ import dataclasses
 import numpy as np
 import scipy.ndimage
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import optotype_tile
 from vissim.optics.blur import blur_image
 from vissim.optics.psf import compute_psf, suggested_size_px

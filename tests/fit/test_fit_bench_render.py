@@ -2,7 +2,7 @@
 
 The image is the bench rendered through meshed crown-glass trial lenses; the reference is the
 same bench rendered without lenses (another seed).  Truth is vergence theory for the lenses as
-rendered (:meth:`vissim.bench.dslr.DslrBench.viewing_setup`, what ``vissim trial-lens`` prints as
+rendered (:meth:`vissim.bench.dslr.bench.DslrBench.viewing_setup`, what ``vissim trial-lens`` prints as
 ``effective_*`` for the thick lens), which the renders match to 0.25 % in blur and 0.02 % in
 magnification (README).  Geometric mode: Mitsuba renders no diffraction.
 """
@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.fit.capture import compare_with_theory, fit_capture
 from vissim.optics.prescription import LensPower
@@ -94,7 +94,7 @@ def test_a_virtual_dng_of_a_render_fits_as_the_render(tmp_path):
     (``tests/fit/virtual_dng.py``): the two fits differ by less than the DNG fit's 95 % noise
     half-width in each component, and by less than 0.02 D."""
     from tests.fit.virtual_dng import through_virtual_dng
-    from vissim.fit.rx_fit import Z95
+    from vissim.fit.result import Z95
 
     lens = TrialLens(1.0, -1.5, 30.0)
     bench = DslrBench(lenses=(lens,), size_px=(134, 114), spp=256, seed=21)

@@ -19,10 +19,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.fit.capture import fit_capture
-from vissim.fit.rx_fit import Z95
+from vissim.fit.result import Z95
 from vissim.optics.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
 

@@ -10,7 +10,8 @@ half-width (the DNG's own noise is what separates them), and by less than 0.02 D
 
 import numpy as np
 
-from vissim.fit.rx_fit import Z95, fit_rx
+from vissim.fit.result import Z95
+from vissim.fit.rx_fit import fit_rx
 from vissim.optics.trial_lens import TrialLens
 
 from tests.fit.synthetic import BENCH, capture

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.fit.power_model import power_model
 from vissim.optics.trial_lens import TrialLens
 

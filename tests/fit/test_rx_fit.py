@@ -3,7 +3,7 @@
 Captures come from vissim's own forward chain (``tests/fit/synthetic.py``: fine chart, bench
 magnification, ray-traced or wave PSF, block means, Gaussian noise), not from the fit's model.
 Truth is the power the bench's lens adds at the camera by vergence theory
-(:meth:`vissim.bench.dslr.DslrBench.viewing_setup`): what ``vissim trial-lens`` prints as
+(:meth:`vissim.bench.dslr.bench.DslrBench.viewing_setup`): what ``vissim trial-lens`` prints as
 ``effective_*`` for the lens as rendered.
 """
 
@@ -115,7 +115,7 @@ def test_the_sandwich_covariance_matches_monte_carlo_for_uneven_correlated_noise
     lags), where the textbook sigma^2 (J^T J)^-1 gives under 0.6 of it (measured 0.39, 0.33)."""
     from scipy.ndimage import uniform_filter
 
-    from vissim.fit.rx_fit import residual_correlation_lag_px, sandwich_covariance
+    from vissim.fit.statistics import residual_correlation_lag_px, sandwich_covariance
 
     rng = np.random.default_rng(7)
     shape = (48, 48)

@@ -3,19 +3,19 @@
 The image (reflectance, paper 0.9) is exposed at 60 % of full scale under a warm light (the
 colour channels see different levels), sampled through an RGGB Bayer filter, given photon shot
 noise (30 000 e- full well) and 2 e- read noise, quantised (black 2048, white 15000 DN) and
-written as a DNG (:mod:`vissim.validation.virtual_capture`).  It is read back with
-:func:`vissim.validation.raw.read_raw_linear` (CFA planes, levels from the file) and made grey
+written as a DNG (:mod:`vissim.imaging.virtual_capture`).  It is read back with
+:func:`vissim.imaging.raw.read_raw_linear` (CFA planes, levels from the file) and made grey
 again as the campaign's capture path does: each CFA plane divided by its paper level
-(:func:`vissim.validation.captures._neutral_mosaic`, paper from the tile's 4-px border), times 0.9.
+(:func:`vissim.validation.dslr.captures._neutral_mosaic`, paper from the tile's 4-px border), times 0.9.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from vissim.validation.captures import _neutral_mosaic
-from vissim.validation.raw import read_raw_linear
-from vissim.validation.virtual_capture import add_sensor_noise, mosaic_bayer, quantise, write_dng
+from vissim.validation.dslr.captures import _neutral_mosaic
+from vissim.imaging.raw import read_raw_linear
+from vissim.imaging.virtual_capture import add_sensor_noise, mosaic_bayer, quantise, write_dng
 
 GAINS = np.array([0.55, 1.0, 0.45])
 PAPER = 0.9

@@ -27,14 +27,14 @@ import numpy as np
 import pytest
 
 from vissim.atv.predict import predicted_spot
-from vissim.bench.atv import (
+from vissim.bench.atv.tube import (
     AtvConfig,
     AtvEye,
     AtvTube,
     atv_trial_lens,
 )
-from vissim.bench.atv_paraxial import atv_paraxial
-from vissim.bench.atv_scene import LENS_BSDF
+from vissim.bench.atv.paraxial import atv_paraxial
+from vissim.bench.atv.scene import LENS_BSDF
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.units import mrad_to_arcmin

@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vissim.bench.depth_scene import ChartPanel, DepthScene, PanelChart, panel_geometries
-from vissim.bench.depth_viewers import EyeViewer
+from vissim.bench.depth.scene import ChartPanel, DepthScene, PanelChart, panel_geometries
+from vissim.bench.depth.viewers import EyeViewer
 from vissim.render.backend import choose_variant
 from vissim.render.depth_render import render_depth, render_view
 

@@ -2,7 +2,7 @@
 
 Small CPU renders with fixed seeds.  Theory: blur diameter = pupil (mm) x |defocus| (D) in
 mrad (docs/conventions.md), defocus = K - 1/z with K = A - Rx for an eye and 1/focus for the
-DSLR (vissim.bench.depth_scene).  Estimator: the edge-spread function of a panel's straight
+DSLR (vissim.bench.depth.scene).  Estimator: the edge-spread function of a panel's straight
 edge against the black sky, averaged along the edge and fitted with a uniform disc's ESF
 integrated over the pixel (as tests/render/test_dslr_render.py); its noise at 64 spp is
 ~0.3 % (measured when written), so 3 % is 10x the noise.  For vissim.optics.depth.blur_depth, whose
@@ -21,7 +21,7 @@ import pytest
 from scipy.optimize import least_squares, minimize_scalar
 
 from tests.bench.depth_scenes import default_panels_scene, default_tilted_scene
-from vissim.bench.depth_scene import (
+from vissim.bench.depth.scene import (
     ChartPanel,
     DepthScene,
     PanelChart,
@@ -29,9 +29,9 @@ from vissim.bench.depth_scene import (
     panel_geometries,
     pixel_tangents,
 )
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer, viewing_setup
-from vissim.bench.depth_scene_dict import depth_scene_dict
-from vissim.bench.depth_textures import panel_texture
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer, viewing_setup
+from vissim.bench.depth.scene_dict import depth_scene_dict
+from vissim.bench.depth.textures import panel_texture
 from vissim.errors import VissimInputError
 from vissim.optics.blur import blur_image
 from vissim.optics.depth import blur_depth

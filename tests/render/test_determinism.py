@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
+from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import single_letter_spec
 from vissim.imageio import read_image, write_image
 from vissim.render.backend import find_libllvm, mitsuba

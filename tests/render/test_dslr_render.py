@@ -1,6 +1,6 @@
 """The virtual DSLR bench against paraxial theory: small CPU renders, fixed seeds.
 
-Theory: :meth:`vissim.bench.dslr.DslrBench.viewing_setup` -- added power and spectacle magnification by
+Theory: :meth:`vissim.bench.dslr.bench.DslrBench.viewing_setup` -- added power and spectacle magnification by
 4 x 4 ray transfer through the same thick lenses that are rendered
 (:func:`vissim.optics.trial_lens.trial_lens_effect`), blur diameter = entrance pupil (3.6 mm) x
 defocus (conventions: dioptres x mm = mrad).  Prototype reference: +2 D at 10 mm, chart at
@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
+from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import optotype_tile, single_letter_spec
 from vissim.optics.trial_lens import TrialLens
 from vissim.render.backend import choose_variant

@@ -12,23 +12,24 @@ from vissim.optics.blur import blur_image
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
 from vissim.optics.wavefront import Wavefront
-from vissim.validation.campaign import load_campaign
-from vissim.validation.renders import bench_for
+from vissim.validation.engine.loader import load_campaign
+
 from vissim.optics.resample import magnify
 
 
 def fake_render(spec):
-    tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=spec.arcmin_per_px, shape_px=spec.tile_px,
-                         polarity=spec.polarity, viewing_distance_m=spec.chart_distance_m,
+    bench = spec.bench
+    step = bench.arcmin_per_px
+    tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=step, shape_px=bench.size_px,
+                         polarity=spec.polarity, viewing_distance_m=bench.chart_distance_mm / 1000.0,
                          snap_to_pixels=False).pixels
-    if spec.lenses:
-        effect = trial_lens_effect(bench_for(spec).trial_lens_setup())
+    if bench.lenses:
+        effect = trial_lens_effect(bench.trial_lens_setup())
         front = Wavefront.from_prescription(effect.camera_prescription,
-                                            entrance_pupil_diameter_mm(spec.focal_length_mm, spec.f_number))
-        psf = compute_psf(front, arcmin_per_px=spec.arcmin_per_px, size_px=suggested_size_px(front, spec.arcmin_per_px),
-                          mode="geometric")
-        tile = blur_image(magnify(tile, effect.magnification_matrix), psf, arcmin_per_px=spec.arcmin_per_px, padding="edge")
-    rng = np.random.default_rng(spec.seed)
+                                            entrance_pupil_diameter_mm(bench.focal_length_mm, bench.f_number))
+        psf = compute_psf(front, arcmin_per_px=step, size_px=suggested_size_px(front, step), mode="geometric")
+        tile = blur_image(magnify(tile, effect.magnification_matrix), psf, arcmin_per_px=step, padding="edge")
+    rng = np.random.default_rng(bench.seed)
     return (tile + rng.normal(0, 0.005, tile.shape)).astype(np.float32)
 
 

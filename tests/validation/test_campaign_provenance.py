@@ -7,7 +7,7 @@ from fake_bench import fake_render
 from provenance_walk import image_provenance, json_without_provenance
 
 from vissim.cli import main
-from vissim.validation import runner
+from vissim.validation.engine import runner
 
 CAMPAIGN = '[campaign]\nname = "provenance"\nspp = 4\ntile_px = [48, 48]\nsimulations = ["geometric", "wave"]\n' \
            '[[item]]\nname = "plus two"\nletter = "K"\nlogmar = 0.5\nlenses = [2.0]\n'
@@ -25,13 +25,13 @@ class FakeResult:
 
 def render_with_provenance(spec):
     pixels = fake_render(spec)
-    return FakeResult(pixels, "fake_variant", spec.spp + 1, {"inputs": {"sampler": "fake"}, "renderer": "fake"})
+    return FakeResult(pixels, "fake_variant", spec.bench.spp + 1, {"inputs": {"sampler": "fake"}, "renderer": "fake"})
 
 
 def test_every_image_of_a_run_has_provenance_with_its_renders(tmp_path, monkeypatch, capsys):
     path = tmp_path / "provenance.toml"
     path.write_text(CAMPAIGN)
-    monkeypatch.setattr(runner, "render_spec", render_with_provenance)
+    monkeypatch.setattr(runner, "render_any", render_with_provenance)
     run_dir = tmp_path / "run"
     assert main(["validate", str(path), "-o", str(run_dir)]) == 0
     found = image_provenance(run_dir)
@@ -44,7 +44,7 @@ def test_every_image_of_a_run_has_provenance_with_its_renders(tmp_path, monkeypa
         if where == "renders":  # the renderer's record is kept: variant, spp used, its own keys
             assert provenance["variant"] == "fake_variant" and provenance["spp_used"] == 5
             assert provenance["renderer"] == "fake" and provenance["inputs"]["sampler"] == "fake"
-            assert provenance["inputs"]["render"]["spp"] == 4
+            assert provenance["inputs"]["render"]["bench"]["spp"] == 4
         elif where == "items":  # passed through as the renders wrote it
             renders = provenance["inputs"]["render_provenance"]
             assert set(renders) == {"truth_a", "truth_b", "no_lens"}, image

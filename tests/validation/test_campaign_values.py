@@ -12,8 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.validation.campaign import load_campaign
-from vissim.validation.depth_campaign import load_depth_campaign
+from vissim.validation.engine.loader import load_campaign
 
 SINGLE_PLANE = {
     "campaign": {
@@ -42,7 +41,7 @@ logmar = 0.5
 """
 
 DEPTH = {
-    "depth_campaign": {"name": "fuzz", "description": "mutated values", "spp": 4, "aux_spp": 4, "seeds": [1, 2],
+    "campaign": {"kind": "depth", "name": "fuzz", "description": "mutated values", "spp": 4, "aux_spp": 4, "seeds": [1, 2],
                        "aux_seed": 3, "oversample": 1, "simulations": ["geometric", "wave"], "wavelength_nm": 550.0,
                        "data_range": 1.0, "margin_px": 1.0, "layer_spacing_fraction": 0.5},
     "config": [{"name": "eye", "scene": "scene.toml", "eye": "-1.00 DS", "pupil_mm": 3.0, "accommodation_diopters": 0.5},
@@ -99,7 +98,7 @@ def test_mutated_depth_campaigns_load_or_give_one_clean_line(tmp_path, data):
     (tmp_path / "scene.toml").write_text(SCENE)
     path = tmp_path / "fuzz.toml"
     path.write_text(toml_document(mutated(data, DEPTH)))
-    campaign = load_or_one_line(load_depth_campaign, path)
+    campaign = load_or_one_line(load_campaign, path)
     if campaign is not None:
         assert campaign.configurations
 
@@ -142,7 +141,7 @@ def test_single_plane_campaigns_take_the_ranges_of_checks(tmp_path, field, value
 
 
 @pytest.mark.parametrize("where, value, fragments", [
-    (("depth_campaign", "wavelength_nm"), 2200.0, ["depth_campaign.wavelength_nm", "within 200 to 2000 nm"]),
+    (("campaign", "wavelength_nm"), 2200.0, ["campaign.wavelength_nm", "within 200 to 2000 nm"]),
     (("config", 1, "camera", "vertex_distance_mm"), 201.0, ["vertex_distance_mm", "within 0 to 200 mm"]),
     (("config", 0, "pupil_mm"), 0.5, ["config[0].pupil_mm", "within 1 to 10 mm"]),
 ])
@@ -151,5 +150,5 @@ def test_depth_campaigns_take_the_ranges_of_checks(tmp_path, where, value, fragm
     path = tmp_path / "range.toml"
     path.write_text(toml_document(mutate(DEPTH, where, value)))
     with pytest.raises(VissimInputError) as caught:
-        load_depth_campaign(path)
+        load_campaign(path)
     assert all(f in str(caught.value) for f in fragments), str(caught.value)

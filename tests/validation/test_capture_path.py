@@ -6,13 +6,15 @@ from fake_bench import fake_render
 from provenance_walk import image_provenance
 
 from vissim.charts import optotype_tile
-from vissim.validation.campaign import load_campaign
-from vissim.validation.captures import capture_tile, file_sha256, load_manifest
-from vissim.validation.raw import camera_arcmin_per_px
-from vissim.validation.renders import RenderSpec, bench_lenses
-from vissim.validation.report import load_results, metrics_rows
-from vissim.validation.runner import run_campaign
-from vissim.validation.virtual_capture import add_sensor_noise, mosaic_bayer, quantise, write_dng
+from vissim.validation.engine.loader import load_campaign
+from vissim.validation.dslr.captures import capture_tile, file_sha256, load_manifest
+from vissim.imaging.raw import camera_arcmin_per_px
+from vissim.bench.dslr.bench import DslrBench
+from vissim.validation.dslr.renders import RenderSpec, build_dslr
+from vissim.validation.dslr.report import metrics_rows
+from vissim.validation.engine.report import load_results
+from vissim.validation.engine.runner import run_campaign
+from vissim.imaging.virtual_capture import add_sensor_noise, mosaic_bayer, quantise, write_dng
 
 SENSOR_PX = 128
 GAINS = np.array([0.55, 1.0, 0.45])  # a warm light: the channels see different levels
@@ -21,7 +23,8 @@ GAINS = np.array([0.55, 1.0, 0.45])  # a warm light: the channels see different 
 def virtual_dng(path, lenses, seed):
     """A capture of the letter: rendered at the camera's own sampling, then through a sensor."""
     scale = camera_arcmin_per_px(5.2, 18.0, object_distance_m=0.9144)
-    spec = RenderSpec("K", 0.7, "black-on-white", lenses, 5.0, 18.0, 0.9144, 10.0, scale, (SENSOR_PX, SENSOR_PX), 4, seed)
+    spec = RenderSpec(DslrBench(lenses=lenses, arcmin_per_px=scale, size_px=(SENSOR_PX, SENSOR_PX), spp=4, seed=seed),
+                      "K", 0.7, "black-on-white")
     radiance = fake_render(spec).astype(np.float64) / 0.9 * 0.6  # paper at 60 % of full scale
     mosaic = mosaic_bayer(radiance[..., None] * GAINS, "RGGB")
     noisy = add_sensor_noise(mosaic, full_well_electrons=30000, read_noise_electrons=2.0, rng=seed)
@@ -32,7 +35,7 @@ def virtual_dng(path, lenses, seed):
 @pytest.fixture
 def capture_campaign(tmp_path):
     settings_probe = load_campaign_text(tmp_path, manifest=False)
-    lenses = bench_lenses(settings_probe.configurations[0], settings_probe.settings)
+    lenses = build_dslr(settings_probe.configurations[0], settings_probe.settings).lenses
     files = {
         "k-plus2": virtual_dng(tmp_path / "k_plus2.dng", lenses, 11),
         "k-plus2-repeat": virtual_dng(tmp_path / "k_plus2_b.dng", lenses, 12),
@@ -67,7 +70,7 @@ def load_campaign_text(tmp_path, manifest):
 def test_virtual_capture_tile_reproduces_the_linear_image(capture_campaign, tmp_path):
     captures = load_manifest(tmp_path / "manifest.toml")
     tile = capture_tile(captures["k-plain"], 1.0, (64, 64))
-    reference = fake_render(RenderSpec("K", 0.7, "black-on-white", (), 5.0, 18.0, 0.9144, 10.0, 1.0, (64, 64), 4, 99))
+    reference = fake_render(RenderSpec(DslrBench(size_px=(64, 64), spp=4, seed=99), "K", 0.7, "black-on-white"))
     # paper and ink levels come back (linear, gains removed); shot + read + render noise ~0.01
     assert np.median(tile[:8]) == pytest.approx(0.9, abs=0.01)
     assert np.percentile(tile, 1) == pytest.approx(0.04, abs=0.03)

@@ -1,7 +1,7 @@
 """The depth campaign: masks, a tiny campaign rendered with Mitsuba, resuming, reports, dispatch.
 
 Expectations: where the render is the single-depth blur of one panel (the interiors of
-vissim.validation.depth_masks) the geometric blur_depth is as good as the single-plane harness:
+vissim.validation.depth.masks) the geometric blur_depth is as good as the single-plane harness:
 its PSNR against the render is at least the render's noise floor (two seeds) minus 1 dB, and a
 perfect simulation would score the floor + 3 dB (MSE sigma^2 against 2 sigma^2).  Occlusion
 bands are measured and must be reported (finite numbers, a row of their own); no threshold is
@@ -21,17 +21,18 @@ from fake_bench import fake_render, refuse
 from provenance_walk import image_provenance, json_without_provenance
 
 from tests.bench.depth_scenes import default_panels_scene
-from vissim.bench.depth_scene import panel_geometries
-from vissim.bench.depth_viewers import CameraViewer, EyeViewer
+from vissim.bench.depth.scene import panel_geometries
+from vissim.bench.depth.viewers import CameraViewer, EyeViewer
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.render.backend import choose_variant
-from vissim.validation import runner
-from vissim.validation.depth_campaign import is_depth_campaign, load_depth_campaign
-from vissim.validation.depth_masks import depth_regions
-from vissim.validation.depth_report import current_results, depth_rows
-from vissim.validation.depth_runner import run_depth_campaign
-from vissim.validation.dispatch import rebuild_any_report, run_any_campaign
+from vissim.validation.engine import runner
+from vissim.validation.engine.loader import load_campaign
+from vissim.validation.depth.masks import depth_regions
+from vissim.validation.depth.report import depth_rows
+from vissim.validation.engine.report import load_results
+from vissim.validation.engine.runner import run_campaign
+from vissim.validation.engine.validate import rebuild_report, validate
 
 ROOT = Path(__file__).resolve().parents[2]
 needs_jit = pytest.mark.skipif(choose_variant("mono").variant.startswith("scalar"), reason="no JIT Mitsuba variant")
@@ -60,7 +61,8 @@ padding_arcmin = 6.0
 """
 
 TINY_CAMPAIGN = """
-[depth_campaign]
+[campaign]
+kind = "depth"
 name = "tiny depth"
 spp = 32
 aux_spp = 16
@@ -92,7 +94,7 @@ def tiny(tmp_path):
 
 
 def test_shipped_depth_campaign_loads():
-    campaign = load_depth_campaign(ROOT / "validation" / "depth.toml")
+    campaign = load_campaign(ROOT / "validation" / "depth.toml")
     assert len(campaign.configurations) == 7 and campaign.settings.seeds == (1, 2)
     viewers = [c.viewer for c in campaign.configurations]
     assert viewers[0] == EyeViewer(Prescription(-2.0), 4.0, 0.0)
@@ -101,20 +103,22 @@ def test_shipped_depth_campaign_loads():
 
 
 @pytest.mark.parametrize("text, fragment", [
-    ("[depth_campaign]\nspp = 0\n", "spp"),
-    ("[depth_campaign]\nseeds = [1, 1]\n[[config]]\nscene = 'scene.toml'\n", "two different integer seeds"),
-    ("[depth_campaign]\n[[config]]\nname = 'x'\n", "needs scene"),
-    ("[depth_campaign]\n[[config]]\nscene = 'scene.toml'\neye = 'plano'\ncamera = { f_number = 4.0 }\n", "not both"),
-    ("[depth_campaign]\nsimulations = ['thesis']\n", "choose from geometric, wave"),
-    ("[depth_campaign]\n", "no configurations"),
-    ("[campaign]\nname = 'flat'\n", "not a depth campaign"),
+    ("[campaign]\nkind = 'depth'\nspp = 0\n", "spp"),
+    ("[campaign]\nkind = 'depth'\nseeds = [1, 1]\n[[config]]\nscene = 'scene.toml'\n", "two different integer seeds"),
+    ("[campaign]\nkind = 'depth'\n[[config]]\nname = 'x'\n", "needs scene"),
+    ("[campaign]\nkind = 'depth'\n[[config]]\nscene = 'scene.toml'\neye = 'plano'\ncamera = { f_number = 4.0 }\n", "not both"),
+    ("[campaign]\nkind = 'depth'\nsimulations = ['thesis']\n", "choose from geometric, wave"),
+    ("[campaign]\nkind = 'depth'\n", "no configurations"),
+    ("[campaign]\nname = 'flat'\n[[config]]\nscene = 'scene.toml'\n", "add kind = \"depth\" to \\[campaign\\]"),
+    ("[campaign]\nkind = 'depth'\n[[item]]\nletter = 'K'\n", "unknown table"),
+    ("[campaign]\nkind = 'eye'\n", "unknown bench kind 'eye'"),
 ])
 def test_bad_depth_campaign_files_get_clear_errors(tmp_path, text, fragment):
     (tmp_path / "scene.toml").write_text(TINY_SCENE)
     path = tmp_path / "bad.toml"
     path.write_text(text)
     with pytest.raises(VissimInputError, match=fragment):
-        load_depth_campaign(path)
+        load_campaign(path)
 
 
 def test_interiors_keep_one_blur_radius_from_depth_edges_and_a_slope_is_no_edge():
@@ -145,13 +149,13 @@ def test_interiors_keep_one_blur_radius_from_depth_edges_and_a_slope_is_no_edge(
 @needs_jit
 def test_tiny_depth_campaign_runs_resumes_and_reports(tiny, tmp_path):
     run_dir = tmp_path / "run"
-    done = run_any_campaign(tiny, run_dir, show_progress=False)
+    done = validate(tiny, run_dir, show_progress=False)
     # per config: two truths, all-in-focus and depth, and each of the two panels' radiance and coverage
     assert done.kind == "depth" and done.summary.items_total == 2 and done.summary.renders_made == 16
     names = {p.name for p in done.report_files}
     assert {"metrics.json", "metrics.csv", "tables.md", "report.html", "figure_depth_geometric_layered.png",
             "figure_depth_geometric_rgbd.png"} <= names
-    rows = depth_rows(current_results(run_dir))
+    rows = depth_rows(load_results(run_dir))
     for row in rows:
         if row["region"].startswith("panel"):
             assert row["n_px"] > 100
@@ -179,24 +183,23 @@ def test_tiny_depth_campaign_runs_resumes_and_reports(tiny, tmp_path):
     assert page.count("<img ") == len(re.findall(r"<img [^>]*alt='[^']{60,}'", page)) == figures >= 2
     assert not re.search(r"\b[Ii]ssues? \d+", tables + page)
     before = (run_dir / "metrics.json").read_text()
-    again = run_depth_campaign(load_depth_campaign(tiny), run_dir, render=refuse, show_progress=False)
+    again = run_campaign(load_campaign(tiny), run_dir, render=refuse, show_progress=False)
     assert again.items_reused == 2 and again.renders_made == 0
     assert json.loads(before)["rows"] == json.loads((run_dir / "metrics.json").read_text())["rows"]
-    written, lines = rebuild_any_report(run_dir)  # vissim report RUN: no rendering
+    written, lines = rebuild_report(run_dir)  # vissim report RUN: no rendering
     assert (run_dir / "report.html") in written and any("boundary" in line for line in lines)
     item = json.loads(next((run_dir / "items").glob("*/result.json")).read_text())
     assert item["masks"]["regions"][-2:] == ["boundary", "frame"] and item["equivalent_eye"]["pupil_diameter_mm"] > 0
 
 
-def test_run_any_campaign_runs_single_plane_campaigns_too(tmp_path, monkeypatch):
+def test_validate_runs_dslr_campaigns_too(tmp_path, monkeypatch):
     path = tmp_path / "flat.toml"
     path.write_text("[campaign]\nname = 'flat'\nspp = 4\ntile_px = [64, 64]\nsimulations = ['geometric']\n"
                     "inputs = ['render']\n[[item]]\nletter = 'K'\nlogmar = 0.7\nlenses = [2.0]\n")
-    assert not is_depth_campaign({"campaign": {"name": "flat"}}) and is_depth_campaign({"campaign": {"kind": "depth"}})
-    monkeypatch.setattr(runner, "render_spec", fake_render)
-    done = run_any_campaign(path, tmp_path / "run", show_progress=False)
-    assert done.kind == "single-plane" and done.summary.items_total == 1 and "PSNR" in done.text()
-    written, lines = rebuild_any_report(tmp_path / "run")
+    monkeypatch.setattr(runner, "render_any", fake_render)
+    done = validate(path, tmp_path / "run", show_progress=False)
+    assert done.kind == "dslr" and done.summary.items_total == 1 and "PSNR" in done.text()
+    written, lines = rebuild_report(tmp_path / "run")
     # header, the one comparison, and the geometric self-check (the wave bench is on by default)
     assert (tmp_path / "run" / "tables.md") in written and len(lines) == 3
 
@@ -206,8 +209,8 @@ def test_run_any_campaign_runs_single_plane_campaigns_too(tmp_path, monkeypatch)
 def test_shipped_depth_campaign_interiors_match_to_the_noise_floor(tmp_path):
     """validation/depth.toml (about two minutes on 2 cores): every panel interior, both optics and inputs;
     the layered geometric simulation at the noise floor everywhere: whole image, occlusion bands, frame."""
-    done = run_any_campaign(ROOT / "validation" / "depth.toml", tmp_path / "run", show_progress=False)
-    rows = depth_rows(current_results(tmp_path / "run"))
+    done = validate(ROOT / "validation" / "depth.toml", tmp_path / "run", show_progress=False)
+    rows = depth_rows(load_results(tmp_path / "run"))
     interiors = [r for r in rows if r["region"].startswith(("panel", "tilted"))]
     assert len(interiors) == 4 * (4 * 4 + 3)  # (geometric, wave) x (layered, rgbd)
     for row in interiors:

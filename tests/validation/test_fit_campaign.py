@@ -4,8 +4,8 @@ import json
 
 from fake_bench import fake_render
 
-from vissim.validation.report import build_report, load_results
-from vissim.validation.runner import run_campaign
+from vissim.validation.engine.report import load_results, write_report
+from vissim.validation.engine.runner import run_campaign
 
 FIT_CAMPAIGN = """
 [campaign]
@@ -47,7 +47,7 @@ def test_a_campaign_with_fit_rx_fits_each_capture_and_reports_it_beside_vergence
     assert max(abs(e) for e in comparison["errors_diopters"].values()) < 0.05
     assert comparison["table_4_2"] and comparison["vergence_theory"]
     json.dumps(fit)  # the record is plain JSON
-    build_report(run_dir)
+    write_report(run_dir)
     tables = (run_dir / "tables.md").read_text()
     assert "Prescription fit of each capture" in tables
     fits = tables.split("Prescription fit of each capture")[1]

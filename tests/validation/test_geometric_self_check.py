@@ -1,6 +1,6 @@
 """The geometric self-check (issue 13): the lens trace's ray optics against the Mitsuba render.
 
-The trace (vissim.bench.lens_trace, the trial lenses' analytic surfaces) and the renderer
+The trace (vissim.bench.lenses.trace, the trial lenses' analytic surfaces) and the renderer
 (Mitsuba, the lenses' meshes) are independent.  The trace's ray PSF applied to the synthetic
 chart must match the render to its noise floor: >= +2 dB over it, as the geometric simulations
 do (a perfect, noise-free image scores +3 dB).
@@ -13,13 +13,14 @@ import pytest
 from scipy import ndimage
 
 from vissim.render.backend import choose_variant
-from vissim.validation.campaign import CampaignSettings, Configuration, LensSpec
+from vissim.validation.dslr.schema import CampaignSettings, Configuration
+from vissim.validation.engine.fields import LensSpec
 from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean
-from vissim.validation.item import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align, synthetic_tile
-from vissim.validation.renders import campaign_bench
-from vissim.validation.simulate import simulate, simulation_setup
-from vissim.validation.wave_bench import TRACED_RAYS, traced_ray_image
-from vissim.validation.wave_bench_report import SELF_CHECK_MARGIN_DB
+from vissim.validation.dslr.item import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align, synthetic_tile
+from vissim.validation.dslr.renders import build_dslr
+from vissim.validation.dslr.simulate import simulate, simulation_setup
+from vissim.validation.dslr.wave_bench import TRACED_RAYS, traced_ray_image
+from vissim.validation.dslr.wave_bench_report import SELF_CHECK_MARGIN_DB
 
 SMALL = """
 [campaign]
@@ -47,7 +48,7 @@ def test_the_trace_s_ray_image_is_the_vergence_geometric_simulation():
     settings = CampaignSettings(tile_px=(64, 64))
     for lenses in ((LensSpec(2.0),), (LensSpec(0.0, 2.0, 90.0),)):
         configuration = Configuration("c", "N", 0.7, lenses=lenses)
-        bench = campaign_bench(configuration, settings)
+        bench = build_dslr(configuration, settings).bench
         fine = synthetic_tile(configuration, settings, SUBPIXELS_PER_PX)
         setup = simulation_setup("geometric", bench.viewing_setup(settings.wavelength_nm), bench.physical_lenses,
                                  configuration, settings)
@@ -81,9 +82,10 @@ def test_a_synthetic_input_is_aligned_on_its_fine_grid_and_the_result_is_not_res
 
 @pytest.mark.skipif(choose_variant("mono").variant.startswith("scalar"), reason="no JIT Mitsuba variant")
 def test_the_trace_s_ray_optics_matches_the_render_to_its_noise_floor(tmp_path):
-    from vissim.validation.campaign import load_campaign
-    from vissim.validation.report import load_results, metrics_rows
-    from vissim.validation.runner import run_campaign
+    from vissim.validation.engine.loader import load_campaign
+    from vissim.validation.dslr.report import metrics_rows
+    from vissim.validation.engine.report import load_results
+    from vissim.validation.engine.runner import run_campaign
 
     path = tmp_path / "small.toml"
     path.write_text(SMALL)

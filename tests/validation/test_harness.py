@@ -8,10 +8,11 @@ from fake_bench import fake_render, refuse
 
 from vissim.cli import main
 from vissim.errors import VissimInputError
-from vissim.validation import runner
-from vissim.validation.campaign import load_campaign
-from vissim.validation.report import build_report, load_results, metrics_rows
-from vissim.validation.runner import run_campaign
+from vissim.validation.engine import runner
+from vissim.validation.engine.loader import load_campaign
+from vissim.validation.dslr.report import metrics_rows
+from vissim.validation.engine.report import load_results, write_report
+from vissim.validation.engine.runner import run_campaign
 
 TINY = """
 [campaign]
@@ -49,7 +50,7 @@ def test_a_tiny_campaign_runs_and_reports(tiny, tmp_path):
     run_dir = tmp_path / "run"
     summary = run_campaign(tiny, run_dir, render=fake_render, show_progress=False)
     assert summary.items_total == 2 and summary.renders_made == 6
-    written = build_report(run_dir)
+    written, _ = write_report(run_dir)
     names = {p.name for p in written}
     assert {"metrics.json", "metrics.csv", "tables.md", "report.html", "figure_wave.png"} <= names
     rows = metrics_rows(load_results(run_dir))
@@ -101,7 +102,7 @@ def test_dask_local_cluster_gives_the_same_numbers(tiny, tmp_path):
 
 
 def test_cli_validate_and_report(tiny, tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr(runner, "render_spec", fake_render)
+    monkeypatch.setattr(runner, "render_any", fake_render)
     run_dir = tmp_path / "cli_run"
     assert main(["validate", tiny.source, "-o", str(run_dir), "--spp", "2"]) == 0
     out = capsys.readouterr().out
@@ -175,7 +176,7 @@ def test_rows_are_grouped_by_the_configurations_group_field_not_by_their_names(c
         assert campaign.item_key(replace(c, group="another")) == campaign.item_key(c)
     run_dir = tmp_path / "run"
     run_campaign(campaign, run_dir, render=fake_render, show_progress=False)
-    build_report(run_dir)
+    write_report(run_dir)
     rows = metrics_rows(load_results(run_dir))
     assert {r["configuration"]: r["group"] for r in rows} == {c.name: c.group for c in campaign.configurations}
     tables = (run_dir / "tables.md").read_text()

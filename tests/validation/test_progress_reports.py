@@ -10,8 +10,8 @@ from fake_bench import fake_render
 from test_harness import TINY
 
 from vissim.progress import counter, terminal_progress
-from vissim.validation.dispatch import rebuild_any_report
-from vissim.validation.runner import run_campaign
+from vissim.validation.engine.validate import rebuild_report
+from vissim.validation.engine.runner import run_campaign
 
 
 def stages(calls):
@@ -28,13 +28,13 @@ def test_a_campaign_reports_each_render_item_and_report_step_once_in_order(campa
     run_dir = tmp_path / "run"
     summary = run_campaign(campaign_file(TINY), run_dir, render=fake_render,
                            progress=lambda *call: calls.append(call))
-    rebuild_any_report(run_dir, progress=lambda *call: calls.append(call))
+    rebuild_report(run_dir, progress=lambda *call: calls.append(call))
     done, totals = stages(calls)
     assert totals["rendering"] == {summary.renders_made} and totals["items"] == {summary.items_total}
     for stage, counts in done.items():
         (total,) = totals[stage]
         assert counts == list(range(1, total + 1)), stage
-    assert set(done) == {"rendering", "items", "report"}
+    assert set(done) == {"rendering", "items", "figures", "report"}
     assert capsys.readouterr().out == ""  # the library reported, it did not print
 
 

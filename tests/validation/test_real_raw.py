@@ -26,8 +26,8 @@ import rawpy
 
 from vissim.errors import VissimInputError
 from vissim.units import REC709_LUMINANCE
-from vissim.validation.captures import capture_provenance, capture_tile, load_manifest, read_capture
-from vissim.validation.raw import read_raw_linear
+from vissim.validation.dslr.captures import capture_provenance, capture_tile, load_manifest, read_capture
+from vissim.imaging.raw import read_raw_linear
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "fetch_real_raw.py"
 DN16 = 1 / 65535  # one step of LibRaw's 16-bit output, 1 = the white level (green, after white balance)

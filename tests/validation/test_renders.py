@@ -5,18 +5,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vissim.bench.dslr import dslr_scene
+from vissim.bench.dslr.bench import dslr_scene
 from vissim.imageio import read_image, write_image
-from vissim.validation.campaign import CampaignSettings, Configuration
-from vissim.validation.fields import LensSpec
-from vissim.validation.renders import RenderSpec, bench_for, campaign_bench, render_spec, truth_specs
-from vissim.validation.simulate import simulation_setup
-from vissim.validation.runner import render_file_provenance
+from vissim.validation.dslr.schema import CampaignSettings, Configuration
+from vissim.validation.engine.fields import LensSpec
+from vissim.bench.dslr.bench import DslrBench
+from vissim.validation.dslr.renders import RenderSpec, build_dslr, render_dslr_spec, truth_specs
+from vissim.validation.dslr.simulate import simulation_setup
+from vissim.validation.engine.renders import render_file_provenance
 
 
 def test_render_header_records_spp_used_and_variant(tmp_path):
-    spec = RenderSpec("K", 1.0, "black-on-white", (), 5.0, 18.0, 0.9144, 10.0, 1.0, (12, 16), 128, 1)
-    result = render_spec(spec)
+    spec = RenderSpec(DslrBench(size_px=(12, 16), spp=128, seed=1), "K", 1.0, "black-on-white")
+    result = render_dslr_spec(spec)
     assert result.pixels.shape == (12, 16) and result.pixels.dtype.name == "float32"
     write_image(tmp_path / "render.exr", result.pixels, provenance=render_file_provenance(spec, result))
     header = read_image(tmp_path / "render.exr").provenance
@@ -33,13 +34,12 @@ def test_render_header_records_spp_used_and_variant(tmp_path):
                          ids=["no lens", "+2 DS", "-3 DS", "-2 DC x 90", "+1 -0.5 x 30 and -2 DS"])
 @pytest.mark.parametrize("kind", ["wave", "geometric"])
 def test_the_simulation_assumes_the_setup_the_bench_renders(tmp_path, lenses, kind):
-    """'Does the simulation assume what the bench renders?' is one comparison of ViewingSetups."""
+    """A configuration is built once: the bench its renders use is the one its simulations assume."""
     settings = CampaignSettings()
     configuration = Configuration("c", "K", 1.0, lenses=lenses)
-    rendered = bench_for(truth_specs(configuration, settings)[0])  # the DslrBench render_spec renders
-    bench = campaign_bench(configuration, settings)
-    simulated = simulation_setup(kind, bench.viewing_setup(settings.wavelength_nm), bench.physical_lenses,
-                                 configuration, settings)
-    assert simulated.setup == rendered.viewing_setup(settings.wavelength_nm)
+    built = build_dslr(configuration, settings)
+    rendered = truth_specs(built, settings)[0].bench  # the DslrBench the render is made with
+    simulated = simulation_setup(kind, built.setup, built.lenses, configuration, settings)
+    assert simulated.setup == built.setup == rendered.viewing_setup(settings.wavelength_nm)
     scene = dslr_scene(rendered, np.ones((8, 8), np.float32), 1.0, mesh_cache_dir=tmp_path)
     assert scene["camera"]["aperture_radius"] == 0.5 * simulated.setup.pupil_diameter_mm

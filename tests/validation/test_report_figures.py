@@ -11,12 +11,12 @@ from fake_bench import fake_render, write_campaign
 from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
 from vissim.units import arcmin_to_rad, cyc_per_rad_to_cyc_per_deg
 from vissim.optics.resample import SUBPIXELS_PER_PX
-from vissim.validation.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
+from vissim.validation.dslr.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
                                               optics_cases, psf_figure_of, sampling_label)
-from vissim.validation.campaign import load_campaign
-from vissim.validation.report import build_report, load_results
-from vissim.validation.renders import campaign_bench
-from vissim.validation.runner import run_campaign
+from vissim.validation.engine.loader import load_campaign
+from vissim.validation.engine.report import load_results, write_report
+from vissim.validation.dslr.renders import build_dslr
+from vissim.validation.engine.runner import run_campaign
 
 SMALL = """
 [campaign]
@@ -49,19 +49,19 @@ def run_dir(tmp_path_factory):
     folder = tmp_path_factory.mktemp("figures")
     run = folder / "run"
     run_campaign(write_campaign(folder, SMALL, "figures.toml"), run, render=fake_render, show_progress=False)
-    build_report(run)
+    write_report(run)
     return run
 
 
 @pytest.fixture(scope="module")
 def cases(run_dir):
-    return optics_cases(load_results(run_dir), run_dir)
+    return optics_cases(load_results(run_dir), run_dir, json.loads((run_dir / "campaign.json").read_text()))
 
 
 def test_one_case_per_group_with_lenses_and_the_optics_of_its_bench(run_dir, cases):
     # Oracle: the campaign above (the myopia sweep's only lens is +1 D; the cylinder item is its
     # own group) and the bench's ray-transfer matrices (`trial_lens_effect`, as fake_bench uses),
-    # not the setup string result.json records, which optics_cases parses.
+    # not the power matrix result.json records, which optics_cases reads.
     campaign = load_campaign(run_dir.parent / "figures.toml")
     configurations = {c.name: c for c in campaign.configurations}
     picked = {c.group: configurations[c.configuration] for c in cases}
@@ -70,11 +70,11 @@ def test_one_case_per_group_with_lenses_and_the_optics_of_its_bench(run_dir, cas
     assert picked["cylinder"].name == "cylinder"
     settings = campaign.settings
     for case in cases:
-        bench = campaign_bench(picked[case.group], settings)
+        bench = build_dslr(picked[case.group], settings).bench
         expected = trial_lens_effect(bench.trial_lens_setup()).camera_prescription
         got = case.prescription
-        # result.json keeps the prescription to 4 decimals (compared as power matrices: axis-free)
-        np.testing.assert_allclose(got.power_matrix(), expected.power_matrix(), atol=1e-4)
+        # result.json keeps the power matrix as numbers, so the figure's optics are the item's to round-off
+        np.testing.assert_allclose(got.power_matrix(), expected.power_matrix(), rtol=0, atol=1e-12)
         expected_pupil = entrance_pupil_diameter_mm(settings.focal_length_mm, picked[case.group].f_number)
         assert case.pupil_diameter_mm == pytest.approx(expected_pupil)
         assert case.wavelength_nm == settings.wavelength_nm
@@ -160,7 +160,7 @@ def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path
     # the tables and the other figures are still written.
     import shutil
 
-    import vissim.validation.report as report
+    import vissim.validation.dslr.report as report
 
     def unreadable(*args, **kwargs):
         raise OSError("synthetic.exr: unreadable")
@@ -170,7 +170,7 @@ def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path
     for name in FIGURES:
         (copy / name).unlink()
     monkeypatch.setattr(report, "optics_figures", unreadable)
-    build_report(copy)
+    write_report(copy)
     assert (copy / "tables.md").exists() and (copy / "report.html").exists()
     assert not any((copy / name).exists() for name in FIGURES)
     assert "optics figures were skipped (OSError" in caplog.text

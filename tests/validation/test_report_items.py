@@ -2,7 +2,7 @@
 
 import json
 
-from vissim.validation.report import load_results
+from vissim.validation.engine.report import load_results
 
 
 def test_items_not_in_the_campaign_are_not_reported(tmp_path):

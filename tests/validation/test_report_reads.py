@@ -17,13 +17,14 @@ import pytest
 from fake_bench import fake_render, write_campaign
 
 from vissim.imageio import srgb_encode
-from vissim.validation import report
-from vissim.validation.report import build_report, column_title, load_results
-from vissim.validation.report_figures import RADIANCE_LABEL, display_norm, radiance_colorbar, scale_bar_arcmin
-from vissim.validation.report_summary import PERFECT_MARGIN_DB, summary_notes
-from vissim.validation.runner import run_campaign
-from vissim.validation.wave_bench import WAVE_BENCH_NOTE
-from vissim.validation.wave_bench_report import RESIDUAL_COLUMNS
+import vissim.validation.dslr.report as report
+from vissim.validation.dslr.report_words import column_title
+from vissim.validation.engine.report import load_results, write_report
+from vissim.validation.engine.figures import RADIANCE_LABEL, display_norm, radiance_colorbar, scale_bar_arcmin
+from vissim.validation.engine.summary import PERFECT_MARGIN_DB, summary_notes
+from vissim.validation.engine.runner import run_campaign
+from vissim.validation.dslr.wave_bench import WAVE_BENCH_NOTE
+from vissim.validation.dslr.wave_bench_report import RESIDUAL_COLUMNS
 
 CAMPAIGN = """
 [campaign]
@@ -55,7 +56,7 @@ def run_dir(tmp_path_factory):
     folder = tmp_path_factory.mktemp("reads")
     run = folder / "run"
     run_campaign(write_campaign(folder, CAMPAIGN, "reads.toml"), run, render=fake_render, show_progress=False)
-    build_report(run)
+    write_report(run)
     return run
 
 

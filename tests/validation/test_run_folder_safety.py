@@ -18,10 +18,10 @@ from fake_bench import fake_render
 import vissim
 from vissim.cli import main
 from vissim.errors import VissimInputError
-from vissim.validation import runner
-from vissim.validation.campaign import load_campaign
-from vissim.validation.depth_campaign import load_depth_campaign
-from vissim.validation.run_lock import LOCK_FILE_NAME, run_folder_lock
+from vissim.validation.engine import runner
+from vissim.validation.engine.loader import load_campaign
+from vissim.validation.engine.loader import load_campaign
+from vissim.validation.engine.run_lock import LOCK_FILE_NAME, run_folder_lock
 
 HEAD = "[campaign]\nname = 'tiny'\nspp = 4\ntile_px = [64, 64]\nsimulations = ['geometric']\ninputs = ['render']\n"
 SCENE = ("[image]\narcmin_per_px = 1.0\nsize_px = [32, 32]\n[eye]\nprescription = '-1.00 DS'\npupil_diameter_mm = 3.0\n"
@@ -62,10 +62,10 @@ def test_the_same_configuration_twice_still_runs_once(tmp_path):
 def test_two_depth_configurations_with_one_name_are_refused(tmp_path):
     (tmp_path / "scene.toml").write_text(SCENE)
     path = tmp_path / "depth.toml"
-    path.write_text("[depth_campaign]\n[[config]]\nname = 'eye'\nscene = 'scene.toml'\neye = '-1.00 DS'\n"
+    path.write_text("[campaign]\nkind = 'depth'\n[[config]]\nname = 'eye'\nscene = 'scene.toml'\neye = '-1.00 DS'\n"
                     "[[config]]\nname = 'eye'\nscene = 'scene.toml'\neye = '-2.00 DS'\n")
     with pytest.raises(VissimInputError, match=r"config\[0\] and config\[1\]: two configurations named 'eye'"):
-        load_depth_campaign(path, check_memory=False)
+        load_campaign(path, check_memory=False)
 
 
 def test_validate_refuses_duplicate_names_in_one_line(tmp_path, capsys):
@@ -85,7 +85,7 @@ def held(tmp_path):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [package_root, os.environ.get("PYTHONPATH")]))}
     holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
         import sys, time
-        from vissim.validation.run_lock import run_folder_lock
+        from vissim.validation.engine.run_lock import run_folder_lock
         with run_folder_lock({str(run)!r}):
             print("held", flush=True)
             sys.stdin.read()  # until the test closes our stdin
@@ -100,7 +100,7 @@ def held(tmp_path):
 
 def test_a_second_run_into_a_held_folder_is_refused_naming_the_holder(tmp_path, capsys, monkeypatch, held):
     run, pid = held
-    monkeypatch.setattr(runner, "render_spec", fake_render)
+    monkeypatch.setattr(runner, "render_any", fake_render)
     path = tmp_path / "tiny.toml"
     path.write_text(HEAD + "[[item]]\nletter = 'K'\nlogmar = 0.7\nlenses = [2.0]\n")
     assert main(["validate", str(path), "-o", str(run)]) == 2
@@ -112,7 +112,7 @@ def test_a_second_run_into_a_held_folder_is_refused_naming_the_holder(tmp_path, 
 
 
 def test_the_folder_is_free_again_after_the_holder_ends(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(runner, "render_spec", fake_render)
+    monkeypatch.setattr(runner, "render_any", fake_render)
     path = tmp_path / "tiny.toml"
     path.write_text(HEAD + "[[item]]\nletter = 'K'\nlogmar = 0.7\nlenses = [2.0]\n")
     run = tmp_path / "run"
@@ -136,7 +136,7 @@ def test_a_run_folder_holding_the_manifest_is_refused(tmp_path, capsys):
 
 def test_report_refuses_a_run_folder_that_now_holds_its_campaign_file(tmp_path, capsys, monkeypatch):
     # A rebuilt report writes tables.md, metrics.*, figures into the folder: never over the campaign file.
-    monkeypatch.setattr(runner, "render_spec", fake_render)
+    monkeypatch.setattr(runner, "render_any", fake_render)
     run = tmp_path / "run"
     path = tmp_path / "tiny.toml"
     path.write_text(HEAD + "[[item]]\nletter = 'K'\nlogmar = 0.7\nlenses = [2.0]\n")

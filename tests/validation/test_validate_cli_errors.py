@@ -5,7 +5,7 @@ import time
 import pytest
 
 from vissim.cli import main
-from vissim.validation import runner
+from vissim.validation.engine import runner, scheduler
 
 TINY = '[campaign]\nname = "tiny"\nspp = 4\ntile_px = [48, 48]\nsimulations = ["geometric"]\n' \
        '[[item]]\nletter = "K"\nlogmar = 0.5\nlenses = [2.0]\n'
@@ -17,7 +17,7 @@ def refuse(spec):  # a renderer that must not be called
 
 @pytest.fixture(autouse=True)
 def _no_rendering(monkeypatch):
-    monkeypatch.setattr(runner, "render_spec", refuse)
+    monkeypatch.setattr(runner, "render_any", refuse)
 
 
 def one_error_line(capsys) -> str:
@@ -63,7 +63,7 @@ def test_an_unreachable_scheduler_fails_within_seconds(tmp_path, capsys):
     started = time.perf_counter()
     assert validate(tmp_path / "tiny.toml", tmp_path / "out", "--scheduler", "tcp://127.0.0.1:1") == 2
     # the connect timeout, plus 3 s for Dask's client set-up and teardown (the interpreter is warm)
-    assert time.perf_counter() - started < runner.SCHEDULER_TIMEOUT_S + 3.0
+    assert time.perf_counter() - started < scheduler.SCHEDULER_TIMEOUT_S + 3.0
     line = one_error_line(capsys)
     assert "tcp://127.0.0.1:1" in line and "no Dask scheduler answered" in line
     assert not (tmp_path / "out").exists()

@@ -8,7 +8,7 @@ import pytest
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from vissim.errors import VissimInputError
-from vissim.validation.metrics import compare_images, noise_floor
+from vissim.imaging.metrics import compare_images, noise_floor
 
 WANG_2004 = dict(gaussian_weights=True, sigma=1.5, use_sample_covariance=False)
 

@@ -8,8 +8,8 @@ import tifffile
 
 from vissim.charts import optotype_tile
 from vissim.errors import VissimInputError
-from vissim.validation.raw import camera_arcmin_per_px, crop_letters, read_raw_linear, resample_to_arcmin
-from vissim.validation.virtual_capture import quantise, write_dng
+from vissim.imaging.raw import camera_arcmin_per_px, crop_letters, read_raw_linear, resample_to_arcmin
+from vissim.imaging.virtual_capture import quantise, write_dng
 
 # Canon EOS Rebel T3 / 1100D: 5.2 um pixel pitch (Canon specification), kit lens at 18 mm (thesis §4.4.2).
 REBEL_T3_PITCH_UM = 5.2

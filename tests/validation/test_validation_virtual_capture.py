@@ -5,8 +5,8 @@ import pytest
 import tifffile
 
 from vissim.errors import VissimInputError
-from vissim.validation.raw import read_raw_linear
-from vissim.validation.virtual_capture import BAYER_PATTERNS, add_sensor_noise, mosaic_bayer, quantise, write_dng
+from vissim.imaging.raw import read_raw_linear
+from vissim.imaging.virtual_capture import BAYER_PATTERNS, add_sensor_noise, mosaic_bayer, quantise, write_dng
 
 BLACK_DN, WHITE_DN = 2048, 15000  # a 14-bit-like camera with a 2048 DN pedestal
 

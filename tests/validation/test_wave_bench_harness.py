@@ -1,7 +1,7 @@
 """The wave bench as a campaign truth (issue 13, harness): rows, tables, residual causes, caching.
 
 A tiny campaign with the stand-in bench (no Mitsuba); the wave bench itself is the real trace
-(vissim.bench.wave_truth), so its numbers are physics, not plumbing.
+(vissim.bench.dslr.wave_truth), so its numbers are physics, not plumbing.
 """
 
 import json
@@ -11,10 +11,10 @@ import pytest
 from fake_bench import fake_render, refuse, write_campaign
 
 from vissim.errors import VissimInputError
-from vissim.validation.dispatch import _single_plane_lines
-from vissim.validation.report import build_report, load_results, metrics_rows
-from vissim.validation.runner import run_campaign
-from vissim.validation.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE
+from vissim.validation.dslr.report import metrics_rows, summary_lines
+from vissim.validation.engine.report import load_results, write_report
+from vissim.validation.engine.runner import run_campaign
+from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE
 
 TINY = """
 [campaign]
@@ -46,7 +46,7 @@ def run(tmp_path_factory):
     tiny = write_campaign(tmp_path, TINY.format(extra=""))
     run_dir = tmp_path / "run"
     run_campaign(tiny, run_dir, render=fake_render, show_progress=False)
-    build_report(run_dir)
+    write_report(run_dir)
     return tiny, run_dir
 
 
@@ -63,7 +63,7 @@ def test_wave_and_thesis_of_the_synthetic_chart_are_compared_with_the_wave_bench
     assert len(json_rows) == 4 and all(r["noise_floor_psnr_db"] is None for r in json_rows)
     assert (run_dir / "metrics.csv").read_text().count(WAVE_BENCH_NOTE) == 4
     # the terminal summary shows no floor for them
-    lines = [line for line in _single_plane_lines(run_dir) if line.endswith("wave bench")]
+    lines = [line for line in summary_lines(metrics_rows(load_results(run_dir))) if line.endswith("wave bench")]
     assert len(lines) == 4 and all(" — " in line for line in lines)
 
 
@@ -154,7 +154,7 @@ def test_wave_truth_false_skips_the_wave_bench_and_keys_the_items_apart(run, tmp
     assert {off.item_key(c) for c in off.configurations}.isdisjoint(tiny.item_key(c) for c in tiny.configurations)
     quiet = tmp_path / "off"
     run_campaign(off, quiet, render=fake_render, show_progress=False)
-    build_report(quiet)
+    write_report(quiet)
     assert not any(r["reference"] == WAVE_BENCH_NOTE or r["simulation"] == TRACED_RAYS
                    for r in metrics_rows(load_results(quiet)))
     assert "wave bench" not in (quiet / "tables.md").read_text()

@@ -3,7 +3,7 @@
 The tube is equivalent to a source at (or near) infinity of the pixel's angular extent: the
 retinal image is the pixel's square, mapped by the paraxial system (spectacle magnification
 included), convolved with the eye's blur for the defocus ``K = vergence + E + A`` at the pupil
-(`vissim.bench.atv_paraxial.atv_paraxial`).  The blur comes from `vissim.optics.psf.compute_psf` of
+(`vissim.bench.atv.paraxial.atv_paraxial`).  The blur comes from `vissim.optics.psf.compute_psf` of
 the prescription ``-K``: ``mode="geometric"`` (ray optics, comparable with the light tracer)
 or ``"wave"`` (diffraction).  Pure numpy; no Mitsuba.
 
@@ -12,7 +12,7 @@ or ``"wave"`` (diffraction).  Pure numpy; no Mitsuba.
 for a luminance in cd m⁻²), on the vissim grid: row 0 up, columns to the eye's right, the
 straight-ahead direction at ``[N//2, N//2]``, each pixel the integral over its square.
 
-The spot metrics every method reports are `vissim.bench.atv_spot.spot_metrics`.
+The spot metrics every method reports are `vissim.bench.atv.spot.spot_metrics`.
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ import numpy as np
 import scipy.signal
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.bench.atv import AtvConfig
-from vissim.bench.atv_paraxial import AtvParaxial, atv_paraxial
-from vissim.bench.atv_spot import spot_metrics, suggested_atv_size_px
+from vissim.bench.atv.tube import AtvConfig
+from vissim.bench.atv.paraxial import AtvParaxial, atv_paraxial
+from vissim.bench.atv.spot import spot_metrics, suggested_atv_size_px
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf

@@ -46,7 +46,7 @@ from vissim.atv.analysis import CurveAnalysis, analyse_curve
 from vissim.atv.data import THESIS_TRIAL_LENSES_DIOPTERS
 from vissim.atv.procedure import (ProcedureConfig, PsychometricFunction, SimulatedObserver, ThresholdResult,
                                   run_procedure)
-from vissim.bench.atv import ATV_TRIAL_LENS_DISTANCE_MM, IPHONE5_PPI, AtvTube, pixel_pitch_mm
+from vissim.bench.atv.tube import ATV_TRIAL_LENS_DISTANCE_MM, IPHONE5_PPI, AtvTube, pixel_pitch_mm
 from vissim.checks import finite_number, positive_number
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm

@@ -59,8 +59,9 @@ def _field_deg(text: str) -> tuple[float, float]:
 
 
 def run_wavefront(args: argparse.Namespace) -> int:
-    from vissim.bench.bench_wavefront import trace_bench_wavefront
-    from vissim.bench.scene_files import bench_from_tables, read_scene_toml
+    from vissim.bench.dslr.traced_wavefront import trace_bench_wavefront
+    from vissim.bench.dslr.scene_files import bench_from_tables
+    from vissim.bench.scene_toml import read_scene_toml
     from vissim.optics.trial_lens import TrialLens, trial_lens_effect
 
     field = _field_deg(args.field_deg)

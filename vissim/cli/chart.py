@@ -7,14 +7,15 @@ import logging
 from pathlib import Path
 
 from vissim.checks import size_text
-from vissim.acuity import THESIS_VIEWING_DISTANCE_M
 from vissim.atomic import write_json_atomic
-from vissim.charts import (DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTANCE, POLARITIES,
-                           THESIS_TILE_SHAPE_PX, chart_sidecar, etdrs_chart_spec, layout_chart, optotype_tile,
-                           render_chart_angular, save_chart_pdf, save_chart_png)
+from vissim.charts import (DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTANCE, POLARITIES, chart_sidecar,
+                           etdrs_chart_spec, layout_chart, optotype_tile, render_chart_angular, save_chart_pdf,
+                           save_chart_png)
 from vissim.cli._common import refuse_existing
 from vissim.errors import VissimInputError
 from vissim.provenance import make_provenance
+from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_TILE_SHAPE_PX
+from vissim.units import mm_to_m
 
 log = logging.getLogger(__name__)
 
@@ -50,7 +51,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--polarity", choices=POLARITIES, default="black-on-white")
     parser.add_argument("--arcmin-per-px", type=float, default=1.0, metavar="ARCMIN",
                         help="angular pixel size (default 1, as the thesis)")
-    parser.add_argument("--distance-m", type=float, default=THESIS_VIEWING_DISTANCE_M, metavar="M",
+    parser.add_argument("--distance-m", type=float, default=mm_to_m(THESIS_CHART_DISTANCE_MM), metavar="M",
                         help="viewing distance in metres (default 0.9144, three feet)")
     parser.add_argument("--paper-reflectance", type=float, default=PAPER_REFLECTANCE, metavar="R",
                         help=f"linear reflectance of the paper (default {PAPER_REFLECTANCE})")

@@ -81,7 +81,7 @@ def _sampling(args, image, reference) -> float:
 
 
 def _bench(args, image):
-    from vissim.bench.dslr import DslrBench
+    from vissim.bench.dslr.bench import DslrBench
     from vissim.fit.capture import bench_from_provenance
 
     if (args.vertex_mm is None) != (args.object_distance_m is None):

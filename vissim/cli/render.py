@@ -1,8 +1,8 @@
 """``vissim render``: render the virtual optical bench with Mitsuba 3 to a linear EXR.
 
-Sub-commands: ``render bench`` (the DSLR bench, `vissim.bench.dslr`), ``render atv``
-(the ATV tube, `vissim.bench.atv`) and ``render depth`` (depth scenes,
-`vissim.bench.depth_scene`).
+Sub-commands: ``render bench`` (the DSLR bench, `vissim.bench.dslr.bench`), ``render atv``
+(the ATV tube, `vissim.bench.atv.tube`) and ``render depth`` (depth scenes,
+`vissim.bench.depth.scene`).
 """
 
 from __future__ import annotations
@@ -103,8 +103,8 @@ def _chart_table(args, scene_doc: dict) -> dict:
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    from vissim.bench.scene_files import (bench_from_tables, chart_spec_from_table, load_chart_toml,
-                                          read_scene_toml)
+    from vissim.bench.dslr.scene_files import bench_from_tables, chart_spec_from_table, load_chart_toml
+    from vissim.bench.scene_toml import read_scene_toml
     from vissim.imageio import write_image
 
     output = Path(args.output)
@@ -140,8 +140,8 @@ def run_bench(args: argparse.Namespace) -> int:
 
 
 def _write_wave_truth(bench, chart, args, output: Path) -> int:
-    from vissim.bench.bench_wavefront import D_LINE_NM
-    from vissim.bench.wave_truth import wave_truth
+    from vissim.bench.dslr.traced_wavefront import D_LINE_NM
+    from vissim.bench.dslr.wave_truth import wave_truth
     from vissim.cli._common import parse_float_list
     from vissim.imageio import write_image
     from vissim.provenance import make_provenance

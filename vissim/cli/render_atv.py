@@ -80,8 +80,8 @@ def _config(args: argparse.Namespace):
     """The scene file's configuration (or the defaults) with the given options applied."""
     from dataclasses import replace
 
-    from vissim.bench.atv import AtvConfig, atv_trial_lens, display_code_to_linear
-    from vissim.bench.scene_files import load_atv_toml
+    from vissim.bench.atv.tube import AtvConfig, atv_trial_lens, display_code_to_linear
+    from vissim.bench.atv.scene_files import load_atv_toml
     from vissim.optics.prescription import Prescription
 
     config = load_atv_toml(args.scene) if args.scene else AtvConfig()

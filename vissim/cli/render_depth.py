@@ -1,7 +1,7 @@
 """``vissim render depth``: a depth scene (charts at several distances, a tilted chart) through an eye or the DSLR.
 
 Registered by `vissim.cli.render` through `add_depth_parser`.  Thin: load the
-scene file (`vissim.bench.depth_scene_files`), apply the options, call
+scene file (`vissim.bench.depth.scene_files`), apply the options, call
 `vissim.render.depth_render.render_depth`, write the blurred image (and on request the
 all-in-focus image and the axial depth map) with provenance, print a summary with the
 predicted blur of every panel.
@@ -12,7 +12,7 @@ channel ``Z`` (or ``.npy``), which ``vissim blur-depth AIF.exr DEPTH.exr`` reads
 
 The all-in-focus image and the depth map cover a margin beyond the blurred image's frame on
 every side (``--margin-px``; default the scene's largest blur radius,
-`vissim.bench.depth_viewers.frame_margin_px`), recorded as ``margin_px`` in their
+`vissim.bench.depth.viewers.frame_margin_px`), recorded as ``margin_px`` in their
 provenance: ``blur-depth`` simulates on the larger grid, so it sees what the observer sees
 beyond the frame, and crops its output to the blurred image's frame.
 """
@@ -76,7 +76,7 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _viewer(args: argparse.Namespace, loaded):
-    from vissim.bench.depth_viewers import CameraViewer, EyeViewer
+    from vissim.bench.depth.viewers import CameraViewer, EyeViewer
     from vissim.optics.prescription import Prescription
     from vissim.optics.trial_lens import TrialLens
 
@@ -138,9 +138,9 @@ def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = No
 
 
 def run_depth(args: argparse.Namespace) -> int:
-    from vissim.bench.depth_scene import panel_geometries
-    from vissim.bench.depth_scene_files import load_depth_scene_toml
-    from vissim.bench.depth_viewers import frame_margin_px, viewing_setup
+    from vissim.bench.depth.scene import panel_geometries
+    from vissim.bench.depth.scene_files import load_depth_scene_toml
+    from vissim.bench.depth.viewers import frame_margin_px, viewing_setup
     from vissim.imageio import write_image
     from vissim.render.depth_render import render_depth
 

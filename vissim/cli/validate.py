@@ -16,7 +16,7 @@ def add_parser(subparsers) -> None:
         description="Render each configuration of a campaign on the virtual bench (the ground truth), "
         "apply the wave, geometric and thesis-mode simulations to the no-lens render and to the "
         "synthetic chart, and compare (SSIM, PSNR, absolute difference, after sub-pixel "
-        "registration). A depth campaign ([depth_campaign], e.g. validation/depth.toml) compares "
+        "registration). A depth campaign (kind = \"depth\", e.g. validation/depth.toml) compares "
         "depth-scene renders with the depth-layered simulation per panel and at occlusion edges. "
         "Re-running reuses finished renders and items.",
     )
@@ -37,15 +37,12 @@ def add_parser(subparsers) -> None:
 
 
 def run_validate(args: argparse.Namespace) -> int:
-    from vissim.validation.dispatch import run_any_campaign
+    from vissim.validation.engine.validate import validate
 
-    if args.scheduler is not None and not args.scheduler.strip():
-        raise VissimInputError("--scheduler is empty; expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786 "
-                               "(leave the option out to render here)")
     try:
         with terminal_progress() as progress:
-            done = run_any_campaign(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler,
-                                    spp=args.spp, show_progress=False, progress=progress)
+            done = validate(args.campaign, args.output, workers=args.workers, scheduler=args.scheduler,
+                            spp=args.spp, show_progress=False, progress=progress)
     except OSError as exc:  # the run folder cannot be written (permissions, a full disk)
         raise VissimInputError(f"cannot write {exc.filename or args.output}: {exc.strerror or exc}") from None
     for line in done.lines:
@@ -56,10 +53,10 @@ def run_validate(args: argparse.Namespace) -> int:
 
 
 def run_report(args: argparse.Namespace) -> int:
-    from vissim.validation.dispatch import rebuild_any_report
+    from vissim.validation.engine.validate import rebuild_report
 
     with terminal_progress() as progress:
-        written, lines = rebuild_any_report(args.run, progress=progress)
+        written, lines = rebuild_report(args.run, progress=progress)
     for line in lines:
         print(line)
     print(f"report: {args.run / 'report.html'} ({len(written)} files)")

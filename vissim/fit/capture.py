@@ -15,9 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.errors import VissimInputError
-from vissim.fit.rx_fit import RxFit, fit_rx
+from vissim.fit.result import RxFit
+from vissim.fit.rx_fit import fit_rx
 from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_lens_power
 from vissim.units import m_to_mm

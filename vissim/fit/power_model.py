@@ -10,7 +10,7 @@ follows power:
 ``bench`` (`BenchLensModel`)
     The fitted vector q is the marked power (M, J0, J45) of one trial lens in the bench's holder,
     made physical exactly as the bench makes it (crown glass, realistic thickness:
-    `vissim.bench.dslr.DslrBench.physical_lenses`).  Vergence theory
+    `vissim.bench.dslr.bench.DslrBench.physical_lenses`).  Vergence theory
     (`viewing_setup`) gives the power it adds at the camera,
     the *effective* power reported (what ``vissim trial-lens`` prints as ``effective_*``), and
     its magnification matrix.  The sign is then in the data.
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.bench.dslr import DslrBench
+from vissim.bench.dslr.bench import DslrBench
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower
 from vissim.optics.trial_lens import TrialLens

@@ -15,7 +15,7 @@ shifted by its own parallax for that pupil point, averaged over the pupil::
     out(x) = < sum_k C_k(x - n_k(p)) prod_{j nearer than k} (1 - A_j(x - n_j(p))) >_p
 
 exactly what a thin lens images of planar layers (for the eye and the DSLR of
-`vissim.bench.depth_viewers`: the ray through ``p`` of the pixel with chief-ray tangent ``t``
+`vissim.bench.depth.viewers`: the ray through ``p`` of the pixel with chief-ray tangent ``t``
 leaves along ``t - K p``), so it converges to the render.  The pupil is sampled as the
 geometric PSF is (a stratified, jittered grid of 250 000 to 4 million rays, fixed seed) and
 each ray's offsets are rounded to whole pixels: for one layer alone the average is then

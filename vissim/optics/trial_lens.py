@@ -37,6 +37,7 @@ from vissim.checks import finite_number as _number
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription
+from vissim.thesis import THESIS_EYE_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import mm_to_m
 
 __all__ = ["CROWN_GLASS_INDEX", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
@@ -48,12 +49,6 @@ log = logging.getLogger(__name__)
 
 #: Refractive index of ophthalmic crown glass (nd), the default for thick trial lenses.
 CROWN_GLASS_INDEX = 1.523
-#: The thesis's DSLR bench (§4.1, §4.4): 18 mm lens at f/5, chart at 3 ft, trial lenses 10 mm
-#: in front.  The one place these numbers live; benches, campaigns and captures import them.
-THESIS_FOCAL_LENGTH_MM = 18.0
-THESIS_F_NUMBER = 5.0
-THESIS_CHART_DISTANCE_MM = 914.4
-THESIS_VERTEX_DISTANCE_MM = 10.0
 #: An eye's trial or spectacle lens: 12 mm from the cornea (clinical practice, 12-14 mm) and the
 #: entrance pupil 3 mm behind the cornea, so 15 mm from the lens's back vertex to the pupil, where
 #: vissim's eye has its thin lens (docs/conventions.md, "Defaults").  A camera's default is the
@@ -63,8 +58,6 @@ CORNEA_TO_ENTRANCE_PUPIL_MM = 3.0
 EYE_VERTEX_DISTANCE_MM = SPECTACLE_VERTEX_DISTANCE_MM + CORNEA_TO_ENTRANCE_PUPIL_MM
 #: The thesis's lens holder takes up to three trial lenses (section 4.4).
 MAX_LENSES_IN_HOLDER = 3
-#: Focal length of the thesis's simplified eye, 18 mm / 1.333 (section 4.4, Table 4.1).
-THESIS_EYE_FOCAL_LENGTH_MM = 13.5
 
 Matrix2 = tuple[tuple[float, float], tuple[float, float]]
 _I2 = np.eye(2)

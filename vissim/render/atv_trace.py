@@ -1,7 +1,7 @@
 """The ATV tube rendered two ways: light tracing from the pixel (primary) and a camera-side check.
 
 **Light tracing** (`trace_atv`).  Rays start on the lit pixel (a Lambertian square of
-radiance L) and are traced through the Mitsuba scene of `vissim.bench.atv_scene.atv_scene` with
+radiance L) and are traced through the Mitsuba scene of `vissim.bench.atv.scene.atv_scene` with
 ``scene.ray_intersect`` (vectorised Dr.Jit arrays), refracting by vector Snell's law at every
 lens hit with the mesh's interpolated vertex normal ``si.sh_frame.n`` (the exact analytic
 normal at the vertices; ``si.n`` is the flat face normal), oriented against the ray.  Hits on
@@ -50,10 +50,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.stats import qmc
 
-from vissim.bench.atv_spot import spot_metrics, suggested_atv_size_px
-from vissim.bench.atv import AtvConfig
-from vissim.bench.atv_paraxial import atv_paraxial
-from vissim.bench.atv_scene import atv_scene
+from vissim.bench.atv.spot import spot_metrics, suggested_atv_size_px
+from vissim.bench.atv.tube import AtvConfig
+from vissim.bench.atv.paraxial import atv_paraxial
+from vissim.bench.atv.scene import atv_scene
 from vissim.errors import VissimError, VissimInputError
 from vissim.render.backend import mitsuba
 from vissim.render.plugins import register_plugins
@@ -82,7 +82,7 @@ class AtvResult:
     passes).  ``total_flux`` counts all light in the pupil (tracer) or the field (camera);
     ``peak`` (the largest value after a light smoothing that removes sampling noise),
     ``peak_pixel`` and ``spot_diameter_arcmin`` (the radial-profile FWHM) are defined in
-    `vissim.bench.atv_spot.spot_metrics`.
+    `vissim.bench.atv.spot.spot_metrics`.
     """
 
     image: np.ndarray
@@ -256,7 +256,7 @@ def trace_atv(config: AtvConfig, *, n_rays: int = DEFAULT_N_RAYS, seed: int = 0,
     """Light-trace the ATV tube (module doc): the retinal image of the pixel, flux per arcmin².
 
     ``n_rays`` (rounded up to a power of two) are emitted into the cone that reaches the pupil;
-    ``size_px`` defaults to `vissim.bench.atv_spot.suggested_atv_size_px`.
+    ``size_px`` defaults to `vissim.bench.atv.spot.suggested_atv_size_px`.
     """
     if not isinstance(config, AtvConfig):
         raise VissimInputError(f"trace_atv needs an AtvConfig, got {type(config).__name__}")

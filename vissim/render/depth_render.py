@@ -1,13 +1,13 @@
 """Render depth scenes: the blurred image, and on request the all-in-focus image and a depth map.
 
-Three renders of one scene (`vissim.bench.depth_scene_dict.depth_scene_dict`), one pixel grid:
+Three renders of one scene (`vissim.bench.depth.scene_dict.depth_scene_dict`), one pixel grid:
 
 * **blurred** -- the observer's optics (eye sensor or DSLR thin lens + trial lenses), seed ``seed``;
 * **all in focus** -- a pinhole at the pupil centre, same film, same lenses, seed ``seed + 1``;
 * **depth** -- the pinhole looking at the *proximity pass* (each panel glows with ``1/z``
   dioptres, z axial, and carries its label), seed ``seed + 2``.  A pixel's value is the mean
   proximity of its *nearest* surface over the part of the pixel it covers (0 where every sample
-  sees sky; `vissim.bench.depth_scene_dict.DEPTH_PASS_STATISTIC`), and the depth map is
+  sees sky; `vissim.bench.depth.scene_dict.DEPTH_PASS_STATISTIC`), and the depth map is
   ``1 / proximity`` metres, ``inf`` for sky: the axial distance
   `vissim.optics.depth.blur_depth` expects for these flat-focal-plane optics.  A pixel
   split between a near panel and the far one behind it takes the near panel's depth, not the
@@ -24,9 +24,9 @@ Three renders of one scene (`vissim.bench.depth_scene_dict.depth_scene_dict`), o
   for `vissim.optics.depth_layers.composite_layers`.
 
 The frame: the pinhole renders (all in focus, depth, layers) cover ``margin_px`` more pixels on
-every side than the blurred render (`vissim.bench.depth_scene.DepthScene.with_margin`; the
+every side than the blurred render (`vissim.bench.depth.scene.DepthScene.with_margin`; the
 blurred render's pixel ``[i, j]`` is their ``[i + m, j + m]``), so a simulation from them sees what
-the observer sees beyond the frame; `vissim.bench.depth_viewers.frame_margin_px` is the
+the observer sees beyond the frame; `vissim.bench.depth.viewers.frame_margin_px` is the
 margin that holds the scene's largest blur.
 
 Only this package imports Mitsuba (through `vissim.render.backend.mitsuba`).
@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.bench.depth_scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
+from vissim.bench.depth.scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
@@ -95,7 +95,7 @@ def render_view(scene, viewer, *, view: str, content: str = "radiance", spp: int
                 panels: tuple[int, ...] | None = None, statistic: str = "mean"):
     """One render (`vissim.render.run.RenderResult`) of ``depth_scene_dict(scene, viewer, ...)``;
     ``statistic``: how a pixel comes from its samples (`vissim.render.run.PIXEL_STATISTICS`)."""
-    from vissim.bench.depth_scene_dict import depth_scene_dict
+    from vissim.bench.depth.scene_dict import depth_scene_dict
 
     kind = {"proximity": "mono", "coverage": "mono", DEPTH_PASS_CONTENT: "rgb"}.get(content, kind)
     register_eye_sensor(mitsuba(kind, variant))
@@ -130,8 +130,8 @@ def render_depth(
     than the blurred render.  ``progress(name, done_spp, total_spp)`` reports each render.  The
     provenance records the scene, the viewer, seeds, spp, the margin and versions.
     """
-    from vissim.bench.depth_scene import panel_geometries
-    from vissim.bench.depth_viewers import viewing_setup
+    from vissim.bench.depth.scene import panel_geometries
+    from vissim.bench.depth.viewers import viewing_setup
 
     start = time.perf_counter()
     aux = int(spp if aux_spp is None else aux_spp)
@@ -197,7 +197,7 @@ def render_aov_depth(scene, viewer, *, spp: int = 16, seed: int = 0, variant: st
     Mean surface z over each pixel's samples, sky counted as z = 0 (so mixed sky pixels are
     meaningless).  Refused with trial lenses: the AOV stops at the first surface, the lens.
     """
-    from vissim.bench.depth_scene_dict import depth_scene_dict
+    from vissim.bench.depth.scene_dict import depth_scene_dict
 
     scene_dict = depth_scene_dict(scene, viewer, view="all_in_focus", content="proximity",
                                   mesh_cache_dir=mesh_cache_dir)

@@ -33,7 +33,7 @@ __all__ = ["EYE_SENSOR", "register_eye_sensor"]
 
 log = logging.getLogger(__name__)
 
-#: Plugin name; equals `vissim.bench.depth_scene_dict.EYE_SENSOR`.
+#: Plugin name; equals `vissim.bench.depth.scene_dict.EYE_SENSOR`.
 EYE_SENSOR = "vissim_eye"
 
 

@@ -246,7 +246,7 @@ def render_bench(
     """Render a `DslrBench` looking at ``chart``.
 
     ``chart`` is a `vissim.charts.ChartSpec` (rendered for print at the bench's texel
-    size, `vissim.bench.dslr.chart_mm_per_texel`) or a `vissim.charts.Chart`
+    size, `vissim.bench.dslr.bench.chart_mm_per_texel`) or a `vissim.charts.Chart`
     already rendered for print.  The result carries a provenance record: bench parameters,
     theory (added power, blur, magnification), chart, variant, spp taken, seed, ``mitsuba_render``
     (`RenderResult.render_record`: spp asked and taken, pass seeds, determinism), vissim,
@@ -285,7 +285,7 @@ def render_bench(
     >>> result.pixels.shape  # doctest: +SKIP
     (64, 64)
     """
-    from vissim.bench.dslr import DslrBench, chart_mm_per_texel, dslr_scene
+    from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
     from vissim.optics.trial_lens import trial_lens_effect
     from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
 

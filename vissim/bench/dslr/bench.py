@@ -1,0 +1,373 @@
+"""The DSLR bench of thesis section 4.4 as a Mitsuba scene dict: camera, trial lenses, chart.
+
+World frame (millimetres): the camera's principal plane (and entrance pupil) at z = 0, looking
+along +z with +y up; the chart at z = ``chart_distance_mm``.  World x is the examiner's right
+(TABO frame of `vissim.optics.trial_lens`), so the camera's image right is world -x.  Light
+travels towards -z: chart, trial lenses (the last lens's back vertex at ``vertex_distance_mm``,
+the others stacked towards the chart with ``lens_gap_mm`` of air), camera.
+
+Choices, and why:
+
+* **Camera**: Mitsuba's ``thinlens`` -- an ideal lens whose aperture disc of diameter f/N is the
+  entrance pupil (3.6 mm at f/5 and 18 mm) -- focused on ``focus_distance_mm``; a ``box``
+  pixel filter so each output pixel is the integral over its solid angle, like vissim's PSFs.
+  ``near_clip`` is 1 mm: Mitsuba's default 0.01 scene units would be 10 mm in a metre scene
+  and silently skip a lens at 10 mm.
+* **Chart**: a self-emitting rectangle whose radiance is the chart's linear reflectance (times
+  ``radiance_scale``).  Emission is deterministic along every path, so the only noise is the
+  camera's pixel and aperture sampling, and with no lens a pixel's expected value is exactly
+  the chart's mean reflectance over it: a clean ground truth.  A diffuse chart lit by lamps
+  would add light-sampling noise and an illumination falloff that tells nothing about blur.
+* **Texture**: the print raster, ``nearest`` filtered, at >= 4 texels per camera pixel
+  (`chart_mm_per_texel`).  Nearest reproduces the printed raster exactly (piecewise
+  constant, like ink dots); bilinear would add a one-texel triangle blur.  The raster is
+  cropped around the axis, or padded with its edge values, to cover the field plus blur and
+  magnification margins.
+* **Lenses**: PLY meshes with exact normals (`vissim.bench.lenses.mesh`), made of the
+  refraction-only ``vissim_refract`` BSDF (`vissim.render.plugins`).  Thin lenses
+  (``refractive_index`` None) become crown-glass lenses of realistic centre thickness for the
+  clear aperture, and the theory (`DslrBench.viewing_setup`, a
+  `ViewingSetup`) uses those same lenses and gives the aperture.
+
+The dict is Mitsuba's scene-dict format with plain values only: transforms are 4 x 4 row-major
+nested lists under ``to_world`` and bitmap textures carry a float32 numpy array under
+``data``; `vissim.render.run.to_mitsuba_dict` converts them.  Nothing here imports Mitsuba.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from vissim.bench.lenses.mesh import cached_lens_ply, realistic_center_thickness_mm
+from vissim.checks import size_text
+from vissim.checks import arcmin_per_px as check_arcmin_per_px
+from vissim.checks import check_allocation, samples_per_pixel
+from vissim.checks import size_px as check_size_px
+from vissim.checks import vertex_distance_mm as check_vertex_mm
+from vissim.errors import VissimInputError
+from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup,
+                                      entrance_pupil_diameter_mm)
+from vissim.optics.setup import DEFAULT_WAVELENGTH_NM, ViewingSetup
+from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
+from vissim.units import REC709_LUMINANCE, arcmin_to_rad, mm_to_m
+
+__all__ = ["SAMPLERS", "DslrBench", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
+
+log = logging.getLogger(__name__)
+
+SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler")
+#: Minimum edge and centre thickness of a trial lens made from a thin one, mm.
+MIN_EDGE_MM = 1.0
+MIN_CENTER_MM = 1.0
+#: Near clipping plane of the camera, mm (well below any vertex distance).
+NEAR_CLIP_MM = 1.0
+#: Path length limits: refractions through three lenses plus total internal reflections.
+MAX_DEPTH = 64
+
+
+def _positive(value: Any, name: str, unit: str, *, allow_zero: bool = False) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise VissimInputError(f"{name} must be a number in {unit}, got {value!r}") from None
+    if not math.isfinite(number) or number < 0.0 or (number == 0.0 and not allow_zero):
+        raise VissimInputError(f"{name} must be {'>= 0' if allow_zero else '> 0'} {unit}, got {value!r}")
+    return number
+
+
+@dataclass(frozen=True)
+class DslrBench:
+    """Camera, trial-lens holder and sampling of the DSLR bench (defaults: the thesis's bench).
+
+    Parameters
+    ----------
+    focal_length_mm : float
+        The camera lens (an ideal thin lens): focal length, mm.
+    f_number : float
+        Its f-number (the entrance pupil is ``focal_length_mm / f_number`` across).
+    focus_distance_mm : float
+        Where the camera is focused, mm from the camera lens.
+    chart_distance_mm : float
+        Where the chart stands, mm from the camera lens.
+    vertex_distance_mm : float
+        From the camera lens to the nearest trial lens, mm.
+    lens_gap_mm : float
+        Between lenses in the holder, mm.
+    lenses : tuple of TrialLens
+        Trial lenses, ordered from the chart to the camera, as in
+        `TrialLensSetup` (at most the holder's slots).
+    refractive_index : float
+        The lenses' glass at the design wavelength (crown glass by default).
+    clear_aperture_mm : float or None
+        The lens meshes' diameter, mm; None sizes them to the beam (`clear_aperture`).
+    arcmin_per_px : float
+        The sensor's sampling, arcmin per pixel.
+    size_px : (int, int)
+        The sensor's size ``(rows, cols)``.
+    spp : int
+        Samples per pixel of the render.
+    seed : int
+        The render's seed.
+    sampler : str
+        The render's Mitsuba sampler.
+    fresnel_loss : bool
+        Whether the lens surfaces reflect (Fresnel) or transmit everything.
+    texels_per_px : float
+        The chart texture's resolution per camera pixel.
+    radiance_scale : float
+        The chart's radiance scale (relative).
+    mesh_rings : int
+        Tessellation of each lens surface: rings.
+    mesh_segments : int
+        Tessellation of each lens surface: segments per ring.
+
+    Examples
+    --------
+    >>> import vissim
+    >>> from vissim.optics.trial_lens import TrialLens
+    >>> bench = vissim.DslrBench(lenses=(TrialLens(2.0),), size_px=(64, 64))
+    >>> bench.focal_length_mm, bench.f_number  # the thesis's camera: an 18 mm lens at f/5
+    (18.0, 5.0)
+    """
+
+    focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
+    f_number: float = THESIS_F_NUMBER
+    focus_distance_mm: float = THESIS_CHART_DISTANCE_MM
+    chart_distance_mm: float = THESIS_CHART_DISTANCE_MM
+    vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
+    lens_gap_mm: float = 2.0
+    lenses: tuple[TrialLens, ...] = ()
+    refractive_index: float = CROWN_GLASS_INDEX
+    clear_aperture_mm: float | None = None
+    arcmin_per_px: float = 1.0
+    size_px: tuple[int, int] = (133, 113)
+    spp: int = 256
+    seed: int = 0
+    sampler: str = "multijitter"
+    fresnel_loss: bool = False
+    texels_per_px: float = 4.0
+    radiance_scale: float = 1.0
+    mesh_rings: int = 16
+    mesh_segments: int = 64
+
+    def __post_init__(self) -> None:
+        for name, unit in (("focal_length_mm", "mm"), ("f_number", "(f-number)"), ("focus_distance_mm", "mm"),
+                           ("chart_distance_mm", "mm"), ("arcmin_per_px", "arcmin/px"),
+                           ("texels_per_px", "texels per camera pixel"), ("radiance_scale", "(relative)")):
+            object.__setattr__(self, name, _positive(getattr(self, name), name.replace("_", " "), unit))
+        object.__setattr__(self, "vertex_distance_mm", check_vertex_mm(self.vertex_distance_mm))
+        object.__setattr__(self, "lens_gap_mm", _positive(self.lens_gap_mm, "lens gap mm", "mm", allow_zero=True))
+        index = _positive(self.refractive_index, "refractive index", "(dimensionless)")
+        if index <= 1.0:
+            raise VissimInputError(f"refractive index must exceed 1, got {index:g}")
+        lenses = (self.lenses,) if isinstance(self.lenses, TrialLens) else tuple(self.lenses)
+        if len(lenses) > MAX_LENSES_IN_HOLDER or not all(isinstance(lens, TrialLens) for lens in lenses):
+            raise VissimInputError(
+                f"the holder takes up to {MAX_LENSES_IN_HOLDER} TrialLens objects, got {self.lenses!r}")
+        object.__setattr__(self, "lenses", lenses)
+        object.__setattr__(self, "size_px", check_size_px(self.size_px))
+        object.__setattr__(self, "spp", samples_per_pixel(self.spp))
+        if self.sampler not in SAMPLERS:
+            raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")
+        check_arcmin_per_px(self.arcmin_per_px, "camera pixel")
+        if self.clear_aperture_mm is not None:
+            object.__setattr__(self, "clear_aperture_mm", _positive(self.clear_aperture_mm, "clear aperture", "mm"))
+        self.trial_lens_setup()  # validates the stack against the chart distance
+
+    # -- geometry -------------------------------------------------------------------------
+    @property
+    def entrance_pupil_diameter_mm(self) -> float:
+        return entrance_pupil_diameter_mm(self.focal_length_mm, self.f_number)
+
+    @property
+    def field_half_diagonal_rad(self) -> float:
+        """Angle from the axis to a corner of the frame (pixels are uniform in tan(angle))."""
+        rows, cols = self.size_px
+        return math.atan(0.5 * math.hypot(rows, cols) * math.tan(arcmin_to_rad(self.arcmin_per_px)))
+
+    def clear_aperture(self) -> float:
+        """Lens clear aperture, mm: given, or the beam at the farthest lens surface x 1.25 + 2 mm.
+
+        Beam = pupil + 2 z tan(half-diagonal field) at z = vertex distance + the holder's depth
+        (3 lenses of <= 4 mm and the gaps), rounded up to 0.5 mm.
+        """
+        if self.clear_aperture_mm is not None:
+            return self.clear_aperture_mm
+        depth = self.vertex_distance_mm + MAX_LENSES_IN_HOLDER * (4.0 + self.lens_gap_mm)
+        beam = self.entrance_pupil_diameter_mm + 2.0 * depth * math.tan(self.field_half_diagonal_rad)
+        return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+
+    def _make_physical(self, lens: TrialLens) -> TrialLens:
+        if not lens.is_thin:
+            return lens
+        index = lens.refractive_index or self.refractive_index
+        thickness = realistic_center_thickness_mm(lens.marked_power, self.clear_aperture(), index, MIN_EDGE_MM,
+                                                  MIN_CENTER_MM, back_surface_diopters=lens.back_surface_diopters)
+        return TrialLens(lens.sphere_diopters, lens.cylinder_diopters, lens.axis_deg, refractive_index=index,
+                         center_thickness_mm=thickness, back_surface_diopters=lens.back_surface_diopters)
+
+    @functools.cached_property
+    def physical_lenses(self) -> tuple[TrialLens, ...]:
+        """The lenses as rendered: thick, with an index (thin ones made realistic)."""
+        return tuple(self._make_physical(lens) for lens in self.lenses)
+
+    def trial_lens_setup(self) -> TrialLensSetup:
+        """The rendered lenses as a `TrialLensSetup` (object distance = chart distance)."""
+        distance_m = mm_to_m(self.chart_distance_mm)
+        return TrialLensSetup(self.physical_lenses, self.vertex_distance_mm, distance_m, self.lens_gap_mm)
+
+    def lens_back_vertex_z_mm(self) -> tuple[float, ...]:
+        """World z of each lens's back vertex, in the order of ``lenses`` (chart to camera)."""
+        z, positions = self.vertex_distance_mm, []
+        for lens in reversed(self.physical_lenses):
+            positions.append(z)
+            z += lens.center_thickness_mm + self.lens_gap_mm
+        return tuple(reversed(positions))
+
+    @property
+    def pitch_mm(self) -> float:
+        """Size on the chart of the central camera pixel, mm (pixels are uniform in tan(angle))."""
+        return self.chart_distance_mm * math.tan(arcmin_to_rad(self.arcmin_per_px))
+
+    def viewing_setup(self, wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
+        """What this camera sees through its rendered lenses: pupil, defocus, magnification."""
+        return ViewingSetup.dslr(self.focal_length_mm, self.f_number, mm_to_m(self.focus_distance_mm),
+                                 self.trial_lens_setup(), wavelength_nm=wavelength_nm)
+
+    def fov_x_deg(self) -> float:
+        cols = self.size_px[1]
+        return math.degrees(2.0 * math.atan(0.5 * cols * math.tan(arcmin_to_rad(self.arcmin_per_px))))
+
+
+def chart_mm_per_texel(bench: DslrBench) -> float:
+    """Texel size for the chart raster: ``texels_per_px`` texels per camera pixel on the chart."""
+    return bench.pitch_mm / bench.texels_per_px
+
+
+#: Peak bytes per texel and channel of the chart texture: float32 raster, its padded copy, Mitsuba's bitmap.
+TEXTURE_BYTES_PER_TEXEL = 3 * 4
+
+
+def chart_texture_shape(bench: DslrBench, setup: ViewingSetup, mm_per_px: float) -> tuple[int, int]:
+    """(rows, cols) texels the chart texture needs: the magnified field, the blur and a margin."""
+    blur_mm = max(d for d, _ in setup.blur_diameter_arcmin) / bench.arcmin_per_px * bench.pitch_mm
+    mag = max(abs(m) for m, _ in setup.magnification_principal)
+    need_mm = [0.5 * n * bench.pitch_mm * max(mag, 1.0) * 1.05 + blur_mm + 2.0 * bench.pitch_mm for n in bench.size_px]
+    rows, cols = (2 * math.ceil(h / mm_per_px) for h in need_mm)  # even; centre stays on a texel corner
+    return rows, cols
+
+
+def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm_per_px: float) -> tuple[np.ndarray, float, float]:
+    """Crop/pad ``pixels`` (centred on the axis) to cover the field with margins; (texture, height_mm, width_mm)."""
+    need_px = chart_texture_shape(bench, setup, mm_per_px)
+    channels = pixels.shape[2] if pixels.ndim == 3 else 1
+    rows, cols = bench.size_px
+    check_allocation(TEXTURE_BYTES_PER_TEXEL * channels * need_px[0] * need_px[1],
+                     f"the bench's {size_text(need_px, 'texel')} chart texture ({size_text((rows, cols))} frame, "
+                     f"blur {max(d for d, _ in setup.blur_diameter_arcmin):.3g} arcmin)")
+    out = pixels
+    for axis, need in enumerate(need_px):
+        have = out.shape[axis]
+        if have > need:
+            start = (have - need) // 2
+            out = np.take(out, np.arange(start, start + need), axis=axis)
+        elif have < need:
+            before = (need - have) // 2
+            pad = [(0, 0)] * out.ndim
+            pad[axis] = (before, need - have - before)
+            out = np.pad(out, pad, mode="edge")
+    if (pixels.shape[0] - out.shape[0]) % 2 or (pixels.shape[1] - out.shape[1]) % 2:
+        log.debug("chart raster of odd size: its centre moved by half a texel (%.3g mm)", 0.5 * mm_per_px)
+    return np.ascontiguousarray(out, dtype=np.float32), out.shape[0] * mm_per_px, out.shape[1] * mm_per_px
+
+
+def hdr_film(size_px: tuple[int, int], kind: str) -> dict[str, Any]:
+    """Mitsuba's float32 ``hdrfilm`` of ``size_px`` (rows, cols); box filter: a pixel integrates its solid angle."""
+    rows, cols = size_px
+    return {"type": "hdrfilm", "width": cols, "height": rows, "rfilter": {"type": "box"},
+            "pixel_format": "luminance" if kind == "mono" else "rgb", "component_format": "float32",
+            "sample_border": False}
+
+
+def _translate(x: float, y: float, z: float) -> list[list[float]]:
+    return [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]]
+
+
+def dslr_scene(
+    bench: DslrBench,
+    chart_pixels: np.ndarray,
+    chart_mm_per_px: float,
+    *,
+    kind: str = "mono",
+    mesh_cache_dir=None,
+) -> dict[str, Any]:
+    """The Mitsuba scene dict of ``bench`` with the chart raster ``chart_pixels`` (module doc).
+
+    ``chart_pixels``: linear reflectance, (H, W) or (H, W, 3), row 0 the top of the chart as
+    the camera sees it, columns to the camera's right; its centre lies on the optical axis.
+    """
+    pixels = np.asarray(chart_pixels, dtype=np.float32)
+    if pixels.ndim not in (2, 3) or (pixels.ndim == 3 and pixels.shape[2] not in (1, 3)) or min(pixels.shape[:2]) < 1:
+        raise VissimInputError(f"chart pixels must be (H, W) or (H, W, 3), got shape {pixels.shape}")
+    if not np.all(np.isfinite(pixels)) or pixels.min() < 0.0:
+        raise VissimInputError("chart pixels must be finite, non-negative linear reflectance")
+    mm_per_px = _positive(chart_mm_per_px, "chart pixel size", "mm")
+    if kind not in ("mono", "rgb"):
+        raise VissimInputError(f"render kind must be 'mono' or 'rgb', got {kind!r}")
+    setup = bench.viewing_setup()
+    texture, height_mm, width_mm = _chart_texture(bench, setup, pixels, mm_per_px)
+    if texture.ndim == 2:
+        texture = texture[:, :, None]
+    if kind == "mono" and texture.shape[2] == 3:
+        texture = texture @ np.array(REC709_LUMINANCE, dtype=np.float32)[:, None]
+    # The rectangle spans [-1, 1]^2 with normal +z; turned 180 deg about y it faces the camera
+    # (-z) and its local +x (texture u) runs along world -x, the camera's image right.  Mitsuba
+    # puts bitmap row 0 at v = 0, local y = -1 (the bottom), so the raster goes in upside down.
+    # Pinned by tests/render/test_dslr_render.py::test_letters_are_neither_mirrored_nor_upside_down.
+    chart_to_world = [[-0.5 * width_mm, 0.0, 0.0, 0.0], [0.0, 0.5 * height_mm, 0.0, 0.0],
+                      [0.0, 0.0, -1.0, bench.chart_distance_mm], [0.0, 0.0, 0.0, 1.0]]
+    scene: dict[str, Any] = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": MAX_DEPTH, "hide_emitters": False},
+        "camera": {
+            "type": "thinlens",
+            "fov": bench.fov_x_deg(),
+            "fov_axis": "x",
+            "aperture_radius": 0.5 * setup.pupil_diameter_mm,
+            "focus_distance": bench.focus_distance_mm,
+            "near_clip": NEAR_CLIP_MM,
+            "far_clip": 10.0 * bench.chart_distance_mm,
+            # look_at((0,0,0), (0,0,1), up (0,1,0)): Mitsuba's camera frame is +x left, +y up, +z forward.
+            "to_world": [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+            "sampler": {"type": bench.sampler, "sample_count": int(bench.spp), "seed": int(bench.seed)},
+            "film": hdr_film(bench.size_px, kind),
+        },
+        "chart": {
+            "type": "rectangle",
+            "to_world": chart_to_world,
+            "emitter": {
+                "type": "area",
+                "radiance": {"type": "bitmap", "data": texture[::-1] * np.float32(bench.radiance_scale),
+                             "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"},
+            },
+        },
+    }
+    aperture = bench.clear_aperture()
+    for i, (lens, z) in enumerate(zip(bench.physical_lenses, bench.lens_back_vertex_z_mm())):
+        path = cached_lens_ply(lens, aperture, rings=bench.mesh_rings, segments=bench.mesh_segments,
+                               cache_dir=mesh_cache_dir)
+        scene[f"lens_{i}"] = {
+            "type": "ply",
+            "filename": str(path),
+            "face_normals": False,
+            "to_world": _translate(0.0, 0.0, z),
+            "bsdf": {"type": "vissim_refract", "int_ior": float(lens.refractive_index),
+                     "fresnel_loss": bool(bench.fresnel_loss)},
+        }
+    return scene

@@ -1,0 +1,65 @@
+"""What a DSLR campaign is: its settings and its configurations.
+
+Its part of the campaign file is read by `vissim.validation.dslr.loader`; the bench kind
+(`vissim.validation.dslr.kind`) builds each configuration once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.optics.trial_lens import CROWN_GLASS_INDEX
+from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
+from vissim.units import mm_to_m
+from vissim.validation.engine.fields import LensSpec
+
+__all__ = ["Configuration", "CampaignSettings", "SIMULATIONS", "INPUTS"]
+
+#: Simulations a campaign may ask for (see vissim.validation.dslr.simulate.SIMULATION_PARTS).
+SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification")
+#: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
+INPUTS = ("render", "synthetic")
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One comparison: a letter on the bench behind some trial lenses."""
+
+    name: str
+    letter: str
+    logmar: float
+    polarity: str = "black-on-white"
+    lenses: tuple[LensSpec, ...] = ()
+    f_number: float = THESIS_F_NUMBER
+    capture: str | None = None  # id of a real RAW capture in the manifest, if any
+    group: str = ""  # the report's group: its sweep's name, or its own name (empty: its own name)
+
+    def lens_label(self) -> str:
+        return " + ".join(l.label() for l in self.lenses) if self.lenses else "no lens"
+
+    def as_json(self) -> dict:
+        return asdict(self)
+
+    def key_inputs(self) -> dict:
+        """What the item's results depend on: every field but the name and group, which label them."""
+        return {"configuration": {k: v for k, v in self.as_json().items() if k not in ("name", "group")}}
+
+
+@dataclass(frozen=True)
+class CampaignSettings:
+    spp: int = 256
+    seeds: tuple[int, int] = (1, 2)
+    arcmin_per_px: float = 1.0
+    tile_px: tuple[int, int] = (133, 113)  # rows, cols (errata item 8)
+    focal_length_mm: float = THESIS_FOCAL_LENGTH_MM
+    chart_distance_m: float = mm_to_m(THESIS_CHART_DISTANCE_MM)
+    vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
+    wavelength_nm: float = DEFAULT_WAVELENGTH_NM
+    refractive_index: float = CROWN_GLASS_INDEX
+    simulations: tuple[str, ...] = ("wave", "geometric", "thesis")
+    inputs: tuple[str, ...] = INPUTS
+    data_range: float = 1.0  # linear reflectance units: what SSIM/PSNR call the peak
+    wave_truth: bool = True  # the wave bench (traced lenses' wave PSF) as a second truth, and the geometric
+    # self-check (the traced lenses' ray PSF against the render; validation.wave_bench)
+    fit_rx: bool = False  # fit the refraction each capture with lenses shows (vissim.fit), beside vergence theory

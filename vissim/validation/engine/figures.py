@@ -1,0 +1,91 @@
+"""What every report figure shares: grey images at display gamma with a radiance colour bar, an
+angular scale bar on image tiles, alt text, and the record a report keeps of each figure.
+
+The charts are emissive in the renders (a chart texture of relative radiance), so grey images
+show *relative radiance*, sRGB-encoded for display; their colour bars carry ticks at even steps of
+the display scale, labelled with the linear radiance they stand for.
+"""
+
+from __future__ import annotations
+
+import io
+from typing import NamedTuple
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as pyplot  # noqa: E402
+import numpy as np  # noqa: E402
+
+from vissim.imageio import srgb_decode, srgb_encode  # noqa: E402
+
+__all__ = ["Figure", "display_norm", "radiance_colorbar", "RADIANCE_LABEL", "DISPLAY_TICKS", "scale_bar",
+           "scale_bar_arcmin", "tiles_alt", "png_bytes", "pyplot"]
+
+#: The label of every grey image's colour bar.
+RADIANCE_LABEL = "relative radiance, display gamma"
+#: Colour-bar ticks at these even steps of the display (sRGB) scale, labelled in linear radiance.
+DISPLAY_TICKS = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: A scale bar is the longest of these (arcmin) that fits in this fraction of a tile's width.
+SCALE_BAR_STEPS_ARCMIN = (1, 2, 5, 10, 20, 50, 100, 200, 500)
+SCALE_BAR_FRACTION = 0.4
+#: Orange reads on both the white paper and a white-on-black letter.
+SCALE_BAR_COLOUR = "tab:orange"
+
+
+class Figure(NamedTuple):
+    """A report figure: its file, PNG bytes, alt text (what it shows, for readers who cannot see it), provenance extras."""
+
+    file_name: str
+    png: bytes
+    alt: str
+    extra: dict = {}
+
+
+def display_norm():
+    """Grey images as the eye sees them: linear relative radiance 0-1, sRGB-encoded."""
+    from matplotlib.colors import FuncNorm
+
+    return FuncNorm((lambda x: srgb_encode(np.clip(x, 0, 1)), lambda y: srgb_decode(np.clip(y, 0, 1))), vmin=0, vmax=1)
+
+
+def radiance_colorbar(bar) -> None:
+    """Label a grey image's colour bar: relative radiance at display gamma, ticks at even display steps."""
+    values = [float(srgb_decode(np.asarray(t))) for t in DISPLAY_TICKS]
+    bar.set_ticks(values, labels=[f"{v:.2g}" if 0 < v < 1 else f"{v:g}" for v in values])
+    bar.set_label(RADIANCE_LABEL.replace(", ", ",\n"), fontsize=7)
+
+
+def scale_bar_arcmin(width_px: int, arcmin_per_px: float) -> float:
+    """The scale bar's length for a tile ``width_px`` wide: the longest round length within the fraction."""
+    room = SCALE_BAR_FRACTION * width_px * arcmin_per_px
+    fitting = [s for s in SCALE_BAR_STEPS_ARCMIN if s <= room]
+    return float(fitting[-1]) if fitting else room
+
+
+def scale_bar(ax, width_px: int, arcmin_per_px: float) -> float:
+    """Draw an angular scale bar (arcmin) at the bottom left of an image tile; its length, arcmin."""
+    from matplotlib.font_manager import FontProperties
+    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+    length = scale_bar_arcmin(width_px, arcmin_per_px)
+    label = f"{length:g}′" if length >= 1 else f"{length:.2g}′"
+    bar = AnchoredSizeBar(ax.transData, length / arcmin_per_px, label, "lower left", pad=0.3, borderpad=0.3,
+                          color=SCALE_BAR_COLOUR, frameon=False, size_vertical=max(0.5, width_px / 80),
+                          fontproperties=FontProperties(size=7, weight="bold"))
+    ax.add_artist(bar)
+    return length
+
+
+def tiles_alt(what: str, rows: list[str], columns: list[str], extra: str = "") -> str:
+    """Alt text of a grid of image tiles: what it shows, its rows, its columns."""
+    text = (f"{what}. Rows: {'; '.join(rows)}. Columns, one per configuration: {'; '.join(columns)}.")
+    return f"{text} {extra}".strip()
+
+
+def png_bytes(fig) -> bytes:
+    """A figure as PNG bytes (110 dpi); the figure is closed."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    pyplot.close(fig)
+    return buffer.getvalue()

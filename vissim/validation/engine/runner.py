@@ -1,0 +1,199 @@
+"""Run a campaign into a run folder: renders first (in parallel), then items; reuse what is done.
+
+Run folder layout::
+
+    RUN/campaign.json             what was run (kind, settings, configurations, item keys)
+    RUN/renders/<key>.exr         every render, keyed by its inputs (reused on re-runs)
+    RUN/items/<key>/result.json   one item's numbers; written last, so its presence = finished
+    RUN/items/<key>/*.exr|*.png   its images and maps
+    RUN/metrics.*, tables.md, figure_*.png, report.html
+
+Re-running reuses finished renders and items and redoes nothing; every file is written
+atomically, so an interrupted run leaves no corrupt file and resumes where it stopped.
+Renders run here (``workers=1``), in a process pool (``workers=N``), or on a Dask cluster
+(``scheduler=ADDRESS``, `vissim.validation.engine.renders`).  The run folder is checked to hold
+none of the campaign's inputs and is locked for the whole run (`vissim.validation.engine.run_lock`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Callable
+
+from vissim.atomic import check_outputs_apart, write_json_atomic
+from vissim.checks import instance_of, path_arg, samples_per_pixel
+from vissim.errors import VissimInputError
+from vissim.imageio import read_image
+from vissim.progress import Progress, counter, terminal_progress
+from vissim.provenance import make_provenance
+from vissim.validation.engine.inputs import campaign_inputs
+from vissim.validation.engine.keys import item_dir, render_path
+from vissim.validation.engine.protocol import Campaign
+from vissim.validation.engine.registry import bench_kind
+from vissim.validation.engine.renders import make_renders, render_any, spec_key
+from vissim.validation.engine.run_lock import run_folder_lock
+from vissim.validation.engine.scheduler import connect_scheduler
+
+__all__ = ["run_campaign", "run_unlocked", "RunSummary", "check_run", "check_run_options", "progress_of", "MAX_WORKERS"]
+
+log = logging.getLogger(__name__)
+
+MAX_WORKERS = 1024
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    run_dir: Path
+    items_total: int
+    items_reused: int
+    renders_made: int
+    renders_reused: int
+    skipped: tuple[str, ...] = ()  # one message per item that could not run (e.g. an absent capture)
+
+
+def progress_of(show_progress: bool, progress: Progress | None):
+    """The campaign's progress reports: to ``progress`` if given, else bars on a terminal if ``show_progress``."""
+    if progress is not None or not show_progress:
+        return contextlib.nullcontext(progress)
+    return terminal_progress()
+
+
+def check_run(campaign: Campaign, run_dir: Path, workers: int, spp: int | None, scheduler: str | None) -> None:
+    """Before anything is written: the run folder holds none of the campaign's inputs; ``-o``, ``--workers``,
+    ``--spp`` and ``--scheduler`` are sound."""
+    check_outputs_apart(campaign_inputs(campaign), folders=[run_dir])
+    check_run_options(run_dir, workers, spp)
+    if scheduler is not None and not scheduler.strip():
+        raise VissimInputError("--scheduler is empty; expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786 "
+                               "(leave the option out to render here)")
+
+
+def check_run_options(run_dir: Path, workers: int, spp: int | None) -> None:
+    """``-o``, ``--workers`` and ``--spp``, before anything is written."""
+    if run_dir.exists() and not run_dir.is_dir():
+        raise VissimInputError(f"-o {run_dir} is a file, not a run folder")
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
+        raise VissimInputError(f"--workers must be 1 to {MAX_WORKERS} worker processes, got {workers!r}")
+    if spp is not None:
+        samples_per_pixel(spp, "--spp")
+
+
+def nothing_to_compare(source: str, total: int, skipped: list[str]) -> VissimInputError:
+    """The error of a campaign all of whose items were skipped (no report is written)."""
+    which = "its only item was" if total == 1 else f"all {total} items were"
+    return VissimInputError(f"{source}: {which} skipped, nothing to compare: {'; '.join(skipped)}")
+
+
+def _with_spp(campaign: Campaign, spp: int | None) -> Campaign:
+    return campaign if spp is None else replace(campaign, settings=replace(campaign.settings, spp=spp))
+
+
+def run_campaign(campaign: Campaign, run_dir: str | Path, *, workers: int = 1, scheduler: str | None = None,
+                 spp: int | None = None, render: Callable | None = None, show_progress: bool = True,
+                 progress: Progress | None = None) -> RunSummary:
+    """Run (or resume) ``campaign`` into ``run_dir``; returns what was made and reused.
+
+    Every check (the run folder apart from the inputs, options, captures, the scheduler) runs
+    before the first file is written; a campaign whose every item would be skipped raises
+    `VissimInputError` and writes nothing.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        From `vissim.load_campaign`, of any bench kind.
+    run_dir : str or Path
+        Directory for renders, simulations, metrics and the report; an existing run there is
+        resumed (finished items are reused).
+    workers : int
+        Local processes that make the renders (1: in this process).  Items are computed here,
+        one after another.
+    scheduler : str, optional
+        A Dask scheduler's address (``host:port``) to make the renders on instead of
+        ``workers``; checked to answer before anything is written.
+    spp : int, optional
+        Override the campaign's samples per pixel for every render.
+    render : callable, optional
+        ``render(spec)``: pixels (linear light, row 0 at the top) or a result with ``pixels``;
+        default: the bench kind's Mitsuba renderer.  Must be picklable for workers.
+    show_progress : bool
+        Without ``progress``: draw progress bars on a terminal (`vissim.progress.terminal_progress`).
+    progress : callable, optional
+        ``progress(stage, done, total)`` after each render ("rendering") and item ("items").
+
+    Returns
+    -------
+    RunSummary
+        ``run_dir``, items total and reused, renders made and reused, and one message per
+        skipped item.
+
+    Examples
+    --------
+    Needs Mitsuba (the default ``render``) and a campaign file; see tutorial 3:
+
+    >>> import vissim
+    >>> campaign = vissim.load_campaign("campaign.toml")  # doctest: +SKIP
+    >>> summary = vissim.run_campaign(campaign, "runs/demo", workers=2)  # doctest: +SKIP
+    >>> summary.renders_made  # doctest: +SKIP
+    4
+    """
+    instance_of(campaign, Campaign, "run_campaign's campaign", "a Campaign (from vissim.load_campaign(path))")
+    run_dir = path_arg(run_dir, "run_campaign's run_dir")
+    check_run(campaign, run_dir, workers, spp, scheduler)
+    with run_folder_lock(run_dir):
+        return run_unlocked(campaign, run_dir, workers=workers, scheduler=scheduler, spp=spp, render=render,
+                            show_progress=show_progress, progress=progress)
+
+
+def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: str | None, spp: int | None,
+                 render: Callable | None, show_progress: bool, progress: Progress | None) -> RunSummary:
+    """`run_campaign` once its checks are done and the run folder is locked."""
+    campaign, kind = _with_spp(campaign, spp), bench_kind(campaign.kind)
+    keys = [campaign.item_key(c) for c in campaign.configurations]
+    todo = [(k, i) for i, k in enumerate(keys) if not (item_dir(run_dir, k) / "result.json").exists()]
+    plans, skipped = kind.plan_items(campaign, todo)
+    if todo and len(skipped) == len(keys):
+        raise nothing_to_compare(campaign.source, len(keys), skipped)
+    for message in skipped:
+        log.warning("%s", message)
+    needed = {spec_key(spec): spec for plan in plans.values() for spec in plan.renders.values()}
+    with progress_of(show_progress, progress) as report:
+        made = _make_missing_renders(run_dir, needed, campaign.record(keys), workers=workers, scheduler=scheduler,
+                                     render=render or render_any, progress=report,
+                                     items=f"{len(todo)} of {len(keys)} items")
+        advance = counter(report, "items", len(todo))
+        for key, index in todo:
+            if key in plans:
+                _compute_item(kind, campaign, key, index, plans[key], run_dir)
+            advance()
+    return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped))
+
+
+def _compute_item(kind, campaign: Campaign, key: str, index: int, plan, run_dir: Path) -> None:
+    """One item from its renders in ``run_dir`` and its given images."""
+    renders = {role: read_image(render_path(run_dir, spec_key(spec))) for role, spec in plan.renders.items()}
+    images = {**plan.given, **{role: image.pixels for role, image in renders.items()}}
+    provenance = {**plan.given_provenance, **{role: image.provenance for role, image in renders.items()}}
+    kind.compute_item(key, campaign, index, images, plan, provenance, item_dir(run_dir, key))
+
+
+def _make_missing_renders(run_dir: Path, needed: dict, record: dict, *, workers: int, scheduler: str | None,
+                          render: Callable, progress: Progress | None, items: str) -> int:
+    """Write ``campaign.json`` (``record``) and the ``needed`` renders ({key: spec}) not yet in ``run_dir``.
+
+    The scheduler is connected before anything is written.  Returns the number of renders made.
+    """
+    pending = [spec for key, spec in needed.items() if not render_path(run_dir, key).exists()]
+    client = connect_scheduler(scheduler) if scheduler is not None and pending else None
+    try:
+        provenance = make_provenance(campaign=record["source"])
+        write_json_atomic(run_dir / "campaign.json", {**record, "provenance": provenance}, overwrite=True)
+        log.info("%s to do; %d renders to make, %d reused", items, len(pending), len(needed) - len(pending))
+        if pending:
+            make_renders(pending, run_dir, workers, client, render, progress)
+    finally:
+        if client is not None:
+            client.close()
+    return len(pending)

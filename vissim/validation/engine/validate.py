@@ -1,0 +1,62 @@
+"""``vissim validate`` and ``vissim report``: run a campaign file of any kind and report it, or rebuild a report."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from vissim.atomic import check_outputs_apart
+from vissim.errors import VissimInputError
+from vissim.progress import Progress
+from vissim.validation.engine.inputs import recorded_inputs
+from vissim.validation.engine.loader import load_campaign
+from vissim.validation.engine.report import write_report
+from vissim.validation.engine.run_lock import run_folder_lock
+from vissim.validation.engine.runner import RunSummary, check_run, run_unlocked
+
+__all__ = ["CampaignRun", "validate", "rebuild_report"]
+
+
+@dataclass(frozen=True)
+class CampaignRun:
+    """What `validate` did: the bench kind, the run summary, the report files and summary lines."""
+
+    kind: str
+    summary: RunSummary
+    report_files: tuple[Path, ...]
+    lines: tuple[str, ...]
+
+    def text(self) -> str:
+        return "\n".join(self.lines)
+
+
+def validate(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: str | None = None,
+             spp: int | None = None, show_progress: bool = True, progress: Progress | None = None) -> CampaignRun:
+    """Run the campaign file at ``path`` into ``out`` and write its report.
+
+    ``progress(stage, done, total)`` (`vissim.progress`): renders, items, then the report's steps.
+    """
+    out = Path(out)
+    campaign = load_campaign(path)
+    check_run(campaign, out, workers, spp, scheduler)
+    with run_folder_lock(out):
+        summary = run_unlocked(campaign, out, workers=workers, scheduler=scheduler, spp=spp, render=None,
+                               show_progress=show_progress, progress=progress)
+        written, lines = write_report(out, progress=progress)
+    head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
+            f"{summary.renders_reused} reused")
+    report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
+    return CampaignRun(campaign.kind, summary, tuple(written),
+                       (head, *lines, f"report: {report} ({len(written)} files)"))
+
+
+def rebuild_report(run_dir: str | Path, progress: Progress | None = None) -> tuple[list[Path], list[str]]:
+    """Rebuild the report of a run folder (``vissim report``): (files written, summary lines)."""
+    run_dir = Path(run_dir)
+    order = run_dir / "campaign.json"
+    if not order.exists():
+        raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
+    check_outputs_apart([p for p in recorded_inputs(json.loads(order.read_text())) if p.exists()], folders=[run_dir])
+    with run_folder_lock(run_dir):
+        return write_report(run_dir, progress=progress)
