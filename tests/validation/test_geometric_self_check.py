@@ -16,7 +16,8 @@ from vissim.render.backend import choose_variant
 from vissim.validation.dslr.schema import CampaignSettings, Configuration
 from vissim.validation.engine.fields import LensSpec
 from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean
-from vissim.validation.dslr.item import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align, synthetic_tile
+from vissim.validation.dslr.align import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align
+from vissim.validation.dslr.item import synthetic_tile
 from vissim.validation.dslr.renders import build_dslr
 from vissim.validation.dslr.simulate import simulate, simulation_setup
 from vissim.validation.dslr.wave_bench import TRACED_RAYS, traced_ray_image

@@ -16,7 +16,7 @@ for the whole image, each beside the same metric between the two seeds (the floo
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -67,106 +67,144 @@ def _scene_layers(scene, images: dict) -> list:
     return layers
 
 
-def compute_depth_item(key: str, built: DepthBuilt, settings: DepthCampaignSettings, images: dict,
-                       item_dir: Path, *, render_provenance: dict | None = None) -> dict:
-    """Simulate, compare per region, write images and ``result.json`` (last) for one configuration.
+@dataclass
+class _DepthItem:
+    """One depth item being computed: its configuration built once, renders, regions and comparisons."""
 
-    ``images``: the renders by name (``truth_0``, ``truth_1``, ``all_in_focus``, ``proximity``).
-    """
-    from vissim.optics.depth import blur_depth
-    from vissim.optics.depth_layers import composite_layers
-    from vissim.optics.setup import Eye
-    from vissim.render.depth_render import proximity_to_depth_m
+    built: DepthBuilt
+    settings: DepthCampaignSettings
+    item_dir: Path
+    provenance: dict
+    renders: dict
+    saved: dict = field(default_factory=dict)
+    references: dict = field(default_factory=dict)  # optics -> (truth, the other seed's truth)
+    comparisons: list = field(default_factory=list)
 
-    started = time.perf_counter()
-    config = built.configuration
-    provenance = make_provenance(item=key, configuration=config.as_json(), settings=settings,
-                                 render_provenance=render_provenance or {})
+    def save(self, name: str, pixels: np.ndarray, preview: bool = True) -> str:
+        return save_item_image(self.item_dir, name, pixels, self.provenance, preview)
 
-    def _save(item_dir: Path, name: str, pixels: np.ndarray, preview: bool = True) -> str:
-        return save_item_image(item_dir, name, pixels, provenance, preview)
-
-    scene, s = config.scene, settings.oversample
-    eye, setup, margin = built.eye, built.setup, built.margin_px
-    truth_a, truth_b = images["truth_0"], images["truth_1"]
-
-    def frame(pixels):  # integrated onto the campaign's pixels, the margin cropped
-        pixels = block_mean(pixels, s)
+    def frame(self, pixels: np.ndarray) -> np.ndarray:
+        """Integrated onto the campaign's pixels, the margin cropped."""
+        pixels, margin = block_mean(pixels, self.settings.oversample), self.built.margin_px
         return pixels if margin == 0 else pixels[margin:-margin, margin:-margin]
 
-    proximity = frame(images["proximity"])
-    geometries = panel_geometries(scene)
+
+def _regions(item: _DepthItem):
+    """The regions (panel interiors, occlusion band, frame) from the depth pass, and the images that show them."""
+    scene, setup = item.built.configuration.scene, item.built.setup
+    proximity = item.frame(item.renders["proximity"])
 
     def radius_px(p):
         with np.errstate(divide="ignore"):
             distance = np.where(p > 1e-9, 1.0 / np.maximum(p, 1e-9), np.inf)
         return 0.5 * setup.blur_diameter_at_arcmin(distance) / scene.arcmin_per_px
 
-    masks = depth_regions(proximity, geometries, radius_px, pupil_diameter_mm=eye.pupil_diameter_mm,
-                          arcmin_per_px=scene.arcmin_per_px, margin_px=settings.margin_px)
-    saved = {"truth": _save(item_dir, "truth", truth_a), "all_in_focus": _save(item_dir, "all_in_focus",
-                                                                                frame(images["all_in_focus"])),
-             "proximity": _save(item_dir, "proximity_diopters", proximity, preview=False),
-             "regions": _save(item_dir, "regions", masks.label_image().astype(np.float32), preview=False)}
-    eye_kwargs = dict(eye=Eye(eye.prescription, eye.pupil_diameter_mm, eye.accommodation_diopters),
-                      arcmin_per_px=scene.arcmin_per_px / s, wavelength_nm=settings.wavelength_nm,
-                      layer_spacing_fraction=settings.layer_spacing_fraction)
-    layers = _scene_layers(scene, images) if "layered" in settings.inputs else None
-    references = {}
-    comparisons = []
+    masks = depth_regions(proximity, panel_geometries(scene), radius_px,
+                          pupil_diameter_mm=item.built.eye.pupil_diameter_mm, arcmin_per_px=scene.arcmin_per_px,
+                          margin_px=item.settings.margin_px)
+    item.saved |= {"truth": item.save("truth", item.renders["truth_0"]),
+                   "all_in_focus": item.save("all_in_focus", item.frame(item.renders["all_in_focus"])),
+                   "proximity": item.save("proximity_diopters", proximity, preview=False),
+                   "regions": item.save("regions", masks.label_image().astype(np.float32), preview=False)}
+    return masks
+
+
+def _simulate(item: _DepthItem, source: str, mode: str, layers):
+    """One simulation of the item: from the RGB-D renders (`blur_depth`) or the scene's layers (`composite_layers`)."""
+    from vissim.optics.depth import blur_depth
+    from vissim.optics.depth_layers import composite_layers
+    from vissim.render.depth_render import proximity_to_depth_m
+
+    settings, s, scene = item.settings, item.settings.oversample, item.built.configuration.scene
+    common = dict(eye=item.built.blur_eye, arcmin_per_px=scene.arcmin_per_px / s, wavelength_nm=settings.wavelength_nm,
+                  layer_spacing_fraction=settings.layer_spacing_fraction, mode=mode, crop_px=item.built.margin_px * s)
+    if source == "rgbd":
+        return blur_depth(item.renders["all_in_focus"], proximity_to_depth_m(item.renders["proximity"]), **common)
+    return composite_layers(layers, **common)
+
+
+def _references(item: _DepthItem, mode: str) -> tuple[np.ndarray, np.ndarray]:
+    """The truth at both seeds for ``mode``: wave optics against the render + the aperture's in-focus diffraction."""
+    if mode not in item.references:
+        truths = (item.renders["truth_0"], item.renders["truth_1"])
+        if mode == "wave":
+            aperture = replace(item.built.setup, wavelength_nm=item.settings.wavelength_nm)
+            scene = item.built.configuration.scene
+            truths = tuple(add_bench_diffraction(t, aperture, scene.arcmin_per_px) for t in truths)
+            item.saved["truth_diffracted"] = item.save("truth_diffracted", truths[0])
+        item.references[mode] = truths
+    return item.references[mode]
+
+
+def _compare(item: _DepthItem, source: str, mode: str, layers, masks) -> None:
+    """One simulation against the render, per region, beside the two seeds' floor over the same pixels."""
+    started = time.perf_counter()
+    result = _simulate(item, source, mode, layers)
+    simulated = block_mean(result.image, item.settings.oversample)
+    reference, other = _references(item, mode)
+    data_range = item.settings.data_range
+    comparison = compare_images(reference, simulated, data_range=data_range)
+    floor = noise_floor(reference, other, data_range)
+    tag = f"{mode}_{source}"
+    item.comparisons.append({
+        "simulation": f"{mode} {source}",
+        "optics": mode,
+        "input": source,
+        "reference_image": "truth" if mode == "geometric" else "truth_diffracted",
+        "regions": _region_table(comparison, masks, data_range),
+        "noise_floor": _region_table(floor, masks, data_range),
+        "depth_blur": {k: v for k, v in result.as_json().items() if k != "layers"},
+        "seconds": time.perf_counter() - started,
+        "images": {"simulation": item.save(f"sim_{tag}", simulated),
+                   "abs_diff_map": item.save(f"sim_{tag}_ad", comparison.abs_diff_map, preview=False)},
+    })
+
+
+def _panels_record(built: DepthBuilt) -> list[dict]:
+    scene, setup = built.configuration.scene, built.setup
+    return [{"name": g.name, "letters": scene.panels[g.index].chart.letters, "logmar": scene.panels[g.index].chart.logmar,
+             "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
+             "blur_diameter_arcmin": [float(setup.blur_diameter_at_arcmin(d))
+                                      for d in (g.distance_left_m, g.distance_right_m)]}
+            for g in panel_geometries(scene)]
+
+
+def _masks_record(masks, settings: DepthCampaignSettings) -> dict:
+    return {"jump_diopters": masks.jump_diopters, "margin_px": settings.margin_px,
+            "regions": list(masks.interiors) + ["boundary", "frame"],
+            "definition": "interior: >= blur radius + margin from any depth discontinuity and the frame; "
+                          "boundary: within that of a discontinuity; frame: within the largest blur radius + "
+                          "margin of the image border (see vissim.validation.depth.masks)"}
+
+
+def compute_depth_item(key: str, built: DepthBuilt, settings: DepthCampaignSettings, images: dict,
+                       item_dir: Path, *, render_provenance: dict | None = None) -> dict:
+    """Simulate, compare per region, write images and ``result.json`` (last) for one configuration.
+
+    ``images``: the renders by name (`vissim.validation.depth.renders.render_specs`).
+    """
+    started = time.perf_counter()
+    config, eye = built.configuration, built.eye
+    provenance = make_provenance(item=key, configuration=config.as_json(), settings=settings,
+                                 render_provenance=render_provenance or {})
+    item = _DepthItem(built, settings, item_dir, provenance, images)
+    masks = _regions(item)
+    layers = _scene_layers(config.scene, images) if "layered" in settings.inputs else None
     for source in settings.inputs:
         for mode in settings.simulations:
-            started_sim = time.perf_counter()
-            if source == "rgbd":
-                result = blur_depth(images["all_in_focus"], proximity_to_depth_m(images["proximity"]), mode=mode,
-                                    crop_px=margin * s, **eye_kwargs)
-            else:
-                result = composite_layers(layers, mode=mode, crop_px=margin * s, **eye_kwargs)
-            simulated = block_mean(result.image, s)
-            if mode not in references:
-                if mode == "wave":  # the render convolved with the aperture's in-focus diffraction
-                    aperture = replace(setup, wavelength_nm=settings.wavelength_nm)
-                    references[mode] = tuple(add_bench_diffraction(t, aperture, scene.arcmin_per_px)
-                                             for t in (truth_a, truth_b))
-                    saved["truth_diffracted"] = _save(item_dir, "truth_diffracted", references[mode][0])
-                else:
-                    references[mode] = (truth_a, truth_b)
-            reference, other = references[mode]
-            comparison = compare_images(reference, simulated, data_range=settings.data_range)
-            floor = noise_floor(reference, other, settings.data_range)
-            name = f"{mode} {source}"
-            tag = f"{mode}_{source}"
-            comparisons.append({
-                "simulation": name,
-                "optics": mode,
-                "input": source,
-                "reference_image": "truth" if mode == "geometric" else "truth_diffracted",
-                "regions": _region_table(comparison, masks, settings.data_range),
-                "noise_floor": _region_table(floor, masks, settings.data_range),
-                "depth_blur": {k: v for k, v in result.as_json().items() if k != "layers"},
-                "seconds": time.perf_counter() - started_sim,
-                "images": {"simulation": _save(item_dir, f"sim_{tag}", simulated),
-                           "abs_diff_map": _save(item_dir, f"sim_{tag}_ad", comparison.abs_diff_map, preview=False)},
-            })
-    result_json = {
+            _compare(item, source, mode, layers, masks)
+    result = {
         "key": key,
         "configuration": config.as_json(),
-        "equivalent_eye": {**asdict(eye), "prescription": eye.prescription.format(4)},
-        "panels": [{"name": g.name, "letters": scene.panels[g.index].chart.letters,
-                    "logmar": scene.panels[g.index].chart.logmar,
-                    "distance_left_m": g.distance_left_m, "distance_right_m": g.distance_right_m,
-                    "blur_diameter_arcmin": [float(setup.blur_diameter_at_arcmin(d))
-                                             for d in (g.distance_left_m, g.distance_right_m)]} for g in geometries],
-        "frame_margin_px": margin,
-        "masks": {"jump_diopters": masks.jump_diopters, "margin_px": settings.margin_px,
-                  "regions": list(masks.interiors) + ["boundary", "frame"],
-                  "definition": "interior: >= blur radius + margin from any depth discontinuity and the frame; "
-                                "boundary: within that of a discontinuity; frame: within the largest blur radius + "
-                                "margin of the image border (see vissim.validation.depth.masks)"},
-        "comparisons": comparisons,
-        "images": saved,
+        "equivalent_eye": {**asdict(eye), "prescription": eye.prescription.format(4),
+                           "power_matrix_diopters": [list(r) for r in eye.prescription.power_matrix()]},
+        "panels": _panels_record(built),
+        "frame_margin_px": built.margin_px,
+        "masks": _masks_record(masks, settings),
+        "comparisons": item.comparisons,
+        "images": item.saved,
         "seconds": time.perf_counter() - started,
         "provenance": provenance,
     }
-    write_json_atomic(item_dir / "result.json", result_json, overwrite=True)  # last: marks the item finished
-    return result_json
+    write_json_atomic(item_dir / "result.json", result, overwrite=True)  # last: marks the item finished
+    return result

@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 from vissim.bench.depth.scene import DepthScene
 from vissim.bench.depth.scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
-from vissim.optics.setup import ViewingSetup
+from vissim.optics.setup import Eye, ViewingSetup
 from vissim.provenance import json_safe
 from vissim.validation.depth.schema import DepthCampaignSettings, DepthConfiguration
 
@@ -76,8 +76,9 @@ class DepthBuilt:
 
 def build_depth(config: DepthConfiguration, settings: DepthCampaignSettings) -> DepthBuilt:
     """What ``config``'s observer sees of its scene: equivalent eye and `ViewingSetup`, built once."""
-    return DepthBuilt(config, equivalent_eye(config.viewer, config.scene), viewing_setup(config.viewer, config.scene),
-                      config.frame_margin_px(settings))
+    eye = equivalent_eye(config.viewer, config.scene)
+    return DepthBuilt(config, eye, Eye(eye.prescription, eye.pupil_diameter_mm, eye.accommodation_diopters),
+                      viewing_setup(config.viewer, config.scene), config.frame_margin_px(settings))
 
 
 def render_specs(built: DepthBuilt, settings: DepthCampaignSettings) -> dict[str, DepthRenderSpec]:

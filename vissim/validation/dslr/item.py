@@ -5,15 +5,7 @@ aperture's diffraction) and, with ``wave_truth``, the wave bench (`vissim.valida
 With the wave bench, a rendered item also gets the geometric self-check: the lens trace's ray
 optics applied to the synthetic chart (simulation ``traced_rays``), against the render.
 
-**Alignment.**  A simulation of the bench's no-lens render is registered onto the truth and
-shifted there (cubic spline): that render exists only at the campaign's sampling.  A
-simulation of the synthetic chart is aligned on the fine grid instead: the fine chart is
-shifted by the accumulated offset, simulated and registered again, until the remaining
-registration is below `ALIGN_TOLERANCE_PX` (at most `MAX_ALIGN_PASSES` passes);
-the simulated image is compared as it comes, never resampled.  One registration of the
-under-sampled result is biased by 0.01-0.03 px, and shifting it by a spline costs accuracy:
-together they held six astigmatic configurations of the thesis campaign (N, K x 180, Z x 90)
-at -0.1...+1.8 dB over the noise floor, for geometric optics that reaches it elsewhere.
+How a simulation is aligned onto its truth: `vissim.validation.dslr.align`.
 """
 
 from __future__ import annotations
@@ -21,25 +13,21 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
 
 from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
 from vissim.fit.capture import fit_bench_item
-from vissim.optics.resample import SUBPIXELS_PER_PX
-from vissim.provenance import json_safe, make_provenance
-from vissim.validation.dslr.schema import CampaignSettings, Configuration
 from vissim.imaging.metrics import compare_images, noise_floor
-from vissim.imaging.registration import Registration, register
+from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean
+from vissim.provenance import json_safe, make_provenance
+from vissim.validation.dslr.align import MAX_SHIFT_PX, UNREGISTERED, align
 from vissim.validation.dslr.renders import DslrBuilt
-from vissim.optics.resample import block_mean
-from vissim.validation.dslr.simulate import simulate, simulation_setup
-from vissim.validation.engine.item_files import save_item_image
-from vissim.validation.engine.truth import add_bench_diffraction
+from vissim.validation.dslr.schema import CampaignSettings, Configuration
+from vissim.validation.dslr.simulate import SimulationSetup, simulate, simulation_setup
 from vissim.validation.dslr.wave_bench import (
     TRACED_RAYS,
     WAVE_BENCH,
@@ -48,13 +36,12 @@ from vissim.validation.dslr.wave_bench import (
     traced_ray_image,
     traced_rays_setup,
 )
+from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.engine.truth import add_bench_diffraction, cached_psf
 
 __all__ = ["compute_item", "synthetic_tile"]
 
 log = logging.getLogger(__name__)
-
-#: Registration may not move an image further than this (px); more means a wrong crop.
-MAX_SHIFT_PX = 6.0
 
 
 def synthetic_tile(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> np.ndarray:
@@ -94,70 +81,127 @@ def _comparison(kind: str, input_name: str, reference_kind: str, reference_image
     }
 
 
-#: The fine pre-alignment stops when the registration left is below this in both axes (px) ...
-ALIGN_TOLERANCE_PX = 0.01
-#: ... or after this many simulations (the thesis campaign: 1-3 passes for 482 of its 497 fine
-#: alignments; 15 reached 4, 11 of them with one 0.01 px step left).
-MAX_ALIGN_PASSES = 4
-#: Registrations resolve 1/100 px: "below 0.01 px" is then "measured as 0", within 0.005 px.
-REGISTRATION_UPSAMPLE = 100
-FINE_ALIGNMENT = ("fine pre-alignment: the fine input shifted (cubic spline) by the accumulated registration "
-                  f"(cross-correlation, normalization=None) until < {ALIGN_TOLERANCE_PX:g} px is left; "
-                  "the simulated image itself is not resampled")
+@dataclass
+class _Item:
+    """One item being computed: its inputs, truths, the images saved so far and its comparisons."""
+
+    built: DslrBuilt
+    settings: CampaignSettings
+    item_dir: Path
+    provenance: dict
+    captured: bool
+    inputs: dict  # name -> (image, oversample)
+    references: dict = field(default_factory=dict)  # reference kind -> truth image
+    floors: dict = field(default_factory=dict)
+    images: dict = field(default_factory=dict)
+    comparisons: list = field(default_factory=list)
+    offsets: dict = field(default_factory=dict)  # each input's latest fine alignment: the next one's start
+
+    def save(self, name: str, pixels: np.ndarray, preview: bool = True) -> str:
+        return save_item_image(self.item_dir, name, pixels, self.provenance, preview)
+
+    def compare_with_render(self, kind: str, input_name: str, reference_kind: str, setup: dict, simulate_fine) -> None:
+        """``simulate_fine`` of an input, aligned onto the render's truth (`align`), compared and recorded."""
+        image, oversample = self.inputs[input_name]
+        reference = self.references[reference_kind]
+        registration, record = align(reference, simulate_fine, image, oversample,
+                                     self.offsets.get(input_name, (0.0, 0.0)))
+        if oversample > 1:
+            self.offsets[input_name] = registration.shift_px
+        if math.hypot(*registration.shift_px) > MAX_SHIFT_PX:
+            log.warning("%s: %s/%s registered by %.1f px (> %.0f): check the crop", self.built.configuration.name,
+                        kind, input_name, math.hypot(*registration.shift_px), MAX_SHIFT_PX)
+        comparison = compare_images(reference, registration.registered, data_range=self.settings.data_range)
+        self.comparisons.append(_comparison(kind, input_name, reference_kind,
+                                            "truth" if reference_kind == "geometric" else "truth_diffracted", setup,
+                                            record, registration.registered, comparison, self.save,
+                                            f"{kind}_{input_name}"))
 
 
-def _fine_shift(image: np.ndarray, offset_px: tuple[float, float], oversample: int) -> np.ndarray:
-    if offset_px == (0.0, 0.0):
-        return image
-    return ndimage.shift(image, (offset_px[0] * oversample, offset_px[1] * oversample), order=3, mode="nearest")
+def _truths(item: _Item, truth_a: np.ndarray, truth_b: np.ndarray | None) -> None:
+    """The references (the render; for wave optics the render + the aperture's diffraction) and their floors.
 
-
-def align(reference: np.ndarray, simulate_fine, image: np.ndarray, oversample: int,
-          start_px: tuple[float, float] = (0.0, 0.0)) -> tuple[Registration, dict]:
-    """``simulate_fine(image)`` aligned onto ``reference``: the registration (with the image) and its record.
-
-    ``oversample == 1`` (the no-lens render): one registration, the result shifted onto the
-    reference.  Finer inputs: the module docstring's fine pre-alignment, from ``start_px`` (a
-    previous simulation's offset; the letter's placement is the same for every simulation).
-    The recorded shift is the offset applied to the input, in campaign pixels.
+    A photograph already carries the lens's diffraction; a render carries none (module simulate).
     """
-    if oversample == 1:
-        registration = register(reference, simulate_fine(image), upsample_factor=REGISTRATION_UPSAMPLE)
-        return registration, registration.as_json()
-    offset = (float(start_px[0]), float(start_px[1]))
-    for passes in range(1, MAX_ALIGN_PASSES + 1):
-        simulated = simulate_fine(_fine_shift(image, offset, oversample))
-        residual = register(reference, simulated, upsample_factor=REGISTRATION_UPSAMPLE)
-        if max(abs(residual.shift_rows_px), abs(residual.shift_cols_px)) < ALIGN_TOLERANCE_PX:
-            break
-        if passes < MAX_ALIGN_PASSES:
-            offset = (offset[0] + residual.shift_rows_px, offset[1] + residual.shift_cols_px)
-    else:
-        log.info("fine alignment stopped after %d passes with (%.3f, %.3f) px left", MAX_ALIGN_PASSES,
-                 residual.shift_rows_px, residual.shift_cols_px)
-    registration = replace(residual, shift_rows_px=offset[0], shift_cols_px=offset[1], registered=simulated)
-    record = {**registration.as_json(), "method": FINE_ALIGNMENT, "passes": passes,
-              "residual_px": [residual.shift_rows_px, residual.shift_cols_px]}
-    return registration, record
+    settings, setup = item.settings, item.built.setup
+
+    def diffracted(truth):
+        return truth if item.captured else add_bench_diffraction(truth, setup, settings.arcmin_per_px)
+
+    item.references = {"geometric": truth_a, "wave": diffracted(truth_a)}
+    item.floors = {"geometric": None, "wave": None}
+    if truth_b is not None:
+        item.floors = {"geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
+                       "wave": noise_floor(item.references["wave"], diffracted(truth_b), settings.data_range).as_json()}
+    item.images |= {"truth": item.save("truth", truth_a),
+                    "truth_diffracted": item.save("truth_diffracted", item.references["wave"])}
 
 
-#: The wave bench's truth and a simulation share one grid: nothing is registered (module wave_bench).
-UNREGISTERED = {"shift_rows_px": 0.0, "shift_cols_px": 0.0, "error": None, "upsample_factor": None,
-                "method": "none: the wave truth and the simulation are laid out on one grid from one chart"}
+def _wave_bench(item: _Item):
+    """The wave bench (module wave_bench): the chart through the traced lenses' wave PSF, and its residual budget.
+
+    None for a capture: the virtual bench's wave optics does not stand in for a photograph.
+    """
+    if not item.settings.wave_truth or item.captured:
+        return None, None
+    bench, settings = item.built.bench, item.settings
+    traced = compute_wave_bench(bench, item.built.configuration, settings, SUBPIXELS_PER_PX)
+    item.images["wave_truth"] = save_item_image(item.item_dir, "wave_truth", traced.pixels,
+                                                {**item.provenance, "wave_truth": json_safe(traced.provenance)})
+    item.floors[WAVE_BENCH] = None  # noise-free: no floor
+    return traced, residual_budget(bench, item.built.setup, settings.wavelength_nm)
 
 
-def compute_item(
-    key: str,
-    built: DslrBuilt,
-    settings: CampaignSettings,
-    truth_a: np.ndarray,
-    truth_b: np.ndarray | None,
-    no_lens: np.ndarray,
-    item_dir: Path,
-    *,
-    source: dict | None = None,
-    render_provenance: dict | None = None,
-) -> dict:
+def _simulations(item: _Item, traced_truth) -> None:
+    """Every simulation of every input against the render, and the wave-optical ones against the wave bench."""
+    settings, built = item.settings, item.built
+    for kind in settings.simulations:
+        setup = simulation_setup(kind, built.setup, built.lenses, built.configuration, settings)
+        reference_kind = "geometric" if setup.mode == "geometric" else "wave"
+        for input_name in settings.inputs:
+            oversample = item.inputs[input_name][1]
+            item.compare_with_render(kind, input_name, reference_kind, setup.as_json(),
+                                     lambda image, setup=setup, oversample=oversample:
+                                     simulate(setup, image, settings, oversample=oversample))
+        if traced_truth is not None and setup.mode == "wave":
+            _against_wave_bench(item, setup, traced_truth)
+
+
+def _against_wave_bench(item: _Item, setup: SimulationSetup, traced_truth) -> None:
+    """The synthetic chart as laid out, unshifted, against the wave truth laid out from the same chart."""
+    fine = item.inputs["synthetic"][0]
+    simulated = simulate(setup, fine, item.settings, oversample=SUBPIXELS_PER_PX)
+    comparison = compare_images(traced_truth.pixels, simulated, data_range=item.settings.data_range)
+    item.comparisons.append(_comparison(setup.kind, "synthetic", WAVE_BENCH, "wave_truth", setup.as_json(),
+                                        UNREGISTERED, simulated, comparison, item.save,
+                                        f"{setup.kind}_synthetic_{WAVE_BENCH}"))
+
+
+def _self_check(item: _Item) -> None:
+    """The geometric self-check (module wave_bench): the trace's ray optics against the render."""
+    bench = item.built.bench
+    item.compare_with_render(TRACED_RAYS, "synthetic", "geometric", traced_rays_setup(bench),
+                             lambda image: traced_ray_image(bench, image, SUBPIXELS_PER_PX))
+
+
+def _wave_psf(item: _Item) -> dict | None:
+    """The wave simulation's PSF at the synthetic chart's sampling, saved with its numbers (the report's PSF figures
+    read it); None without a wave simulation."""
+    if "wave" not in item.settings.simulations:
+        return None
+    built, settings = item.built, item.settings
+    setup = simulation_setup("wave", built.setup, built.lenses, built.configuration, settings).setup
+    step = settings.arcmin_per_px / SUBPIXELS_PER_PX
+    psf = cached_psf(setup, step, "wave")
+    image = save_item_image(item.item_dir, "psf_wave", psf.data, item.provenance, preview=False)
+    return {"image": image, "simulation": "wave", "arcmin_per_px": psf.arcmin_per_px,
+            "pupil_diameter_mm": psf.pupil_diameter_mm, "wavelength_nm": psf.wavelengths_nm[0], "mode": psf.mode,
+            "pixel": psf.pixel, "energy_in_field": psf.energy_in_field}
+
+
+def compute_item(key: str, built: DslrBuilt, settings: CampaignSettings, truth_a: np.ndarray,
+                 truth_b: np.ndarray | None, no_lens: np.ndarray, item_dir: Path, *, source: dict | None = None,
+                 render_provenance: dict | None = None) -> dict:
     """Compare every requested simulation with the ground truth; write images and result.json.
 
     ``truth_b`` is a second, independent ground truth (another seed or exposure) for the noise
@@ -165,91 +209,35 @@ def compute_item(
     of the renders or captures the item uses, by role) goes, as given, into every image's.
     """
     started = time.perf_counter()
-    configuration = built.configuration
-    provenance = make_provenance(item=key, configuration=configuration.as_json(), settings=settings,
-                                 source=source or {}, render_provenance=render_provenance or {})
-
-    def save(name: str, pixels: np.ndarray, preview: bool = True) -> str:
-        return save_item_image(item_dir, name, pixels, provenance, preview)
-
-    bench, lenses, bench_setup = built.bench, built.lenses, built.setup
-    captured = bool(source and source.get("ground_truth") == "capture")
-    # A photograph already carries the lens's diffraction; a render carries none (module simulate).
-    truth_wave_a = truth_a if captured else add_bench_diffraction(truth_a, bench_setup, settings.arcmin_per_px)
-    references = {"geometric": truth_a, "wave": truth_wave_a}
-    floors = {"geometric": None, "wave": None}
-    if truth_b is not None:
-        truth_wave_b = truth_b if captured else add_bench_diffraction(truth_b, bench_setup, settings.arcmin_per_px)
-        floors = {
-            "geometric": noise_floor(truth_a, truth_b, settings.data_range).as_json(),
-            "wave": noise_floor(truth_wave_a, truth_wave_b, settings.data_range).as_json(),
-        }
+    configuration, source = built.configuration, source or {}
+    provenance = make_provenance(item=key, configuration=configuration.as_json(), settings=settings, source=source,
+                                 render_provenance=render_provenance or {})
     fine_synthetic = synthetic_tile(configuration, settings, SUBPIXELS_PER_PX)
-    inputs = {"render": (no_lens, 1), "synthetic": (fine_synthetic, SUBPIXELS_PER_PX)}
-    images = {
-        "truth": save("truth", truth_a),
-        "truth_diffracted": save("truth_diffracted", truth_wave_a),
-        "no_lens_render": save("no_lens_render", no_lens),
-        "synthetic": save("synthetic", block_mean(fine_synthetic, SUBPIXELS_PER_PX)),
-    }
-    # The wave bench (module wave_bench): the bench's chart through the traced lenses' wave PSF.
-    # A capture's truth is the photograph; the virtual bench's wave optics does not stand in for it.
-    traced_truth, budget = None, None
-    if settings.wave_truth and not captured:
-        traced_truth = compute_wave_bench(bench, configuration, settings, SUBPIXELS_PER_PX)
-        images["wave_truth"] = save_item_image(item_dir, "wave_truth", traced_truth.pixels,
-                                               {**provenance, "wave_truth": json_safe(traced_truth.provenance)})
-        budget = residual_budget(bench, bench_setup, settings.wavelength_nm)
-        floors[WAVE_BENCH] = None  # noise-free: no floor
-    comparisons = []
-    offsets: dict[str, tuple[float, float]] = {}  # each input's latest fine alignment: the next one's start
-
-    def compare_with_render(kind: str, input_name: str, reference_kind: str, setup: dict, simulate_fine) -> None:
-        image, oversample = inputs[input_name]
-        reference = references[reference_kind]
-        registration, record = align(reference, simulate_fine, image, oversample, offsets.get(input_name, (0.0, 0.0)))
-        if oversample > 1:
-            offsets[input_name] = registration.shift_px
-        if math.hypot(*registration.shift_px) > MAX_SHIFT_PX:
-            log.warning("%s: %s/%s registered by %.1f px (> %.0f): check the crop", configuration.name, kind,
-                        input_name, math.hypot(*registration.shift_px), MAX_SHIFT_PX)
-        comparison = compare_images(reference, registration.registered, data_range=settings.data_range)
-        comparisons.append(_comparison(kind, input_name, reference_kind,
-                                       "truth" if reference_kind == "geometric" else "truth_diffracted", setup,
-                                       record, registration.registered, comparison, save, f"{kind}_{input_name}"))
-
-    for kind in settings.simulations:
-        setup = simulation_setup(kind, bench_setup, lenses, configuration, settings)
-        reference_kind = "geometric" if setup.mode == "geometric" else "wave"
-        for input_name in settings.inputs:
-            oversample = inputs[input_name][1]
-            compare_with_render(kind, input_name, reference_kind, setup.as_json(),
-                                lambda image, setup=setup, oversample=oversample: simulate(setup, image, settings,
-                                                                                           oversample=oversample))
-        if traced_truth is not None and setup.mode == "wave":
-            # the synthetic chart as laid out, unshifted: the truth is laid out from the same chart
-            simulated = simulate(setup, fine_synthetic, settings, oversample=SUBPIXELS_PER_PX)
-            comparison = compare_images(traced_truth.pixels, simulated, data_range=settings.data_range)
-            comparisons.append(_comparison(kind, "synthetic", WAVE_BENCH, "wave_truth", setup.as_json(), UNREGISTERED,
-                                           simulated, comparison, save, f"{kind}_synthetic_{WAVE_BENCH}"))
+    item = _Item(built, settings, item_dir, provenance, source.get("ground_truth") == "capture",
+                 {"render": (no_lens, 1), "synthetic": (fine_synthetic, SUBPIXELS_PER_PX)})
+    _truths(item, truth_a, truth_b)
+    item.images |= {"no_lens_render": item.save("no_lens_render", no_lens),
+                    "synthetic": item.save("synthetic", block_mean(fine_synthetic, SUBPIXELS_PER_PX))}
+    traced_truth, budget = _wave_bench(item)
+    _simulations(item, traced_truth)
     if traced_truth is not None:
-        # The geometric self-check (module wave_bench): the trace's ray optics against the render.
-        compare_with_render(TRACED_RAYS, "synthetic", "geometric", traced_rays_setup(bench),
-                            lambda image: traced_ray_image(bench, image, SUBPIXELS_PER_PX))
+        _self_check(item)
     fit = None
     if settings.fit_rx and configuration.lenses:  # the refraction the capture shows, beside vergence theory
-        fit = fit_bench_item(truth_a, no_lens, bench, arcmin_per_px=settings.arcmin_per_px, photograph=captured)
+        fit = fit_bench_item(truth_a, no_lens, built.bench, arcmin_per_px=settings.arcmin_per_px,
+                             photograph=item.captured)
     result = {
         "key": key,
         "configuration": configuration.as_json(),
         "lens_label": configuration.lens_label(),
-        "lenses": [{k: v for k, v in asdict(l).items() if k != "back_surface_diopters"} for l in lenses],
-        "noise_floor": floors,
-        "comparisons": comparisons,
+        "lenses": [{k: v for k, v in asdict(l).items() if k != "back_surface_diopters"} for l in built.lenses],
+        "noise_floor": item.floors,
+        "comparisons": item.comparisons,
         "wave_bench": budget,
         "fit_rx": fit,
-        "images": images,
-        "source": source or {},
+        "psf": _wave_psf(item),
+        "images": item.images,
+        "source": source,
         "seconds": time.perf_counter() - started,
         "provenance": provenance,
     }

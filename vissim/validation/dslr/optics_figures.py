@@ -1,14 +1,14 @@
 """The report's optics figures: the wave PSF (log scale), its MTF against the diffraction limit, through focus.
 
 One configuration stands for each group (a sweep, or one item): of those with lenses, the one of
-median defocus.  Its wave simulation's PSF is recomputed with the public functions
-(`vissim.compute_psf`, `vissim.mtf`, `vissim.diffraction_mtf`,
-`vissim.blur_image`) from the numbers the item recorded: the camera's power matrix and pupil of the
-``wave`` comparison (``setup`` in ``result.json``), the campaign's wavelength and sampling.  The PSF is the one the simulation of the synthetic chart
-used (the campaign's arcmin/px over ``SUBPIXELS_PER_PX``); the through-focus strip blurs the
-item's synthetic chart at the campaign's sampling.  Spectacle magnification is left out (the PSF
-has none; the simulation magnifies the image before blurring).  ``vissim report RUN`` redraws
-them from a run folder, like the other figures.
+median defocus.  The PSF and MTF panels show the PSF its wave simulation of the synthetic chart
+used, as the item saved it (``psf`` in ``result.json``: the image and its sampling, pupil and
+wavelength), with `vissim.mtf` and `vissim.diffraction_mtf`.  The through-focus strip needs
+PSFs no item computed: they are made with `vissim.compute_psf` from the numbers the item
+recorded (the camera's power matrix and pupil of the ``wave`` comparison, the campaign's
+wavelength and sampling), with the sphere stepped, and blur the item's synthetic chart at the
+campaign's sampling.  Spectacle magnification is left out (the PSF has none; the simulation
+magnifies the image before blurring).  ``vissim report RUN`` redraws them from a run folder.
 """
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ from vissim.validation.dslr.report_words import lens_words
 from vissim.validation.engine.figures import display_norm, pyplot, radiance_colorbar, scale_bar
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
-           "mtf_figure_of", "through_focus_figure_of", "optics_figures", "THROUGH_FOCUS_STEPS_D", "LOG_PSF_DECADES"]
+           "mtf_figure_of", "through_focus_figure_of", "optics_figures", "recorded_psf", "THROUGH_FOCUS_STEPS_D",
+           "LOG_PSF_DECADES"]
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +59,7 @@ class OpticsCase:
     psf_arcmin_per_px: float  # the sampling of the simulation of the synthetic chart
     synthetic: Path | None  # the item's synthetic chart at the campaign's sampling
     trial_lenses: str = ""  # the lenses in the holder (their label), which give the camera ``prescription``
+    psf_file: Path | None = None  # the PSF the item's wave simulation used, as it saved it (None: an older item)
 
     def as_json(self) -> dict:
         return {"group": self.group, "configuration": self.configuration, "trial_lenses": self.trial_lenses,
@@ -86,12 +88,13 @@ def optics_cases(results: list[dict], run_dir: str | Path, campaign: dict) -> li
         if wave is None:
             continue
         settings = campaign.get("settings") or result["provenance"]["inputs"]["settings"]
-        synthetic = result["images"].get("synthetic")
+        synthetic, psf = result["images"].get("synthetic"), result.get("psf") or {}
+        step = float(psf.get("arcmin_per_px", float(settings["arcmin_per_px"]) / SUBPIXELS_PER_PX))
         case = OpticsCase(group_of(result["configuration"]), result["configuration"]["name"],
                           Prescription.from_power_matrix(wave["setup"]["camera_power_matrix_diopters"]),
                           float(wave["setup"]["pupil_diameter_mm"]), float(settings["wavelength_nm"]),
-                          float(settings["arcmin_per_px"]), float(settings["arcmin_per_px"]) / SUBPIXELS_PER_PX,
-                          run_dir / synthetic if synthetic else None, result["lens_label"])
+                          float(settings["arcmin_per_px"]), step, run_dir / synthetic if synthetic else None,
+                          result["lens_label"], run_dir / psf["image"] if psf.get("image") else None)
         groups.setdefault(case.group, []).append((result["lens_label"] != "no lens", case))
     cases = []
     for members in groups.values():
@@ -101,8 +104,19 @@ def optics_cases(results: list[dict], run_dir: str | Path, campaign: dict) -> li
     return cases
 
 
+def recorded_psf(case: OpticsCase) -> PSF:
+    """The wave PSF the item's simulation of the synthetic chart used, read from the item (pixel-integrated);
+    computed from the recorded numbers (`case_psf`) for an item that saved none."""
+    if case.psf_file is None or not case.psf_file.exists():
+        return case_psf(case)
+    psf = PSF.from_array(read_image(case.psf_file).pixels, case.psf_arcmin_per_px, wavelength_nm=case.wavelength_nm,
+                         pupil_diameter_mm=case.pupil_diameter_mm)
+    return replace(psf, mode="wave", pixel="integrate")
+
+
 def case_psf(case: OpticsCase, arcmin_per_px: float | None = None, sphere_step_diopters: float = 0.0) -> PSF:
-    """The wave PSF of ``case`` (pixel-integrated), at ``arcmin_per_px`` (default: the synthetic chart's sampling).
+    """The wave PSF of ``case`` (pixel-integrated) computed from its recorded numbers, at ``arcmin_per_px``
+    (default: the synthetic chart's sampling); the through-focus strip's PSFs, which no item computed.
 
     ``sphere_step_diopters`` is added to the camera prescription's sphere (the through-focus steps).
     """
@@ -264,7 +278,7 @@ def optics_figures(results: list[dict], run_dir: str | Path, campaign: dict,
     cases = optics_cases(results, run_dir, campaign)
     if not cases:
         return {}
-    psfs = [case_psf(case) for case in cases]
+    psfs = [recorded_psf(case) for case in cases]
     extra = {"optics": [case.as_json() for case in cases]}
     panels = "; ".join(_panel_title(c).replace("\n", ", ") for c in cases)
     figures = {

@@ -71,6 +71,8 @@ class SimulationSetup:
             "camera_power_matrix_diopters": [list(r) for r in self.setup.camera_prescription.power_matrix()],
             "pupil_diameter_mm": self.setup.pupil_diameter_mm,
             "magnification_matrix": [list(r) for r in self.setup.magnification_matrix],
+            "zernike_um": {f"{n},{m}": c for (n, m), c in sorted(self.setup.wavefront.coefficients_um.items())},
+            "wavelength_nm": self.setup.wavelength_nm,
             "mode": self.mode,
         }
 
