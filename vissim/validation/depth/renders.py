@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from vissim.bench.depth.scene import DepthScene
 from vissim.bench.depth.scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
@@ -66,10 +66,12 @@ def render_depth_spec(spec: DepthRenderSpec):
 
 @dataclass(frozen=True)
 class DepthBuilt:
-    """A configuration built once: the observer's equivalent eye, its viewing setup and the frame margin."""
+    """A configuration built once: the observer's equivalent eye (as a viewer, and as the `Eye` the
+    simulations blur with), its viewing setup and the frame margin."""
 
     configuration: DepthConfiguration
-    eye: Any  # vissim.bench.depth_viewers.EquivalentEye
+    eye: EyeViewer
+    blur_eye: Eye
     setup: ViewingSetup
     margin_px: int
 
