@@ -12,7 +12,7 @@ from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effe
 from vissim.units import arcmin_to_rad, cyc_per_rad_to_cyc_per_deg
 from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.validation.dslr.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
-                                              optics_cases, psf_figure_of, sampling_label)
+                                              optics_cases, psf_figure_of, recorded_psf, sampling_label)
 from vissim.validation.engine.loader import load_campaign
 from vissim.validation.engine.report import load_results, write_report
 from vissim.validation.dslr.renders import build_dslr
@@ -79,6 +79,23 @@ def test_one_case_per_group_with_lenses_and_the_optics_of_its_bench(run_dir, cas
         assert case.pupil_diameter_mm == pytest.approx(expected_pupil)
         assert case.wavelength_nm == settings.wavelength_nm
         assert case.psf_arcmin_per_px == pytest.approx(settings.arcmin_per_px / SUBPIXELS_PER_PX)
+
+
+def test_the_psf_figures_read_the_psf_the_item_used(cases, tmp_path):
+    """The PSF and MTF panels show the PSF the wave simulation used, as the item saved it: equal to the PSF
+    its recorded numbers give (to float32 storage), and what the file holds (a delta put there is read back)."""
+    from dataclasses import replace
+
+    from vissim.imageio import write_image
+
+    for case in cases:
+        stored, computed = recorded_psf(case), case_psf(case)
+        assert case.psf_file.name == "psf_wave.exr" and stored.arcmin_per_px == computed.arcmin_per_px
+        np.testing.assert_allclose(stored.data, computed.data, rtol=0, atol=1e-6 * computed.data.max())
+    delta = np.zeros((9, 9), np.float32)
+    delta[4, 4] = 1.0
+    write_image(tmp_path / "psf_wave.exr", delta)
+    assert recorded_psf(replace(cases[0], psf_file=tmp_path / "psf_wave.exr")).data[4, 4] == 1.0
 
 
 def test_figures_are_written_with_provenance_and_linked(run_dir, cases):
