@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -119,43 +120,58 @@ def _group_row(group: str, psnrs: list[float], budgets: list[dict]) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
-def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
-    """Markdown: the summary per group (a column ``wave / wave bench``), the causes, and a table per configuration."""
-    wave_rows = [r for r in rows if is_wave_bench_row(r)]
-    if not wave_rows:
-        return ""
-    simulations = list(dict.fromkeys(r["simulation"] for r in wave_rows))
-    psnr = {(r["configuration"], r["simulation"]): r["psnr_db"] for r in wave_rows}
-    budgets = {r["configuration"]["name"]: r["wave_bench"] for r in results if r.get("wave_bench")}
+@dataclass(frozen=True)
+class _WaveBenchRows:
+    """The rows against the wave bench, by (configuration, simulation), with each configuration's budget and group."""
+
+    simulations: list[str]
+    psnr: dict[tuple[str, str], float]
+    budgets: dict[str, dict]
+    groups: dict[str, list[str]]
+
+
+def _wave_bench_rows(results: list[dict], wave_rows: list[dict]) -> _WaveBenchRows:
     groups: dict[str, list[str]] = {}
     for name, group in dict.fromkeys((r["configuration"], r["group"]) for r in wave_rows):
         groups.setdefault(group, []).append(name)
-    wavelengths = sorted({b["wavelength_nm"] for b in budgets.values()})
-    header = ["group (configurations)", *[f"{s} / wave bench" for s in simulations], "wave / wave bench, lowest",
+    return _WaveBenchRows(list(dict.fromkeys(r["simulation"] for r in wave_rows)),
+                          {(r["configuration"], r["simulation"]): r["psnr_db"] for r in wave_rows},
+                          {r["configuration"]["name"]: r["wave_bench"] for r in results if r.get("wave_bench")}, groups)
+
+
+def _summary(results: list[dict], w: _WaveBenchRows) -> list[str]:
+    """The PSNR per group against the wave bench, and what the configurations without a lens score."""
+    wavelengths = sorted({b["wavelength_nm"] for b in w.budgets.values()})
+    header = ["group (configurations)", *[f"{s} / wave bench" for s in w.simulations], "wave / wave bench, lowest",
               "residual's cause"]
     out = [
         "### Summary: PSNR against the wave bench (dB)\n",
         (f"The wave bench is the chart imaged through the trial lenses' traced wavefront by wave optics, traced "
-         f"through the dispersive crown glass at {', '.join(f'{w:g}' for w in wavelengths)} nm. It is noise-free, "
+         f"through the dispersive crown glass at {', '.join(f'{x:g}' for x in wavelengths)} nm. It is noise-free, "
          "so there is no noise floor: these are absolute PSNRs (median per group) of the simulations of the "
          "synthetic chart, unregistered. The wave simulation passes at >= 50 dB; the aim is 60 dB.\n"),
         "| " + " | ".join(header) + " |",
         "|" + "---|" * len(header),
     ]
-    for group, names in groups.items():
-        cells = [_cell([psnr[(n, s)] for n in names if (n, s) in psnr]) for s in simulations]
-        wave = [psnr[(n, "wave")] for n in names if (n, "wave") in psnr]
-        causes = Counter(budgets[n]["cause"] for n in names if n in budgets)
+    for group, names in w.groups.items():
+        cells = [_cell([w.psnr[(n, s)] for n in names if (n, s) in w.psnr]) for s in w.simulations]
+        wave = [w.psnr[(n, "wave")] for n in names if (n, "wave") in w.psnr]
+        causes = Counter(w.budgets[n]["cause"] for n in names if n in w.budgets)
         out.append("| " + " | ".join([f"{group} ({len(names)})", *cells, f"{min(wave):.1f}" if wave else "—",
                                       ", ".join(f"{c} ({k})" for c, k in causes.most_common()) or "—"]) + " |")
-    rendered = sorted({n for b in budgets.values() for n in b["rendered_index"]})
-    bare = [psnr[(n, "wave")] for r in results if r.get("lens_label") == NO_LENS
-            for n in [r["configuration"]["name"]] if (n, "wave") in psnr]
+    bare = [w.psnr[(n, "wave")] for r in results if r.get("lens_label") == NO_LENS
+            for n in [r["configuration"]["name"]] if (n, "wave") in w.psnr]
     if bare:
         out += ["", (f"Configurations without a lens ({len(bare)}) score {value_span(bare, '.1f')} dB here: with nothing "
                      "traced, only the float32 round-off of the two computations is left. They raise their groups' "
                      "medians, not the lowest, which a configuration with lenses sets whenever the group has one.")]
-    out += ["", "### Residuals against the wave bench, explained\n"]
+    return out
+
+
+def _residuals(w: _WaveBenchRows) -> list[str]:
+    """Per group, the largest of each part of the residual, and what names it."""
+    rendered = sorted({n for b in w.budgets.values() for n in b["rendered_index"]})
+    out = ["", "### Residuals against the wave bench, explained\n"]
     out.append("Each residual of the wave simulation against the wave bench is named by the largest RMS part of "
                "the wavefront difference: dispersion (the trace at the campaign's wavelength against the trace at "
                "the d line, where the glass has the rendered index "
@@ -166,20 +182,25 @@ def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
                "simulation, and the obliquity of the field in neither, so neither is part of the residual.\n")
     out += ["| " + " | ".join(["group (configurations)", *RESIDUAL_COLUMNS]) + " |",
             "|" + "---|" * (len(RESIDUAL_COLUMNS) + 1)]
-    for group, names in groups.items():
-        group_budgets = [budgets[n] for n in names if n in budgets]
+    for group, names in w.groups.items():
+        group_budgets = [w.budgets[n] for n in names if n in w.budgets]
         if group_budgets:
-            out.append(_group_row(group, [psnr[(n, "wave")] for n in names if (n, "wave") in psnr], group_budgets))
-    out += ["", "### Each configuration against the wave bench\n"]
-    columns = ["configuration", *[f"{s} / wave bench" for s in simulations], "trial lens power, traced",
+            out.append(_group_row(group, [w.psnr[(n, "wave")] for n in names if (n, "wave") in w.psnr], group_budgets))
+    return out
+
+
+def _per_configuration(w: _WaveBenchRows) -> list[str]:
+    """Each configuration's PSNRs and budget."""
+    out = ["", "### Each configuration against the wave bench\n"]
+    columns = ["configuration", *[f"{s} / wave bench" for s in w.simulations], "trial lens power, traced",
                "trial lens power, simulated",
                "traced − simulated (D)", "dispersion (D)", "vergence approx. (D)", "c(4,0) (nm)",
                "thickness, in both (D)", "obliquity, in neither (nm RMS)", "cause"]
     out += ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-    for names in groups.values():
+    for names in w.groups.values():
         for name in names:
-            b = budgets.get(name)
-            cells = [_cell([psnr[(name, s)]], 2) if (name, s) in psnr else "—" for s in simulations]
+            b = w.budgets.get(name)
+            cells = [_cell([w.psnr[(name, s)]], 2) if (name, s) in w.psnr else "—" for s in w.simulations]
             if b is None:
                 cells += ["—"] * 9
             else:
@@ -188,4 +209,13 @@ def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
                           f"{1e3 * b['spherical_aberration_um']:.2g}", _diopters(b["thickness_diopters"]),
                           f"{1e3 * b['obliquity_rms_um']:.2g}", b["cause"]]
             out.append("| " + " | ".join([name, *cells]) + " |")
-    return "\n".join(out) + "\n"
+    return out
+
+
+def wave_bench_tables(results: list[dict], rows: list[dict]) -> str:
+    """Markdown: the summary per group (a column ``wave / wave bench``), the causes, and a table per configuration."""
+    wave_rows = [r for r in rows if is_wave_bench_row(r)]
+    if not wave_rows:
+        return ""
+    w = _wave_bench_rows(results, wave_rows)
+    return "\n".join([*_summary(results, w), *_residuals(w), *_per_configuration(w)]) + "\n"
