@@ -256,6 +256,40 @@ def _checked_weights(weights, wavelengths: tuple[float, ...]) -> tuple[float, ..
     return tuple(w / sum(weights_t) for w in weights_t)
 
 
+def _checked_size_px(size_px) -> int:
+    if (isinstance(size_px, bool) or not isinstance(size_px, (int, float, np.integer, np.floating))
+            or int(size_px) != size_px or not 1 <= size_px <= MAX_PSF_SIZE_PX):
+        raise VissimInputError(f"PSF size must be an integer number of pixels in 1-{MAX_PSF_SIZE_PX} (or 'auto'), "
+                               f"got {size_px!r}")
+    return int(size_px)
+
+
+def _check_options(mode, pixel, dtype, method, normalise) -> None:
+    """`compute_psf`'s choices: optics, pixel, dtype, method and normalisation."""
+    if mode not in ("wave", "geometric"):
+        raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
+    if pixel not in PIXEL_MODES:
+        raise VissimInputError(f"PSF pixel must be one of {', '.join(PIXEL_MODES)}, got {pixel!r}")
+    if dtype not in (np.float32, np.float64):
+        raise VissimInputError(f"PSF dtype must be float32 or float64, got {dtype!r}")
+    if method is not None and method not in ("mft", "fft"):
+        raise VissimInputError(f"PSF method must be 'mft' or 'fft', got {method!r}")
+    if normalise not in NORMALISATIONS:
+        raise VissimInputError(f"PSF normalise must be one of {', '.join(NORMALISATIONS)}, got {normalise!r}")
+
+
+def _accumulated_psf(fronts, wavelengths, weights, blurs, diameter: float, step: float, size_px: int, *, mode: str,
+                     method, dtype, pixel: str, progress) -> tuple[np.ndarray, tuple]:
+    """The weighted sum of each wavelength's PSF (not normalised), and the wave optics' samplings (() for rays)."""
+    if mode != "wave":
+        return sum(weight * _geometric_psf(front, diameter, step, size_px, blur, pixel)
+                   for front, weight, blur in zip(fronts, weights, blurs)), ()
+    samplings = plan_wave_psf(diameter, wavelengths, step, size_px, blurs, method)
+    log.debug("wave PSF by %s: %d^2 internal, %.0f pupil cells", samplings[0].method, samplings[0].internal_size,
+              samplings[0].pupil_cells)
+    return wave_psf(fronts, weights, diameter, samplings, size_px, dtype, pixel, progress), samplings
+
+
 def compute_psf(
     wavefront: Wavefront,
     *,
@@ -346,26 +380,12 @@ def compute_psf(
     if isinstance(size_px, str) and size_px == "auto":
         size_px = suggested_size_px(wavefront, step, pupil_diameter_mm=diameter, wavelength_nm=wavelength_nm,
                                     weights=weights, lca_reference_nm=lca_reference_nm)
-    if (isinstance(size_px, bool) or not isinstance(size_px, (int, float, np.integer, np.floating))
-            or int(size_px) != size_px or not 1 <= size_px <= MAX_PSF_SIZE_PX):
-        raise VissimInputError(f"PSF size must be an integer number of pixels in 1-{MAX_PSF_SIZE_PX} (or 'auto'), "
-                               f"got {size_px!r}")
-    size_px = int(size_px)
-    if mode not in ("wave", "geometric"):
-        raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
-    if pixel not in PIXEL_MODES:
-        raise VissimInputError(f"PSF pixel must be one of {', '.join(PIXEL_MODES)}, got {pixel!r}")
-    if dtype not in (np.float32, np.float64):
-        raise VissimInputError(f"PSF dtype must be float32 or float64, got {dtype!r}")
+    size_px = _checked_size_px(size_px)
+    _check_options(mode, pixel, dtype, method, normalise)
     wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))
     weights_t = _checked_weights(weights, wavelengths)
     if lca_reference_nm is not None:
         lca_reference_nm = check_wavelength_nm(lca_reference_nm, "LCA reference wavelength")
-
-    if method is not None and method not in ("mft", "fft"):
-        raise VissimInputError(f"PSF method must be 'mft' or 'fft', got {method!r}")
-    if normalise not in NORMALISATIONS:
-        raise VissimInputError(f"PSF normalise must be one of {', '.join(NORMALISATIONS)}, got {normalise!r}")
     kernel = normalise == "field"
 
     def too_small(outside: float) -> FieldTooSmallError:
@@ -386,15 +406,8 @@ def compute_psf(
                                        lca_reference_nm=lca_reference_nm, conservative=False)
         if outside > PLAIN_ESTIMATE_MARGIN * MAX_ENERGY_OUTSIDE:
             raise too_small(outside)
-    samplings: tuple = ()
-    if mode == "wave":
-        samplings = plan_wave_psf(diameter, wavelengths, step, size_px, blurs, method)
-        log.debug("wave PSF by %s: %d^2 internal, %.0f pupil cells", samplings[0].method,
-                  samplings[0].internal_size, samplings[0].pupil_cells)
-        accumulated = wave_psf(fronts, weights_t, diameter, samplings, size_px, dtype, pixel, progress)
-    else:
-        accumulated = sum(weight * _geometric_psf(front, diameter, step, size_px, blur, pixel)
-                          for front, weight, blur in zip(fronts, weights_t, blurs))
+    accumulated, samplings = _accumulated_psf(fronts, wavelengths, weights_t, blurs, diameter, step, size_px,
+                                              mode=mode, method=method, dtype=dtype, pixel=pixel, progress=progress)
     energy = float(accumulated.sum())
     if leaves_too_much_outside(energy):
         if kernel:
