@@ -23,7 +23,7 @@ from PIL import Image as PILImage
 
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic
 from vissim.errors import VissimInputError
-from vissim.imageio import Image, read_image, srgb_decode, srgb_encode, to_preview_png, write_image
+from vissim.imageio import Image, output_bit_depth, read_image, srgb_decode, srgb_encode, to_preview_png, write_image
 from vissim.provenance import from_json, make_provenance, to_json
 
 RNG_SEED = 20240601
@@ -229,6 +229,22 @@ def test_16_bit_colour_png_is_refused_both_ways(tmp_path):
     (tmp_path / "c16.png").write_bytes(png)
     with pytest.raises(VissimInputError, match="16-bit colour PNG"):
         read_image(tmp_path / "c16.png")
+
+
+def test_16_bit_grey_with_alpha_png_is_refused_both_ways_and_grey_alone_kept(tmp_path):
+    # Pillow keeps 16 bits only for grey without alpha; the writer, the reader and output_bit_depth share that rule.
+    with pytest.raises(VissimInputError, match=r"16-bit grey \+ alpha PNG"):
+        write_image(tmp_path / "a.png", np.zeros((2, 2)), alpha=np.ones((2, 2)), bit_depth=16)
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+    rows = b"".join(b"\x00" + np.full((2, 2), 40000, ">u2").tobytes() for _ in range(2))  # grey, alpha
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2, 2, 16, 4, 0, 0, 0))
+           + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+    (tmp_path / "la16.png").write_bytes(png)
+    with pytest.raises(VissimInputError, match=r"16-bit grey \+ alpha PNG"):
+        read_image(tmp_path / "la16.png")
+    grey = write_image(tmp_path / "g.png", np.full((2, 2), 12345 / 65535), encoding="linear", bit_depth=16)
+    assert read_image(grey).bit_depth == 16 and output_bit_depth(read_image(grey), tmp_path / "out.png") == 16
 
 
 # ---------------------------------------------------------------- write validation

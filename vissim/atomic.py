@@ -118,14 +118,19 @@ def _holds(folder: str | os.PathLike[str], path: str | os.PathLike[str]) -> bool
 def check_outputs_apart(inputs: Iterable[str | os.PathLike[str] | None],
                         outputs: Iterable[str | os.PathLike[str] | None] = (), *,
                         folders: Iterable[str | os.PathLike[str] | None] = ()) -> None:
-    """Refuse, before any work, an output file that is an input or an output folder that holds one.
+    """Refuse, before any work, an output file that is an input or another output, or an output
+    folder that holds an input.
 
     ``inputs`` are every file (or folder) the command reads, ``outputs`` every file it writes
     (sidecars included), ``folders`` the folders it writes into; ``None`` entries are skipped.
-    Holds with or without ``--overwrite``: an output never replaces an input.
+    Holds with or without ``--overwrite``: an output never replaces an input or another output.
     """
     inputs = [Path(p) for p in inputs if p is not None]
-    for out in (Path(p) for p in outputs if p is not None):
+    outputs = [Path(p) for p in outputs if p is not None]
+    for k, out in enumerate(outputs):
+        for other in outputs[:k]:
+            if _same_file(out, other):
+                raise VissimInputError(f"outputs {other} and {out} are the same file; give each output its own path")
         for source in inputs:
             if _same_file(out, source):
                 raise VissimInputError(f"output {out} is the same file as input {source}; an output never "

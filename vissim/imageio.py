@@ -8,8 +8,9 @@ shape ``(H, W)`` (mono, channel ``Y``) or ``(H, W, 3)`` (channels ``R, G, B``), 
   Provenance rides in one string header attribute, ``vissim_provenance`` (JSON).
 * ``.png`` / ``.tif`` / ``.tiff`` store 8- or 16-bit integers, by default sRGB-encoded
   (IEC 61966-2-1); provenance goes to a sidecar ``<file>.json`` (``out.png.json``).
-  Float TIFFs are read as linear.  16-bit *colour* PNG is refused both ways, because
-  Pillow silently truncates it to 8 bits; use TIFF or EXR for that.
+  Float TIFFs are read as linear.  16-bit PNG other than grey without alpha (colour, or
+  grey + alpha) is refused both ways, because Pillow silently truncates it to 8 bits;
+  use TIFF or EXR for that.
 
 An alpha channel (PNG/TIFF extra sample, EXR ``A``) is read into `Image.alpha`
 (coverage in [0, 1], never light: stored linearly, no transfer function) and written back
@@ -240,6 +241,16 @@ def _split_alpha(data: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     return data, None
 
 
+def _png_16_bit_loss(colour: bool, alpha: bool) -> str | None:
+    """The kind of 16-bit PNG whose bits Pillow would lose (``"colour"``, ``"grey + alpha"``), or None.
+
+    Grey without alpha is the one 16-bit PNG Pillow reads and writes; it truncates any other to 8 bits.
+    """
+    if colour:
+        return "colour"
+    return "grey + alpha" if alpha else None
+
+
 def output_bit_depth(image: Image, path: str | os.PathLike[str]) -> int:
     """The integer depth to write ``image``'s result at ``path`` with: its own (8 or 16), else 8.
 
@@ -247,8 +258,8 @@ def output_bit_depth(image: Image, path: str | os.PathLike[str]) -> int:
     8 bits and one warning naming .tif and .exr, which keep them.
     """
     bits = image.bit_depth if image.bit_depth in (8, 16) else 8
-    if bits == 16 and Path(path).suffix.lower() == ".png" and (image.pixels.ndim == 3 or image.alpha is not None):
-        what = "colour" if image.pixels.ndim == 3 else "grey + alpha"
+    what = _png_16_bit_loss(image.pixels.ndim == 3, image.alpha is not None)
+    if bits == 16 and Path(path).suffix.lower() == ".png" and what:
         logger.warning("%s: 16-bit %s PNG cannot be written; writing 8 bits (use .tif or .exr to keep 16)", path, what)
         return 8
     return bits
@@ -390,11 +401,11 @@ def _read_png(path: Path) -> np.ndarray:
     bit_depth, colour_type = struct.unpack(">BB", head[24:26])
     if colour_type != 3 and bit_depth not in (8, 16):
         raise VissimInputError(f"{path}: PNG bit depth {bit_depth} is not supported (expected 8 or 16)")
-    if bit_depth == 16 and colour_type != 0:
-        raise VissimInputError(
-            f"{path}: 16-bit colour PNG is not supported (Pillow "
-            "truncates it to 8 bits); use 16-bit TIFF or EXR"
-        )
+    colour, alpha = bool(colour_type & 2), bool(colour_type & 4)  # the PNG colour type's bits
+    lost = _png_16_bit_loss(colour, alpha) if bit_depth == 16 else None
+    if lost:
+        raise VissimInputError(f"{path}: 16-bit {lost} PNG is not supported (Pillow truncates it to 8 bits); "
+                               "use 16-bit TIFF or EXR")
     try:
         with _PILImage.open(path) as im:
             im.load()
@@ -557,15 +568,11 @@ def write_image(
         raise VissimInputError(f"cannot write {path}: bit_depth must be 8 or 16 bits, got {bit_depth!r}")
     arr = _validated_pixels(path, pixels, channel_names)
     alpha_plane = _validated_alpha(path, alpha, arr.shape[:2])
-    if kind == "png" and bit_depth == 16 and alpha_plane is not None:
-        raise VissimInputError(f"cannot write {path}: 16-bit PNG with alpha is not supported (Pillow cannot write it); "
+    lost = _png_16_bit_loss(arr.ndim == 3, alpha_plane is not None) if kind == "png" and bit_depth == 16 else None
+    if lost:
+        raise VissimInputError(f"cannot write {path}: 16-bit {lost} PNG is not supported (Pillow cannot write it); "
                                "use .tif or .exr")
     provenance = _with_sampling(provenance, arcmin_per_px, path)
-    if kind == "png" and bit_depth == 16 and arr.ndim == 3:
-        raise VissimInputError(
-            f"cannot write {path}: 16-bit colour PNG is not "
-            "supported (Pillow cannot write it); use .tif or .exr"
-        )
     if kind == "exr":
         planes = arr if alpha_plane is None else np.dstack([arr, alpha_plane])
         names = None if alpha_plane is None else (*(MONO_CHANNELS if arr.ndim == 2 else RGB_CHANNELS), "A")

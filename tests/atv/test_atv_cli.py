@@ -1,6 +1,7 @@
 """``vissim atv analyze | simulate | run`` as a user runs them."""
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -79,6 +80,20 @@ def test_run_with_a_person_at_the_terminal(capsys, tmp_path, monkeypatch):
     record = json.loads(target.read_text())
     assert abs(record["result"]["threshold_code"] - 0.42) <= 0.0005
     assert record["inputs"]["trial_lens_diopters"] == -1.5 and len(answers) == len(record["result"]["presentations"])
+
+
+def test_a_person_sees_each_prompt_before_answering_it(capsys, tmp_path, monkeypatch):
+    # The command prints live for a person (prints_live): its other output waits for its files, its prompts do not.
+    shown = []
+
+    def person(prompt):
+        sys.stdout.write(prompt)  # where builtins.input writes its prompt
+        shown.append(prompt in capsys.readouterr().out)
+        return "y" if float(prompt.split("code value ")[1].split(";")[0]) >= 0.42 else "n"
+
+    monkeypatch.setattr("builtins.input", person)
+    code, _, _ = run(capsys, "atv", "run", "--observer", "person", "--display", "terminal", "-o", str(tmp_path / "p.json"))
+    assert code == 0 and shown and all(shown)
 
 
 def test_run_person_quitting_leaves_no_file(capsys, tmp_path, monkeypatch):

@@ -152,6 +152,21 @@ def test_one_output_written_twice_in_one_command_is_refused(tmp_path):
     assert snapshot(tmp_path) == {}
 
 
+@pytest.mark.parametrize("spelling", ["same", "dotdot", "hardlink"])
+def test_two_outputs_of_one_command_that_are_one_file_are_refused_before_any_work(tmp_path, capsys, spelling):
+    # vissim.atomic.check_outputs_apart decides it for every command; render depth has three outputs
+    scene = Path(__file__).resolve().parents[2] / "scenes" / "depth_panels.toml"
+    blurred = tmp_path / "blurred.exr"
+    if spelling == "hardlink":
+        blurred.write_bytes(b"mine")
+        os.link(blurred, tmp_path / "linked.exr")
+    other = {"same": blurred, "dotdot": tmp_path / "x" / ".." / "blurred.exr", "hardlink": tmp_path / "linked.exr"}
+    before = snapshot(tmp_path)
+    code = main(["render", "depth", str(scene), "-o", str(blurred), "--depth", str(other[spelling]), "--overwrite"])
+    assert code == 2 and "are the same file" in one_error_line(capsys)
+    assert snapshot(tmp_path) == before
+
+
 def test_the_refusal_to_overwrite_has_one_wording(tmp_path, capsys):
     """The library, the image writer and every command say the same words (vissim.atomic.existing_output_error)."""
     taken = tmp_path / "taken.png"

@@ -125,7 +125,10 @@ def test_figure_headings_say_which_power_is_the_trial_lens_and_which_the_camera_
     assert "LogMAR 0.7" in title and "trial lens +1.00 DS" in title
     assert f"camera Rx {wave['setup']['camera_prescription']}" in title
     bare = next(r for r in load_results(run_dir) if r["lens_label"] == "no lens")
-    assert "no trial lens" in column_title(bare, bare["comparisons"][0])
+    # the heading says the lens as the configuration's name does (one phrase: schema.trial_lens_phrase)
+    for r in (result, bare):
+        assert r["configuration"]["name"].endswith(", " + column_title(r).splitlines()[1])
+    assert column_title(bare, bare["comparisons"][0]).splitlines()[1] == "no lens"
 
 
 def test_the_residuals_are_a_table_with_a_row_per_group(tables):

@@ -8,7 +8,9 @@ an exit code) with ``parser.set_defaults(func=...)``.  Bad input raises
 A command's files appear together when it succeeds, or not at all
 (`vissim.atomic.output_transaction`); a command that resumes from what it already wrote
 (``validate``, ``report``) sets ``writes_progressively=True`` and writes file by file.
-A transactional command's ``wrote ...`` lines are printed once its files are in place.
+A transactional command's ``wrote ...`` lines are printed once its files are in place,
+unless it sets ``prints_live=True``: a person reads its lines as they come
+(``atv run --observer person``), and its files still appear together.
 """
 
 from __future__ import annotations
@@ -92,7 +94,7 @@ def _run_command(args: argparse.Namespace) -> int:
     """Run the command; a transactional one's stdout ('wrote ...') is shown only once its files are in place."""
     if getattr(args, "writes_progressively", False):
         return int(args.func(args) or 0)
-    if getattr(args, "observer", None) == "person":  # a person reads prompts as they come
+    if getattr(args, "prints_live", False):
         with output_transaction():
             return int(args.func(args) or 0)
     said = io.StringIO()

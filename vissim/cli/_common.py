@@ -1,15 +1,23 @@
-"""Argument groups and checks shared by several sub-commands (aberration, pupil, wavelengths, outputs)."""
+"""Argument groups and checks shared by several sub-commands (aberration, pupil, wavelengths, sampling, outputs)."""
 
 from __future__ import annotations
 
 import argparse
+import logging
 import math
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from vissim.atomic import check_outputs_apart, refuse_existing  # noqa: F401  (the commands' one door)
 from vissim.checks import ENTRANCE_PUPIL_RANGE_MM
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
+
+if TYPE_CHECKING:  # imageio loads OpenEXR; the image only lends its recorded sampling here
+    from vissim.imageio import Image
+
+log = logging.getLogger(__name__)
 
 
 #: What ``--rx`` is, in every command that takes it (docs/conventions.md, "Prescriptions").
@@ -82,3 +90,17 @@ def parse_float_list(text: str, name: str, unit: str, *, positive: bool = True) 
     if not all(math.isfinite(v) and (v > 0 or not positive) for v in values):
         raise VissimInputError(f"{name} must be {'positive ' if positive else ''}finite numbers in {unit}, got {text!r}")
     return values
+
+
+def image_sampling(image: Image, given: float | None, path: Path) -> float:
+    """``--arcmin-per-px`` if given, else the sampling the image file records (``Image.arcmin_per_px``).
+
+    When both exist and differ, the option wins and one warning names both.
+    """
+    recorded = image.arcmin_per_px
+    if given is not None and recorded is not None and not math.isclose(given, recorded, rel_tol=1e-9):
+        log.warning("--arcmin-per-px %g overrides the %g arcmin/px that %s records", given, recorded, path)
+    step = given if given is not None else recorded
+    if step is None:
+        raise VissimInputError(f"{path} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)")
+    return step

@@ -71,7 +71,7 @@ def add_parser(subparsers) -> None:
     run = sub.add_parser("run", help="run the threshold procedure once (Listing 5.1)",
                          description="Phase 1: quasi-random narrowing in steps of 0.1; phase 2: bisection down to "
                          "--resolution. A person answers in a one-pixel window (keys y/n/q) or in the terminal.")
-    run.add_argument("--observer", choices=("simulated", "person"), default="simulated")
+    run.add_argument("--observer", choices=("simulated", "person"), default="simulated", action=_ObserverChoice)
     run.add_argument("--display", choices=("auto", "window", "terminal"), default="auto", help="how a person sees the stimulus")
     _observer_args(run, threshold=True)
     run.add_argument("--resolution", type=float, default=0.001, help="phase-2 resolution, code value (default 0.001)")
@@ -80,7 +80,15 @@ def add_parser(subparsers) -> None:
     run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     run.add_argument("-o", "--output", type=Path, required=True, help="result JSON file")
     run.add_argument("--overwrite", action="store_true", help="replace an existing result")
-    run.set_defaults(func=run_procedure_command)
+    run.set_defaults(func=run_procedure_command, prints_live=False)
+
+
+class _ObserverChoice(argparse.Action):
+    """``--observer``: with a person, the command prints live (`vissim.cli`), for the person reads its prompts."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        namespace.prints_live = values == "person"
 
 
 def _observer_args(parser: argparse.ArgumentParser, *, threshold: bool) -> None:

@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import logging
 import math
 from pathlib import Path
 
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
-from vissim.cli._common import add_aberration_args, check_outputs_apart, parse_float_list, wavefront_from_args
+from vissim.cli._common import (add_aberration_args, check_outputs_apart, image_sampling, parse_float_list,
+                                wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.imageio import Image, image_files, output_bit_depth, read_image, write_image
+from vissim.imageio import image_files, output_bit_depth, read_image, write_image
 from vissim.optics.array_backend import DEVICES, array_backend
 from vissim.optics.blur import PADDING_MODES, blur_image
 from vissim.optics.blur_device import blur_image_on
@@ -22,8 +22,6 @@ from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
 
 DEFAULT_CHANNELS_NM = (610.0, 550.0, 465.0)
-
-log = logging.getLogger(__name__)
 
 
 def add_parser(subparsers) -> None:
@@ -65,20 +63,6 @@ def add_parser(subparsers) -> None:
                              "per PSF and equal cpu to float32 round-off")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
     parser.set_defaults(func=run)
-
-
-def image_sampling(image: Image, given: float | None, path: Path) -> float:
-    """``--arcmin-per-px`` if given, else the sampling the image file records (``Image.arcmin_per_px``).
-
-    When both exist and differ, the option wins and one warning names both.
-    """
-    recorded = image.arcmin_per_px
-    if given is not None and recorded is not None and not math.isclose(given, recorded, rel_tol=1e-9):
-        log.warning("--arcmin-per-px %g overrides the %g arcmin/px that %s records", given, recorded, path)
-    step = given if given is not None else recorded
-    if step is None:
-        raise VissimInputError(f"{path} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)")
-    return step
 
 
 def image_too_small(path: Path, shape: tuple[int, ...], psf_px: int, step: float) -> VissimInputError:

@@ -14,9 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import add_rx_arg, check_outputs_apart
+from vissim.cli._common import add_rx_arg, check_outputs_apart, image_sampling
 from vissim.cli._parser import Number
-from vissim.cli.blur import image_sampling
 from vissim.errors import VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_data_map, read_image, write_image
 from vissim.optics.accommodation import Accommodation, accommodation_for_target

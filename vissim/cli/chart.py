@@ -13,6 +13,7 @@ from vissim.charts import (DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTAN
                            save_chart_png)
 from vissim.cli._common import refuse_existing
 from vissim.errors import VissimInputError
+from vissim.imageio import image_files, write_image
 from vissim.provenance import make_provenance
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_TILE_SHAPE_PX
 from vissim.units import mm_to_m
@@ -106,10 +107,8 @@ def run(args: argparse.Namespace) -> int:
     if suffix not in allowed:
         raise VissimInputError(f"-o {out}: expected one of {', '.join(allowed)}")
     sidecar_path = out.with_name(out.name + _SIDECAR_SUFFIX)
-    written = [out, sidecar_path]
-    if suffix not in (".exr", ".pdf"):  # PNG/TIFF provenance goes to OUTPUT.json
-        written.append(out.with_name(out.name + ".json"))
-    refuse_existing(*written, overwrite=args.overwrite)
+    images = (out,) if suffix == ".pdf" else image_files(out)  # a PDF keeps its provenance inside
+    refuse_existing(*images, sidecar_path, overwrite=args.overwrite)
     provenance = make_provenance(command="vissim chart", options={k: v for k, v in vars(args).items() if k != "func"}, spec=spec)
 
     if args.print_form:
@@ -122,8 +121,6 @@ def run(args: argparse.Namespace) -> int:
         what = f"print chart {size_text((round(height_mm, 1), round(width_mm, 1)), 'mm')}" + ("" if suffix == ".pdf" else f" at {args.dpi:g} dpi")
         sidecar = chart_sidecar(spec, layout)
     else:
-        from vissim.imageio import write_image
-
         if args.tile:
             chart = optotype_tile(letters.strip(), args.logmar, arcmin_per_px=args.arcmin_per_px,
                                   shape_px=THESIS_TILE_SHAPE_PX, **look)
@@ -135,8 +132,8 @@ def run(args: argparse.Namespace) -> int:
         sidecar = chart.sidecar()
     n = len(sidecar["letters"])
     print(f"wrote {out} ({what}, {n} letter{'s' if n != 1 else ''})")
-    if len(written) == 3:
-        print(f"wrote {written[2]} (provenance)")
+    for provenance_path in images[1:]:
+        print(f"wrote {provenance_path} (provenance)")
     write_json_atomic(sidecar_path, sidecar | {"provenance": provenance}, overwrite=args.overwrite)
     print(f"wrote {sidecar_path} (letter boxes)")
     return 0

@@ -10,9 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, VERTEX_DISTANCE_RANGE_MM
-from vissim.cli._common import check_outputs_apart, refuse_existing
+from vissim.cli._common import check_outputs_apart, image_sampling, refuse_existing
 from vissim.cli._parser import Number
-from vissim.cli.blur import image_sampling
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
 from vissim.units import REC709_LUMINANCE

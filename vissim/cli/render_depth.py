@@ -105,9 +105,7 @@ def _viewer(args: argparse.Namespace, loaded):
 
 def _check_outputs(args: argparse.Namespace) -> None:
     paths = [p for p in (args.output, args.all_in_focus, args.depth) if p is not None]
-    check_outputs_apart([args.scene], paths)
-    if len({p.resolve() for p in paths}) != len(paths):
-        raise VissimInputError("the blurred, all-in-focus and depth outputs must be different files")
+    check_outputs_apart([args.scene], paths)  # the three outputs apart from the scene and from each other
     for path, allowed in ((args.output, (".exr",)), (args.all_in_focus, (".exr",)), (args.depth, (".exr", ".npy"))):
         if path is None:
             continue

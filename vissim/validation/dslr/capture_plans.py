@@ -1,14 +1,48 @@
-"""Items whose truth is a real capture: the captures each uses, checked and read before anything is written."""
+"""Items whose truth is a real capture: the captures each uses, checked and read before anything is written.
+
+Each capture file is checked (presence, sha256) and decoded to its tile once per run, however
+many configurations use it; every item gets its own copy of the tile.
+"""
 
 from __future__ import annotations
 
-from vissim.validation.dslr.captures import capture_problem, capture_provenance, capture_tile, load_manifest, read_capture
+import copy
+
+import numpy as np
+
+from vissim.validation.dslr.captures import (Capture, capture_problem, capture_provenance, capture_tile, load_manifest,
+                                             read_capture)
 from vissim.validation.engine.protocol import ItemPlan
 
 __all__ = ["capture_item_plans"]
 
 
-def _capture_plan(campaign, config, captures: dict) -> tuple | str:
+class _RunCaptures:
+    """A run's manifest: each capture checked and decoded at most once, its tile and provenance kept."""
+
+    def __init__(self, campaign):
+        self.settings = campaign.settings
+        self.captures: dict[str, Capture] = load_manifest(campaign.manifest) if campaign.manifest else {}
+        self._problems: dict[str, str | None] = {}
+        self._tiles: dict[str, tuple[np.ndarray, dict]] = {}
+
+    def problem(self, capture_id: str) -> str | None:
+        """Why the capture cannot be used (`capture_problem`: absent file, wrong checksum), or None."""
+        if capture_id not in self._problems:
+            self._problems[capture_id] = capture_problem(self.captures[capture_id])
+        return self._problems[capture_id]
+
+    def tile(self, capture: Capture) -> tuple[np.ndarray, dict]:
+        """The capture's tile on the campaign's grid (a copy of its own) and its provenance."""
+        if capture.id not in self._tiles:
+            raw = read_capture(capture)
+            tile = capture_tile(capture, self.settings.arcmin_per_px, self.settings.tile_px, raw=raw)
+            self._tiles[capture.id] = tile, capture_provenance(capture, raw)
+        tile, provenance = self._tiles[capture.id]
+        return tile.copy(), copy.deepcopy(provenance)
+
+
+def _capture_plan(campaign, config, captures: _RunCaptures) -> tuple | str:
     """The captures (truth, repeat | None, no-lens) an item uses, or why it is skipped.
 
     Each capture's own file (presence, sha256) is checked before what it refers to, so a
@@ -18,10 +52,10 @@ def _capture_plan(campaign, config, captures: dict) -> tuple | str:
         return f"{config.name}: capture {config.capture!r} but the campaign names no manifest"
 
     def checked(capture_id: str):  # the capture, or why the item is skipped
-        if capture_id not in captures:
+        if capture_id not in captures.captures:
             return f"{config.name}: capture {capture_id!r} is not in {campaign.manifest}"
-        problem = capture_problem(captures[capture_id])
-        return f"{config.name}: skipped, {problem}" if problem else captures[capture_id]
+        problem = captures.problem(capture_id)
+        return f"{config.name}: skipped, {problem}" if problem else captures.captures[capture_id]
 
     capture = checked(config.capture)
     if isinstance(capture, str):
@@ -33,14 +67,11 @@ def _capture_plan(campaign, config, captures: dict) -> tuple | str:
     return next((p for p in plan if isinstance(p, str)), tuple(plan))
 
 
-def _capture_inputs(campaign, plan: tuple):
+def _capture_inputs(plan: tuple, captures: _RunCaptures):
     """(truth_a, truth_b | None, no_lens) tiles of a capture plan, and their provenance."""
-    settings = campaign.settings
-    raws = [None if c is None else read_capture(c) for c in plan]
-    tiles = [None if c is None else capture_tile(c, settings.arcmin_per_px, settings.tile_px, raw=r)
-             for c, r in zip(plan, raws)]
-    provenance = {name: None if c is None else capture_provenance(c, r)
-                  for name, c, r in zip(("truth_a", "truth_b", "no_lens"), plan, raws)}
+    read = [None if c is None else captures.tile(c) for c in plan]
+    tiles = [None if r is None else r[0] for r in read]
+    provenance = {name: None if r is None else r[1] for name, r in zip(("truth_a", "truth_b", "no_lens"), read)}
     return (*tiles, provenance)
 
 
@@ -49,7 +80,7 @@ def capture_item_plans(campaign, todo: list[tuple[str, int]]) -> tuple[dict[str,
     before it writes), and a message per item skipped (an absent or corrupt capture)."""
     if not todo:
         return {}, []
-    captures = load_manifest(campaign.manifest) if campaign.manifest else {}
+    captures = _RunCaptures(campaign)
     plans, skipped = {}, []
     for key, index in todo:
         config = campaign.configurations[index]
@@ -57,7 +88,7 @@ def capture_item_plans(campaign, todo: list[tuple[str, int]]) -> tuple[dict[str,
         if isinstance(plan, str):
             skipped.append(plan)
             continue
-        truth_a, truth_b, no_lens, provenance = _capture_inputs(campaign, plan)
+        truth_a, truth_b, no_lens, provenance = _capture_inputs(plan, captures)
         given = {"truth_a": truth_a, "no_lens": no_lens}
         if truth_b is not None:
             given["truth_b"] = truth_b

@@ -132,15 +132,22 @@ def capture_problem(capture: Capture) -> str | None:
     return None
 
 
-def _neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray) -> np.ndarray:
-    """Full-resolution grey image from the four CFA planes, each divided by its paper level."""
-    rows, cols, _ = planes.shape
-    gains = [float(np.median(planes[..., c][paper_mask])) for c in range(4)]
+def _neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray, cell_px: int) -> np.ndarray:
+    """Full-resolution grey image from the CFA planes, each divided by its paper level.
+
+    Plane ``c`` holds photosite ``divmod(c, cell_px)`` (row, col) of every ``cell_px`` x ``cell_px``
+    CFA cell (raster order, `vissim.imaging.raw`).
+    """
+    rows, cols, channels = planes.shape
+    if channels != cell_px * cell_px:
+        raise VissimInputError(f"a capture tile needs the RAW's CFA planes (mode='planes'), got {channels} channels")
+    gains = [float(np.median(planes[..., c][paper_mask])) for c in range(channels)]
     if min(gains) <= 0:
         raise VissimInputError("the capture's paper is not above black in every colour channel; check exposure")
-    mosaic = np.empty((2 * rows, 2 * cols), np.float64)
-    for c, (dr, dc) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
-        mosaic[dr::2, dc::2] = planes[..., c] / gains[c]
+    mosaic = np.empty((cell_px * rows, cell_px * cols), np.float64)
+    for c in range(channels):
+        dr, dc = divmod(c, cell_px)
+        mosaic[dr::cell_px, dc::cell_px] = planes[..., c] / gains[c]
     return mosaic
 
 
@@ -166,9 +173,11 @@ def capture_tile(capture: Capture, arcmin_per_px: float, tile_px: tuple[int, int
     raw = read_capture(capture) if raw is None else raw
     row, col = capture.letter_center_px
     # paper: a ring around the letter between 0.75 and 1.5 tile half-widths, converted to sensor
-    # pixels by the camera's scale (plane pixel (i, j) covers sensor pixels (2i..2i+1, 2j..2j+1))
+    # pixels by the camera's scale (plane pixel (i, j) is a CFA cell of n x n sensor pixels from
+    # (n i, n j), n = raw.sensor_px_per_pixel, centred at (n i + (n - 1) / 2, n j + (n - 1) / 2))
+    cell = raw.sensor_px_per_pixel
     pr, pc = np.mgrid[: raw.pixels.shape[0], : raw.pixels.shape[1]]
-    distance = np.hypot(2 * pr + 0.5 - row, 2 * pc + 0.5 - col)
+    distance = np.hypot(cell * pr + (cell - 1) / 2 - row, cell * pc + (cell - 1) / 2 - col)
     sensor_arcmin_per_px = camera_arcmin_per_px(capture.pixel_pitch_um, capture.focal_length_mm,
                                                 object_distance_m=capture.chart_distance_m)
     reach = max(tile_px) / 2 * arcmin_per_px / sensor_arcmin_per_px
@@ -176,7 +185,7 @@ def capture_tile(capture: Capture, arcmin_per_px: float, tile_px: tuple[int, int
     if capture.polarity == "white-on-black":
         ring = np.zeros_like(ring)  # background is ink: take the paper from the brightest letter pixels
         ring[np.unravel_index(np.argsort(raw.pixels.mean(axis=-1), axis=None)[-64:], ring.shape)] = True
-    mosaic = _neutral_mosaic(raw.pixels, ring)
+    mosaic = _neutral_mosaic(raw.pixels, ring, cell)
     resampled = resample_to_arcmin(mosaic, capture.pixel_pitch_um, capture.focal_length_mm, arcmin_per_px,
                                    sensor_px_per_image_px=1, object_distance_m=capture.chart_distance_m)
     scale = resampled.scale

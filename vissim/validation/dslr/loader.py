@@ -17,7 +17,7 @@ from vissim.charts import POLARITIES
 from vissim.checks import (F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, MAX_ARCMIN_PER_PX, OBJECT_DISTANCE_RANGE_M,
                            VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM)
 from vissim.optotypes import SLOAN_LETTERS
-from vissim.validation.dslr.schema import INPUTS, SIMULATIONS, CampaignSettings, Configuration
+from vissim.validation.dslr.schema import INPUTS, SIMULATIONS, CampaignSettings, Configuration, trial_lens_phrase
 from vissim.validation.engine.fields import (
     MAX_SPP,
     field_error,
@@ -33,7 +33,7 @@ from vissim.validation.engine.fields import (
     whole_number,
 )
 
-__all__ = ["read_dslr_part", "trial_lens_phrase"]
+__all__ = ["read_dslr_part"]
 
 #: [campaign] numbers: (unit, lowest, highest), the ranges of `vissim.checks`; the finest sampling is a campaign's own.
 NUMBER_SETTINGS = {
@@ -78,7 +78,7 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
     capture, name = (None if raw.get(k) is None else check(raw[k], source, f"{where}.{k}")
                      for k, check in (("capture", text), ("name", name_text)))
     config = Configuration(name or "", letter, logmar, polarity, specs, f_number, capture)
-    label = f"{letter} LogMAR {logmar:.1f} {polarity.split('-')[0]}, {trial_lens_phrase(config)}"
+    label = f"{letter} LogMAR {logmar:.1f} {polarity.split('-')[0]}, {trial_lens_phrase(config.lens_label())}"
     return replace(config, name=name or label, group=name or label)
 
 
@@ -86,13 +86,6 @@ def _describe(c: Configuration) -> str:
     """What a configuration compares, for messages: letter, LogMAR, polarity, lenses, f-number, capture."""
     capture = f", capture {c.capture}" if c.capture else ""
     return f"letter {c.letter}, LogMAR {c.logmar:g}, {c.polarity}, {c.lens_label()}, f/{c.f_number:g}{capture}"
-
-
-def trial_lens_phrase(config: Configuration) -> str:
-    """``trial lens +2.00 DS``, ``trial lenses +1.00 DS + -0.50 DC x 30`` or ``no lens``: a name's lens part."""
-    if not config.lenses:
-        return "no lens"
-    return f"trial lens{'es' if len(config.lenses) > 1 else ''} {config.lens_label()}"
 
 
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:

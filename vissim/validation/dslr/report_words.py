@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from vissim.validation.dslr.schema import trial_lens_phrase
+
 __all__ = ["arcmin_per_px_of", "lens_words", "column_title", "camera_rx", "group_of"]
 
 
@@ -14,15 +16,14 @@ def arcmin_per_px_of(result: dict, campaign: dict | None = None) -> float | None
     return float(value) if value is not None and math.isfinite(float(value)) else None
 
 
-def lens_words(lens_label: str) -> str:
-    """``trial lens +2.00 DS``, or ``no trial lens``."""
-    return "no trial lens" if lens_label == "no lens" else f"trial lens {lens_label}"
+#: The name `vissim.validation.dslr.optics_figures` imports `trial_lens_phrase` by.
+lens_words = trial_lens_phrase
 
 
 def column_title(result: dict, comparison: dict | None = None) -> str:
     """A figure column's header: the letter and its LogMAR, the trial lens, the camera's resulting Rx (`camera_rx`)."""
     config = result["configuration"]
-    title = f"{config['letter']}, LogMAR {config['logmar']:.1f}\n{lens_words(result['lens_label'])}"
+    title = f"{config['letter']}, LogMAR {config['logmar']:.1f}\n{trial_lens_phrase(result['lens_label'])}"
     if comparison is not None:
         title += f"\ncamera Rx {camera_rx(result, comparison)}"
     return title

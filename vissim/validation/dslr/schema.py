@@ -13,13 +13,16 @@ from vissim.optics.trial_lens import CROWN_GLASS_INDEX
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import mm_to_m
 from vissim.validation.engine.fields import LensSpec
+from vissim.validation.engine.summary import NO_LENS
 
-__all__ = ["Configuration", "CampaignSettings", "SIMULATIONS", "INPUTS"]
+__all__ = ["Configuration", "CampaignSettings", "SIMULATIONS", "INPUTS", "trial_lens_phrase"]
 
 #: Simulations a campaign may ask for (see vissim.validation.dslr.simulate.SIMULATION_PARTS).
 SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification")
 #: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
 INPUTS = ("render", "synthetic")
+#: Between the lenses of a set in a lens label: ``+1.00 DS + -0.50 DC x 30``.
+LENS_JOINER = " + "
 
 
 @dataclass(frozen=True)
@@ -36,7 +39,7 @@ class Configuration:
     group: str = ""  # the report's group: its sweep's name, or its own name (empty: its own name)
 
     def lens_label(self) -> str:
-        return " + ".join(l.label() for l in self.lenses) if self.lenses else "no lens"
+        return LENS_JOINER.join(l.label() for l in self.lenses) if self.lenses else NO_LENS
 
     def as_json(self) -> dict:
         return asdict(self)
@@ -44,6 +47,14 @@ class Configuration:
     def key_inputs(self) -> dict:
         """What the item's results depend on: every field but the name and group, which label them."""
         return {"configuration": {k: v for k, v in self.as_json().items() if k not in ("name", "group")}}
+
+
+def trial_lens_phrase(lens_label: str) -> str:
+    """A lens label (`Configuration.lens_label`) in words, as configuration names and figure headings say it:
+    ``trial lens +2.00 DS``, ``trial lenses +1.00 DS + -0.50 DC x 30`` or ``no lens``."""
+    if lens_label == NO_LENS:
+        return NO_LENS
+    return f"trial lens{'es' if LENS_JOINER in lens_label else ''} {lens_label}"
 
 
 @dataclass(frozen=True)
