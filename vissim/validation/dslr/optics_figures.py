@@ -27,8 +27,9 @@ from vissim.optics.psf_metrics import (diffraction_cutoff_cyc_per_deg, diffracti
                                        frequencies_cyc_per_deg, mtf,
                                        radius_of_encircled_energy_arcmin, ring_means)
 from vissim.optics.wavefront import Wavefront
-from vissim.validation.dslr.report_words import lens_words
+from vissim.validation.dslr.schema import trial_lens_phrase
 from vissim.validation.engine.figures import display_norm, pyplot, radiance_colorbar, scale_bar
+from vissim.validation.engine.summary import NO_LENS
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
            "mtf_figure_of", "through_focus_figure_of", "optics_figures", "recorded_psf", "THROUGH_FOCUS_STEPS_D",
@@ -95,7 +96,7 @@ def optics_cases(results: list[dict], run_dir: str | Path, campaign: dict) -> li
                           float(wave["setup"]["pupil_diameter_mm"]), float(settings["wavelength_nm"]),
                           float(settings["arcmin_per_px"]), step, run_dir / synthetic if synthetic else None,
                           result["lens_label"], run_dir / psf["image"] if psf.get("image") else None)
-        groups.setdefault(case.group, []).append((result["lens_label"] != "no lens", case))
+        groups.setdefault(case.group, []).append((result["lens_label"] != NO_LENS, case))
     cases = []
     for members in groups.values():
         with_lenses = [case for has_lens, case in members if has_lens] or [case for _, case in members]
@@ -137,7 +138,7 @@ def sampling_label(psf: PSF) -> str:
 
 
 def _panel_title(case: OpticsCase) -> str:
-    return f"{case.configuration}\n{lens_words(case.trial_lenses)} → camera Rx {case.prescription.format(2)}"
+    return f"{case.configuration}\n{trial_lens_phrase(case.trial_lenses)} → camera Rx {case.prescription.format(2)}"
 
 
 def _grid(n: int, rows: int = 1, width: float = 3.0, height: float = 3.0):
@@ -258,7 +259,7 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
             if i == 0:
                 ax.set_title("camera Rx (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it", fontsize=8)
         scale_bar(axes[i, 0], chart.shape[1], case.arcmin_per_px)
-        axes[i, 0].set_ylabel(f"{case.group}\n{lens_words(case.trial_lenses)}\ncamera Rx "
+        axes[i, 0].set_ylabel(f"{case.group}\n{trial_lens_phrase(case.trial_lenses)}\ncamera Rx "
                               f"{case.prescription.format(2)}", fontsize=7)
     radiance_colorbar(fig.colorbar(shown, ax=axes[:, :], shrink=0.8, pad=0.02, aspect=25))
     first = cases[0]

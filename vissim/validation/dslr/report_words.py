@@ -6,7 +6,7 @@ import math
 
 from vissim.validation.dslr.schema import trial_lens_phrase
 
-__all__ = ["arcmin_per_px_of", "lens_words", "column_title", "camera_rx", "group_of"]
+__all__ = ["arcmin_per_px_of", "column_title", "camera_rx", "group_of"]
 
 
 def arcmin_per_px_of(result: dict, campaign: dict | None = None) -> float | None:
@@ -14,10 +14,6 @@ def arcmin_per_px_of(result: dict, campaign: dict | None = None) -> float | None
     settings = (campaign or {}).get("settings") or (result.get("provenance") or {}).get("inputs", {}).get("settings")
     value = (settings or {}).get("arcmin_per_px")
     return float(value) if value is not None and math.isfinite(float(value)) else None
-
-
-#: The name `vissim.validation.dslr.optics_figures` imports `trial_lens_phrase` by.
-lens_words = trial_lens_phrase
 
 
 def column_title(result: dict, comparison: dict | None = None) -> str:
