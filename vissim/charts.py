@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from vissim.acuity import letter_height_arcmin, letter_height_mm, logmar_to_snellen, subtense_arcmin, subtense_mm
-from vissim.checks import size_text
+from vissim.checks import VIEWING_DISTANCE_RANGE_M, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, describe, finite_number, instance_of, positive_number
 from vissim.errors import VissimInputError, VissimTypeError
@@ -58,8 +58,6 @@ _SIDECAR_SCHEMA = "vissim.chart-letters/1"
 _BOX_KEYS = ("top", "left", "bottom", "right")
 
 
-#: Viewing distances a chart (or a depth panel's chart) may be made for, m; far beyond, its sizes in mm overflow.
-VIEWING_DISTANCE_RANGE_M = (1e-3, 1e6)
 #: Linear reflectances of laser-printed paper and toner ink (the charts' defaults).
 PAPER_REFLECTANCE = 0.9
 INK_REFLECTANCE = 0.04

@@ -9,11 +9,21 @@ from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
 
-__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm", "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
-           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm", "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS", "F_NUMBER_RANGE",
-           "FOCAL_LENGTH_RANGE_MM", "OBJECT_DISTANCE_RANGE_M", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
-           "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "MAX_DESCRIPTION_CHARS", "name_problem",
-           "path_arg", "number_array"]
+__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
+           "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
+           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
+           "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS",
+           "accommodation_diopters", "trial_lens_diopters", "F_NUMBER_RANGE", "FOCAL_LENGTH_RANGE_MM",
+           "OBJECT_DISTANCE_RANGE_M", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
+           "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "MAX_DESCRIPTION_CHARS",
+           "name_problem", "path_arg", "number_array", "ARCMIN_PER_PX_RANGE", "MIN_ARCMIN_PER_PX",
+           "MAX_CAMPAIGN_SEED", "TRIAL_LENS_RANGE_DIOPTERS", "AXIS_RANGE_DEG", "AUTOREFRACTOR_SPHERE_RANGE_DIOPTERS",
+           "AUTOREFRACTOR_CYLINDER_RANGE_DIOPTERS", "AUTOREFRACTOR_VERTEX_RANGE_MM", "PUPIL_DISTANCE_RANGE_MM",
+           "DISPLAY_CODE_RANGE", "TRIAL_TIME_RANGE_S", "EXAMINATION_DURATION_RANGE_S", "ILLUMINANCE_RANGE_LX",
+           "LOGMAR_RANGE", "REFRACTIVE_INDEX_RANGE", "DATA_RANGE_RANGE", "TILE_RANGE_PX", "MARGIN_RANGE_PX",
+           "LAYER_SPACING_FRACTION_RANGE", "OVERSAMPLE_RANGE", "COLLIMATOR_POWER_RANGE_DIOPTERS",
+           "MAX_PIXEL_RADIANCE", "FIT_POWER_RANGE_DIOPTERS", "MODEL_ERROR_RANGE_DIOPTERS", "MAX_WORKERS",
+           "VIEWING_DISTANCE_RANGE_M", "LENS_GAP_RANGE_MM", "MAX_PSF_SIZE_PX"]
 
 
 def describe(value) -> str:
@@ -89,14 +99,38 @@ def wavelength_nm(value, name: str = "wavelength") -> float:
 #: Trial-lens vertex distances, mm (the last lens's back vertex to the camera's or eye's principal
 #: plane): the thesis's bench used 10, spectacles sit at 12-15; past 20 cm a lens is no trial lens.
 VERTEX_DISTANCE_RANGE_MM = (0.0, 200.0)
-#: An eye's accommodation, dioptres: from relaxed to beyond a child's amplitude.
+#: The accommodation an eye exerts, dioptres: from relaxed to beyond a child's amplitude
+#: (about 15 D at 8 years, Duane 1922). Every eye a user describes takes it: campaigns, scene files, the ATV.
 ACCOMMODATION_RANGE_DIOPTERS = (0.0, 20.0)
 
 
+#: Viewing distances a chart (or a depth panel's chart) may be made for, m; far beyond, its sizes in mm overflow.
+VIEWING_DISTANCE_RANGE_M = (1e-3, 1e6)
+#: Gap between trial lenses in the holder, mm: touching to a metre (the vertex distance: `VERTEX_DISTANCE_RANGE_MM`).
+LENS_GAP_RANGE_MM = (0.0, 1000.0)
 #: A camera's f-number, focal length (mm) and distance to what it images (m), as bench files take them.
 F_NUMBER_RANGE = (0.5, 128.0)
 FOCAL_LENGTH_RANGE_MM = (1.0, 1000.0)
 OBJECT_DISTANCE_RANGE_M = (0.01, 1000.0)
+
+
+def accommodation_diopters(value, name: str = "accommodation") -> float:
+    """An accommodation exerted within `ACCOMMODATION_RANGE_DIOPTERS`."""
+    number = finite_number(value, name, "dioptres")
+    low, high = ACCOMMODATION_RANGE_DIOPTERS
+    if not low <= number <= high:
+        raise VissimInputError(f"{name} must be within {low:g}-{high:g} dioptres, got {number:g} dioptres")
+    return number + 0.0  # -0.0 as 0.0
+
+
+def trial_lens_diopters(value, name: str = "trial lens power") -> float:
+    """A trial lens's sphere or cylinder within `TRIAL_LENS_RANGE_DIOPTERS`."""
+    number = finite_number(value, name, "dioptres")
+    low, high = TRIAL_LENS_RANGE_DIOPTERS
+    if not low <= number <= high:
+        raise VissimInputError(
+            f"{name} must be within {low:g} to {high:g} dioptres (a trial lens), got {number:g} dioptres")
+    return number
 
 
 def vertex_distance_mm(value, name: str = "vertex distance") -> float:
@@ -151,7 +185,7 @@ def check_allocation(n_bytes: float, what: str) -> None:
 
 #: Angular samplings vissim takes, arcmin per pixel (the thesis's is 1): finer ones need more
 #: memory than any machine has (checked by `check_allocation`), coarser ones are no image.
-MIN_ARCMIN_PER_PX, MAX_ARCMIN_PER_PX = 1e-6, 60.0
+ARCMIN_PER_PX_RANGE = MIN_ARCMIN_PER_PX, MAX_ARCMIN_PER_PX = 1e-6, 60.0
 
 
 def arcmin_per_px(value, name: str = "angular sampling") -> float:
@@ -213,6 +247,8 @@ def size_px(value, name: str = "size_px") -> tuple[int, int]:
     return size  # type: ignore[return-value]
 
 
+#: Largest PSF field a user may ask for, pixels (``psf --size``, `compute_psf`): 16384² complex doubles take 4 GiB.
+MAX_PSF_SIZE_PX = 16384
 #: Most samples per pixel a render takes (Mitsuba counts them in 32 bits; 65536 spp of the
 #: thesis bench takes hours on 2 cores).
 MAX_SPP = 1 << 16
@@ -220,6 +256,8 @@ MAX_SPP = 1 << 16
 
 #: Sampler seeds are 32-bit.
 MAX_SAMPLER_SEED = 2**32 - 1
+#: Campaign seeds: the no-lens render uses seed_a + seed_b + 1, which must stay a sampler seed.
+MAX_CAMPAIGN_SEED = (MAX_SAMPLER_SEED - 1) // 2
 
 
 def samples_per_pixel(value, name: str = "spp") -> int:
@@ -253,3 +291,49 @@ def name_problem(value: str) -> str | None:
 #: Largest lens power vissim reads from a user, dioptres (a 1 mm focal length: far beyond any
 #: eye or trial lens). Results computed from inputs may exceed it.
 MAX_POWER_DIOPTERS = 1000.0
+
+
+# -- ranges of the values campaign, scene and subject files give (docs/conventions.md, "Input ranges") --
+#: A trial lens's sphere or cylinder, dioptres: trial sets go to +-20; beyond +-30 a lens is no trial lens.
+TRIAL_LENS_RANGE_DIOPTERS = (-30.0, 30.0)
+#: A cylinder axis, degrees (TABO): 0 and 180 are the same meridian.
+AXIS_RANGE_DEG = (0.0, 180.0)
+#: An autorefractor's printed sphere (and spherical equivalent) and cylinder, dioptres: what instruments measure.
+AUTOREFRACTOR_SPHERE_RANGE_DIOPTERS = (-30.0, 30.0)
+AUTOREFRACTOR_CYLINDER_RANGE_DIOPTERS = (-10.0, 10.0)
+#: The vertex distance an autorefractor reports its reading at, mm: 0 (cornea) or a spectacle's 12-14, with a margin.
+AUTOREFRACTOR_VERTEX_RANGE_MM = (0.0, 25.0)
+#: Interpupillary distance, mm: a small child's ~40 to a large adult's ~75, with a margin.
+PUPIL_DISTANCE_RANGE_MM = (30.0, 90.0)
+#: A display code value (ATV thresholds): 0 black to 1 the display's white.
+DISPLAY_CODE_RANGE = (0.0, 1.0)
+#: One ATV trial, seconds: at most an hour.
+TRIAL_TIME_RANGE_S = (0.0, 3600.0)
+#: One ATV examination, seconds: at most a day.
+EXAMINATION_DURATION_RANGE_S = (0.0, 86400.0)
+#: Ambient illuminance, lux: darkness to twice direct sunlight (~100000 lx).
+ILLUMINANCE_RANGE_LX = (0.0, 200000.0)
+#: A letter's size, LogMAR: -1 (20/2) to 2 (20/2000), beyond any chart's -0.3 to 1.0.
+LOGMAR_RANGE = (-1.0, 2.0)
+#: A lens's refractive index: above air (an index of 1 is no lens) to beyond any optical glass (~2).
+REFRACTIVE_INDEX_RANGE = (1.01, 3.0)
+#: The value range SSIM and PSNR take, linear reflectance: the chart's white is 1.
+DATA_RANGE_RANGE = (1e-3, 1e3)
+#: A campaign tile's rows or columns, pixels: a few letter strokes to 2**20 (memory is checked besides).
+TILE_RANGE_PX = (16, 1 << 20)
+#: Depth-region margin, pixels: none to far beyond any blur radius.
+MARGIN_RANGE_PX = (0.0, 1000.0)
+#: Depth layers' spacing, as a fraction of a blur-free depth step: finer is no faster, coarser blurs wrongly.
+LAYER_SPACING_FRACTION_RANGE = (1e-3, 1.0)
+#: Sub-pixels per pixel per axis a render or a wave truth takes: 16 x 16 costs 256 times one.
+OVERSAMPLE_RANGE = (1, 16)
+#: The ATV's collimator power, dioptres (> 0): the thesis's is 8; 40 is a 25 mm focal length.
+COLLIMATOR_POWER_RANGE_DIOPTERS = (0.0, 40.0)
+#: Brightest display pixel, linear radiance units: keeps the float32 retinal image finite.
+MAX_PIXEL_RADIANCE = 1e30
+#: The sphere search range ``fit-rx --max-power-diopters`` takes, dioptres (> 0): a trial set's strongest lens.
+FIT_POWER_RANGE_DIOPTERS = (0.0, 20.0)
+#: The model error ``fit-rx`` adds to its intervals, dioptres.
+MODEL_ERROR_RANGE_DIOPTERS = (0.0, 10.0)
+#: Most local worker processes a campaign runs (``validate --workers``): far beyond any machine's cores.
+MAX_WORKERS = 1024

@@ -13,6 +13,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+from vissim.checks import trial_lens_diopters
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import TrialLens
 
@@ -76,6 +77,9 @@ def parse_trial_lenses(entries: list, where: str) -> tuple[TrialLens, ...]:
         if "sphere_diopters" not in kwargs and "cylinder_diopters" not in kwargs:
             raise VissimInputError(f"{lens_where} needs sphere_diopters and/or cylinder_diopters (D)")
         kwargs.setdefault("sphere_diopters", 0.0)
+        for key in ("sphere_diopters", "cylinder_diopters"):
+            if key in kwargs:
+                trial_lens_diopters(kwargs[key], f"{lens_where} {key}")
         lenses.append(TrialLens(**kwargs))
     return tuple(lenses)
 

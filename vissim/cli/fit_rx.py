@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM, VERTEX_DISTANCE_RANGE_MM
+from vissim.checks import (DEFAULT_WAVELENGTH_NM, FIT_POWER_RANGE_DIOPTERS, MODEL_ERROR_RANGE_DIOPTERS,
+                           VERTEX_DISTANCE_RANGE_MM)
 from vissim.cli._common import check_outputs_apart, image_sampling, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
@@ -44,9 +45,11 @@ def add_parser(subparsers) -> None:
                         help=f"wave mode: wavelength (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--fit-focus-offset", action="store_true", help="also fit a focus offset (dioptres)")
     parser.add_argument("--fit-pupil", action="store_true", help="also fit the pupil diameter (trades against power)")
-    parser.add_argument("--max-power-diopters", type=Number(float, positive=True, maximum=20.0), default=6.0, metavar="D",
+    parser.add_argument("--max-power-diopters", type=Number(float, positive=True, maximum=FIT_POWER_RANGE_DIOPTERS[1]),
+                        default=6.0, metavar="D",
                         help="search range of the sphere (cylinder: half of it); default 6")
-    parser.add_argument("--model-error-diopters", type=Number(float, nonnegative=True, maximum=10.0), metavar="D",
+    parser.add_argument("--model-error-diopters", metavar="D",
+                        type=Number(float, nonnegative=True, maximum=MODEL_ERROR_RANGE_DIOPTERS[1]),
                         help="the model's own error per power-vector component, added to the noise in the intervals "
                              "(default 0.0045: measured on Mitsuba bench renders; 0 gives noise-only intervals)")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import describe, size_text
+from vissim.checks import MODEL_ERROR_RANGE_DIOPTERS, describe, size_text
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.fit.forward import FORWARD_MODES
@@ -93,6 +93,7 @@ def check_fit_arguments(image, reference, arcmin_per_px, pupil_diameter_mm, mode
         raise VissimInputError(f"magnification model must be one of {', '.join(MAGNIFICATION_MODELS)}, got {magnification!r}")
     img, ref = check_fit_inputs(image, reference)
     model_error_diopters = float(model_error_diopters)
-    if not (math.isfinite(model_error_diopters) and 0.0 <= model_error_diopters <= 10.0):
-        raise VissimInputError(f"the model error must be within 0-10 D, got {model_error_diopters!r} D")
+    low, high = MODEL_ERROR_RANGE_DIOPTERS
+    if not (math.isfinite(model_error_diopters) and low <= model_error_diopters <= high):
+        raise VissimInputError(f"the model error must be within {low:g}-{high:g} D, got {model_error_diopters!r} D")
     return step, pupil, img, ref, model_error_diopters

@@ -27,7 +27,7 @@ import re
 from dataclasses import dataclass
 from typing import Self
 
-from vissim.checks import MAX_POWER_DIOPTERS
+from vissim.checks import AXIS_RANGE_DEG, MAX_POWER_DIOPTERS
 from vissim.checks import describe
 from vissim.checks import finite_number as _finite
 from vissim.errors import VissimInputError, VissimTypeError
@@ -89,8 +89,9 @@ class SpheroCylinder:
         sphere = _finite(self.sphere_diopters, "sphere", "dioptres")
         cyl = _finite(self.cylinder_diopters, "cylinder", "dioptres")
         axis = _finite(self.axis_deg, "axis", "degrees")
-        if not 0.0 <= axis <= 180.0:
-            raise VissimInputError(f"axis must be within 0-180 degrees (TABO), got {axis:g} deg")
+        low, high = AXIS_RANGE_DEG
+        if not low <= axis <= high:
+            raise VissimInputError(f"axis must be within {low:g}-{high:g} degrees (TABO), got {axis:g} deg")
         object.__setattr__(self, "sphere_diopters", sphere + 0.0)
         object.__setattr__(self, "cylinder_diopters", cyl + 0.0)
         object.__setattr__(self, "axis_deg", 180.0 if cyl == 0.0 else _normalise_axis(axis))

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.checks import DEFAULT_WAVELENGTH_NM, MAX_PSF_SIZE_PX
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
@@ -83,9 +83,7 @@ PIXEL_MODES = ("integrate", "sample")
 #: What a PSF's ``data`` is normalised to: "field" (unit sum over the field, a blur kernel) or
 #: "total" (unit total energy, so it sums to ``energy_in_field``: a PSF image).
 NORMALISATIONS = ("field", "total")
-#: Largest PSF field, pixels.
-MAX_PSF_SIZE_PX = 16384
-#: A field is refused before computing when the plain estimate exceeds this many times the limit.
+#: A field is refused before computing when the plain estimate exceeds this many times `MAX_PSF_SIZE_PX`.
 PLAIN_ESTIMATE_MARGIN = 1.5
 
 

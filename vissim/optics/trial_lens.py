@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.checks import finite_number as _number
+from vissim.checks import LENS_GAP_RANGE_MM
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription
@@ -232,9 +233,6 @@ class TrialLens:
         return front, SurfaceRadii((back_r, back_r), (180.0, 90.0))
 
 
-#: Longest lens gap, mm (the vertex distance: `vissim.checks.VERTEX_DISTANCE_RANGE_MM`).
-MAX_HOLDER_DISTANCE_MM = 1000.0
-
 
 @dataclass(frozen=True)
 class TrialLensSetup:
@@ -274,8 +272,9 @@ class TrialLensSetup:
         object.__setattr__(self, "lenses", lenses)
         object.__setattr__(self, "vertex_distance_mm", check_vertex_mm(self.vertex_distance_mm))
         gap = _number(self.lens_gap_mm, "lens gap", "mm")
-        if not 0.0 <= gap <= MAX_HOLDER_DISTANCE_MM:
-            raise VissimInputError(f"lens gap must be within 0-{MAX_HOLDER_DISTANCE_MM:g} mm, got {gap:g} mm")
+        low, high = LENS_GAP_RANGE_MM
+        if not low <= gap <= high:
+            raise VissimInputError(f"lens gap must be within {low:g}-{high:g} mm, got {gap:g} mm")
         object.__setattr__(self, "lens_gap_mm", gap + 0.0)
         distance = _number(self.object_distance_m, "object distance", "m", allow_inf=True)
         if distance <= mm_to_m(self.span_mm):

@@ -13,6 +13,7 @@ from typing import Any
 
 from vissim.bench.atv.tube import AtvConfig, AtvEye, AtvTube, atv_trial_lens
 from vissim.bench.scene_toml import check_keys, read_scene_toml, sub_table, typed_value
+from vissim.checks import trial_lens_diopters
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import EYE_VERTEX_DISTANCE_MM
 
@@ -52,7 +53,10 @@ def load_atv_toml(path: str | os.PathLike[str]):
     if "sphere_diopters" in lens or "cylinder_diopters" in lens:
         powers = (("sphere_diopters", 0.0, "dioptres"), ("cylinder_diopters", 0.0, "dioptres"),
                   ("axis_deg", 180.0, "degrees"))
-        trial = atv_trial_lens(*(value("trial_lens", key, default, float, unit) for key, default, unit in powers))
+        sphere, cylinder, axis = (value("trial_lens", key, default, float, unit) for key, default, unit in powers)
+        where = f"{source} [trial_lens]"
+        trial = atv_trial_lens(trial_lens_diopters(sphere, f"{where}.sphere_diopters"),
+                               trial_lens_diopters(cylinder, f"{where}.cylinder_diopters"), axis)
     return AtvConfig(tube=tube, eye=eye, trial_lens=trial,
                      trial_lens_distance_mm=value("trial_lens", "distance_mm", EYE_VERTEX_DISTANCE_MM, float, "mm"),
                      fresnel_loss=value("trial_lens", "fresnel_loss", False, bool, "(true/false)"))

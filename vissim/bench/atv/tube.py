@@ -46,7 +46,8 @@ import numpy as np
 from vissim.bench.lenses.mesh import (lens_surface_curvatures_per_mm, realistic_center_thickness_mm,
                                       rim_thickness_mm, sag_mm)
 from vissim.charts import MM_PER_INCH
-from vissim.checks import eye_pupil_diameter_mm, finite_number
+from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, COLLIMATOR_POWER_RANGE_DIOPTERS, DISPLAY_CODE_RANGE,
+                           MAX_PIXEL_RADIANCE, REFRACTIVE_INDEX_RANGE, eye_pupil_diameter_mm, finite_number)
 from vissim.errors import VissimInputError
 from vissim.imageio import srgb_decode
 from vissim.optics.prescription import LensPower, Prescription, RefractiveError
@@ -63,7 +64,6 @@ IPHONE5_PPI = 326.0
 #: so it is an eye's default (12 mm spectacle vertex distance + 3 mm cornea to entrance pupil).
 ATV_TRIAL_LENS_DISTANCE_MM = EYE_VERTEX_DISTANCE_MM
 DISPLAY_TRANSFERS = ("srgb", "gamma2.2")
-MAX_ACCOMMODATION_DIOPTERS = 15.0
 #: Tube radius beyond the largest clear aperture, mm (the lenses sit in the tube).
 TUBE_CLEARANCE_MM = 0.05
 #: Least air between the trial lens and the collimator, and between the pupil and the trial lens, mm.
@@ -79,9 +79,6 @@ def _number(value, name: str, unit: str, *, lo: float | None = None, hi: float |
         raise VissimInputError(f"{name} must be <= {hi:g} {unit}, got {number:g} {unit}")
     return number + 0.0
 
-
-#: Brightest pixel, linear radiance units: keeps the float32 retinal image finite.
-MAX_PIXEL_RADIANCE = 1e30
 
 
 def pixel_pitch_mm(pixels_per_inch: float) -> float:
@@ -107,7 +104,8 @@ def display_code_to_linear(code, transfer: str = ATV_DISPLAY_TRANSFER):
         values = np.asarray(code, dtype=float)
     except (TypeError, ValueError):
         raise VissimInputError(f"display code must be a number in [0, 1] (code units), got {code!r}") from None
-    if not np.all(np.isfinite(values)) or values.min(initial=0.0) < 0.0 or values.max(initial=0.0) > 1.0:
+    low, high = DISPLAY_CODE_RANGE
+    if not np.all(np.isfinite(values)) or values.min(initial=low) < low or values.max(initial=low) > high:
         raise VissimInputError(f"display code must lie in [0, 1] (code units), got {code!r}")
     linear = srgb_decode(values) if transfer == "srgb" else np.power(values, 2.2)
     return float(linear) if np.ndim(code) == 0 else np.asarray(linear, dtype=float)
@@ -131,8 +129,10 @@ class AtvTube:
     def __post_init__(self) -> None:
         for name, (what, unit, lo, lo_open, hi) in {  # field: (what, unit, lowest, lowest excluded, highest)
             "tube_length_mm": ("tube length", "mm", 0.0, True, None),
-            "lens_power_diopters": ("collimator power", "dioptres", 0.0, True, 40.0),
-            "lens_refractive_index": ("collimator refractive index", "(dimensionless)", 1.0, True, 3.0),
+            "lens_power_diopters": ("collimator power", "dioptres", COLLIMATOR_POWER_RANGE_DIOPTERS[0], True,
+                                    COLLIMATOR_POWER_RANGE_DIOPTERS[1]),
+            "lens_refractive_index": ("collimator refractive index", "(dimensionless)",
+                                      REFRACTIVE_INDEX_RANGE[0], False, REFRACTIVE_INDEX_RANGE[1]),
             "lens_center_thickness_mm": ("collimator centre thickness", "mm", 0.0, True, None),
             "lens_clear_aperture_mm": ("collimator clear aperture", "mm", 0.0, True, None),
             "eye_relief_mm": ("eye relief", "mm", 0.0, True, None),
@@ -200,8 +200,9 @@ class AtvEye:
             raise VissimInputError(
                 f"the eye's refraction must be a Prescription or a RefractiveError, got {type(error).__name__}")
         object.__setattr__(self, "refractive_error", error)
+        low, high = ACCOMMODATION_RANGE_DIOPTERS
         object.__setattr__(self, "accommodation_diopters", _number(
-            self.accommodation_diopters, "accommodation", "dioptres", lo=0.0, hi=MAX_ACCOMMODATION_DIOPTERS))
+            self.accommodation_diopters, "accommodation", "dioptres", lo=low, hi=high))
 
     def viewing_setup(self, vergence_diopters=None) -> ViewingSetup:
         """This eye's `ViewingSetup.eye`; its defocus matrix

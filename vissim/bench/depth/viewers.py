@@ -32,7 +32,7 @@ from typing import Union
 import numpy as np
 
 from vissim.bench.dslr.bench import DslrBench
-from vissim.checks import positive_number
+from vissim.checks import accommodation_diopters, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, entrance_pupil_diameter_mm
@@ -46,7 +46,7 @@ __all__ = ["EyeViewer", "CameraViewer", "Viewer", "viewing_setup", "equivalent_e
 
 @dataclass(frozen=True)
 class EyeViewer:
-    """An eye of correcting lens ``prescription`` (myope < 0, not worn), pupil, accommodation >= 0."""
+    """An eye of correcting lens ``prescription`` (myope < 0, not worn), pupil, accommodation (checks' range)."""
 
     prescription: Prescription = field(default_factory=lambda: Prescription(0.0))
     pupil_diameter_mm: float = 4.0
@@ -55,7 +55,7 @@ class EyeViewer:
     def __post_init__(self) -> None:
         setup = ViewingSetup.eye(self.prescription, self.pupil_diameter_mm, self.accommodation_diopters)  # validates
         object.__setattr__(self, "pupil_diameter_mm", setup.pupil_diameter_mm)
-        object.__setattr__(self, "accommodation_diopters", float(self.accommodation_diopters) + 0.0)
+        object.__setattr__(self, "accommodation_diopters", accommodation_diopters(self.accommodation_diopters))
 
     def label(self) -> str:
         return f"eye {self.prescription.format()}, {self.pupil_diameter_mm:g} mm pupil, A {self.accommodation_diopters:g} D"

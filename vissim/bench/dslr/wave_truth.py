@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import size_text
+from vissim.checks import OVERSAMPLE_RANGE, size_text
 from vissim.bench.dslr.traced_wavefront import D_LINE_NM, TracedWavefront, trace_bench_wavefront
 from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import ChartSpec, chart_sidecar, render_chart_angular
@@ -55,8 +55,10 @@ class WaveTruth:
 def _check(bench: DslrBench, oversample: int, mode: str) -> None:
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"the bench truth's optics must be 'wave' or 'geometric', got {mode!r}")
-    if int(oversample) != oversample or not 1 <= oversample <= 16:
-        raise VissimInputError(f"oversample must be a whole number of sub-pixels within 1-16, got {oversample!r}")
+    low, high = OVERSAMPLE_RANGE
+    if int(oversample) != oversample or not low <= oversample <= high:
+        raise VissimInputError(
+            f"oversample must be a whole number of sub-pixels within {low}-{high}, got {oversample!r}")
     if abs(bench.focus_distance_mm - bench.chart_distance_mm) > 1e-9 * bench.chart_distance_mm:
         raise VissimInputError(
             f"the wave truth needs the camera focused on the chart ({bench.chart_distance_mm:g} mm); "

@@ -17,13 +17,15 @@ from typing import Any
 from vissim.bench.depth.scene import DepthScene
 from vissim.bench.depth.scene_files import load_depth_scene_toml
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer
-from vissim.checks import (DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, OBJECT_DISTANCE_RANGE_M,
-                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM, ACCOMMODATION_RANGE_DIOPTERS)
+from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, DATA_RANGE_RANGE, DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM,
+                           F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, LAYER_SPACING_FRACTION_RANGE, MARGIN_RANGE_PX,
+                           MAX_CAMPAIGN_SEED, OBJECT_DISTANCE_RANGE_M, OVERSAMPLE_RANGE, VERTEX_DISTANCE_RANGE_MM,
+                           WAVELENGTH_RANGE_NM)
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
-from vissim.validation.engine.fields import (MAX_SEED, MAX_SPP, checked_numbers, field_error, lenses, number,
+from vissim.validation.engine.fields import (MAX_SPP, checked_numbers, field_error, lenses, number,
                                       name_text, refuse_duplicate_names, settings_kwargs, tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "read_depth_part", "DEPTH_SIMULATIONS", "DEPTH_INPUTS"]
@@ -78,19 +80,19 @@ class DepthCampaignSettings:
 
 
 # -- loading ---------------------------------------------------------------------------
-#: [campaign] numbers: (unit, lowest, highest).
+#: [campaign] numbers: (unit, lowest, highest), the ranges of `vissim.checks`.
 NUMBER_SETTINGS = {
     "wavelength_nm": ("nm", *WAVELENGTH_RANGE_NM),
-    "data_range": ("(linear reflectance)", 1e-3, 1e3),
-    "margin_px": ("px", 0.0, 1000.0),
-    "layer_spacing_fraction": ("(of a blur-free depth step)", 1e-3, 1.0),
+    "data_range": ("(linear reflectance)", *DATA_RANGE_RANGE),
+    "margin_px": ("px", *MARGIN_RANGE_PX),
+    "layer_spacing_fraction": ("(of a blur-free depth step)", *LAYER_SPACING_FRACTION_RANGE),
 }
-#: [campaign] whole numbers: (unit, lowest, highest).
+#: [campaign] whole numbers: (unit, lowest, highest), the ranges of `vissim.checks`.
 WHOLE_SETTINGS = {
     "spp": ("samples per pixel", 1, MAX_SPP),
     "aux_spp": ("samples per pixel", 1, MAX_SPP),
-    "aux_seed": ("(a seed)", 0, MAX_SEED),
-    "oversample": ("(sub-pixels per pixel per axis)", 1, 16),
+    "aux_seed": ("(a seed)", 0, MAX_CAMPAIGN_SEED),
+    "oversample": ("(sub-pixels per pixel per axis)", *OVERSAMPLE_RANGE),
 }
 
 

@@ -14,8 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from vissim.charts import POLARITIES
-from vissim.checks import (F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, MAX_ARCMIN_PER_PX, OBJECT_DISTANCE_RANGE_M,
-                           VERTEX_DISTANCE_RANGE_MM, WAVELENGTH_RANGE_NM)
+from vissim.checks import (ARCMIN_PER_PX_RANGE, DATA_RANGE_RANGE, F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, LOGMAR_RANGE,
+                           OBJECT_DISTANCE_RANGE_M, REFRACTIVE_INDEX_RANGE, TILE_RANGE_PX, VERTEX_DISTANCE_RANGE_MM,
+                           WAVELENGTH_RANGE_NM)
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.dslr.schema import INPUTS, SIMULATIONS, CampaignSettings, Configuration, trial_lens_phrase
 from vissim.validation.engine.fields import (
@@ -35,20 +36,18 @@ from vissim.validation.engine.fields import (
 
 __all__ = ["read_dslr_part"]
 
-#: [campaign] numbers: (unit, lowest, highest), the ranges of `vissim.checks`; the finest sampling is a campaign's own.
+#: [campaign] numbers: (unit, lowest, highest), the ranges of `vissim.checks`.
 NUMBER_SETTINGS = {
-    "arcmin_per_px": ("arcmin/px", 1e-3, MAX_ARCMIN_PER_PX),
+    "arcmin_per_px": ("arcmin/px", *ARCMIN_PER_PX_RANGE),
     "focal_length_mm": ("mm", *FOCAL_LENGTH_RANGE_MM),
     "chart_distance_m": ("m", *OBJECT_DISTANCE_RANGE_M),
     "vertex_distance_mm": ("mm", *VERTEX_DISTANCE_RANGE_MM),
     "wavelength_nm": ("nm", *WAVELENGTH_RANGE_NM),
-    "refractive_index": ("(refractive index)", 1.01, 3.0),
-    "data_range": ("(linear reflectance)", 1e-3, 1e3),
+    "refractive_index": ("(refractive index)", *REFRACTIVE_INDEX_RANGE),
+    "data_range": ("(linear reflectance)", *DATA_RANGE_RANGE),
 }
-LOGMAR_RANGE = (-1.0, 2.0)
 #: Sloan letters are 5 strokes tall: 5 arcmin at LogMAR 0.
 LETTER_ARCMIN_AT_LOGMAR_0 = 5.0
-MAX_TILE_PX = 1 << 20
 
 
 def _f_number(value: Any, source: str, where: str) -> float:
@@ -123,10 +122,10 @@ def _settings(raw: dict, source: str) -> CampaignSettings:
                              texts=("manifest",), switches=("wave_truth", "fit_rx"),
                              read_elsewhere=("f_number",))
     if "tile_px" in raw:
-        tile = raw["tile_px"]
+        tile, (low, high) = raw["tile_px"], TILE_RANGE_PX
         if not (isinstance(tile, list) and len(tile) == 2):
-            raise field_error(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= 16), got {tile!r}")
-        kwargs["tile_px"] = tuple(whole_number(t, source, f"campaign.tile_px[{i}]", "pixels", lo=16, hi=MAX_TILE_PX)
+            raise field_error(source, "campaign.tile_px", f"need [rows, cols] in pixels (>= {low}), got {tile!r}")
+        kwargs["tile_px"] = tuple(whole_number(t, source, f"campaign.tile_px[{i}]", "pixels", lo=low, hi=high)
                                   for i, t in enumerate(tile))
     return CampaignSettings(**kwargs)
 

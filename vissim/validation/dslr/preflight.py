@@ -11,9 +11,9 @@ texture's needs are the renderer's own estimates (`vissim.render.run.render_memo
 from __future__ import annotations
 
 from vissim.bench.dslr.bench import TEXTURE_BYTES_PER_TEXEL, chart_mm_per_texel, chart_texture_shape
-from vissim.checks import check_allocation, size_text
+from vissim.checks import MAX_PSF_SIZE_PX, check_allocation, size_text
 from vissim.errors import VissimInputError
-from vissim.optics.psf import MAX_PSF_SIZE_PX, geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
+from vissim.optics.psf import geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
 from vissim.optics.wavefront import Wavefront
 from vissim.render.run import render_memory_bytes  # no Mitsuba import: that happens when a render starts
 from vissim.optics.resample import SUBPIXELS_PER_PX

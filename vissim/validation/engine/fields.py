@@ -12,17 +12,15 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from vissim.checks import MAX_DESCRIPTION_CHARS, MAX_SAMPLER_SEED, MAX_SPP, name_problem, path_arg
+from vissim.checks import (AXIS_RANGE_DEG, MAX_CAMPAIGN_SEED, MAX_DESCRIPTION_CHARS, MAX_SPP, TRIAL_LENS_RANGE_DIOPTERS,
+                           name_problem, path_arg)
 from vissim.errors import VissimInputError
+from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER
 
 __all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_campaign_toml", "number", "whole_number",
            "checked_numbers", "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs",
-           "lens", "lenses", "LensSpec", "MAX_SPP", "MAX_SEED", "MAX_LENS_DIOPTERS", "CAMPAIGN_TABLES"]
+           "lens", "lenses", "LensSpec", "MAX_SPP", "CAMPAIGN_TABLES"]
 
-#: Campaign seeds: the no-lens render uses seed_a + seed_b + 1, which must stay a sampler seed.
-MAX_SEED = (MAX_SAMPLER_SEED - 1) // 2
-#: Trial lens sets go to +-20 D; beyond +-30 D a lens is no trial lens.
-MAX_LENS_DIOPTERS = 30.0
 #: Top-level tables that make a TOML file a campaign: its head and any bench kind's configurations.
 CAMPAIGN_TABLES = ("campaign", "item", "sweep", "config")
 
@@ -110,10 +108,11 @@ def checked_numbers(raw: dict, ranges: dict, source: str, where: str, *, whole: 
 
 
 def seed_pair(value: Any, source: str, where: str) -> tuple[int, int]:
-    """Two different seeds in 0..MAX_SEED (the ground truth twice: its noise floor)."""
+    """Two different seeds in 0..MAX_CAMPAIGN_SEED (the ground truth twice: its noise floor)."""
     if not (isinstance(value, list) and len(value) == 2):
         raise field_error(source, where, f"need two different integer seeds (for the noise floor), got {value!r}")
-    seeds = tuple(whole_number(s, source, f"{where}[{i}]", "(a seed)", lo=0, hi=MAX_SEED) for i, s in enumerate(value))
+    seeds = tuple(whole_number(s, source, f"{where}[{i}]", "(a seed)", lo=0, hi=MAX_CAMPAIGN_SEED)
+                  for i, s in enumerate(value))
     if seeds[0] == seeds[1]:
         raise field_error(source, where, f"need two different integer seeds (for the noise floor), got {value!r}")
     return seeds  # type: ignore[return-value]
@@ -220,7 +219,7 @@ class LensSpec:
 
 def lens(entry: Any, source: str, where: str) -> LensSpec:
     """One trial lens: a number (sphere, D) or a table {sphere, cylinder, axis}."""
-    limit = {"lo": -MAX_LENS_DIOPTERS, "hi": MAX_LENS_DIOPTERS}
+    limit = dict(zip(("lo", "hi"), TRIAL_LENS_RANGE_DIOPTERS))
     if isinstance(entry, (int, float)) and not isinstance(entry, bool):
         return LensSpec(number(entry, source, where, "dioptres", **limit))
     if not isinstance(entry, dict):
@@ -232,15 +231,16 @@ def lens(entry: Any, source: str, where: str) -> LensSpec:
     cyl = number(entry.get("cylinder", 0.0), source, f"{where}.cylinder", "dioptres", **limit)
     if cyl != 0 and "axis" not in entry:
         raise field_error(source, where, "a cylinder needs an axis in degrees (TABO)")
-    axis = number(entry.get("axis", 180.0), source, f"{where}.axis", "degrees", lo=0.0, hi=180.0)
+    low, high = AXIS_RANGE_DEG
+    axis = number(entry.get("axis", 180.0), source, f"{where}.axis", "degrees", lo=low, hi=high)
     sphere = number(entry.get("sphere", 0.0), source, f"{where}.sphere", "dioptres", **limit)
     return LensSpec(sphere, cyl, axis if cyl else 180.0)
 
 
 def lenses(value: Any, source: str, where: str) -> tuple[LensSpec, ...]:
-    """Up to 3 lenses in the holder (plano lenses dropped)."""
+    """Up to `MAX_LENSES_IN_HOLDER` lenses in the holder (plano lenses dropped)."""
     entries = value if isinstance(value, list) else [value]
-    if len(entries) > 3:
-        raise field_error(source, where, f"the holder takes at most 3 lenses, got {len(entries)}")
+    if len(entries) > MAX_LENSES_IN_HOLDER:
+        raise field_error(source, where, f"the holder takes at most {MAX_LENSES_IN_HOLDER} lenses, got {len(entries)}")
     specs = tuple(lens(e, source, f"{where}[{i}]") for i, e in enumerate(entries))
     return tuple(s for s in specs if (s.sphere_diopters, s.cylinder_diopters) != (0.0, 0.0))

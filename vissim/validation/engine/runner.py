@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Callable
 
 from vissim.atomic import check_outputs_apart, write_json_atomic
-from vissim.checks import instance_of, path_arg, samples_per_pixel
+from vissim.checks import MAX_WORKERS, instance_of, path_arg, samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
 from vissim.progress import Progress, counter, terminal_progress
@@ -37,11 +37,9 @@ from vissim.validation.engine.renders import make_renders, render_any, spec_key
 from vissim.validation.engine.run_lock import run_folder_lock
 from vissim.validation.engine.scheduler import connect_scheduler
 
-__all__ = ["run_campaign", "run_unlocked", "RunSummary", "check_run", "check_run_options", "progress_of", "MAX_WORKERS"]
+__all__ = ["run_campaign", "run_unlocked", "RunSummary", "check_run", "check_run_options", "progress_of"]
 
 log = logging.getLogger(__name__)
-
-MAX_WORKERS = 1024
 
 
 @dataclass(frozen=True)
