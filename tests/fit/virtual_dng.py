@@ -6,14 +6,14 @@ noise (30 000 e- full well) and 2 e- read noise, quantised (black 2048, white 15
 written as a DNG (:mod:`vissim.imaging.virtual_capture`).  It is read back with
 :func:`vissim.imaging.raw.read_raw_linear` (CFA planes, levels from the file) and made grey
 again as the campaign's capture path does: each CFA plane divided by its paper level
-(:func:`vissim.validation.dslr.captures._neutral_mosaic`, paper from the tile's 4-px border), times 0.9.
+(:func:`vissim.validation.dslr.captures.neutral_mosaic`, paper from the tile's 4-px border), times 0.9.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from vissim.validation.dslr.captures import _neutral_mosaic
+from vissim.validation.dslr.captures import neutral_mosaic
 from vissim.imaging.raw import read_raw_linear
 from vissim.imaging.virtual_capture import add_sensor_noise, mosaic_bayer, quantise, write_dng
 
@@ -34,4 +34,4 @@ def through_virtual_dng(linear: np.ndarray, path, seed: int) -> np.ndarray:
     border = np.ones(raw.pixels.shape[:2], dtype=bool)
     b = BORDER_PX // 2
     border[b:-b, b:-b] = False
-    return _neutral_mosaic(raw.pixels, border) * PAPER
+    return neutral_mosaic(raw.pixels, border, raw.sensor_px_per_pixel) * PAPER

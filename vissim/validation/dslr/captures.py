@@ -48,7 +48,7 @@ from vissim.validation.engine.fields import LensSpec
 from vissim.validation.engine.fields import field_error, lenses, number, read_toml_file, tables, text
 from vissim.imaging.raw import RawImage, camera_arcmin_per_px, file_sha256, read_raw_linear, resample_to_arcmin
 
-__all__ = ["Capture", "load_manifest", "capture_problem", "read_capture", "capture_tile", "capture_provenance",
+__all__ = ["Capture", "neutral_mosaic", "load_manifest", "capture_problem", "read_capture", "capture_tile", "capture_provenance",
            "file_sha256"]
 
 log = logging.getLogger(__name__)
@@ -132,7 +132,7 @@ def capture_problem(capture: Capture) -> str | None:
     return None
 
 
-def _neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray, cell_px: int) -> np.ndarray:
+def neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray, cell_px: int) -> np.ndarray:
     """Full-resolution grey image from the CFA planes, each divided by its paper level.
 
     Plane ``c`` holds photosite ``divmod(c, cell_px)`` (row, col) of every ``cell_px`` x ``cell_px``
@@ -185,7 +185,7 @@ def capture_tile(capture: Capture, arcmin_per_px: float, tile_px: tuple[int, int
     if capture.polarity == "white-on-black":
         ring = np.zeros_like(ring)  # background is ink: take the paper from the brightest letter pixels
         ring[np.unravel_index(np.argsort(raw.pixels.mean(axis=-1), axis=None)[-64:], ring.shape)] = True
-    mosaic = _neutral_mosaic(raw.pixels, ring, cell)
+    mosaic = neutral_mosaic(raw.pixels, ring, cell)
     resampled = resample_to_arcmin(mosaic, capture.pixel_pitch_um, capture.focal_length_mm, arcmin_per_px,
                                    sensor_px_per_image_px=1, object_distance_m=capture.chart_distance_m)
     scale = resampled.scale
