@@ -17,9 +17,9 @@ import pytest
 
 from vissim.optics.eyes.media import GrinMedium
 from vissim.optics.eyes.models import arizona, escudero_sanz_1999, le_grand, liou_brennan_1997, navarro_1985
-from vissim.optics.eyes.paraxial import (GRIN_STEPS, efl_mm, entrance_pupil_diameter_mm, entrance_pupil_position_mm,
+from vissim.optics.eyes.paraxial import (GRIN_STEPS, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, grin_matrix, iris_diameter_mm, lca_diopters,
-                                         refraction_diopters, retinal_mm_per_deg, spectacle_refraction_diopters)
+                                         paraxial_eye, refraction_diopters, retinal_mm_per_deg, spectacle_refraction_diopters)
 
 
 def _ynu_power(radii_mm, gaps_mm, indices):
@@ -41,10 +41,11 @@ def _ynu_power(radii_mm, gaps_mm, indices):
 def test_wide_angle_navarro_matches_optilands_sample_at_543_nm():
     """optiland: entrance pupil 3.04010 mm behind the cornea, 3.40022 mm across at a 3 mm stop,
     f' = 22.029 mm; each within 0.1 %. Measured: 3.04005, 3.40026, 22.0305 mm."""
-    eye = escudero_sanz_1999()
-    assert entrance_pupil_position_mm(eye, 543.0) == pytest.approx(3.04010, rel=1e-3)
-    assert entrance_pupil_diameter_mm(eye, 3.0, 543.0) == pytest.approx(3.40022, rel=1e-3)
-    assert efl_mm(eye, 543.0) == pytest.approx(22.029, rel=1e-3)
+    eye = paraxial_eye(escudero_sanz_1999(), 543.0, iris_mm=3.0)
+    assert eye.entrance_pupil_position_mm == pytest.approx(3.04010, rel=1e-3)
+    assert eye.entrance_pupil_diameter_mm == pytest.approx(3.40022, rel=1e-3)
+    assert eye.efl_mm == pytest.approx(22.029, rel=1e-3)
+    assert eye.efl_mm / eye.entrance_pupil_diameter_mm == pytest.approx(6.4787, rel=1e-3)  # optiland's F-number
 
 
 def test_iris_and_entrance_pupil_convert_both_ways():

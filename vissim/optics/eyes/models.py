@@ -28,9 +28,9 @@ __all__ = ["EyeSurface", "SchematicEye", "SURFACE_KINDS", "NAVARRO_ACCOMMODATION
 #: a GRIN lens where its polynomial changes (the index is continuous); retina: the image surface.
 SURFACE_KINDS = ("refracting", "stop", "grin-boundary", "retina")
 
-#: Navarro's accommodation formulas are used over 0-10 D: Navarro 1985 fitted them to
-#: accommodated states up to 10 D (ISET3d ``convertToNavarroAccomm.m`` samples the model
-#: to 10 D); beyond that the formulas extrapolate a lens no source describes.
+#: Navarro's accommodation formulas are used over 0-10 D: ISET3d's ``convertToNavarroAccomm.m``
+#: samples the model (in Zemax) from 0 to 10 D and notes the formulas were fitted at 5 and 10 D;
+#: beyond 10 D they extrapolate a lens no source describes.
 NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
 #: The Arizona eye's formulas are linear in A, and its lens index, 1.42 + 0.00256A − 0.00022A²,
 #: peaks at A ≈ 5.8 D and falls beyond: we accept 0-6 D, the range over which it rises (the
@@ -177,7 +177,7 @@ def arizona(accommodation_diopters: float = 0.0) -> SchematicEye:
 def le_grand(accommodated: bool = False) -> SchematicEye:
     """Gullstrand–Le Grand's full theoretical eye, relaxed or accommodated (visisipy
     ``catalog/gullstrand.py``); indices with ISET3d's n∞ + K/(λ − 130) dispersion. The iris is at
-    the lens front (the model places it 3.6 mm behind the cornea; visisipy puts it at the lens)."""
+    the lens front, as visisipy puts it (3.6 mm behind the corneal vertex when relaxed)."""
     aqueous, vitreous = le_grand_medium("aqueous"), le_grand_medium("vitreous")
     if accommodated:  # aqueous 2.65, lens 6.0 / -5.5 x 4.5 mm, n 1.427, vitreous 16.49655
         depth, front, back, thickness, vitreous_mm = 2.65, 6.0, -5.5, 4.5, 16.49655
