@@ -5,6 +5,8 @@
 * `trial_lens`: trial lenses in front of a camera or an eye (ray-transfer matrices).
 * `chromatic`, `accommodation`: the eye's LCA and focus.
 * `psf`, `psf_metrics`: PSF, OTF/MTF, Strehl.
+* `eyes/`: schematic eyes (Navarro, Escudero-Sanz, Arizona, Le Grand, Liou–Brennan), their
+  media's dispersion and their paraxial optics.
 * `blur`, `depth` (with `pullpush`):
   images blurred in linear light, at one depth or many.
 
