@@ -9,7 +9,7 @@ from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
 
-__all__ = ["finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
+__all__ = ["NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS",
@@ -102,6 +102,14 @@ VERTEX_DISTANCE_RANGE_MM = (0.0, 200.0)
 #: The accommodation an eye exerts, dioptres: from relaxed to beyond a child's amplitude
 #: (about 15 D at 8 years, Duane 1922). Every eye a user describes takes it: campaigns, scene files, the ATV.
 ACCOMMODATION_RANGE_DIOPTERS = (0.0, 20.0)
+#: Navarro's accommodation formulas are used over 0-10 D: ISET3d's ``convertToNavarroAccomm.m``
+#: samples the model (in Zemax) from 0 to 10 D and notes the formulas were fitted at 5 and 10 D;
+#: beyond 10 D they extrapolate a lens no source describes.
+NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
+#: The Arizona eye's formulas are linear in A, and its lens index, 1.42 + 0.00256A − 0.00022A²,
+#: peaks at A ≈ 5.8 D and falls beyond: we accept 0-6 D, the range over which it rises (the
+#: Field Guide gives no range; the FRED example accommodates to 4 D).
+ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
 
 
 #: Viewing distances a chart (or a depth panel's chart) may be made for, m; far beyond, its sizes in mm overflow.

@@ -15,28 +15,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from vissim.checks import finite_number
+from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, NAVARRO_ACCOMMODATION_RANGE_DIOPTERS,
+                           finite_number)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import (AIR, GrinMedium, Medium, arizona_medium, le_grand_medium,
                                       liou_brennan_medium, navarro_medium)
 
-__all__ = ["EyeSurface", "SchematicEye", "SURFACE_KINDS", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS",
-           "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "navarro_1985", "escudero_sanz_1999", "arizona",
+__all__ = ["EyeSurface", "SchematicEye", "SURFACE_KINDS", "navarro_1985", "escudero_sanz_1999", "arizona",
            "le_grand", "liou_brennan_1997", "EYE_MODELS", "eye_model"]
 
 #: refracting: an index step; stop: the iris, a plane with no power; grin-boundary: a plane inside
 #: a GRIN lens where its polynomial changes (the index is continuous); retina: the image surface.
 SURFACE_KINDS = ("refracting", "stop", "grin-boundary", "retina")
-
-#: Navarro's accommodation formulas are used over 0-10 D: ISET3d's ``convertToNavarroAccomm.m``
-#: samples the model (in Zemax) from 0 to 10 D and notes the formulas were fitted at 5 and 10 D;
-#: beyond 10 D they extrapolate a lens no source describes.
-NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
-#: The Arizona eye's formulas are linear in A, and its lens index, 1.42 + 0.00256A − 0.00022A²,
-#: peaks at A ≈ 5.8 D and falls beyond: we accept 0-6 D, the range over which it rises (the
-#: Field Guide gives no range; the FRED example accommodates to 4 D).
-ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
-
 
 @dataclass(frozen=True)
 class EyeSurface:
