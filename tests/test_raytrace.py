@@ -3,13 +3,16 @@
 Oracles, none sharing code with the tracer:
 
 * Snell's law at a plane, written out (n1 sin i = n2 sin t, the transverse direction scaled);
-* the aplanatic points of a refracting sphere (Born & Wolf, Principles of Optics, 4.2.3): rays
+* the aplanatic points of a refracting sphere (Born & Wolf, Principles of Optics): rays
   converging on the point (n2/n1) R beyond the centre meet exactly at (n1/n2) R beyond it, every
   optical path from a sphere around the first point being the same;
-* the Cartesian ellipsoid (Q = -(n1/n2)^2, Born & Wolf 4.2.2): a collimated beam focuses
+* the Cartesian ellipsoid (Q = -(n1/n2)^2, the Cartesian oval of a point at infinity): a collimated beam focuses
   perfectly at n2 R / (n2 - n1) from the vertex;
 * the skew invariant n (x d_y - y d_x) of a rotationally symmetric system (Welford, Aberrations of
-  Optical Systems, 5.3), conserved through surfaces and a GRIN medium alike;
+  Optical Systems), conserved through surfaces and a GRIN medium alike;
+* a plane wave through flat surfaces stays plane: its path to a plane is linear in position;
+* a wave focused dz before the reference point: W = n' dz (1 - cos u) to first order in dz,
+  and exactly n' (tau - tau_chief), tau the distance from the focus back to the sphere;
 * a medium with a linear axial gradient n = a0 + a1 z: the invariant beta = n sin(theta) gives the
   path and the optical path in closed form (x = (beta/a1) ln(n + sqrt(n^2 - beta^2)) + c).
   Its small-angle limit is the textbook circular arc; the closed form is exact.
@@ -23,7 +26,8 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.raytrace import Biconic, Conic, GradientIndex, Plane, Surface, aim_rays, trace_rays
+from vissim.optics.raytrace import (Biconic, Conic, GradientIndex, Plane, Surface, aim_collimated, aim_rays, trace_rays,
+                                    wavefront_on_reference_sphere_um)
 
 
 def _unit(v):
@@ -112,8 +116,9 @@ def test_a_biconic_with_equal_meridians_is_the_conic_and_its_gradient_is_the_sag
 
 def test_rays_end_on_a_curved_retina():
     retina = Surface(Conic(-12.0), 20.0, 1.336, name="retina")
-    starts = np.array([[0.0, 0.0, 0.0], [1.0, -2.0, 0.0], [0.0, 0.0, 0.0]])
-    d = _unit([[0.0, 0.0, 1.0], [0.1, 0.2, 1.0], [0.35, -0.3, 1.0]])  # out to 25 deg
+    # The last ray, at 60 deg from z = 10, crosses the vertex plane 17 mm off axis, beyond the sphere.
+    starts = np.array([[0.0, 0.0, 0.0], [1.0, -2.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 10.0]])
+    d = _unit([[0.0, 0.0, 1.0], [0.1, 0.2, 1.0], [0.35, -0.3, 1.0], [math.sqrt(3.0), 0.0, 1.0]])
     bundle = trace_rays((retina,), starts, d, None, index_before=1.336)
     centre = np.array([0.0, 0.0, 8.0])
     assert np.abs(np.linalg.norm(bundle.points_mm - centre, axis=1) - 12.0).max() < 1e-12
@@ -126,6 +131,84 @@ def test_aiming_lands_rays_on_a_stop_inside_the_glass_in_the_eyes_frame():
     bundle, launch = aim_rays(surfaces, [5.0, -3.0, -200.0], targets, 3.0)
     assert np.abs(bundle.points_mm[:, :2] - targets).max() < 1e-9
     assert np.all(launch[:, 2] > 0.0) and bundle.final_index == 1.376
+
+
+def test_a_collimated_beam_is_aimed_onto_a_stop_and_stays_a_plane_wave_through_flat_surfaces():
+    surfaces = (Surface(Plane(), 0.0, 1.376, name="front"), Surface(Plane(), 0.55, 1.336, name="back"))
+    direction = [math.sin(math.radians(40.0)), 0.2, math.cos(math.radians(40.0))]  # 40 deg and a little y
+    rng = np.random.default_rng(5)
+    targets = rng.uniform(-2.0, 2.0, (30, 2))
+    bundle, starts = aim_collimated(surfaces, direction, targets, 3.6, -2.0, index_before=1.0)
+    assert np.abs(bundle.points_mm[:, :2] - targets).max() < 1e-9 and np.all(starts[:, 2] == -2.0)
+    # The refracted plane wave: L(q) = L0 + n' q . d' on the stop plane (d' the common direction).
+    d_out = bundle.directions[0]
+    assert np.abs(bundle.directions - d_out).max() < 1e-14
+    predicted = 1.336 * targets @ d_out[:2]
+    assert np.abs((bundle.opl_mm - predicted) - (bundle.opl_mm - predicted).mean()).max() < 1e-12
+
+
+def test_aiming_a_collimated_beam_through_a_cornea_at_forty_degrees_lands_on_the_iris_grid():
+    cornea = (Surface(Conic(7.72, -0.26), 0.0, 1.3771, name="cornea front"),
+              Surface(Conic(6.50), 0.55, 1.3374, name="cornea back"))
+    axis = np.linspace(-1.5, 1.5, 7)
+    x, y = np.meshgrid(axis, axis)
+    targets = np.stack([x.ravel(), y.ravel()], axis=1)
+    for field in ((40.0, 0.0), (0.0, -40.0), (28.0, 28.0)):
+        tx, ty = (math.tan(math.radians(v)) for v in field)
+        bundle, _ = aim_collimated(cornea, [tx, ty, 1.0], targets, 3.6, -5.0)
+        assert np.abs(bundle.points_mm[:, :2] - targets).max() < 1e-9
+
+
+def _focused_beam(defocus_mm):
+    """The Cartesian ellipsoid's perfect focus (z = 30), traced to a flat 'retina' defocus_mm beyond it."""
+    n2 = 1.5
+    surfaces = (Surface(Conic(10.0, -(1.0 / n2) ** 2), 0.0, n2, name="ellipsoid"),
+                Surface(Plane(), 30.0 + defocus_mm, n2, name="retina"))
+    rho = np.linspace(0.0, 5.0, 11)
+    starts = np.stack([rho * 0.6, rho * 0.8, np.full(11, -5.0)], axis=1)
+    bundle = trace_rays(surfaces, starts, np.tile([0.0, 0.0, 1.0], (11, 1)), None)
+    return bundle, n2
+
+
+def test_the_wavefront_on_the_reference_sphere_is_zero_for_a_perfect_focus_and_defocus_for_a_shifted_one():
+    bundle, _ = _focused_beam(0.0)
+    assert np.abs(wavefront_on_reference_sphere_um(bundle, 0, 0.0)).max() < 1e-6  # µm
+    dz = 1e-3  # the retina 1 µm beyond the focus: the wave focuses before it (myopic), W > 0 at the rim
+    bundle, n2 = _focused_beam(dz)
+    w_um = wavefront_on_reference_sphere_um(bundle, 0, 0.0)
+    focus = np.array([0.0, 0.0, 30.0])
+    u = -bundle.directions  # from the focus back towards the pupil
+    cos_u = bundle.directions[:, 2]
+    assert w_um[-1] > 0.0
+    assert w_um == pytest.approx(1000.0 * n2 * dz * (1.0 - cos_u), rel=1e-4, abs=1e-9)
+    centre = np.array([0.0, 0.0, 30.0 + dz])
+    rho = 30.0 + dz  # the reference sphere passes through the exit pupil's centre, the vertex
+    a = focus - centre
+    ua = np.einsum("ij,j->i", u, a)  # |focus + tau u - centre| = rho, the root in front of the focus
+    tau = -ua + np.sqrt(ua**2 - a @ a + rho**2)
+    assert np.abs(w_um - 1000.0 * n2 * (tau - tau[0])).max() < 1e-6
+
+
+def test_the_trace_reproduces_optilands_published_navarro_sample():
+    # Issue 26's must-show, here as a check of the tracer and its aiming: the wide-angle Navarro eye
+    # (Escudero-Sanz & Navarro 1999; the table of /work/shared/reference/schematic-eyes.md, written out
+    # here; the model itself lives with the eye models) with 543 nm indices (visisipy's table) and a
+    # 3 mm stop at the lens front: optiland PR #247 gives f' = 22.029 mm, the entrance pupil 3.04010 mm
+    # behind the cornea and 3.40022 mm across (paraxial), each to be met within 0.1 %.
+    # Measured: 22.02912, 3.040096, 3.400218.
+    n_cornea, n_aqueous, n_lens, n_vitreous = 1.3777, 1.3391, 1.4222, 1.3377
+    cornea = (Surface(Conic(7.72, -0.26), 0.0, n_cornea, name="cornea front"),
+              Surface(Conic(6.50), 0.55, n_aqueous, name="cornea back"))
+    lens = (Surface(Conic(10.2, -3.1316), 3.60, n_lens, name="lens front"),
+            Surface(Conic(-6.0, -1.0), 7.60, n_vitreous, name="lens back"))
+    h = 1e-4  # near the axis: real rays in the paraxial limit
+    ray = trace_rays(cornea + lens, [[h, 0.0, -1.0]], [[0.0, 0.0, 1.0]], 30.0)
+    assert h / -(ray.directions[0, 0] / ray.directions[0, 2]) == pytest.approx(22.029, rel=1e-3)
+    _, marginal = aim_collimated(cornea, [0.0, 0.0, 1.0], [[h, 0.0]], 3.60, -1.0)
+    assert 3.0 * marginal[0, 0] / h == pytest.approx(3.40022, rel=1e-3)
+    slope = 1e-5
+    _, chief = aim_collimated(cornea, [slope, 0.0, 1.0], [[0.0, 0.0]], 3.60, -1.0)
+    assert -1.0 - chief[0, 0] / slope == pytest.approx(3.04010, rel=1e-3)
 
 
 # ------------------------------------------------------------------ bad input

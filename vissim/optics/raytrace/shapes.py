@@ -12,6 +12,10 @@ that surface.  A positive curvature puts the centre of curvature on the side the
 * `Biconic` (Zemax's form): ``(cx x'^2 + cy y'^2) / (1 + sqrt(1 - (1+Qx) cx^2 x'^2 - (1+Qy) cy^2 y'^2))``
   in a frame turned by ``axis_deg`` (counter-clockwise from +x); equals `Conic` when the two agree.
 * `Plane`: z = 0.
+
+A shape may also offer ``ray_distance_mm(points, directions)`` (in its own frame), a closed-form
+first guess for the intersection (`Conic` does): Newton then starts on the surface, not on the
+vertex plane, which a ray far off axis can cross outside a steep surface's domain (a retina).
 """
 
 from __future__ import annotations
@@ -106,6 +110,22 @@ class Conic:
         c = _curvature_per_mm(self.radius_mm, "conic surface")
         r2 = np.sum(np.asarray(xy_mm, dtype=float) ** 2, axis=-1)
         return c * r2 / (1.0 + _root_or_nan(1.0 - (1.0 + self.conic) * c * c * r2))
+
+    def ray_distance_mm(self, points_mm: np.ndarray, directions: np.ndarray) -> np.ndarray:
+        """Closed-form distance along rays (local frame: z the sag direction, d_z > 0) to the vertex branch.
+
+        The conic is ``c r^2 - 2 z + (1 + Q) c z^2 = 0``; a ray ``p + s d`` meets it where
+        ``A s^2 + B s + C = 0``, and the root that tends to the plane's ``-z/d_z`` as c -> 0 is
+        ``2 C / (-B + sqrt(B^2 - 4 A C))``.  NaN where the ray misses the conic.
+        """
+        c = _curvature_per_mm(self.radius_mm, "conic surface")
+        k = (1.0 + self.conic) * c
+        (x, y, z), (dx, dy, dz) = points_mm.T, directions.T
+        a = c * (dx * dx + dy * dy) + k * dz * dz
+        b = 2.0 * (c * (x * dx + y * dy) - dz + k * z * dz)
+        q = c * (x * x + y * y) - 2.0 * z + k * z * z
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return 2.0 * q / (-b + np.sqrt(b * b - 4.0 * a * q))
 
     def sag_gradient(self, xy_mm):
         """``c (x, y) / sqrt(1 - (1 + Q) c^2 r^2)``: d sag/dr = c r / w."""

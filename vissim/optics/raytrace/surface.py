@@ -6,7 +6,8 @@ eye's frame, cornea first; -1: -z, the bench's world frame, chart first).  A sur
 so a positive radius puts the centre of curvature beyond the surface in both frames.
 
 * **Intersection** in a homogeneous medium: Newton's method on
-  ``f(s) = p_z + s d_z - z_v - travel_z sag(p_xy + s d_xy)`` from the vertex plane, to
+  ``f(s) = p_z + s d_z - z_v - travel_z sag(p_xy + s d_xy)`` from the vertex plane (or the shape's
+  closed-form distance, where it has one: `vissim.optics.raytrace.shapes`), to
   `INTERSECT_TOL_MM`.  A ray that leaves the shape's domain (NaN sag) or does not converge misses
   the surface: one `VissimInputError` names the surface.
 * **Normal**: ``(grad sag, -travel_z)`` normalised, the exact normal, facing the incoming light.
@@ -65,7 +66,7 @@ def _missed(surface: Surface, count: int) -> VissimInputError:
 
 def intersect(surface: Surface, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """Distance (mm) along each straight ray to ``surface`` (module doc)."""
-    s = (surface.vertex_z_mm - points[:, 2]) / directions[:, 2]
+    s = _first_guess(surface, points, directions)
     for _ in range(MAX_NEWTON):
         xy = points[:, :2] + s[:, None] * directions[:, :2]
         f = points[:, 2] + s * directions[:, 2] - surface.vertex_z_mm - surface.travel_z * surface.shape.sag_mm(xy)
@@ -79,6 +80,18 @@ def intersect(surface: Surface, points: np.ndarray, directions: np.ndarray) -> n
         if np.max(np.abs(step), initial=0.0) < INTERSECT_TOL_MM:
             return s
     raise _missed(surface, int(np.sum(np.abs(step) >= INTERSECT_TOL_MM)))
+
+
+def _first_guess(surface: Surface, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """The vertex plane's distance, or the shape's closed form where it has one (shapes module doc)."""
+    plane = (surface.vertex_z_mm - points[:, 2]) / directions[:, 2]
+    closed_form = getattr(surface.shape, "ray_distance_mm", None)
+    if closed_form is None:
+        return plane
+    local = np.concatenate([points[:, :2], surface.travel_z * (points[:, 2:] - surface.vertex_z_mm)], axis=1)
+    local_d = np.concatenate([directions[:, :2], surface.travel_z * directions[:, 2:]], axis=1)
+    s = closed_form(local, local_d)
+    return np.where(np.isfinite(s), s, plane)
 
 
 def check_aperture(surface: Surface, points: np.ndarray, checked: np.ndarray) -> None:
