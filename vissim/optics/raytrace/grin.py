@@ -110,6 +110,7 @@ def _check_inside(medium, exit_surface, r, t_vec, excess) -> None:
     turned = exit_surface.travel_z * t_vec[:, 2] <= 0.0
     if np.any(turned):
         raise _left_lens(medium, exit_surface, int(turned.sum()), "turn back")
-    lost = ~np.isfinite(excess) | (np.hypot(r[:, 0], r[:, 1]) > exit_surface.clear_radius_mm)
+    inside = ~(excess >= 0.0)  # a ray that crossed the surface in this step lands in _land, at its own radius
+    lost = ~np.isfinite(excess) | (inside & (np.hypot(r[:, 0], r[:, 1]) > exit_surface.clear_radius_mm))
     if np.any(lost):
         raise _left_lens(medium, exit_surface, int(lost.sum()), "pass beyond the rim")
