@@ -21,8 +21,9 @@ import pytest
 from vissim.bench.dslr.traced_wavefront import shift_invariance, trace_bench_wavefront
 from vissim.bench.dslr.bench import DslrBench
 from vissim.bench.lenses.mesh import cached_lens_ply, lens_surface_curvatures_per_mm
-from vissim.bench.lenses.trace import aim_rays, bench_surfaces, object_point_mm
+from vissim.bench.lenses.trace import bench_surfaces, object_point_mm
 from vissim.optics.glass import C_LINE_NM, D_LINE_NM, F_LINE_NM, SPECTACLE_CROWN, crown_index
+from vissim.optics.raytrace import aim_rays
 from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, trial_lens_effect
 from vissim.optics.wavefront import Wavefront
 from vissim.units import mm_to_m

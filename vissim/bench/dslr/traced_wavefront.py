@@ -36,11 +36,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vissim.bench.lenses.trace import aim_rays, bench_surfaces, object_point_mm
+from vissim.bench.lenses.trace import bench_surfaces, object_point_mm
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
 from vissim.optics.glass import D_LINE_NM
 from vissim.optics.prescription import LensPower
+from vissim.optics.raytrace import aim_rays
 from vissim.optics.wavefront import Wavefront
 from vissim.optics.zernike import zernike_keys, zernike_nm
 from vissim.units import arcmin_to_rad, mm_to_m

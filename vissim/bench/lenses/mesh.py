@@ -38,6 +38,8 @@ import numpy as np
 from vissim.atomic import atomic_output, cache_output
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower
+from vissim.optics.raytrace.shapes import matrix_sag_gradient as sag_gradient
+from vissim.optics.raytrace.shapes import matrix_sag_mm
 from vissim.optics.trial_lens import TrialLens
 from vissim.units import diopters_to_per_mm
 
@@ -64,33 +66,16 @@ def lens_surface_curvatures_per_mm(lens: TrialLens) -> tuple[np.ndarray, np.ndar
     return front, back
 
 
-def _quadratic_forms(curvature_per_mm, xy_mm) -> tuple[np.ndarray, ...]:  # xy, K x, K^2 x, x^T K x, x^T K^2 x
-    curvature = np.asarray(curvature_per_mm, dtype=float)
-    xy = np.asarray(xy_mm, dtype=float)
-    kx = xy @ curvature.T  # K x, K symmetric
-    kkx = kx @ curvature.T  # K^2 x
-    q = np.einsum("...i,...i->...", xy, kx)
-    p = np.einsum("...i,...i->...", xy, kkx)
-    return xy, kx, kkx, q, p
-
-
 def sag_mm(curvature_per_mm, xy_mm) -> np.ndarray:
-    """Sag ``x^T K x / (1 + sqrt(1 - x^T K^2 x))`` in mm at points ``xy_mm`` (..., 2)."""
-    xy, _, _, q, p = _quadratic_forms(curvature_per_mm, xy_mm)
-    if np.any(p >= 1.0):
+    """Sag ``x^T K x / (1 + sqrt(1 - x^T K^2 x))`` in mm at points ``xy_mm`` (..., 2) (`matrix_sag_mm`)."""
+    xy = np.asarray(xy_mm, dtype=float)
+    sag = matrix_sag_mm(curvature_per_mm, xy)
+    if not np.all(np.isfinite(sag)):
         raise VissimInputError(
             f"a point {float(np.sqrt(np.max(np.sum(xy**2, axis=-1)))):.3g} mm from the axis lies beyond the "
             "surface's hemisphere (aperture radius >= radius of curvature)"
         )
-    return q / (1.0 + np.sqrt(1.0 - p))
-
-
-def sag_gradient(curvature_per_mm, xy_mm) -> np.ndarray:
-    """Analytic gradient (d sag/dx, d sag/dy), dimensionless, at points ``xy_mm`` (..., 2)."""
-    _, kx, kkx, q, p = _quadratic_forms(curvature_per_mm, xy_mm)
-    w = np.sqrt(1.0 - p)
-    one_w = 1.0 + w
-    return 2.0 * kx / one_w[..., None] + (q / (one_w**2 * w))[..., None] * kkx
+    return sag
 
 
 def _rim_directions(curvatures: tuple[np.ndarray, ...]) -> np.ndarray:
