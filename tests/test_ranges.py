@@ -82,6 +82,7 @@ NOT_INPUT_BOUNDS = {
     "MIN_PUPIL_CELLS": "the wave PSF's internal sampling", "MAX_INTERNAL_SIZE": "the wave PSF's internal sampling",
     "MIN_RAYS": "the geometric PSF's ray budget", "MAX_RAYS": "the geometric PSF's ray budget",
     "MAX_ARRAYS": "the workspace cache", "MAX_KEPT_BYTES": "the workspace cache",
+    "MAX_NEWTON": "the ray tracer's iteration budget", "MAX_GRIN_STEPS": "the GRIN integrator's step budget",
 }
 
 
