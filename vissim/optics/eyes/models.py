@@ -31,7 +31,14 @@ SURFACE_KINDS = ("refracting", "stop", "grin-boundary", "retina")
 @dataclass(frozen=True)
 class EyeSurface:
     """One surface: its vertex radius (mm; ``math.inf`` for a plane), conic Q, the axial distance
-    to the next surface's vertex (mm) and the medium between them, and its kind (`SURFACE_KINDS`)."""
+    to the next surface's vertex (mm) and the medium between them, and its kind (`SURFACE_KINDS`).
+
+    A toric (biconic) surface also has ``radius_y_mm``: then ``radius_mm`` is the radius of its
+    section along the TABO meridian ``axis_deg`` (its local x', counter-clockwise from +x, the
+    examiner's right, as the examiner faces the eye) and ``radius_y_mm`` that along ``axis_deg``
+    + 90° (y'); both sections have the conic Q (Zemax's biconic with Qx = Qy). ``radius_y_mm``
+    None (every model's table) is a surface of revolution, and ``axis_deg`` is then unused.
+    """
 
     name: str
     radius_mm: float
@@ -39,6 +46,18 @@ class EyeSurface:
     thickness_after_mm: float
     medium_after: Medium | GrinMedium
     kind: str = "refracting"
+    radius_y_mm: float | None = None
+    axis_deg: float = 0.0
+
+    @property
+    def radius_x_mm(self) -> float:
+        """The radius along x' (the meridian ``axis_deg``), mm: ``radius_mm``."""
+        return self.radius_mm
+
+    @property
+    def is_toric(self) -> bool:
+        """True when the two principal radii differ."""
+        return self.radius_y_mm is not None and self.radius_y_mm != self.radius_mm
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ import numpy as np
 from vissim.checks import positive_number
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
 
@@ -82,10 +83,14 @@ def _index_after(eye: SchematicEye, i: int, wavelength_nm: float) -> float:
 
 def matrix_to_surface(eye: SchematicEye, surface_index: int, wavelength_nm: float, steps: int = GRIN_STEPS) -> np.ndarray:
     """The matrix from air at the corneal front vertex to the vertex plane of ``surfaces[surface_index]``
-    (before it refracts). ``surface_index = len(surfaces) - 1`` ends at the retina."""
+    (before it refracts). ``surface_index = len(surfaces) - 1`` ends at the retina. A toric surface
+    on the way has no 2 x 2 matrix and raises `VissimInputError`."""
     wavelength = checked_wavelength_nm(wavelength_nm)
     matrix = np.eye(2)
     for i, surface in enumerate(eye.surfaces[:surface_index]):
+        if surface.is_toric:
+            raise VissimInputError(f"the {eye.name} eye's {surface.name} is toric ({surface.radius_mm:g} mm and "
+                                   f"{surface.radius_y_mm:g} mm): use vissim.optics.eyes.ametropia's 4 x 4 matrices")
         n, n_after = _index_before(eye, i, wavelength), _index_after(eye, i, wavelength)
         matrix = _refraction((n_after - n) / surface.radius_mm) @ matrix  # a plane: 1/inf = 0
         medium = surface.medium_after
