@@ -3,6 +3,7 @@
 * `media`: n(λ) of each model's media (Navarro 1985, Arizona, Le Grand, Liou–Brennan), with sources.
 * `models`: `SchematicEye` tables and their builders; `EYE_MODELS` by command-line name.
 * `paraxial`: ray-transfer matrices: power, f′, entrance pupil, refraction, retinal scale, LCA.
-
-The real-ray trace through these surfaces lives elsewhere; this package is data and first-order optics.
+* `surfaces`: a model as surfaces of the exact trace (`vissim.optics.raytrace`), in the eye's frame.
+* `wavefront`: the traced wavefront over the entrance pupil at a field point and a wavelength.
+* `refraction`: paraxial and minimum-RMS refraction from that wavefront, at the cornea or a spectacle plane.
 """
