@@ -20,7 +20,6 @@ distance in metres from that plane to the entrance pupil.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
