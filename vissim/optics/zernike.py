@@ -24,7 +24,7 @@ from scipy.special import eval_jacobi
 from vissim.errors import VissimInputError
 
 __all__ = ["ansi_j_to_nm", "nm_to_ansi_j", "noll_to_nm", "nm_to_noll", "zernike_keys", "zernike_norm",
-           "zernike_radial", "zernike_nm"]
+           "zernike_radial", "zernike_nm", "fit_zernike_um"]
 
 
 def _check_nm(n: int, m: int) -> tuple[int, int]:
@@ -109,3 +109,26 @@ def zernike_nm(n: int, m: int, rho: np.ndarray, theta: np.ndarray) -> np.ndarray
     if m < 0:
         return -radial * np.sin(m * np.asarray(theta))
     return radial * np.ones_like(np.asarray(theta, dtype=float))
+
+
+def fit_zernike_um(x_mm, y_mm, opd_um, pupil_diameter_mm: float, max_order: int = 8):
+    """Least-squares OSA Zernike coefficients (µm) of OPD samples inside the pupil disc.
+
+    Returns ``(coefficients {(n, m): µm}, rms of the fit residual in µm)``; samples with
+    ``r > R`` are ignored.
+    """
+    if int(max_order) != max_order or not 2 <= max_order <= 20:
+        raise VissimInputError(f"Zernike radial order must be a whole number within 2-20 (defocus needs 2), "
+                               f"got {max_order!r}")
+    radius = 0.5 * pupil_diameter_mm
+    x, y, w = (np.asarray(a, dtype=float).ravel() for a in (x_mm, y_mm, opd_um))
+    rho = np.hypot(x, y) / radius
+    inside = rho <= 1.0 + 1e-12
+    keys = zernike_keys(int(max_order))
+    if inside.sum() < 2 * len(keys):
+        raise VissimInputError(f"{int(inside.sum())} samples inside the pupil cannot fit {len(keys)} Zernike terms")
+    theta = np.arctan2(y[inside], x[inside])
+    basis = np.stack([zernike_nm(n, m, rho[inside], theta) for n, m in keys], axis=1)
+    solution, *_ = np.linalg.lstsq(basis, w[inside], rcond=None)
+    residual = w[inside] - basis @ solution
+    return {k: float(v) for k, v in zip(keys, solution)}, float(np.sqrt(np.mean(residual**2)))

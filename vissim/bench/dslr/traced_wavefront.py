@@ -43,7 +43,7 @@ from vissim.optics.glass import D_LINE_NM
 from vissim.optics.prescription import LensPower
 from vissim.optics.raytrace import aim_rays
 from vissim.optics.wavefront import Wavefront
-from vissim.optics.zernike import zernike_keys, zernike_nm
+from vissim.optics.zernike import fit_zernike_um, zernike_nm
 from vissim.units import arcmin_to_rad, mm_to_m
 
 __all__ = ["TracedWavefront", "ShiftInvariance", "fit_zernike_um", "trace_bench_wavefront", "frame_field_points_deg",
@@ -52,29 +52,6 @@ __all__ = ["TracedWavefront", "ShiftInvariance", "fit_zernike_um", "trace_bench_
 #: Defaults: 65 x 65 samples (centre on a sample), Zernike radial order 8.
 DEFAULT_SAMPLES = 65
 DEFAULT_MAX_ORDER = 8
-
-
-def fit_zernike_um(x_mm, y_mm, opd_um, pupil_diameter_mm: float, max_order: int = DEFAULT_MAX_ORDER):
-    """Least-squares OSA Zernike coefficients (µm) of OPD samples inside the pupil disc.
-
-    Returns ``(coefficients {(n, m): µm}, rms of the fit residual in µm)``; samples with
-    ``r > R`` are ignored.
-    """
-    if int(max_order) != max_order or not 2 <= max_order <= 20:
-        raise VissimInputError(f"Zernike radial order must be a whole number within 2-20 (defocus needs 2), "
-                               f"got {max_order!r}")
-    radius = 0.5 * pupil_diameter_mm
-    x, y, w = (np.asarray(a, dtype=float).ravel() for a in (x_mm, y_mm, opd_um))
-    rho = np.hypot(x, y) / radius
-    inside = rho <= 1.0 + 1e-12
-    keys = zernike_keys(int(max_order))
-    if inside.sum() < 2 * len(keys):
-        raise VissimInputError(f"{int(inside.sum())} samples inside the pupil cannot fit {len(keys)} Zernike terms")
-    theta = np.arctan2(y[inside], x[inside])
-    basis = np.stack([zernike_nm(n, m, rho[inside], theta) for n, m in keys], axis=1)
-    solution, *_ = np.linalg.lstsq(basis, w[inside], rcond=None)
-    residual = w[inside] - basis @ solution
-    return {k: float(v) for k, v in zip(keys, solution)}, float(np.sqrt(np.mean(residual**2)))
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,98 @@
+"""The refraction of a schematic eye from its traced wavefront: paraxial and minimum RMS.
+
+Both read the OSA Zernike coefficients (µm) over the **entrance pupil** (radius R, mm), as
+`vissim.optics.eyes.wavefront.EyeWavefront` holds them, and give the **correcting lens** (a
+`Prescription`: negative sphere for a myope), as `vissim.optics.wavefront.zernike_um_to_prescription`:
+
+* minimum RMS: from c(2,−2), c(2,0), c(2,2) only, M = −4√3 c(2,0)/R², J0 = −2√6 c(2,2)/R²,
+  J45 = −2√6 c(2,−2)/R² (Thibos, Hong, Bradley & Applegate 2004, J. Vision 4:329);
+* paraxial: the wavefront's curvature at the pupil centre, every order's ρ² term: with W ≈ a0 ρ² +
+  a2 ρ² cos 2θ + a−2 ρ² sin 2θ near the centre, (M, J0, J45) = −2 (a0, a2, a−2)/R². For orders
+  2, 4, 6 this is Thibos et al.'s M = (−4√3 c20 + 12√5 c40 − 24√7 c60)/R², J0 = (−2√6 c22 +
+  6√10 c42 − 12√14 c62)/R² (J45 alike with m = −2); orders 8 and up add their own ρ² terms.
+
+Plane: the entrance pupil lies in object space (air), so these are vergences at the
+entrance-pupil plane, ``entrance_pupil_position_mm`` behind the corneal vertex. Each is carried
+once to the plane asked for -- the corneal vertex, or a spectacle plane ``vertex_distance_mm`` in
+front of it -- through air by the vergence transfer of power matrices, F' = F (I + d F)⁻¹, d the
+distance in metres from that plane to the entrance pupil.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
+from vissim.optics.prescription import Prescription
+from vissim.optics.wavefront import zernike_um_to_prescription
+from vissim.optics.zernike import zernike_norm
+
+__all__ = ["paraxial_rho2_coefficient", "paraxial_prescription", "minimum_rms_prescription", "transfer_prescription",
+           "EyeRefraction", "eye_refraction"]
+
+
+def paraxial_rho2_coefficient(n: int, m: int) -> float:
+    """The coefficient of ρ² in Z(n, m) (OSA, unit RMS) for m = 0 or ±2, n ≥ |m| even; its radial
+    polynomial's last term times the norm: (−1)^k (n/2 + 1)(n/2) / (1 + δ_|m|2), k = n/2 − 1."""
+    if abs(m) not in (0, 2) or n < 2 or (n - m) % 2:
+        return 0.0
+    k = n // 2 - 1
+    radial = (-1) ** k * (n // 2 + 1) * (n // 2) / (2.0 if abs(m) == 2 else 1.0)
+    return zernike_norm(n, m) * radial
+
+
+def paraxial_prescription(zernike_um, pupil_diameter_mm: float) -> Prescription:
+    """The correcting lens (at the pupil's plane) from the wavefront's curvature at the pupil centre (module doc)."""
+    a = {0: 0.0, 2: 0.0, -2: 0.0}
+    for (n, m), c in zernike_um.items():
+        if m in a:
+            a[m] += float(c) * paraxial_rho2_coefficient(n, m)
+    radius_sq = (0.5 * pupil_diameter_mm) ** 2
+    return Prescription.from_power_vector(-2.0 * a[0] / radius_sq, -2.0 * a[2] / radius_sq, -2.0 * a[-2] / radius_sq)
+
+
+def minimum_rms_prescription(zernike_um, pupil_diameter_mm: float) -> Prescription:
+    """The correcting lens (at the pupil's plane) from the second-order terms alone."""
+    return zernike_um_to_prescription(zernike_um, pupil_diameter_mm)
+
+
+def transfer_prescription(rx: Prescription, distance_mm: float) -> Prescription:
+    """``rx`` (a far point's vergence at a plane) at the plane ``distance_mm`` in front of it, through air."""
+    f = np.asarray(rx.power_matrix(), dtype=float)
+    moved = f @ np.linalg.inv(np.eye(2) + 1e-3 * distance_mm * f)
+    return Prescription.from_power_matrix(0.5 * (moved + moved.T))
+
+
+@dataclass(frozen=True)
+class EyeRefraction:
+    """The paraxial and minimum-RMS refractions of a traced wavefront at ``plane``:
+    ``"corneal vertex"`` or ``"spectacle plane"`` ``vertex_distance_mm`` in front of it."""
+
+    plane: str
+    vertex_distance_mm: float
+    pupil_diameter_mm: float
+    paraxial: Prescription
+    minimum_rms: Prescription
+
+    def as_json(self) -> dict:
+        def entry(rx: Prescription) -> dict:
+            m, j0, j45 = rx.power_vector()
+            return {"sphere_diopters": rx.sphere_diopters, "cylinder_diopters": rx.cylinder_diopters,
+                    "axis_deg": rx.axis_deg, "M": m, "J0": j0, "J45": j45}
+
+        return {"refraction_plane": self.plane, "vertex_distance_mm": self.vertex_distance_mm,
+                "paraxial": entry(self.paraxial), "minimum_rms": entry(self.minimum_rms)}
+
+
+def eye_refraction(wavefront, vertex_distance_mm: float | None = None) -> EyeRefraction:
+    """The refraction of an `EyeWavefront` at the corneal vertex (``vertex_distance_mm`` None) or at
+    a spectacle plane that far in front of it (module doc)."""
+    vertex = 0.0 if vertex_distance_mm is None else checked_vertex_distance_mm(vertex_distance_mm)
+    plane = "corneal vertex" if vertex_distance_mm is None else "spectacle plane"
+    distance = wavefront.entrance_pupil_position_mm + vertex
+    pupil = wavefront.entrance_pupil_mm
+    return EyeRefraction(plane, vertex, pupil,
+                         transfer_prescription(paraxial_prescription(wavefront.zernike_um, pupil), distance),
+                         transfer_prescription(minimum_rms_prescription(wavefront.zernike_um, pupil), distance))

@@ -1,0 +1,247 @@
+"""The traced wavefront of a schematic eye: one field point, one wavelength, over the entrance pupil.
+
+Steps (`trace_eye_wavefront`):
+
+1. A collimated beam from the field point (x, y) degrees -- the object's direction seen from the
+   eye, at (tan x, tan y) in OSA's frame, so the beam travels along (−tan x, −tan y, 1) -- is
+   aimed with `aim_collimated` through the cornea onto a regular square grid on the iris (the
+   stop; centred on the iris centre, ``stop_decentre_nasal_mm`` towards +x: a right eye), and
+   traced on through the lens (the GRIN lens by the ray equation) to the retina
+   (`vissim.optics.eyes.surfaces`). Field angles are from the optical axis.
+2. The chief ray (through the iris centre) meets the retina at the image point; each ray's OPD is
+   taken on the reference sphere about that point through the chief ray's crossing of the
+   paraxial exit-pupil plane (`wavefront_on_reference_sphere_um`; OSA sign, W > 0 leads).
+3. Each ray is placed at its **entrance-pupil** coordinates: where its incoming line crosses the
+   plane of the paraxial entrance pupil (the traced pupil imaging, pupil aberration included).
+4. The OSA Zernike fit (`fit_zernike_um`, up to radial order 8 by default) is over the disc of the
+   entrance-pupil diameter centred on the chief ray's entrance-pupil point; the grid reaches
+   `GRID_MARGIN` times the iris radius so that the disc is covered off axis too, where the
+   iris's image grows and shifts (at 40° in ES1999, by up to 13 %). Off axis this disc, in the
+   plane normal to the optical axis, is the on-axis pupil's size, not the iris's oblique image.
+
+Pupils: the entrance pupil (clinicians') or the iris (optical design's) may be given; the other
+follows from the real-ray pupil imaging on axis at the trace's wavelength
+(`entrance_pupil_from_iris_mm`, `iris_from_entrance_pupil_mm`), and `EyeWavefront.pupil_given`
+records which one was. Coefficients are always over the entrance pupil.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from vissim.checks import EYE_PUPIL_RANGE_MM, finite_number, positive_number
+from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.models import SchematicEye
+from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, iris_diameter_mm, matrix_to_surface
+from vissim.optics.eyes.surfaces import split_at_stop
+from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefront_on_reference_sphere_um
+from vissim.optics.zernike import fit_zernike_um
+
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "exit_pupil_position_mm", "entrance_pupil_from_iris_mm",
+           "iris_from_entrance_pupil_mm", "max_iris_mm", "DEFAULT_SAMPLES", "GRID_MARGIN", "MAX_FIELD_DEG"]
+
+#: Samples across the iris (odd: the chief ray is the grid's centre) and the grid's reach, in iris radii.
+DEFAULT_SAMPLES = 65
+GRID_MARGIN = 1.05
+#: Field angles, degrees from the optical axis, per axis (issue 26: 0-40; beyond, rays may miss).
+MAX_FIELD_DEG = 89.0
+#: The plane the collimated beam starts on, mm (in front of the corneal vertex).
+_START_Z_MM = -1.0
+_PUPIL_TOL_MM = 1e-12
+
+
+def exit_pupil_position_mm(eye: SchematicEye, wavelength_nm: float) -> float:
+    """The paraxial exit pupil (the iris imaged by the lens into the vitreous), mm behind the corneal vertex."""
+    retina = len(eye.surfaces) - 1
+    rest = matrix_to_surface(eye, retina, wavelength_nm) @ np.linalg.inv(matrix_to_surface(eye, eye.stop_index,
+                                                                                            wavelength_nm))
+    y, nu = rest @ np.array([0.0, 1.0])  # a ray from the iris centre, at the retina's vertex plane
+    n_vitreous = eye.surfaces[-2].medium_after.index(wavelength_nm)
+    return eye.axial_length_mm - n_vitreous * y / nu
+
+
+def _beam_direction(field_deg) -> np.ndarray:
+    fx, fy = (finite_number(v, "field angle", "deg") for v in field_deg)
+    for value in (fx, fy):
+        if abs(value) > MAX_FIELD_DEG:
+            raise VissimInputError(f"field angle {value:g} deg is beyond +-{MAX_FIELD_DEG:g} deg")
+    d = np.array([-math.tan(math.radians(fx)), -math.tan(math.radians(fy)), 1.0])
+    return d / np.linalg.norm(d)
+
+
+def _axial_starts(eye: SchematicEye, iris_x_mm, wavelength_nm: float) -> np.ndarray:
+    """x (mm) where axial rays that land on the iris at ``iris_x_mm`` (y = 0) enter: their entrance-pupil heights."""
+    front, stop_z, _ = split_at_stop(eye)
+    targets = np.stack([np.asarray(iris_x_mm, dtype=float), np.zeros(len(iris_x_mm))], axis=1)
+    _, starts = aim_collimated(front, [0.0, 0.0, 1.0], targets, stop_z, _START_Z_MM, wavelength_nm=wavelength_nm)
+    return starts[:, 0]
+
+
+def entrance_pupil_from_iris_mm(eye: SchematicEye, iris_mm: float, wavelength_nm: float) -> float:
+    """The entrance-pupil diameter (mm) of an iris ``iris_mm`` across, by real rays on axis (its x extent)."""
+    centre, radius = eye.stop_decentre_nasal_mm, 0.5 * iris_mm
+    rim = _axial_starts(eye, [centre + radius, centre - radius], wavelength_nm)
+    return float(rim[0] - rim[1])
+
+
+def iris_from_entrance_pupil_mm(eye: SchematicEye, entrance_pupil_mm: float, wavelength_nm: float) -> float:
+    """The iris diameter (mm) whose real-ray entrance pupil is ``entrance_pupil_mm``: the secant method from
+    the paraxial iris."""
+    d0 = iris_diameter_mm(eye, entrance_pupil_mm, wavelength_nm)
+    d1 = 1.01 * d0
+    f0 = entrance_pupil_from_iris_mm(eye, d0, wavelength_nm) - entrance_pupil_mm
+    for _ in range(30):
+        f1 = entrance_pupil_from_iris_mm(eye, d1, wavelength_nm) - entrance_pupil_mm
+        if abs(f1) < _PUPIL_TOL_MM or f1 == f0:
+            return d1
+        d0, d1, f0 = d1, d1 - f1 * (d1 - d0) / (f1 - f0), f1
+    raise VissimInputError(f"no iris gives a {entrance_pupil_mm:g} mm entrance pupil")  # pragma: no cover
+
+
+def max_iris_mm(eye: SchematicEye) -> float:
+    """The widest iris the eye holds, mm: twice the radius where the iris plane meets the surface in
+    front of it (the anterior chamber's angle, at the cornea's back), by bisection on its sag."""
+    front, stop_z, _ = split_at_stop(eye)
+    wall = front[-1]
+    depth = stop_z - wall.vertex_z_mm
+    low, high = 0.0, 1.0
+    while high < 1e3 and wall.shape.sag_mm(np.array([high, 0.0])) < depth:
+        high *= 2.0
+    for _ in range(80):
+        mid = 0.5 * (low + high)
+        sag = wall.shape.sag_mm(np.array([mid, 0.0]))
+        low, high = (mid, high) if sag < depth else (low, mid)  # NaN (beyond the conic's domain): the rim
+    return 2.0 * low
+
+
+def _pupils(eye: SchematicEye, wavelength_nm: float, pupil_mm, iris_mm) -> tuple[float, float, str]:
+    """(entrance pupil, iris, which was given), each mm. The iris may open to the top of a human eye's
+    `EYE_PUPIL_RANGE_MM` and to `max_iris_mm` of this eye; an entrance pupil is held to the iris it needs."""
+    if (pupil_mm is None) == (iris_mm is None):
+        raise VissimInputError("give either the entrance-pupil diameter (pupil_mm) or the iris diameter (iris_mm), "
+                               "not both or neither")
+    if pupil_mm is not None:
+        pupil, given = positive_number(pupil_mm, "entrance pupil diameter", "mm"), "entrance pupil"
+        try:
+            iris = iris_from_entrance_pupil_mm(eye, pupil, wavelength_nm)
+        except VissimInputError as error:
+            raise VissimInputError(f"entrance pupil {pupil:g} mm: {error}") from None
+        asked = f"entrance pupil {pupil:g} mm needs an iris of {iris:.3f} mm"
+    else:
+        iris, given = positive_number(iris_mm, "iris diameter", "mm"), "iris"
+        asked = f"iris {iris:g} mm"
+    human = EYE_PUPIL_RANGE_MM[1]
+    widest = min(human, max_iris_mm(eye))
+    if iris > widest:
+        raise VissimInputError(f"{asked}, wider than the {widest:.3g} mm the {eye.name} eye's iris allows (a human "
+                               f"iris opens to {human:g} mm at most, and to no wider than where the iris plane meets "
+                               "the cornea's back)")
+    if given == "iris":
+        pupil = entrance_pupil_from_iris_mm(eye, iris, wavelength_nm)
+    return float(pupil), float(iris), given
+
+
+@dataclass(frozen=True, eq=False)
+class EyeWavefront:
+    """The traced wavefront of ``model`` at ``field_deg`` and ``wavelength_nm`` (module doc).
+
+    ``entrance_pupil_mm`` / ``iris_mm``: the pupil the coefficients are over and the iris that gives
+    it; ``pupil_given``: ``"entrance pupil"`` or ``"iris"``. ``x_mm``, ``y_mm``, ``opd_um``: every
+    traced ray's entrance-pupil coordinates (relative to the chief ray's) and OPD (µm, OSA sign),
+    inside the disc or not. ``zernike_um``: OSA (n, m) -> µm over the entrance pupil, piston and tilt
+    included; ``rms_um``: without piston and tilt; ``image_point_mm``: the chief ray on the retina;
+    ``chief_entrance_pupil_mm``: where the chief ray crosses the entrance-pupil plane (x, y), the
+    disc's centre (on the axis for a centred iris on axis; −0.097 mm in x at 40° in ES1999).
+    """
+
+    model: str
+    field_deg: tuple[float, float]
+    wavelength_nm: float
+    entrance_pupil_mm: float
+    iris_mm: float
+    pupil_given: str
+    entrance_pupil_position_mm: float
+    exit_pupil_position_mm: float
+    image_point_mm: tuple[float, float, float]
+    chief_entrance_pupil_mm: tuple[float, float]
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    opd_um: np.ndarray
+    zernike_um: dict
+    fit_residual_rms_um: float
+
+    @property
+    def rms_um(self) -> float:
+        """RMS wavefront error over the entrance pupil, piston and tilt removed (unit-RMS Zernikes)."""
+        return math.sqrt(sum(v * v for (n, _), v in self.zernike_um.items() if n >= 2))
+
+    def inside(self) -> np.ndarray:
+        """The rays inside the entrance-pupil disc (those the fit used)."""
+        return np.hypot(self.x_mm, self.y_mm) <= 0.5 * self.entrance_pupil_mm * (1.0 + 1e-12)
+
+
+def _iris_grid(eye: SchematicEye, iris_mm: float, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """The (N, 2) iris targets -- a square grid of step iris / (samples − 1), its points within
+    `GRID_MARGIN` iris radii plus two steps, the chief ray (the iris centre) first -- and which of
+    them are on the grid's edge (a 4-neighbour missing)."""
+    step = iris_mm / (samples - 1)
+    half = math.ceil(GRID_MARGIN * (samples - 1) / 2) + 2
+    axis = step * np.arange(-half, half + 1)
+    x, y = np.meshgrid(axis, axis[::-1])
+    keep = np.hypot(x, y) <= step * (half + 1e-9)
+    padded = np.pad(keep, 1)
+    edge = keep & ~(padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:])
+    keep[half, half] = False
+    points = np.concatenate([[[0.0, 0.0]], np.stack([x[keep], y[keep]], axis=1)])
+    return points + np.array([eye.stop_decentre_nasal_mm, 0.0]), np.concatenate([[False], edge[keep]])
+
+
+def _trace_to_retina(eye: SchematicEye, direction, targets, wavelength_nm: float) -> tuple[RayBundle, np.ndarray]:
+    front, stop_z, back = split_at_stop(eye)
+    at_iris, starts = aim_collimated(front, direction, targets, stop_z, _START_Z_MM, wavelength_nm=wavelength_nm)
+    on_retina = trace_rays(back, at_iris.points_mm, at_iris.directions, None, wavelength_nm=wavelength_nm,
+                           index_before=at_iris.final_index)
+    bundle = RayBundle(on_retina.points_mm, on_retina.directions, at_iris.opl_mm + on_retina.opl_mm,
+                       on_retina.final_index)
+    return bundle, starts
+
+
+def _checked_samples(samples) -> int:
+    if int(samples) != samples or not 9 <= samples <= 1025 or samples % 2 == 0:
+        raise VissimInputError(f"iris grid samples must be an odd whole number within 9-1025, got {samples!r}")
+    return int(samples)
+
+
+def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0, 0.0), *, pupil_mm=None,
+                        iris_mm=None, samples: int = DEFAULT_SAMPLES, max_order: int = 8) -> EyeWavefront:
+    """The traced wavefront of ``eye`` (module doc); give ``pupil_mm`` (entrance pupil) or ``iris_mm``.
+
+    A field angle where rays miss a surface, meet total internal reflection or leave the GRIN lens
+    raises one `VissimInputError` naming the field angle in degrees and what happened.
+    """
+    wavelength = checked_wavelength_nm(wavelength_nm)
+    direction = _beam_direction(field_deg)
+    samples = _checked_samples(samples)
+    pupil, iris, given = _pupils(eye, wavelength, pupil_mm, iris_mm)
+    field = tuple(float(v) for v in field_deg)
+    try:
+        targets, edge = _iris_grid(eye, iris, samples)
+        bundle, starts = _trace_to_retina(eye, direction, targets, wavelength)
+    except VissimInputError as error:
+        raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
+    entrance_z, exit_z = entrance_pupil_position_mm(eye, wavelength), exit_pupil_position_mm(eye, wavelength)
+    opd_um = wavefront_on_reference_sphere_um(bundle, 0, exit_z)
+    xy = starts[:, :2] + direction[:2] / direction[2] * (entrance_z - starts[:, 2:3])
+    chief = tuple(float(v) for v in xy[0])
+    xy = xy - xy[0]
+    if np.any(np.hypot(xy[edge, 0], xy[edge, 1]) <= 0.5 * pupil):
+        raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: the traced rays do not cover the "
+                               f"{pupil:g} mm entrance pupil")
+    coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, pupil, max_order)
+    return EyeWavefront(eye.name, field, wavelength, pupil, iris, given, entrance_z, exit_z,
+                        tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,
+                        coefficients, residual)
