@@ -9,7 +9,7 @@ from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
 
-__all__ = ["NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
+__all__ = ["MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS",
@@ -110,6 +110,9 @@ NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
 #: peaks at A ≈ 5.8 D and falls beyond: we accept 0-6 D, the range over which it rises (the
 #: Field Guide gives no range; the FRED example accommodates to 4 D).
 ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
+#: A field angle through a schematic eye, degrees from its optical axis per axis: the models are
+#: built for 0-40; beyond, rays may miss a surface (refused by the trace, naming it); 90 is grazing.
+MAX_FIELD_DEG = 89.0
 
 
 #: Viewing distances a chart (or a depth panel's chart) may be made for, m; far beyond, its sizes in mm overflow.

@@ -50,8 +50,7 @@ from vissim.optics.eyes.media import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import matrix_to_surface
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix,
-                                      transfer_matrix)
+from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix
 from vissim.units import mm_to_m
 
 __all__ = ["CORNEA", "SPECTACLE", "EyeRefraction", "far_point_vergence_matrix", "cornea_front_power_matrix",

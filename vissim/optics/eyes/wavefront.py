@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, finite_number, positive_number
+from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, finite_number, positive_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
@@ -42,13 +42,11 @@ from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefr
 from vissim.optics.zernike import fit_zernike_um
 
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "exit_pupil_position_mm", "entrance_pupil_from_iris_mm",
-           "iris_from_entrance_pupil_mm", "max_iris_mm", "DEFAULT_SAMPLES", "GRID_MARGIN", "MAX_FIELD_DEG"]
+           "iris_from_entrance_pupil_mm", "max_iris_mm", "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
 #: Samples across the iris (odd: the chief ray is the grid's centre) and the grid's reach, in iris radii.
 DEFAULT_SAMPLES = 65
 GRID_MARGIN = 1.05
-#: Field angles, degrees from the optical axis, per axis (issue 26: 0-40; beyond, rays may miss).
-MAX_FIELD_DEG = 89.0
 #: The plane the collimated beam starts on, mm (in front of the corneal vertex).
 _START_Z_MM = -1.0
 _PUPIL_TOL_MM = 1e-12
