@@ -88,7 +88,8 @@ def test_success_lines_and_errors_say_sizes_the_same_way(capsys, tmp_path):
 
 def test_every_wavelength_default_is_the_one_constant():
     # The bench's glass is traced at its d line (render bench --optics wave, bench wavefront), stated in
-    # their help; blur's RGB channels have their own wavelengths (mono images take the constant).
+    # their help; blur's RGB channels have their own wavelengths (mono images take the constant); a
+    # schematic eye is traced at its model's reference wavelength (Escudero-Sanz's 543 nm), said in its help.
     seen = []
     for path, parser in subcommands():
         for flag in ("--wavelength-nm", "--lca-reference-nm"):
@@ -98,6 +99,8 @@ def test_every_wavelength_default_is_the_one_constant():
             seen.append(path)
             if path in (("render", "bench"), ("bench", "wavefront")):
                 assert action.default in (None, D_LINE_NM) and "the d line" in action.help
+            elif path == ("eye",):
+                assert action.default is None and "the model's reference wavelength" in action.help
             elif action.default is None:
                 assert path == ("blur",) and f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help
             else:

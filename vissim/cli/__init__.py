@@ -32,6 +32,7 @@ from vissim.errors import VissimError
 COMMAND_MODULES = (
     "vissim.cli.rx",
     "vissim.cli.trial_lens",
+    "vissim.cli.eye",
     "vissim.cli.fit_rx",
     "vissim.cli.psf",
     "vissim.cli.chart",

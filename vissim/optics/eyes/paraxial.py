@@ -14,6 +14,7 @@ A refraction is the far point's vergence (D) at a plane: negative for a myope (f
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -29,7 +30,7 @@ from vissim.optics.eyes.models import SchematicEye
 __all__ = ["GRIN_STEPS", "LCA_REFERENCE_NM", "ParaxialEye", "grin_matrix", "matrix_to_surface",
            "equivalent_power_diopters", "efl_mm", "entrance_pupil_position_mm", "pupil_magnification",
            "entrance_pupil_diameter_mm", "iris_diameter_mm", "refraction_diopters", "spectacle_refraction_diopters",
-           "retinal_mm_per_deg", "lca_diopters", "paraxial_eye"]
+           "retinal_mm_per_deg", "lca_diopters", "paraxial_eye", "mean_meridian_eye"]
 
 #: Runge–Kutta steps per GRIN segment (a 1.6-2.4 mm half: 0.01 mm steps); halving the step
 #: changes Liou–Brennan's power by < 1e-9 D (tests/test_eye_paraxial.py).
@@ -100,6 +101,18 @@ def matrix_to_surface(eye: SchematicEye, surface_index: int, wavelength_nm: floa
             gap = _transfer(surface.thickness_after_mm, n_after)
         matrix = gap @ matrix
     return matrix
+
+
+def mean_meridian_eye(eye: SchematicEye) -> SchematicEye:
+    """``eye`` with each toric surface replaced by the sphere of its mean curvature, (1/Rx + 1/Ry)/2
+    (the same conic); ``eye`` itself when none is toric. The paraxial 2 x 2 matrices of
+    this module need surfaces of revolution: its power is exactly the mean of the toric eye's two
+    principal powers (a matrix element linear in each surface's curvature), and its pupils and
+    focal lengths stand for the toric eye's mean meridian."""
+    surfaces = tuple(dataclasses.replace(s, radius_mm=2.0 / (1.0 / s.radius_mm + 1.0 / s.radius_y_mm),
+                                         radius_y_mm=None)
+                     if s.is_toric else s for s in eye.surfaces)
+    return eye if surfaces == eye.surfaces else dataclasses.replace(eye, surfaces=surfaces)
 
 
 def _to_retina(eye: SchematicEye, wavelength_nm: float, steps: int = GRIN_STEPS) -> np.ndarray:

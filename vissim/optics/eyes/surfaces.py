@@ -3,8 +3,12 @@
 Frame: the corneal front vertex at the origin, light travelling along +z from the cornea to the
 retina (``travel_z = +1``); x and y are OSA's pupil axes (x the examiner's right, y up, looking
 at the eye), so a wavefront's (x, y) is OSA's. Each `EyeSurface` becomes a `Surface` at the sum
-of the thicknesses before it: a `Conic` (R, Q), or a `Plane` for an infinite radius (the iris, a
-GRIN lens's equatorial boundary). Homogeneous media are passed as their ``index(wavelength_nm)``,
+of the thicknesses before it: a `Conic` (R, Q), a `Plane` for an infinite radius (the iris, a
+GRIN lens's equatorial boundary), or a `Biconic` for a toric surface (`EyeSurface.is_toric`: the
+cornea front of `vissim.optics.eyes.ametropia.ametropic_eye`): radius ``radius_mm`` along its x',
+the TABO meridian ``axis_deg`` (counter-clockwise from +x, the examiner's right, as the examiner
+faces the eye: this frame's x and y, so `Biconic`'s ``axis_deg`` is the TABO axis as it stands),
+``radius_y_mm`` along y', both with the surface's conic Q. Homogeneous media are passed as their ``index(wavelength_nm)``,
 so one list of surfaces serves every wavelength; a `GrinMedium` becomes a `GradientIndex` with its
 z measured from its segment's front vertex and its dispersion shift in ``a0``.
 
@@ -19,7 +23,7 @@ import math
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
-from vissim.optics.raytrace import Conic, GradientIndex, Plane, Surface
+from vissim.optics.raytrace import Biconic, Conic, GradientIndex, Plane, Surface
 
 __all__ = ["vertex_positions_mm", "grin_index", "eye_surfaces", "split_at_stop"]
 
@@ -47,8 +51,11 @@ def grin_index(medium: GrinMedium, front_z_mm: float) -> GradientIndex:
     return GradientIndex(axial_index, a1, a2, medium.r2_coefficient, front_z_mm, name=medium.name)
 
 
-def _shape(radius_mm: float, conic: float):
-    return Plane() if math.isinf(radius_mm) else Conic(radius_mm, conic)
+def _shape(surface):
+    """The trace's shape of an `EyeSurface` (module doc)."""
+    if surface.is_toric:
+        return Biconic(surface.radius_mm, surface.radius_y_mm, surface.conic, surface.conic, surface.axis_deg)
+    return Plane() if math.isinf(surface.radius_mm) else Conic(surface.radius_mm, surface.conic)
 
 
 def eye_surfaces(eye: SchematicEye) -> tuple[Surface, ...]:
@@ -57,7 +64,7 @@ def eye_surfaces(eye: SchematicEye) -> tuple[Surface, ...]:
     for surface, z in zip(eye.surfaces, vertex_positions_mm(eye)):
         medium = surface.medium_after
         after = grin_index(medium, z) if isinstance(medium, GrinMedium) else medium.index
-        surfaces.append(Surface(_shape(surface.radius_mm, surface.conic), z, after, name=surface.name))
+        surfaces.append(Surface(_shape(surface), z, after, name=surface.name))
     return tuple(surfaces)
 
 

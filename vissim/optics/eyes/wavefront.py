@@ -23,6 +23,10 @@ Pupils: the entrance pupil (clinicians') or the iris (optical design's) may be g
 follows from the real-ray pupil imaging on axis at the trace's wavelength
 (`entrance_pupil_from_iris_mm`, `iris_from_entrance_pupil_mm`), and `EyeWavefront.pupil_given`
 records which one was. Coefficients are always over the entrance pupil.
+
+A toric cornea (an astigmatic eye, `vissim.optics.eyes.ametropia`) is traced as the biconic it is;
+only the paraxial planes the trace is referred to (the entrance and exit pupils, the paraxial
+iris that starts the pupil search) are those of its mean meridian (`paraxial.mean_meridian_eye`).
 """
 
 from __future__ import annotations
@@ -36,7 +40,8 @@ from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, finite_number, posi
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
-from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, iris_diameter_mm, matrix_to_surface
+from vissim.optics.eyes.paraxial import (entrance_pupil_position_mm, iris_diameter_mm, matrix_to_surface,
+                                         mean_meridian_eye)
 from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.zernike import fit_zernike_um
@@ -54,6 +59,7 @@ _PUPIL_TOL_MM = 1e-12
 
 def exit_pupil_position_mm(eye: SchematicEye, wavelength_nm: float) -> float:
     """The paraxial exit pupil (the iris imaged by the lens into the vitreous), mm behind the corneal vertex."""
+    eye = mean_meridian_eye(eye)
     retina = len(eye.surfaces) - 1
     rest = matrix_to_surface(eye, retina, wavelength_nm) @ np.linalg.inv(matrix_to_surface(eye, eye.stop_index,
                                                                                             wavelength_nm))
@@ -89,7 +95,7 @@ def entrance_pupil_from_iris_mm(eye: SchematicEye, iris_mm: float, wavelength_nm
 def iris_from_entrance_pupil_mm(eye: SchematicEye, entrance_pupil_mm: float, wavelength_nm: float) -> float:
     """The iris diameter (mm) whose real-ray entrance pupil is ``entrance_pupil_mm``: the secant method from
     the paraxial iris."""
-    d0 = iris_diameter_mm(eye, entrance_pupil_mm, wavelength_nm)
+    d0 = iris_diameter_mm(mean_meridian_eye(eye), entrance_pupil_mm, wavelength_nm)
     d1 = 1.01 * d0
     f0 = entrance_pupil_from_iris_mm(eye, d0, wavelength_nm) - entrance_pupil_mm
     for _ in range(30):
@@ -231,7 +237,8 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
         bundle, starts = _trace_to_retina(eye, direction, targets, wavelength)
     except VissimInputError as error:
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
-    entrance_z, exit_z = entrance_pupil_position_mm(eye, wavelength), exit_pupil_position_mm(eye, wavelength)
+    entrance_z = entrance_pupil_position_mm(mean_meridian_eye(eye), wavelength)
+    exit_z = exit_pupil_position_mm(eye, wavelength)
     opd_um = wavefront_on_reference_sphere_um(bundle, 0, exit_z)
     xy = starts[:, :2] + direction[:2] / direction[2] * (entrance_z - starts[:, 2:3])
     chief = tuple(float(v) for v in xy[0])

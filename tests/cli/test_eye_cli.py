@@ -1,0 +1,211 @@
+"""``vissim eye``: a schematic eye's record, its numbers against published ones, and its bad input.
+
+Oracles, each independent of the trace it checks:
+
+* optiland's Navarro sample (its PR #247 tests, /work/shared/reference/schematic-eyes.md §2): the
+  wide-angle Navarro eye at 543 nm with a 3 mm stop has its **paraxial** entrance pupil 3.04010 mm
+  behind the cornea and 3.40022 mm across, f′ = 22.029 mm, each pinned within 0.1 %; the real-ray
+  pupil magnification is below the paraxial 1.1334 and above the 1.123 real rays give at a 2 mm
+  stop radius (same page): the JSON's ``diameter_mm`` is the real-ray one (3.3827 mm here);
+* Escudero-Sanz & Navarro 1999 made their eye emmetropic at 543 nm: its paraxial refraction on
+  axis is 0 within 0.02 D;
+* the prescription an eye was built to need (`vissim.optics.eyes.ametropia`, paraxial matrices)
+  against the exact trace's paraxial refraction at the same 12 mm spectacle plane: within 0.02 D;
+* the diffraction-limited MTF of a circular pupil (Goodman 2005, Eq. 6-32, `diffraction_mtf`):
+  no aberrated eye's MTF exceeds it (beyond the sampled PSF's 2e-3, pinned in test_eye_report.py).
+"""
+
+import dataclasses
+import json
+import re
+
+import numpy as np
+import pytest
+
+from vissim.cli import main
+from vissim.optics.eyes import models
+from vissim.optics.eyes.media import Medium
+from vissim.optics.psf_metrics import diffraction_mtf
+
+OPTILAND = {"ep_position_mm": 3.04010, "ep_diameter_mm": 3.40022, "efl_mm": 22.029}
+MTF_SAMPLING_TOL = 2e-3
+REFRACTION_TOL_D = 0.02
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def record(capsys, *argv):
+    code, out, err = run(capsys, "eye", *argv, "--json")
+    assert code == 0, err
+    return json.loads(out)
+
+
+def assert_one_error_line(code, err, *fragments):
+    assert code == 2, err
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("vissim: error: "), err
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+PRESCRIPTION_KEYS = {"sphere_diopters", "cylinder_diopters", "axis_deg", "M", "J0", "J45"}
+
+
+def test_the_json_record_has_the_issues_keys_and_types(capsys):
+    r = record(capsys, "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543",
+               "--mtf-cyc-per-mm", "0,50", "--mtf-cyc-per-deg", "0,10,30")
+    assert r["model"] == "escudero-sanz-1999"
+    for key in ("power_diopters", "efl_mm", "iris_mm", "wavelength_nm", "rms_um"):
+        assert isinstance(r[key], float), key
+    assert set(r["entrance_pupil"]) >= {"diameter_mm", "position_mm"}
+    assert all(isinstance(r["entrance_pupil"][k], float) for k in ("diameter_mm", "position_mm"))
+    zernike = r["zernike_um"]
+    assert "2,0" in zernike and "8,0" in zernike and len(zernike) == 45  # OSA orders 0-8
+    assert all(isinstance(v, float) for v in zernike.values())
+    refraction = r["refraction"]
+    assert refraction["refraction_plane"] == "corneal vertex"
+    for kind in ("paraxial", "minimum_rms"):
+        assert set(refraction[kind]) == PRESCRIPTION_KEYS
+        assert all(isinstance(v, float) for v in refraction[kind].values())
+    assert [f for f, _ in r["mtf"]["cyc_per_mm"]["radial"]] == [0.0, 50.0]
+    assert [f for f, _ in r["mtf"]["cyc_per_deg"]["radial"]] == [0.0, 10.0, 30.0]
+    assert r["wavelength_nm"] == 543.0 and r["wavelength"] == "given"
+
+
+def test_default_wavelength_is_the_models_reference_and_is_said(capsys):
+    r = record(capsys, "navarro-1985", "--pupil-mm", "3")
+    assert r["wavelength_nm"] == 589.3 and r["wavelength"] == "the model's reference wavelength"
+    assert "mtf" in r and r["mtf"] == {}
+
+
+def test_entrance_pupil_and_focal_length_meet_optilands_navarro_sample(capsys):
+    r = record(capsys, "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543")
+    pupil = r["entrance_pupil"]
+    assert pupil["position_mm"] == pytest.approx(OPTILAND["ep_position_mm"], rel=1e-3)
+    assert pupil["paraxial_diameter_mm"] == pytest.approx(OPTILAND["ep_diameter_mm"], rel=1e-3)
+    assert r["efl_mm"] == pytest.approx(OPTILAND["efl_mm"], rel=1e-3)
+    # the reported diameter is the real-ray one: pupil aberration shrinks it below the paraxial one
+    assert pupil["diameter"].startswith("real rays") and pupil["given"] == "iris"
+    assert 3 * 1.123 < pupil["diameter_mm"] < OPTILAND["ep_diameter_mm"]
+    assert pupil["diameter_mm"] == pytest.approx(3.3827, abs=5e-4)
+    assert r["iris_mm"] == 3.0
+
+
+def test_a_given_entrance_pupil_is_the_one_reported(capsys):
+    r = record(capsys, "escudero-sanz-1999", "--pupil-mm", "3", "--wavelength-nm", "543")
+    assert r["entrance_pupil"]["diameter_mm"] == pytest.approx(3.0, abs=1e-9)
+    assert r["entrance_pupil"]["given"] == "entrance pupil" and r["iris_mm"] < 3.0  # the cornea magnifies
+
+
+def test_the_emmetropic_model_needs_no_refraction_on_axis(capsys):
+    r = record(capsys, "escudero-sanz-1999", "--pupil-mm", "3")
+    paraxial = r["refraction"]["paraxial"]
+    assert abs(paraxial["M"]) < REFRACTION_TOL_D and abs(paraxial["J0"]) < 1e-6 and abs(paraxial["J45"]) < 1e-6
+
+
+@pytest.mark.parametrize("rx, expected", [("-3", (-3.0, 0.0, 180.0)), ("-2.00 -1.00 x 30", (-2.0, -1.0, 30.0))])
+def test_an_rx_eye_has_its_prescription_at_the_spectacle_plane(capsys, rx, expected):
+    r = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", rx)
+    refraction = r["refraction"]
+    assert refraction["refraction_plane"] == "spectacle plane at 12 mm"
+    paraxial = refraction["paraxial"]
+    assert paraxial["sphere_diopters"] == pytest.approx(expected[0], abs=REFRACTION_TOL_D)
+    assert paraxial["cylinder_diopters"] == pytest.approx(expected[1], abs=REFRACTION_TOL_D)
+    if expected[1]:
+        assert paraxial["axis_deg"] == pytest.approx(expected[2], abs=0.5)
+
+
+def test_the_spectacle_plane_follows_vertex_mm(capsys):
+    at_12 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3")
+    at_14 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3", "--vertex-mm", "14")
+    assert at_14["refraction"]["refraction_plane"] == "spectacle plane at 14 mm"
+    assert at_14["refraction"]["paraxial"]["M"] == pytest.approx(-3.0, abs=REFRACTION_TOL_D)
+    assert at_12["power_diopters"] == pytest.approx(at_14["power_diopters"], abs=1e-9)  # only the vitreous moves
+
+
+def test_mtf_is_one_at_zero_and_below_the_diffraction_limit(capsys):
+    frequencies = np.arange(0.0, 101.0, 5.0)
+    r = record(capsys, "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", ",".join(f"{f:g}" for f in frequencies))
+    pairs = np.array(r["mtf"]["cyc_per_deg"]["radial"])
+    assert pairs[0, 1] == 1.0
+    limit = diffraction_mtf(pairs[:, 0], r["entrance_pupil"]["diameter_mm"], r["wavelength_nm"])
+    assert np.all(pairs[:, 1] <= limit + MTF_SAMPLING_TOL), np.c_[pairs, limit]
+    assert pairs[4, 1] < limit[4] - 0.05  # 20 cyc/deg: Navarro's spherical aberration shows at 3 mm
+
+
+def test_cycles_per_mm_go_through_the_retinal_scale(capsys):
+    r = record(capsys, "navarro-1985", "--pupil-mm", "3")
+    per_mm = 10.0 / r["retinal_mm_per_deg"]
+    r = record(capsys, "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "10", "--mtf-cyc-per-mm", f"{per_mm!r}")
+    assert r["mtf"]["cyc_per_mm"]["radial"][0][1] == pytest.approx(r["mtf"]["cyc_per_deg"]["radial"][0][1], abs=1e-12)
+
+
+def test_off_axis_tangential_and_sagittal_differ_at_20_deg(capsys):
+    r = record(capsys, "escudero-sanz-1999", "--pupil-mm", "4", "--field-deg", "20,0", "--mtf-cyc-per-mm", "0,30,60")
+    table = r["mtf"]["cyc_per_mm"]
+    assert set(table) == {"tangential", "sagittal"} and "tangential" in r["mtf"]["directions"]
+    (_, t0), *tangential = table["tangential"]
+    (_, s0), *sagittal = table["sagittal"]
+    assert t0 == s0 == 1.0
+    assert abs(tangential[0][1] - sagittal[0][1]) > 0.05, table
+    assert abs(r["refraction"]["paraxial"]["J0"]) > 0.1  # the field's astigmatism, along x
+
+
+def test_text_output_is_aligned_lines(capsys):
+    code, out, _ = run(capsys, "eye", "escudero-sanz-1999", "--iris-mm", "3", "--mtf-cyc-per-deg", "10")
+    assert code == 0
+    lines = out.splitlines()
+    assert lines[0].startswith("eye ") and any(line.startswith("entrance pupil") for line in lines)
+    columns = {re.match(r"^\s*\S.*?\s{2,}(?=\S)", line).end() for line in lines}
+    assert len(columns) == 1, out  # every value starts in one column
+    assert "543 nm (the model's reference)" in out and "MTF radial" in out
+
+
+# -- bad input ----------------------------------------------------------------------------------
+
+
+def _dense_cornea_air_chamber(accommodation_diopters=0.0):
+    """Navarro's eye with a 3.6 mm cornea back over an air-filled chamber: total internal reflection there."""
+    eye = models.navarro_1985(accommodation_diopters)
+    air = Medium("air-filled chamber", "constant", (1.0,))
+    surfaces = list(eye.surfaces)
+    surfaces[1] = dataclasses.replace(surfaces[1], radius_mm=3.6, medium_after=air)
+    surfaces[2] = dataclasses.replace(surfaces[2], medium_after=air)
+    return dataclasses.replace(eye, name="air-chamber", surfaces=tuple(surfaces))
+
+
+@pytest.mark.parametrize("argv, fragments", [
+    (["no-such-eye", "--pupil-mm", "3"], ["'no-such-eye'", "navarro-1985", "liou-brennan-1997"]),
+    (["navarro-1985", "--pupil-mm", "3", "--accommodation-diopters", "12"], ["12 dioptres", "0-10"]),
+    (["arizona", "--pupil-mm", "3", "--accommodation-diopters", "7"], ["7 dioptres", "0-6"]),
+    (["navarro-1985", "--pupil-mm", "11"], ["entrance pupil 11 mm", "iris"]),
+    (["navarro-1985", "--iris-mm", "11"], ["iris 11 mm"]),
+    (["navarro-1985", "--pupil-mm", "3", "--iris-mm", "3"], ["--iris-mm", "--pupil-mm"]),
+    (["navarro-1985"], ["--pupil-mm", "--iris-mm"]),
+    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "80,0"], ["(80, 0) deg", "miss the retina"]),
+    (["liou-brennan-1997", "--pupil-mm", "7", "--field-deg", "80,0"], ["(80, 0) deg", "leave the lens"]),
+    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "1,2,3"], ["--field-deg", "'1,2,3'", "degrees"]),
+    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "a,b"], ["--field-deg", "'a,b'", "degrees"]),
+    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "nan,0"], ["--field-deg", "degrees"]),
+    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-mm", "10,x"], ["--mtf-cyc-per-mm", "'10,x'", "per mm"]),
+    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", ""], ["--mtf-cyc-per-deg", "per degree"]),
+    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-mm", "10,-2"], ["-2 cycles per mm", ">= 0"]),
+    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "-5"], ["-5 cycles per degree", ">= 0"]),
+    (["navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "5000"], ["5000", "nm"]),
+    (["navarro-1985", "--pupil-mm", "3", "--sphere", "-1"], ["--sphere", "not traced yet"]),
+    (["navarro-1985", "--pupil-mm", "3", "--rx", "+200"], ["+200", "far point"]),
+])
+def test_bad_input_is_one_error_line_naming_the_value(capsys, argv, fragments):
+    code, out, err = run(capsys, "eye", *argv)
+    assert_one_error_line(code, err, *fragments)
+    assert out == ""
+
+
+def test_total_internal_reflection_is_one_error_line(capsys, monkeypatch):
+    monkeypatch.setitem(models.EYE_MODELS, "air-chamber", _dense_cornea_air_chamber)
+    code, _, err = run(capsys, "eye", "air-chamber", "--iris-mm", "6")
+    assert_one_error_line(code, err, "(0, 0) deg", "total internal reflection", "cornea back")

@@ -1,0 +1,121 @@
+"""``vissim eye``: a schematic eye traced at one field point and one wavelength (`vissim.optics.eyes.report`)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from vissim import __version__
+from vissim.cli._common import RX_HELP, add_trial_lens_args, parse_float_list, trial_lens_powers
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.models import EYE_MODELS
+from vissim.optics.eyes.report import EyeReport, eye_report
+from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "eye",
+        help="trace a schematic eye: power, pupils, Zernikes, refraction, MTF",
+        description=(
+            "Trace a schematic eye surface by surface at one field point and one wavelength: its power and "
+            "f', its entrance pupil (diameter: real rays on axis, the pupil the OSA Zernikes are over; "
+            "position: paraxial, behind the corneal vertex), the Zernikes and RMS of its wavefront in µm, "
+            "its refraction (paraxial: the wavefront's curvature at the pupil centre; minimum RMS: the "
+            "second-order terms), in minus-cylinder form, and the MTF of its wave PSF (diffraction "
+            "included; the radial average on axis, tangential and sagittal off axis: tangential along "
+            "the field's meridian). Models: " + ", ".join(EYE_MODELS) + "."),
+    )
+    parser.add_argument("model", metavar="MODEL", help="the schematic eye: " + ", ".join(EYE_MODELS))
+    parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
+                        help="accommodation exerted, dioptres, within the model's range (default 0, relaxed)")
+    pupil = parser.add_mutually_exclusive_group(required=True)
+    pupil.add_argument("--pupil-mm", type=float, metavar="D", help="entrance pupil diameter, mm (a clinician's)")
+    pupil.add_argument("--iris-mm", type=float, metavar="D", help="iris (stop) diameter, mm (optical design's)")
+    parser.add_argument("--wavelength-nm", type=float, default=None, metavar="NM",
+                        help="wavelength, nm (default: the model's reference wavelength)")
+    parser.add_argument("--field-deg", default="0,0", metavar="X,Y",
+                        help="field angle from the optical axis, degrees, x (examiner's right) and y (up) "
+                             "(default 0,0)")
+    parser.add_argument("--rx", metavar="PRESCRIPTION",
+                        help=f"{RX_HELP}: trace the eye that has it (axial length for its sphere, a toric cornea "
+                             "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea")
+    add_trial_lens_args(parser)
+    parser.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
+                        help="spectacle plane, mm in front of the corneal vertex: where --rx is written and the "
+                             f"refraction is stated (default {SPECTACLE_VERTEX_DISTANCE_MM:g} with --rx; "
+                             "without --rx and --vertex-mm the refraction is at the corneal vertex)")
+    parser.add_argument("--mtf-cyc-per-mm", metavar="F1,F2,...",
+                        help="MTF at these retinal frequencies, cycles per mm (>= 0)")
+    parser.add_argument("--mtf-cyc-per-deg", metavar="F1,F2,...",
+                        help="MTF at these frequencies, cycles per degree of visual angle (>= 0)")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(func=run)
+    return parser
+
+
+def _field(text: str) -> tuple[float, float]:
+    values = parse_float_list(text, "--field-deg", "degrees", positive=False)
+    if len(values) != 2:
+        raise VissimInputError(f"--field-deg must be two angles X,Y in degrees, got {text!r}")
+    return values[0], values[1]
+
+
+def _frequencies(text: str | None, name: str, unit: str) -> list[float]:
+    if text is None:
+        return []
+    values = parse_float_list(text, name, unit, positive=False)
+    negative = [v for v in values if v < 0.0]
+    if negative:
+        raise VissimInputError(f"{name} must be frequencies >= 0 {unit}, got {negative[0]:g} {unit}")
+    return values
+
+
+def run(args: argparse.Namespace) -> int:
+    if trial_lens_powers(args) is not None:
+        raise VissimInputError("--sphere/--cylinder/--axis: a trial or spectacle lens in front of a traced eye is "
+                               "not traced yet; give the eye's prescription with --rx instead")
+    report = eye_report(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
+                        iris_mm=args.iris_mm, wavelength_nm=args.wavelength_nm, field_deg=_field(args.field_deg),
+                        rx=args.rx, vertex_distance_mm=args.vertex_mm,
+                        mtf_cyc_per_mm=_frequencies(args.mtf_cyc_per_mm, "--mtf-cyc-per-mm", "cycles per mm"),
+                        mtf_cyc_per_deg=_frequencies(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles per degree"))
+    if args.json:
+        print(json.dumps({**report.as_json(), "vissim_version": __version__}, indent=2, allow_nan=False))
+        return 0
+    _print_text(report)
+    return 0
+
+
+def _rx_line(entry: dict) -> str:
+    return (f"{entry['sphere_diopters']:+.3f} {entry['cylinder_diopters']:+.3f} x {entry['axis_deg']:.0f}   "
+            f"M {entry['M']:+.3f}  J0 {entry['J0']:+.3f}  J45 {entry['J45']:+.3f} D")
+
+
+def _print_text(report: EyeReport) -> None:
+    record = report.as_json()
+    pupil, refraction = record["entrance_pupil"], record["refraction"]
+    wavelength = "" if report.wavelength_given else " (the model's reference)"
+    rx = f", made to need {record['prescription']}" if record["prescription"] else ""
+    rows = [
+        ("eye", f"{record['model']} at {record['accommodation_diopters']:g} D accommodation{rx}"),
+        ("wavelength", f"{record['wavelength_nm']:g} nm{wavelength}"),
+        ("field", f"({record['field_deg'][0]:g}, {record['field_deg'][1]:g}) deg"),
+        ("power, f'", f"{record['power_diopters']:.3f} D, {record['efl_mm']:.4f} mm"),
+        ("retina", f"{record['retinal_mm_per_deg']:.5f} mm per deg"),
+        ("entrance pupil", f"{pupil['diameter_mm']:.4f} mm across (real rays; paraxial "
+                           f"{pupil['paraxial_diameter_mm']:.4f}), {pupil['position_mm']:.4f} mm behind the cornea"),
+        ("iris", f"{record['iris_mm']:.4f} mm ({pupil['given']} given)"),
+        ("RMS (order >= 2)", f"{record['rms_um']:.4f} µm over the entrance pupil"),
+        ("refraction at", refraction["refraction_plane"] + " (correcting lens, minus cylinder)"),
+        ("  paraxial", _rx_line(refraction["paraxial"])),
+        ("  minimum RMS", _rx_line(refraction["minimum_rms"])),
+    ]
+    big = {k: v for k, v in record["zernike_um"].items() if abs(v) >= 5e-4 and int(k.split(",")[0]) >= 2}
+    rows.append(("Zernikes (µm)", "  ".join(f"{k}: {v:+.4f}" for k, v in big.items()) or "all < 0.0005"))
+    for key, unit in (("cyc_per_deg", "cyc/deg"), ("cyc_per_mm", "cyc/mm")):
+        for direction, pairs in record["mtf"].get(key, {}).items():
+            rows.append((f"MTF {direction}", ", ".join(f"{f:g} {unit}: {v:.4f}" for f, v in pairs)))
+    width = max(len(label) for label, _ in rows)
+    for label, text in rows:
+        print(f"{label:<{width}}  {text}")

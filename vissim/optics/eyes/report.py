@@ -1,0 +1,205 @@
+"""One record of a schematic eye at a field point and a wavelength: what ``vissim eye`` prints.
+
+`eye_report` builds the eye (`models.eye_model`, made ametropic by `ametropia.ametropic_eye`
+when a prescription is given), traces its wavefront over the entrance pupil
+(`wavefront.trace_eye_wavefront`), reads its refraction (`refraction.eye_refraction`) and its
+MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of issue 26's
+``vissim eye --json``.
+
+* **Wavelength**: the model's reference wavelength unless given (``EyeReport.wavelength_given``).
+* **Pupils**: the entrance pupil (``pupil_mm``) or the iris (``iris_mm``); ``entrance_pupil``'s
+  ``diameter_mm`` is the **real-ray** entrance pupil on axis (the one the Zernikes are over; the
+  given value when the entrance pupil was given), ``paraxial_diameter_mm`` the paraxial image of
+  the iris, ``position_mm`` the paraxial entrance pupil behind the corneal vertex.
+* **Prescription** (``rx``): the eye that has it, written at the spectacle plane
+  ``vertex_distance_mm`` in front of the cornea (12 mm by default), solved at the model's
+  reference wavelength (axial length for the spherical equivalent, a toric cornea front for the
+  cylinder: `vissim.optics.eyes.ametropia`). With a prescription, or a vertex distance given, the
+  refraction is stated at that spectacle plane; otherwise at the corneal vertex.
+* **Power, f′, retinal mm per degree**: paraxial, of the mean meridian for a toric eye
+  (`paraxial.mean_meridian_eye`).
+* **MTF**: of the wave PSF (`vissim.optics.psf.compute_psf`, diffraction included) of the traced
+  wavefront's Zernikes (orders 2-8: piston and tilt only move the PSF) over the entrance pupil,
+  at one wavelength, pixel sinc divided out. On axis (field (0, 0)) the radial average; off axis
+  ``tangential`` (the spatial frequency along the field's meridian, the direction of (x, y)) and
+  ``sagittal`` (perpendicular to it). Frequencies in cycles per degree of visual angle (object
+  space), and in cycles per mm on the retina through the paraxial ``retinal_mm_per_deg``. Above
+  the diffraction cutoff D/λ the MTF is 0.
+
+Trial or spectacle lenses in front of the traced eye are not traced yet: `eye_report` takes none.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import map_coordinates
+
+from vissim.checks import finite_number
+from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
+from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.ametropia import ametropic_eye
+from vissim.optics.eyes.models import eye_model
+from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm, entrance_pupil_position_mm,
+                                         equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
+from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
+from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
+from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.psf import compute_psf
+from vissim.optics import psf_metrics
+from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.wavefront import Wavefront
+
+__all__ = ["EyeReport", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_SIZE_PX"]
+
+#: The PSF's sampling: its Nyquist frequency is this many times the diffraction cutoff D/λ.
+MTF_NYQUIST_PER_CUTOFF = 1.25
+#: The PSF's side, pixels: the MTF's frequency step is cutoff * 2 * 1.25 / 512, about 0.5 cyc/deg at 3 mm.
+MTF_SIZE_PX = 512
+
+
+def _frequencies(values, name: str) -> np.ndarray:
+    out = np.array([finite_number(v, name, "cycles") for v in values], dtype=float)
+    if np.any(out < 0.0):
+        raise VissimInputError(f"{name} must be >= 0, got {float(out[out < 0.0][0]):g}")
+    return out
+
+
+def _mtf_directions(field_deg) -> dict[str, tuple[float, float] | None]:
+    """``{"radial": None}`` on axis; else the tangential and sagittal unit vectors in OSA's (x, y)."""
+    fx, fy = field_deg
+    norm = math.hypot(fx, fy)
+    if norm == 0.0:
+        return {"radial": None}
+    tx, ty = fx / norm, fy / norm
+    return {"tangential": (tx, ty), "sagittal": (-ty, tx)}
+
+
+def eye_mtf(wavefront: Wavefront, wavelength_nm: float, frequencies_cyc_per_deg, field_deg=(0.0, 0.0)) -> dict:
+    """The MTF of the wave PSF of ``wavefront`` (over its pupil) at ``frequencies_cyc_per_deg``:
+    ``{direction: array}``, ``radial`` on axis, ``tangential`` and ``sagittal`` off axis (module doc)."""
+    wavelength = checked_wavelength_nm(wavelength_nm)
+    f = _frequencies(frequencies_cyc_per_deg, "MTF frequency (per degree)")
+    cutoff = psf_metrics.diffraction_cutoff_cyc_per_deg(wavefront.pupil_diameter_mm, wavelength)
+    step_arcmin = 30.0 / (MTF_NYQUIST_PER_CUTOFF * cutoff)
+    psf = compute_psf(wavefront, wavelength_nm=wavelength, arcmin_per_px=step_arcmin, size_px=MTF_SIZE_PX,
+                      dtype=np.float64, normalise="total")
+    m = psf_metrics.mtf(psf, remove_pixel=True)
+    axis = psf_metrics.frequencies_cyc_per_deg(psf)
+    df, centre = axis[1] - axis[0], MTF_SIZE_PX // 2
+    out = {}
+    for name, direction in _mtf_directions(field_deg).items():
+        if direction is None:
+            rows, cols = np.indices(m.shape) - centre
+            radius, mean = psf_metrics.ring_means(m, np.hypot(rows, cols) * df, df)
+            values = np.interp(f, radius, mean)
+        else:  # OSA (x, y) maps to (col, row) offsets of (-x, -y); the MTF is even, so (x, y) serves
+            cols, rows = centre + f * direction[0] / df, centre + f * direction[1] / df
+            values = map_coordinates(m, [rows, cols], order=1, mode="nearest")
+        out[name] = np.where(f >= cutoff, 0.0, np.minimum(values, 1.0))
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class EyeReport:
+    """A schematic eye's numbers at one field point and one wavelength (module doc)."""
+
+    model: str
+    accommodation_diopters: float
+    wavelength_nm: float
+    wavelength_given: bool
+    prescription: Prescription | None
+    power_diopters: float
+    efl_mm: float
+    retinal_mm_per_deg: float
+    paraxial_entrance_pupil_mm: float
+    wavefront: EyeWavefront
+    refraction: EyeRefraction
+    mtf_cyc_per_deg: dict
+    mtf_cyc_per_mm: dict
+
+    def as_json(self) -> dict:
+        """The record of ``vissim eye --json`` (plain numbers; Zernikes keyed ``"n,m"``)."""
+        wf = self.wavefront
+        mtf = {}
+        for key, table in (("cyc_per_mm", self.mtf_cyc_per_mm), ("cyc_per_deg", self.mtf_cyc_per_deg)):
+            if table:
+                mtf[key] = {direction: [[float(f), float(v)] for f, v in pairs] for direction, pairs in table.items()}
+        if mtf:
+            mtf["directions"] = ("radial average (on axis)" if "radial" in next(iter(mtf.values())) else
+                                 "tangential: frequency along the field's meridian (x, y); sagittal: across it")
+        refraction = self.refraction.as_json()
+        return {
+            "model": self.model,
+            "accommodation_diopters": self.accommodation_diopters,
+            "prescription": None if self.prescription is None else str(self.prescription),
+            "power_diopters": self.power_diopters,
+            "efl_mm": self.efl_mm,
+            "retinal_mm_per_deg": self.retinal_mm_per_deg,
+            "entrance_pupil": {"diameter_mm": wf.entrance_pupil_mm, "position_mm": wf.entrance_pupil_position_mm,
+                               "paraxial_diameter_mm": self.paraxial_entrance_pupil_mm,
+                               "diameter": "real rays on axis (the Zernike pupil)", "given": wf.pupil_given},
+            "iris_mm": wf.iris_mm,
+            "wavelength_nm": self.wavelength_nm,
+            "wavelength": "given" if self.wavelength_given else "the model's reference wavelength",
+            "field_deg": list(wf.field_deg),
+            "zernike_um": {f"{n},{m}": float(v) for (n, m), v in sorted(wf.zernike_um.items())},
+            "zernike_pupil": "entrance pupil",
+            "rms_um": wf.rms_um,
+            "refraction": {"paraxial": refraction["paraxial"], "minimum_rms": refraction["minimum_rms"],
+                           "refraction_plane": self._plane_text(),
+                           "vertex_distance_mm": refraction["vertex_distance_mm"]},
+            "mtf": mtf,
+        }
+
+    def _plane_text(self) -> str:
+        if self.refraction.plane == "corneal vertex":
+            return "corneal vertex"
+        return f"spectacle plane at {self.refraction.vertex_distance_mm:g} mm"
+
+
+def _pairs(frequencies, table: dict) -> dict:
+    return {name: list(zip(frequencies, values)) for name, values in table.items()}
+
+
+def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None, iris_mm=None,
+               wavelength_nm=None, field_deg=(0.0, 0.0), rx=None, vertex_distance_mm=None,
+               mtf_cyc_per_mm=(), mtf_cyc_per_deg=()) -> EyeReport:
+    """The `EyeReport` of ``model`` (a name of `vissim.optics.eyes.models.EYE_MODELS`), module doc.
+
+    ``rx``: a prescription (text or `Prescription`) the eye is made to have, at the spectacle
+    plane ``vertex_distance_mm`` (default 12 mm) in front of the cornea. Bad input -- an unknown
+    model, an accommodation beyond the model's range, a pupil the iris cannot give, a field where
+    rays miss a surface, meet total internal reflection or leave the GRIN lens, a negative
+    frequency -- raises one `VissimInputError` naming the value and its unit.
+    """
+    base = eye_model(model, accommodation_diopters)
+    f_mm = _frequencies(mtf_cyc_per_mm, "MTF frequency (per mm)")
+    f_deg = _frequencies(mtf_cyc_per_deg, "MTF frequency (per degree)")
+    vertex = None if vertex_distance_mm is None else checked_vertex_distance_mm(vertex_distance_mm)
+    prescription = None
+    eye = base
+    if rx is not None:
+        prescription = Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
+        vertex = SPECTACLE_VERTEX_DISTANCE_MM if vertex is None else vertex
+        eye = ametropic_eye(base, prescription, vertex)
+    wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
+    field = tuple(float(v) for v in field_deg)
+    front = trace_eye_wavefront(eye, wavelength, field, pupil_mm=pupil_mm, iris_mm=iris_mm)
+    refraction = eye_refraction(front, vertex)
+    mean = mean_meridian_eye(eye)
+    mm_per_deg = retinal_mm_per_deg(mean, wavelength)
+    tables_deg, tables_mm = {}, {}
+    if len(f_deg) or len(f_mm):
+        higher = {k: v for k, v in front.zernike_um.items() if k[0] >= 2}
+        wave = Wavefront(higher, front.entrance_pupil_mm)
+        everything = eye_mtf(wave, wavelength, np.concatenate([f_deg, f_mm * mm_per_deg]), field)
+        tables_deg = _pairs(f_deg, {k: v[:len(f_deg)] for k, v in everything.items()}) if len(f_deg) else {}
+        tables_mm = _pairs(f_mm, {k: v[len(f_deg):] for k, v in everything.items()}) if len(f_mm) else {}
+    return EyeReport(eye.name, base.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
+                     equivalent_power_diopters(mean, wavelength), efl_mm(mean, wavelength), mm_per_deg,
+                     entrance_pupil_diameter_mm(mean, front.iris_mm, wavelength), front, refraction,
+                     tables_deg, tables_mm)
