@@ -72,3 +72,20 @@ def test_a_toric_eyes_power_is_the_mean_of_its_meridians():
     toric = eye_report("navarro-1985", pupil_mm=2.0, rx="-1.00 -2.00 x 30")  # the same spherical equivalent
     assert toric.power_diopters == pytest.approx(sphere.power_diopters, abs=1e-9)
     assert base.name == toric.model
+
+
+def test_lens_surfaces_sit_in_front_of_the_cornea_and_refuse_a_thin_lens():
+    import math
+
+    from vissim.optics.eyes.spectacles import lens_surfaces
+    from vissim.optics.trial_lens import TrialLens, TrialLensSetup
+
+    lens = TrialLens(-3.0, refractive_index=1.523, center_thickness_mm=1.0)
+    front, back = lens_surfaces(TrialLensSetup((lens,), 12.0, math.inf))
+    assert (front.vertex_z_mm, back.vertex_z_mm) == (-13.0, -12.0)
+    assert front.medium_after(587.56) == pytest.approx(1.523, abs=1e-4) and back.medium_after == 1.0
+    # back vertex power F = F1 / (1 - (t/n) F1) with a plano back, so F1 = F / (1 + (t/n) F) (t in m)
+    curvature = front.shape.curvature_per_mm[0, 0]
+    assert 1000.0 * 0.523 * curvature == pytest.approx(-3.0 / (1.0 - 3.0 * 1e-3 / 1.523), rel=1e-9)
+    with pytest.raises(VissimInputError, match="thin"):
+        lens_surfaces(TrialLensSetup((TrialLens(-3.0),), 12.0, math.inf))

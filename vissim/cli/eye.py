@@ -6,6 +6,7 @@ import argparse
 import json
 
 from vissim import __version__
+from vissim.bench.atv.tube import atv_trial_lens
 from vissim.cli._common import RX_HELP, add_trial_lens_args, parse_float_list, trial_lens_powers
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
@@ -40,11 +41,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--rx", metavar="PRESCRIPTION",
                         help=f"{RX_HELP}: trace the eye that has it (axial length for its sphere, a toric cornea "
                              "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea")
-    add_trial_lens_args(parser)
+    lens = parser.add_argument_group(
+        "a trial or spectacle lens worn in front, traced with the eye: crown glass of realistic centre thickness "
+        "(1 mm at edge and centre over 22 mm, as the ATV tube's trial lenses), plano back, its back vertex "
+        "--vertex-mm in front of the cornea; the refraction is then the over-refraction at its front surface")
+    add_trial_lens_args(lens)
     parser.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
-                        help="spectacle plane, mm in front of the corneal vertex: where --rx is written and the "
-                             f"refraction is stated (default {SPECTACLE_VERTEX_DISTANCE_MM:g} with --rx; "
-                             "without --rx and --vertex-mm the refraction is at the corneal vertex)")
+                        help="spectacle plane, mm in front of the corneal vertex: where --rx is written, the lens's "
+                             f"back vertex sits and the refraction is stated (default {SPECTACLE_VERTEX_DISTANCE_MM:g} "
+                             "with --rx or a lens; without them and --vertex-mm the refraction is at the corneal vertex)")
     parser.add_argument("--mtf-cyc-per-mm", metavar="F1,F2,...",
                         help="MTF at these retinal frequencies, cycles per mm (>= 0)")
     parser.add_argument("--mtf-cyc-per-deg", metavar="F1,F2,...",
@@ -72,14 +77,14 @@ def _frequencies(text: str | None, name: str, unit: str) -> list[float]:
 
 
 def run(args: argparse.Namespace) -> int:
-    if trial_lens_powers(args) is not None:
-        raise VissimInputError("--sphere/--cylinder/--axis: a trial or spectacle lens in front of a traced eye is "
-                               "not traced yet; give the eye's prescription with --rx instead")
+    powers = trial_lens_powers(args)
+    lenses = () if powers is None else (atv_trial_lens(*powers),)
     report = eye_report(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
                         iris_mm=args.iris_mm, wavelength_nm=args.wavelength_nm, field_deg=_field(args.field_deg),
                         rx=args.rx, vertex_distance_mm=args.vertex_mm,
                         mtf_cyc_per_mm=_frequencies(args.mtf_cyc_per_mm, "--mtf-cyc-per-mm", "cycles per mm"),
-                        mtf_cyc_per_deg=_frequencies(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles per degree"))
+                        mtf_cyc_per_deg=_frequencies(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles per degree"),
+                        lenses=lenses)
     if args.json:
         print(json.dumps({**report.as_json(), "vissim_version": __version__}, indent=2, allow_nan=False))
         return 0
@@ -101,6 +106,9 @@ def _print_text(report: EyeReport) -> None:
         ("eye", f"{record['model']} at {record['accommodation_diopters']:g} D accommodation{rx}"),
         ("wavelength", f"{record['wavelength_nm']:g} nm{wavelength}"),
         ("field", f"({record['field_deg'][0]:g}, {record['field_deg'][1]:g}) deg"),
+        *[("lens", f"{lens['marked_power']} (back vertex power), n_d {lens['refractive_index_d']:g}, "
+                   f"{lens['center_thickness_mm']:.3f} mm thick, back vertex {report.lens_setup.vertex_distance_mm:g} mm "
+                   "in front of the cornea") for lens in record["lenses"]],
         ("power, f'", f"{record['power_diopters']:.3f} D, {record['efl_mm']:.4f} mm"),
         ("retina", f"{record['retinal_mm_per_deg']:.5f} mm per deg"),
         ("entrance pupil", f"{pupil['diameter_mm']:.4f} mm across (real rays; paraxial "

@@ -26,7 +26,13 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of issue 
   space), and in cycles per mm on the retina through the paraxial ``retinal_mm_per_deg``. Above
   the diffraction cutoff D/λ the MTF is 0.
 
-Trial or spectacle lenses in front of the traced eye are not traced yet: `eye_report` takes none.
+* **Lenses in front** (``lenses``: thick `TrialLens` es, object to eye, the last one's back vertex
+  ``vertex_distance_mm`` (default 12 mm) in front of the cornea, ``lens_gap_mm`` apart): traced
+  surface by surface with the eye (`vissim.optics.eyes.wavefront`). The Zernikes are then over the
+  iris's image through the lenses and the cornea, and the refraction is the **over-refraction**: the
+  thin lens touching the front of the first lens that would correct what remains, stated at that
+  plane (as `spectacles.residual_refraction`'s `SPECTACLE` plane, its paraxial oracle). Thin
+  lenses are refused: make them thick first (`vissim.bench.atv.tube.atv_trial_lens`).
 """
 
 from __future__ import annotations
@@ -46,11 +52,12 @@ from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm, entrance_pupil_position_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
+from vissim.optics.eyes.spectacles import system_entrance_pupil_mm
 from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import compute_psf
 from vissim.optics import psf_metrics
-from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, TrialLensSetup
 from vissim.optics.wavefront import Wavefront
 
 __all__ = ["EyeReport", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_SIZE_PX"]
@@ -120,6 +127,7 @@ class EyeReport:
     refraction: EyeRefraction
     mtf_cyc_per_deg: dict
     mtf_cyc_per_mm: dict
+    lens_setup: TrialLensSetup | None = None
 
     def as_json(self) -> dict:
         """The record of ``vissim eye --json`` (plain numbers; Zernikes keyed ``"n,m"``)."""
@@ -139,9 +147,13 @@ class EyeReport:
             "power_diopters": self.power_diopters,
             "efl_mm": self.efl_mm,
             "retinal_mm_per_deg": self.retinal_mm_per_deg,
-            "entrance_pupil": {"diameter_mm": wf.entrance_pupil_mm, "position_mm": wf.entrance_pupil_position_mm,
+            "entrance_pupil": {"diameter_mm": float(wf.entrance_pupil_mm),
+                               "position_mm": float(wf.entrance_pupil_position_mm),
                                "paraxial_diameter_mm": self.paraxial_entrance_pupil_mm,
-                               "diameter": "real rays on axis (the Zernike pupil)", "given": wf.pupil_given},
+                               "diameter": "real rays on axis (the Zernike pupil)", "given": wf.pupil_given,
+                               "through_lenses": self.lens_setup is not None,
+                               "eye_diameter_mm": float(wf.eye_entrance_pupil_mm)},
+            "lenses": self._lenses_json(),
             "iris_mm": wf.iris_mm,
             "wavelength_nm": self.wavelength_nm,
             "wavelength": "given" if self.wavelength_given else "the model's reference wavelength",
@@ -158,7 +170,16 @@ class EyeReport:
     def _plane_text(self) -> str:
         if self.refraction.plane == "corneal vertex":
             return "corneal vertex"
+        if self.lens_setup is not None:
+            return f"front of the lenses at {self.refraction.vertex_distance_mm:g} mm (over-refraction)"
         return f"spectacle plane at {self.refraction.vertex_distance_mm:g} mm"
+
+    def _lenses_json(self) -> list:
+        if self.lens_setup is None:
+            return []
+        return [{"marked_power": str(lens.marked_power), "refractive_index_d": lens.refractive_index,
+                 "center_thickness_mm": lens.center_thickness_mm, "back_surface_diopters": lens.back_surface_diopters}
+                for lens in self.lens_setup.lenses]
 
 
 def _pairs(frequencies, table: dict) -> dict:
@@ -167,11 +188,12 @@ def _pairs(frequencies, table: dict) -> dict:
 
 def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None, iris_mm=None,
                wavelength_nm=None, field_deg=(0.0, 0.0), rx=None, vertex_distance_mm=None,
-               mtf_cyc_per_mm=(), mtf_cyc_per_deg=()) -> EyeReport:
+               mtf_cyc_per_mm=(), mtf_cyc_per_deg=(), lenses=(), lens_gap_mm: float = 0.0) -> EyeReport:
     """The `EyeReport` of ``model`` (a name of `vissim.optics.eyes.models.EYE_MODELS`), module doc.
 
     ``rx``: a prescription (text or `Prescription`) the eye is made to have, at the spectacle
-    plane ``vertex_distance_mm`` (default 12 mm) in front of the cornea. Bad input -- an unknown
+    plane ``vertex_distance_mm`` (default 12 mm) in front of the cornea; ``lenses``: thick trial or
+    spectacle lenses worn there (module doc). Bad input -- an unknown
     model, an accommodation beyond the model's range, a pupil the iris cannot give, a field where
     rays miss a surface, meet total internal reflection or leave the GRIN lens, a negative
     frequency -- raises one `VissimInputError` naming the value and its unit.
@@ -186,10 +208,14 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
         prescription = Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
         vertex = SPECTACLE_VERTEX_DISTANCE_MM if vertex is None else vertex
         eye = ametropic_eye(base, prescription, vertex)
+    setup = None
+    if len(lenses):
+        vertex = SPECTACLE_VERTEX_DISTANCE_MM if vertex is None else vertex
+        setup = TrialLensSetup(tuple(lenses), vertex, math.inf, lens_gap_mm)
     wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
     field = tuple(float(v) for v in field_deg)
-    front = trace_eye_wavefront(eye, wavelength, field, pupil_mm=pupil_mm, iris_mm=iris_mm)
-    refraction = eye_refraction(front, vertex)
+    front = trace_eye_wavefront(eye, wavelength, field, pupil_mm=pupil_mm, iris_mm=iris_mm, lenses=setup)
+    refraction = eye_refraction(front, vertex if setup is None else setup.span_mm)
     mean = mean_meridian_eye(eye)
     mm_per_deg = retinal_mm_per_deg(mean, wavelength)
     tables_deg, tables_mm = {}, {}
@@ -199,7 +225,10 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
         everything = eye_mtf(wave, wavelength, np.concatenate([f_deg, f_mm * mm_per_deg]), field)
         tables_deg = _pairs(f_deg, {k: v[:len(f_deg)] for k, v in everything.items()}) if len(f_deg) else {}
         tables_mm = _pairs(f_mm, {k: v[len(f_deg):] for k, v in everything.items()}) if len(f_mm) else {}
+    if setup is None:
+        paraxial_pupil = entrance_pupil_diameter_mm(mean, front.iris_mm, wavelength)
+    else:
+        paraxial_pupil = front.iris_mm * system_entrance_pupil_mm(eye, setup, wavelength)[1]
     return EyeReport(eye.name, base.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
-                     equivalent_power_diopters(mean, wavelength), efl_mm(mean, wavelength), mm_per_deg,
-                     entrance_pupil_diameter_mm(mean, front.iris_mm, wavelength), front, refraction,
-                     tables_deg, tables_mm)
+                     float(equivalent_power_diopters(mean, wavelength)), float(efl_mm(mean, wavelength)),
+                     float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup)

@@ -22,6 +22,17 @@ named by its plane:
 * `CORNEA` (a contact lens over the spectacles): K − L, K the eye's own corneal refraction and
   L = −C A⁻¹ the vergence the lenses give at the cornea to light from infinity.
 
+**Traced lenses** (`lens_surfaces`): a thick lens as its two surfaces for the exact trace, in the
+eye's frame (`vissim.optics.eyes.surfaces`; light along +z, the corneal vertex at 0, so the lenses
+lie at z < 0): front and back curvature matrices K = F / (n_d − 1) / 1000 per mm of the bench's
+`vissim.bench.lenses.mesh.lens_surface_curvatures_per_mm` (a `MatrixSag`; x, y are the TABO frame
+in both frames, so a cylinder's axis is the same), glass of the lens's n_d with crown's Abbe
+number at the traced wavelength, as `vissim.bench.lenses.trace.bench_surfaces`. Thin lenses
+have no surfaces: make them crown lenses of realistic thickness first (the bench's
+`realistic_center_thickness_mm`, e.g. `vissim.bench.atv.tube.atv_trial_lens`). No clear aperture
+is checked. `system_entrance_pupil_mm` is the iris imaged through the cornea and the lenses
+(paraxial, the mean of the two principal meridians).
+
 Both are negative when the eye with its lenses is myopic. Three uses, one function: an ametropic
 eye uncorrected (no lens) or corrected (`spectacle_lens` of its prescription), and an emmetropic
 eye with blur induced by a trial lens (the thesis's experiment on an eye).
@@ -37,14 +48,16 @@ from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, EyeRefraction, eye_ray_matrix, refraction_from_matrix
 from vissim.optics.eyes.models import SchematicEye
+from vissim.optics.eyes.paraxial import matrix_to_surface, mean_meridian_eye
 from vissim.optics.glass import glass_like_crown
 from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.raytrace import MatrixSag, Surface
 from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup, refraction_matrix,
                                       transfer_matrix)
 from vissim.units import mm_to_m
 
 __all__ = ["CORNEA", "SPECTACLE", "spectacle_lens", "lens_ray_matrix", "lenses_to_cornea_matrix",
-           "residual_refraction"]
+           "residual_refraction", "lens_surfaces", "system_entrance_pupil_mm"]
 
 _I2 = np.eye(2)
 
@@ -106,3 +119,43 @@ def residual_refraction(eye: SchematicEye, lenses=(), vertex_distance_mm: float 
 def _lens_span_mm(setup: TrialLensSetup) -> float:
     """Lens thicknesses and gaps: from the first lens's front vertex to the last one's back vertex, mm."""
     return setup.span_mm - setup.vertex_distance_mm if setup.lenses else 0.0
+
+
+def _thick(lens: TrialLens) -> TrialLens:
+    if lens.is_thin:
+        raise VissimInputError(f"trial lens {lens.marked_power} is thin (no index, 0 mm thick): the trace needs a "
+                               "real lens; make it one of realistic centre thickness first")
+    return lens
+
+
+def lens_surfaces(setup: TrialLensSetup) -> tuple[Surface, ...]:
+    """The lenses of ``setup`` (object to eye) as surfaces of the eye's frame, the last back vertex
+    ``setup.vertex_distance_mm`` in front of the cornea (module doc)."""
+    lenses = [_thick(lens) for lens in setup.lenses]
+    z = -setup.vertex_distance_mm - sum(lens.center_thickness_mm for lens in lenses) - setup.lens_gap_mm * (
+        len(lenses) - 1)
+    surfaces = []
+    for i, lens in enumerate(lenses):
+        n_minus_1 = lens.refractive_index - 1.0
+        front = np.asarray(lens.front_surface_power_matrix(), dtype=float) / 1000.0 / n_minus_1
+        back = -lens.back_surface_diopters * _I2 / 1000.0 / n_minus_1
+        glass = glass_like_crown(lens.refractive_index).index
+        surfaces.append(Surface(MatrixSag(front), z, glass, name=f"lens {i + 1} front"))
+        z += lens.center_thickness_mm
+        surfaces.append(Surface(MatrixSag(back), z, 1.0, name=f"lens {i + 1} back"))
+        z += setup.lens_gap_mm
+    return tuple(surfaces)
+
+
+def system_entrance_pupil_mm(eye: SchematicEye, setup: TrialLensSetup, wavelength_nm: float) -> tuple[float, float]:
+    """(position behind the corneal vertex, paraxial magnification iris -> pupil) of the iris imaged
+    through the cornea and ``setup``'s lenses, mm; the mean of the principal meridians (module doc)."""
+    wavelength = checked_wavelength_nm(wavelength_nm)
+    lenses = lenses_to_cornea_matrix(setup, wavelength)
+    lens_scalar = np.array([[np.trace(lenses[:2, :2]), np.trace(lenses[:2, 2:])],
+                            [np.trace(lenses[2:, :2]), np.trace(lenses[2:, 2:])]]) / 2.0
+    (a, b), (c, d) = matrix_to_surface(mean_meridian_eye(eye), eye.stop_index, wavelength)
+    to_stop = np.array([[a, b / 1000.0], [c * 1000.0, d]]) @ lens_scalar  # (m, D)
+    a, b = to_stop[0]
+    start_mm = setup.span_mm if setup.lenses else setup.vertex_distance_mm  # the matrix's first plane
+    return 1000.0 * b / a - start_mm, 1.0 / a

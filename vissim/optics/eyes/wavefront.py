@@ -27,6 +27,15 @@ records which one was. Coefficients are always over the entrance pupil.
 A toric cornea (an astigmatic eye, `vissim.optics.eyes.ametropia`) is traced as the biconic it is;
 only the paraxial planes the trace is referred to (the entrance and exit pupils, the paraxial
 iris that starts the pupil search) are those of its mean meridian (`paraxial.mean_meridian_eye`).
+
+Lenses in front (``lenses``, a `TrialLensSetup` of thick lenses): their surfaces
+(`spectacles.lens_surfaces`) are traced before the cornea, the beam starting in front of them.
+The iris is the eye's own (a given entrance pupil is the eye's, measured without lenses); the
+Zernikes are over the iris's image through the cornea **and** the lenses (real rays on axis, as
+without them), at the paraxial entrance pupil of the whole system
+(`spectacles.system_entrance_pupil_mm`). For an object at infinity every ray's incoming line is
+parallel, so that plane's position moves no ray relative to the chief ray; it only names the
+plane the refraction is read at.
 """
 
 from __future__ import annotations
@@ -42,6 +51,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import (entrance_pupil_position_mm, iris_diameter_mm, matrix_to_surface,
                                          mean_meridian_eye)
+from vissim.optics.eyes.spectacles import lens_surfaces, system_entrance_pupil_mm
 from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.zernike import fit_zernike_um
@@ -52,8 +62,8 @@ __all__ = ["EyeWavefront", "trace_eye_wavefront", "exit_pupil_position_mm", "ent
 #: Samples across the iris (odd: the chief ray is the grid's centre) and the grid's reach, in iris radii.
 DEFAULT_SAMPLES = 65
 GRID_MARGIN = 1.05
-#: The plane the collimated beam starts on, mm (in front of the corneal vertex).
-_START_Z_MM = -1.0
+#: The plane the collimated beam starts on, mm in front of the first surface's vertex.
+_START_BEFORE_MM = 5.0
 _PUPIL_TOL_MM = 1e-12
 
 
@@ -77,18 +87,26 @@ def _beam_direction(field_deg) -> np.ndarray:
     return d / np.linalg.norm(d)
 
 
-def _axial_starts(eye: SchematicEye, iris_x_mm, wavelength_nm: float) -> np.ndarray:
+def _front(eye: SchematicEye, lenses) -> tuple[tuple, float, tuple, float]:
+    """(surfaces before the iris, lenses first; the iris z; those after it; the beam's start z), mm."""
+    front, stop_z, back = split_at_stop(eye)
+    front = (lens_surfaces(lenses) if lenses is not None and lenses.lenses else ()) + tuple(front)
+    return front, stop_z, back, front[0].vertex_z_mm - _START_BEFORE_MM
+
+
+def _axial_starts(eye: SchematicEye, iris_x_mm, wavelength_nm: float, lenses=None) -> np.ndarray:
     """x (mm) where axial rays that land on the iris at ``iris_x_mm`` (y = 0) enter: their entrance-pupil heights."""
-    front, stop_z, _ = split_at_stop(eye)
+    front, stop_z, _, start_z = _front(eye, lenses)
     targets = np.stack([np.asarray(iris_x_mm, dtype=float), np.zeros(len(iris_x_mm))], axis=1)
-    _, starts = aim_collimated(front, [0.0, 0.0, 1.0], targets, stop_z, _START_Z_MM, wavelength_nm=wavelength_nm)
+    _, starts = aim_collimated(front, [0.0, 0.0, 1.0], targets, stop_z, start_z, wavelength_nm=wavelength_nm)
     return starts[:, 0]
 
 
-def entrance_pupil_from_iris_mm(eye: SchematicEye, iris_mm: float, wavelength_nm: float) -> float:
-    """The entrance-pupil diameter (mm) of an iris ``iris_mm`` across, by real rays on axis (its x extent)."""
+def entrance_pupil_from_iris_mm(eye: SchematicEye, iris_mm: float, wavelength_nm: float, lenses=None) -> float:
+    """The entrance-pupil diameter (mm) of an iris ``iris_mm`` across, by real rays on axis (its x extent),
+    through the cornea and, if given, the lenses of the `TrialLensSetup` ``lenses``."""
     centre, radius = eye.stop_decentre_nasal_mm, 0.5 * iris_mm
-    rim = _axial_starts(eye, [centre + radius, centre - radius], wavelength_nm)
+    rim = _axial_starts(eye, [centre + radius, centre - radius], wavelength_nm, lenses)
     return float(rim[0] - rim[1])
 
 
@@ -160,6 +178,8 @@ class EyeWavefront:
     included; ``rms_um``: without piston and tilt; ``image_point_mm``: the chief ray on the retina;
     ``chief_entrance_pupil_mm``: where the chief ray crosses the entrance-pupil plane (x, y), the
     disc's centre (on the axis for a centred iris on axis; −0.097 mm in x at 40° in ES1999).
+    ``lenses``: the `TrialLensSetup` in front (None: none); with lenses ``entrance_pupil_mm`` and
+    ``entrance_pupil_position_mm`` are the whole system's and ``eye_entrance_pupil_mm`` the eye's own.
     """
 
     model: str
@@ -177,6 +197,8 @@ class EyeWavefront:
     opd_um: np.ndarray
     zernike_um: dict
     fit_residual_rms_um: float
+    lenses: object = None
+    eye_entrance_pupil_mm: float | None = None
 
     @property
     def rms_um(self) -> float:
@@ -204,9 +226,10 @@ def _iris_grid(eye: SchematicEye, iris_mm: float, samples: int) -> tuple[np.ndar
     return points + np.array([eye.stop_decentre_nasal_mm, 0.0]), np.concatenate([[False], edge[keep]])
 
 
-def _trace_to_retina(eye: SchematicEye, direction, targets, wavelength_nm: float) -> tuple[RayBundle, np.ndarray]:
-    front, stop_z, back = split_at_stop(eye)
-    at_iris, starts = aim_collimated(front, direction, targets, stop_z, _START_Z_MM, wavelength_nm=wavelength_nm)
+def _trace_to_retina(eye: SchematicEye, direction, targets, wavelength_nm: float,
+                     lenses=None) -> tuple[RayBundle, np.ndarray]:
+    front, stop_z, back, start_z = _front(eye, lenses)
+    at_iris, starts = aim_collimated(front, direction, targets, stop_z, start_z, wavelength_nm=wavelength_nm)
     on_retina = trace_rays(back, at_iris.points_mm, at_iris.directions, None, wavelength_nm=wavelength_nm,
                            index_before=at_iris.final_index)
     bundle = RayBundle(on_retina.points_mm, on_retina.directions, at_iris.opl_mm + on_retina.opl_mm,
@@ -220,9 +243,19 @@ def _checked_samples(samples) -> int:
     return int(samples)
 
 
+def _system_pupil(eye: SchematicEye, lenses, iris: float, pupil: float, wavelength: float) -> tuple[float, float]:
+    """(entrance-pupil diameter, its position behind the corneal vertex), mm: the eye's, or with lenses the system's."""
+    if lenses is None or not lenses.lenses:
+        return pupil, entrance_pupil_position_mm(mean_meridian_eye(eye), wavelength)
+    return entrance_pupil_from_iris_mm(eye, iris, wavelength, lenses), system_entrance_pupil_mm(eye, lenses,
+                                                                                                 wavelength)[0]
+
+
 def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0, 0.0), *, pupil_mm=None,
-                        iris_mm=None, samples: int = DEFAULT_SAMPLES, max_order: int = 8) -> EyeWavefront:
-    """The traced wavefront of ``eye`` (module doc); give ``pupil_mm`` (entrance pupil) or ``iris_mm``.
+                        iris_mm=None, samples: int = DEFAULT_SAMPLES, max_order: int = 8,
+                        lenses=None) -> EyeWavefront:
+    """The traced wavefront of ``eye`` (module doc); give ``pupil_mm`` (entrance pupil) or ``iris_mm``;
+    ``lenses``: a `TrialLensSetup` of thick lenses in front (module doc).
 
     A field angle where rays miss a surface, meet total internal reflection or leave the GRIN lens
     raises one `VissimInputError` naming the field angle in degrees and what happened.
@@ -232,12 +265,13 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     samples = _checked_samples(samples)
     pupil, iris, given = _pupils(eye, wavelength, pupil_mm, iris_mm)
     field = tuple(float(v) for v in field_deg)
+    eye_pupil = pupil
     try:
+        pupil, entrance_z = _system_pupil(eye, lenses, iris, pupil, wavelength)
         targets, edge = _iris_grid(eye, iris, samples)
-        bundle, starts = _trace_to_retina(eye, direction, targets, wavelength)
+        bundle, starts = _trace_to_retina(eye, direction, targets, wavelength, lenses)
     except VissimInputError as error:
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
-    entrance_z = entrance_pupil_position_mm(mean_meridian_eye(eye), wavelength)
     exit_z = exit_pupil_position_mm(eye, wavelength)
     opd_um = wavefront_on_reference_sphere_um(bundle, 0, exit_z)
     xy = starts[:, :2] + direction[:2] / direction[2] * (entrance_z - starts[:, 2:3])
@@ -249,4 +283,4 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, pupil, max_order)
     return EyeWavefront(eye.name, field, wavelength, pupil, iris, given, entrance_z, exit_z,
                         tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,
-                        coefficients, residual)
+                        coefficients, residual, lenses, eye_pupil)
