@@ -89,3 +89,27 @@ def test_lens_surfaces_sit_in_front_of_the_cornea_and_refuse_a_thin_lens():
     assert 1000.0 * 0.523 * curvature == pytest.approx(-3.0 / (1.0 - 3.0 * 1e-3 / 1.523), rel=1e-9)
     with pytest.raises(VissimInputError, match="thin"):
         lens_surfaces(TrialLensSetup((TrialLens(-3.0),), 12.0, math.inf))
+
+
+def test_the_retina_per_degree_through_a_lens_is_the_spectacle_magnification():
+    """Spectacle magnification of a thick lens (Bennett & Rabbetts, Clinical Visual Optics, ch. 17):
+    SM = 1 / (1 - h P) x 1 / (1 - (t/n) F1), P the back vertex power, h its back vertex to the eye's
+    entrance pupil, F1 the front surface's power; without a lens the 4 x 4 path meets the 2 x 2 one."""
+    import math
+
+    from vissim.bench.atv.tube import atv_trial_lens
+    from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, retinal_mm_per_deg
+    from vissim.optics.eyes.spectacles import system_retinal_mm_per_deg
+    from vissim.optics.trial_lens import TrialLensSetup
+
+    eye = ametropic_eye(navarro_1985(), Prescription(-3.0))
+    wavelength = eye.reference_wavelength_nm
+    bare = retinal_mm_per_deg(eye, wavelength)
+    assert system_retinal_mm_per_deg(eye, TrialLensSetup((), 12.0, math.inf), wavelength) == pytest.approx(bare,
+                                                                                                           rel=1e-12)
+    lens = atv_trial_lens(-3.0)
+    h_m = (12.0 + entrance_pupil_position_mm(eye, wavelength)) / 1000.0
+    front = lens.front_surface_power_matrix()[0][0]
+    expected = 1.0 / (1.0 + 3.0 * h_m) / (1.0 - lens.center_thickness_mm / 1000.0 / 1.523 * front)
+    through = system_retinal_mm_per_deg(eye, TrialLensSetup((lens,), 12.0, math.inf), wavelength)
+    assert through / bare == pytest.approx(expected, rel=1e-4)

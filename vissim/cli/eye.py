@@ -42,7 +42,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help=f"{RX_HELP}: trace the eye that has it (axial length for its sphere, a toric cornea "
                              "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea")
     lens = parser.add_argument_group(
-        "a trial or spectacle lens worn in front, traced with the eye: crown glass of realistic centre thickness "
+        "trial or spectacle lens (traced with the eye)",
+        "Crown glass of realistic centre thickness "
         "(1 mm at edge and centre over 22 mm, as the ATV tube's trial lenses), plano back, its back vertex "
         "--vertex-mm in front of the cornea; the refraction is then the over-refraction at its front surface")
     add_trial_lens_args(lens)

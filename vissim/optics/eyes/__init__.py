@@ -8,4 +8,6 @@
 * `surfaces`: a model as surfaces of the exact trace (`vissim.optics.raytrace`), in the eye's frame.
 * `wavefront`: the traced wavefront over the entrance pupil at a field point and a wavelength.
 * `refraction`: paraxial and minimum-RMS refraction from that wavefront, at the cornea or a spectacle plane.
+* `report`: one eye's record at a field point and a wavelength (``vissim eye``): power, pupils,
+  Zernikes, refraction and MTF, with an optional prescription and lenses in front.
 """

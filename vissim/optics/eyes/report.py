@@ -23,7 +23,8 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of issue 
   at one wavelength, pixel sinc divided out. On axis (field (0, 0)) the radial average; off axis
   ``tangential`` (the spatial frequency along the field's meridian, the direction of (x, y)) and
   ``sagittal`` (perpendicular to it). Frequencies in cycles per degree of visual angle (object
-  space), and in cycles per mm on the retina through the paraxial ``retinal_mm_per_deg``. Above
+  space; in front of the lenses when there are lenses), and in cycles per mm on the retina through
+  the paraxial ``retinal_mm_per_deg`` (through the lenses: `spectacles.system_retinal_mm_per_deg`). Above
   the diffraction cutoff D/λ the MTF is 0.
 
 * **Lenses in front** (``lenses``: thick `TrialLens` es, object to eye, the last one's back vertex
@@ -47,16 +48,16 @@ from vissim.checks import finite_number
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
+from vissim.optics import psf_metrics
 from vissim.optics.eyes.ametropia import ametropic_eye
 from vissim.optics.eyes.models import eye_model
-from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm, entrance_pupil_position_mm,
+from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
-from vissim.optics.eyes.spectacles import system_entrance_pupil_mm
+from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retinal_mm_per_deg
 from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import compute_psf
-from vissim.optics import psf_metrics
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, TrialLensSetup
 from vissim.optics.wavefront import Wavefront
 
@@ -217,7 +218,10 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
     front = trace_eye_wavefront(eye, wavelength, field, pupil_mm=pupil_mm, iris_mm=iris_mm, lenses=setup)
     refraction = eye_refraction(front, vertex if setup is None else setup.span_mm)
     mean = mean_meridian_eye(eye)
-    mm_per_deg = retinal_mm_per_deg(mean, wavelength)
+    if setup is None:
+        mm_per_deg = retinal_mm_per_deg(mean, wavelength)
+    else:
+        mm_per_deg = system_retinal_mm_per_deg(eye, setup, wavelength)
     tables_deg, tables_mm = {}, {}
     if len(f_deg) or len(f_mm):
         higher = {k: v for k, v in front.zernike_um.items() if k[0] >= 2}

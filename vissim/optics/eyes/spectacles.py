@@ -31,7 +31,8 @@ number at the traced wavelength, as `vissim.bench.lenses.trace.bench_surfaces`. 
 have no surfaces: make them crown lenses of realistic thickness first (the bench's
 `realistic_center_thickness_mm`, e.g. `vissim.bench.atv.tube.atv_trial_lens`). No clear aperture
 is checked. `system_entrance_pupil_mm` is the iris imaged through the cornea and the lenses
-(paraxial, the mean of the two principal meridians).
+(paraxial, the mean of the two principal meridians), and `system_retinal_mm_per_deg` the retinal
+image per degree of field seen through the lenses (the chief ray through that pupil).
 
 Both are negative when the eye with its lenses is myopic. Three uses, one function: an ametropic
 eye uncorrected (no lens) or corrected (`spectacle_lens` of its prescription), and an emmetropic
@@ -57,7 +58,7 @@ from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, TrialLens, T
 from vissim.units import mm_to_m
 
 __all__ = ["CORNEA", "SPECTACLE", "spectacle_lens", "lens_ray_matrix", "lenses_to_cornea_matrix",
-           "residual_refraction", "lens_surfaces", "system_entrance_pupil_mm"]
+           "residual_refraction", "lens_surfaces", "system_entrance_pupil_mm", "system_retinal_mm_per_deg"]
 
 _I2 = np.eye(2)
 
@@ -152,10 +153,25 @@ def system_entrance_pupil_mm(eye: SchematicEye, setup: TrialLensSetup, wavelengt
     through the cornea and ``setup``'s lenses, mm; the mean of the principal meridians (module doc)."""
     wavelength = checked_wavelength_nm(wavelength_nm)
     lenses = lenses_to_cornea_matrix(setup, wavelength)
-    lens_scalar = np.array([[np.trace(lenses[:2, :2]), np.trace(lenses[:2, 2:])],
-                            [np.trace(lenses[2:, :2]), np.trace(lenses[2:, 2:])]]) / 2.0
+    lens_scalar = _mean_meridian(lenses)
     (a, b), (c, d) = matrix_to_surface(mean_meridian_eye(eye), eye.stop_index, wavelength)
     to_stop = np.array([[a, b / 1000.0], [c * 1000.0, d]]) @ lens_scalar  # (m, D)
     a, b = to_stop[0]
     start_mm = setup.span_mm if setup.lenses else setup.vertex_distance_mm  # the matrix's first plane
     return 1000.0 * b / a - start_mm, 1.0 / a
+
+
+def _mean_meridian(matrix: np.ndarray) -> np.ndarray:
+    """The 2 x 2 scalar matrix of a 4 x 4 one's mean meridian: each 2 x 2 block's half trace."""
+    return np.array([[np.trace(matrix[:2, :2]), np.trace(matrix[:2, 2:])],
+                     [np.trace(matrix[2:, :2]), np.trace(matrix[2:, 2:])]]) / 2.0
+
+
+def system_retinal_mm_per_deg(eye: SchematicEye, setup: TrialLensSetup, wavelength_nm: float) -> float:
+    """Retinal image height per degree of field in front of ``setup``'s lenses, mm: the paraxial chief
+    ray through the system's entrance pupil carried to the retina's vertex plane (mean meridian)."""
+    wavelength = checked_wavelength_nm(wavelength_nm)
+    (a, b), _ = _mean_meridian(eye_ray_matrix(eye, wavelength) @ lenses_to_cornea_matrix(setup, wavelength))
+    start_mm = setup.span_mm if setup.lenses else setup.vertex_distance_mm
+    pupil_m = mm_to_m(system_entrance_pupil_mm(eye, setup, wavelength)[0] + start_mm)
+    return 1000.0 * abs(b - a * pupil_m) * math.pi / 180.0

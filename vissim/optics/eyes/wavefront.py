@@ -146,8 +146,16 @@ def _pupils(eye: SchematicEye, wavelength_nm: float, pupil_mm, iris_mm) -> tuple
     if (pupil_mm is None) == (iris_mm is None):
         raise VissimInputError("give either the entrance-pupil diameter (pupil_mm) or the iris diameter (iris_mm), "
                                "not both or neither")
+    human = EYE_PUPIL_RANGE_MM[1]
+    widest = min(human, max_iris_mm(eye))
     if pupil_mm is not None:
         pupil, given = positive_number(pupil_mm, "entrance pupil diameter", "mm"), "entrance pupil"
+        widest_pupil = entrance_pupil_from_iris_mm(eye, widest, wavelength_nm)
+        if pupil > widest_pupil:  # checked before the search, which a huge pupil would send out of range
+            raise VissimInputError(f"entrance pupil {pupil:g} mm, wider than the {widest_pupil:.3g} mm that the "
+                                   f"{eye.name} eye's widest iris, {widest:.3g} mm, gives (a human iris opens to "
+                                   f"{human:g} mm at most, and to no wider than where the iris plane meets the "
+                                   "cornea's back)")
         try:
             iris = iris_from_entrance_pupil_mm(eye, pupil, wavelength_nm)
         except VissimInputError as error:
@@ -156,8 +164,6 @@ def _pupils(eye: SchematicEye, wavelength_nm: float, pupil_mm, iris_mm) -> tuple
     else:
         iris, given = positive_number(iris_mm, "iris diameter", "mm"), "iris"
         asked = f"iris {iris:g} mm"
-    human = EYE_PUPIL_RANGE_MM[1]
-    widest = min(human, max_iris_mm(eye))
     if iris > widest:
         raise VissimInputError(f"{asked}, wider than the {widest:.3g} mm the {eye.name} eye's iris allows (a human "
                                f"iris opens to {human:g} mm at most, and to no wider than where the iris plane meets "
