@@ -58,6 +58,7 @@ from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retin
 from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import compute_psf
+from vissim.optics.psf_field import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, TrialLensSetup
 from vissim.optics.wavefront import Wavefront
 
@@ -66,6 +67,9 @@ __all__ = ["EyeReport", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_
 #: The PSF's sampling: its Nyquist frequency is this many times the diffraction cutoff D/λ.
 MTF_NYQUIST_PER_CUTOFF = 1.25
 #: The PSF's side, pixels: the MTF's frequency step is cutoff * 2 * 1.25 / 512, about 0.5 cyc/deg at 3 mm.
+#: A PSF that leaves more than `MAX_ENERGY_OUTSIDE` of its energy outside is computed again over the
+#: field that holds it (`vissim.optics.psf_field.size_holding_px`): slow (tens of seconds) for an 8 mm
+#: pupil at 40°.
 MTF_SIZE_PX = 512
 
 
@@ -93,11 +97,15 @@ def eye_mtf(wavefront: Wavefront, wavelength_nm: float, frequencies_cyc_per_deg,
     f = _frequencies(frequencies_cyc_per_deg, "MTF frequency (per degree)")
     cutoff = psf_metrics.diffraction_cutoff_cyc_per_deg(wavefront.pupil_diameter_mm, wavelength)
     step_arcmin = 30.0 / (MTF_NYQUIST_PER_CUTOFF * cutoff)
-    psf = compute_psf(wavefront, wavelength_nm=wavelength, arcmin_per_px=step_arcmin, size_px=MTF_SIZE_PX,
+    size = MTF_SIZE_PX
+    diameter = wavefront.pupil_diameter_mm
+    if energy_outside_field(wavefront, diameter, [wavelength], [1.0], step_arcmin, size) > MAX_ENERGY_OUTSIDE:
+        size = size_holding_px(wavefront, diameter, [wavelength], [1.0], step_arcmin, size)  # a cut PSF smooths its OTF
+    psf = compute_psf(wavefront, wavelength_nm=wavelength, arcmin_per_px=step_arcmin, size_px=size,
                       dtype=np.float64, normalise="total")
     m = psf_metrics.mtf(psf, remove_pixel=True)
     axis = psf_metrics.frequencies_cyc_per_deg(psf)
-    df, centre = axis[1] - axis[0], MTF_SIZE_PX // 2
+    df, centre = axis[1] - axis[0], m.shape[0] // 2
     out = {}
     for name, direction in _mtf_directions(field_deg).items():
         if direction is None:
