@@ -3,7 +3,7 @@
 `eye_report` builds the eye (`models.eye_model`, made ametropic by `ametropia.ametropic_eye`
 when a prescription is given), traces its wavefront over the entrance pupil
 (`wavefront.trace_eye_wavefront`), reads its refraction (`refraction.eye_refraction`) and its
-MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of issue 26's
+MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
 ``vissim eye --json``.
 
 * **Wavelength**: the model's reference wavelength unless given (``EyeReport.wavelength_given``).
