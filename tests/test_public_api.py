@@ -117,6 +117,8 @@ WRONG_TYPES = [
     (lambda: vissim.analyse_subject("subject_001.json"), "must be a SubjectData (from vissim.load_subject"),
     (lambda: vissim.fit_quadratic("a", "b"), "must be a number or a sequence of numbers in D"),
     (lambda: vissim.render_chart_print("K"), "must be a ChartSpec"),
+    (lambda: vissim.eye_wavefront("navarro-1985", pupil_mm=3.0, wavelength_nm=555.0, rx=-1.0),
+     "expected a Prescription (the correcting lens)"),
 ]
 
 
@@ -140,6 +142,7 @@ def test_a_wrong_argument_type_is_one_type_error_saying_what_is_accepted(call, a
     (lambda: vissim.blur_image(IMAGE, _psf(), arcmin_per_px=float("nan")), "arcmin per pixel"),
     (lambda: vissim.DslrBench(focal_length_mm="long"), "focal length mm must be a number in mm"),
     (lambda: vissim.single_letter_spec(5, 1.0), "unknown Sloan letter '5'"),
+    (lambda: vissim.eye_wavefront("navaro", pupil_mm=3.0, wavelength_nm=555.0), "unknown eye model 'navaro'"),
 ])
 def test_a_bad_value_is_one_input_error_naming_it_and_its_unit(call, fragment):
     with pytest.raises(VissimInputError, match=fragment.replace("(", r"\(")):

@@ -10,6 +10,11 @@ import numpy as np
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
 from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.models import EYE_MODELS
+from vissim.optics.eyes.psf_wavefront import eye_wavefront
+from vissim.optics.prescription import Prescription
+from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 from vissim.imageio import to_preview_png, write_image
 from vissim.optics.psf import compute_psf
 from vissim.provenance import make_provenance
@@ -33,6 +38,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
     parser.add_argument("--lca-reference-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
                         help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
+    parser.add_argument("--eye-model", metavar="MODEL",
+                        help="a schematic eye (" + ", ".join(EYE_MODELS) + ") in place of the reduced eye: its traced "
+                        "wavefront over the --pupil-mm entrance pupil, at the one --wavelength-nm, on axis, relaxed "
+                        "(its spherical aberration and its own dispersion; no --lca), with --rx's defocus and "
+                        "astigmatism (and --zernike) added over the same pupil, so --rx means what it means for the "
+                        "reduced eye (vissim.optics.eyes.psf_wavefront; `vissim eye --rx` traces the ametropic eye "
+                        "instead)")
     parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
     parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="wave (default) or geometric optics")
@@ -43,14 +55,17 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    wavefront = wavefront_from_args(args)
     wavelengths = parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
+    wavefront = _eye_front(args, wavelengths) if args.eye_model is not None else wavefront_from_args(args)
     weights = parse_float_list(args.weights, "--weights", "relative units") if args.weights else None
     psf = compute_psf(wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
                       lca_reference_nm=args.lca_reference_nm if args.lca else None,
                       arcmin_per_px=args.arcmin_per_px, size_px=args.size, mode=args.mode,
                       dtype=np.float64 if args.float64 else np.float32, normalise="total")
-    provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike)
+    provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike,
+                                 eye_model=args.eye_model or "reduced",
+                                 eye_wavefront_um={f"{n},{m}": c for (n, m), c in wavefront.coefficients_um.items()}
+                                 if args.eye_model else None)
     output = args.output
     exr_path = output.with_suffix(".exr") if output.suffix.lower() == ".png" else output
     data = psf.data.astype(np.float32)
@@ -65,3 +80,19 @@ def run(args: argparse.Namespace) -> int:
         f"{psf.pupil_diameter_mm:g} mm, {psf.mode} optics, {100 * psf.energy_in_field:.2f} % of the energy in the field"
     )
     return 0
+
+
+def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront:
+    """The schematic eye's traced wavefront with --rx (and --zernike) added (`eye_wavefront`)."""
+    if args.eye_model not in EYE_MODELS:
+        raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
+    if len(wavelengths) != 1 or args.lca:
+        given = ", ".join(f"{w:g}" for w in wavelengths)
+        raise VissimInputError(f"--eye-model takes one --wavelength-nm and no --lca (the traced eye has its own "
+                               f"dispersion), got {given} nm{' with --lca' if args.lca else ''}")
+    rx = Prescription.parse(args.rx) if args.rx is not None else None
+    front = eye_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelength_nm=wavelengths[0], rx=rx)
+    if args.zernike is not None:
+        measured = args.zernike_pupil_mm if args.zernike_pupil_mm is not None else args.pupil_mm
+        front = front + Wavefront(parse_zernike_terms(args.zernike), measured)
+    return front

@@ -8,6 +8,8 @@
 * `surfaces`: a model as surfaces of the exact trace (`vissim.optics.raytrace`), in the eye's frame.
 * `wavefront`: the traced wavefront over the entrance pupil at a field point and a wavelength.
 * `refraction`: paraxial and minimum-RMS refraction from that wavefront, at the cornea or a spectacle plane.
+* `psf_wavefront`: `eye_wavefront`, the traced eye's Zernikes with a prescription's added over the
+  entrance pupil: what ``vissim psf --eye-model`` computes its PSF from.
 * `report`: one eye's record at a field point and a wavelength (``vissim eye``): power, pupils,
   Zernikes, refraction and MTF, with an optional prescription and lenses in front.
 """
