@@ -95,3 +95,25 @@ def test_cli_psf_eye_model_bad_input_is_one_error_line_and_exit_2(capsys, tmp_pa
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and err[0].startswith("vissim: error:"), err
     assert not (tmp_path / "x.exr").exists()
+
+
+def test_cli_psf_eye_model_takes_field_and_accommodation_as_the_library_does(capsys, tmp_path):
+    """The CLI's PSF equals compute_psf of eye_wavefront at the same field and accommodation (float32 file)."""
+    target = tmp_path / "off.exr"
+    code = main(["psf", "--eye-model", "navarro-1985", "--pupil-mm", "4", "--wavelength-nm", "555", "--field-deg", "10,0",
+                 "--accommodation-diopters", "1", "--arcmin-per-px", "0.5", "--size", "65", "-o", str(target)])
+    assert code == 0
+    front = eye_wavefront("navarro-1985", pupil_mm=4.0, wavelength_nm=555.0, field_deg=(10.0, 0.0),
+                          accommodation_diopters=1.0)
+    assert abs(front.coefficients_um[(2, 2)]) > 1e-3  # off-axis astigmatism is there
+    psf = compute_psf(front, wavelength_nm=555.0, arcmin_per_px=0.5, size_px=65, normalise="total")
+    image = read_image(target)
+    assert image.provenance["inputs"]["field_deg"] == "10,0"
+    assert np.abs(image.pixels - psf.data).max() <= 1e-5 * psf.data.max()
+
+
+def test_cli_psf_field_without_an_eye_model_is_one_error_line(capsys, tmp_path):
+    capsys.readouterr()
+    code = main(["psf", "--rx", "-1", "--field-deg", "5,0", "--pupil-mm", "3", "-o", str(tmp_path / "x.exr")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--eye-model" in err[0], err

@@ -79,6 +79,14 @@ def wavefront_from_args(args: argparse.Namespace) -> Wavefront:
     return front
 
 
+def field_deg_from_text(text: str) -> tuple[float, float]:
+    """``--field-deg X,Y``: a field angle's (x, y) in degrees."""
+    values = parse_float_list(text, "--field-deg", "degrees", positive=False)
+    if len(values) != 2:
+        raise VissimInputError(f"--field-deg must be two angles X,Y in degrees, got {text!r}")
+    return values[0], values[1]
+
+
 def parse_float_list(text: str, name: str, unit: str, *, positive: bool = True) -> list[float]:
     """Comma-separated finite numbers, positive unless ``positive=False`` (wavelengths; lens powers)."""
     try:

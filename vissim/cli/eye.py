@@ -7,7 +7,7 @@ import json
 
 from vissim import __version__
 from vissim.bench.atv.tube import atv_trial_lens
-from vissim.cli._common import RX_HELP, add_trial_lens_args, parse_float_list, trial_lens_powers
+from vissim.cli._common import RX_HELP, add_trial_lens_args, field_deg_from_text, parse_float_list, trial_lens_powers
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.eyes.report import EyeReport, eye_report
@@ -60,13 +60,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def _field(text: str) -> tuple[float, float]:
-    values = parse_float_list(text, "--field-deg", "degrees", positive=False)
-    if len(values) != 2:
-        raise VissimInputError(f"--field-deg must be two angles X,Y in degrees, got {text!r}")
-    return values[0], values[1]
-
-
 def _frequencies(text: str | None, name: str, unit: str) -> list[float]:
     if text is None:
         return []
@@ -81,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
     powers = trial_lens_powers(args)
     lenses = () if powers is None else (atv_trial_lens(*powers),)
     report = eye_report(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
-                        iris_mm=args.iris_mm, wavelength_nm=args.wavelength_nm, field_deg=_field(args.field_deg),
+                        iris_mm=args.iris_mm, wavelength_nm=args.wavelength_nm,
+                        field_deg=field_deg_from_text(args.field_deg),
                         rx=args.rx, vertex_distance_mm=args.vertex_mm,
                         mtf_cyc_per_mm=_frequencies(args.mtf_cyc_per_mm, "--mtf-cyc-per-mm", "cycles per mm"),
                         mtf_cyc_per_deg=_frequencies(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles per degree"),

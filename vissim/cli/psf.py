@@ -9,7 +9,7 @@ import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
-from vissim.cli._common import add_aberration_args, parse_float_list, wavefront_from_args
+from vissim.cli._common import add_aberration_args, field_deg_from_text, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.eyes.psf_wavefront import eye_wavefront
@@ -40,11 +40,18 @@ def add_parser(subparsers) -> None:
                         help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--eye-model", metavar="MODEL",
                         help="a schematic eye (" + ", ".join(EYE_MODELS) + ") in place of the reduced eye: its traced "
-                        "wavefront over the --pupil-mm entrance pupil, at the one --wavelength-nm, on axis, relaxed "
+                        "wavefront over the --pupil-mm entrance pupil, at the one --wavelength-nm, --field-deg and "
+                        "--accommodation-diopters "
                         "(its spherical aberration and its own dispersion; no --lca), with --rx's defocus and "
                         "astigmatism (and --zernike) added over the same pupil, so --rx means what it means for the "
                         "reduced eye (vissim.optics.eyes.psf_wavefront; `vissim eye --rx` traces the ametropic eye "
                         "instead)")
+    parser.add_argument("--field-deg", metavar="X,Y",
+                        help="with --eye-model: field angle from the optical axis, degrees, x (examiner's right) and "
+                        "y (up); the PSF is centred on the chief ray's image point (default 0,0)")
+    parser.add_argument("--accommodation-diopters", type=float, metavar="A",
+                        help="with --eye-model: accommodation exerted, dioptres, within the model's range "
+                        "(default 0, relaxed)")
     parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
     parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="wave (default) or geometric optics")
@@ -56,6 +63,9 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     wavelengths = parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
+    if args.eye_model is None and (args.field_deg is not None or args.accommodation_diopters is not None):
+        raise VissimInputError("--field-deg and --accommodation-diopters need --eye-model (the reduced eye has one "
+                               "PSF over the field and no accommodation)")
     wavefront = _eye_front(args, wavelengths) if args.eye_model is not None else wavefront_from_args(args)
     weights = parse_float_list(args.weights, "--weights", "relative units") if args.weights else None
     psf = compute_psf(wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
@@ -63,7 +73,8 @@ def run(args: argparse.Namespace) -> int:
                       arcmin_per_px=args.arcmin_per_px, size_px=args.size, mode=args.mode,
                       dtype=np.float64 if args.float64 else np.float32, normalise="total")
     provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike,
-                                 eye_model=args.eye_model or "reduced",
+                                 eye_model=args.eye_model or "reduced", field_deg=args.field_deg,
+                                 accommodation_diopters=args.accommodation_diopters,
                                  eye_wavefront_um={f"{n},{m}": c for (n, m), c in wavefront.coefficients_um.items()}
                                  if args.eye_model else None)
     output = args.output
@@ -91,7 +102,10 @@ def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront:
         raise VissimInputError(f"--eye-model takes one --wavelength-nm and no --lca (the traced eye has its own "
                                f"dispersion), got {given} nm{' with --lca' if args.lca else ''}")
     rx = Prescription.parse(args.rx) if args.rx is not None else None
-    front = eye_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelength_nm=wavelengths[0], rx=rx)
+    field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
+    accommodation = args.accommodation_diopters if args.accommodation_diopters is not None else 0.0
+    front = eye_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelength_nm=wavelengths[0], rx=rx,
+                          field_deg=field, accommodation_diopters=accommodation)
     if args.zernike is not None:
         measured = args.zernike_pupil_mm if args.zernike_pupil_mm is not None else args.pupil_mm
         front = front + Wavefront(parse_zernike_terms(args.zernike), measured)
