@@ -226,3 +226,18 @@ def defocus_otf(pupil_diameter_mm, wavelength_nm, w020_um, shift_mm):
 
     value, _ = quad(integrand, phi0, math.pi / 2, limit=400, epsabs=1e-13, epsrel=1e-12)
     return 2 * value / (math.pi * radius_mm**2)  # both halves u < 0 and u > 0
+
+
+def probe_pixels(values, rng, n_line=13, n_random=12):
+    """(row, col) of pixels everywhere: peak and its 3x3, centre, lines through the peak,
+    random pixels (half of them in the bright part), the four corners."""
+    n = values.shape[0]
+    peak = np.unravel_index(int(np.argmax(values)), values.shape)
+    points = {(n // 2, n // 2), (0, 0), (0, n - 1), (n - 1, 0), (n - 1, n - 1)}
+    points |= {(min(max(peak[0] + d, 0), n - 1), min(max(peak[1] + e, 0), n - 1)) for d in (-1, 0, 1) for e in (-1, 0, 1)}
+    for v in np.linspace(0, n - 1, n_line).round().astype(int):
+        points |= {(peak[0], int(v)), (int(v), peak[1])}
+    points |= {tuple(int(i) for i in p) for p in rng.integers(0, n, size=(n_random // 2, 2))}
+    bright = np.argwhere(values > 1e-2 * values.max())
+    points |= {tuple(int(i) for i in p) for p in bright[rng.choice(len(bright), n_random - n_random // 2)]}
+    return np.array(sorted(points))

@@ -14,7 +14,7 @@ eye in tests/test_psf_accuracy.py). Measured (float64, about 60 probed pixels ea
 
 import numpy as np
 import pytest
-from fraunhofer_reference import pixel_values
+from fraunhofer_reference import pixel_values, probe_pixels
 
 from vissim.cli import main
 from vissim.imageio import read_image
@@ -29,20 +29,6 @@ from vissim.optics.wavefront import Wavefront
 PEAK_FRACTION = 2e-3
 
 
-def _probes(values, rng, n_line=15, n_random=16):
-    """(row, col): the peak and its 3x3, lines through it, random pixels (half in the bright part), corners."""
-    n = values.shape[0]
-    peak = np.unravel_index(int(np.argmax(values)), values.shape)
-    points = {(0, 0), (0, n - 1), (n - 1, 0), (n - 1, n - 1)}
-    points |= {(peak[0] + d, peak[1] + e) for d in (-1, 0, 1) for e in (-1, 0, 1)}
-    for v in np.linspace(0, n - 1, n_line).round().astype(int):
-        points |= {(peak[0], int(v)), (int(v), peak[1])}
-    points |= {tuple(int(i) for i in p) for p in rng.integers(0, n, size=(n_random // 2, 2))}
-    bright = np.argwhere(values > 1e-2 * values.max())
-    points |= {tuple(int(i) for i in p) for p in bright[rng.choice(len(bright), n_random - n_random // 2)]}
-    return np.array(sorted(points))
-
-
 @pytest.mark.parametrize(("pupil_mm", "wavelength_nm", "arcmin_per_px", "size_px"),
                          [(3.0, 555.0, 0.25, 129), (6.0, 589.3, 0.25, 161)])
 def test_navarro_psf_matches_the_fraunhofer_quadrature_of_its_traced_wavefront(pupil_mm, wavelength_nm,
@@ -54,7 +40,7 @@ def test_navarro_psf_matches_the_fraunhofer_quadrature_of_its_traced_wavefront(p
     psf = compute_psf(front, wavelength_nm=wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=size_px,
                       mode="wave", pixel="integrate", dtype=np.float64)
     values = psf.data * psf.energy_in_field
-    pixels = _probes(values, np.random.default_rng(26))
+    pixels = probe_pixels(values, np.random.default_rng(26), n_line=15, n_random=16)
     offsets = pixels - size_px // 2
     oracle = pixel_values(dict(traced.zernike_um), traced.entrance_pupil_mm, pupil_mm, wavelength_nm,
                           arcmin_per_px, offsets, integrate=True)

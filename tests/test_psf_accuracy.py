@@ -14,6 +14,7 @@ from fraunhofer_reference import (
     defocus_otf,
     max_slope_rad,
     pixel_values,
+    probe_pixels,
 )
 
 from vissim.errors import FieldTooSmallError
@@ -38,21 +39,6 @@ def vissim_psf(front, pupil_mm, arcmin_per_px, size_px=None, pixel="integrate", 
         except FieldTooSmallError:
             size = int(size * 1.5) | 1
     raise AssertionError("no field size holds the PSF")  # pragma: no cover
-
-
-def probe_pixels(values, rng, n_line=13, n_random=12):
-    """(row, col) of pixels everywhere: peak and its 3x3, centre, lines through the peak,
-    random pixels (half of them in the bright part), the four corners."""
-    n = values.shape[0]
-    peak = np.unravel_index(int(np.argmax(values)), values.shape)
-    points = {(n // 2, n // 2), (0, 0), (0, n - 1), (n - 1, 0), (n - 1, n - 1)}
-    points |= {(min(max(peak[0] + d, 0), n - 1), min(max(peak[1] + e, 0), n - 1)) for d in (-1, 0, 1) for e in (-1, 0, 1)}
-    for v in np.linspace(0, n - 1, n_line).round().astype(int):
-        points |= {(peak[0], int(v)), (int(v), peak[1])}
-    points |= {tuple(int(i) for i in p) for p in rng.integers(0, n, size=(n_random // 2, 2))}
-    bright = np.argwhere(values > 1e-2 * values.max())
-    points |= {tuple(int(i) for i in p) for p in bright[rng.choice(len(bright), n_random - n_random // 2)]}
-    return np.array(sorted(points))
 
 
 def error_over_peak(front, pupil_mm, arcmin_per_px, size_px=None, pixel="integrate", seed=0, dtype=np.float64):
