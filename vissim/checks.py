@@ -9,7 +9,7 @@ from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
 
-__all__ = ["MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
+__all__ = ["number_within", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS",
@@ -87,13 +87,19 @@ WAVELENGTH_RANGE_NM = (200.0, 2000.0)
 DEFAULT_WAVELENGTH_NM = 550.0
 
 
+def number_within(value, name: str, unit: str, bounds: tuple[float, float], what: str = "") -> float:
+    """A finite number within ``bounds`` (inclusive), or one error naming it, the range and ``unit``."""
+    number = finite_number(value, name, unit)
+    low, high = bounds
+    if not low <= number <= high:
+        span = f"{low:g} to {high:g}" if low < 0 else f"{low:g}-{high:g}"
+        raise VissimInputError(f"{name} must be within {span} {unit}{what}, got {number:g} {unit}")
+    return number + 0.0  # -0.0 as 0.0
+
+
 def wavelength_nm(value, name: str = "wavelength") -> float:
     """A wavelength within `WAVELENGTH_RANGE_NM`."""
-    number = finite_number(value, name, "nm")
-    low, high = WAVELENGTH_RANGE_NM
-    if not low <= number <= high:
-        raise VissimInputError(f"{name} must be within {low:g}-{high:g} nm, got {value!r} nm")
-    return number
+    return number_within(value, name, "nm", WAVELENGTH_RANGE_NM)
 
 
 #: Trial-lens vertex distances, mm (the last lens's back vertex to the camera's or eye's principal
@@ -127,30 +133,17 @@ OBJECT_DISTANCE_RANGE_M = (0.01, 1000.0)
 
 def accommodation_diopters(value, name: str = "accommodation") -> float:
     """An accommodation exerted within `ACCOMMODATION_RANGE_DIOPTERS`."""
-    number = finite_number(value, name, "dioptres")
-    low, high = ACCOMMODATION_RANGE_DIOPTERS
-    if not low <= number <= high:
-        raise VissimInputError(f"{name} must be within {low:g}-{high:g} dioptres, got {number:g} dioptres")
-    return number + 0.0  # -0.0 as 0.0
+    return number_within(value, name, "dioptres", ACCOMMODATION_RANGE_DIOPTERS)
 
 
 def trial_lens_diopters(value, name: str = "trial lens power") -> float:
     """A trial lens's sphere or cylinder within `TRIAL_LENS_RANGE_DIOPTERS`."""
-    number = finite_number(value, name, "dioptres")
-    low, high = TRIAL_LENS_RANGE_DIOPTERS
-    if not low <= number <= high:
-        raise VissimInputError(
-            f"{name} must be within {low:g} to {high:g} dioptres (a trial lens), got {number:g} dioptres")
-    return number
+    return number_within(value, name, "dioptres", TRIAL_LENS_RANGE_DIOPTERS, " (a trial lens)")
 
 
 def vertex_distance_mm(value, name: str = "vertex distance") -> float:
     """A vertex distance within `VERTEX_DISTANCE_RANGE_MM`."""
-    number = finite_number(value, name, "mm")
-    low, high = VERTEX_DISTANCE_RANGE_MM
-    if not low <= number <= high:
-        raise VissimInputError(f"{name} must be within {low:g}-{high:g} mm, got {number:g} mm")
-    return number + 0.0  # -0.0 as 0.0
+    return number_within(value, name, "mm", VERTEX_DISTANCE_RANGE_MM)
 
 
 def available_memory_bytes() -> int:

@@ -17,7 +17,7 @@ from typing import Any
 from vissim.checks import (AUTOREFRACTOR_CYLINDER_RANGE_DIOPTERS, AUTOREFRACTOR_SPHERE_RANGE_DIOPTERS,
                            AUTOREFRACTOR_VERTEX_RANGE_MM, AXIS_RANGE_DEG, DISPLAY_CODE_RANGE,
                            EXAMINATION_DURATION_RANGE_S, ILLUMINANCE_RANGE_LX, PUPIL_DISTANCE_RANGE_MM,
-                           TRIAL_LENS_RANGE_DIOPTERS, TRIAL_TIME_RANGE_S)
+                           TRIAL_LENS_RANGE_DIOPTERS, TRIAL_TIME_RANGE_S, number_within)
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 
@@ -29,14 +29,6 @@ EYES = ("R", "L")
 THESIS_TRIAL_LENSES_DIOPTERS = (-5.0, -4.0, -3.0, -2.0, -1.5, -1.0, -0.5, -0.25, 0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0)
 
 
-def _within(value: float, name: str, unit: str, bounds: tuple[float, float]) -> float:
-    """``value`` if within ``bounds`` (a range of `vissim.checks`); else an error naming it, its unit and the range."""
-    lo, hi = bounds
-    if not (lo <= value <= hi):
-        raise VissimInputError(f"{name} must be within {lo:g}-{hi:g} {unit}, got {value:g} {unit}")
-    return value
-
-
 def _eye(value: str, name: str = "eye") -> str:
     if value not in EYES:
         raise VissimInputError(f"{name} must be 'R' or 'L', got {value!r}")
@@ -44,7 +36,7 @@ def _eye(value: str, name: str = "eye") -> str:
 
 
 def _quarter_diopters(value: float, name: str) -> float:
-    _within(value, name, "D", TRIAL_LENS_RANGE_DIOPTERS)
+    number_within(value, name, "D", TRIAL_LENS_RANGE_DIOPTERS)
     if abs(value * 4 - round(value * 4)) > 1e-9:
         raise VissimInputError(f"{name} must be a multiple of 0.25 D (a trial lens), got {value:g} D")
     return value
@@ -61,10 +53,10 @@ class AutorefractorEye:
     line: int | None = None
 
     def __post_init__(self) -> None:
-        _within(self.sphere_diopters, "sphere_diopters", "D", AUTOREFRACTOR_SPHERE_RANGE_DIOPTERS)
-        _within(self.cylinder_diopters, "cylinder_diopters", "D", AUTOREFRACTOR_CYLINDER_RANGE_DIOPTERS)
-        _within(self.axis_deg, "axis_deg", "deg", AXIS_RANGE_DEG)
-        _within(self.spherical_equivalent_diopters, "spherical_equivalent_diopters", "D",
+        number_within(self.sphere_diopters, "sphere_diopters", "D", AUTOREFRACTOR_SPHERE_RANGE_DIOPTERS)
+        number_within(self.cylinder_diopters, "cylinder_diopters", "D", AUTOREFRACTOR_CYLINDER_RANGE_DIOPTERS)
+        number_within(self.axis_deg, "axis_deg", "deg", AXIS_RANGE_DEG)
+        number_within(self.spherical_equivalent_diopters, "spherical_equivalent_diopters", "D",
                 AUTOREFRACTOR_SPHERE_RANGE_DIOPTERS)
 
     @property
@@ -89,8 +81,8 @@ class Autorefraction:
     lines: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
-        _within(self.vertex_distance_mm, "vertex_distance_mm", "mm", AUTOREFRACTOR_VERTEX_RANGE_MM)
-        _within(self.pupil_distance_mm, "pupil_distance_mm", "mm", PUPIL_DISTANCE_RANGE_MM)
+        number_within(self.vertex_distance_mm, "vertex_distance_mm", "mm", AUTOREFRACTOR_VERTEX_RANGE_MM)
+        number_within(self.pupil_distance_mm, "pupil_distance_mm", "mm", PUPIL_DISTANCE_RANGE_MM)
         if self.cylinder_sign not in ("-", "+"):
             raise VissimInputError(f"cylinder_sign must be '-' or '+', got {self.cylinder_sign!r}")
 
@@ -112,9 +104,9 @@ class Trial:
     def __post_init__(self) -> None:
         _quarter_diopters(self.trial_lens_diopters, "trial_lens_diopters")
         _eye(self.eye)
-        _within(self.minimum_visible_code, "minimum_visible_code", "(display code value)", DISPLAY_CODE_RANGE)
-        _within(self.elapsed_time_s, "elapsed_time_s", "s", TRIAL_TIME_RANGE_S)
-        _within(self.lux_mean_lx, "lux_mean_lx", "lx", ILLUMINANCE_RANGE_LX)
+        number_within(self.minimum_visible_code, "minimum_visible_code", "(display code value)", DISPLAY_CODE_RANGE)
+        number_within(self.elapsed_time_s, "elapsed_time_s", "s", TRIAL_TIME_RANGE_S)
+        number_within(self.lux_mean_lx, "lux_mean_lx", "lx", ILLUMINANCE_RANGE_LX)
 
 
 @dataclass(frozen=True)
@@ -130,7 +122,7 @@ class Examination:
     def __post_init__(self) -> None:
         if self.number < 1:
             raise VissimInputError(f"number must be >= 1, got {self.number}")
-        _within(self.duration_s, "duration_s", "s", EXAMINATION_DURATION_RANGE_S)
+        number_within(self.duration_s, "duration_s", "s", EXAMINATION_DURATION_RANGE_S)
         for i, lens in enumerate(self.lens_sequence_diopters):
             _quarter_diopters(lens, f"lens_sequence_diopters[{i}]")
         if not self.trials:
@@ -156,7 +148,7 @@ class SummaryRow:
         _quarter_diopters(self.trial_lens_diopters, "trial_lens_diopters")
         _eye(self.eye)
         for name in ("mean_code", "max_code", "diff_code"):
-            _within(getattr(self, name), name, "(display code value)", DISPLAY_CODE_RANGE)
+            number_within(getattr(self, name), name, "(display code value)", DISPLAY_CODE_RANGE)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass
 
 from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, NAVARRO_ACCOMMODATION_RANGE_DIOPTERS,
-                           finite_number)
+                           number_within)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import (AIR, GrinMedium, Medium, arizona_medium, le_grand_medium,
                                       liou_brennan_medium, navarro_medium)
@@ -109,11 +109,7 @@ class SchematicEye:
 
 
 def _accommodation(value, model: str, bounds: tuple[float, float]) -> float:
-    number = finite_number(value, f"{model} accommodation", "dioptres")
-    low, high = bounds
-    if not low <= number <= high:
-        raise VissimInputError(f"{model} accommodation must be within {low:g}-{high:g} dioptres, got {number:g} dioptres")
-    return number + 0.0
+    return number_within(value, f"{model} accommodation", "dioptres", bounds)
 
 
 _NAVARRO_SOURCE = ("Navarro, Santamaria & Bescos 1985, JOSA A 2:1273, Tables 1 and 4 (accommodation "
