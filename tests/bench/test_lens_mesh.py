@@ -13,10 +13,10 @@ import math
 import numpy as np
 import pytest
 
+from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
 from vissim.bench.lenses.mesh import (
     cached_lens_ply,
     lens_mesh,
-    lens_surface_curvatures_per_mm,
     ply_bytes,
     realistic_center_thickness_mm,
     rim_thickness_mm,

@@ -20,7 +20,8 @@ import pytest
 
 from vissim.bench.dslr.traced_wavefront import shift_invariance, trace_bench_wavefront
 from vissim.bench.dslr.bench import DslrBench
-from vissim.bench.lenses.mesh import cached_lens_ply, lens_surface_curvatures_per_mm
+from vissim.bench.lenses.mesh import cached_lens_ply
+from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
 from vissim.bench.lenses.trace import bench_surfaces, object_point_mm
 from vissim.optics.glass import C_LINE_NM, D_LINE_NM, F_LINE_NM, SPECTACLE_CROWN, crown_index
 from vissim.optics.raytrace import aim_rays

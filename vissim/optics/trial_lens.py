@@ -39,9 +39,9 @@ from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower, Prescription
 from vissim.thesis import THESIS_EYE_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
-from vissim.units import mm_to_m
+from vissim.units import diopters_to_per_mm, mm_to_m
 
-__all__ = ["CROWN_GLASS_INDEX", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
+__all__ = ["CROWN_GLASS_INDEX", "lens_surface_curvatures_per_mm", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
            "TrialLensEffect", "trial_lens_effect", "refraction_matrix", "transfer_matrix",
            "entrance_pupil_diameter_mm", "thesis_eye_pupil_diameter_mm", "thesis_table_4_2_power",
            "thesis_table_4_2_lens_power", "Matrix2", "matrix2_tuple", "tabo_meridian_deg", "principal_pairs"]
@@ -464,3 +464,18 @@ def thesis_table_4_2_lens_power(lenses, vertex_distance_mm: float) -> LensPower:
     p_axis = thesis_table_4_2_power(summed.meridian_power(axis), vertex_distance_mm)
     p_perp = thesis_table_4_2_power(summed.meridian_power(axis + 90.0), vertex_distance_mm)
     return LensPower(p_axis, p_perp - p_axis, axis)
+
+
+def lens_surface_curvatures_per_mm(lens: TrialLens) -> tuple[np.ndarray, np.ndarray]:
+    """(front, back) 2x2 curvature matrices K in 1/mm of a thick lens's surfaces: the front carries its marked
+    power over (n - 1), the back its back-surface power, negated (sag z = x^T K x / (1 + sqrt(1 - x^T K^2 x))
+    along the light; `vissim.bench.lenses.mesh`, `vissim.optics.eyes.spectacles`)."""
+    if lens.refractive_index is None:
+        raise VissimInputError(
+            f"trial lens {lens.marked_power} is thin (no refractive index); a mesh needs an index and a "
+            "centre thickness (see realistic_center_thickness_mm)"
+        )
+    n_minus_1 = lens.refractive_index - 1.0
+    front = diopters_to_per_mm(np.asarray(lens.front_surface_power_matrix(), dtype=float)) / n_minus_1
+    back = -diopters_to_per_mm(lens.back_surface_diopters * np.eye(2)) / n_minus_1
+    return front, back

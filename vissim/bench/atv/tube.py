@@ -43,7 +43,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vissim.bench.lenses.mesh import (lens_surface_curvatures_per_mm, realistic_center_thickness_mm,
+from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
+from vissim.bench.lenses.mesh import (realistic_center_thickness_mm,
                                       rim_thickness_mm, sag_mm)
 from vissim.charts import MM_PER_INCH
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, COLLIMATOR_POWER_RANGE_DIOPTERS, DISPLAY_CODE_RANGE,

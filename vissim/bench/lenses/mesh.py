@@ -40,10 +40,9 @@ from vissim.errors import VissimInputError
 from vissim.optics.prescription import LensPower
 from vissim.optics.raytrace.shapes import matrix_sag_gradient as sag_gradient
 from vissim.optics.raytrace.shapes import matrix_sag_mm
-from vissim.optics.trial_lens import TrialLens
-from vissim.units import diopters_to_per_mm
+from vissim.optics.trial_lens import TrialLens, lens_surface_curvatures_per_mm
 
-__all__ = ["LensMesh", "lens_mesh", "lens_surface_curvatures_per_mm", "sag_mm", "sag_gradient",
+__all__ = ["LensMesh", "lens_mesh", "sag_mm", "sag_gradient",
            "rim_thickness_mm", "realistic_center_thickness_mm", "write_ply", "ply_bytes", "cached_lens_ply",
            "mesh_cache_dir"]
 
@@ -51,19 +50,6 @@ log = logging.getLogger(__name__)
 
 _PLY_SCHEMA = "vissim.lens-mesh/1"
 _RIM_SAMPLES = 720
-
-
-def lens_surface_curvatures_per_mm(lens: TrialLens) -> tuple[np.ndarray, np.ndarray]:
-    """(front, back) 2x2 curvature matrices K in 1/mm, in the sag convention of the module doc."""
-    if lens.refractive_index is None:
-        raise VissimInputError(
-            f"trial lens {lens.marked_power} is thin (no refractive index); a mesh needs an index and a "
-            "centre thickness (see realistic_center_thickness_mm)"
-        )
-    n_minus_1 = lens.refractive_index - 1.0
-    front = diopters_to_per_mm(np.asarray(lens.front_surface_power_matrix(), dtype=float)) / n_minus_1
-    back = -diopters_to_per_mm(lens.back_surface_diopters * np.eye(2)) / n_minus_1
-    return front, back
 
 
 def sag_mm(curvature_per_mm, xy_mm) -> np.ndarray:

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from vissim.bench.lenses.mesh import lens_surface_curvatures_per_mm
+from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
 from vissim.errors import VissimInputError
 from vissim.optics.glass import D_LINE_NM, glass_like_crown
 from vissim.optics.raytrace import MatrixSag, Surface

@@ -25,7 +25,7 @@ named by its plane:
 **Traced lenses** (`lens_surfaces`): a thick lens as its two surfaces for the exact trace, in the
 eye's frame (`vissim.optics.eyes.surfaces`; light along +z, the corneal vertex at 0, so the lenses
 lie at z < 0): front and back curvature matrices K = F / (n_d − 1) / 1000 per mm of the bench's
-`vissim.bench.lenses.mesh.lens_surface_curvatures_per_mm` (a `MatrixSag`; x, y are the TABO frame
+`vissim.optics.trial_lens.lens_surface_curvatures_per_mm` (a `MatrixSag`; x, y are the TABO frame
 in both frames, so a cylinder's axis is the same), glass of the lens's n_d with crown's Abbe
 number at the traced wavelength, as `vissim.bench.lenses.trace.bench_surfaces`. Thin lenses
 have no surfaces: make them crown lenses of realistic thickness first (the bench's
@@ -53,7 +53,8 @@ from vissim.optics.eyes.paraxial import matrix_to_surface, mean_meridian_eye
 from vissim.optics.glass import glass_like_crown
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.raytrace import MatrixSag, Surface
-from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup, refraction_matrix,
+from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup, lens_surface_curvatures_per_mm,
+                                      refraction_matrix,
                                       transfer_matrix)
 from vissim.units import mm_to_m
 
@@ -137,9 +138,7 @@ def lens_surfaces(setup: TrialLensSetup) -> tuple[Surface, ...]:
         len(lenses) - 1)
     surfaces = []
     for i, lens in enumerate(lenses):
-        n_minus_1 = lens.refractive_index - 1.0
-        front = np.asarray(lens.front_surface_power_matrix(), dtype=float) / 1000.0 / n_minus_1
-        back = -lens.back_surface_diopters * _I2 / 1000.0 / n_minus_1
+        front, back = lens_surface_curvatures_per_mm(lens)
         glass = glass_like_crown(lens.refractive_index).index
         surfaces.append(Surface(MatrixSag(front), z, glass, name=f"lens {i + 1} front"))
         z += lens.center_thickness_mm
