@@ -335,8 +335,9 @@ OVERSAMPLE_RANGE = (1, 16)
 COLLIMATOR_POWER_RANGE_DIOPTERS = (0.0, 40.0)
 #: Brightest display pixel, linear radiance units: keeps the float32 retinal image finite.
 MAX_PIXEL_RADIANCE = 1e30
-#: The sphere search range ``fit-rx --max-power-diopters`` takes, dioptres (> 0): a trial set's strongest lens.
-FIT_POWER_RANGE_DIOPTERS = (0.0, 20.0)
+#: The sphere search range ``fit-rx --max-power-diopters`` takes, dioptres: from a blur the fit can still
+#: resolve to a trial set's strongest lens.
+FIT_POWER_RANGE_DIOPTERS = (0.5, 20.0)
 #: The model error ``fit-rx`` adds to its intervals, dioptres.
 MODEL_ERROR_RANGE_DIOPTERS = (0.0, 10.0)
 #: Most local worker processes a campaign runs (``validate --workers``): far beyond any machine's cores.

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.checks import (DEFAULT_WAVELENGTH_NM, FIT_POWER_RANGE_DIOPTERS, MODEL_ERROR_RANGE_DIOPTERS,
+from vissim.checks import (DEFAULT_WAVELENGTH_NM, FIT_POWER_RANGE_DIOPTERS, MODEL_ERROR_RANGE_DIOPTERS, number_within,
                            VERTEX_DISTANCE_RANGE_MM)
 from vissim.cli._common import check_outputs_apart, image_sampling, refuse_existing
 from vissim.cli._parser import Number
@@ -103,8 +103,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_outputs_apart((*image_files(args.image), *image_files(args.reference)), [args.output])
     refuse_existing(args.output, overwrite=args.overwrite)
-    if args.max_power_diopters < 0.5:
-        raise VissimInputError(f"--max-power-diopters must be within 0.5-20 dioptres, got {args.max_power_diopters:g} D")
+    number_within(args.max_power_diopters, "--max-power-diopters", "dioptres", FIT_POWER_RANGE_DIOPTERS)
     image = read_image(args.image)
     reference = read_image(args.reference)
     step = _sampling(args, image, reference)

@@ -62,8 +62,9 @@ def _in_disc(u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def landing_arcmin(wavefront, pupil_diameter_mm: float, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Where the rays through image-oriented unit-disc points ``(u, v)`` land: image offsets (col, row), arcmin.
 
-    A ray lands at ``-grad W`` of ``wavefront`` (a Zernike `Wavefront` or an `OpdMap`) at its
-    OSA pupil point: a slope dW/dy > 0 lands up (+y), i.e. at -row (``docs/conventions.md``).
+    A ray goes in the direction ``+grad W`` of ``wavefront`` (a Zernike `Wavefront` or an `OpdMap`) at its
+    OSA pupil point (``docs/conventions.md``, "Sign of the wavefront"), mapped to the image by
+    `vissim.units.osa_xy_to_image_colrow`.
     """
     radius = pupil_diameter_mm / 2.0
     sx, sy = wavefront.slopes_mrad(*image_colrow_to_osa_xy(u * radius, v * radius))  # image-oriented pupil -> OSA
