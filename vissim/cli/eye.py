@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import TYPE_CHECKING
 
 from vissim import __version__
-from vissim.bench.atv.tube import atv_trial_lens
 from vissim.cli._common import RX_HELP, add_trial_lens_args, field_deg_from_text, parse_float_list, trial_lens_powers
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
-from vissim.optics.eyes.report import EyeReport, eye_report
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+
+if TYPE_CHECKING:
+    from vissim.optics.eyes.report import EyeReport
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -71,6 +73,9 @@ def _frequencies(text: str | None, name: str, unit: str) -> list[float]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from vissim.bench.atv.tube import atv_trial_lens  # the trace's imports are paid when the command runs
+    from vissim.optics.eyes.report import eye_report
+
     powers = trial_lens_powers(args)
     lenses = () if powers is None else (atv_trial_lens(*powers),)
     report = eye_report(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,

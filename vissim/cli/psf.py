@@ -12,7 +12,6 @@ from vissim.checks import size_text
 from vissim.cli._common import add_aberration_args, field_deg_from_text, parse_float_list, wavefront_from_args
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
-from vissim.optics.eyes.psf_wavefront import eye_wavefront
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 from vissim.imageio import to_preview_png, write_image
@@ -95,6 +94,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront:
     """The schematic eye's traced wavefront with --rx (and --zernike) added (`eye_wavefront`)."""
+    from vissim.optics.eyes.psf_wavefront import eye_wavefront  # the trace's imports are paid when it runs
+
     if args.eye_model not in EYE_MODELS:
         raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
     if len(wavelengths) != 1 or args.lca:
