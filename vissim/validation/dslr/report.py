@@ -93,9 +93,9 @@ def reference_note(comparison: dict) -> str:
     return REFERENCE_NOTE[comparison["simulation"]]
 
 
-def markdown_tables(results: list[dict]) -> str:
+def markdown_tables(results: list[dict], all_rows: list[dict] | None = None) -> str:
     """Thesis-style tables (one row per configuration), PSNR and SSIM, with noise floors; then the wave bench's."""
-    all_rows = metrics_rows(results)
+    all_rows = metrics_rows(results) if all_rows is None else all_rows
     if not all_rows:
         return "No finished items.\n"
     rows = [r for r in all_rows if not is_wave_bench_row(r)]
@@ -182,7 +182,8 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
     columns = _columns(results, simulation, input_kind, wave_bench)
     if not columns:
         return None
-    highest = max(float(np.percentile(read_image(run_dir / c["images"]["abs_diff_map"]).pixels, 99.9)) for _, c in columns)
+    ad_maps = [read_image(run_dir / c["images"]["abs_diff_map"]).pixels for _, c in columns]
+    highest = max(float(np.percentile(ad, 99.9)) for ad in ad_maps)
     ad_max = max(1e-4 if wave_bench else 0.01, highest)  # the wave bench's differences are 100x smaller
     lo, hi = DISSIMILARITY_RANGE
     truth_label = "wave bench (truth)" if wave_bench else "bench (truth)"
@@ -198,8 +199,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
         truth = _load(result, run_dir, comp["reference_image"])
         sim = read_image(run_dir / comp["images"]["simulation"]).pixels
         ssim_map = read_image(run_dir / comp["images"]["ssim_map"]).pixels
-        ad_map = read_image(run_dir / comp["images"]["abs_diff_map"]).pixels
-        images = [truth, sim, np.clip(1.0 - ssim_map, lo, hi), ad_map]
+        images = [truth, sim, np.clip(1.0 - ssim_map, lo, hi), ad_maps[j]]
         for i, (img, (_, cmap, norm, _)) in enumerate(zip(images, rows)):
             ax = axes[i, j]
             shown[i] = ax.imshow(img, cmap=cmap, norm=norm(), interpolation="nearest")
@@ -259,7 +259,8 @@ def dslr_report(results: list[dict], run_dir: Path, record: dict, progress=None)
         figures[name] = Figure(file_name, png_bytes(fig), alt, extra)
     advance()
     title = f"vissim validation: {record.get('name', run_dir.name)}"
-    return ReportParts(title, metrics_rows(results), markdown_tables(results), figures)
+    rows = metrics_rows(results)
+    return ReportParts(title, rows, markdown_tables(results, rows), figures)
 
 
 def summary_lines(rows: list[dict]) -> list[str]:

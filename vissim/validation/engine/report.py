@@ -162,7 +162,8 @@ def _markdown_alt(text: str) -> str:
     return " ".join(text.replace("[", "(").replace("]", ")").split())
 
 
-def write_report(run_dir: str | Path, progress: Progress | None = None) -> tuple[list[Path], list[str]]:
+def write_report(run_dir: str | Path, progress: Progress | None = None,
+                 record: dict | None = None) -> tuple[list[Path], list[str]]:
     """Write a run folder's report: metrics.json, metrics.csv, tables.md, its figures and report.html.
 
     The run's bench kind gives the rows, tables and figures (``progress(stage, done, total)``
@@ -170,7 +171,7 @@ def write_report(run_dir: str | Path, progress: Progress | None = None) -> tuple
     the terminal summary's lines.
     """
     run_dir = Path(run_dir)
-    record = read_record(run_dir)
+    record = read_record(run_dir) if record is None else record
     kind = bench_kind(record.get("kind", DEFAULT_KIND))
     results = load_results(run_dir, record)
     parts = kind.report(results, run_dir, record, progress)

@@ -57,6 +57,7 @@ def rebuild_report(run_dir: str | Path, progress: Progress | None = None) -> tup
     order = run_dir / "campaign.json"
     if not order.exists():
         raise VissimInputError(f"{run_dir} is not a vissim run folder (no campaign.json)")
-    check_outputs_apart([p for p in recorded_inputs(json.loads(order.read_text())) if p.exists()], folders=[run_dir])
+    record = json.loads(order.read_text())
+    check_outputs_apart([p for p in recorded_inputs(record) if p.exists()], folders=[run_dir])
     with run_folder_lock(run_dir):
-        return write_report(run_dir, progress=progress)
+        return write_report(run_dir, progress=progress, record=record)
