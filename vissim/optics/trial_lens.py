@@ -41,7 +41,7 @@ from vissim.optics.prescription import LensPower, Prescription
 from vissim.thesis import THESIS_EYE_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import diopters_to_per_mm, mm_to_m
 
-__all__ = ["CROWN_GLASS_INDEX", "lens_surface_curvatures_per_mm", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
+__all__ = ["CROWN_GLASS_INDEX", "lens_surface_curvatures_per_mm", "vergence_after_distance", "MAX_LENSES_IN_HOLDER", "SurfaceRadii", "TrialLens", "TrialLensSetup",
            "TrialLensEffect", "trial_lens_effect", "refraction_matrix", "transfer_matrix",
            "entrance_pupil_diameter_mm", "thesis_eye_pupil_diameter_mm", "thesis_table_4_2_power",
            "thesis_table_4_2_lens_power", "Matrix2", "matrix2_tuple", "tabo_meridian_deg", "principal_pairs"]
@@ -479,3 +479,16 @@ def lens_surface_curvatures_per_mm(lens: TrialLens) -> tuple[np.ndarray, np.ndar
     front = diopters_to_per_mm(np.asarray(lens.front_surface_power_matrix(), dtype=float)) / n_minus_1
     back = -diopters_to_per_mm(lens.back_surface_diopters * np.eye(2)) / n_minus_1
     return front, back
+
+
+def vergence_after_distance(vergence_matrix_diopters, distance_m: float) -> np.ndarray:
+    """A vergence (2 x 2, D) carried ``distance_m`` along the light through air: V' = V (I - d V)^-1,
+    symmetrised (d < 0 carries it back upstream). Refuses a principal vergence whose focus lies
+    within the gap (I - d V singular or of the wrong sign)."""
+    vergence = np.asarray(vergence_matrix_diopters, dtype=float)
+    gap = np.eye(2) - distance_m * vergence
+    if np.linalg.eigvalsh(0.5 * (gap + gap.T)).min() <= _SINGULAR_TOL:
+        raise VissimInputError(f"a vergence of {np.linalg.eigvalsh(vergence).round(4).tolist()} D comes to a focus "
+                               f"within {1000.0 * abs(distance_m):g} mm, before the next plane")
+    moved = vergence @ np.linalg.inv(gap)
+    return 0.5 * (moved + moved.T)

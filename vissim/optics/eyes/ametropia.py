@@ -50,7 +50,8 @@ from vissim.optics.eyes.media import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import matrix_to_surface
 from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix
+from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix,
+                                      vergence_after_distance)
 from vissim.units import mm_to_m
 
 __all__ = ["CORNEA", "SPECTACLE", "EyeRefraction", "far_point_vergence_matrix", "cornea_front_power_matrix",
@@ -119,13 +120,11 @@ def far_point_vergence_matrix(rx: Prescription, vertex_distance_mm: float = SPEC
     power P ≥ 1/d, whose far point would lie between the lens and the eye (or at the lens)."""
     rx = as_prescription(rx)
     d_m = mm_to_m(checked_vertex_distance_mm(vertex_distance_mm))
-    power = np.asarray(rx.power_matrix(), dtype=float)
-    gap = _I2 - d_m * power
-    if np.linalg.eigvalsh(gap).min() <= _SINGULAR_TOL:
+    try:
+        return vergence_after_distance(rx.power_matrix(), d_m)
+    except VissimInputError:
         raise VissimInputError(f"prescription {rx} at {vertex_distance_mm:g} mm puts the far point between the "
-                               f"spectacle plane and the eye (a principal power >= {1.0 / d_m:.4g} dioptres)")
-    k = power @ np.linalg.inv(gap)
-    return 0.5 * (k + k.T)
+                               f"spectacle plane and the eye (a principal power >= {1.0 / d_m:.4g} dioptres)") from None
 
 
 def _curvature_matrix_per_mm(radius_x_mm: float, radius_y_mm: float, axis_deg: float) -> np.ndarray:

@@ -22,12 +22,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.optics.prescription import Prescription
+from vissim.optics.trial_lens import vergence_after_distance
 from vissim.optics.wavefront import zernike_um_to_prescription
 from vissim.optics.zernike import zernike_norm
+from vissim.units import mm_to_m
 
 __all__ = ["paraxial_rho2_coefficient", "paraxial_prescription", "minimum_rms_prescription", "transfer_prescription",
            "EyeRefraction", "eye_refraction"]
@@ -60,9 +60,7 @@ def minimum_rms_prescription(zernike_um, pupil_diameter_mm: float) -> Prescripti
 
 def transfer_prescription(rx: Prescription, distance_mm: float) -> Prescription:
     """``rx`` (a far point's vergence at a plane) at the plane ``distance_mm`` in front of it, through air."""
-    f = np.asarray(rx.power_matrix(), dtype=float)
-    moved = f @ np.linalg.inv(np.eye(2) + 1e-3 * distance_mm * f)
-    return Prescription.from_power_matrix(0.5 * (moved + moved.T))
+    return Prescription.from_power_matrix(vergence_after_distance(rx.power_matrix(), -mm_to_m(distance_mm)))
 
 
 @dataclass(frozen=True)
