@@ -207,6 +207,7 @@ def test_real_ray_entrance_pupil_is_smaller_than_the_paraxial_one_by_the_pupil_a
     paraxial = entrance_pupil_diameter_mm(eye, 3.0, 543.0)
     print(f"3 mm iris: entrance pupil {real:.5f} mm real, {paraxial:.5f} mm paraxial (optiland 3.40022)")
     assert paraxial == pytest.approx(3.40022, rel=1e-4)
+    # 1.1334 = 3.40022 / 3, optiland's paraxial pupil magnification; 1.123, the reference page's real-ray one
     assert 0.0 < 1.0 - real / 3.40022 < 1.0 - 1.123 / 1.1334
     assert entrance_pupil_from_iris_mm(eye, 4.0, 543.0) / 4.0 == pytest.approx(1.123, abs=1e-3)
     assert iris_from_entrance_pupil_mm(eye, real, 543.0) == pytest.approx(3.0, abs=1e-9)

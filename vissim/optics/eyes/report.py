@@ -55,6 +55,7 @@ from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
 from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retinal_mm_per_deg
+from vissim.units import osa_xy_to_image_colrow
 from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.psf import compute_psf
@@ -112,8 +113,9 @@ def eye_mtf(wavefront: Wavefront, wavelength_nm: float, frequencies_cyc_per_deg,
             rows, cols = np.indices(m.shape) - centre
             radius, mean = psf_metrics.ring_means(m, np.hypot(rows, cols) * df, df)
             values = np.interp(f, radius, mean)
-        else:  # OSA (x, y) maps to (col, row) offsets of (-x, -y); the MTF is even, so (x, y) serves
-            cols, rows = centre + f * direction[0] / df, centre + f * direction[1] / df
+        else:  # the field direction, OSA (x, y), as image (col, row) offsets
+            d_col, d_row = osa_xy_to_image_colrow(direction[0], direction[1])
+            cols, rows = centre + f * d_col / df, centre + f * d_row / df
             values = map_coordinates(m, [rows, cols], order=1, mode="nearest")
         out[name] = np.where(f >= cutoff, 0.0, np.minimum(values, 1.0))
     return out
