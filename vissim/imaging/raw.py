@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import io
 import logging
 import math
 import os
@@ -137,10 +138,10 @@ def file_sha256(path: str | os.PathLike[str]) -> str:
     return digest.hexdigest()
 
 
-def _camera_name(path: Path) -> str | None:
+def _camera_name(data: bytes) -> str | None:
     """Make and model from the TIFF tags of TIFF-based RAWs (DNG, CR2, NEF, ...); rawpy does not expose them."""
     try:
-        with tifffile.TiffFile(path) as tif:
+        with tifffile.TiffFile(io.BytesIO(data)) as tif:
             tags = tif.pages.first.tags
             unique = tags.get(50708)
             if unique is not None:
@@ -161,10 +162,11 @@ def _tiff_ifds(tif: Any) -> list[Any]:
     return ifds
 
 
-def _check_tiff_structure(path: Path) -> None:
-    """Refuse a plain TIFF (LibRaw reads any uncompressed TIFF as sensor data) and a TIFF-based RAW cut short."""
+def _check_tiff_structure(path: Path, data: bytes) -> None:
+    """Refuse a plain TIFF (LibRaw reads any uncompressed TIFF as sensor data) and a TIFF-based RAW cut short
+    (``data``: the file's bytes)."""
     try:
-        with tifffile.TiffFile(path) as tif:
+        with tifffile.TiffFile(io.BytesIO(data)) as tif:
             ifds = _tiff_ifds(tif)
             tags = ifds[0].tags
             camera_tags = any(k in tags for k in ("Make", "Model", 50706, 50708))  # 50706 DNGVersion, 50708 model
@@ -174,7 +176,7 @@ def _check_tiff_structure(path: Path) -> None:
         return
     if not (camera_tags or cfa):
         raise VissimInputError(f"{path} is a plain TIFF image (no Make, Model or DNG tags), not a camera RAW file")
-    size = path.stat().st_size
+    size = len(data)
     if data_end > size:
         raise VissimInputError(f"{path} is truncated: its image data runs to byte {data_end} but the file has "
                                f"{size} bytes")
@@ -262,9 +264,13 @@ def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> Ra
     path = Path(path)
     if not path.is_file():
         raise VissimInputError(f"RAW file {path} {'is not a file' if path.exists() else 'does not exist'}")
-    _check_tiff_structure(path)
     try:
-        with rawpy.imread(str(path)) as raw:
+        data = path.read_bytes()  # read once: the TIFF checks, LibRaw and the checksum see the same bytes
+    except OSError as exc:
+        raise VissimInputError(f"cannot read RAW file {path}: {exc.strerror or exc}") from None
+    _check_tiff_structure(path, data)
+    try:
+        with rawpy.imread(io.BytesIO(data)) as raw:
             _refuse_zero_rows(raw, path)
             white = float(raw.white_level)
             # Read the CFA layout and levels before postprocess(), which rewrites them.
@@ -292,9 +298,9 @@ def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> Ra
         logger.warning("%s: %d pixel values at or above the white level (saturated)", path, saturated)
     image = RawImage(
         pixels=pixels, mode=mode, channel_names=names, black_levels=blacks, white_level=white, cfa_pattern=cfa,
-        sensor_px_per_pixel=2 if mode == "planes" else 1, camera=_camera_name(path),
+        sensor_px_per_pixel=2 if mode == "planes" else 1, camera=_camera_name(data),
         iso=_nonzero(other.iso_speed), exposure_s=_nonzero(other.shutter_speed), path=str(path),
-        camera_wb=wb, camera_to_srgb=camera_to_srgb, sha256=file_sha256(path),
+        camera_wb=wb, camera_to_srgb=camera_to_srgb, sha256=hashlib.sha256(data).hexdigest(),
     )
     logger.debug("read %s (%s): %s px, black %s DN, white %g DN", path, mode, pixels.shape, blacks, white)
     return image

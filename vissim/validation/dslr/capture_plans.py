@@ -10,8 +10,7 @@ import copy
 
 import numpy as np
 
-from vissim.validation.dslr.captures import (Capture, capture_problem, capture_provenance, capture_tile, load_manifest,
-                                             read_capture)
+from vissim.validation.dslr.captures import Capture, capture_provenance, capture_tile, load_manifest, open_capture
 from vissim.validation.engine.protocol import ItemPlan
 
 __all__ = ["capture_item_plans"]
@@ -23,19 +22,23 @@ class _RunCaptures:
     def __init__(self, campaign):
         self.settings = campaign.settings
         self.captures: dict[str, Capture] = load_manifest(campaign.manifest) if campaign.manifest else {}
-        self._problems: dict[str, str | None] = {}
+        self._opened: dict[str, object] = {}  # capture id -> its RawImage, or why it cannot be used
         self._tiles: dict[str, tuple[np.ndarray, dict]] = {}
 
+    def _open(self, capture_id: str):
+        if capture_id not in self._opened:
+            self._opened[capture_id] = open_capture(self.captures[capture_id])
+        return self._opened[capture_id]
+
     def problem(self, capture_id: str) -> str | None:
-        """Why the capture cannot be used (`capture_problem`: absent file, wrong checksum), or None."""
-        if capture_id not in self._problems:
-            self._problems[capture_id] = capture_problem(self.captures[capture_id])
-        return self._problems[capture_id]
+        """Why the capture cannot be used (`open_capture`: absent file, wrong checksum), or None."""
+        opened = self._open(capture_id)
+        return opened if isinstance(opened, str) else None
 
     def tile(self, capture: Capture) -> tuple[np.ndarray, dict]:
         """The capture's tile on the campaign's grid (a copy of its own) and its provenance."""
         if capture.id not in self._tiles:
-            raw = read_capture(capture)
+            raw = self._open(capture.id)
             tile = capture_tile(capture, self.settings.arcmin_per_px, self.settings.tile_px, raw=raw)
             self._tiles[capture.id] = tile, capture_provenance(capture, raw)
         tile, provenance = self._tiles[capture.id]

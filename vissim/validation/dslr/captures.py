@@ -48,7 +48,7 @@ from vissim.validation.engine.fields import LensSpec
 from vissim.validation.engine.fields import field_error, lenses, number, read_toml_file, tables, text
 from vissim.imaging.raw import RawImage, camera_arcmin_per_px, file_sha256, read_raw_linear, resample_to_arcmin
 
-__all__ = ["Capture", "neutral_mosaic", "load_manifest", "capture_problem", "read_capture", "capture_tile", "capture_provenance",
+__all__ = ["Capture", "neutral_mosaic", "load_manifest", "open_capture", "read_capture", "capture_tile", "capture_provenance",
            "file_sha256"]
 
 log = logging.getLogger(__name__)
@@ -111,7 +111,7 @@ def _capture(entry: dict, path: Path, i: int) -> Capture:
 
 
 def load_manifest(path: str | Path) -> dict[str, Capture]:
-    """Read a capture manifest; every field is checked, files are not (see `capture_problem`)."""
+    """Read a capture manifest; every field is checked, files are not (see `open_capture`)."""
     path = Path(path)
     raw = read_toml_file(path, "capture manifest")
     captures = {}
@@ -123,13 +123,15 @@ def load_manifest(path: str | Path) -> dict[str, Capture]:
     return captures
 
 
-def capture_problem(capture: Capture) -> str | None:
-    """Why a capture cannot be used (absent file, wrong checksum), or None."""
+def open_capture(capture: Capture) -> RawImage | str:
+    """The capture's RAW as linear CFA planes, read and hashed once; or why it cannot be used (absent file,
+    a sha256 that does not match the manifest's)."""
     if not capture.file.exists():
         return f"capture {capture.id!r}: {capture.file} is absent"
-    if capture.sha256 and file_sha256(capture.file) != capture.sha256.lower():
+    raw = read_raw_linear(capture.file, mode="planes")
+    if capture.sha256 and raw.sha256 != capture.sha256.lower():
         return f"capture {capture.id!r}: {capture.file} does not match its sha256 in the manifest"
-    return None
+    return raw
 
 
 def neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray, cell_px: int) -> np.ndarray:
@@ -152,12 +154,10 @@ def neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray, cell_px: int) -> 
 
 
 def read_capture(capture: Capture) -> RawImage:
-    """The capture's RAW as linear CFA planes, after checking that it is present and matches its sha256."""
-    if not capture.file.exists():
-        raise VissimInputError(capture_problem(capture))
-    raw = read_raw_linear(capture.file, mode="planes")  # hashes the file as it reads it: once
-    if capture.sha256 and raw.sha256 != capture.sha256.lower():
-        raise VissimInputError(f"capture {capture.id!r}: {capture.file} does not match its sha256 in the manifest")
+    """The capture's RAW (`open_capture`), or one error saying why it cannot be used."""
+    raw = open_capture(capture)
+    if isinstance(raw, str):
+        raise VissimInputError(raw)
     return raw
 
 
