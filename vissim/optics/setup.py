@@ -47,7 +47,7 @@ from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, entran
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
-__all__ = ["ViewingSetup", "Eye", "DEFAULT_WAVELENGTH_NM", "check_accommodation_diopters"]
+__all__ = ["ViewingSetup", "Eye", "check_accommodation_diopters"]
 
 _IDENTITY: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
 

@@ -49,11 +49,12 @@ from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, samples_per_pixel
 from vissim.checks import size_px as check_size_px
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup,
                                       entrance_pupil_diameter_mm)
-from vissim.optics.setup import DEFAULT_WAVELENGTH_NM, ViewingSetup
+from vissim.optics.setup import ViewingSetup
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import REC709_LUMINANCE, arcmin_to_rad, mm_to_m
 

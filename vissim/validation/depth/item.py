@@ -77,7 +77,7 @@ class _DepthItem:
     provenance: dict
     renders: dict
     saved: dict = field(default_factory=dict)
-    references: dict = field(default_factory=dict)  # optics -> (truth, the other seed's truth)
+    references: dict = field(default_factory=dict)  # optics -> (truth, its noise floor)
     comparisons: list = field(default_factory=list)
 
     def save(self, name: str, pixels: np.ndarray, preview: bool = True) -> str:
@@ -123,8 +123,9 @@ def _simulate(item: _DepthItem, source: str, mode: str, layers):
     return composite_layers(layers, **common)
 
 
-def _references(item: _DepthItem, mode: str) -> tuple[np.ndarray, np.ndarray]:
-    """The truth at both seeds for ``mode``: wave optics against the render + the aperture's in-focus diffraction."""
+def _references(item: _DepthItem, mode: str):
+    """The truth for ``mode`` and its noise floor (the two seeds compared), made once per mode: wave optics
+    against the render + the aperture's in-focus diffraction."""
     if mode not in item.references:
         truths = (item.renders["truth_0"], item.renders["truth_1"])
         if mode == "wave":
@@ -132,7 +133,7 @@ def _references(item: _DepthItem, mode: str) -> tuple[np.ndarray, np.ndarray]:
             scene = item.built.configuration.scene
             truths = tuple(add_bench_diffraction(t, aperture, scene.arcmin_per_px) for t in truths)
             item.saved["truth_diffracted"] = item.save("truth_diffracted", truths[0])
-        item.references[mode] = truths
+        item.references[mode] = (truths[0], noise_floor(truths[0], truths[1], item.settings.data_range))
     return item.references[mode]
 
 
@@ -141,10 +142,9 @@ def _compare(item: _DepthItem, source: str, mode: str, layers, masks) -> None:
     started = time.perf_counter()
     result = _simulate(item, source, mode, layers)
     simulated = block_mean(result.image, item.settings.oversample)
-    reference, other = _references(item, mode)
+    reference, floor = _references(item, mode)
     data_range = item.settings.data_range
     comparison = compare_images(reference, simulated, data_range=data_range)
-    floor = noise_floor(reference, other, data_range)
     tag = f"{mode}_{source}"
     item.comparisons.append({
         "simulation": f"{mode} {source}",

@@ -86,7 +86,11 @@ def nothing_to_compare(source: str, total: int, skipped: list[str]) -> VissimInp
 
 
 def _with_spp(campaign: Campaign, spp: int | None) -> Campaign:
-    return campaign if spp is None else replace(campaign, settings=replace(campaign.settings, spp=spp))
+    """``campaign`` with every render at ``spp`` samples per pixel; its configurations built again for it."""
+    if spp is None:
+        return campaign
+    settings, kind = replace(campaign.settings, spp=spp), bench_kind(campaign.kind)
+    return replace(campaign, settings=settings, built=tuple(kind.build(c, settings) for c in campaign.configurations))
 
 
 def run_campaign(campaign: Campaign, run_dir: str | Path, *, workers: int = 1, scheduler: str | None = None,
