@@ -61,7 +61,7 @@ from vissim.units import REC709_LUMINANCE, m_to_mm, rad_to_arcmin
 logger = logging.getLogger(__name__)
 
 __all__ = ["RAW_MODES", "XYZ_FROM_SRGB", "LetterCrop", "RawImage", "ResampledImage", "camera_arcmin_per_px",
-           "crop_letters", "file_sha256", "read_raw_linear", "resample_to_arcmin"]
+           "crop_letters", "file_sha256", "read_file_bytes", "read_raw_linear", "resample_to_arcmin"]
 
 RAW_MODES = ("planes", "demosaic")
 _PHOTOMETRIC_CFA = 32803  # TIFF/EP PhotometricInterpretation of colour-filter-array data
@@ -127,6 +127,14 @@ class RawImage:
                    camera_wb=None if self.camera_wb is None else list(self.camera_wb),
                    camera_to_srgb=None if self.camera_to_srgb is None else [list(r) for r in self.camera_to_srgb])
         return out
+
+
+def read_file_bytes(path: str | os.PathLike[str]) -> bytes:
+    """A RAW file's bytes, or one error naming it."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise VissimInputError(f"cannot read RAW file {path}: {exc.strerror or exc}") from None
 
 
 def file_sha256(path: str | os.PathLike[str]) -> str:
@@ -254,8 +262,11 @@ def _demosaic(raw: Any) -> np.ndarray:
     return (rgb16.astype(np.float64) / 65535.0).astype(np.float32)
 
 
-def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> RawImage:
+def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes", data: bytes | None = None) -> RawImage:
     """Read a camera RAW (CR2, NEF, DNG, ...) as linear light; see the module docstring.
+
+    ``data``: the file's bytes, if the caller has read them already (they are decoded and hashed as
+    given; the file is not read again).
 
     Raises `VissimInputError` for a missing, unreadable or unsupported file.
     """
@@ -264,10 +275,8 @@ def read_raw_linear(path: str | os.PathLike[str], *, mode: str = "planes") -> Ra
     path = Path(path)
     if not path.is_file():
         raise VissimInputError(f"RAW file {path} {'is not a file' if path.exists() else 'does not exist'}")
-    try:
-        data = path.read_bytes()  # read once: the TIFF checks, LibRaw and the checksum see the same bytes
-    except OSError as exc:
-        raise VissimInputError(f"cannot read RAW file {path}: {exc.strerror or exc}") from None
+    if data is None:
+        data = read_file_bytes(path)  # read once: the TIFF checks, LibRaw and the checksum see the same bytes
     _check_tiff_structure(path, data)
     try:
         with rawpy.imread(io.BytesIO(data)) as raw:

@@ -34,6 +34,7 @@ white levels, CFA pattern, as-shot white balance and the file's sha256.
 
 from __future__ import annotations
 
+import hashlib
 import logging
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,7 +47,8 @@ from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCA
 from vissim.units import mm_to_m
 from vissim.validation.engine.fields import LensSpec
 from vissim.validation.engine.fields import field_error, lenses, number, read_toml_file, tables, text
-from vissim.imaging.raw import RawImage, camera_arcmin_per_px, file_sha256, read_raw_linear, resample_to_arcmin
+from vissim.imaging.raw import (RawImage, camera_arcmin_per_px, file_sha256, read_file_bytes, read_raw_linear,
+                               resample_to_arcmin)
 
 __all__ = ["Capture", "neutral_mosaic", "load_manifest", "open_capture", "read_capture", "capture_tile", "capture_provenance",
            "file_sha256"]
@@ -124,14 +126,14 @@ def load_manifest(path: str | Path) -> dict[str, Capture]:
 
 
 def open_capture(capture: Capture) -> RawImage | str:
-    """The capture's RAW as linear CFA planes, read and hashed once; or why it cannot be used (absent file,
-    a sha256 that does not match the manifest's)."""
+    """The capture's RAW as linear CFA planes, its file read once and checked against the manifest's sha256
+    before it is decoded; or why it cannot be used (absent file, another sha256)."""
     if not capture.file.exists():
         return f"capture {capture.id!r}: {capture.file} is absent"
-    raw = read_raw_linear(capture.file, mode="planes")
-    if capture.sha256 and raw.sha256 != capture.sha256.lower():
+    data = read_file_bytes(capture.file)
+    if capture.sha256 and hashlib.sha256(data).hexdigest() != capture.sha256.lower():
         return f"capture {capture.id!r}: {capture.file} does not match its sha256 in the manifest"
-    return raw
+    return read_raw_linear(capture.file, mode="planes", data=data)
 
 
 def neutral_mosaic(planes: np.ndarray, paper_mask: np.ndarray, cell_px: int) -> np.ndarray:
