@@ -227,3 +227,12 @@ def test_dispersive_spectral_renders_are_bit_identical_per_seed(variant):
     assert first.deterministic and np.array_equal(first.pixels, again.pixels)
     assert not np.array_equal(first.pixels, other.pixels)
     assert first.pixels.mean() == pytest.approx(1.0, abs=0.03)  # 64 samples of one wavelength each: ~1 % noise
+
+
+def test_a_sensor_that_ends_the_secondaries_itself_gets_no_factor_of_four():
+    """With ``sensor_terminates_secondary`` the lens only zeroes the others: behind Mitsuba's
+    thinlens (which ends nothing) the white keeps the hero's quarter of its luminance."""
+    bench = DslrBench(lenses=(TrialLens(2.0),), size_px=(24, 24), spp=64, seed=1)
+    scene = dslr_scene(bench, WHITE, WHITE_MM_PER_TEXEL, kind="spectral")
+    scene["lens_0"]["bsdf"]["sensor_terminates_secondary"] = True
+    assert render_scene(scene, kind="spectral", spp=64, seed=1).pixels.mean() == pytest.approx(0.25, abs=0.005)

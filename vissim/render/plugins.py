@@ -47,7 +47,7 @@ the d line and spectacle crown's Abbe number, the glass the bench's exact trace 
 * **mono and RGB variants**: one index, at ``wavelength_nm`` (default the d line, where the
   glass has ``int_ior`` bit for bit, so the default render is unchanged).
 
-Without ``dispersion`` the index is ``int_ior`` at every wavelength, as before.
+Without ``dispersion`` the index is ``int_ior`` at every wavelength (``wavelength_nm`` unused).
 
 Register with `register_plugins` (idempotent) before loading a scene that uses it.
 """
