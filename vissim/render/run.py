@@ -37,7 +37,7 @@ from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
 from vissim.render.fixed_order import pass_seeds, render_image, render_samples
-from vissim.render.plugins import register_plugins
+from vissim.render.plugins import attach_scene, register_plugins
 from vissim.units import REC709_LUMINANCE
 
 __all__ = ["RenderResult", "PIXEL_STATISTICS", "nearest_surface", "to_mitsuba_dict", "render_scene", "render_bench",
@@ -169,8 +169,8 @@ def render_scene(
     doc; (H, W) pixels from a scene whose R is a proximity and G a surface label).
 
     ``progress(done_spp, total_spp)`` is called after each pass.  Returns float32 pixels:
-    (H, W) for ``kind="mono"`` (the one channel; on a scalar_rgb fallback, Rec. 709 luminance),
-    (H, W, 3) for ``"rgb"``.
+    (H, W) for ``kind="mono"`` (the one channel; on a scalar_rgb fallback, Rec. 709 luminance)
+    and ``"spectral"`` (a luminance film: CIE Y of the spectrum), (H, W, 3) for ``"rgb"``.
     """
     spp = samples_per_pixel(spp)
     if statistic not in PIXEL_STATISTICS:
@@ -181,6 +181,15 @@ def render_scene(
     register_plugins(mi)
     start = time.perf_counter()
     scene = mi.load_dict(to_mitsuba_dict(scene_dict, mi))
+    attach_scene(mi, scene)
+    try:
+        return _render_loaded(mi, scene, kind=kind, spp=spp, seed=seed, pass_spp=pass_spp, progress=progress,
+                              statistic=statistic, start=start)
+    finally:
+        attach_scene(mi, scene, detach=True)  # no scene <-> BSDF cycle left behind
+
+
+def _render_loaded(mi, scene, *, kind, spp, seed, pass_spp, progress, statistic, start) -> RenderResult:
     film = scene.sensors()[0].film()
     width, height = (int(v) for v in film.crop_size())
     counts = _split(int(spp), width * height, pass_spp)
@@ -201,7 +210,7 @@ def render_scene(
             image = rendered.image.astype(np.float64)
             if image.ndim == 2:
                 image = image[:, :, None]
-            if kind == "mono" and image.shape[2] >= 3:  # scalar_rgb fallback
+            if kind != "rgb" and image.shape[2] >= 3:  # scalar_rgb fallback
                 image = image[:, :, :3] @ np.array(REC709_LUMINANCE)[:, None]
             total += image[:, :, : total.shape[2]] * count
         else:  # reduced from the samples after the passes
@@ -259,8 +268,9 @@ def render_bench(
         (arcmin per pixel, ``size_px`` = (rows, cols)), spp and seed.
     chart : ChartSpec or Chart
         What the camera looks at, at ``bench.chart_distance_mm``.
-    kind : {"mono", "rgb"}
-        One channel or three.
+    kind : {"mono", "rgb", "spectral"}
+        One channel, three, or the luminance of a spectral render through dispersive lenses
+        (`vissim.bench.dslr.bench.SPECTRAL_MODE`).
     variant : str, optional
         Mitsuba variant (default: the fastest that works here, `vissim.render.backend`).
     pass_spp : int, optional
@@ -271,7 +281,7 @@ def render_bench(
     Returns
     -------
     RenderResult
-        ``pixels``: float32 linear radiance, (H, W) for ``"mono"`` or (H, W, 3) for ``"rgb"``,
+        ``pixels``: float32 linear radiance, (H, W) for ``"mono"`` and ``"spectral"`` or (H, W, 3) for ``"rgb"``,
         row 0 at the top and columns to the observer's right (as the camera sees the chart,
         not mirrored); ``provenance``, ``spp``, ``seed``, ``variant``, ``seconds``.
 
@@ -285,7 +295,7 @@ def render_bench(
     >>> result.pixels.shape  # doctest: +SKIP
     (64, 64)
     """
-    from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
+    from vissim.bench.dslr.bench import SPECTRAL_MODE, DslrBench, chart_mm_per_texel, dslr_scene
     from vissim.optics.trial_lens import trial_lens_effect
     from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
 
@@ -313,6 +323,7 @@ def render_bench(
         chart=chart_sidecar(chart.spec, chart.layout),
         chart_mm_per_px=chart.mm_per_px,
         kind=kind,
+        **({"spectral": SPECTRAL_MODE} if kind == "spectral" else {}),
         variant=result.variant,
         spp=result.spp,  # taken; mitsuba_render.spp_requested is bench.spp
         seed=result.seed,

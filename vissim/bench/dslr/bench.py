@@ -58,7 +58,7 @@ from vissim.optics.setup import ViewingSetup
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import REC709_LUMINANCE, arcmin_to_rad, mm_to_m
 
-__all__ = ["SAMPLERS", "DslrBench", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
+__all__ = ["SAMPLERS", "RENDER_KINDS", "SPECTRAL_MODE", "DslrBench", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
 
 log = logging.getLogger(__name__)
 
@@ -288,11 +288,24 @@ def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm
     return np.ascontiguousarray(out, dtype=np.float32), out.shape[0] * mm_per_px, out.shape[1] * mm_per_px
 
 
+#: Render kinds of the bench: one channel, three, or spectral (luminance of a spectral render).
+RENDER_KINDS = ("mono", "rgb", "spectral")
+#: What a spectral bench render is (recorded in its provenance): the chart's light, the lenses' glass, the response.
+SPECTRAL_MODE = {
+    "emitter_spectrum": "equal-energy (CIE illuminant E): the chart's linear reflectance at every wavelength",
+    "glass": "spectacle crown dispersion: Cauchy fit to the lens index at the d line and Abbe number 58.6 "
+             "(vissim.optics.glass.glass_like_crown)",
+    "response": "CIE 1931 luminance Y (Mitsuba's film: XYZ from the sampled wavelengths, stored as Y)",
+    "wavelengths": "Mitsuba's sampling of the visible range, 4 per path; at a path's first lens surface only the "
+                   "hero wavelength continues, weighted by 4 (pbrt-v4's TerminateSecondary)",
+}
+
+
 def hdr_film(size_px: tuple[int, int], kind: str) -> dict[str, Any]:
     """Mitsuba's float32 ``hdrfilm`` of ``size_px`` (rows, cols); box filter: a pixel integrates its solid angle."""
     rows, cols = size_px
     return {"type": "hdrfilm", "width": cols, "height": rows, "rfilter": {"type": "box"},
-            "pixel_format": "luminance" if kind == "mono" else "rgb", "component_format": "float32",
+            "pixel_format": "rgb" if kind == "rgb" else "luminance", "component_format": "float32",
             "sample_border": False}
 
 
@@ -319,13 +332,13 @@ def dslr_scene(
     if not np.all(np.isfinite(pixels)) or pixels.min() < 0.0:
         raise VissimInputError("chart pixels must be finite, non-negative linear reflectance")
     mm_per_px = _positive(chart_mm_per_px, "chart pixel size", "mm")
-    if kind not in ("mono", "rgb"):
-        raise VissimInputError(f"render kind must be 'mono' or 'rgb', got {kind!r}")
+    if kind not in RENDER_KINDS:
+        raise VissimInputError(f"render kind must be one of {', '.join(RENDER_KINDS)}, got {kind!r}")
     setup = bench.viewing_setup()
     texture, height_mm, width_mm = _chart_texture(bench, setup, pixels, mm_per_px)
     if texture.ndim == 2:
         texture = texture[:, :, None]
-    if kind == "mono" and texture.shape[2] == 3:
+    if kind != "rgb" and texture.shape[2] == 3:
         texture = texture @ np.array(REC709_LUMINANCE, dtype=np.float32)[:, None]
     # The rectangle spans [-1, 1]^2 with normal +z; turned 180 deg about y it faces the camera
     # (-z) and its local +x (texture u) runs along world -x, the camera's image right.  Mitsuba
@@ -371,4 +384,6 @@ def dslr_scene(
             "bsdf": {"type": "vissim_refract", "int_ior": float(lens.refractive_index),
                      "fresnel_loss": bool(bench.fresnel_loss)},
         }
+        if kind == "spectral":  # SPECTRAL_MODE
+            scene[f"lens_{i}"]["bsdf"]["dispersion"] = "crown"
     return scene
