@@ -119,6 +119,10 @@ WRONG_TYPES = [
     (lambda: vissim.render_chart_print("K"), "must be a ChartSpec"),
     (lambda: vissim.eye_wavefront("navarro-1985", pupil_mm=3.0, wavelength_nm=555.0, rx=-1.0),
      "expected a Prescription (the correcting lens)"),
+    (lambda: vissim.eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=[500.0, 600.0], rx=-1.0),
+     "expected a Prescription (the correcting lens)"),
+    (lambda: vissim.SpectralWavefront((500.0,), ("2,0=0.1",)), "must be a Wavefront"),
+    (lambda: vissim.named_spectrum(5), "must be text, one of photopic"),
 ]
 
 

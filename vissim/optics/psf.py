@@ -229,7 +229,7 @@ def _clearly_holds(diameter_mm, wavelengths_nm, blurs_arcmin, arcmin_per_px, siz
 
 
 #: What `compute_psf` and `strehl_ratio` take as the aberration.
-WAVEFRONT_ACCEPTED = ("a Wavefront, an OpdMap or a SpectralWavefront, e.g. vissim.Wavefront.from_prescription("
+WAVEFRONT_ACCEPTED = ("a Wavefront or an OpdMap (or a SpectralWavefront), e.g. vissim.Wavefront.from_prescription("
                       "vissim.Prescription.parse('-2.00 DS'), pupil_diameter_mm=3.0)")
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from vissim.checks import instance_of
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.wavefront import Wavefront
@@ -58,8 +59,7 @@ class SpectralWavefront:
         if any(b <= a for a, b in zip(wavelengths, wavelengths[1:])):
             raise VissimInputError(f"a spectral wavefront's wavelengths must increase, got {wavelengths} nm")
         for front in fronts:
-            if not isinstance(front, Wavefront):
-                raise VissimInputError(f"a spectral wavefront's fronts must be Wavefronts, got {type(front).__name__}")
+            instance_of(front, Wavefront, "each front of a SpectralWavefront", "a Wavefront (µm over a pupil)")
         pupils = {front.pupil_diameter_mm for front in fronts}
         if len(pupils) != 1:
             raise VissimInputError(f"a spectral wavefront's fronts must share one pupil, got {sorted(pupils)} mm")

@@ -77,10 +77,16 @@ def _own_front(traced: EyeWavefront) -> Wavefront:
                      traced.entrance_pupil_mm)
 
 
+def _checked_rx(rx) -> Prescription | None:
+    if rx is None:
+        return None
+    return Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
+
+
 def _with_rx(front: Wavefront, rx) -> Wavefront:
+    rx = _checked_rx(rx)
     if rx is None:
         return front
-    rx = Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
     return front + Wavefront.from_prescription(rx, front.pupil_diameter_mm)
 
 
@@ -112,6 +118,7 @@ def eye_spectral_wavefront(model: str, *, pupil_mm: float, wavelengths_nm, rx=No
     >>> s.wavelengths_nm, s.reference_wavelength_nm
     ((450.0, 650.0), 589.3)
     """
+    rx = _checked_rx(rx)  # before the traces
     eye = eye_model(model, accommodation_diopters)
     traced = traced_spectral_wavefront(eye, wavelengths_nm, field_deg, pupil_mm=pupil_mm, samples=samples,
                                        reference_wavelength_nm=reference_wavelength_nm)
