@@ -58,7 +58,7 @@ def test_the_cheap_docstring_examples_run():
     modules = ("vissim.optics.prescription", "vissim.optics.wavefront", "vissim.optics.blur", "vissim.charts",
                "vissim.fit.rx_fit", "vissim.validation.engine.loader", "vissim.validation.engine.runner", "vissim.atv.analysis",
                "vissim.render.run", "vissim.optics.psf_metrics", "vissim.optics.depth", "vissim.atv.data",
-               "vissim.bench.dslr.bench")
+               "vissim.bench.dslr.bench", "vissim.spectra", "vissim.optics.spectral_wavefront")
     attempted = 0
     for name in modules:
         result = doctest.testmod(importlib.import_module(name), optionflags=doctest.NORMALIZE_WHITESPACE)

@@ -28,7 +28,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
             "its refraction (paraxial: the wavefront's curvature at the pupil centre; minimum RMS: the "
             "second-order terms), in minus-cylinder form, and the MTF of its wave PSF (diffraction "
             "included; the radial average on axis, tangential and sagittal off axis: tangential along "
-            "the field's meridian). Models: " + ", ".join(EYE_MODELS) + "."),
+            "the field's meridian); with --spectrum or several --wavelength-nm, the MTF of that light, the eye "
+            "traced at each wavelength. Models: " + ", ".join(EYE_MODELS) + "."),
     )
     parser.add_argument("model", metavar="MODEL", help="the schematic eye: " + ", ".join(EYE_MODELS))
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
