@@ -24,8 +24,8 @@ from vissim.optics.eyes.paraxial import lca_diopters, retinal_mm_per_deg
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront
 from vissim.optics.eyes.report import MtfSpectrum, eye_report
 from vissim.optics.eyes.surfaces import split_at_stop
-from vissim.optics.psf import compute_psf
-from vissim.optics.psf_field import suggested_size_px
+from vissim.optics.psf import compute_psf, strehl_ratio
+from vissim.optics.psf_field import energy_outside_field, suggested_size_px
 from vissim.optics.raytrace import aim_collimated, trace_rays
 from vissim.spectra import named_spectrum, photopic_weights
 
@@ -151,3 +151,13 @@ def test_halving_the_photopic_spectrums_step_changes_the_eye_mtf_by_less_than_1e
     change = max(np.abs(tables[0][k] - tables[1][k]).max() for k in tables[0])
     print(f"field {field_deg} deg, {pupil_mm:g} mm: MTF change on halving the step = {change:.1e}")
     assert change < 1e-3
+
+
+def test_the_field_sizing_and_the_strehl_ratio_take_each_wavelengths_own_front():
+    spectral = eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=(450.0, 650.0), field_deg=(5, 0))
+    blue, red = spectral.at(450.0), spectral.at(650.0)
+    both = energy_outside_field(spectral, 3.0, [450.0, 650.0], [1.0, 3.0], 0.25, 33)
+    each = [energy_outside_field(front, 3.0, [w], [1.0], 0.25, 33) for front, w in ((blue, 450.0), (red, 650.0))]
+    assert both == pytest.approx((each[0] + 3.0 * each[1]) / 4.0, rel=1e-12)
+    assert each[0] != pytest.approx(each[1], rel=1e-3)  # the two fronts differ: the sum tells which was taken
+    assert strehl_ratio(spectral, 450.0) == pytest.approx(strehl_ratio(blue, 450.0), rel=1e-12)

@@ -24,7 +24,8 @@ Piston is dropped (it moves nothing); tilt is kept, so the PSF's origin is the c
 point (the centre of the reference sphere the OPD is taken against).
 
 `eye_spectral_wavefront` traces the eye at each of several wavelengths over one entrance pupil
-(``pupil_mm`` at every wavelength; the iris that gives it differs by under 0.1 % across the visible)
+(``pupil_mm`` at every wavelength; the iris that gives it differs by the cornea's dispersion, 0.5 %
+from 400 to 700 nm in Navarro's eye: 2.648 and 2.661 mm for a 3 mm pupil)
 and returns a `SpectralWavefront`: each wavelength's front has its own defocus (the eye's traced
 longitudinal chromatic aberration) and aberrations, with ``rx`` added to each as above. **Transverse
 chromatic aberration**: each wavelength's chief ray (through the iris centre) lands at its own
