@@ -30,29 +30,38 @@ and returns a `SpectralWavefront`: each wavelength's front has its own defocus (
 longitudinal chromatic aberration) and aberrations, with ``rx`` added to each as above. **Transverse
 chromatic aberration**: each wavelength's chief ray (through the iris centre) lands at its own
 retinal point; that point's offset from the chief ray's point at the reference wavelength (the
-model's, unless given), divided by the paraxial retinal mm per degree at the reference wavelength
-(`paraxial.retinal_mm_per_deg`, of the mean meridian), is the visual angle it is seen at, and is added
-to that wavelength's front as tilt. The image is inverted (a retinal offset towards +x is seen
-towards −x of the visual field, OSA frame), and a tilt c(1,1), c(1,−1) µm over a pupil of radius R mm
-moves the PSF by +2c/R mrad along +x, +y of the visual field (docs/conventions.md, "Sign of the
-wavefront and of the pupil phase"). All fronts' PSFs are then centred on the reference wavelength's
-chief ray image point, so a polychromatic PSF off axis shows the TCA.
+model's, unless given) is seen at the field angle whose reference-wavelength chief ray would land
+there: the offset through the inverse of the retina's local mm per degree, the 2 × 2 derivative of
+the traced chief ray's retinal point by the field angle (`retinal_jacobian_mm_per_deg`, central
+differences of ±`JACOBIAN_STEP_DEG`; on axis it is the paraxial `paraxial.retinal_mm_per_deg`, and
+it falls off axis: 13 % lower radially at 20° in Navarro's eye). That visual angle is added to the
+wavelength's front as tilt: a tilt c(1,1), c(1,−1) µm over a pupil of radius R mm moves the PSF by
++2c/R mrad along +x, +y of the visual field, OSA frame (docs/conventions.md, "Sign of the wavefront
+and of the pupil phase"); the image's inversion is in the derivative (a field angle towards +x lands
+towards −x). All fronts' PSFs are then centred on the reference wavelength's chief ray image point,
+so a polychromatic PSF off axis shows the TCA.
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
+
+from vissim.checks import MAX_FIELD_DEG
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import eye_model
-from vissim.optics.eyes.paraxial import mean_meridian_eye, retinal_mm_per_deg
 from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, trace_eye_wavefront
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.spectral_wavefront import SpectralWavefront
 from vissim.optics.wavefront import Wavefront
 
-__all__ = ["eye_wavefront", "eye_spectral_wavefront", "chromatic_offset_deg"]
+__all__ = ["eye_wavefront", "eye_spectral_wavefront", "traced_spectral_wavefront", "chromatic_offset_deg",
+           "retinal_jacobian_mm_per_deg", "JACOBIAN_STEP_DEG"]
+
+#: Field step (deg) of the central differences that give the retina's local mm per degree.
+JACOBIAN_STEP_DEG = 0.1
 
 
 def eye_wavefront(model: str, *, pupil_mm: float, wavelength_nm: float, rx=None, field_deg=(0.0, 0.0),
@@ -91,12 +100,33 @@ def _with_rx(front: Wavefront, rx) -> Wavefront:
     return front + Wavefront.from_prescription(rx, front.pupil_diameter_mm)
 
 
-def chromatic_offset_deg(traced: EyeWavefront, reference: EyeWavefront, mm_per_deg: float) -> tuple[float, float]:
+def retinal_jacobian_mm_per_deg(eye, wavelength_nm: float, field_deg, *, iris_mm: float,
+                                lenses=None) -> np.ndarray:
+    """d(chief ray's retinal point x, y, mm) / d(field angle x, y, deg) at ``field_deg``: a 2 × 2 matrix by
+    central differences of ±`JACOBIAN_STEP_DEG` (one-sided at ±`MAX_FIELD_DEG`) of chief rays traced
+    through the ``iris_mm`` iris (and ``lenses``) at ``wavelength_nm``. About −(mm per degree) × I near the axis."""
+    columns = []
+    for axis in (0, 1):
+        low = max(field_deg[axis] - JACOBIAN_STEP_DEG, -MAX_FIELD_DEG)
+        high = min(field_deg[axis] + JACOBIAN_STEP_DEG, MAX_FIELD_DEG)
+        points = []
+        for value in (low, high):
+            field = [float(v) for v in field_deg]
+            field[axis] = value
+            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=9, max_order=2,
+                                         lenses=lenses)
+            points.append(np.array(traced.image_point_mm[:2]))
+        columns.append((points[1] - points[0]) / (high - low))
+    return np.stack(columns, axis=1)
+
+
+def chromatic_offset_deg(traced: EyeWavefront, reference: EyeWavefront, jacobian_mm_per_deg) -> tuple[float, float]:
     """The visual angle (deg, OSA x and y of the visual field) at which ``traced``'s chief ray image point is
-    seen relative to ``reference``'s: their retinal offset (mm) over ``mm_per_deg``, inverted (module doc)."""
-    dx_mm = traced.image_point_mm[0] - reference.image_point_mm[0]
-    dy_mm = traced.image_point_mm[1] - reference.image_point_mm[1]
-    return -dx_mm / mm_per_deg, -dy_mm / mm_per_deg
+    seen relative to ``reference``'s: their retinal offset (mm) through the inverse of the retina's local
+    ``jacobian_mm_per_deg`` (`retinal_jacobian_mm_per_deg`; module doc)."""
+    offset_mm = np.subtract(traced.image_point_mm[:2], reference.image_point_mm[:2])
+    x, y = np.linalg.solve(np.asarray(jacobian_mm_per_deg, dtype=float), offset_mm)
+    return float(x), float(y)
 
 
 def _tilt_um(offset_deg: tuple[float, float], pupil_diameter_mm: float) -> Wavefront:
@@ -127,11 +157,10 @@ def eye_spectral_wavefront(model: str, *, pupil_mm: float, wavelengths_nm, rx=No
 
 
 def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupil_mm=None, iris_mm=None,
-                              lenses=None, samples: int = DEFAULT_SAMPLES, reference_wavelength_nm=None,
-                              mm_per_deg: float | None = None) -> SpectralWavefront:
+                              lenses=None, samples: int = DEFAULT_SAMPLES,
+                              reference_wavelength_nm=None) -> SpectralWavefront:
     """The `SpectralWavefront` of the `SchematicEye` ``eye`` (lenses in front, if given, as
-    `trace_eye_wavefront` takes them), its TCA as tilt (module doc): ``mm_per_deg`` converts retinal
-    offsets to visual angle (default: the eye's paraxial retinal mm per degree at the reference).
+    `trace_eye_wavefront` takes them), its TCA as tilt (module doc), field angles in front of the lenses.
 
     The pupil: ``pupil_mm`` (the eye's entrance pupil) at every wavelength, or, for ``iris_mm``, the
     entrance pupil it gives at the reference wavelength. With lenses in front the system's pupil may
@@ -152,13 +181,12 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     traced = [anchor if w == reference else
               trace_eye_wavefront(eye, w, field_deg, pupil_mm=pupil, samples=samples, lenses=lenses)
               for w in wavelengths]
-    if mm_per_deg is None:
-        mm_per_deg = retinal_mm_per_deg(mean_meridian_eye(eye), reference)
+    jacobian = retinal_jacobian_mm_per_deg(eye, reference, field_deg, iris_mm=anchor.iris_mm, lenses=lenses)
     common = min(t.entrance_pupil_mm for t in traced)
     fronts = []
     for t in traced:
         front = _own_front(t)
-        front = front + _tilt_um(chromatic_offset_deg(t, anchor, mm_per_deg), front.pupil_diameter_mm)
+        front = front + _tilt_um(chromatic_offset_deg(t, anchor, jacobian), front.pupil_diameter_mm)
         fronts.append(front if front.pupil_diameter_mm == common else front.rescaled(common))
     field = tuple(float(v) for v in field_deg)
     return SpectralWavefront(tuple(wavelengths), tuple(fronts), reference,

@@ -279,7 +279,7 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
         mm_per_deg = system_retinal_mm_per_deg(eye, setup, wavelength)
     tables_deg, tables_mm = {}, {}
     if len(f_deg) or len(f_mm):
-        everything = _mtf(eye, front, setup, mtf_spectrum, mm_per_deg, np.concatenate([f_deg, f_mm * mm_per_deg]))
+        everything = _mtf(eye, front, setup, mtf_spectrum, np.concatenate([f_deg, f_mm * mm_per_deg]))
         tables_deg = _pairs(f_deg, {k: v[:len(f_deg)] for k, v in everything.items()}) if len(f_deg) else {}
         tables_mm = _pairs(f_mm, {k: v[len(f_deg):] for k, v in everything.items()}) if len(f_mm) else {}
     if setup is None:
@@ -292,14 +292,14 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
                      mtf_spectrum)
 
 
-def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, mm_per_deg: float, f_deg) -> dict:
+def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg) -> dict:
     """`eye_mtf` at the traced front's wavelength (orders 2-8), or over ``spectrum`` (tilts kept: the TCA)."""
     if spectrum is None:
         higher = {k: v for k, v in front.zernike_um.items() if k[0] >= 2}
         return eye_mtf(Wavefront(higher, front.entrance_pupil_mm), front.wavelength_nm, f_deg, front.field_deg)
     spectral = traced_spectral_wavefront(eye, spectrum.wavelengths_nm, front.field_deg,
                                          pupil_mm=front.eye_entrance_pupil_mm, lenses=setup,
-                                         reference_wavelength_nm=front.wavelength_nm, mm_per_deg=mm_per_deg)
+                                         reference_wavelength_nm=front.wavelength_nm)
     weights = dict(zip(spectrum.wavelengths_nm, spectrum.weights))
     return eye_mtf(spectral, spectral.wavelengths_nm, f_deg, front.field_deg,
                    [weights[w] for w in spectral.wavelengths_nm])
