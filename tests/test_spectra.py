@@ -65,3 +65,20 @@ def test_unknown_spectra_and_uneven_steps_are_refused():
         named_spectrum("scotopic")
     with pytest.raises(VissimInputError, match="7 nm"):
         named_spectrum("photopic", step_nm=7.0)
+
+
+def test_the_table_imports_without_numpy():
+    """The renderer's response reads the same table: importing it costs no numerical library."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import vissim
+
+    root = str(Path(vissim.__file__).resolve().parents[1])  # this checkout, whatever the interpreter has installed
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
+    code = "import sys, vissim.spectra; print('numpy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env=env).stdout.strip()
+    assert out == "False"
