@@ -73,7 +73,7 @@ def test_cli_psf_with_an_eye_model_writes_an_image_recording_the_model(capsys, t
 
 
 @pytest.mark.parametrize("argv", [["--eye-model", "no-such-eye"],
-                                  ["--eye-model", "navarro-1985", "--wavelength-nm", "500,600"],
+                                  ["--eye-model", "navarro-1985", "--wavelength-nm", "500,600,500"],
                                   ["--eye-model", "navarro-1985", "--lca"]])
 def test_cli_psf_eye_model_bad_input_is_one_error_line_and_exit_2(capsys, tmp_path, argv):
     capsys.readouterr()

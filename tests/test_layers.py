@@ -3,7 +3,7 @@
 Read from the source with ``ast`` (nothing is imported), every ``import`` at any depth. The
 layers, lowest first (docs/conventions.md, "Layers"):
 
-1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``, ``thesis``
+1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``, ``thesis``, ``spectra``
 2. ``optics``: the physics (prescriptions, wavefronts, PSFs, blur, depth)
 3. imaging: ``imageio``, ``imaging`` (image registration), ``optotypes``, ``acuity``,
    ``charts``, ``chart_demo``
@@ -26,7 +26,7 @@ from pathlib import Path
 from source_modules import MODULES, PACKAGE, loops, owner
 
 LAYERS = [
-    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis"},
+    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis", "spectra"},
     {"optics"},
     {"imageio", "imaging", "optotypes", "acuity", "charts", "chart_demo"},
     {"bench"},

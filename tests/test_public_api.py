@@ -58,7 +58,7 @@ def test_the_cheap_docstring_examples_run():
     modules = ("vissim.optics.prescription", "vissim.optics.wavefront", "vissim.optics.blur", "vissim.charts",
                "vissim.fit.rx_fit", "vissim.validation.engine.loader", "vissim.validation.engine.runner", "vissim.atv.analysis",
                "vissim.render.run", "vissim.optics.psf_metrics", "vissim.optics.depth", "vissim.atv.data",
-               "vissim.bench.dslr.bench")
+               "vissim.bench.dslr.bench", "vissim.spectra", "vissim.optics.spectral_wavefront")
     attempted = 0
     for name in modules:
         result = doctest.testmod(importlib.import_module(name), optionflags=doctest.NORMALIZE_WHITESPACE)
@@ -119,6 +119,10 @@ WRONG_TYPES = [
     (lambda: vissim.render_chart_print("K"), "must be a ChartSpec"),
     (lambda: vissim.eye_wavefront("navarro-1985", pupil_mm=3.0, wavelength_nm=555.0, rx=-1.0),
      "expected a Prescription (the correcting lens)"),
+    (lambda: vissim.eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=[500.0, 600.0], rx=-1.0),
+     "expected a Prescription (the correcting lens)"),
+    (lambda: vissim.SpectralWavefront((500.0,), ("2,0=0.1",)), "must be a Wavefront"),
+    (lambda: vissim.named_spectrum(5), "must be text, one of photopic"),
 ]
 
 

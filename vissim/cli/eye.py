@@ -11,6 +11,7 @@ from vissim.cli._common import RX_HELP, add_trial_lens_args, field_deg_from_text
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
 
 if TYPE_CHECKING:
     from vissim.optics.eyes.report import EyeReport
@@ -27,7 +28,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
             "its refraction (paraxial: the wavefront's curvature at the pupil centre; minimum RMS: the "
             "second-order terms), in minus-cylinder form, and the MTF of its wave PSF (diffraction "
             "included; the radial average on axis, tangential and sagittal off axis: tangential along "
-            "the field's meridian). Models: " + ", ".join(EYE_MODELS) + "."),
+            "the field's meridian); with --spectrum or several --wavelength-nm, the MTF of that light, the eye "
+            "traced at each wavelength. Models: " + ", ".join(EYE_MODELS) + "."),
     )
     parser.add_argument("model", metavar="MODEL", help="the schematic eye: " + ", ".join(EYE_MODELS))
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
@@ -35,8 +37,17 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     pupil = parser.add_mutually_exclusive_group(required=True)
     pupil.add_argument("--pupil-mm", type=float, metavar="D", help="entrance pupil diameter, mm (a clinician's)")
     pupil.add_argument("--iris-mm", type=float, metavar="D", help="iris (stop) diameter, mm (optical design's)")
-    parser.add_argument("--wavelength-nm", type=float, default=None, metavar="NM",
-                        help="wavelength, nm (default: the model's reference wavelength)")
+    parser.add_argument("--wavelength-nm", default=None, metavar="NM[,NM...]",
+                        help="wavelength, nm (default: the model's reference wavelength); several: the MTF is of "
+                             "their light (see --spectrum), all else at the model's reference wavelength")
+    parser.add_argument("--weights", metavar="W[,W...]",
+                        help="with several --wavelength-nm: relative weight per wavelength (default equal)")
+    parser.add_argument("--spectrum", metavar="NAME",
+                        help="the MTF of a named light, the eye traced at each of its wavelengths (its own defocus, "
+                             "aberrations and, off axis, transverse chromatic aberration): " + ", ".join(SPECTRA) +
+                             f" ({SPECTRUM_START_NM:g}-{SPECTRUM_STOP_NM:g} nm every {SPECTRUM_STEP_NM:g} nm; "
+                             "photopic: weighted by the CIE 1924 V(λ)); the Zernikes, refraction and pupils stay at "
+                             "--wavelength-nm (default the model's reference)")
     parser.add_argument("--field-deg", default="0,0", metavar="X,Y",
                         help="field angle from the optical axis, degrees, x (examiner's right) and y (up) "
                              "(default 0,0)")
@@ -72,14 +83,36 @@ def _frequencies(text: str | None, name: str, unit: str) -> list[float]:
     return values
 
 
+def _light(args: argparse.Namespace):
+    """(the report's one wavelength or None, the MTF's `MtfSpectrum` or None) from --wavelength-nm,
+    --weights and --spectrum."""
+    from vissim.optics.eyes.report import MtfSpectrum
+
+    given = None if args.wavelength_nm is None else parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
+    several = given is not None and len(given) > 1
+    if args.weights is not None and not several:
+        raise VissimInputError("--weights needs several --wavelength-nm (one weight each)")
+    if args.spectrum is not None:
+        if several:
+            raise VissimInputError(f"--spectrum {args.spectrum} gives the MTF's wavelengths: give one --wavelength-nm "
+                                   "(for the Zernikes and refraction) or none")
+        return (given[0] if given else None), MtfSpectrum(*named_spectrum(args.spectrum), args.spectrum)
+    if not several:
+        return (given[0] if given else None), None
+    weights = (parse_float_list(args.weights, "--weights", "relative units", positive=False)
+               if args.weights is not None else [1.0] * len(given))
+    return None, MtfSpectrum(tuple(given), tuple(weights))
+
+
 def run(args: argparse.Namespace) -> int:
     from vissim.bench.atv.tube import atv_trial_lens  # the trace's imports are paid when the command runs
     from vissim.optics.eyes.report import eye_report
 
     powers = trial_lens_powers(args)
     lenses = () if powers is None else (atv_trial_lens(*powers),)
+    wavelength, spectrum = _light(args)
     report = eye_report(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
-                        iris_mm=args.iris_mm, wavelength_nm=args.wavelength_nm,
+                        iris_mm=args.iris_mm, wavelength_nm=wavelength, mtf_spectrum=spectrum,
                         field_deg=field_deg_from_text(args.field_deg),
                         rx=args.rx, vertex_distance_mm=args.vertex_mm,
                         mtf_cyc_per_mm=_frequencies(args.mtf_cyc_per_mm, "--mtf-cyc-per-mm", "cycles per mm"),
@@ -121,6 +154,11 @@ def _print_text(report: EyeReport) -> None:
     ]
     big = {k: v for k, v in record["zernike_um"].items() if abs(v) >= 5e-4 and int(k.split(",")[0]) >= 2}
     rows.append(("Zernikes (µm)", "  ".join(f"{k}: {v:+.4f}" for k, v in big.items()) or "all < 0.0005"))
+    if "spectrum" in record["mtf"]:
+        light = record["mtf"]["spectrum"]
+        span = f"{light['wavelengths_nm'][0]:g}-{light['wavelengths_nm'][-1]:g} nm"
+        rows.append(("MTF light", f"{light['name']}, {len(light['wavelengths_nm'])} wavelengths {span} (the eye "
+                                  f"traced at each; Zernikes and refraction above at {record['wavelength_nm']:g} nm)"))
     for key, unit in (("cyc_per_deg", "cyc/deg"), ("cyc_per_mm", "cyc/mm")):
         for direction, pairs in record["mtf"].get(key, {}).items():
             rows.append((f"MTF {direction}", ", ".join(f"{f:g} {unit}: {v:.4f}" for f, v in pairs)))

@@ -16,7 +16,9 @@ from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 from vissim.imageio import to_preview_png, write_image
 from vissim.optics.psf import compute_psf
+from vissim.optics.spectral_wavefront import SpectralWavefront
 from vissim.provenance import make_provenance
+from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
 
 
 def add_parser(subparsers) -> None:
@@ -31,17 +33,22 @@ def add_parser(subparsers) -> None:
         "beside it).",
     )
     add_aberration_args(parser)
-    parser.add_argument("--wavelength-nm", default=f"{DEFAULT_WAVELENGTH_NM:g}", metavar="NM[,NM...]",
+    parser.add_argument("--wavelength-nm", default=None, metavar="NM[,NM...]",
                         help=f"wavelength(s) in nm (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--weights", metavar="W[,W...]", help="relative weight per wavelength (default equal)")
+    parser.add_argument("--spectrum", metavar="NAME",
+                        help="a named light in place of --wavelength-nm and --weights: " + ", ".join(SPECTRA) +
+                        f" ({SPECTRUM_START_NM:g}-{SPECTRUM_STOP_NM:g} nm every {SPECTRUM_STEP_NM:g} nm; photopic: "
+                        "an equal-energy light weighted by the CIE 1924 photopic luminous efficiency V(λ))")
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
     parser.add_argument("--lca-reference-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
                         help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--eye-model", metavar="MODEL",
                         help="a schematic eye (" + ", ".join(EYE_MODELS) + ") in place of the reduced eye: its traced "
-                        "wavefront over the --pupil-mm entrance pupil, at the one --wavelength-nm, --field-deg and "
-                        "--accommodation-diopters "
-                        "(its spherical aberration and its own dispersion; no --lca), with --rx's defocus and "
+                        "wavefront over the --pupil-mm entrance pupil, at --field-deg and --accommodation-diopters, "
+                        "traced at each wavelength (its spherical aberration and its own dispersion: defocus, and off "
+                        "axis each wavelength's image point seen from the model's reference wavelength's; no --lca), "
+                        "with --rx's defocus and "
                         "astigmatism (and --zernike) added over the same pupil, so --rx means what it means for the "
                         "reduced eye (vissim.optics.eyes.psf_wavefront; `vissim eye --rx` traces the ametropic eye "
                         "instead)")
@@ -60,13 +67,26 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+def _light(args: argparse.Namespace) -> tuple[list[float], list[float] | None]:
+    """(wavelengths nm, weights or None): --spectrum's, or --wavelength-nm's and --weights'."""
+    if args.spectrum is not None:
+        if args.wavelength_nm is not None or args.weights is not None:
+            raise VissimInputError(f"--spectrum {args.spectrum} gives the wavelengths and weights: drop "
+                                   "--wavelength-nm and --weights, or --spectrum")
+        wavelengths, weights = named_spectrum(args.spectrum)
+        return list(wavelengths), list(weights)
+    text = args.wavelength_nm if args.wavelength_nm is not None else f"{DEFAULT_WAVELENGTH_NM:g}"
+    wavelengths = parse_float_list(text, "--wavelength-nm", "nm")
+    weights = parse_float_list(args.weights, "--weights", "relative units", positive=False) if args.weights else None
+    return wavelengths, weights
+
+
 def run(args: argparse.Namespace) -> int:
-    wavelengths = parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
+    wavelengths, weights = _light(args)
     if args.eye_model is None and (args.field_deg is not None or args.accommodation_diopters is not None):
         raise VissimInputError("--field-deg and --accommodation-diopters need --eye-model (the reduced eye has one "
                                "PSF over the field and no accommodation)")
     wavefront = _eye_front(args, wavelengths) if args.eye_model is not None else wavefront_from_args(args)
-    weights = parse_float_list(args.weights, "--weights", "relative units") if args.weights else None
     psf = compute_psf(wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
                       lca_reference_nm=args.lca_reference_nm if args.lca else None,
                       arcmin_per_px=args.arcmin_per_px, size_px=args.size, mode=args.mode,
@@ -74,8 +94,7 @@ def run(args: argparse.Namespace) -> int:
     provenance = make_provenance(command="psf", psf=psf.as_json(), rx=args.rx, zernike=args.zernike,
                                  eye_model=args.eye_model or "reduced", field_deg=args.field_deg,
                                  accommodation_diopters=args.accommodation_diopters,
-                                 eye_wavefront_um={f"{n},{m}": c for (n, m), c in wavefront.coefficients_um.items()}
-                                 if args.eye_model else None)
+                                 spectrum=args.spectrum, eye_wavefront_um=_eye_record(wavefront) if args.eye_model else None)
     output = args.output
     exr_path = output.with_suffix(".exr") if output.suffix.lower() == ".png" else output
     data = psf.data.astype(np.float32)
@@ -92,22 +111,35 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront:
-    """The schematic eye's traced wavefront with --rx (and --zernike) added (`eye_wavefront`)."""
-    from vissim.optics.eyes.psf_wavefront import eye_wavefront  # the trace's imports are paid when it runs
+def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront | SpectralWavefront:
+    """The schematic eye's traced wavefront with --rx (and --zernike) added (`eye_wavefront`); at several
+    wavelengths one traced front each (`eye_spectral_wavefront`)."""
+    from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront  # paid when it runs
 
     if args.eye_model not in EYE_MODELS:
         raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
-    if len(wavelengths) != 1 or args.lca:
-        given = ", ".join(f"{w:g}" for w in wavelengths)
-        raise VissimInputError(f"--eye-model takes one --wavelength-nm and no --lca (the traced eye has its own "
-                               f"dispersion), got {given} nm{' with --lca' if args.lca else ''}")
+    if args.lca:
+        raise VissimInputError("--eye-model takes no --lca: the traced eye has its own dispersion")
+    if len(set(wavelengths)) != len(wavelengths):
+        raise VissimInputError(f"--wavelength-nm lists a wavelength twice: {', '.join(f'{w:g}' for w in wavelengths)} nm")
     rx = Prescription.parse(args.rx) if args.rx is not None else None
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
     accommodation = args.accommodation_diopters if args.accommodation_diopters is not None else 0.0
-    front = eye_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelength_nm=wavelengths[0], rx=rx,
-                          field_deg=field, accommodation_diopters=accommodation)
+    if len(wavelengths) == 1:
+        front = eye_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelength_nm=wavelengths[0], rx=rx,
+                              field_deg=field, accommodation_diopters=accommodation)
+    else:
+        front = eye_spectral_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelengths_nm=wavelengths, rx=rx,
+                                       field_deg=field, accommodation_diopters=accommodation)
     if args.zernike is not None:
         measured = args.zernike_pupil_mm if args.zernike_pupil_mm is not None else args.pupil_mm
-        front = front + Wavefront(parse_zernike_terms(args.zernike), measured)
+        extra = Wavefront(parse_zernike_terms(args.zernike), measured)
+        front = front.map(lambda f: f + extra) if isinstance(front, SpectralWavefront) else front + extra
     return front
+
+
+def _eye_record(front: Wavefront | SpectralWavefront) -> dict:
+    """The eye's Zernikes for the provenance: ``"n,m"`` -> µm, or per wavelength (nm) for several."""
+    if isinstance(front, SpectralWavefront):
+        return {f"{w:g}": _eye_record(f) for w, f in zip(front.wavelengths_nm, front.fronts)}
+    return {f"{n},{m}": c for (n, m), c in front.coefficients_um.items()}

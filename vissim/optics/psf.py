@@ -57,6 +57,7 @@ from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_
 from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
 from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.optics.opd_map import OpdMap
+from vissim.optics.spectral_wavefront import SpectralWavefront, wavelengths_for
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import nm_to_mm, rad_to_arcmin
@@ -111,10 +112,11 @@ class PSF:
     energy_in_field : float
         Fraction of the energy through the pupil that lands inside the field (<= 1 up to the
         light the pupil sampling folds back: at most 0.2 %, ``docs/conventions.md``).
-    wavefront : Wavefront
-        The aberration the PSF is of.
+    wavefront : Wavefront, OpdMap or SpectralWavefront
+        The aberration the PSF is of (a `SpectralWavefront`: one front per wavelength).
     lca_reference_nm : float or None
-        In-focus wavelength of the eye's longitudinal chromatic aberration, if modelled.
+        In-focus wavelength of the eye's longitudinal chromatic aberration, if modelled (Thibos);
+        None for a `SpectralWavefront`, whose fronts carry their own dispersion.
     sampling : tuple
         The internal pupil and field sampling per wavelength (`psf_sampling`).
     pixel : {"integrate", "sample"}
@@ -227,13 +229,13 @@ def _clearly_holds(diameter_mm, wavelengths_nm, blurs_arcmin, arcmin_per_px, siz
 
 
 #: What `compute_psf` and `strehl_ratio` take as the aberration.
-WAVEFRONT_ACCEPTED = ("a Wavefront or an OpdMap, e.g. vissim.Wavefront.from_prescription("
+WAVEFRONT_ACCEPTED = ("a Wavefront or an OpdMap (or a SpectralWavefront), e.g. vissim.Wavefront.from_prescription("
                       "vissim.Prescription.parse('-2.00 DS'), pupil_diameter_mm=3.0)")
 
 
 def _checked_front(wavefront, pupil_diameter_mm, what: str) -> float:
     """The pupil diameter (mm) a PSF or Strehl ratio of ``wavefront`` is computed over; wrong types refused."""
-    instance_of(wavefront, (Wavefront, OpdMap), f"{what}'s wavefront", WAVEFRONT_ACCEPTED)
+    instance_of(wavefront, (Wavefront, OpdMap, SpectralWavefront), f"{what}'s wavefront", WAVEFRONT_ACCEPTED)
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     if diameter > wavefront.pupil_diameter_mm * (1 + 1e-12):
         raise VissimInputError(
@@ -292,7 +294,7 @@ def compute_psf(
     wavefront: Wavefront,
     *,
     pupil_diameter_mm: float | None = None,
-    wavelength_nm: float | Sequence[float] = DEFAULT_WAVELENGTH_NM,
+    wavelength_nm: float | Sequence[float] | None = None,
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     arcmin_per_px: float = 0.25,
@@ -308,20 +310,23 @@ def compute_psf(
 
     Parameters
     ----------
-    wavefront : Wavefront or OpdMap
-        A Zernike `Wavefront` or a sampled
-        `OpdMap` (a traced or measured OPD map).
+    wavefront : Wavefront, OpdMap or SpectralWavefront
+        A Zernike `Wavefront`, a sampled
+        `OpdMap` (a traced or measured OPD map), or a `SpectralWavefront` (one front per
+        wavelength, e.g. a schematic eye traced at each: each wavelength's PSF is of its own front).
     pupil_diameter_mm : float, optional
         Pupil diameter in mm, at most the wavefront's measurement pupil.
     wavelength_nm : float or sequence of float, optional
-        Wavelength(s) in nm (default 550): one wavelength, or several.
+        Wavelength(s) in nm: one wavelength, or several (default: a `SpectralWavefront`'s own
+        wavelengths, else 550); with a `SpectralWavefront`, each must be one of its wavelengths.
     weights : sequence of float, optional
         Relative spectral weights of several wavelengths (default equal): each wavelength's PSF
         carries its weight of the total energy (inside and outside the field), and their sum is
         normalised as ``normalise`` says.
     lca_reference_nm : float, optional
         If given, add the eye's longitudinal chromatic aberration (Thibos 1992) relative to
-        this wavelength: each wavelength gets its chromatic defocus.
+        this wavelength: each wavelength gets its chromatic defocus.  Refused with a
+        `SpectralWavefront` (its fronts have their own dispersion).
     arcmin_per_px : float
         Output sampling, arcmin per pixel (default 0.25).
     size_px : int or "auto"
@@ -375,6 +380,7 @@ def compute_psf(
     """
     diameter = _checked_front(wavefront, pupil_diameter_mm, "compute_psf")
     step = check_arcmin_per_px(arcmin_per_px)
+    wavelength_nm = wavelengths_for(wavefront, wavelength_nm, DEFAULT_WAVELENGTH_NM)
     if isinstance(size_px, str) and size_px == "auto":
         size_px = suggested_size_px(wavefront, step, pupil_diameter_mm=diameter, wavelength_nm=wavelength_nm,
                                     weights=weights, lca_reference_nm=lca_reference_nm)
@@ -459,6 +465,7 @@ def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = DEFAULT_WAVELENGTH
     """
     diameter = _checked_front(wavefront, pupil_diameter_mm, "strehl_ratio")
     wavelength_nm = check_wavelength_nm(wavelength_nm)
+    wavefront = front_at_wavelength(wavefront, wavelength_nm, None)  # a spectral front's own at that wavelength
     cells = max(256, psf_sampling(diameter, wavelength_nm, 1.0, 1, geometric_blur_radius_arcmin(wavefront, diameter),
                                   "mft").pupil_cells)
     grid = pupil_grid(diameter / cells, diameter)

@@ -31,8 +31,10 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
+from vissim.errors import VissimInputError
 from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.pupil_rays import landing_arcmin, pupil_cell_centres
+from vissim.optics.spectral_wavefront import SpectralWavefront, wavelengths_for
 from vissim.optics.wavefront import Wavefront
 from vissim.units import nm_to_mm, rad_to_arcmin
 
@@ -91,7 +93,15 @@ def _blur_radius_cached(items: tuple, measured_mm: float, diameter_mm: float) ->
     return float(rad_to_arcmin(1e-3 * np.max(np.hypot(sx, sy))))
 
 
-def front_at_wavelength(wavefront: Wavefront, wavelength_nm: float, lca_reference_nm: float | None) -> Wavefront:
+def front_at_wavelength(wavefront, wavelength_nm: float, lca_reference_nm: float | None) -> Wavefront:
+    """The front a PSF at ``wavelength_nm`` is of: a `SpectralWavefront`'s own front at that wavelength
+    (which carries its own dispersion: ``lca_reference_nm`` is refused); any other with Thibos's
+    chromatic defocus relative to ``lca_reference_nm`` added when that is given."""
+    if isinstance(wavefront, SpectralWavefront):
+        if lca_reference_nm is not None:
+            raise VissimInputError(f"an LCA reference wavelength ({lca_reference_nm:g} nm) cannot be added to a "
+                                   "spectral wavefront: each wavelength's front has its own dispersion")
+        return wavefront.at(wavelength_nm)
     if lca_reference_nm is None:
         return wavefront
     return wavefront.with_defocus_diopters(chromatic_difference_of_refraction_diopters(wavelength_nm, lca_reference_nm))
@@ -102,16 +112,18 @@ def suggested_size_px(
     arcmin_per_px: float,
     *,
     pupil_diameter_mm: float | None = None,
-    wavelength_nm: float | Sequence[float] = DEFAULT_WAVELENGTH_NM,
+    wavelength_nm: float | Sequence[float] | None = None,
     weights: Sequence[float] | None = None,
     lca_reference_nm: float | None = None,
     mode: str = "wave",
     minimum_px: int = 33,
 ) -> int:
     """The smallest odd field size (px, at least ``minimum_px``) that holds all but
-    `MAX_ENERGY_OUTSIDE` of the PSF's energy (`energy_outside_field`)."""
+    `MAX_ENERGY_OUTSIDE` of the PSF's energy (`energy_outside_field`); ``wavelength_nm`` defaults to a
+    `SpectralWavefront`'s own wavelengths, else 550 nm."""
     diameter = wavefront.pupil_diameter_mm if pupil_diameter_mm is None else check_pupil_mm(pupil_diameter_mm)
     step = check_arcmin_per_px(arcmin_per_px)
+    wavelength_nm = wavelengths_for(wavefront, wavelength_nm, DEFAULT_WAVELENGTH_NM)
     wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))
     weights = (1.0,) * len(wavelengths) if weights is None else tuple(float(w) for w in weights)
     if hasattr(wavefront, "coefficients_um"):  # campaigns ask again and again for the same eyes

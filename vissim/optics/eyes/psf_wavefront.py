@@ -22,16 +22,46 @@ leaves out. ``vissim eye --rx`` reports that eye.
 
 Piston is dropped (it moves nothing); tilt is kept, so the PSF's origin is the chief ray's image
 point (the centre of the reference sphere the OPD is taken against).
+
+`eye_spectral_wavefront` traces the eye at each of several wavelengths over one entrance pupil
+(``pupil_mm`` at every wavelength; the iris that gives it differs by the cornea's dispersion, 0.5 %
+from 400 to 700 nm in Navarro's eye: 2.648 and 2.661 mm for a 3 mm pupil)
+and returns a `SpectralWavefront`: each wavelength's front has its own defocus (the eye's traced
+longitudinal chromatic aberration) and aberrations, with ``rx`` added to each as above. **Transverse
+chromatic aberration**: each wavelength's chief ray (through the iris centre) lands at its own
+retinal point; that point's offset from the chief ray's point at the reference wavelength (the
+model's, unless given) is seen at the field angle whose reference-wavelength chief ray would land
+there: the offset through the inverse of the retina's local mm per degree, the 2 × 2 derivative of
+the traced chief ray's retinal point by the field angle (`retinal_jacobian_mm_per_deg`, central
+differences of ±`JACOBIAN_STEP_DEG`; on axis it is the paraxial `paraxial.retinal_mm_per_deg`, and
+it falls off axis: 13 % lower radially at 20° in Navarro's eye). That visual angle is added to the
+wavelength's front as tilt: a tilt c(1,1), c(1,−1) µm over a pupil of radius R mm moves the PSF by
++2c/R mrad along +x, +y of the visual field, OSA frame (docs/conventions.md, "Sign of the wavefront
+and of the pupil phase"); the image's inversion is in the derivative (a field angle towards +x lands
+towards −x). All fronts' PSFs are then centred on the reference wavelength's chief ray image point,
+so a polychromatic PSF off axis shows the TCA.
 """
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
+from vissim.checks import MAX_FIELD_DEG
+from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import eye_model
-from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, trace_eye_wavefront
+from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, trace_eye_wavefront
 from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.spectral_wavefront import SpectralWavefront
 from vissim.optics.wavefront import Wavefront
 
-__all__ = ["eye_wavefront"]
+__all__ = ["eye_wavefront", "eye_spectral_wavefront", "traced_spectral_wavefront", "chromatic_offset_deg",
+           "retinal_jacobian_mm_per_deg", "JACOBIAN_STEP_DEG"]
+
+#: Field step (deg) of the central differences that give the retina's local mm per degree.
+JACOBIAN_STEP_DEG = 0.1
 
 
 def eye_wavefront(model: str, *, pupil_mm: float, wavelength_nm: float, rx=None, field_deg=(0.0, 0.0),
@@ -48,9 +78,118 @@ def eye_wavefront(model: str, *, pupil_mm: float, wavelength_nm: float, rx=None,
     """
     eye = eye_model(model, accommodation_diopters)
     traced = trace_eye_wavefront(eye, wavelength_nm, field_deg, pupil_mm=pupil_mm, samples=samples)
-    own = {key: value for key, value in traced.zernike_um.items() if key != (0, 0)}
-    front = Wavefront(own, traced.entrance_pupil_mm)
-    if rx is not None:
-        rx = Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
-        front = front + Wavefront.from_prescription(rx, front.pupil_diameter_mm)
-    return front
+    return _with_rx(_own_front(traced), rx)
+
+
+def _own_front(traced: EyeWavefront) -> Wavefront:
+    """The traced Zernikes without piston, over the entrance pupil."""
+    return Wavefront({key: value for key, value in traced.zernike_um.items() if key != (0, 0)},
+                     traced.entrance_pupil_mm)
+
+
+def _checked_rx(rx) -> Prescription | None:
+    if rx is None:
+        return None
+    return Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
+
+
+def _with_rx(front: Wavefront, rx) -> Wavefront:
+    rx = _checked_rx(rx)
+    if rx is None:
+        return front
+    return front + Wavefront.from_prescription(rx, front.pupil_diameter_mm)
+
+
+def retinal_jacobian_mm_per_deg(eye, wavelength_nm: float, field_deg, *, iris_mm: float,
+                                lenses=None) -> np.ndarray:
+    """d(chief ray's retinal point x, y, mm) / d(field angle x, y, deg) at ``field_deg``: a 2 × 2 matrix by
+    central differences of ±`JACOBIAN_STEP_DEG` (one-sided at ±`MAX_FIELD_DEG`) of chief rays traced
+    through the ``iris_mm`` iris (and ``lenses``) at ``wavelength_nm``. About −(mm per degree) × I near the axis."""
+    columns = []
+    for axis in (0, 1):
+        low = max(field_deg[axis] - JACOBIAN_STEP_DEG, -MAX_FIELD_DEG)
+        high = min(field_deg[axis] + JACOBIAN_STEP_DEG, MAX_FIELD_DEG)
+        points = []
+        for value in (low, high):
+            field = [float(v) for v in field_deg]
+            field[axis] = value
+            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=9, max_order=2,
+                                         lenses=lenses)
+            points.append(np.array(traced.image_point_mm[:2]))
+        columns.append((points[1] - points[0]) / (high - low))
+    return np.stack(columns, axis=1)
+
+
+def chromatic_offset_deg(traced: EyeWavefront, reference: EyeWavefront, jacobian_mm_per_deg) -> tuple[float, float]:
+    """The visual angle (deg, OSA x and y of the visual field) at which ``traced``'s chief ray image point is
+    seen relative to ``reference``'s: their retinal offset (mm) through the inverse of the retina's local
+    ``jacobian_mm_per_deg`` (`retinal_jacobian_mm_per_deg`; module doc)."""
+    offset_mm = np.subtract(traced.image_point_mm[:2], reference.image_point_mm[:2])
+    x, y = np.linalg.solve(np.asarray(jacobian_mm_per_deg, dtype=float), offset_mm)
+    return float(x), float(y)
+
+
+def _tilt_um(offset_deg: tuple[float, float], pupil_diameter_mm: float) -> Wavefront:
+    """The tilt that moves a PSF by ``offset_deg`` (OSA x, y of the visual field): c = shift_mrad R / 2 µm."""
+    radius_mm = 0.5 * pupil_diameter_mm
+    cx, cy = (1e3 * math.radians(v) * radius_mm / 2.0 for v in offset_deg)
+    return Wavefront({(1, 1): cx, (1, -1): cy}, pupil_diameter_mm)
+
+
+def eye_spectral_wavefront(model: str, *, pupil_mm: float, wavelengths_nm, rx=None, field_deg=(0.0, 0.0),
+                           accommodation_diopters: float = 0.0, samples: int = DEFAULT_SAMPLES,
+                           reference_wavelength_nm: float | None = None) -> SpectralWavefront:
+    """The `SpectralWavefront` of the schematic eye ``model`` traced at each of ``wavelengths_nm`` over the
+    ``pupil_mm`` entrance pupil, ``rx`` added to each, with its transverse chromatic aberration as tilt
+    relative to the chief ray at ``reference_wavelength_nm`` (default: the model's) (module doc).
+
+    Examples
+    --------
+    >>> s = eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=[450, 650], field_deg=(10, 0))
+    >>> s.wavelengths_nm, s.reference_wavelength_nm
+    ((450.0, 650.0), 589.3)
+    """
+    rx = _checked_rx(rx)  # before the traces
+    eye = eye_model(model, accommodation_diopters)
+    traced = traced_spectral_wavefront(eye, wavelengths_nm, field_deg, pupil_mm=pupil_mm, samples=samples,
+                                       reference_wavelength_nm=reference_wavelength_nm)
+    return traced.map(lambda front: _with_rx(front, rx))
+
+
+def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupil_mm=None, iris_mm=None,
+                              lenses=None, samples: int = DEFAULT_SAMPLES,
+                              reference_wavelength_nm=None) -> SpectralWavefront:
+    """The `SpectralWavefront` of the `SchematicEye` ``eye`` (lenses in front, if given, as
+    `trace_eye_wavefront` takes them), its TCA as tilt (module doc), field angles in front of the lenses.
+
+    The pupil: ``pupil_mm`` (the eye's entrance pupil) at every wavelength, or, for ``iris_mm``, the
+    entrance pupil it gives at the reference wavelength. With lenses in front the system's pupil may
+    differ between wavelengths by their dispersion; every front is then re-expanded
+    (`Wavefront.rescaled`) over the smallest.
+    """
+    reference = (eye.reference_wavelength_nm if reference_wavelength_nm is None
+                 else checked_wavelength_nm(reference_wavelength_nm, "reference wavelength"))
+    try:
+        wavelengths = sorted({checked_wavelength_nm(w) for w in wavelengths_nm})
+    except TypeError:
+        raise VissimInputError(f"wavelengths must be a list of nm, got {wavelengths_nm!r}") from None
+    if not wavelengths:
+        raise VissimInputError("a spectral wavefront needs at least one wavelength, got none")
+    anchor = trace_eye_wavefront(eye, reference, field_deg, pupil_mm=pupil_mm, iris_mm=iris_mm, samples=samples,
+                                 lenses=lenses)
+    pupil = anchor.eye_entrance_pupil_mm
+    traced = [anchor if w == reference else
+              trace_eye_wavefront(eye, w, field_deg, pupil_mm=pupil, samples=samples, lenses=lenses)
+              for w in wavelengths]
+    jacobian = retinal_jacobian_mm_per_deg(eye, reference, field_deg, iris_mm=anchor.iris_mm, lenses=lenses)
+    common = min(t.entrance_pupil_mm for t in traced)
+    fronts = []
+    for t in traced:
+        front = _own_front(t)
+        front = front + _tilt_um(chromatic_offset_deg(t, anchor, jacobian), front.pupil_diameter_mm)
+        fronts.append(front if front.pupil_diameter_mm == common else front.rescaled(common))
+    field = tuple(float(v) for v in field_deg)
+    return SpectralWavefront(tuple(wavelengths), tuple(fronts), reference,
+                             f"{eye.name} traced at each wavelength, field ({field[0]:g}, {field[1]:g}) deg, "
+                             f"accommodation {eye.accommodation_diopters:g} D; tilt: each chief ray's image point "
+                             f"seen from {reference:g} nm's")

@@ -27,6 +27,14 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
   the paraxial ``retinal_mm_per_deg`` (through the lenses: `spectacles.system_retinal_mm_per_deg`). Above
   the diffraction cutoff D/λ the MTF is 0.
 
+* **Polychromatic MTF** (``mtf_spectrum``, an `MtfSpectrum`: wavelengths and weights, e.g. the
+  photopic spectrum of `vissim.spectra.named_spectrum`): the MTF is then of the weighted sum of each
+  wavelength's wave PSF, the eye traced at each wavelength
+  (`vissim.optics.eyes.psf_wavefront.traced_spectral_wavefront`: its own defocus and aberrations,
+  and its transverse chromatic aberration as tilt relative to the report's wavelength, tilts kept). The
+  Zernikes, RMS, refraction, power and pupils stay at the report's one wavelength (the model's
+  reference unless given); JSON ``mtf.spectrum`` records both.
+
 * **Lenses in front** (``lenses``: thick `TrialLens` es, object to eye, the last one's back vertex
   ``vertex_distance_mm`` (default 12 mm) in front of the cornea, ``lens_gap_mm`` apart): traced
   surface by surface with the eye (`vissim.optics.eyes.wavefront`). The Zernikes are then over the
@@ -53,6 +61,7 @@ from vissim.optics.eyes.ametropia import ametropic_eye
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
+from vissim.optics.eyes.psf_wavefront import traced_spectral_wavefront
 from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
 from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retinal_mm_per_deg
 from vissim.units import osa_xy_to_image_colrow
@@ -63,7 +72,7 @@ from vissim.optics.psf_field import MAX_ENERGY_OUTSIDE, energy_outside_field, si
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, TrialLensSetup
 from vissim.optics.wavefront import Wavefront
 
-__all__ = ["EyeReport", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_SIZE_PX"]
+__all__ = ["EyeReport", "MtfSpectrum", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_SIZE_PX"]
 
 #: The PSF's sampling: its Nyquist frequency is this many times the diffraction cutoff D/λ.
 MTF_NYQUIST_PER_CUTOFF = 1.25
@@ -91,18 +100,22 @@ def _mtf_directions(field_deg) -> dict[str, tuple[float, float] | None]:
     return {"tangential": (tx, ty), "sagittal": (-ty, tx)}
 
 
-def eye_mtf(wavefront: Wavefront, wavelength_nm: float, frequencies_cyc_per_deg, field_deg=(0.0, 0.0)) -> dict:
+def eye_mtf(wavefront: Wavefront, wavelength_nm, frequencies_cyc_per_deg, field_deg=(0.0, 0.0),
+            weights=None) -> dict:
     """The MTF of the wave PSF of ``wavefront`` (over its pupil) at ``frequencies_cyc_per_deg``:
-    ``{direction: array}``, ``radial`` on axis, ``tangential`` and ``sagittal`` off axis (module doc)."""
-    wavelength = checked_wavelength_nm(wavelength_nm)
+    ``{direction: array}``, ``radial`` on axis, ``tangential`` and ``sagittal`` off axis (module doc).
+    Polychromatic: ``wavefront`` a `SpectralWavefront`, ``wavelength_nm`` several of its wavelengths and
+    ``weights`` their relative weights (default equal); sampled for the shortest wavelength's cutoff."""
+    wavelengths = [checked_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm)]
+    weights = [1.0] * len(wavelengths) if weights is None else [float(w) for w in weights]
     f = _frequencies(frequencies_cyc_per_deg, "MTF frequency (per degree)")
-    cutoff = psf_metrics.diffraction_cutoff_cyc_per_deg(wavefront.pupil_diameter_mm, wavelength)
+    cutoff = psf_metrics.diffraction_cutoff_cyc_per_deg(wavefront.pupil_diameter_mm, min(wavelengths))
     step_arcmin = 30.0 / (MTF_NYQUIST_PER_CUTOFF * cutoff)
     size = MTF_SIZE_PX
     diameter = wavefront.pupil_diameter_mm
-    if energy_outside_field(wavefront, diameter, [wavelength], [1.0], step_arcmin, size) > MAX_ENERGY_OUTSIDE:
-        size = size_holding_px(wavefront, diameter, [wavelength], [1.0], step_arcmin, size)  # a cut PSF smooths its OTF
-    psf = compute_psf(wavefront, wavelength_nm=wavelength, arcmin_per_px=step_arcmin, size_px=size,
+    if energy_outside_field(wavefront, diameter, wavelengths, weights, step_arcmin, size) > MAX_ENERGY_OUTSIDE:
+        size = size_holding_px(wavefront, diameter, wavelengths, weights, step_arcmin, size)  # a cut PSF smooths its OTF
+    psf = compute_psf(wavefront, wavelength_nm=wavelengths, weights=weights, arcmin_per_px=step_arcmin, size_px=size,
                       dtype=np.float64, normalise="total")
     m = psf_metrics.mtf(psf, remove_pixel=True)
     axis = psf_metrics.frequencies_cyc_per_deg(psf)
@@ -119,6 +132,33 @@ def eye_mtf(wavefront: Wavefront, wavelength_nm: float, frequencies_cyc_per_deg,
             values = map_coordinates(m, [rows, cols], order=1, mode="nearest")
         out[name] = np.where(f >= cutoff, 0.0, np.minimum(values, 1.0))
     return out
+
+
+@dataclass(frozen=True)
+class MtfSpectrum:
+    """The light a polychromatic MTF is of: wavelengths (nm), relative weights, and a name (e.g.
+    ``"photopic"``, or ``""`` for wavelengths given one by one)."""
+
+    wavelengths_nm: tuple[float, ...]
+    weights: tuple[float, ...]
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        wavelengths = tuple(checked_wavelength_nm(w) for w in self.wavelengths_nm)
+        weights = tuple(finite_number(w, "spectral weight", "relative units") for w in self.weights)
+        if not wavelengths or len(weights) != len(wavelengths) or min(weights) < 0 or sum(weights) <= 0:
+            raise VissimInputError(f"need one non-negative weight per wavelength, got {list(self.weights)} for "
+                                   f"{list(self.wavelengths_nm)} nm")
+        if len(set(wavelengths)) != len(wavelengths):
+            raise VissimInputError(f"a spectrum's wavelengths must differ, got {list(wavelengths)} nm")
+        object.__setattr__(self, "wavelengths_nm", wavelengths)
+        object.__setattr__(self, "weights", weights)
+
+    def as_json(self, reference_nm: float) -> dict:
+        total = sum(self.weights)
+        return {"name": self.name or "wavelengths given", "wavelengths_nm": list(self.wavelengths_nm),
+                "weights": [w / total for w in self.weights],
+                "zernikes_and_refraction_at_nm": reference_nm, "tca_reference_nm": reference_nm}
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,6 +179,7 @@ class EyeReport:
     mtf_cyc_per_deg: dict
     mtf_cyc_per_mm: dict
     lens_setup: TrialLensSetup | None = None
+    mtf_spectrum: MtfSpectrum | None = None
 
     def as_json(self) -> dict:
         """The record of ``vissim eye --json`` (plain numbers; Zernikes keyed ``"n,m"``)."""
@@ -150,6 +191,8 @@ class EyeReport:
         if mtf:
             mtf["directions"] = ("radial average (on axis)" if "radial" in next(iter(mtf.values())) else
                                  "tangential: frequency along the field's meridian (x, y); sagittal: across it")
+            if self.mtf_spectrum is not None:
+                mtf["spectrum"] = self.mtf_spectrum.as_json(self.wavelength_nm)
         refraction = self.refraction.as_json()
         return {
             "model": self.model,
@@ -199,7 +242,8 @@ def _pairs(frequencies, table: dict) -> dict:
 
 def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None, iris_mm=None,
                wavelength_nm=None, field_deg=(0.0, 0.0), rx=None, vertex_distance_mm=None,
-               mtf_cyc_per_mm=(), mtf_cyc_per_deg=(), lenses=(), lens_gap_mm: float = 0.0) -> EyeReport:
+               mtf_cyc_per_mm=(), mtf_cyc_per_deg=(), lenses=(), lens_gap_mm: float = 0.0,
+               mtf_spectrum: MtfSpectrum | None = None) -> EyeReport:
     """The `EyeReport` of ``model`` (a name of `vissim.optics.eyes.models.EYE_MODELS`), module doc.
 
     ``rx``: a prescription (text or `Prescription`) the eye is made to have, at the spectacle
@@ -207,7 +251,8 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
     spectacle lenses worn there (module doc). Bad input -- an unknown
     model, an accommodation beyond the model's range, a pupil the iris cannot give, a field where
     rays miss a surface, meet total internal reflection or leave the GRIN lens, a negative
-    frequency -- raises one `VissimInputError` naming the value and its unit.
+    frequency -- raises one `VissimInputError` naming the value and its unit. ``mtf_spectrum``: the
+    MTF of that light (module doc), all else at ``wavelength_nm``.
     """
     base = eye_model(model, accommodation_diopters)
     f_mm = _frequencies(mtf_cyc_per_mm, "MTF frequency (per mm)")
@@ -234,9 +279,7 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
         mm_per_deg = system_retinal_mm_per_deg(eye, setup, wavelength)
     tables_deg, tables_mm = {}, {}
     if len(f_deg) or len(f_mm):
-        higher = {k: v for k, v in front.zernike_um.items() if k[0] >= 2}
-        wave = Wavefront(higher, front.entrance_pupil_mm)
-        everything = eye_mtf(wave, wavelength, np.concatenate([f_deg, f_mm * mm_per_deg]), field)
+        everything = _mtf(eye, front, setup, mtf_spectrum, np.concatenate([f_deg, f_mm * mm_per_deg]))
         tables_deg = _pairs(f_deg, {k: v[:len(f_deg)] for k, v in everything.items()}) if len(f_deg) else {}
         tables_mm = _pairs(f_mm, {k: v[len(f_deg):] for k, v in everything.items()}) if len(f_mm) else {}
     if setup is None:
@@ -245,4 +288,18 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
         paraxial_pupil = front.iris_mm * system_entrance_pupil_mm(eye, setup, wavelength)[1]
     return EyeReport(eye.name, base.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
                      float(equivalent_power_diopters(mean, wavelength)), float(efl_mm(mean, wavelength)),
-                     float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup)
+                     float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup,
+                     mtf_spectrum)
+
+
+def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg) -> dict:
+    """`eye_mtf` at the traced front's wavelength (orders 2-8), or over ``spectrum`` (tilts kept: the TCA)."""
+    if spectrum is None:
+        higher = {k: v for k, v in front.zernike_um.items() if k[0] >= 2}
+        return eye_mtf(Wavefront(higher, front.entrance_pupil_mm), front.wavelength_nm, f_deg, front.field_deg)
+    spectral = traced_spectral_wavefront(eye, spectrum.wavelengths_nm, front.field_deg,
+                                         pupil_mm=front.eye_entrance_pupil_mm, lenses=setup,
+                                         reference_wavelength_nm=front.wavelength_nm)
+    weights = dict(zip(spectrum.wavelengths_nm, spectrum.weights))
+    return eye_mtf(spectral, spectral.wavelengths_nm, f_deg, front.field_deg,
+                   [weights[w] for w in spectral.wavelengths_nm])

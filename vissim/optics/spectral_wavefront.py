@@ -1,0 +1,106 @@
+"""One wavefront per wavelength over one pupil: an eye with its own dispersion.
+
+A `SpectralWavefront` holds a `Wavefront` (OSA Zernikes in µm over one pupil) for each of its
+wavelengths, e.g. a schematic eye traced at each one
+(`vissim.optics.eyes.psf_wavefront.eye_spectral_wavefront`). `vissim.optics.psf.compute_psf`
+and the field sizing of `vissim.optics.psf_field` take it in place of a `Wavefront`: each
+wavelength's PSF is of that wavelength's own front (`psf_field.front_at_wavelength`, the one
+place it is chosen), and a Thibos chromatic defocus (``lca_reference_nm``) is refused, the
+fronts carrying their own.
+
+Every front is in one image frame: its tilt places its wavelength's PSF relative to the origin
+the PSF is centred on (for a traced eye, the chief ray's image point at
+``reference_wavelength_nm``), so a polychromatic PSF shows the transverse chromatic aberration.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from vissim.checks import instance_of
+from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.errors import VissimInputError
+from vissim.optics.wavefront import Wavefront
+
+__all__ = ["SpectralWavefront", "WAVELENGTH_MATCH_NM", "wavelengths_for"]
+
+#: Two wavelengths closer than this (nm) are the same wavelength when a front is looked up.
+WAVELENGTH_MATCH_NM = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class SpectralWavefront:
+    """``fronts[i]`` is the wavefront at ``wavelengths_nm[i]`` (increasing), all over one pupil (mm).
+
+    ``reference_wavelength_nm``: the wavelength whose image point is the frame's origin (None when the
+    fronts were not placed in one frame by such a point); ``description``: what the fronts are (for
+    the record).
+
+    Examples
+    --------
+    >>> from vissim.optics.wavefront import Wavefront
+    >>> s = SpectralWavefront((500.0, 600.0), (Wavefront({(2, 0): 0.1}, 3.0), Wavefront({(2, 0): -0.1}, 3.0)))
+    >>> s.pupil_diameter_mm, s.at(600.0).coefficients_um[(2, 0)]
+    (3.0, -0.1)
+    """
+
+    wavelengths_nm: tuple[float, ...]
+    fronts: tuple[Wavefront, ...]
+    reference_wavelength_nm: float | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        wavelengths = tuple(checked_wavelength_nm(w) for w in self.wavelengths_nm)
+        fronts = tuple(self.fronts)
+        if not wavelengths or len(fronts) != len(wavelengths):
+            raise VissimInputError(f"a spectral wavefront needs one front per wavelength, got {len(fronts)} fronts "
+                                   f"for {len(wavelengths)} wavelengths")
+        if any(b <= a for a, b in zip(wavelengths, wavelengths[1:])):
+            raise VissimInputError(f"a spectral wavefront's wavelengths must increase, got {wavelengths} nm")
+        for front in fronts:
+            instance_of(front, Wavefront, "each front of a SpectralWavefront", "a Wavefront (µm over a pupil)")
+        pupils = {front.pupil_diameter_mm for front in fronts}
+        if len(pupils) != 1:
+            raise VissimInputError(f"a spectral wavefront's fronts must share one pupil, got {sorted(pupils)} mm")
+        object.__setattr__(self, "wavelengths_nm", wavelengths)
+        object.__setattr__(self, "fronts", fronts)
+
+    @property
+    def pupil_diameter_mm(self) -> float:
+        return self.fronts[0].pupil_diameter_mm
+
+    def at(self, wavelength_nm: float) -> Wavefront:
+        """The front at ``wavelength_nm`` (one of `wavelengths_nm`); any other is refused."""
+        for w, front in zip(self.wavelengths_nm, self.fronts):
+            if abs(w - wavelength_nm) <= WAVELENGTH_MATCH_NM:
+                return front
+        held = ", ".join(f"{w:g}" for w in self.wavelengths_nm)
+        raise VissimInputError(f"wavelength {wavelength_nm:g} nm is not one of this spectral wavefront's ({held} nm)")
+
+    def map(self, change) -> SpectralWavefront:
+        """The same wavelengths with ``change(front)`` in place of each front (e.g. a prescription added)."""
+        return SpectralWavefront(self.wavelengths_nm, tuple(change(f) for f in self.fronts),
+                                 self.reference_wavelength_nm, self.description)
+
+    def as_json(self) -> dict:
+        return {
+            "pupil_diameter_mm": self.pupil_diameter_mm,
+            "reference_wavelength_nm": self.reference_wavelength_nm,
+            "description": self.description,
+            "per_wavelength": [{"wavelength_nm": w, "zernike_um": front.as_json()["zernike_um"]}
+                               for w, front in zip(self.wavelengths_nm, self.fronts)],
+        }
+
+    def __repr__(self) -> str:
+        span = f"{self.wavelengths_nm[0]:g}-{self.wavelengths_nm[-1]:g}" if len(self.fronts) > 1 else \
+            f"{self.wavelengths_nm[0]:g}"
+        return f"SpectralWavefront({len(self.fronts)} fronts, {span} nm, over {self.pupil_diameter_mm:g} mm)"
+
+
+def wavelengths_for(wavefront, wavelength_nm: float | Sequence[float] | None, default_nm: float):
+    """The wavelength(s) (nm) a PSF of ``wavefront`` is computed at: ``wavelength_nm`` when given, else a
+    spectral front's own, else ``default_nm``."""
+    if wavelength_nm is not None:
+        return wavelength_nm
+    return wavefront.wavelengths_nm if isinstance(wavefront, SpectralWavefront) else default_nm
