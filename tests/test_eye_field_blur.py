@@ -108,3 +108,12 @@ def test_a_navarro_eye_accommodated_2_d_is_in_focus_at_its_traced_refraction():
     # the Eye reads its focus at the entrance pupil, 3.04 mm behind the cornea: 2.56^2 x 0.003 = 0.02 D apart
     assert eye.in_focus_proximity_diopters == pytest.approx(far_point, abs=0.05)
     assert 1.8 < eye.in_focus_proximity_diopters < 3.0  # near 0.5 m (Navarro's lens gives 2.5 D at "2 D")
+
+
+def test_the_blur_eye_docstring_example_runs():
+    import doctest
+
+    import vissim.optics.eyes.field_blur as module
+
+    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted >= 3 and result.failed == 0

@@ -119,6 +119,8 @@ WRONG_TYPES = [
     (lambda: vissim.render_chart_print("K"), "must be a ChartSpec"),
     (lambda: vissim.eye_wavefront("navarro-1985", pupil_mm=3.0, wavelength_nm=555.0, rx=-1.0),
      "expected a Prescription (the correcting lens)"),
+    (lambda: vissim.blur_eye("chart.png", model="navarro-1985", arcmin_per_px=1.0, pupil_mm=3.0, wavelength_nm=555.0),
+     "image must be an ndarray"),
 ]
 
 

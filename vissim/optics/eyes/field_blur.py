@@ -108,8 +108,13 @@ def blur_eye(image: np.ndarray, *, model: str, arcmin_per_px: float, pupil_mm: f
         The field angle of the image centre, OSA's frame (default (0, 0): fixation at the centre).
     field_step_deg : float, optional
         The PSF nodes' spacing, degrees (default `DEFAULT_FIELD_STEP_DEG`).
-    mode, padding, background, dtype
-        As `vissim.compute_psf` (``mode``) and `vissim.blur_image`.
+    mode : {"wave", "geometric"}
+        The PSFs' optics, as `vissim.compute_psf`.
+    padding : {"constant", "edge", "reflect", "wrap"}
+        Outside the image, as `vissim.blur_image`.
+    background : float or per-channel floats, optional
+        The value outside for ``"constant"`` (default: the mean of the border pixels).
+    dtype : float32 (default) or float64
 
     Returns
     -------
