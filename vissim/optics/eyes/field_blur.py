@@ -19,7 +19,11 @@
 * The image stays in **visual-angle coordinates**: the eye's distortion (the chief ray's retinal
   position against its field angle) is not applied; each PSF is centred on its chief ray.
 
-`DEFAULT_FIELD_STEP_DEG` was chosen by measurement (``benchmarks/bench_eye_field_step.py``).
+`DEFAULT_FIELD_STEP_DEG` (2°) was chosen by measurement (``benchmarks/bench_eye_field_step.py``,
+2026-12-03): an ETDRS chart tiled over 0-20° at 1 arcmin/px, 4 mm pupil, 555 nm, blurred at node
+steps 4, 2, 1 and 0.5°; the PSNR between each step and its half was, Navarro 1985: 44.5, 62.3,
+74.1 dB; Escudero-Sanz 1999: 42.9, 61.3, 72.5 dB (largest pixel differences at 2° against 1°:
+1.05e-2 and 1.17e-2 of a 0.86 range). 2° is the largest step whose halving stays above 50 dB.
 """
 
 from __future__ import annotations
