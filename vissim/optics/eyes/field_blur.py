@@ -28,13 +28,14 @@ steps 4, 2, 1 and 0.5°; the PSNR between each step and its half was, Navarro 19
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
-from vissim.errors import VissimInputError
+from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.optics.blur import pixel_array
 from vissim.optics.eyes.psf_wavefront import eye_wavefront
 from vissim.optics.field_blur import PSFGrid, blur_field_dependent, psf_grid
@@ -58,9 +59,17 @@ def node_field_deg(row_px: float, col_px: float, shape: tuple[int, int], arcmin_
 
 
 def _node_psf(front, step: float, wavelength_nm: float, mode: str, max_size_px: int) -> PSF:
+    """The node's blur kernel, its field cut to ``max_size_px``; an image too small to hold it is refused."""
     size = suggested_size_px(front, step, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=[wavelength_nm])
-    return compute_psf(front, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=wavelength_nm,
-                       arcmin_per_px=step, size_px=min(size, max_size_px), mode=mode)
+    try:
+        return compute_psf(front, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=wavelength_nm,
+                           arcmin_per_px=step, size_px=min(size, max_size_px), mode=mode)
+    except FieldTooSmallError:
+        if size <= max_size_px:
+            raise
+        raise FieldTooSmallError(f"the image is too small for this eye's blur: its PSF needs a {size} px field at "
+                                 f"{step:g} arcmin/px, so the image needs at least {math.ceil((size - 1) / 2)} px on its "
+                                 "longer side (or a coarser sampling)") from None
 
 
 def eye_psf_grid(shape: tuple[int, int], *, model: str, arcmin_per_px: float, pupil_mm: float, wavelength_nm: float,
