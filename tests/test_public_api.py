@@ -123,6 +123,8 @@ WRONG_TYPES = [
      "expected a Prescription (the correcting lens)"),
     (lambda: vissim.SpectralWavefront((500.0,), ("2,0=0.1",)), "must be a Wavefront"),
     (lambda: vissim.named_spectrum(5), "must be text, one of photopic"),
+    (lambda: vissim.blur_eye("chart.png", model="navarro-1985", arcmin_per_px=1.0, pupil_mm=3.0, wavelength_nm=555.0),
+     "image must be an ndarray"),
 ]
 
 

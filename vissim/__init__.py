@@ -5,9 +5,10 @@ The names a user needs are importable from here; each loads its module on first 
 
 * Prescriptions and wavefronts: `Prescription`, `parse_spherocylinder`,
   `Wavefront`.
-* Schematic eyes: `eye_wavefront` (a traced eye's wavefront with a prescription added).
 * Spectra: `eye_spectral_wavefront` (the eye traced at each wavelength), `SpectralWavefront`,
   `named_spectrum` (e.g. the photopic V(λ) spectrum).
+* Schematic eyes: `eye_wavefront` (a traced eye's wavefront with a prescription added);
+  `blur_eye` (an image seen by a schematic eye, its PSF varying over the field).
 * PSFs and their metrics: `compute_psf`, `PSF`, `strehl_ratio`,
   `mtf`, `otf`, `diffraction_mtf`, `frequencies_cyc_per_deg`.
 * Images: `blur_image`, and scenes with depth: `blur_depth`; charts: `etdrs_chart_spec`, `single_letter_spec`,
@@ -36,6 +37,7 @@ _PUBLIC = {
     "eye_spectral_wavefront": "vissim.optics.eyes.psf_wavefront",
     "SpectralWavefront": "vissim.optics.spectral_wavefront",
     "named_spectrum": "vissim.spectra",
+    "blur_eye": "vissim.optics.eyes.field_blur",
     "PSF": "vissim.optics.psf",
     "compute_psf": "vissim.optics.psf",
     "strehl_ratio": "vissim.optics.psf",

@@ -9,14 +9,16 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
-from vissim.cli._common import (add_aberration_args, check_outputs_apart, image_sampling, parse_float_list,
-                                wavefront_from_args)
+from vissim.cli._common import (add_aberration_args, check_outputs_apart, field_deg_from_text, image_sampling,
+                                parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_image, write_image
 from vissim.optics.array_backend import DEVICES, array_backend
 from vissim.optics.blur import PADDING_MODES, blur_image
 from vissim.optics.blur_device import blur_image_on
 from vissim.optics.chromatic import gaussian_band
+from vissim.optics.eyes.models import EYE_MODELS
+from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
@@ -61,8 +63,31 @@ def add_parser(subparsers) -> None:
                         help="where to blur: cpu (default), cuda (a GPU through CuPy, the gpu extra), auto (cuda "
                              "when present, else the same code on the CPU); cuda and auto take one full-frame FFT "
                              "per PSF and equal cpu to float32 round-off")
+    add_eye_model_args(parser)
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
     parser.set_defaults(func=run)
+
+
+def add_eye_model_args(parser) -> None:
+    """``--eye-model`` and the options that go with it (``vissim blur``)."""
+    eye = parser.add_argument_group(
+        "schematic eye (in place of the reduced eye)",
+        "With --eye-model the image is seen by a traced schematic eye: each channel's wavelength is traced "
+        "(the eye's own spherical aberration, dispersion and off-axis aberrations; no --lca, one wavelength per "
+        "channel), --rx is added over the same --pupil-mm entrance pupil as for the reduced eye. The PSF varies "
+        "over the image: it is traced at a grid of field points --field-step-deg apart and interpolated between "
+        "them; an image within one step is blurred by the one PSF at its centre. The image stays in visual angle "
+        "(the eye's distortion is not applied).")
+    eye.add_argument("--eye-model", metavar="MODEL", help="a schematic eye: " + ", ".join(EYE_MODELS))
+    eye.add_argument("--field-deg", metavar="X,Y",
+                     help="with --eye-model: the field angle of the image centre from the optical axis, degrees, x "
+                     "(examiner's right, so the observer's left) and y (up), as vissim psf (default 0,0: the eye "
+                     "looks at the image centre)")
+    eye.add_argument("--accommodation-diopters", type=float, metavar="A",
+                     help="with --eye-model: accommodation exerted, dioptres, within the model's range (default 0)")
+    eye.add_argument("--field-step-deg", type=float, metavar="S",
+                     help="with --eye-model: spacing of the traced PSFs over the image, degrees of visual angle "
+                     "(default 2)")
 
 
 def image_too_small(path: Path, shape: tuple[int, ...], psf_px: int, step: float) -> VissimInputError:
@@ -128,11 +153,12 @@ def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, de
 
 def run(args: argparse.Namespace) -> int:
     check_outputs_apart(image_files(args.input), image_files(args.output))
+    _check_eye_options(args)
     if args.device == "cuda":
         array_backend("cuda")  # no GPU: refused before the PSFs are computed
     image = read_image(args.input)
     step = image_sampling(image, args.arcmin_per_px, args.input)
-    wavefront = wavefront_from_args(args)
+    wavefront = wavefront_from_args(args) if args.eye_model is None else None
     n_channels = 1 if image.pixels.ndim == 2 else image.pixels.shape[2]
     if args.channels_nm is not None:
         if n_channels != 3:
@@ -145,6 +171,8 @@ def run(args: argparse.Namespace) -> int:
         per_channel = [wavelengths] * n_channels
     else:
         per_channel = [[w] for w in DEFAULT_CHANNELS_NM]
+    if args.eye_model is not None:
+        return _run_eye(args, image, step, per_channel)
     lca = args.lca_reference_nm if args.lca else None
     bands = []
     for wavelengths in per_channel:
@@ -163,4 +191,64 @@ def run(args: argparse.Namespace) -> int:
     written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
                           alpha=image.alpha, bit_depth=output_bit_depth(image, args.output))
     print(f"wrote {written}")
+    return 0
+
+
+def _check_eye_options(args: argparse.Namespace) -> None:
+    """The refusals of --eye-model's combinations, before any image is read."""
+    eye_only = {"--field-deg": args.field_deg, "--accommodation-diopters": args.accommodation_diopters,
+                "--field-step-deg": args.field_step_deg}
+    if args.eye_model is None:
+        given = [name for name, value in eye_only.items() if value is not None]
+        if given:
+            raise VissimInputError(f"{', '.join(given)} need(s) --eye-model (the reduced eye has one PSF over the "
+                                   "field and no accommodation)")
+        return
+    if args.eye_model not in EYE_MODELS:
+        raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
+    if args.lca:
+        raise VissimInputError("--lca does not go with --eye-model: the traced eye has its own dispersion")
+    if args.channel_fwhm_nm is not None:
+        raise VissimInputError("--channel-fwhm-nm with --eye-model is not supported yet: give one wavelength per "
+                               "channel (--channels-nm or --wavelength-nm)")
+    if args.zernike is not None:
+        raise VissimInputError("--zernike with --eye-model is not supported by blur; give the eye's --rx")
+    if args.device != "cpu":
+        raise VissimInputError(f"--device {args.device} with --eye-model: the field-dependent blur runs on the cpu")
+
+
+def _run_eye(args: argparse.Namespace, image, step: float, per_channel: list) -> int:
+    """``blur --eye-model``: one PSF grid per distinct channel wavelength, the image blurred field-dependently."""
+    from vissim.optics.eyes.field_blur import DEFAULT_FIELD_STEP_DEG, eye_psf_grid  # the trace's imports, when used
+    from vissim.optics.field_blur import blur_field_dependent
+
+    if any(len(wavelengths) != 1 for wavelengths in per_channel):
+        given = ", ".join(f"{w:g}" for w in per_channel[0])
+        raise VissimInputError(f"--eye-model takes one wavelength per channel (the traced eye's), got {given} nm")
+    field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
+    accommodation = args.accommodation_diopters if args.accommodation_diopters is not None else 0.0
+    field_step = DEFAULT_FIELD_STEP_DEG if args.field_step_deg is None else args.field_step_deg
+    rx = Prescription.parse(args.rx) if args.rx is not None else None
+    grids = {}
+    for (wavelength,) in per_channel:
+        if wavelength not in grids:
+            grids[wavelength] = eye_psf_grid(image.pixels.shape[:2], model=args.eye_model, arcmin_per_px=step,
+                                             pupil_mm=args.pupil_mm, wavelength_nm=wavelength, rx=rx,
+                                             accommodation_diopters=accommodation, field_deg=field,
+                                             field_step_deg=field_step, mode=args.mode)
+    channel_grids = [grids[w] for (w,) in per_channel]
+    blurred = blur_field_dependent(image.pixels, channel_grids if image.pixels.ndim == 3 else channel_grids[0],
+                                   arcmin_per_px=step, padding=args.padding)
+    any_grid = channel_grids[0]
+    eye = {"model": args.eye_model, "field_deg": list(field), "accommodation_diopters": accommodation,
+           "pupil_mm": args.pupil_mm, "field_step_deg": field_step, "nodes": list(any_grid.shape),
+           "node_count": any_grid.node_count, "wavelengths_nm": [w for (w,) in per_channel],
+           "distortion": "not applied (visual-angle coordinates)"}
+    provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
+                                 arcmin_per_px=step, padding=args.padding, device=args.device, rx=args.rx,
+                                 eye_model=eye)
+    written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
+                          alpha=image.alpha, bit_depth=output_bit_depth(image, args.output))
+    print(f"wrote {written} ({args.eye_model}, {any_grid.shape[0]} x {any_grid.shape[1]} PSF nodes "
+          f"{field_step:g} deg apart)")
     return 0

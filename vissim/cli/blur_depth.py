@@ -14,12 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import add_rx_arg, check_outputs_apart, image_sampling
+from vissim.cli._common import add_rx_arg, check_outputs_apart, field_deg_from_text, image_sampling
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_data_map, read_image, write_image
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
 from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
+from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.prescription import Prescription
 from vissim.optics.setup import Eye
 from vissim.progress import terminal_progress
@@ -50,6 +51,18 @@ def add_parser(subparsers) -> None:
     focus.add_argument("--age", type=float, metavar="Y", help="age in years: amplitude 18.5 - 0.3 Y D (Hofstetter 1950)")
     focus.add_argument("--amplitude-diopters", type=float, metavar="A", help="amplitude of accommodation, dioptres")
     focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres")
+    eye = parser.add_argument_group(
+        "schematic eye (in place of the reduced eye)",
+        "With --eye-model the eye is a traced schematic eye at one field point (--field-deg, default the "
+        "optical axis): its spherical aberration and its own defocus at --wavelength-nm and at the accommodation "
+        "exerted (--accommodation-diopters, physical: its lens changes shape), with --rx's lens added over the "
+        "same --pupil-mm entrance pupil; each depth adds its defocus as for the reduced eye, and the eye is in "
+        "focus where its whole wavefront says. The focus-target options (--age, --amplitude-diopters, "
+        "--focus-distance-m) are the reduced eye's and are refused with it.")
+    eye.add_argument("--eye-model", metavar="MODEL", help="a schematic eye: " + ", ".join(EYE_MODELS))
+    eye.add_argument("--field-deg", metavar="X,Y",
+                     help="with --eye-model: the field angle the eye is traced at, degrees from the optical axis, "
+                     "x (examiner's right) and y (up), as vissim psf (default 0,0)")
     parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: the one the image file records)")
     parser.add_argument("--wavelength-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
                         help=f"wavelength, nm (default {DEFAULT_WAVELENGTH_NM:g})")
@@ -108,6 +121,27 @@ def _accommodation(args: argparse.Namespace, eye: Prescription, depth: np.ndarra
     }
 
 
+def _schematic_eye(args: argparse.Namespace, rx: Prescription) -> tuple[Eye, float, dict]:
+    """The traced eye's `Eye` (`vissim.optics.eyes.depth_eye.traced_depth_eye`), its accommodation and its record."""
+    from vissim.optics.eyes.depth_eye import traced_depth_eye  # the trace's imports, when used
+
+    if args.eye_model not in EYE_MODELS:
+        raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
+    targets = [name for name, value in (("--age", args.age), ("--amplitude-diopters", args.amplitude_diopters),
+                                        ("--focus-distance-m", args.focus_distance_m)) if value is not None]
+    if targets:
+        raise VissimInputError(f"{', '.join(targets)} do(es) not go with --eye-model: give the accommodation the "
+                               "schematic eye exerts with --accommodation-diopters")
+    accommodation = 0.0 if args.accommodation_diopters is None else args.accommodation_diopters
+    field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
+    eye = traced_depth_eye(args.eye_model, rx, pupil_mm=args.pupil_mm, wavelength_nm=args.wavelength_nm,
+                           accommodation_diopters=accommodation, field_deg=field)
+    info = {"accommodation_diopters": accommodation, "eye_model": args.eye_model, "field_deg": list(field),
+            "in_focus_proximity_diopters": eye.in_focus_proximity_diopters,
+            "eye_wavefront_um": {f"{n},{m}": c for (n, m), c in eye.extra_wavefront.coefficients_um.items()}}
+    return eye, accommodation, info
+
+
 def run(args: argparse.Namespace) -> int:
     check_outputs_apart((*image_files(args.input), args.depth), image_files(args.output))
     image = read_image(args.input)
@@ -119,10 +153,16 @@ def run(args: argparse.Namespace) -> int:
     eye_pupil_diameter_mm(args.pupil_mm, "--pupil-mm")
     depth = read_depth_m(args.depth)
     eye = Prescription.parse(args.rx)
-    accommodation, focus_info = _accommodation(args, eye, depth)
+    if args.eye_model is None:
+        if args.field_deg is not None:
+            raise VissimInputError("--field-deg needs --eye-model (the reduced eye has one PSF over the field)")
+        accommodation, focus_info = _accommodation(args, eye, depth)
+        depth_eye = Eye(eye, args.pupil_mm, accommodation)
+    else:
+        depth_eye, accommodation, focus_info = _schematic_eye(args, eye)
     with terminal_progress() as progress:
         result = blur_depth(
-            image.pixels, depth, eye=Eye(eye, args.pupil_mm, accommodation), arcmin_per_px=step,
+            image.pixels, depth, eye=depth_eye, arcmin_per_px=step,
             wavelength_nm=args.wavelength_nm, mode=args.mode,
             layer_spacing_fraction=args.layer_spacing_fraction, max_layers=args.max_layers, crop_px=crop,
             coarse_blur_px=args.coarse_blur_px, device=args.device, progress=progress,
@@ -131,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
                                  input_provenance=image.provenance, eye=eye.format(),
                                  pupil_diameter_mm=args.pupil_mm, arcmin_per_px=step,
                                  wavelength_nm=args.wavelength_nm, mode=args.mode, focus=focus_info, crop_px=crop,
-                                 coarse_blur_px=args.coarse_blur_px,
+                                 coarse_blur_px=args.coarse_blur_px, eye_model=args.eye_model or "reduced",
                                  depth_blur=result.as_json())
     rows, cols = image.pixels.shape[:2]
     alpha = None if image.alpha is None else image.alpha[crop:rows - crop, crop:cols - crop]  # carried, not blurred
