@@ -81,7 +81,7 @@ def test_an_image_within_one_step_is_blurred_by_the_one_psf_at_its_field():
                         field_deg=(8.0, 0.0))
     assert grid.node_count == 1
     front = vissim.eye_wavefront(MODEL, pupil_mm=PUPIL_MM, wavelength_nm=WAVELENGTH_NM, field_deg=(8.0, 0.0))
-    assert grid.psfs[0][0].wavefront.coefficients_um == pytest.approx(front.coefficients_um)
+    assert grid.psfs[0][0].wavefront.at(WAVELENGTH_NM).coefficients_um == pytest.approx(front.coefficients_um)
     blurred = vissim.blur_eye(image, model=MODEL, arcmin_per_px=1.0, pupil_mm=PUPIL_MM, wavelength_nm=WAVELENGTH_NM,
                               field_deg=(8.0, 0.0))
     np.testing.assert_allclose(blurred, blur_image(image, grid.psfs[0][0], arcmin_per_px=1.0), atol=1e-6)

@@ -65,13 +65,31 @@ def test_an_rgb_point_through_a_navarro_eye_spreads_most_in_the_blue(capsys, tmp
     assert code == 0, err
     out = read_image(target).pixels
     assert out[20, 20, 2] < 0.5 * min(out[20, 20, 0], out[20, 20, 1])  # blue defocused by the eye's own LCA
-    assert read_image(target).provenance["inputs"]["eye_model"]["wavelengths_nm"] == [610.0, 550.0, 465.0]
+    assert read_image(target).provenance["inputs"]["eye_model"]["channel_wavelengths_nm"] == [[610.0], [550.0], [465.0]]
+
+
+def test_channel_bands_with_an_eye_model_equal_blur_eye_over_the_same_bands(capsys, tmp_path):
+    """--channel-fwhm-nm with --eye-model: each channel a Gaussian band (`gaussian_band`), traced at each
+    wavelength, as `vissim.blur_eye` with the same bands and weights (plumbing)."""
+    from vissim.optics.chromatic import gaussian_band
+
+    source, target = tmp_path / "rgb.exr", tmp_path / "out.exr"
+    rgb = np.zeros((41, 41, 3), np.float32)
+    rgb[20, 20] = 1.0
+    write_image(source, rgb, provenance={"inputs": {"arcmin_per_px": 0.5}})
+    code, _, err = run(capsys, "blur", source, "-o", target, "--eye-model", MODEL, "--pupil-mm", "3",
+                       "--padding", "constant", "--channel-fwhm-nm", "40")
+    assert code == 0, err
+    bands = [gaussian_band(w, 40.0) for w in (610.0, 550.0, 465.0)]
+    expected = vissim.blur_eye(rgb, model=MODEL, arcmin_per_px=0.5, pupil_mm=3.0, wavelength_nm=[b[0] for b in bands],
+                               weights=[b[1] for b in bands], background=0.0)
+    np.testing.assert_allclose(read_image(target).pixels, expected, atol=1e-6)
+    assert len(read_image(target).provenance["inputs"]["eye_model"]["channel_wavelengths_nm"][0]) == len(bands[0][0])
 
 
 @pytest.mark.parametrize("extra, fragments", [
     (["--lca"], ["--lca", "own dispersion"]),
-    (["--channel-fwhm-nm", "20"], ["--channel-fwhm-nm", "not supported yet"]),
-    (["--wavelength-nm", "550,600"], ["one wavelength per channel", "550, 600 nm"]),
+    (["--channel-fwhm-nm", "20", "--wavelength-nm", "550,600"], ["--channel-fwhm-nm", "one centre wavelength"]),
     (["--field-deg", "95,0"], ["95", "deg"]),
     (["--field-step-deg", "0"], ["field_step_deg", "degrees"]),
     (["--accommodation-diopters", "12"], ["12"]),

@@ -171,9 +171,6 @@ def run(args: argparse.Namespace) -> int:
         per_channel = [wavelengths] * n_channels
     else:
         per_channel = [[w] for w in DEFAULT_CHANNELS_NM]
-    if args.eye_model is not None:
-        return _run_eye(args, image, step, per_channel)
-    lca = args.lca_reference_nm if args.lca else None
     bands = []
     for wavelengths in per_channel:
         if args.channel_fwhm_nm is not None:
@@ -182,6 +179,9 @@ def run(args: argparse.Namespace) -> int:
             bands.append(gaussian_band(wavelengths[0], args.channel_fwhm_nm))
         else:
             bands.append((tuple(wavelengths), None))
+    if args.eye_model is not None:
+        return _run_eye(args, image, step, bands)
+    lca = args.lca_reference_nm if args.lca else None
     with terminal_progress() as progress:
         psfs, cache = _channel_psfs(bands, wavefront, step, args, lca, image.pixels.shape[:2], progress)
         blurred = _blur_channels(image.pixels, psfs, step, args.padding, args.device, progress)
@@ -208,41 +208,33 @@ def _check_eye_options(args: argparse.Namespace) -> None:
         raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
     if args.lca:
         raise VissimInputError("--lca does not go with --eye-model: the traced eye has its own dispersion")
-    if args.channel_fwhm_nm is not None:
-        raise VissimInputError("--channel-fwhm-nm with --eye-model is not supported yet: give one wavelength per "
-                               "channel (--channels-nm or --wavelength-nm)")
     if args.zernike is not None:
         raise VissimInputError("--zernike with --eye-model is not supported by blur; give the eye's --rx")
     if args.device != "cpu":
         raise VissimInputError(f"--device {args.device} with --eye-model: the field-dependent blur runs on the cpu")
 
 
-def _run_eye(args: argparse.Namespace, image, step: float, per_channel: list) -> int:
-    """``blur --eye-model``: one PSF grid per distinct channel wavelength, the image blurred field-dependently."""
-    from vissim.optics.eyes.field_blur import DEFAULT_FIELD_STEP_DEG, eye_psf_grid  # the trace's imports, when used
+def _run_eye(args: argparse.Namespace, image, step: float, bands: list) -> int:
+    """``blur --eye-model``: one PSF grid per distinct channel band ((wavelengths, weights)), the image
+    blurred field-dependently."""
+    from vissim.optics.eyes.field_blur import DEFAULT_FIELD_STEP_DEG, eye_psf_grids  # the trace's imports, when used
     from vissim.optics.field_blur import blur_field_dependent
 
-    if any(len(wavelengths) != 1 for wavelengths in per_channel):
-        given = ", ".join(f"{w:g}" for w in per_channel[0])
-        raise VissimInputError(f"--eye-model takes one wavelength per channel (the traced eye's), got {given} nm")
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
     accommodation = args.accommodation_diopters if args.accommodation_diopters is not None else 0.0
     field_step = DEFAULT_FIELD_STEP_DEG if args.field_step_deg is None else args.field_step_deg
     rx = Prescription.parse(args.rx) if args.rx is not None else None
-    grids = {}
-    for (wavelength,) in per_channel:
-        if wavelength not in grids:
-            grids[wavelength] = eye_psf_grid(image.pixels.shape[:2], model=args.eye_model, arcmin_per_px=step,
-                                             pupil_mm=args.pupil_mm, wavelength_nm=wavelength, rx=rx,
-                                             accommodation_diopters=accommodation, field_deg=field,
-                                             field_step_deg=field_step, mode=args.mode)
-    channel_grids = [grids[w] for (w,) in per_channel]
+    channel_grids = eye_psf_grids(image.pixels.shape[:2], [b[0] for b in bands], [b[1] for b in bands],
+                                  model=args.eye_model, arcmin_per_px=step, pupil_mm=args.pupil_mm, rx=rx,
+                                  accommodation_diopters=accommodation, field_deg=field, field_step_deg=field_step,
+                                  mode=args.mode)
     blurred = blur_field_dependent(image.pixels, channel_grids if image.pixels.ndim == 3 else channel_grids[0],
                                    arcmin_per_px=step, padding=args.padding)
     any_grid = channel_grids[0]
     eye = {"model": args.eye_model, "field_deg": list(field), "accommodation_diopters": accommodation,
            "pupil_mm": args.pupil_mm, "field_step_deg": field_step, "nodes": list(any_grid.shape),
-           "node_count": any_grid.node_count, "wavelengths_nm": [w for (w,) in per_channel],
+           "node_count": any_grid.node_count, "channel_wavelengths_nm": [list(b[0]) for b in bands],
+           "channel_weights": [None if b[1] is None else list(b[1]) for b in bands],
            "distortion": "not applied (visual-angle coordinates)"}
     provenance = make_provenance(command="blur", input=str(args.input), input_provenance=image.provenance,
                                  arcmin_per_px=step, padding=args.padding, device=args.device, rx=args.rx,

@@ -11,9 +11,10 @@
   `vissim.units.image_colrow_to_osa_xy`: a node right of the centre is at a smaller x, a node
   above it at a larger y. Field angles beyond ``checks.MAX_FIELD_DEG``, or where the rays miss,
   are refused as the trace refuses them.
-* **A node's PSF**: `vissim.optics.eyes.psf_wavefront.eye_wavefront` (the traced eye at that field,
-  the wavelength and the accommodation, with ``rx`` added over the same entrance pupil), then
-  `compute_psf` at the image's sampling.
+* **A node's PSF**: `vissim.optics.eyes.psf_wavefront.eye_spectral_wavefront` (the traced eye at that
+  field, at each wavelength of the channel's band, and the accommodation, with ``rx`` added over the
+  same entrance pupil; each wavelength's transverse chromatic aberration relative to the model's
+  reference wavelength), then `compute_psf` at the image's sampling.
 * **Between nodes** the PSF is interpolated bilinearly (`vissim.optics.field_blur`, Nagy &
   O'Leary 1998).
 * The image stays in **visual-angle coordinates**: the eye's distortion (the chief ray's retinal
@@ -37,12 +38,12 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.optics.blur import pixel_array
-from vissim.optics.eyes.psf_wavefront import eye_wavefront
+from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.field_blur import PSFGrid, blur_field_dependent, psf_grid
 from vissim.optics.psf import PSF, compute_psf, suggested_size_px
 from vissim.units import image_colrow_to_osa_xy
 
-__all__ = ["DEFAULT_FIELD_STEP_DEG", "ARCMIN_PER_DEG", "node_field_deg", "eye_psf_grid", "blur_eye"]
+__all__ = ["DEFAULT_FIELD_STEP_DEG", "ARCMIN_PER_DEG", "node_field_deg", "eye_psf_grid", "eye_psf_grids", "blur_eye"]
 
 #: The default spacing of the PSF nodes, degrees of visual angle (measured: module doc).
 DEFAULT_FIELD_STEP_DEG = 2.0
@@ -58,11 +59,12 @@ def node_field_deg(row_px: float, col_px: float, shape: tuple[int, int], arcmin_
     return float(field_deg[0] + dx), float(field_deg[1] + dy)
 
 
-def _node_psf(front, step: float, wavelength_nm: float, mode: str, max_size_px: int) -> PSF:
+def _node_psf(front, step: float, band: tuple, weights, mode: str, max_size_px: int) -> PSF:
     """The node's blur kernel, its field cut to ``max_size_px``; an image too small to hold it is refused."""
-    size = suggested_size_px(front, step, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=[wavelength_nm])
+    size = suggested_size_px(front, step, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=band,
+                             weights=weights)
     try:
-        return compute_psf(front, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=wavelength_nm,
+        return compute_psf(front, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=band, weights=weights,
                            arcmin_per_px=step, size_px=min(size, max_size_px), mode=mode)
     except FieldTooSmallError:
         if size <= max_size_px:
@@ -72,12 +74,26 @@ def _node_psf(front, step: float, wavelength_nm: float, mode: str, max_size_px: 
                                  "longer side (or a coarser sampling)") from None
 
 
-def eye_psf_grid(shape: tuple[int, int], *, model: str, arcmin_per_px: float, pupil_mm: float, wavelength_nm: float,
-                 rx=None, accommodation_diopters: float = 0.0, field_deg=(0.0, 0.0),
+def _band(wavelength_nm, weights) -> tuple[tuple[float, ...], tuple[float, ...] | None]:
+    """A channel's wavelengths (nm) and weights: one wavelength, or a band of several (weights default equal)."""
+    try:
+        band = tuple(positive_number(w, "wavelength", "nm") for w in np.atleast_1d(wavelength_nm))
+    except TypeError:
+        raise VissimInputError(f"a channel's wavelength must be nm or a list of nm, got {wavelength_nm!r}") from None
+    if weights is not None and len(np.atleast_1d(weights)) != len(band):
+        raise VissimInputError(f"need one weight per wavelength, got {weights!r} for {band} nm")
+    return band, None if weights is None else tuple(float(w) for w in np.atleast_1d(weights))
+
+
+def eye_psf_grid(shape: tuple[int, int], *, model: str, arcmin_per_px: float, pupil_mm: float, wavelength_nm,
+                 weights=None, rx=None, accommodation_diopters: float = 0.0, field_deg=(0.0, 0.0),
                  field_step_deg: float | None = None, mode: str = "wave") -> PSFGrid:
     """The schematic eye's PSFs at the nodes over an image of ``shape`` (rows, cols) (module doc).
 
-    Each PSF's field is cut to twice the image's longer side plus one (no pixel sees farther).
+    ``wavelength_nm``: one wavelength, or a band of several weighted by ``weights`` (default equal):
+    each node's eye is traced at each (`eye_spectral_wavefront`, its transverse chromatic aberration
+    relative to the model's reference wavelength, as for one wavelength). Each PSF's field is cut to
+    twice the image's longer side plus one (no pixel sees farther).
     """
     step = check_arcmin_per_px(arcmin_per_px, "the image's arcmin_per_px")
     spacing_deg = DEFAULT_FIELD_STEP_DEG if field_step_deg is None else positive_number(
@@ -85,18 +101,35 @@ def eye_psf_grid(shape: tuple[int, int], *, model: str, arcmin_per_px: float, pu
     centre = tuple(finite_number(v, "field angle", "deg") for v in field_deg)
     if len(centre) != 2:
         raise VissimInputError(f"field_deg must be two angles (x, y) in degrees, got {field_deg!r}")
+    band, band_weights = _band(wavelength_nm, weights)
 
     def psf_at(row_px: float, col_px: float) -> PSF:
-        front = eye_wavefront(model, pupil_mm=pupil_mm, wavelength_nm=wavelength_nm, rx=rx,
-                              accommodation_diopters=accommodation_diopters,
-                              field_deg=node_field_deg(row_px, col_px, shape, step, centre))
-        return _node_psf(front, step, wavelength_nm, mode, 2 * max(shape) + 1)
+        front = eye_spectral_wavefront(model, pupil_mm=pupil_mm, wavelengths_nm=band, rx=rx,
+                                       accommodation_diopters=accommodation_diopters,
+                                       field_deg=node_field_deg(row_px, col_px, shape, step, centre))
+        return _node_psf(front, step, band, band_weights, mode, 2 * max(shape) + 1)
 
     return psf_grid(shape, spacing_deg * ARCMIN_PER_DEG / step, psf_at)
 
 
+def eye_psf_grids(shape: tuple[int, int], channels_nm: Sequence, channel_weights=None, **eye) -> list[PSFGrid]:
+    """One `eye_psf_grid` per channel (each distinct band computed once): ``channels_nm[c]`` is channel
+    ``c``'s wavelength or band, ``channel_weights[c]`` its band's weights (None: equal); ``eye``: the
+    other keywords of `eye_psf_grid`."""
+    weights = [None] * len(channels_nm) if channel_weights is None else list(channel_weights)
+    if len(weights) != len(channels_nm):
+        raise VissimInputError(f"got {len(weights)} weight lists for {len(channels_nm)} channels")
+    bands = [_band(w, k) for w, k in zip(channels_nm, weights)]
+    grids: dict = {}
+    for band in bands:
+        if band not in grids:
+            grids[band] = eye_psf_grid(shape, wavelength_nm=band[0], weights=band[1], **eye)
+    return [grids[band] for band in bands]
+
+
 def blur_eye(image: np.ndarray, *, model: str, arcmin_per_px: float, pupil_mm: float,
-             wavelength_nm: float | Sequence[float], rx=None, accommodation_diopters: float = 0.0,
+             wavelength_nm: float | Sequence, weights: Sequence | None = None, rx=None,
+             accommodation_diopters: float = 0.0,
              field_deg=(0.0, 0.0), field_step_deg: float | None = None, mode: str = "wave",
              padding: str = "constant", background=None, dtype=np.float32) -> np.ndarray:
     """Blur a linear-light image as the schematic eye ``model`` sees it, the PSF varying over the field.
@@ -110,8 +143,12 @@ def blur_eye(image: np.ndarray, *, model: str, arcmin_per_px: float, pupil_mm: f
         A schematic eye (a key of `vissim.optics.eyes.models.EYE_MODELS`).
     pupil_mm : float
         The entrance pupil's diameter, mm.
-    wavelength_nm : float or sequence of float
-        One wavelength for every channel, or one per channel; each is traced (the eye's own dispersion).
+    wavelength_nm : float or sequence
+        One wavelength for every channel, or one entry per channel: a wavelength, or a band (a
+        sequence of wavelengths); each is traced (the eye's own dispersion, its transverse chromatic
+        aberration relative to the model's reference wavelength).
+    weights : sequence, optional
+        Per channel, its band's relative weights (None: equal).
     rx : Prescription or str, optional
         The eye's prescription (its correcting lens, not worn), added over the same entrance
         pupil as for the reduced eye (`vissim.eye_wavefront`).
@@ -144,17 +181,11 @@ def blur_eye(image: np.ndarray, *, model: str, arcmin_per_px: float, pupil_mm: f
     """
     array = pixel_array(image)
     n_channels = array.shape[2] if array.ndim == 3 else 1
-    wavelengths = [wavelength_nm] * n_channels if np.ndim(wavelength_nm) == 0 else list(wavelength_nm)
-    if len(wavelengths) != n_channels:
-        raise VissimInputError(f"got {len(wavelengths)} wavelengths for an image with {n_channels} channels")
-    grids: dict[float, PSFGrid] = {}
-    for wavelength in wavelengths:
-        wavelength = positive_number(wavelength, "wavelength", "nm")
-        if wavelength not in grids:
-            grids[wavelength] = eye_psf_grid(array.shape[:2], model=model, arcmin_per_px=arcmin_per_px,
-                                             pupil_mm=pupil_mm, wavelength_nm=wavelength, rx=rx,
-                                             accommodation_diopters=accommodation_diopters, field_deg=field_deg,
-                                             field_step_deg=field_step_deg, mode=mode)
-    per_channel = [grids[float(w)] for w in wavelengths]
-    return blur_field_dependent(array, per_channel if array.ndim == 3 else per_channel[0], arcmin_per_px=arcmin_per_px,
+    per_channel = [wavelength_nm] * n_channels if np.ndim(wavelength_nm) == 0 else list(wavelength_nm)
+    if len(per_channel) != n_channels:
+        raise VissimInputError(f"got {len(per_channel)} wavelengths for an image with {n_channels} channels")
+    grids = eye_psf_grids(array.shape[:2], per_channel, weights, model=model, arcmin_per_px=arcmin_per_px,
+                          pupil_mm=pupil_mm, rx=rx, accommodation_diopters=accommodation_diopters,
+                          field_deg=field_deg, field_step_deg=field_step_deg, mode=mode)
+    return blur_field_dependent(array, grids if array.ndim == 3 else grids[0], arcmin_per_px=arcmin_per_px,
                                 padding=padding, background=background, dtype=dtype)

@@ -20,8 +20,11 @@ spectacle plane, toric cornea) is the physical eye that has the prescription; it
 aberrations differ from the emmetropic model's by its longer or shorter vitreous, which this sum
 leaves out. ``vissim eye --rx`` reports that eye.
 
-Piston is dropped (it moves nothing); tilt is kept, so the PSF's origin is the chief ray's image
-point (the centre of the reference sphere the OPD is taken against).
+Piston is dropped (it moves nothing); tilt is kept. The PSF's origin is the image point of the chief
+ray at the model's reference wavelength (the centre of the reference sphere the OPD is taken against
+at that wavelength): at another wavelength the front carries, as tilt, its chief ray's offset from
+that point (the transverse chromatic aberration, below), so one wavelength's PSF and a spectrum's
+are in one frame, and the renderer maps its film through that wavelength's chief rays too.
 
 `eye_spectral_wavefront` traces the eye at each of several wavelengths over one entrance pupil
 (``pupil_mm`` at every wavelength; the iris that gives it differs by the cornea's dispersion, 0.5 %
@@ -68,7 +71,8 @@ def eye_wavefront(model: str, *, pupil_mm: float, wavelength_nm: float, rx=None,
                   accommodation_diopters: float = 0.0, samples: int = DEFAULT_SAMPLES) -> Wavefront:
     """The wavefront (µm, OSA Zernikes over the ``pupil_mm`` entrance pupil) of the schematic eye
     ``model`` (a key of `models.EYE_MODELS`) with the prescription ``rx`` (a `Prescription` or its
-    text; the correcting lens, as for the reduced eye) added (module doc).
+    text; the correcting lens, as for the reduced eye) added, its tilt placing the PSF relative to the
+    chief ray's image point at the model's reference wavelength (module doc).
 
     Examples
     --------
@@ -76,9 +80,10 @@ def eye_wavefront(model: str, *, pupil_mm: float, wavelength_nm: float, rx=None,
     >>> front.pupil_diameter_mm
     3.0
     """
+    rx = _checked_rx(rx)  # before the traces
     eye = eye_model(model, accommodation_diopters)
-    traced = trace_eye_wavefront(eye, wavelength_nm, field_deg, pupil_mm=pupil_mm, samples=samples)
-    return _with_rx(_own_front(traced), rx)
+    spectral = traced_spectral_wavefront(eye, [wavelength_nm], field_deg, pupil_mm=pupil_mm, samples=samples)
+    return _with_rx(spectral.fronts[0], rx)
 
 
 def _own_front(traced: EyeWavefront) -> Wavefront:
@@ -181,12 +186,14 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     traced = [anchor if w == reference else
               trace_eye_wavefront(eye, w, field_deg, pupil_mm=pupil, samples=samples, lenses=lenses)
               for w in wavelengths]
-    jacobian = retinal_jacobian_mm_per_deg(eye, reference, field_deg, iris_mm=anchor.iris_mm, lenses=lenses)
+    jacobian = (None if wavelengths == [reference] else
+                retinal_jacobian_mm_per_deg(eye, reference, field_deg, iris_mm=anchor.iris_mm, lenses=lenses))
     common = min(t.entrance_pupil_mm for t in traced)
     fronts = []
     for t in traced:
         front = _own_front(t)
-        front = front + _tilt_um(chromatic_offset_deg(t, anchor, jacobian), front.pupil_diameter_mm)
+        if t is not anchor:
+            front = front + _tilt_um(chromatic_offset_deg(t, anchor, jacobian), front.pupil_diameter_mm)
         fronts.append(front if front.pupil_diameter_mm == common else front.rescaled(common))
     field = tuple(float(v) for v in field_deg)
     return SpectralWavefront(tuple(wavelengths), tuple(fronts), reference,
