@@ -270,6 +270,22 @@ class SchematicEyeTracer:
         sag, _, _ = _sag_and_gradient(self.shapes[-1], x, y)
         return (x, y, self.retina_z_mm + sag)
 
+    def surface_point(self, i: int, x, y):
+        """The point of surface ``i`` above (x, y) (mm), as a 3-tuple."""
+        sag, _, _ = _sag_and_gradient(self.shapes[i], x, y)
+        return (x, y, self.z_mm[i] + sag)
+
+    def projected_solid_angle_weight(self, retina_points, offsets):
+        """``cos θ_r |d_z| / |offset|²`` (1/mm²): the projected solid angle per unit x-y area at the far
+        end of ``offsets`` (retina point to a point sampled uniformly in x, y), θ_r the angle between
+        the ray and the retina's normal."""
+        _, gx, gy = _sag_and_gradient(self.shapes[-1], retina_points[0], retina_points[1])
+        inv_n = dr.rsqrt(gx * gx + gy * gy + 1.0)
+        dist2 = _dot(offsets, offsets)
+        inv_d = dr.rsqrt(dist2)
+        cos_retina = (gx * offsets[0] + gy * offsets[1] - offsets[2]) * inv_n * inv_d
+        return cos_retina * dr.abs(offsets[2]) * inv_d / dist2
+
     def trace_out(self, points, directions, wavelength_nm) -> EyeTraceResult:
         """Rays from ``points`` (3-tuples of arrays, on or in front of the retina, in the vitreous) along
         ``directions`` (d_z < 0) out through the eye into air, at ``wavelength_nm`` (a number or an array)."""
