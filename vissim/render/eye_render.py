@@ -1,0 +1,127 @@
+"""A letter chart at a distance seen by a schematic eye (`vissim_schematic_eye`), optionally through a trial lens.
+
+The scene is the DSLR bench's (`vissim.bench.dslr.bench.dslr_scene`: a self-emitting chart of
+radiance = its reflectance facing the observer at ``chart_distance_m``, a trial lens mesh of
+``vissim_refract`` glass with its back vertex ``vertex_mm`` in front of the eye), with its
+``thinlens`` camera replaced by the schematic-eye sensor at the corneal vertex.  The bench's
+camera pupil is set to the eye's entrance pupil so the lens mesh is sized for the eye's beam.
+
+Wavelength: ``wavelength_nm`` (monochromatic; default the model's reference) on the mono
+variant, or ``spectrum="photopic"``: the spectral variant, hero wavelength per path, the film
+developing luminance (CIE ȳ = V(λ)).  Determinism: `vissim.render.run.render_scene` (fixed-order
+accumulation): the same seed gives the same pixels.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from vissim.errors import VissimInputError
+
+__all__ = ["EyeRender", "eye_scene_dict", "render_eye", "SPECTRA"]
+
+SPECTRA = ("mono", "photopic")
+
+
+@dataclass(frozen=True)
+class EyeRender:
+    """What to render (module doc); pupil: exactly one of ``pupil_mm`` (entrance pupil) and ``iris_mm``."""
+
+    model: str = "navarro-1985"
+    accommodation_diopters: float = 0.0
+    pupil_mm: float | None = 3.0
+    iris_mm: float | None = None
+    field_deg: tuple[float, float] = (0.0, 0.0)
+    wavelength_nm: float | None = None
+    spectrum: str = "mono"
+    size_px: tuple[int, int] = (64, 64)
+    arcmin_per_px: float = 1.0
+    spp: int = 64
+    seed: int = 0
+    chart_distance_m: float = 6.0
+    letter: str = "K"
+    logmar: float = 1.0
+    lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
+    vertex_mm: float = 12.0
+
+    def __post_init__(self) -> None:
+        if self.spectrum not in SPECTRA:
+            raise VissimInputError(f"spectrum must be one of {', '.join(SPECTRA)}, got {self.spectrum!r}")
+        if self.spectrum == "photopic" and self.wavelength_nm is not None:
+            raise VissimInputError("give a wavelength (monochromatic) or the photopic spectrum, not both")
+        from vissim.checks import arcmin_per_px, eye_pupil_diameter_mm, finite_number, number_within, positive_number
+        from vissim.render.schematic_eye_trace import TABLE_RANGE_NM
+        from vissim.optics.eyes.models import eye_model
+
+        eye_model(self.model, self.accommodation_diopters)  # the model's name and accommodation range
+        if (self.pupil_mm is None) == (self.iris_mm is None):
+            raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
+        eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,
+                              "entrance pupil" if self.iris_mm is None else "iris")
+        for value in self.field_deg:
+            if abs(finite_number(value, "field angle", "deg")) > 45.0:
+                raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within 45 deg of the axis")
+        if self.wavelength_nm is not None:
+            number_within(self.wavelength_nm, "wavelength", "nm", TABLE_RANGE_NM)
+        arcmin_per_px(self.arcmin_per_px)
+        positive_number(self.chart_distance_m, "chart distance", "m")
+        positive_number(self.vertex_mm, "vertex distance", "mm")
+        if int(self.spp) < 1:
+            raise VissimInputError(f"samples per pixel must be >= 1, got {self.spp}")
+
+
+def _bench(settings: EyeRender, pupil_mm: float):
+    from vissim.bench.dslr.bench import DslrBench
+    from vissim.optics.trial_lens import TrialLens
+
+    distance_mm = 1000.0 * settings.chart_distance_m
+    focal_mm = 18.0
+    return DslrBench(focal_length_mm=focal_mm, f_number=focal_mm / pupil_mm, focus_distance_mm=distance_mm,
+                     chart_distance_mm=distance_mm, vertex_distance_mm=settings.vertex_mm,
+                     lenses=() if settings.lens is None else (TrialLens(*settings.lens),),
+                     arcmin_per_px=settings.arcmin_per_px, size_px=tuple(settings.size_px), spp=settings.spp,
+                     seed=settings.seed, sampler="independent")
+
+
+def eye_scene_dict(settings: EyeRender) -> dict:
+    """The plain scene dict (module doc); its camera is the schematic-eye sensor."""
+    from vissim.bench.dslr.bench import chart_mm_per_texel, dslr_scene
+    from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+
+    sensor = {"type": "vissim_schematic_eye", "model": settings.model,
+              "accommodation_diopters": float(settings.accommodation_diopters),
+              "arcmin_per_px": float(settings.arcmin_per_px), "field_x_deg": float(settings.field_deg[0]),
+              "field_y_deg": float(settings.field_deg[1])}
+    if settings.pupil_mm is not None:
+        sensor["pupil_mm"] = float(settings.pupil_mm)
+    if settings.iris_mm is not None:
+        sensor["iris_mm"] = float(settings.iris_mm)
+    if settings.wavelength_nm is not None:
+        sensor["wavelength_nm"] = float(settings.wavelength_nm)
+    bench = _bench(settings, settings.pupil_mm or settings.iris_mm)
+    chart = render_chart_print(single_letter_spec(settings.letter, settings.logmar),
+                               MM_PER_INCH / chart_mm_per_texel(bench))
+    scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="mono")
+    camera = scene["camera"]
+    sensor.update({"to_world": camera["to_world"], "film": camera["film"], "sampler": camera["sampler"],
+                   "far_clip": 10.0 * bench.chart_distance_mm})
+    scene["camera"] = sensor
+    return scene
+
+
+def render_eye(settings: EyeRender, variant: str | None = None):
+    """Render ``settings`` (module doc); a `vissim.render.run.RenderResult` with provenance."""
+    from vissim.provenance import json_safe, make_provenance
+    from vissim.render.backend import choose_variant, mitsuba
+    from vissim.render.run import mitsuba_versions, render_scene
+    from vissim.render.schematic_eye_sensor import register_schematic_eye_sensor
+
+    chosen = choose_variant("spectral" if settings.spectrum == "photopic" else "mono", variant).variant
+    register_schematic_eye_sensor(mitsuba("mono", chosen))
+    result = render_scene(eye_scene_dict(settings), kind="mono", spp=settings.spp, seed=settings.seed,
+                          variant=chosen)
+    provenance = make_provenance(command="render eye", eye=dataclasses.asdict(settings), variant=result.variant,
+                                 spp=result.spp, seed=result.seed, render_seconds=round(result.seconds, 3),
+                                 mitsuba_render=result.render_record(), **mitsuba_versions())
+    return dataclasses.replace(result, provenance=json_safe(provenance))
