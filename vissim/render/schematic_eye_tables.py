@@ -86,12 +86,31 @@ def chief_ray_radii_mm(eye: SchematicEye, theta_deg: np.ndarray, wavelength_nm: 
     return np.array(radii)
 
 
+def _double_array_type():
+    """Dr.Jit's float64 array of a JIT backend that works here (LLVM, else CUDA): the tables trace ~10^5-10^6 rays."""
+    import os
+
+    from vissim.render.backend import find_libllvm, mitsuba
+
+    mitsuba("mono")  # sets DRJIT_LIBLLVM_PATH before Dr.Jit's backends are used
+    if find_libllvm() is not None or os.environ.get("DRJIT_LIBLLVM_PATH"):
+        from drjit.llvm import Float64
+        return Float64
+    try:
+        from drjit.cuda import Float64
+
+        Float64([1.0])
+        return Float64
+    except Exception:  # no CUDA device either
+        raise VissimInputError("the schematic-eye sensor needs Dr.Jit's LLVM or CUDA backend to trace its tables "
+                               "(install LLVM >= 16, e.g. Debian's libllvm19)") from None
+
+
 def _grid_rays(tracer: SchematicEyeTracer, r_edges, azimuths, boxes, grid: int, wavelength_nm: float):
     """Trace a ``grid`` x ``grid`` grid over each edge's box (E, 4) on the lens back from every (edge,
     azimuth) retinal point; returns (valid, the quadrature weights of Ω) as (E, Z, grid, grid), and
     each edge's cell centres (E, grid) in a and b and cell area (E,)."""
-    from drjit.llvm import Float64
-
+    Float64 = _double_array_type()
     boxes = np.asarray(boxes, dtype=float)
     u = (np.arange(grid) + 0.5) / grid
     a_axis = boxes[:, :1] + (boxes[:, 1:2] - boxes[:, :1]) * u
