@@ -55,3 +55,20 @@ def test_bad_input_is_one_error_line(tmp_path, capsys, options, message):
     err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
     assert len(err) == 1 and message in err[0]
     assert not (tmp_path / "x.exr").exists()
+
+
+@needs_llvm
+@pytest.mark.slow
+def test_a_plus_trial_lens_brings_a_near_chart_into_focus_for_the_relaxed_eye(tmp_path):
+    """Chart 0.5 m from the cornea, relaxed Navarro eye (paraxial refraction +0.03 D at 589.3 nm): a +2 D
+    trial lens 12 mm in front meets a vergence of -1/0.488 m = -2.05 D and leaves -0.05 D (thin-lens
+    vergence; the mesh has real thickness), about 0.08 D of defocus against 2 D without it.  Measured at
+    64 spp: 5-95 % spread 1.00 with the lens, 0.49 without."""
+    spreads = {}
+    for name, lens in (("none", []), ("plus", ["--sphere", "2"])):
+        path = tmp_path / f"{name}.exr"
+        assert main(["render", "eye", "--size", "32x32", "--spp", "64", "--logmar", "0.7", "--distance-m", "0.5",
+                     *lens, "-o", str(path)]) == 0
+        pixels = read_image(path).pixels
+        spreads[name] = float(np.percentile(pixels, 95) - np.percentile(pixels, 5))
+    assert spreads["plus"] > 1.5 * spreads["none"]
