@@ -80,6 +80,15 @@ class _Lookup:
         self.x0, self.dx, self.values = x0, dx, np.asarray(values, dtype=float)
         self._arrays = {}
 
+    def at(self, dr, index):
+        """The value at a whole-number ``index`` (a Dr.Jit array or a number): no interpolation."""
+        if not dr.is_array_v(index):
+            return float(self.values[int(index)])
+        kind = type(index)
+        if kind not in self._arrays:
+            self._arrays[kind] = kind(self.values)
+        return dr.gather(kind, self._arrays[kind], dr.uint32_array_t(kind)(index))
+
     def __call__(self, dr, x):
         last = len(self.values) - 1
         if not dr.is_array_v(x):
@@ -132,7 +141,7 @@ def _make_class(mi, dr):
             self.tracer = SchematicEyeTracer(eye, self.iris_mm)
             self.radius_of = _Lookup(0.0, float(t.theta_deg[1] - t.theta_deg[0]), t.radius_mm)
             self.bin_mm = float(t.r_edges_mm[1] - t.r_edges_mm[0])
-            self.box = [_Lookup(0.5 * self.bin_mm, self.bin_mm, t.boxes[:, j]) for j in range(4)]
+            self.box = [_Lookup(0.0, 1.0, t.boxes[:, j]) for j in range(4)]
             self.boxes_np = t.boxes
             count = len(t.azimuths_rad)
             self.omega = [_Lookup(0.0, self.bin_mm, t.omega_sr[:, j]) for j in range(count)]
@@ -160,10 +169,9 @@ def _make_class(mi, dr):
             return wavelengths, weight * hero_only, wavelengths[0]
 
         def _box(self, r):
-            """The sampling box (a0, a1, b0, b1) of the bin of retinal radius ``r`` (nearest bin)."""
+            """The sampling box (a0, a1, b0, b1) of the radius bin that holds ``r`` (mm)."""
             k = dr.minimum(dr.floor(r / self.bin_mm), len(self.boxes_np) - 1)
-            centre = (k + 0.5) * self.bin_mm
-            return [lookup(dr, centre) for lookup in self.box]
+            return [lookup.at(dr, k) for lookup in self.box]
 
         def _omega(self, r, cos_psi, sin_psi):
             """Ω at retinal radius r and azimuth ψ: linear in r, and in ψ (periodic) for a decentred iris."""

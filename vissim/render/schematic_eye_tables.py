@@ -90,10 +90,11 @@ def _double_array_type():
     """Dr.Jit's float64 array of a JIT backend that works here (LLVM, else CUDA): the tables trace ~10^5-10^6 rays."""
     import os
 
-    from vissim.render.backend import find_libllvm, mitsuba
+    from vissim.render.backend import find_libllvm
 
-    mitsuba("mono")  # sets DRJIT_LIBLLVM_PATH before Dr.Jit's backends are used
-    if find_libllvm() is not None or os.environ.get("DRJIT_LIBLLVM_PATH"):
+    path = os.environ.get("DRJIT_LIBLLVM_PATH") or find_libllvm()
+    if path:
+        os.environ.setdefault("DRJIT_LIBLLVM_PATH", path)  # before Dr.Jit's LLVM backend starts
         from drjit.llvm import Float64
         return Float64
     try:
