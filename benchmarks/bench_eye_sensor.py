@@ -62,9 +62,10 @@ def main() -> None:
     samples = SIZE * SIZE * SPP
     eye_s, lens_s = median_seconds(mi, eye_scene), median_seconds(mi, lens_scene)
     print(f"{mi.variant()}, {SIZE}x{SIZE} px, {SPP} spp ({samples} samples), {model}, median of {REPEATS}")
-    print(f"  schematic eye: {eye_s:.3f} s = {samples / eye_s:,.0f} samples/s (scene load with tables {load_seconds:.2f} s)")
+    print(f"  schematic eye: {eye_s:.3f} s = {samples / eye_s:,.0f} samples/s "
+          f"(scene load with its tables {load_seconds:.2f} s)")
     print(f"  thinlens:      {lens_s:.3f} s = {samples / lens_s:,.0f} samples/s")
-    print(f"  ratio thinlens / schematic eye throughput: {lens_s and eye_s / lens_s:.2f}")
+    print(f"  throughput ratio thinlens / schematic eye: {eye_s / lens_s:.2f}")
 
 
 if __name__ == "__main__":

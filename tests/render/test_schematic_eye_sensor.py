@@ -58,7 +58,8 @@ def test_spectral_hero_wavelength_keeps_the_films_mean():
     emitter = {"type": "constant", "radiance": {"type": "uniform", "value": 1.0}}
     eye, _ = render(mi, eye_sensor(spp=256, pixel_format="luminance"), emitter)
     lens = {"type": "thinlens", "fov": 16.0, "aperture_radius": 1.5, "focus_distance": 1000.0,
-            "film": eye_sensor(pixel_format="luminance")["film"], "sampler": {"type": "independent", "sample_count": 64}}
+            "film": eye_sensor(pixel_format="luminance")["film"],
+            "sampler": {"type": "independent", "sample_count": 64}}
     reference, _ = render(mi, lens, emitter)
     assert abs(reference.mean() - 1.0) < 0.01  # Mitsuba: white of radiance 1 develops Y = 1
     assert abs(eye.mean() - reference.mean()) < 0.03  # hero x4 over 256 spp: ~4x the mono noise
