@@ -129,3 +129,23 @@ def test_scalar_numbers_trace_as_arrays_do():
     back = out_p + (START_Z_MM - out_p[2]) / out_d[2] * out_d
     assert np.abs(back - start[0]).max() < 1e-9
     assert np.abs(out_d + d[0]).max() < 1e-10
+
+
+@needs_llvm
+def test_toric_cornea_biconic_reverses_the_numpy_trace():
+    """A biconic surface: the cornea front of an eye with -1.00 -2.00 x 30 (`optics.eyes.ametropia`),
+    its two radii along TABO 30 and 120 deg; both tracers' Newton iterations to rounding."""
+    mitsuba("mono")
+    from drjit.llvm import Float64
+
+    from vissim.optics.eyes.ametropia import ametropic_eye
+    from vissim.optics.prescription import Prescription
+
+    eye = ametropic_eye(eye_model("navarro-1985"), Prescription.parse("-1.00 -2.00 x 30"))
+    assert eye.surfaces[0].is_toric
+    start, d = inward_rays(40, 20.0, 4.0, seed=3)
+    bundle = trace_rays(eye_surfaces(eye), start, d, stop_z_mm=None, wavelength_nm=555.0)
+    back, back_d, valid, _ = traced_out(eye, bundle.points_mm, bundle.directions, 555.0, Float64)
+    assert valid.all()
+    assert np.abs(back - start).max() < 1e-9
+    assert np.abs(back_d + d).max() < 1e-10
