@@ -33,7 +33,7 @@ def render(mi, sensor, emitter, seed=1, spp=None):
 
 
 @needs_llvm
-@pytest.mark.parametrize("model", ["navarro-1985", "liou-brennan-1997"])
+@pytest.mark.parametrize("model", ["navarro-1985", pytest.param("liou-brennan-1997", marks=pytest.mark.slow)])
 def test_uniform_radiance_fills_the_frame_with_that_radiance(model):
     """Normalisation (module doc): a constant environment of radiance 1 gives every pixel 1.
 
