@@ -141,11 +141,10 @@ def _make_class(mi, dr):
             self.tracer = SchematicEyeTracer(eye, self.iris_mm)
             self.radius_of = _Lookup(0.0, float(t.theta_deg[1] - t.theta_deg[0]), t.radius_mm)
             self.bin_mm = float(t.r_edges_mm[1] - t.r_edges_mm[0])
-            self.box = [_Lookup(0.0, 1.0, t.boxes[:, j]) for j in range(4)]
-            self.boxes_np = t.boxes
-            count = len(t.azimuths_rad)
-            self.omega = [_Lookup(0.0, self.bin_mm, t.omega_sr[:, j]) for j in range(count)]
-            self.azimuth_step = 2.0 * math.pi / count
+            self.bins, self.azimuth_count = t.boxes.shape[:2]
+            self.box = [_Lookup(0.0, 1.0, t.boxes[:, :, j].ravel()) for j in range(4)]
+            self.omega = [_Lookup(0.0, self.bin_mm, t.omega_sr[:, j]) for j in range(self.azimuth_count)]
+            self.azimuth_step = 2.0 * math.pi / self.azimuth_count
 
         def pass_fraction(self) -> np.ndarray:
             """Per retinal radius edge: the fraction of samples in the box that pass the iris."""
@@ -168,25 +167,30 @@ def _make_class(mi, dr):
             hero_only = mi.Spectrum([float(count)] + [0.0] * (count - 1))
             return wavelengths, weight * hero_only, wavelengths[0]
 
-        def _box(self, r):
-            """The sampling box (a0, a1, b0, b1) of the radius bin that holds ``r`` (mm)."""
-            k = dr.minimum(dr.floor(r / self.bin_mm), len(self.boxes_np) - 1)
-            return [lookup.at(dr, k) for lookup in self.box]
+        def _box(self, r, sector):
+            """The sampling box (a0, a1, b0, b1) of the sector: the radius bin holding ``r`` (mm), ``sector``."""
+            k = dr.minimum(dr.floor(r / self.bin_mm), self.bins - 1)
+            return [lookup.at(dr, k * self.azimuth_count + sector) for lookup in self.box]
 
-        def _omega(self, r, cos_psi, sin_psi):
-            """Ω at retinal radius r and azimuth ψ: linear in r, and in ψ (periodic) for a decentred iris."""
-            count = len(self.omega)
-            if count == 1:
-                return self.omega[0](dr, r)
+        def _azimuth(self, cos_psi, sin_psi):
+            """(the sector index, the position between its two azimuth nodes in [0, 1))."""
+            if self.azimuth_count == 1:
+                return 0.0 * cos_psi, 0.0 * cos_psi
             psi = dr.atan2(sin_psi, cos_psi)
             u = dr.select(psi < 0.0, psi + 2.0 * math.pi, psi) / self.azimuth_step
-            j = dr.minimum(dr.floor(u), count - 1)
-            frac = u - j
+            sector = dr.minimum(dr.floor(u), self.azimuth_count - 1)
+            return sector, u - sector
+
+        def _omega(self, r, sector, frac):
+            """Ω at retinal radius r, linear in r and (for a decentred iris) between the sector's azimuths."""
+            count = self.azimuth_count
+            if count == 1:
+                return self.omega[0](dr, r)
             total = 0.0 * r
             for index, lookup in enumerate(self.omega):
                 value = lookup(dr, r)
-                total = total + dr.select(j == index, (1.0 - frac) * value, 0.0)
-                total = total + dr.select(j == (index - 1) % count, frac * value, 0.0)
+                total = total + dr.select(sector == index, (1.0 - frac) * value, 0.0)
+                total = total + dr.select(sector == (index - 1) % count, frac * value, 0.0)
             return total
 
         def sample_ray(self, time, wavelength_sample, position_sample, aperture_sample, active=True):
@@ -200,15 +204,15 @@ def _make_class(mi, dr):
             sin_psi = dr.select(on_axis, 0.0, -up * inv)
             r = self.radius_of(dr, theta)
             p = self.tracer.retina_point(r * cos_psi, r * sin_psi)
-            a0, a1, b0, b1 = self._box(r)
+            sector, frac = self._azimuth(cos_psi, sin_psi)
+            a0, a1, b0, b1 = self._box(r, sector)
             a = a0 + (a1 - a0) * aperture_sample.x
             b = b0 + (b1 - b0) * aperture_sample.y
             q = self.tracer.surface_point(len(self.tracer.shapes) - 2, a * cos_psi - b * sin_psi,
                                           a * sin_psi + b * cos_psi)
             d = (q[0] - p[0], q[1] - p[1], q[2] - p[2])
             out = self.tracer.trace_out(p, d, wavelength_nm)
-            w = self.tracer.projected_solid_angle_weight(p, d) * (a1 - a0) * (b1 - b0) / self._omega(r, cos_psi,
-                                                                                                       sin_psi)
+            w = self.tracer.projected_solid_angle_weight(p, d) * (a1 - a0) * (b1 - b0) / self._omega(r, sector, frac)
             w = dr.select(out.valid & active, w, 0.0)
             to_world = self.world_transform()
             origin = mi.Point3f(out.points[0], out.points[1], -out.points[2])
