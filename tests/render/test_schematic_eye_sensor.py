@@ -179,3 +179,15 @@ def test_scalar_variant_renders_the_same_flat_field():
     image, _ = render(mi, sensor, {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}})
     assert mi.variant() == "scalar_rgb"
     assert abs(image.mean() - 1.0) < 0.1
+
+
+@needs_llvm
+@pytest.mark.parametrize("wavelength_nm", [450.0, 650.0])
+def test_monochromatic_spectral_render_of_white_gives_its_radiance(wavelength_nm):
+    """wavelength_nm in a spectral variant: every wavelength that one, the film's ȳ(λ) response divided
+    out, so white of radiance 1 develops 1 (8 x 8 px x 256 spp: noise of the mean about 0.005)."""
+    mi = mitsuba("spectral")
+    sensor = eye_sensor(spp=256, wavelength_nm=wavelength_nm)
+    sensor["film"].update(width=8, height=8)
+    image, _ = render(mi, sensor, {"type": "constant", "radiance": {"type": "uniform", "value": 1.0}})
+    assert abs(image.mean() - 1.0) < 0.02

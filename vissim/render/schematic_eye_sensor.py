@@ -20,7 +20,9 @@ uniform radiance L gives every pixel the value L, as Mitsuba's ``thinlens`` does
 unit radiance, ``n_vitreous² Ω``: `retinal_irradiance_factor`).
 
 **Wavelength**: ``wavelength_nm`` set: every wavelength is that one (monochromatic; in a mono or
-RGB variant it is the wavelength the optics are traced at, default the model's reference).  In
+RGB variant it is the wavelength the optics are traced at, default the model's reference; in a
+spectral variant the weight is divided by the film's luminance response at that wavelength, so
+a white scene still develops its radiance).  In
 a spectral variant without it, the sampled wavelengths' first (the hero) is traced, the others'
 weights are zeroed and the hero's multiplied by their count, so the film's average over them
 keeps its expectation (Mitsuba's spectral film develops Y with CIE ȳ = V(λ): photopic).
@@ -42,12 +44,13 @@ import math
 
 import numpy as np
 
+from vissim.checks import number_within
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
 from vissim.render.schematic_eye_tables import EyeTables, eye_tables
-from vissim.render.schematic_eye_trace import SchematicEyeTracer
+from vissim.render.schematic_eye_trace import TABLE_RANGE_NM, SchematicEyeTracer
 
 __all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_tables"]
 
@@ -116,7 +119,16 @@ def _make_class(mi, dr):
             accommodation = float(props.get("accommodation_diopters", 0.0))
             eye = eye_model(self.model, accommodation)
             fixed = props.get("wavelength_nm", None)
-            self.fixed_wavelength_nm = None if fixed is None else float(fixed)
+            self.fixed_wavelength_nm = None if fixed is None else number_within(fixed, "wavelength", "nm",
+                                                                                TABLE_RANGE_NM)
+            if spectral and self.fixed_wavelength_nm is not None and not 360.0 <= self.fixed_wavelength_nm <= 830.0:
+                raise VissimInputError(f"a monochromatic spectral render needs 360-830 nm (where CIE ȳ is "
+                                       f"tabulated), got {self.fixed_wavelength_nm:g} nm")
+            if spectral and self.fixed_wavelength_nm is not None:
+                # the film develops Y = ȳ(λ) L MI_CIE_Y_NORMALIZATION: divide it out
+                y_bar = mi.cie1931_y(mi.Float(self.fixed_wavelength_nm))
+                y_bar = float(y_bar[0] if dr.is_array_v(y_bar) else y_bar)
+                self.mono_scale = 1.0 / (y_bar * mi.MI_CIE_Y_NORMALIZATION)
             self.wavelength_nm = self.fixed_wavelength_nm or eye.reference_wavelength_nm
             self.pupil_mm, self.iris_mm = _pupils(eye, props.get("pupil_mm", None), props.get("iris_mm", None),
                                                   self.wavelength_nm)
@@ -160,7 +172,7 @@ def _make_class(mi, dr):
                                                               active)
                 return wavelengths, weight, self.wavelength_nm
             if self.fixed_wavelength_nm is not None:
-                return mi.Spectrum(self.fixed_wavelength_nm), mi.Spectrum(1.0), self.fixed_wavelength_nm
+                return mi.Spectrum(self.fixed_wavelength_nm), mi.Spectrum(self.mono_scale), self.fixed_wavelength_nm
             wavelengths, weight = self.sample_wavelengths(dr.zeros(mi.SurfaceInteraction3f), wavelength_sample,
                                                           active)
             count = dr.size_v(mi.Spectrum)

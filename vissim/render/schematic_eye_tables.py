@@ -17,7 +17,8 @@
   lens moves far less than the margin between 400 and 700 nm, and Ω changes by < 0.5 %
   (Navarro, 3 mm pupil: +0.48 % at 400 nm, -0.1 % at 700 nm, against 589.3 nm).
 * **Normalisation**: a `GRID` x `GRID` grid over each edge's box is a quadrature of the projected
-  solid angle of the rays that get out, ``Ω(r, ψ) = ∫ cos θ_r dω``, θ_r the angle from the retina's normal (mm² / mm²: sr);
+  solid angle of the rays that get out, ``Ω(r, ψ) = ∫ cos θ_r dω``, θ_r the angle from the
+  retina's normal (sr; a 0.1-0.3 % quadrature error: the spread of Ω at r = 0 over azimuths);
   the sensor divides its weight by it (interpolated in r and in the azimuth ψ), so a uniform
   radiance fills the image with that radiance.  The retinal irradiance is then
   ``n_vitreous² Ω L`` (`retinal_irradiance_factor`).
