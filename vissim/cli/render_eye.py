@@ -39,10 +39,10 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     pupil.add_argument("--pupil-mm", type=float, metavar="D", help="entrance-pupil diameter, mm (default 3)")
     pupil.add_argument("--iris-mm", type=float, metavar="D", help="or the iris diameter, mm")
     parser.add_argument("--field-deg", metavar="X,Y", default="0,0",
-                        help="where the image's centre lies in the visual field, degrees from the eye's axis to "
-                             "the observer's right (X) and up (Y), as the image's columns and rows run (default "
-                             "0,0).  The chart stays on the axis.  Note: vissim eye --field-deg counts x to the "
-                             "examiner's right, the other way")
+                        help="where the chart lies in the visual field: the eye turns so that the chart's centre "
+                             "is X degrees to the observer's right and Y degrees up from its optical axis, as the "
+                             "image's columns and rows run; the image stays centred on the chart (default 0,0).  "
+                             "Note: vissim eye --field-deg counts x to the examiner's right, the other way")
     colour = parser.add_mutually_exclusive_group()
     colour.add_argument("--wavelength-nm", type=float, metavar="NM",
                         help="monochromatic light of this wavelength (default: the model's reference wavelength)")

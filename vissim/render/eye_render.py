@@ -5,6 +5,9 @@ radiance = its reflectance facing the observer at ``chart_distance_m``, a trial 
 ``vissim_refract`` glass with its back vertex ``vertex_mm`` in front of the eye), with its
 ``thinlens`` camera replaced by the schematic-eye sensor at the corneal vertex.  The bench's
 camera pupil is set to the eye's entrance pupil so the lens mesh is sized for the eye's beam.
+``field_deg`` turns the eye about its corneal vertex so that the chart's centre lies that far
+(to the observer's right, up) from the eye's optical axis; the image stays centred on the chart
+(`eye_to_world`), seen through the trial lens's centre.
 
 Wavelength: ``wavelength_nm`` (monochromatic; default the model's reference) on the mono
 variant, or ``spectrum="photopic"``: the spectral variant, hero wavelength per path, the film
@@ -15,7 +18,10 @@ accumulation): the same seed gives the same pixels.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from vissim.errors import VissimInputError
 
@@ -71,6 +77,40 @@ class EyeRender:
             raise VissimInputError(f"samples per pixel must be >= 1, got {self.spp}")
 
 
+def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:
+    """The lens mesh's diameter: the bench's rule (`DslrBench.clear_aperture`: the beam at the holder's
+    far side x 1.25 + 2 mm) for the widest direction the image looks along, field offset included."""
+    from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER
+
+    rows, cols = settings.size_px
+    half_deg = [abs(f) + 0.5 * n * settings.arcmin_per_px / 60.0 for f, n in zip(settings.field_deg, (cols, rows))]
+    reach = math.radians(math.hypot(*half_deg))
+    depth = settings.vertex_mm + MAX_LENSES_IN_HOLDER * (4.0 + 2.0)
+    beam = 1.2 * pupil_mm + 2.0 * depth * math.tan(reach)  # an iris's entrance pupil is at most ~1.13 x it
+    return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+
+
+def eye_to_world(field_deg) -> list[list[float]]:
+    """The sensor's to_world (4 x 4, corneal vertex at the origin) that turns the eye so that the world's +z
+    (the chart's centre) lies ``field_deg`` = (right, up) degrees from its optical axis.
+
+    The sensor's local frame has +x to the observer's left, +y up, +z along the axis; the direction
+    (right, up) of the sensor's map is ``(-sin θ cos φ, sin θ sin φ, cos θ)``, θ = |(right, up)|,
+    φ = atan2(up, right).  The rotation by θ about ``d x z`` takes it to +z (Rodrigues)."""
+    right, up = (math.radians(float(v)) for v in field_deg)
+    theta = math.hypot(right, up)
+    if theta == 0.0:
+        return [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    d = np.array([-math.sin(theta) * right / theta, math.sin(theta) * up / theta, math.cos(theta)])
+    axis = np.cross(d, [0.0, 0.0, 1.0])
+    axis /= np.linalg.norm(axis)
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    rotation = np.eye(3) + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)
+    out = np.eye(4)
+    out[:3, :3] = rotation
+    return out.tolist()
+
+
 def _bench(settings: EyeRender, pupil_mm: float):
     from vissim.bench.dslr.bench import DslrBench
     from vissim.optics.trial_lens import TrialLens
@@ -79,6 +119,7 @@ def _bench(settings: EyeRender, pupil_mm: float):
     focal_mm = 18.0
     return DslrBench(focal_length_mm=focal_mm, f_number=focal_mm / pupil_mm, focus_distance_mm=distance_mm,
                      chart_distance_mm=distance_mm, vertex_distance_mm=settings.vertex_mm,
+                     clear_aperture_mm=_clear_aperture_mm(settings, pupil_mm),
                      lenses=() if settings.lens is None else (TrialLens(*settings.lens),),
                      arcmin_per_px=settings.arcmin_per_px, size_px=tuple(settings.size_px), spp=settings.spp,
                      seed=settings.seed, sampler="independent")
@@ -104,7 +145,8 @@ def eye_scene_dict(settings: EyeRender) -> dict:
                                MM_PER_INCH / chart_mm_per_texel(bench))
     scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="mono")
     camera = scene["camera"]
-    sensor.update({"to_world": camera["to_world"], "film": camera["film"], "sampler": camera["sampler"],
+    # the bench's camera sits at the origin looking along +z (identity): the eye takes its place, turned
+    sensor.update({"to_world": eye_to_world(settings.field_deg), "film": camera["film"], "sampler": camera["sampler"],
                    "far_clip": 10.0 * bench.chart_distance_mm})
     scene["camera"] = sensor
     return scene
