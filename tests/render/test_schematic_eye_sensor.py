@@ -66,7 +66,8 @@ def test_spectral_hero_wavelength_keeps_the_films_mean():
 
 
 @needs_llvm
-@pytest.mark.parametrize("model, min_pass", [("navarro-1985", 0.4), ("liou-brennan-1997", 0.3)])
+@pytest.mark.parametrize("model, min_pass", [("navarro-1985", 0.65),
+                                             pytest.param("liou-brennan-1997", 0.5, marks=pytest.mark.slow)])
 def test_pupil_bounds_hold_every_ray_that_passes_the_iris(model, min_pass):
     """Rays from retinal points across a few sectors (radius bin x azimuth step) to a dense grid over the
     whole lens back, in each point's own frame: every one that gets out lands inside its sector's box
@@ -80,7 +81,7 @@ def test_pupil_bounds_hold_every_ray_that_passes_the_iris(model, min_pass):
     eye = eye_model(model)
     tables = eye_tables(eye, 3.0, 589.3, 10.0)
     tracer = SchematicEyeTracer(eye, 3.0)
-    axis = np.linspace(-GRID_RADIUS_MM, GRID_RADIUS_MM, 241)
+    axis = np.linspace(-GRID_RADIUS_MM, GRID_RADIUS_MM, 401)  # 0.025 mm: as fine as the tables' fine grid
     a, b = (v.ravel() for v in np.meshgrid(axis, axis))
     count = len(tables.azimuths_rad)
     step = 2 * math.pi / count
