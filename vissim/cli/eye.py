@@ -38,8 +38,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--wavelength-nm", type=float, default=None, metavar="NM",
                         help="wavelength, nm (default: the model's reference wavelength)")
     parser.add_argument("--field-deg", default="0,0", metavar="X,Y",
-                        help="field angle from the optical axis, degrees, x (examiner's right) and y (up) "
-                             "(default 0,0)")
+                        help="field angle, degrees, x (examiner's right; nasal for the right eye the models "
+                             "are) and y (up), from the visual axis for a model that has one (liou-brennan-1997: "
+                             "0,0 is where the eye fixates, 5 deg nasal of its optical axis), else from the optical "
+                             "axis (default 0,0)")
     parser.add_argument("--rx", metavar="PRESCRIPTION",
                         help=f"{RX_HELP}: trace the eye that has it (axial length for its sphere, a toric cornea "
                              "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea")
@@ -110,7 +112,7 @@ def _print_text(report: EyeReport) -> None:
     rows = [
         ("eye", f"{record['model']} at {record['accommodation_diopters']:g} D accommodation{rx}"),
         ("wavelength", f"{record['wavelength_nm']:g} nm{wavelength}"),
-        ("field", f"({record['field_deg'][0]:g}, {record['field_deg'][1]:g}) deg"),
+        ("field", f"({record['field_deg'][0]:g}, {record['field_deg'][1]:g}) deg from the {record['field_axis']}"),
         *[("lens", f"{lens['marked_power']} (back vertex power), n_d {lens['refractive_index_d']:g}, "
                    f"{lens['center_thickness_mm']:.3f} mm thick, back vertex {report.lens_setup.vertex_distance_mm:g} mm "
                    "in front of the cornea") for lens in record["lenses"]],

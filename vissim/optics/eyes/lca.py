@@ -144,7 +144,7 @@ def lca_curve(eye: SchematicEye, wavelengths_nm=LCA_WAVELENGTHS_NM, *, pupil_mm=
     rows = []
     for w in wavelengths:
         traced, rms, _ = _traced_m(eye, w, field, iris)
-        rows.append(LcaRow(w, traced - traced_ref, rms - rms_ref, refraction_diopters(eye, w) - paraxial_ref,
+        rows.append(LcaRow(w, traced - traced_ref, rms - rms_ref, float(refraction_diopters(eye, w) - paraxial_ref),
                            chromatic_difference_of_refraction_diopters(w, reference),
                            atchison_smith_2005_diopters(w, reference)))
     return LcaCurve(eye.name, reference, pupil_ref, iris, given, field, tuple(rows))

@@ -176,6 +176,7 @@ class EyeReport:
             "wavelength_nm": self.wavelength_nm,
             "wavelength": "given" if self.wavelength_given else "the model's reference wavelength",
             "field_deg": list(wf.field_deg),
+            "field_axis": wf.field_axis,
             "zernike_um": {f"{n},{m}": float(v) for (n, m), v in sorted(wf.zernike_um.items())},
             "zernike_pupil": "entrance pupil",
             "rms_um": wf.rms_um,
