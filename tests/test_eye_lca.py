@@ -110,17 +110,32 @@ def test_navarro_eyes_traced_lca_beside_thibos_and_atchison_smith(build):
         assert row.traced_diopters - row.atchison_smith_diopters == pytest.approx(atchison, abs=RECORDED_TOL_D)
 
 
+LCA_ROW_KEYS = {"wavelength_nm", "traced_diopters", "traced_minimum_rms_diopters", "paraxial_diopters",
+                "thibos_diopters", "atchison_smith_diopters"}
+
+
+def test_curve_json_names_its_reference_pupil_and_columns():
+    record = lca_curve(navarro_1985(), [450.0, 589.3, 650.0], iris_mm=2.0).as_json()
+    assert record["reference_wavelength_nm"] == 589.3 and record["refraction_plane"] == "corneal vertex"
+    assert record["pupil"]["given"] == "iris" and record["pupil"]["iris_mm"] == 2.0
+    assert record["pupil"]["entrance_pupil_mm"] == pytest.approx(2.26, abs=0.01)  # ~1.13 x the iris
+    assert set(record["columns"]) == LCA_ROW_KEYS - {"wavelength_nm"}
+    assert all(set(r) == LCA_ROW_KEYS and all(isinstance(v, float) for v in r.values()) for r in record["rows"])
+    assert record["rows"][1]["traced_diopters"] == 0.0 and record["rows"][1]["atchison_smith_diopters"] == 0.0
+    json.dumps(record, allow_nan=False)
+
+
+@pytest.mark.slow
 def test_cli_lca_json_has_one_row_per_wavelength_with_the_columns(capsys):
     assert main(["eye", "navarro-1985", "--pupil-mm", "1", "--lca", "--json"]) == 0
     lca = json.loads(capsys.readouterr().out)["lca"]
     assert lca["reference_wavelength_nm"] == 589.3 and lca["refraction_plane"] == "corneal vertex"
     assert lca["pupil"]["entrance_pupil_mm"] == pytest.approx(1.0, abs=1e-9)
     assert [r["wavelength_nm"] for r in lca["rows"]] == list(LCA_WAVELENGTHS_NM)
-    keys = {"wavelength_nm", "traced_diopters", "traced_minimum_rms_diopters", "paraxial_diopters",
-            "thibos_diopters", "atchison_smith_diopters"}
-    assert all(set(r) == keys and all(isinstance(v, float) for v in r.values()) for r in lca["rows"])
+    assert all(set(r) == LCA_ROW_KEYS and all(isinstance(v, float) for v in r.values()) for r in lca["rows"])
 
 
+@pytest.mark.slow
 def test_cli_lca_text_prints_the_table(capsys):
     assert main(["eye", "arizona", "--iris-mm", "2", "--lca"]) == 0
     out = capsys.readouterr().out
