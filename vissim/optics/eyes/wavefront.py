@@ -59,7 +59,8 @@ from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefr
 from vissim.optics.zernike import fit_zernike_um
 
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "field_from_optical_axis_deg", "field_axis",
-           "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm", "DEFAULT_SAMPLES", "GRID_MARGIN"]
+           "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
+           "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
 #: Samples across the iris (odd: the chief ray is the grid's centre) and the grid's reach, in iris radii.
 DEFAULT_SAMPLES = 65
