@@ -58,7 +58,7 @@ from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.zernike import fit_zernike_um
 
-__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_from_optical_axis_deg", "field_axis",
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
            "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
@@ -86,8 +86,9 @@ def field_axis(eye: SchematicEye) -> str:
     return "visual axis" if eye.visual_axis_deg != 0.0 else "optical axis"
 
 
-def _object_direction(eye: SchematicEye, field_deg) -> np.ndarray:
-    """The unit vector from the eye towards the field point, in the eye's (optical-axis) frame.
+def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:
+    """The unit vector from the eye towards the field point, in the eye's (optical-axis) frame: x, y
+    OSA's (x the examiner's right, y up), z the axis towards the object.
 
     The rule, written once: a field angle (x, y) is the direction (tan x, tan y, 1) in the frame of
     the axis `field_axis` names. The visual axis is the optical axis turned by ``visual_axis_deg``
@@ -110,13 +111,13 @@ def _object_direction(eye: SchematicEye, field_deg) -> np.ndarray:
 def field_from_optical_axis_deg(eye: SchematicEye, field_deg) -> tuple[float, float]:
     """The field angle (x, y), degrees, given from `field_axis`, as angles from the optical axis
     (each the arctangent of its direction's x or y over z); the same angles for a model with no visual axis."""
-    o = _object_direction(eye, field_deg)
+    o = field_direction(eye, field_deg)
     return math.degrees(math.atan2(o[0], o[2])), math.degrees(math.atan2(o[1], o[2]))
 
 
 def _beam_direction(eye: SchematicEye, field_deg) -> np.ndarray:
     """The collimated beam's direction of travel (towards +z) from the field point ``field_deg``."""
-    o = _object_direction(eye, field_deg)
+    o = field_direction(eye, field_deg)
     return np.array([-o[0], -o[1], o[2]])
 
 
