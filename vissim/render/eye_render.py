@@ -57,7 +57,7 @@ class EyeRender:
         if self.spectrum == "photopic" and self.wavelength_nm is not None:
             raise VissimInputError("give a wavelength (monochromatic) or the photopic spectrum, not both")
         from vissim.checks import arcmin_per_px, eye_pupil_diameter_mm, finite_number, number_within, positive_number
-        from vissim.render.schematic_eye_trace import TABLE_RANGE_NM
+        from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM
         from vissim.optics.eyes.models import eye_model
 
         eye_model(self.model, self.accommodation_diopters)  # the model's name and accommodation range
@@ -69,7 +69,7 @@ class EyeRender:
             if abs(finite_number(value, "field angle", "deg")) > 45.0:
                 raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within 45 deg of the axis")
         if self.wavelength_nm is not None:
-            number_within(self.wavelength_nm, "wavelength", "nm", TABLE_RANGE_NM)
+            number_within(self.wavelength_nm, "wavelength", "nm", EYE_RENDER_WAVELENGTH_RANGE_NM)
         arcmin_per_px(self.arcmin_per_px)
         positive_number(self.chart_distance_m, "chart distance", "m")
         positive_number(self.vertex_mm, "vertex distance", "mm")

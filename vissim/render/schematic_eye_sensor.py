@@ -53,7 +53,8 @@ from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
 from vissim.render.schematic_eye_tables import EyeTables, eye_tables
-from vissim.render.schematic_eye_trace import TABLE_RANGE_NM, SchematicEyeTracer
+from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM
+from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
 __all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_tables"]
 
@@ -123,7 +124,7 @@ def _make_class(mi, dr):
             eye = eye_model(self.model, accommodation)
             fixed = props.get("wavelength_nm", None)
             self.fixed_wavelength_nm = None if fixed is None else number_within(fixed, "wavelength", "nm",
-                                                                                TABLE_RANGE_NM)
+                                                                                EYE_RENDER_WAVELENGTH_RANGE_NM)
             if spectral and self.fixed_wavelength_nm is not None and not 360.0 <= self.fixed_wavelength_nm <= 830.0:
                 raise VissimInputError(f"a monochromatic spectral render needs 360-830 nm (where CIE ȳ is "
                                        f"tabulated), got {self.fixed_wavelength_nm:g} nm")
