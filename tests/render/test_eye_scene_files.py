@@ -101,6 +101,7 @@ BAD = [  # (file text, fragments the one error line must hold besides the file's
     ("[chart]\nletter = \"Q\"\n", ["[chart].letter", "Q"]),
     ("[spectacles]\ncylinder_diopters = -1.0\naxis_deg = 200.0\n", ["[spectacles]", "axis_deg", "deg", "200"]),
     ("[eye]\npupil_mm = 3.0\niris_mm = 4.0\n", ["pupil_mm", "iris_mm"]),
+    ("[eye]\nfield_deg = [50.0, 0.0]\n", ["[eye].field_deg", "50", "deg"]),
     ("[light]\nwavelength_nm = 550.0\nspectrum = \"photopic\"\n", ["wavelength", "photopic"]),
     ("[eye]\nrx = \"minus two\"\n", ["[eye].rx", "minus two", "dioptres"]),
     ("[eye\n", ["not valid TOML"]),

@@ -134,7 +134,31 @@ def eye_scene_values(path: str | os.PathLike[str]) -> dict[str, Any]:
     _checked_elsewhere(values, source)
     if "iris_mm" in values and "pupil_mm" not in values:
         values["pupil_mm"] = None  # the iris instead of EyeRender's default entrance pupil
+    _whole(values, source)
     return values
+
+
+def _whole(values: dict, source: str) -> None:
+    """`EyeRender` of ``values``; a refusal names the key that alone is refused (field_deg beyond the
+    sensor's reach), or the file when it takes two keys (pupil_mm with iris_mm)."""
+    try:
+        EyeRender(**values)
+    except VissimInputError as exc:
+        keys = {field: f"[{table}].{key}" for table, fields in EYE_SCENE_KEYS.items()
+                for key, (field, _, _) in fields.items()}
+        for field in (field for field in keys if field in values):
+            alone = {field: values[field], "pupil_mm": None} if field == "iris_mm" else {field: values[field]}
+            if not _accepted(alone):
+                raise VissimInputError(f"{source} {keys[field]}: {exc}") from None
+        raise VissimInputError(f"{source}: {exc}") from None
+
+
+def _accepted(values: dict) -> bool:
+    try:
+        EyeRender(**values)
+    except VissimInputError:
+        return False
+    return True
 
 
 def eye_render_from_values(values: dict[str, Any], source: str) -> EyeRender:
