@@ -67,6 +67,11 @@ def render_atv(root):
     return [scene], lambda out, _: ["render", "atv", "--scene", str(scene), "-o", out]
 
 
+def render_eye(root):
+    scene = _copy("scenes/eye.toml", root / "in" / "eye.toml")
+    return [scene], lambda out, _: ["render", "eye", "--scene", str(scene), "-o", out]
+
+
 def render_depth(root):
     scene = _copy("scenes/depth_panels.toml", root / "in" / "panels.toml")
     others = {"-o": str(root / "o.exr"), "--all-in-focus": str(root / "aif.exr"), "--depth": str(root / "d.exr")}
@@ -91,11 +96,12 @@ def atv_analyze(root):
 
 
 CASES = {"blur": blur, "blur-depth": blur_depth, "fit-rx": fit_rx, "render bench": render_bench,
-         "render atv": render_atv, "render depth": render_depth, "validate": validate, "atv analyze": atv_analyze}
+         "render atv": render_atv, "render depth": render_depth, "render eye": render_eye, "validate": validate, "atv analyze": atv_analyze}
 #: Commands with an output but no input file (nothing to clash with); the outputs of chart/psf are
 #: checked against each other by the output transaction (tests/cli/test_output_safety.py).
-NO_INPUT_FILES = {"psf", "chart", "demo", "atv simulate", "atv run", "render eye"}
-HAS_OVERWRITE = {"blur", "blur-depth", "fit-rx", "render bench", "render atv", "render depth", "atv analyze"}
+NO_INPUT_FILES = {"psf", "chart", "demo", "atv simulate", "atv run"}
+HAS_OVERWRITE = {"blur", "blur-depth", "fit-rx", "render bench", "render atv", "render depth", "atv analyze",
+                 "render eye"}
 
 
 def spelled(target: Path, how: str, root: Path) -> str:

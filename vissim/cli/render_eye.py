@@ -1,18 +1,25 @@
 """``vissim render eye``: a letter chart at a distance seen through a schematic eye's traced optics.
 
-Registered by `vissim.cli.render` through `add_eye_parser`.  Thin: read the options into a
-`vissim.render.eye_render.EyeRender`, render, write the EXR with provenance, print a summary.
+Registered by `vissim.cli.render` through `add_eye_parser`.  Thin: read the scene file (``--scene``,
+`vissim.render.eye_scene_files`) and the options over it into a `vissim.render.eye_render.EyeRender`
+(options, then the file, then its defaults), render, write the EXR with provenance (the scene file's
+path among its inputs), print a summary.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
+from vissim.atomic import check_outputs_apart
 from vissim.checks import size_text
 from vissim.cli._common import (RX_HELP, add_trial_lens_args, field_deg_from_text, refuse_existing, size_from_text,
                                 trial_lens_powers)
 from vissim.errors import VissimInputError
+from vissim.render.eye_render import EyeRender
+
+_DEFAULT = {field.name: field.default for field in dataclasses.fields(EyeRender)}  # the one set of defaults
 
 __all__ = ["add_eye_parser", "run_eye"]
 
@@ -32,41 +39,48 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
             "reaches that retinal point through the pupil (a uniform white scene gives 1 everywhere)."
         ),
     )
-    parser.add_argument("--eye-model", choices=tuple(EYE_MODELS), default="navarro-1985", metavar="MODEL",
-                        help="the schematic eye: " + ", ".join(EYE_MODELS) + " (default navarro-1985)")
-    parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
-                        help="the eye's accommodation, dioptres, within the model's range (default 0)")
+    parser.add_argument("--scene", metavar="TOML",
+                        help="eye scene file (see scenes/eye.toml); the options below override its values")
+    parser.add_argument("--eye-model", choices=tuple(EYE_MODELS), metavar="MODEL",
+                        help="the schematic eye: " + ", ".join(EYE_MODELS) + f" (default {_DEFAULT['model']})")
+    parser.add_argument("--accommodation-diopters", type=float, metavar="A",
+                        help="the eye's accommodation, dioptres, within the model's range "
+                             f"(default {_DEFAULT['accommodation_diopters']:g})")
     pupil = parser.add_mutually_exclusive_group()
-    pupil.add_argument("--pupil-mm", type=float, metavar="D", help="entrance-pupil diameter, mm (default 3)")
+    pupil.add_argument("--pupil-mm", type=float, metavar="D",
+                       help=f"entrance-pupil diameter, mm (default {_DEFAULT['pupil_mm']:g})")
     pupil.add_argument("--iris-mm", type=float, metavar="D", help="or the iris diameter, mm")
-    parser.add_argument("--field-deg", metavar="X,Y", default="0,0",
+    parser.add_argument("--field-deg", metavar="X,Y",
                         help="where the chart lies in the visual field: the eye turns so that the chart's centre "
                              "is at this field angle from its optical axis, degrees, x (examiner's right: the "
                              "observer's left) and y (up), as vissim eye and psf count it; the image stays "
-                             "centred on the chart (default 0,0)")
+                             "centred on the chart (default {:g},{:g})".format(*_DEFAULT["field_deg"]))
     colour = parser.add_mutually_exclusive_group()
     colour.add_argument("--wavelength-nm", type=float, metavar="NM",
                         help="monochromatic light of this wavelength (default: the model's reference wavelength)")
     colour.add_argument("--spectrum", choices=("photopic",),
                         help="photopic: white light over the visible spectrum, each ray at its own wavelength, the "
                              "image weighted by the eye's photopic sensitivity V(λ)")
-    parser.add_argument("--distance-m", type=float, default=6.0, metavar="M", help="chart distance (default 6 m)")
-    parser.add_argument("--letter", default="K", metavar="X", help="one Sloan letter (default K)")
-    parser.add_argument("--logmar", type=float, default=0.5, metavar="L", help="letter size in LogMAR (default 0.5)")
+    parser.add_argument("--distance-m", type=float, metavar="M",
+                        help=f"chart distance (default {_DEFAULT['chart_distance_m']:g} m)")
+    parser.add_argument("--letter", metavar="X", help=f"one Sloan letter (default {_DEFAULT['letter']})")
+    parser.add_argument("--logmar", type=float, metavar="L",
+                        help=f"letter size in LogMAR (default {_DEFAULT['logmar']:g})")
     parser.add_argument("--rx", metavar="PRESCRIPTION",
                         help=f"{RX_HELP}: render the eye that has it (axial length for its sphere, a toric cornea for "
                              "its cylinder), written at the spectacle plane --vertex-mm in front of the cornea, as "
                              "vissim eye --rx does")
-    add_trial_lens_args(parser.add_argument_group("trial lens in front of the eye"))
-    parser.add_argument("--vertex-mm", type=float, default=12.0, metavar="MM",
+    add_trial_lens_args(parser.add_argument_group("trial lens in front of the eye (replaces the scene file's)"))
+    parser.add_argument("--vertex-mm", type=float, metavar="MM",
                         help="the spectacle plane, mm in front of the cornea: where --rx is written and the trial "
-                             "lens's back vertex sits (default 12)")
-    parser.add_argument("--size", metavar="ROWSxCOLS", default="64x64", help="image size (default 64x64)")
-    parser.add_argument("--arcmin-per-px", type=float, default=1.0, metavar="ARCMIN",
-                        help="angular pixel size (default 1)")
-    parser.add_argument("--spp", type=int, default=64, metavar="N", help="samples per pixel (default 64)")
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="sampler seed (default 0): the same seed "
-                        "gives the same image")
+                             f"lens's back vertex sits (default {_DEFAULT['vertex_mm']:g})")
+    parser.add_argument("--size", metavar="ROWSxCOLS",
+                        help="image size (default {}x{})".format(*_DEFAULT["size_px"]))
+    parser.add_argument("--arcmin-per-px", type=float, metavar="ARCMIN",
+                        help=f"angular pixel size (default {_DEFAULT['arcmin_per_px']:g})")
+    parser.add_argument("--spp", type=int, metavar="N", help=f"samples per pixel (default {_DEFAULT['spp']})")
+    parser.add_argument("--seed", type=int, metavar="S", help=f"sampler seed (default {_DEFAULT['seed']}): the same "
+                        "seed gives the same image")
     parser.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
     parser.add_argument("-o", "--output", required=True, type=Path, metavar="PATH", help="output .exr (linear)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
@@ -74,25 +88,42 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
+def _settings(args: argparse.Namespace):
+    """The scene file's values (or none), the given options over them, `EyeRender`'s defaults under both."""
+    from vissim.render.eye_scene_files import eye_render_from_values, eye_scene_values
+
+    values = {} if args.scene is None else eye_scene_values(args.scene)
+    options = {"model": args.eye_model, "accommodation_diopters": args.accommodation_diopters,
+               "chart_distance_m": args.distance_m, "letter": args.letter, "logmar": args.logmar, "rx": args.rx,
+               "vertex_mm": args.vertex_mm, "arcmin_per_px": args.arcmin_per_px, "spp": args.spp, "seed": args.seed,
+               "field_deg": None if args.field_deg is None else field_deg_from_text(args.field_deg),
+               "size_px": None if args.size is None else size_from_text(args.size, "64x64"),
+               "lens": trial_lens_powers(args)}
+    values.update({key: value for key, value in options.items() if value is not None})
+    if args.pupil_mm is not None or args.iris_mm is not None:
+        values.update(pupil_mm=args.pupil_mm, iris_mm=args.iris_mm)
+    if args.wavelength_nm is not None:
+        values.update(wavelength_nm=args.wavelength_nm, spectrum="mono")
+    if args.spectrum is not None:
+        values.update(wavelength_nm=None, spectrum=args.spectrum)
+    return eye_render_from_values(values, "command line" if args.scene is None else f"{args.scene} with the options")
+
+
 def run_eye(args: argparse.Namespace) -> int:
     from vissim.imageio import write_image
-    from vissim.render.eye_render import EyeRender, render_eye
+    from vissim.render.eye_render import render_eye
 
+    check_outputs_apart([args.scene], [args.output])
     if args.output.suffix.lower() != ".exr":
         raise VissimInputError(f"render eye writes linear float EXR; give an output ending in .exr, got {args.output}")
-    if args.spp < 1:
-        raise VissimInputError(f"--spp must be a positive number of samples per pixel, got {args.spp}")
     refuse_existing(args.output, overwrite=args.overwrite)
-    pupil = 3.0 if args.pupil_mm is None and args.iris_mm is None else args.pupil_mm
-    settings = EyeRender(model=args.eye_model, accommodation_diopters=args.accommodation_diopters, pupil_mm=pupil,
-                         iris_mm=args.iris_mm, field_deg=field_deg_from_text(args.field_deg),
-                         wavelength_nm=args.wavelength_nm, spectrum=args.spectrum or "mono",
-                         size_px=size_from_text(args.size, "64x64"), arcmin_per_px=args.arcmin_per_px, spp=args.spp, seed=args.seed,
-                         chart_distance_m=args.distance_m, letter=args.letter, logmar=args.logmar,
-                         lens=trial_lens_powers(args), vertex_mm=args.vertex_mm, rx=args.rx)
+    settings = _settings(args)
     result = render_eye(settings, args.variant)
-    write_image(args.output, result.pixels, provenance=result.provenance, overwrite=args.overwrite,
-                arcmin_per_px=args.arcmin_per_px)
+    provenance = dict(result.provenance)
+    if args.scene is not None:
+        provenance["inputs"] = dict(provenance["inputs"], scene_file=str(args.scene))
+    write_image(args.output, result.pixels, provenance=provenance, overwrite=args.overwrite,
+                arcmin_per_px=settings.arcmin_per_px)
     print(f"wrote {args.output}: {size_text(result.pixels.shape)}, {result.spp} spp, {result.variant}, "
-          f"{result.seconds:.1f} s; {args.eye_model}")
+          f"{result.seconds:.1f} s; {settings.model}")
     return 0
