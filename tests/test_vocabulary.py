@@ -99,7 +99,7 @@ def test_every_wavelength_default_is_the_one_constant():
             seen.append(path)
             if path in (("render", "bench"), ("bench", "wavefront")):
                 assert action.default in (None, D_LINE_NM) and "the d line" in action.help
-            elif path == ("eye",):
+            elif path in (("eye",), ("render", "eye")):
                 assert action.default is None and "the model's reference wavelength" in action.help
             elif action.default is None:
                 assert path == ("blur",) and f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help

@@ -16,6 +16,7 @@ from vissim.charts import POLARITIES
 from vissim.cli._common import add_trial_lens_args, check_outputs_apart, refuse_existing, trial_lens_powers
 from vissim.cli.render_atv import add_atv_parser
 from vissim.cli.render_depth import add_depth_parser
+from vissim.cli.render_eye import add_eye_parser
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
 
@@ -34,6 +35,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     add_bench_parser(benches)
     add_atv_parser(benches)
     add_depth_parser(benches)
+    add_eye_parser(benches)
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
     return parser
 

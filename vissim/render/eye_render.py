@@ -1,0 +1,169 @@
+"""A letter chart at a distance seen by a schematic eye (`vissim_schematic_eye`), optionally through a trial lens.
+
+The scene is the DSLR bench's (`vissim.bench.dslr.bench.dslr_scene`: a self-emitting chart of
+radiance = its reflectance facing the observer at ``chart_distance_m``, a trial lens mesh of
+``vissim_refract`` glass with its back vertex ``vertex_mm`` in front of the eye), with its
+``thinlens`` camera replaced by the schematic-eye sensor at the corneal vertex.  The bench's
+camera pupil is set to the eye's entrance pupil so the lens mesh is sized for the eye's beam.
+``field_deg`` turns the eye about its corneal vertex so that the chart's centre lies that far
+(to the observer's right, up) from the eye's optical axis; the image stays centred on the chart
+(`eye_to_world`), seen through the trial lens's centre.
+
+Wavelength: ``wavelength_nm`` (monochromatic; default the model's reference) on the mono
+variant, or ``spectrum="photopic"``: the spectral variant, hero wavelength per path, the film
+developing luminance (CIE ȳ = V(λ)).  Determinism: `vissim.render.run.render_scene` (fixed-order
+accumulation): the same seed gives the same pixels.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from vissim.errors import VissimInputError
+
+__all__ = ["EyeRender", "eye_scene_dict", "render_eye", "SPECTRA"]
+
+SPECTRA = ("mono", "photopic")
+
+
+@dataclass(frozen=True)
+class EyeRender:
+    """What to render (module doc); pupil: exactly one of ``pupil_mm`` (entrance pupil) and ``iris_mm``."""
+
+    model: str = "navarro-1985"
+    accommodation_diopters: float = 0.0
+    pupil_mm: float | None = 3.0
+    iris_mm: float | None = None
+    field_deg: tuple[float, float] = (0.0, 0.0)
+    wavelength_nm: float | None = None
+    spectrum: str = "mono"
+    size_px: tuple[int, int] = (64, 64)
+    arcmin_per_px: float = 1.0
+    spp: int = 64
+    seed: int = 0
+    chart_distance_m: float = 6.0
+    letter: str = "K"
+    logmar: float = 1.0
+    lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
+    vertex_mm: float = 12.0
+
+    def __post_init__(self) -> None:
+        if self.spectrum not in SPECTRA:
+            raise VissimInputError(f"spectrum must be one of {', '.join(SPECTRA)}, got {self.spectrum!r}")
+        if self.spectrum == "photopic" and self.wavelength_nm is not None:
+            raise VissimInputError("give a wavelength (monochromatic) or the photopic spectrum, not both")
+        from vissim.checks import arcmin_per_px, eye_pupil_diameter_mm, finite_number, number_within, positive_number
+        from vissim.render.schematic_eye_trace import TABLE_RANGE_NM
+        from vissim.optics.eyes.models import eye_model
+
+        eye_model(self.model, self.accommodation_diopters)  # the model's name and accommodation range
+        if (self.pupil_mm is None) == (self.iris_mm is None):
+            raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
+        eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,
+                              "entrance pupil" if self.iris_mm is None else "iris")
+        for value in self.field_deg:
+            if abs(finite_number(value, "field angle", "deg")) > 45.0:
+                raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within 45 deg of the axis")
+        if self.wavelength_nm is not None:
+            number_within(self.wavelength_nm, "wavelength", "nm", TABLE_RANGE_NM)
+        arcmin_per_px(self.arcmin_per_px)
+        positive_number(self.chart_distance_m, "chart distance", "m")
+        positive_number(self.vertex_mm, "vertex distance", "mm")
+        if int(self.spp) < 1:
+            raise VissimInputError(f"samples per pixel must be >= 1, got {self.spp}")
+
+
+def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:
+    """The lens mesh's diameter: the bench's rule (`DslrBench.clear_aperture`: the beam at the holder's
+    far side x 1.25 + 2 mm) for the widest direction the image looks along, field offset included."""
+    from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER
+
+    rows, cols = settings.size_px
+    half_deg = [abs(f) + 0.5 * n * settings.arcmin_per_px / 60.0 for f, n in zip(settings.field_deg, (cols, rows))]
+    reach = math.radians(math.hypot(*half_deg))
+    depth = settings.vertex_mm + MAX_LENSES_IN_HOLDER * (4.0 + 2.0)
+    beam = 1.2 * pupil_mm + 2.0 * depth * math.tan(reach)  # an iris's entrance pupil is at most ~1.13 x it
+    return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+
+
+def eye_to_world(field_deg) -> list[list[float]]:
+    """The sensor's to_world (4 x 4, corneal vertex at the origin) that turns the eye so that the world's +z
+    (the chart's centre) lies ``field_deg`` = (right, up) degrees from its optical axis.
+
+    The sensor's local frame has +x to the observer's left, +y up, +z along the axis; the direction
+    (right, up) of the sensor's map is ``(-sin θ cos φ, sin θ sin φ, cos θ)``, θ = |(right, up)|,
+    φ = atan2(up, right).  The rotation by θ about ``d x z`` takes it to +z (Rodrigues)."""
+    right, up = (math.radians(float(v)) for v in field_deg)
+    theta = math.hypot(right, up)
+    if theta == 0.0:
+        return [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    d = np.array([-math.sin(theta) * right / theta, math.sin(theta) * up / theta, math.cos(theta)])
+    axis = np.cross(d, [0.0, 0.0, 1.0])
+    axis /= np.linalg.norm(axis)
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    rotation = np.eye(3) + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)
+    out = np.eye(4)
+    out[:3, :3] = rotation
+    return out.tolist()
+
+
+def _bench(settings: EyeRender, pupil_mm: float):
+    from vissim.bench.dslr.bench import DslrBench
+    from vissim.optics.trial_lens import TrialLens
+
+    distance_mm = 1000.0 * settings.chart_distance_m
+    focal_mm = 18.0
+    return DslrBench(focal_length_mm=focal_mm, f_number=focal_mm / pupil_mm, focus_distance_mm=distance_mm,
+                     chart_distance_mm=distance_mm, vertex_distance_mm=settings.vertex_mm,
+                     clear_aperture_mm=_clear_aperture_mm(settings, pupil_mm),
+                     lenses=() if settings.lens is None else (TrialLens(*settings.lens),),
+                     arcmin_per_px=settings.arcmin_per_px, size_px=tuple(settings.size_px), spp=settings.spp,
+                     seed=settings.seed, sampler="independent")
+
+
+def eye_scene_dict(settings: EyeRender) -> dict:
+    """The plain scene dict (module doc); its camera is the schematic-eye sensor."""
+    from vissim.bench.dslr.bench import chart_mm_per_texel, dslr_scene
+    from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+
+    sensor = {"type": "vissim_schematic_eye", "model": settings.model,
+              "accommodation_diopters": float(settings.accommodation_diopters),
+              "arcmin_per_px": float(settings.arcmin_per_px), "field_x_deg": float(settings.field_deg[0]),
+              "field_y_deg": float(settings.field_deg[1])}
+    if settings.pupil_mm is not None:
+        sensor["pupil_mm"] = float(settings.pupil_mm)
+    if settings.iris_mm is not None:
+        sensor["iris_mm"] = float(settings.iris_mm)
+    if settings.wavelength_nm is not None:
+        sensor["wavelength_nm"] = float(settings.wavelength_nm)
+    bench = _bench(settings, settings.pupil_mm or settings.iris_mm)
+    chart = render_chart_print(single_letter_spec(settings.letter, settings.logmar),
+                               MM_PER_INCH / chart_mm_per_texel(bench))
+    scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="mono")
+    camera = scene["camera"]
+    # the bench's camera sits at the origin looking along +z (identity): the eye takes its place, turned
+    sensor.update({"to_world": eye_to_world(settings.field_deg), "film": camera["film"], "sampler": camera["sampler"],
+                   "far_clip": 10.0 * bench.chart_distance_mm})
+    scene["camera"] = sensor
+    return scene
+
+
+def render_eye(settings: EyeRender, variant: str | None = None):
+    """Render ``settings`` (module doc); a `vissim.render.run.RenderResult` with provenance."""
+    from vissim.provenance import json_safe, make_provenance
+    from vissim.render.backend import choose_variant, mitsuba
+    from vissim.render.run import mitsuba_versions, render_scene
+    from vissim.render.schematic_eye_sensor import register_schematic_eye_sensor
+
+    chosen = choose_variant("spectral" if settings.spectrum == "photopic" else "mono", variant).variant
+    register_schematic_eye_sensor(mitsuba("mono", chosen))
+    result = render_scene(eye_scene_dict(settings), kind="mono", spp=settings.spp, seed=settings.seed,
+                          variant=chosen)
+    provenance = make_provenance(command="render eye", eye=dataclasses.asdict(settings), variant=result.variant,
+                                 spp=result.spp, seed=result.seed, render_seconds=round(result.seconds, 3),
+                                 mitsuba_render=result.render_record(), **mitsuba_versions())
+    return dataclasses.replace(result, provenance=json_safe(provenance))

@@ -1,0 +1,252 @@
+"""Mitsuba sensor ``vissim_schematic_eye``: a schematic eye's retina seen through its traced optics.
+
+Each film pixel is a visual direction: its angles from the optical axis, to the observer's right
+and up, are ``field_x_deg + (u - 1/2) W a`` and ``field_y_deg + (1/2 - v) H a`` (u, v the film
+position in [0, 1], row 0 at the top; a = ``arcmin_per_px`` / 60; W x H the film's size): an
+azimuthal-equidistant map of the visual field, centred on the direction ``field_*_deg`` from the
+axis (the sensor's forward direction, the fixation).  That direction's chief ray lands on the
+curved retina at the radius r(θ) of a table traced at init (`vissim.render.schematic_eye_tables`:
+the eye's distortion is in it), opposite its azimuth (the retinal image is inverted).  From
+that retinal point a ray is aimed at a point sampled uniformly in the box that bounds, on the lens's
+back surface, the rays that pass the iris (pbrt-v4's exit-pupil bounds), and traced out through
+the eye (`vissim.render.schematic_eye_trace`, Dr.Jit, at the ray's wavelength).  Rays stopped by
+the iris or lost at a surface get weight 0; the fraction that gets through is tabulated at init
+(`pass_fraction`, logged).
+
+**Normalisation**: weight = ``cos θ_r |d_z| A_box / (dist² Ω(r, ψ))``, the projected-solid-angle
+estimator divided by its own integral Ω over the passing rays (tabulated at init), so that a
+uniform radiance L gives every pixel the value L, as Mitsuba's ``thinlens`` does for any pupil
+(the factor a thin lens leaves out, and that this sensor states, is the retinal irradiance per
+unit radiance, ``n_vitreous² Ω``: `retinal_irradiance_factor`).
+
+**Wavelength**: ``wavelength_nm`` set: every wavelength is that one (monochromatic; in a mono or
+RGB variant it is the wavelength the optics are traced at, default the model's reference; in a
+spectral variant the weight is divided by the film's luminance response at that wavelength, so
+a white scene still develops its radiance).  In
+a spectral variant without it, the sampled wavelengths' first (the hero) is traced, the others'
+weights are zeroed and the hero's multiplied by their count, so the film's average over them
+keeps its expectation (Mitsuba's spectral film develops Y with CIE ȳ = V(λ): photopic).
+
+Frame: local +z forward (into the scene), +y up, +x the observer's left (Mitsuba's camera
+frame); the eye's frame (z towards the retina, x the examiner's right: the subject's left) maps
+to it by z -> -z; the local origin is the corneal vertex.  Properties: ``model``,
+``accommodation_diopters``, ``pupil_mm`` (entrance pupil) or ``iris_mm``, ``wavelength_nm``,
+``arcmin_per_px``, ``field_x_deg``, ``field_y_deg``, ``far_clip`` (mm), ``to_world``, ``film``,
+``sampler``.  The pupil is converted by real rays at ``wavelength_nm`` or the model's reference
+(`vissim.optics.eyes.wavefront`).  Register with `register_schematic_eye_sensor` (idempotent).
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+
+import numpy as np
+
+from vissim.checks import number_within
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.models import eye_model
+from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
+from vissim.render.plugins import register_once
+from vissim.render.schematic_eye_tables import EyeTables, eye_tables
+from vissim.render.schematic_eye_trace import TABLE_RANGE_NM, SchematicEyeTracer
+
+__all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_tables"]
+
+log = logging.getLogger(__name__)
+
+#: Plugin name.
+SCHEMATIC_EYE_SENSOR = "vissim_schematic_eye"
+
+
+@functools.lru_cache(maxsize=16)
+def sensor_tables(model: str, accommodation_diopters: float, iris_mm: float, wavelength_nm: float,
+                  max_theta_deg: float) -> EyeTables:
+    """`eye_tables` of the model, cached (a scene reloaded with the same eye reuses them)."""
+    return eye_tables(eye_model(model, accommodation_diopters), iris_mm, wavelength_nm, max_theta_deg)
+
+
+def _pupils(eye, pupil_mm, iris_mm, wavelength_nm: float) -> tuple[float, float]:
+    """(entrance pupil, iris) in mm from the one given."""
+    if (pupil_mm is None) == (iris_mm is None):
+        raise VissimInputError("give the schematic-eye sensor either pupil_mm (entrance pupil) or iris_mm, not both")
+    if iris_mm is not None:
+        return entrance_pupil_from_iris_mm(eye, float(iris_mm), wavelength_nm), float(iris_mm)
+    return float(pupil_mm), iris_from_entrance_pupil_mm(eye, float(pupil_mm), wavelength_nm)
+
+
+class _Lookup:
+    """Linear interpolation in a table on a uniform grid ``x0 + i dx``, in Dr.Jit arrays or numbers."""
+
+    def __init__(self, x0: float, dx: float, values):
+        self.x0, self.dx, self.values = x0, dx, np.asarray(values, dtype=float)
+        self._arrays = {}
+
+    def at(self, dr, index):
+        """The value at a whole-number ``index`` (a Dr.Jit array or a number): no interpolation."""
+        if not dr.is_array_v(index):
+            return float(self.values[int(index)])
+        kind = type(index)
+        if kind not in self._arrays:
+            self._arrays[kind] = kind(self.values)
+        return dr.gather(kind, self._arrays[kind], dr.uint32_array_t(kind)(index))
+
+    def __call__(self, dr, x):
+        last = len(self.values) - 1
+        if not dr.is_array_v(x):
+            return float(np.interp(x, self.x0 + self.dx * np.arange(last + 1), self.values))
+        kind = type(x)
+        if kind not in self._arrays:
+            self._arrays[kind] = kind(self.values)
+        u = dr.clip((x - self.x0) / self.dx, 0.0, last - 1e-4)
+        i = dr.floor(u)
+        index = dr.uint32_array_t(kind)(i)
+        low = dr.gather(kind, self._arrays[kind], index)
+        high = dr.gather(kind, self._arrays[kind], index + 1)
+        return low + (u - i) * (high - low)
+
+
+def _make_class(mi, dr):
+    spectral = mi.is_spectral
+
+    class SchematicEyeSensor(mi.Sensor):
+        """See the module docstring."""
+
+        def __init__(self, props):
+            mi.Sensor.__init__(self, props)
+            self.model = str(props.get("model", "navarro-1985"))
+            accommodation = float(props.get("accommodation_diopters", 0.0))
+            eye = eye_model(self.model, accommodation)
+            fixed = props.get("wavelength_nm", None)
+            self.fixed_wavelength_nm = None if fixed is None else number_within(fixed, "wavelength", "nm",
+                                                                                TABLE_RANGE_NM)
+            if spectral and self.fixed_wavelength_nm is not None and not 360.0 <= self.fixed_wavelength_nm <= 830.0:
+                raise VissimInputError(f"a monochromatic spectral render needs 360-830 nm (where CIE ȳ is "
+                                       f"tabulated), got {self.fixed_wavelength_nm:g} nm")
+            if spectral and self.fixed_wavelength_nm is not None:
+                # the film develops Y = ȳ(λ) L MI_CIE_Y_NORMALIZATION: divide it out
+                y_bar = mi.cie1931_y(mi.Float(self.fixed_wavelength_nm))
+                y_bar = float(y_bar[0] if dr.is_array_v(y_bar) else y_bar)
+                self.mono_scale = 1.0 / (y_bar * mi.MI_CIE_Y_NORMALIZATION)
+            self.wavelength_nm = self.fixed_wavelength_nm or eye.reference_wavelength_nm
+            self.pupil_mm, self.iris_mm = _pupils(eye, props.get("pupil_mm", None), props.get("iris_mm", None),
+                                                  self.wavelength_nm)
+            self.arcmin_per_px = float(props.get("arcmin_per_px", 1.0))
+            if not 0.0 < self.arcmin_per_px <= 600.0:
+                raise VissimInputError(f"arcmin_per_px must lie in (0, 600] arcmin, got {self.arcmin_per_px:g}")
+            self.field_deg = (float(props.get("field_x_deg", 0.0)), float(props.get("field_y_deg", 0.0)))
+            self.far_clip = float(props.get("far_clip", 1.0e7))
+            width, height = self.film().size()
+            self.span_deg = (width * self.arcmin_per_px / 60.0, height * self.arcmin_per_px / 60.0)
+            reach = math.hypot(abs(self.field_deg[0]) + 0.5 * self.span_deg[0],
+                               abs(self.field_deg[1]) + 0.5 * self.span_deg[1])
+            self.tables = sensor_tables(self.model, accommodation, self.iris_mm, self.wavelength_nm, reach)
+            self._init_lookups(eye)
+            self.m_needs_sample_3 = True
+            centre, edge = self.tables.pass_fraction[0], self.tables.pass_fraction[-1]
+            log.info("schematic-eye sensor %s: %.1f %% of pupil samples pass the iris at the fovea, %.1f %% at "
+                     "%.3g mm", self.model, 100 * centre, 100 * edge, self.tables.r_edges_mm[-1])
+
+        def _init_lookups(self, eye):
+            t = self.tables
+            self.tracer = SchematicEyeTracer(eye, self.iris_mm)
+            self.radius_of = _Lookup(0.0, float(t.theta_deg[1] - t.theta_deg[0]), t.radius_mm)
+            self.bin_mm = float(t.r_edges_mm[1] - t.r_edges_mm[0])
+            self.bins, self.azimuth_count = t.boxes.shape[:2]
+            self.box = [_Lookup(0.0, 1.0, t.boxes[:, :, j].ravel()) for j in range(4)]
+            self.omega = [_Lookup(0.0, self.bin_mm, t.omega_sr[:, j]) for j in range(self.azimuth_count)]
+            self.azimuth_step = 2.0 * math.pi / self.azimuth_count
+
+        def pass_fraction(self) -> np.ndarray:
+            """Per retinal radius edge: the fraction of samples in the box that pass the iris."""
+            return self.tables.pass_fraction
+
+        def retinal_irradiance_factor(self, radius_mm: float, azimuth_rad: float = 0.0) -> float:
+            """Retinal irradiance per unit scene radiance (sr; module doc)."""
+            return self.tables.retinal_irradiance_factor(radius_mm, azimuth_rad)
+
+        def _wavelengths(self, wavelength_sample, active):
+            if not spectral:
+                wavelengths, weight = self.sample_wavelengths(dr.zeros(mi.SurfaceInteraction3f), wavelength_sample,
+                                                              active)
+                return wavelengths, weight, self.wavelength_nm
+            if self.fixed_wavelength_nm is not None:
+                return mi.Spectrum(self.fixed_wavelength_nm), mi.Spectrum(self.mono_scale), self.fixed_wavelength_nm
+            wavelengths, weight = self.sample_wavelengths(dr.zeros(mi.SurfaceInteraction3f), wavelength_sample,
+                                                          active)
+            count = dr.size_v(mi.Spectrum)
+            hero_only = mi.Spectrum([float(count)] + [0.0] * (count - 1))
+            return wavelengths, weight * hero_only, wavelengths[0]
+
+        def _box(self, r, sector):
+            """The sampling box (a0, a1, b0, b1) of the sector: the radius bin holding ``r`` (mm), ``sector``."""
+            k = dr.minimum(dr.floor(r / self.bin_mm), self.bins - 1)
+            return [lookup.at(dr, k * self.azimuth_count + sector) for lookup in self.box]
+
+        def _azimuth(self, cos_psi, sin_psi):
+            """(the sector index, the position between its two azimuth nodes in [0, 1))."""
+            if self.azimuth_count == 1:
+                return 0.0 * cos_psi, 0.0 * cos_psi
+            psi = dr.atan2(sin_psi, cos_psi)
+            u = dr.select(psi < 0.0, psi + 2.0 * math.pi, psi) / self.azimuth_step
+            sector = dr.minimum(dr.floor(u), self.azimuth_count - 1)
+            return sector, u - sector
+
+        def _omega(self, r, sector, frac):
+            """Ω at retinal radius r, linear in r and (for a decentred iris) between the sector's azimuths."""
+            count = self.azimuth_count
+            if count == 1:
+                return self.omega[0](dr, r)
+            total = 0.0 * r
+            for index, lookup in enumerate(self.omega):
+                value = lookup(dr, r)
+                total = total + dr.select(sector == index, (1.0 - frac) * value, 0.0)
+                total = total + dr.select(sector == (index - 1) % count, frac * value, 0.0)
+            return total
+
+        def sample_ray(self, time, wavelength_sample, position_sample, aperture_sample, active=True):
+            wavelengths, weight, wavelength_nm = self._wavelengths(wavelength_sample, active)
+            right = self.field_deg[0] + (position_sample.x - 0.5) * self.span_deg[0]
+            up = self.field_deg[1] + (0.5 - position_sample.y) * self.span_deg[1]
+            theta = dr.sqrt(right * right + up * up)
+            on_axis = theta <= 1e-9
+            inv = dr.select(on_axis, 0.0, 1.0 / dr.maximum(theta, 1e-9))
+            cos_psi = dr.select(on_axis, 1.0, right * inv)  # the landing point's azimuth in the eye's x, y
+            sin_psi = dr.select(on_axis, 0.0, -up * inv)
+            r = self.radius_of(dr, theta)
+            p = self.tracer.retina_point(r * cos_psi, r * sin_psi)
+            sector, frac = self._azimuth(cos_psi, sin_psi)
+            a0, a1, b0, b1 = self._box(r, sector)
+            a = a0 + (a1 - a0) * aperture_sample.x
+            b = b0 + (b1 - b0) * aperture_sample.y
+            q = self.tracer.surface_point(len(self.tracer.shapes) - 2, a * cos_psi - b * sin_psi,
+                                          a * sin_psi + b * cos_psi)
+            d = (q[0] - p[0], q[1] - p[1], q[2] - p[2])
+            out = self.tracer.trace_out(p, d, wavelength_nm)
+            w = self.tracer.projected_solid_angle_weight(p, d) * (a1 - a0) * (b1 - b0) / self._omega(r, sector, frac)
+            w = dr.select(out.valid & active, w, 0.0)
+            to_world = self.world_transform()
+            origin = mi.Point3f(out.points[0], out.points[1], -out.points[2])
+            direction = mi.Vector3f(out.directions[0], out.directions[1], -out.directions[2])
+            ray = mi.Ray3f(to_world @ origin, dr.normalize(to_world @ direction), time, wavelengths)
+            ray.maxt = self.far_clip
+            return ray, weight * w
+
+        def sample_ray_differential(self, time, wavelength_sample, position_sample, aperture_sample, active=True):
+            ray, weight = self.sample_ray(time, wavelength_sample, position_sample, aperture_sample, active)
+            return mi.RayDifferential3f(ray), weight
+
+        def traverse(self, callback):
+            pass
+
+        def to_string(self):
+            return (f"SchematicEyeSensor[model={self.model}, pupil={self.pupil_mm:.4g} mm (iris {self.iris_mm:.4g} "
+                    f"mm), {self.arcmin_per_px:g} arcmin/px, field=({self.field_deg[0]:g}, {self.field_deg[1]:g}) deg]")
+
+    return SchematicEyeSensor
+
+
+def register_schematic_eye_sensor(mi) -> None:
+    """Register `SCHEMATIC_EYE_SENSOR` with the current Mitsuba variant (once per variant)."""
+    register_once(mi, SCHEMATIC_EYE_SENSOR, "sensor", _make_class)
