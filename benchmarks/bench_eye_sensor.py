@@ -26,7 +26,7 @@ from vissim.render.eye_render import EyeRender, eye_scene_dict  # noqa: E402
 from vissim.render.run import to_mitsuba_dict  # noqa: E402
 from vissim.render.schematic_eye_sensor import register_schematic_eye_sensor  # noqa: E402
 
-SIZE, SPP, REPEATS = 128, 64, 3
+SIZE, SPP, REPEATS = 128, 64, 5
 
 
 def median_seconds(mi, scene) -> float:

@@ -75,16 +75,16 @@ def test_a_plus_trial_lens_brings_a_near_chart_into_focus_for_the_relaxed_eye(tm
 
 
 def test_eye_to_world_turns_the_field_direction_onto_the_chart():
-    """The sensor's map direction (right, up) = (-sin θ cos φ, sin θ sin φ, cos θ) goes to world +z, and
-    the turn is a rotation (orthonormal, det 1)."""
+    """The sensor's direction for the field angle (x, y), OSA's frame = its local frame,
+    (sin θ cos φ, sin θ sin φ, cos θ), goes to world +z, and the turn is a rotation (orthonormal, det 1)."""
     import math
 
     from vissim.render.eye_render import eye_to_world
 
-    for right, up in ((10.0, 0.0), (0.0, -10.0), (20.0, 15.0), (-7.0, 3.0)):
-        matrix = np.array(eye_to_world((right, up)))
-        theta, phi = math.radians(math.hypot(right, up)), math.atan2(up, right)
-        d = np.array([-math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
+    for x, y in ((10.0, 0.0), (0.0, -10.0), (20.0, 15.0), (-7.0, 3.0)):
+        matrix = np.array(eye_to_world((x, y)))
+        theta, phi = math.radians(math.hypot(x, y)), math.atan2(y, x)
+        d = np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
         np.testing.assert_allclose(matrix[:3, :3] @ d, [0.0, 0.0, 1.0], atol=1e-12)
         np.testing.assert_allclose(matrix[:3, :3] @ matrix[:3, :3].T, np.eye(3), atol=1e-12)
         assert abs(np.linalg.det(matrix[:3, :3]) - 1.0) < 1e-12 and np.all(matrix[:3, 3] == 0.0)
@@ -115,7 +115,8 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
              @ mi.ScalarTransform4f().scale(20.0) @ mi.ScalarTransform4f().rotate([0, 1, 0], 180),
              "emitter": {"type": "area", "radiance": 1.0}}
     sensor = {"type": "vissim_schematic_eye", "model": "escudero-sanz-1999", "pupil_mm": 3.0, "arcmin_per_px": step,
-              "field_x_deg": right, "field_y_deg": up, "to_world": mi.ScalarTransform4f(eye_to_world((right, up))),
+              "field_x_deg": -right, "field_y_deg": up,  # OSA x is the observer's left
+              "to_world": mi.ScalarTransform4f(eye_to_world((-right, up))),
               "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"},
                        "pixel_format": "luminance"},
               "sampler": {"type": "independent", "sample_count": 256}}

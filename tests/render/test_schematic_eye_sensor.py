@@ -66,7 +66,8 @@ def test_spectral_hero_wavelength_keeps_the_films_mean():
 
 
 @needs_llvm
-@pytest.mark.parametrize("model, min_pass", [("navarro-1985", 0.4), ("liou-brennan-1997", 0.3)])
+@pytest.mark.parametrize("model, min_pass", [("navarro-1985", 0.65),
+                                             pytest.param("liou-brennan-1997", 0.5, marks=pytest.mark.slow)])
 def test_pupil_bounds_hold_every_ray_that_passes_the_iris(model, min_pass):
     """Rays from retinal points across a few sectors (radius bin x azimuth step) to a dense grid over the
     whole lens back, in each point's own frame: every one that gets out lands inside its sector's box
@@ -80,7 +81,7 @@ def test_pupil_bounds_hold_every_ray_that_passes_the_iris(model, min_pass):
     eye = eye_model(model)
     tables = eye_tables(eye, 3.0, 589.3, 10.0)
     tracer = SchematicEyeTracer(eye, 3.0)
-    axis = np.linspace(-GRID_RADIUS_MM, GRID_RADIUS_MM, 241)
+    axis = np.linspace(-GRID_RADIUS_MM, GRID_RADIUS_MM, 401)  # 0.025 mm: as fine as the tables' fine grid
     a, b = (v.ravel() for v in np.meshgrid(axis, axis))
     count = len(tables.azimuths_rad)
     step = 2 * math.pi / count
@@ -141,6 +142,7 @@ def test_a_distant_point_appears_at_its_chief_ray_plus_the_wavefronts_mean_slope
     centroid there (with 0.009 arcmin of parallax) within 0.03 arcmin.  Measured, seeds 1-3: -0.498, -0.509,
     -0.503 against -0.509."""
     from vissim.optics.eyes.wavefront import trace_eye_wavefront
+    from vissim.units import image_colrow_to_osa_xy
 
     field_deg, step_arcmin, distance_mm, size = 5.0, 0.25, 1.0e5, 24
     wavefront = trace_eye_wavefront(eye_model("navarro-1985"), 589.3, (field_deg, 0.0), pupil_mm=3.0)
@@ -152,7 +154,7 @@ def test_a_distant_point_appears_at_its_chief_ray_plus_the_wavefronts_mean_slope
     # sees it 3.04 tan(5 deg) / distance nearer the axis
     parallax_arcmin = math.degrees(3.04 * math.tan(math.radians(field_deg)) / distance_mm) * 60
     mi = mitsuba("mono")
-    x = -math.tan(math.radians(field_deg)) * distance_mm
+    x = math.tan(math.radians(field_deg)) * distance_mm  # OSA x: the sensor's local +x
     light = {"type": "disk", "to_world": mi.ScalarTransform4f().translate([x, 0.0, distance_mm])
              @ mi.ScalarTransform4f().scale(20.0) @ mi.ScalarTransform4f().rotate([0, 1, 0], 180),
              "emitter": {"type": "area", "radiance": 1.0}}
@@ -165,8 +167,9 @@ def test_a_distant_point_appears_at_its_chief_ray_plus_the_wavefronts_mean_slope
                           "sensor": sensor})
     image = np.asarray(mi.render(scene, seed=1), dtype=float)[..., 0]
     cols = np.arange(size)[None, :]
-    centroid_arcmin = ((cols * image).sum() / image.sum() - (size - 1) / 2) * step_arcmin
-    assert abs(centroid_arcmin - (g_tilt_arcmin - parallax_arcmin)) < 0.03
+    centroid_col_arcmin = ((cols * image).sum() / image.sum() - (size - 1) / 2) * step_arcmin
+    centroid_x_arcmin = image_colrow_to_osa_xy(centroid_col_arcmin, 0.0)[0]  # columns run to the observer's right
+    assert abs(centroid_x_arcmin - (g_tilt_arcmin - parallax_arcmin)) < 0.03
 
 
 @needs_llvm  # the tables are traced on Dr.Jit's LLVM backend whatever the render's variant

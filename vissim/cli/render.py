@@ -1,8 +1,9 @@
 """``vissim render``: render the virtual optical bench with Mitsuba 3 to a linear EXR.
 
 Sub-commands: ``render bench`` (the DSLR bench, `vissim.bench.dslr.bench`), ``render atv``
-(the ATV tube, `vissim.bench.atv.tube`) and ``render depth`` (depth scenes,
-`vissim.bench.depth.scene`).
+(the ATV tube, `vissim.bench.atv.tube`), ``render depth`` (depth scenes,
+`vissim.bench.depth.scene`) and ``render eye`` (a letter through a schematic eye,
+`vissim.cli.render_eye`).
 """
 
 from __future__ import annotations

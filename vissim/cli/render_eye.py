@@ -40,9 +40,9 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     pupil.add_argument("--iris-mm", type=float, metavar="D", help="or the iris diameter, mm")
     parser.add_argument("--field-deg", metavar="X,Y", default="0,0",
                         help="where the chart lies in the visual field: the eye turns so that the chart's centre "
-                             "is X degrees to the observer's right and Y degrees up from its optical axis, as the "
-                             "image's columns and rows run; the image stays centred on the chart (default 0,0).  "
-                             "Note: vissim eye --field-deg counts x to the examiner's right, the other way")
+                             "is at this field angle from its optical axis, degrees, x (examiner's right: the "
+                             "observer's left) and y (up), as vissim eye and psf count it; the image stays "
+                             "centred on the chart (default 0,0)")
     colour = parser.add_mutually_exclusive_group()
     colour.add_argument("--wavelength-nm", type=float, metavar="NM",
                         help="monochromatic light of this wavelength (default: the model's reference wavelength)")

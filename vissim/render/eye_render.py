@@ -5,8 +5,8 @@ radiance = its reflectance facing the observer at ``chart_distance_m``, a trial 
 ``vissim_refract`` glass with its back vertex ``vertex_mm`` in front of the eye), with its
 ``thinlens`` camera replaced by the schematic-eye sensor at the corneal vertex.  The bench's
 camera pupil is set to the eye's entrance pupil so the lens mesh is sized for the eye's beam.
-``field_deg`` turns the eye about its corneal vertex so that the chart's centre lies that far
-(to the observer's right, up) from the eye's optical axis; the image stays centred on the chart
+``field_deg`` turns the eye about its corneal vertex so that the chart's centre lies at that field
+angle from the eye's optical axis (OSA's frame: x the examiner's right, the observer's left; y up); the image stays centred on the chart
 (`eye_to_world`), seen through the trial lens's centre.
 
 Wavelength: ``wavelength_nm`` (monochromatic; default the model's reference) on the mono
@@ -92,12 +92,14 @@ def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:
 
 def eye_to_world(field_deg) -> list[list[float]]:
     """The sensor's to_world (4 x 4, corneal vertex at the origin) that turns the eye so that the world's +z
-    (the chart's centre) lies ``field_deg`` = (right, up) degrees from its optical axis.
+    (the chart's centre) lies at the field angle ``field_deg`` = (x, y) degrees from its optical axis, OSA's
+    frame (x the examiner's right: the observer's left; y up), as every ``--field-deg``.
 
-    The sensor's local frame has +x to the observer's left, +y up, +z along the axis; the direction
-    (right, up) of the sensor's map is ``(-sin θ cos φ, sin θ sin φ, cos θ)``, θ = |(right, up)|,
-    φ = atan2(up, right).  The rotation by θ about ``d x z`` takes it to +z (Rodrigues)."""
-    right, up = (math.radians(float(v)) for v in field_deg)
+    The sensor's local frame has +x to the observer's left (OSA's x), +y up, +z along the axis; the
+    direction (x, y) is ``(sin θ cos φ, sin θ sin φ, cos θ)``, θ = |(x, y)|, φ = atan2(y, x).  The
+    rotation by θ about ``d x z`` takes it to +z (Rodrigues)."""
+    x, up = (math.radians(float(v)) for v in field_deg)
+    right = -x
     theta = math.hypot(right, up)
     if theta == 0.0:
         return [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]

@@ -1,10 +1,12 @@
 """Mitsuba sensor ``vissim_schematic_eye``: a schematic eye's retina seen through its traced optics.
 
 Each film pixel is a visual direction: its angles from the optical axis, to the observer's right
-and up, are ``field_x_deg + (u - 1/2) W a`` and ``field_y_deg + (1/2 - v) H a`` (u, v the film
+and up, are ``-field_x_deg + (u - 1/2) W a`` and ``field_y_deg + (1/2 - v) H a`` (u, v the film
 position in [0, 1], row 0 at the top; a = ``arcmin_per_px`` / 60; W x H the film's size): an
-azimuthal-equidistant map of the visual field, centred on the direction ``field_*_deg`` from the
-axis (the sensor's forward direction, the fixation).  That direction's chief ray lands on the
+azimuthal-equidistant map of the visual field, centred on the field angle (``field_x_deg``,
+``field_y_deg``) in OSA's frame, as every vissim ``--field-deg`` (x the examiner's right, the
+observer's left: `vissim.units.osa_xy_to_image_colrow`), from the axis (the sensor's forward
+direction).  That direction's chief ray lands on the
 curved retina at the radius r(θ) of a table traced at init (`vissim.render.schematic_eye_tables`:
 the eye's distortion is in it), opposite its azimuth (the retinal image is inverted).  From
 that retinal point a ray is aimed at a point sampled uniformly in the box that bounds, on the lens's
@@ -207,7 +209,7 @@ def _make_class(mi, dr):
 
         def sample_ray(self, time, wavelength_sample, position_sample, aperture_sample, active=True):
             wavelengths, weight, wavelength_nm = self._wavelengths(wavelength_sample, active)
-            right = self.field_deg[0] + (position_sample.x - 0.5) * self.span_deg[0]
+            right = -self.field_deg[0] + (position_sample.x - 0.5) * self.span_deg[0]  # OSA x: observer's left
             up = self.field_deg[1] + (0.5 - position_sample.y) * self.span_deg[1]
             theta = dr.sqrt(right * right + up * up)
             on_axis = theta <= 1e-9
