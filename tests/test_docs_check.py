@@ -68,7 +68,7 @@ PAGE = """<html><body><h1 id="psf">PSF</h1>
 <p>See :class:<code>PSF</code>, <code>README.md</code> and <code>docs/conventions.md</code>.</p>
 <table><thead><tr><th>Name</th><th>Type</th><th>Description</th><th>Default</th></tr></thead><tbody>
 <tr class="doc-section-item"><td><code>wavefront</code></td><td>Wavefront</td><td>x</td><td><em>required</em></td></tr>
-<tr class="doc-section-item"><td><code>wavelength_nm</code></td><td>float</td><td>x</td><td><code>550.0</code></td></tr>
+<tr class="doc-section-item"><td><code>wavelength_nm</code></td><td>float</td><td>x</td><td><code>None</code></td></tr>
 <tr class="doc-section-item"><td><code>size_px</code></td><td>int</td><td>x</td><td><code>0.25</code></td></tr>
 <tr class="doc-section-item"><td><code>mode</code></td><td>str</td><td>x</td><td><code>"wave"</code></td></tr>
 </tbody></table>

@@ -4,7 +4,10 @@ Sources (docs reference page schematic-eyes.md §1, checked where reachable): Na
 Escudero-Sanz & Navarro 1999 as visisipy ``catalog/navarro.py``, ISET3d ``navarroLensCreate.m`` and
 optiland ``NavarroWideAngleEye``; Arizona as ISET3d ``arizonaLensCreate.m`` (read: its radii are
 written with the opposite sign and flipped back); Le Grand as visisipy ``catalog/gullstrand.py``;
-Liou & Brennan 1997 RECALLED (not found in a stored source), so its test pins what we recalled.
+Liou & Brennan 1997 partly RECALLED: its cornea radii (6.40/7.77, quoted as Liou-Brennan's in a
+public Castrop IOL-formula code) and media indices (SpikeFinder ``LiouBrennanRefractiveIndices.cs``)
+are found in stored sources and pinned by their own test; its conics, thicknesses, lens radii and
+GRIN polynomial are not, so their test pins what we recalled.
 Rows: (radius mm, conic, thickness after mm), cornea front first, the iris (a plane) included.
 """
 
@@ -122,3 +125,32 @@ def test_bad_input_is_one_line(call, message):
         call()
     text = str(info.value)
     assert message in text and "\n" not in text
+
+
+def test_liou_brennan_numbers_found_in_stored_sources():
+    """Quoted: ``static let liouBrennan = 6.40 / 7.77`` (the posterior/anterior corneal radius ratio of
+    the Castrop formula, a public IOL-power code); ``ComputeCornea ... 1.376``, ``ComputeAqueous ...
+    1.336``, ``ComputeVitreous ... 1.336`` at 555 nm (SpikeFinder LiouBrennanRefractiveIndices.cs);
+    axial length 23.95 mm (the paper's abstract)."""
+    eye = liou_brennan_1997()
+    assert (eye.surfaces[0].radius_mm, eye.surfaces[1].radius_mm) == (7.77, 6.40)
+    for index, n_555 in ((0, 1.376), (1, 1.336), (5, 1.336)):  # cornea, aqueous, vitreous
+        medium = eye.surfaces[index].medium_after
+        assert (medium.formula, medium.coefficients) == ("liou-brennan", (n_555,))
+    assert eye.axial_length_mm == pytest.approx(23.95, abs=1e-9)
+
+
+def test_accommodated_navarro_holds_its_vitreous_as_the_public_codes_do():
+    """Navarro 1985's Table 4 moves the lens front forward by 0.05L and thickens the lens by 0.1L
+    (L = ln(A + 1)); the paper itself is not in a stored source, so whether it holds the axial length
+    or the vitreous is UNCONFIRMED. We follow the two public codes that implement it: ISET3d
+    ``navarroLensCreate.m`` and ``mb.body.Navarro`` (which says its values were "double checked ...
+    with those in Tables 4 & 5 of the original 1985 paper"): both hold the lens-back-to-retina
+    distance, 16.40 mm (mb.body: ``-0.55-d2-d3-16.40398``), so the axial length grows by 0.05L.
+    Measured at 589.3 nm, refraction at the cornea for A = 1, 4, 10 D: vitreous held −1.290, −4.121,
+    −9.824 D; axial length held −1.195, −3.895, −9.470 D (relaxed: +0.026 D). Neither reproduces A
+    exactly; the choice is the codes', not a fit."""
+    for a in (1.0, 4.0, 10.0):
+        eye = navarro_1985(a)
+        assert eye.surfaces[4].thickness_after_mm == 16.40
+        assert eye.axial_length_mm == pytest.approx(24.0 + 0.05 * math.log(a + 1.0), abs=1e-12)

@@ -89,6 +89,13 @@ def test_navarro_eyes_power_and_emmetropia():
     assert equivalent_power_diopters(escudero_sanz_1999(), 543.0) == pytest.approx(hand, abs=0.01)
 
 
+def test_wide_angle_navarro_power_at_543_nm_from_optilands_focal_length():
+    """No stored source prints ES1999's power; optiland's sample prints f' = 22.029 mm at 543 nm and
+    visisipy's table the vitreous index 1.3377 there, so P = n'/f' = 60.724 D (to their digits,
+    ±0.05 %). Measured 60.722 D."""
+    assert equivalent_power_diopters(escudero_sanz_1999(), 543.0) == pytest.approx(1000 * 1.3377 / 22.029, rel=5e-4)
+
+
 def test_arizona_is_emmetropic_at_the_d_line():
     """The Arizona eye is emmetropic relaxed (Schwiegerling 2004): measured K = −0.007 D at 589.3 nm,
     P = 60.62 D (the brief's "about 60.0 D" is not found in a source, and 60.0 D would leave this

@@ -42,9 +42,10 @@ def _trace(eye, wavelength_nm, field=(0.0, 0.0), samples=33, **pupil):
 
 
 def _centred_liou_brennan():
-    """Liou–Brennan with its iris on the axis: the on-axis refraction then meets the axial paraxial one
+    """Liou–Brennan with its iris on the axis and looking along its optical axis (no visual axis, so
+    field (0, 0) is on the optical axis): the on-axis refraction then meets the axial paraxial one
     (its 0.5 mm decentred iris adds a refraction of its own, tested below)."""
-    return dataclasses.replace(liou_brennan_1997(), stop_decentre_nasal_mm=0.0)
+    return dataclasses.replace(liou_brennan_1997(), stop_decentre_nasal_mm=0.0, visual_axis_deg=0.0)
 
 
 def _myopic_escudero_sanz(extra_vitreous_mm=0.5):
@@ -225,7 +226,7 @@ def test_either_pupil_may_be_given_and_the_wavefront_says_which():
 def test_liou_brennans_decentred_iris_adds_coma_and_astigmatism_on_axis():
     """Its iris 0.5 mm off the axis (towards +x): coma c(3,1) and astigmatism c(2,2) appear on axis,
     and vanish (< 1e-9 µm) with the iris centred."""
-    decentred = _trace(liou_brennan_1997(), 555.0, pupil_mm=4.0).zernike_um
+    decentred = _trace(dataclasses.replace(liou_brennan_1997(), visual_axis_deg=0.0), 555.0, pupil_mm=4.0).zernike_um
     centred = _trace(_centred_liou_brennan(), 555.0, pupil_mm=4.0).zernike_um
     assert abs(decentred[(3, 1)]) > 0.01 and abs(decentred[(2, 2)]) > 0.005
     assert abs(centred[(3, 1)]) < 1e-9 and abs(centred[(2, 2)]) < 1e-9

@@ -224,7 +224,8 @@ def _dense_cornea_air_chamber(accommodation_diopters=0.0):
     (["navarro-1985", "--pupil-mm", "3", "--iris-mm", "3"], ["--iris-mm", "--pupil-mm"]),
     (["navarro-1985"], ["--pupil-mm", "--iris-mm"]),
     (["navarro-1985", "--pupil-mm", "3", "--field-deg", "80,0"], ["(80, 0) deg", "miss the retina"]),
-    (["liou-brennan-1997", "--pupil-mm", "7", "--field-deg", "80,0"], ["(80, 0) deg", "leave the lens"]),
+    # 75° from its visual axis: 80° from the optical axis
+    (["liou-brennan-1997", "--pupil-mm", "7", "--field-deg", "75,0"], ["(75, 0) deg", "leave the lens"]),
     (["navarro-1985", "--pupil-mm", "3", "--field-deg", "1,2,3"], ["--field-deg", "'1,2,3'", "degrees"]),
     (["navarro-1985", "--pupil-mm", "3", "--field-deg", "a,b"], ["--field-deg", "'a,b'", "degrees"]),
     (["navarro-1985", "--pupil-mm", "3", "--field-deg", "nan,0"], ["--field-deg", "degrees"]),

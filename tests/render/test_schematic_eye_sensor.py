@@ -194,3 +194,21 @@ def test_monochromatic_spectral_render_of_white_gives_its_radiance(wavelength_nm
     sensor["film"].update(width=8, height=8)
     image, _ = render(mi, sensor, {"type": "constant", "radiance": {"type": "uniform", "value": 1.0}})
     assert abs(image.mean() - 1.0) < 0.02
+
+
+@needs_llvm
+@pytest.mark.parametrize("model", ["navarro-1985", pytest.param("liou-brennan-1997", marks=pytest.mark.slow)])
+def test_a_pixel_looks_along_the_direction_the_trace_gives_its_field_angle(model):
+    """The sensor's Dr.Jit copy of the field-angle rule equals `wavefront.field_direction` (the numpy
+    original: (tan x, tan y, 1), from Liou-Brennan's visual axis), within float32 round-off (2e-7)."""
+    from vissim.optics.eyes.wavefront import field_direction
+    from vissim.render.schematic_eye_sensor import register_schematic_eye_sensor
+
+    mi = mitsuba("mono")
+    register_schematic_eye_sensor(mi)
+    sensor = mi.load_dict(eye_sensor(model, spp=1))
+    fields = [(0.0, 0.0), (10.0, 0.0), (-20.0, 15.0), (3.0, -30.0)]
+    got = sensor._direction(mi.Float([f[0] for f in fields]), mi.Float([f[1] for f in fields]))
+    got = np.stack([np.asarray(c, dtype=float) for c in got], axis=1)
+    expected = np.array([field_direction(eye_model(model), f) for f in fields])
+    np.testing.assert_allclose(got, expected, atol=2e-7)

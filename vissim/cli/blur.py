@@ -73,8 +73,8 @@ def add_eye_model_args(parser) -> None:
     eye = parser.add_argument_group(
         "schematic eye (in place of the reduced eye)",
         "With --eye-model the image is seen by a traced schematic eye: each channel's wavelength is traced "
-        "(the eye's own spherical aberration, dispersion and off-axis aberrations; no --lca, one wavelength per "
-        "channel), --rx is added over the same --pupil-mm entrance pupil as for the reduced eye. The PSF varies "
+        "(the eye's own spherical aberration, dispersion and off-axis aberrations, no --lca; a --channel-fwhm-nm band "
+        "at each of its wavelengths), --rx is added over the same --pupil-mm entrance pupil as for the reduced eye. The PSF varies "
         "over the image: it is traced at a grid of field points --field-step-deg apart and interpolated between "
         "them; an image within one step is blurred by the one PSF at its centre. The image stays in visual angle "
         "(the eye's distortion is not applied).")

@@ -49,8 +49,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              "photopic: weighted by the CIE 1924 V(λ)); the Zernikes, refraction and pupils stay at "
                              "--wavelength-nm (default the model's reference)")
     parser.add_argument("--field-deg", default="0,0", metavar="X,Y",
-                        help="field angle from the optical axis, degrees, x (examiner's right) and y (up) "
-                             "(default 0,0)")
+                        help="field angle, degrees, x (examiner's right; nasal for the right eye the models "
+                             "are) and y (up), from the visual axis for a model that has one (liou-brennan-1997: "
+                             "0,0 is where the eye fixates, 5 deg nasal of its optical axis), else from the optical "
+                             "axis (default 0,0)")
     parser.add_argument("--rx", metavar="PRESCRIPTION",
                         help=f"{RX_HELP}: trace the eye that has it (axial length for its sphere, a toric cornea "
                              "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea")
@@ -68,6 +70,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="MTF at these retinal frequencies, cycles per mm (>= 0)")
     parser.add_argument("--mtf-cyc-per-deg", metavar="F1,F2,...",
                         help="MTF at these frequencies, cycles per degree of visual angle (>= 0)")
+    parser.add_argument("--lca", action="store_true",
+                        help="add the eye's longitudinal chromatic aberration over 400-700 nm in 10 nm steps: its "
+                             "refraction at each wavelength minus that at --wavelength-nm (default the model's "
+                             "reference), traced over the pupil given at --field-deg, beside the paraxial value, "
+                             "Thibos's chromatic eye (1992) and Atchison & Smith's fit to measured eyes (2005)")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(func=run)
     return parser
@@ -117,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
                         rx=args.rx, vertex_distance_mm=args.vertex_mm,
                         mtf_cyc_per_mm=_frequencies(args.mtf_cyc_per_mm, "--mtf-cyc-per-mm", "cycles per mm"),
                         mtf_cyc_per_deg=_frequencies(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles per degree"),
-                        lenses=lenses)
+                        lenses=lenses, lca=args.lca)
     if args.json:
         print(json.dumps({**report.as_json(), "vissim_version": __version__}, indent=2, allow_nan=False))
         return 0
@@ -138,7 +145,7 @@ def _print_text(report: EyeReport) -> None:
     rows = [
         ("eye", f"{record['model']} at {record['accommodation_diopters']:g} D accommodation{rx}"),
         ("wavelength", f"{record['wavelength_nm']:g} nm{wavelength}"),
-        ("field", f"({record['field_deg'][0]:g}, {record['field_deg'][1]:g}) deg"),
+        ("field", f"({record['field_deg'][0]:g}, {record['field_deg'][1]:g}) deg from the {record['field_axis']}"),
         *[("lens", f"{lens['marked_power']} (back vertex power), n_d {lens['refractive_index_d']:g}, "
                    f"{lens['center_thickness_mm']:.3f} mm thick, back vertex {report.lens_setup.vertex_distance_mm:g} mm "
                    "in front of the cornea") for lens in record["lenses"]],
@@ -165,3 +172,18 @@ def _print_text(report: EyeReport) -> None:
     width = max(len(label) for label, _ in rows)
     for label, text in rows:
         print(f"{label:<{width}}  {text}")
+    if "lca" in record:
+        _print_lca(record["lca"])
+
+
+def _print_lca(lca: dict) -> None:
+    pupil = lca["pupil"]
+    print(f"\nLCA at the corneal vertex, D, re {lca['reference_wavelength_nm']:g} nm; traced over a "
+          f"{pupil['entrance_pupil_mm']:.3f} mm entrance pupil (iris {pupil['iris_mm']:.3f} mm) at field "
+          f"({lca['field_deg'][0]:g}, {lca['field_deg'][1]:g}) deg")
+    print("    nm    traced  min RMS  paraxial  Thibos  Atchison&Smith  traced-Thibos  traced-A&S")
+    for r in lca["rows"]:
+        traced = r["traced_diopters"]
+        print(f"  {r['wavelength_nm']:4.0f}  {traced:+8.3f} {r['traced_minimum_rms_diopters']:+8.3f} "
+              f"{r['paraxial_diopters']:+9.3f} {r['thibos_diopters']:+7.3f} {r['atchison_smith_diopters']:+15.3f} "
+              f"{traced - r['thibos_diopters']:+14.3f} {traced - r['atchison_smith_diopters']:+11.3f}")

@@ -90,20 +90,20 @@ def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:
     return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
 
 
-def eye_to_world(field_deg) -> list[list[float]]:
-    """The sensor's to_world (4 x 4, corneal vertex at the origin) that turns the eye so that the world's +z
-    (the chart's centre) lies at the field angle ``field_deg`` = (x, y) degrees from its optical axis, OSA's
+def eye_to_world(eye, field_deg) -> list[list[float]]:
+    """The sensor's to_world (4 x 4, corneal vertex at the origin) that turns the `SchematicEye` ``eye`` so
+    that the world's +z (the chart's centre) lies at the field angle ``field_deg`` = (x, y) degrees, OSA's
     frame (x the examiner's right: the observer's left; y up), as every ``--field-deg``.
 
-    The sensor's local frame has +x to the observer's left (OSA's x), +y up, +z along the axis; the
-    direction (x, y) is ``(sin θ cos φ, sin θ sin φ, cos θ)``, θ = |(x, y)|, φ = atan2(y, x).  The
-    rotation by θ about ``d x z`` takes it to +z (Rodrigues)."""
-    x, up = (math.radians(float(v)) for v in field_deg)
-    right = -x
-    theta = math.hypot(right, up)
-    if theta == 0.0:
-        return [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
-    d = np.array([-math.sin(theta) * right / theta, math.sin(theta) * up / theta, math.cos(theta)])
+    The sensor's local frame has +x to the observer's left (OSA's x), +y up, +z along the optical axis;
+    the field angle's direction there is `vissim.optics.eyes.wavefront.field_direction` (the trace's rule,
+    from the visual axis for a model that has one).  The rotation about ``d x z`` takes it to +z (Rodrigues)."""
+    from vissim.optics.eyes.wavefront import field_direction
+
+    d = np.asarray(field_direction(eye, field_deg), dtype=float)
+    if np.allclose(d, [0.0, 0.0, 1.0], rtol=0.0, atol=1e-15):
+        return np.eye(4).tolist()
+    theta = math.acos(min(1.0, float(d[2])))
     axis = np.cross(d, [0.0, 0.0, 1.0])
     axis /= np.linalg.norm(axis)
     k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
@@ -129,6 +129,7 @@ def _bench(settings: EyeRender, pupil_mm: float):
 
 def eye_scene_dict(settings: EyeRender) -> dict:
     """The plain scene dict (module doc); its camera is the schematic-eye sensor."""
+    from vissim.optics.eyes.models import eye_model
     from vissim.bench.dslr.bench import chart_mm_per_texel, dslr_scene
     from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
 
@@ -148,7 +149,8 @@ def eye_scene_dict(settings: EyeRender) -> dict:
     scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="mono")
     camera = scene["camera"]
     # the bench's camera sits at the origin looking along +z (identity): the eye takes its place, turned
-    sensor.update({"to_world": eye_to_world(settings.field_deg), "film": camera["film"], "sampler": camera["sampler"],
+    turn = eye_to_world(eye_model(settings.model, settings.accommodation_diopters), settings.field_deg)
+    sensor.update({"to_world": turn, "film": camera["film"], "sampler": camera["sampler"],
                    "far_clip": 10.0 * bench.chart_distance_mm})
     scene["camera"] = sensor
     return scene

@@ -1,12 +1,13 @@
 """Mitsuba sensor ``vissim_schematic_eye``: a schematic eye's retina seen through its traced optics.
 
-Each film pixel is a visual direction: its angles from the optical axis, to the observer's right
-and up, are ``-field_x_deg + (u - 1/2) W a`` and ``field_y_deg + (1/2 - v) H a`` (u, v the film
-position in [0, 1], row 0 at the top; a = ``arcmin_per_px`` / 60; W x H the film's size): an
-azimuthal-equidistant map of the visual field, centred on the field angle (``field_x_deg``,
-``field_y_deg``) in OSA's frame, as every vissim ``--field-deg`` (x the examiner's right, the
-observer's left: `vissim.units.osa_xy_to_image_colrow`), from the axis (the sensor's forward
-direction).  That direction's chief ray lands on the
+Each film pixel is a visual direction: its field angle, OSA's frame as every vissim ``--field-deg``
+(x the examiner's right, the observer's left: `vissim.units.osa_xy_to_image_colrow`; y up), is
+``(field_x_deg - (u - 1/2) W a, field_y_deg + (1/2 - v) H a)`` (u, v the film position in [0, 1], row
+0 at the top, columns to the observer's right; a = ``arcmin_per_px`` / 60; W x H the film's size),
+and its direction is the one the traced wavefront gives that field angle
+(`vissim.optics.eyes.wavefront.field_direction`: (tan x, tan y, 1), from the visual axis for a model
+that has one), so a pixel of the render and a pixel of a simulation at the same field angle look
+the same way.  That direction's chief ray lands on the
 curved retina at the radius r(θ) of a table traced at init (`vissim.render.schematic_eye_tables`:
 the eye's distortion is in it), opposite its azimuth (the retinal image is inverted).  From
 that retinal point a ray is aimed at a point sampled uniformly in the box that bounds, on the lens's
@@ -141,14 +142,25 @@ def _make_class(mi, dr):
             self.far_clip = float(props.get("far_clip", 1.0e7))
             width, height = self.film().size()
             self.span_deg = (width * self.arcmin_per_px / 60.0, height * self.arcmin_per_px / 60.0)
-            reach = math.hypot(abs(self.field_deg[0]) + 0.5 * self.span_deg[0],
-                               abs(self.field_deg[1]) + 0.5 * self.span_deg[1])
+            self.visual_axis_rad = math.radians(eye.visual_axis_deg)
+            corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0)))
+                      for f, span in zip(self.field_deg, self.span_deg)]
+            reach = math.degrees(math.atan(math.hypot(*corner))) + eye.visual_axis_deg  # widest angle from the axis
             self.tables = sensor_tables(self.model, accommodation, self.iris_mm, self.wavelength_nm, reach)
             self._init_lookups(eye)
             self.m_needs_sample_3 = True
             centre, edge = self.tables.pass_fraction[0], self.tables.pass_fraction[-1]
             log.info("schematic-eye sensor %s: %.1f %% of pupil samples pass the iris at the fovea, %.1f %% at "
                      "%.3g mm", self.model, 100 * centre, 100 * edge, self.tables.r_edges_mm[-1])
+
+        def _direction(self, x_deg, y_deg):
+            """`vissim.optics.eyes.wavefront.field_direction` (the one rule) in Dr.Jit: (tan x, tan y, 1)
+            normalised, turned from the visual axis to the optical axis by the model's ``visual_axis_deg``."""
+            tx, ty = dr.tan(x_deg * (math.pi / 180.0)), dr.tan(y_deg * (math.pi / 180.0))
+            norm = dr.rsqrt(tx * tx + ty * ty + 1.0)
+            ox, oy, oz = tx * norm, ty * norm, norm
+            c, s = math.cos(self.visual_axis_rad), math.sin(self.visual_axis_rad)
+            return ox * c + oz * s, oy, -ox * s + oz * c
 
         def _init_lookups(self, eye):
             t = self.tables
@@ -209,13 +221,16 @@ def _make_class(mi, dr):
 
         def sample_ray(self, time, wavelength_sample, position_sample, aperture_sample, active=True):
             wavelengths, weight, wavelength_nm = self._wavelengths(wavelength_sample, active)
-            right = -self.field_deg[0] + (position_sample.x - 0.5) * self.span_deg[0]  # OSA x: observer's left
-            up = self.field_deg[1] + (0.5 - position_sample.y) * self.span_deg[1]
-            theta = dr.sqrt(right * right + up * up)
-            on_axis = theta <= 1e-9
-            inv = dr.select(on_axis, 0.0, 1.0 / dr.maximum(theta, 1e-9))
-            cos_psi = dr.select(on_axis, 1.0, right * inv)  # the landing point's azimuth in the eye's x, y
-            sin_psi = dr.select(on_axis, 0.0, -up * inv)
+            # the pixel's field angle, OSA's frame (columns run to the observer's right: -x)
+            x_deg = self.field_deg[0] - (position_sample.x - 0.5) * self.span_deg[0]
+            y_deg = self.field_deg[1] + (0.5 - position_sample.y) * self.span_deg[1]
+            ox, oy, oz = self._direction(x_deg, y_deg)
+            rho = dr.sqrt(ox * ox + oy * oy)
+            theta = dr.atan2(rho, oz) * (180.0 / math.pi)
+            on_axis = rho <= 1e-12
+            inv = dr.select(on_axis, 0.0, 1.0 / dr.maximum(rho, 1e-12))
+            cos_psi = dr.select(on_axis, 1.0, -ox * inv)  # the landing point's azimuth in the eye's x, y (inverted)
+            sin_psi = dr.select(on_axis, 0.0, -oy * inv)
             r = self.radius_of(dr, theta)
             p = self.tracer.retina_point(r * cos_psi, r * sin_psi)
             sector, frac = self._azimuth(cos_psi, sin_psi)

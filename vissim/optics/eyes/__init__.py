@@ -10,6 +10,8 @@
 * `refraction`: paraxial and minimum-RMS refraction from that wavefront, at the cornea or a spectacle plane.
 * `psf_wavefront`: `eye_wavefront`, the traced eye's Zernikes with a prescription's added over the
   entrance pupil: what ``vissim psf --eye-model`` computes its PSF from.
+* `lca`: the longitudinal chromatic aberration curve, traced, beside the paraxial one, Thibos's
+  chromatic eye and Atchison & Smith 2005.
 * `report`: one eye's record at a field point and a wavelength (``vissim eye``): power, pupils,
   Zernikes, refraction and MTF, with an optional prescription and lenses in front.
 """

@@ -68,6 +68,9 @@ class SchematicEye:
     ``stop_decentre_nasal_mm``: the iris centre's offset from the optical axis towards the nose;
     ``visual_axis_deg``: the angle between the visual and the optical axis in object space
     (angle alpha: the visual axis lies nasal of the optical axis). Both are 0 for centred models.
+    The models are right eyes (nasal is +x in OSA's frame). A model with a visual axis has its
+    field angles measured from it: field (0, 0) is where it fixates (the rule is applied once, by
+    the trace: `vissim.optics.eyes.wavefront.field_from_optical_axis_deg`).
     ``accommodation_diopters`` is the model's own accommodation parameter; ``recalled`` marks a
     table not checked against a stored source.
     """
@@ -135,8 +138,10 @@ def _navarro_surfaces(accommodation_diopters: float, vitreous_mm: float, retina_
 def navarro_1985(accommodation_diopters: float = 0.0) -> SchematicEye:
     """Navarro's 1985 eye, accommodated by A dioptres (0-10 D) by its Table 4 formulas.
 
-    The vitreous (lens back to retina) stays 16.40 mm at every A, as ISET3d and mb.body.Navarro do;
-    whether the paper keeps the axial length fixed instead is not settled. The 1985 paper gives
+    The vitreous (lens back to retina) stays 16.40 mm at every A, as ISET3d and mb.body.Navarro (whose
+    author checked it against the paper's Tables 4 and 5) do, so the axial length grows by
+    0.05 ln(A + 1) mm; the paper is not in a stored source, so whether it holds the axial length
+    instead is unconfirmed (tests/test_eye_models.py records the refraction either way). The 1985 paper gives
     no retinal curvature; the retina here is Escudero-Sanz & Navarro's −12 mm sphere.
     """
     a = _accommodation(accommodation_diopters, "navarro-1985", NAVARRO_ACCOMMODATION_RANGE_DIOPTERS)
@@ -203,14 +208,19 @@ def le_grand(accommodated: bool = False) -> SchematicEye:
                         "dispersion ISET3d", accommodation_diopters=0.0)
 
 
-_LB_SOURCE = ("Liou & Brennan 1997, JOSA A 14:1684 (abstract: 60.35 D, axial length 23.95 mm). "
-              "RECALLED: the surface and GRIN table is recalled from the paper, not read from a stored "
-              "copy; confirm it against Table 1 of the paper before relying on it")
+_LB_SOURCE = ("Liou & Brennan 1997, JOSA A 14:1684 (abstract: 60.35 D, axial length 23.95 mm). Found in "
+              "stored sources: the cornea's radii 7.77 and 6.40 mm (their ratio, named for Liou-Brennan, in a "
+              "public Castrop IOL-formula code) and the media's indices at 555 nm, cornea 1.376, aqueous and "
+              "vitreous 1.336 (SpikeFinder LiouBrennanRefractiveIndices.cs). RECALLED: the conics, the "
+              "thicknesses, the lens radii and the GRIN polynomial are recalled from the paper's Table 1, not "
+              "read from a stored copy (they reproduce the abstract's power and axial length); confirm them "
+              "against the paper before relying on them")
 
 
 def liou_brennan_1997() -> SchematicEye:
     """Liou & Brennan's 1997 eye: aspheric cornea and lens, a two-part GRIN lens, the iris at the
-    lens front decentred 0.5 mm nasally, the visual axis 5° from the optical axis (RECALLED table).
+    lens front decentred 0.5 mm nasally, the visual axis 5° from the optical axis, nasal (field
+    angles are measured from it); partly RECALLED table (``_LB_SOURCE`` says which numbers are found).
 
     GRIN halves, n at 555 nm, z from each half's front plane, r from the axis (mm):
     front 1.368 + 0.049057z − 0.015427z² − 0.001978r² over 1.59 mm; back 1.407 − 0.006605z² −

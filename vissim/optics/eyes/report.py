@@ -42,6 +42,11 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
   thin lens touching the front of the first lens that would correct what remains, stated at that
   plane (as `spectacles.residual_refraction`'s `SPECTACLE` plane, its paraxial oracle). Thin
   lenses are refused: make them thick first (`vissim.bench.atv.tube.atv_trial_lens`).
+
+* **LCA** (``lca=True``): the eye's chromatic difference of refraction over 400-700 nm
+  (`lca.lca_curve`), traced behind the report's iris at its field point, re the report's
+  wavelength, beside the paraxial curve, Thibos's chromatic eye and Atchison & Smith 2005; without
+  lenses in front (the eye's own).
 """
 
 from __future__ import annotations
@@ -58,6 +63,7 @@ from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics import psf_metrics
 from vissim.optics.eyes.ametropia import ametropic_eye
+from vissim.optics.eyes.lca import LcaCurve, lca_curve
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
@@ -180,6 +186,7 @@ class EyeReport:
     mtf_cyc_per_mm: dict
     lens_setup: TrialLensSetup | None = None
     mtf_spectrum: MtfSpectrum | None = None
+    lca: LcaCurve | None = None
 
     def as_json(self) -> dict:
         """The record of ``vissim eye --json`` (plain numbers; Zernikes keyed ``"n,m"``)."""
@@ -212,6 +219,7 @@ class EyeReport:
             "wavelength_nm": self.wavelength_nm,
             "wavelength": "given" if self.wavelength_given else "the model's reference wavelength",
             "field_deg": list(wf.field_deg),
+            "field_axis": wf.field_axis,
             "zernike_um": {f"{n},{m}": float(v) for (n, m), v in sorted(wf.zernike_um.items())},
             "zernike_pupil": "entrance pupil",
             "rms_um": wf.rms_um,
@@ -219,6 +227,7 @@ class EyeReport:
                            "refraction_plane": self._plane_text(),
                            "vertex_distance_mm": refraction["vertex_distance_mm"]},
             "mtf": mtf,
+            **({} if self.lca is None else {"lca": self.lca.as_json()}),
         }
 
     def _plane_text(self) -> str:
@@ -243,12 +252,12 @@ def _pairs(frequencies, table: dict) -> dict:
 def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None, iris_mm=None,
                wavelength_nm=None, field_deg=(0.0, 0.0), rx=None, vertex_distance_mm=None,
                mtf_cyc_per_mm=(), mtf_cyc_per_deg=(), lenses=(), lens_gap_mm: float = 0.0,
-               mtf_spectrum: MtfSpectrum | None = None) -> EyeReport:
+               mtf_spectrum: MtfSpectrum | None = None, lca: bool = False) -> EyeReport:
     """The `EyeReport` of ``model`` (a name of `vissim.optics.eyes.models.EYE_MODELS`), module doc.
 
     ``rx``: a prescription (text or `Prescription`) the eye is made to have, at the spectacle
     plane ``vertex_distance_mm`` (default 12 mm) in front of the cornea; ``lenses``: thick trial or
-    spectacle lenses worn there (module doc). Bad input -- an unknown
+    spectacle lenses worn there (module doc); ``lca``: add the eye's LCA curve (module doc). Bad input -- an unknown
     model, an accommodation beyond the model's range, a pupil the iris cannot give, a field where
     rays miss a surface, meet total internal reflection or leave the GRIN lens, a negative
     frequency -- raises one `VissimInputError` naming the value and its unit. ``mtf_spectrum``: the
@@ -286,10 +295,11 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
         paraxial_pupil = entrance_pupil_diameter_mm(mean, front.iris_mm, wavelength)
     else:
         paraxial_pupil = front.iris_mm * system_entrance_pupil_mm(eye, setup, wavelength)[1]
+    curve = lca_curve(eye, iris_mm=front.iris_mm, reference_nm=wavelength, field_deg=field) if lca else None
     return EyeReport(eye.name, base.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
                      float(equivalent_power_diopters(mean, wavelength)), float(efl_mm(mean, wavelength)),
                      float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup,
-                     mtf_spectrum)
+                     mtf_spectrum, curve)
 
 
 def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg) -> dict:

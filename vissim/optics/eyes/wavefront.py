@@ -7,7 +7,9 @@ Steps (`trace_eye_wavefront`):
    aimed with `aim_collimated` through the cornea onto a regular square grid on the iris (the
    stop; centred on the iris centre, ``stop_decentre_nasal_mm`` towards +x: a right eye), and
    traced on through the lens (the GRIN lens by the ray equation) to the retina
-   (`vissim.optics.eyes.surfaces`). Field angles are from the optical axis.
+   (`vissim.optics.eyes.surfaces`). Field angles are from the **visual axis** for a model that has
+   one (``visual_axis_deg`` > 0: Liou–Brennan's 5°), so that field (0, 0) is the fixation
+   direction, and from the optical axis otherwise (`field_from_optical_axis_deg`, `FIELD_AXIS`).
 2. The chief ray (through the iris centre) meets the retina at the image point; each ray's OPD is
    taken on the reference sphere about that point through the chief ray's crossing of the
    paraxial exit-pupil plane (`wavefront_on_reference_sphere_um`; OSA sign, W > 0 leads).
@@ -56,8 +58,9 @@ from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.zernike import fit_zernike_um
 
-__all__ = ["EyeWavefront", "trace_eye_wavefront", "exit_pupil_position_mm", "entrance_pupil_from_iris_mm",
-           "iris_from_entrance_pupil_mm", "max_iris_mm", "DEFAULT_SAMPLES", "GRID_MARGIN"]
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_direction", "field_from_optical_axis_deg", "field_axis",
+           "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
+           "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
 #: Samples across the iris (odd: the chief ray is the grid's centre) and the grid's reach, in iris radii.
 DEFAULT_SAMPLES = 65
@@ -78,13 +81,44 @@ def exit_pupil_position_mm(eye: SchematicEye, wavelength_nm: float) -> float:
     return eye.axial_length_mm - n_vitreous * y / nu
 
 
-def _beam_direction(field_deg) -> np.ndarray:
+def field_axis(eye: SchematicEye) -> str:
+    """The axis field angles are measured from: ``"visual axis"`` for a model with one, else ``"optical axis"``."""
+    return "visual axis" if eye.visual_axis_deg != 0.0 else "optical axis"
+
+
+def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:
+    """The unit vector from the eye towards the field point, in the eye's (optical-axis) frame: x, y
+    OSA's (x the examiner's right, y up), z the axis towards the object.
+
+    The rule, written once: a field angle (x, y) is the direction (tan x, tan y, 1) in the frame of
+    the axis `field_axis` names. The visual axis is the optical axis turned by ``visual_axis_deg``
+    about y towards +x: the object-space angle alpha with the fixation point **nasal** of the optical
+    axis (the fovea temporal of the posterior pole). +x is nasal for a **right eye** in OSA's frame
+    (x to the examiner's right), the eye the models' nasal iris decentre already assumes; so the
+    fixation direction, field (0, 0), is (+alpha, 0) from the optical axis.
+    """
     fx, fy = (finite_number(v, "field angle", "deg") for v in field_deg)
     for value in (fx, fy):
         if abs(value) > MAX_FIELD_DEG:
             raise VissimInputError(f"field angle {value:g} deg is beyond +-{MAX_FIELD_DEG:g} deg")
-    d = np.array([-math.tan(math.radians(fx)), -math.tan(math.radians(fy)), 1.0])
-    return d / np.linalg.norm(d)
+    o = np.array([math.tan(math.radians(fx)), math.tan(math.radians(fy)), 1.0])
+    o /= np.linalg.norm(o)
+    alpha = math.radians(eye.visual_axis_deg)
+    return np.array([o[0] * math.cos(alpha) + o[2] * math.sin(alpha), o[1],
+                     -o[0] * math.sin(alpha) + o[2] * math.cos(alpha)])
+
+
+def field_from_optical_axis_deg(eye: SchematicEye, field_deg) -> tuple[float, float]:
+    """The field angle (x, y), degrees, given from `field_axis`, as angles from the optical axis
+    (each the arctangent of its direction's x or y over z); the same angles for a model with no visual axis."""
+    o = field_direction(eye, field_deg)
+    return math.degrees(math.atan2(o[0], o[2])), math.degrees(math.atan2(o[1], o[2]))
+
+
+def _beam_direction(eye: SchematicEye, field_deg) -> np.ndarray:
+    """The collimated beam's direction of travel (towards +z) from the field point ``field_deg``."""
+    o = field_direction(eye, field_deg)
+    return np.array([-o[0], -o[1], o[2]])
 
 
 def _front(eye: SchematicEye, lenses) -> tuple[tuple, float, tuple, float]:
@@ -186,6 +220,7 @@ class EyeWavefront:
     disc's centre (on the axis for a centred iris on axis; −0.097 mm in x at 40° in ES1999).
     ``lenses``: the `TrialLensSetup` in front (None: none); with lenses ``entrance_pupil_mm`` and
     ``entrance_pupil_position_mm`` are the whole system's and ``eye_entrance_pupil_mm`` the eye's own.
+    ``field_axis``: the axis ``field_deg`` is measured from (`field_axis`).
     """
 
     model: str
@@ -205,6 +240,7 @@ class EyeWavefront:
     fit_residual_rms_um: float
     lenses: object = None
     eye_entrance_pupil_mm: float | None = None
+    field_axis: str = "optical axis"
 
     @property
     def rms_um(self) -> float:
@@ -267,7 +303,7 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     raises one `VissimInputError` naming the field angle in degrees and what happened.
     """
     wavelength = checked_wavelength_nm(wavelength_nm)
-    direction = _beam_direction(field_deg)
+    direction = _beam_direction(eye, field_deg)
     samples = _checked_samples(samples)
     pupil, iris, given = _pupils(eye, wavelength, pupil_mm, iris_mm)
     field = tuple(float(v) for v in field_deg)
@@ -289,4 +325,4 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, pupil, max_order)
     return EyeWavefront(eye.name, field, wavelength, pupil, iris, given, entrance_z, exit_z,
                         tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,
-                        coefficients, residual, lenses, eye_pupil)
+                        coefficients, residual, lenses, eye_pupil, field_axis(eye))
