@@ -120,9 +120,10 @@ def _sweep(entry: dict, index: int, source: str) -> list[dict]:
 
 def _settings(head: dict, source: str) -> EyeSettings:
     kwargs = settings_kwargs(head, EyeSettings, source, "campaign",
-                             numbers={"arcmin_per_px": (0.25, 4.0), "chart_distance_m": (0.5, 100.0),
-                                      "vertex_mm": (5.0, 30.0)},
-                             whole_numbers={"spp": (1, 1 << 16), "oversample": (1, 8), "rays_across": (21, 1001)},
+                             numbers={"arcmin_per_px": ("arcmin/px", 0.25, 4.0), "chart_distance_m": ("m", 0.5, 100.0),
+                                      "vertex_mm": ("mm", 5.0, 30.0)},
+                             whole_numbers={"spp": ("samples per pixel", 1, 1 << 16), "oversample": ("", 1, 8),
+                                            "rays_across": ("rays", 21, 1001)},
                              lists={}, texts=("name", "description", "kind"), read_elsewhere=("size_px",))
     if "size_px" in head:
         size = head["size_px"]

@@ -55,6 +55,8 @@ __all__ = ["SIMULATIONS", "COSTS", "EyeScene", "simulate", "chart", "PHOTOPIC_FO
 
 #: The wavelength the reduced eye is in focus at, and the thesis's one wavelength, for photopic light.
 PHOTOPIC_FOCUS_NM = 555.0
+#: The photopic spectrum's sampling in the simulations and the ray trace, nm (400-700 nm: 13 wavelengths).
+PHOTOPIC_STEP_NM = 25.0
 #: The simulations compared with every render (module doc).
 SIMULATIONS = ("traced_rays", "reduced_geometric", "reduced_wave", "thesis", "schematic", "schematic_wave")
 #: Reduced-eye assumption -> the simulation that puts it into the geometric schematic one, and where it applies.
@@ -103,7 +105,7 @@ class EyeScene:
         self.eye = eye_model(configuration.model, configuration.accommodation_diopters)
         self.photopic = configuration.spectrum == "photopic"
         if self.photopic:
-            wavelengths, weights = named_spectrum("photopic")
+            wavelengths, weights = named_spectrum("photopic", PHOTOPIC_STEP_NM)
             self.wavelengths, self.weights = tuple(wavelengths), tuple(weights)
         else:
             self.wavelengths, self.weights = (configuration.wavelength_nm,), (1.0,)
