@@ -3,7 +3,7 @@
 A row's ``over_floor_db`` is its PSNR minus the noise floor's (the two seeds' renders against each
 other): a simulation that matches the render to its noise scores about +3 dB (its error is one
 render's noise, the floor's two).  The geometric self-check (``traced_rays``) must reach
-`SELF_CHECK_MARGIN_DB`.  An assumption's ``cost_db`` is the geometric schematic simulation's PSNR
+`SELF_CHECK_MARGIN_DB`.  An assumption's ``cost_db`` is the schematic wave-optics simulation's PSNR
 minus that of the same simulation with the assumption put in (> 0: the assumption costs that much).
 """
 
@@ -82,7 +82,7 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
         if simulation in SIMULATIONS:
             saved[simulation] = save_item_image(item_dir, simulation, simulated, {"simulation": simulation})
     by_name = {r["simulation"]: r for r in rows}
-    costs = {assumption: by_name["schematic"]["psnr_db"] - by_name[name]["psnr_db"]
+    costs = {assumption: by_name["schematic_wave"]["psnr_db"] - by_name[name]["psnr_db"]
              for assumption, (name, _) in COSTS.items() if name in by_name}
     saved["render"] = save_item_image(item_dir, "render", truth_a, render_provenance.get("truth_0", {}))
     result = {"key": key, "configuration": configuration.as_json(), "noise_floor": floor.as_json(),

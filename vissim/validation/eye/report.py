@@ -72,8 +72,8 @@ def _simulations_table(results: list[dict]) -> str:
 
 def _costs_table(results: list[dict]) -> str:
     lines = ["### What each reduced-eye assumption costs (dB lost against the render)\n",
-             "The schematic eye's ray-optics simulation, with one of the reduced eye's simplifications put in, "
-             "scored against the render: the PSNR it loses. Spherical aberration: the eye's higher-order "
+             "The schematic eye's wave-optics simulation, with one of the reduced eye's simplifications put in, "
+             "scored against the render blurred by the pupil's diffraction: the PSNR it loses. Spherical aberration: the eye's higher-order "
              "aberrations dropped. Chromatic model: Thibos's chromatic-eye formula instead of the traced "
              "dispersion (photopic light only). Field dependence: the on-axis PSF used off axis. Pupil "
              "definition: the iris's diameter taken as the pupil's (the entrance pupil is the iris magnified "

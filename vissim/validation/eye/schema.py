@@ -31,7 +31,7 @@ class EyeSettings:
     arcmin_per_px: float = 0.5
     chart_distance_m: float = 6.0
     vertex_mm: float = 12.0
-    oversample: int = 4
+    oversample: int = 2
     rays_across: int = 161
 
 

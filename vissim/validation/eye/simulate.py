@@ -20,7 +20,8 @@ diffraction PSF (wave optics).
     The schematic eye (`vissim.blur_eye`): the traced wavefront at the image's field and every
     wavelength (each with its own focus and transverse shift), the lens and the chart's vergence
     added at the eye's entrance pupil, the lens's spectacle magnification.
-Each reduced-eye assumption, put into the geometric ``schematic`` one at a time:
+Each reduced-eye assumption, put into ``schematic_wave`` one at a time (wave optics, scored against the render
+with diffraction):
 ``no_higher_orders`` (the eye's Zernike orders above 2 dropped), ``thibos_lca`` (traced at 555
 nm only, Thibos's formula for the other wavelengths; photopic only), ``on_axis_psf`` (the on-axis
 PSF for an off-axis image), ``iris_as_pupil`` (the iris's diameter taken as the entrance pupil's),
@@ -65,7 +66,7 @@ COSTS = {"spherical aberration": ("no_higher_orders", "always"),
          "field dependence": ("on_axis_psf", "off axis"),
          "pupil definition": ("iris_as_pupil", "always"),
          "spectacle magnification": ("no_magnification", "lens")}
-WAVE = ("reduced_wave", "thesis", "schematic_wave")
+WAVE = ("reduced_wave", "thesis", "schematic_wave") + tuple(name for name, _ in COSTS.values())
 
 
 def reference_of(simulation: str) -> str:
