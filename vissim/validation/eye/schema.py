@@ -103,6 +103,15 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
     return configuration
 
 
+def _words(value) -> str:
+    """A swept value as a name's words: a lens table as "+0 +1 x 90", a list as "10,0"."""
+    if isinstance(value, dict):
+        return f"{value.get('sphere', 0.0):+g} {value.get('cylinder', 0.0):+g} x {value.get('axis', 180):g}"
+    if isinstance(value, list):
+        return ",".join(f"{v:g}" for v in value)
+    return f"{value:g}" if isinstance(value, (int, float)) else str(value)
+
+
 def _sweep(entry: dict, index: int, source: str) -> list[dict]:
     where = f"sweep[{index}]"
     prefix = name_text(entry.get("name", where), source, f"{where}.name")
@@ -113,7 +122,7 @@ def _sweep(entry: dict, index: int, source: str) -> list[dict]:
     out = []
     for values in itertools.product(*lists):
         chosen = dict(zip(keys, values))
-        label = " ".join(f"{k}={v}" for k, v in chosen.items() if len(lists[keys.index(k)]) > 1)
+        label = " ".join(f"{k} {_words(v)}" for k, v in chosen.items() if len(lists[keys.index(k)]) > 1)
         out.append({"name": f"{prefix} {label}".strip(), **chosen})
     return out
 

@@ -45,6 +45,7 @@ from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridia
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm
 from vissim.optics.prescription import Prescription
+from vissim.errors import FieldTooSmallError
 from vissim.optics.psf import PSF, compute_psf
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
@@ -59,7 +60,9 @@ PHOTOPIC_FOCUS_NM = 555.0
 #: The photopic spectrum's sampling in the simulations and the ray trace, nm (400-700 nm: 13 wavelengths).
 PHOTOPIC_STEP_NM = 25.0
 #: The simulations compared with every render (module doc).
-SIMULATIONS = ("traced_rays", "reduced_geometric", "reduced_wave", "thesis", "schematic", "schematic_wave")
+SIMULATIONS = ("traced_rays", "reduced_geometric", "reduced_wave", "thesis", "schematic_wave")
+#: Simulations made on request only: the schematic eye in ray optics (its ray PSF of the traced wavefront is slow).
+EXTRA_SIMULATIONS = ("schematic",)
 #: Reduced-eye assumption -> the simulation that puts it into the geometric schematic one, and where it applies.
 COSTS = {"spherical aberration": ("no_higher_orders", "always"),
          "chromatic model": ("thibos_lca", "photopic"),
@@ -180,19 +183,26 @@ def _blur_psf(image: np.ndarray, psf: PSF, step: float) -> np.ndarray:
     return np.asarray(blur_image(image, psf, arcmin_per_px=step, padding="edge"), np.float64)
 
 
-def _psf(front, scene: EyeScene, step: float, mode: str, **extra) -> PSF:
-    return compute_psf(front, arcmin_per_px=step, size_px="auto", mode=mode, pixel="integrate", **extra)
+def _psf(front, scene: EyeScene, step: float, mode: str, size_px="auto", **extra) -> PSF:
+    """The PSF of ``front``; ray optics on ``size_px`` (the ray PSF's field: the automatic size's search is slow
+    for ray optics), widened to the automatic size where more than 1 % of the light falls outside."""
+    try:
+        return compute_psf(front, arcmin_per_px=step, size_px=size_px, mode=mode, pixel="integrate", **extra)
+    except FieldTooSmallError:
+        return compute_psf(front, arcmin_per_px=step, size_px="auto", mode=mode, pixel="integrate", **extra)
 
 
 def _schematic(scene: EyeScene, image: np.ndarray, step: float, mode: str, *, field=None, pupil_mm=None,
-               drop_higher=False, thibos=False) -> np.ndarray:
-    """The schematic eye's blur of ``image`` with one assumption swapped (module doc)."""
+               drop_higher=False, thibos=False, size_px="auto") -> np.ndarray:
+    """The schematic eye's blur of ``image`` with one assumption swapped (module doc).  Unswapped, in wave optics,
+    it is `blur_eye`; in ray optics the same PSF (the image lies within one of `blur_eye`'s PSF nodes) on the ray
+    PSF's field."""
     rx, _ = scene.schematic_rx()
     own_field = tuple(float(v) for v in scene.c.field_deg)
     field = own_field if field is None else field
     pupil = scene.c.pupil_mm if pupil_mm is None else pupil_mm
     eye = dict(pupil_mm=pupil, rx=rx, field_deg=field, accommodation_diopters=scene.c.accommodation_diopters)
-    if not (drop_higher or thibos or field != own_field or pupil_mm is not None):
+    if mode == "wave" and not (drop_higher or thibos or field != own_field or pupil_mm is not None):
         bands = [scene.wavelengths] if scene.photopic else scene.mono_nm
         weights = [scene.weights] if scene.photopic else None
         return np.asarray(blur_eye(image, model=scene.c.model, arcmin_per_px=step, wavelength_nm=bands,
@@ -206,7 +216,7 @@ def _schematic(scene: EyeScene, image: np.ndarray, step: float, mode: str, *, fi
         psf = _psf(front.fronts[0], scene, step, mode, wavelength_nm=scene.wavelengths, weights=scene.weights,
                    lca_reference_nm=PHOTOPIC_FOCUS_NM)
     else:
-        psf = _psf(front, scene, step, mode, weights=scene.weights)
+        psf = _psf(front, scene, step, mode, size_px, weights=scene.weights)
     return _blur_psf(image, psf, step)
 
 
@@ -254,7 +264,8 @@ def simulate(simulation: str, scene: EyeScene, ray, margin: int, offset_px=(0.0,
     elif simulation == "thesis":
         blurred = _reduced(scene, image, step, mode, thesis=True)
     elif simulation in ("schematic", "schematic_wave", "no_magnification"):
-        blurred = _schematic(scene, image, step, mode)
+        size = ray.psf.shape[0] + 16 if mode == "geometric" else "auto"
+        blurred = _schematic(scene, image, step, mode, size_px=size)
     elif simulation == "no_higher_orders":
         blurred = _schematic(scene, image, step, mode, drop_higher=True)
     elif simulation == "thibos_lca":
