@@ -17,7 +17,8 @@ from vissim.imaging.registration import register
 from vissim.optics.blur import blur_image
 from vissim.validation.engine.item_files import save_item_image
 from vissim.validation.eye.rays import ray_psf
-from vissim.validation.eye.simulate import COSTS, SIMULATIONS, EyeScene, diffraction_psf, margin_px, reference_of, simulate
+from vissim.validation.eye.simulate import (COSTS, SIMULATIONS, EyeScene, diffraction_psf, margin_px, reference_of,
+                                            simulate)
 
 __all__ = ["compute_eye_item", "SELF_CHECK_MARGIN_DB", "DATA_RANGE", "applies"]
 
@@ -86,8 +87,8 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
              for assumption, (name, _) in COSTS.items() if name in by_name}
     saved["render"] = save_item_image(item_dir, "render", truth_a, render_provenance.get("truth_0", {}))
     result = {"key": key, "configuration": configuration.as_json(), "noise_floor": floor.as_json(),
-              "chart_placement": placement, "rows": rows, "costs_db": costs, "ray_psf": {"rays": ray.rays, "step_arcmin": ray.step_arcmin,
-                                                          "magnification": ray.magnification.tolist()},
+              "chart_placement": placement, "rows": rows, "costs_db": costs,
+              "ray_psf": {"rays": ray.rays, "step_arcmin": ray.step_arcmin, "magnification": ray.magnification.tolist()},
               "self_check_pass": by_name["traced_rays"]["over_floor_db"] >= SELF_CHECK_MARGIN_DB,
               "images": saved}
     write_json_atomic(item_dir / "result.json", result, overwrite=True)

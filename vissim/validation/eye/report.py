@@ -48,7 +48,8 @@ def _rows(results: list[dict]) -> list[dict]:
 
 
 def _self_check_table(results: list[dict]) -> str:
-    lines = [f"### Geometric self-check (ray trace against the render; must be at least +{SELF_CHECK_MARGIN_DB:g} dB)\n",
+    lines = ["### Geometric self-check (ray trace against the render; must be at least "
+             f"+{SELF_CHECK_MARGIN_DB:g} dB)\n",
              "| configuration | setup | noise floor PSNR dB | ray trace dB over floor | SSIM | passes |",
              "|---|---|---|---|---|---|"]
     for r in results:
@@ -73,7 +74,8 @@ def _simulations_table(results: list[dict]) -> str:
 def _costs_table(results: list[dict]) -> str:
     lines = ["### What each reduced-eye assumption costs (dB lost against the render)\n",
              "The schematic eye's wave-optics simulation, with one of the reduced eye's simplifications put in, "
-             "scored against the render blurred by the pupil's diffraction: the PSNR it loses. Spherical aberration: the eye's higher-order "
+             "scored against the render blurred by the pupil's diffraction: the PSNR it loses. Spherical "
+             "aberration: the eye's higher-order "
              "aberrations dropped. Chromatic model: Thibos's chromatic-eye formula instead of the traced "
              "dispersion (photopic light only). Field dependence: the on-axis PSF used off axis. Pupil "
              "definition: the iris's diameter taken as the pupil's (the entrance pupil is the iris magnified "

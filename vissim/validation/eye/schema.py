@@ -2,7 +2,8 @@
 
 An item is one rendered view of a letter through a schematic eye: ``model``, ``pupil_mm`` (the
 entrance pupil), ``accommodation`` (D), ``field`` (degrees: the chart centre's field angle [x, y], OSA's
-frame as every vissim field angle: x the examiner's right, y up; a number is [x, 0]), ``light`` (``"photopic"`` or a wavelength in nm), an optional trial ``lens``
+frame as every vissim field angle: x the examiner's right, y up; a number is [x, 0]), ``light``
+(``"photopic"`` or a wavelength in nm), an optional trial ``lens``
 (a sphere in D, or {sphere, cylinder, axis}), ``letter``, ``logmar``.  A ``[[sweep]]`` table gives
 lists for any of them and makes one item per combination (its ``name`` a prefix).
 """

@@ -119,7 +119,8 @@ class EyeScene:
         """(added power matrix D, magnification matrix) of the lens ``to_pupil_mm`` behind the corneal vertex."""
         if self.lens is None:
             return np.zeros((2, 2)), np.eye(2)
-        setup = TrialLensSetup((self.lens,), self.c.vertex_mm + to_pupil_mm, self.c.chart_distance_m + 1e-3 * to_pupil_mm)
+        setup = TrialLensSetup((self.lens,), self.c.vertex_mm + to_pupil_mm,
+                               self.c.chart_distance_m + 1e-3 * to_pupil_mm)
         effect = trial_lens_effect(setup)
         return np.asarray(effect.added_power_matrix, float), np.asarray(effect.magnification_matrix, float)
 
