@@ -16,6 +16,7 @@ __all__ = ["BENCH_KINDS", "DEFAULT_KIND", "bench_kind", "register_bench_kind"]
 BENCH_KINDS = {
     "dslr": "vissim.validation.dslr.kind",
     "depth": "vissim.validation.depth.kind",
+    "eye": "vissim.validation.eye.kind",
 }
 #: The kind of a campaign file that names none (the thesis's single-plane DSLR bench).
 DEFAULT_KIND = "dslr"

@@ -1,0 +1,95 @@
+"""One eye-bench item: its two renders, the ray PSF, every simulation scored against the render.
+
+A row's ``over_floor_db`` is its PSNR minus the noise floor's (the two seeds' renders against each
+other): a simulation that matches the render to its noise scores about +3 dB (its error is one
+render's noise, the floor's two).  The geometric self-check (``traced_rays``) must reach
+`SELF_CHECK_MARGIN_DB`.  An assumption's ``cost_db`` is the schematic wave-optics simulation's PSNR
+minus that of the same simulation with the assumption put in (> 0: the assumption costs that much).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vissim.atomic import write_json_atomic
+from vissim.imaging.metrics import compare_images, noise_floor
+from vissim.imaging.registration import register
+from vissim.optics.blur import blur_image
+from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.eye.rays import ray_psf
+from vissim.validation.eye.simulate import (COSTS, SIMULATIONS, EyeScene, diffraction_psf, margin_px, reference_of,
+                                            simulate)
+
+__all__ = ["compute_eye_item", "SELF_CHECK_MARGIN_DB", "DATA_RANGE", "applies"]
+
+#: The geometric self-check's required margin over the render's noise floor, dB.
+SELF_CHECK_MARGIN_DB = 2.0
+#: The chart's placement is searched until less than this is left (image px), in at most this many passes.
+ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES = 0.01, 4
+#: The images' data range for PSNR and SSIM (the chart's white is 0.9).
+DATA_RANGE = 1.0
+
+
+def applies(where: str, configuration) -> bool:
+    """Whether an assumption of `COSTS` applies to ``configuration`` (``where``: its scope)."""
+    return {"always": True, "photopic": configuration.spectrum == "photopic",
+            "off axis": tuple(configuration.field_deg) != (0.0, 0.0), "lens": configuration.lens is not None}[where]
+
+
+def item_ray_psf(configuration, settings, lens, scene: EyeScene):
+    c = configuration
+    return ray_psf(model=c.model, accommodation_diopters=c.accommodation_diopters, pupil_mm=c.pupil_mm,
+                   field_deg=c.field_deg, chart_distance_m=c.chart_distance_m, lens=lens, vertex_mm=c.vertex_mm,
+                   wavelengths_nm=scene.wavelengths, weights=scene.weights, sensor_wavelength_nm=c.wavelength_nm,
+                   arcmin_per_px=c.arcmin_per_px, oversample=settings.oversample, rays_across=settings.rays_across)
+
+
+def chart_offset_px(truth: np.ndarray, scene: EyeScene, ray, margin: int) -> tuple[tuple[float, float], dict]:
+    """Where the render placed its chart (rows, cols; image px): the ray-trace simulation registered onto the
+    render, its chart shifted by the sum, until less than `ALIGN_TOLERANCE_PX` is left (`MAX_ALIGN_PASSES`)."""
+    offset = (0.0, 0.0)
+    for passes in range(1, MAX_ALIGN_PASSES + 1):
+        left = register(truth, simulate("traced_rays", scene, ray, margin, offset), upsample_factor=100)
+        if max(abs(left.shift_rows_px), abs(left.shift_cols_px)) < ALIGN_TOLERANCE_PX:
+            break
+        offset = (offset[0] + left.shift_rows_px, offset[1] + left.shift_cols_px)
+    return offset, {"shift_rows_px": offset[0], "shift_cols_px": offset[1], "passes": passes,
+                    "left_px": [left.shift_rows_px, left.shift_cols_px]}
+
+
+def _row(simulation: str, reference: np.ndarray, simulated: np.ndarray, floor_db: float) -> dict:
+    metrics = compare_images(reference, simulated, data_range=DATA_RANGE)
+    return {"simulation": simulation, "reference": reference_of(simulation), "psnr_db": metrics.psnr_db,
+            "ssim": metrics.ssim, "over_floor_db": metrics.psnr_db - floor_db}
+
+
+def compute_eye_item(key: str, configuration, settings, built, images: dict, item_dir, render_provenance: dict) -> dict:
+    """Simulate and score one item (module doc); writes its images and ``result.json`` (last)."""
+    truth_a = np.asarray(images["truth_0"], np.float64).squeeze()
+    truth_b = np.asarray(images["truth_1"], np.float64).squeeze()
+    floor = noise_floor(truth_a, truth_b, DATA_RANGE)
+    scene = EyeScene(configuration, settings, built)
+    ray = item_ray_psf(configuration, settings, built.lens, scene)
+    margin = margin_px(ray, settings.oversample)
+    offset, placement = chart_offset_px(truth_a, scene, ray, margin)
+    with_diffraction = np.asarray(blur_image(truth_a, diffraction_psf(scene), arcmin_per_px=configuration.arcmin_per_px,
+                                             padding="edge"), np.float64)
+    swaps = [name for name, where in COSTS.values() if applies(where, configuration)]
+    rows, saved = [], {}
+    for simulation in SIMULATIONS + tuple(swaps):
+        simulated = simulate(simulation, scene, ray, margin, offset)
+        reference = with_diffraction if reference_of(simulation) != "render" else truth_a
+        rows.append(_row(simulation, reference, simulated, floor.psnr_db))
+        if simulation in SIMULATIONS:
+            saved[simulation] = save_item_image(item_dir, simulation, simulated, {"simulation": simulation})
+    by_name = {r["simulation"]: r for r in rows}
+    costs = {assumption: by_name["schematic_wave"]["psnr_db"] - by_name[name]["psnr_db"]
+             for assumption, (name, _) in COSTS.items() if name in by_name}
+    saved["render"] = save_item_image(item_dir, "render", truth_a, render_provenance.get("truth_0", {}))
+    result = {"key": key, "configuration": configuration.as_json(), "noise_floor": floor.as_json(),
+              "chart_placement": placement, "rows": rows, "costs_db": costs,
+              "ray_psf": {"rays": ray.rays, "step_arcmin": ray.step_arcmin, "magnification": ray.magnification.tolist()},
+              "self_check_pass": by_name["traced_rays"]["over_floor_db"] >= SELF_CHECK_MARGIN_DB,
+              "images": saved}
+    write_json_atomic(item_dir / "result.json", result, overwrite=True)
+    return result

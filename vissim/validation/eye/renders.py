@@ -1,0 +1,87 @@
+"""The eye bench's renders: `vissim.render.eye_render.render_eye` of a configuration, and the lens it renders."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, asdict
+from typing import ClassVar
+
+from vissim.render.eye_render import EyeRender
+
+__all__ = ["EyeSpec", "EyeBuilt", "build_eye", "eye_render_settings", "render_bench", "chart_half_arcmin", "spec"]
+
+
+@dataclass(frozen=True)
+class EyeSpec:
+    """One render: the configuration's `EyeRender` fields (a plain, picklable record)."""
+
+    kind: ClassVar[str] = "eye"
+    fields: tuple  # sorted (name, value) pairs of EyeRender
+
+    def as_json(self) -> dict:
+        return dict(self.fields)
+
+    def settings(self) -> EyeRender:
+        return EyeRender(**dict(self.fields))
+
+
+def eye_render_settings(configuration, spp: int, seed: int) -> EyeRender:
+    """The `EyeRender` of one configuration at ``spp`` and ``seed``."""
+    c = configuration
+    return EyeRender(model=c.model, accommodation_diopters=c.accommodation_diopters, pupil_mm=c.pupil_mm,
+                     field_deg=tuple(c.field_deg), wavelength_nm=c.wavelength_nm, spectrum=c.spectrum,
+                     size_px=tuple(c.size_px), arcmin_per_px=c.arcmin_per_px, spp=spp, seed=seed,
+                     chart_distance_m=c.chart_distance_m, letter=c.letter, logmar=c.logmar,
+                     lens=None if c.lens is None else tuple(c.lens), vertex_mm=c.vertex_mm)
+
+
+def spec(configuration, spp: int, seed: int) -> EyeSpec:
+    settings = eye_render_settings(configuration, spp, seed)
+    return EyeSpec(tuple(sorted((k, v) for k, v in asdict(settings).items())))
+
+
+@dataclass(frozen=True)
+class EyeBuilt:
+    """What the simulations need of the rendered scene: the trial lens as meshed (thick; None: no lens) and
+    the chart texture's half size (rows, columns) in arcmin: beyond it the scene is black."""
+
+    lens: object
+    chart_half_arcmin: tuple[float, float]
+
+
+def build_eye(configuration, settings) -> EyeBuilt:
+    render = eye_render_settings(configuration, settings.spp, settings.seeds[0])
+    bench = render_bench(render)
+    return EyeBuilt(bench.physical_lenses[0] if bench.lenses else None, chart_half_arcmin(render, bench))
+
+
+def chart_half_arcmin(settings: EyeRender, bench) -> tuple[float, float]:
+    """The chart texture's half size, arcmin (rows, columns), as `render_eye` lays it (`dslr_scene`'s rule)."""
+    from vissim.bench.dslr.bench import chart_mm_per_texel, chart_texture_shape
+    from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+
+    chart = render_chart_print(single_letter_spec(settings.letter, settings.logmar),
+                               MM_PER_INCH / chart_mm_per_texel(bench))
+    shape = chart_texture_shape(bench, bench.viewing_setup(), chart.mm_per_px)
+    distance_mm = 1000.0 * settings.chart_distance_m
+    return tuple(60.0 * math.degrees(math.atan(0.5 * n * chart.mm_per_px / distance_mm)) for n in shape)
+
+
+def render_bench(settings: EyeRender):
+    """The DSLR bench `render_eye` builds its scene from: a camera of pupil = the eye's, the lens's clear
+    aperture by the bench's rule for the widest direction the image looks along (`eye_render`'s module doc)."""
+    from vissim.bench.dslr.bench import DslrBench
+    from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER, TrialLens
+
+    pupil = settings.pupil_mm or settings.iris_mm
+    rows, cols = settings.size_px
+    half_deg = [abs(f) + 0.5 * n * settings.arcmin_per_px / 60.0 for f, n in zip(settings.field_deg, (cols, rows))]
+    depth = settings.vertex_mm + MAX_LENSES_IN_HOLDER * (4.0 + 2.0)
+    beam = 1.2 * pupil + 2.0 * depth * math.tan(math.radians(math.hypot(*half_deg)))
+    aperture = math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+    distance_mm = 1000.0 * settings.chart_distance_m
+    bench = DslrBench(focal_length_mm=18.0, f_number=18.0 / pupil, focus_distance_mm=distance_mm,
+                      chart_distance_mm=distance_mm, vertex_distance_mm=settings.vertex_mm,
+                      clear_aperture_mm=aperture, lenses=() if settings.lens is None else (TrialLens(*settings.lens),),
+                      arcmin_per_px=settings.arcmin_per_px, size_px=tuple(settings.size_px))
+    return bench

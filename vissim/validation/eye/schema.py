@@ -1,0 +1,159 @@
+"""The eye bench's campaign file: ``[campaign]`` settings, ``[[item]]`` configurations and ``[[sweep]]`` grids.
+
+An item is one rendered view of a letter through a schematic eye: ``model``, ``pupil_mm`` (the
+entrance pupil), ``accommodation`` (D), ``field`` (degrees: the chart centre's field angle [x, y], OSA's
+frame as every vissim field angle: x the examiner's right, y up; a number is [x, 0]), ``light``
+(``"photopic"`` or a wavelength in nm), an optional trial ``lens``
+(a sphere in D, or {sphere, cylinder, axis}), ``letter``, ``logmar``.  A ``[[sweep]]`` table gives
+lists for any of them and makes one item per combination (its ``name`` a prefix).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import asdict, dataclass, replace
+
+from vissim.validation.engine.fields import (field_error, lens, name_text, number, settings_kwargs, tables, text,
+                                             whole_number)
+
+__all__ = ["EyeSettings", "EyeConfiguration", "read_campaign"]
+
+LIGHTS = ("photopic",)
+ITEM_KEYS = ("name", "model", "pupil_mm", "accommodation", "field", "light", "lens", "letter", "logmar")
+
+
+@dataclass(frozen=True)
+class EyeSettings:
+    """Campaign-wide settings: samples per pixel, the two seeds, the image, the chart, the simulations' grid."""
+
+    spp: int = 256
+    seeds: tuple[int, int] = (1, 2)
+    size_px: tuple[int, int] = (64, 64)
+    arcmin_per_px: float = 0.5
+    chart_distance_m: float = 6.0
+    vertex_mm: float = 12.0
+    oversample: int = 2
+    rays_across: int = 161
+
+
+@dataclass(frozen=True)
+class EyeConfiguration:
+    """One item (module doc); ``wavelength_nm`` None for photopic light."""
+
+    name: str
+    model: str = "navarro-1985"
+    pupil_mm: float = 4.0
+    accommodation_diopters: float = 0.0
+    field_deg: tuple[float, float] = (0.0, 0.0)
+    spectrum: str = "mono"
+    wavelength_nm: float | None = 550.0
+    lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
+    letter: str = "K"
+    logmar: float = 1.3
+    # copied from the settings (so each item's key holds what its renders depend on)
+    size_px: tuple[int, int] = (64, 64)
+    arcmin_per_px: float = 0.5
+    chart_distance_m: float = 6.0
+    vertex_mm: float = 12.0
+
+    def as_json(self) -> dict:
+        return asdict(self)
+
+    def key_inputs(self) -> dict:
+        record = self.as_json()
+        record.pop("name")
+        return record
+
+
+def _light(value, source: str, where: str) -> tuple[str, float | None]:
+    if value == "photopic":
+        return "photopic", None
+    return "mono", number(value, source, where, "nm", lo=400.0, hi=700.0)
+
+
+def _field(value, source: str, where: str) -> tuple[float, float]:
+    values = [value, 0.0] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+    if not isinstance(values, list) or len(values) != 2:
+        raise field_error(source, where, f"a field is degrees (x, a number) or [x, y], got {value!r}")
+    return tuple(number(v, source, where, "deg", lo=-20.0, hi=20.0) for v in values)
+
+
+def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
+    unknown = set(entry) - set(ITEM_KEYS)
+    if unknown:
+        raise field_error(source, where, f"unknown key(s) {sorted(unknown)}; known: {', '.join(ITEM_KEYS)}")
+    spectrum, wavelength = _light(entry.get("light", 550.0), source, f"{where}.light")
+    trial = lens(entry["lens"], source, f"{where}.lens") if "lens" in entry else None
+    trial = None if trial is None or (trial.sphere_diopters, trial.cylinder_diopters) == (0.0, 0.0) else (
+        trial.sphere_diopters, trial.cylinder_diopters, trial.axis_deg)
+    configuration = EyeConfiguration(
+        name=name_text(entry.get("name", where), source, f"{where}.name"),
+        model=text(entry.get("model", "navarro-1985"), source, f"{where}.model"),
+        pupil_mm=number(entry.get("pupil_mm", 4.0), source, f"{where}.pupil_mm", "mm", lo=1.0, hi=8.0),
+        accommodation_diopters=number(entry.get("accommodation", 0.0), source, f"{where}.accommodation", "D",
+                                      lo=0.0, hi=6.0),
+        field_deg=_field(entry.get("field", 0.0), source, f"{where}.field"),
+        spectrum=spectrum, wavelength_nm=wavelength, lens=trial,
+        letter=text(entry.get("letter", "K"), source, f"{where}.letter"),
+        logmar=number(entry.get("logmar", 1.3), source, f"{where}.logmar", "logMAR", lo=0.0, hi=1.6),
+        size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
+        vertex_mm=settings.vertex_mm)
+    if configuration.lens is not None and configuration.field_deg != (0.0, 0.0):
+        raise field_error(source, where, "a trial lens is simulated on the line of sight only: give field = 0 "
+                                         "with a lens")
+    return configuration
+
+
+def _words(value) -> str:
+    """A swept value as a name's words: a lens table as "+0 +1 x 90", a list as "10,0"."""
+    if isinstance(value, dict):
+        return f"{value.get('sphere', 0.0):+g} {value.get('cylinder', 0.0):+g} x {value.get('axis', 180):g}"
+    if isinstance(value, list):
+        return ",".join(f"{v:g}" for v in value)
+    return f"{value:g}" if isinstance(value, (int, float)) else str(value)
+
+
+def _sweep(entry: dict, index: int, source: str) -> list[dict]:
+    where = f"sweep[{index}]"
+    prefix = name_text(entry.get("name", where), source, f"{where}.name")
+    keys = [k for k in entry if k != "name"]
+    lists = [entry[k] if isinstance(entry[k], list) and k != "field" or (
+        k == "field" and isinstance(entry[k], list) and entry[k] and isinstance(entry[k][0], list))
+        else [entry[k]] for k in keys]
+    out = []
+    for values in itertools.product(*lists):
+        chosen = dict(zip(keys, values))
+        label = " ".join(f"{k} {_words(v)}" for k, v in chosen.items() if len(lists[keys.index(k)]) > 1)
+        out.append({"name": f"{prefix} {label}".strip(), **chosen})
+    return out
+
+
+def _settings(head: dict, source: str) -> EyeSettings:
+    kwargs = settings_kwargs(head, EyeSettings, source, "campaign",
+                             numbers={"arcmin_per_px": ("arcmin/px", 0.25, 4.0), "chart_distance_m": ("m", 0.5, 100.0),
+                                      "vertex_mm": ("mm", 5.0, 30.0)},
+                             whole_numbers={"spp": ("samples per pixel", 1, 1 << 16), "oversample": ("", 1, 8),
+                                            "rays_across": ("rays", 21, 1001)},
+                             lists={}, texts=("name", "description", "kind"), read_elsewhere=("size_px",))
+    if "size_px" in head:
+        size = head["size_px"]
+        if not isinstance(size, list) or len(size) != 2:
+            raise field_error(source, "campaign.size_px", f"give [rows, columns], got {size!r}")
+        kwargs["size_px"] = tuple(whole_number(v, source, "campaign.size_px", "px", lo=16, hi=512) for v in size)
+    return EyeSettings(**kwargs)
+
+
+def read_campaign(doc: dict, head: dict, source: str) -> tuple[EyeSettings, tuple[EyeConfiguration, ...]]:
+    """The settings and the configurations (items, then each sweep's combinations) of a campaign file."""
+    settings = _settings(head, source)
+    entries = [(t, f"item[{i}]") for i, t in enumerate(tables(doc, "item", source))]
+    for i, sweep in enumerate(tables(doc, "sweep", source)):
+        entries += [(t, f"sweep[{i}] {t['name']}") for t in _sweep(sweep, i, source)]
+    if not entries:
+        raise field_error(source, "[[item]]", "the campaign has no items: add [[item]] or [[sweep]] tables")
+    configurations = tuple(_configuration(t, settings, source, where) for t, where in entries)
+    names = [c.name for c in configurations]
+    duplicate = next((n for n in names if names.count(n) > 1), None)
+    if duplicate:
+        raise field_error(source, "[[item]]", f"two items are named {duplicate!r}")
+    return settings, tuple(replace(c) for c in configurations)
