@@ -18,7 +18,9 @@
   the crown lens's, at the spectacle plane in front of the lens) equals the chart's vergence at that
   plane.  The thick lens is the bench's (`realistic_center_thickness_mm`, 1 mm minimum edge and
   centre, ``PREDICTION_APERTURE_MM``); its thickness moves the predicted differences by < 1e-3 D.
-  The eye's own part is the corneal-plane LCA (`vissim.optics.eyes.paraxial.lca_diopters`).
+  The eye's own part, reported beside it, is the corneal-plane LCA of `vissim.optics.eyes.lca.lca_curve`
+  over the render's pupil: paraxial (y-nu) and traced (the traced wavefront's paraxial refraction);
+  the lens's share is the prediction less the paraxial LCA, and "traced LCA + lens" their sum.
 """
 
 from __future__ import annotations
@@ -129,7 +131,8 @@ class ChromaticFocus:
     model: str
     pupil_mm: float
     sweeps: tuple[FocusSweep, ...]
-    eye_lca_diopters: dict = field(default_factory=dict)
+    traced_lca_diopters: dict = field(default_factory=dict)
+    paraxial_lca_diopters: dict = field(default_factory=dict)
     seconds: float = 0.0
 
     def sweep(self, wavelength_nm: float) -> FocusSweep:
@@ -140,6 +143,16 @@ class ChromaticFocus:
 
     def predicted_difference_diopters(self, wavelength_nm: float) -> float:
         return self.sweep(wavelength_nm).predicted_sphere_diopters - self.sweep(REFERENCE_NM).predicted_sphere_diopters
+
+    def lens_share_diopters(self, wavelength_nm: float) -> float:
+        """The prediction less the eye's own (paraxial, corneal-plane) LCA: the crown lens's dispersion and
+        the vertex distance's share."""
+        return self.predicted_difference_diopters(wavelength_nm) - self.paraxial_lca_diopters[wavelength_nm]
+
+    def traced_difference_diopters(self, wavelength_nm: float) -> float:
+        """The traced LCA (`vissim.optics.eyes.lca.lca_curve`, the traced wavefront's paraxial refraction over
+        the render's pupil) plus the lens's share."""
+        return self.traced_lca_diopters[wavelength_nm] + self.lens_share_diopters(wavelength_nm)
 
 
 def _sweep(base, spheres, wavelength_nm: float, predicted: float) -> FocusSweep:
@@ -174,8 +187,8 @@ def chromatic_focus(*, model: str = "navarro-1985", pupil_mm: float = 3.0, wavel
                     size_px: tuple[int, int] = (64, 64), arcmin_per_px: float = 0.5, logmar: float = 0.6,
                     chart_distance_m: float = 6.0) -> ChromaticFocus:
     """Run the study (module doc): a `ChromaticFocus`."""
+    from vissim.optics.eyes.lca import lca_curve
     from vissim.optics.eyes.models import eye_model
-    from vissim.optics.eyes.paraxial import lca_diopters
     from vissim.render.eye_render import EyeRender
 
     if not 0.0 < step_diopters <= 0.125:
@@ -189,6 +202,6 @@ def chromatic_focus(*, model: str = "navarro-1985", pupil_mm: float = 3.0, wavel
     for w in wavelengths_nm:
         own = spheres[np.abs(spheres - predicted[w]) <= margin_diopters + 1e-9]
         sweeps.append(_sweep(base, own, w, predicted[w]))
-    lca = lca_diopters(eye_model(model), list(wavelengths_nm), REFERENCE_NM)
-    return ChromaticFocus(model, pupil_mm, tuple(sweeps), {w: float(v) for w, v in zip(wavelengths_nm, lca)},
-                          time.perf_counter() - start)
+    curve = lca_curve(eye_model(model), list(wavelengths_nm), pupil_mm=pupil_mm, reference_nm=REFERENCE_NM)
+    return ChromaticFocus(model, pupil_mm, tuple(sweeps), {r.wavelength_nm: r.traced_diopters for r in curve.rows},
+                          {r.wavelength_nm: r.paraxial_diopters for r in curve.rows}, time.perf_counter() - start)

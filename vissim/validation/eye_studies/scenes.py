@@ -5,10 +5,11 @@ chart as the schematic-eye sensor's pixels see it before any blur.
   the observer's left, +y up: Mitsuba's camera frame), rasterised onto the scene's emitting rectangle
   (`chart_emitter`: Mitsuba's ``bitmap``, nearest texel, row 0 at the rectangle's v = 0, its bottom; the
   rectangle's local +x runs along world −x, as `vissim.bench.dslr.bench.dslr_scene` lays its chart).
-* **A pixel's direction** (`pixel_directions`): the sensor's azimuthal-equidistant map
-  (`vissim.render.schematic_eye_sensor`): the pixel at film position (u, v) looks
-  ``field + ((u − ½) W a, (½ − v) H a)`` degrees (right, up) from the eye's axis, along
-  ``(−sin θ cos φ, sin θ sin φ, cos θ)`` in the sensor's frame, turned into the world by
+* **A pixel's direction** (`pixel_directions`): the sensor's map (`vissim.render.schematic_eye_sensor`):
+  the pixel at film position (u, v) is at the field angle ``(field_x − (u − ½) W a, field_y + (½ − v) H a)``
+  degrees (OSA's frame: x the observer's left, y up), whose direction in the eye's frame is
+  (tan x, tan y, 1) turned by the model's visual axis (`vissim.optics.eyes.wavefront.field_direction`,
+  vectorised here and pinned to it by a test), then into the world by
   `vissim.render.eye_render.eye_to_world`.  Seen from the corneal vertex: the entrance pupil's
   few mm of parallax are below 1e-5 deg for the far charts the studies use (1 km).
 * **The ideal image** (`ideal_image`): the chart's texels looked up, as Mitsuba looks them up, along
@@ -100,8 +101,9 @@ def with_dispersive_lenses(scene: dict, wavelength_nm: float) -> dict:
     return out
 
 
-def pixel_directions(size_px: tuple[int, int], arcmin_per_px: float, field_deg, oversample: int = 1) -> np.ndarray:
-    """World unit directions (rows·k, cols·k, 3) of the ``oversample``² sub-pixel centres (module doc)."""
+def pixel_directions(eye, size_px: tuple[int, int], arcmin_per_px: float, field_deg, oversample: int = 1) -> np.ndarray:
+    """World unit directions (rows·k, cols·k, 3) of the ``oversample``² sub-pixel centres of a render of the
+    `SchematicEye` ``eye`` (module doc)."""
     from vissim.render.eye_render import eye_to_world
 
     rows, cols = size_px
@@ -109,21 +111,22 @@ def pixel_directions(size_px: tuple[int, int], arcmin_per_px: float, field_deg, 
     u = (np.arange(cols * k) + 0.5) / (cols * k)
     v = (np.arange(rows * k) + 0.5) / (rows * k)
     a_deg = arcmin_per_px / 60.0
-    right = np.radians(field_deg[0] + (u[None, :] - 0.5) * cols * a_deg)
-    up = np.radians(field_deg[1] + (0.5 - v[:, None]) * rows * a_deg)
-    right, up = np.broadcast_arrays(right, up)
-    theta = np.hypot(right, up)
-    phi = np.arctan2(up, right)
-    local = np.stack([-np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
-    mirror = np.diag([-1.0, 1.0, 1.0])
-    rotation = mirror @ np.asarray(eye_to_world(field_deg))[:3, :3] @ mirror  # as measured (module doc)
+    x = np.radians(field_deg[0] - (u[None, :] - 0.5) * cols * a_deg)  # OSA x: the observer's left
+    y = np.radians(field_deg[1] + (0.5 - v[:, None]) * rows * a_deg)
+    x, y = np.broadcast_arrays(x, y)
+    o = np.stack([np.tan(x), np.tan(y), np.ones_like(x)], axis=-1)
+    o /= np.linalg.norm(o, axis=-1, keepdims=True)
+    alpha = math.radians(eye.visual_axis_deg)  # the visual axis: `field_direction`'s turn about y
+    local = np.stack([o[..., 0] * math.cos(alpha) + o[..., 2] * math.sin(alpha), o[..., 1],
+                      -o[..., 0] * math.sin(alpha) + o[..., 2] * math.cos(alpha)], axis=-1)
+    rotation = np.asarray(eye_to_world(eye, field_deg))[:3, :3]
     return local @ rotation.T
 
 
-def ideal_image(raster: ChartRaster, size_px: tuple[int, int], arcmin_per_px: float, field_deg,
+def ideal_image(raster: ChartRaster, eye, size_px: tuple[int, int], arcmin_per_px: float, field_deg,
                 oversample: int = 4) -> np.ndarray:
     """The chart's reflectance per pixel, unblurred, on the sensor's grid (module doc): float64 (H, W)."""
-    d = pixel_directions(size_px, arcmin_per_px, field_deg, oversample)
+    d = pixel_directions(eye, size_px, arcmin_per_px, field_deg, oversample)
     t = raster.distance_mm / d[..., 2]
     values = raster.lookup(t * d[..., 0], t * d[..., 1])
     rows, cols = size_px
