@@ -102,7 +102,7 @@ def test_every_wavelength_default_is_the_one_constant():
             elif path in (("eye",), ("render", "eye")):
                 assert action.default is None and "the model's reference wavelength" in action.help
             elif action.default is None:
-                assert path == ("blur",) and f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help
+                assert path in (("blur",), ("psf",)) and f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help
             else:
                 assert float(action.default) == DEFAULT_WAVELENGTH_NM, (path, flag)
                 assert f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help, (path, flag)

@@ -11,7 +11,8 @@ from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["number_within", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
-           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
+           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM",
+           "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS",
            "accommodation_diopters", "trial_lens_diopters", "F_NUMBER_RANGE", "FOCAL_LENGTH_RANGE_MM",
            "OBJECT_DISTANCE_RANGE_M", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
@@ -81,6 +82,10 @@ def positive_number(value, name: str, unit: str, *, allow_inf: bool = False) -> 
 
 #: Wavelengths a PSF may be computed at (nm): the near UV to the near IR.
 WAVELENGTH_RANGE_NM = (200.0, 2000.0)
+#: Wavelengths the schematic-eye renderer traces (its media's index tables, nm).
+EYE_RENDER_WAVELENGTH_RANGE_NM = (350.0, 850.0)
+#: Where Atchison & Smith's 2005 fit of the eye's chromatic aberration holds (their data: 400-900 nm).
+ATCHISON_SMITH_RANGE_NM = (380.0, 1000.0)
 #: The wavelength every command and function uses when none is given, nm: the thesis's, near the
 #: photopic peak (docs/conventions.md, "Defaults"). The bench's wave truth alone differs: it is
 #: traced at the glass's d line, where the lenses have the index Mitsuba renders.

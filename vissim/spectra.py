@@ -29,7 +29,6 @@ Plain Python (no numpy): the renderer's response reads the same table.
 from __future__ import annotations
 
 import math
-from bisect import bisect_right
 
 from vissim.checks import instance_of
 from vissim.errors import VissimInputError

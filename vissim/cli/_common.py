@@ -87,6 +87,17 @@ def field_deg_from_text(text: str) -> tuple[float, float]:
     return values[0], values[1]
 
 
+def size_from_text(text: str, example: str = "133x113") -> tuple[int, int]:
+    """``--size ROWSxCOLS``: an image size (rows, columns) in pixels, each at least 1."""
+    try:
+        rows, cols = (int(v) for v in text.lower().replace("×", "x").split("x"))
+    except ValueError:
+        raise VissimInputError(f"--size must be ROWSxCOLS in pixels, e.g. {example}, got {text!r}") from None
+    if rows < 1 or cols < 1:
+        raise VissimInputError(f"--size must be at least 1x1 px, got {text!r}")
+    return rows, cols
+
+
 def parse_float_list(text: str, name: str, unit: str, *, positive: bool = True) -> list[float]:
     """Comma-separated finite numbers, positive unless ``positive=False`` (wavelengths; lens powers)."""
     try:

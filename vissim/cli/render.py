@@ -14,7 +14,7 @@ from pathlib import Path
 
 from vissim.checks import size_text
 from vissim.charts import POLARITIES
-from vissim.cli._common import add_trial_lens_args, check_outputs_apart, refuse_existing, trial_lens_powers
+from vissim.cli._common import add_trial_lens_args, size_from_text, check_outputs_apart, refuse_existing, trial_lens_powers
 from vissim.cli.render_atv import add_atv_parser
 from vissim.cli.render_depth import add_depth_parser
 from vissim.cli.render_eye import add_eye_parser
@@ -39,14 +39,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     add_eye_parser(benches)
     parser.set_defaults(func=lambda args: parser.print_help() or 2)
     return parser
-
-
-def _size(text: str) -> tuple[int, int]:
-    try:
-        rows, cols = (int(v) for v in text.lower().replace("×", "x").split("x"))
-    except ValueError:
-        raise VissimInputError(f"--size must be ROWSxCOLS in pixels, e.g. 133x113, got {text!r}") from None
-    return rows, cols
 
 
 def add_bench_parser(subparsers) -> argparse.ArgumentParser:
@@ -126,7 +118,7 @@ def run_bench(args: argparse.Namespace) -> int:
     doc, source = ({}, "command line") if args.scene is None else read_scene_toml(args.scene)
     bench = bench_from_tables(
         doc, source, lenses=_lenses(args), f_number=args.f_number, arcmin_per_px=args.arcmin_per_px,
-        size_px=None if args.size is None else _size(args.size), spp=args.spp, seed=args.seed,
+        size_px=None if args.size is None else size_from_text(args.size), spp=args.spp, seed=args.seed,
         sampler=args.sampler, fresnel_loss=args.fresnel_loss,
     )
     if args.chart is not None:

@@ -10,7 +10,8 @@ import argparse
 from pathlib import Path
 
 from vissim.checks import size_text
-from vissim.cli._common import add_trial_lens_args, refuse_existing, trial_lens_powers
+from vissim.cli._common import (RX_HELP, add_trial_lens_args, field_deg_from_text, refuse_existing, size_from_text,
+                                trial_lens_powers)
 from vissim.errors import VissimInputError
 
 __all__ = ["add_eye_parser", "run_eye"]
@@ -31,8 +32,8 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
             "reaches that retinal point through the pupil (a uniform white scene gives 1 everywhere)."
         ),
     )
-    parser.add_argument("--model", choices=tuple(EYE_MODELS), default="navarro-1985",
-                        help="schematic eye (default navarro-1985)")
+    parser.add_argument("--eye-model", choices=tuple(EYE_MODELS), default="navarro-1985", metavar="MODEL",
+                        help="the schematic eye: " + ", ".join(EYE_MODELS) + " (default navarro-1985)")
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
                         help="the eye's accommodation, dioptres, within the model's range (default 0)")
     pupil = parser.add_mutually_exclusive_group()
@@ -52,9 +53,14 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--distance-m", type=float, default=6.0, metavar="M", help="chart distance (default 6 m)")
     parser.add_argument("--letter", default="K", metavar="X", help="one Sloan letter (default K)")
     parser.add_argument("--logmar", type=float, default=0.5, metavar="L", help="letter size in LogMAR (default 0.5)")
+    parser.add_argument("--rx", metavar="PRESCRIPTION",
+                        help=f"{RX_HELP}: render the eye that has it (axial length for its sphere, a toric cornea for "
+                             "its cylinder), written at the spectacle plane --vertex-mm in front of the cornea, as "
+                             "vissim eye --rx does")
     add_trial_lens_args(parser.add_argument_group("trial lens in front of the eye"))
     parser.add_argument("--vertex-mm", type=float, default=12.0, metavar="MM",
-                        help="the trial lens's back vertex to the cornea, mm (default 12)")
+                        help="the spectacle plane, mm in front of the cornea: where --rx is written and the trial "
+                             "lens's back vertex sits (default 12)")
     parser.add_argument("--size", metavar="ROWSxCOLS", default="64x64", help="image size (default 64x64)")
     parser.add_argument("--arcmin-per-px", type=float, default=1.0, metavar="ARCMIN",
                         help="angular pixel size (default 1)")
@@ -68,24 +74,6 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     return parser
 
 
-def _pair(text: str, option: str) -> tuple[float, float]:
-    try:
-        x, y = (float(v) for v in text.split(","))
-    except ValueError:
-        raise VissimInputError(f"{option} must be X,Y in degrees, e.g. 5,0, got {text!r}") from None
-    return x, y
-
-
-def _size(text: str) -> tuple[int, int]:
-    try:
-        rows, cols = (int(v) for v in text.lower().replace("×", "x").split("x"))
-    except ValueError:
-        raise VissimInputError(f"--size must be ROWSxCOLS in pixels, e.g. 64x64, got {text!r}") from None
-    if rows < 1 or cols < 1:
-        raise VissimInputError(f"--size must be at least 1x1 px, got {text!r}")
-    return rows, cols
-
-
 def run_eye(args: argparse.Namespace) -> int:
     from vissim.imageio import write_image
     from vissim.render.eye_render import EyeRender, render_eye
@@ -96,15 +84,15 @@ def run_eye(args: argparse.Namespace) -> int:
         raise VissimInputError(f"--spp must be a positive number of samples per pixel, got {args.spp}")
     refuse_existing(args.output, overwrite=args.overwrite)
     pupil = 3.0 if args.pupil_mm is None and args.iris_mm is None else args.pupil_mm
-    settings = EyeRender(model=args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=pupil,
-                         iris_mm=args.iris_mm, field_deg=_pair(args.field_deg, "--field-deg"),
+    settings = EyeRender(model=args.eye_model, accommodation_diopters=args.accommodation_diopters, pupil_mm=pupil,
+                         iris_mm=args.iris_mm, field_deg=field_deg_from_text(args.field_deg),
                          wavelength_nm=args.wavelength_nm, spectrum=args.spectrum or "mono",
-                         size_px=_size(args.size), arcmin_per_px=args.arcmin_per_px, spp=args.spp, seed=args.seed,
+                         size_px=size_from_text(args.size, "64x64"), arcmin_per_px=args.arcmin_per_px, spp=args.spp, seed=args.seed,
                          chart_distance_m=args.distance_m, letter=args.letter, logmar=args.logmar,
-                         lens=trial_lens_powers(args), vertex_mm=args.vertex_mm)
+                         lens=trial_lens_powers(args), vertex_mm=args.vertex_mm, rx=args.rx)
     result = render_eye(settings, args.variant)
     write_image(args.output, result.pixels, provenance=result.provenance, overwrite=args.overwrite,
                 arcmin_per_px=args.arcmin_per_px)
     print(f"wrote {args.output}: {size_text(result.pixels.shape)}, {result.spp} spp, {result.variant}, "
-          f"{result.seconds:.1f} s; {args.model}")
+          f"{result.seconds:.1f} s; {args.eye_model}")
     return 0

@@ -50,6 +50,7 @@ class EyeRender:
     logmar: float = 1.0
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
     vertex_mm: float = 12.0
+    rx: str | None = None  # the eye made to need this prescription at the spectacle plane vertex_mm
 
     def __post_init__(self) -> None:
         if self.spectrum not in SPECTRA:
@@ -57,10 +58,14 @@ class EyeRender:
         if self.spectrum == "photopic" and self.wavelength_nm is not None:
             raise VissimInputError("give a wavelength (monochromatic) or the photopic spectrum, not both")
         from vissim.checks import arcmin_per_px, eye_pupil_diameter_mm, finite_number, number_within, positive_number
-        from vissim.render.schematic_eye_trace import TABLE_RANGE_NM
+        from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM
         from vissim.optics.eyes.models import eye_model
 
         eye_model(self.model, self.accommodation_diopters)  # the model's name and accommodation range
+        if self.rx is not None:
+            from vissim.optics.prescription import Prescription
+
+            object.__setattr__(self, "rx", str(Prescription.parse(self.rx)))
         if (self.pupil_mm is None) == (self.iris_mm is None):
             raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
         eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,
@@ -69,7 +74,7 @@ class EyeRender:
             if abs(finite_number(value, "field angle", "deg")) > 45.0:
                 raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within 45 deg of the axis")
         if self.wavelength_nm is not None:
-            number_within(self.wavelength_nm, "wavelength", "nm", TABLE_RANGE_NM)
+            number_within(self.wavelength_nm, "wavelength", "nm", EYE_RENDER_WAVELENGTH_RANGE_NM)
         arcmin_per_px(self.arcmin_per_px)
         positive_number(self.chart_distance_m, "chart distance", "m")
         positive_number(self.vertex_mm, "vertex distance", "mm")
@@ -137,6 +142,8 @@ def eye_scene_dict(settings: EyeRender) -> dict:
               "accommodation_diopters": float(settings.accommodation_diopters),
               "arcmin_per_px": float(settings.arcmin_per_px), "field_x_deg": float(settings.field_deg[0]),
               "field_y_deg": float(settings.field_deg[1])}
+    if settings.rx is not None:
+        sensor.update({"rx": settings.rx, "rx_vertex_mm": float(settings.vertex_mm)})
     if settings.pupil_mm is not None:
         sensor["pupil_mm"] = float(settings.pupil_mm)
     if settings.iris_mm is not None:

@@ -33,7 +33,9 @@ keeps its expectation (Mitsuba's spectral film develops Y with CIE ȳ = V(λ): p
 Frame: local +z forward (into the scene), +y up, +x the observer's left (Mitsuba's camera
 frame); the eye's frame (z towards the retina, x the examiner's right: the subject's left) maps
 to it by z -> -z; the local origin is the corneal vertex.  Properties: ``model``,
-``accommodation_diopters``, ``pupil_mm`` (entrance pupil) or ``iris_mm``, ``wavelength_nm``,
+``accommodation_diopters``, ``rx`` and ``rx_vertex_mm`` (the eye made to need that prescription at that
+spectacle plane: `sensor_eye`; the tables are traced in its x meridian, so a cylinder's distortion is
+the x meridian's), ``pupil_mm`` (entrance pupil) or ``iris_mm``, ``wavelength_nm``,
 ``arcmin_per_px``, ``field_x_deg``, ``field_y_deg``, ``far_clip`` (mm), ``to_world``, ``film``,
 ``sampler``.  The pupil is converted by real rays at ``wavelength_nm`` or the model's reference
 (`vissim.optics.eyes.wavefront`).  Register with `register_schematic_eye_sensor` (idempotent).
@@ -53,9 +55,10 @@ from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
 from vissim.render.schematic_eye_tables import EyeTables, eye_tables
-from vissim.render.schematic_eye_trace import TABLE_RANGE_NM, SchematicEyeTracer
+from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM
+from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
-__all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_tables"]
+__all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_eye", "sensor_tables"]
 
 log = logging.getLogger(__name__)
 
@@ -64,10 +67,24 @@ SCHEMATIC_EYE_SENSOR = "vissim_schematic_eye"
 
 
 @functools.lru_cache(maxsize=16)
+def sensor_eye(model: str, accommodation_diopters: float, rx: str | None = None, rx_vertex_mm: float = 12.0):
+    """The model at its accommodation, made to need ``rx`` at the spectacle plane ``rx_vertex_mm`` when given
+    (`vissim.optics.eyes.ametropia.ametropic_eye`: the eye ``vissim eye --rx`` traces)."""
+    eye = eye_model(model, accommodation_diopters)
+    if rx is None:
+        return eye
+    from vissim.optics.eyes.ametropia import ametropic_eye
+    from vissim.optics.prescription import Prescription
+
+    return ametropic_eye(eye, Prescription.parse(rx), rx_vertex_mm)
+
+
+@functools.lru_cache(maxsize=16)
 def sensor_tables(model: str, accommodation_diopters: float, iris_mm: float, wavelength_nm: float,
-                  max_theta_deg: float) -> EyeTables:
-    """`eye_tables` of the model, cached (a scene reloaded with the same eye reuses them)."""
-    return eye_tables(eye_model(model, accommodation_diopters), iris_mm, wavelength_nm, max_theta_deg)
+                  max_theta_deg: float, rx: str | None = None, rx_vertex_mm: float = 12.0) -> EyeTables:
+    """`eye_tables` of the `sensor_eye`, cached (a scene reloaded with the same eye reuses them)."""
+    return eye_tables(sensor_eye(model, accommodation_diopters, rx, rx_vertex_mm), iris_mm, wavelength_nm,
+                      max_theta_deg)
 
 
 def _pupils(eye, pupil_mm, iris_mm, wavelength_nm: float) -> tuple[float, float]:
@@ -120,10 +137,13 @@ def _make_class(mi, dr):
             mi.Sensor.__init__(self, props)
             self.model = str(props.get("model", "navarro-1985"))
             accommodation = float(props.get("accommodation_diopters", 0.0))
-            eye = eye_model(self.model, accommodation)
+            rx = props.get("rx", None)
+            self.rx = None if rx is None else str(rx)
+            self.rx_vertex_mm = float(props.get("rx_vertex_mm", 12.0))
+            eye = sensor_eye(self.model, accommodation, self.rx, self.rx_vertex_mm)
             fixed = props.get("wavelength_nm", None)
             self.fixed_wavelength_nm = None if fixed is None else number_within(fixed, "wavelength", "nm",
-                                                                                TABLE_RANGE_NM)
+                                                                                EYE_RENDER_WAVELENGTH_RANGE_NM)
             if spectral and self.fixed_wavelength_nm is not None and not 360.0 <= self.fixed_wavelength_nm <= 830.0:
                 raise VissimInputError(f"a monochromatic spectral render needs 360-830 nm (where CIE ȳ is "
                                        f"tabulated), got {self.fixed_wavelength_nm:g} nm")
@@ -146,7 +166,8 @@ def _make_class(mi, dr):
             corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0)))
                       for f, span in zip(self.field_deg, self.span_deg)]
             reach = math.degrees(math.atan(math.hypot(*corner))) + eye.visual_axis_deg  # widest angle from the axis
-            self.tables = sensor_tables(self.model, accommodation, self.iris_mm, self.wavelength_nm, reach)
+            self.tables = sensor_tables(self.model, accommodation, self.iris_mm, self.wavelength_nm, reach, self.rx,
+                                        self.rx_vertex_mm)
             self._init_lookups(eye)
             self.m_needs_sample_3 = True
             centre, edge = self.tables.pass_fraction[0], self.tables.pass_fraction[-1]

@@ -18,7 +18,7 @@ so the ray ends on the exit surface).
 
 Indices: at one wavelength given as a number, each medium's formula evaluated exactly; at a
 wavelength per ray (a Dr.Jit array: a spectral render's hero wavelength), each medium's n(λ)
-tabulated at init every `TABLE_STEP_NM` over `TABLE_RANGE_NM` and interpolated linearly (error
+tabulated at init every `TABLE_STEP_NM` over `vissim.checks.EYE_RENDER_WAVELENGTH_RANGE_NM` and interpolated linearly (error
 below 1e-8 in n for these smooth formulas).
 
 The arrays are those of the caller: ``mi.Float`` inside a render (float32 on the usual
@@ -37,12 +37,13 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.surfaces import vertex_positions_mm
+from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM
 from vissim.optics.raytrace.media import DEFAULT_GRIN_STEP_MM
 
-__all__ = ["EyeTraceResult", "SchematicEyeTracer", "TABLE_RANGE_NM", "TABLE_STEP_NM"]
+__all__ = ["EyeTraceResult", "SchematicEyeTracer", "TABLE_STEP_NM"]
 
-#: Wavelength range and step (nm) of the index tables used for a wavelength per ray.
-TABLE_RANGE_NM = (350.0, 850.0)
+#: Wavelength step (nm) of the index tables used for a wavelength per ray (over
+#: `vissim.checks.EYE_RENDER_WAVELENGTH_RANGE_NM`).
 TABLE_STEP_NM = 0.1
 #: Newton iterations: refining a conic's closed-form hit, a biconic's hit, a GRIN ray's last step.
 CONIC_NEWTON, BICONIC_NEWTON, LANDING_NEWTON = 2, 12, 8
@@ -175,11 +176,11 @@ class _Index:
             return self.function(float(wavelength))
         kind = type(wavelength)
         if kind not in self._tables:
-            lo, hi = TABLE_RANGE_NM
+            lo, hi = EYE_RENDER_WAVELENGTH_RANGE_NM
             count = int(round((hi - lo) / TABLE_STEP_NM)) + 1
             self._tables[kind] = kind([self.function(lo + i * TABLE_STEP_NM) for i in range(count)])
         table = self._tables[kind]
-        u = dr.clip((wavelength - TABLE_RANGE_NM[0]) / TABLE_STEP_NM, 0.0, dr.width(table) - 1.000001)
+        u = dr.clip((wavelength - EYE_RENDER_WAVELENGTH_RANGE_NM[0]) / TABLE_STEP_NM, 0.0, dr.width(table) - 1.000001)
         i = dr.floor(u)
         frac = u - i
         index_type = dr.uint32_array_t(kind)

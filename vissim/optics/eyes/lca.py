@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import ATCHISON_SMITH_RANGE_NM
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
@@ -52,13 +53,11 @@ LCA_PUPIL_MM = 1.0
 LCA_SAMPLES = 17
 #: Atchison & Smith 2005, Eq. 5: R(λ) = a0 + a2/λ² + a4/λ⁴ + a6/λ⁶, D, λ in nm.
 ATCHISON_SMITH_2005_EQ5 = (1.60911, -6.70941e5, 5.55334e10, -5.59998e15)
-#: Atchison & Smith's fit spans their measurements' range (JOSA A 22:29, 400-900 nm).
-_ATCHISON_SMITH_RANGE_NM = (380.0, 1000.0)
 
 
 def _atchison_smith(wavelength_nm: float) -> float:
     w = checked_wavelength_nm(wavelength_nm)
-    low, high = _ATCHISON_SMITH_RANGE_NM
+    low, high = ATCHISON_SMITH_RANGE_NM
     if not low <= w <= high:
         raise VissimInputError(f"wavelength {w:g} nm is outside the {low:g}-{high:g} nm of Atchison & Smith's fit")
     a0, a2, a4, a6 = ATCHISON_SMITH_2005_EQ5
