@@ -36,7 +36,8 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["BIN_PX", "EdgeMtf", "SlantedEdge", "edge_mtf", "traced_edge_lsf", "geometric_mtf", "slanted_edge"]
+__all__ = ["BIN_PX", "EdgeMtf", "SlantedEdge", "edge_mtf", "retina_landing_mm", "traced_rays_deg", "traced_edge_lsf",
+           "geometric_mtf", "slanted_edge"]
 
 #: ESF bin, pixels (ISO 12233's 4x oversampling).
 BIN_PX = 0.25
@@ -104,7 +105,8 @@ def edge_mtf(image: np.ndarray, arcmin_per_px: float) -> EdgeMtf:
     return EdgeMtf(frequencies, mtf, math.degrees(math.atan(b)))
 
 
-def _landing_mm(eye, wavelength_nm: float, field_x_deg: float, targets) -> np.ndarray:
+def retina_landing_mm(eye, wavelength_nm: float, field_x_deg: float, targets) -> np.ndarray:
+    """(N, 2) retinal x, y, mm, of a collimated beam from field x ``field_x_deg`` aimed at iris ``targets`` (N, 2)."""
     from vissim.optics.eyes.surfaces import split_at_stop
     from vissim.optics.raytrace import aim_collimated, trace_rays
 
@@ -128,8 +130,8 @@ def traced_rays_deg(model: str, pupil_mm: float, wavelength_nm: float, rays_acro
     x, y = np.meshgrid(axis, axis)
     keep = np.hypot(x, y) <= 0.5 * iris_mm
     targets = np.concatenate([[[0.0, 0.0]], np.stack([x[keep], y[keep]], axis=1)]) + [eye.stop_decentre_nasal_mm, 0.0]
-    landing = _landing_mm(eye, wavelength_nm, 0.0, targets)
-    chief = _landing_mm(eye, wavelength_nm, 0.5, targets[:1])
+    landing = retina_landing_mm(eye, wavelength_nm, 0.0, targets)
+    chief = retina_landing_mm(eye, wavelength_nm, 0.5, targets[:1])
     mm_per_deg = abs(chief[0, 0] - landing[0, 0]) / 0.5
     return (landing[1:] - landing[0]) / mm_per_deg
 

@@ -25,6 +25,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -164,7 +165,7 @@ def _sweep(base, spheres, wavelength_nm: float, predicted: float) -> FocusSweep:
     for sphere in spheres:
         pair = []
         for seed in (base.seed, base.seed + 1):
-            settings = _replace(base, wavelength_nm=wavelength_nm, lens=(float(sphere), 0.0, 0.0), seed=seed)
+            settings = dataclasses.replace(base, wavelength_nm=wavelength_nm, lens=(float(sphere), 0.0, 0.0), seed=seed)
             scene = with_dispersive_lenses(eye_scene_dict(settings), wavelength_nm)
             pair.append(render_settings(settings, scene).pixels.astype(float))
         pairs.append(pair)
@@ -174,12 +175,6 @@ def _sweep(base, spheres, wavelength_nm: float, predicted: float) -> FocusSweep:
     best = gaussian_peak(spheres, scores)
     return FocusSweep(wavelength_nm, tuple(float(s) for s in spheres), tuple(scores), best, predicted,
                       time.perf_counter() - start)
-
-
-def _replace(settings, **changes):
-    import dataclasses
-
-    return dataclasses.replace(settings, **changes)
 
 
 def chromatic_focus(*, model: str = "navarro-1985", pupil_mm: float = 3.0, wavelengths_nm=WAVELENGTHS_NM,
