@@ -84,6 +84,21 @@ def positive_number(value, name: str, unit: str, *, allow_inf: bool = False) -> 
 WAVELENGTH_RANGE_NM = (200.0, 2000.0)
 #: Wavelengths the schematic-eye renderer traces (its media's index tables, nm).
 EYE_RENDER_WAVELENGTH_RANGE_NM = (350.0, 850.0)
+#: The eye campaign's values (validation/eye): wavelength nm, field deg, pupil mm, accommodation D, letter
+#: size logMAR and image side px.
+EYE_BENCH_WAVELENGTH_RANGE_NM = (400.0, 700.0)
+EYE_BENCH_FIELD_RANGE_DEG = (-20.0, 20.0)
+EYE_BENCH_PUPIL_RANGE_MM = (1.0, 8.0)
+EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
+EYE_BENCH_LOGMAR_RANGE = (0.0, 1.6)
+EYE_BENCH_SIZE_RANGE_PX = (16, 512)
+#: The eye campaign's settings: arcmin/px, chart distance m, vertex mm, spp, oversampling, rays across the pupil.
+EYE_BENCH_ARCMIN_PER_PX_RANGE = (0.25, 4.0)
+EYE_BENCH_CHART_DISTANCE_RANGE_M = (0.5, 100.0)
+EYE_BENCH_VERTEX_RANGE_MM = (5.0, 30.0)
+EYE_BENCH_SPP_RANGE = (1, 1 << 16)
+EYE_BENCH_OVERSAMPLE_RANGE = (1, 8)
+EYE_BENCH_RAYS_ACROSS_RANGE = (21, 1001)
 #: Where Atchison & Smith's 2005 fit of the eye's chromatic aberration holds (their data: 400-900 nm).
 ATCHISON_SMITH_RANGE_NM = (380.0, 1000.0)
 #: The wavelength every command and function uses when none is given, nm: the thesis's, near the

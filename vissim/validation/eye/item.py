@@ -20,14 +20,14 @@ from vissim.validation.eye.rays import ray_psf
 from vissim.validation.eye.simulate import (COSTS, SIMULATIONS, EyeScene, diffraction_psf, margin_px, reference_of,
                                             simulate)
 
-__all__ = ["compute_eye_item", "SELF_CHECK_MARGIN_DB", "DATA_RANGE", "applies"]
+__all__ = ["compute_eye_item", "SELF_CHECK_MARGIN_DB", "IMAGE_PEAK_VALUE", "applies"]
 
 #: The geometric self-check's required margin over the render's noise floor, dB.
 SELF_CHECK_MARGIN_DB = 2.0
 #: The chart's placement is searched until less than this is left (image px), in at most this many passes.
 ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES = 0.01, 4
 #: The images' data range for PSNR and SSIM (the chart's white is 0.9).
-DATA_RANGE = 1.0
+IMAGE_PEAK_VALUE = 1.0
 
 
 def applies(where: str, configuration) -> bool:
@@ -58,7 +58,7 @@ def chart_offset_px(truth: np.ndarray, scene: EyeScene, ray, margin: int) -> tup
 
 
 def _row(simulation: str, reference: np.ndarray, simulated: np.ndarray, floor_db: float) -> dict:
-    metrics = compare_images(reference, simulated, data_range=DATA_RANGE)
+    metrics = compare_images(reference, simulated, data_range=IMAGE_PEAK_VALUE)
     return {"simulation": simulation, "reference": reference_of(simulation), "psnr_db": metrics.psnr_db,
             "ssim": metrics.ssim, "over_floor_db": metrics.psnr_db - floor_db}
 
@@ -67,7 +67,7 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
     """Simulate and score one item (module doc); writes its images and ``result.json`` (last)."""
     truth_a = np.asarray(images["truth_0"], np.float64).squeeze()
     truth_b = np.asarray(images["truth_1"], np.float64).squeeze()
-    floor = noise_floor(truth_a, truth_b, DATA_RANGE)
+    floor = noise_floor(truth_a, truth_b, IMAGE_PEAK_VALUE)
     scene = EyeScene(configuration, settings, built)
     ray = item_ray_psf(configuration, settings, built.lens, scene)
     margin = margin_px(ray, settings.oversample)

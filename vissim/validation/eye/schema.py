@@ -10,6 +10,11 @@ lists for any of them and makes one item per combination (its ``name`` a prefix)
 
 from __future__ import annotations
 
+from vissim.checks import (EYE_BENCH_ARCMIN_PER_PX_RANGE, EYE_BENCH_CHART_DISTANCE_RANGE_M, EYE_BENCH_OVERSAMPLE_RANGE,
+                           EYE_BENCH_RAYS_ACROSS_RANGE, EYE_BENCH_SPP_RANGE, EYE_BENCH_VERTEX_RANGE_MM)
+from vissim.checks import (EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS, EYE_BENCH_FIELD_RANGE_DEG, EYE_BENCH_LOGMAR_RANGE,
+                           EYE_BENCH_PUPIL_RANGE_MM, EYE_BENCH_SIZE_RANGE_PX, EYE_BENCH_WAVELENGTH_RANGE_NM)
+
 import itertools
 from dataclasses import asdict, dataclass, replace
 
@@ -68,14 +73,14 @@ class EyeConfiguration:
 def _light(value, source: str, where: str) -> tuple[str, float | None]:
     if value == "photopic":
         return "photopic", None
-    return "mono", number(value, source, where, "nm", lo=400.0, hi=700.0)
+    return "mono", number(value, source, where, "nm", lo=EYE_BENCH_WAVELENGTH_RANGE_NM[0], hi=EYE_BENCH_WAVELENGTH_RANGE_NM[1])
 
 
 def _field(value, source: str, where: str) -> tuple[float, float]:
     values = [value, 0.0] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
     if not isinstance(values, list) or len(values) != 2:
         raise field_error(source, where, f"a field is degrees (x, a number) or [x, y], got {value!r}")
-    return tuple(number(v, source, where, "deg", lo=-20.0, hi=20.0) for v in values)
+    return tuple(number(v, source, where, "deg", lo=EYE_BENCH_FIELD_RANGE_DEG[0], hi=EYE_BENCH_FIELD_RANGE_DEG[1]) for v in values)
 
 
 def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
@@ -89,13 +94,13 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
     configuration = EyeConfiguration(
         name=name_text(entry.get("name", where), source, f"{where}.name"),
         model=text(entry.get("model", "navarro-1985"), source, f"{where}.model"),
-        pupil_mm=number(entry.get("pupil_mm", 4.0), source, f"{where}.pupil_mm", "mm", lo=1.0, hi=8.0),
+        pupil_mm=number(entry.get("pupil_mm", 4.0), source, f"{where}.pupil_mm", "mm", lo=EYE_BENCH_PUPIL_RANGE_MM[0], hi=EYE_BENCH_PUPIL_RANGE_MM[1]),
         accommodation_diopters=number(entry.get("accommodation", 0.0), source, f"{where}.accommodation", "D",
-                                      lo=0.0, hi=6.0),
+                                      lo=EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS[0], hi=EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS[1]),
         field_deg=_field(entry.get("field", 0.0), source, f"{where}.field"),
         spectrum=spectrum, wavelength_nm=wavelength, lens=trial,
         letter=text(entry.get("letter", "K"), source, f"{where}.letter"),
-        logmar=number(entry.get("logmar", 1.3), source, f"{where}.logmar", "logMAR", lo=0.0, hi=1.6),
+        logmar=number(entry.get("logmar", 1.3), source, f"{where}.logmar", "logMAR", lo=EYE_BENCH_LOGMAR_RANGE[0], hi=EYE_BENCH_LOGMAR_RANGE[1]),
         size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
         vertex_mm=settings.vertex_mm)
     if configuration.lens is not None and configuration.field_deg != (0.0, 0.0):
@@ -130,16 +135,19 @@ def _sweep(entry: dict, index: int, source: str) -> list[dict]:
 
 def _settings(head: dict, source: str) -> EyeSettings:
     kwargs = settings_kwargs(head, EyeSettings, source, "campaign",
-                             numbers={"arcmin_per_px": ("arcmin/px", 0.25, 4.0), "chart_distance_m": ("m", 0.5, 100.0),
-                                      "vertex_mm": ("mm", 5.0, 30.0)},
-                             whole_numbers={"spp": ("samples per pixel", 1, 1 << 16), "oversample": ("", 1, 8),
-                                            "rays_across": ("rays", 21, 1001)},
+                             numbers={"arcmin_per_px": ("arcmin/px", *EYE_BENCH_ARCMIN_PER_PX_RANGE),
+                                      "chart_distance_m": ("m", *EYE_BENCH_CHART_DISTANCE_RANGE_M),
+                                      "vertex_mm": ("mm", *EYE_BENCH_VERTEX_RANGE_MM)},
+                             whole_numbers={"spp": ("samples per pixel", *EYE_BENCH_SPP_RANGE),
+                                            "oversample": ("", *EYE_BENCH_OVERSAMPLE_RANGE),
+                                            "rays_across": ("rays", *EYE_BENCH_RAYS_ACROSS_RANGE)},
                              lists={}, texts=("name", "description", "kind"), read_elsewhere=("size_px",))
     if "size_px" in head:
         size = head["size_px"]
         if not isinstance(size, list) or len(size) != 2:
             raise field_error(source, "campaign.size_px", f"give [rows, columns], got {size!r}")
-        kwargs["size_px"] = tuple(whole_number(v, source, "campaign.size_px", "px", lo=16, hi=512) for v in size)
+        low, high = EYE_BENCH_SIZE_RANGE_PX
+        kwargs["size_px"] = tuple(whole_number(v, source, "campaign.size_px", "px", lo=low, hi=high) for v in size)
     return EyeSettings(**kwargs)
 
 
