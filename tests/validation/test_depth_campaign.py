@@ -111,7 +111,7 @@ def test_shipped_depth_campaign_loads():
     ("[campaign]\nkind = 'depth'\n", "no configurations"),
     ("[campaign]\nname = 'flat'\n[[config]]\nscene = 'scene.toml'\n", "add kind = \"depth\" to \\[campaign\\]"),
     ("[campaign]\nkind = 'depth'\n[[item]]\nletter = 'K'\n", "unknown table"),
-    ("[campaign]\nkind = 'eye'\n", "unknown bench kind 'eye'"),
+    ("[campaign]\nkind = 'cyclops'\n", "unknown bench kind 'cyclops'"),
 ])
 def test_bad_depth_campaign_files_get_clear_errors(tmp_path, text, fragment):
     (tmp_path / "scene.toml").write_text(TINY_SCENE)
