@@ -11,7 +11,8 @@ from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["number_within", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
-           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM",
+           "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
+           "EYE_RENDER_MAX_FIELD_DEG", "EYE_RENDER_MAX_THETA_DEG",
            "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "ACCOMMODATION_RANGE_DIOPTERS",
            "accommodation_diopters", "trial_lens_diopters", "F_NUMBER_RANGE", "FOCAL_LENGTH_RANGE_MM",
@@ -84,20 +85,15 @@ def positive_number(value, name: str, unit: str, *, allow_inf: bool = False) -> 
 WAVELENGTH_RANGE_NM = (200.0, 2000.0)
 #: Wavelengths the schematic-eye renderer traces (its media's index tables, nm).
 EYE_RENDER_WAVELENGTH_RANGE_NM = (350.0, 850.0)
-#: The eye campaign's values (validation/eye): wavelength nm, field deg, pupil mm, accommodation D, letter
-#: size logMAR and image side px.
-EYE_BENCH_WAVELENGTH_RANGE_NM = (400.0, 700.0)
-EYE_BENCH_FIELD_RANGE_DEG = (-20.0, 20.0)
-EYE_BENCH_PUPIL_RANGE_MM = (1.0, 8.0)
-EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
-EYE_BENCH_LOGMAR_RANGE = (0.0, 1.6)
+#: Where CIE 1931 ȳ(λ) is tabulated (nm): a monochromatic spectral render divides it out.
+CIE_YBAR_RANGE_NM = (360.0, 830.0)
+#: The schematic-eye renderer: the chart's field angle at most this (deg), and the image's widest direction at most
+#: this far from the eye's optical axis (deg; its tables' reach).
+EYE_RENDER_MAX_FIELD_DEG = 45.0
+EYE_RENDER_MAX_THETA_DEG = 60.0
+#: The eye campaign (validation/eye): its image's side, px (each item renders and simulates it several times),
+#: and the rays across the iris of its self-check's trace.
 EYE_BENCH_SIZE_RANGE_PX = (16, 512)
-#: The eye campaign's settings: arcmin/px, chart distance m, vertex mm, spp, oversampling, rays across the pupil.
-EYE_BENCH_ARCMIN_PER_PX_RANGE = (0.25, 4.0)
-EYE_BENCH_CHART_DISTANCE_RANGE_M = (0.5, 100.0)
-EYE_BENCH_VERTEX_RANGE_MM = (5.0, 30.0)
-EYE_BENCH_SPP_RANGE = (1, 1 << 16)
-EYE_BENCH_OVERSAMPLE_RANGE = (1, 8)
 EYE_BENCH_RAYS_ACROSS_RANGE = (21, 1001)
 #: Where Atchison & Smith's 2005 fit of the eye's chromatic aberration holds (their data: 400-900 nm).
 ATCHISON_SMITH_RANGE_NM = (380.0, 1000.0)

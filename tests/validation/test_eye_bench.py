@@ -45,7 +45,9 @@ def test_the_campaign_file_is_checked():
     with pytest.raises(VissimInputError, match=r"item\[0\].*lens"):
         read_campaign(doc, {"kind": "eye"}, "eye.toml")
     with pytest.raises(VissimInputError, match="pupil"):
-        read_campaign({"item": [{"pupil_mm": 9.5}]}, {"kind": "eye"}, "eye.toml")
+        read_campaign({"item": [{"pupil_mm": 10.5}]}, {"kind": "eye"}, "eye.toml")  # an eye's pupil: 1-10 mm
+    with pytest.raises(VissimInputError, match=r"item\[0\].*accommodation"):  # Arizona's range is 0-6 D
+        read_campaign({"item": [{"model": "arizona", "accommodation": 7.0}]}, {"kind": "eye"}, "eye.toml")
     with pytest.raises(VissimInputError, match="colour"):
         read_campaign({"item": [{"colour": 1}]}, {"kind": "eye"}, "eye.toml")
     settings, configurations = read_campaign({"sweep": [{"name": "p", "pupil_mm": [3.0, 6.0], "light": "photopic"}]},

@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 import pytest
+
+from vissim.validation.engine.summary import PERFECT_MARGIN_DB
 from scipy.special import ndtr
 
 from vissim.optics.eyes.models import eye_model
@@ -15,7 +17,6 @@ from vissim.validation.eye_studies.edge import BIN_PX, edge_mtf, traced_rays_deg
 from vissim.validation.eye_studies.focus import (denoised_gradient_energy, gaussian_peak, gradient_energy,
                                                  predicted_best_sphere_diopters, sphere_lattice)
 from vissim.validation.eye_studies.scenes import ChartRaster, ideal_image, pixel_directions
-from vissim.validation.eye_studies.wide import psnr_db
 
 needs_llvm = pytest.mark.skipif(find_libllvm() is None, reason="no usable libLLVM: llvm variants unavailable")
 
@@ -84,11 +85,11 @@ def test_traced_psf_is_centred_and_its_scale_is_the_paraxial_one():
     large = traced_rays_deg("navarro-1985", 4.0, 550.0, rays_across=31)
     assert np.all(np.abs(large.mean(axis=0)) < 1e-6)
     assert np.sqrt(np.mean(np.sum(large**2, axis=1))) > 1.5 * np.sqrt(np.mean(np.sum(small**2, axis=1)))
-    from vissim.validation.eye_studies import edge
+    from vissim.optics.eyes.wavefront import trace_to_retina
 
     eye = eye_model("navarro-1985")
-    centre = edge.retina_landing_mm(eye, 550.0, 0.0, np.array([[0.0, 0.0]]))
-    tilted = edge.retina_landing_mm(eye, 550.0, 0.5, np.array([[0.0, 0.0]]))
+    centre = trace_to_retina(eye, np.array([[0.0, 0.0]]), 550.0, field_deg=(0.0, 0.0))[0].points_mm
+    tilted = trace_to_retina(eye, np.array([[0.0, 0.0]]), 550.0, field_deg=(0.5, 0.0))[0].points_mm
     assert abs(tilted[0, 0] - centre[0, 0]) / 0.5 == pytest.approx(retinal_mm_per_deg(eye, 550.0), rel=0.01)
 
 
@@ -121,12 +122,10 @@ def test_chart_lookup_inverts_the_raster():
     assert np.array_equal(rolled.lookup(x, y), raster.lookup(y, -x))
 
 
-def test_ideal_image_of_a_uniform_chart_is_uniform_and_psnr_of_equal_images_is_infinite():
+def test_ideal_image_of_a_uniform_chart_is_uniform():
     raster = ChartRaster(np.full((4, 4), 0.7, dtype=np.float32), 1e5, 1e5, 1e6)
     image = ideal_image(raster, eye_model("navarro-1985"), (6, 8), 1.0, (5.0, 0.0))
     assert np.allclose(image, 0.7)
-    assert psnr_db(image, image) == math.inf
-    assert psnr_db(image, image + 0.1) == pytest.approx(20.0)
 
 
 @needs_llvm
@@ -160,8 +159,10 @@ def test_slanted_edge_mtf_matches_the_traced_geometric_mtf_within_the_noise():
 def test_wide_chart_field_dependent_blur_follows_the_render_and_one_psf_does_not():
     from vissim.validation.eye_studies import wide_chart
 
-    result = wide_chart()  # measured: field-dependent 29.3 / 28.8 dB, floor 29.9 / 29.3, one PSF 28.4 / 12.7
+    # measured: field-dependent 29.3 / 28.8 dB, perfect (floor + 3.01) 29.9 / 29.3, one PSF 28.4 / 12.7
+    result = wide_chart()
+    perfect = {band: result.noise_floor_db[band] + PERFECT_MARGIN_DB for band in result.noise_floor_db}
     for band in ("on axis", "off axis"):
-        assert result.field_dependent_db[band] >= result.noise_floor_db[band] - 1.5
-    assert result.single_psf_db["on axis"] >= result.noise_floor_db["on axis"] - 2.5
+        assert result.field_dependent_db[band] >= perfect[band] - 1.5
+    assert result.single_psf_db["on axis"] >= perfect["on axis"] - 2.5
     assert result.single_psf_db["off axis"] <= result.field_dependent_db["off axis"] - 10.0

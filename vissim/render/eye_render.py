@@ -2,7 +2,8 @@
 
 The scene is the DSLR bench's (`vissim.bench.dslr.bench.dslr_scene`: a self-emitting chart of
 radiance = its reflectance facing the observer at ``chart_distance_m``, a trial lens mesh of
-``vissim_refract`` glass with its back vertex ``vertex_mm`` in front of the eye), with its
+``vissim_refract`` crown glass, dispersive as the exact trace's, with its back vertex ``vertex_mm`` in
+front of the eye; the letter sized for the chart's distance: `eye_chart`), with its
 ``thinlens`` camera replaced by the schematic-eye sensor at the corneal vertex.  The bench's
 camera pupil is set to the eye's entrance pupil so the lens mesh is sized for the eye's beam.
 ``field_deg`` turns the eye about its corneal vertex so that the chart's centre lies at that field
@@ -25,7 +26,7 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["EyeRender", "eye_scene_dict", "render_eye", "SPECTRA"]
+__all__ = ["EyeRender", "eye_bench", "eye_chart", "eye_scene_dict", "eye_to_world", "render_eye", "SPECTRA"]
 
 SPECTRA = ("mono", "photopic")
 
@@ -58,7 +59,8 @@ class EyeRender:
         if self.spectrum == "photopic" and self.wavelength_nm is not None:
             raise VissimInputError("give a wavelength (monochromatic) or the photopic spectrum, not both")
         from vissim.checks import arcmin_per_px, eye_pupil_diameter_mm, finite_number, number_within, positive_number
-        from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM
+        from vissim.charts import single_letter_spec
+        from vissim.checks import EYE_RENDER_MAX_FIELD_DEG, EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE
         from vissim.optics.eyes.models import eye_model
 
         eye_model(self.model, self.accommodation_diopters)  # the model's name and accommodation range
@@ -71,12 +73,15 @@ class EyeRender:
         eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,
                               "entrance pupil" if self.iris_mm is None else "iris")
         for value in self.field_deg:
-            if abs(finite_number(value, "field angle", "deg")) > 45.0:
-                raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within 45 deg of the axis")
+            if abs(finite_number(value, "field angle", "deg")) > EYE_RENDER_MAX_FIELD_DEG:
+                raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within "
+                                       f"{EYE_RENDER_MAX_FIELD_DEG:g} deg of the axis")
         if self.wavelength_nm is not None:
             number_within(self.wavelength_nm, "wavelength", "nm", EYE_RENDER_WAVELENGTH_RANGE_NM)
         arcmin_per_px(self.arcmin_per_px)
         positive_number(self.chart_distance_m, "chart distance", "m")
+        number_within(self.logmar, "letter size", "logMAR", LOGMAR_RANGE)
+        single_letter_spec(self.letter, self.logmar, viewing_distance_m=self.chart_distance_m)  # a Sloan letter
         positive_number(self.vertex_mm, "vertex distance", "mm")
         if int(self.spp) < 1:
             raise VissimInputError(f"samples per pixel must be >= 1, got {self.spp}")
@@ -118,10 +123,13 @@ def eye_to_world(eye, field_deg) -> list[list[float]]:
     return out.tolist()
 
 
-def _bench(settings: EyeRender, pupil_mm: float):
+def eye_bench(settings: EyeRender):
+    """The DSLR bench the scene is built from: its camera pupil the eye's (``pupil_mm`` or ``iris_mm``), the
+    trial lens's clear aperture by the bench's rule for the widest direction the image looks along."""
     from vissim.bench.dslr.bench import DslrBench
     from vissim.optics.trial_lens import TrialLens
 
+    pupil_mm = settings.pupil_mm or settings.iris_mm
     distance_mm = 1000.0 * settings.chart_distance_m
     focal_mm = 18.0
     return DslrBench(focal_length_mm=focal_mm, f_number=focal_mm / pupil_mm, focus_distance_mm=distance_mm,
@@ -132,11 +140,20 @@ def _bench(settings: EyeRender, pupil_mm: float):
                      seed=settings.seed, sampler="independent")
 
 
+def eye_chart(settings: EyeRender, bench):
+    """The printed chart (`vissim.charts.render_chart_print`): the letter sized for ``chart_distance_m``, so it
+    subtends ``logmar`` there, at the texel pitch the bench's texture needs."""
+    from vissim.bench.dslr.bench import chart_mm_per_texel
+    from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+
+    spec = single_letter_spec(settings.letter, settings.logmar, viewing_distance_m=settings.chart_distance_m)
+    return render_chart_print(spec, MM_PER_INCH / chart_mm_per_texel(bench))
+
+
 def eye_scene_dict(settings: EyeRender) -> dict:
     """The plain scene dict (module doc); its camera is the schematic-eye sensor."""
     from vissim.optics.eyes.models import eye_model
-    from vissim.bench.dslr.bench import chart_mm_per_texel, dslr_scene
-    from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+    from vissim.bench.dslr.bench import dslr_scene
 
     sensor = {"type": "vissim_schematic_eye", "model": settings.model,
               "accommodation_diopters": float(settings.accommodation_diopters),
@@ -150,13 +167,17 @@ def eye_scene_dict(settings: EyeRender) -> dict:
         sensor["iris_mm"] = float(settings.iris_mm)
     if settings.wavelength_nm is not None:
         sensor["wavelength_nm"] = float(settings.wavelength_nm)
-    bench = _bench(settings, settings.pupil_mm or settings.iris_mm)
-    chart = render_chart_print(single_letter_spec(settings.letter, settings.logmar),
-                               MM_PER_INCH / chart_mm_per_texel(bench))
-    scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="mono")
+    bench = eye_bench(settings)
+    chart = eye_chart(settings, bench)
+    eye = eye_model(settings.model, settings.accommodation_diopters)
+    if settings.spectrum == "photopic":  # crown at each path's hero wavelength; the sensor ends the others
+        scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="spectral", sensor_terminates_secondary=True)
+    else:
+        scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="mono",
+                           lens_wavelength_nm=settings.wavelength_nm or eye.reference_wavelength_nm)
     camera = scene["camera"]
     # the bench's camera sits at the origin looking along +z (identity): the eye takes its place, turned
-    turn = eye_to_world(eye_model(settings.model, settings.accommodation_diopters), settings.field_deg)
+    turn = eye_to_world(eye, settings.field_deg)
     sensor.update({"to_world": turn, "film": camera["film"], "sampler": camera["sampler"],
                    "far_clip": 10.0 * bench.chart_distance_mm})
     scene["camera"] = sensor

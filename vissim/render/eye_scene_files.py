@@ -91,8 +91,9 @@ def _checked_elsewhere(values: dict, source: str) -> None:
     if "rx" in values:
         _named(f"{source} [eye].rx", Prescription.parse, values["rx"])
     if "letter" in values or "logmar" in values:
-        _named(f"{source} [chart].letter, logmar", single_letter_spec,
-               *(values.get(k, defaults[k].default) for k in ("letter", "logmar")))
+        letter, logmar, distance = (values.get(k, defaults[k].default) for k in ("letter", "logmar", "chart_distance_m"))
+        _named(f"{source} [chart].letter, logmar", lambda *a: single_letter_spec(*a, viewing_distance_m=distance),
+               letter, logmar)
     if "lens" in values:
         _named(f"{source} [spectacles] sphere_diopters, cylinder_diopters, axis_deg", TrialLens, *values["lens"])
 

@@ -7,8 +7,8 @@ Each film pixel is a visual direction: its field angle, OSA's frame as every vis
 and its direction is the one the traced wavefront gives that field angle
 (`vissim.optics.eyes.wavefront.field_direction`: (tan x, tan y, 1), from the visual axis for a model
 that has one), so a pixel of the render and a pixel of a simulation at the same field angle look
-the same way.  That direction's chief ray lands on the
-curved retina at the radius r(θ) of a table traced at init (`vissim.render.schematic_eye_tables`:
+the same way.  That direction's chief ray **at the model's reference wavelength**
+lands on the curved retina at the radius r(θ) of a table traced at init (`vissim.render.schematic_eye_tables`:
 the eye's distortion is in it), opposite its azimuth (the retinal image is inverted).  From
 that retinal point a ray is aimed at a point sampled uniformly in the box that bounds, on the lens's
 back surface, the rays that pass the iris (pbrt-v4's exit-pupil bounds), and traced out through
@@ -54,14 +54,17 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
-from vissim.render.schematic_eye_tables import EyeTables, eye_tables
-from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM
+from vissim.render.schematic_eye_tables import EyeTables, chief_ray_radii_mm, eye_tables, table_theta_deg
+from vissim.checks import CIE_YBAR_RANGE_NM, EYE_RENDER_MAX_THETA_DEG, EYE_RENDER_WAVELENGTH_RANGE_NM
+from vissim.checks import arcmin_per_px as checked_arcmin_per_px
 from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
 __all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_eye", "sensor_tables"]
 
 log = logging.getLogger(__name__)
 
+#: The tables' reach is rounded up to a multiple of this (deg), so nearby films and fields share them.
+TABLE_REACH_STEP_DEG = 5.0
 #: Plugin name.
 SCHEMATIC_EYE_SENSOR = "vissim_schematic_eye"
 
@@ -85,6 +88,14 @@ def sensor_tables(model: str, accommodation_diopters: float, iris_mm: float, wav
     """`eye_tables` of the `sensor_eye`, cached (a scene reloaded with the same eye reuses them)."""
     return eye_tables(sensor_eye(model, accommodation_diopters, rx, rx_vertex_mm), iris_mm, wavelength_nm,
                       max_theta_deg)
+
+
+@functools.lru_cache(maxsize=16)
+def sensor_map_radii_mm(model: str, accommodation_diopters: float, wavelength_nm: float, max_theta_deg: float,
+                        rx: str | None = None, rx_vertex_mm: float = 12.0) -> np.ndarray:
+    """The film's map r(θ) at ``wavelength_nm`` on the tables' θ grid (`chief_ray_radii_mm`), cached."""
+    eye = sensor_eye(model, accommodation_diopters, rx, rx_vertex_mm)
+    return chief_ray_radii_mm(eye, table_theta_deg(max_theta_deg), wavelength_nm)
 
 
 def _pupils(eye, pupil_mm, iris_mm, wavelength_nm: float) -> tuple[float, float]:
@@ -144,9 +155,9 @@ def _make_class(mi, dr):
             fixed = props.get("wavelength_nm", None)
             self.fixed_wavelength_nm = None if fixed is None else number_within(fixed, "wavelength", "nm",
                                                                                 EYE_RENDER_WAVELENGTH_RANGE_NM)
-            if spectral and self.fixed_wavelength_nm is not None and not 360.0 <= self.fixed_wavelength_nm <= 830.0:
-                raise VissimInputError(f"a monochromatic spectral render needs 360-830 nm (where CIE ȳ is "
-                                       f"tabulated), got {self.fixed_wavelength_nm:g} nm")
+            if spectral and self.fixed_wavelength_nm is not None:  # CIE ȳ must be tabulated there
+                number_within(self.fixed_wavelength_nm, "a monochromatic spectral render's wavelength", "nm",
+                              CIE_YBAR_RANGE_NM)
             if spectral and self.fixed_wavelength_nm is not None:
                 # the film develops Y = ȳ(λ) L MI_CIE_Y_NORMALIZATION: divide it out
                 y_bar = mi.cie1931_y(mi.Float(self.fixed_wavelength_nm))
@@ -155,9 +166,7 @@ def _make_class(mi, dr):
             self.wavelength_nm = self.fixed_wavelength_nm or eye.reference_wavelength_nm
             self.pupil_mm, self.iris_mm = _pupils(eye, props.get("pupil_mm", None), props.get("iris_mm", None),
                                                   self.wavelength_nm)
-            self.arcmin_per_px = float(props.get("arcmin_per_px", 1.0))
-            if not 0.0 < self.arcmin_per_px <= 600.0:
-                raise VissimInputError(f"arcmin_per_px must lie in (0, 600] arcmin, got {self.arcmin_per_px:g}")
+            self.arcmin_per_px = checked_arcmin_per_px(float(props.get("arcmin_per_px", 1.0)))
             self.field_deg = (float(props.get("field_x_deg", 0.0)), float(props.get("field_y_deg", 0.0)))
             self.far_clip = float(props.get("far_clip", 1.0e7))
             width, height = self.film().size()
@@ -166,8 +175,16 @@ def _make_class(mi, dr):
             corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0)))
                       for f, span in zip(self.field_deg, self.span_deg)]
             reach = math.degrees(math.atan(math.hypot(*corner))) + eye.visual_axis_deg  # widest angle from the axis
+            if reach <= EYE_RENDER_MAX_THETA_DEG:  # beyond it the tables refuse the image, naming its reach
+                reach = min(math.ceil(reach / TABLE_REACH_STEP_DEG) * TABLE_REACH_STEP_DEG, EYE_RENDER_MAX_THETA_DEG)
             self.tables = sensor_tables(self.model, accommodation, self.iris_mm, self.wavelength_nm, reach, self.rx,
                                         self.rx_vertex_mm)
+            # the film's map: where the chief ray lands at the model's reference wavelength, as every simulation
+            # places its PSFs (`vissim.optics.eyes.psf_wavefront`): at another wavelength the image shifts by the
+            # transverse chromatic aberration, as the eye's does
+            reference = eye.reference_wavelength_nm
+            self.map_radius_mm = self.tables.radius_mm if self.wavelength_nm == reference else sensor_map_radii_mm(
+                self.model, accommodation, reference, reach, self.rx, self.rx_vertex_mm)
             self._init_lookups(eye)
             self.m_needs_sample_3 = True
             centre, edge = self.tables.pass_fraction[0], self.tables.pass_fraction[-1]
@@ -186,7 +203,7 @@ def _make_class(mi, dr):
         def _init_lookups(self, eye):
             t = self.tables
             self.tracer = SchematicEyeTracer(eye, self.iris_mm)
-            self.radius_of = _Lookup(0.0, float(t.theta_deg[1] - t.theta_deg[0]), t.radius_mm)
+            self.radius_of = _Lookup(0.0, float(t.theta_deg[1] - t.theta_deg[0]), self.map_radius_mm)
             self.bin_mm = float(t.r_edges_mm[1] - t.r_edges_mm[0])
             self.bins, self.azimuth_count = t.boxes.shape[:2]
             self.box = [_Lookup(0.0, 1.0, t.boxes[:, :, j].ravel()) for j in range(4)]

@@ -32,14 +32,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import EYE_RENDER_MAX_THETA_DEG
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import aim_collimated, trace_rays
 from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
-__all__ = ["EyeTables", "eye_tables", "THETA_STEP_DEG", "GRID", "GRID_RADIUS_MM", "BOX_MARGIN_CELLS",
-           "AZIMUTHS_DECENTRED", "RADIUS_BINS", "COARSE_GRID"]
+__all__ = ["EyeTables", "eye_tables", "chief_ray_radii_mm", "THETA_STEP_DEG", "GRID", "GRID_RADIUS_MM", "BOX_MARGIN_CELLS",
+           "AZIMUTHS_DECENTRED", "RADIUS_BINS", "COARSE_GRID", "table_theta_deg"]
 
 THETA_STEP_DEG = 0.25
 GRID = 128
@@ -167,13 +168,18 @@ def _sector_boxes(node_boxes, bins: int, count: int) -> np.ndarray:
     return boxes
 
 
+def table_theta_deg(max_theta_deg: float) -> np.ndarray:
+    """The tables' field angles from the axis, deg: every `THETA_STEP_DEG` past ``max_theta_deg``."""
+    return np.arange(0.0, max_theta_deg + 2 * THETA_STEP_DEG, THETA_STEP_DEG)
+
+
 def eye_tables(eye: SchematicEye, iris_mm: float, wavelength_nm: float, max_theta_deg: float) -> EyeTables:
     """The tables of the module doc for ``eye`` with an iris ``iris_mm`` across, at ``wavelength_nm``,
     covering visual angles up to ``max_theta_deg``."""
-    if not 0.0 <= max_theta_deg <= 60.0:
+    if not 0.0 <= max_theta_deg <= EYE_RENDER_MAX_THETA_DEG:
         raise VissimInputError(f"the image reaches {max_theta_deg:.3g} deg from the eye's axis; the schematic-eye "
-                               "sensor renders up to 60 deg")
-    theta = np.arange(0.0, max_theta_deg + 2 * THETA_STEP_DEG, THETA_STEP_DEG)
+                               f"sensor renders up to {EYE_RENDER_MAX_THETA_DEG:g} deg")
+    theta = table_theta_deg(max_theta_deg)
     radius = chief_ray_radii_mm(eye, theta, wavelength_nm)
     tracer = SchematicEyeTracer(eye, iris_mm)
     r_edges = np.linspace(0.0, 1.02 * radius[-1], RADIUS_BINS + 1)

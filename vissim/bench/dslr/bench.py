@@ -320,8 +320,15 @@ def dslr_scene(
     *,
     kind: str = "mono",
     mesh_cache_dir=None,
+    lens_wavelength_nm: float | None = None,
+    sensor_terminates_secondary: bool = False,
 ) -> dict[str, Any]:
     """The Mitsuba scene dict of ``bench`` with the chart raster ``chart_pixels`` (module doc).
+
+    The lenses' glass, decided here: spectacle crown, dispersive, in a ``"spectral"`` render (each path's
+    hero wavelength; ``sensor_terminates_secondary`` when the camera ends the other wavelengths itself) and
+    when ``lens_wavelength_nm`` is given (a one-wavelength render: crown's index there); otherwise the
+    lenses' index at every wavelength (the bench's default).
 
     ``chart_pixels``: linear reflectance, (H, W) or (H, W, 3), row 0 the top of the chart as
     the camera sees it, columns to the camera's right; its centre lies on the optical axis.
@@ -384,6 +391,11 @@ def dslr_scene(
             "bsdf": {"type": "vissim_refract", "int_ior": float(lens.refractive_index),
                      "fresnel_loss": bool(bench.fresnel_loss)},
         }
+        bsdf = scene[f"lens_{i}"]["bsdf"]
         if kind == "spectral":  # SPECTRAL_MODE
-            scene[f"lens_{i}"]["bsdf"]["dispersion"] = "crown"
+            bsdf["dispersion"] = "crown"
+            if sensor_terminates_secondary:
+                bsdf["sensor_terminates_secondary"] = True
+        elif lens_wavelength_nm is not None:
+            bsdf.update(dispersion="crown", wavelength_nm=float(lens_wavelength_nm))
     return scene

@@ -52,11 +52,14 @@ ARCMIN_PER_DEG = 60.0
 
 def node_field_deg(row_px: float, col_px: float, shape: tuple[int, int], arcmin_per_px: float,
                    field_deg=(0.0, 0.0)) -> tuple[float, float]:
-    """The field angle (x, y) in degrees, OSA's frame, of image point ``[row_px, col_px]`` (module doc)."""
+    """The field angle (x, y) in degrees, OSA's frame, of image point ``[row_px, col_px]`` (module doc):
+    the one map from image pixels to field angles (the renderer's sensor draws its film by it too).
+    Numbers give floats; arrays (broadcast) give arrays."""
     centre_row, centre_col = (shape[0] - 1) / 2.0, (shape[1] - 1) / 2.0
     to_deg = arcmin_per_px / ARCMIN_PER_DEG
-    dx, dy = image_colrow_to_osa_xy((col_px - centre_col) * to_deg, (row_px - centre_row) * to_deg)
-    return float(field_deg[0] + dx), float(field_deg[1] + dy)
+    dx, dy = image_colrow_to_osa_xy((np.asarray(col_px) - centre_col) * to_deg, (np.asarray(row_px) - centre_row) * to_deg)
+    x, y = field_deg[0] + dx, field_deg[1] + dy
+    return (float(x), float(y)) if np.ndim(x) == 0 and np.ndim(y) == 0 else (x, y)
 
 
 def _node_psf(front, step: float, band: tuple, weights, mode: str, max_size_px: int) -> PSF:

@@ -55,10 +55,10 @@ from vissim.optics.eyes.paraxial import (entrance_pupil_position_mm, iris_diamet
                                          mean_meridian_eye)
 from vissim.optics.eyes.spectacles import lens_surfaces, system_entrance_pupil_mm
 from vissim.optics.eyes.surfaces import split_at_stop
-from vissim.optics.raytrace import RayBundle, aim_collimated, trace_rays, wavefront_on_reference_sphere_um
+from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.zernike import fit_zernike_um
 
-__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_direction", "field_from_optical_axis_deg", "field_axis",
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "trace_to_retina", "field_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
            "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
@@ -96,16 +96,25 @@ def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:
     axis (the fovea temporal of the posterior pole). +x is nasal for a **right eye** in OSA's frame
     (x to the examiner's right), the eye the models' nasal iris decentre already assumes; so the
     fixation direction, field (0, 0), is (+alpha, 0) from the optical axis.
+
+    Vectorised: ``field_deg`` = (x, y) of numbers or of equal-shape arrays; the result has shape (..., 3).
     """
-    fx, fy = (finite_number(v, "field angle", "deg") for v in field_deg)
+    try:
+        fx, fy = (np.asarray(v, dtype=float) for v in field_deg)
+    except (TypeError, ValueError):
+        raise VissimInputError(f"a field angle must be two numbers (x, y) in deg, got {field_deg!r}") from None
     for value in (fx, fy):
-        if abs(value) > MAX_FIELD_DEG:
-            raise VissimInputError(f"field angle {value:g} deg is beyond +-{MAX_FIELD_DEG:g} deg")
-    o = np.array([math.tan(math.radians(fx)), math.tan(math.radians(fy)), 1.0])
-    o /= np.linalg.norm(o)
+        bad = ~np.isfinite(value) | (np.abs(value) > MAX_FIELD_DEG)
+        if np.any(bad):
+            first = float(np.ravel(value)[np.argmax(np.ravel(bad))])
+            raise VissimInputError(f"field angle {first:g} deg is beyond +-{MAX_FIELD_DEG:g} deg"
+                                   if math.isfinite(first) else f"field angle must be finite deg, got {first}")
+    tx, ty = np.broadcast_arrays(np.tan(np.radians(fx)), np.tan(np.radians(fy)))
+    o = np.stack([tx, ty, np.ones_like(tx)], axis=-1)
+    o /= np.linalg.norm(o, axis=-1, keepdims=True)
     alpha = math.radians(eye.visual_axis_deg)
-    return np.array([o[0] * math.cos(alpha) + o[2] * math.sin(alpha), o[1],
-                     -o[0] * math.sin(alpha) + o[2] * math.cos(alpha)])
+    return np.stack([o[..., 0] * math.cos(alpha) + o[..., 2] * math.sin(alpha), o[..., 1],
+                     -o[..., 0] * math.sin(alpha) + o[..., 2] * math.cos(alpha)], axis=-1)
 
 
 def field_from_optical_axis_deg(eye: SchematicEye, field_deg) -> tuple[float, float]:
@@ -268,10 +277,20 @@ def _iris_grid(eye: SchematicEye, iris_mm: float, samples: int) -> tuple[np.ndar
     return points + np.array([eye.stop_decentre_nasal_mm, 0.0]), np.concatenate([[False], edge[keep]])
 
 
-def _trace_to_retina(eye: SchematicEye, direction, targets, wavelength_nm: float,
-                     lenses=None) -> tuple[RayBundle, np.ndarray]:
+def trace_to_retina(eye: SchematicEye, targets, wavelength_nm: float, *, field_deg=None, object_point_mm=None,
+                    lenses=None) -> tuple[RayBundle, np.ndarray]:
+    """Rays through ``lenses`` (a `TrialLensSetup`, or None) and ``eye`` aimed at the iris points ``targets``
+    (N, 2, mm) and traced to the retina: a collimated beam from ``field_deg`` (the models' rule,
+    `field_direction`) or the rays of one ``object_point_mm`` (eye frame, z towards the retina). Returns the
+    bundle on the retina (path lengths from the start) and the rays' starts (collimated) or launch directions."""
     front, stop_z, back, start_z = _front(eye, lenses)
-    at_iris, starts = aim_collimated(front, direction, targets, stop_z, start_z, wavelength_nm=wavelength_nm)
+    if (field_deg is None) == (object_point_mm is None):
+        raise VissimInputError("trace to the retina from a field angle or from an object point, not both or neither")
+    if object_point_mm is None:
+        at_iris, starts = aim_collimated(front, _beam_direction(eye, field_deg), targets, stop_z, start_z,
+                                         wavelength_nm=wavelength_nm)
+    else:
+        at_iris, starts = aim_rays(front, object_point_mm, targets, stop_z, wavelength_nm=wavelength_nm)
     on_retina = trace_rays(back, at_iris.points_mm, at_iris.directions, None, wavelength_nm=wavelength_nm,
                            index_before=at_iris.final_index)
     bundle = RayBundle(on_retina.points_mm, on_retina.directions, at_iris.opl_mm + on_retina.opl_mm,
@@ -311,7 +330,7 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     try:
         pupil, entrance_z = _system_pupil(eye, lenses, iris, pupil, wavelength)
         targets, edge = _iris_grid(eye, iris, samples)
-        bundle, starts = _trace_to_retina(eye, direction, targets, wavelength, lenses)
+        bundle, starts = trace_to_retina(eye, targets, wavelength, field_deg=field, lenses=lenses)
     except VissimInputError as error:
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
     exit_z = exit_pupil_position_mm(eye, wavelength)

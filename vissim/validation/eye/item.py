@@ -44,17 +44,21 @@ def item_ray_psf(configuration, settings, lens, scene: EyeScene):
                    arcmin_per_px=c.arcmin_per_px, oversample=settings.oversample, rays_across=settings.rays_across)
 
 
-def chart_offset_px(truth: np.ndarray, scene: EyeScene, ray, margin: int) -> tuple[tuple[float, float], dict]:
+def chart_offset_px(truth: np.ndarray, scene: EyeScene, ray, margin: int) -> tuple[tuple[float, float], dict, np.ndarray]:
     """Where the render placed its chart (rows, cols; image px): the ray-trace simulation registered onto the
-    render, its chart shifted by the sum, until less than `ALIGN_TOLERANCE_PX` is left (`MAX_ALIGN_PASSES`)."""
+    render, its chart shifted by the sum, until less than `ALIGN_TOLERANCE_PX` is left (`MAX_ALIGN_PASSES`).
+    Also returns the ray-trace simulation at that offset (the self-check's image, not simulated again)."""
     offset = (0.0, 0.0)
     for passes in range(1, MAX_ALIGN_PASSES + 1):
-        left = register(truth, simulate("traced_rays", scene, ray, margin, offset), upsample_factor=100)
+        simulated = simulate("traced_rays", scene, ray, margin, offset)
+        left = register(truth, simulated, upsample_factor=100)
         if max(abs(left.shift_rows_px), abs(left.shift_cols_px)) < ALIGN_TOLERANCE_PX:
             break
         offset = (offset[0] + left.shift_rows_px, offset[1] + left.shift_cols_px)
+    else:
+        simulated = simulate("traced_rays", scene, ray, margin, offset)
     return offset, {"shift_rows_px": offset[0], "shift_cols_px": offset[1], "passes": passes,
-                    "left_px": [left.shift_rows_px, left.shift_cols_px]}
+                    "left_px": [left.shift_rows_px, left.shift_cols_px]}, simulated
 
 
 def _row(simulation: str, reference: np.ndarray, simulated: np.ndarray, floor_db: float) -> dict:
@@ -71,13 +75,13 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
     scene = EyeScene(configuration, settings, built)
     ray = item_ray_psf(configuration, settings, built.lens, scene)
     margin = margin_px(ray, settings.oversample)
-    offset, placement = chart_offset_px(truth_a, scene, ray, margin)
+    offset, placement, traced = chart_offset_px(truth_a, scene, ray, margin)
     with_diffraction = np.asarray(blur_image(truth_a, diffraction_psf(scene), arcmin_per_px=configuration.arcmin_per_px,
                                              padding="edge"), np.float64)
     swaps = [name for name, where in COSTS.values() if applies(where, configuration)]
     rows, saved = [], {}
     for simulation in SIMULATIONS + tuple(swaps):
-        simulated = simulate(simulation, scene, ray, margin, offset)
+        simulated = traced if simulation == "traced_rays" else simulate(simulation, scene, ray, margin, offset)
         reference = with_diffraction if reference_of(simulation) != "render" else truth_a
         rows.append(_row(simulation, reference, simulated, floor.psnr_db))
         if simulation in SIMULATIONS:

@@ -4,7 +4,8 @@ Rays leave the chart's centre (at the chart distance from the corneal vertex, al
 sight), pass the trial lens (thick, as rendered) and the eye's surfaces (`vissim.optics.raytrace`,
 aimed at a jittered grid filling the iris) and land on the retina.  Each landing point is turned
 into a field angle as the eye sensor reads its retina: its distance from the axis through the
-inverse of the chief rays' r(θ) (no lens, at the sensor's wavelength; traced here), the direction
+inverse of the chief rays' r(θ) (no lens, at the model's reference wavelength, as the sensor's film:
+`vissim.render.schematic_eye_tables.chief_ray_radii_mm`), the direction
 opposite its azimuth, the field angle of that direction by the models' rule (`field_direction`).
 The offsets from the chart centre's field angle are histogrammed on a grid
 ``oversample`` times finer than the image's pixels: the ray PSF.  The trial lens's spectacle
@@ -13,7 +14,7 @@ the lens over without it).  Photopic light: one trace per wavelength of the phot
 weighted by V(λ) (the render's film develops luminance).
 
 The renderer traces the other way (retina to scene, Dr.Jit, the lens as a mesh): this trace shares
-no code with it.
+none of its ray code; only the film's map r(θ), the same numpy table both read.
 """
 
 from __future__ import annotations
@@ -24,11 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.optics.eyes.models import eye_model
-from vissim.optics.eyes.spectacles import lens_surfaces
-from vissim.optics.eyes.surfaces import split_at_stop
-from vissim.optics.eyes.wavefront import field_direction, iris_from_entrance_pupil_mm
-from vissim.optics.raytrace import aim_collimated, aim_rays, trace_rays
+from vissim.optics.eyes.wavefront import field_direction, iris_from_entrance_pupil_mm, trace_to_retina
 from vissim.optics.trial_lens import TrialLensSetup
+from vissim.render.schematic_eye_tables import chief_ray_radii_mm
+from vissim.units import osa_xy_to_image_colrow
 
 __all__ = ["RayPsf", "ray_psf", "RAYS_ACROSS_IRIS", "MAGNIFICATION_STEP_DEG", "RADIUS_STEP_DEG", "RADIUS_SPAN_DEG"]
 
@@ -70,25 +70,8 @@ def _iris_targets(eye, iris_mm: float, rays_across: int, seed: int) -> np.ndarra
 
 def _land(eye, lens_setup, point_mm, targets, wavelength_nm: float) -> np.ndarray:
     """Retinal landing points (N, 2) of rays from ``point_mm`` aimed at iris ``targets``."""
-    front, stop_z, back = split_at_stop(eye)
-    if lens_setup is not None:
-        front = lens_surfaces(lens_setup) + tuple(front)
-    at_iris, _ = aim_rays(tuple(front), point_mm, targets, stop_z, wavelength_nm=wavelength_nm)
-    landed = trace_rays(back, at_iris.points_mm, at_iris.directions, None, wavelength_nm=wavelength_nm,
-                        index_before=at_iris.final_index)
-    return landed.points_mm[:, :2]
-
-
-def _chief_radius_mm(eye, theta_deg: float, wavelength_nm: float) -> float:
-    """Where a collimated ray at ``theta_deg`` from the optical axis through the iris plane's axial point lands
-    on the retina: its distance from the axis (the sensor's r(θ), traced here by the numpy tracer)."""
-    front, stop_z, back = split_at_stop(eye)
-    t = math.radians(theta_deg)
-    at_iris, _ = aim_collimated(front, [math.sin(t), 0.0, math.cos(t)], [[0.0, 0.0]], stop_z,
-                                front[0].vertex_z_mm - 5.0, wavelength_nm=wavelength_nm)
-    landed = trace_rays(back, at_iris.points_mm, at_iris.directions, None, wavelength_nm=wavelength_nm,
-                        index_before=at_iris.final_index)
-    return float(np.hypot(*landed.points_mm[0, :2]))
+    bundle, _ = trace_to_retina(eye, targets, wavelength_nm, object_point_mm=point_mm, lenses=lens_setup)
+    return bundle.points_mm[:, :2]
 
 
 class _Retina:
@@ -101,7 +84,7 @@ class _Retina:
         centre = math.degrees(math.atan2(math.hypot(o[0], o[1]), o[2]))
         low = max(0.0, centre - RADIUS_SPAN_DEG)
         self.theta = np.arange(low, centre + RADIUS_SPAN_DEG + 1e-9, RADIUS_STEP_DEG)
-        self.radius = np.array([_chief_radius_mm(eye, t, wavelength_nm) for t in self.theta])
+        self.radius = chief_ray_radii_mm(eye, self.theta, wavelength_nm)
         self.alpha = math.radians(eye.visual_axis_deg)
 
     def field_deg(self, points_mm: np.ndarray) -> np.ndarray:
@@ -147,7 +130,7 @@ def ray_psf(*, model: str, accommodation_diopters: float, pupil_mm: float, field
     field = tuple(float(v) for v in field_deg)
     distance_mm = 1000.0 * chart_distance_m
     lens_setup = None if lens is None else TrialLensSetup((lens,), vertex_mm, chart_distance_m)
-    retina = _Retina(eye, sensor_nm, field)
+    retina = _Retina(eye, eye.reference_wavelength_nm, field)  # the film's map: the sensor's, at the reference
     point = _object_point_mm(eye, field, distance_mm)
     targets = _iris_targets(eye, iris_mm, rays_across, seed)
     step_deg = arcmin_per_px / oversample / 60.0
@@ -157,7 +140,7 @@ def ray_psf(*, model: str, accommodation_diopters: float, pupil_mm: float, field
         angles.append(a)
         ray_weights.append(np.full(len(a), float(weight) / len(a)))
     angles, ray_weights = np.concatenate(angles), np.concatenate(ray_weights)
-    cols, rows = -angles[:, 0] / step_deg, -angles[:, 1] / step_deg  # columns to the observer's right (-x), rows down
+    cols, rows = osa_xy_to_image_colrow(angles[:, 0] / step_deg, angles[:, 1] / step_deg)
     half = int(math.ceil(max(np.abs(cols).max(), np.abs(rows).max()))) + 2
     edges = np.arange(-half - 0.5, half + 1.0)
     psf, _, _ = np.histogram2d(rows, cols, bins=(edges, edges), weights=ray_weights)

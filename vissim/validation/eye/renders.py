@@ -6,9 +6,9 @@ import math
 from dataclasses import dataclass, asdict
 from typing import ClassVar
 
-from vissim.render.eye_render import EyeRender
+from vissim.render.eye_render import EyeRender, eye_bench, eye_chart
 
-__all__ = ["EyeSpec", "EyeBuilt", "build_eye", "eye_render_settings", "render_bench", "chart_half_arcmin", "spec"]
+__all__ = ["EyeSpec", "EyeBuilt", "build_eye", "eye_render_settings", "chart_half_arcmin", "spec"]
 
 
 @dataclass(frozen=True)
@@ -51,37 +51,15 @@ class EyeBuilt:
 
 def build_eye(configuration, settings) -> EyeBuilt:
     render = eye_render_settings(configuration, settings.spp, settings.seeds[0])
-    bench = render_bench(render)
+    bench = eye_bench(render)
     return EyeBuilt(bench.physical_lenses[0] if bench.lenses else None, chart_half_arcmin(render, bench))
 
 
 def chart_half_arcmin(settings: EyeRender, bench) -> tuple[float, float]:
     """The chart texture's half size, arcmin (rows, columns), as `render_eye` lays it (`dslr_scene`'s rule)."""
-    from vissim.bench.dslr.bench import chart_mm_per_texel, chart_texture_shape
-    from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
+    from vissim.bench.dslr.bench import chart_texture_shape
 
-    chart = render_chart_print(single_letter_spec(settings.letter, settings.logmar),
-                               MM_PER_INCH / chart_mm_per_texel(bench))
+    chart = eye_chart(settings, bench)
     shape = chart_texture_shape(bench, bench.viewing_setup(), chart.mm_per_px)
     distance_mm = 1000.0 * settings.chart_distance_m
     return tuple(60.0 * math.degrees(math.atan(0.5 * n * chart.mm_per_px / distance_mm)) for n in shape)
-
-
-def render_bench(settings: EyeRender):
-    """The DSLR bench `render_eye` builds its scene from: a camera of pupil = the eye's, the lens's clear
-    aperture by the bench's rule for the widest direction the image looks along (`eye_render`'s module doc)."""
-    from vissim.bench.dslr.bench import DslrBench
-    from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER, TrialLens
-
-    pupil = settings.pupil_mm or settings.iris_mm
-    rows, cols = settings.size_px
-    half_deg = [abs(f) + 0.5 * n * settings.arcmin_per_px / 60.0 for f, n in zip(settings.field_deg, (cols, rows))]
-    depth = settings.vertex_mm + MAX_LENSES_IN_HOLDER * (4.0 + 2.0)
-    beam = 1.2 * pupil + 2.0 * depth * math.tan(math.radians(math.hypot(*half_deg)))
-    aperture = math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
-    distance_mm = 1000.0 * settings.chart_distance_m
-    bench = DslrBench(focal_length_mm=18.0, f_number=18.0 / pupil, focus_distance_mm=distance_mm,
-                      chart_distance_mm=distance_mm, vertex_distance_mm=settings.vertex_mm,
-                      clear_aperture_mm=aperture, lenses=() if settings.lens is None else (TrialLens(*settings.lens),),
-                      arcmin_per_px=settings.arcmin_per_px, size_px=tuple(settings.size_px))
-    return bench

@@ -10,14 +10,15 @@ lists for any of them and makes one item per combination (its ``name`` a prefix)
 
 from __future__ import annotations
 
-from vissim.checks import (EYE_BENCH_ARCMIN_PER_PX_RANGE, EYE_BENCH_CHART_DISTANCE_RANGE_M, EYE_BENCH_OVERSAMPLE_RANGE,
-                           EYE_BENCH_RAYS_ACROSS_RANGE, EYE_BENCH_SPP_RANGE, EYE_BENCH_VERTEX_RANGE_MM)
-from vissim.checks import (EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS, EYE_BENCH_FIELD_RANGE_DEG, EYE_BENCH_LOGMAR_RANGE,
-                           EYE_BENCH_PUPIL_RANGE_MM, EYE_BENCH_SIZE_RANGE_PX, EYE_BENCH_WAVELENGTH_RANGE_NM)
-
 import itertools
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.models import eye_model
+from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
+                           EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
+                           EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
+                           VERTEX_DISTANCE_RANGE_MM, VIEWING_DISTANCE_RANGE_M)
 from vissim.validation.engine.fields import (field_error, lens, name_text, number, settings_kwargs, tables, text,
                                              whole_number)
 
@@ -54,7 +55,7 @@ class EyeConfiguration:
     wavelength_nm: float | None = 550.0
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
     letter: str = "K"
-    logmar: float = 1.3
+    logmar: float = 0.5
     # copied from the settings (so each item's key holds what its renders depend on)
     size_px: tuple[int, int] = (64, 64)
     arcmin_per_px: float = 0.5
@@ -73,14 +74,14 @@ class EyeConfiguration:
 def _light(value, source: str, where: str) -> tuple[str, float | None]:
     if value == "photopic":
         return "photopic", None
-    return "mono", number(value, source, where, "nm", lo=EYE_BENCH_WAVELENGTH_RANGE_NM[0], hi=EYE_BENCH_WAVELENGTH_RANGE_NM[1])
+    return "mono", number(value, source, where, "nm", lo=EYE_RENDER_WAVELENGTH_RANGE_NM[0], hi=EYE_RENDER_WAVELENGTH_RANGE_NM[1])
 
 
 def _field(value, source: str, where: str) -> tuple[float, float]:
     values = [value, 0.0] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
     if not isinstance(values, list) or len(values) != 2:
         raise field_error(source, where, f"a field is degrees (x, a number) or [x, y], got {value!r}")
-    return tuple(number(v, source, where, "deg", lo=EYE_BENCH_FIELD_RANGE_DEG[0], hi=EYE_BENCH_FIELD_RANGE_DEG[1]) for v in values)
+    return tuple(number(v, source, where, "deg", lo=-EYE_RENDER_MAX_FIELD_DEG, hi=EYE_RENDER_MAX_FIELD_DEG) for v in values)
 
 
 def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
@@ -94,15 +95,19 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
     configuration = EyeConfiguration(
         name=name_text(entry.get("name", where), source, f"{where}.name"),
         model=text(entry.get("model", "navarro-1985"), source, f"{where}.model"),
-        pupil_mm=number(entry.get("pupil_mm", 4.0), source, f"{where}.pupil_mm", "mm", lo=EYE_BENCH_PUPIL_RANGE_MM[0], hi=EYE_BENCH_PUPIL_RANGE_MM[1]),
+        pupil_mm=number(entry.get("pupil_mm", 4.0), source, f"{where}.pupil_mm", "mm", lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1]),
         accommodation_diopters=number(entry.get("accommodation", 0.0), source, f"{where}.accommodation", "D",
-                                      lo=EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS[0], hi=EYE_BENCH_ACCOMMODATION_RANGE_DIOPTERS[1]),
+                                      lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1]),
         field_deg=_field(entry.get("field", 0.0), source, f"{where}.field"),
         spectrum=spectrum, wavelength_nm=wavelength, lens=trial,
         letter=text(entry.get("letter", "K"), source, f"{where}.letter"),
-        logmar=number(entry.get("logmar", 1.3), source, f"{where}.logmar", "logMAR", lo=EYE_BENCH_LOGMAR_RANGE[0], hi=EYE_BENCH_LOGMAR_RANGE[1]),
+        logmar=number(entry.get("logmar", 0.5), source, f"{where}.logmar", "logMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1]),
         size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
         vertex_mm=settings.vertex_mm)
+    try:  # the model's name and its own accommodation range
+        eye_model(configuration.model, configuration.accommodation_diopters)
+    except VissimInputError as error:
+        raise field_error(source, where, str(error)) from None
     if configuration.lens is not None and configuration.field_deg != (0.0, 0.0):
         raise field_error(source, where, "a trial lens is simulated on the line of sight only: give field = 0 "
                                          "with a lens")
@@ -135,11 +140,11 @@ def _sweep(entry: dict, index: int, source: str) -> list[dict]:
 
 def _settings(head: dict, source: str) -> EyeSettings:
     kwargs = settings_kwargs(head, EyeSettings, source, "campaign",
-                             numbers={"arcmin_per_px": ("arcmin/px", *EYE_BENCH_ARCMIN_PER_PX_RANGE),
-                                      "chart_distance_m": ("m", *EYE_BENCH_CHART_DISTANCE_RANGE_M),
-                                      "vertex_mm": ("mm", *EYE_BENCH_VERTEX_RANGE_MM)},
-                             whole_numbers={"spp": ("samples per pixel", *EYE_BENCH_SPP_RANGE),
-                                            "oversample": ("", *EYE_BENCH_OVERSAMPLE_RANGE),
+                             numbers={"arcmin_per_px": ("arcmin/px", *ARCMIN_PER_PX_RANGE),
+                                      "chart_distance_m": ("m", *VIEWING_DISTANCE_RANGE_M),
+                                      "vertex_mm": ("mm", *VERTEX_DISTANCE_RANGE_MM)},
+                             whole_numbers={"spp": ("samples per pixel", 1, MAX_SPP),
+                                            "oversample": ("", *OVERSAMPLE_RANGE),
                                             "rays_across": ("rays", *EYE_BENCH_RAYS_ACROSS_RANGE)},
                              lists={}, texts=("name", "description", "kind"), read_elsewhere=("size_px",))
     if "size_px" in head:
@@ -164,4 +169,4 @@ def read_campaign(doc: dict, head: dict, source: str) -> tuple[EyeSettings, tupl
     duplicate = next((n for n in names if names.count(n) > 1), None)
     if duplicate:
         raise field_error(source, "[[item]]", f"two items are named {duplicate!r}")
-    return settings, tuple(replace(c) for c in configurations)
+    return settings, tuple(configurations)

@@ -37,7 +37,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.signal import fftconvolve
 
-from vissim.charts import optotype_tile, single_letter_spec
+from vissim.charts import optotype_tile
 from vissim.optics.blur import blur_image
 from vissim.optics.eyes.field_blur import blur_eye
 from vissim.optics.eyes.models import eye_model
@@ -77,18 +77,12 @@ def reference_of(simulation: str) -> str:
     return "render + diffraction" if simulation in WAVE else "render"
 
 
-#: The distance the rendered chart is printed for (`single_letter_spec`'s default): at another distance its
-#: letter subtends that much more or less.
-PRINT_DISTANCE_M = single_letter_spec("K", 1.0).viewing_distance_m
-
-
 @functools.lru_cache(maxsize=32)
 def chart(letter: str, logmar: float, distance_m: float, step_arcmin: float, shape: tuple[int, int],
           half_size_arcmin: tuple[float, float]) -> np.ndarray:
-    """The rendered chart's letter (printed for `PRINT_DISTANCE_M`, seen at ``distance_m``) in visual angle,
+    """The rendered chart's letter (printed for ``distance_m``, `vissim.render.eye_render.eye_chart`) in visual angle,
     centred, ``shape`` pixels of ``step_arcmin``; black beyond the chart's half size (rows, columns; arcmin)."""
-    seen_logmar = logmar + math.log10(PRINT_DISTANCE_M / distance_m)
-    pixels = optotype_tile(letter, seen_logmar, arcmin_per_px=step_arcmin, shape_px=shape,
+    pixels = optotype_tile(letter, logmar, arcmin_per_px=step_arcmin, shape_px=shape,
                            viewing_distance_m=distance_m, snap_to_pixels=False).pixels.astype(np.float64)
     for axis, half in enumerate(half_size_arcmin):
         offset = step_arcmin * np.abs(np.arange(shape[axis]) - (shape[axis] - 1) / 2.0)
@@ -139,15 +133,6 @@ class EyeScene:
         return Prescription.from_power_matrix(-vergence), magnification
 
 
-def _local_directions(field_x_deg: np.ndarray, field_y_deg: np.ndarray, visual_axis_deg: float) -> np.ndarray:
-    """Unit directions (..., 3) of field angles (deg) in the eye's frame (z to the object): `field_direction`'s rule."""
-    o = np.stack([np.tan(np.radians(field_x_deg)), np.tan(np.radians(field_y_deg)), np.ones_like(field_x_deg)], -1)
-    o /= np.linalg.norm(o, axis=-1, keepdims=True)
-    a = math.radians(visual_axis_deg)
-    return np.stack([o[..., 0] * math.cos(a) + o[..., 2] * math.sin(a), o[..., 1],
-                     -o[..., 0] * math.sin(a) + o[..., 2] * math.cos(a)], -1)
-
-
 def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
     """The chart as the eye's pixels see it: pixel (row, col) looks at field angle (x, y) = the image's field
     minus (col, row) offsets x ``step`` (columns to the observer's right: -x), along `field_direction`'s
@@ -155,6 +140,8 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
     `eye_render.eye_to_world`) at the chart point drawn there.  On the axis of a model without a visual
     axis this is the chart drawn in visual angle; off it the chart is seen stretched across the field
     direction (by 1 / cos of the field angle)."""
+    from vissim.optics.eyes.field_blur import node_field_deg
+    from vissim.optics.eyes.wavefront import field_direction
     from vissim.render.eye_render import eye_to_world
 
     c = scene.c
@@ -164,9 +151,8 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
         return flat
     base_shape = tuple(int(math.ceil(1.15 * n)) + 8 for n in shape)
     base = chart(c.letter, c.logmar, c.chart_distance_m, step, base_shape, scene.chart_half_arcmin)
-    rows, cols = (np.arange(n) - (n - 1) / 2.0 for n in shape)
-    r, q = np.meshgrid(rows, cols, indexing="ij")
-    local = _local_directions(field[0] - q * step / 60.0, field[1] - r * step / 60.0, scene.eye.visual_axis_deg)
+    r, q = np.indices(shape)
+    local = field_direction(scene.eye, node_field_deg(r, q, shape, step, field))
     world = local @ np.asarray(eye_to_world(scene.eye, field), float)[:3, :3].T
     to_arcmin = 60.0 * 180.0 / math.pi
     col_arcmin = np.arctan(-world[..., 0] / world[..., 2]) * to_arcmin  # world +x: the observer's left

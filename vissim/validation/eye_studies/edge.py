@@ -37,13 +37,11 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["BIN_PX", "EdgeMtf", "SlantedEdge", "edge_mtf", "retina_landing_mm", "traced_rays_deg", "traced_edge_lsf",
+__all__ = ["BIN_PX", "EdgeMtf", "SlantedEdge", "edge_mtf", "traced_rays_deg", "traced_edge_lsf",
            "geometric_mtf", "slanted_edge"]
 
 #: ESF bin, pixels (ISO 12233's 4x oversampling).
 BIN_PX = 0.25
-#: The collimated beam starts this far in front of the cornea, mm.
-START_BEFORE_MM = 5.0
 #: LSF half-length, pixels: the ESF used reaches this far either side of the edge.
 HALF_SPAN_PX = 32
 
@@ -106,24 +104,10 @@ def edge_mtf(image: np.ndarray, arcmin_per_px: float) -> EdgeMtf:
     return EdgeMtf(frequencies, mtf, math.degrees(math.atan(b)))
 
 
-def retina_landing_mm(eye, wavelength_nm: float, field_x_deg: float, targets) -> np.ndarray:
-    """(N, 2) retinal x, y, mm, of a collimated beam from field x ``field_x_deg`` aimed at iris ``targets`` (N, 2)."""
-    from vissim.optics.eyes.surfaces import split_at_stop
-    from vissim.optics.raytrace import aim_collimated, trace_rays
-
-    front, stop_z, back = split_at_stop(eye)
-    direction = [-math.tan(math.radians(field_x_deg)), 0.0, 1.0]
-    start_z = front[0].vertex_z_mm - START_BEFORE_MM
-    at_iris, _ = aim_collimated(front, direction, targets, stop_z, start_z, wavelength_nm=wavelength_nm)
-    on_retina = trace_rays(back, at_iris.points_mm, at_iris.directions, None, wavelength_nm=wavelength_nm,
-                           index_before=at_iris.final_index)
-    return on_retina.points_mm[:, :2]
-
-
 def traced_rays_deg(model: str, pupil_mm: float, wavelength_nm: float, rays_across: int = 161) -> np.ndarray:
     """The geometric PSF's rays: (N, 2) landing offsets from the chief ray, degrees of visual angle (module doc)."""
     from vissim.optics.eyes.models import eye_model
-    from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm
+    from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm, trace_to_retina
 
     eye = eye_model(model)
     iris_mm = iris_from_entrance_pupil_mm(eye, pupil_mm, wavelength_nm)
@@ -131,8 +115,8 @@ def traced_rays_deg(model: str, pupil_mm: float, wavelength_nm: float, rays_acro
     x, y = np.meshgrid(axis, axis)
     keep = np.hypot(x, y) <= 0.5 * iris_mm
     targets = np.concatenate([[[0.0, 0.0]], np.stack([x[keep], y[keep]], axis=1)]) + [eye.stop_decentre_nasal_mm, 0.0]
-    landing = retina_landing_mm(eye, wavelength_nm, 0.0, targets)
-    chief = retina_landing_mm(eye, wavelength_nm, 0.5, targets[:1])
+    landing = trace_to_retina(eye, targets, wavelength_nm, field_deg=(0.0, 0.0))[0].points_mm[:, :2]
+    chief = trace_to_retina(eye, targets[:1], wavelength_nm, field_deg=(0.5, 0.0))[0].points_mm[:, :2]
     mm_per_deg = abs(chief[0, 0] - landing[0, 0]) / 0.5
     return (landing[1:] - landing[0]) / mm_per_deg
 

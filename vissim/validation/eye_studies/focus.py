@@ -2,7 +2,7 @@
 
 * **Renders**: `vissim.render.eye_render` (a Sloan letter at ``chart_distance_m``, a trial lens of
   sphere S at 12 mm, a schematic eye relaxed), monochromatic on the mono variant; the lens in
-  spectacle crown at the render's wavelength (`scenes.with_dispersive_lenses`: n_d 1.523, V_d 58.6,
+  spectacle crown at the render's wavelength (`eye_render.eye_scene_dict`: n_d 1.523, V_d 58.6,
   Cauchy, `vissim.optics.glass`).
 * **Sweep**: one lattice of spheres for every wavelength, ``step_diopters`` apart (multiples of the
   step, not centred on any prediction), covering each wavelength's predicted best sphere ± ``margin``.
@@ -157,8 +157,7 @@ class ChromaticFocus:
 
 
 def _sweep(base, spheres, wavelength_nm: float, predicted: float) -> FocusSweep:
-    from vissim.render.eye_render import eye_scene_dict
-    from vissim.validation.eye_studies.scenes import render_settings, with_dispersive_lenses
+    from vissim.render.eye_render import render_eye
 
     start = time.perf_counter()
     pairs = []
@@ -166,8 +165,7 @@ def _sweep(base, spheres, wavelength_nm: float, predicted: float) -> FocusSweep:
         pair = []
         for seed in (base.seed, base.seed + 1):
             settings = dataclasses.replace(base, wavelength_nm=wavelength_nm, lens=(float(sphere), 0.0, 0.0), seed=seed)
-            scene = with_dispersive_lenses(eye_scene_dict(settings), wavelength_nm)
-            pair.append(render_settings(settings, scene).pixels.astype(float))
+            pair.append(render_eye(settings).pixels.astype(float))  # its lens in crown at that wavelength
         pairs.append(pair)
     sharpest = pairs[int(np.argmax([gradient_energy(a + b, 2.0) for a, b in pairs]))][0]
     white = float(np.mean(np.sort(sharpest, axis=None)[-max(1, sharpest.size // 20):]))

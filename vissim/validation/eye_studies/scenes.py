@@ -26,7 +26,7 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["ChartRaster", "chart_emitter", "with_chart", "with_dispersive_lenses", "pixel_directions",
+__all__ = ["ChartRaster", "chart_emitter", "with_chart", "pixel_directions",
            "ideal_image", "render_settings"]
 
 #: A chart: (world x mm, world y mm) arrays -> reflectance (0-1).
@@ -91,34 +91,17 @@ def with_chart(scene: dict, raster: ChartRaster) -> dict:
     return {**scene, "chart": chart_emitter(raster, white)}
 
 
-def with_dispersive_lenses(scene: dict, wavelength_nm: float) -> dict:
-    """``scene`` with every trial lens in crown-dispersive glass at ``wavelength_nm`` (the
-    ``vissim_refract`` BSDF's ``dispersion = "crown"``: its index at that wavelength on a mono variant)."""
-    out = dict(scene)
-    for key, value in scene.items():
-        if key.startswith("lens_"):
-            out[key] = {**value, "bsdf": {**value["bsdf"], "dispersion": "crown", "wavelength_nm": float(wavelength_nm)}}
-    return out
-
-
 def pixel_directions(eye, size_px: tuple[int, int], arcmin_per_px: float, field_deg, oversample: int = 1) -> np.ndarray:
     """World unit directions (rows·k, cols·k, 3) of the ``oversample``² sub-pixel centres of a render of the
     `SchematicEye` ``eye`` (module doc)."""
+    from vissim.optics.eyes.field_blur import node_field_deg
+    from vissim.optics.eyes.wavefront import field_direction
     from vissim.render.eye_render import eye_to_world
 
     rows, cols = size_px
     k = int(oversample)
-    u = (np.arange(cols * k) + 0.5) / (cols * k)
-    v = (np.arange(rows * k) + 0.5) / (rows * k)
-    a_deg = arcmin_per_px / 60.0
-    x = np.radians(field_deg[0] - (u[None, :] - 0.5) * cols * a_deg)  # OSA x: the observer's left
-    y = np.radians(field_deg[1] + (0.5 - v[:, None]) * rows * a_deg)
-    x, y = np.broadcast_arrays(x, y)
-    o = np.stack([np.tan(x), np.tan(y), np.ones_like(x)], axis=-1)
-    o /= np.linalg.norm(o, axis=-1, keepdims=True)
-    alpha = math.radians(eye.visual_axis_deg)  # the visual axis: `field_direction`'s turn about y
-    local = np.stack([o[..., 0] * math.cos(alpha) + o[..., 2] * math.sin(alpha), o[..., 1],
-                      -o[..., 0] * math.sin(alpha) + o[..., 2] * math.cos(alpha)], axis=-1)
+    r, q = np.indices((rows * k, cols * k))
+    local = field_direction(eye, node_field_deg(r, q, (rows * k, cols * k), arcmin_per_px / k, field_deg))
     rotation = np.asarray(eye_to_world(eye, field_deg))[:3, :3]
     return local @ rotation.T
 

@@ -6,19 +6,18 @@
 * **Render**: `vissim.render.eye_render` with ``field_deg = (centre, 0)`` (OSA's frame, as every
   ``--field-deg``): the eye turned so that the image's centre lies at field x = ``centre``, the image
   ``width_deg`` wide (field x from −0.5° to ``width_deg`` − 0.5°), geometric (no diffraction),
-  monochromatic at the model's reference wavelength by default.  At another wavelength the two
-  disagree by the eye's transverse chromatic aberration: `blur_eye` places each wavelength's PSF
-  about the reference wavelength's chief ray (TCA kept), while a monochromatic render's film maps the
-  retina to field angle through a table traced at the render's own wavelength (TCA gone): at 550 nm,
-  19° off axis, Navarro, 4 mm, 0.85 arcmin, which costs 8 dB.
+  monochromatic at the model's reference wavelength by default (at another wavelength both place
+  the image about the reference wavelength's chief ray, so both show the transverse chromatic
+  aberration).
 * **Simulations**, on the chart as the sensor's pixels see it (`scenes.ideal_image`, computed
   ``MARGIN_PX`` wider on every side and cropped after the blur, so that no padding rule enters):
   `vissim.optics.eyes.field_blur.blur_eye` in ``mode="geometric"`` with the image's field centre, its
   PSF varying over the field (2° nodes); and the same with one PSF, the on-axis one, everywhere (``field_deg = (0, 0)``, one node).
 * **Score**: PSNR (data range 1, the chart's reflectance) of each simulation against the render
   (divided by its white radiance) over two column bands: on axis (visual angle 0-2° from the eye's
-  axis) and off axis (18-20°); and the render's own noise floor there: the PSNR between two seeds
-  plus 3.01 dB (the difference of two renders holds twice one render's noise variance).
+  axis) and off axis (18-20°) (`vissim.imaging.metrics.compare_images`); and the render's own noise
+  floor there (`vissim.imaging.metrics.noise_floor`: two seeds), which a perfect simulation exceeds by
+  `vissim.validation.engine.summary.PERFECT_MARGIN_DB` (3.01 dB), as on every bench.
 """
 
 from __future__ import annotations
@@ -30,7 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MARGIN_PX", "WideChart", "checkerboard", "psnr_db", "wide_chart"]
+from vissim.imaging.metrics import compare_images, noise_floor
+from vissim.optics.eyes.field_blur import node_field_deg
+
+__all__ = ["MARGIN_PX", "WideChart", "checkerboard", "wide_chart"]
 
 #: Extra pixels of chart on every side of the simulated image, cropped after the blur.
 MARGIN_PX = 48
@@ -48,12 +50,6 @@ def checkerboard(distance_mm: float, square_arcmin: float, dark: float = 0.1, br
     return chart
 
 
-def psnr_db(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> float:
-    """10 log10(range² / mean squared difference), dB."""
-    mse = float(np.mean((np.asarray(a, dtype=float) - np.asarray(b, dtype=float)) ** 2))
-    return math.inf if mse == 0.0 else 10.0 * math.log10(data_range**2 / mse)
-
-
 @dataclass(frozen=True)
 class WideChart:
     """PSNR, dB, per band (`BANDS_DEG`): field-dependent blur, on-axis PSF, render noise floor; timings."""
@@ -67,8 +63,8 @@ class WideChart:
 
 
 def _band_columns(width_px: int, arcmin_per_px: float, centre_deg: float, band) -> slice:
-    """The columns whose centres lie ``band`` = (from, to) degrees of OSA x (columns run towards −x)."""
-    angle = centre_deg - ((np.arange(width_px) + 0.5) - 0.5 * width_px) * arcmin_per_px / 60.0
+    """The columns whose centres lie ``band`` = (from, to) degrees of OSA x (`node_field_deg`'s map)."""
+    angle = node_field_deg(0.0, np.arange(width_px), (1, width_px), arcmin_per_px, (centre_deg, 0.0))[0]
     inside = np.nonzero((angle >= band[0]) & (angle <= band[1]))[0]
     return slice(int(inside[0]), int(inside[-1]) + 1)
 
@@ -137,7 +133,7 @@ def wide_chart(*, model: str = "navarro-1985", pupil_mm: float = 4.0, wavelength
     for band, limits in BANDS_DEG.items():
         columns = _band_columns(cols, arcmin_per_px, centre_deg, limits)
         for name, image in simulated.items():
-            scores[name][band] = psnr_db(renders[0][:, columns], image[:, columns])
-        floor[band] = psnr_db(renders[0][:, columns], renders[1][:, columns]) + 10.0 * math.log10(2.0)
+            scores[name][band] = compare_images(renders[0][:, columns], image[:, columns], data_range=1.0).psnr_db
+        floor[band] = noise_floor(renders[0][:, columns], renders[1][:, columns], data_range=1.0).psnr_db
     return WideChart(scores["field dependent"], scores["single psf"], floor, render_seconds, simulation_seconds,
                      time.perf_counter() - start)
