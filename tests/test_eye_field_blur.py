@@ -96,7 +96,7 @@ def test_bad_eye_blur_inputs_are_refused():
         vissim.blur_eye(image, wavelength_nm=550.0, field_step_deg=0.0, **common)
     with pytest.raises(VissimInputError, match="beyond"):
         vissim.blur_eye(image, wavelength_nm=550.0, field_deg=(95.0, 0.0), **common)
-    with pytest.raises(VissimInputError, match="too small for this eye's blur: its PSF needs a .* px field"):
+    with pytest.raises(VissimInputError, match="too small for this blur: its PSF needs a .* px field"):
         vissim.blur_eye(np.zeros((6, 6)), wavelength_nm=555.0, rx="-3", **{**common, "arcmin_per_px": 0.25,
                                                                             "pupil_mm": 6.0})
     with pytest.raises(VissimInputError, match="unknown eye model"):

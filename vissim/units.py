@@ -6,11 +6,12 @@ import math
 
 import numpy as np
 
-__all__ = ["xy_matrix_to_image_rowcol", "ARCMIN_PER_RAD", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
+__all__ = ["xy_matrix_to_image_rowcol", "ARCMIN_PER_RAD", "ARCMIN_PER_DEG", "deg_to_mrad", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
            "cyc_per_rad_to_cyc_per_deg", "mrad_to_arcmin", "MM_PER_M", "mm_to_m", "m_to_mm", "diopters_to_mm",
            "diopters_to_per_mm", "REC709_LUMINANCE", "osa_xy_to_image_colrow", "image_colrow_to_osa_xy"]
 
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
+ARCMIN_PER_DEG = 60.0
 
 
 def arcmin_to_rad(arcmin):
@@ -24,6 +25,11 @@ def rad_to_arcmin(rad):
 def mrad_to_arcmin(mrad):
     """Wavefront slopes in µm/mm are milliradians; this gives arcmin."""
     return rad_to_arcmin(np.asarray(mrad, dtype=float) * 1e-3 if np.ndim(mrad) else float(mrad) * 1e-3)
+
+
+def deg_to_mrad(deg):
+    """Degrees of visual angle to milliradians (a wavefront slope in µm/mm)."""
+    return np.radians(np.asarray(deg, dtype=float)) * 1e3 if np.ndim(deg) else math.radians(float(deg)) * 1e3
 
 
 def nm_to_mm(nm: float) -> float:

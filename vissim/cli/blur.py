@@ -3,23 +3,21 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 import numpy as np
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import (add_aberration_args, check_outputs_apart, field_deg_from_text, image_sampling,
                                 parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_image, write_image
 from vissim.optics.array_backend import DEVICES, array_backend
-from vissim.optics.blur import PADDING_MODES, blur_image
+from vissim.optics.blur import PADDING_MODES, blur_image, image_kernel_psf
 from vissim.optics.blur_device import blur_image_on
 from vissim.optics.chromatic import gaussian_band
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
 from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
 
@@ -90,44 +88,22 @@ def add_eye_model_args(parser) -> None:
                      "(default 2)")
 
 
-def image_too_small(path: Path, shape: tuple[int, ...], psf_px: int, step: float) -> VissimInputError:
-    """The error for an image smaller than its blur: its size, the PSF field the blur needs, the side that holds it.
-
-    A blur's PSF field is cut to twice the image's longer side plus one (no pixel sees farther);
-    an image whose cut field loses more than 1 % of the energy is too small.
-    """
-    side = math.ceil((psf_px - 1) / 2)
-    return VissimInputError(
-        f"{path}: the image is {size_text(shape)}, too small for this blur: its PSF needs a "
-        f"{psf_px} px field at {step:g} arcmin/px, so the image needs at least {side} px on its longer side "
-        "(or a coarser --arcmin-per-px)")
-
-
 def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> tuple[list, dict]:
-    """One PSF per channel (computed once per distinct band), and the distinct ones by band.
-
-    A PSF's field is cut to twice the image's longer side plus one (no pixel sees farther); an
-    image too small for the field its blur needs is refused with `image_too_small`.
-    """
+    """One PSF per channel (computed once per distinct band, `image_kernel_psf`), and the distinct ones by band;
+    an image too small for its blur is refused naming the file."""
     psfs, cache = [], {}
     advance = counter(progress, "PSFs", len(set(bands)))
     for wavelengths, weights in bands:
         key = (wavelengths, weights)
         if key not in cache:
-            size = suggested_size_px(wavefront, step, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, lca_reference_nm=lca)
-            field_px = min(size, 2 * max(shape) + 1)
             label = f"at {', '.join(f'{w:g}' for w in wavelengths)} nm"
             stages = None if progress is None else (lambda stage, done, total, label=label:
                                                     progress(f"{stage} {label}", done, total))
             try:
-                cache[key] = compute_psf(
-                    wavefront, pupil_diameter_mm=args.pupil_mm, wavelength_nm=wavelengths, weights=weights,
-                    lca_reference_nm=lca, arcmin_per_px=step, size_px=field_px, mode=args.mode, progress=stages,
-                )
-            except FieldTooSmallError:
-                if field_px == size:
-                    raise
-                raise image_too_small(args.input, shape, size, step) from None
+                cache[key] = image_kernel_psf(wavefront, shape, arcmin_per_px=step, wavelength_nm=wavelengths,
+                                              weights=weights, lca_reference_nm=lca, mode=args.mode, progress=stages)
+            except FieldTooSmallError as error:
+                raise FieldTooSmallError(f"{args.input}: {error}") from None
             advance()
         psfs.append(cache[key])
     return psfs, cache

@@ -41,10 +41,10 @@ import scipy.fft
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe, size_text
-from vissim.errors import VissimInputError, VissimTypeError
-from vissim.optics.psf import PSF
+from vissim.errors import FieldTooSmallError, VissimInputError, VissimTypeError
+from vissim.optics.psf import PSF, compute_psf, suggested_size_px
 
-__all__ = ["blur_image", "BlurKernel", "PADDING_MODES", "border_mean", "psf_padding_width_px"]
+__all__ = ["blur_image", "image_kernel_psf", "BlurKernel", "PADDING_MODES", "border_mean", "psf_padding_width_px"]
 
 log = logging.getLogger(__name__)
 
@@ -352,3 +352,26 @@ def blur_image(
     log.debug("blurred a %s image with %d PSF(s), padding %s", array.shape, len(set(map(id, psfs))), padding)
     out = blurred[0] if array.ndim == 2 else np.stack(blurred, axis=-1)
     return out.astype(dtype, copy=False)
+
+
+def image_kernel_psf(front, shape: tuple[int, ...], *, arcmin_per_px: float, wavelength_nm, weights=None,
+                     lca_reference_nm=None, mode: str = "wave", progress=None) -> PSF:
+    """The blur kernel of ``front`` (a `Wavefront`, `OpdMap` or `SpectralWavefront`, over its pupil) for an
+    image of ``shape``: its field the one that holds it (`suggested_size_px`), cut to twice the image's
+    longer side plus one (no pixel sees farther). An image whose cut field would lose more than 1 % of the
+    energy is too small: `FieldTooSmallError` naming the image side that holds the blur."""
+    pupil = front.pupil_diameter_mm
+    size = suggested_size_px(front, arcmin_per_px, pupil_diameter_mm=pupil, wavelength_nm=wavelength_nm,
+                             weights=weights, lca_reference_nm=lca_reference_nm)
+    field_px = min(size, 2 * max(shape[:2]) + 1)
+    try:
+        return compute_psf(front, pupil_diameter_mm=pupil, wavelength_nm=wavelength_nm, weights=weights,
+                           lca_reference_nm=lca_reference_nm, arcmin_per_px=arcmin_per_px, size_px=field_px,
+                           mode=mode, progress=progress)
+    except FieldTooSmallError:
+        if field_px == size:
+            raise
+        raise FieldTooSmallError(
+            f"the image is {size_text(shape[:2])}, too small for this blur: its PSF needs a {size} px field at "
+            f"{arcmin_per_px:g} arcmin/px, so the image needs at least {math.ceil((size - 1) / 2)} px on its longer "
+            "side (or a coarser sampling)") from None

@@ -32,7 +32,7 @@ from vissim.checks import describe
 from vissim.checks import finite_number as _finite
 from vissim.errors import VissimInputError, VissimTypeError
 
-__all__ = ["SpheroCylinder", "Prescription", "RefractiveError", "LensPower", "as_prescription",
+__all__ = ["prescription_from", "SpheroCylinder", "Prescription", "RefractiveError", "LensPower", "as_prescription",
            "parse_spherocylinder"]
 
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)"
@@ -260,6 +260,11 @@ def as_prescription(value) -> Prescription:
         hint = "; read written notation with vissim.Prescription.parse(text)" if isinstance(value, str) else ""
         raise VissimTypeError(f"expected a Prescription (the correcting lens), got {describe(value)}{hint}")
     return value
+
+
+def prescription_from(value) -> Prescription:
+    """A `Prescription`, or its written notation (`Prescription.parse`), as the eye functions take ``rx``."""
+    return Prescription.parse(value) if isinstance(value, str) else as_prescription(value)
 
 
 def parse_spherocylinder(text: str) -> tuple[float, float, float]:

@@ -207,6 +207,24 @@ class Wavefront:
         return cls(parse_zernike_terms(text), pupil_diameter_mm)
 
     @classmethod
+    def tilt(cls, image_shift_mrad, pupil_diameter_mm: float) -> Wavefront:
+        """The tilt that moves the image by ``image_shift_mrad`` = (x, y) mrad of the visual field, OSA frame:
+        c(1, 1), c(1, -1) = shift R / 2 µm over a pupil of radius R mm (`image_shift_mrad`'s inverse;
+        docs/conventions.md, "Sign of the wavefront")."""
+        radius = 0.5 * _check_pupil(pupil_diameter_mm)
+        x, y = (float(v) for v in image_shift_mrad)
+        return cls({(1, 1): 0.5 * x * radius, (1, -1): 0.5 * y * radius}, pupil_diameter_mm)
+
+    @property
+    def image_shift_mrad(self) -> tuple[float, float]:
+        """Where a point is seen, minus where it is, by this front's tilt: (x, y) mrad of the visual field, OSA
+        frame: 2 c(1, 1) / R, 2 c(1, -1) / R (R the pupil radius, mm; docs/conventions.md, "Sign of the
+        wavefront"). The one place the tilt's image shift is written."""
+        radius = 0.5 * self.pupil_diameter_mm
+        return (2.0 * self.coefficients_um.get((1, 1), 0.0) / radius,
+                2.0 * self.coefficients_um.get((1, -1), 0.0) / radius)
+
+    @classmethod
     def zero(cls, pupil_diameter_mm: float) -> Wavefront:
         """A perfect (aberration-free) wavefront over a pupil of ``pupil_diameter_mm`` mm.
 

@@ -89,8 +89,7 @@ class TracedWavefront:
     @property
     def image_shift_mrad(self) -> tuple[float, float]:
         """Where the chart point is seen, minus where it is: (x, y) mrad in the OSA frame, 2c/R."""
-        radius = 0.5 * self.pupil_diameter_mm
-        return 2.0 * self.tilt_um[(1, 1)] / radius, 2.0 * self.tilt_um[(1, -1)] / radius
+        return Wavefront(self.tilt_um, self.pupil_diameter_mm).image_shift_mrad
 
     @property
     def rms_um(self) -> float:

@@ -16,7 +16,7 @@ the reduced eye. A second accommodation in the Eye would count it twice.
 from __future__ import annotations
 
 from vissim.optics.eyes.psf_wavefront import eye_wavefront
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.prescription import prescription_from
 from vissim.optics.setup import Eye
 
 __all__ = ["traced_depth_eye"]
@@ -26,7 +26,7 @@ def traced_depth_eye(model: str, rx, *, pupil_mm: float, wavelength_nm: float, a
                      field_deg=(0.0, 0.0)) -> Eye:
     """The `Eye` of the schematic eye ``model`` with prescription ``rx`` (a `Prescription` or its text), accommodated
     ``accommodation_diopters`` (within the model's range), at one field point ``field_deg`` (module doc)."""
-    prescription = Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
+    prescription = prescription_from(rx)
     traced = eye_wavefront(model, pupil_mm=pupil_mm, wavelength_nm=wavelength_nm, field_deg=field_deg,
                            accommodation_diopters=accommodation_diopters)
     return Eye(prescription, traced.pupil_diameter_mm, 0.0, extra_wavefront=traced)

@@ -29,25 +29,23 @@ steps 4, 2, 1 and 0.5°; the PSNR between each step and its half was, Navarro 19
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
-from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.optics.blur import pixel_array
+from vissim.errors import VissimInputError
+from vissim.optics.blur import image_kernel_psf, pixel_array
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.field_blur import PSFGrid, blur_field_dependent, psf_grid
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px
-from vissim.units import image_colrow_to_osa_xy
+from vissim.optics.psf import PSF
+from vissim.units import ARCMIN_PER_DEG, image_colrow_to_osa_xy
 
-__all__ = ["DEFAULT_FIELD_STEP_DEG", "ARCMIN_PER_DEG", "node_field_deg", "eye_psf_grid", "eye_psf_grids", "blur_eye"]
+__all__ = ["DEFAULT_FIELD_STEP_DEG", "node_field_deg", "eye_psf_grid", "eye_psf_grids", "blur_eye"]
 
 #: The default spacing of the PSF nodes, degrees of visual angle (measured: module doc).
 DEFAULT_FIELD_STEP_DEG = 2.0
-ARCMIN_PER_DEG = 60.0
 
 
 def node_field_deg(row_px: float, col_px: float, shape: tuple[int, int], arcmin_per_px: float,
@@ -60,21 +58,6 @@ def node_field_deg(row_px: float, col_px: float, shape: tuple[int, int], arcmin_
     dx, dy = image_colrow_to_osa_xy((np.asarray(col_px) - centre_col) * to_deg, (np.asarray(row_px) - centre_row) * to_deg)
     x, y = field_deg[0] + dx, field_deg[1] + dy
     return (float(x), float(y)) if np.ndim(x) == 0 and np.ndim(y) == 0 else (x, y)
-
-
-def _node_psf(front, step: float, band: tuple, weights, mode: str, max_size_px: int) -> PSF:
-    """The node's blur kernel, its field cut to ``max_size_px``; an image too small to hold it is refused."""
-    size = suggested_size_px(front, step, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=band,
-                             weights=weights)
-    try:
-        return compute_psf(front, pupil_diameter_mm=front.pupil_diameter_mm, wavelength_nm=band, weights=weights,
-                           arcmin_per_px=step, size_px=min(size, max_size_px), mode=mode)
-    except FieldTooSmallError:
-        if size <= max_size_px:
-            raise
-        raise FieldTooSmallError(f"the image is too small for this eye's blur: its PSF needs a {size} px field at "
-                                 f"{step:g} arcmin/px, so the image needs at least {math.ceil((size - 1) / 2)} px on its "
-                                 "longer side (or a coarser sampling)") from None
 
 
 def _band(wavelength_nm, weights) -> tuple[tuple[float, ...], tuple[float, ...] | None]:
@@ -110,7 +93,7 @@ def eye_psf_grid(shape: tuple[int, int], *, model: str, arcmin_per_px: float, pu
         front = eye_spectral_wavefront(model, pupil_mm=pupil_mm, wavelengths_nm=band, rx=rx,
                                        accommodation_diopters=accommodation_diopters,
                                        field_deg=node_field_deg(row_px, col_px, shape, step, centre))
-        return _node_psf(front, step, band, band_weights, mode, 2 * max(shape) + 1)
+        return image_kernel_psf(front, shape, arcmin_per_px=step, wavelength_nm=band, weights=band_weights, mode=mode)
 
     return psf_grid(shape, spacing_deg * ARCMIN_PER_DEG / step, psf_at)
 

@@ -38,14 +38,15 @@ from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import refraction_diopters
 from vissim.optics.eyes.refraction import eye_refraction
+from vissim.spectra import SPECTRUM_STEP_NM, named_spectrum
 from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm, trace_eye_wavefront
 
 __all__ = ["LCA_WAVELENGTHS_NM", "LCA_STEP_NM", "LCA_PUPIL_MM", "LCA_SAMPLES", "ATCHISON_SMITH_2005_EQ5",
            "atchison_smith_2005_diopters", "LcaRow", "LcaCurve", "lca_curve"]
 
-#: The curve's wavelengths: 400-700 nm in steps of `LCA_STEP_NM`.
-LCA_STEP_NM = 10.0
-LCA_WAVELENGTHS_NM = tuple(400.0 + LCA_STEP_NM * k for k in range(31))
+#: The curve's wavelengths: the sampled spectra's (`vissim.spectra`: 400-700 nm in steps of `LCA_STEP_NM`).
+LCA_STEP_NM = SPECTRUM_STEP_NM
+LCA_WAVELENGTHS_NM = named_spectrum("equal-energy")[0]
 #: The entrance pupil the traced curve is read over when none is given, mm: small, so that the
 #: minimum-RMS refraction is close to the paraxial one too.
 LCA_PUPIL_MM = 1.0

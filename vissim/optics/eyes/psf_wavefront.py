@@ -47,7 +47,6 @@ so a polychromatic PSF off axis shows the TCA.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
@@ -56,13 +55,16 @@ from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, trace_eye_wavefront
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.prescription import Prescription, prescription_from
 from vissim.optics.spectral_wavefront import SpectralWavefront
 from vissim.optics.wavefront import Wavefront
+from vissim.units import deg_to_mrad
 
 __all__ = ["eye_wavefront", "eye_spectral_wavefront", "traced_spectral_wavefront", "chromatic_offset_deg",
            "retinal_jacobian_mm_per_deg", "JACOBIAN_STEP_DEG"]
 
+#: The iris grid (samples across) of a trace made only for its chief ray and pupil.
+ANCHOR_SAMPLES = 9
 #: Field step (deg) of the central differences that give the retina's local mm per degree.
 JACOBIAN_STEP_DEG = 0.1
 
@@ -95,11 +97,10 @@ def _own_front(traced: EyeWavefront) -> Wavefront:
 def _checked_rx(rx) -> Prescription | None:
     if rx is None:
         return None
-    return Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
+    return prescription_from(rx)
 
 
-def _with_rx(front: Wavefront, rx) -> Wavefront:
-    rx = _checked_rx(rx)
+def _with_rx(front: Wavefront, rx: Prescription | None) -> Wavefront:
     if rx is None:
         return front
     return front + Wavefront.from_prescription(rx, front.pupil_diameter_mm)
@@ -132,13 +133,6 @@ def chromatic_offset_deg(traced: EyeWavefront, reference: EyeWavefront, jacobian
     offset_mm = np.subtract(traced.image_point_mm[:2], reference.image_point_mm[:2])
     x, y = np.linalg.solve(np.asarray(jacobian_mm_per_deg, dtype=float), offset_mm)
     return float(x), float(y)
-
-
-def _tilt_um(offset_deg: tuple[float, float], pupil_diameter_mm: float) -> Wavefront:
-    """The tilt that moves a PSF by ``offset_deg`` (OSA x, y of the visual field): c = shift_mrad R / 2 µm."""
-    radius_mm = 0.5 * pupil_diameter_mm
-    cx, cy = (1e3 * math.radians(v) * radius_mm / 2.0 for v in offset_deg)
-    return Wavefront({(1, 1): cx, (1, -1): cy}, pupil_diameter_mm)
 
 
 def eye_spectral_wavefront(model: str, *, pupil_mm: float, wavelengths_nm, rx=None, field_deg=(0.0, 0.0),
@@ -180,7 +174,10 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
         raise VissimInputError(f"wavelengths must be a list of nm, got {wavelengths_nm!r}") from None
     if not wavelengths:
         raise VissimInputError("a spectral wavefront needs at least one wavelength, got none")
-    anchor = trace_eye_wavefront(eye, reference, field_deg, pupil_mm=pupil_mm, iris_mm=iris_mm, samples=samples,
+    # the reference's chief ray and pupil only, unless its front is wanted too (they do not depend on the grid)
+    wanted = reference in wavelengths
+    anchor = trace_eye_wavefront(eye, reference, field_deg, pupil_mm=pupil_mm, iris_mm=iris_mm,
+                                 samples=samples if wanted else ANCHOR_SAMPLES, max_order=8 if wanted else 2,
                                  lenses=lenses)
     pupil = anchor.eye_entrance_pupil_mm
     traced = [anchor if w == reference else
@@ -193,7 +190,8 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     for t in traced:
         front = _own_front(t)
         if t is not anchor:
-            front = front + _tilt_um(chromatic_offset_deg(t, anchor, jacobian), front.pupil_diameter_mm)
+            offset_mrad = deg_to_mrad(chromatic_offset_deg(t, anchor, jacobian))
+            front = front + Wavefront.tilt(offset_mrad, front.pupil_diameter_mm)
         fronts.append(front if front.pupil_diameter_mm == common else front.rescaled(common))
     field = tuple(float(v) for v in field_deg)
     return SpectralWavefront(tuple(wavelengths), tuple(fronts), reference,

@@ -72,7 +72,7 @@ from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
 from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retinal_mm_per_deg
 from vissim.units import osa_xy_to_image_colrow
 from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.prescription import Prescription, prescription_from
 from vissim.optics.psf import compute_psf
 from vissim.optics.psf_field import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, TrialLensSetup
@@ -270,7 +270,7 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
     prescription = None
     eye = base
     if rx is not None:
-        prescription = Prescription.parse(rx) if isinstance(rx, str) else as_prescription(rx)
+        prescription = prescription_from(rx)
         vertex = SPECTACLE_VERTEX_DISTANCE_MM if vertex is None else vertex
         eye = ametropic_eye(base, prescription, vertex)
     setup = None

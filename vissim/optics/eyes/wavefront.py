@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, finite_number, positive_number
+from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, positive_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
