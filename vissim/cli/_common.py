@@ -79,6 +79,20 @@ def wavefront_from_args(args: argparse.Namespace) -> Wavefront:
     return front
 
 
+#: What ``--field-deg`` means, in every command that takes it.
+FIELD_DEG_HELP = ("field angle, degrees, x (examiner's right: the observer's left; nasal for the right eyes the "
+                  "models are) and y (up), from the eye's visual axis for a model that has one (liou-brennan-1997: "
+                  "0,0 is where it fixates, 5 deg nasal of its optical axis), else from its optical axis")
+
+
+def add_eye_model_arg(parser, help_text: str, **extra) -> None:
+    """``--eye-model MODEL``: one of `EYE_MODELS`, refused by the parser otherwise."""
+    from vissim.optics.eyes.models import EYE_MODELS
+
+    parser.add_argument("--eye-model", choices=tuple(EYE_MODELS), metavar="MODEL",
+                        help=f"{help_text} (one of {', '.join(EYE_MODELS)})", **extra)
+
+
 def field_deg_from_text(text: str) -> tuple[float, float]:
     """``--field-deg X,Y``: a field angle's (x, y) in degrees."""
     values = parse_float_list(text, "--field-deg", "degrees", positive=False)

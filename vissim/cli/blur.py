@@ -8,15 +8,14 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.cli._common import (add_aberration_args, check_outputs_apart, field_deg_from_text, image_sampling,
-                                parse_float_list, wavefront_from_args)
+from vissim.cli._common import (FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg, check_outputs_apart,
+                                field_deg_from_text, image_sampling, parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_image, write_image
 from vissim.optics.array_backend import DEVICES, array_backend
 from vissim.optics.blur import PADDING_MODES, blur_image, image_kernel_psf
 from vissim.optics.blur_device import blur_image_on
 from vissim.optics.chromatic import gaussian_band
-from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.prescription import Prescription
 from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
@@ -76,11 +75,10 @@ def add_eye_model_args(parser) -> None:
         "over the image: it is traced at a grid of field points --field-step-deg apart and interpolated between "
         "them; an image within one step is blurred by the one PSF at its centre. The image stays in visual angle "
         "(the eye's distortion is not applied).")
-    eye.add_argument("--eye-model", metavar="MODEL", help="a schematic eye: " + ", ".join(EYE_MODELS))
+    add_eye_model_arg(eye, "a schematic eye")
     eye.add_argument("--field-deg", metavar="X,Y",
-                     help="with --eye-model: the field angle of the image centre from the optical axis, degrees, x "
-                     "(examiner's right, so the observer's left) and y (up), as vissim psf (default 0,0: the eye "
-                     "looks at the image centre)")
+                     help=f"with --eye-model: the image centre's {FIELD_DEG_HELP} (default 0,0: the eye looks at "
+                     "the image centre)")
     eye.add_argument("--accommodation-diopters", type=float, metavar="A",
                      help="with --eye-model: accommodation exerted, dioptres, within the model's range (default 0)")
     eye.add_argument("--field-step-deg", type=float, metavar="S",
@@ -180,8 +178,6 @@ def _check_eye_options(args: argparse.Namespace) -> None:
             raise VissimInputError(f"{', '.join(given)} need(s) --eye-model (the reduced eye has one PSF over the "
                                    "field and no accommodation)")
         return
-    if args.eye_model not in EYE_MODELS:
-        raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
     if args.lca:
         raise VissimInputError("--lca does not go with --eye-model: the traced eye has its own dispersion")
     if args.zernike is not None:

@@ -14,13 +14,13 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import add_rx_arg, check_outputs_apart, field_deg_from_text, image_sampling
+from vissim.cli._common import (FIELD_DEG_HELP, add_eye_model_arg, add_rx_arg, check_outputs_apart,
+                                field_deg_from_text, image_sampling)
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_data_map, read_image, write_image
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
 from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
-from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.prescription import Prescription
 from vissim.optics.setup import Eye
 from vissim.progress import terminal_progress
@@ -53,16 +53,14 @@ def add_parser(subparsers) -> None:
     focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres")
     eye = parser.add_argument_group(
         "schematic eye (in place of the reduced eye)",
-        "With --eye-model the eye is a traced schematic eye at one field point (--field-deg, default the "
-        "optical axis): its spherical aberration and its own defocus at --wavelength-nm and at the accommodation "
+        "With --eye-model the eye is a traced schematic eye at one field point (--field-deg, default 0,0): its spherical aberration and its own defocus at --wavelength-nm and at the accommodation "
         "exerted (--accommodation-diopters, physical: its lens changes shape), with --rx's lens added over the "
         "same --pupil-mm entrance pupil; each depth adds its defocus as for the reduced eye, and the eye is in "
         "focus where its whole wavefront says. The focus-target options (--age, --amplitude-diopters, "
         "--focus-distance-m) are the reduced eye's and are refused with it.")
-    eye.add_argument("--eye-model", metavar="MODEL", help="a schematic eye: " + ", ".join(EYE_MODELS))
+    add_eye_model_arg(eye, "a schematic eye")
     eye.add_argument("--field-deg", metavar="X,Y",
-                     help="with --eye-model: the field angle the eye is traced at, degrees from the optical axis, "
-                     "x (examiner's right) and y (up), as vissim psf (default 0,0)")
+                     help=f"with --eye-model: the {FIELD_DEG_HELP}, where the eye is traced (default 0,0)")
     parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: the one the image file records)")
     parser.add_argument("--wavelength-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
                         help=f"wavelength, nm (default {DEFAULT_WAVELENGTH_NM:g})")
@@ -125,8 +123,6 @@ def _schematic_eye(args: argparse.Namespace, rx: Prescription) -> tuple[Eye, flo
     """The traced eye's `Eye` (`vissim.optics.eyes.depth_eye.traced_depth_eye`), its accommodation and its record."""
     from vissim.optics.eyes.depth_eye import traced_depth_eye  # the trace's imports, when used
 
-    if args.eye_model not in EYE_MODELS:
-        raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
     targets = [name for name, value in (("--age", args.age), ("--amplitude-diopters", args.amplitude_diopters),
                                         ("--focus-distance-m", args.focus_distance_m)) if value is not None]
     if targets:

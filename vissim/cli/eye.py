@@ -7,7 +7,8 @@ import json
 from typing import TYPE_CHECKING
 
 from vissim import __version__
-from vissim.cli._common import RX_HELP, add_trial_lens_args, field_deg_from_text, parse_float_list, trial_lens_powers
+from vissim.cli._common import (FIELD_DEG_HELP, RX_HELP, add_trial_lens_args, field_deg_from_text, parse_float_list,
+                                trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
@@ -49,10 +50,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              "photopic: weighted by the CIE 1924 V(λ)); the Zernikes, refraction and pupils stay at "
                              "--wavelength-nm (default the model's reference)")
     parser.add_argument("--field-deg", default="0,0", metavar="X,Y",
-                        help="field angle, degrees, x (examiner's right; nasal for the right eye the models "
-                             "are) and y (up), from the visual axis for a model that has one (liou-brennan-1997: "
-                             "0,0 is where the eye fixates, 5 deg nasal of its optical axis), else from the optical "
-                             "axis (default 0,0)")
+                        help=f"the {FIELD_DEG_HELP} (default 0,0)")
     parser.add_argument("--rx", metavar="PRESCRIPTION",
                         help=f"{RX_HELP}: trace the eye that has it (axial length for its sphere, a toric cornea "
                              "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea")

@@ -9,9 +9,9 @@ import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
-from vissim.cli._common import add_aberration_args, field_deg_from_text, parse_float_list, wavefront_from_args
+from vissim.cli._common import (FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg, field_deg_from_text,
+                                parse_float_list, wavefront_from_args)
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 from vissim.imageio import to_preview_png, write_image
@@ -43,8 +43,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
     parser.add_argument("--lca-reference-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
                         help=f"in-focus wavelength for --lca (default {DEFAULT_WAVELENGTH_NM:g})")
-    parser.add_argument("--eye-model", metavar="MODEL",
-                        help="a schematic eye (" + ", ".join(EYE_MODELS) + ") in place of the reduced eye: its traced "
+    add_eye_model_arg(parser, "a schematic eye in place of the reduced eye: its traced "
                         "wavefront over the --pupil-mm entrance pupil, at --field-deg and --accommodation-diopters, "
                         "traced at each wavelength (its spherical aberration and its own dispersion: defocus, and off "
                         "axis each wavelength's image point seen from the model's reference wavelength's; no --lca), "
@@ -53,8 +52,8 @@ def add_parser(subparsers) -> None:
                         "reduced eye (vissim.optics.eyes.psf_wavefront; `vissim eye --rx` traces the ametropic eye "
                         "instead)")
     parser.add_argument("--field-deg", metavar="X,Y",
-                        help="with --eye-model: field angle from the optical axis, degrees, x (examiner's right) and "
-                        "y (up); the PSF is centred on the chief ray's image point (default 0,0)")
+                        help=f"with --eye-model: the {FIELD_DEG_HELP}; the PSF is centred on the chief ray's image "
+                        "point at the model's reference wavelength (default 0,0)")
     parser.add_argument("--accommodation-diopters", type=float, metavar="A",
                         help="with --eye-model: accommodation exerted, dioptres, within the model's range "
                         "(default 0, relaxed)")
@@ -116,8 +115,6 @@ def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront 
     wavelengths one traced front each (`eye_spectral_wavefront`)."""
     from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront  # paid when it runs
 
-    if args.eye_model not in EYE_MODELS:
-        raise VissimInputError(f"--eye-model {args.eye_model!r} is not a known eye model; known: {', '.join(EYE_MODELS)}")
     if args.lca:
         raise VissimInputError("--eye-model takes no --lca: the traced eye has its own dispersion")
     if len(set(wavelengths)) != len(wavelengths):

@@ -14,8 +14,8 @@ from pathlib import Path
 
 from vissim.atomic import check_outputs_apart
 from vissim.checks import size_text
-from vissim.cli._common import (RX_HELP, add_trial_lens_args, field_deg_from_text, refuse_existing, size_from_text,
-                                trial_lens_powers)
+from vissim.cli._common import (FIELD_DEG_HELP, RX_HELP, add_eye_model_arg, add_trial_lens_args, field_deg_from_text,
+                                refuse_existing, size_from_text, trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.render.eye_render import EyeRender
 
@@ -26,8 +26,7 @@ __all__ = ["add_eye_parser", "run_eye"]
 
 def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     """Add the ``eye`` sub-command to ``subparsers`` (those of ``vissim render``) and return it."""
-    from vissim.optics.eyes.models import EYE_MODELS
-
+    
     parser = subparsers.add_parser(
         "eye",
         help="a letter chart seen through a schematic eye, ray traced to its retina",
@@ -41,8 +40,7 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument("--scene", metavar="TOML",
                         help="eye scene file (see scenes/eye.toml); the options below override its values")
-    parser.add_argument("--eye-model", choices=tuple(EYE_MODELS), metavar="MODEL",
-                        help="the schematic eye: " + ", ".join(EYE_MODELS) + f" (default {_DEFAULT['model']})")
+    add_eye_model_arg(parser, f"the schematic eye, default {_DEFAULT['model']}")
     parser.add_argument("--accommodation-diopters", type=float, metavar="A",
                         help="the eye's accommodation, dioptres, within the model's range "
                              f"(default {_DEFAULT['accommodation_diopters']:g})")
@@ -51,10 +49,8 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
                        help=f"entrance-pupil diameter, mm (default {_DEFAULT['pupil_mm']:g})")
     pupil.add_argument("--iris-mm", type=float, metavar="D", help="or the iris diameter, mm")
     parser.add_argument("--field-deg", metavar="X,Y",
-                        help="where the chart lies in the visual field: the eye turns so that the chart's centre "
-                             "is at this field angle from its optical axis, degrees, x (examiner's right: the "
-                             "observer's left) and y (up), as vissim eye and psf count it; the image stays "
-                             "centred on the chart (default {:g},{:g})".format(*_DEFAULT["field_deg"]))
+                        help=f"where the chart lies: the eye turns so that the chart's centre is at this {FIELD_DEG_HELP}; "
+                             "the image stays centred on the chart (default {:g},{:g})".format(*_DEFAULT["field_deg"]))
     colour = parser.add_mutually_exclusive_group()
     colour.add_argument("--wavelength-nm", type=float, metavar="NM",
                         help="monochromatic light of this wavelength (default: the model's reference wavelength)")

@@ -22,7 +22,7 @@ class _RunCaptures:
     def __init__(self, campaign):
         self.settings = campaign.settings
         self.captures: dict[str, Capture] = load_manifest(campaign.manifest) if campaign.manifest else {}
-        self._opened: dict[str, object] = {}  # capture id -> its RawImage, or why it cannot be used
+        self._opened: dict[str, object] = {}  # capture id -> its RawImage until tiled (then None), or why not usable
         self._tiles: dict[str, tuple[np.ndarray, dict]] = {}
 
     def _open(self, capture_id: str):
@@ -41,6 +41,7 @@ class _RunCaptures:
             raw = self._open(capture.id)
             tile = capture_tile(capture, self.settings.arcmin_per_px, self.settings.tile_px, raw=raw)
             self._tiles[capture.id] = tile, capture_provenance(capture, raw)
+            self._opened[capture.id] = None  # usable; its full-sensor decode is not kept for the rest of the run
         tile, provenance = self._tiles[capture.id]
         return tile.copy(), copy.deepcopy(provenance)
 
