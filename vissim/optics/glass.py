@@ -68,7 +68,11 @@ class CauchyGlass:
             raise VissimInputError(f"wavelength must be within 200-2500 nm for a glass index, got {wavelength:g} nm")
         if wavelength == D_LINE_NM:
             return self.n_d
-        return self.n_d + self.b_nm2 * (wavelength**-2 - D_LINE_NM**-2)
+        return self.index_unchecked(wavelength)
+
+    def index_unchecked(self, wavelength_nm):
+        """`index` without its checks, for arrays of any kind (NumPy, Dr.Jit): the one Cauchy formula."""
+        return self.n_d + self.b_nm2 * (wavelength_nm**-2 - D_LINE_NM**-2)
 
 
 #: The bench's glass: spectacle crown at the bench's fixed index.

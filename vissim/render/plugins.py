@@ -106,9 +106,8 @@ def _make_class(mi, dr):
                     raise VissimInputError("dispersion needs an unpolarised variant; got " + mi.variant())
 
         def _hero_eta(self, si):
-            """Relative index at the hero wavelength (Cauchy, as vissim.optics.glass writes it)."""
-            inv_d2 = D_LINE_NM**-2
-            return (self.glass.n_d + self.glass.b_nm2 * (dr.square(dr.rcp(si.wavelengths[0])) - inv_d2)) / self.ext_ior
+            """Relative index at the hero wavelength (`vissim.optics.glass.CauchyGlass.index_unchecked`)."""
+            return self.glass.index_unchecked(si.wavelengths[0]) / self.ext_ior
 
         def _hero_only(self, si, weight, active):
             """The spectrum of ``weight`` on the hero wavelength alone, times the count at the first interface."""
