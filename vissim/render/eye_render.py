@@ -88,16 +88,14 @@ class EyeRender:
 
 
 def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:
-    """The lens mesh's diameter: the bench's rule (`DslrBench.clear_aperture`: the beam at the holder's
-    far side x 1.25 + 2 mm) for the widest direction the image looks along, field offset included."""
-    from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER
+    """The lens mesh's diameter: the bench's rule (`lens_clear_aperture_mm`) for the widest direction the image
+    looks along, field offset included, and a beam 1.2 x ``pupil_mm`` (an iris's entrance pupil is <= ~1.13 x it)."""
+    from vissim.bench.dslr.bench import DslrBench, lens_clear_aperture_mm
 
     rows, cols = settings.size_px
     half_deg = [abs(f) + 0.5 * n * settings.arcmin_per_px / 60.0 for f, n in zip(settings.field_deg, (cols, rows))]
-    reach = math.radians(math.hypot(*half_deg))
-    depth = settings.vertex_mm + MAX_LENSES_IN_HOLDER * (4.0 + 2.0)
-    beam = 1.2 * pupil_mm + 2.0 * depth * math.tan(reach)  # an iris's entrance pupil is at most ~1.13 x it
-    return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+    return lens_clear_aperture_mm(1.2 * pupil_mm, math.radians(math.hypot(*half_deg)), settings.vertex_mm,
+                                  DslrBench.lens_gap_mm)
 
 
 def eye_to_world(eye, field_deg) -> list[list[float]]:

@@ -58,7 +58,7 @@ from vissim.optics.setup import ViewingSetup
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import REC709_LUMINANCE, arcmin_to_rad, mm_to_m
 
-__all__ = ["SAMPLERS", "RENDER_KINDS", "SPECTRAL_MODE", "DslrBench", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
+__all__ = ["SAMPLERS", "RENDER_KINDS", "SPECTRAL_MODE", "DslrBench", "lens_clear_aperture_mm", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
 
 log = logging.getLogger(__name__)
 
@@ -200,9 +200,8 @@ class DslrBench:
         """
         if self.clear_aperture_mm is not None:
             return self.clear_aperture_mm
-        depth = self.vertex_distance_mm + MAX_LENSES_IN_HOLDER * (4.0 + self.lens_gap_mm)
-        beam = self.entrance_pupil_diameter_mm + 2.0 * depth * math.tan(self.field_half_diagonal_rad)
-        return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+        return lens_clear_aperture_mm(self.entrance_pupil_diameter_mm, self.field_half_diagonal_rad,
+                                      self.vertex_distance_mm, self.lens_gap_mm)
 
     def _make_physical(self, lens: TrialLens) -> TrialLens:
         if not lens.is_thin:
@@ -286,6 +285,16 @@ def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm
     if (pixels.shape[0] - out.shape[0]) % 2 or (pixels.shape[1] - out.shape[1]) % 2:
         log.debug("chart raster of odd size: its centre moved by half a texel (%.3g mm)", 0.5 * mm_per_px)
     return np.ascontiguousarray(out, dtype=np.float32), out.shape[0] * mm_per_px, out.shape[1] * mm_per_px
+
+
+def lens_clear_aperture_mm(beam_diameter_mm: float, half_angle_rad: float, vertex_distance_mm: float,
+                           lens_gap_mm: float) -> float:
+    """The trial lenses' clear aperture, mm: the beam at the holder's far side (a ``beam_diameter_mm`` pupil's
+    beam widened to ``half_angle_rad`` over the vertex distance + 3 lenses of <= 4 mm and their gaps) x 1.25
+    + 2 mm, rounded up to 0.5 mm. The one rule, for the DSLR and the eye alike."""
+    depth = vertex_distance_mm + MAX_LENSES_IN_HOLDER * (4.0 + lens_gap_mm)
+    beam = beam_diameter_mm + 2.0 * depth * math.tan(half_angle_rad)
+    return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
 
 
 #: Render kinds of the bench: one channel, three, or spectral (luminance of a spectral render).
