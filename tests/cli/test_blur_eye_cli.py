@@ -68,6 +68,7 @@ def test_an_rgb_point_through_a_navarro_eye_spreads_most_in_the_blue(capsys, tmp
     assert read_image(target).provenance["inputs"]["eye_model"]["channel_wavelengths_nm"] == [[610.0], [550.0], [465.0]]
 
 
+@pytest.mark.slow  # 5 s: 3 bands x 7 wavelengths traced
 def test_channel_bands_with_an_eye_model_equal_blur_eye_over_the_same_bands(capsys, tmp_path):
     """--channel-fwhm-nm with --eye-model: each channel a Gaussian band (`gaussian_band`), traced at each
     wavelength, as `vissim.blur_eye` with the same bands and weights (plumbing)."""
