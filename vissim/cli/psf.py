@@ -111,9 +111,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront | SpectralWavefront:
-    """The schematic eye's traced wavefront with --rx (and --zernike) added (`eye_wavefront`); at several
-    wavelengths one traced front each (`eye_spectral_wavefront`)."""
-    from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront  # paid when it runs
+    """The schematic eye's traced wavefront at each wavelength with --rx (and --zernike) added
+    (`eye_spectral_wavefront`: one wavelength's front is `eye_wavefront`'s, with its map to visual angle)."""
+    from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront  # paid when it runs
 
     if args.lca:
         raise VissimInputError("--eye-model takes no --lca: the traced eye has its own dispersion")
@@ -122,12 +122,8 @@ def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront 
     rx = Prescription.parse(args.rx) if args.rx is not None else None
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
     accommodation = args.accommodation_diopters if args.accommodation_diopters is not None else 0.0
-    if len(wavelengths) == 1:
-        front = eye_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelength_nm=wavelengths[0], rx=rx,
-                              field_deg=field, accommodation_diopters=accommodation)
-    else:
-        front = eye_spectral_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelengths_nm=wavelengths, rx=rx,
-                                       field_deg=field, accommodation_diopters=accommodation)
+    front = eye_spectral_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelengths_nm=wavelengths, rx=rx,
+                                   field_deg=field, accommodation_diopters=accommodation)
     if args.zernike is not None:
         measured = args.zernike_pupil_mm if args.zernike_pupil_mm is not None else args.pupil_mm
         extra = Wavefront(parse_zernike_terms(args.zernike), measured)
@@ -137,6 +133,8 @@ def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront 
 
 def _eye_record(front: Wavefront | SpectralWavefront) -> dict:
     """The eye's Zernikes for the provenance: ``"n,m"`` -> µm, or per wavelength (nm) for several."""
+    if isinstance(front, SpectralWavefront) and len(front.fronts) == 1:
+        return _eye_record(front.fronts[0])
     if isinstance(front, SpectralWavefront):
         return {f"{w:g}": _eye_record(f) for w, f in zip(front.wavelengths_nm, front.fronts)}
     return {f"{n},{m}": c for (n, m), c in front.coefficients_um.items()}

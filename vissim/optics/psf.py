@@ -57,7 +57,7 @@ from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_
 from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
 from vissim.optics.resample import SUBPIXELS_PER_PX
 from vissim.optics.opd_map import OpdMap
-from vissim.optics.spectral_wavefront import SpectralWavefront, wavelengths_for
+from vissim.optics.spectral_wavefront import SpectralWavefront, field_map_stretch, field_mapped, wavelengths_for
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import nm_to_mm, rad_to_arcmin
@@ -384,6 +384,8 @@ def compute_psf(
     if isinstance(size_px, str) and size_px == "auto":
         size_px = suggested_size_px(wavefront, step, pupil_diameter_mm=diameter, wavelength_nm=wavelength_nm,
                                     weights=weights, lca_reference_nm=lca_reference_nm)
+        stretch = field_map_stretch(getattr(wavefront, "field_map", None))
+        size_px = min(MAX_PSF_SIZE_PX, size_px if stretch <= 1.0 else 2 * math.ceil(stretch * size_px / 2) + 1)
     size_px = _checked_size_px(size_px)
     _check_options(mode, pixel, dtype, method, normalise)
     wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))
@@ -412,6 +414,7 @@ def compute_psf(
             raise too_small(outside)
     accumulated, samplings = _accumulated_psf(fronts, wavelengths, weights_t, blurs, diameter, step, size_px,
                                               mode=mode, method=method, dtype=dtype, pixel=pixel, progress=progress)
+    accumulated = field_mapped(accumulated, getattr(wavefront, "field_map", None))
     energy = float(accumulated.sum())
     if leaves_too_much_outside(energy):
         if kernel:

@@ -11,6 +11,11 @@ fronts carrying their own.
 Every front is in one image frame: its tilt places its wavelength's PSF relative to the origin
 the PSF is centred on (for a traced eye, the chief ray's image point at
 ``reference_wavelength_nm``), so a polychromatic PSF shows the transverse chromatic aberration.
+
+``field_map`` (a 2 x 2 matrix over OSA's x, y; None: the identity) takes the angles the fronts' slopes
+give to the visual angles they are seen at: off axis a traced eye's pupil coordinates lie in a plane
+oblique to the beam (`vissim.optics.eyes.wavefront.field_map`). `vissim.optics.psf.compute_psf`
+draws every PSF of the front through it (`field_mapped`).
 """
 
 from __future__ import annotations
@@ -18,15 +23,20 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from vissim.checks import instance_of
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.wavefront import Wavefront
 
-__all__ = ["SpectralWavefront", "WAVELENGTH_MATCH_NM", "wavelengths_for"]
+__all__ = ["SpectralWavefront", "WAVELENGTH_MATCH_NM", "wavelengths_for", "field_mapped", "field_map_stretch",
+           "FIELD_MAP_IDENTITY_TOL"]
 
 #: Two wavelengths closer than this (nm) are the same wavelength when a front is looked up.
 WAVELENGTH_MATCH_NM = 1e-6
+#: A field map within this of the identity (largest element) is the identity: no PSF is resampled.
+FIELD_MAP_IDENTITY_TOL = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,7 +45,7 @@ class SpectralWavefront:
 
     ``reference_wavelength_nm``: the wavelength whose image point is the frame's origin (None when the
     fronts were not placed in one frame by such a point); ``description``: what the fronts are (for
-    the record).
+    the record); ``field_map``: slopes' angles -> visual angles (module doc).
 
     Examples
     --------
@@ -49,6 +59,7 @@ class SpectralWavefront:
     fronts: tuple[Wavefront, ...]
     reference_wavelength_nm: float | None = None
     description: str = ""
+    field_map: tuple | None = None
 
     def __post_init__(self) -> None:
         wavelengths = tuple(checked_wavelength_nm(w) for w in self.wavelengths_nm)
@@ -65,6 +76,7 @@ class SpectralWavefront:
             raise VissimInputError(f"a spectral wavefront's fronts must share one pupil, got {sorted(pupils)} mm")
         object.__setattr__(self, "wavelengths_nm", wavelengths)
         object.__setattr__(self, "fronts", fronts)
+        object.__setattr__(self, "field_map", _checked_map(self.field_map))
 
     @property
     def pupil_diameter_mm(self) -> float:
@@ -81,13 +93,14 @@ class SpectralWavefront:
     def map(self, change) -> SpectralWavefront:
         """The same wavelengths with ``change(front)`` in place of each front (e.g. a prescription added)."""
         return SpectralWavefront(self.wavelengths_nm, tuple(change(f) for f in self.fronts),
-                                 self.reference_wavelength_nm, self.description)
+                                 self.reference_wavelength_nm, self.description, self.field_map)
 
     def as_json(self) -> dict:
         return {
             "pupil_diameter_mm": self.pupil_diameter_mm,
             "reference_wavelength_nm": self.reference_wavelength_nm,
             "description": self.description,
+            "field_map": None if self.field_map is None else [list(row) for row in self.field_map],
             "per_wavelength": [{"wavelength_nm": w, "zernike_um": front.as_json()["zernike_um"]}
                                for w, front in zip(self.wavelengths_nm, self.fronts)],
         }
@@ -104,3 +117,44 @@ def wavelengths_for(wavefront, wavelength_nm: float | Sequence[float] | None, de
     if wavelength_nm is not None:
         return wavelength_nm
     return wavefront.wavelengths_nm if isinstance(wavefront, SpectralWavefront) else default_nm
+
+
+def _checked_map(matrix) -> tuple | None:
+    """A field map as a tuple of two rows, or None for none or the identity; refused unless 2 x 2, finite and
+    orientation-keeping (positive determinant)."""
+    if matrix is None:
+        return None
+    try:
+        m = np.asarray(matrix, dtype=float)
+    except (TypeError, ValueError):
+        m = np.full(1, np.nan)
+    if m.shape != (2, 2) or not np.all(np.isfinite(m)) or np.linalg.det(m) <= 0.0:
+        raise VissimInputError(f"a field map must be a finite 2 x 2 matrix with a positive determinant, got {matrix!r}")
+    if np.max(np.abs(m - np.eye(2))) <= FIELD_MAP_IDENTITY_TOL:
+        return None
+    return tuple(tuple(float(v) for v in row) for row in m)
+
+
+def field_map_stretch(field_map) -> float:
+    """How much ``field_map`` widens a PSF at most (its largest singular value; 1 for None)."""
+    return 1.0 if field_map is None else float(np.linalg.norm(np.asarray(field_map, dtype=float), 2))
+
+
+def field_mapped(array: np.ndarray, field_map) -> np.ndarray:
+    """A PSF array ``[row, col]`` (rows down: −y; columns to the observer's right: −x; origin at ``[N//2, N//2]``;
+    values per pixel) as seen through ``field_map`` (module doc): value(θ) = value(map⁻¹ θ) / det(map), by
+    cubic interpolation (negative ringing clipped); ``field_map`` None returns ``array``. The energy the map
+    moves beyond the field is lost (the caller's field check sees it)."""
+    if field_map is None:
+        return array
+    from scipy.ndimage import map_coordinates  # only for a mapped front
+
+    inverse = np.linalg.inv(np.asarray(field_map, dtype=float))
+    # (x, y) = -(col, row) offsets: the signs cancel; in (row, col) the inverse's rows and columns swap.
+    in_rows = np.array([[inverse[1, 1], inverse[1, 0]], [inverse[0, 1], inverse[0, 0]]])
+    centre = np.array([array.shape[0] // 2, array.shape[1] // 2], dtype=float)
+    rows, cols = np.indices(array.shape, dtype=float)
+    offsets = np.stack([rows.ravel() - centre[0], cols.ravel() - centre[1]])
+    source = in_rows @ offsets + centre[:, None]
+    values = map_coordinates(np.asarray(array, dtype=np.float64), source, order=3, mode="constant", cval=0.0)
+    return np.maximum(values.reshape(array.shape), 0.0) / float(np.linalg.det(np.asarray(field_map, dtype=float)))

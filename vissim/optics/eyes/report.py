@@ -75,6 +75,7 @@ from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
 from vissim.optics.prescription import Prescription, prescription_from
 from vissim.optics.psf import compute_psf
 from vissim.optics.psf_field import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
+from vissim.optics.spectral_wavefront import SpectralWavefront, field_map_stretch
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, TrialLensSetup
 from vissim.optics.wavefront import Wavefront
 
@@ -121,6 +122,7 @@ def eye_mtf(wavefront: Wavefront, wavelength_nm, frequencies_cyc_per_deg, field_
     diameter = wavefront.pupil_diameter_mm
     if energy_outside_field(wavefront, diameter, wavelengths, weights, step_arcmin, size) > MAX_ENERGY_OUTSIDE:
         size = size_holding_px(wavefront, diameter, wavelengths, weights, step_arcmin, size)  # a cut PSF smooths its OTF
+    size = 2 * math.ceil(field_map_stretch(getattr(wavefront, "field_map", None)) * size / 2)  # a mapped front's widening
     psf = compute_psf(wavefront, wavelength_nm=wavelengths, weights=weights, arcmin_per_px=step_arcmin, size_px=size,
                       dtype=np.float64, normalise="total")
     m = psf_metrics.mtf(psf, remove_pixel=True)
@@ -306,7 +308,9 @@ def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg) -
     """`eye_mtf` at the traced front's wavelength (orders 2-8), or over ``spectrum`` (tilts kept: the TCA)."""
     if spectrum is None:
         higher = {k: v for k, v in front.zernike_um.items() if k[0] >= 2}
-        return eye_mtf(Wavefront(higher, front.entrance_pupil_mm), front.wavelength_nm, f_deg, front.field_deg)
+        own = SpectralWavefront((front.wavelength_nm,), (Wavefront(higher, front.entrance_pupil_mm),),
+                                field_map=front.field_map)
+        return eye_mtf(own, front.wavelength_nm, f_deg, front.field_deg)
     spectral = traced_spectral_wavefront(eye, spectrum.wavelengths_nm, front.field_deg,
                                          pupil_mm=front.eye_entrance_pupil_mm, lenses=setup,
                                          reference_wavelength_nm=front.wavelength_nm)

@@ -20,6 +20,13 @@ Steps (`trace_eye_wavefront`):
    `GRID_MARGIN` times the iris radius so that the disc is covered off axis too, where the
    iris's image grows and shifts (at 40° in ES1999, by up to 13 %). Off axis this disc, in the
    plane normal to the optical axis, is the on-axis pupil's size, not the iris's oblique image.
+5. **Slopes to visual angle** (`field_map`): the coefficients' pupil coordinates lie in that plane,
+   not in the plane normal to the oblique beam, so a slope of the front is not yet the visual angle it
+   sends a ray to. A beam turned by δ from the field point adds the OPD (o(f + δ) − o(f)) · (x, y) over
+   the plane (o: `field_direction`), so a slope g is seen at δ = J⁻¹ g, J = ∂(o_x, o_y)/∂(field)
+   (1/cos θ tangentially at θ off the axis the pupil plane is normal to; 1.064 at 20°). A PSF of the
+   front is in the slopes' angles; `field_map` (J⁻¹) takes it to visual angle
+   (`vissim.optics.spectral_wavefront.SpectralWavefront.field_map`, applied by `vissim.compute_psf`).
 
 Pupils: the entrance pupil (clinicians') or the iris (optical design's) may be given; the other
 follows from the real-ray pupil imaging on axis at the trace's wavelength
@@ -58,7 +65,7 @@ from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.zernike import fit_zernike_um
 
-__all__ = ["EyeWavefront", "trace_eye_wavefront", "trace_to_retina", "field_direction", "field_from_optical_axis_deg", "field_axis",
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
            "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
@@ -122,6 +129,24 @@ def field_from_optical_axis_deg(eye: SchematicEye, field_deg) -> tuple[float, fl
     (each the arctangent of its direction's x or y over z); the same angles for a model with no visual axis."""
     o = field_direction(eye, field_deg)
     return math.degrees(math.atan2(o[0], o[2])), math.degrees(math.atan2(o[1], o[2]))
+
+
+def field_map(eye: SchematicEye, field_deg) -> np.ndarray:
+    """The 2 x 2 matrix that takes a wavefront slope over the entrance-pupil plane (x, y; OSA) to the visual
+    angle (x, y) it is seen at, both in the same angular unit (module doc, step 5): the inverse of
+    ∂(o_x, o_y)/∂(field x, y), o = `field_direction`, differentiated analytically."""
+    fx, fy = (math.radians(float(v)) for v in field_deg)
+    field_direction(eye, field_deg)  # the same checks
+    t = np.array([math.tan(fx), math.tan(fy), 1.0])
+    norm = float(np.linalg.norm(t))
+    alpha = math.radians(eye.visual_axis_deg)
+    columns = []
+    for axis, angle in ((0, fx), (1, fy)):
+        dt = np.zeros(3)
+        dt[axis] = 1.0 / math.cos(angle) ** 2
+        du = dt / norm - t * float(t @ dt) / norm ** 3
+        columns.append([du[0] * math.cos(alpha) + du[2] * math.sin(alpha), du[1]])
+    return np.linalg.inv(np.array(columns).T)
 
 
 def _beam_direction(eye: SchematicEye, field_deg) -> np.ndarray:
@@ -229,7 +254,8 @@ class EyeWavefront:
     disc's centre (on the axis for a centred iris on axis; −0.097 mm in x at 40° in ES1999).
     ``lenses``: the `TrialLensSetup` in front (None: none); with lenses ``entrance_pupil_mm`` and
     ``entrance_pupil_position_mm`` are the whole system's and ``eye_entrance_pupil_mm`` the eye's own.
-    ``field_axis``: the axis ``field_deg`` is measured from (`field_axis`).
+    ``field_axis``: the axis ``field_deg`` is measured from (`field_axis`). ``field_map``: the 2 x 2 map from
+    the front's slopes to visual angle (`field_map`; the identity on the axis of a model without a visual axis).
     """
 
     model: str
@@ -250,6 +276,7 @@ class EyeWavefront:
     lenses: object = None
     eye_entrance_pupil_mm: float | None = None
     field_axis: str = "optical axis"
+    field_map: tuple = ((1.0, 0.0), (0.0, 1.0))
 
     @property
     def rms_um(self) -> float:
@@ -344,4 +371,5 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, pupil, max_order)
     return EyeWavefront(eye.name, field, wavelength, pupil, iris, given, entrance_z, exit_z,
                         tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,
-                        coefficients, residual, lenses, eye_pupil, field_axis(eye))
+                        coefficients, residual, lenses, eye_pupil, field_axis(eye),
+                        tuple(tuple(float(v) for v in row) for row in field_map(eye, field)))

@@ -7,7 +7,8 @@ into a field angle as the eye sensor reads its retina: its distance from the axi
 inverse of the chief rays' r(θ) (no lens, at the model's reference wavelength, as the sensor's film:
 `vissim.render.schematic_eye_tables.chief_ray_radii_mm`), the direction
 opposite its azimuth, the field angle of that direction by the models' rule (`field_direction`).
-The offsets from the chart centre's field angle are histogrammed on a grid
+The offsets from the field angle at which the film sees the chart centre (from the entrance pupil,
+`vissim.optics.eyes.sight.film_field_deg`, as the simulations draw the chart) are histogrammed on a grid
 ``oversample`` times finer than the image's pixels: the ray PSF.  The trial lens's spectacle
 magnification is measured by the same trace (chief rays from chart points off the centre, with
 the lens over without it).  Photopic light: one trace per wavelength of the photopic spectrum,
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.optics.eyes.models import eye_model
+from vissim.optics.eyes.sight import field_of_direction, film_field_deg
 from vissim.optics.eyes.wavefront import field_direction, iris_from_entrance_pupil_mm, trace_to_retina
 from vissim.optics.trial_lens import TrialLensSetup
 from vissim.render.schematic_eye_tables import chief_ray_radii_mm
@@ -85,17 +87,14 @@ class _Retina:
         low = max(0.0, centre - RADIUS_SPAN_DEG)
         self.theta = np.arange(low, centre + RADIUS_SPAN_DEG + 1e-9, RADIUS_STEP_DEG)
         self.radius = chief_ray_radii_mm(eye, self.theta, wavelength_nm)
-        self.alpha = math.radians(eye.visual_axis_deg)
+        self.eye = eye
 
     def field_deg(self, points_mm: np.ndarray) -> np.ndarray:
         rho = np.hypot(points_mm[:, 0], points_mm[:, 1])
         theta = np.radians(np.interp(rho, self.radius, self.theta))
         safe = np.maximum(rho, 1e-300)
         ox, oy = -np.sin(theta) * points_mm[:, 0] / safe, -np.sin(theta) * points_mm[:, 1] / safe
-        oz = np.cos(theta)
-        vx = ox * math.cos(self.alpha) - oz * math.sin(self.alpha)  # undo the visual axis's turn
-        vz = ox * math.sin(self.alpha) + oz * math.cos(self.alpha)
-        return np.degrees(np.stack([np.arctan2(vx, vz), np.arctan2(oy, vz)], axis=1))
+        return field_of_direction(self.eye, np.stack([ox, oy, np.cos(theta)], axis=1))
 
 
 def _magnification(eye, lens_setup, retina: _Retina, field_deg, distance_mm: float, wavelength_nm: float) -> np.ndarray:
@@ -135,8 +134,9 @@ def ray_psf(*, model: str, accommodation_diopters: float, pupil_mm: float, field
     targets = _iris_targets(eye, iris_mm, rays_across, seed)
     step_deg = arcmin_per_px / oversample / 60.0
     angles, ray_weights = [], []
+    seen = film_field_deg(eye, point, pupil_mm)  # the chart centre as the film sees it: the image's origin
     for wavelength, weight in zip(wavelengths_nm, weights):
-        a = retina.field_deg(_land(eye, lens_setup, point, targets, float(wavelength))) - np.array(field)
+        a = retina.field_deg(_land(eye, lens_setup, point, targets, float(wavelength))) - seen
         angles.append(a)
         ray_weights.append(np.full(len(a), float(weight) / len(a)))
     angles, ray_weights = np.concatenate(angles), np.concatenate(ray_weights)

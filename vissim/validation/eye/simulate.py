@@ -43,6 +43,7 @@ from vissim.optics.eyes.field_blur import blur_eye
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
+from vissim.optics.eyes.sight import chief_pupil_point_mm
 from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm
 from vissim.optics.prescription import Prescription
 from vissim.errors import FieldTooSmallError
@@ -136,10 +137,13 @@ class EyeScene:
 def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
     """The chart as the eye's pixels see it: pixel (row, col) looks at field angle (x, y) = the image's field
     minus (col, row) offsets x ``step`` (columns to the observer's right: -x), along `field_direction`'s
-    direction; that ray meets the flat chart (facing the eye, its centre at the image's field,
-    `eye_render.eye_to_world`) at the chart point drawn there.  On the axis of a model without a visual
-    axis this is the chart drawn in visual angle; off it the chart is seen stretched across the field
-    direction (by 1 / cos of the field angle)."""
+    direction; the eye's film maps its retina through collimated chief rays, so that line of sight leaves the
+    chief ray's point on the entrance-pupil plane (`vissim.optics.eyes.sight`), and meets the flat chart (facing
+    the eye, its centre at the image's field from the corneal vertex, `eye_render.eye_to_world`) at the chart
+    point drawn there.  Off axis the chart is seen stretched across the field direction (by 1 / cos of the
+    field angle) and nearer the axis by the pupil's parallax (3 mm x sin 20 deg / 6 m = 0.6 arcmin).  On the
+    axis of a model without a visual axis it is the chart drawn in visual angle (the parallax only shrinks
+    it by the pupil's depth over the distance, 0.05 % at 6 m)."""
     from vissim.optics.eyes.field_blur import node_field_deg
     from vissim.optics.eyes.wavefront import field_direction
     from vissim.render.eye_render import eye_to_world
@@ -152,11 +156,16 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
     base_shape = tuple(int(math.ceil(1.15 * n)) + 8 for n in shape)
     base = chart(c.letter, c.logmar, c.chart_distance_m, step, base_shape, scene.chart_half_arcmin)
     r, q = np.indices(shape)
-    local = field_direction(scene.eye, node_field_deg(r, q, shape, step, field))
-    world = local @ np.asarray(eye_to_world(scene.eye, field), float)[:3, :3].T
+    to_world = np.asarray(eye_to_world(scene.eye, field), float)[:3, :3]
+    sight = field_direction(scene.eye, node_field_deg(r, q, shape, step, field)) @ to_world.T
+    pupil = chief_pupil_point_mm(scene.eye, field, c.pupil_mm)  # the trace's frame: z towards the retina
+    start = to_world @ np.array([pupil[0], pupil[1], -pupil[2]])
+    reach = (1000.0 * c.chart_distance_m - start[2]) / sight[..., 2]
+    world_x, world_y = start[0] + reach * sight[..., 0], start[1] + reach * sight[..., 1]
     to_arcmin = 60.0 * 180.0 / math.pi
-    col_arcmin = np.arctan(-world[..., 0] / world[..., 2]) * to_arcmin  # world +x: the observer's left
-    row_arcmin = np.arctan(-world[..., 1] / world[..., 2]) * to_arcmin
+    distance_mm = 1000.0 * c.chart_distance_m
+    col_arcmin = np.arctan(-world_x / distance_mm) * to_arcmin  # world +x: the observer's left
+    row_arcmin = np.arctan(-world_y / distance_mm) * to_arcmin
     coords = [row_arcmin / step + (base_shape[0] - 1) / 2.0, col_arcmin / step + (base_shape[1] - 1) / 2.0]
     return ndimage.map_coordinates(base, coords, order=1, mode="nearest")
 

@@ -1,0 +1,58 @@
+"""Lines of sight: where a schematic eye's film sees a point at a finite distance.
+
+The eye bench's film (`vissim.render.schematic_eye_sensor`) and every traced wavefront name a retinal
+point by the field angle of the collimated beam whose chief ray (through the iris centre, at the
+model's reference wavelength) lands there.  That chief ray's line in object space passes through
+the entrance pupil, not the corneal vertex: a point ``d`` away at a field angle θ from the vertex is
+seen from the pupil, ``e`` mm behind the vertex, nearer the axis by about e · sin θ / d (0.6 arcmin
+for Navarro's 3.04 mm at 20° and 6 m).  This module is the one place that parallax is worked out.
+
+Frames: the trace's (`vissim.optics.eyes.wavefront`): x, y OSA's, z from the corneal vertex towards
+the retina, mm.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vissim.optics.eyes.models import SchematicEye
+from vissim.optics.eyes.wavefront import trace_eye_wavefront
+
+__all__ = ["field_of_direction", "chief_pupil_point_mm", "film_field_deg"]
+
+#: The iris grid of the trace made for a chief ray only (samples across).
+_CHIEF_SAMPLES = 9
+
+
+def field_of_direction(eye: SchematicEye, direction) -> np.ndarray:
+    """The field angle (x, y) in degrees of the unit vector(s) ``direction`` (..., 3) towards the object, in the
+    eye's optical-axis frame with z towards the object: the inverse of
+    `vissim.optics.eyes.wavefront.field_direction` (the visual axis's turn undone, then (atan x/z, atan y/z))."""
+    o = np.asarray(direction, dtype=float)
+    alpha = math.radians(eye.visual_axis_deg)
+    vx = o[..., 0] * math.cos(alpha) - o[..., 2] * math.sin(alpha)
+    vz = o[..., 0] * math.sin(alpha) + o[..., 2] * math.cos(alpha)
+    return np.degrees(np.stack([np.arctan2(vx, vz), np.arctan2(o[..., 1], vz)], axis=-1))
+
+
+def chief_pupil_point_mm(eye: SchematicEye, field_deg, pupil_mm: float) -> np.ndarray:
+    """Where the chief ray of the collimated beam at ``field_deg`` (the model's reference wavelength) crosses the
+    paraxial entrance-pupil plane: (x, y, z) mm in the trace's frame (module doc)."""
+    traced = trace_eye_wavefront(eye, eye.reference_wavelength_nm, tuple(float(v) for v in field_deg),
+                                 pupil_mm=pupil_mm, samples=_CHIEF_SAMPLES, max_order=2)
+    x, y = traced.chief_entrance_pupil_mm
+    return np.array([x, y, traced.entrance_pupil_position_mm])
+
+
+def film_field_deg(eye: SchematicEye, object_point_mm, pupil_mm: float) -> np.ndarray:
+    """The field angle (x, y), degrees, at which the film sees the point ``object_point_mm`` (the trace's frame):
+    the direction from the chief ray's entrance-pupil point (`chief_pupil_point_mm`, at the point's field
+    angle from the vertex) to the point."""
+    point = np.asarray(object_point_mm, dtype=float)
+    towards = np.array([point[0], point[1], -point[2]])
+    from_vertex = field_of_direction(eye, towards / np.linalg.norm(towards))
+    pupil = chief_pupil_point_mm(eye, from_vertex, pupil_mm)
+    line = np.array([point[0] - pupil[0], point[1] - pupil[1], pupil[2] - point[2]])
+    return field_of_direction(eye, line / np.linalg.norm(line))
