@@ -66,8 +66,10 @@ def test_an_item_s_rx_is_checked_and_kept_as_its_prescription():
     assert [c.rx for c in configurations] == ["-3.00 DS", "-2.00 -1.00 x 90", None, "-1.00 DS", "+2.50 DS"]
     assert configurations[0].vertex_mm == 14.0 and "rx" not in configurations[2].key_inputs()
     assert configurations[0].key_inputs() != configurations[2].key_inputs()
-    # not a prescription; not text; +90 D: the far point inside the eye (the ametropic eye's own check)
-    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS at 14 mm")):
+    # not a prescription; not text; +90 D: the far point inside the eye (the ametropic eye's own check); 0.125 D and
+    # 90.5 deg: not held by the prescription's text (0.01 D, whole degrees), refused rather than rounded
+    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS at 14 mm"),
+                       (0.125, r"0\.125 is written as '\+0\.12 DS'"), ("-2 -1 x 90.5", "whole degrees")):
         with pytest.raises(VissimInputError, match=rf"eye\.toml: item\[0\]\S*: .*{words}") as caught:
             read_campaign({"item": [{"rx": bad}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
         assert "\n" not in str(caught.value)

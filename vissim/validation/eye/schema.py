@@ -16,6 +16,8 @@ from __future__ import annotations
 import itertools
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.ametropia import ametropic_eye
 from vissim.optics.eyes.models import eye_model
@@ -93,13 +95,20 @@ def _field(value, source: str, where: str) -> tuple[float, float]:
 
 
 def _rx(value, source: str, where: str) -> str:
-    """A prescription text (`Prescription.parse`) or a number (the sphere, D), as its canonical text."""
+    """A prescription text (`Prescription.parse`) or a number (the sphere, D), as its canonical text (the render's
+    `EyeRender.rx`); refused where that text (0.01 D, whole degrees) would not hold it exactly."""
+    written = value
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        value = f"{number(value, source, where, 'D'):+.6g}"
+        written = f"{number(value, source, where, 'D'):+.6f}"
     try:
-        return str(Prescription.parse(text(value, source, where)))
+        given = Prescription.parse(text(written, source, where))
     except VissimInputError as error:
         raise field_error(source, where, str(error)) from None
+    canonical = str(given)
+    if not np.allclose(Prescription.parse(canonical).power_matrix(), given.power_matrix(), rtol=0.0, atol=1e-9):
+        raise field_error(source, where, f"prescription {value!r} is written as {canonical!r}: give it in "
+                                         "0.01 D steps and whole degrees")
+    return canonical
 
 
 def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
