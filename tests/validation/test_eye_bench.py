@@ -4,7 +4,10 @@ Oracles: the ray PSF of an eye defocused by a trial lens is a blur disc of angul
 pupil x vergence error (geometric optics of a thin defocus, the reduced eye's first-order
 law; the schematic eye's spherical aberration and the lens's thickness move it by a few %);
 the campaign's geometric self-check is an independent trace of the rendered scene and must land
-at the render's noise floor (+3 dB for a noise-free match, >= +2 dB required).
+at the render's noise floor (+3 dB for a noise-free match, >= +2 dB required).  An ametropic eye (``rx``, its
+spectacle prescription at the vertex distance) corrected by that very lens at that distance has no defocus
+left: a thin lens P at d sends light from infinity to the far point P / (1 - dP) at the cornea, the vergence
+the eye focuses (the eye's refraction at the cornea, by the same arithmetic).
 """
 
 from __future__ import annotations
@@ -56,6 +59,75 @@ def test_the_campaign_file_is_checked():
     assert {c.spectrum for c in configurations} == {"photopic"}
 
 
+def test_an_item_s_rx_is_checked_and_kept_as_its_prescription():
+    settings, configurations = read_campaign(
+        {"item": [{"name": "a", "rx": -3}, {"name": "b", "rx": "-2 -1 x 90"}, {"name": "c"}],
+         "sweep": [{"name": "s", "rx": ["-1.00", 2.5]}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
+    assert [c.rx for c in configurations] == ["-3.00 DS", "-2.00 -1.00 x 90", None, "-1.00 DS", "+2.50 DS"]
+    assert configurations[0].vertex_mm == 14.0 and "rx" not in configurations[2].key_inputs()
+    assert configurations[0].key_inputs() != configurations[2].key_inputs()
+    # not a prescription; not text; +90 D: the far point inside the eye (the ametropic eye's own check); 0.125 D and
+    # 90.5 deg: not held by the prescription's text (0.01 D, whole degrees), refused rather than rounded
+    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS at 14 mm"),
+                       (0.125, r"0\.125 is written as '\+0\.12 DS'"), ("-2 -1 x 90.5", "whole degrees")):
+        with pytest.raises(VissimInputError, match=rf"eye\.toml: item\[0\]\S*: .*{words}") as caught:
+            read_campaign({"item": [{"rx": bad}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
+        assert "\n" not in str(caught.value)
+
+
+def _myope_scenes(chart_distance_m: float):
+    """The -3 D myope (spectacle Rx at 12 mm) without and with its -3 D spectacles, and the emmetrope, as
+    `EyeScene`s (the lens as the render meshes it; the chart at ``chart_distance_m``)."""
+    import dataclasses
+
+    from vissim.validation.eye.renders import build_eye
+    from vissim.validation.eye.simulate import EyeScene
+
+    settings, configurations = read_campaign(
+        {"item": [{"name": "m", "rx": -3.0}, {"name": "ms", "rx": -3.0, "lens": -3.0}, {"name": "e"}]},
+        {"kind": "eye", "vertex_mm": 12.0}, "eye.toml")
+    return [EyeScene(dataclasses.replace(c, chart_distance_m=chart_distance_m), settings, build_eye(c, settings))
+            for c in configurations]
+
+
+def test_a_myope_in_its_spectacles_has_no_defocus_left():
+    """Chart at 1000 km (1e-6 D): the reduced eye's defocus (`ViewingSetup.eye`: D = -Rx + A + V, myopic > 0).
+    Oracle by hand: the -3 D myope's refraction at the cornea is P / (1 - dP) = -3 / 1.036 = -2.895753 D, so
+    uncorrected D = +2.895753; its -3 D lens 12 mm in front brings light from infinity to the same vergence at the
+    cornea, D = 0.  The thick lens (1 mm, its back vertex at 12 mm, back-vertex power -3 D) does it exactly; the
+    chart's 1e-6 D is left.  The thesis setup (the lens's P / (1 - dP), the chart at infinity) likewise, at 6 m."""
+    from vissim.validation.eye.simulate import thesis_setup
+
+    myope, corrected, emmetrope = _myope_scenes(1e6)
+    at_cornea = -3.0 / (1.0 - 0.012 * -3.0)
+    assert np.asarray(myope.reduced_setup()[0].defocus_matrix_diopters) == pytest.approx(
+        -at_cornea * np.eye(2) - 1e-6 * np.eye(2), abs=1e-9)
+    assert np.asarray(corrected.reduced_setup()[0].defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=2e-6)
+    assert np.asarray(emmetrope.reduced_setup()[0].defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=2e-6)
+    myope, corrected, _ = _myope_scenes(6.0)
+    assert np.asarray(thesis_setup(corrected).defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=1e-12)
+    assert np.asarray(thesis_setup(myope).defocus_matrix_diopters) == pytest.approx(-at_cornea * np.eye(2), abs=1e-12)
+
+
+def test_the_schematic_eye_s_rx_is_the_myope_s_minus_lens_at_the_entrance_pupil():
+    """`blur_eye`'s ``rx`` is the correcting lens (a myope's is minus) at the entrance pupil, ``depth`` behind the
+    cornea: the -3 D spectacle Rx at 12 mm is there -3 / (1 + 3 (0.012 m + depth)) (thin-lens arithmetic), the chart
+    at 6 m adds +1 / (6 m + depth); in its -3 D spectacles only the chart's vergence through the lens is left."""
+    from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
+
+    myope, corrected, emmetrope = _myope_scenes(6.0)
+    depth_m = 1e-3 * entrance_pupil_position_mm(mean_meridian_eye(myope.eye), myope.mono_nm)
+    expected = -3.0 / (1.0 + 3.0 * (0.012 + depth_m)) + 1.0 / (6.0 + depth_m)
+    assert myope.schematic_rx()[0].sphere_diopters == pytest.approx(expected, abs=1e-9)
+    assert myope.schematic_rx()[0].sphere_diopters < -2.5  # the myope's correcting lens is a minus lens
+    assert emmetrope.schematic_rx()[0].sphere_diopters == pytest.approx(1.0 / (6.0 + depth_m), abs=1e-9)
+    # corrected: only the chart's vergence, carried through the thin -3 D lens (1 mm thick as meshed: within 1e-3 D)
+    gap_m = 0.012 + depth_m
+    through_lens = -1.0 / (6.0 - 0.012) - 3.0
+    at_pupil = through_lens / (1.0 - gap_m * through_lens)
+    assert corrected.schematic_rx()[0].sphere_diopters == pytest.approx(-3.0 / (1.0 + 3.0 * gap_m) - at_pupil, abs=1e-3)
+
+
 def test_a_defocused_eye_s_ray_psf_is_the_blur_disc():
     """+2 D before a relaxed Navarro eye at 6 m, 550 nm: the vergence error at the eye P / (1 - dP) - 1/6 m plus the
     eye's own myopia at 550 nm (`paraxial.refraction_diopters`: -0.175 D) ~ 2.06 D: a blur disc of 3 mm x 2.06 D =
@@ -102,3 +174,35 @@ def test_a_toy_eye_campaign_runs_through_the_engine(tmp_path):
         assert 2.0 <= row["over_floor_db"] <= 4.0, row  # the independent trace sits at the render's noise floor
     again = validate(path, tmp_path / "run", show_progress=False)
     assert again.summary.items_reused == 2 and again.summary.renders_made == 0
+
+
+MYOPE_TOY = TOY.split("[[item]]")[0].replace('name = "eye toy"', 'name = "myope toy"') + """
+[[item]]
+name = "myope"
+pupil_mm = 3.0
+rx = -3.0
+
+[[item]]
+name = "myope in spectacles"
+pupil_mm = 3.0
+rx = -3.0
+lens = -3.0
+"""
+
+
+@pytest.mark.slow
+def test_the_myope_with_and_without_its_spectacles_passes_the_self_check(tmp_path):
+    """The render traces the ametropic eye (the sensor's `sensor_eye`), the self-check the same eye
+    (`rays.rendered_eye`), each film mapped through that eye's chief rays: the self-check sits at the noise floor."""
+    import json
+
+    path = tmp_path / "eye.toml"
+    path.write_text(MYOPE_TOY)
+    done = validate(path, tmp_path / "run", show_progress=False)
+    assert done.summary.items_total == 2 and done.summary.renders_made == 4
+    assert "eye Rx -3.00 DS at 12 mm" in (tmp_path / "run" / "tables.md").read_text()
+    rows = json.loads((tmp_path / "run" / "metrics.json").read_text())["rows"]
+    checks = {r["configuration"]: r["over_floor_db"] for r in rows if r["simulation"] == "traced_rays"}
+    assert set(checks) == {"myope", "myope in spectacles"}
+    for name, over_floor_db in checks.items():
+        assert 2.0 <= over_floor_db <= 4.0, (name, over_floor_db)

@@ -32,7 +32,7 @@ def eye_render_settings(configuration, spp: int, seed: int) -> EyeRender:
                      field_deg=tuple(c.field_deg), wavelength_nm=c.wavelength_nm, spectrum=c.spectrum,
                      size_px=tuple(c.size_px), arcmin_per_px=c.arcmin_per_px, spp=spp, seed=seed,
                      chart_distance_m=c.chart_distance_m, letter=c.letter, logmar=c.logmar,
-                     lens=None if c.lens is None else tuple(c.lens), vertex_mm=c.vertex_mm)
+                     lens=None if c.lens is None else tuple(c.lens), vertex_mm=c.vertex_mm, rx=c.rx)
 
 
 def spec(configuration, spp: int, seed: int) -> EyeSpec:

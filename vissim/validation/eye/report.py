@@ -31,7 +31,8 @@ def configuration_label(c: dict) -> str:
     lens = "" if c["lens"] is None else f", lens {c['lens'][0]:+g}" + (
         f" {c['lens'][1]:+g} x {c['lens'][2]:g}" if c["lens"][1] else "") + " D"
     field = c["field_deg"]
-    return (f"{c['pupil_mm']:g} mm, {c['accommodation_diopters']:g} D acc., field {field[0]:g},{field[1]:g} deg, "
+    eye = "" if c.get("rx") is None else f"eye Rx {c['rx']} at {c['vertex_mm']:g} mm, "
+    return (f"{eye}{c['pupil_mm']:g} mm, {c['accommodation_diopters']:g} D acc., field {field[0]:g},{field[1]:g} deg, "
             f"{light}{lens}")
 
 

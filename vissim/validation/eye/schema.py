@@ -4,7 +4,10 @@ An item is one rendered view of a letter through a schematic eye: ``model``, ``p
 entrance pupil), ``accommodation`` (D), ``field`` (degrees: the chart centre's field angle [x, y], OSA's
 frame as every vissim field angle: x the examiner's right, y up; a number is [x, 0]), ``light``
 (``"photopic"`` or a wavelength in nm), an optional trial ``lens``
-(a sphere in D, or {sphere, cylinder, axis}), ``letter``, ``logmar``.  A ``[[sweep]]`` table gives
+(a sphere in D, or {sphere, cylinder, axis}), an optional ``rx`` (the eye made ametropic: the spectacle
+prescription it needs at the campaign's ``vertex_mm``, a text such as ``"-3.00"`` or ``"-2.00 -1.00 x 90"``,
+or a number: the sphere in D; `vissim.optics.eyes.ametropia.ametropic_eye`; absent: the model as it is),
+``letter``, ``logmar``.  A ``[[sweep]]`` table gives
 lists for any of them and makes one item per combination (its ``name`` a prefix).
 """
 
@@ -13,8 +16,12 @@ from __future__ import annotations
 import itertools
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.ametropia import ametropic_eye
 from vissim.optics.eyes.models import eye_model
+from vissim.optics.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
                            EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
                            EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
@@ -25,7 +32,7 @@ from vissim.validation.engine.fields import (field_error, lens, name_text, numbe
 __all__ = ["EyeSettings", "EyeConfiguration", "read_campaign"]
 
 LIGHTS = ("photopic",)
-ITEM_KEYS = ("name", "model", "pupil_mm", "accommodation", "field", "light", "lens", "letter", "logmar")
+ITEM_KEYS = ("name", "model", "pupil_mm", "accommodation", "field", "light", "lens", "rx", "letter", "logmar")
 
 
 @dataclass(frozen=True)
@@ -54,6 +61,7 @@ class EyeConfiguration:
     spectrum: str = "mono"
     wavelength_nm: float | None = 550.0
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
+    rx: str | None = None  # the eye's spectacle prescription at vertex_mm (canonical text); None: the model's eye
     letter: str = "K"
     logmar: float = 0.5
     # copied from the settings (so each item's key holds what its renders depend on)
@@ -68,6 +76,8 @@ class EyeConfiguration:
     def key_inputs(self) -> dict:
         record = self.as_json()
         record.pop("name")
+        if record["rx"] is None:  # the model's own eye: the key it had before items could be ametropic
+            record.pop("rx")
         return record
 
 
@@ -82,6 +92,23 @@ def _field(value, source: str, where: str) -> tuple[float, float]:
     if not isinstance(values, list) or len(values) != 2:
         raise field_error(source, where, f"a field is degrees (x, a number) or [x, y], got {value!r}")
     return tuple(number(v, source, where, "deg", lo=-EYE_RENDER_MAX_FIELD_DEG, hi=EYE_RENDER_MAX_FIELD_DEG) for v in values)
+
+
+def _rx(value, source: str, where: str) -> str:
+    """A prescription text (`Prescription.parse`) or a number (the sphere, D), as its canonical text (the render's
+    `EyeRender.rx`); refused where that text (0.01 D, whole degrees) would not hold it exactly."""
+    written = value
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        written = f"{number(value, source, where, 'D'):+.6f}"
+    try:
+        given = Prescription.parse(text(written, source, where))
+    except VissimInputError as error:
+        raise field_error(source, where, str(error)) from None
+    canonical = str(given)
+    if not np.allclose(Prescription.parse(canonical).power_matrix(), given.power_matrix(), rtol=0.0, atol=1e-9):
+        raise field_error(source, where, f"prescription {value!r} is written as {canonical!r}: give it in "
+                                         "0.01 D steps and whole degrees")
+    return canonical
 
 
 def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
@@ -100,12 +127,15 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
                                       lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1]),
         field_deg=_field(entry.get("field", 0.0), source, f"{where}.field"),
         spectrum=spectrum, wavelength_nm=wavelength, lens=trial,
+        rx=_rx(entry["rx"], source, f"{where}.rx") if "rx" in entry else None,
         letter=text(entry.get("letter", "K"), source, f"{where}.letter"),
         logmar=number(entry.get("logmar", 0.5), source, f"{where}.logmar", "logMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1]),
         size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
         vertex_mm=settings.vertex_mm)
-    try:  # the model's name and its own accommodation range
-        eye_model(configuration.model, configuration.accommodation_diopters)
+    try:  # the model's name and its own accommodation range; the ametropic eye's own checks
+        eye = eye_model(configuration.model, configuration.accommodation_diopters)
+        if configuration.rx is not None:
+            ametropic_eye(eye, Prescription.parse(configuration.rx), configuration.vertex_mm)
     except VissimInputError as error:
         raise field_error(source, where, str(error)) from None
     if configuration.lens is not None and configuration.field_deg != (0.0, 0.0):

@@ -20,6 +20,11 @@ diffraction PSF (wave optics).
     The schematic eye (`vissim.blur_eye`): the traced wavefront at the image's field and every
     wavelength (each with its own focus and transverse shift), the lens and the chart's vergence
     added at the eye's entrance pupil, the lens's spectacle magnification.
+An ametropic eye (the configuration's ``rx``: its spectacle prescription at ``vertex_mm``) enters every
+simulation as its refraction carried to the plane the simulation adds vergences at (`EyeScene.eye_refraction`,
+the one place): the corneal vertex for the reduced eye and the thesis (the prescription of `ViewingSetup.eye`,
+which the thesis adds its lens's P / (1 - dP) to), the entrance pupil for the schematic eye (folded into the
+``rx`` `blur_eye` adds there); the traced self-check traces the ametropic eye itself.
 Each reduced-eye assumption, put into ``schematic_wave`` one at a time (wave optics, scored against the render
 with diffraction):
 ``no_higher_orders`` (the eye's Zernike orders above 2 dropped), ``thibos_lca`` (traced at 555
@@ -50,11 +55,12 @@ from vissim.errors import FieldTooSmallError
 from vissim.optics.psf import PSF, compute_psf
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import TrialLensSetup, thesis_table_4_2_power, trial_lens_effect
+from vissim.optics.eyes.ametropia import far_point_vergence_matrix
+from vissim.optics.trial_lens import TrialLensSetup, thesis_table_4_2_power, trial_lens_effect, vergence_after_distance
 from vissim.optics.wavefront import Wavefront
 from vissim.spectra import named_spectrum
 
-__all__ = ["SIMULATIONS", "COSTS", "EyeScene", "simulate", "chart", "PHOTOPIC_FOCUS_NM", "reference_of"]
+__all__ = ["SIMULATIONS", "COSTS", "EyeScene", "simulate", "thesis_setup", "chart", "PHOTOPIC_FOCUS_NM", "reference_of"]
 
 #: The wavelength the reduced eye is in focus at, and the thesis's one wavelength, for photopic light.
 PHOTOPIC_FOCUS_NM = 555.0
@@ -119,19 +125,34 @@ class EyeScene:
         effect = trial_lens_effect(setup)
         return np.asarray(effect.added_power_matrix, float), np.asarray(effect.magnification_matrix, float)
 
+    def eye_refraction(self, depth_mm: float) -> np.ndarray:
+        """The eye's own correcting lens (2 x 2 D; myope < 0) at ``depth_mm`` behind the corneal vertex: its spectacle
+        ``rx`` at ``vertex_mm`` carried there (`far_point_vergence_matrix`: the far point's vergence at the cornea,
+        then ``depth_mm`` on); zero for the model's own eye."""
+        if self.c.rx is None:
+            return np.zeros((2, 2))
+        at_cornea = far_point_vergence_matrix(Prescription.parse(self.c.rx), self.c.vertex_mm)
+        return vergence_after_distance(at_cornea, 1e-3 * depth_mm)
+
+    def reduced_rx(self) -> Prescription:
+        """The reduced eye's prescription (`ViewingSetup.eye`'s correcting lens, at the corneal vertex)."""
+        return Prescription.from_power_matrix(self.eye_refraction(0.0))
+
     def reduced_setup(self) -> ViewingSetup:
         added, magnification = self.lens_effect(0.0)
         vergence = added - np.eye(2) / self.c.chart_distance_m
-        setup = ViewingSetup.eye(Prescription(0.0), self.c.pupil_mm, self.c.accommodation_diopters,
+        setup = ViewingSetup.eye(self.reduced_rx(), self.c.pupil_mm, self.c.accommodation_diopters,
                                  vergence_diopters=vergence, wavelength_nm=self.mono_nm)
         return setup, magnification
 
     def schematic_rx(self) -> tuple[Prescription, np.ndarray]:
-        """The prescription that adds the lens and the chart's vergence at the entrance pupil; the magnification."""
+        """The prescription at the entrance pupil that adds the eye's own refraction, the lens and the chart's
+        vergence (`blur_eye`'s ``rx``: the correcting lens, so the eye's minus the light's vergence); the
+        magnification."""
         depth_mm = entrance_pupil_position_mm(mean_meridian_eye(self.eye), self.mono_nm)
         added, magnification = self.lens_effect(depth_mm)
         vergence = added - np.eye(2) / (self.c.chart_distance_m + 1e-3 * depth_mm)
-        return Prescription.from_power_matrix(-vergence), magnification
+        return Prescription.from_power_matrix(self.eye_refraction(depth_mm) - vergence), magnification
 
 
 def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
@@ -216,11 +237,17 @@ def _schematic(scene: EyeScene, image: np.ndarray, step: float, mode: str, *, fi
     return _blur_psf(image, psf, step)
 
 
+def thesis_setup(scene: EyeScene) -> ViewingSetup:
+    """The thesis's setup (module doc): the eye's prescription, the lens's P / (1 - dP) (its sphere), the chart at
+    infinity."""
+    power = 0.0 if scene.lens is None else thesis_table_4_2_power(scene.lens.sphere_diopters, scene.c.vertex_mm)
+    return ViewingSetup.eye(scene.reduced_rx(), scene.c.pupil_mm, scene.c.accommodation_diopters,
+                            vergence_diopters=power, wavelength_nm=scene.mono_nm)
+
+
 def _reduced(scene: EyeScene, image: np.ndarray, step: float, mode: str, thesis: bool = False) -> np.ndarray:
     if thesis:
-        power = 0.0 if scene.lens is None else thesis_table_4_2_power(scene.lens.sphere_diopters, scene.c.vertex_mm)
-        setup = ViewingSetup.eye(Prescription(0.0), scene.c.pupil_mm, scene.c.accommodation_diopters,
-                                 vergence_diopters=power, wavelength_nm=scene.mono_nm)
+        setup = thesis_setup(scene)
         return _blur_psf(image, _psf(setup.wavefront, scene, step, mode, wavelength_nm=scene.mono_nm), step)
     setup, _ = scene.reduced_setup()
     if scene.photopic:
