@@ -19,7 +19,7 @@ from fraunhofer_reference import pixel_values, probe_pixels
 from vissim.cli import main
 from vissim.imageio import read_image
 from vissim.optics.eyes.models import eye_model
-from vissim.optics.eyes.psf_wavefront import eye_wavefront
+from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront
 from vissim.optics.eyes.wavefront import trace_eye_wavefront
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf
@@ -84,7 +84,8 @@ def test_cli_psf_eye_model_bad_input_is_one_error_line_and_exit_2(capsys, tmp_pa
 
 
 def test_cli_psf_eye_model_takes_field_and_accommodation_as_the_library_does(capsys, tmp_path):
-    """The CLI's PSF equals compute_psf of eye_wavefront at the same field and accommodation (float32 file)."""
+    """The CLI's PSF equals compute_psf of the eye's one-wavelength spectral front (eye_wavefront's front with
+    its map to visual angle) at the same field and accommodation (float32 file)."""
     target = tmp_path / "off.exr"
     code = main(["psf", "--eye-model", "navarro-1985", "--pupil-mm", "4", "--wavelength-nm", "555", "--field-deg", "10,0",
                  "--accommodation-diopters", "1", "--arcmin-per-px", "0.5", "--size", "65", "-o", str(target)])
@@ -92,7 +93,10 @@ def test_cli_psf_eye_model_takes_field_and_accommodation_as_the_library_does(cap
     front = eye_wavefront("navarro-1985", pupil_mm=4.0, wavelength_nm=555.0, field_deg=(10.0, 0.0),
                           accommodation_diopters=1.0)
     assert abs(front.coefficients_um[(2, 2)]) > 1e-3  # off-axis astigmatism is there
-    psf = compute_psf(front, wavelength_nm=555.0, arcmin_per_px=0.5, size_px=65, normalise="total")
+    spectral = eye_spectral_wavefront("navarro-1985", pupil_mm=4.0, wavelengths_nm=[555.0], field_deg=(10.0, 0.0),
+                                      accommodation_diopters=1.0)
+    assert spectral.fronts[0].coefficients_um == front.coefficients_um and spectral.field_map is not None
+    psf = compute_psf(spectral, wavelength_nm=555.0, arcmin_per_px=0.5, size_px=65, normalise="total")
     image = read_image(target)
     assert image.provenance["inputs"]["field_deg"] == "10,0"
     assert np.abs(image.pixels - psf.data).max() <= 1e-5 * psf.data.max()
