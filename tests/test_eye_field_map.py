@@ -123,3 +123,15 @@ def test_film_sees_a_near_point_from_the_entrance_pupil():
         parallax = math.radians(20.0 - seen[0])
         assert abs(parallax - expected) <= max(0.02 * expected, math.radians(0.005 / 60.0))
         assert abs(seen[1]) < 1e-9
+
+
+def test_depth_eye_warns_off_axis_where_its_psfs_miss_the_field_map(caplog):
+    """The depth blur's eye cannot carry the field map: at 20° it says the eye's PSFs are 6.4 % (1/cos 20° − 1) wider;
+    on the axis it says nothing."""
+    from vissim.optics.eyes.depth_eye import traced_depth_eye
+
+    with caplog.at_level("WARNING"):
+        traced_depth_eye("navarro-1985", "-1.00", pupil_mm=3.0, wavelength_nm=555.0)
+        assert not caplog.records
+        traced_depth_eye("navarro-1985", "-1.00", pupil_mm=3.0, wavelength_nm=555.0, field_deg=(20.0, 0.0))
+    assert len(caplog.records) == 1 and "6.4 %" in caplog.records[0].getMessage()
