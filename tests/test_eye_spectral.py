@@ -25,6 +25,7 @@ from vissim.optics.eyes.paraxial import lca_diopters
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront
 from vissim.optics.eyes.report import MtfSpectrum, eye_report
 from vissim.optics.eyes.surfaces import split_at_stop
+from vissim.optics.spectral_wavefront import SpectralWavefront
 from vissim.optics.psf import compute_psf, strehl_ratio
 from vissim.optics.psf_field import energy_outside_field, suggested_size_px
 from vissim.optics.raytrace import aim_collimated, trace_rays
@@ -38,7 +39,9 @@ PEAK_FRACTION = 2e-3
 def test_polychromatic_eye_psf_is_the_weighted_sum_of_fraunhofer_quadratures_of_each_wavelengths_front():
     wavelengths = (470.0, 555.0, 640.0)
     weights = photopic_weights(wavelengths)
-    spectral = eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=wavelengths, field_deg=(10, 0))
+    traced = eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=wavelengths, field_deg=(10, 0))
+    # the fronts in their own slope angles: the map to visual angle is tested in tests/test_eye_field_map.py
+    spectral = SpectralWavefront(traced.wavelengths_nm, traced.fronts, traced.reference_wavelength_nm)
     step, size = 0.25, 65
     psf = compute_psf(spectral, weights=weights, arcmin_per_px=step, size_px=size, pixel="integrate",
                       dtype=np.float64, normalise="total")

@@ -19,7 +19,10 @@ diffraction PSF (wave optics).
 ``schematic_wave`` / ``schematic``
     The schematic eye (`vissim.blur_eye`): the traced wavefront at the image's field and every
     wavelength (each with its own focus and transverse shift), the lens and the chart's vergence
-    added at the eye's entrance pupil, the lens's spectacle magnification.
+    added at the eye's entrance pupil, the lens's spectacle magnification.  ``schematic`` is the same
+    wavefront in ray optics, scored against the render itself: the schematic eye's check free of the
+    wave reference's own error near focus (the render is ray optics; blurred by the in-focus diffraction
+    PSF it is not a wave image of an eye with spherical aberration: `vissim.validation.eye.report`).
 An ametropic eye (the configuration's ``rx``: its spectacle prescription at ``vertex_mm``) enters every
 simulation as its refraction carried to the plane the simulation adds vergences at (`EyeScene.eye_refraction`,
 the one place): the corneal vertex for the reduced eye and the thesis (the prescription of `ViewingSetup.eye`,
@@ -67,9 +70,7 @@ PHOTOPIC_FOCUS_NM = 555.0
 #: The photopic spectrum's sampling in the simulations and the ray trace, nm (400-700 nm: 13 wavelengths).
 PHOTOPIC_STEP_NM = 25.0
 #: The simulations compared with every render (module doc).
-SIMULATIONS = ("traced_rays", "reduced_geometric", "reduced_wave", "thesis", "schematic_wave")
-#: Simulations made on request only: the schematic eye in ray optics (its ray PSF of the traced wavefront is slow).
-EXTRA_SIMULATIONS = ("schematic",)
+SIMULATIONS = ("traced_rays", "reduced_geometric", "reduced_wave", "thesis", "schematic", "schematic_wave")
 #: Reduced-eye assumption -> the simulation that puts it into the geometric schematic one, and where it applies.
 COSTS = {"spherical aberration": ("no_higher_orders", "always"),
          "chromatic model": ("thibos_lca", "photopic"),
