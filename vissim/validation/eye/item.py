@@ -81,11 +81,12 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
                                              padding="edge"), np.float64)
     swaps = [name for name, where in COSTS.values() if applies(where, configuration)]
     rows, saved = [], {}
-    for simulation in SIMULATIONS + tuple(swaps):
+    made = [name for name in SIMULATIONS if name != "schematic" or configuration.spectrum != "photopic"]
+    for simulation in made + swaps:
         simulated = traced if simulation == "traced_rays" else simulate(simulation, scene, ray, margin, offset)
         reference = with_diffraction if reference_of(simulation) != "render" else truth_a
         rows.append(_row(simulation, reference, simulated, floor.psnr_db))
-        if simulation in SIMULATIONS:
+        if simulation in made:
             saved[simulation] = save_item_image(item_dir, simulation, simulated, {"simulation": simulation})
     by_name = {r["simulation"]: r for r in rows}
     costs = {assumption: by_name["schematic_wave"]["psnr_db"] - by_name[name]["psnr_db"]

@@ -25,7 +25,7 @@ INTRO = (
     "one below 0 dB differs from the render by more than the render's own noise. Ray-optics simulations "
     "are scored against the render itself; the schematic eye's ray-optics simulation is the traced "
     "wavefront that the wave simulation diffracts, so it checks that wavefront, its vergences and its "
-    "field dependence against the render directly. Wave-optics simulations "
+    "field dependence against the render directly (one-wavelength light only). Wave-optics simulations "
     "are scored against the render blurred by the pupil's diffraction (the render has none). That reference "
     "is ray optics blurred by diffraction, not wave optics: with spherical aberration the two are best "
     "focused about a third of the primary spherical aberration apart (0.05-0.08 D for a 3-4 mm pupil), so "
@@ -76,7 +76,7 @@ def _simulations_table(results: list[dict]) -> str:
     for r in results:
         by = {x["simulation"]: x for x in r["rows"]}
         lines.append(f"| {r['configuration']['name']} | " + " | ".join(
-            f"{by[s]['over_floor_db']:+.2f}" for s in SIMULATIONS) + " |")
+            f"{by[s]['over_floor_db']:+.2f}" if s in by else "-" for s in SIMULATIONS) + " |")
     return "\n".join(lines) + "\n\n"
 
 

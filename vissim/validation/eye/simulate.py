@@ -22,7 +22,8 @@ diffraction PSF (wave optics).
     added at the eye's entrance pupil, the lens's spectacle magnification.  ``schematic`` is the same
     wavefront in ray optics, scored against the render itself: the schematic eye's check free of the
     wave reference's own error near focus (the render is ray optics; blurred by the in-focus diffraction
-    PSF it is not a wave image of an eye with spherical aberration: `vissim.validation.eye.report`).
+    PSF it is not a wave image of an eye with spherical aberration: `vissim.validation.eye.report`).  Made
+    for one-wavelength light only: the ray PSFs of 13 photopic wavelengths take about a minute per item.
 An ametropic eye (the configuration's ``rx``: its spectacle prescription at ``vertex_mm``) enters every
 simulation as its refraction carried to the plane the simulation adds vergences at (`EyeScene.eye_refraction`,
 the one place): the corneal vertex for the reduced eye and the thesis (the prescription of `ViewingSetup.eye`,
