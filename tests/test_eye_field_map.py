@@ -48,7 +48,8 @@ def test_field_map_on_the_x_axis_is_one_over_cos():
 
 def test_field_mapped_stretches_a_gaussian_as_the_map_says():
     """A Gaussian of σ px through diag(1.3, 0.8) (x, y) is a Gaussian of σ 1.3 along columns, 0.8 σ along rows, the
-    same energy; the identity (None) returns the array itself."""
+    same energy; the identity (None) returns the array itself. Cubic interpolation of a 4 px Gaussian: error
+    ~1e-4 of the peak, bounded at 1e-3."""
     n, sigma = 81, 4.0
     rows, cols = np.indices((n, n)) - n // 2
     g = np.exp(-(rows ** 2 + cols ** 2) / (2 * sigma ** 2))
@@ -92,8 +93,8 @@ def _ray_centroid_arcmin(eye, field, pupil_mm, wavelength):
 def test_off_axis_psf_centroid_follows_the_traced_rays():
     """Navarro, 4 mm, 589.3 nm, 20° on x: the wave PSF's centroid (the front's mean slope, coma's included, through
     the field map)
-    within 0.05 arcmin of the rays' own mean film angle (3.66 arcmin towards the axis); without the map it
-    falls 0.19 arcmin short."""
+    within 0.05 arcmin (the 65-ray grid's and the order-8 fit's residue, measured 0.01-0.03) of the rays' own
+    mean film angle; without the map it falls short by about (1 - cos 20°) of it (0.2 arcmin)."""
     eye = eye_model("navarro-1985")
     field = (20.0, 0.0)
     truth = _ray_centroid_arcmin(eye, field, 4.0, 589.3)
@@ -105,10 +106,12 @@ def test_off_axis_psf_centroid_follows_the_traced_rays():
         cols = np.arange(data.shape[1]) - data.shape[1] // 2
         return -step * float((data.sum(axis=0) * cols).sum() / data.sum())  # columns to the right: -x
 
-    assert abs(truth + 3.66) < 0.05
+    # the map's effect, (1 - cos 20°) |truth|, must stand well above the 0.05 arcmin tolerance for the test to tell
+    missing = (1.0 - math.cos(math.radians(field[0]))) * abs(truth)
+    assert truth < 0.0 and missing > 0.15  # coma moves the centroid towards the axis (-x), by several arcmin
     assert abs(centroid_x(spectral) - truth) < 0.05
     unmapped = SpectralWavefront(spectral.wavelengths_nm, spectral.fronts)
-    assert abs(centroid_x(unmapped) - truth) > 0.15
+    assert abs(centroid_x(unmapped) - truth) > 0.5 * missing
 
 
 def test_film_sees_a_near_point_from_the_entrance_pupil():

@@ -29,6 +29,7 @@ from vissim.checks import instance_of
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.wavefront import Wavefront
+from vissim.units import xy_matrix_to_image_rowcol
 
 __all__ = ["SpectralWavefront", "WAVELENGTH_MATCH_NM", "wavelengths_for", "field_mapped", "field_map_stretch",
            "FIELD_MAP_IDENTITY_TOL"]
@@ -141,17 +142,15 @@ def field_map_stretch(field_map) -> float:
 
 
 def field_mapped(array: np.ndarray, field_map) -> np.ndarray:
-    """A PSF array ``[row, col]`` (rows down: −y; columns to the observer's right: −x; origin at ``[N//2, N//2]``;
-    values per pixel) as seen through ``field_map`` (module doc): value(θ) = value(map⁻¹ θ) / det(map), by
+    """A PSF array ``[row, col]`` (image axes, docs/conventions.md: `vissim.units.xy_matrix_to_image_rowcol`; origin
+    at ``[N//2, N//2]``; values per pixel) as seen through ``field_map`` (module doc): value(θ) = value(map⁻¹ θ) / det(map), by
     cubic interpolation (negative ringing clipped); ``field_map`` None returns ``array``. The energy the map
     moves beyond the field is lost (the caller's field check sees it)."""
     if field_map is None:
         return array
     from scipy.ndimage import map_coordinates  # only for a mapped front
 
-    inverse = np.linalg.inv(np.asarray(field_map, dtype=float))
-    # (x, y) = -(col, row) offsets: the signs cancel; in (row, col) the inverse's rows and columns swap.
-    in_rows = np.array([[inverse[1, 1], inverse[1, 0]], [inverse[0, 1], inverse[0, 0]]])
+    in_rows = xy_matrix_to_image_rowcol(np.linalg.inv(np.asarray(field_map, dtype=float)))
     centre = np.array([array.shape[0] // 2, array.shape[1] // 2], dtype=float)
     rows, cols = np.indices(array.shape, dtype=float)
     offsets = np.stack([rows.ravel() - centre[0], cols.ravel() - centre[1]])

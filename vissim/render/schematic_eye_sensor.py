@@ -51,7 +51,6 @@ import numpy as np
 
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
 from vissim.render.schematic_eye_tables import EyeTables, chief_ray_radii_mm, eye_tables, table_theta_deg
@@ -72,14 +71,10 @@ SCHEMATIC_EYE_SENSOR = "vissim_schematic_eye"
 @functools.lru_cache(maxsize=16)
 def sensor_eye(model: str, accommodation_diopters: float, rx: str | None = None, rx_vertex_mm: float = 12.0):
     """The model at its accommodation, made to need ``rx`` at the spectacle plane ``rx_vertex_mm`` when given
-    (`vissim.optics.eyes.ametropia.ametropic_eye`: the eye ``vissim eye --rx`` traces)."""
-    eye = eye_model(model, accommodation_diopters)
-    if rx is None:
-        return eye
-    from vissim.optics.eyes.ametropia import ametropic_eye
-    from vissim.optics.prescription import Prescription
+    (`vissim.optics.eyes.ametropia.ametropic_model_eye`: the eye ``vissim eye --rx`` traces)."""
+    from vissim.optics.eyes.ametropia import ametropic_model_eye
 
-    return ametropic_eye(eye, Prescription.parse(rx), rx_vertex_mm)
+    return ametropic_model_eye(model, accommodation_diopters, rx, rx_vertex_mm)
 
 
 @functools.lru_cache(maxsize=16)

@@ -47,14 +47,14 @@ from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import GrinMedium
-from vissim.optics.eyes.models import SchematicEye
+from vissim.optics.eyes.models import SchematicEye, eye_model
 from vissim.optics.eyes.paraxial import matrix_to_surface
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.prescription import Prescription, as_prescription, prescription_from
 from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix,
                                       vergence_after_distance)
 from vissim.units import mm_to_m
 
-__all__ = ["CORNEA", "SPECTACLE", "EyeRefraction", "far_point_vergence_matrix", "cornea_front_power_matrix",
+__all__ = ["ametropic_model_eye", "CORNEA", "SPECTACLE", "EyeRefraction", "far_point_vergence_matrix", "cornea_front_power_matrix",
            "eye_ray_matrix", "corneal_refraction", "refraction_from_matrix", "ametropic_eye"]
 
 #: The planes a refraction is given at: the corneal front vertex, or the spectacle plane in front of it.
@@ -246,3 +246,12 @@ def ametropic_eye(eye: SchematicEye, rx: Prescription, vertex_distance_mm: float
               f"{wavelength:g} nm (axial: vitreous {vitreous_mm:.6f} mm"
               + ("; toric cornea front)" if rx.cylinder_diopters != 0.0 else ")"))
     return dataclasses.replace(eye, surfaces=tuple(surfaces), source=source)
+
+
+def ametropic_model_eye(model: str, accommodation_diopters: float = 0.0, rx=None,
+                        vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM) -> SchematicEye:
+    """The schematic eye ``model`` at its accommodation, made to need ``rx`` (a `Prescription` or its text) at
+    ``vertex_distance_mm`` when given (`ametropic_eye`); the model as it is for None. The one eye the eye
+    sensor renders and the eye bench traces."""
+    eye = eye_model(model, accommodation_diopters)
+    return eye if rx is None else ametropic_eye(eye, prescription_from(rx), vertex_distance_mm)

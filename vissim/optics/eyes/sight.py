@@ -13,28 +13,15 @@ the retina, mm.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from vissim.optics.eyes.models import SchematicEye
-from vissim.optics.eyes.wavefront import trace_eye_wavefront
+from vissim.optics.eyes.wavefront import field_of_direction, trace_eye_wavefront
 
-__all__ = ["field_of_direction", "chief_pupil_point_mm", "film_field_deg"]
+__all__ = ["chief_pupil_point_mm", "film_field_deg"]
 
 #: The iris grid of the trace made for a chief ray only (samples across).
 _CHIEF_SAMPLES = 9
-
-
-def field_of_direction(eye: SchematicEye, direction) -> np.ndarray:
-    """The field angle (x, y) in degrees of the unit vector(s) ``direction`` (..., 3) towards the object, in the
-    eye's optical-axis frame with z towards the object: the inverse of
-    `vissim.optics.eyes.wavefront.field_direction` (the visual axis's turn undone, then (atan x/z, atan y/z))."""
-    o = np.asarray(direction, dtype=float)
-    alpha = math.radians(eye.visual_axis_deg)
-    vx = o[..., 0] * math.cos(alpha) - o[..., 2] * math.sin(alpha)
-    vz = o[..., 0] * math.sin(alpha) + o[..., 2] * math.cos(alpha)
-    return np.degrees(np.stack([np.arctan2(vx, vz), np.arctan2(o[..., 1], vz)], axis=-1))
 
 
 def chief_pupil_point_mm(eye: SchematicEye, field_deg, pupil_mm: float) -> np.ndarray:

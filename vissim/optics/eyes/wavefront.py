@@ -65,7 +65,7 @@ from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.zernike import fit_zernike_um
 
-__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_from_optical_axis_deg", "field_axis",
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
            "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
@@ -122,6 +122,17 @@ def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:
     alpha = math.radians(eye.visual_axis_deg)
     return np.stack([o[..., 0] * math.cos(alpha) + o[..., 2] * math.sin(alpha), o[..., 1],
                      -o[..., 0] * math.sin(alpha) + o[..., 2] * math.cos(alpha)], axis=-1)
+
+
+def field_of_direction(eye: SchematicEye, direction) -> np.ndarray:
+    """The field angle (x, y) in degrees of the unit vector(s) ``direction`` (..., 3) towards the object, in the
+    eye's optical-axis frame with z towards the object: the inverse of
+    `field_direction` (the visual axis's turn undone, then (atan x/z, atan y/z))."""
+    o = np.asarray(direction, dtype=float)
+    alpha = math.radians(eye.visual_axis_deg)
+    vx = o[..., 0] * math.cos(alpha) - o[..., 2] * math.sin(alpha)
+    vz = o[..., 0] * math.sin(alpha) + o[..., 2] * math.cos(alpha)
+    return np.degrees(np.stack([np.arctan2(vx, vz), np.arctan2(o[..., 1], vz)], axis=-1))
 
 
 def field_from_optical_axis_deg(eye: SchematicEye, field_deg) -> tuple[float, float]:

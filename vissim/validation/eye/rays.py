@@ -1,8 +1,8 @@
 """The eye bench's geometric self-check: the numpy trace's own ray PSF of the rendered scene.
 
 The eye is the rendered one: the model at its accommodation, made to need ``rx`` at the spectacle
-plane ``vertex_mm`` when given (`rendered_eye`: `vissim.optics.eyes.ametropia.ametropic_eye`, as
-the sensor's `sensor_eye` builds it).  Rays leave the chart's centre (at the chart distance from
+plane ``vertex_mm`` when given (`vissim.optics.eyes.ametropia.ametropic_model_eye`, the eye the
+sensor's `sensor_eye` builds).  Rays leave the chart's centre (at the chart distance from
 the corneal vertex, along the line of sight), pass the trial lens (thick, as rendered) and the
 eye's surfaces (`vissim.optics.raytrace`, aimed at a jittered grid filling the iris) and land on
 the retina.  Each landing point is turned into a field angle as the eye sensor reads its retina:
@@ -28,16 +28,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.optics.eyes.ametropia import ametropic_eye
-from vissim.optics.eyes.models import eye_model
-from vissim.optics.eyes.sight import field_of_direction, film_field_deg
-from vissim.optics.prescription import Prescription
-from vissim.optics.eyes.wavefront import field_direction, iris_from_entrance_pupil_mm, trace_to_retina
+from vissim.optics.eyes.ametropia import ametropic_model_eye
+from vissim.optics.eyes.sight import film_field_deg
+from vissim.optics.eyes.wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
+                                          trace_to_retina)
 from vissim.optics.trial_lens import TrialLensSetup
 from vissim.render.schematic_eye_tables import chief_ray_radii_mm
 from vissim.units import osa_xy_to_image_colrow
 
-__all__ = ["RayPsf", "ray_psf", "rendered_eye", "RAYS_ACROSS_IRIS", "MAGNIFICATION_STEP_DEG", "RADIUS_STEP_DEG",
+__all__ = ["RayPsf", "ray_psf", "RAYS_ACROSS_IRIS", "MAGNIFICATION_STEP_DEG", "RADIUS_STEP_DEG",
            "RADIUS_SPAN_DEG"]
 
 #: Rays across the iris's diameter (a jittered square grid; ~0.785 x its square inside).
@@ -57,13 +56,6 @@ class RayPsf:
     step_arcmin: float
     magnification: np.ndarray
     rays: int
-
-
-def rendered_eye(model: str, accommodation_diopters: float, rx: str | None = None, vertex_mm: float = 12.0):
-    """The eye the render traces: the model at its accommodation, made to need the spectacle prescription ``rx``
-    at ``vertex_mm`` when given (`ametropic_eye`, the library function the eye sensor's `sensor_eye` calls)."""
-    eye = eye_model(model, accommodation_diopters)
-    return eye if rx is None else ametropic_eye(eye, Prescription.parse(rx), vertex_mm)
 
 
 def _object_point_mm(eye, field_deg, distance_mm: float) -> np.ndarray:
@@ -136,8 +128,8 @@ def ray_psf(*, model: str, accommodation_diopters: float, pupil_mm: float, field
             rays_across: int = RAYS_ACROSS_IRIS, seed: int = 0) -> RayPsf:
     """The ray PSF (module doc) of the rendered eye: ``lens`` a thick `TrialLens` (as rendered) or None,
     ``field_deg`` the chart centre's field angle (OSA) as `vissim.render.eye_render.EyeRender` has it; ``rx`` the
-    eye's spectacle prescription at ``vertex_mm`` (`rendered_eye`; None: the model's eye)."""
-    eye = rendered_eye(model, accommodation_diopters, rx, vertex_mm)
+    eye's spectacle prescription at ``vertex_mm`` (`ametropic_model_eye`; None: the model's eye)."""
+    eye = ametropic_model_eye(model, accommodation_diopters, rx, vertex_mm)
     sensor_nm = eye.reference_wavelength_nm if sensor_wavelength_nm is None else float(sensor_wavelength_nm)
     iris_mm = iris_from_entrance_pupil_mm(eye, pupil_mm, sensor_nm)
     field = tuple(float(v) for v in field_deg)

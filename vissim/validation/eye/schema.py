@@ -6,7 +6,7 @@ frame as every vissim field angle: x the examiner's right, y up; a number is [x,
 (``"photopic"`` or a wavelength in nm), an optional trial ``lens``
 (a sphere in D, or {sphere, cylinder, axis}), an optional ``rx`` (the eye made ametropic: the spectacle
 prescription it needs at the campaign's ``vertex_mm``, a text such as ``"-3.00"`` or ``"-2.00 -1.00 x 90"``,
-or a number: the sphere in D; `vissim.optics.eyes.ametropia.ametropic_eye`; absent: the model as it is),
+or a number: the sphere in D; `vissim.optics.eyes.ametropia.ametropic_model_eye`; absent: the model as it is),
 ``letter``, ``logmar``.  A ``[[sweep]]`` table gives
 lists for any of them and makes one item per combination (its ``name`` a prefix).
 """
@@ -19,8 +19,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.ametropia import ametropic_eye
-from vissim.optics.eyes.models import eye_model
+from vissim.optics.eyes.ametropia import ametropic_model_eye
 from vissim.optics.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
                            EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
@@ -133,9 +132,8 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
         size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
         vertex_mm=settings.vertex_mm)
     try:  # the model's name and its own accommodation range; the ametropic eye's own checks
-        eye = eye_model(configuration.model, configuration.accommodation_diopters)
-        if configuration.rx is not None:
-            ametropic_eye(eye, Prescription.parse(configuration.rx), configuration.vertex_mm)
+        ametropic_model_eye(configuration.model, configuration.accommodation_diopters, configuration.rx,
+                            configuration.vertex_mm)
     except VissimInputError as error:
         raise field_error(source, where, str(error)) from None
     if configuration.lens is not None and configuration.field_deg != (0.0, 0.0):

@@ -59,7 +59,7 @@ from vissim.errors import FieldTooSmallError
 from vissim.optics.psf import PSF, compute_psf
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
-from vissim.optics.eyes.ametropia import far_point_vergence_matrix
+from vissim.optics.eyes.ametropia import ametropic_model_eye, far_point_vergence_matrix
 from vissim.optics.trial_lens import TrialLensSetup, thesis_table_4_2_power, trial_lens_effect, vergence_after_distance
 from vissim.optics.wavefront import Wavefront
 from vissim.spectra import named_spectrum
@@ -110,6 +110,7 @@ class EyeScene:
         self.c, self.s = configuration, settings
         self.lens, self.chart_half_arcmin = built.lens, built.chart_half_arcmin  # `renders.EyeBuilt`
         self.eye = eye_model(configuration.model, configuration.accommodation_diopters)
+        self._charts: dict = {}  # (step, shape) -> `scene_chart`'s image: every simulation of the item draws it
         self.photopic = configuration.spectrum == "photopic"
         if self.photopic:
             wavelengths, weights = named_spectrum("photopic", PHOTOPIC_STEP_NM)
@@ -167,6 +168,14 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
     field angle) and nearer the axis by the pupil's parallax (3 mm x sin 20 deg / 6 m = 0.6 arcmin).  On the
     axis of a model without a visual axis it is the chart drawn in visual angle (the parallax only shrinks
     it by the pupil's depth over the distance, 0.05 % at 6 m)."""
+    if (step, shape) not in scene._charts:
+        seen = np.array(_seen_chart(scene, step, shape))
+        seen.setflags(write=False)
+        scene._charts[(step, shape)] = seen
+    return scene._charts[(step, shape)]
+
+
+def _seen_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
     from vissim.optics.eyes.field_blur import node_field_deg
     from vissim.optics.eyes.wavefront import field_direction
     from vissim.render.eye_render import eye_to_world
@@ -181,7 +190,8 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
     r, q = np.indices(shape)
     to_world = np.asarray(eye_to_world(scene.eye, field), float)[:3, :3]
     sight = field_direction(scene.eye, node_field_deg(r, q, shape, step, field)) @ to_world.T
-    pupil = chief_pupil_point_mm(scene.eye, field, c.pupil_mm)  # the trace's frame: z towards the retina
+    rendered = ametropic_model_eye(c.model, c.accommodation_diopters, c.rx, c.vertex_mm)  # the film's eye
+    pupil = chief_pupil_point_mm(rendered, field, c.pupil_mm)  # the trace's frame: z towards the retina
     start = to_world @ np.array([pupil[0], pupil[1], -pupil[2]])
     reach = (1000.0 * c.chart_distance_m - start[2]) / sight[..., 2]
     world_x, world_y = start[0] + reach * sight[..., 0], start[1] + reach * sight[..., 1]
