@@ -35,7 +35,7 @@ from vissim.optics.depth import (
 from vissim.optics.depth_windows import extended_layer, occlusion_weight
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.setup import Eye
+from vissim.optics.setup import DepthViewer
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
@@ -328,7 +328,7 @@ def test_other_bad_inputs():
         blur_depth(texture((8, 8)), np.ones((8, 8)), eye_prescription=Prescription(-1.0).refractive_error(),
                    pupil_diameter_mm=3.0, arcmin_per_px=1.0)
     with pytest.raises(VissimInputError, match="not both .also given: pupil_diameter_mm"):
-        blur_depth(texture((8, 8)), np.ones((8, 8)), eye=Eye(Prescription(0.0), 3.0), pupil_diameter_mm=3.0,
+        blur_depth(texture((8, 8)), np.ones((8, 8)), eye=DepthViewer(Prescription(0.0), 3.0), pupil_diameter_mm=3.0,
                    arcmin_per_px=1.0)
     with pytest.raises(TypeError, match="the eye is needed"):
         blur_depth(texture((8, 8)), np.ones((8, 8)), arcmin_per_px=1.0)
@@ -340,7 +340,7 @@ def test_an_eye_object_blurs_as_its_keywords_do():
     kwargs = dict(arcmin_per_px=1.0, mode="geometric")
     by_keywords = blur_depth(image, depth, eye_prescription=rx, pupil_diameter_mm=3.0, accommodation_diopters=0.5,
                              extra_wavefront=extra, **kwargs)
-    by_eye = blur_depth(image, depth, eye=Eye(rx, 3.0, 0.5, extra), **kwargs)
+    by_eye = blur_depth(image, depth, eye=DepthViewer(rx, 3.0, 0.5, extra), **kwargs)
     np.testing.assert_array_equal(by_eye.image, by_keywords.image)
     assert by_eye.as_json() == by_keywords.as_json()
 

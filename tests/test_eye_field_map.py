@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
@@ -98,7 +99,7 @@ def test_off_axis_psf_centroid_follows_the_traced_rays():
     eye = eye_model("navarro-1985")
     field = (20.0, 0.0)
     truth = _ray_centroid_arcmin(eye, field, 4.0, 589.3)
-    spectral = eye_spectral_wavefront("navarro-1985", pupil_mm=4.0, wavelengths_nm=[589.3], field_deg=field)
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=4.0), wavelengths_nm=[589.3], field_deg=field)
     step = 0.5
 
     def centroid_x(front):
@@ -134,7 +135,8 @@ def test_depth_eye_warns_off_axis_where_its_psfs_miss_the_field_map(caplog):
     from vissim.optics.eyes.depth_eye import traced_depth_eye
 
     with caplog.at_level("WARNING"):
-        traced_depth_eye("navarro-1985", "-1.00", pupil_mm=3.0, wavelength_nm=555.0)
+        eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-1.00")
+        traced_depth_eye(eye, wavelength_nm=555.0)
         assert not caplog.records
-        traced_depth_eye("navarro-1985", "-1.00", pupil_mm=3.0, wavelength_nm=555.0, field_deg=(20.0, 0.0))
+        traced_depth_eye(eye, wavelength_nm=555.0, field_deg=(20.0, 0.0))
     assert len(caplog.records) == 1 and "6.4 %" in caplog.records[0].getMessage()

@@ -117,13 +117,13 @@ WRONG_TYPES = [
     (lambda: vissim.analyse_subject("subject_001.json"), "must be a SubjectData (from vissim.load_subject"),
     (lambda: vissim.fit_quadratic("a", "b"), "must be a number or a sequence of numbers in D"),
     (lambda: vissim.render_chart_print("K"), "must be a ChartSpec"),
-    (lambda: vissim.eye_wavefront("navarro-1985", pupil_mm=3.0, wavelength_nm=555.0, rx=-1.0),
-     "expected a Prescription (the correcting lens)"),
-    (lambda: vissim.eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=[500.0, 600.0], rx=-1.0),
-     "expected a Prescription (the correcting lens)"),
+    (lambda: vissim.build_eye("navarro-1985", pupil_mm=3.0, rx=-1.0), "expected a Prescription (the correcting lens)"),
+    (lambda: vissim.Eye("navarro-1985"), "must be a SchematicEye"),
+    (lambda: vissim.eye_wavefront(5, wavelength_nm=555.0), "must be an Eye (vissim.build_eye)"),
+    (lambda: vissim.eye_spectral_wavefront(None, wavelengths_nm=[500.0, 600.0]), "must be an Eye (vissim.build_eye)"),
     (lambda: vissim.SpectralWavefront((500.0,), ("2,0=0.1",)), "must be a Wavefront"),
     (lambda: vissim.named_spectrum(5), "must be text, one of photopic"),
-    (lambda: vissim.blur_eye("chart.png", model="navarro-1985", arcmin_per_px=1.0, pupil_mm=3.0, wavelength_nm=555.0),
+    (lambda: vissim.blur_eye("chart.png", vissim.build_eye("navarro-1985"), arcmin_per_px=1.0, wavelength_nm=555.0),
      "image must be an ndarray"),
 ]
 
@@ -148,7 +148,11 @@ def test_a_wrong_argument_type_is_one_type_error_saying_what_is_accepted(call, a
     (lambda: vissim.blur_image(IMAGE, _psf(), arcmin_per_px=float("nan")), "arcmin per pixel"),
     (lambda: vissim.DslrBench(focal_length_mm="long"), "focal length mm must be a number in mm"),
     (lambda: vissim.single_letter_spec(5, 1.0), "unknown Sloan letter '5'"),
-    (lambda: vissim.eye_wavefront("navaro", pupil_mm=3.0, wavelength_nm=555.0), "unknown eye model 'navaro'"),
+    (lambda: vissim.build_eye("navaro", pupil_mm=3.0), "unknown eye model 'navaro'"),
+    (lambda: vissim.eye_wavefront("navarro-1985"), "takes an Eye, not the name 'navarro-1985'"),
+    (lambda: vissim.build_eye("navarro-1985", pupil_mm=3.0, iris_mm=3.0), "not both"),
+    (lambda: vissim.build_eye("navarro-1985", surfaces={"cornea": {"conic": 0.0}}), "has no surface 'cornea'"),
+    (lambda: vissim.build_eye("navarro-1985", surfaces={"cornea front": {"conic": "flat"}}), "must be a number"),
 ])
 def test_a_bad_value_is_one_input_error_naming_it_and_its_unit(call, fragment):
     with pytest.raises(VissimInputError, match=fragment.replace("(", r"\(")):

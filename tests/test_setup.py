@@ -114,10 +114,10 @@ def test_blur_is_pupil_times_principal_defocus_and_prescription_round_trips(sphe
     (Prescription(-2.0), 0.0, 0.5), (Prescription(0.0), 2.5, 6.0), (Prescription(-1.0, -1.0, 30.0), 1.0, 0.4),
     (Prescription(1.0), 0.0, math.inf)])
 def test_an_eye_at_a_depth_is_the_viewing_setup_of_that_eye_there(rx, accommodation, distance_m):
-    # The depth blurs' Eye and ViewingSetup.eye decide the same defocus: D = A I - Rx - I/d.
-    from vissim.optics.setup import Eye
+    # The depth blurs' DepthViewer and ViewingSetup.eye decide the same defocus: D = A I - Rx - I/d.
+    from vissim.optics.setup import DepthViewer
 
-    eye = Eye(rx, 3.0, accommodation)
+    eye = DepthViewer(rx, 3.0, accommodation)
     proximity = 0.0 if math.isinf(distance_m) else 1.0 / distance_m
     setup = eye.viewing_setup(distance_m)
     assert setup == ViewingSetup.eye(rx, 3.0, accommodation, distance_m)
@@ -129,10 +129,10 @@ def test_an_eye_at_a_depth_is_the_viewing_setup_of_that_eye_there(rx, accommodat
 
 def test_an_eye_refuses_negative_accommodation_and_a_smaller_extra_wavefront():
     from vissim.errors import VissimInputError
-    from vissim.optics.setup import Eye
+    from vissim.optics.setup import DepthViewer
     from vissim.optics.wavefront import Wavefront
 
     with pytest.raises(VissimInputError, match="accommodation exerted must be >= 0 dioptres"):
-        Eye(Prescription(-1.0), 3.0, -0.5)
+        DepthViewer(Prescription(-1.0), 3.0, -0.5)
     with pytest.raises(VissimInputError, match="extra_wavefront is measured over 2 mm"):
-        Eye(Prescription(-1.0), 3.0, extra_wavefront=Wavefront({(4, 0): 0.1}, 2.0))
+        DepthViewer(Prescription(-1.0), 3.0, extra_wavefront=Wavefront({(4, 0): 0.1}, 2.0))

@@ -7,8 +7,9 @@ The names a user needs are importable from here; each loads its module on first 
   `Wavefront`.
 * Spectra: `eye_spectral_wavefront` (the eye traced at each wavelength), `SpectralWavefront`,
   `named_spectrum` (e.g. the photopic V(λ) spectrum).
-* Schematic eyes: `eye_wavefront` (a traced eye's wavefront with a prescription added);
-  `blur_eye` (an image seen by a schematic eye, its PSF varying over the field).
+* Eyes: `Eye` and `build_eye` (a schematic model at its accommodation, with its pupil and the
+  prescription it has); `eye_wavefront` (an eye's traced wavefront); `blur_eye` (an image seen by an
+  eye, its PSF varying over the field).
 * PSFs and their metrics: `compute_psf`, `PSF`, `strehl_ratio`,
   `mtf`, `otf`, `diffraction_mtf`, `frequencies_cyc_per_deg`.
 * Images: `blur_image`, and scenes with depth: `blur_depth`; charts: `etdrs_chart_spec`, `single_letter_spec`,
@@ -33,6 +34,8 @@ _PUBLIC = {
     "Prescription": "vissim.optics.prescription",
     "parse_spherocylinder": "vissim.optics.prescription",
     "Wavefront": "vissim.optics.wavefront",
+    "Eye": "vissim.optics.eyes.eye",
+    "build_eye": "vissim.optics.eyes.eye",
     "eye_wavefront": "vissim.optics.eyes.psf_wavefront",
     "eye_spectral_wavefront": "vissim.optics.eyes.psf_wavefront",
     "SpectralWavefront": "vissim.optics.spectral_wavefront",

@@ -46,7 +46,7 @@ def test_blur_with_an_eye_model_equals_blur_eye_and_records_the_eye(capsys, tmp_
                          "--wavelength-nm", "555", "--field-deg", "5,0", "--field-step-deg", "0.7")
     assert code == 0, err
     blurred = read_image(target)
-    expected = vissim.blur_eye(image, model=MODEL, arcmin_per_px=1.0, pupil_mm=3.0, wavelength_nm=555.0,
+    expected = vissim.blur_eye(image, vissim.build_eye(MODEL, pupil_mm=3.0), arcmin_per_px=1.0, wavelength_nm=555.0,
                                field_deg=(5.0, 0.0), field_step_deg=0.7)
     np.testing.assert_allclose(blurred.pixels, expected, atol=1e-6)
     eye = blurred.provenance["inputs"]["eye_model"]
@@ -82,8 +82,8 @@ def test_channel_bands_with_an_eye_model_equal_blur_eye_over_the_same_bands(caps
                        "--padding", "constant", "--channel-fwhm-nm", "40")
     assert code == 0, err
     bands = [gaussian_band(w, 40.0) for w in (610.0, 550.0, 465.0)]
-    expected = vissim.blur_eye(rgb, model=MODEL, arcmin_per_px=0.5, pupil_mm=3.0, wavelength_nm=[b[0] for b in bands],
-                               weights=[b[1] for b in bands], background=0.0)
+    expected = vissim.blur_eye(rgb, vissim.build_eye(MODEL, pupil_mm=3.0), arcmin_per_px=0.5,
+                               wavelength_nm=[b[0] for b in bands], weights=[b[1] for b in bands], background=0.0)
     np.testing.assert_allclose(read_image(target).pixels, expected, atol=1e-6)
     assert len(read_image(target).provenance["inputs"]["eye_model"]["channel_wavelengths_nm"][0]) == len(bands[0][0])
 
@@ -92,7 +92,7 @@ def test_channel_bands_with_an_eye_model_equal_blur_eye_over_the_same_bands(caps
     (["--lca"], ["--lca", "own dispersion"]),
     (["--channel-fwhm-nm", "20", "--wavelength-nm", "550,600"], ["--channel-fwhm-nm", "one centre wavelength"]),
     (["--field-deg", "95,0"], ["95", "deg"]),
-    (["--field-step-deg", "0"], ["field_step_deg", "degrees"]),
+    (["--field-step-deg", "0"], ["field step", "degrees"]),
     (["--accommodation-diopters", "12"], ["12"]),
     (["--zernike", "4,0=0.1"], ["--zernike"]),
     (["--device", "cuda"], ["--device cuda", "cpu"]),
@@ -130,7 +130,7 @@ def test_blur_depth_with_an_eye_model_focuses_where_its_traced_wavefront_says(ca
                          "--eye-model", MODEL, "--accommodation-diopters", "2", "--wavelength-nm", "555")
     assert code == 0, err
     focus = read_image(target).provenance["inputs"]["focus"]
-    assert focus["eye_model"] == MODEL and focus["accommodation_diopters"] == 2.0
+    assert focus["model"] == MODEL and focus["accommodation_diopters"] == 2.0
     assert 1.8 < focus["in_focus_proximity_diopters"] < 3.0  # a 0.5 m scene near focus (test_eye_field_blur.py)
 
 

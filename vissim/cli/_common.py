@@ -93,6 +93,23 @@ def add_eye_model_arg(parser, help_text: str, **extra) -> None:
                         help=f"{help_text} (one of {', '.join(EYE_MODELS)})", **extra)
 
 
+#: What ``--rx`` means with ``--eye-model``, in every command that takes both.
+EYE_RX_HELP = ("with --eye-model, --rx is the prescription the eye has (the model eye made ametropic: its axial "
+               "length and a toric cornea, measured at the spectacle plane 12 mm in front of the cornea)")
+
+
+def eye_from_args(args, rx_text: str | None):
+    """The `Eye` ``--eye-model``, ``--accommodation-diopters``, ``--pupil-mm`` and ``rx_text`` describe: the one
+    place the command line's words become an eye (`build_eye`)."""
+    from vissim.optics.eyes.eye import build_eye  # the trace's imports, when used
+
+    rx = None if rx_text is None else Prescription.parse(rx_text)
+    if rx is not None and rx.is_close(Prescription(0.0)):
+        rx = None
+    accommodation = 0.0 if args.accommodation_diopters is None else args.accommodation_diopters
+    return build_eye(args.eye_model, accommodation_diopters=accommodation, pupil_mm=args.pupil_mm, rx=rx)
+
+
 def field_deg_from_text(text: str) -> tuple[float, float]:
     """``--field-deg X,Y``: a field angle's (x, y) in degrees."""
     values = parse_float_list(text, "--field-deg", "degrees", positive=False)

@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.cli._common import (FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg, check_outputs_apart,
-                                field_deg_from_text, image_sampling, parse_float_list, wavefront_from_args)
+from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg,
+                                check_outputs_apart, eye_from_args, field_deg_from_text, image_sampling,
+                                parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_image, write_image
 from vissim.optics.array_backend import DEVICES, array_backend
@@ -71,7 +72,7 @@ def add_eye_model_args(parser) -> None:
         "schematic eye (in place of the reduced eye)",
         "With --eye-model the image is seen by a traced schematic eye: each channel's wavelength is traced "
         "(the eye's own spherical aberration, dispersion and off-axis aberrations, no --lca; a --channel-fwhm-nm band "
-        "at each of its wavelengths), --rx is added over the same --pupil-mm entrance pupil as for the reduced eye. The PSF varies "
+        "at each of its wavelengths) over the --pupil-mm entrance pupil; " + EYE_RX_HELP + ". The PSF varies "
         "over the image: it is traced at a grid of field points --field-step-deg apart and interpolated between "
         "them; an image within one step is blurred by the one PSF at its centre. The image stays in visual angle "
         "(the eye's distortion is not applied).")
@@ -193,18 +194,14 @@ def _run_eye(args: argparse.Namespace, image, step: float, bands: list) -> int:
     from vissim.optics.field_blur import blur_field_dependent
 
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
-    accommodation = args.accommodation_diopters if args.accommodation_diopters is not None else 0.0
     field_step = DEFAULT_FIELD_STEP_DEG if args.field_step_deg is None else args.field_step_deg
-    rx = Prescription.parse(args.rx) if args.rx is not None else None
-    channel_grids = eye_psf_grids(image.pixels.shape[:2], [b[0] for b in bands], [b[1] for b in bands],
-                                  model=args.eye_model, arcmin_per_px=step, pupil_mm=args.pupil_mm, rx=rx,
-                                  accommodation_diopters=accommodation, field_deg=field, field_step_deg=field_step,
-                                  mode=args.mode)
+    the_eye = eye_from_args(args, args.rx)
+    channel_grids = eye_psf_grids(image.pixels.shape[:2], the_eye, [b[0] for b in bands], [b[1] for b in bands],
+                                  arcmin_per_px=step, field_deg=field, field_step_deg=field_step, mode=args.mode)
     blurred = blur_field_dependent(image.pixels, channel_grids if image.pixels.ndim == 3 else channel_grids[0],
                                    arcmin_per_px=step, padding=args.padding)
     any_grid = channel_grids[0]
-    eye = {"model": args.eye_model, "field_deg": list(field), "accommodation_diopters": accommodation,
-           "pupil_mm": args.pupil_mm, "field_step_deg": field_step, "nodes": list(any_grid.shape),
+    eye = {**the_eye.as_json(), "field_deg": list(field), "field_step_deg": field_step, "nodes": list(any_grid.shape),
            "node_count": any_grid.node_count, "channel_wavelengths_nm": [list(b[0]) for b in bands],
            "channel_weights": [None if b[1] is None else list(b[1]) for b in bands],
            "distortion": "not applied (visual-angle coordinates)"}

@@ -14,15 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import (FIELD_DEG_HELP, add_eye_model_arg, add_rx_arg, check_outputs_apart,
-                                field_deg_from_text, image_sampling)
+from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_eye_model_arg, add_rx_arg, check_outputs_apart,
+                                eye_from_args, field_deg_from_text, image_sampling)
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_data_map, read_image, write_image
 from vissim.optics.accommodation import Accommodation, accommodation_for_target
 from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
 from vissim.optics.prescription import Prescription
-from vissim.optics.setup import Eye
+from vissim.optics.setup import DepthViewer
 from vissim.progress import terminal_progress
 from vissim.provenance import make_provenance
 
@@ -54,8 +54,8 @@ def add_parser(subparsers) -> None:
     eye = parser.add_argument_group(
         "schematic eye (in place of the reduced eye)",
         "With --eye-model the eye is a traced schematic eye at one field point (--field-deg, default 0,0): its spherical aberration and its own defocus at --wavelength-nm and at the accommodation "
-        "exerted (--accommodation-diopters, physical: its lens changes shape), with --rx's lens added over the "
-        "same --pupil-mm entrance pupil; each depth adds its defocus as for the reduced eye, and the eye is in "
+        "exerted (--accommodation-diopters, physical: its lens changes shape), over the --pupil-mm entrance pupil; "
+        + EYE_RX_HELP + "; each depth adds its defocus as for the reduced eye, and the eye is in "
         "focus where its whole wavefront says. The focus-target options (--age, --amplitude-diopters, "
         "--focus-distance-m) are the reduced eye's and are refused with it.")
     add_eye_model_arg(eye, "a schematic eye")
@@ -119,8 +119,9 @@ def _accommodation(args: argparse.Namespace, eye: Prescription, depth: np.ndarra
     }
 
 
-def _schematic_eye(args: argparse.Namespace, rx: Prescription) -> tuple[Eye, float, dict]:
-    """The traced eye's `Eye` (`vissim.optics.eyes.depth_eye.traced_depth_eye`), its accommodation and its record."""
+def _schematic_eye(args: argparse.Namespace) -> tuple[DepthViewer, float, dict]:
+    """The traced eye's `DepthViewer` (`vissim.optics.eyes.depth_eye.traced_depth_eye`), its accommodation and its
+    record."""
     from vissim.optics.eyes.depth_eye import traced_depth_eye  # the trace's imports, when used
 
     targets = [name for name, value in (("--age", args.age), ("--amplitude-diopters", args.amplitude_diopters),
@@ -130,9 +131,9 @@ def _schematic_eye(args: argparse.Namespace, rx: Prescription) -> tuple[Eye, flo
                                "schematic eye exerts with --accommodation-diopters")
     accommodation = 0.0 if args.accommodation_diopters is None else args.accommodation_diopters
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
-    eye = traced_depth_eye(args.eye_model, rx, pupil_mm=args.pupil_mm, wavelength_nm=args.wavelength_nm,
-                           accommodation_diopters=accommodation, field_deg=field)
-    info = {"accommodation_diopters": accommodation, "eye_model": args.eye_model, "field_deg": list(field),
+    the_eye = eye_from_args(args, args.rx)
+    eye = traced_depth_eye(the_eye, wavelength_nm=args.wavelength_nm, field_deg=field)
+    info = {**the_eye.as_json(), "field_deg": list(field),
             "in_focus_proximity_diopters": eye.in_focus_proximity_diopters,
             "eye_wavefront_um": {f"{n},{m}": c for (n, m), c in eye.extra_wavefront.coefficients_um.items()}}
     return eye, accommodation, info
@@ -153,9 +154,9 @@ def run(args: argparse.Namespace) -> int:
         if args.field_deg is not None:
             raise VissimInputError("--field-deg needs --eye-model (the reduced eye has one PSF over the field)")
         accommodation, focus_info = _accommodation(args, eye, depth)
-        depth_eye = Eye(eye, args.pupil_mm, accommodation)
+        depth_eye = DepthViewer(eye, args.pupil_mm, accommodation)
     else:
-        depth_eye, accommodation, focus_info = _schematic_eye(args, eye)
+        depth_eye, accommodation, focus_info = _schematic_eye(args)
     with terminal_progress() as progress:
         result = blur_depth(
             image.pixels, depth, eye=depth_eye, arcmin_per_px=step,

@@ -11,7 +11,7 @@ from vissim.cli._common import (FIELD_DEG_HELP, RX_HELP, add_trial_lens_args, fi
                                 trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
-from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
 
 if TYPE_CHECKING:
@@ -62,7 +62,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     add_trial_lens_args(lens)
     parser.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
                         help="spectacle plane, mm in front of the corneal vertex: where --rx is written, the lens's "
-                             f"back vertex sits and the refraction is stated (default {SPECTACLE_VERTEX_DISTANCE_MM:g} "
+                             f"back vertex sits and the refraction is stated (default {DEFAULT_SPECTACLE_VERTEX_MM:g} "
                              "with --rx or a lens; without them and --vertex-mm the refraction is at the corneal vertex)")
     parser.add_argument("--mtf-cyc-per-mm", metavar="F1,F2,...",
                         help="MTF at these retinal frequencies, cycles per mm (>= 0)")
@@ -111,15 +111,17 @@ def _light(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     from vissim.bench.atv.tube import atv_trial_lens  # the trace's imports are paid when the command runs
+    from vissim.optics.eyes.eye import build_eye
     from vissim.optics.eyes.report import eye_report
 
     powers = trial_lens_powers(args)
     lenses = () if powers is None else (atv_trial_lens(*powers),)
     wavelength, spectrum = _light(args)
-    report = eye_report(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
-                        iris_mm=args.iris_mm, wavelength_nm=wavelength, mtf_spectrum=spectrum,
-                        field_deg=field_deg_from_text(args.field_deg),
-                        rx=args.rx, vertex_distance_mm=args.vertex_mm,
+    eye = build_eye(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
+                    iris_mm=args.iris_mm, rx=args.rx,
+                    vertex_mm=DEFAULT_SPECTACLE_VERTEX_MM if args.vertex_mm is None else args.vertex_mm)
+    report = eye_report(eye, wavelength_nm=wavelength, mtf_spectrum=spectrum,
+                        field_deg=field_deg_from_text(args.field_deg), at_spectacle_plane=args.vertex_mm is not None,
                         mtf_cyc_per_mm=_frequencies(args.mtf_cyc_per_mm, "--mtf-cyc-per-mm", "cycles per mm"),
                         mtf_cyc_per_deg=_frequencies(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles per degree"),
                         lenses=lenses, lca=args.lca)

@@ -9,8 +9,8 @@ import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
-from vissim.cli._common import (FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg, field_deg_from_text,
-                                parse_float_list, wavefront_from_args)
+from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg, eye_from_args,
+                                field_deg_from_text, parse_float_list, wavefront_from_args)
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
@@ -47,10 +47,7 @@ def add_parser(subparsers) -> None:
                         "wavefront over the --pupil-mm entrance pupil, at --field-deg and --accommodation-diopters, "
                         "traced at each wavelength (its spherical aberration and its own dispersion: defocus, and off "
                         "axis each wavelength's image point seen from the model's reference wavelength's; no --lca), "
-                        "with --rx's defocus and "
-                        "astigmatism (and --zernike) added over the same pupil, so --rx means what it means for the "
-                        "reduced eye (vissim.optics.eyes.psf_wavefront; `vissim eye --rx` traces the ametropic eye "
-                        "instead)")
+                        "--zernike added over the same pupil; " + EYE_RX_HELP + " (vissim.optics.eyes.psf_wavefront)")
     parser.add_argument("--field-deg", metavar="X,Y",
                         help=f"with --eye-model: the {FIELD_DEG_HELP}; the PSF is centred on the chief ray's image "
                         "point at the model's reference wavelength (default 0,0)")
@@ -111,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront | SpectralWavefront:
-    """The schematic eye's traced wavefront at each wavelength with --rx (and --zernike) added
+    """The schematic eye's traced wavefront at each wavelength, the eye having --rx, with --zernike added
     (`eye_spectral_wavefront`: one wavelength's front is `eye_wavefront`'s, with its map to visual angle)."""
     from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront  # paid when it runs
 
@@ -119,11 +116,8 @@ def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront 
         raise VissimInputError("--eye-model takes no --lca: the traced eye has its own dispersion")
     if len(set(wavelengths)) != len(wavelengths):
         raise VissimInputError(f"--wavelength-nm lists a wavelength twice: {', '.join(f'{w:g}' for w in wavelengths)} nm")
-    rx = Prescription.parse(args.rx) if args.rx is not None else None
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
-    accommodation = args.accommodation_diopters if args.accommodation_diopters is not None else 0.0
-    front = eye_spectral_wavefront(args.eye_model, pupil_mm=args.pupil_mm, wavelengths_nm=wavelengths, rx=rx,
-                                   field_deg=field, accommodation_diopters=accommodation)
+    front = eye_spectral_wavefront(eye_from_args(args, args.rx), wavelengths_nm=wavelengths, field_deg=field)
     if args.zernike is not None:
         measured = args.zernike_pupil_mm if args.zernike_pupil_mm is not None else args.pupil_mm
         extra = Wavefront(parse_zernike_terms(args.zernike), measured)

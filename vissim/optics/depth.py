@@ -1,7 +1,7 @@
 """Depth-dependent blur: one eye, one accommodation state, a scene with a depth map.
 
 Defocus per depth (derivation in `vissim.optics.accommodation`; decided by
-`vissim.optics.setup.Eye`, `vissim.optics.setup.ViewingSetup.eye` at every depth).  An object
+`vissim.optics.setup.DepthViewer`, `vissim.optics.setup.ViewingSetup.eye` at every depth).  An object
 ``d`` metres away has *proximity* ``L = 1/d`` dioptres (``L = 0`` for sky at infinity).  An eye whose correcting
 lens is ``Rx`` (myope negative), exerting accommodation ``A``, is corrected *for that object*
 by the lens::
@@ -93,7 +93,7 @@ from vissim.optics.depth_psfs import LayerOptics, in_order, layer_pool, worker_t
 from vissim.optics.depth_windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import geometric_blur_radius_arcmin
-from vissim.optics.setup import Eye
+from vissim.optics.setup import DepthViewer
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import arcmin_to_rad
@@ -237,10 +237,10 @@ class DepthBlurResult:
 
 
 # -- the eye ---------------------------------------------------------------------------
-def eye_of(eye: Eye | None, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront) -> Eye:
-    """``eye``, or the `Eye` the keywords describe (accommodation None: 0 D); both at once are refused."""
+def eye_of(eye: DepthViewer | None, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront) -> DepthViewer:
+    """``eye``, or the `DepthViewer` the keywords describe (accommodation None: 0 D); both at once are refused."""
     if eye is not None:
-        instance_of(eye, Eye, "eye", "a vissim.optics.setup.Eye")
+        instance_of(eye, DepthViewer, "eye", "a vissim.optics.setup.DepthViewer")
         given = [name for name, value in (("eye_prescription", eye_prescription), ("pupil_diameter_mm", pupil_diameter_mm),
                                           ("accommodation_diopters", accommodation_diopters),
                                           ("extra_wavefront", extra_wavefront)) if value is not None]
@@ -248,10 +248,10 @@ def eye_of(eye: Eye | None, eye_prescription, pupil_diameter_mm, accommodation_d
             raise VissimInputError(f"give the eye as eye= or as its keywords, not both (also given: {', '.join(given)})")
         return eye
     if eye_prescription is None or pupil_diameter_mm is None:
-        raise VissimTypeError("the eye is needed: eye= (a vissim.optics.setup.Eye), or eye_prescription= and "
+        raise VissimTypeError("the eye is needed: eye= (a vissim.optics.setup.DepthViewer), or eye_prescription= and "
                               "pupil_diameter_mm=")
     accommodation = 0.0 if accommodation_diopters is None else accommodation_diopters
-    return Eye(eye_prescription, pupil_diameter_mm, accommodation, extra_wavefront)
+    return DepthViewer(eye_prescription, pupil_diameter_mm, accommodation, extra_wavefront)
 
 
 # -- the layered blur -----------------------------------------------------------------
@@ -266,7 +266,7 @@ def blur_depth(
     wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
     mode: str = "wave",
     extra_wavefront: Wavefront | None = None,
-    eye: Eye | None = None,
+    eye: DepthViewer | None = None,
     layer_spacing_fraction: float = 0.5,
     max_layers: int | None = DEFAULT_MAX_LAYERS,
     occlusion_threshold_px: float = 1.0,
@@ -293,8 +293,8 @@ def blur_depth(
         `vissim.optics.accommodation.accommodation_for_target`.
     extra_wavefront : Wavefront, optional
         Further aberrations of the eye (higher orders), the same at every depth.
-    eye : Eye, optional
-        The eye as one object (`vissim.optics.setup.Eye`), instead of the four keywords above.
+    eye : DepthViewer, optional
+        The eye as one object (`vissim.optics.setup.DepthViewer`), instead of the four keywords above.
     layer_spacing_fraction : float
         Neighbouring layers' blur discs differ by at most this many pixels.
     max_layers : int, optional
@@ -448,7 +448,7 @@ def _tent_matte(proximity: np.ndarray, layer_diopters: np.ndarray) -> _TentMatte
     return _TentMatte(lower.astype(np.int32), upper, frac.astype(np.float32), coverage, active)
 
 
-def _layer_optics(eye: Eye, layer_diopters: np.ndarray, matte: _TentMatte, wavelength: float, step: float, mode: str,
+def _layer_optics(eye: DepthViewer, layer_diopters: np.ndarray, matte: _TentMatte, wavelength: float, step: float, mode: str,
                   coarse_blur_px: float | None, pool) -> tuple[LayerOptics, list[DepthLayer]]:
     """Each non-empty layer's wavefront (``eye`` at its proximity), blur diameter, grid (coarse from
     ``coarse_blur_px``) and PSF (on ``pool``'s threads if given), and its record."""

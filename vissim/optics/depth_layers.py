@@ -68,7 +68,7 @@ from vissim.optics.depth_windows import grow_box
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import PSF, geometric_blur_radius_arcmin
 from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
-from vissim.optics.setup import Eye
+from vissim.optics.setup import DepthViewer
 from vissim.optics.wavefront import Wavefront
 
 __all__ = ["SceneLayer", "LayeredBlurResult", "composite_layers"]
@@ -298,7 +298,7 @@ def composite_layers(
     wavelength_nm: float = DEFAULT_WAVELENGTH_NM,
     mode: str = "geometric",
     extra_wavefront: Wavefront | None = None,
-    eye: Eye | None = None,
+    eye: DepthViewer | None = None,
     layer_spacing_fraction: float = 0.5,
     n_rays: int | None = None,
     crop_px: int = 0,
@@ -320,8 +320,8 @@ def composite_layers(
         The eye's wavelength, nm, as in `vissim.optics.depth.blur_depth`.
     extra_wavefront
         The eye's further aberrations, as in `vissim.optics.depth.blur_depth`.
-    eye : Eye, optional
-        The eye as one object (`vissim.optics.setup.Eye`), instead of the four keywords above.
+    eye : DepthViewer, optional
+        The eye as one object (`vissim.optics.setup.DepthViewer`), instead of the four keywords above.
     mode : {"geometric", "wave"}
     layer_spacing_fraction : float
         A slanted layer's slices differ in blur by at most this many pixels.

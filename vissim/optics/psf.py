@@ -439,15 +439,15 @@ def compute_psf(
     )
 
 
-def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = DEFAULT_WAVELENGTH_NM, pupil_diameter_mm: float | None = None) -> float:
+def strehl_ratio(wavefront: Wavefront, wavelength_nm: float | None = None, pupil_diameter_mm: float | None = None) -> float:
     """Strehl ratio |<exp(ikW)>|^2 over the pupil (cell-averaged quadrature, sampling from the slope).
 
     Parameters
     ----------
     wavefront : Wavefront
         The aberration (OPD in micrometres over its measurement pupil).
-    wavelength_nm : float
-        Wavelength, nm.
+    wavelength_nm : float, optional
+        Wavelength, nm (default: the wavefront's own, else 550).
     pupil_diameter_mm : float, optional
         Pupil diameter, mm, at most the wavefront's (default: the wavefront's pupil).
 
@@ -467,7 +467,9 @@ def strehl_ratio(wavefront: Wavefront, wavelength_nm: float = DEFAULT_WAVELENGTH
     0.39
     """
     diameter = _checked_front(wavefront, pupil_diameter_mm, "strehl_ratio")
-    wavelength_nm = check_wavelength_nm(wavelength_nm)
+    if isinstance(wavefront, SpectralWavefront) and wavelength_nm is None:
+        raise VissimInputError("strehl_ratio of a spectral wavefront needs one of its wavelengths (wavelength_nm)")
+    wavelength_nm = check_wavelength_nm(wavelengths_for(wavefront, wavelength_nm, DEFAULT_WAVELENGTH_NM))
     wavefront = front_at_wavelength(wavefront, wavelength_nm, None)  # a spectral front's own at that wavelength
     cells = max(256, psf_sampling(diameter, wavelength_nm, 1.0, 1, geometric_blur_radius_arcmin(wavefront, diameter),
                                   "mft").pupil_cells)

@@ -20,6 +20,8 @@ size that would hold the PSF.
 
 from __future__ import annotations
 
+import dataclasses
+
 import functools
 import math
 from collections.abc import Sequence
@@ -35,7 +37,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.pupil_rays import landing_arcmin, pupil_cell_centres
 from vissim.optics.spectral_wavefront import SpectralWavefront, wavelengths_for
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.wavefront import Wavefront, same_wavelength
 from vissim.units import nm_to_mm, rad_to_arcmin
 
 __all__ = [
@@ -94,17 +96,41 @@ def _blur_radius_cached(items: tuple, measured_mm: float, diameter_mm: float) ->
 
 
 def front_at_wavelength(wavefront, wavelength_nm: float, lca_reference_nm: float | None) -> Wavefront:
-    """The front a PSF at ``wavelength_nm`` is of: a `SpectralWavefront`'s own front at that wavelength
-    (which carries its own dispersion: ``lca_reference_nm`` is refused); any other with Thibos's
-    chromatic defocus relative to ``lca_reference_nm`` added when that is given."""
+    """The front a PSF at ``wavelength_nm`` is of, decided here once:
+
+    * a `SpectralWavefront`'s own front at that wavelength (it carries its own dispersion:
+      ``lca_reference_nm`` is refused);
+    * a `Wavefront` that knows its wavelength (traced or measured in that light): itself at that
+      wavelength; at another only when told how to convert it, ``lca_reference_nm`` equal to its own
+      wavelength (Thibos's chromatic defocus from there); anything else is refused, never silently
+      used in the wrong light;
+    * any other front (a prescription's): itself, with Thibos's chromatic defocus relative to
+      ``lca_reference_nm`` added when that is given.
+    """
     if isinstance(wavefront, SpectralWavefront):
         if lca_reference_nm is not None:
             raise VissimInputError(f"an LCA reference wavelength ({lca_reference_nm:g} nm) cannot be added to a "
                                    "spectral wavefront: each wavelength's front has its own dispersion")
         return wavefront.at(wavelength_nm)
+    own = getattr(wavefront, "wavelength_nm", None)
+    if own is not None:
+        _check_conversion(own, wavelength_nm, lca_reference_nm)
     if lca_reference_nm is None:
         return wavefront
-    return wavefront.with_defocus_diopters(chromatic_difference_of_refraction_diopters(wavelength_nm, lca_reference_nm))
+    converted = wavefront.with_defocus_diopters(chromatic_difference_of_refraction_diopters(wavelength_nm,
+                                                                                            lca_reference_nm))
+    return converted if own is None else dataclasses.replace(converted, wavelength_nm=wavelength_nm)
+
+
+def _check_conversion(own_nm: float, wavelength_nm: float, lca_reference_nm: float | None) -> None:
+    """Refuse a front known at ``own_nm`` used at ``wavelength_nm`` unless converted from its own wavelength."""
+    if lca_reference_nm is not None and not same_wavelength(lca_reference_nm, own_nm):
+        raise VissimInputError(f"the wavefront holds at {own_nm:g} nm: its chromatic defocus can only be taken from "
+                               f"there (LCA reference {own_nm:g} nm), not from {lca_reference_nm:g} nm")
+    if lca_reference_nm is None and not same_wavelength(own_nm, wavelength_nm):
+        raise VissimInputError(f"the wavefront holds at {own_nm:g} nm, not at {wavelength_nm:g} nm: trace or measure "
+                               f"it at {wavelength_nm:g} nm, or convert it by the eye's chromatic defocus "
+                               f"(LCA reference {own_nm:g} nm)")
 
 
 def suggested_size_px(

@@ -17,7 +17,7 @@ at an object at ``object_distance_m``.  It holds
 From these follow the wavefront (``W = -P r^2 / 2`` of the prescription P) and the geometric
 blur: pupil (mm) x |principal defocus| (D) milliradians per principal meridian.
 
-An `Eye` is an uncorrected eye at every depth at once (the depth blurs,
+A `DepthViewer` is an uncorrected eye at every depth at once (the depth blurs,
 `vissim.optics.depth.blur_depth` and `vissim.optics.depth_layers.composite_layers`): the
 same decision per depth as `ViewingSetup.eye`, on the eye's wavefront.
 
@@ -47,7 +47,7 @@ from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, entran
 from vissim.optics.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
-__all__ = ["ViewingSetup", "Eye", "check_accommodation_diopters"]
+__all__ = ["ViewingSetup", "DepthViewer", "check_accommodation_diopters"]
 
 _IDENTITY: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
 
@@ -183,7 +183,7 @@ class ViewingSetup:
 
 
 @dataclass(frozen=True, eq=False)
-class Eye:
+class DepthViewer:
     """An uncorrected eye seen at every depth: its defocus there, on its wavefront.
 
     ``prescription`` is the eye's correcting lens (myope < 0, *not* worn), ``pupil_diameter_mm``

@@ -28,14 +28,12 @@ import numpy as np
 from vissim.checks import instance_of
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.wavefront import WAVELENGTH_MATCH_NM, Wavefront, same_wavelength
 from vissim.units import xy_matrix_to_image_rowcol
 
 __all__ = ["SpectralWavefront", "WAVELENGTH_MATCH_NM", "wavelengths_for", "field_mapped", "field_map_stretch",
            "FIELD_MAP_IDENTITY_TOL"]
 
-#: Two wavelengths closer than this (nm) are the same wavelength when a front is looked up.
-WAVELENGTH_MATCH_NM = 1e-6
 #: A field map within this of the identity (largest element) is the identity: no PSF is resampled.
 FIELD_MAP_IDENTITY_TOL = 1e-9
 
@@ -70,8 +68,11 @@ class SpectralWavefront:
                                    f"for {len(wavelengths)} wavelengths")
         if any(b <= a for a, b in zip(wavelengths, wavelengths[1:])):
             raise VissimInputError(f"a spectral wavefront's wavelengths must increase, got {wavelengths} nm")
-        for front in fronts:
+        for wavelength, front in zip(wavelengths, fronts):
             instance_of(front, Wavefront, "each front of a SpectralWavefront", "a Wavefront (µm over a pupil)")
+            if front.wavelength_nm is not None and not same_wavelength(front.wavelength_nm, wavelength):
+                raise VissimInputError(f"a spectral wavefront's front at {front.wavelength_nm:g} nm is given for "
+                                       f"{wavelength:g} nm")
         pupils = {front.pupil_diameter_mm for front in fronts}
         if len(pupils) != 1:
             raise VissimInputError(f"a spectral wavefront's fronts must share one pupil, got {sorted(pupils)} mm")
@@ -86,7 +87,7 @@ class SpectralWavefront:
     def at(self, wavelength_nm: float) -> Wavefront:
         """The front at ``wavelength_nm`` (one of `wavelengths_nm`); any other is refused."""
         for w, front in zip(self.wavelengths_nm, self.fronts):
-            if abs(w - wavelength_nm) <= WAVELENGTH_MATCH_NM:
+            if same_wavelength(w, wavelength_nm):
                 return front
         held = ", ".join(f"{w:g}" for w in self.wavelengths_nm)
         raise VissimInputError(f"wavelength {wavelength_nm:g} nm is not one of this spectral wavefront's ({held} nm)")
@@ -114,10 +115,13 @@ class SpectralWavefront:
 
 def wavelengths_for(wavefront, wavelength_nm: float | Sequence[float] | None, default_nm: float):
     """The wavelength(s) (nm) a PSF of ``wavefront`` is computed at: ``wavelength_nm`` when given, else a
-    spectral front's own, else ``default_nm``."""
+    spectral front's own, else the one a `Wavefront` knows, else ``default_nm``."""
     if wavelength_nm is not None:
         return wavelength_nm
-    return wavefront.wavelengths_nm if isinstance(wavefront, SpectralWavefront) else default_nm
+    if isinstance(wavefront, SpectralWavefront):
+        return wavefront.wavelengths_nm
+    own = getattr(wavefront, "wavelength_nm", None)
+    return default_nm if own is None else own
 
 
 def _checked_map(matrix) -> tuple | None:

@@ -28,12 +28,14 @@ from types import MappingProxyType
 import numpy as np
 
 from vissim.checks import describe, finite_number
+from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.zernike import zernike_keys, zernike_nm
 
-__all__ = ["Wavefront", "prescription_to_zernike_um", "zernike_um_to_prescription", "parse_zernike_terms",
+__all__ = ["Wavefront", "WAVELENGTH_MATCH_NM", "same_wavelength", "prescription_to_zernike_um",
+           "zernike_um_to_prescription", "parse_zernike_terms",
            "ring_fit_um"]
 
 _SQRT3 = math.sqrt(3.0)
@@ -119,7 +121,10 @@ def _zernike_key(key) -> tuple[int, int]:
 class Wavefront:
     """OSA Zernike expansion of a wavefront error, in µm, over ``pupil_diameter_mm``.
 
-    ``coefficients_um`` maps ``(n, m)`` to the coefficient in micrometres.
+    ``coefficients_um`` maps ``(n, m)`` to the coefficient in micrometres. ``wavelength_nm``: the
+    light the front was traced or measured in, or None for a front that holds at any wavelength (a
+    prescription's, the reduced eye's). A front that knows its wavelength is used at that wavelength
+    only, unless told how to convert it (`vissim.optics.psf_field.front_at_wavelength`).
 
     Parameters
     ----------
@@ -128,6 +133,8 @@ class Wavefront:
         zeros are dropped.
     pupil_diameter_mm : float
         Diameter of the pupil over which the coefficients are defined, mm.
+    wavelength_nm : float, optional
+        The wavelength the coefficients hold at, nm (None: any).
 
     Examples
     --------
@@ -138,6 +145,7 @@ class Wavefront:
 
     coefficients_um: Mapping[tuple[int, int], float]
     pupil_diameter_mm: float
+    wavelength_nm: float | None = None
     _items: tuple = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -155,6 +163,8 @@ class Wavefront:
                 clean[(n, m)] = clean.get((n, m), 0.0) + value
         object.__setattr__(self, "coefficients_um", MappingProxyType(dict(sorted(clean.items()))))
         object.__setattr__(self, "pupil_diameter_mm", diameter)
+        if self.wavelength_nm is not None:
+            object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm, "wavefront's wavelength"))
         object.__setattr__(self, "_items", tuple(self.coefficients_um.items()))
 
     # -- construction -----------------------------------------------------------------
@@ -248,7 +258,7 @@ class Wavefront:
         merged = dict(self.coefficients_um)
         for key, value in other.coefficients_um.items():
             merged[key] = merged.get(key, 0.0) + value
-        return Wavefront(merged, self.pupil_diameter_mm)
+        return Wavefront(merged, self.pupil_diameter_mm, _common_wavelength_nm(self, other))
 
     def with_defocus_diopters(self, extra_sphere_diopters: float) -> Wavefront:
         """Add a spherical *prescription* change (negative = more myopic eye) at this pupil."""
@@ -299,18 +309,41 @@ class Wavefront:
                 "the coefficients were measured over; Zernike coefficients cannot be extrapolated"
             )
         if not self._items or new == self.pupil_diameter_mm:
-            return Wavefront(dict(self.coefficients_um), new)
+            return Wavefront(dict(self.coefficients_um), new, self.wavelength_nm)
         order = self.max_order
         keys, solution = ring_fit_um(self.opd_um, new, order, 2 * order + 4, 4 * order + 8)
         scale = max(1e-12, float(np.max(np.abs(solution))))
-        return Wavefront({k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new)
+        return Wavefront({k: float(v) for k, v in zip(keys, solution) if abs(v) > 1e-13 * scale}, new,
+                         self.wavelength_nm)
 
     def as_json(self) -> dict:
-        return {
+        record = {
             "pupil_diameter_mm": self.pupil_diameter_mm,
             "zernike_um": {f"{n},{m}": v for (n, m), v in self._items},
         }
+        if self.wavelength_nm is not None:
+            record["wavelength_nm"] = self.wavelength_nm
+        return record
 
     def __repr__(self) -> str:
         terms = ", ".join(f"({n},{m})={v:.6g}" for (n, m), v in self._items)
-        return f"Wavefront({{{terms}}} um over {self.pupil_diameter_mm:g} mm)"
+        light = "" if self.wavelength_nm is None else f" at {self.wavelength_nm:g} nm"
+        return f"Wavefront({{{terms}}} um over {self.pupil_diameter_mm:g} mm{light})"
+
+
+#: Two wavelengths closer than this (nm) are one wavelength when fronts are matched to light.
+WAVELENGTH_MATCH_NM = 1e-6
+
+
+def same_wavelength(a_nm: float, b_nm: float) -> bool:
+    """Whether two wavelengths (nm) are one, to `WAVELENGTH_MATCH_NM`."""
+    return abs(a_nm - b_nm) <= WAVELENGTH_MATCH_NM
+
+
+def _common_wavelength_nm(a: Wavefront, b: Wavefront) -> float | None:
+    """The wavelength of the sum of two fronts: the one either knows; two different ones refused."""
+    if a.wavelength_nm is None or b.wavelength_nm is None:
+        return a.wavelength_nm if b.wavelength_nm is None else b.wavelength_nm
+    if not same_wavelength(a.wavelength_nm, b.wavelength_nm):
+        raise VissimInputError(f"cannot add a wavefront at {a.wavelength_nm:g} nm to one at {b.wavelength_nm:g} nm")
+    return a.wavelength_nm

@@ -1,4 +1,4 @@
-"""An image blurred by a schematic eye, its PSF varying over the field (`blur_eye`).
+"""An image blurred by an `Eye`, its PSF varying over the field (`blur_eye`).
 
 * **Nodes**: a regular grid of image points at most ``field_step_deg`` apart, spanning the image
   (`vissim.optics.field_blur.node_positions_px`); an image narrower than one step along an axis
@@ -12,9 +12,9 @@
   above it at a larger y. Field angles beyond ``checks.MAX_FIELD_DEG``, or where the rays miss,
   are refused as the trace refuses them.
 * **A node's PSF**: `vissim.optics.eyes.psf_wavefront.eye_spectral_wavefront` (the traced eye at that
-  field, at each wavelength of the channel's band, and the accommodation, with ``rx`` added over the
-  same entrance pupil; each wavelength's transverse chromatic aberration relative to the model's
-  reference wavelength), then `compute_psf` at the image's sampling.
+  field, at each wavelength of the channel's band, with the light's vergence added over its entrance
+  pupil; each wavelength's transverse chromatic aberration relative to the eye's reference
+  wavelength), then `compute_psf` at the image's sampling.
 * **Between nodes** the PSF is interpolated bilinearly (`vissim.optics.field_blur`, Nagy &
   O'Leary 1998).
 * The image stays in **visual-angle coordinates**: the eye's distortion (the chief ray's retinal
@@ -37,6 +37,7 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.blur import image_kernel_psf, pixel_array
+from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.field_blur import PSFGrid, blur_field_dependent, psf_grid
 from vissim.optics.psf import PSF
@@ -71,37 +72,38 @@ def _band(wavelength_nm, weights) -> tuple[tuple[float, ...], tuple[float, ...] 
     return band, None if weights is None else tuple(float(w) for w in np.atleast_1d(weights))
 
 
-def eye_psf_grid(shape: tuple[int, int], *, model: str, arcmin_per_px: float, pupil_mm: float, wavelength_nm,
-                 weights=None, rx=None, accommodation_diopters: float = 0.0, field_deg=(0.0, 0.0),
-                 field_step_deg: float | None = None, mode: str = "wave") -> PSFGrid:
-    """The schematic eye's PSFs at the nodes over an image of ``shape`` (rows, cols) (module doc).
+def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wavelength_nm=None, weights=None,
+                 vergence_diopters=0.0, field_deg=(0.0, 0.0), field_step_deg: float | None = None,
+                 mode: str = "wave") -> PSFGrid:
+    """The `Eye` ``eye``'s PSFs at the nodes over an image of ``shape`` (rows, cols) (module doc).
 
-    ``wavelength_nm``: one wavelength, or a band of several weighted by ``weights`` (default equal):
-    each node's eye is traced at each (`eye_spectral_wavefront`, its transverse chromatic aberration
-    relative to the model's reference wavelength, as for one wavelength). Each PSF's field is cut to
-    twice the image's longer side plus one (no pixel sees farther).
+    ``wavelength_nm``: one wavelength (default the eye's reference wavelength), or a band of several
+    weighted by ``weights`` (default equal): each node's eye is traced at each (`eye_spectral_wavefront`,
+    its transverse chromatic aberration relative to the eye's reference wavelength, as for one
+    wavelength). Each PSF's field is cut to twice the image's longer side plus one (no pixel sees farther).
     """
+    eye = checked_eye(eye, "eye_psf_grid")
     step = check_arcmin_per_px(arcmin_per_px, "the image's arcmin_per_px")
     spacing_deg = DEFAULT_FIELD_STEP_DEG if field_step_deg is None else positive_number(
-        field_step_deg, "field_step_deg", "degrees")
+        field_step_deg, "field step", "degrees")
     centre = tuple(finite_number(v, "field angle", "deg") for v in field_deg)
     if len(centre) != 2:
-        raise VissimInputError(f"field_deg must be two angles (x, y) in degrees, got {field_deg!r}")
-    band, band_weights = _band(wavelength_nm, weights)
+        raise VissimInputError(f"the field angle must be two angles (x, y) in degrees, got {field_deg!r}")
+    band, band_weights = _band(eye.reference_wavelength_nm if wavelength_nm is None else wavelength_nm, weights)
 
     def psf_at(row_px: float, col_px: float) -> PSF:
-        front = eye_spectral_wavefront(model, pupil_mm=pupil_mm, wavelengths_nm=band, rx=rx,
-                                       accommodation_diopters=accommodation_diopters,
+        front = eye_spectral_wavefront(eye, wavelengths_nm=band, vergence_diopters=vergence_diopters,
                                        field_deg=node_field_deg(row_px, col_px, shape, step, centre))
         return image_kernel_psf(front, shape, arcmin_per_px=step, wavelength_nm=band, weights=band_weights, mode=mode)
 
     return psf_grid(shape, spacing_deg * ARCMIN_PER_DEG / step, psf_at)
 
 
-def eye_psf_grids(shape: tuple[int, int], channels_nm: Sequence, channel_weights=None, **eye) -> list[PSFGrid]:
-    """One `eye_psf_grid` per channel (each distinct band computed once): ``channels_nm[c]`` is channel
-    ``c``'s wavelength or band, ``channel_weights[c]`` its band's weights (None: equal); ``eye``: the
-    other keywords of `eye_psf_grid`."""
+def eye_psf_grids(shape: tuple[int, int], eye: Eye, channels_nm: Sequence, channel_weights=None,
+                  **options) -> list[PSFGrid]:
+    """One `eye_psf_grid` of ``eye`` per channel (each distinct band computed once): ``channels_nm[c]`` is
+    channel ``c``'s wavelength or band, ``channel_weights[c]`` its band's weights (None: equal); ``options``:
+    the other keywords of `eye_psf_grid`."""
     weights = [None] * len(channels_nm) if channel_weights is None else list(channel_weights)
     if len(weights) != len(channels_nm):
         raise VissimInputError(f"got {len(weights)} weight lists for {len(channels_nm)} channels")
@@ -109,37 +111,32 @@ def eye_psf_grids(shape: tuple[int, int], channels_nm: Sequence, channel_weights
     grids: dict = {}
     for band in bands:
         if band not in grids:
-            grids[band] = eye_psf_grid(shape, wavelength_nm=band[0], weights=band[1], **eye)
+            grids[band] = eye_psf_grid(shape, eye, wavelength_nm=band[0], weights=band[1], **options)
     return [grids[band] for band in bands]
 
 
-def blur_eye(image: np.ndarray, *, model: str, arcmin_per_px: float, pupil_mm: float,
-             wavelength_nm: float | Sequence, weights: Sequence | None = None, rx=None,
-             accommodation_diopters: float = 0.0,
-             field_deg=(0.0, 0.0), field_step_deg: float | None = None, mode: str = "wave",
-             padding: str = "constant", background=None, dtype=np.float32) -> np.ndarray:
-    """Blur a linear-light image as the schematic eye ``model`` sees it, the PSF varying over the field.
+def blur_eye(image: np.ndarray, eye: Eye, *, arcmin_per_px: float, wavelength_nm: float | Sequence | None = None,
+             weights: Sequence | None = None, vergence_diopters=0.0, field_deg=(0.0, 0.0),
+             field_step_deg: float | None = None, mode: str = "wave", padding: str = "constant", background=None,
+             dtype=np.float32) -> np.ndarray:
+    """Blur a linear-light image as the `Eye` ``eye`` sees it, the PSF varying over the field.
 
     Parameters
     ----------
     image : ndarray of shape (H, W) or (H, W, C)
         Linear light, ``[row, col]``, at ``arcmin_per_px`` (visual angle; the eye's distortion is
         not applied).
-    model : str
-        A schematic eye (a key of `vissim.optics.eyes.models.EYE_MODELS`).
-    pupil_mm : float
-        The entrance pupil's diameter, mm.
-    wavelength_nm : float or sequence
-        One wavelength for every channel, or one entry per channel: a wavelength, or a band (a
-        sequence of wavelengths); each is traced (the eye's own dispersion, its transverse chromatic
-        aberration relative to the model's reference wavelength).
+    eye : Eye
+        The eye (`vissim.build_eye`): its model, accommodation, pupil and the prescription it has.
+    wavelength_nm : float or sequence, optional
+        One wavelength for every channel (default: the eye's reference wavelength), or one entry per
+        channel: a wavelength, or a band (a sequence of wavelengths); each is traced (the eye's own
+        dispersion, its transverse chromatic aberration relative to the eye's reference wavelength).
     weights : sequence, optional
         Per channel, its band's relative weights (None: equal).
-    rx : Prescription or str, optional
-        The eye's prescription (its correcting lens, not worn), added over the same entrance
-        pupil as for the reduced eye (`vissim.eye_wavefront`).
-    accommodation_diopters : float
-        Accommodation exerted, within the model's range (default 0, relaxed).
+    vergence_diopters : float or 2 x 2, optional
+        The light's vergence at the entrance pupil, D (default 0: a distant object; −1/d for one d
+        metres away; lenses in front add their power), as `vissim.eye_wavefront`.
     field_deg : (x, y) degrees
         The field angle of the image centre, OSA's frame (default (0, 0): fixation at the centre).
     field_step_deg : float, optional
@@ -160,18 +157,20 @@ def blur_eye(image: np.ndarray, *, model: str, arcmin_per_px: float, pupil_mm: f
     --------
     >>> import numpy as np, vissim
     >>> image = np.zeros((41, 41)); image[20, 20] = 1.0
-    >>> blurred = vissim.blur_eye(image, model="navarro-1985", arcmin_per_px=1.0, pupil_mm=3.0,
-    ...                           wavelength_nm=555.0, background=0.0)
+    >>> eye = vissim.build_eye("navarro-1985", pupil_mm=3.0)
+    >>> blurred = vissim.blur_eye(image, eye, arcmin_per_px=1.0, wavelength_nm=555.0, background=0.0)
     >>> round(float(blurred.sum()), 4)
     1.0
     """
+    eye = checked_eye(eye, "blur_eye")
     array = pixel_array(image)
     n_channels = array.shape[2] if array.ndim == 3 else 1
+    wavelength_nm = eye.reference_wavelength_nm if wavelength_nm is None else wavelength_nm
     per_channel = [wavelength_nm] * n_channels if np.ndim(wavelength_nm) == 0 else list(wavelength_nm)
     if len(per_channel) != n_channels:
         raise VissimInputError(f"got {len(per_channel)} wavelengths for an image with {n_channels} channels")
-    grids = eye_psf_grids(array.shape[:2], per_channel, weights, model=model, arcmin_per_px=arcmin_per_px,
-                          pupil_mm=pupil_mm, rx=rx, accommodation_diopters=accommodation_diopters,
-                          field_deg=field_deg, field_step_deg=field_step_deg, mode=mode)
+    grids = eye_psf_grids(array.shape[:2], eye, per_channel, weights, arcmin_per_px=arcmin_per_px,
+                          vergence_diopters=vergence_diopters, field_deg=field_deg, field_step_deg=field_step_deg,
+                          mode=mode)
     return blur_field_dependent(array, grids if array.ndim == 3 else grids[0], arcmin_per_px=arcmin_per_px,
                                 padding=padding, background=background, dtype=dtype)

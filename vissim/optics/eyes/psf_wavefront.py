@@ -1,27 +1,19 @@
-"""The `Wavefront` a PSF of a schematic eye is computed from: the traced eye plus a prescription.
+"""The `Wavefront` a PSF of an `Eye` is computed from: the eye traced, and the light's vergence.
 
-`eye_wavefront` is the one place that decides how ``--eye-model`` and ``--rx`` combine (in
-``vissim psf`` and in the Python API):
+`eye_wavefront` and `eye_spectral_wavefront` take an `Eye` (`vissim.optics.eyes.eye`):
 
 * the eye's own aberrations: the OSA Zernikes of `wavefront.trace_eye_wavefront` (orders up to 8,
-  µm) over the **entrance pupil** ``pupil_mm``, at ``wavelength_nm``, at ``field_deg`` and
-  ``accommodation_diopters``: the model's spherical aberration, its dispersion (the eye's own
-  defocus at that wavelength, in place of Thibos's formula) and its field dependence;
-* plus the prescription's second-order Zernikes, `Wavefront.from_prescription` over the same
-  entrance pupil, added to them.
-
-Why added, and not the ametropic eye of ``vissim eye --rx`` (`ametropia.ametropic_eye`): in
-``psf`` (and ``blur``) ``--rx`` is the correcting lens at the eye's principal plane
-(docs/conventions.md, "Prescriptions"), the wavefront error ``Wavefront.from_prescription``
-writes, for the reduced eye and the schematic eye alike. Added over the same entrance pupil, the
-same ``--rx`` adds the same defocus and astigmatism whichever eye is chosen, so changing
-``--eye-model`` changes only the eye's own aberrations. The ametropic eye (axial length solved at a
-spectacle plane, toric cornea) is the physical eye that has the prescription; its higher-order
-aberrations differ from the emmetropic model's by its longer or shorter vitreous, which this sum
-leaves out. ``vissim eye --rx`` reports that eye.
+  µm) of the eye's optics (the ametropic eye when it has a prescription: its axial length and toric
+  cornea, with the higher orders they bring) over its **entrance pupil**, at ``wavelength_nm``, at
+  ``field_deg`` and its accommodation: the model's spherical aberration, its dispersion (the eye's
+  own defocus at that wavelength, in place of Thibos's formula) and its field dependence;
+* plus the light's vergence at the entrance pupil, ``vergence_diopters`` (V: −1/d for an object d
+  metres in front of the entrance pupil, plus what lenses in front add, as `ViewingSetup`'s
+  vergence), as the second-order Zernikes of an eye whose correcting lens is −V, added over the
+  same pupil. Zero (the default) is a distant object seen without lenses.
 
 Piston is dropped (it moves nothing); tilt is kept. The PSF's origin is the image point of the chief
-ray at the model's reference wavelength (the centre of the reference sphere the OPD is taken against
+ray at the eye's reference wavelength (the centre of the reference sphere the OPD is taken against
 at that wavelength): at another wavelength the front carries, as tilt, its chief ray's offset from
 that point (the transverse chromatic aberration, below), so one wavelength's PSF and a spectrum's
 are in one frame, and the renderer maps its film through that wavelength's chief rays too.
@@ -30,10 +22,9 @@ are in one frame, and the renderer maps its film through that wavelength's chief
 (``pupil_mm`` at every wavelength; the iris that gives it differs by the cornea's dispersion, 0.5 %
 from 400 to 700 nm in Navarro's eye: 2.648 and 2.661 mm for a 3 mm pupil)
 and returns a `SpectralWavefront`: each wavelength's front has its own defocus (the eye's traced
-longitudinal chromatic aberration) and aberrations, with ``rx`` added to each as above. **Transverse
+longitudinal chromatic aberration) and aberrations, with the vergence added to each as above. **Transverse
 chromatic aberration**: each wavelength's chief ray (through the iris centre) lands at its own
-retinal point; that point's offset from the chief ray's point at the reference wavelength (the
-model's, unless given) is seen at the field angle whose reference-wavelength chief ray would land
+retinal point; that point's offset from the chief ray's point at the eye's reference wavelength is seen at the field angle whose reference-wavelength chief ray would land
 there: the offset through the inverse of the retina's local mm per degree, the 2 × 2 derivative of
 the traced chief ray's retinal point by the field angle (`retinal_jacobian_mm_per_deg`, central
 differences of ±`JACOBIAN_STEP_DEG`; on axis it is the paraxial `paraxial.retinal_mm_per_deg`, and
@@ -60,14 +51,14 @@ import numpy as np
 from vissim.checks import MAX_FIELD_DEG
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.models import eye_model
+from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, trace_eye_wavefront
-from vissim.optics.prescription import Prescription, prescription_from
+from vissim.optics.prescription import Prescription
 from vissim.optics.spectral_wavefront import SpectralWavefront
 from vissim.optics.wavefront import Wavefront
 from vissim.units import deg_to_mrad
 
-__all__ = ["eye_wavefront", "eye_spectral_wavefront", "traced_spectral_wavefront", "chromatic_offset_deg",
+__all__ = ["eye_wavefront", "eye_spectral_wavefront", "vergence_front", "traced_spectral_wavefront", "chromatic_offset_deg",
            "retinal_jacobian_mm_per_deg", "JACOBIAN_STEP_DEG"]
 
 #: The iris grid (samples across) of a trace made only for its chief ray and pupil.
@@ -76,41 +67,57 @@ ANCHOR_SAMPLES = 9
 JACOBIAN_STEP_DEG = 0.1
 
 
-def eye_wavefront(model: str, *, pupil_mm: float, wavelength_nm: float, rx=None, field_deg=(0.0, 0.0),
-                  accommodation_diopters: float = 0.0, samples: int = DEFAULT_SAMPLES) -> Wavefront:
-    """The wavefront (µm, OSA Zernikes over the ``pupil_mm`` entrance pupil) of the schematic eye
-    ``model`` (a key of `models.EYE_MODELS`) with the prescription ``rx`` (a `Prescription` or its
-    text; the correcting lens, as for the reduced eye) added, its tilt placing the PSF relative to the
-    chief ray's image point at the model's reference wavelength (module doc).
+def eye_wavefront(eye: Eye, *, wavelength_nm: float | None = None, field_deg=(0.0, 0.0), vergence_diopters=0.0,
+                  samples: int = DEFAULT_SAMPLES) -> Wavefront:
+    """The wavefront (µm, OSA Zernikes over the eye's entrance pupil, at ``wavelength_nm``, default the eye's
+    reference wavelength) of the `Eye` ``eye`` traced at ``field_deg``, with the light's
+    ``vergence_diopters`` at the entrance pupil added (module doc), its tilt placing the PSF relative to the
+    chief ray's image point at the eye's reference wavelength. The front knows its wavelength.
 
     Examples
     --------
-    >>> front = eye_wavefront("navarro-1985", pupil_mm=3.0, wavelength_nm=589.3, rx="-1.00")
-    >>> front.pupil_diameter_mm
-    3.0
+    >>> from vissim.optics.eyes.eye import build_eye
+    >>> front = eye_wavefront(build_eye("navarro-1985", pupil_mm=3.0, rx="-1.00"))
+    >>> front.pupil_diameter_mm, front.wavelength_nm
+    (3.0, 589.3)
     """
-    rx = _checked_rx(rx)  # before the traces
-    eye = eye_model(model, accommodation_diopters)
-    spectral = traced_spectral_wavefront(eye, [wavelength_nm], field_deg, pupil_mm=pupil_mm, samples=samples)
-    return _with_rx(spectral.fronts[0], rx)
+    eye = checked_eye(eye, "eye_wavefront")
+    wavelength = eye.reference_wavelength_nm if wavelength_nm is None else wavelength_nm
+    spectral = eye_spectral_wavefront(eye, wavelengths_nm=[wavelength], field_deg=field_deg,
+                                      vergence_diopters=vergence_diopters, samples=samples)
+    return spectral.fronts[0]
 
 
 def _own_front(traced: EyeWavefront) -> Wavefront:
     """The traced Zernikes without piston, over the entrance pupil."""
     return Wavefront({key: value for key, value in traced.zernike_um.items() if key != (0, 0)},
-                     traced.entrance_pupil_mm)
+                     traced.entrance_pupil_mm, traced.wavelength_nm)
 
 
-def _checked_rx(rx) -> Prescription | None:
-    if rx is None:
+def vergence_front(vergence_diopters, pupil_diameter_mm: float) -> Wavefront | None:
+    """The wavefront error the light's vergence at the entrance pupil adds (D: a scalar, or a 2 x 2 TABO
+    matrix; the object's −1/d plus what lenses in front add): that of an eye whose correcting lens is −V.
+    None for zero vergence."""
+    matrix = _vergence_matrix(vergence_diopters)
+    if not np.any(matrix):
         return None
-    return prescription_from(rx)
+    return Wavefront.from_prescription(Prescription.from_power_matrix(-matrix), pupil_diameter_mm)
 
 
-def _with_rx(front: Wavefront, rx: Prescription | None) -> Wavefront:
-    if rx is None:
-        return front
-    return front + Wavefront.from_prescription(rx, front.pupil_diameter_mm)
+def _vergence_matrix(vergence_diopters) -> np.ndarray:
+    try:
+        value = np.asarray(vergence_diopters, dtype=float)
+    except (TypeError, ValueError):
+        value = np.full(1, np.nan)
+    matrix = value * np.eye(2) if value.ndim == 0 else value
+    if matrix.shape != (2, 2) or not np.all(np.isfinite(matrix)) or abs(matrix[0, 1] - matrix[1, 0]) > 1e-9:
+        raise VissimInputError(f"the light's vergence must be dioptres or a symmetric 2 x 2 matrix of dioptres, got "
+                               f"{vergence_diopters!r}")
+    return matrix
+
+
+def _with_vergence(front: Wavefront, vergence: Wavefront | None) -> Wavefront:
+    return front if vergence is None else front + vergence
 
 
 def retinal_jacobian_mm_per_deg(eye, wavelength_nm: float, field_deg, *, iris_mm: float,
@@ -142,24 +149,25 @@ def chromatic_offset_deg(traced: EyeWavefront, reference: EyeWavefront, jacobian
     return float(x), float(y)
 
 
-def eye_spectral_wavefront(model: str, *, pupil_mm: float, wavelengths_nm, rx=None, field_deg=(0.0, 0.0),
-                           accommodation_diopters: float = 0.0, samples: int = DEFAULT_SAMPLES,
-                           reference_wavelength_nm: float | None = None) -> SpectralWavefront:
-    """The `SpectralWavefront` of the schematic eye ``model`` traced at each of ``wavelengths_nm`` over the
-    ``pupil_mm`` entrance pupil, ``rx`` added to each, with its transverse chromatic aberration as tilt
-    relative to the chief ray at ``reference_wavelength_nm`` (default: the model's) (module doc).
+def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), vergence_diopters=0.0,
+                           samples: int = DEFAULT_SAMPLES) -> SpectralWavefront:
+    """The `SpectralWavefront` of the `Eye` ``eye`` traced at each of ``wavelengths_nm`` over its entrance
+    pupil, the light's ``vergence_diopters`` added to each, with its transverse chromatic aberration as tilt
+    relative to the chief ray at the eye's reference wavelength (module doc).
 
     Examples
     --------
-    >>> s = eye_spectral_wavefront("navarro-1985", pupil_mm=3.0, wavelengths_nm=[450, 650], field_deg=(10, 0))
+    >>> from vissim.optics.eyes.eye import build_eye
+    >>> s = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelengths_nm=[450, 650],
+    ...                            field_deg=(10, 0))
     >>> s.wavelengths_nm, s.reference_wavelength_nm
     ((450.0, 650.0), 589.3)
     """
-    rx = _checked_rx(rx)  # before the traces
-    eye = eye_model(model, accommodation_diopters)
-    traced = traced_spectral_wavefront(eye, wavelengths_nm, field_deg, pupil_mm=pupil_mm, samples=samples,
-                                       reference_wavelength_nm=reference_wavelength_nm)
-    return traced.map(lambda front: _with_rx(front, rx))
+    eye = checked_eye(eye, "eye_spectral_wavefront")
+    _vergence_matrix(vergence_diopters)  # before the traces
+    traced = traced_spectral_wavefront(eye.optics, wavelengths_nm, field_deg, samples=samples, **eye.pupil)
+    vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm)
+    return traced.map(lambda front: _with_vergence(front, vergence))
 
 
 def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupil_mm=None, iris_mm=None,

@@ -58,13 +58,11 @@ import numpy as np
 from scipy.ndimage import map_coordinates
 
 from vissim.checks import finite_number
-from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics import psf_metrics
-from vissim.optics.eyes.ametropia import ametropic_eye
+from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.lca import LcaCurve, lca_curve
-from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.psf_wavefront import traced_spectral_wavefront
@@ -72,11 +70,11 @@ from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
 from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retinal_mm_per_deg
 from vissim.units import osa_xy_to_image_colrow
 from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
-from vissim.optics.prescription import Prescription, prescription_from
+from vissim.optics.prescription import Prescription
 from vissim.optics.psf import compute_psf
 from vissim.optics.psf_field import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
 from vissim.optics.spectral_wavefront import SpectralWavefront, field_map_stretch
-from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM, TrialLensSetup
+from vissim.optics.trial_lens import TrialLensSetup
 from vissim.optics.wavefront import Wavefront
 
 __all__ = ["EyeReport", "MtfSpectrum", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_SIZE_PX"]
@@ -251,33 +249,27 @@ def _pairs(frequencies, table: dict) -> dict:
     return {name: list(zip(frequencies, values)) for name, values in table.items()}
 
 
-def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None, iris_mm=None,
-               wavelength_nm=None, field_deg=(0.0, 0.0), rx=None, vertex_distance_mm=None,
+def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectacle_plane: bool = False,
                mtf_cyc_per_mm=(), mtf_cyc_per_deg=(), lenses=(), lens_gap_mm: float = 0.0,
                mtf_spectrum: MtfSpectrum | None = None, lca: bool = False) -> EyeReport:
-    """The `EyeReport` of ``model`` (a name of `vissim.optics.eyes.models.EYE_MODELS`), module doc.
+    """The `EyeReport` of the `Eye` ``eye`` (its model, accommodation, pupil and the prescription it has), module doc.
 
-    ``rx``: a prescription (text or `Prescription`) the eye is made to have, at the spectacle
-    plane ``vertex_distance_mm`` (default 12 mm) in front of the cornea; ``lenses``: thick trial or
-    spectacle lenses worn there (module doc); ``lca``: add the eye's LCA curve (module doc). Bad input -- an unknown
-    model, an accommodation beyond the model's range, a pupil the iris cannot give, a field where
-    rays miss a surface, meet total internal reflection or leave the GRIN lens, a negative
-    frequency -- raises one `VissimInputError` naming the value and its unit. ``mtf_spectrum``: the
-    MTF of that light (module doc), all else at ``wavelength_nm``.
+    ``lenses``: thick trial or spectacle lenses worn at the eye's spectacle plane (``eye.vertex_mm`` in front of
+    the cornea, module doc); the refraction is stated there when the eye has a prescription, wears lenses or
+    ``at_spectacle_plane``, else at the corneal vertex; ``lca``: add the eye's LCA curve (module doc). Bad input --
+    a pupil the iris cannot give, a field where rays miss a surface, meet total internal reflection or leave the
+    GRIN lens, a negative frequency -- raises one `VissimInputError` naming the value and its unit.
+    ``mtf_spectrum``: the MTF of that light (module doc), all else at ``wavelength_nm``.
     """
-    base = eye_model(model, accommodation_diopters)
+    eye_in = checked_eye(eye, "eye_report")
     f_mm = _frequencies(mtf_cyc_per_mm, "MTF frequency (per mm)")
     f_deg = _frequencies(mtf_cyc_per_deg, "MTF frequency (per degree)")
-    vertex = None if vertex_distance_mm is None else checked_vertex_distance_mm(vertex_distance_mm)
-    prescription = None
-    eye = base
-    if rx is not None:
-        prescription = prescription_from(rx)
-        vertex = SPECTACLE_VERTEX_DISTANCE_MM if vertex is None else vertex
-        eye = ametropic_eye(base, prescription, vertex)
+    vertex = eye_in.vertex_mm if (at_spectacle_plane or eye_in.rx is not None or len(lenses)) else None
+    prescription = eye_in.rx
+    eye = eye_in.optics
+    pupil_mm, iris_mm = eye_in.pupil_mm, eye_in.iris_mm
     setup = None
     if len(lenses):
-        vertex = SPECTACLE_VERTEX_DISTANCE_MM if vertex is None else vertex
         setup = TrialLensSetup(tuple(lenses), vertex, math.inf, lens_gap_mm)
     wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
     field = tuple(float(v) for v in field_deg)
@@ -298,7 +290,7 @@ def eye_report(model: str, *, accommodation_diopters: float = 0.0, pupil_mm=None
     else:
         paraxial_pupil = front.iris_mm * system_entrance_pupil_mm(eye, setup, wavelength)[1]
     curve = lca_curve(eye, iris_mm=front.iris_mm, reference_nm=wavelength, field_deg=field) if lca else None
-    return EyeReport(eye.name, base.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
+    return EyeReport(eye.name, eye_in.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
                      float(equivalent_power_diopters(mean, wavelength)), float(efl_mm(mean, wavelength)),
                      float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup,
                      mtf_spectrum, curve)

@@ -17,7 +17,7 @@ from typing import ClassVar
 from vissim.bench.depth.scene import DepthScene
 from vissim.bench.depth.scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
-from vissim.optics.setup import Eye, ViewingSetup
+from vissim.optics.setup import DepthViewer, ViewingSetup
 from vissim.provenance import json_safe
 from vissim.validation.depth.schema import DepthCampaignSettings, DepthConfiguration
 
@@ -66,12 +66,12 @@ def render_depth_spec(spec: DepthRenderSpec):
 
 @dataclass(frozen=True)
 class DepthBuilt:
-    """A configuration built once: the observer's equivalent eye (as a viewer, and as the `Eye` the
+    """A configuration built once: the observer's equivalent eye (as a viewer, and as the `DepthViewer` the
     simulations blur with), its viewing setup and the frame margin."""
 
     configuration: DepthConfiguration
     eye: EyeViewer
-    blur_eye: Eye
+    blur_eye: DepthViewer
     setup: ViewingSetup
     margin_px: int
 
@@ -79,7 +79,7 @@ class DepthBuilt:
 def build_depth(config: DepthConfiguration, settings: DepthCampaignSettings) -> DepthBuilt:
     """What ``config``'s observer sees of its scene: equivalent eye and `ViewingSetup`, built once."""
     eye = equivalent_eye(config.viewer, config.scene)
-    return DepthBuilt(config, eye, Eye(eye.prescription, eye.pupil_diameter_mm, eye.accommodation_diopters),
+    return DepthBuilt(config, eye, DepthViewer(eye.prescription, eye.pupil_diameter_mm, eye.accommodation_diopters),
                       viewing_setup(config.viewer, config.scene), config.frame_margin_px(settings))
 
 

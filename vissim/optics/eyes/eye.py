@@ -1,0 +1,212 @@
+"""`Eye`: the one object every eye simulation, render and campaign takes.
+
+An `Eye` is a schematic model's surfaces and media (`SchematicEye`: any of the five models, one
+altered, or one built by hand) at its accommodation, with
+
+* the prescription it **has** (``rx``, a spectacle prescription measured ``vertex_mm`` in front of
+  the cornea): the eye is then the ametropic eye that needs it (`ametropia.ametropic_eye`: axial
+  length for the spherical equivalent, a toric cornea front for the cylinder). ``rx`` never means a
+  defocus added to the emmetropic model: a lens worn in front is a lens, not part of the eye;
+* its pupil, given once: the entrance pupil ``pupil_mm`` or the ``iris_mm`` (default:
+  `DEFAULT_EYE_PUPIL_MM` of entrance pupil);
+* its reference wavelength ``wavelength_nm`` (default: the model's): the light its prescription
+  is measured in and the chief ray that is the image frame's origin.
+
+It is immutable: altered with `dataclasses.replace` or the builders (`Eye.with_pupil`,
+`Eye.with_rx`, `Eye.accommodated`, `Eye.with_surface`). `build_eye` makes one from a model's
+name; entry points take an `Eye` and never a name, so a name is resolved once, at the edge.
+
+Examples
+--------
+>>> from vissim.optics.eyes.eye import build_eye
+>>> eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-2.00")
+>>> eye.model, eye.pupil_mm, str(eye.rx)
+('navarro-1985', 3.0, '-2.00 DS')
+>>> round(eye.optics.axial_length_mm - eye.schematic.axial_length_mm, 3)
+0.751
+>>> eye.with_surface("cornea front", conic=-0.5).schematic.surfaces[0].conic
+-0.5
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+from vissim.checks import instance_of, positive_number
+from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
+from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.ametropia import ametropic_eye
+from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.models import EYE_MODELS, SchematicEye, eye_model
+from vissim.optics.prescription import Prescription, prescription_from
+
+__all__ = ["Eye", "build_eye", "SURFACE_OVERRIDES", "checked_eye"]
+
+#: The `EyeSurface` fields `Eye.with_surface` may change, with their units.
+SURFACE_OVERRIDES = {"radius_mm": "mm", "conic": "", "thickness_after_mm": "mm", "radius_y_mm": "mm",
+                     "axis_deg": "deg"}
+
+
+@dataclass(frozen=True)
+class Eye:
+    """An eye to simulate or render (module doc). Build one with `build_eye`."""
+
+    schematic: SchematicEye
+    pupil_mm: float | None = None
+    iris_mm: float | None = None
+    rx: Prescription | None = None
+    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
+    wavelength_nm: float | None = None
+    _optics: SchematicEye = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        instance_of(self.schematic, SchematicEye, "an Eye's schematic", "a SchematicEye (vissim.optics.eyes.models)")
+        if self.pupil_mm is not None and self.iris_mm is not None:
+            raise VissimInputError(f"give the eye's entrance pupil ({self.pupil_mm!r} mm) or its iris "
+                                   f"({self.iris_mm!r} mm), not both")
+        if self.iris_mm is not None:
+            object.__setattr__(self, "iris_mm", positive_number(self.iris_mm, "iris diameter", "mm"))
+        else:
+            pupil = DEFAULT_EYE_PUPIL_MM if self.pupil_mm is None else self.pupil_mm
+            object.__setattr__(self, "pupil_mm", positive_number(pupil, "entrance pupil diameter", "mm"))
+        object.__setattr__(self, "vertex_mm", checked_vertex_distance_mm(self.vertex_mm, "spectacle vertex distance"))
+        if self.wavelength_nm is not None:
+            object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm,
+                                                                            "eye's reference wavelength"))
+        if self.rx is not None:
+            object.__setattr__(self, "rx", prescription_from(self.rx))
+        object.__setattr__(self, "_optics", self._traced_optics())  # a prescription the eye cannot have: refused now
+
+    def _traced_optics(self) -> SchematicEye:
+        optics = self.schematic
+        if self.wavelength_nm is not None and self.wavelength_nm != optics.reference_wavelength_nm:
+            optics = dataclasses.replace(optics, reference_wavelength_nm=self.wavelength_nm)
+        return optics if self.rx is None else ametropic_eye(optics, self.rx, self.vertex_mm)
+
+    # -- what it is ----------------------------------------------------------------------
+    @property
+    def optics(self) -> SchematicEye:
+        """The surfaces traced: the schematic eye made to need ``rx`` (itself when ``rx`` is None)."""
+        return self._optics
+
+    @property
+    def model(self) -> str:
+        """The schematic model's name."""
+        return self.schematic.name
+
+    @property
+    def accommodation_diopters(self) -> float:
+        return self.schematic.accommodation_diopters
+
+    @property
+    def reference_wavelength_nm(self) -> float:
+        """The eye's reference wavelength, nm: ``wavelength_nm``, else the model's."""
+        return self.optics.reference_wavelength_nm
+
+    @property
+    def pupil(self) -> dict:
+        """The pupil as the traces take it: ``{"pupil_mm": d}`` or ``{"iris_mm": d}``."""
+        return {"iris_mm": self.iris_mm} if self.iris_mm is not None else {"pupil_mm": self.pupil_mm}
+
+    def describe(self) -> str:
+        """One line: model, accommodation, pupil, prescription."""
+        pupil = f"iris {self.iris_mm:g} mm" if self.iris_mm is not None else f"entrance pupil {self.pupil_mm:g} mm"
+        rx = "" if self.rx is None else f", has {self.rx} at {self.vertex_mm:g} mm"
+        return f"{self.model}, accommodation {self.accommodation_diopters:g} D, {pupil}{rx}"
+
+    def as_json(self) -> dict:
+        return {"model": self.model, "accommodation_diopters": self.accommodation_diopters,
+                "entrance_pupil_mm": self.pupil_mm, "iris_mm": self.iris_mm,
+                "rx": None if self.rx is None else str(self.rx), "vertex_mm": self.vertex_mm,
+                "reference_wavelength_nm": self.reference_wavelength_nm}
+
+    # -- builders ------------------------------------------------------------------------
+    def with_pupil(self, pupil_mm: float | None = None, iris_mm: float | None = None) -> Eye:
+        """The same eye with its entrance pupil or its iris (one of them) set."""
+        return dataclasses.replace(self, pupil_mm=pupil_mm, iris_mm=iris_mm)
+
+    def with_rx(self, rx, vertex_mm: float | None = None) -> Eye:
+        """The same eye made to have ``rx`` (None: emmetropic), measured ``vertex_mm`` in front (default: its own)."""
+        return dataclasses.replace(self, rx=rx, vertex_mm=self.vertex_mm if vertex_mm is None else vertex_mm)
+
+    def accommodated(self, accommodation_diopters: float) -> Eye:
+        """The same eye accommodating ``accommodation_diopters``: its model rebuilt (refused for an eye whose
+        surfaces were altered or built by hand, which have no accommodation formulas)."""
+        if self.schematic != _named_schematic(self.schematic):
+            raise VissimInputError(f"the {self.model} eye's surfaces were altered or built by hand: accommodate its "
+                                   "model first (build_eye(..., accommodation_diopters=A)), then alter it")
+        return dataclasses.replace(self, schematic=eye_model(self.model, accommodation_diopters))
+
+    def with_surface(self, surface: str, **changes) -> Eye:
+        """The same eye with one surface (by name, e.g. ``"cornea front"``) changed: any of `SURFACE_OVERRIDES`."""
+        return dataclasses.replace(self, schematic=altered_schematic(self.schematic, surface, changes))
+
+
+def _named_schematic(schematic: SchematicEye) -> SchematicEye | None:
+    if schematic.name not in EYE_MODELS:
+        return None
+    return eye_model(schematic.name, schematic.accommodation_diopters)
+
+
+def altered_schematic(schematic: SchematicEye, surface: str, changes: dict) -> SchematicEye:
+    """``schematic`` with the surface named ``surface`` changed by ``changes`` (fields of `SURFACE_OVERRIDES`)."""
+    names = [s.name for s in schematic.surfaces]
+    if surface not in names:
+        raise VissimInputError(f"the {schematic.name} eye has no surface {surface!r}; its surfaces: {', '.join(names)}")
+    values = {}
+    for key, value in changes.items():
+        if key not in SURFACE_OVERRIDES:
+            raise VissimInputError(f"cannot change a surface's {key!r}; the fields that can change: "
+                                   f"{', '.join(SURFACE_OVERRIDES)}")
+        values[key] = _surface_value(key, value, surface)
+    index = names.index(surface)
+    surfaces = list(schematic.surfaces)
+    surfaces[index] = dataclasses.replace(surfaces[index], **values)
+    said = ", ".join(f"{key} {value:g}" for key, value in values.items())
+    return dataclasses.replace(schematic, surfaces=tuple(surfaces), source=f"{schematic.source}; {surface}: {said}")
+
+
+def _surface_value(key: str, value, surface: str) -> float:
+    unit = SURFACE_OVERRIDES[key] or "(no unit)"
+    allow_inf = key in ("radius_mm", "radius_y_mm")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise VissimInputError(f"{surface} {key} must be a number {unit}, got {value!r}") from None
+    if math.isnan(number) or (math.isinf(number) and not allow_inf) or (key.startswith("radius") and number == 0):
+        raise VissimInputError(f"{surface} {key} must be a finite, non-zero number {unit}, got {value!r}")
+    if key == "thickness_after_mm" and number < 0.0:
+        raise VissimInputError(f"{surface} thickness_after_mm must be >= 0 mm, got {number:g} mm")
+    return number
+
+
+def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0, pupil_mm: float | None = None,
+              iris_mm: float | None = None, rx=None, vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
+              wavelength_nm: float | None = None, surfaces: dict | None = None) -> Eye:
+    """The `Eye` of the schematic model ``model`` (a key of `EYE_MODELS`, or a `SchematicEye` built by hand)
+    at ``accommodation_diopters``, with its pupil, the prescription it has, its reference wavelength and
+    ``surfaces`` overrides ({surface name: {field: value}}, `SURFACE_OVERRIDES`). The one place a model's name
+    becomes an eye."""
+    if isinstance(model, SchematicEye):
+        if accommodation_diopters:
+            raise VissimInputError("a SchematicEye built by hand has its own accommodation; accommodation_diopters "
+                                   f"must be 0 D, got {accommodation_diopters!r} D")
+        schematic = model
+    else:
+        schematic = eye_model(model, accommodation_diopters)
+    for surface, changes in (surfaces or {}).items():
+        if not isinstance(changes, dict):
+            raise VissimInputError(f"surface {surface!r}'s changes must be a table of fields, got {changes!r}")
+        schematic = altered_schematic(schematic, surface, changes)
+    return Eye(schematic, pupil_mm, iris_mm, rx, vertex_mm, wavelength_nm)
+
+
+def checked_eye(eye, where: str) -> Eye:
+    """``eye`` if it is an `Eye`; a model's name is refused with how to make one."""
+    if isinstance(eye, str):
+        raise VissimInputError(f"{where} takes an Eye, not the name {eye!r}: build it once with "
+                               f"vissim.build_eye({eye!r}, pupil_mm=..., rx=...)")
+    return instance_of(eye, Eye, f"{where}'s eye", "an Eye (vissim.build_eye)")
