@@ -156,10 +156,13 @@ def test_navarro_spherical_aberration_at_six_mm_is_positive_and_meets_seidel_as_
 # --- (c) off-axis astigmatism ----------------------------------------------------------------------
 
 def test_wide_angle_eye_off_axis_astigmatism_grows_as_the_field_squared():
-    """ES1999, 543 nm, 4 mm entrance pupil, minimum-RMS at the corneal vertex. A horizontal field gives
-    J0 < 0 (the horizontal, tangential meridian the more myopic; minus-cylinder axis 90), J45 = 0, and a
-    vertical field the opposite J0. |J0| rises monotonically, ×4 from 10° to 20° and 20° to 40° (± 10 %,
-    third order); measured −0.105, −0.425, −0.964, −1.711 D (cylinder −0.21 to −3.42 D) at 3 mm."""
+    """ES1999, 543 nm, 4 mm entrance pupil, minimum-RMS at the corneal vertex, over the pupil seen along the
+    chief ray. A horizontal field gives J0 < 0 (the horizontal, tangential meridian the more myopic;
+    minus-cylinder axis 90), J45 = 0, and a vertical field the opposite J0. |J0| rises monotonically, ×4
+    from 10° to 20° (± 10 %, third order), and faster than ×4 from 20° to 40°, where the oblique beam's
+    tangential power grows beyond third order (optiland's real-ray foci, `test_eye_oblique_refraction`:
+    ×4.58 in the astigmatism at 1 mm); measured −0.114, −0.465, −1.090, −2.063 D (cylinder −0.23 to −4.13 D).
+    (Over the entrance-pupil plane, before, −0.105 to −1.711 D, ×4.03 from 20° to 40°.)"""
     eye = escudero_sanz_1999()
     j0 = {}
     for field in (10.0, 20.0, 30.0, 40.0):
@@ -169,7 +172,7 @@ def test_wide_angle_eye_off_axis_astigmatism_grows_as_the_field_squared():
         assert abs(j45) < 1e-6
     assert j0[10.0] < 0.0 and j0[10.0] > j0[20.0] > j0[30.0] > j0[40.0]
     assert j0[20.0] / j0[10.0] == pytest.approx(4.0, rel=0.1)
-    assert j0[40.0] / j0[20.0] == pytest.approx(4.0, rel=0.1)
+    assert j0[40.0] / j0[20.0] > 4.0
     vertical = eye_refraction(_trace(eye, 543.0, (0.0, 20.0), pupil_mm=4.0)).minimum_rms.power_vector()
     assert vertical[1] == pytest.approx(-j0[20.0], rel=1e-6)
 

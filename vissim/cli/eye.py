@@ -156,6 +156,7 @@ def _print_text(report: EyeReport) -> None:
         ("iris", f"{record['iris_mm']:.4f} mm ({pupil['given']} given)"),
         ("RMS (order >= 2)", f"{record['rms_um']:.4f} µm over the entrance pupil"),
         ("refraction at", refraction["refraction_plane"] + " (correcting lens, minus cylinder)"),
+        ("refraction over", refraction["pupil_definition"]),
         ("  paraxial", _rx_line(refraction["paraxial"])),
         ("  minimum RMS", _rx_line(refraction["minimum_rms"])),
     ]

@@ -15,7 +15,9 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
   ``vertex_distance_mm`` in front of the cornea (12 mm by default), solved at the model's
   reference wavelength (axial length for the spherical equivalent, a toric cornea front for the
   cylinder: `vissim.optics.eyes.ametropia`). With a prescription, or a vertex distance given, the
-  refraction is stated at that spectacle plane; otherwise at the corneal vertex.
+  refraction is stated at that spectacle plane; otherwise at the corneal vertex. Off axis it is
+  over the entrance pupil seen along the chief ray (JSON ``refraction.pupil_definition``; the
+  `refraction` module doc).
 * **Power, f′, retinal mm per degree**: paraxial, of the mean meridian for a toric eye
   (`paraxial.mean_meridian_eye`).
 * **MTF**: of the wave PSF (`vissim.optics.psf.compute_psf`, diffraction included) of the traced
@@ -225,7 +227,8 @@ class EyeReport:
             "rms_um": wf.rms_um,
             "refraction": {"paraxial": refraction["paraxial"], "minimum_rms": refraction["minimum_rms"],
                            "refraction_plane": self._plane_text(),
-                           "vertex_distance_mm": refraction["vertex_distance_mm"]},
+                           "vertex_distance_mm": refraction["vertex_distance_mm"],
+                           "pupil_definition": refraction["pupil_definition"]},
             "mtf": mtf,
             **({} if self.lca is None else {"lca": self.lca.as_json()}),
         }

@@ -267,6 +267,8 @@ class EyeWavefront:
     ``entrance_pupil_position_mm`` are the whole system's and ``eye_entrance_pupil_mm`` the eye's own.
     ``field_axis``: the axis ``field_deg`` is measured from (`field_axis`). ``field_map``: the 2 x 2 map from
     the front's slopes to visual angle (`field_map`; the identity on the axis of a model without a visual axis).
+    ``chief_direction``: the unit vector towards the field point, the chief ray's in object space, in the
+    optical-axis frame (`field_direction`; the refraction's pupil is seen along it, `refraction` module doc).
     """
 
     model: str
@@ -288,6 +290,7 @@ class EyeWavefront:
     eye_entrance_pupil_mm: float | None = None
     field_axis: str = "optical axis"
     field_map: tuple = ((1.0, 0.0), (0.0, 1.0))
+    chief_direction: tuple = (0.0, 0.0, 1.0)
 
     @property
     def rms_um(self) -> float:
@@ -383,4 +386,5 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     return EyeWavefront(eye.name, field, wavelength, pupil, iris, given, entrance_z, exit_z,
                         tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,
                         coefficients, residual, lenses, eye_pupil, field_axis(eye),
-                        tuple(tuple(float(v) for v in row) for row in field_map(eye, field)))
+                        tuple(tuple(float(v) for v in row) for row in field_map(eye, field)),
+                        tuple(float(v) for v in field_direction(eye, field)))
