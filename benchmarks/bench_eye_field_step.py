@@ -26,7 +26,8 @@ import vissim  # noqa: E402
 
 STEPS_DEG = (4.0, 2.0, 1.0, 0.5)
 ARCMIN_PER_PX, WIDTH_PX = 1.0, 1200
-CASE = dict(arcmin_per_px=ARCMIN_PER_PX, pupil_mm=4.0, wavelength_nm=555.0, field_deg=(10.0, 0.0))
+CASE = dict(arcmin_per_px=ARCMIN_PER_PX, wavelength_nm=555.0, field_deg=(10.0, 0.0))
+PUPIL_MM = 4.0
 
 
 def wide_chart() -> np.ndarray:
@@ -48,7 +49,8 @@ def main(models: list[str]) -> None:
         blurred = {}
         for step in STEPS_DEG:
             start = time.perf_counter()
-            blurred[step] = vissim.blur_eye(chart, model=model, field_step_deg=step, dtype=np.float64, **CASE)
+            eye = vissim.build_eye(model, pupil_mm=PUPIL_MM)
+            blurred[step] = vissim.blur_eye(chart, eye, field_step_deg=step, dtype=np.float64, **CASE)
             print(f"  {model} step {step:g} deg: {time.perf_counter() - start:.1f} s", flush=True)
         for coarse, fine in zip(STEPS_DEG, STEPS_DEG[1:]):
             diff = blurred[coarse] - blurred[fine]

@@ -126,7 +126,11 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
     light = {"type": "disk", "to_world": mi.ScalarTransform4f().translate([0.0, 0.0, 1.0e5])
              @ mi.ScalarTransform4f().scale(20.0) @ mi.ScalarTransform4f().rotate([0, 1, 0], 180),
              "emitter": {"type": "area", "radiance": 1.0}}
-    sensor = {"type": "vissim_schematic_eye", "model": "escudero-sanz-1999", "pupil_mm": 3.0, "arcmin_per_px": step,
+    from vissim.optics.eyes.eye import build_eye
+    from vissim.render.schematic_eye_sensor import register_sensor_eye
+
+    key = register_sensor_eye(build_eye("escudero-sanz-1999", pupil_mm=3.0))
+    sensor = {"type": "vissim_schematic_eye", "eye_key": key, "arcmin_per_px": step,
               "field_x_deg": field[0], "field_y_deg": field[1],
               "to_world": mi.ScalarTransform4f(eye_to_world(eye, field)),
               "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"},

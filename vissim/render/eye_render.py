@@ -19,6 +19,7 @@ accumulation): the same seed gives the same pixels.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -52,6 +53,30 @@ class EyeRender:
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
     vertex_mm: float = 12.0
     rx: str | None = None  # the eye made to need this prescription at the spectacle plane vertex_mm
+    surfaces: tuple = ()  # the model's surfaces altered: sorted (surface name, field, value) triples
+
+    @classmethod
+    def for_eye(cls, eye, **view) -> EyeRender:
+        """The render of the `Eye` ``eye`` (a named model, its surfaces altered or not), ``view`` the other fields."""
+        from vissim.optics.eyes.eye import surface_overrides
+        from vissim.optics.prescription import Prescription
+
+        pupil = {"pupil_mm": eye.pupil_mm, "iris_mm": None} if eye.iris_mm is None else \
+            {"pupil_mm": None, "iris_mm": eye.iris_mm}
+        if eye.wavelength_nm is not None and eye.wavelength_nm != eye.schematic.reference_wavelength_nm:
+            raise VissimInputError("render eye maps its film through the model's reference wavelength; an eye with "
+                                   f"another ({eye.wavelength_nm:g} nm) cannot be rendered")
+        if eye.rx is not None and not eye.rx.is_close(Prescription.parse(str(eye.rx))):
+            raise VissimInputError(f"render eye holds a prescription in 0.01 D steps and whole degrees; "
+                                   f"{eye.rx.format(4)} is not one")
+        return cls(model=eye.model, accommodation_diopters=eye.accommodation_diopters, rx=eye.rx and str(eye.rx),
+                   vertex_mm=eye.vertex_mm, surfaces=surface_overrides(eye.schematic), **pupil, **view)
+
+    @property
+    def eye(self):
+        """The `Eye` rendered: the model at its accommodation, its surfaces altered, its pupil and prescription."""
+        return _eye_of(self.model, self.accommodation_diopters, self.pupil_mm, self.iris_mm, self.rx, self.vertex_mm,
+                       self.surfaces)
 
     def __post_init__(self) -> None:
         if self.spectrum not in SPECTRA:
@@ -68,6 +93,7 @@ class EyeRender:
             from vissim.optics.prescription import Prescription
 
             object.__setattr__(self, "rx", str(Prescription.parse(self.rx)))
+        object.__setattr__(self, "surfaces", tuple(tuple(t) for t in self.surfaces))
         if (self.pupil_mm is None) == (self.iris_mm is None):
             raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
         eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,
@@ -85,6 +111,15 @@ class EyeRender:
         positive_number(self.vertex_mm, "vertex distance", "mm")
         if int(self.spp) < 1:
             raise VissimInputError(f"samples per pixel must be >= 1, got {self.spp}")
+        self.eye  # the eye's own checks: its surfaces, its prescription
+
+
+@functools.lru_cache(maxsize=32)
+def _eye_of(model, accommodation_diopters, pupil_mm, iris_mm, rx, vertex_mm, surfaces):
+    from vissim.optics.eyes.eye import build_eye, overrides_table
+
+    return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_mm=pupil_mm, iris_mm=iris_mm, rx=rx,
+                     vertex_mm=vertex_mm, surfaces=overrides_table(surfaces))
 
 
 def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:
@@ -149,25 +184,19 @@ def eye_chart(settings: EyeRender, bench):
 
 
 def eye_scene_dict(settings: EyeRender) -> dict:
-    """The plain scene dict (module doc); its camera is the schematic-eye sensor."""
-    from vissim.optics.eyes.models import eye_model
+    """The plain scene dict (module doc); its camera is the schematic-eye sensor, handed the eye itself."""
     from vissim.bench.dslr.bench import dslr_scene
 
-    sensor = {"type": "vissim_schematic_eye", "model": settings.model,
-              "accommodation_diopters": float(settings.accommodation_diopters),
+    from vissim.render.schematic_eye_sensor import register_sensor_eye
+
+    sensor = {"type": "vissim_schematic_eye", "eye_key": register_sensor_eye(settings.eye),
               "arcmin_per_px": float(settings.arcmin_per_px), "field_x_deg": float(settings.field_deg[0]),
               "field_y_deg": float(settings.field_deg[1])}
-    if settings.rx is not None:
-        sensor.update({"rx": settings.rx, "rx_vertex_mm": float(settings.vertex_mm)})
-    if settings.pupil_mm is not None:
-        sensor["pupil_mm"] = float(settings.pupil_mm)
-    if settings.iris_mm is not None:
-        sensor["iris_mm"] = float(settings.iris_mm)
     if settings.wavelength_nm is not None:
         sensor["wavelength_nm"] = float(settings.wavelength_nm)
     bench = eye_bench(settings)
     chart = eye_chart(settings, bench)
-    eye = eye_model(settings.model, settings.accommodation_diopters)
+    eye = settings.eye.optics
     if settings.spectrum == "photopic":  # crown at each path's hero wavelength; the sensor ends the others
         scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind="spectral", sensor_terminates_secondary=True)
     else:

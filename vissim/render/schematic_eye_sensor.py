@@ -32,10 +32,10 @@ keeps its expectation (Mitsuba's spectral film develops Y with CIE ȳ = V(λ): p
 
 Frame: local +z forward (into the scene), +y up, +x the observer's left (Mitsuba's camera
 frame); the eye's frame (z towards the retina, x the examiner's right: the subject's left) maps
-to it by z -> -z; the local origin is the corneal vertex.  Properties: ``model``,
-``accommodation_diopters``, ``rx`` and ``rx_vertex_mm`` (the eye made to need that prescription at that
-spectacle plane: `sensor_eye`; the tables are traced in its x meridian, so a cylinder's distortion is
-the x meridian's), ``pupil_mm`` (entrance pupil) or ``iris_mm``, ``wavelength_nm``,
+to it by z -> -z; the local origin is the corneal vertex.  Properties: ``eye_key``, the `vissim.optics.eyes.eye.Eye`
+handed over by `register_sensor_eye` (its optics: the model at its accommodation, its surfaces as
+altered, made ametropic when it has a prescription; the tables are traced in its x meridian, so a
+cylinder's distortion is the x meridian's; its pupil, entrance pupil or iris), ``wavelength_nm``,
 ``arcmin_per_px``, ``field_x_deg``, ``field_y_deg``, ``far_clip`` (mm), ``to_world``, ``film``,
 ``sampler``.  The pupil is converted by real rays at ``wavelength_nm`` or the model's reference
 (`vissim.optics.eyes.wavefront`).  Register with `register_schematic_eye_sensor` (idempotent).
@@ -58,7 +58,8 @@ from vissim.checks import CIE_YBAR_RANGE_NM, EYE_RENDER_MAX_THETA_DEG, EYE_RENDE
 from vissim.checks import arcmin_per_px as checked_arcmin_per_px
 from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
-__all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_eye", "sensor_tables"]
+__all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "register_sensor_eye", "sensor_eye",
+           "sensor_tables"]
 
 log = logging.getLogger(__name__)
 
@@ -68,29 +69,36 @@ TABLE_REACH_STEP_DEG = 5.0
 SCHEMATIC_EYE_SENSOR = "vissim_schematic_eye"
 
 
+#: The eyes a scene's sensors look through, by the key `register_sensor_eye` gave: the sensor receives the
+#: eye itself (its surfaces and media), never a name to build it from.
+_EYES: dict = {}
+
+
+def register_sensor_eye(eye) -> str:
+    """Hand the `Eye` ``eye`` to the sensors of scenes loaded in this process; the key a scene names it by."""
+    key = f"eye-{hash(eye.optics) & 0xFFFFFFFFFFFF:012x}-{eye.pupil}"
+    _EYES[key] = eye
+    return key
+
+
+def sensor_eye(key: str):
+    """The `Eye` registered under ``key`` (`register_sensor_eye`)."""
+    if key not in _EYES:
+        raise VissimInputError(f"no eye is registered for the schematic-eye sensor under {key!r}: hand it over with "
+                               "register_sensor_eye(eye) before loading the scene")
+    return _EYES[key]
+
+
 @functools.lru_cache(maxsize=16)
-def sensor_eye(model: str, accommodation_diopters: float, rx: str | None = None, rx_vertex_mm: float = 12.0):
-    """The model at its accommodation, made to need ``rx`` at the spectacle plane ``rx_vertex_mm`` when given
-    (`vissim.optics.eyes.ametropia.ametropic_model_eye`: the eye ``vissim eye --rx`` traces)."""
-    from vissim.optics.eyes.ametropia import ametropic_model_eye
-
-    return ametropic_model_eye(model, accommodation_diopters, rx, rx_vertex_mm)
+def sensor_tables(optics, iris_mm: float, wavelength_nm: float, max_theta_deg: float) -> EyeTables:
+    """`eye_tables` of the traced `SchematicEye` ``optics``, cached (a scene reloaded with the same eye reuses them)."""
+    return eye_tables(optics, iris_mm, wavelength_nm, max_theta_deg)
 
 
 @functools.lru_cache(maxsize=16)
-def sensor_tables(model: str, accommodation_diopters: float, iris_mm: float, wavelength_nm: float,
-                  max_theta_deg: float, rx: str | None = None, rx_vertex_mm: float = 12.0) -> EyeTables:
-    """`eye_tables` of the `sensor_eye`, cached (a scene reloaded with the same eye reuses them)."""
-    return eye_tables(sensor_eye(model, accommodation_diopters, rx, rx_vertex_mm), iris_mm, wavelength_nm,
-                      max_theta_deg)
-
-
-@functools.lru_cache(maxsize=16)
-def sensor_map_radii_mm(model: str, accommodation_diopters: float, wavelength_nm: float, max_theta_deg: float,
-                        rx: str | None = None, rx_vertex_mm: float = 12.0) -> np.ndarray:
+def sensor_map_radii_mm(optics, wavelength_nm: float, max_theta_deg: float) -> np.ndarray:
     """The film's map r(θ) at ``wavelength_nm`` on the tables' θ grid (`chief_ray_radii_mm`), cached."""
-    eye = sensor_eye(model, accommodation_diopters, rx, rx_vertex_mm)
-    return chief_ray_radii_mm(eye, table_theta_deg(max_theta_deg), wavelength_nm)
+    return chief_ray_radii_mm(optics, table_theta_deg(max_theta_deg), wavelength_nm)
 
 
 def _pupils(eye, pupil_mm, iris_mm, wavelength_nm: float) -> tuple[float, float]:
@@ -141,12 +149,9 @@ def _make_class(mi, dr):
 
         def __init__(self, props):
             mi.Sensor.__init__(self, props)
-            self.model = str(props.get("model", "navarro-1985"))
-            accommodation = float(props.get("accommodation_diopters", 0.0))
-            rx = props.get("rx", None)
-            self.rx = None if rx is None else str(rx)
-            self.rx_vertex_mm = float(props.get("rx_vertex_mm", 12.0))
-            eye = sensor_eye(self.model, accommodation, self.rx, self.rx_vertex_mm)
+            the_eye = sensor_eye(str(props.get("eye_key", "")))
+            eye = the_eye.optics
+            self.model = the_eye.model
             fixed = props.get("wavelength_nm", None)
             self.fixed_wavelength_nm = None if fixed is None else number_within(fixed, "wavelength", "nm",
                                                                                 EYE_RENDER_WAVELENGTH_RANGE_NM)
@@ -159,8 +164,7 @@ def _make_class(mi, dr):
                 y_bar = float(y_bar[0] if dr.is_array_v(y_bar) else y_bar)
                 self.mono_scale = 1.0 / (y_bar * mi.MI_CIE_Y_NORMALIZATION)
             self.wavelength_nm = self.fixed_wavelength_nm or eye.reference_wavelength_nm
-            self.pupil_mm, self.iris_mm = _pupils(eye, props.get("pupil_mm", None), props.get("iris_mm", None),
-                                                  self.wavelength_nm)
+            self.pupil_mm, self.iris_mm = _pupils(eye, the_eye.pupil_mm, the_eye.iris_mm, self.wavelength_nm)
             self.arcmin_per_px = checked_arcmin_per_px(float(props.get("arcmin_per_px", 1.0)))
             self.field_deg = (float(props.get("field_x_deg", 0.0)), float(props.get("field_y_deg", 0.0)))
             self.far_clip = float(props.get("far_clip", 1.0e7))
@@ -172,14 +176,13 @@ def _make_class(mi, dr):
             reach = math.degrees(math.atan(math.hypot(*corner))) + eye.visual_axis_deg  # widest angle from the axis
             if reach <= EYE_RENDER_MAX_THETA_DEG:  # beyond it the tables refuse the image, naming its reach
                 reach = min(math.ceil(reach / TABLE_REACH_STEP_DEG) * TABLE_REACH_STEP_DEG, EYE_RENDER_MAX_THETA_DEG)
-            self.tables = sensor_tables(self.model, accommodation, self.iris_mm, self.wavelength_nm, reach, self.rx,
-                                        self.rx_vertex_mm)
+            self.tables = sensor_tables(eye, self.iris_mm, self.wavelength_nm, reach)
             # the film's map: where the chief ray lands at the model's reference wavelength, as every simulation
             # places its PSFs (`vissim.optics.eyes.psf_wavefront`): at another wavelength the image shifts by the
             # transverse chromatic aberration, as the eye's does
             reference = eye.reference_wavelength_nm
             self.map_radius_mm = self.tables.radius_mm if self.wavelength_nm == reference else sensor_map_radii_mm(
-                self.model, accommodation, reference, reach, self.rx, self.rx_vertex_mm)
+                eye, reference, reach)
             self._init_lookups(eye)
             self.m_needs_sample_3 = True
             centre, edge = self.tables.pass_fraction[0], self.tables.pass_fraction[-1]

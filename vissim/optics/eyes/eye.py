@@ -43,7 +43,7 @@ from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_
 from vissim.optics.eyes.models import EYE_MODELS, SchematicEye, eye_model
 from vissim.optics.prescription import Prescription, prescription_from
 
-__all__ = ["Eye", "build_eye", "SURFACE_OVERRIDES", "checked_eye"]
+__all__ = ["Eye", "build_eye", "SURFACE_OVERRIDES", "checked_eye", "surface_overrides", "overrides_table"]
 
 #: The `EyeSurface` fields `Eye.with_surface` may change, with their units.
 SURFACE_OVERRIDES = {"radius_mm": "mm", "conic": "", "thickness_after_mm": "mm", "radius_y_mm": "mm",
@@ -210,3 +210,33 @@ def checked_eye(eye, where: str) -> Eye:
         raise VissimInputError(f"{where} takes an Eye, not the name {eye!r}: build it once with "
                                f"vissim.build_eye({eye!r}, pupil_mm=..., rx=...)")
     return instance_of(eye, Eye, f"{where}'s eye", "an Eye (vissim.build_eye)")
+
+
+def surface_overrides(schematic: SchematicEye) -> tuple:
+    """How ``schematic`` differs from its named model at its accommodation: sorted (surface, field, value)
+    triples of `SURFACE_OVERRIDES` (empty for the model itself); any other difference is refused."""
+    named = _named_schematic(schematic)
+    if named is None or len(named.surfaces) != len(schematic.surfaces):
+        raise VissimInputError(f"the {schematic.name} eye is not a named model with altered surfaces; only such "
+                               "an eye can be written as a model and its changes")
+    changes = []
+    for mine, theirs in zip(schematic.surfaces, named.surfaces):
+        for key in SURFACE_OVERRIDES:
+            if getattr(mine, key) != getattr(theirs, key):
+                changes.append((mine.name, key, getattr(mine, key)))
+        rest = {k: v for k, v in dataclasses.asdict(mine).items() if k not in SURFACE_OVERRIDES}
+        if mine.name != theirs.name or rest != {k: v for k, v in dataclasses.asdict(theirs).items()
+                                                  if k not in SURFACE_OVERRIDES}:
+            raise VissimInputError(f"the {schematic.name} eye's {mine.name} differs from its model's in more than "
+                                   f"{', '.join(SURFACE_OVERRIDES)}")
+    if dataclasses.replace(schematic, surfaces=named.surfaces, source=named.source) != named:
+        raise VissimInputError(f"the {schematic.name} eye differs from its model beyond its surfaces")
+    return tuple(sorted(changes))
+
+
+def overrides_table(triples) -> dict:
+    """(surface, field, value) triples as `build_eye`'s ``surfaces`` table."""
+    table: dict = {}
+    for surface, key, value in triples:
+        table.setdefault(surface, {})[key] = value
+    return table

@@ -38,9 +38,8 @@ def applies(where: str, configuration) -> bool:
 
 def item_ray_psf(configuration, settings, lens, scene: EyeScene):
     c = configuration
-    return ray_psf(model=c.model, accommodation_diopters=c.accommodation_diopters, pupil_mm=c.pupil_mm,
-                   field_deg=c.field_deg, chart_distance_m=c.chart_distance_m, lens=lens, vertex_mm=c.vertex_mm,
-                   rx=c.rx, wavelengths_nm=scene.wavelengths, weights=scene.weights,
+    return ray_psf(c.eye(), field_deg=c.field_deg, chart_distance_m=c.chart_distance_m, lens=lens,
+                   vertex_mm=c.vertex_mm, wavelengths_nm=scene.wavelengths, weights=scene.weights,
                    sensor_wavelength_nm=c.wavelength_nm,
                    arcmin_per_px=c.arcmin_per_px, oversample=settings.oversample, rays_across=settings.rays_across)
 

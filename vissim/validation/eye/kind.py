@@ -28,9 +28,9 @@ class EyeKind:
         return settings, configurations, None
 
     def build(self, configuration, settings):
-        from vissim.validation.eye.renders import build_eye
+        from vissim.validation.eye.renders import build_bench
 
-        return build_eye(configuration, settings)
+        return build_bench(configuration, settings)
 
     def check_memory(self, campaign: Campaign) -> None:
         pass  # images of at most 512 x 512 pixels

@@ -1,8 +1,7 @@
 """The eye bench's geometric self-check: the numpy trace's own ray PSF of the rendered scene.
 
-The eye is the rendered one: the model at its accommodation, made to need ``rx`` at the spectacle
-plane ``vertex_mm`` when given (`vissim.optics.eyes.ametropia.ametropic_model_eye`, the eye the
-sensor's `sensor_eye` builds).  Rays leave the chart's centre (at the chart distance from
+The eye is the rendered one, the same `Eye` object the sensor is handed: the model at its
+accommodation, its surfaces as altered, made to need its prescription at its spectacle plane.  Rays leave the chart's centre (at the chart distance from
 the corneal vertex, along the line of sight), pass the trial lens (thick, as rendered) and the
 eye's surfaces (`vissim.optics.raytrace`, aimed at a jittered grid filling the iris) and land on
 the retina.  Each landing point is turned into a field angle as the eye sensor reads its retina:
@@ -28,7 +27,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.optics.eyes.ametropia import ametropic_model_eye
 from vissim.optics.eyes.sight import film_field_deg
 from vissim.optics.eyes.wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
                                           trace_to_retina)
@@ -122,14 +120,15 @@ def _magnification(eye, lens_setup, retina: _Retina, field_deg, distance_mm: flo
     return np.stack(columns, axis=1)
 
 
-def ray_psf(*, model: str, accommodation_diopters: float, pupil_mm: float, field_deg, chart_distance_m: float,
-            lens=None, vertex_mm: float = 12.0, rx: str | None = None, wavelengths_nm=(550.0,), weights=(1.0,),
-            sensor_wavelength_nm: float | None = None, arcmin_per_px: float = 1.0, oversample: int = 4,
-            rays_across: int = RAYS_ACROSS_IRIS, seed: int = 0) -> RayPsf:
-    """The ray PSF (module doc) of the rendered eye: ``lens`` a thick `TrialLens` (as rendered) or None,
-    ``field_deg`` the chart centre's field angle (OSA) as `vissim.render.eye_render.EyeRender` has it; ``rx`` the
-    eye's spectacle prescription at ``vertex_mm`` (`ametropic_model_eye`; None: the model's eye)."""
-    eye = ametropic_model_eye(model, accommodation_diopters, rx, vertex_mm)
+def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm: float = 12.0,
+            wavelengths_nm=(550.0,), weights=(1.0,), sensor_wavelength_nm: float | None = None,
+            arcmin_per_px: float = 1.0, oversample: int = 4, rays_across: int = RAYS_ACROSS_IRIS,
+            seed: int = 0) -> RayPsf:
+    """The ray PSF (module doc) of the rendered `Eye` ``the_eye`` (its optics: ametropic when it has a
+    prescription; its entrance pupil): ``lens`` a thick `TrialLens` (as rendered) or None, its back vertex
+    ``vertex_mm`` in front of the cornea, ``field_deg`` the chart centre's field angle (OSA) as
+    `vissim.render.eye_render.EyeRender` has it."""
+    eye, pupil_mm = the_eye.optics, the_eye.pupil_mm
     sensor_nm = eye.reference_wavelength_nm if sensor_wavelength_nm is None else float(sensor_wavelength_nm)
     iris_mm = iris_from_entrance_pupil_mm(eye, pupil_mm, sensor_nm)
     field = tuple(float(v) for v in field_deg)

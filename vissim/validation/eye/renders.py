@@ -8,7 +8,7 @@ from typing import ClassVar
 
 from vissim.render.eye_render import EyeRender, eye_bench, eye_chart
 
-__all__ = ["EyeSpec", "EyeBuilt", "build_eye", "eye_render_settings", "chart_half_arcmin", "spec"]
+__all__ = ["EyeSpec", "EyeBuilt", "build_bench", "eye_render_settings", "chart_half_arcmin", "spec"]
 
 
 @dataclass(frozen=True)
@@ -19,7 +19,10 @@ class EyeSpec:
     fields: tuple  # sorted (name, value) pairs of EyeRender
 
     def as_json(self) -> dict:
-        return dict(self.fields)
+        record = dict(self.fields)
+        if not record.get("surfaces"):  # the model's own surfaces: the key such a render always had
+            record.pop("surfaces", None)
+        return record
 
     def settings(self) -> EyeRender:
         return EyeRender(**dict(self.fields))
@@ -32,7 +35,8 @@ def eye_render_settings(configuration, spp: int, seed: int) -> EyeRender:
                      field_deg=tuple(c.field_deg), wavelength_nm=c.wavelength_nm, spectrum=c.spectrum,
                      size_px=tuple(c.size_px), arcmin_per_px=c.arcmin_per_px, spp=spp, seed=seed,
                      chart_distance_m=c.chart_distance_m, letter=c.letter, logmar=c.logmar,
-                     lens=None if c.lens is None else tuple(c.lens), vertex_mm=c.vertex_mm, rx=c.rx)
+                     lens=None if c.lens is None else tuple(c.lens), vertex_mm=c.vertex_mm, rx=c.rx,
+                     surfaces=tuple(c.surfaces))
 
 
 def spec(configuration, spp: int, seed: int) -> EyeSpec:
@@ -49,7 +53,7 @@ class EyeBuilt:
     chart_half_arcmin: tuple[float, float]
 
 
-def build_eye(configuration, settings) -> EyeBuilt:
+def build_bench(configuration, settings) -> EyeBuilt:
     render = eye_render_settings(configuration, settings.spp, settings.seeds[0])
     bench = eye_bench(render)
     return EyeBuilt(bench.physical_lenses[0] if bench.lenses else None, chart_half_arcmin(render, bench))

@@ -7,19 +7,22 @@ frame as every vissim field angle: x the examiner's right, y up; a number is [x,
 (a sphere in D, or {sphere, cylinder, axis}), an optional ``rx`` (the eye made ametropic: the spectacle
 prescription it needs at the campaign's ``vertex_mm``, a text such as ``"-3.00"`` or ``"-2.00 -1.00 x 90"``,
 or a number: the sphere in D; `vissim.optics.eyes.ametropia.ametropic_model_eye`; absent: the model as it is),
-``letter``, ``logmar``.  A ``[[sweep]]`` table gives
+``letter``, ``logmar``, and ``surfaces``: the model's surfaces altered, a table of surface names each with
+fields of `vissim.optics.eyes.eye.SURFACE_OVERRIDES` (``surfaces."cornea front".conic = 0.0``: an eye built from
+a model plus overrides).  A ``[[sweep]]`` table gives
 lists for any of them and makes one item per combination (its ``name`` a prefix).
 """
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.ametropia import ametropic_model_eye
+from vissim.optics.eyes.eye import SURFACE_OVERRIDES, build_eye, overrides_table
 from vissim.optics.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
                            EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
@@ -31,7 +34,8 @@ from vissim.validation.engine.fields import (field_error, lens, name_text, numbe
 __all__ = ["EyeSettings", "EyeConfiguration", "read_campaign"]
 
 LIGHTS = ("photopic",)
-ITEM_KEYS = ("name", "model", "pupil_mm", "accommodation", "field", "light", "lens", "rx", "letter", "logmar")
+ITEM_KEYS = ("name", "model", "pupil_mm", "accommodation", "field", "light", "lens", "rx", "letter", "logmar",
+             "surfaces")
 
 
 @dataclass(frozen=True)
@@ -63,6 +67,7 @@ class EyeConfiguration:
     rx: str | None = None  # the eye's spectacle prescription at vertex_mm (canonical text); None: the model's eye
     letter: str = "K"
     logmar: float = 0.5
+    surfaces: tuple = ()  # sorted (surface name, field, value) triples: the model's surfaces altered
     # copied from the settings (so each item's key holds what its renders depend on)
     size_px: tuple[int, int] = (64, 64)
     arcmin_per_px: float = 0.5
@@ -77,7 +82,20 @@ class EyeConfiguration:
         record.pop("name")
         if record["rx"] is None:  # the model's own eye: the key it had before items could be ametropic
             record.pop("rx")
+        if not record["surfaces"]:  # the model's own surfaces: the key it had before they could be altered
+            record.pop("surfaces")
         return record
+
+    def eye(self):
+        """The `Eye` of this item: the model at its accommodation, its surfaces altered, its entrance pupil and
+        the prescription it has at ``vertex_mm`` (built once per configuration)."""
+        return _eye_of(self.model, self.accommodation_diopters, self.pupil_mm, self.rx, self.vertex_mm, self.surfaces)
+
+
+@functools.lru_cache(maxsize=64)
+def _eye_of(model: str, accommodation_diopters: float, pupil_mm: float, rx, vertex_mm: float, surfaces: tuple):
+    return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_mm=pupil_mm, rx=rx,
+                     vertex_mm=vertex_mm, surfaces=overrides_table(surfaces))
 
 
 def _light(value, source: str, where: str) -> tuple[str, float | None]:
@@ -110,6 +128,22 @@ def _rx(value, source: str, where: str) -> str:
     return canonical
 
 
+def _surfaces(value, source: str, where: str) -> tuple:
+    """``surfaces`` as sorted (surface, field, value) triples; each value a number in its field's unit."""
+    if not isinstance(value, dict) or not all(isinstance(v, dict) for v in value.values()):
+        raise field_error(source, where, "give a table of surface names, each a table of fields, e.g. "
+                                         f"surfaces.\"cornea front\".conic = 0.0, got {value!r}")
+    triples = []
+    for surface, fields in value.items():
+        for key, number_value in fields.items():
+            if key not in SURFACE_OVERRIDES:
+                raise field_error(source, f"{where}.{surface}", f"cannot change a surface's {key!r}; the fields that "
+                                                                f"can change: {', '.join(SURFACE_OVERRIDES)}")
+            unit = SURFACE_OVERRIDES[key] or "(no unit)"
+            triples.append((surface, key, number(number_value, source, f"{where}.{surface}.{key}", unit)))
+    return tuple(sorted(triples))
+
+
 def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
     unknown = set(entry) - set(ITEM_KEYS)
     if unknown:
@@ -127,13 +161,13 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
         field_deg=_field(entry.get("field", 0.0), source, f"{where}.field"),
         spectrum=spectrum, wavelength_nm=wavelength, lens=trial,
         rx=_rx(entry["rx"], source, f"{where}.rx") if "rx" in entry else None,
+        surfaces=_surfaces(entry.get("surfaces", {}), source, f"{where}.surfaces"),
         letter=text(entry.get("letter", "K"), source, f"{where}.letter"),
         logmar=number(entry.get("logmar", 0.5), source, f"{where}.logmar", "logMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1]),
         size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
         vertex_mm=settings.vertex_mm)
-    try:  # the model's name and its own accommodation range; the ametropic eye's own checks
-        ametropic_model_eye(configuration.model, configuration.accommodation_diopters, configuration.rx,
-                            configuration.vertex_mm)
+    try:  # the model's name and its own accommodation range; the altered and the ametropic eye's own checks
+        configuration.eye()
     except VissimInputError as error:
         raise field_error(source, where, str(error)) from None
     if configuration.lens is not None and configuration.field_deg != (0.0, 0.0):

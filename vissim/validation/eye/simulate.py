@@ -24,11 +24,12 @@ diffraction PSF (wave optics).
     wave reference's own error near focus (the render is ray optics; blurred by the in-focus diffraction
     PSF it is not a wave image of an eye with spherical aberration: `vissim.validation.eye.report`).  Made
     for one-wavelength light only: the ray PSFs of 13 photopic wavelengths take about a minute per item.
-An ametropic eye (the configuration's ``rx``: its spectacle prescription at ``vertex_mm``) enters every
-simulation as its refraction carried to the plane the simulation adds vergences at (`EyeScene.eye_refraction`,
-the one place): the corneal vertex for the reduced eye and the thesis (the prescription of `ViewingSetup.eye`,
-which the thesis adds its lens's P / (1 - dP) to), the entrance pupil for the schematic eye (folded into the
-``rx`` `blur_eye` adds there); the traced self-check traces the ametropic eye itself.
+An ametropic eye (the configuration's ``rx``: its spectacle prescription at ``vertex_mm``) is one `Eye`
+(`schema.EyeConfiguration.eye`): the schematic simulations and the traced self-check trace that ametropic eye
+itself (its longer vitreous, toric cornea and the higher orders they bring), with the light's vergence at its
+entrance pupil added (`EyeScene.schematic_vergence`); the reduced eye and the thesis take its refraction
+carried to the corneal vertex (`EyeScene.eye_refraction`: the prescription of `ViewingSetup.eye`, which the
+thesis adds its lens's P / (1 - dP) to).
 Each reduced-eye assumption, put into ``schematic_wave`` one at a time (wave optics, scored against the render
 with diffraction):
 ``no_higher_orders`` (the eye's Zernike orders above 2 dropped), ``thibos_lca`` (traced at 555
@@ -49,7 +50,6 @@ from scipy.signal import fftconvolve
 from vissim.charts import optotype_tile
 from vissim.optics.blur import blur_image
 from vissim.optics.eyes.field_blur import blur_eye
-from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.eyes.sight import chief_pupil_point_mm
@@ -59,7 +59,7 @@ from vissim.errors import FieldTooSmallError
 from vissim.optics.psf import PSF, compute_psf
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
-from vissim.optics.eyes.ametropia import ametropic_model_eye, far_point_vergence_matrix
+from vissim.optics.eyes.ametropia import far_point_vergence_matrix
 from vissim.optics.trial_lens import TrialLensSetup, thesis_table_4_2_power, trial_lens_effect, vergence_after_distance
 from vissim.optics.wavefront import Wavefront
 from vissim.spectra import named_spectrum
@@ -109,7 +109,8 @@ class EyeScene:
     def __init__(self, configuration, settings, built):
         self.c, self.s = configuration, settings
         self.lens, self.chart_half_arcmin = built.lens, built.chart_half_arcmin  # `renders.EyeBuilt`
-        self.eye = eye_model(configuration.model, configuration.accommodation_diopters)
+        self.the_eye = configuration.eye()  # the one `Eye` of the item: rendered, traced and simulated
+        self.eye = self.the_eye.optics
         self._charts: dict = {}  # (step, shape) -> `scene_chart`'s image: every simulation of the item draws it
         self.photopic = configuration.spectrum == "photopic"
         if self.photopic:
@@ -148,14 +149,13 @@ class EyeScene:
                                  vergence_diopters=vergence, wavelength_nm=self.mono_nm)
         return setup, magnification
 
-    def schematic_rx(self) -> tuple[Prescription, np.ndarray]:
-        """The prescription at the entrance pupil that adds the eye's own refraction, the lens and the chart's
-        vergence (`blur_eye`'s ``rx``: the correcting lens, so the eye's minus the light's vergence); the
-        magnification."""
+    def schematic_vergence(self) -> tuple[np.ndarray, np.ndarray]:
+        """The light's vergence at the eye's entrance pupil (2 x 2 D: the lens's added power and the chart's
+        -1/d there; `blur_eye`'s ``vergence_diopters``) and the lens's magnification. The eye's own refraction is
+        in the eye itself (the ametropic eye), not added."""
         depth_mm = entrance_pupil_position_mm(mean_meridian_eye(self.eye), self.mono_nm)
         added, magnification = self.lens_effect(depth_mm)
-        vergence = added - np.eye(2) / (self.c.chart_distance_m + 1e-3 * depth_mm)
-        return Prescription.from_power_matrix(self.eye_refraction(depth_mm) - vergence), magnification
+        return added - np.eye(2) / (self.c.chart_distance_m + 1e-3 * depth_mm), magnification
 
 
 def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
@@ -190,8 +190,7 @@ def _seen_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
     r, q = np.indices(shape)
     to_world = np.asarray(eye_to_world(scene.eye, field), float)[:3, :3]
     sight = field_direction(scene.eye, node_field_deg(r, q, shape, step, field)) @ to_world.T
-    rendered = ametropic_model_eye(c.model, c.accommodation_diopters, c.rx, c.vertex_mm)  # the film's eye
-    pupil = chief_pupil_point_mm(rendered, field, c.pupil_mm)  # the trace's frame: z towards the retina
+    pupil = chief_pupil_point_mm(scene.eye, field, c.pupil_mm)  # the film's eye: the rendered one  # the trace's frame: z towards the retina
     start = to_world @ np.array([pupil[0], pupil[1], -pupil[2]])
     reach = (1000.0 * c.chart_distance_m - start[2]) / sight[..., 2]
     world_x, world_y = start[0] + reach * sight[..., 0], start[1] + reach * sight[..., 1]
@@ -226,21 +225,21 @@ def _schematic(scene: EyeScene, image: np.ndarray, step: float, mode: str, *, fi
     """The schematic eye's blur of ``image`` with one assumption swapped (module doc).  Unswapped, in wave optics,
     it is `blur_eye`; in ray optics the same PSF (the image lies within one of `blur_eye`'s PSF nodes) on the ray
     PSF's field."""
-    rx, _ = scene.schematic_rx()
+    vergence, _ = scene.schematic_vergence()
     own_field = tuple(float(v) for v in scene.c.field_deg)
     field = own_field if field is None else field
-    pupil = scene.c.pupil_mm if pupil_mm is None else pupil_mm
-    eye = dict(pupil_mm=pupil, rx=rx, field_deg=field, accommodation_diopters=scene.c.accommodation_diopters)
+    eye = scene.the_eye if pupil_mm is None else scene.the_eye.with_pupil(pupil_mm=pupil_mm)
     if mode == "wave" and not (drop_higher or thibos or field != own_field or pupil_mm is not None):
         bands = [scene.wavelengths] if scene.photopic else scene.mono_nm
         weights = [scene.weights] if scene.photopic else None
-        return np.asarray(blur_eye(image, model=scene.c.model, arcmin_per_px=step, wavelength_nm=bands,
-                                   weights=weights, mode=mode, padding="edge", dtype=np.float64, **eye), np.float64)
+        return np.asarray(blur_eye(image, eye, arcmin_per_px=step, wavelength_nm=bands, weights=weights,
+                                   vergence_diopters=vergence, field_deg=field, mode=mode, padding="edge",
+                                   dtype=np.float64), np.float64)
     wavelengths = (scene.mono_nm,) if thibos else scene.wavelengths
-    front = eye_spectral_wavefront(scene.c.model, wavelengths_nm=wavelengths, **eye)
+    front = eye_spectral_wavefront(eye, wavelengths_nm=wavelengths, field_deg=field, vergence_diopters=vergence)
     if drop_higher:
         front = front.map(lambda f: Wavefront({k: v for k, v in f.coefficients_um.items() if k[0] <= 2},
-                                              f.pupil_diameter_mm))
+                                              f.pupil_diameter_mm, f.wavelength_nm))
     if thibos:
         psf = _psf(front.fronts[0], scene, step, mode, wavelength_nm=scene.wavelengths, weights=scene.weights,
                    lca_reference_nm=PHOTOPIC_FOCUS_NM)
@@ -277,7 +276,7 @@ def _magnification(scene: EyeScene, simulation: str, ray) -> np.ndarray:
         return ray.magnification
     if simulation.startswith("reduced"):
         return scene.reduced_setup()[1]
-    return scene.schematic_rx()[1]
+    return scene.schematic_vergence()[1]
 
 
 def simulate(simulation: str, scene: EyeScene, ray, margin: int, offset_px=(0.0, 0.0)) -> np.ndarray:

@@ -83,19 +83,17 @@ def _raster(settings, square_arcmin: float, chart_distance_m: float):
 
 def _simulations(raster, settings) -> dict:
     from vissim.optics.eyes.field_blur import blur_eye
-    from vissim.optics.eyes.models import eye_model
     from vissim.validation.eye_studies.scenes import ideal_image
 
     rows, cols = settings.size_px
     padded = (rows + 2 * MARGIN_PX, cols + 2 * MARGIN_PX)
-    eye_optics = eye_model(settings.model, settings.accommodation_diopters)
-    ideal = ideal_image(raster, eye_optics, padded, settings.arcmin_per_px, settings.field_deg)
-    eye = dict(model=settings.model, arcmin_per_px=settings.arcmin_per_px, pupil_mm=settings.pupil_mm,
-               wavelength_nm=settings.wavelength_nm, accommodation_diopters=settings.accommodation_diopters,
-               mode="geometric", padding="edge", dtype=np.float64)
+    the_eye = settings.eye
+    ideal = ideal_image(raster, the_eye.optics, padded, settings.arcmin_per_px, settings.field_deg)
+    options = dict(arcmin_per_px=settings.arcmin_per_px, wavelength_nm=settings.wavelength_nm, mode="geometric",
+                   padding="edge", dtype=np.float64)
     crop = (slice(MARGIN_PX, MARGIN_PX + rows), slice(MARGIN_PX, MARGIN_PX + cols))
-    varying = blur_eye(ideal, field_deg=settings.field_deg, **eye)[crop]
-    single = blur_eye(ideal, field_deg=(0.0, 0.0), field_step_deg=1e3, **eye)[crop]
+    varying = blur_eye(ideal, the_eye, field_deg=settings.field_deg, **options)[crop]
+    single = blur_eye(ideal, the_eye, field_deg=(0.0, 0.0), field_step_deg=1e3, **options)[crop]
     return {"field dependent": varying, "single psf": single}
 
 
