@@ -19,13 +19,13 @@ accumulation): the same seed gives the same pixels.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
 
 __all__ = ["EyeRender", "eye_bench", "eye_chart", "eye_scene_dict", "eye_to_world", "render_eye", "SPECTRA"]
 
@@ -36,9 +36,9 @@ SPECTRA = ("mono", "photopic")
 class EyeRender:
     """What to render (module doc); pupil: exactly one of ``pupil_mm`` (entrance pupil) and ``iris_mm``."""
 
-    model: str = "navarro-1985"
+    model: str = DEFAULT_EYE_MODEL
     accommodation_diopters: float = 0.0
-    pupil_mm: float | None = 3.0
+    pupil_mm: float | None = DEFAULT_EYE_PUPIL_MM
     iris_mm: float | None = None
     field_deg: tuple[float, float] = (0.0, 0.0)
     wavelength_nm: float | None = None
@@ -51,7 +51,7 @@ class EyeRender:
     letter: str = "K"
     logmar: float = 1.0
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
-    vertex_mm: float = 12.0
+    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     rx: str | None = None  # the eye made to need this prescription at the spectacle plane vertex_mm
     surfaces: tuple = ()  # the model's surfaces altered: sorted (surface name, field, value) triples
 
@@ -75,8 +75,10 @@ class EyeRender:
     @property
     def eye(self):
         """The `Eye` rendered: the model at its accommodation, its surfaces altered, its pupil and prescription."""
-        return _eye_of(self.model, self.accommodation_diopters, self.pupil_mm, self.iris_mm, self.rx, self.vertex_mm,
-                       self.surfaces)
+        from vissim.optics.eyes.eye import eye_from_fields
+
+        return eye_from_fields(self.model, self.accommodation_diopters, self.pupil_mm, self.iris_mm, self.rx,
+                               self.vertex_mm, self.surfaces)
 
     def __post_init__(self) -> None:
         if self.spectrum not in SPECTRA:
@@ -86,9 +88,6 @@ class EyeRender:
         from vissim.checks import arcmin_per_px, eye_pupil_diameter_mm, finite_number, number_within, positive_number
         from vissim.charts import single_letter_spec
         from vissim.checks import EYE_RENDER_MAX_FIELD_DEG, EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE
-        from vissim.optics.eyes.models import eye_model
-
-        eye_model(self.model, self.accommodation_diopters)  # the model's name and accommodation range
         if self.rx is not None:
             from vissim.optics.prescription import Prescription
 
@@ -111,15 +110,7 @@ class EyeRender:
         positive_number(self.vertex_mm, "vertex distance", "mm")
         if int(self.spp) < 1:
             raise VissimInputError(f"samples per pixel must be >= 1, got {self.spp}")
-        self.eye  # the eye's own checks: its surfaces, its prescription
-
-
-@functools.lru_cache(maxsize=32)
-def _eye_of(model, accommodation_diopters, pupil_mm, iris_mm, rx, vertex_mm, surfaces):
-    from vissim.optics.eyes.eye import build_eye, overrides_table
-
-    return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_mm=pupil_mm, iris_mm=iris_mm, rx=rx,
-                     vertex_mm=vertex_mm, surfaces=overrides_table(surfaces))
+        self.eye  # the eye's own checks: its model's name and accommodation range, its surfaces, its prescription
 
 
 def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:

@@ -31,6 +31,7 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -43,7 +44,8 @@ from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_
 from vissim.optics.eyes.models import EYE_MODELS, SchematicEye, eye_model
 from vissim.optics.prescription import Prescription, prescription_from
 
-__all__ = ["Eye", "build_eye", "SURFACE_OVERRIDES", "checked_eye", "surface_overrides", "overrides_table"]
+__all__ = ["Eye", "build_eye", "eye_from_fields", "SURFACE_OVERRIDES", "checked_eye", "surface_overrides",
+           "overrides_table"]
 
 #: The `EyeSurface` fields `Eye.with_surface` may change, with their units.
 SURFACE_OVERRIDES = {"radius_mm": "mm", "conic": "", "thickness_after_mm": "mm", "radius_y_mm": "mm",
@@ -240,3 +242,12 @@ def overrides_table(triples) -> dict:
     for surface, key, value in triples:
         table.setdefault(surface, {})[key] = value
     return table
+
+
+@functools.lru_cache(maxsize=64)
+def eye_from_fields(model: str, accommodation_diopters: float, pupil_mm, iris_mm, rx, vertex_mm: float,
+                    surfaces: tuple = ()) -> Eye:
+    """`build_eye` of plain, hashable fields (``surfaces``: (surface, field, value) triples), built once per
+    distinct set in a process: a campaign item's eye and its render's are one object."""
+    return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_mm=pupil_mm, iris_mm=iris_mm, rx=rx,
+                     vertex_mm=vertex_mm, surfaces=overrides_table(surfaces))

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.sight import film_field_deg
 from vissim.optics.eyes.wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
                                           trace_to_retina)
@@ -120,7 +121,7 @@ def _magnification(eye, lens_setup, retina: _Retina, field_deg, distance_mm: flo
     return np.stack(columns, axis=1)
 
 
-def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm: float = 12.0,
+def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
             wavelengths_nm=(550.0,), weights=(1.0,), sensor_wavelength_nm: float | None = None,
             arcmin_per_px: float = 1.0, oversample: int = 4, rays_across: int = RAYS_ACROSS_IRIS,
             seed: int = 0) -> RayPsf:

@@ -15,14 +15,14 @@ lists for any of them and makes one item per combination (its ``name`` a prefix)
 
 from __future__ import annotations
 
-import functools
 import itertools
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.eye import SURFACE_OVERRIDES, build_eye, overrides_table
+from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.eye import SURFACE_OVERRIDES, eye_from_fields
 from vissim.optics.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
                            EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
@@ -47,7 +47,7 @@ class EyeSettings:
     size_px: tuple[int, int] = (64, 64)
     arcmin_per_px: float = 0.5
     chart_distance_m: float = 6.0
-    vertex_mm: float = 12.0
+    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     oversample: int = 2
     rays_across: int = 161
 
@@ -57,8 +57,8 @@ class EyeConfiguration:
     """One item (module doc); ``wavelength_nm`` None for photopic light."""
 
     name: str
-    model: str = "navarro-1985"
-    pupil_mm: float = 4.0
+    model: str = DEFAULT_EYE_MODEL
+    pupil_mm: float = DEFAULT_EYE_PUPIL_MM
     accommodation_diopters: float = 0.0
     field_deg: tuple[float, float] = (0.0, 0.0)
     spectrum: str = "mono"
@@ -72,7 +72,7 @@ class EyeConfiguration:
     size_px: tuple[int, int] = (64, 64)
     arcmin_per_px: float = 0.5
     chart_distance_m: float = 6.0
-    vertex_mm: float = 12.0
+    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
 
     def as_json(self) -> dict:
         return asdict(self)
@@ -89,13 +89,8 @@ class EyeConfiguration:
     def eye(self):
         """The `Eye` of this item: the model at its accommodation, its surfaces altered, its entrance pupil and
         the prescription it has at ``vertex_mm`` (built once per configuration)."""
-        return _eye_of(self.model, self.accommodation_diopters, self.pupil_mm, self.rx, self.vertex_mm, self.surfaces)
-
-
-@functools.lru_cache(maxsize=64)
-def _eye_of(model: str, accommodation_diopters: float, pupil_mm: float, rx, vertex_mm: float, surfaces: tuple):
-    return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_mm=pupil_mm, rx=rx,
-                     vertex_mm=vertex_mm, surfaces=overrides_table(surfaces))
+        return eye_from_fields(self.model, self.accommodation_diopters, self.pupil_mm, None, self.rx, self.vertex_mm,
+                               self.surfaces)
 
 
 def _light(value, source: str, where: str) -> tuple[str, float | None]:
@@ -154,8 +149,8 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
         trial.sphere_diopters, trial.cylinder_diopters, trial.axis_deg)
     configuration = EyeConfiguration(
         name=name_text(entry.get("name", where), source, f"{where}.name"),
-        model=text(entry.get("model", "navarro-1985"), source, f"{where}.model"),
-        pupil_mm=number(entry.get("pupil_mm", 4.0), source, f"{where}.pupil_mm", "mm", lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1]),
+        model=text(entry.get("model", DEFAULT_EYE_MODEL), source, f"{where}.model"),
+        pupil_mm=number(entry.get("pupil_mm", DEFAULT_EYE_PUPIL_MM), source, f"{where}.pupil_mm", "mm", lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1]),
         accommodation_diopters=number(entry.get("accommodation", 0.0), source, f"{where}.accommodation", "D",
                                       lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1]),
         field_deg=_field(entry.get("field", 0.0), source, f"{where}.field"),

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM
 
 __all__ = ["BIN_PX", "EdgeMtf", "SlantedEdge", "edge_mtf", "traced_rays_deg", "traced_edge_lsf",
            "geometric_mtf", "slanted_edge"]
@@ -194,7 +195,7 @@ def _edge_chart(chart_distance_m: float, roll_deg: float, half_width_deg: float)
     return ChartRaster(data, side_mm, side_mm, distance_mm, roll_deg)
 
 
-def slanted_edge(*, model: str = "navarro-1985", pupil_mm: float = 4.0, wavelength_nm: float = 550.0,
+def slanted_edge(*, model: str = DEFAULT_EYE_MODEL, pupil_mm: float = DEFAULT_EYE_PUPIL_MM, wavelength_nm: float = 550.0,
                  roll_deg: float = 5.0, size_px: int = 128, arcmin_per_px: float = 0.5, spp: int = 1024,
                  seeds: int = 8, chart_distance_m: float = 1000.0) -> SlantedEdge:
     """Run the study (module doc): a `SlantedEdge`."""

@@ -33,12 +33,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_SPECTACLE_VERTEX_MM
 
 __all__ = ["FocusSweep", "ChromaticFocus", "predicted_best_sphere_diopters", "gradient_energy", "denoised_gradient_energy", "gaussian_peak",
            "sphere_lattice", "chromatic_focus"]
 
 #: The lens aperture the predicted lens's thickness is computed for, mm (its effect: module doc).
 PREDICTION_APERTURE_MM = 20.0
+#: The study's pupil, mm: the entrance pupil its chromatic focus is measured over.
+FOCUS_STUDY_PUPIL_MM = 3.0
 WAVELENGTHS_NM = (450.0, 550.0, 650.0)
 REFERENCE_NM = 550.0
 
@@ -54,7 +57,7 @@ def _thick_lens(sphere_diopters: float, aperture_mm: float = PREDICTION_APERTURE
 
 
 def predicted_best_sphere_diopters(model: str, wavelength_nm: float, chart_distance_m: float,
-                                   vertex_mm: float = 12.0, aperture_mm: float = PREDICTION_APERTURE_MM) -> float:
+                                   vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM, aperture_mm: float = PREDICTION_APERTURE_MM) -> float:
     """The trial sphere, D, that images the chart on the retina at ``wavelength_nm`` (paraxial; module doc)."""
     from vissim.optics.eyes.models import eye_model
     from vissim.optics.eyes.spectacles import residual_refraction
@@ -175,7 +178,7 @@ def _sweep(base, spheres, wavelength_nm: float, predicted: float) -> FocusSweep:
                       time.perf_counter() - start)
 
 
-def chromatic_focus(*, model: str = "navarro-1985", pupil_mm: float = 3.0, wavelengths_nm=WAVELENGTHS_NM,
+def chromatic_focus(*, model: str = DEFAULT_EYE_MODEL, pupil_mm: float = FOCUS_STUDY_PUPIL_MM, wavelengths_nm=WAVELENGTHS_NM,
                     step_diopters: float = 0.0625, margin_diopters: float = 0.375, spp: int = 256, seed: int = 0,
                     size_px: tuple[int, int] = (64, 64), arcmin_per_px: float = 0.5, logmar: float = 0.6,
                     chart_distance_m: float = 6.0) -> ChromaticFocus:

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.imaging.metrics import compare_images, noise_floor
+from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM
 from vissim.optics.eyes.field_blur import node_field_deg
 
 __all__ = ["MARGIN_PX", "WideChart", "checkerboard", "wide_chart"]
@@ -97,7 +98,7 @@ def _simulations(raster, settings) -> dict:
     return {"field dependent": varying, "single psf": single}
 
 
-def wide_chart(*, model: str = "navarro-1985", pupil_mm: float = 4.0, wavelength_nm: float | None = None,
+def wide_chart(*, model: str = DEFAULT_EYE_MODEL, pupil_mm: float = DEFAULT_EYE_PUPIL_MM, wavelength_nm: float | None = None,
                width_deg: float = 21.0, rows: int = 96, arcmin_per_px: float = 1.0, square_arcmin: float = 8.0,
                spp: int = 256, seed: int = 0, chart_distance_m: float = 1000.0) -> WideChart:
     """Run the study (module doc): a `WideChart`."""
