@@ -130,6 +130,19 @@ def test_an_rx_eye_has_its_prescription_at_the_spectacle_plane(capsys, rx, expec
         assert paraxial["axis_deg"] == pytest.approx(expected[2], abs=0.5)
 
 
+def test_le_grands_accommodated_eye_is_reachable_from_the_command_line(capsys):
+    """Issue 33: ``--accommodation-diopters 7.05`` gives Le Grand's accommodated eye (visisipy's table:
+    lens 6.0 / −5.5 mm, 4.5 mm thick). Oracle: its paraxial refraction on axis is the relaxed eye's minus
+    its accommodation, −7.05 D at the corneal vertex, within `REFRACTION_TOL_D` (0.02 D; the hand value
+    of tests/test_eye_models.py is 7.0525 D with Le Grand's indices)."""
+    relaxed = record(capsys, "le-grand", "--pupil-mm", "2")
+    near = record(capsys, "le-grand", "--pupil-mm", "2", "--accommodation-diopters", "7.05")
+    assert near["accommodation_diopters"] == 7.05
+    change = near["refraction"]["paraxial"]["M"] - relaxed["refraction"]["paraxial"]["M"]
+    assert change == pytest.approx(-7.05, abs=REFRACTION_TOL_D)
+    assert near["power_diopters"] == pytest.approx(67.68, abs=0.01)  # Le Grand's accommodated eye: 67.68 D
+
+
 def test_the_spectacle_plane_follows_vertex_mm(capsys):
     at_12 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3")
     at_14 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3", "--vertex-mm", "14")
@@ -219,6 +232,10 @@ def _dense_cornea_air_chamber(accommodation_diopters=0.0):
     (["no-such-eye", "--pupil-mm", "3"], ["'no-such-eye'", "navarro-1985", "liou-brennan-1997"]),
     (["navarro-1985", "--pupil-mm", "3", "--accommodation-diopters", "12"], ["12 dioptres", "0-10"]),
     (["arizona", "--pupil-mm", "3", "--accommodation-diopters", "7"], ["7 dioptres", "0-6"]),
+    (["le-grand", "--pupil-mm", "3", "--accommodation-diopters", "2"],
+     ["le-grand takes accommodation 0 D (relaxed) or 7.05 D (its accommodated eye) only, got 2 D"]),
+    (["liou-brennan-1997", "--pupil-mm", "3", "--accommodation-diopters", "1"],
+     ["liou-brennan-1997 takes accommodation 0 D only, got 1 D"]),
     (["navarro-1985", "--pupil-mm", "11"], ["entrance pupil 11 mm", "iris"]),
     (["navarro-1985", "--iris-mm", "11"], ["iris 11 mm"]),
     (["navarro-1985", "--pupil-mm", "3", "--iris-mm", "3"], ["--iris-mm", "--pupil-mm"]),

@@ -7,7 +7,7 @@ import json
 from typing import TYPE_CHECKING
 
 from vissim import __version__
-from vissim.cli._common import (FIELD_DEG_HELP, RX_HELP, add_trial_lens_args, field_deg_from_text, parse_float_list,
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_trial_lens_args, field_deg_from_text, parse_float_list,
                                 trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
@@ -34,7 +34,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument("model", metavar="MODEL", help="the schematic eye: " + ", ".join(EYE_MODELS))
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
-                        help="accommodation exerted, dioptres, within the model's range (default 0, relaxed)")
+                        help=f"accommodation exerted, {EYE_ACCOMMODATION_HELP} (default 0, relaxed)")
     pupil = parser.add_mutually_exclusive_group(required=True)
     pupil.add_argument("--pupil-mm", type=float, metavar="D", help="entrance pupil diameter, mm (a clinician's)")
     pupil.add_argument("--iris-mm", type=float, metavar="D", help="iris (stop) diameter, mm (optical design's)")
