@@ -143,6 +143,17 @@ def test_le_grands_accommodated_eye_is_reachable_from_the_command_line(capsys):
     assert near["power_diopters"] == pytest.approx(67.68, abs=0.01)  # Le Grand's accommodated eye: 67.68 D
 
 
+@pytest.mark.parametrize("model", ["navarro-1985", "liou-brennan-1997"])
+def test_a_spherical_rx_reads_back_with_no_cylinder_text(capsys, model):
+    """Issue 33: ``--rx -1.00DS`` read back with a cylinder of ~1e-6 D printed as ``-0.000 x 136``.
+    The paraxial line is ``-1.000 DS`` (to 0.001 D; Liou–Brennan's now solved along its visual axis)."""
+    code, out, err = run(capsys, "eye", model, "--pupil-mm", "3", "--rx", "-1.00DS")
+    assert code == 0, err
+    paraxial = next(line for line in out.splitlines() if line.strip().startswith("paraxial"))
+    assert paraxial.split()[1:3] == ["-1.000", "DS"] and " x " not in paraxial
+    assert "-0.000" not in paraxial
+
+
 def test_the_spectacle_plane_follows_vertex_mm(capsys):
     at_12 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3")
     at_14 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3", "--vertex-mm", "14")

@@ -131,8 +131,15 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _rx_line(entry: dict) -> str:
-    return (f"{entry['sphere_diopters']:+.3f} {entry['cylinder_diopters']:+.3f} x {entry['axis_deg']:.0f}   "
-            f"M {entry['M']:+.3f}  J0 {entry['J0']:+.3f}  J45 {entry['J45']:+.3f} D")
+    """Sphere, cylinder and axis to 0.001 D, then M, J0, J45; a cylinder that rounds to 0 is written
+    ``DS`` with no axis (its axis is noise), the sphere then the spherical equivalent M, and a
+    component that rounds to 0 is +0.000."""
+    if round(entry["cylinder_diopters"], 3) == 0:
+        written = f"{entry['M']:+.3f} DS"
+    else:
+        written = f"{entry['sphere_diopters']:+.3f} {entry['cylinder_diopters']:+.3f} x {entry['axis_deg']:.0f}"
+    m, j0, j45 = (round(entry[key], 3) + 0.0 for key in ("M", "J0", "J45"))  # + 0.0: no "-0.000"
+    return f"{written:<22} M {m:+.3f}  J0 {j0:+.3f}  J45 {j45:+.3f} D"
 
 
 def _print_text(report: EyeReport) -> None:
