@@ -35,7 +35,7 @@ from vissim.optics.prescription import Prescription
 from vissim.optics.psf_metrics import diffraction_mtf
 from vissim.optics.trial_lens import TrialLens
 
-OPTILAND = {"ep_position_mm": 3.04010, "ep_diameter_mm": 3.40022, "efl_mm": 22.029}
+OPTILAND = {"ep_position_mm": 3.04010, "ep_diameter_mm": 3.40022, "image_focal_length_mm": 22.029}
 MTF_SAMPLING_TOL = 2e-3
 REFRACTION_TOL_D = 0.02
 LENS_TOL_D = 0.005
@@ -68,7 +68,7 @@ def test_the_json_record_has_the_issues_keys_and_types(capsys):
     r = record(capsys, "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543",
                "--mtf-cyc-per-mm", "0,50", "--mtf-cyc-per-deg", "0,10,30")
     assert r["model"] == "escudero-sanz-1999"
-    for key in ("power_diopters", "efl_mm", "iris_mm", "wavelength_nm", "rms_um"):
+    for key in ("power_diopters", "image_focal_length_mm", "iris_mm", "wavelength_nm", "rms_um"):
         assert isinstance(r[key], float), key
     assert set(r["entrance_pupil"]) >= {"diameter_mm", "position_mm"}
     assert all(isinstance(r["entrance_pupil"][k], float) for k in ("diameter_mm", "position_mm"))
@@ -96,7 +96,7 @@ def test_entrance_pupil_and_focal_length_meet_optilands_navarro_sample(capsys):
     pupil = r["entrance_pupil"]
     assert pupil["position_mm"] == pytest.approx(OPTILAND["ep_position_mm"], rel=1e-3)
     assert pupil["paraxial_diameter_mm"] == pytest.approx(OPTILAND["ep_diameter_mm"], rel=1e-3)
-    assert r["efl_mm"] == pytest.approx(OPTILAND["efl_mm"], rel=1e-3)
+    assert r["image_focal_length_mm"] == pytest.approx(OPTILAND["image_focal_length_mm"], rel=1e-3)
     # the reported diameter is the real-ray one: pupil aberration shrinks it below the paraxial one
     assert pupil["diameter"].startswith("real rays") and pupil["given"] == "iris"
     assert 3 * 1.123 < pupil["diameter_mm"] < OPTILAND["ep_diameter_mm"]

@@ -24,7 +24,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         help="trace a schematic eye: power, pupils, Zernikes, refraction, MTF",
         description=(
             "Trace a schematic eye surface by surface at one field point and one wavelength: its power and "
-            "f', its entrance pupil (diameter: real rays on axis, the pupil the OSA Zernikes are over; "
+            "image-space focal length f' (n'/P, in the vitreous), its entrance pupil (diameter: real rays on axis, the pupil the OSA Zernikes are over; "
             "position: paraxial, behind the corneal vertex), the Zernikes and RMS of its wavefront in µm, "
             "its refraction (paraxial: the wavefront's curvature at the pupil centre; minimum RMS: the "
             "second-order terms), in minus-cylinder form, and the MTF of its wave PSF (diffraction "
@@ -154,7 +154,8 @@ def _print_text(report: EyeReport) -> None:
         *[("lens", f"{lens['marked_power']} (back vertex power), n_d {lens['refractive_index_d']:g}, "
                    f"{lens['center_thickness_mm']:.3f} mm thick, back vertex {report.lens_setup.vertex_distance_mm:g} mm "
                    "in front of the cornea") for lens in record["lenses"]],
-        ("power, f'", f"{record['power_diopters']:.3f} D, {record['efl_mm']:.4f} mm"),
+        ("power, f'", f"{record['power_diopters']:.3f} D, {record['image_focal_length_mm']:.4f} mm "
+                      "(image space: n'/P)"),
         ("retina", f"{record['retinal_mm_per_deg']:.5f} mm per deg"),
         ("entrance pupil", f"{pupil['diameter_mm']:.4f} mm across (real rays; paraxial "
                            f"{pupil['paraxial_diameter_mm']:.4f}), {pupil['position_mm']:.4f} mm behind the cornea"),
