@@ -226,6 +226,10 @@ def liou_brennan_1997() -> SchematicEye:
     lens front decentred 0.5 mm nasally, the visual axis 5° from the optical axis, nasal (field
     angles are measured from it); partly RECALLED table (``_LB_SOURCE`` says which numbers are found).
 
+    Its dispersion adds the same Δn(λ) to every medium (`media.liou_brennan_shift`), so its LCA is
+    small: 0.69 D from 450 to 650 nm against 1.23–1.28 D measured (the formula's own result; the media
+    module says why).
+
     GRIN halves, n at 555 nm, z from each half's front plane, r from the axis (mm):
     front 1.368 + 0.049057z − 0.015427z² − 0.001978r² over 1.59 mm; back 1.407 − 0.006605z² −
     0.001978r² over 2.43 mm. Both equal 1.368 at the lens surfaces and 1.407 at the join.
