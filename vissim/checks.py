@@ -222,7 +222,7 @@ def arcmin_per_px(value, name: str = "angular sampling") -> float:
     step = positive_number(value, name, "arcmin per pixel")
     if not MIN_ARCMIN_PER_PX <= step <= MAX_ARCMIN_PER_PX:
         raise VissimInputError(
-            f"{name} must be within {MIN_ARCMIN_PER_PX:g}-{MAX_ARCMIN_PER_PX:g} arcmin per pixel, got {step:g}")
+            f"{name} must be {range_text((MIN_ARCMIN_PER_PX, MAX_ARCMIN_PER_PX), 'arcmin per pixel')}, got {step:g}")
     return step
 
 
@@ -248,7 +248,7 @@ def _pupil_within(value, name: str, bounds: tuple[float, float], what: str) -> f
     pupil = positive_number(value, name, "mm")
     low, high = bounds
     if not low <= pupil <= high:
-        raise VissimInputError(f"{name} must be within {low:g}-{high:g} mm{what}, got {pupil:g} mm")
+        raise VissimInputError(f"{name} must be {range_text(bounds, 'mm')}{what}, got {pupil:g} mm")
     return pupil
 
 
