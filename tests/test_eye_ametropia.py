@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError, VissimTypeError
-from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, ametropic_eye, corneal_refraction
+from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, ametropic_eye, corneal_refraction, visual_axis_refraction
+from vissim.optics.eyes.report import eye_report
 from vissim.optics.eyes.models import arizona, escudero_sanz_1999, le_grand, liou_brennan_1997, navarro_1985
 from vissim.optics.eyes.paraxial import refraction_diopters
 from vissim.optics.eyes.spectacles import residual_refraction, spectacle_lens
@@ -95,9 +96,49 @@ def test_uncorrected_refraction_at_the_cornea_is_the_vergence_transferred_rx(bui
 
 
 def test_grin_eye_is_made_ametropic_too():
-    """Liou–Brennan (GRIN lens; the hand trace cannot do it): the scalar paraxial module's refraction."""
-    eye = ametropic_eye(liou_brennan_1997(), Prescription(-4.0))
+    """Liou–Brennan (GRIN lens; the hand trace cannot do it), solved about its optical axis only
+    (``along_visual_axis=False``): the scalar paraxial module's refraction is the vergence-transferred Rx."""
+    eye = ametropic_eye(liou_brennan_1997(), Prescription(-4.0), along_visual_axis=False)
     assert refraction_diopters(eye, 555.0) == pytest.approx(-4.0 / (1.0 + 4.0 * D_M), abs=1e-6)
+
+
+# --- (b2) an eye with a visual axis reads its Rx back along it --------------------------------------
+
+@pytest.mark.parametrize("rx", ["-4.00 -1.50 x 30", "-1.00 DS", "plano", "+2.00 -0.75 x 90", "-6.00 -3.00 x 165",
+                                "-2.50 -1.00 x 45"])
+def test_liou_brennan_reads_its_rx_back_along_the_visual_axis(rx):
+    """Issue 33: Liou–Brennan (5° visual axis, iris 0.5 mm nasal) built for −4.00 −1.50 × 30 read back
+    −3.995 −1.465 × 31 (M, J0, J45 off by up to 0.032 D): its own astigmatism along the visual axis
+    was not cancelled. The read-back is `vissim eye --rx`'s: the paraxial refraction (curvature at the
+    pupil centre) of the wavefront traced from field (0, 0) over a 3 mm entrance pupil (the solve traces
+    1 mm), at the 12 mm spectacle plane. Required: each of M, J0, J45 within 0.002 D (issue 33); measured
+    <= 1e-4 D."""
+    want = Prescription.parse(rx)
+    read = eye_report("liou-brennan-1997", pupil_mm=3.0, rx=rx).refraction.paraxial
+    assert read.power_vector() == pytest.approx(want.power_vector(), abs=0.002)
+    assert read.power_vector() == pytest.approx(want.power_vector(), abs=2e-4)
+
+
+def test_liou_brennan_solved_on_its_optical_axis_alone_keeps_its_own_astigmatism():
+    """The residual the visual-axis solve removes is there without it: solved paraxially about the
+    optical axis, the −1.00 DS eye reads back with |J0| > 0.02 D along the visual axis (measured −0.042 D)."""
+    eye = ametropic_eye(liou_brennan_1997(), Prescription(-1.0), along_visual_axis=False)
+    k = visual_axis_refraction(eye)
+    j0_cornea = 0.5 * (k[0, 0] - k[1, 1])
+    assert abs(j0_cornea) > 0.02
+
+
+@pytest.mark.parametrize("build", [navarro_1985, escudero_sanz_1999, arizona, le_grand])
+def test_centred_eyes_are_solved_once_on_their_optical_axis(build):
+    """A centred eye (no visual axis, iris centred) is the closed-form paraxial solve, unchanged by the
+    visual-axis rule: the same surfaces with or without it, and its traced read-back is the Rx within
+    0.002 D (issue 33; measured <= 5e-5 D, the trace's Zernike fit of a toric front)."""
+    rx = Prescription(-2.0, -1.5, 30.0)
+    eye = ametropic_eye(build(), rx)
+    assert eye.surfaces == ametropic_eye(build(), rx, along_visual_axis=False).surfaces
+    read = eye_report(build().name, pupil_mm=3.0, rx=rx).refraction.paraxial
+    assert read.power_vector() == pytest.approx(rx.power_vector(), abs=0.002)
+    assert read.power_vector() == pytest.approx(rx.power_vector(), abs=2e-4)
 
 
 def test_a_spherical_rx_changes_only_the_vitreous():

@@ -146,3 +146,23 @@ def test_cli_lca_text_prints_the_table(capsys):
 def test_without_lca_the_record_has_no_lca_key(capsys):
     assert main(["eye", "navarro-1985", "--pupil-mm", "1", "--json"]) == 0
     assert "lca" not in json.loads(capsys.readouterr().out)
+
+
+def test_liou_brennans_small_lca_is_its_dispersion_formulas_own():
+    """Issue 33: Liou–Brennan's LCA from 450 to 650 nm is 0.69 D against 1.23–1.28 D measured. Its
+    dispersion (n_555 + 0.0512 − 0.1455λ + 0.0961λ², λ in µm: SpikeFinder's code of the paper's formula,
+    reference page §1) adds the same Δn to every medium, so only the air–cornea step and the reduced
+    lengths change with λ. By hand, a reduced eye of the cornea's radius r = 7.77 mm and the axial length
+    L = 23.95 mm (the paper's abstract): ΔK = Δn (1/r − 1/L), Δn = 0.00796 here, 0.692 D. The eye, paraxial
+    and traced (1 mm pupil at fixation), within 0.02 D of that (measured 0.687 and 0.687 D); and well
+    below the chromatic eye's 1.2 D: the formula's own result, not a bug (docs/conventions.md)."""
+    def shift(lam_um):
+        return 0.0512 - 0.1455 * lam_um + 0.0961 * lam_um ** 2
+
+    hand = (shift(0.450) - shift(0.650)) * (1000.0 / 7.77 - 1000.0 / 23.95)
+    curve = lca_curve(liou_brennan_1997(), [450.0, 650.0], pupil_mm=1.0, reference_nm=555.0)
+    blue, red = curve.rows
+    assert red.paraxial_diopters - blue.paraxial_diopters == pytest.approx(hand, abs=REFERENCE_TOL_D)
+    assert red.traced_diopters - blue.traced_diopters == pytest.approx(hand, abs=REFERENCE_TOL_D)
+    thibos = _thibos_reduced_eye(650.0, 555.0) - _thibos_reduced_eye(450.0, 555.0)
+    assert thibos > 1.2 and thibos - (red.traced_diopters - blue.traced_diopters) > 0.4

@@ -16,8 +16,9 @@ import math
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.models import (EYE_MODELS, arizona, escudero_sanz_1999, eye_model, le_grand,
-                                       liou_brennan_1997, navarro_1985)
+from vissim.optics.eyes.paraxial import refraction_diopters
+from vissim.optics.eyes.models import (EYE_MODELS, LE_GRAND_ACCOMMODATED_DIOPTERS, arizona, escudero_sanz_1999,
+                                       eye_model, le_grand, liou_brennan_1997, navarro_1985)
 
 INF = math.inf
 ES1999 = [(7.72, -0.26, 0.55), (6.50, 0.0, 3.05), (INF, 0.0, 0.0), (10.2, -3.1316, 4.0), (-6.0, -1.0, 16.3203),
@@ -116,8 +117,11 @@ def test_every_model_has_the_iris_before_the_lens_and_the_retina_last():
     (lambda: eye_model("navarro-1985", 12), "navarro-1985 accommodation must be within 0-10 dioptres, got 12 dioptres"),
     (lambda: navarro_1985(-1), "navarro-1985 accommodation must be within 0-10 dioptres, got -1 dioptres"),
     (lambda: arizona(7), "arizona accommodation must be within 0-6 dioptres, got 7 dioptres"),
-    (lambda: eye_model("le-grand", 2), "le-grand accommodation must be within 0-0 dioptres, got 2 dioptres"),
-    (lambda: eye_model("liou-brennan-1997", 1), "liou-brennan-1997 accommodation must be within 0-0 dioptres"),
+    (lambda: eye_model("le-grand", 2), "le-grand takes accommodation 0 D (relaxed) or 7.05 D (its accommodated eye) "
+                                       "only, got 2 D"),
+    (lambda: eye_model("le-grand", 7.0), "le-grand takes accommodation 0 D (relaxed) or 7.05 D"),
+    (lambda: eye_model("liou-brennan-1997", 1), "liou-brennan-1997 takes accommodation 0 D only, got 1 D"),
+    (lambda: eye_model("le-grand", float("nan")), "le-grand accommodation must be finite (in dioptres)"),
     (lambda: eye_model("arizona", float("nan")), "arizona accommodation must be finite (in dioptres)"),
 ])
 def test_bad_input_is_one_line(call, message):
@@ -125,6 +129,50 @@ def test_bad_input_is_one_line(call, message):
         call()
     text = str(info.value)
     assert message in text and "\n" not in text
+    assert "0-0" not in text  # issue 33: a one-value range was "within 0-0 dioptres"
+
+
+def _visisipy_le_grand_refraction_diopters(accommodation: str) -> float:
+    """The paraxial refraction at the corneal vertex (vergence A/B in air, D) of visisipy's Gullstrand–Le
+    Grand eye, by a y-nu matrix trace written here over visisipy's own radii, thicknesses and indices."""
+    from visisipy.models.catalog.gullstrand import surfaces_by_accommodation
+    from visisipy.models.materials import (GullstrandLeGrandAccommodatedMaterials,
+                                           GullstrandLeGrandUnaccommodatedMaterials)
+
+    table = surfaces_by_accommodation[accommodation]
+    media = (GullstrandLeGrandAccommodatedMaterials() if accommodation == "accommodated"
+             else GullstrandLeGrandUnaccommodatedMaterials())
+    steps = [(table["cornea_front"], media.cornea.refractive_index),
+             (table["cornea_back"], media.aqueous.refractive_index),
+             (table["lens_front"], media.lens.refractive_index),
+             (table["lens_back"], media.vitreous.refractive_index)]
+    a, b, c, d = 1.0, 0.0, 0.0, 1.0
+    n = 1.0
+    for surface, n_after in steps:
+        power = (n_after - n) / surface.radius
+        c, d = c - power * a, d - power * b
+        a, b = a + surface.thickness / n_after * c, b + surface.thickness / n_after * d
+        n = n_after
+    return 1000.0 * a / b
+
+
+def test_le_grand_accommodated_eye_takes_its_own_accommodation():
+    """Issue 33: the accommodated Le Grand eye was in the API only. ``eye_model("le-grand", A)`` takes
+    A = 0 (relaxed) or the accommodated eye's own accommodation, relaxed minus accommodated refraction at
+    the corneal vertex. Oracle: a hand y-nu trace of visisipy's two eyes (catalog/gullstrand.py, Le
+    Grand's single indices): 7.0525 D; the constant is that to 0.01 D (rounding: tolerance 0.005 D).
+    vissim's own two eyes at 589.3 nm (ISET3d dispersion, indices within 4e-5 of Le Grand's) differ from
+    it by their media alone: 7.058 D, within 0.01 D."""
+    pytest.importorskip("visisipy")
+    accommodation = (_visisipy_le_grand_refraction_diopters("unaccommodated")
+                     - _visisipy_le_grand_refraction_diopters("accommodated"))
+    assert LE_GRAND_ACCOMMODATED_DIOPTERS == pytest.approx(accommodation, abs=0.005)
+    own = refraction_diopters(le_grand(), 589.3) - refraction_diopters(le_grand(accommodated=True), 589.3)
+    assert own == pytest.approx(LE_GRAND_ACCOMMODATED_DIOPTERS, abs=0.01)
+    eye = eye_model("le-grand", LE_GRAND_ACCOMMODATED_DIOPTERS)
+    assert [(s.radius_mm, s.conic, s.thickness_after_mm) for s in eye.surfaces] == LE_GRAND_ACCOMMODATED
+    assert eye.accommodation_diopters == LE_GRAND_ACCOMMODATED_DIOPTERS
+    assert eye_model("le-grand").accommodation_diopters == 0.0
 
 
 def test_liou_brennan_numbers_found_in_stored_sources():

@@ -38,14 +38,32 @@ def _ynu_power(radii_mm, gaps_mm, indices):
 
 # --- optiland's Navarro sample --------------------------------------------------------------------
 
+def test_image_focal_length_is_the_second_principal_point_to_the_focus_in_the_vitreous():
+    """Issue 33: ``efl_mm`` was n′/P without saying so; it is ``image_focal_length_mm``. By hand, with
+    visisipy's printed Le Grand indices (1.3771, 1.3374, 1.42, 1.336; no vissim code): a ray at height
+    y = 1 mm from infinity leaves the lens back at angle u′ = nu′/n′ in the vitreous; the second principal
+    plane is where its extension reaches y = 1, so f′ = −1/u′ = n′/P (22.29 mm), not 1/P (16.68 mm).
+    vissim's Le Grand media at 589.3 nm (ISET3d dispersion) sit within 4e-5 of those indices: 0.01 %."""
+    radii, gaps, indices = [7.8, 6.5, 10.2, -6.0], [0.55, 3.05, 4.0], [1.0, 1.3771, 1.3374, 1.42, 1.336]
+    y, nu = 1.0, 0.0
+    for k, radius in enumerate(radii):
+        nu -= y * (indices[k + 1] - indices[k]) / radius
+        if k < len(gaps):
+            y += gaps[k] * nu / indices[k + 1]
+    hand_mm = -1.0 / (nu / indices[-1])
+    eye = paraxial_eye(le_grand(), 589.3, iris_mm=3.0)
+    assert eye.image_focal_length_mm == pytest.approx(hand_mm, rel=1e-4)
+    assert eye.image_focal_length_mm == pytest.approx(1000.0 * 1.336 / eye.power_diopters, rel=1e-4)
+    assert abs(eye.image_focal_length_mm - 1000.0 / eye.power_diopters) > 5.0  # not the focal length in air
+
 def test_wide_angle_navarro_matches_optilands_sample_at_543_nm():
     """optiland: entrance pupil 3.04010 mm behind the cornea, 3.40022 mm across at a 3 mm stop,
     f' = 22.029 mm; each within 0.1 %. Measured: 3.04005, 3.40026, 22.0305 mm."""
     eye = paraxial_eye(escudero_sanz_1999(), 543.0, iris_mm=3.0)
     assert eye.entrance_pupil_position_mm == pytest.approx(3.04010, rel=1e-3)
     assert eye.entrance_pupil_diameter_mm == pytest.approx(3.40022, rel=1e-3)
-    assert eye.efl_mm == pytest.approx(22.029, rel=1e-3)
-    assert eye.efl_mm / eye.entrance_pupil_diameter_mm == pytest.approx(6.4787, rel=1e-3)  # optiland's F-number
+    assert eye.image_focal_length_mm == pytest.approx(22.029, rel=1e-3)
+    assert eye.image_focal_length_mm / eye.entrance_pupil_diameter_mm == pytest.approx(6.4787, rel=1e-3)  # optiland's F-number
 
 
 def test_iris_and_entrance_pupil_convert_both_ways():

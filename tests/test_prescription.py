@@ -111,3 +111,41 @@ def test_nonfinite_values_are_refused():
 def test_axis_noise_near_the_horizontal_is_normalised_to_180():
     assert LensPower(0, 1, 1e-13).axis_deg == 180.0
     assert LensPower(0, 1, 180 - 1e-12).axis_deg == 180.0
+
+
+# --- issue 33: a cylinder that rounds to zero is written as none ---------------------------------------
+
+@given(powers, st.integers(2, 4))
+def test_a_spherical_prescription_is_written_with_no_cylinder_or_axis(sphere, decimals):
+    """A sphere alone is ``S DS`` (or ``plano DS``) at every precision: no cylinder, no axis."""
+    text = Prescription(sphere).format(decimals)
+    assert text.endswith(" DS") and " x " not in text
+
+
+@given(powers, st.floats(-0.49, 0.49), axes, st.integers(2, 4))
+def test_a_cylinder_that_rounds_to_zero_prints_no_axis(sphere, cyl_fraction, axis, decimals):
+    """Issue 33: ``--rx -1.00DS`` read back from a traced eye printed a cylinder of ~1e-6 D as
+    ``-0.000 x 136.5``. A cylinder under half the last printed digit is written ``DS``, its sphere the
+    spherical equivalent: the same text in minus- and plus-cylinder form, and within half a digit
+    (plus the cylinder's half) of the sphere."""
+    cyl = cyl_fraction * 10.0 ** -decimals
+    rx = Prescription(sphere, cyl, axis)
+    text = rx.format(decimals)
+    assert text.endswith(" DS") and " x " not in text
+    assert text == rx.transposed().format(decimals)
+    written = 0.0 if text.startswith("plano") else float(text.split()[0])
+    assert abs(written - rx.spherical_equivalent_diopters) <= 0.5 * 10.0 ** -decimals + 1e-12
+
+
+@given(powers, st.floats(0.51, 10.0), axes, st.integers(2, 4))
+def test_a_cylinder_that_shows_keeps_its_axis(sphere, cyl_digits, axis, decimals):
+    """A cylinder of at least half the last printed digit is written with its axis."""
+    text = Prescription(sphere, -cyl_digits * 10.0 ** -decimals, axis).format(decimals)
+    assert " x " in text and not text.endswith("DS")
+
+
+@pytest.mark.parametrize("rx, text", [(Prescription(-1.0, -1e-6, 136.5), "-1.00 DS"),
+                                      (Prescription(-0.001), "plano DS"),
+                                      (Prescription(-2.0, -1.25, 180.0), "-2.00 -1.25 x 180")])
+def test_written_forms_by_hand(rx, text):
+    assert str(rx) == text

@@ -193,3 +193,16 @@ def test_every_reader_of_an_eyes_accommodation_takes_one_range(reader):
         ACCOMMODATION_READERS[reader](inside)
     with pytest.raises(VissimInputError, match=r"accommodation must be .*20 dioptres, got 20.5"):
         ACCOMMODATION_READERS[reader](high + 0.5)
+
+
+@pytest.mark.parametrize("bounds, unit, text", [((0.0, 10.0), "dioptres", "within 0-10 dioptres"),
+                                                ((-5.0, 5.0), "mm", "within -5 to 5 mm"),
+                                                ((0.0, 0.0), "dioptres", "0 dioptres only")])
+def test_a_range_is_named_one_way_and_a_one_value_range_as_that_value(bounds, unit, text):
+    """Issue 33: a range of one value read "within 0-0 dioptres"; every refusal names it by `range_text`."""
+    from vissim.checks import number_within, range_text
+
+    assert range_text(bounds, unit) == text
+    with pytest.raises(VissimInputError) as info:
+        number_within(bounds[1] + 1.0, "x", unit, bounds)
+    assert f"x must be {text}, got" in str(info.value) and "0-0" not in str(info.value)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
 
-__all__ = ["number_within", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
+__all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
            "EYE_RENDER_MAX_FIELD_DEG", "EYE_RENDER_MAX_THETA_DEG",
@@ -108,9 +108,18 @@ def number_within(value, name: str, unit: str, bounds: tuple[float, float], what
     number = finite_number(value, name, unit)
     low, high = bounds
     if not low <= number <= high:
-        span = f"{low:g} to {high:g}" if low < 0 else f"{low:g}-{high:g}"
-        raise VissimInputError(f"{name} must be within {span} {unit}{what}, got {number:g} {unit}")
+        raise VissimInputError(f"{name} must be {range_text(bounds, unit)}{what}, got {number:g} {unit}")
     return number + 0.0  # -0.0 as 0.0
+
+
+def range_text(bounds: tuple[float, float], unit: str) -> str:
+    """How a refusal names the values ``bounds`` (inclusive) allows: ``within 0-10 dioptres``,
+    ``within -5 to 5 mm``, or, for a range of one value, ``0 dioptres only``."""
+    low, high = bounds
+    if low == high:
+        return f"{low:g} {unit} only"
+    span = f"{low:g} to {high:g}" if low < 0 else f"{low:g}-{high:g}"
+    return f"within {span} {unit}"
 
 
 def wavelength_nm(value, name: str = "wavelength") -> float:
@@ -213,7 +222,7 @@ def arcmin_per_px(value, name: str = "angular sampling") -> float:
     step = positive_number(value, name, "arcmin per pixel")
     if not MIN_ARCMIN_PER_PX <= step <= MAX_ARCMIN_PER_PX:
         raise VissimInputError(
-            f"{name} must be within {MIN_ARCMIN_PER_PX:g}-{MAX_ARCMIN_PER_PX:g} arcmin per pixel, got {step:g}")
+            f"{name} must be {range_text((MIN_ARCMIN_PER_PX, MAX_ARCMIN_PER_PX), 'arcmin per pixel')}, got {step:g}")
     return step
 
 
@@ -239,7 +248,7 @@ def _pupil_within(value, name: str, bounds: tuple[float, float], what: str) -> f
     pupil = positive_number(value, name, "mm")
     low, high = bounds
     if not low <= pupil <= high:
-        raise VissimInputError(f"{name} must be within {low:g}-{high:g} mm{what}, got {pupil:g} mm")
+        raise VissimInputError(f"{name} must be {range_text(bounds, 'mm')}{what}, got {pupil:g} mm")
     return pupil
 
 

@@ -9,8 +9,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from vissim.atomic import check_outputs_apart, refuse_existing  # noqa: F401  (the commands' one door)
-from vissim.checks import ENTRANCE_PUPIL_RANGE_MM
+from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, ENTRANCE_PUPIL_RANGE_MM,
+                           NAVARRO_ACCOMMODATION_RANGE_DIOPTERS)
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.models import LE_GRAND_ACCOMMODATED_DIOPTERS
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 
@@ -22,6 +24,11 @@ log = logging.getLogger(__name__)
 
 #: What ``--rx`` is, in every command that takes it (docs/conventions.md, "Prescriptions").
 RX_HELP = "the eye's prescription: its correcting lens, not worn (myope < 0)"
+#: What ``--accommodation-diopters`` takes, model by model (`vissim.optics.eyes.models`).
+EYE_ACCOMMODATION_HELP = (f"dioptres: 0-{NAVARRO_ACCOMMODATION_RANGE_DIOPTERS[1]:g} navarro-1985 and "
+                          f"escudero-sanz-1999, 0-{ARIZONA_ACCOMMODATION_RANGE_DIOPTERS[1]:g} arizona, 0 or "
+                          f"{LE_GRAND_ACCOMMODATED_DIOPTERS:g} le-grand (relaxed, or its accommodated eye), "
+                          "0 liou-brennan-1997")
 
 
 def add_rx_arg(parser, *, required: bool = False, default_text: str = "") -> None:

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg,
-                                check_outputs_apart, eye_from_args, field_deg_from_text, image_sampling,
-                                parse_float_list, wavefront_from_args)
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
+                                add_eye_model_arg, check_outputs_apart, eye_from_args, field_deg_from_text,
+                                image_sampling, parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_image, write_image
 from vissim.optics.array_backend import DEVICES, array_backend
@@ -81,7 +81,7 @@ def add_eye_model_args(parser) -> None:
                      help=f"with --eye-model: the image centre's {FIELD_DEG_HELP} (default 0,0: the eye looks at "
                      "the image centre)")
     eye.add_argument("--accommodation-diopters", type=float, metavar="A",
-                     help="with --eye-model: accommodation exerted, dioptres, within the model's range (default 0)")
+                     help=f"with --eye-model: accommodation exerted, {EYE_ACCOMMODATION_HELP} (default 0)")
     eye.add_argument("--field-step-deg", type=float, metavar="S",
                      help="with --eye-model: spacing of the traced PSFs over the image, degrees of visual angle "
                      "(default 2)")

@@ -7,8 +7,8 @@ import json
 from typing import TYPE_CHECKING
 
 from vissim import __version__
-from vissim.cli._common import (FIELD_DEG_HELP, RX_HELP, add_trial_lens_args, field_deg_from_text, parse_float_list,
-                                trial_lens_powers)
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_trial_lens_args,
+                                field_deg_from_text, parse_float_list, trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
@@ -24,7 +24,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         help="trace a schematic eye: power, pupils, Zernikes, refraction, MTF",
         description=(
             "Trace a schematic eye surface by surface at one field point and one wavelength: its power and "
-            "f', its entrance pupil (diameter: real rays on axis, the pupil the OSA Zernikes are over; "
+            "image-space focal length f' (n'/P, in the vitreous), its entrance pupil (diameter: real rays on "
+            "axis, the pupil the OSA Zernikes are over; "
             "position: paraxial, behind the corneal vertex), the Zernikes and RMS of its wavefront in µm, "
             "its refraction (paraxial: the wavefront's curvature at the pupil centre; minimum RMS: the "
             "second-order terms), in minus-cylinder form, and the MTF of its wave PSF (diffraction "
@@ -34,7 +35,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument("model", metavar="MODEL", help="the schematic eye: " + ", ".join(EYE_MODELS))
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
-                        help="accommodation exerted, dioptres, within the model's range (default 0, relaxed)")
+                        help=f"accommodation exerted, {EYE_ACCOMMODATION_HELP} (default 0, relaxed)")
     pupil = parser.add_mutually_exclusive_group(required=True)
     pupil.add_argument("--pupil-mm", type=float, metavar="D", help="entrance pupil diameter, mm (a clinician's)")
     pupil.add_argument("--iris-mm", type=float, metavar="D", help="iris (stop) diameter, mm (optical design's)")
@@ -133,8 +134,15 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _rx_line(entry: dict) -> str:
-    return (f"{entry['sphere_diopters']:+.3f} {entry['cylinder_diopters']:+.3f} x {entry['axis_deg']:.0f}   "
-            f"M {entry['M']:+.3f}  J0 {entry['J0']:+.3f}  J45 {entry['J45']:+.3f} D")
+    """Sphere, cylinder and axis to 0.001 D, then M, J0, J45; a cylinder that rounds to 0 is written
+    ``DS`` with no axis (its axis is noise), the sphere then the spherical equivalent M, and a
+    component that rounds to 0 is +0.000."""
+    if round(entry["cylinder_diopters"], 3) == 0:
+        written = f"{entry['M']:+.3f} DS"
+    else:
+        written = f"{entry['sphere_diopters']:+.3f} {entry['cylinder_diopters']:+.3f} x {entry['axis_deg']:.0f}"
+    m, j0, j45 = (round(entry[key], 3) + 0.0 for key in ("M", "J0", "J45"))  # + 0.0: no "-0.000"
+    return f"{written:<22} M {m:+.3f}  J0 {j0:+.3f}  J45 {j45:+.3f} D"
 
 
 def _print_text(report: EyeReport) -> None:
@@ -149,7 +157,8 @@ def _print_text(report: EyeReport) -> None:
         *[("lens", f"{lens['marked_power']} (back vertex power), n_d {lens['refractive_index_d']:g}, "
                    f"{lens['center_thickness_mm']:.3f} mm thick, back vertex {report.lens_setup.vertex_distance_mm:g} mm "
                    "in front of the cornea") for lens in record["lenses"]],
-        ("power, f'", f"{record['power_diopters']:.3f} D, {record['efl_mm']:.4f} mm"),
+        ("power, f'", f"{record['power_diopters']:.3f} D, {record['image_focal_length_mm']:.4f} mm "
+                      "(image space: n'/P)"),
         ("retina", f"{record['retinal_mm_per_deg']:.5f} mm per deg"),
         ("entrance pupil", f"{pupil['diameter_mm']:.4f} mm across (real rays; paraxial "
                            f"{pupil['paraxial_diameter_mm']:.4f}), {pupil['position_mm']:.4f} mm behind the cornea"),

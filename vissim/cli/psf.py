@@ -9,8 +9,9 @@ import numpy as np
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
-from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args, add_eye_model_arg, eye_from_args,
-                                field_deg_from_text, parse_float_list, wavefront_from_args)
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
+                                add_eye_model_arg, eye_from_args, field_deg_from_text, parse_float_list,
+                                wavefront_from_args)
 from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
@@ -52,7 +53,7 @@ def add_parser(subparsers) -> None:
                         help=f"with --eye-model: the {FIELD_DEG_HELP}; the PSF is centred on the chief ray's image "
                         "point at the model's reference wavelength (default 0,0)")
     parser.add_argument("--accommodation-diopters", type=float, metavar="A",
-                        help="with --eye-model: accommodation exerted, dioptres, within the model's range "
+                        help=f"with --eye-model: accommodation exerted, {EYE_ACCOMMODATION_HELP} "
                         "(default 0, relaxed)")
     parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
     parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from vissim.atomic import check_outputs_apart
 from vissim.checks import size_text
-from vissim.cli._common import (FIELD_DEG_HELP, RX_HELP, add_eye_model_arg, add_trial_lens_args, field_deg_from_text,
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg, add_trial_lens_args, field_deg_from_text,
                                 refuse_existing, size_from_text, trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.render.eye_render import EyeRender
@@ -42,7 +42,7 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
                         help="eye scene file (see scenes/eye.toml); the options below override its values")
     add_eye_model_arg(parser, f"the schematic eye, default {_DEFAULT['model']}")
     parser.add_argument("--accommodation-diopters", type=float, metavar="A",
-                        help="the eye's accommodation, dioptres, within the model's range "
+                        help=f"the eye's accommodation, {EYE_ACCOMMODATION_HELP} "
                              f"(default {_DEFAULT['accommodation_diopters']:g})")
     pupil = parser.add_mutually_exclusive_group()
     pupil.add_argument("--pupil-mm", type=float, metavar="D",

@@ -126,11 +126,20 @@ class SpheroCylinder:
         return self.format()
 
     def format(self, decimals: int = 2) -> str:
-        """Written form, e.g. ``-2.00 -1.25 x 180`` (clinical: 2 decimals; more for optics)."""
-        sphere = "plano" if self.sphere_diopters == 0 else f"{self.sphere_diopters:+.{decimals}f}"
-        if self.cylinder_diopters == 0:
-            return f"{sphere} DS"
-        return f"{sphere} {self.cylinder_diopters:+.{decimals}f} x {self.axis_deg:.{max(0, decimals - 2)}f}"
+        """Written form, e.g. ``-2.00 -1.25 x 180`` (clinical: 2 decimals; more for optics).
+
+        A cylinder that rounds to 0 at ``decimals`` is written as none: ``S DS`` with S the spherical
+        equivalent (the same whichever cylinder sign the power is written in), and no axis (a
+        near-zero cylinder's axis is noise: −1.00 DS read back from a traced eye is not
+        ``-1.00 -0.00 x 137``). A sphere that rounds to 0 is written ``plano``.
+        """
+        sphere, cylinder = self.sphere_diopters, self.cylinder_diopters
+        if round(cylinder, decimals) == 0:
+            sphere, cylinder = self.spherical_equivalent_diopters, 0.0
+        written = "plano" if round(sphere, decimals) == 0 else f"{sphere:+.{decimals}f}"
+        if cylinder == 0:
+            return f"{written} DS"
+        return f"{written} {cylinder:+.{decimals}f} x {self.axis_deg:.{max(0, decimals - 2)}f}"
 
     # -- transposition ----------------------------------------------------------------
     def transposed(self) -> Self:

@@ -26,6 +26,16 @@ Formulas (λ_nm in nanometres, λ_um in micrometres):
 * ``liou-brennan`` (Liou & Brennan 1997, JOSA A 14:1684; as coded in SpikeFinder
   ``LiouBrennanRefractiveIndices.cs``, whose later group-index step is not taken):
   n(λ) = n_555 + 0.0512 − 0.1455 λ_um + 0.0961 λ_um², the same shift for every medium.
+
+  **Its LCA is small, and that is the formula's.** The same Δn(λ) in every medium leaves every
+  internal index step, and so every internal surface's power, unchanged: only the air–cornea
+  step and the media's reduced lengths t/n change with λ, and the eye's refraction changes by
+  about Δn (1/r_cornea − 1/axial length), a reduced eye of the cornea's radius. From 450 to 650 nm
+  Δn = 0.00796 and that is 0.69 D (traced: 0.687 D; 1.03 D from 400 to 700 nm), against 1.23–1.28 D
+  measured (Thibos et al. 1992; Atchison & Smith 2005) and 1.05–1.35 D in the other models here.
+  The formula is kept as the public code gives it; the paper's dispersion section is not in a
+  stored source (only its first page is), so whether Liou & Brennan apply it this way is
+  unconfirmed (docs/conventions.md, Dispersion).
 """
 
 from __future__ import annotations

@@ -13,16 +13,18 @@ Builders: `navarro_1985`, `escudero_sanz_1999`, `arizona`, `le_grand`, `liou_bre
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, NAVARRO_ACCOMMODATION_RANGE_DIOPTERS,
-                           number_within)
+                           finite_number, number_within)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import (AIR, GrinMedium, Medium, arizona_medium, le_grand_medium,
                                       liou_brennan_medium, navarro_medium)
 
 __all__ = ["EyeSurface", "SchematicEye", "SURFACE_KINDS", "navarro_1985", "escudero_sanz_1999", "arizona",
-           "le_grand", "liou_brennan_1997", "EYE_MODELS", "eye_model"]
+           "le_grand", "liou_brennan_1997", "EYE_MODELS", "eye_model", "LE_GRAND_ACCOMMODATED_DIOPTERS",
+           "fixed_accommodation_text"]
 
 #: refracting: an index step; stop: the iris, a plane with no power; grin-boundary: a plane inside
 #: a GRIN lens where its polynomial changes (the index is continuous); retina: the image surface.
@@ -186,7 +188,8 @@ def arizona(accommodation_diopters: float = 0.0) -> SchematicEye:
 
 def le_grand(accommodated: bool = False) -> SchematicEye:
     """Gullstrand–Le Grand's full theoretical eye, relaxed or accommodated (visisipy
-    ``catalog/gullstrand.py``); indices with ISET3d's n∞ + K/(λ − 130) dispersion. The iris is at
+    ``catalog/gullstrand.py``; accommodated: ``accommodation_diopters`` `LE_GRAND_ACCOMMODATED_DIOPTERS`,
+    ``eye_model("le-grand", 7.05)``); indices with ISET3d's n∞ + K/(λ − 130) dispersion. The iris is at
     the lens front, as visisipy puts it (3.6 mm behind the corneal vertex when relaxed)."""
     aqueous, vitreous = le_grand_medium("aqueous"), le_grand_medium("vitreous")
     if accommodated:  # aqueous 2.65, lens 6.0 / -5.5 x 4.5 mm, n 1.427, vitreous 16.49655
@@ -205,7 +208,8 @@ def le_grand(accommodated: bool = False) -> SchematicEye:
     )
     return SchematicEye("le-grand", surfaces, 2, 589.3,
                         "Le Grand & El Hage 1980 (Gullstrand-Le Grand); visisipy catalog/gullstrand.py; "
-                        "dispersion ISET3d", accommodation_diopters=0.0)
+                        "dispersion ISET3d",
+                        accommodation_diopters=LE_GRAND_ACCOMMODATED_DIOPTERS if accommodated else 0.0)
 
 
 _LB_SOURCE = ("Liou & Brennan 1997, JOSA A 14:1684 (abstract: 60.35 D, axial length 23.95 mm). Found in "
@@ -221,6 +225,10 @@ def liou_brennan_1997() -> SchematicEye:
     """Liou & Brennan's 1997 eye: aspheric cornea and lens, a two-part GRIN lens, the iris at the
     lens front decentred 0.5 mm nasally, the visual axis 5° from the optical axis, nasal (field
     angles are measured from it); partly RECALLED table (``_LB_SOURCE`` says which numbers are found).
+
+    Its dispersion adds the same Δn(λ) to every medium (`media.liou_brennan_shift`), so its LCA is
+    small: 0.69 D from 450 to 650 nm against 1.23–1.28 D measured (the formula's own result; the media
+    module says why).
 
     GRIN halves, n at 555 nm, z from each half's front plane, r from the axis (mm):
     front 1.368 + 0.049057z − 0.015427z² − 0.001978r² over 1.59 mm; back 1.407 − 0.006605z² −
@@ -243,12 +251,38 @@ def liou_brennan_1997() -> SchematicEye:
                         stop_decentre_nasal_mm=0.5, visual_axis_deg=5.0, recalled=True)
 
 
-def _only_relaxed(builder, model: str):
+#: The accommodated Gullstrand–Le Grand eye's accommodation, D, to 0.01 D: the relaxed eye's paraxial
+#: refraction at the corneal vertex minus the accommodated eye's, with Le Grand's indices (1.3771,
+#: 1.3374, lens 1.42 and 1.427, 1.336; visisipy catalog/gullstrand.py): 7.0525 D. vissim's media at
+#: 589.3 nm (ISET3d's dispersion, within 4e-5 of those indices) give 7.058 D. tests/test_eye_models.py
+#: recomputes both. ``le-grand`` takes this accommodation, or 0 D, and nothing between: the model has
+#: two lenses, not a formula in A.
+LE_GRAND_ACCOMMODATED_DIOPTERS = 7.05
+
+
+def _fixed_accommodation(model: str, builders: dict[float, Callable[[], SchematicEye]]):
+    """A builder taking ``accommodation_diopters`` for a model that has eyes at the accommodations
+    ``builders``'s keys only (D); any other value is refused, the values it takes named."""
+    values = sorted(builders)
+
     def build(accommodation_diopters: float = 0.0) -> SchematicEye:
-        _accommodation(accommodation_diopters, model, (0.0, 0.0))
-        return builder()
-    build.__doc__ = f"{model}, relaxed only (accommodation 0 D)."
+        a = finite_number(accommodation_diopters, f"{model} accommodation", "dioptres") + 0.0
+        if a not in builders:
+            raise VissimInputError(f"{model} takes accommodation {fixed_accommodation_text(model)}, got {a:g} D")
+        return builders[a]()
+
+    build.__doc__ = f"{model} at accommodation {' or '.join(f'{v:g}' for v in values)} D only."
+    build.accommodations_diopters = tuple(values)
     return build
+
+
+def fixed_accommodation_text(model: str) -> str:
+    """The accommodations a fixed-accommodation model takes, as its refusal names them: ``0 D only``, or
+    ``0 D (relaxed) or 7.05 D (its accommodated eye) only``."""
+    values = EYE_MODELS[model].accommodations_diopters
+    if len(values) == 1:
+        return f"{values[0]:g} D only"
+    return f"{values[0]:g} D (relaxed) or " + " or ".join(f"{v:g} D (its accommodated eye)" for v in values[1:]) + " only"
 
 
 #: Command-line model name -> builder taking ``accommodation_diopters``.
@@ -256,17 +290,18 @@ EYE_MODELS = {
     "navarro-1985": navarro_1985,
     "escudero-sanz-1999": escudero_sanz_1999,
     "arizona": arizona,
-    "le-grand": _only_relaxed(le_grand, "le-grand"),
-    "liou-brennan-1997": _only_relaxed(liou_brennan_1997, "liou-brennan-1997"),
+    "le-grand": _fixed_accommodation("le-grand", {0.0: le_grand,
+                                                  LE_GRAND_ACCOMMODATED_DIOPTERS: lambda: le_grand(accommodated=True)}),
+    "liou-brennan-1997": _fixed_accommodation("liou-brennan-1997", {0.0: liou_brennan_1997}),
 }
 
 
 def eye_model(name: str, accommodation_diopters: float = 0.0) -> SchematicEye:
     """The model ``name`` (a key of `EYE_MODELS`) at ``accommodation_diopters``.
 
-    Le Grand and Liou–Brennan take 0 D only here (`le_grand(accommodated=True)` is Le Grand's
-    accommodated eye). An unknown name or an accommodation outside the model's range raises
-    `VissimInputError`.
+    Liou–Brennan takes 0 D only; Le Grand 0 D (relaxed) or `LE_GRAND_ACCOMMODATED_DIOPTERS` (its
+    accommodated eye, `le_grand(accommodated=True)`). An unknown name or an accommodation outside the
+    model's range (or not one a fixed-accommodation model has) raises `VissimInputError`.
     """
     if name not in EYE_MODELS:
         raise VissimInputError(f"unknown eye model {name!r}; known: {', '.join(EYE_MODELS)}")

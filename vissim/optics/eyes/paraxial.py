@@ -29,7 +29,7 @@ from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
 from vissim.optics.eyes.models import SchematicEye
 
 __all__ = ["GRIN_STEPS", "LCA_REFERENCE_NM", "ParaxialEye", "grin_matrix", "matrix_to_surface",
-           "equivalent_power_diopters", "efl_mm", "entrance_pupil_position_mm", "pupil_magnification",
+           "equivalent_power_diopters", "image_focal_length_mm", "entrance_pupil_position_mm", "pupil_magnification",
            "entrance_pupil_diameter_mm", "iris_diameter_mm", "refraction_diopters", "spectacle_refraction_diopters",
            "retinal_mm_per_deg", "lca_diopters", "paraxial_eye", "mean_meridian_eye"]
 
@@ -125,8 +125,11 @@ def equivalent_power_diopters(eye: SchematicEye, wavelength_nm: float, steps: in
     return -1000.0 * _to_retina(eye, wavelength_nm, steps)[1, 0]
 
 
-def efl_mm(eye: SchematicEye, wavelength_nm: float) -> float:
-    """The image-space effective focal length f' = n_vitreous / P, mm (optiland's f′)."""
+def image_focal_length_mm(eye: SchematicEye, wavelength_nm: float) -> float:
+    """The image-space (posterior) focal length f′ = n′/P, mm: n′ the vitreous's index, P the eye's
+    equivalent power; the second principal point to the second focal point, in the vitreous (optiland's
+    and Zemax's image-space EFL: 22.03 mm for the wide-angle Navarro eye at 543 nm). Not the focal
+    length in air 1/P (16.6 mm there), which some texts call the EFL."""
     n_image = _index_before(eye, len(eye.surfaces) - 1, checked_wavelength_nm(wavelength_nm))
     return 1000.0 * n_image / equivalent_power_diopters(eye, wavelength_nm)
 
@@ -189,7 +192,7 @@ class ParaxialEye:
     model: str
     wavelength_nm: float
     power_diopters: float
-    efl_mm: float
+    image_focal_length_mm: float
     entrance_pupil_position_mm: float
     entrance_pupil_diameter_mm: float
     iris_mm: float
@@ -200,6 +203,6 @@ class ParaxialEye:
 def paraxial_eye(eye: SchematicEye, wavelength_nm: float, iris_mm: float) -> ParaxialEye:
     """`ParaxialEye` of ``eye`` at ``wavelength_nm`` with an iris ``iris_mm`` across."""
     return ParaxialEye(eye.name, checked_wavelength_nm(wavelength_nm), equivalent_power_diopters(eye, wavelength_nm),
-                       efl_mm(eye, wavelength_nm), entrance_pupil_position_mm(eye, wavelength_nm),
+                       image_focal_length_mm(eye, wavelength_nm), entrance_pupil_position_mm(eye, wavelength_nm),
                        entrance_pupil_diameter_mm(eye, iris_mm, wavelength_nm), iris_mm,
                        refraction_diopters(eye, wavelength_nm), retinal_mm_per_deg(eye, wavelength_nm))

@@ -19,7 +19,8 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
   over the entrance pupil seen along the chief ray (JSON ``refraction.pupil_definition``; the
   `refraction` module doc).
 * **Power, f′, retinal mm per degree**: paraxial, of the mean meridian for a toric eye
-  (`paraxial.mean_meridian_eye`).
+  (`paraxial.mean_meridian_eye`). f′ (``image_focal_length_mm``) is the image-space focal length
+  n′/P, in the vitreous (`paraxial.image_focal_length_mm`), not the focal length in air 1/P.
 * **MTF**: of the wave PSF (`vissim.optics.psf.compute_psf`, diffraction included) of the traced
   wavefront's Zernikes (orders 2-8: piston and tilt only move the PSF) over the entrance pupil,
   at one wavelength, pixel sinc divided out. On axis (field (0, 0)) the radial average; off axis
@@ -65,7 +66,7 @@ from vissim.errors import VissimInputError
 from vissim.optics import psf_metrics
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.lca import LcaCurve, lca_curve
-from vissim.optics.eyes.paraxial import (efl_mm, entrance_pupil_diameter_mm,
+from vissim.optics.eyes.paraxial import (image_focal_length_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.psf_wavefront import traced_spectral_wavefront
 from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
@@ -179,7 +180,7 @@ class EyeReport:
     wavelength_given: bool
     prescription: Prescription | None
     power_diopters: float
-    efl_mm: float
+    image_focal_length_mm: float
     retinal_mm_per_deg: float
     paraxial_entrance_pupil_mm: float
     wavefront: EyeWavefront
@@ -208,7 +209,7 @@ class EyeReport:
             "accommodation_diopters": self.accommodation_diopters,
             "prescription": None if self.prescription is None else str(self.prescription),
             "power_diopters": self.power_diopters,
-            "efl_mm": self.efl_mm,
+            "image_focal_length_mm": self.image_focal_length_mm,
             "retinal_mm_per_deg": self.retinal_mm_per_deg,
             "entrance_pupil": {"diameter_mm": float(wf.entrance_pupil_mm),
                                "position_mm": float(wf.entrance_pupil_position_mm),
@@ -294,7 +295,7 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
         paraxial_pupil = front.iris_mm * system_entrance_pupil_mm(eye, setup, wavelength)[1]
     curve = lca_curve(eye, iris_mm=front.iris_mm, reference_nm=wavelength, field_deg=field) if lca else None
     return EyeReport(eye.name, eye_in.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
-                     float(equivalent_power_diopters(mean, wavelength)), float(efl_mm(mean, wavelength)),
+                     float(equivalent_power_diopters(mean, wavelength)), float(image_focal_length_mm(mean, wavelength)),
                      float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup,
                      mtf_spectrum, curve)
 

@@ -84,9 +84,9 @@ def number(value: Any, source: str, where: str, unit: str, *, lo: float | None =
     if positive and value <= 0:
         raise field_error(source, where, f"must be > 0 {unit}, got {value!r}")
     if (lo is not None and value < lo) or (hi is not None and value > hi):
-        span = f"within {lo:g} to {hi:g}" if lo is not None and hi is not None else (
-            f"at least {lo:g}" if lo is not None else f"at most {hi:g}")
-        raise field_error(source, where, f"must be {span} {unit}, got {value!r}")
+        span = (f"{lo:g} {unit} only" if lo == hi else f"within {lo:g} to {hi:g} {unit}") if (
+            lo is not None and hi is not None) else (f"at least {lo:g} {unit}" if lo is not None else f"at most {hi:g} {unit}")
+        raise field_error(source, where, f"must be {span}, got {value!r}")
     return float(value)
 
 
