@@ -26,6 +26,7 @@ import pytest
 
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, ametropic_eye, corneal_refraction, visual_axis_refraction
+from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.report import eye_report
 from vissim.optics.eyes.models import arizona, escudero_sanz_1999, le_grand, liou_brennan_1997, navarro_1985
 from vissim.optics.eyes.paraxial import refraction_diopters
@@ -114,7 +115,7 @@ def test_liou_brennan_reads_its_rx_back_along_the_visual_axis(rx):
     1 mm), at the 12 mm spectacle plane. Required: each of M, J0, J45 within 0.002 D (issue 33); measured
     <= 1e-4 D."""
     want = Prescription.parse(rx)
-    read = eye_report("liou-brennan-1997", pupil_mm=3.0, rx=rx).refraction.paraxial
+    read = eye_report(build_eye("liou-brennan-1997", pupil_mm=3.0, rx=rx)).refraction.paraxial
     assert read.power_vector() == pytest.approx(want.power_vector(), abs=0.002)
     assert read.power_vector() == pytest.approx(want.power_vector(), abs=2e-4)
 
@@ -136,7 +137,7 @@ def test_centred_eyes_are_solved_once_on_their_optical_axis(build):
     rx = Prescription(-2.0, -1.5, 30.0)
     eye = ametropic_eye(build(), rx)
     assert eye.surfaces == ametropic_eye(build(), rx, along_visual_axis=False).surfaces
-    read = eye_report(build().name, pupil_mm=3.0, rx=rx).refraction.paraxial
+    read = eye_report(build_eye(build().name, pupil_mm=3.0, rx=rx)).refraction.paraxial
     assert read.power_vector() == pytest.approx(rx.power_vector(), abs=0.002)
     assert read.power_vector() == pytest.approx(rx.power_vector(), abs=2e-4)
 

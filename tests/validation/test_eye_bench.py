@@ -214,3 +214,67 @@ def test_the_myope_with_and_without_its_spectacles_passes_the_self_check(tmp_pat
     assert set(checks) == {"myope", "myope in spectacles"}
     for name, over_floor_db in checks.items():
         assert 2.0 <= over_floor_db <= 4.0, (name, over_floor_db)
+
+
+ALTERED_TOY = TOY.split("[[item]]")[0].replace('name = "eye toy"', 'name = "altered toy"') + """
+[[item]]
+name = "spherical cornea"
+pupil_mm = 4.0
+surfaces."cornea front".conic = 0.0
+"""
+
+
+@pytest.mark.slow
+def test_an_eye_with_an_altered_cornea_described_in_toml_passes_the_self_check(tmp_path):
+    """A model plus overrides in the campaign file (Navarro with a spherical cornea): the render's sensor is handed
+    that eye, the self-check traces it, and lands at the render's noise floor (>= +2 dB)."""
+    import json
+
+    path = tmp_path / "eye.toml"
+    path.write_text(ALTERED_TOY)
+    done = validate(path, tmp_path / "run", show_progress=False)
+    assert done.summary.items_total == 1
+    rows = json.loads((tmp_path / "run" / "metrics.json").read_text())["rows"]
+    check = next(r for r in rows if r["simulation"] == "traced_rays")
+    assert 2.0 <= check["over_floor_db"] <= 4.0, check
+
+
+def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, monkeypatch):
+    """Reading the item, building its bench and computing it (renders stood in by noise) build the bench once and
+    the model eye once: the item's one `Eye` is what the simulations, the self-check and the render settings use."""
+    import dataclasses
+
+    from vissim.bench.dslr import bench as dslr_bench
+    from vissim.optics.eyes import eye as eye_module
+    from vissim.optics.eyes import models
+    from vissim.validation.eye.item import compute_eye_item
+    from vissim.validation.eye.kind import BENCH
+
+    counts = {"model": 0, "bench": 0}
+    builders = dict(models.EYE_MODELS)
+
+    def counted(builder):
+        def build(*args, **kwargs):
+            counts["model"] += 1
+            return builder(*args, **kwargs)
+        return build
+
+    monkeypatch.setattr(models, "EYE_MODELS", {name: counted(b) for name, b in builders.items()})
+    eye_module.eye_from_fields.cache_clear()
+    original_init = dslr_bench.DslrBench.__post_init__
+
+    def counted_init(self):
+        counts["bench"] += 1
+        original_init(self)
+
+    monkeypatch.setattr(dslr_bench.DslrBench, "__post_init__", counted_init)
+    doc = {"item": [{"name": "myope in spectacles", "pupil_mm": 3.0, "rx": -1.0, "lens": -1.0,
+                     "model": "escudero-sanz-1999"}]}
+    settings, (configuration,) = read_campaign(doc, {"kind": "eye", "size_px": [16, 16], "rays_across": 41,
+                                                     "oversample": 1}, "eye.toml")
+    built = BENCH.build(configuration, settings)
+    noise = np.random.default_rng(0)
+    images = {f"truth_{i}": 0.5 + 0.01 * noise.standard_normal((16, 16)) for i in range(2)}
+    compute_eye_item("k", configuration, settings, built, images, tmp_path, {})
+    assert counts == {"model": 1, "bench": 1}
+    assert dataclasses.is_dataclass(configuration) and configuration.eye() is configuration.eye()

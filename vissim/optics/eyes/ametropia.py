@@ -242,21 +242,22 @@ def _solved_eye(eye: SchematicEye, k: np.ndarray, axis_deg: float, toric: bool, 
     return dataclasses.replace(eye, surfaces=tuple(surfaces)), vitreous_mm
 
 
-def visual_axis_refraction(eye: SchematicEye, wavelength_nm: float | None = None) -> np.ndarray:
-    """The eye's refraction at the corneal vertex along its visual axis, 2 × 2 D: the paraxial
-    refraction (the wavefront's curvature at the pupil centre, `refraction.paraxial_prescription`)
-    of the wavefront traced from field (0, 0) through a 1 mm entrance pupil
-    (`wavefront.trace_eye_wavefront`). For a centred eye it is `corneal_refraction`'s; for one with a
-    visual axis or a decentred iris (Liou–Brennan) it adds the eye's own oblique astigmatism and
-    defocus along the visual axis."""
+def visual_axis_refraction(eye: SchematicEye, wavelength_nm: float | None = None,
+                           vertex_distance_mm: float | None = None) -> np.ndarray:
+    """The eye's refraction at the corneal vertex (or the spectacle plane ``vertex_distance_mm`` in front of it)
+    along its visual axis, 2 × 2 D: the paraxial
+    refraction of the wavefront traced from field (0, 0) through a 1 mm entrance pupil, by the one
+    refraction rule (`refraction.eye_refraction`: the curvature at the pupil centre, over the pupil
+    seen along the chief ray). For a centred eye it is `corneal_refraction`'s; for one with a visual
+    axis or a decentred iris (Liou–Brennan) it adds the eye's own oblique astigmatism and defocus
+    along the visual axis."""
     # wavefront -> spectacles -> this module: the trace is imported where it is used.
-    from vissim.optics.eyes.refraction import paraxial_prescription, transfer_prescription
+    from vissim.optics.eyes.refraction import eye_refraction
     from vissim.optics.eyes.wavefront import trace_eye_wavefront
 
     wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
     front = trace_eye_wavefront(eye, wavelength, (0.0, 0.0), pupil_mm=_VISUAL_AXIS_PUPIL_MM)
-    at_pupil = paraxial_prescription(front.zernike_um, front.entrance_pupil_mm)
-    return np.array(transfer_prescription(at_pupil, front.entrance_pupil_position_mm).power_matrix())
+    return np.array(eye_refraction(front, vertex_distance_mm).paraxial.power_matrix())
 
 
 def _off_axis_fixation(eye: SchematicEye) -> bool:
@@ -279,7 +280,8 @@ def ametropic_eye(eye: SchematicEye, rx: Prescription, vertex_distance_mm: float
     paraxial solve about the optical axis does not see (−0.008 D of M and −0.042 D of J0 at the
     spectacle plane for Liou–Brennan's −1.00 DS eye). With ``along_visual_axis`` (default) such an
     eye is solved again for the target minus that residual, read by `visual_axis_refraction` on the
-    solved eye, until the traced refraction is the prescription's to ``VISUAL_AXIS_TOL_DIOPTERS``
+    solved eye at the spectacle plane (as the read-back is), until it is the prescription to
+    ``VISUAL_AXIS_TOL_DIOPTERS``
     (two or three solves); its cornea front is then toric for a spherical prescription too. Centred
     eyes are solved once (their visual-axis refraction is the paraxial one). ``along_visual_axis``
     False: the paraxial solve only (the optical axis has the prescription).
@@ -292,12 +294,12 @@ def ametropic_eye(eye: SchematicEye, rx: Prescription, vertex_distance_mm: float
     solved, vitreous_mm = _solved_eye(eye, target, rx.axis_deg, toric, wavelength, rx_text)
     corrected = along_visual_axis and _off_axis_fixation(eye)
     if corrected:
-        k = target
+        k, wanted = target, np.array(rx.power_matrix())
         for _ in range(_VISUAL_AXIS_MAX_SOLVES):
-            error = target - visual_axis_refraction(solved, wavelength)
-            if np.max(np.abs(error)) <= VISUAL_AXIS_TOL_DIOPTERS:
+            read = visual_axis_refraction(solved, wavelength, vertex_distance_mm)  # as `vissim eye --rx` reads it
+            if np.max(np.abs(wanted - read)) <= VISUAL_AXIS_TOL_DIOPTERS:
                 break
-            k = k + error
+            k = k + target - far_point_vergence_matrix(Prescription.from_power_matrix(read), vertex_distance_mm)
             axis = Prescription.from_power_matrix(k).axis_deg
             solved, vitreous_mm = _solved_eye(eye, k, axis, True, wavelength, rx_text)
         else:
