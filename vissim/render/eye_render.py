@@ -127,23 +127,11 @@ def _clear_aperture_mm(settings: EyeRender, pupil_mm: float) -> float:
 def eye_to_world(eye, field_deg) -> list[list[float]]:
     """The sensor's to_world (4 x 4, corneal vertex at the origin) that turns the `SchematicEye` ``eye`` so
     that the world's +z (the chart's centre) lies at the field angle ``field_deg`` = (x, y) degrees, OSA's
-    frame (x the examiner's right: the observer's left; y up), as every ``--field-deg``.
+    frame: `vissim.optics.eyes.sight.eye_to_world_rotation`, the one rule the simulations share."""
+    from vissim.optics.eyes.sight import eye_to_world_rotation
 
-    The sensor's local frame has +x to the observer's left (OSA's x), +y up, +z along the optical axis;
-    the field angle's direction there is `vissim.optics.eyes.wavefront.field_direction` (the trace's rule,
-    from the visual axis for a model that has one).  The rotation about ``d x z`` takes it to +z (Rodrigues)."""
-    from vissim.optics.eyes.wavefront import field_direction
-
-    d = np.asarray(field_direction(eye, field_deg), dtype=float)
-    if np.allclose(d, [0.0, 0.0, 1.0], rtol=0.0, atol=1e-15):
-        return np.eye(4).tolist()
-    theta = math.acos(min(1.0, float(d[2])))
-    axis = np.cross(d, [0.0, 0.0, 1.0])
-    axis /= np.linalg.norm(axis)
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    rotation = np.eye(3) + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)
     out = np.eye(4)
-    out[:3, :3] = rotation
+    out[:3, :3] = eye_to_world_rotation(eye, field_deg)
     return out.tolist()
 
 

@@ -13,12 +13,14 @@ the retina, mm.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from vissim.optics.eyes.models import SchematicEye
-from vissim.optics.eyes.wavefront import field_of_direction, trace_eye_wavefront
+from vissim.optics.eyes.wavefront import field_direction, field_of_direction, trace_eye_wavefront
 
-__all__ = ["chief_pupil_point_mm", "film_field_deg"]
+__all__ = ["chief_pupil_point_mm", "film_field_deg", "eye_to_world_rotation"]
 
 #: The iris grid of the trace made for a chief ray only (samples across).
 _CHIEF_SAMPLES = 9
@@ -43,3 +45,18 @@ def film_field_deg(eye: SchematicEye, object_point_mm, pupil_mm: float) -> np.nd
     pupil = chief_pupil_point_mm(eye, from_vertex, pupil_mm)
     line = np.array([point[0] - pupil[0], point[1] - pupil[1], pupil[2] - point[2]])
     return field_of_direction(eye, line / np.linalg.norm(line))
+
+
+def eye_to_world_rotation(eye: SchematicEye, field_deg) -> np.ndarray:
+    """The 3 x 3 rotation that turns the eye so that the world's +z (a chart's centre) lies at the field angle
+    ``field_deg`` = (x, y) degrees, OSA's frame: the field direction (`field_direction`, the trace's rule, from the
+    visual axis for a model that has one) taken onto +z about ``d x z`` (Rodrigues). The eye's local frame has +x
+    to the observer's left (OSA's x), +y up, +z along the optical axis, the corneal vertex at the origin."""
+    d = np.asarray(field_direction(eye, field_deg), dtype=float)
+    if np.allclose(d, [0.0, 0.0, 1.0], rtol=0.0, atol=1e-15):
+        return np.eye(3)
+    theta = math.acos(min(1.0, float(d[2])))
+    axis = np.cross(d, [0.0, 0.0, 1.0])
+    axis /= np.linalg.norm(axis)
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)

@@ -17,7 +17,7 @@ diffraction PSF (wave optics).
     The thesis's setup: the lens's P / (1 - dP) at the vertex distance, the chart at infinity, no
     magnification, one wavelength (555 nm for photopic light), wave optics.
 ``schematic_wave`` / ``schematic``
-    The schematic eye (`vissim.blur_eye`): the traced wavefront at the image's field and every
+    The schematic eye (`EyeView.blur`, `vissim.blur_eye`): the traced wavefront at the image's field and every
     wavelength (each with its own focus and transverse shift), the lens and the chart's vergence
     added at the eye's entrance pupil, the lens's spectacle magnification.  ``schematic`` is the same
     wavefront in ray optics, scored against the render itself: the schematic eye's check free of the
@@ -48,19 +48,13 @@ from scipy import ndimage
 from scipy.signal import fftconvolve
 
 from vissim.charts import optotype_tile
-from vissim.optics.blur import blur_image
-from vissim.optics.eyes.field_blur import blur_eye
-from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
-from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
-from vissim.optics.eyes.sight import chief_pupil_point_mm
-from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm
-from vissim.optics.prescription import Prescription
 from vissim.errors import FieldTooSmallError
+from vissim.optics.blur import blur_image
+from vissim.optics.eyes.viewing import EyeView
+from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm
 from vissim.optics.psf import PSF, compute_psf
 from vissim.optics.resample import block_mean, magnify
 from vissim.optics.setup import ViewingSetup
-from vissim.optics.eyes.ametropia import far_point_vergence_matrix
-from vissim.optics.trial_lens import TrialLensSetup, thesis_table_4_2_power, trial_lens_effect, vergence_after_distance
 from vissim.optics.wavefront import Wavefront
 from vissim.spectra import named_spectrum
 
@@ -104,12 +98,15 @@ def chart(letter: str, logmar: float, distance_m: float, step_arcmin: float, sha
 
 
 class EyeScene:
-    """One configuration's optics, as the simulations need them (configuration: `schema.EyeConfiguration`)."""
+    """One configuration's view and light, as the simulations need them (configuration: `schema.EyeConfiguration`):
+    the item's one `Eye` through its lens at its chart (`vissim.optics.eyes.viewing.EyeView`, the viewing physics)."""
 
     def __init__(self, configuration, settings, built):
         self.c, self.s = configuration, settings
         self.lens, self.chart_half_arcmin = built.lens, built.chart_half_arcmin  # `renders.EyeBuilt`
-        self.the_eye = configuration.eye()  # the one `Eye` of the item: rendered, traced and simulated
+        self.view = EyeView(configuration.eye(), configuration.chart_distance_m, configuration.field_deg, built.lens,
+                            configuration.vertex_mm)
+        self.the_eye = self.view.eye  # the one `Eye` of the item: rendered, traced and simulated
         self.eye = self.the_eye.optics
         self._charts: dict = {}  # (step, shape) -> `scene_chart`'s image: every simulation of the item draws it
         self.photopic = configuration.spectrum == "photopic"
@@ -120,54 +117,18 @@ class EyeScene:
             self.wavelengths, self.weights = (configuration.wavelength_nm,), (1.0,)
         self.mono_nm = PHOTOPIC_FOCUS_NM if self.photopic else configuration.wavelength_nm
 
-    def lens_effect(self, to_pupil_mm: float):
-        """(added power matrix D, magnification matrix) of the lens ``to_pupil_mm`` behind the corneal vertex."""
-        if self.lens is None:
-            return np.zeros((2, 2)), np.eye(2)
-        setup = TrialLensSetup((self.lens,), self.c.vertex_mm + to_pupil_mm,
-                               self.c.chart_distance_m + 1e-3 * to_pupil_mm)
-        effect = trial_lens_effect(setup)
-        return np.asarray(effect.added_power_matrix, float), np.asarray(effect.magnification_matrix, float)
-
-    def eye_refraction(self, depth_mm: float) -> np.ndarray:
-        """The eye's own correcting lens (2 x 2 D; myope < 0) at ``depth_mm`` behind the corneal vertex: its spectacle
-        ``rx`` at ``vertex_mm`` carried there (`far_point_vergence_matrix`: the far point's vergence at the cornea,
-        then ``depth_mm`` on); zero for the model's own eye."""
-        if self.c.rx is None:
-            return np.zeros((2, 2))
-        at_cornea = far_point_vergence_matrix(Prescription.parse(self.c.rx), self.c.vertex_mm)
-        return vergence_after_distance(at_cornea, 1e-3 * depth_mm)
-
-    def reduced_rx(self) -> Prescription:
-        """The reduced eye's prescription (`ViewingSetup.eye`'s correcting lens, at the corneal vertex)."""
-        return Prescription.from_power_matrix(self.eye_refraction(0.0))
-
-    def reduced_setup(self) -> ViewingSetup:
-        added, magnification = self.lens_effect(0.0)
-        vergence = added - np.eye(2) / self.c.chart_distance_m
-        setup = ViewingSetup.eye(self.reduced_rx(), self.c.pupil_mm, self.c.accommodation_diopters,
-                                 vergence_diopters=vergence, wavelength_nm=self.mono_nm)
-        return setup, magnification
+    def reduced_setup(self):
+        """The reduced eye's `ViewingSetup` at the item's focus wavelength, and the lens's magnification."""
+        return self.view.reduced_setup(self.mono_nm)
 
     def schematic_vergence(self) -> tuple[np.ndarray, np.ndarray]:
-        """The light's vergence at the eye's entrance pupil (2 x 2 D: the lens's added power and the chart's
-        -1/d there; `blur_eye`'s ``vergence_diopters``) and the lens's magnification. The eye's own refraction is
-        in the eye itself (the ametropic eye), not added."""
-        depth_mm = entrance_pupil_position_mm(mean_meridian_eye(self.eye), self.mono_nm)
-        added, magnification = self.lens_effect(depth_mm)
-        return added - np.eye(2) / (self.c.chart_distance_m + 1e-3 * depth_mm), magnification
+        """The light's vergence at the eye's entrance pupil and the lens's magnification (`EyeView.vergence_at_pupil`)."""
+        return self.view.vergence_at_pupil(self.mono_nm)
 
 
 def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
-    """The chart as the eye's pixels see it: pixel (row, col) looks at field angle (x, y) = the image's field
-    minus (col, row) offsets x ``step`` (columns to the observer's right: -x), along `field_direction`'s
-    direction; the eye's film maps its retina through collimated chief rays, so that line of sight leaves the
-    chief ray's point on the entrance-pupil plane (`vissim.optics.eyes.sight`), and meets the flat chart (facing
-    the eye, its centre at the image's field from the corneal vertex, `eye_render.eye_to_world`) at the chart
-    point drawn there.  Off axis the chart is seen stretched across the field direction (by 1 / cos of the
-    field angle) and nearer the axis by the pupil's parallax (3 mm x sin 20 deg / 6 m = 0.6 arcmin).  On the
-    axis of a model without a visual axis it is the chart drawn in visual angle (the parallax only shrinks
-    it by the pupil's depth over the distance, 0.05 % at 6 m)."""
+    """The chart as the eye's pixels see it (`EyeView.chart_points_arcmin`: each pixel's line of sight from the
+    entrance pupil to the flat chart), drawn once per item and shape."""
     if (step, shape) not in scene._charts:
         seen = np.array(_seen_chart(scene, step, shape))
         seen.setflags(write=False)
@@ -176,28 +137,13 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
 
 
 def _seen_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
-    from vissim.optics.eyes.field_blur import node_field_deg
-    from vissim.optics.eyes.wavefront import field_direction
-    from vissim.render.eye_render import eye_to_world
-
     c = scene.c
-    field = tuple(float(v) for v in c.field_deg)
-    flat = chart(c.letter, c.logmar, c.chart_distance_m, step, shape, scene.chart_half_arcmin)
-    if field == (0.0, 0.0) and scene.eye.visual_axis_deg == 0.0:
-        return flat
+    points = scene.view.chart_points_arcmin(shape, step)
+    if points is None:
+        return chart(c.letter, c.logmar, c.chart_distance_m, step, shape, scene.chart_half_arcmin)
     base_shape = tuple(int(math.ceil(1.15 * n)) + 8 for n in shape)
     base = chart(c.letter, c.logmar, c.chart_distance_m, step, base_shape, scene.chart_half_arcmin)
-    r, q = np.indices(shape)
-    to_world = np.asarray(eye_to_world(scene.eye, field), float)[:3, :3]
-    sight = field_direction(scene.eye, node_field_deg(r, q, shape, step, field)) @ to_world.T
-    pupil = chief_pupil_point_mm(scene.eye, field, c.pupil_mm)  # the film's eye: the rendered one  # the trace's frame: z towards the retina
-    start = to_world @ np.array([pupil[0], pupil[1], -pupil[2]])
-    reach = (1000.0 * c.chart_distance_m - start[2]) / sight[..., 2]
-    world_x, world_y = start[0] + reach * sight[..., 0], start[1] + reach * sight[..., 1]
-    to_arcmin = 60.0 * 180.0 / math.pi
-    distance_mm = 1000.0 * c.chart_distance_m
-    col_arcmin = np.arctan(-world_x / distance_mm) * to_arcmin  # world +x: the observer's left
-    row_arcmin = np.arctan(-world_y / distance_mm) * to_arcmin
+    row_arcmin, col_arcmin = points
     coords = [row_arcmin / step + (base_shape[0] - 1) / 2.0, col_arcmin / step + (base_shape[1] - 1) / 2.0]
     return ndimage.map_coordinates(base, coords, order=1, mode="nearest")
 
@@ -225,18 +171,16 @@ def _schematic(scene: EyeScene, image: np.ndarray, step: float, mode: str, *, fi
     """The schematic eye's blur of ``image`` with one assumption swapped (module doc).  Unswapped, in wave optics,
     it is `blur_eye`; in ray optics the same PSF (the image lies within one of `blur_eye`'s PSF nodes) on the ray
     PSF's field."""
-    vergence, _ = scene.schematic_vergence()
-    own_field = tuple(float(v) for v in scene.c.field_deg)
-    field = own_field if field is None else field
-    eye = scene.the_eye if pupil_mm is None else scene.the_eye.with_pupil(pupil_mm=pupil_mm)
-    if mode == "wave" and not (drop_higher or thibos or field != own_field or pupil_mm is not None):
+    view = scene.view
+    field = view.field_deg if field is None else field
+    eye = view.eye if pupil_mm is None else view.eye.with_pupil(pupil_mm=pupil_mm)
+    if mode == "wave" and not (drop_higher or thibos or field != view.field_deg or pupil_mm is not None):
         bands = [scene.wavelengths] if scene.photopic else scene.mono_nm
         weights = [scene.weights] if scene.photopic else None
-        return np.asarray(blur_eye(image, eye, arcmin_per_px=step, wavelength_nm=bands, weights=weights,
-                                   vergence_diopters=vergence, field_deg=field, mode=mode, padding="edge",
-                                   dtype=np.float64), np.float64)
+        return np.asarray(view.blur(image, arcmin_per_px=step, wavelength_nm=bands, focus_nm=scene.mono_nm,
+                                    weights=weights, mode=mode, padding="edge", dtype=np.float64), np.float64)
     wavelengths = (scene.mono_nm,) if thibos else scene.wavelengths
-    front = eye_spectral_wavefront(eye, wavelengths_nm=wavelengths, field_deg=field, vergence_diopters=vergence)
+    front = view.spectral_wavefront(wavelengths, focus_nm=scene.mono_nm, field_deg=field, eye=eye)
     if drop_higher:
         front = front.map(lambda f: Wavefront({k: v for k, v in f.coefficients_um.items() if k[0] <= 2},
                                               f.pupil_diameter_mm, f.wavelength_nm))
@@ -249,11 +193,8 @@ def _schematic(scene: EyeScene, image: np.ndarray, step: float, mode: str, *, fi
 
 
 def thesis_setup(scene: EyeScene) -> ViewingSetup:
-    """The thesis's setup (module doc): the eye's prescription, the lens's P / (1 - dP) (its sphere), the chart at
-    infinity."""
-    power = 0.0 if scene.lens is None else thesis_table_4_2_power(scene.lens.sphere_diopters, scene.c.vertex_mm)
-    return ViewingSetup.eye(scene.reduced_rx(), scene.c.pupil_mm, scene.c.accommodation_diopters,
-                            vergence_diopters=power, wavelength_nm=scene.mono_nm)
+    """The thesis's setup (`EyeView.thesis_setup`) at the item's focus wavelength."""
+    return scene.view.thesis_setup(scene.mono_nm)
 
 
 def _reduced(scene: EyeScene, image: np.ndarray, step: float, mode: str, thesis: bool = False) -> np.ndarray:
