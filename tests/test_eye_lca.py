@@ -127,7 +127,7 @@ def test_curve_json_names_its_reference_pupil_and_columns():
 
 @pytest.mark.slow
 def test_cli_lca_json_has_one_row_per_wavelength_with_the_columns(capsys):
-    assert main(["eye", "navarro-1985", "--pupil-mm", "1", "--lca", "--json"]) == 0
+    assert main(["eye", "--eye-model", "navarro-1985", "--pupil-mm", "1", "--lca", "--json"]) == 0
     lca = json.loads(capsys.readouterr().out)["lca"]
     assert lca["reference_wavelength_nm"] == 589.3 and lca["refraction_plane"] == "corneal vertex"
     assert lca["pupil"]["entrance_pupil_mm"] == pytest.approx(1.0, abs=1e-9)
@@ -137,14 +137,14 @@ def test_cli_lca_json_has_one_row_per_wavelength_with_the_columns(capsys):
 
 @pytest.mark.slow
 def test_cli_lca_text_prints_the_table(capsys):
-    assert main(["eye", "arizona", "--iris-mm", "2", "--lca"]) == 0
+    assert main(["eye", "--eye-model", "arizona", "--iris-mm", "2", "--lca"]) == 0
     out = capsys.readouterr().out
     assert "LCA at the corneal vertex, D, re 589.3 nm" in out
     assert sum(line.strip().startswith(("400 ", "550 ", "700 ")) for line in out.splitlines()) == 3
 
 
 def test_without_lca_the_record_has_no_lca_key(capsys):
-    assert main(["eye", "navarro-1985", "--pupil-mm", "1", "--json"]) == 0
+    assert main(["eye", "--eye-model", "navarro-1985", "--pupil-mm", "1", "--json"]) == 0
     assert "lca" not in json.loads(capsys.readouterr().out)
 
 

@@ -65,7 +65,7 @@ def test_the_same_eye_without_its_visual_axis_is_traced_along_its_optical_axis()
 
 
 def test_the_record_names_the_axis_the_field_is_from(capsys):
-    assert main(["eye", "liou-brennan-1997", "--pupil-mm", "2", "--json"]) == 0
+    assert main(["eye", "--eye-model", "liou-brennan-1997", "--pupil-mm", "2", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["field_axis"] == "visual axis"
-    assert main(["eye", "navarro-1985", "--pupil-mm", "2"]) == 0
+    assert main(["eye", "--eye-model", "navarro-1985", "--pupil-mm", "2"]) == 0
     assert "(0, 0) deg from the optical axis" in capsys.readouterr().out

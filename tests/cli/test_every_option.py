@@ -21,7 +21,7 @@ VALUES = ["0", "-1", "nan", "inf", "-inf", "1e300", "1e-300", "abc", ""]
 BASES = {
     ("rx",): ["rx", "-2.00 -1.25 x 180", "--pupil-mm", "6", "--json"],
     ("trial-lens",): ["trial-lens", "--sphere", "2"],
-    ("eye",): ["eye", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "10", "--json"],
+    ("eye",): ["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "10", "--json"],
     ("bench", "wavefront"): ["bench", "wavefront", "--sphere", "2"],
     ("psf",): ["psf", "--rx", "-2", "--pupil-mm", "3", "--size", "161", "-o", "{out}/p.exr"],
     ("chart",): ["chart", "--logmar", "1", "-o", "{out}/c.exr"],

@@ -65,7 +65,7 @@ PRESCRIPTION_KEYS = {"sphere_diopters", "cylinder_diopters", "axis_deg", "M", "J
 
 
 def test_the_json_record_has_the_issues_keys_and_types(capsys):
-    r = record(capsys, "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543",
+    r = record(capsys, "--eye-model", "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543",
                "--mtf-cyc-per-mm", "0,50", "--mtf-cyc-per-deg", "0,10,30")
     assert r["model"] == "escudero-sanz-1999"
     for key in ("power_diopters", "image_focal_length_mm", "iris_mm", "wavelength_nm", "rms_um"):
@@ -86,13 +86,13 @@ def test_the_json_record_has_the_issues_keys_and_types(capsys):
 
 
 def test_default_wavelength_is_the_models_reference_and_is_said(capsys):
-    r = record(capsys, "navarro-1985", "--pupil-mm", "3")
+    r = record(capsys, "--eye-model", "navarro-1985", "--pupil-mm", "3")
     assert r["wavelength_nm"] == 589.3 and r["wavelength"] == "the model's reference wavelength"
     assert "mtf" in r and r["mtf"] == {}
 
 
 def test_entrance_pupil_and_focal_length_meet_optilands_navarro_sample(capsys):
-    r = record(capsys, "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543")
+    r = record(capsys, "--eye-model", "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543")
     pupil = r["entrance_pupil"]
     assert pupil["position_mm"] == pytest.approx(OPTILAND["ep_position_mm"], rel=1e-3)
     assert pupil["paraxial_diameter_mm"] == pytest.approx(OPTILAND["ep_diameter_mm"], rel=1e-3)
@@ -107,20 +107,20 @@ def test_entrance_pupil_and_focal_length_meet_optilands_navarro_sample(capsys):
 
 
 def test_a_given_entrance_pupil_is_the_one_reported(capsys):
-    r = record(capsys, "escudero-sanz-1999", "--pupil-mm", "3", "--wavelength-nm", "543")
+    r = record(capsys, "--eye-model", "escudero-sanz-1999", "--pupil-mm", "3", "--wavelength-nm", "543")
     assert r["entrance_pupil"]["diameter_mm"] == pytest.approx(3.0, abs=1e-9)
     assert r["entrance_pupil"]["given"] == "entrance pupil" and r["iris_mm"] < 3.0  # the cornea magnifies
 
 
 def test_the_emmetropic_model_needs_no_refraction_on_axis(capsys):
-    r = record(capsys, "escudero-sanz-1999", "--pupil-mm", "3")
+    r = record(capsys, "--eye-model", "escudero-sanz-1999", "--pupil-mm", "3")
     paraxial = r["refraction"]["paraxial"]
     assert abs(paraxial["M"]) < REFRACTION_TOL_D and abs(paraxial["J0"]) < 1e-6 and abs(paraxial["J45"]) < 1e-6
 
 
 @pytest.mark.parametrize("rx, expected", [("-3", (-3.0, 0.0, 180.0)), ("-2.00 -1.00 x 30", (-2.0, -1.0, 30.0))])
 def test_an_rx_eye_has_its_prescription_at_the_spectacle_plane(capsys, rx, expected):
-    r = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", rx)
+    r = record(capsys, "--eye-model", "navarro-1985", "--pupil-mm", "2", "--rx", rx)
     refraction = r["refraction"]
     assert refraction["refraction_plane"] == "spectacle plane at 12 mm"
     paraxial = refraction["paraxial"]
@@ -135,8 +135,8 @@ def test_le_grands_accommodated_eye_is_reachable_from_the_command_line(capsys):
     lens 6.0 / −5.5 mm, 4.5 mm thick). Oracle: its paraxial refraction on axis is the relaxed eye's minus
     its accommodation, −7.05 D at the corneal vertex, within `REFRACTION_TOL_D` (0.02 D; the hand value
     of tests/test_eye_models.py is 7.0525 D with Le Grand's indices)."""
-    relaxed = record(capsys, "le-grand", "--pupil-mm", "2")
-    near = record(capsys, "le-grand", "--pupil-mm", "2", "--accommodation-diopters", "7.05")
+    relaxed = record(capsys, "--eye-model", "le-grand", "--pupil-mm", "2")
+    near = record(capsys, "--eye-model", "le-grand", "--pupil-mm", "2", "--accommodation-diopters", "7.05")
     assert near["accommodation_diopters"] == 7.05
     change = near["refraction"]["paraxial"]["M"] - relaxed["refraction"]["paraxial"]["M"]
     assert change == pytest.approx(-7.05, abs=REFRACTION_TOL_D)
@@ -147,7 +147,7 @@ def test_le_grands_accommodated_eye_is_reachable_from_the_command_line(capsys):
 def test_a_spherical_rx_reads_back_with_no_cylinder_text(capsys, model):
     """Issue 33: ``--rx -1.00DS`` read back with a cylinder of ~1e-6 D printed as ``-0.000 x 136``.
     The paraxial line is ``-1.000 DS`` (to 0.001 D; Liou–Brennan's now solved along its visual axis)."""
-    code, out, err = run(capsys, "eye", model, "--pupil-mm", "3", "--rx", "-1.00DS")
+    code, out, err = run(capsys, "eye", "--eye-model", model, "--pupil-mm", "3", "--rx", "-1.00DS")
     assert code == 0, err
     paraxial = next(line for line in out.splitlines() if line.strip().startswith("paraxial"))
     assert paraxial.split()[1:3] == ["-1.000", "DS"] and " x " not in paraxial
@@ -155,8 +155,8 @@ def test_a_spherical_rx_reads_back_with_no_cylinder_text(capsys, model):
 
 
 def test_the_spectacle_plane_follows_vertex_mm(capsys):
-    at_12 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3")
-    at_14 = record(capsys, "navarro-1985", "--pupil-mm", "2", "--rx", "-3", "--vertex-mm", "14")
+    at_12 = record(capsys, "--eye-model", "navarro-1985", "--pupil-mm", "2", "--rx", "-3")
+    at_14 = record(capsys, "--eye-model", "navarro-1985", "--pupil-mm", "2", "--rx", "-3", "--vertex-mm", "14")
     assert at_14["refraction"]["refraction_plane"] == "spectacle plane at 14 mm"
     assert at_14["refraction"]["paraxial"]["M"] == pytest.approx(-3.0, abs=REFRACTION_TOL_D)
     assert at_12["power_diopters"] == pytest.approx(at_14["power_diopters"], abs=1e-9)  # only the vitreous moves
@@ -164,7 +164,7 @@ def test_the_spectacle_plane_follows_vertex_mm(capsys):
 
 def test_mtf_is_one_at_zero_and_below_the_diffraction_limit(capsys):
     frequencies = np.arange(0.0, 101.0, 5.0)
-    r = record(capsys, "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", ",".join(f"{f:g}" for f in frequencies))
+    r = record(capsys, "--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", ",".join(f"{f:g}" for f in frequencies))
     pairs = np.array(r["mtf"]["cyc_per_deg"]["radial"])
     assert pairs[0, 1] == pytest.approx(1.0, abs=1e-12)
     limit = diffraction_mtf(pairs[:, 0], r["entrance_pupil"]["diameter_mm"], r["wavelength_nm"])
@@ -173,14 +173,14 @@ def test_mtf_is_one_at_zero_and_below_the_diffraction_limit(capsys):
 
 
 def test_cycles_per_mm_go_through_the_retinal_scale(capsys):
-    r = record(capsys, "navarro-1985", "--pupil-mm", "3")
+    r = record(capsys, "--eye-model", "navarro-1985", "--pupil-mm", "3")
     per_mm = 10.0 / r["retinal_mm_per_deg"]
-    r = record(capsys, "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "10", "--mtf-cyc-per-mm", f"{per_mm!r}")
+    r = record(capsys, "--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "10", "--mtf-cyc-per-mm", f"{per_mm!r}")
     assert r["mtf"]["cyc_per_mm"]["radial"][0][1] == pytest.approx(r["mtf"]["cyc_per_deg"]["radial"][0][1], abs=1e-12)
 
 
 def test_off_axis_tangential_and_sagittal_differ_at_20_deg(capsys):
-    r = record(capsys, "escudero-sanz-1999", "--pupil-mm", "4", "--field-deg", "20,0", "--mtf-cyc-per-mm", "0,30,60")
+    r = record(capsys, "--eye-model", "escudero-sanz-1999", "--pupil-mm", "4", "--field-deg", "20,0", "--mtf-cyc-per-mm", "0,30,60")
     table = r["mtf"]["cyc_per_mm"]
     assert set(table) == {"tangential", "sagittal"} and "tangential" in r["mtf"]["directions"]
     (_, t0), *tangential = table["tangential"]
@@ -191,7 +191,7 @@ def test_off_axis_tangential_and_sagittal_differ_at_20_deg(capsys):
 
 
 def test_text_output_is_aligned_lines(capsys):
-    code, out, _ = run(capsys, "eye", "escudero-sanz-1999", "--iris-mm", "3", "--mtf-cyc-per-deg", "10")
+    code, out, _ = run(capsys, "eye", "--eye-model", "escudero-sanz-1999", "--iris-mm", "3", "--mtf-cyc-per-deg", "10")
     assert code == 0
     lines = out.splitlines()
     assert lines[0].startswith("eye ") and any(line.startswith("entrance pupil") for line in lines)
@@ -208,7 +208,7 @@ def test_text_output_is_aligned_lines(capsys):
 ])
 def test_a_traced_lens_leaves_the_paraxial_over_refraction(capsys, model, rx, lens):
     flags = [*(["--rx", rx] if rx else []), *sum(zip(("--sphere", "--cylinder", "--axis"), lens), ())]
-    r = record(capsys, model, "--pupil-mm", "2", *flags)
+    r = record(capsys, "--eye-model", model, "--pupil-mm", "2", *flags)
     [worn] = r["lenses"]
     trial = TrialLens(*(float(v) for v in lens), refractive_index=worn["refractive_index_d"],
                       center_thickness_mm=worn["center_thickness_mm"]) if len(lens) == 3 else TrialLens(
@@ -240,31 +240,31 @@ def _dense_cornea_air_chamber(accommodation_diopters=0.0):
 
 
 @pytest.mark.parametrize("argv, fragments", [
-    (["no-such-eye", "--pupil-mm", "3"], ["'no-such-eye'", "navarro-1985", "liou-brennan-1997"]),
-    (["navarro-1985", "--pupil-mm", "3", "--accommodation-diopters", "12"], ["12 dioptres", "0-10"]),
-    (["arizona", "--pupil-mm", "3", "--accommodation-diopters", "7"], ["7 dioptres", "0-6"]),
-    (["le-grand", "--pupil-mm", "3", "--accommodation-diopters", "2"],
+    (["--eye-model", "no-such-eye", "--pupil-mm", "3"], ["'no-such-eye'", "navarro-1985", "liou-brennan-1997"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--accommodation-diopters", "12"], ["12 dioptres", "0-10"]),
+    (["--eye-model", "arizona", "--pupil-mm", "3", "--accommodation-diopters", "7"], ["7 dioptres", "0-6"]),
+    (["--eye-model", "le-grand", "--pupil-mm", "3", "--accommodation-diopters", "2"],
      ["le-grand takes accommodation 0 D (relaxed) or 7.05 D (its accommodated eye) only, got 2 D"]),
-    (["liou-brennan-1997", "--pupil-mm", "3", "--accommodation-diopters", "1"],
+    (["--eye-model", "liou-brennan-1997", "--pupil-mm", "3", "--accommodation-diopters", "1"],
      ["liou-brennan-1997 takes accommodation 0 D only, got 1 D"]),
-    (["navarro-1985", "--pupil-mm", "11"], ["entrance pupil 11 mm", "iris"]),
-    (["navarro-1985", "--iris-mm", "11"], ["iris 11 mm"]),
-    (["navarro-1985", "--pupil-mm", "3", "--iris-mm", "3"], ["--iris-mm", "--pupil-mm"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "11"], ["entrance pupil 11 mm", "iris"]),
+    (["--eye-model", "navarro-1985", "--iris-mm", "11"], ["iris 11 mm"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--iris-mm", "3"], ["--iris-mm", "--pupil-mm"]),
     (["navarro-1985"], ["--pupil-mm", "--iris-mm"]),
-    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "80,0"], ["(80, 0) deg", "miss the retina"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "80,0"], ["(80, 0) deg", "miss the retina"]),
     # 75° from its visual axis: 80° from the optical axis
-    (["liou-brennan-1997", "--pupil-mm", "7", "--field-deg", "75,0"], ["(75, 0) deg", "leave the lens"]),
-    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "1,2,3"], ["--field-deg", "'1,2,3'", "degrees"]),
-    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "a,b"], ["--field-deg", "'a,b'", "degrees"]),
-    (["navarro-1985", "--pupil-mm", "3", "--field-deg", "nan,0"], ["--field-deg", "degrees"]),
-    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-mm", "10,x"], ["--mtf-cyc-per-mm", "'10,x'", "per mm"]),
-    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", ""], ["--mtf-cyc-per-deg", "per degree"]),
-    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-mm", "10,-2"], ["-2 cycles per mm", ">= 0"]),
-    (["navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "-5"], ["-5 cycles per degree", ">= 0"]),
-    (["navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "5000"], ["5000", "nm"]),
-    (["navarro-1985", "--pupil-mm", "3", "--sphere", "100"], ["+100.00 DS trial lens", "radius of curvature"]),
-    (["navarro-1985", "--pupil-mm", "3", "--cylinder", "-1"], ["--cylinder -1 D", "--axis", "degrees"]),
-    (["navarro-1985", "--pupil-mm", "3", "--rx", "+200"], ["+200", "far point"]),
+    (["--eye-model", "liou-brennan-1997", "--pupil-mm", "7", "--field-deg", "75,0"], ["(75, 0) deg", "leave the lens"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "1,2,3"], ["--field-deg", "'1,2,3'", "degrees"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "a,b"], ["--field-deg", "'a,b'", "degrees"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "nan,0"], ["--field-deg", "degrees"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-mm", "10,x"], ["--mtf-cyc-per-mm", "'10,x'", "per mm"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", ""], ["--mtf-cyc-per-deg", "per degree"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-mm", "10,-2"], ["-2 cycles per mm", ">= 0"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "-5"], ["-5 cycles per degree", ">= 0"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "5000"], ["5000", "nm"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--sphere", "100"], ["+100.00 DS trial lens", "radius of curvature"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--cylinder", "-1"], ["--cylinder -1 D", "--axis", "degrees"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "+200"], ["+200", "far point"]),
 ])
 def test_bad_input_is_one_error_line_naming_the_value(capsys, argv, fragments):
     code, out, err = run(capsys, "eye", *argv)
@@ -274,5 +274,5 @@ def test_bad_input_is_one_error_line_naming_the_value(capsys, argv, fragments):
 
 def test_total_internal_reflection_is_one_error_line(capsys, monkeypatch):
     monkeypatch.setitem(models.EYE_MODELS, "air-chamber", _dense_cornea_air_chamber)
-    code, _, err = run(capsys, "eye", "air-chamber", "--iris-mm", "6")
+    code, _, err = run(capsys, "eye", "--eye-model", "air-chamber", "--iris-mm", "6")
     assert_one_error_line(code, err, "(0, 0) deg", "total internal reflection", "cornea back")

@@ -73,7 +73,7 @@ def test_psf_bad_light_is_one_error_line_and_exit_2(capsys, tmp_path, argv, frag
 @pytest.mark.slow
 def test_eye_mtf_over_several_wavelengths_keeps_zernikes_at_the_reference_and_records_the_light(capsys):
     capsys.readouterr()
-    code = main(["eye", "navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "470,555,640", "--weights", "1,2,1",
+    code = main(["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "470,555,640", "--weights", "1,2,1",
                  "--mtf-cyc-per-deg", "10,30", "--json"])
     out = capsys.readouterr().out
     assert code == 0
@@ -93,7 +93,7 @@ def test_eye_mtf_over_several_wavelengths_keeps_zernikes_at_the_reference_and_re
 
 def test_eye_text_names_the_mtfs_light(capsys):
     capsys.readouterr()
-    assert main(["eye", "navarro-1985", "--pupil-mm", "2", "--wavelength-nm", "500,600", "--mtf-cyc-per-deg", "10"]) == 0
+    assert main(["eye", "--eye-model", "navarro-1985", "--pupil-mm", "2", "--wavelength-nm", "500,600", "--mtf-cyc-per-deg", "10"]) == 0
     out = capsys.readouterr().out
     assert "MTF light" in out and "500-600 nm" in out and "at 589.3 nm" in out
 
@@ -105,13 +105,13 @@ def test_eye_text_names_the_mtfs_light(capsys):
     (["--wavelength-nm", "500,600", "--weights", "1,-1"], "weight"),
 ])
 def test_eye_bad_light_is_one_error_line_and_exit_2(capsys, argv, fragment):
-    assert fragment in _error_line(capsys, ["eye", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "10", *argv])
+    assert fragment in _error_line(capsys, ["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--mtf-cyc-per-deg", "10", *argv])
 
 
 @pytest.mark.slow
 def test_eye_spectrum_photopic_json(capsys):
     capsys.readouterr()
-    assert main(["eye", "navarro-1985", "--pupil-mm", "3", "--spectrum", "photopic", "--wavelength-nm", "555",
+    assert main(["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--spectrum", "photopic", "--wavelength-nm", "555",
                  "--mtf-cyc-per-deg", "10", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["wavelength_nm"] == 555.0 and record["mtf"]["spectrum"]["name"] == "photopic"

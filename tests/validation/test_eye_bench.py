@@ -50,7 +50,7 @@ def test_the_campaign_file_is_checked():
     with pytest.raises(VissimInputError, match="pupil"):
         read_campaign({"item": [{"pupil_mm": 10.5}]}, {"kind": "eye"}, "eye.toml")  # an eye's pupil: 1-10 mm
     with pytest.raises(VissimInputError, match=r"item\[0\].*accommodation"):  # Arizona's range is 0-6 D
-        read_campaign({"item": [{"model": "arizona", "accommodation": 7.0}]}, {"kind": "eye"}, "eye.toml")
+        read_campaign({"item": [{"eye_model": "arizona", "accommodation": 7.0}]}, {"kind": "eye"}, "eye.toml")
     with pytest.raises(VissimInputError, match="colour"):
         read_campaign({"item": [{"colour": 1}]}, {"kind": "eye"}, "eye.toml")
     settings, configurations = read_campaign({"sweep": [{"name": "p", "pupil_mm": [3.0, 6.0], "light": "photopic"}]},
@@ -269,7 +269,7 @@ def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, m
 
     monkeypatch.setattr(dslr_bench.DslrBench, "__post_init__", counted_init)
     doc = {"item": [{"name": "myope in spectacles", "pupil_mm": 3.0, "rx": -1.0, "lens": -1.0,
-                     "model": "escudero-sanz-1999"}]}
+                     "eye_model": "escudero-sanz-1999"}]}
     settings, (configuration,) = read_campaign(doc, {"kind": "eye", "size_px": [16, 16], "rays_across": 41,
                                                      "oversample": 1}, "eye.toml")
     built = BENCH.build(configuration, settings)

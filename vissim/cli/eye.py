@@ -7,11 +7,11 @@ import json
 from typing import TYPE_CHECKING
 
 from vissim import __version__
-from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_trial_lens_args,
-                                field_deg_from_text, parse_float_list, trial_lens_powers)
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg,
+                                add_trial_lens_args, field_deg_from_text, parse_float_list, trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import EYE_MODELS
-from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
 
 if TYPE_CHECKING:
@@ -33,7 +33,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
             "the field's meridian); with --spectrum or several --wavelength-nm, the MTF of that light, the eye "
             "traced at each wavelength. Models: " + ", ".join(EYE_MODELS) + "."),
     )
-    parser.add_argument("model", metavar="MODEL", help="the schematic eye: " + ", ".join(EYE_MODELS))
+    add_eye_model_arg(parser, f"the schematic eye (default {DEFAULT_EYE_MODEL})", default=DEFAULT_EYE_MODEL)
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
                         help=f"accommodation exerted, {EYE_ACCOMMODATION_HELP} (default 0, relaxed)")
     pupil = parser.add_mutually_exclusive_group(required=True)
@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     powers = trial_lens_powers(args)
     lenses = () if powers is None else (atv_trial_lens(*powers),)
     wavelength, spectrum = _light(args)
-    eye = build_eye(args.model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
+    eye = build_eye(args.eye_model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
                     iris_mm=args.iris_mm, rx=args.rx,
                     vertex_mm=DEFAULT_SPECTACLE_VERTEX_MM if args.vertex_mm is None else args.vertex_mm)
     report = eye_report(eye, wavelength_nm=wavelength, mtf_spectrum=spectrum,

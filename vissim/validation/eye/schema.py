@@ -1,6 +1,7 @@
 """The eye bench's campaign file: ``[campaign]`` settings, ``[[item]]`` configurations and ``[[sweep]]`` grids.
 
-An item is one rendered view of a letter through a schematic eye: ``model``, ``pupil_mm`` (the
+An item is one rendered view of a letter through a schematic eye: ``eye_model`` (spelled as the command
+line's ``--eye-model``), ``pupil_mm`` (the
 entrance pupil), ``accommodation`` (D), ``field`` (degrees: the chart centre's field angle [x, y], OSA's
 frame as every vissim field angle: x the examiner's right, y up; a number is [x, 0]), ``light``
 (``"photopic"`` or a wavelength in nm), an optional trial ``lens``
@@ -34,7 +35,7 @@ from vissim.validation.engine.fields import (field_error, lens, name_text, numbe
 __all__ = ["EyeSettings", "EyeConfiguration", "read_campaign"]
 
 LIGHTS = ("photopic",)
-ITEM_KEYS = ("name", "model", "pupil_mm", "accommodation", "field", "light", "lens", "rx", "letter", "logmar",
+ITEM_KEYS = ("name", "eye_model", "pupil_mm", "accommodation", "field", "light", "lens", "rx", "letter", "logmar",
              "surfaces")
 
 
@@ -149,7 +150,7 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
         trial.sphere_diopters, trial.cylinder_diopters, trial.axis_deg)
     configuration = EyeConfiguration(
         name=name_text(entry.get("name", where), source, f"{where}.name"),
-        model=text(entry.get("model", DEFAULT_EYE_MODEL), source, f"{where}.model"),
+        model=text(entry.get("eye_model", DEFAULT_EYE_MODEL), source, f"{where}.eye_model"),
         pupil_mm=number(entry.get("pupil_mm", DEFAULT_EYE_PUPIL_MM), source, f"{where}.pupil_mm", "mm", lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1]),
         accommodation_diopters=number(entry.get("accommodation", 0.0), source, f"{where}.accommodation", "D",
                                       lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1]),
