@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError, VissimTypeError
-from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, ametropic_eye, corneal_refraction, visual_axis_refraction
+from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, corneal_refraction
+from vissim.optics.eyes.fixation import ametropic_eye, visual_axis_refraction
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.report import eye_report
 from vissim.optics.eyes.models import arizona, escudero_sanz_1999, le_grand, liou_brennan_1997, navarro_1985

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.ametropia import ametropic_eye
+from vissim.optics.eyes.fixation import ametropic_eye
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.models import navarro_1985
 from vissim.optics.eyes.refraction import eye_refraction

@@ -28,7 +28,7 @@ import pytest
 
 from vissim.cli import main
 from vissim.optics.eyes import models
-from vissim.optics.eyes.ametropia import ametropic_eye
+from vissim.optics.eyes.fixation import ametropic_eye
 from vissim.optics.eyes.media import Medium
 from vissim.optics.eyes.spectacles import residual_refraction
 from vissim.optics.prescription import Prescription

@@ -154,7 +154,7 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
 @pytest.mark.slow
 def test_an_axial_myope_sees_the_distant_letter_as_the_emmetrope_does_through_its_spectacles(tmp_path):
     """``--rx -3``: Navarro's eye made to need -3.00 D at the 12 mm spectacle plane (its vitreous longer,
-    `ametropia.ametropic_eye`). Without the lens a LogMAR 0.7 letter (5 arcmin strokes) at 6 m is blurred
+    `fixation.ametropic_eye`). Without the lens a LogMAR 0.7 letter (5 arcmin strokes) at 6 m is blurred
     (3 D of defocus over the 3 mm pupil: a ~31 arcmin blur); with a -3.00 D trial lens at 12 mm it is as
     sharp as the emmetropic eye's image of the letter shrunk by the lens's spectacle magnification (thin
     lens: 1/(1 - 0.012 x -3) = 0.9653), rendered LogMAR 0.7 + log10 0.9653. Sharpness: the mean squared

@@ -139,7 +139,7 @@ def test_toric_cornea_biconic_reverses_the_numpy_trace():
     mitsuba("mono")
     from drjit.llvm import Float64
 
-    from vissim.optics.eyes.ametropia import ametropic_eye
+    from vissim.optics.eyes.fixation import ametropic_eye
     from vissim.optics.prescription import Prescription
 
     eye = ametropic_eye(eye_model("navarro-1985"), Prescription.parse("-1.00 -2.00 x 30"))

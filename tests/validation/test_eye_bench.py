@@ -201,7 +201,7 @@ lens = -3.0
 @pytest.mark.slow
 def test_the_myope_with_and_without_its_spectacles_passes_the_self_check(tmp_path):
     """The render traces the ametropic eye (the sensor's `sensor_eye`), the self-check the same eye
-    (`ametropic_model_eye`), each film mapped through that eye's chief rays: the self-check sits at the noise floor."""
+    (its `Eye`), each film mapped through that eye's chief rays: the self-check sits at the noise floor."""
     import json
 
     path = tmp_path / "eye.toml"

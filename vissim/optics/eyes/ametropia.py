@@ -47,33 +47,26 @@ from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import GrinMedium
-from vissim.optics.eyes.models import SchematicEye, eye_model
+from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import matrix_to_surface
-from vissim.optics.prescription import Prescription, as_prescription, prescription_from
+from vissim.optics.prescription import Prescription, as_prescription
 from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix,
                                       vergence_after_distance)
 from vissim.units import mm_to_m
 
-__all__ = ["ametropic_model_eye", "CORNEA", "SPECTACLE", "EyeRefraction", "far_point_vergence_matrix", "cornea_front_power_matrix",
-           "eye_ray_matrix", "corneal_refraction", "refraction_from_matrix", "ametropic_eye",
-           "visual_axis_refraction", "VISUAL_AXIS_TOL_DIOPTERS"]
+__all__ = ["CORNEA", "SPECTACLE", "ParaxialRefraction", "far_point_vergence_matrix", "cornea_front_power_matrix",
+           "eye_ray_matrix", "corneal_refraction", "refraction_from_matrix", "paraxial_ametropic_eye", "solved_eye",
+           "solve_inputs", "with_source"]
 
 #: The planes a refraction is given at: the corneal front vertex, or the spectacle plane in front of it.
 CORNEA = "corneal vertex"
 SPECTACLE = "spectacle plane"
 _I2 = np.eye(2)
 _SINGULAR_TOL = 1e-12
-#: An eye with a visual axis is solved until its traced refraction along it is the target's to this, D
-#: (each of the power matrix's entries, at the corneal vertex), in at most this many solves.
-VISUAL_AXIS_TOL_DIOPTERS = 1e-4
-_VISUAL_AXIS_MAX_SOLVES = 6
-#: The entrance pupil the visual-axis refraction is traced over, mm (the curvature at its centre does
-#: not depend on it: Liou–Brennan's reads the same to 1e-4 D at 1, 3 and 5 mm).
-_VISUAL_AXIS_PUPIL_MM = 1.0
 
 
 @dataclass(frozen=True)
-class EyeRefraction:
+class ParaxialRefraction:
     """A refraction: the correcting thin lens at ``plane``, ``plane_distance_mm`` in front of the
     corneal front vertex (0 at the cornea), at ``wavelength_nm``.
 
@@ -114,12 +107,12 @@ class EyeRefraction:
 
 
 def refraction_from_matrix(matrix_diopters, plane: str, plane_distance_mm: float,
-                           wavelength_nm: float) -> EyeRefraction:
-    """An `EyeRefraction` from a 2 × 2 power matrix (its symmetric part; D)."""
+                           wavelength_nm: float) -> ParaxialRefraction:
+    """An `ParaxialRefraction` from a 2 × 2 power matrix (its symmetric part; D)."""
     matrix = np.asarray(matrix_diopters, dtype=float)
     symmetric = 0.5 * (matrix + matrix.T)
     rx = Prescription.from_power_matrix(symmetric).minus_cylinder()
-    return EyeRefraction(rx, matrix2_tuple(symmetric), plane, float(plane_distance_mm), float(wavelength_nm))
+    return ParaxialRefraction(rx, matrix2_tuple(symmetric), plane, float(plane_distance_mm), float(wavelength_nm))
 
 
 def far_point_vergence_matrix(rx: Prescription, vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM) -> np.ndarray:
@@ -182,7 +175,7 @@ def eye_ray_matrix(eye: SchematicEye, wavelength_nm: float) -> np.ndarray:
     return np.kron(rest, _I2) @ refraction_matrix(cornea_front_power_matrix(eye, wavelength))
 
 
-def corneal_refraction(eye: SchematicEye, wavelength_nm: float | None = None) -> EyeRefraction:
+def corneal_refraction(eye: SchematicEye, wavelength_nm: float | None = None) -> ParaxialRefraction:
     """The eye's own refraction at the corneal vertex: K = B⁻¹ A of `eye_ray_matrix` (module doc),
     at ``wavelength_nm`` (default: the model's reference wavelength)."""
     wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
@@ -226,7 +219,7 @@ def _toric_front(eye: SchematicEye, front_matrix_d: np.ndarray, axis: float, wav
     return dataclasses.replace(front, radius_mm=radii[0], radius_y_mm=radii[1], axis_deg=axis)
 
 
-def _solved_eye(eye: SchematicEye, k: np.ndarray, axis_deg: float, toric: bool, wavelength_nm: float,
+def solved_eye(eye: SchematicEye, k: np.ndarray, axis_deg: float, toric: bool, wavelength_nm: float,
                 rx_text: str) -> tuple[SchematicEye, float]:
     """``eye`` with the vitreous and (``toric``) the cornea front that give it the refraction ``k`` at the
     corneal vertex (2 × 2 D) paraxially about its optical axis (module doc), and the vitreous, mm."""
@@ -242,81 +235,38 @@ def _solved_eye(eye: SchematicEye, k: np.ndarray, axis_deg: float, toric: bool, 
     return dataclasses.replace(eye, surfaces=tuple(surfaces)), vitreous_mm
 
 
-def visual_axis_refraction(eye: SchematicEye, wavelength_nm: float | None = None,
-                           vertex_distance_mm: float | None = None) -> np.ndarray:
-    """The eye's refraction at the corneal vertex (or the spectacle plane ``vertex_distance_mm`` in front of it)
-    along its visual axis, 2 × 2 D: the paraxial
-    refraction of the wavefront traced from field (0, 0) through a 1 mm entrance pupil, by the one
-    refraction rule (`refraction.eye_refraction`: the curvature at the pupil centre, over the pupil
-    seen along the chief ray). For a centred eye it is `corneal_refraction`'s; for one with a visual
-    axis or a decentred iris (Liou–Brennan) it adds the eye's own oblique astigmatism and defocus
-    along the visual axis."""
-    # wavefront -> spectacles -> this module: the trace is imported where it is used.
-    from vissim.optics.eyes.refraction import eye_refraction
-    from vissim.optics.eyes.wavefront import trace_eye_wavefront
-
-    wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
-    front = trace_eye_wavefront(eye, wavelength, (0.0, 0.0), pupil_mm=_VISUAL_AXIS_PUPIL_MM)
-    return np.array(eye_refraction(front, vertex_distance_mm).paraxial.power_matrix())
-
-
-def _off_axis_fixation(eye: SchematicEye) -> bool:
-    return eye.visual_axis_deg != 0.0 or eye.stop_decentre_nasal_mm != 0.0
-
-
-def ametropic_eye(eye: SchematicEye, rx: Prescription, vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM,
-                  wavelength_nm: float | None = None, *, along_visual_axis: bool = True) -> SchematicEye:
+def paraxial_ametropic_eye(eye: SchematicEye, rx: Prescription,
+                           vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM,
+                           wavelength_nm: float | None = None) -> SchematicEye:
     """``eye`` made to have the spectacle prescription ``rx`` worn ``vertex_distance_mm`` in front of
-    its corneal vertex, at ``wavelength_nm`` (default: the model's reference wavelength).
+    its corneal vertex, paraxially about its optical axis, at ``wavelength_nm`` (default: the model's
+    reference wavelength): the closed-form solve (module doc). An eye with a visual axis is then
+    corrected along it by `vissim.optics.eyes.fixation.ametropic_eye` (the one callers use).
 
     Spherical equivalent by axial ametropia (the vitreous solved in closed form), cylinder by a
     toric cornea front with the model's mean front power and conic (module doc). Returns a new
     `SchematicEye`; ``eye`` is unchanged. Raises `VissimInputError` when the far point would fall
     inside the eye or between the lens and the eye, when no vitreous > 0 mm gives the spherical
     equivalent, or when the cylinder needs a cornea-front section of power <= 0 D.
-
-    **Along the visual axis.** An eye whose visual axis is not its optical axis, or whose iris is
-    decentred (Liou–Brennan: 5°, 0.5 mm), has a refraction of its own along the visual axis that the
-    paraxial solve about the optical axis does not see (−0.008 D of M and −0.042 D of J0 at the
-    spectacle plane for Liou–Brennan's −1.00 DS eye). With ``along_visual_axis`` (default) such an
-    eye is solved again for the target minus that residual, read by `visual_axis_refraction` on the
-    solved eye at the spectacle plane (as the read-back is), until it is the prescription to
-    ``VISUAL_AXIS_TOL_DIOPTERS``
-    (two or three solves); its cornea front is then toric for a spherical prescription too. Centred
-    eyes are solved once (their visual-axis refraction is the paraxial one). ``along_visual_axis``
-    False: the paraxial solve only (the optical axis has the prescription).
     """
+    rx, wavelength, rx_text, target = solve_inputs(eye, rx, vertex_distance_mm, wavelength_nm)
+    toric = rx.cylinder_diopters != 0.0 or eye.surfaces[0].is_toric
+    solved, vitreous_mm = solved_eye(eye, target, rx.axis_deg, toric, wavelength, rx_text)
+    return with_source(eye, solved, rx_text, wavelength, vitreous_mm, "")
+
+
+def solve_inputs(eye: SchematicEye, rx, vertex_distance_mm: float, wavelength_nm: float | None):
+    """(the prescription, the wavelength, its text for messages, its far point's vergence at the cornea)."""
     rx = as_prescription(rx)
     wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
     rx_text = f"{rx} at {checked_vertex_distance_mm(vertex_distance_mm):g} mm"
-    target = far_point_vergence_matrix(rx, vertex_distance_mm)
-    toric = rx.cylinder_diopters != 0.0 or eye.surfaces[0].is_toric
-    solved, vitreous_mm = _solved_eye(eye, target, rx.axis_deg, toric, wavelength, rx_text)
-    corrected = along_visual_axis and _off_axis_fixation(eye)
-    if corrected:
-        k, wanted = target, np.array(rx.power_matrix())
-        for _ in range(_VISUAL_AXIS_MAX_SOLVES):
-            read = visual_axis_refraction(solved, wavelength, vertex_distance_mm)  # as `vissim eye --rx` reads it
-            if np.max(np.abs(wanted - read)) <= VISUAL_AXIS_TOL_DIOPTERS:
-                break
-            k = k + target - far_point_vergence_matrix(Prescription.from_power_matrix(read), vertex_distance_mm)
-            axis = Prescription.from_power_matrix(k).axis_deg
-            solved, vitreous_mm = _solved_eye(eye, k, axis, True, wavelength, rx_text)
-        else:
-            raise VissimInputError(f"prescription {rx_text}: the {eye.name} eye's refraction along its visual axis "
-                                   f"did not settle within {VISUAL_AXIS_TOL_DIOPTERS:g} dioptres in "
-                                   f"{_VISUAL_AXIS_MAX_SOLVES} solves")
+    return rx, wavelength, rx_text, far_point_vergence_matrix(rx, vertex_distance_mm)
+
+
+def with_source(eye: SchematicEye, solved: SchematicEye, rx_text: str, wavelength: float, vitreous_mm: float,
+                along: str) -> SchematicEye:
+    """``solved`` with a source that says how it was made from ``eye``."""
     how = "; toric cornea front" if solved.surfaces[0].is_toric else ""
-    along = "; refraction along the visual axis (traced)" if corrected else ""
     source = (f"{eye.source}; made ametropic by vissim.optics.eyes.ametropia for spectacle Rx {rx_text} at "
               f"{wavelength:g} nm (axial: vitreous {vitreous_mm:.6f} mm{how}{along})")
     return dataclasses.replace(solved, source=source)
-
-
-def ametropic_model_eye(model: str, accommodation_diopters: float = 0.0, rx=None,
-                        vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM) -> SchematicEye:
-    """The schematic eye ``model`` at its accommodation, made to need ``rx`` (a `Prescription` or its text) at
-    ``vertex_distance_mm`` when given (`ametropic_eye`); the model as it is for None. The one eye the eye
-    sensor renders and the eye bench traces."""
-    eye = eye_model(model, accommodation_diopters)
-    return eye if rx is None else ametropic_eye(eye, prescription_from(rx), vertex_distance_mm)

@@ -4,7 +4,7 @@ An `Eye` is a schematic model's surfaces and media (`SchematicEye`: any of the f
 altered, or one built by hand) at its accommodation, with
 
 * the prescription it **has** (``rx``, a spectacle prescription measured ``vertex_mm`` in front of
-  the cornea): the eye is then the ametropic eye that needs it (`ametropia.ametropic_eye`: axial
+  the cornea): the eye is then the ametropic eye that needs it (`fixation.ametropic_eye`: axial
   length for the spherical equivalent, a toric cornea front for the cylinder). ``rx`` never means a
   defocus added to the emmetropic model: a lens worn in front is a lens, not part of the eye;
 * its pupil, given once: the entrance pupil ``pupil_mm`` or the ``iris_mm`` (default:
@@ -39,7 +39,7 @@ from vissim.checks import instance_of, positive_number
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.ametropia import ametropic_eye
+from vissim.optics.eyes.fixation import ametropic_eye
 from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.models import EYE_MODELS, SchematicEye, eye_model
 from vissim.optics.prescription import Prescription, prescription_from

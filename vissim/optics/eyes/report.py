@@ -1,6 +1,6 @@
 """One record of a schematic eye at a field point and a wavelength: what ``vissim eye`` prints.
 
-`eye_report` builds the eye (`models.eye_model`, made ametropic by `ametropia.ametropic_eye`
+`eye_report` builds the eye (`models.eye_model`, made ametropic by `fixation.ametropic_eye`
 when a prescription is given), traces its wavefront over the entrance pupil
 (`wavefront.trace_eye_wavefront`), reads its refraction (`refraction.eye_refraction`) and its
 MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of

@@ -47,7 +47,7 @@ import numpy as np
 
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, EyeRefraction, eye_ray_matrix, refraction_from_matrix
+from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, ParaxialRefraction, eye_ray_matrix, refraction_from_matrix
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import matrix_to_surface, mean_meridian_eye
 from vissim.optics.glass import glass_like_crown
@@ -95,7 +95,7 @@ def lenses_to_cornea_matrix(setup: TrialLensSetup, wavelength_nm: float) -> np.n
 
 def residual_refraction(eye: SchematicEye, lenses=(), vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM, *,
                         lens_gap_mm: float = 0.0, wavelength_nm: float | None = None,
-                        plane: str = SPECTACLE) -> EyeRefraction:
+                        plane: str = SPECTACLE) -> ParaxialRefraction:
     """The refraction that remains with ``lenses`` (TrialLens, object to eye) worn in front of ``eye``,
     at ``plane`` (`SPECTACLE` or `CORNEA`, module doc), at ``wavelength_nm`` (default: the model's
     reference wavelength), for an object at infinity.

@@ -5,7 +5,7 @@ retina (``travel_z = +1``); x and y are OSA's pupil axes (x the examiner's right
 at the eye), so a wavefront's (x, y) is OSA's. Each `EyeSurface` becomes a `Surface` at the sum
 of the thicknesses before it: a `Conic` (R, Q), a `Plane` for an infinite radius (the iris, a
 GRIN lens's equatorial boundary), or a `Biconic` for a toric surface (`EyeSurface.is_toric`: the
-cornea front of `vissim.optics.eyes.ametropia.ametropic_eye`): radius ``radius_mm`` along its x',
+cornea front of `vissim.optics.eyes.fixation.ametropic_eye`): radius ``radius_mm`` along its x',
 the TABO meridian ``axis_deg`` (counter-clockwise from +x, the examiner's right, as the examiner
 faces the eye: this frame's x and y, so `Biconic`'s ``axis_deg`` is the TABO axis as it stands),
 ``radius_y_mm`` along y', both with the surface's conic Q. Homogeneous media are passed as their ``index(wavelength_nm)``,

@@ -7,7 +7,7 @@ frame as every vissim field angle: x the examiner's right, y up; a number is [x,
 (``"photopic"`` or a wavelength in nm), an optional trial ``lens``
 (a sphere in D, or {sphere, cylinder, axis}), an optional ``rx`` (the eye made ametropic: the spectacle
 prescription it needs at the campaign's ``vertex_mm``, a text such as ``"-3.00"`` or ``"-2.00 -1.00 x 90"``,
-or a number: the sphere in D; `vissim.optics.eyes.ametropia.ametropic_model_eye`; absent: the model as it is),
+or a number: the sphere in D; `vissim.optics.eyes.fixation.ametropic_eye`; absent: the model as it is),
 ``letter``, ``logmar``, and ``surfaces``: the model's surfaces altered, a table of surface names each with
 fields of `vissim.optics.eyes.eye.SURFACE_OVERRIDES` (``surfaces."cornea front".conic = 0.0``: an eye built from
 a model plus overrides).  A ``[[sweep]]`` table gives
