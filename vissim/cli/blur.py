@@ -17,7 +17,6 @@ from vissim.optics.array_backend import DEVICES, array_backend
 from vissim.optics.blur import PADDING_MODES, blur_image, image_kernel_psf
 from vissim.optics.blur_device import blur_image_on
 from vissim.optics.chromatic import gaussian_band
-from vissim.optics.prescription import Prescription
 from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
 

@@ -13,7 +13,6 @@ from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_H
                                 add_eye_model_arg, eye_from_args, field_deg_from_text, parse_float_list,
                                 wavefront_from_args)
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 from vissim.imageio import to_preview_png, write_image
 from vissim.optics.psf import compute_psf
