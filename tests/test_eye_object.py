@@ -134,3 +134,19 @@ def test_an_eye_object_is_what_every_entry_point_takes():
     with pytest.raises(VissimInputError, match="takes an Eye, not the name 'navarro-1985'"):
         vissim.blur_eye(np.zeros((5, 5)), "navarro-1985", arcmin_per_px=1.0)
     assert isinstance(build_eye("arizona"), Eye)
+
+
+def test_a_render_takes_an_eye_built_in_python_and_hands_the_sensor_that_same_eye():
+    """`EyeRender.for_eye`: a named model with altered surfaces is written as the model and its changes; the render
+    rebuilds the same eye (equal optics), and the scene's sensor is handed it, not a name."""
+    from vissim.render.eye_render import EyeRender, eye_scene_dict
+    from vissim.render.schematic_eye_sensor import sensor_eye
+
+    eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-2.00 -0.50 x 20").with_surface("cornea front", conic=0.0)
+    settings = EyeRender.for_eye(eye, size_px=(16, 16), spp=4)
+    assert settings.surfaces == (("cornea front", "conic", 0.0),) and settings.eye.optics == eye.optics
+    sensor = eye_scene_dict(settings)["camera"]
+    assert "model" not in sensor and "rx" not in sensor and sensor_eye(sensor["eye_key"]) is settings.eye
+    by_hand = dataclasses.replace(navarro_1985(), surfaces=navarro_1985().surfaces[:-1])
+    with pytest.raises(VissimInputError, match="not a named model with altered surfaces"):
+        EyeRender.for_eye(Eye(by_hand))
