@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.validation.engine.metrics import PSNR, floor_column
+from vissim.validation.engine.metrics import MEAN_ABS_DIFF, PSNR, floor_column
 from vissim.validation.engine.summary import NO_LENS, margin, value_span
 from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH_NOTE
 
