@@ -18,8 +18,12 @@ from vissim.errors import VissimInputError
 from vissim.imaging.metrics import compare_images, psnr_db
 from vissim.validation.depth.report import depth_rows
 from vissim.validation.dslr.report import metrics_rows
+from vissim.validation.dslr.wave_bench import TRACED_RAYS
+from vissim.validation.dslr.wave_bench_report import self_check_table
 from vissim.validation.engine import metrics
-from vissim.validation.engine.metrics import METRICS, PSNR, SSIM, Metric, added_scores, floor_column, register_metric
+from vissim.validation.engine.metrics import (METRICS, MEAN_ABS_DIFF, PSNR, SSIM, Metric, added_scores, floor_column,
+                                              register_metric)
+from vissim.validation.engine.summary import NO_LENS
 from vissim.validation.eye.report import eye_report
 
 VALIDATION = Path(metrics.__file__).resolve().parents[1]
@@ -92,3 +96,13 @@ def test_a_new_metric_is_one_registration_and_reaches_every_kind_s_rows(peak_met
     assert metrics_rows([dslr])[0][peak_metric.name] == 0.25
     assert depth_rows([depth])[0][peak_metric.name] == 0.25
     assert eye_report([eye]).rows[0][peak_metric.name] == 0.25
+
+
+def test_the_self_check_note_on_lens_free_rows_reads_their_metrics_from_the_registry():
+    """A no-lens traced-rays row below the self-check's margin gets the note on the rasterisation, with its mean AD."""
+    row = {"configuration": "bare", "group": "g", "lenses": NO_LENS, "simulation": TRACED_RAYS, "input": "synthetic",
+           "reference": "render (no diffraction)", PSNR.name: 40.0, floor_column(PSNR): 39.0,
+           MEAN_ABS_DIFF.name: 2.5e-3}
+    table = self_check_table([row])
+    assert "Without lenses (1): +1.0 dB over the floor (40.0 dB against 39.0 dB)" in table
+    assert "They differ by 2.5e-03 on average" in table
