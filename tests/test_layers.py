@@ -25,6 +25,8 @@ from pathlib import Path
 
 from source_modules import MODULES, PACKAGE, loops, owner
 
+from vissim.validation.engine.registry import BENCH_KINDS, bench_kind_names
+
 LAYERS = [
     {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis", "spectra"},
     {"optics"},
@@ -143,8 +145,14 @@ def test_loading_a_campaign_imports_neither_the_harness_nor_scikit_image():
 
 
 #: Inside ``validation``: the engine knows no bench kind, and no bench kind knows another
-#: (each imports the engine and the layers below; the registry names kinds as strings).
-BENCH_KIND_PACKAGES = ("vissim.validation.dslr", "vissim.validation.depth")
+#: (each imports the engine and the layers below; the registry names kinds as strings).  The kinds'
+#: packages are read from the registry: ``vissim.validation.eye.kind`` -> ``vissim.validation.eye``.
+BENCH_KIND_PACKAGES = tuple(sorted({module.rsplit(".", 1)[0] for module in BENCH_KINDS.values()}))
+
+
+def test_the_layer_rules_see_every_registered_kind():
+    assert set(bench_kind_names()) >= {"dslr", "depth", "eye"}
+    assert all(package in MODULES for package in BENCH_KIND_PACKAGES), BENCH_KIND_PACKAGES
 
 
 def test_the_engine_imports_no_bench_kind_and_kinds_not_each_other():

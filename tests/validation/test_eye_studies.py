@@ -1,9 +1,11 @@
-"""The eye studies on renders (vissim.validation.eye_studies): their measuring tools against analytic
-answers (fast), and each study's must-show threshold on real renders (slow, ``-m slow``)."""
+"""The eye studies on renders (scripts/eye_studies, outside the package): their measuring tools against
+analytic answers (fast), and each study's must-show threshold on real renders (slow, ``-m slow``)."""
 
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,10 +15,15 @@ from scipy.special import ndtr
 
 from vissim.optics.eyes.models import eye_model
 from vissim.render.backend import find_libllvm
-from vissim.validation.eye_studies.edge import BIN_PX, edge_mtf, traced_rays_deg
-from vissim.validation.eye_studies.focus import (denoised_gradient_energy, gaussian_peak, gradient_energy,
-                                                 predicted_best_sphere_diopters, sphere_lattice)
-from vissim.validation.eye_studies.scenes import ChartRaster, ideal_image, pixel_directions
+
+ROOT = Path(__file__).resolve().parents[2]
+if str(ROOT) not in sys.path:  # the studies are scripts, imported as the package ``scripts.eye_studies``
+    sys.path.insert(0, str(ROOT))
+
+from scripts.eye_studies.edge import BIN_PX, edge_mtf, traced_rays_deg  # noqa: E402
+from scripts.eye_studies.focus import (denoised_gradient_energy, gaussian_peak, gradient_energy,  # noqa: E402
+                                       predicted_best_sphere_diopters, sphere_lattice)
+from scripts.eye_studies.scenes import ChartRaster, ideal_image, pixel_directions  # noqa: E402
 
 needs_llvm = pytest.mark.skipif(find_libllvm() is None, reason="no usable libLLVM: llvm variants unavailable")
 
@@ -131,7 +138,7 @@ def test_ideal_image_of_a_uniform_chart_is_uniform():
 @needs_llvm
 @pytest.mark.slow
 def test_chromatic_focus_on_renders_matches_the_lca_within_0_05_diopters():
-    from vissim.validation.eye_studies import chromatic_focus
+    from scripts.eye_studies import chromatic_focus
 
     result = chromatic_focus()  # measured: 450-550 nm off by 0.019 D, 650-550 nm by 0.004 D
     for wavelength in (450.0, 650.0):
@@ -144,7 +151,7 @@ def test_chromatic_focus_on_renders_matches_the_lca_within_0_05_diopters():
 @needs_llvm
 @pytest.mark.slow
 def test_slanted_edge_mtf_matches_the_traced_geometric_mtf_within_the_noise():
-    from vissim.validation.eye_studies import slanted_edge
+    from scripts.eye_studies import slanted_edge
 
     result = slanted_edge()
     assert abs(abs(result.edge_angle_deg) - 5.0) < 0.1
@@ -157,7 +164,7 @@ def test_slanted_edge_mtf_matches_the_traced_geometric_mtf_within_the_noise():
 @needs_llvm
 @pytest.mark.slow
 def test_wide_chart_field_dependent_blur_follows_the_render_and_one_psf_does_not():
-    from vissim.validation.eye_studies import wide_chart
+    from scripts.eye_studies import wide_chart
 
     # measured: field-dependent 29.2 / 28.8 dB, perfect (floor + 3.01) 29.9 / 29.3, one PSF 28.4 / 12.7
     result = wide_chart()

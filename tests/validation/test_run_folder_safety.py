@@ -19,7 +19,7 @@ import vissim
 from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.validation.engine import runner
-from vissim.validation.engine.loader import load_campaign
+from vissim.validation.engine.configurations import sweep_combinations
 from vissim.validation.engine.loader import load_campaign
 from vissim.validation.engine.run_lock import LOCK_FILE_NAME, run_folder_lock
 
@@ -66,6 +66,23 @@ def test_two_depth_configurations_with_one_name_are_refused(tmp_path):
                     "[[config]]\nname = 'eye'\nscene = 'scene.toml'\neye = '-2.00 DS'\n")
     with pytest.raises(VissimInputError, match=r"config\[0\] and config\[1\]: two configurations named 'eye'"):
         load_campaign(path, check_memory=False)
+
+
+def test_two_eye_items_with_one_name_are_refused_naming_both(tmp_path):
+    """The eye kind calls the engine's one check: an item and a sweep's combination that share a name."""
+    path = tmp_path / "eye.toml"
+    path.write_text("[campaign]\nkind = 'eye'\n[[item]]\nname = 'p 3'\npupil_mm = 3.0\n"
+                    "[[sweep]]\nname = 'p'\npupil_mm = [4.0, 5.0]\n[[sweep]]\nname = 'p 3'\npupil_mm = 6.0\n")
+    with pytest.raises(VissimInputError, match=r"item\[0\] and sweep\[1\] p 3: two configurations named 'p 3'") as err:
+        load_campaign(path, check_memory=False)
+    assert "pupil 3 mm" in str(err.value) and "pupil 6 mm" in str(err.value)  # what each compares
+    assert "\n" not in str(err.value)
+
+
+def test_a_sweep_s_combinations_vary_the_last_axis_fastest():
+    combinations = sweep_combinations({"letter": ["K", "N"], "logmar": [1.0], "lenses": [[], [2.0]]})
+    assert combinations == [{"letter": "K", "logmar": 1.0, "lenses": []}, {"letter": "K", "logmar": 1.0, "lenses": [2.0]},
+                            {"letter": "N", "logmar": 1.0, "lenses": []}, {"letter": "N", "logmar": 1.0, "lenses": [2.0]}]
 
 
 def test_validate_refuses_duplicate_names_in_one_line(tmp_path, capsys):

@@ -8,7 +8,6 @@ quadrature (`vissim.fit.rx_fit`, "Intervals").
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,6 +17,7 @@ import scipy.signal
 from vissim.fit.forward import ForwardModel
 from vissim.fit.problem import FitProblem
 from vissim.fit.result import Solution
+from vissim.imaging.metrics import psnr_db
 
 __all__ = ["sandwich_covariance", "residual_correlation_lag_px", "fitted_solution", "rank_solutions", "Ranking",
            "residual_statistics", "Residual", "MODEL_ERROR_DIOPTERS", "SAME_SOLUTION_DIOPTERS",
@@ -171,5 +171,4 @@ def residual_statistics(problem: FitProblem, theta: np.ndarray, forward: Forward
     unexplained = float(np.sum(residual ** 2)) / sst
     data_range = float(img.max() - img.min())
     mse = float(np.mean(residual ** 2))
-    psnr = math.inf if mse == 0 else 10.0 * math.log10(data_range ** 2 / mse)
-    return Residual(fitted, gain, offset, unexplained, psnr)
+    return Residual(fitted, gain, offset, unexplained, psnr_db(mse, data_range))

@@ -18,7 +18,9 @@ from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.validation.engine.fields import number, settings_kwargs, tables
 from vissim.validation.engine.figures import Figure
 from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.engine.metrics import PSNR, floor_column
 from vissim.validation.engine.protocol import ItemPlan, ReportParts
+from vissim.validation.engine.summary import margin
 
 SIZE_PX = 32
 NOISE = 0.01
@@ -100,14 +102,14 @@ class ToyKind:
         return []
 
     def report(self, results, run_dir, record, progress=None):
-        rows = [{"configuration": r["configuration"]["name"], "psnr_db": r["metrics"]["psnr_db"],
-                 "noise_floor_psnr_db": r["noise_floor"]["psnr_db"]} for r in results]
+        rows = [{"configuration": r["configuration"]["name"], PSNR.name: r["metrics"][PSNR.name],
+                 floor_column(PSNR): r["noise_floor"][PSNR.name]} for r in results]
         table = "### toy\n\n| configuration | PSNR dB |\n|---|---|\n" + "".join(
-            f"| {r['configuration']} | {r['psnr_db']:.2f} |\n" for r in rows)
+            f"| {r['configuration']} | {r[PSNR.name]:.{PSNR.digits}f} |\n" for r in rows)
         return ReportParts("toy validation", rows, table, {})
 
     def summary_lines(self, rows):
-        return [f"{r['configuration']}: {r['psnr_db'] - r['noise_floor_psnr_db']:+.2f} dB over the floor" for r in rows]
+        return [f"{r['configuration']}: {margin(r):+.2f} dB over the floor" for r in rows]
 
 
 BENCH = ToyKind()

@@ -15,6 +15,7 @@ for the whole image, each beside the same metric between the two seeds (the floo
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -26,21 +27,34 @@ from vissim.bench.depth.scene import panel_geometries
 from vissim.provenance import make_provenance
 from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.optics.resample import block_mean
-from vissim.validation.depth.masks import depth_regions, masked_metrics
+from vissim.validation.depth.masks import depth_regions
 from vissim.validation.depth.renders import DepthBuilt
 from vissim.validation.depth.schema import DepthCampaignSettings
 from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.engine.metrics import MEAN_ABS_DIFF, PSNR, SSIM, added_metrics, added_scores
 from vissim.validation.engine.truth import add_bench_diffraction
 
 __all__ = ["compute_depth_item"]
 
 
-def _region_table(comparison, masks, data_range: float) -> dict:
-    maps = (comparison.squared_error_map, comparison.abs_diff_map, comparison.ssim_map)
-    table = {name: masked_metrics(*maps, mask, data_range) for name, mask in masks.interiors.items()}
-    table["boundary"] = masked_metrics(*maps, masks.boundary, data_range)
-    table["frame"] = masked_metrics(*maps, masks.frame, data_range)
-    table["all"] = comparison.as_json()
+def _region_metrics(comparison, mask: np.ndarray) -> dict:
+    """The pixels, PSNR (dB), MSE, mean |difference| and mean SSIM of ``comparison`` over ``mask``."""
+    n = int(mask.sum())
+    if n == 0:
+        return {"n_px": 0, PSNR.name: None, "mse": None, MEAN_ABS_DIFF.name: None, SSIM.name: None,
+                **{m.name: None for m in added_metrics()}}
+    psnr = PSNR.value(comparison, mask)
+    return {"n_px": n, PSNR.name: psnr if math.isfinite(psnr) else "inf",
+            "mse": float(comparison.squared_error_map[mask].mean()),
+            MEAN_ABS_DIFF.name: MEAN_ABS_DIFF.value(comparison, mask), SSIM.name: SSIM.value(comparison, mask),
+            **added_scores(comparison, mask)}
+
+
+def _region_table(comparison, masks) -> dict:
+    table = {name: _region_metrics(comparison, mask) for name, mask in masks.interiors.items()}
+    table["boundary"] = _region_metrics(comparison, masks.boundary)
+    table["frame"] = _region_metrics(comparison, masks.frame)
+    table["all"] = {**comparison.as_json(), **added_scores(comparison)}
     table["all"]["n_px"] = int(np.prod(comparison.shape[:2]))
     return table
 
@@ -151,8 +165,8 @@ def _compare(item: _DepthItem, source: str, mode: str, layers, masks) -> None:
         "optics": mode,
         "input": source,
         "reference_image": "truth" if mode == "geometric" else "truth_diffracted",
-        "regions": _region_table(comparison, masks, data_range),
-        "noise_floor": _region_table(floor, masks, data_range),
+        "regions": _region_table(comparison, masks),
+        "noise_floor": _region_table(floor, masks),
         "depth_blur": {k: v for k, v in result.as_json().items() if k != "layers"},
         "seconds": time.perf_counter() - started,
         "images": {"simulation": item.save(f"sim_{tag}", simulated),

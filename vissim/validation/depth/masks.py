@@ -35,7 +35,7 @@ from scipy import ndimage
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, mm_to_m
 
-__all__ = ["RegionMasks", "depth_regions", "masked_metrics", "SKY"]
+__all__ = ["RegionMasks", "depth_regions", "SKY"]
 
 log = logging.getLogger(__name__)
 
@@ -133,15 +133,3 @@ def _region_name(median_diopters: float, spread_diopters: float, geometries, jum
     pool = fronto if fronto and (spread_diopters < jump_diopters or not tilted) else (tilted or fronto)
     best = min(pool, key=lambda g: abs(0.5 * sum(g.proximity_range_diopters) - median_diopters))
     return best.name
-
-
-def masked_metrics(squared_error: np.ndarray, abs_diff: np.ndarray, ssim_map: np.ndarray, mask: np.ndarray,
-                   data_range: float) -> dict:
-    """PSNR (dB), MSE, mean |difference| and mean SSIM over ``mask`` (the maps of one comparison)."""
-    n = int(mask.sum())
-    if n == 0:
-        return {"n_px": 0, "psnr_db": None, "mse": None, "mean_abs_diff": None, "ssim": None}
-    mse = float(squared_error[mask].mean())
-    psnr = math.inf if mse == 0.0 else 10.0 * math.log10(data_range**2 / mse)
-    return {"n_px": n, "psnr_db": psnr if math.isfinite(psnr) else "inf", "mse": mse,
-            "mean_abs_diff": float(abs_diff[mask].mean()), "ssim": float(ssim_map[mask].mean())}

@@ -20,8 +20,9 @@ from vissim.imageio import read_image
 from vissim.progress import counter
 from vissim.validation.engine.figures import Figure, display_norm, png_bytes, pyplot, radiance_colorbar
 from vissim.validation.engine.protocol import ReportParts
+from vissim.validation.engine.metrics import (MEAN_ABS_DIFF, PSNR, SSIM, added_metrics, floor_column,
+                                              metric_float)
 from vissim.validation.engine.report import format_number as _fmt
-from vissim.validation.engine.report import metric_float
 from vissim.validation.engine.summary import PERFECT_MARGIN_DB
 
 __all__ = ["depth_rows", "depth_tables", "depth_report", "summary_lines"]
@@ -39,20 +40,21 @@ def depth_rows(results: list[dict]) -> list[dict]:
         for comp in result["comparisons"]:
             for region, metrics in comp["regions"].items():
                 floor = comp["noise_floor"][region]
-                psnr, floor_psnr = metric_float(metrics["psnr_db"]), metric_float(floor["psnr_db"])
+                psnr, floor_psnr = metric_float(metrics[PSNR.name]), metric_float(floor[PSNR.name])
                 rows.append({
                     "configuration": config["name"],
                     "observer": config["viewer_label"],
                     "simulation": comp["simulation"],
                     "region": region,
                     "n_px": metrics["n_px"],
-                    "psnr_db": psnr,
-                    "noise_floor_psnr_db": floor_psnr,
+                    PSNR.name: psnr,
+                    floor_column(PSNR): floor_psnr,
                     "psnr_minus_floor_db": psnr - floor_psnr if math.isfinite(psnr) and math.isfinite(floor_psnr)
                     else math.nan,
-                    "ssim": metric_float(metrics["ssim"]),
-                    "noise_floor_ssim": metric_float(floor["ssim"]),
-                    "mean_abs_diff": metric_float(metrics["mean_abs_diff"]),
+                    SSIM.name: metric_float(metrics[SSIM.name]),
+                    floor_column(SSIM): metric_float(floor[SSIM.name]),
+                    MEAN_ABS_DIFF.name: metric_float(metrics[MEAN_ABS_DIFF.name]),
+                    **{m.name: metric_float(metrics.get(m.name)) for m in added_metrics()},
                     "n_layers": comp["depth_blur"]["n_layers"],
                     "key": result["key"],
                 })
@@ -119,8 +121,8 @@ def depth_tables(results: list[dict]) -> str:
                 r = next(x for x in mine if x["simulation"] == sim and x["region"] == region)
                 if len(cells) == 1:
                     cells.append(str(r["n_px"]))
-                cells += [_fmt(r["psnr_db"], 2), _fmt(r["noise_floor_psnr_db"], 2), _fmt(r["psnr_minus_floor_db"], 2),
-                          _fmt(r["ssim"], 4), _fmt(r["noise_floor_ssim"], 4), _fmt(r["mean_abs_diff"], 4)]
+                cells += [_fmt(r[PSNR.name], 2), _fmt(r[floor_column(PSNR)], 2), _fmt(r["psnr_minus_floor_db"], 2),
+                          _fmt(r[SSIM.name], 4), _fmt(r[floor_column(SSIM)], 4), _fmt(r[MEAN_ABS_DIFF.name], 4)]
             out.append("| " + " | ".join(cells) + " |")
         out.append("")
     out.append(
@@ -191,10 +193,10 @@ def _figure(results: list[dict], run_dir: Path, simulation: str) -> Figure | Non
         bar.set_ticks(range(len(names)), labels=names)
         bar.ax.tick_params(labelsize=6)
         interior = [r for r in comp["regions"] if r not in ("boundary", "frame", "all")]
-        psnr = ", ".join(f"{r} {_fmt(metric_float(comp['regions'][r]['psnr_db']), 1)}" for r in interior[:3])
+        psnr = ", ".join(f"{r} {_fmt(metric_float(comp['regions'][r][PSNR.name]), 1)}" for r in interior[:3])
         axes[i, 0].set_ylabel(textwrap.fill(result["configuration"]["name"], 28), fontsize=7)
         axes[i, 0].set_xlabel(_panels_label(result), fontsize=7)
-        axes[i, 2].set_xlabel(f"PSNR dB: {psnr}; boundary {_fmt(metric_float(comp['regions']['boundary']['psnr_db']), 1)}",
+        axes[i, 2].set_xlabel(f"PSNR dB: {psnr}; boundary {_fmt(metric_float(comp['regions']['boundary'][PSNR.name]), 1)}",
                               fontsize=7)
     for j in range(3):
         bar = fig.colorbar(shown[j], ax=axes[:, j], location="bottom", shrink=0.9, aspect=30, pad=0.01)
@@ -231,5 +233,5 @@ def summary_lines(rows: list[dict]) -> list[str]:
     lines = [f"{'configuration':40s} {'simulation':>16s} {'region':>16s} {'PSNR dB':>8s} {'floor dB':>8s} {'SSIM':>7s}"]
     for r in rows:
         lines.append(f"{r['configuration'][:40]:40s} {r['simulation']:>16s} {r['region'][:16]:>16s} "
-                     f"{_fmt(r['psnr_db'], 2):>8s} {_fmt(r['noise_floor_psnr_db'], 2):>8s} {_fmt(r['ssim'], 4):>7s}")
+                     f"{_fmt(r[PSNR.name], 2):>8s} {_fmt(r[floor_column(PSNR)], 2):>8s} {_fmt(r[SSIM.name], 4):>7s}")
     return lines

@@ -25,8 +25,9 @@ from vissim.errors import VissimInputError
 from vissim.optics.prescription import Prescription
 from vissim.optics.trial_lens import TrialLens
 from vissim.provenance import json_safe
-from vissim.validation.engine.fields import (MAX_SPP, checked_numbers, field_error, lenses, number,
-                                      name_text, refuse_duplicate_names, settings_kwargs, tables, text)
+from vissim.validation.engine.configurations import refuse_duplicate_names
+from vissim.validation.engine.fields import (MAX_SPP, checked_numbers, field_error, lenses, name_text, number,
+                                             settings_kwargs, tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "read_depth_part", "DEPTH_SIMULATIONS", "DEPTH_INPUTS"]
 

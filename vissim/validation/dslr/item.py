@@ -37,6 +37,7 @@ from vissim.validation.dslr.wave_bench import (
     traced_rays_setup,
 )
 from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.engine.metrics import added_scores
 from vissim.validation.engine.truth import add_bench_diffraction, cached_psf
 
 __all__ = ["compute_item", "synthetic_tile"]
@@ -72,7 +73,7 @@ def _comparison(kind: str, input_name: str, reference_kind: str, reference_image
         "reference_image": reference_image,
         "setup": setup,
         "registration": registration,
-        "metrics": comparison.as_json(),
+        "metrics": {**comparison.as_json(), **added_scores(comparison)},
         "images": {
             "simulation": save(stem, simulated),
             "ssim_map": save(f"{stem}_ssim", comparison.ssim_map, preview=False),

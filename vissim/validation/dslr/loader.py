@@ -7,7 +7,6 @@ with a message naming the file, the field and its unit.
 
 from __future__ import annotations
 
-import itertools
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -19,13 +18,13 @@ from vissim.checks import (ARCMIN_PER_PX_RANGE, DATA_RANGE_RANGE, F_NUMBER_RANGE
                            WAVELENGTH_RANGE_NM)
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.dslr.schema import INPUTS, SIMULATIONS, CampaignSettings, Configuration, trial_lens_phrase
+from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
 from vissim.validation.engine.fields import (
     MAX_SPP,
     field_error,
     lenses,
     name_text,
     number,
-    refuse_duplicate_names,
     settings_kwargs,
     table,
     tables,
@@ -106,9 +105,9 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
         lens_sets += list(value_list(raw["lenses"], source, f"{where}.lenses", "[[2.0], [1.0, -0.5]] (lens sets)"))
     prefix = name_text(raw.get("name", ""), source, f"{where}.name")
     out = []
-    for letter, logmar, polarity, lens_set in itertools.product(letters, logmars, polarities, lens_sets or [[]]):
-        item = {"letter": letter, "logmar": logmar, "polarity": polarity, "lenses": lens_set,
-                "f_number": raw.get("f_number", f_number)}
+    axes = {"letter": letters, "logmar": logmars, "polarity": polarities, "lenses": lens_sets or [[]]}
+    for combination in sweep_combinations(axes):
+        item = {**combination, "f_number": raw.get("f_number", f_number)}
         config = _configuration(item, settings, source, where, f_number)
         label = f"{prefix}: {config.name}" if prefix else config.name
         out.append(replace(config, name=label, group=prefix or label))

@@ -21,7 +21,9 @@ from vissim.validation.dslr.wave_bench_report import is_wave_bench_row, self_che
 from vissim.validation.engine.figures import (Figure, display_norm, pyplot, png_bytes, radiance_colorbar, scale_bar,
                                               tiles_alt)
 from vissim.validation.engine.protocol import ReportParts
-from vissim.validation.engine.report import format_number, metric_float
+from vissim.validation.engine.metrics import (MEAN_ABS_DIFF, PSNR, SSIM, added_metrics, floor_column,
+                                              metric_float)
+from vissim.validation.engine.report import format_number
 from vissim.validation.engine.summary import summary_table
 
 __all__ = ["metrics_rows", "markdown_tables", "reference_note", "dslr_report", "summary_lines", "REFERENCE_NOTE", "ORDER"]
@@ -59,7 +61,7 @@ def metrics_rows(results: list[dict]) -> list[dict]:
         config = result["configuration"]
         for comp in result["comparisons"]:
             # no floor: a capture without a repeat, or the noise-free wave bench
-            floor = result["noise_floor"].get(comp["reference_kind"]) or {"ssim": float("nan"), "psnr_db": float("nan")}
+            floor = result["noise_floor"].get(comp["reference_kind"]) or {m.name: float("nan") for m in (SSIM, PSNR)}
             rows.append(
                 {
                     "configuration": config["name"],
@@ -71,11 +73,9 @@ def metrics_rows(results: list[dict]) -> list[dict]:
                     "simulation": comp["simulation"],
                     "input": comp["input"],
                     "reference": reference_note(comp),
-                    "ssim": comp["metrics"]["ssim"],
-                    "psnr_db": metric_float(comp["metrics"]["psnr_db"]),
-                    "mean_abs_diff": comp["metrics"]["mean_abs_diff"],
-                    "noise_floor_ssim": floor["ssim"],
-                    "noise_floor_psnr_db": metric_float(floor["psnr_db"]),
+                    **{m.name: metric_float(comp["metrics"][m.name]) for m in (SSIM, PSNR, MEAN_ABS_DIFF)},
+                    **{floor_column(m): metric_float(floor[m.name]) for m in (SSIM, PSNR)},
+                    **{m.name: metric_float(comp["metrics"].get(m.name)) for m in added_metrics()},
                     "shift_rows_px": comp["registration"]["shift_rows_px"],
                     "shift_cols_px": comp["registration"]["shift_cols_px"],
                     "camera_prescription": comp["setup"]["camera_prescription"],
@@ -105,25 +105,24 @@ def markdown_tables(results: list[dict], all_rows: list[dict] | None = None) -> 
         by_config.setdefault(r["configuration"], {"_floor": {}, "_rx": "—"})[(r["simulation"], r["input"])] = r
         if r["simulation"] in ("wave", "geometric"):  # the bench's own optics (thesis mode has its own Rx)
             by_config[r["configuration"]]["_rx"] = r["camera_prescription"]
-        by_config[r["configuration"]]["_floor"][REFERENCE_NOTE[r["simulation"]]] = (r["noise_floor_psnr_db"], r["noise_floor_ssim"])
+        by_config[r["configuration"]]["_floor"][REFERENCE_NOTE[r["simulation"]]] = r
     out = [summary_table(rows, [c for c in columns if c[0] != TRACED_RAYS])]
     self_check = self_check_table(rows)
     if self_check:
         out.append(self_check)
-    for metric, label, digits in (("psnr_db", "PSNR (dB)", 2), ("ssim", "SSIM", 4)):
-        floor_idx = 0 if metric == "psnr_db" else 1
-        powers = ["trial lens(es)", "camera Rx (result)"] if metric == "psnr_db" else []
+    for metric in (PSNR, SSIM):
+        powers = ["trial lens(es)", "camera Rx (result)"] if metric is PSNR else []
         header = ["configuration", *powers] + [f"{s} / {i}" for s, i in columns] + ["noise floor (render)",
                                                                                    "noise floor (+diffraction)"]
-        out.append(f"### {label} against the bench\n")
-        if metric == "psnr_db":
+        out.append(f"### {metric.heading()} against the bench\n")
+        if metric is PSNR:
             out.append(COLUMNS_NOTE)
         out.append("| " + " | ".join(header) + " |")
         out.append("|" + "---|" * len(header))
         for name, cells in by_config.items():
-            values = [_fmt(cells[c][metric], digits) if c in cells else "—" for c in columns]
+            values = [_fmt(cells[c][metric.name], metric.digits) if c in cells else "—" for c in columns]
             floors = [
-                _fmt(cells["_floor"][note][floor_idx], digits) if note in cells["_floor"] else "—"
+                _fmt(cells["_floor"][note][floor_column(metric)], metric.digits) if note in cells["_floor"] else "—"
                 for note in (REFERENCE_NOTE["geometric"], REFERENCE_NOTE["wave"])
             ]
             shown = [cells[c] for c in columns if c in cells][0]
@@ -209,7 +208,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
         if step is not None:
             bar_arcmin = scale_bar(axes[0, j], truth.shape[1], step)
         axes[0, j].set_title(column_title(result, comp), fontsize=7)
-        axes[3, j].set_xlabel(f"SSIM {comp['metrics']['ssim']:.3f}\nPSNR {_fmt(metric_float(comp['metrics']['psnr_db']), 1)} dB", fontsize=8)
+        axes[3, j].set_xlabel(f"SSIM {comp['metrics'][SSIM.name]:.3f}\nPSNR {_fmt(metric_float(comp['metrics'][PSNR.name]), 1)} dB", fontsize=8)
     for i, (label, _, _, bar_label) in enumerate(rows):
         axes[i, 0].set_ylabel(label, fontsize=9)
         bar = fig.colorbar(shown[i], ax=axes[i, :], shrink=0.9, pad=0.02, aspect=15)
@@ -225,8 +224,8 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
                     "as letter tiles with an angular scale bar",
                     [truth_label, f"the {simulation} simulation", "1 − SSIM map on a log scale",
                      "absolute difference map"],
-                    [f"{r['configuration']['name']}: SSIM {c['metrics']['ssim']:.3f}, "
-                     f"PSNR {_fmt(metric_float(c['metrics']['psnr_db']), 1)} dB" for r, c in columns])
+                    [f"{r['configuration']['name']}: SSIM {c['metrics'][SSIM.name]:.3f}, "
+                     f"PSNR {_fmt(metric_float(c['metrics'][PSNR.name]), 1)} dB" for r, c in columns])
     return Figure("", png_bytes(fig), alt)
 
 
@@ -270,7 +269,7 @@ def summary_lines(rows: list[dict]) -> list[str]:
               f"{'floor dB':>8s} {'against':>10s}")]
     for r in rows:
         against = "wave bench" if is_wave_bench_row(r) else "render"
-        lines.append(f"{r['configuration'][:width]:{width}s} {r['simulation']:>16s} {r['input']:>9s} {r['ssim']:7.4f} "
-                     f"{format_number(r['psnr_db'], 2):>8s} {format_number(r['noise_floor_psnr_db'], 2):>8s} "
+        lines.append(f"{r['configuration'][:width]:{width}s} {r['simulation']:>16s} {r['input']:>9s} {r[SSIM.name]:7.4f} "
+                     f"{format_number(r[PSNR.name], 2):>8s} {format_number(r[floor_column(PSNR)], 2):>8s} "
                      f"{against:>10s}")
     return lines

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.validation.engine.metrics import MEAN_ABS_DIFF, PSNR, floor_column
 from vissim.validation.engine.summary import NO_LENS, margin, value_span
 from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH_NOTE
 
@@ -65,13 +66,13 @@ def self_check_table(rows: list[dict]) -> str:
     if bare:
         margins = [margin(r) for r in bare]
         out += ["", (f"Without lenses ({len(bare)}): {value_span(margins, '+.1f')} dB over the floor "
-                     f"({value_span([r['psnr_db'] for r in bare], '.1f')} dB against "
-                     f"{value_span([r['noise_floor_psnr_db'] for r in bare], '.1f')} dB). With no lens the trace's PSF is a "
+                     f"({value_span([r[PSNR.name] for r in bare], '.1f')} dB against "
+                     f"{value_span([r[floor_column(PSNR)] for r in bare], '.1f')} dB). With no lens the trace's PSF is a "
                      "point and nothing is traced: the synthetic chart is compared with the render's chart texture, "
                      "two rasterisations of one letter (the geometric simulation of the synthetic chart scores the "
                      "same).")]
         if min(margins) < SELF_CHECK_MARGIN_DB:
-            out[-1] += (f" They differ by {value_span([r['mean_abs_diff'] for r in bare], '.1e')} on average, which a "
+            out[-1] += (f" They differ by {value_span([r[MEAN_ABS_DIFF.name] for r in bare], '.1e')} on average, which a "
                         "lens's blur and the Monte-Carlo noise hide; without a lens two renders with different seeds "
                         "agree far better than that, so the floor exposes the rasterisation, not the trace.")
     return "\n".join(out) + "\n"
@@ -135,7 +136,7 @@ def _wave_bench_rows(results: list[dict], wave_rows: list[dict]) -> _WaveBenchRo
     for name, group in dict.fromkeys((r["configuration"], r["group"]) for r in wave_rows):
         groups.setdefault(group, []).append(name)
     return _WaveBenchRows(list(dict.fromkeys(r["simulation"] for r in wave_rows)),
-                          {(r["configuration"], r["simulation"]): r["psnr_db"] for r in wave_rows},
+                          {(r["configuration"], r["simulation"]): r[PSNR.name] for r in wave_rows},
                           {r["configuration"]["name"]: r["wave_bench"] for r in results if r.get("wave_bench")}, groups)
 
 

@@ -17,7 +17,7 @@ from vissim.checks import (AXIS_RANGE_DEG, MAX_CAMPAIGN_SEED, MAX_DESCRIPTION_CH
 from vissim.errors import VissimInputError
 from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER
 
-__all__ = ["field_error", "refuse_duplicate_names", "read_toml_file", "read_campaign_toml", "number", "whole_number",
+__all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number",
            "checked_numbers", "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs",
            "lens", "lenses", "LensSpec", "MAX_SPP", "CAMPAIGN_TABLES"]
 
@@ -27,22 +27,6 @@ CAMPAIGN_TABLES = ("campaign", "item", "sweep", "config")
 
 def field_error(source: str, where: str, message: str) -> VissimInputError:
     return VissimInputError(f"{source}: {where}: {message}")
-
-
-def refuse_duplicate_names(source: str, entries, describe) -> None:
-    """Refuse two configurations with one name (a report shows one row per name, hiding the other).
-
-    ``entries`` are ``(where, configuration)`` pairs; ``describe(configuration)`` says what it compares.
-    """
-    seen: dict[str, tuple[str, object]] = {}
-    for where, config in entries:
-        if config.name in seen:
-            first_where, first = seen[config.name]
-            raise field_error(source, f"{first_where} and {where}",
-                              f"two configurations named {config.name!r} ({describe(first)}; {describe(config)}); "
-                              "give each its own name (a sweep's generated names round lens powers to 0.01 D and "
-                              "LogMAR to 0.1: make such values differ by more, or list them as named items)")
-        seen[config.name] = (where, config)
 
 
 def read_toml_file(path: str | Path, what: str = "campaign file") -> dict:

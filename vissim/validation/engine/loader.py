@@ -1,7 +1,7 @@
 """The one campaign loader: a ``[campaign]`` head naming its bench kind, and that kind's tables.
 
 The head holds ``name``, ``description`` and ``kind`` (a name of
-`vissim.validation.engine.registry.BENCH_KINDS`; ``"dslr"`` when absent) and the kind's
+`vissim.validation.engine.registry.bench_kind_names`; ``"dslr"`` when absent) and the kind's
 settings; the kind reads its settings and its configuration tables (`BenchKind.read`) and builds
 each configuration once (`BenchKind.build`).  Every field is checked with a message naming the
 file, the field and its unit.
@@ -15,7 +15,7 @@ from vissim.checks import path_arg
 from vissim.errors import VissimInputError
 from vissim.validation.engine.fields import description_text, field_error, name_text, read_campaign_toml, table, text
 from vissim.validation.engine.protocol import Campaign
-from vissim.validation.engine.registry import BENCH_KINDS, DEFAULT_KIND, bench_kind
+from vissim.validation.engine.registry import DEFAULT_KIND, bench_kind, bench_kind_names
 
 __all__ = ["load_campaign", "campaign_kind"]
 
@@ -24,12 +24,12 @@ def campaign_kind(doc: dict, source: str) -> str:
     """The bench kind a campaign document names (``[campaign] kind``), checked against its tables."""
     head = table(doc.get("campaign", {}), source, "[campaign]")
     name = text(head.get("kind", DEFAULT_KIND), source, "campaign.kind")
-    if name not in BENCH_KINDS:
-        raise field_error(source, "campaign.kind", f"unknown bench kind {name!r}; known: {', '.join(sorted(BENCH_KINDS))}")
+    if name not in bench_kind_names():
+        raise field_error(source, "campaign.kind", f"unknown bench kind {name!r}; known: {', '.join(bench_kind_names())}")
     allowed = {"campaign", *bench_kind(name).tables}
     unknown = sorted(set(doc) - allowed)
     if unknown:
-        owners = sorted(k for k in BENCH_KINDS if k != name and set(unknown) <= {"campaign", *bench_kind(k).tables})
+        owners = sorted(k for k in bench_kind_names() if k != name and set(unknown) <= {"campaign", *bench_kind(k).tables})
         hint = f" (tables of kind {owners[0]!r}: add kind = \"{owners[0]}\" to [campaign])" if owners else ""
         raise field_error(source, "top level", f"unknown table(s) {unknown} for a {name} campaign{hint}; "
                                                f"use [campaign] and {', '.join(f'[[{t}]]' for t in bench_kind(name).tables)}")

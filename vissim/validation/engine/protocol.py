@@ -16,6 +16,7 @@ from typing import Any, Callable, Protocol
 import numpy as np
 
 from vissim.validation.engine.keys import item_key
+from vissim.validation.engine.records import Item, Row
 
 __all__ = ["BenchKind", "Campaign", "ItemPlan", "ReportParts"]
 
@@ -32,12 +33,15 @@ class ItemPlan:
 
 @dataclass(frozen=True)
 class ReportParts:
-    """A bench kind's part of the report: its title, metric rows, Markdown tables and figures."""
+    """A bench kind's part of the report: its title, metric rows (each a `Row`), Markdown tables and figures."""
 
     title: str
-    rows: list[dict]
+    rows: tuple[Row, ...]  # given as dicts or Rows; kept as Rows
     tables_md: str
     figures: dict  # name -> vissim.validation.engine.figures.Figure
+
+    def __post_init__(self):
+        object.__setattr__(self, "rows", tuple(Row.of(row) for row in self.rows))
 
 
 @dataclass(frozen=True)
@@ -95,9 +99,9 @@ class BenchKind(Protocol):
     def input_files(self, configurations: list[dict]) -> list[Path]:
         """The files beside the campaign file that its configurations read (from ``campaign.json``'s records)."""
 
-    def report(self, results: list[dict], run_dir: Path, record: dict,
+    def report(self, results: list[Item], run_dir: Path, record: dict,
                progress: Callable[[], None] | None) -> ReportParts:
-        """The report's rows, tables and figures for these results."""
+        """The report's rows, tables and figures for these finished items."""
 
-    def summary_lines(self, rows: list[dict]) -> list[str]:
+    def summary_lines(self, rows: tuple[Row, ...]) -> list[str]:
         """The terminal summary of a run: a few lines from the report's rows."""

@@ -23,10 +23,11 @@ from vissim.progress import Progress
 from vissim.provenance import make_provenance
 from vissim.validation.engine.figures import Figure
 from vissim.validation.engine.html_page import html_report
+from vissim.validation.engine.records import Item, Row
 from vissim.validation.engine.registry import DEFAULT_KIND, bench_kind
 
-__all__ = ["load_results", "read_record", "write_report", "write_report_files", "format_number", "metric_float",
-           "json_rows", "Figure"]
+__all__ = ["load_results", "read_record", "write_report", "write_report_files", "format_number", "json_rows",
+           "Figure"]
 
 log = logging.getLogger(__name__)
 
@@ -37,7 +38,7 @@ def read_record(run_dir: Path) -> dict:
     return json.loads(order.read_text()) if order.exists() else {}
 
 
-def load_results(run_dir: str | Path, record: dict | None = None) -> list[dict]:
+def load_results(run_dir: str | Path, record: dict | None = None) -> list[Item]:
     """The finished items of a run, in campaign order (``record``: its ``campaign.json``, read if not given).
 
     Items of another campaign left in the folder are not this run's and are left out.  A
@@ -52,7 +53,7 @@ def load_results(run_dir: str | Path, record: dict | None = None) -> list[dict]:
         result = json.loads(path.read_text())
         results[result["key"]] = result
     if not order:
-        return [results[k] for k in sorted(results)]
+        return [Item.from_json(results[k]) for k in sorted(results)]
     stale = set(results) - set(order)
     if stale:  # items of another campaign (or of an older simulator) left in the folder: not this run's
         log.info("ignoring %d finished items in %s that are not in its campaign", len(stale), run_dir / "items")
@@ -62,16 +63,10 @@ def load_results(run_dir: str | Path, record: dict | None = None) -> list[dict]:
             for field in ("name", "group"):
                 if labels.get(key, {}).get(field):
                     result["configuration"][field] = labels[key][field]
-    return [results[k] for k in order if k in results]
-
-def metric_float(value) -> float:
-    """A JSON metric back to a float: ``"inf"`` is infinite, None unknown (NaN)."""
-    if value is None:
-        return math.nan
-    return math.inf if value == "inf" else float(value)
+    return [Item.from_json(results[k]) for k in order if k in results]
 
 
-def json_rows(rows: list[dict]) -> list[dict]:
+def json_rows(rows: tuple[Row, ...]) -> list[dict]:
     """Rows for JSON: an unknown number (NaN, e.g. the wave bench's noise floor) is null, infinity ``"inf"``."""
     def cell(value):
         if isinstance(value, float) and not math.isfinite(value):
@@ -123,7 +118,7 @@ def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
     return path.read_bytes()
 
 
-def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict, rows: list[dict], tables_md: str,
+def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict, rows: tuple[Row, ...], tables_md: str,
                        figures: dict[str, Figure]) -> list[Path]:
     """metrics.json, metrics.csv, tables.md, the figures and report.html.
 
@@ -175,8 +170,8 @@ def write_report(run_dir: str | Path, progress: Progress | None = None,
     kind = bench_kind(record.get("kind", DEFAULT_KIND))
     results = load_results(run_dir, record)
     parts = kind.report(results, run_dir, record, progress)
-    written = write_report_files(run_dir, record, title=parts.title, metrics={"items": results,
-                                                                             "rows": json_rows(parts.rows)},
+    written = write_report_files(run_dir, record, title=parts.title,
+                                 metrics={"items": [r.as_json() for r in results], "rows": json_rows(parts.rows)},
                                  rows=parts.rows, tables_md=parts.tables_md, figures=parts.figures)
     if progress is not None:
         progress("report", 1, 1)

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from vissim.validation.engine.metrics import PSNR, floor_column
+
 
 __all__ = ["PERFECT_MARGIN_DB", "summary_table", "summary_notes", "margin", "NO_LENS", "value_span"]
 
@@ -23,7 +25,7 @@ NO_LENS = "no lens"
 
 def margin(row: dict) -> float:
     """PSNR minus the noise floor of a metrics row, dB (NaN without a floor)."""
-    return row["psnr_db"] - row["noise_floor_psnr_db"]
+    return row[PSNR.name] - row[floor_column(PSNR)]
 
 
 def _median_cell(values: list[float]) -> str:
@@ -108,7 +110,7 @@ def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
         return "\n".join(out)
     groups = sorted({r["group"] for r in bare})
     margins = [margin(r) for r in bare if math.isfinite(margin(r))]
-    floors = [r["noise_floor_psnr_db"] for r in bare if math.isfinite(r["noise_floor_psnr_db"])]
+    floors = [r[floor_column(PSNR)] for r in bare if math.isfinite(r[floor_column(PSNR)])]
     out.append(
         f"The configurations without a lens ({len({r['configuration'] for r in bare})}, in "
         f"{', '.join(groups)}) count in their groups' medians. With no lens the bench renders a sharp letter: its "

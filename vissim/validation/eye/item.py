@@ -16,6 +16,7 @@ from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.imaging.registration import register
 from vissim.optics.blur import blur_image
 from vissim.validation.engine.item_files import save_item_image
+from vissim.validation.engine.metrics import PSNR, SSIM, added_scores
 from vissim.validation.eye.rays import ray_psf
 from vissim.validation.eye.simulate import (COSTS, SIMULATIONS, EyeScene, diffraction_psf, margin_px, reference_of,
                                             simulate)
@@ -63,8 +64,9 @@ def chart_offset_px(truth: np.ndarray, scene: EyeScene, ray, margin: int) -> tup
 
 def _row(simulation: str, reference: np.ndarray, simulated: np.ndarray, floor_db: float) -> dict:
     metrics = compare_images(reference, simulated, data_range=IMAGE_PEAK_VALUE)
-    return {"simulation": simulation, "reference": reference_of(simulation), "psnr_db": metrics.psnr_db,
-            "ssim": metrics.ssim, "over_floor_db": metrics.psnr_db - floor_db}
+    psnr = PSNR.value(metrics, None)
+    return {"simulation": simulation, "reference": reference_of(simulation), PSNR.name: psnr,
+            SSIM.name: SSIM.value(metrics, None), "over_floor_db": psnr - floor_db, **added_scores(metrics)}
 
 
 def compute_eye_item(key: str, configuration, settings, built, images: dict, item_dir, render_provenance: dict) -> dict:
@@ -88,7 +90,7 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
         if simulation in made:
             saved[simulation] = save_item_image(item_dir, simulation, simulated, {"simulation": simulation})
     by_name = {r["simulation"]: r for r in rows}
-    costs = {assumption: by_name["schematic_wave"]["psnr_db"] - by_name[name]["psnr_db"]
+    costs = {assumption: by_name["schematic_wave"][PSNR.name] - by_name[name][PSNR.name]
              for assumption, (name, _) in COSTS.items() if name in by_name}
     saved["render"] = save_item_image(item_dir, "render", truth_a, render_provenance.get("truth_0", {}))
     result = {"key": key, "configuration": configuration.as_json(), "noise_floor": floor.as_json(),

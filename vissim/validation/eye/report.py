@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from vissim.validation.engine.metrics import PSNR, SSIM, added_metrics, floor_column, metric_float
 from vissim.validation.engine.protocol import ReportParts
 from vissim.validation.eye.item import SELF_CHECK_MARGIN_DB
 from vissim.validation.eye.simulate import COSTS, SIMULATIONS
@@ -50,9 +51,10 @@ def _rows(results: list[dict]) -> list[dict]:
         c = result["configuration"]
         for row in result["rows"]:
             rows.append({"configuration": c["name"], "setup": configuration_label(c), "simulation": row["simulation"],
-                         "reference": row["reference"], "psnr_db": row["psnr_db"], "ssim": row["ssim"],
-                         "noise_floor_psnr_db": result["noise_floor"]["psnr_db"],
-                         "over_floor_db": row["over_floor_db"]})
+                         "reference": row["reference"], PSNR.name: row[PSNR.name], SSIM.name: row[SSIM.name],
+                         floor_column(PSNR): result["noise_floor"][PSNR.name],
+                         "over_floor_db": row["over_floor_db"],
+                         **{m.name: metric_float(row.get(m.name)) for m in added_metrics()}})
     return rows
 
 
@@ -64,7 +66,7 @@ def _self_check_table(results: list[dict]) -> str:
     for r in results:
         row = next(x for x in r["rows"] if x["simulation"] == "traced_rays")
         lines.append(f"| {r['configuration']['name']} | {configuration_label(r['configuration'])} | "
-                     f"{r['noise_floor']['psnr_db']:.2f} | {row['over_floor_db']:+.2f} | {row['ssim']:.4f} | "
+                     f"{r['noise_floor'][PSNR.name]:.2f} | {row['over_floor_db']:+.2f} | {row[SSIM.name]:.4f} | "
                      f"{'yes' if row['over_floor_db'] >= SELF_CHECK_MARGIN_DB else 'NO'} |")
     return "\n".join(lines) + "\n\n"
 

@@ -16,7 +16,6 @@ lists for any of them and makes one item per combination (its ``name`` a prefix)
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -29,6 +28,7 @@ from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EY
                            EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
                            EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
                            VERTEX_DISTANCE_RANGE_MM, VIEWING_DISTANCE_RANGE_M)
+from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
 from vissim.validation.engine.fields import (field_error, lens, name_text, number, settings_kwargs, tables, text,
                                              whole_number)
 
@@ -184,16 +184,19 @@ def _words(value) -> str:
 def _sweep(entry: dict, index: int, source: str) -> list[dict]:
     where = f"sweep[{index}]"
     prefix = name_text(entry.get("name", where), source, f"{where}.name")
-    keys = [k for k in entry if k != "name"]
-    lists = [entry[k] if isinstance(entry[k], list) and k != "field" or (
-        k == "field" and isinstance(entry[k], list) and entry[k] and isinstance(entry[k][0], list))
-        else [entry[k]] for k in keys]
+    axes = {k: _axis_values(k, v) for k, v in entry.items() if k != "name"}
     out = []
-    for values in itertools.product(*lists):
-        chosen = dict(zip(keys, values))
-        label = " ".join(f"{k} {_words(v)}" for k, v in chosen.items() if len(lists[keys.index(k)]) > 1)
+    for chosen in sweep_combinations(axes):
+        label = " ".join(f"{k} {_words(v)}" for k, v in chosen.items() if len(axes[k]) > 1)
         out.append({"name": f"{prefix} {label}".strip(), **chosen})
     return out
+
+
+def _axis_values(key: str, value) -> list:
+    """A sweep field's values: its list, or the one value it gives (a field is a list of [x, y] pairs to sweep)."""
+    if key == "field":
+        return value if isinstance(value, list) and value and isinstance(value[0], list) else [value]
+    return value if isinstance(value, list) else [value]
 
 
 def _settings(head: dict, source: str) -> EyeSettings:
@@ -223,8 +226,14 @@ def read_campaign(doc: dict, head: dict, source: str) -> tuple[EyeSettings, tupl
     if not entries:
         raise field_error(source, "[[item]]", "the campaign has no items: add [[item]] or [[sweep]] tables")
     configurations = tuple(_configuration(t, settings, source, where) for t, where in entries)
-    names = [c.name for c in configurations]
-    duplicate = next((n for n in names if names.count(n) > 1), None)
-    if duplicate:
-        raise field_error(source, "[[item]]", f"two items are named {duplicate!r}")
-    return settings, tuple(configurations)
+    refuse_duplicate_names(source, [(where, c) for (_, where), c in zip(entries, configurations)], _describe,
+                           hint="give each its own name")
+    return settings, configurations
+
+
+def _describe(c: EyeConfiguration) -> str:
+    """What an item compares, for messages: the eye, its pupil, accommodation, field, light and lens."""
+    light = "photopic" if c.wavelength_nm is None else f"{c.wavelength_nm:g} nm"
+    lens = "no lens" if c.lens is None else "lens {:+g} {:+g} x {:g}".format(*c.lens)
+    return (f"{c.model}{'' if c.rx is None else f' Rx {c.rx}'}, pupil {c.pupil_mm:g} mm, "
+            f"accommodation {c.accommodation_diopters:g} D, field {c.field_deg[0]:g},{c.field_deg[1]:g} deg, {light}, {lens}")

@@ -6,11 +6,16 @@
 * `wide`: a chart over 0-20° against the field-dependent blur and a single on-axis PSF.
 
 `scenes` edits the eye render's scene (a chart of one's own, dispersive lenses) and computes the chart
-as the sensor's pixels see it.  ``scripts/eye_studies.py`` runs all three and prints the numbers.
+as the sensor's pixels see it.  Run all three from the repository's root (``__main__``), which prints the numbers:
+
+    PYTHONPATH=$PWD python -m scripts.eye_studies [focus] [edge] [wide]
+
+Studies, not part of the vissim package: they use its public API and the eye render, and their
+tests are tests/validation/test_eye_studies.py.
 """
 
-from vissim.validation.eye_studies.edge import SlantedEdge, slanted_edge
-from vissim.validation.eye_studies.focus import ChromaticFocus, chromatic_focus
-from vissim.validation.eye_studies.wide import WideChart, wide_chart
+from .edge import SlantedEdge, slanted_edge
+from .focus import ChromaticFocus, chromatic_focus
+from .wide import WideChart, wide_chart
 
 __all__ = ["ChromaticFocus", "chromatic_focus", "SlantedEdge", "slanted_edge", "WideChart", "wide_chart"]

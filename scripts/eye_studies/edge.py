@@ -187,7 +187,7 @@ class SlantedEdge:
 
 
 def _edge_chart(chart_distance_m: float, roll_deg: float, half_width_deg: float):
-    from vissim.validation.eye_studies.scenes import ChartRaster
+    from .scenes import ChartRaster
 
     distance_mm = 1000.0 * chart_distance_m
     side_mm = 4.0 * distance_mm * math.tan(math.radians(half_width_deg))
@@ -200,7 +200,7 @@ def slanted_edge(*, model: str = DEFAULT_EYE_MODEL, pupil_mm: float = DEFAULT_EY
                  seeds: int = 8, chart_distance_m: float = 1000.0) -> SlantedEdge:
     """Run the study (module doc): a `SlantedEdge`."""
     from vissim.render.eye_render import EyeRender, eye_scene_dict
-    from vissim.validation.eye_studies.scenes import render_settings, with_chart
+    from .scenes import render_settings, with_chart
 
     start = time.perf_counter()
     half_deg = 0.5 * size_px * arcmin_per_px / 60.0

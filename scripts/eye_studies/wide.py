@@ -71,7 +71,7 @@ def _band_columns(width_px: int, arcmin_per_px: float, centre_deg: float, band) 
 
 
 def _raster(settings, square_arcmin: float, chart_distance_m: float):
-    from vissim.validation.eye_studies.scenes import ChartRaster
+    from .scenes import ChartRaster
 
     distance_mm = 1000.0 * chart_distance_m
     rows, cols = settings.size_px
@@ -84,7 +84,7 @@ def _raster(settings, square_arcmin: float, chart_distance_m: float):
 
 def _simulations(raster, settings) -> dict:
     from vissim.optics.eyes.field_blur import blur_eye
-    from vissim.validation.eye_studies.scenes import ideal_image
+    from .scenes import ideal_image
 
     rows, cols = settings.size_px
     padded = (rows + 2 * MARGIN_PX, cols + 2 * MARGIN_PX)
@@ -103,7 +103,7 @@ def wide_chart(*, model: str = DEFAULT_EYE_MODEL, pupil_mm: float = DEFAULT_EYE_
                spp: int = 256, seed: int = 0, chart_distance_m: float = 1000.0) -> WideChart:
     """Run the study (module doc): a `WideChart`."""
     from vissim.render.eye_render import EyeRender, eye_scene_dict
-    from vissim.validation.eye_studies.scenes import render_settings, with_chart
+    from .scenes import render_settings, with_chart
 
     from vissim.optics.eyes.models import eye_model
 

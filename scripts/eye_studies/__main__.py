@@ -1,8 +1,8 @@
-"""Run the eye studies on renders (vissim.validation.eye_studies) and print their numbers.
+"""Run the eye studies on renders (this folder) and print their numbers, from the repository's root:
 
-    PYTHONPATH=$PWD python scripts/eye_studies.py [focus] [edge] [wide]
+    PYTHONPATH=$PWD python -m scripts.eye_studies [focus] [edge] [wide]
 
-Each study's run time is printed; on 2 cores: taskset -c 0,1 python scripts/eye_studies.py.
+Each study's run time is printed; on 2 cores: taskset -c 0,1 python -m scripts.eye_studies.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 
 from vissim.validation.engine.summary import PERFECT_MARGIN_DB
-from vissim.validation.eye_studies import chromatic_focus, slanted_edge, wide_chart
+from . import chromatic_focus, slanted_edge, wide_chart
 
 
 def print_focus() -> None:
