@@ -241,10 +241,10 @@ def test_an_eye_with_an_altered_cornea_described_in_toml_passes_the_self_check(t
 
 def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, monkeypatch):
     """Reading the item, building its bench and computing it (renders stood in by noise) build the bench once and
-    the model eye once: the item's one `Eye` is what the simulations, the self-check and the render settings use."""
+    the model eye once: the item's one `Eye` is what the simulations, the self-check and the rendered bench use."""
     import dataclasses
 
-    from vissim.bench.dslr import bench as dslr_bench
+    from vissim.bench.eye import bench as eye_bench
     from vissim.optics.eyes import eye as eye_module
     from vissim.optics.eyes import models
     from vissim.validation.eye.item import compute_eye_item
@@ -261,13 +261,13 @@ def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, m
 
     monkeypatch.setattr(models, "EYE_MODELS", {name: counted(b) for name, b in builders.items()})
     eye_module.eye_from_fields.cache_clear()
-    original_init = dslr_bench.DslrBench.__post_init__
+    original_init = eye_bench.EyeBench.__post_init__
 
     def counted_init(self):
         counts["bench"] += 1
         original_init(self)
 
-    monkeypatch.setattr(dslr_bench.DslrBench, "__post_init__", counted_init)
+    monkeypatch.setattr(eye_bench.EyeBench, "__post_init__", counted_init)
     doc = {"item": [{"name": "myope in spectacles", "pupil_mm": 3.0, "rx": -1.0, "lens": -1.0,
                      "model": "escudero-sanz-1999"}]}
     settings, (configuration,) = read_campaign(doc, {"kind": "eye", "size_px": [16, 16], "rays_across": 41,

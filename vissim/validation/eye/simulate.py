@@ -89,7 +89,7 @@ def reference_of(simulation: str) -> str:
 @functools.lru_cache(maxsize=32)
 def chart(letter: str, logmar: float, distance_m: float, step_arcmin: float, shape: tuple[int, int],
           half_size_arcmin: tuple[float, float]) -> np.ndarray:
-    """The rendered chart's letter (printed for ``distance_m``, `vissim.render.eye_render.eye_chart`) in visual angle,
+    """The rendered chart's letter (printed for ``distance_m``, `vissim.bench.eye.bench.EyeBench.chart`) in visual angle,
     centred, ``shape`` pixels of ``step_arcmin``; black beyond the chart's half size (rows, columns; arcmin)."""
     pixels = optotype_tile(letter, logmar, arcmin_per_px=step_arcmin, shape_px=shape,
                            viewing_distance_m=distance_m, snap_to_pixels=False).pixels.astype(np.float64)
@@ -163,7 +163,7 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
     minus (col, row) offsets x ``step`` (columns to the observer's right: -x), along `field_direction`'s
     direction; the eye's film maps its retina through collimated chief rays, so that line of sight leaves the
     chief ray's point on the entrance-pupil plane (`vissim.optics.eyes.sight`), and meets the flat chart (facing
-    the eye, its centre at the image's field from the corneal vertex, `eye_render.eye_to_world`) at the chart
+    the eye, its centre at the image's field from the corneal vertex, `vissim.bench.eye.scene.eye_to_world`) at the chart
     point drawn there.  Off axis the chart is seen stretched across the field direction (by 1 / cos of the
     field angle) and nearer the axis by the pupil's parallax (3 mm x sin 20 deg / 6 m = 0.6 arcmin).  On the
     axis of a model without a visual axis it is the chart drawn in visual angle (the parallax only shrinks
@@ -178,7 +178,7 @@ def scene_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndar
 def _seen_chart(scene: EyeScene, step: float, shape: tuple[int, int]) -> np.ndarray:
     from vissim.optics.eyes.field_blur import node_field_deg
     from vissim.optics.eyes.wavefront import field_direction
-    from vissim.render.eye_render import eye_to_world
+    from vissim.bench.eye.scene import eye_to_world
 
     c = scene.c
     field = tuple(float(v) for v in c.field_deg)

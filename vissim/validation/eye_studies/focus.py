@@ -47,7 +47,7 @@ REFERENCE_NM = 550.0
 
 
 def _thick_lens(sphere_diopters: float, aperture_mm: float = PREDICTION_APERTURE_MM):
-    from vissim.bench.dslr.bench import MIN_CENTER_MM, MIN_EDGE_MM
+    from vissim.bench.lenses.holder import MIN_CENTER_MM, MIN_EDGE_MM
     from vissim.bench.lenses.mesh import realistic_center_thickness_mm
     from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
 
