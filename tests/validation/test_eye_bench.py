@@ -278,3 +278,34 @@ def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, m
     compute_eye_item("k", configuration, settings, built, images, tmp_path, {})
     assert counts == {"model": 1, "bench": 1}
     assert dataclasses.is_dataclass(configuration) and configuration.eye() is configuration.eye()
+
+
+def test_each_seeds_render_spec_carries_the_one_built_bench_with_its_chart(monkeypatch):
+    """The item's renders carry the configuration's bench, built once; a seed's worker (the spec pickled, as
+    a process pool sends it) prints no chart again and hands its sensor the item's `Eye`."""
+    import pickle
+
+    import vissim.charts as charts
+    from vissim.bench.eye.scene import eye_scene
+    from vissim.bench.eye.sensor_eyes import sensor_eye
+    from vissim.validation.engine.protocol import Campaign
+    from vissim.validation.eye.kind import BENCH
+
+    settings, (configuration,) = read_campaign({"item": [{"name": "lens", "lens": 1.0, "pupil_mm": 3.0}]},
+                                               {"kind": "eye", "size_px": [16, 16]}, "eye.toml")
+    built = BENCH.build(configuration, settings)
+    campaign = Campaign(kind="eye", name="one", description="", settings=settings, configurations=(configuration,),
+                        built=(built,))
+    plans, _ = BENCH.plan_items(campaign, [("k", 0)])
+    specs = list(plans["k"].renders.values())
+    assert [s.seed for s in specs] == list(settings.seeds) and all(s.bench is built.bench for s in specs)
+    assert built.bench.eye is configuration.eye()
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a worker printed the chart again")
+
+    sent = pickle.loads(pickle.dumps(specs[1]))
+    monkeypatch.setattr(charts, "render_chart_print", refuse)
+    scene = eye_scene(sent.bench, sent.spp, sent.seed)
+    assert sensor_eye(scene["camera"]["eye_key"]).optics == configuration.eye().optics
+    assert sent.as_json() == specs[1].as_json()

@@ -74,7 +74,8 @@ def chart_texture_shape(size_px: tuple[int, int], pitch_mm: float, blur_px: floa
     return rows, cols
 
 
-def chart_texture(pixels: np.ndarray, need_px: tuple[int, int], mm_per_px: float, what: str) -> tuple[np.ndarray, float, float]:
+def chart_texture(pixels: np.ndarray, need_px: tuple[int, int], mm_per_px: float,
+                  what: str) -> tuple[np.ndarray, float, float]:
     """Crop/pad ``pixels`` (centred on the axis) to ``need_px`` texels; (texture, height_mm, width_mm).
     ``what`` names the texture in the memory check's refusal."""
     channels = pixels.shape[2] if pixels.ndim == 3 else 1
