@@ -83,7 +83,7 @@ class EyeBench:
                 raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within "
                                        f"{EYE_RENDER_MAX_FIELD_DEG:g} deg of the axis")
         object.__setattr__(self, "size_px", check_size_px(self.size_px))
-        check_arcmin_per_px(self.arcmin_per_px, "eye sensor pixel")
+        check_arcmin_per_px(self.arcmin_per_px)
         self.trial_lens_setup()  # validates the stack against the chart distance
 
     def _check_light(self) -> None:
