@@ -4,7 +4,7 @@ chart as the schematic-eye sensor's pixels see it before any blur.
 * **Charts** are functions of the chart plane (world x, y in mm, z = the chart's distance; world +x is
   the observer's left, +y up: Mitsuba's camera frame), rasterised onto the scene's emitting rectangle
   (`chart_emitter`: Mitsuba's ``bitmap``, nearest texel, row 0 at the rectangle's v = 0, its bottom; the
-  rectangle's local +x runs along world −x, as `vissim.bench.dslr.bench.dslr_scene` lays its chart).
+  rectangle's local +x runs along world −x, as `vissim.bench.scene_parts.chart_emitter` lays the benches' chart).
 * **A pixel's direction** (`pixel_directions`): the sensor's map (`vissim.render.schematic_eye_sensor`):
   the pixel at film position (u, v) is at the field angle ``(field_x − (u − ½) W a, field_y + (½ − v) H a)``
   degrees (OSA's frame: x the observer's left, y up), whose direction in the eye's frame is
