@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/bench_eye_sensor.py [MODEL]
 
-The scene is ``vissim render eye``'s (`vissim.render.eye_render.eye_scene_dict`: a Sloan letter
+The scene is ``vissim render eye``'s (`vissim.render.eye_render.eye_scene_dict`, the eye bench's scene: a Sloan letter
 at 6 m, no trial lens), 128 x 128 px at 1 arcmin/px, 64 spp, independent sampler, on the variant
 vissim chooses.  Timed: ``mi.render`` of the scene with the ``vissim_schematic_eye`` sensor
 (default Navarro 1985, 3 mm entrance pupil, 589.3 nm) and of the same scene with a ``thinlens``

@@ -21,7 +21,7 @@ from vissim.optics.eyes.wavefront import field_direction, field_map, iris_from_e
 from vissim.optics.psf import compute_psf
 from vissim.optics.spectral_wavefront import SpectralWavefront, field_mapped
 from vissim.optics.wavefront import Wavefront
-from vissim.render.schematic_eye_tables import chief_ray_radii_mm
+from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 
 
 @pytest.mark.parametrize("model,field", [("navarro-1985", (20.0, 0.0)), ("navarro-1985", (12.0, -7.0)),

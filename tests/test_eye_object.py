@@ -140,7 +140,7 @@ def test_a_render_takes_an_eye_built_in_python_and_hands_the_sensor_that_same_ey
     """`EyeRender.for_eye`: a named model with altered surfaces is written as the model and its changes; the render
     rebuilds the same eye (equal optics), and the scene's sensor is handed it, not a name."""
     from vissim.render.eye_render import EyeRender, eye_scene_dict
-    from vissim.render.schematic_eye_sensor import sensor_eye
+    from vissim.bench.eye.sensor_eyes import sensor_eye
 
     eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-2.00 -0.50 x 20").with_surface("cornea front", conic=0.0)
     settings = EyeRender.for_eye(eye, size_px=(16, 16), spp=4)

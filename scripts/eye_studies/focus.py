@@ -47,13 +47,10 @@ REFERENCE_NM = 550.0
 
 
 def _thick_lens(sphere_diopters: float, aperture_mm: float = PREDICTION_APERTURE_MM):
-    from vissim.bench.dslr.bench import MIN_CENTER_MM, MIN_EDGE_MM
-    from vissim.bench.lenses.mesh import realistic_center_thickness_mm
+    from vissim.bench.lenses.holder import physical_lens
     from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
 
-    thin = TrialLens(sphere_diopters, 0.0, 0.0)
-    thickness = realistic_center_thickness_mm(thin, aperture_mm, CROWN_GLASS_INDEX, MIN_EDGE_MM, MIN_CENTER_MM)
-    return TrialLens(sphere_diopters, 0.0, 0.0, refractive_index=CROWN_GLASS_INDEX, center_thickness_mm=thickness)
+    return physical_lens(TrialLens(sphere_diopters, 0.0, 0.0), aperture_mm, CROWN_GLASS_INDEX)  # the bench's rule
 
 
 def predicted_best_sphere_diopters(model: str, wavelength_nm: float, chart_distance_m: float,

@@ -4,13 +4,13 @@ chart as the schematic-eye sensor's pixels see it before any blur.
 * **Charts** are functions of the chart plane (world x, y in mm, z = the chart's distance; world +x is
   the observer's left, +y up: Mitsuba's camera frame), rasterised onto the scene's emitting rectangle
   (`chart_emitter`: Mitsuba's ``bitmap``, nearest texel, row 0 at the rectangle's v = 0, its bottom; the
-  rectangle's local +x runs along world −x, as `vissim.bench.dslr.bench.dslr_scene` lays its chart).
+  rectangle's local +x runs along world −x, as `vissim.bench.scene_parts.chart_emitter` lays the benches' chart).
 * **A pixel's direction** (`pixel_directions`): the sensor's map (`vissim.render.schematic_eye_sensor`):
   the pixel at film position (u, v) is at the field angle ``(field_x − (u − ½) W a, field_y + (½ − v) H a)``
   degrees (OSA's frame: x the observer's left, y up), whose direction in the eye's frame is
   (tan x, tan y, 1) turned by the model's visual axis (`vissim.optics.eyes.wavefront.field_direction`,
   vectorised here and pinned to it by a test), then into the world by
-  `vissim.render.eye_render.eye_to_world`.  Seen from the corneal vertex: the entrance pupil's
+  `vissim.bench.eye.scene.eye_to_world`.  Seen from the corneal vertex: the entrance pupil's
   few mm of parallax are below 1e-5 deg for the far charts the studies use (1 km).
 * **The ideal image** (`ideal_image`): the chart's texels looked up, as Mitsuba looks them up, along
   ``oversample``² directions per pixel (a box filter, the film's), averaged.
@@ -96,7 +96,7 @@ def pixel_directions(eye, size_px: tuple[int, int], arcmin_per_px: float, field_
     `SchematicEye` ``eye`` (module doc)."""
     from vissim.optics.eyes.field_blur import node_field_deg
     from vissim.optics.eyes.wavefront import field_direction
-    from vissim.render.eye_render import eye_to_world
+    from vissim.bench.eye.scene import eye_to_world
 
     rows, cols = size_px
     k = int(oversample)

@@ -84,7 +84,7 @@ def test_eye_to_world_turns_the_field_direction_onto_the_chart():
     import math
 
     from vissim.optics.eyes.models import eye_model
-    from vissim.render.eye_render import eye_to_world
+    from vissim.bench.eye.scene import eye_to_world
 
     for name, alpha_deg in (("navarro-1985", 0.0), ("liou-brennan-1997", 5.0)):
         for x, y in ((10.0, 0.0), (0.0, -10.0), (20.0, 15.0), (-7.0, 3.0), (0.0, 0.0)):
@@ -112,7 +112,7 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
     from vissim.optics.eyes.models import eye_model
     from vissim.optics.eyes.wavefront import trace_eye_wavefront
     from vissim.render.backend import mitsuba
-    from vissim.render.eye_render import eye_to_world
+    from vissim.bench.eye.scene import eye_to_world
     from vissim.render.schematic_eye_sensor import register_schematic_eye_sensor
     from vissim.units import image_colrow_to_osa_xy
 
@@ -127,7 +127,7 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
              @ mi.ScalarTransform4f().scale(20.0) @ mi.ScalarTransform4f().rotate([0, 1, 0], 180),
              "emitter": {"type": "area", "radiance": 1.0}}
     from vissim.optics.eyes.eye import build_eye
-    from vissim.render.schematic_eye_sensor import register_sensor_eye
+    from vissim.bench.eye.sensor_eyes import register_sensor_eye
 
     key = register_sensor_eye(build_eye("escudero-sanz-1999", pupil_mm=3.0))
     sensor = {"type": "vissim_schematic_eye", "eye_key": key, "arcmin_per_px": step,

@@ -18,7 +18,7 @@ SIZE = 16
 
 def eye_sensor(model="navarro-1985", spp=64, arcmin_per_px=60.0, pixel_format="luminance", **extra):
     from vissim.optics.eyes.eye import build_eye
-    from vissim.render.schematic_eye_sensor import register_sensor_eye
+    from vissim.bench.eye.sensor_eyes import register_sensor_eye
 
     key = register_sensor_eye(build_eye(model, pupil_mm=3.0))
     return {"type": "vissim_schematic_eye", "eye_key": key, "arcmin_per_px": arcmin_per_px,
@@ -106,7 +106,7 @@ def test_pupil_bounds_hold_every_ray_that_passes_the_iris(model, min_pass):
 
 def test_distortion_table_starts_at_the_paraxial_retinal_scale():
     """r(θ) near the axis: the paraxial chief ray's mm per degree (`optics.eyes.paraxial`) within 0.5 %."""
-    from vissim.render.schematic_eye_tables import chief_ray_radii_mm
+    from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 
     eye = eye_model("escudero-sanz-1999")
     radii = chief_ray_radii_mm(eye, np.array([0.0, 0.5, 1.0]), 543.0)

@@ -241,10 +241,10 @@ def test_an_eye_with_an_altered_cornea_described_in_toml_passes_the_self_check(t
 
 def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, monkeypatch):
     """Reading the item, building its bench and computing it (renders stood in by noise) build the bench once and
-    the model eye once: the item's one `Eye` is what the simulations, the self-check and the render settings use."""
+    the model eye once: the item's one `Eye` is what the simulations, the self-check and the rendered bench use."""
     import dataclasses
 
-    from vissim.bench.dslr import bench as dslr_bench
+    from vissim.bench.eye import bench as eye_bench
     from vissim.optics.eyes import eye as eye_module
     from vissim.optics.eyes import models
     from vissim.validation.eye.item import compute_eye_item
@@ -261,13 +261,13 @@ def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, m
 
     monkeypatch.setattr(models, "EYE_MODELS", {name: counted(b) for name, b in builders.items()})
     eye_module.eye_from_fields.cache_clear()
-    original_init = dslr_bench.DslrBench.__post_init__
+    original_init = eye_bench.EyeBench.__post_init__
 
     def counted_init(self):
         counts["bench"] += 1
         original_init(self)
 
-    monkeypatch.setattr(dslr_bench.DslrBench, "__post_init__", counted_init)
+    monkeypatch.setattr(eye_bench.EyeBench, "__post_init__", counted_init)
     doc = {"item": [{"name": "myope in spectacles", "pupil_mm": 3.0, "rx": -1.0, "lens": -1.0,
                      "eye_model": "escudero-sanz-1999"}]}
     settings, (configuration,) = read_campaign(doc, {"kind": "eye", "size_px": [16, 16], "rays_across": 41,
@@ -278,3 +278,34 @@ def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, m
     compute_eye_item("k", configuration, settings, built, images, tmp_path, {})
     assert counts == {"model": 1, "bench": 1}
     assert dataclasses.is_dataclass(configuration) and configuration.eye() is configuration.eye()
+
+
+def test_each_seeds_render_spec_carries_the_one_built_bench_with_its_chart(monkeypatch):
+    """The item's renders carry the configuration's bench, built once; a seed's worker (the spec pickled, as
+    a process pool sends it) prints no chart again and hands its sensor the item's `Eye`."""
+    import pickle
+
+    import vissim.charts as charts
+    from vissim.bench.eye.scene import eye_scene
+    from vissim.bench.eye.sensor_eyes import sensor_eye
+    from vissim.validation.engine.protocol import Campaign
+    from vissim.validation.eye.kind import BENCH
+
+    settings, (configuration,) = read_campaign({"item": [{"name": "lens", "lens": 1.0, "pupil_mm": 3.0}]},
+                                               {"kind": "eye", "size_px": [16, 16]}, "eye.toml")
+    built = BENCH.build(configuration, settings)
+    campaign = Campaign(kind="eye", name="one", description="", settings=settings, configurations=(configuration,),
+                        built=(built,))
+    plans, _ = BENCH.plan_items(campaign, [("k", 0)])
+    specs = list(plans["k"].renders.values())
+    assert [s.seed for s in specs] == list(settings.seeds) and all(s.bench is built.bench for s in specs)
+    assert built.bench.eye is configuration.eye()
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a worker printed the chart again")
+
+    sent = pickle.loads(pickle.dumps(specs[1]))
+    monkeypatch.setattr(charts, "render_chart_print", refuse)
+    scene = eye_scene(sent.bench, sent.spp, sent.seed)
+    assert sensor_eye(scene["camera"]["eye_key"]).optics == configuration.eye().optics
+    assert sent.as_json() == specs[1].as_json()

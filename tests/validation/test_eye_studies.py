@@ -105,7 +105,7 @@ def test_traced_psf_is_centred_and_its_scale_is_the_paraxial_one():
 def test_pixel_directions_follow_the_trace_field_rule(model, field):
     """The centre of an odd film looks along world +z, and every pixel along eye_to_world @ field_direction."""
     from vissim.optics.eyes.wavefront import field_direction
-    from vissim.render.eye_render import eye_to_world
+    from vissim.bench.eye.scene import eye_to_world
 
     eye = eye_model(model)
     d = pixel_directions(eye, (5, 7), 30.0, field)

@@ -21,7 +21,7 @@ A `DepthViewer` is an uncorrected eye at every depth at once (the depth blurs,
 `vissim.optics.depth.blur_depth` and `vissim.optics.depth_layers.composite_layers`): the
 same decision per depth as `ViewingSetup.eye`, on the eye's wavefront.
 
-Named constructors only: `ViewingSetup.dslr`, `ViewingSetup.eye`,
+Named constructors only: `ViewingSetup.dslr`, `ViewingSetup.through_lenses`, `ViewingSetup.eye`,
 `ViewingSetup.atv_observer`.  The thesis's choices are named replacements, each one field
 changed (``dataclasses.replace``): `with_thesis_pupil` (ERRATA item 3),
 `with_table_4_2_power` (item 4), `without_magnification`
@@ -56,6 +56,14 @@ def _proximity(distance_m: float) -> float:
     return object_proximity_diopters(distance_m, "object distance")
 
 
+def _lens_effect(lenses: TrialLensSetup) -> tuple[np.ndarray, Matrix2]:
+    """(added power matrix D, magnification matrix) of ``lenses``: none and the identity without lenses."""
+    if not lenses.lenses:
+        return np.zeros((2, 2)), _IDENTITY
+    effect = trial_lens_effect(lenses)
+    return np.asarray(effect.added_power_matrix), effect.magnification_matrix
+
+
 def check_accommodation_diopters(accommodation_diopters) -> float:
     """The accommodation exerted (D), refused unless finite and >= 0."""
     accommodation = finite_number(accommodation_diopters, "accommodation", "dioptres")
@@ -86,12 +94,21 @@ class ViewingSetup:
         """
         chart_m = lenses.object_distance_m
         focus_error = _proximity(focus_distance_m) - _proximity(chart_m)
-        added, magnification = np.zeros((2, 2)), _IDENTITY
-        if lenses.lenses:
-            effect = trial_lens_effect(lenses)
-            added, magnification = np.asarray(effect.added_power_matrix), effect.magnification_matrix
+        added, magnification = _lens_effect(lenses)
         return cls(entrance_pupil_diameter_mm(focal_length_mm, f_number), matrix2_tuple(added + focus_error * np.eye(2)),
                    magnification, wavelength_nm, chart_m)
+
+    @classmethod
+    def through_lenses(cls, pupil_diameter_mm: float, lenses: TrialLensSetup, *,
+                       wavelength_nm: float = DEFAULT_WAVELENGTH_NM) -> ViewingSetup:
+        """A viewer of entrance pupil ``pupil_diameter_mm`` focused on the lenses' object (``lenses.object_distance_m``),
+        looking through ``lenses``: their added power (`trial_lens_effect`) is its defocus, their spectacle
+        magnification its magnification (what the eye bench sizes its chart texture by)."""
+        added, magnification = _lens_effect(lenses)
+        pupil = finite_number(pupil_diameter_mm, "entrance pupil diameter", "mm")
+        if pupil <= 0.0:
+            raise VissimInputError(f"entrance pupil diameter must be > 0 mm, got {pupil:g} mm")
+        return cls(pupil, matrix2_tuple(added), magnification, wavelength_nm, lenses.object_distance_m)
 
     @classmethod
     def eye(cls, prescription: Prescription, pupil_diameter_mm: float, accommodation_diopters: float = 0.0,

@@ -33,7 +33,7 @@ keeps its expectation (Mitsuba's spectral film develops Y with CIE ȳ = V(λ): p
 Frame: local +z forward (into the scene), +y up, +x the observer's left (Mitsuba's camera
 frame); the eye's frame (z towards the retina, x the examiner's right: the subject's left) maps
 to it by z -> -z; the local origin is the corneal vertex.  Properties: ``eye_key``, the `vissim.optics.eyes.eye.Eye`
-handed over by `register_sensor_eye` (its optics: the model at its accommodation, its surfaces as
+handed over by `vissim.bench.eye.sensor_eyes.register_sensor_eye` (its optics: the model at its accommodation, its surfaces as
 altered, made ametropic when it has a prescription; the tables are traced in its x meridian, so a
 cylinder's distortion is the x meridian's; its pupil, entrance pupil or iris), ``wavelength_nm``,
 ``arcmin_per_px``, ``field_x_deg``, ``field_y_deg``, ``far_clip`` (mm), ``to_world``, ``film``,
@@ -49,17 +49,18 @@ import math
 
 import numpy as np
 
+from vissim.bench.eye.sensor_eyes import sensor_eye
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
-from vissim.render.schematic_eye_tables import EyeTables, chief_ray_radii_mm, eye_tables, table_theta_deg
+from vissim.optics.eyes.retina_map import chief_ray_radii_mm
+from vissim.render.schematic_eye_tables import EyeTables, eye_tables, table_theta_deg
 from vissim.checks import CIE_YBAR_RANGE_NM, EYE_RENDER_MAX_THETA_DEG, EYE_RENDER_WAVELENGTH_RANGE_NM
 from vissim.checks import arcmin_per_px as checked_arcmin_per_px
 from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
-__all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "register_sensor_eye", "sensor_eye",
-           "sensor_tables"]
+__all__ = ["SCHEMATIC_EYE_SENSOR", "register_schematic_eye_sensor", "sensor_tables"]
 
 log = logging.getLogger(__name__)
 
@@ -67,26 +68,6 @@ log = logging.getLogger(__name__)
 TABLE_REACH_STEP_DEG = 5.0
 #: Plugin name.
 SCHEMATIC_EYE_SENSOR = "vissim_schematic_eye"
-
-
-#: The eyes a scene's sensors look through, by the key `register_sensor_eye` gave: the sensor receives the
-#: eye itself (its surfaces and media), never a name to build it from.
-_EYES: dict = {}
-
-
-def register_sensor_eye(eye) -> str:
-    """Hand the `Eye` ``eye`` to the sensors of scenes loaded in this process; the key a scene names it by."""
-    key = f"eye-{hash(eye.optics) & 0xFFFFFFFFFFFF:012x}-{eye.pupil}"
-    _EYES[key] = eye
-    return key
-
-
-def sensor_eye(key: str):
-    """The `Eye` registered under ``key`` (`register_sensor_eye`)."""
-    if key not in _EYES:
-        raise VissimInputError(f"no eye is registered for the schematic-eye sensor under {key!r}: hand it over with "
-                               "register_sensor_eye(eye) before loading the scene")
-    return _EYES[key]
 
 
 @functools.lru_cache(maxsize=16)

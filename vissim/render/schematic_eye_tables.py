@@ -1,9 +1,9 @@
 """The schematic-eye sensor's tables, made once per eye: where each visual direction lands, and the pupil bounds.
 
 * **Distortion**: the chief ray of a visual direction at angle θ from the optical axis, traced by the
-  numpy exact tracer (`vissim.optics.raytrace`: a collimated ray aimed at the centre of the iris
-  plane's axial point, then on to the retina), lands at the radius r(θ) on the retina (mm, measured
-  in x, y).  Tabulated every `THETA_STEP_DEG` up to the widest angle the image needs; the sensor
+  numpy exact tracer (`vissim.optics.eyes.retina_map.chief_ray_radii_mm`: a collimated ray aimed at
+  the centre of the iris plane's axial point, then on to the retina), lands at the radius r(θ) on
+  the retina (mm, measured in x, y).  Tabulated every `THETA_STEP_DEG` up to the widest angle the image needs; the sensor
   interpolates it linearly.  For a decentred iris (Liou–Brennan) the table still uses the ray
   through the axial point of the iris plane, so that it is radially symmetric: the image's
   centre is where the optical axis meets the retina.
@@ -35,11 +35,10 @@ import numpy as np
 from vissim.checks import EYE_RENDER_MAX_THETA_DEG
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
-from vissim.optics.eyes.surfaces import split_at_stop
-from vissim.optics.raytrace import aim_collimated, trace_rays
+from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
-__all__ = ["EyeTables", "eye_tables", "chief_ray_radii_mm", "THETA_STEP_DEG", "GRID", "GRID_RADIUS_MM", "BOX_MARGIN_CELLS",
+__all__ = ["EyeTables", "eye_tables", "THETA_STEP_DEG", "GRID", "GRID_RADIUS_MM", "BOX_MARGIN_CELLS",
            "AZIMUTHS_DECENTRED", "RADIUS_BINS", "COARSE_GRID", "table_theta_deg"]
 
 THETA_STEP_DEG = 0.25
@@ -49,7 +48,6 @@ GRID_RADIUS_MM = 5.0
 BOX_MARGIN_CELLS = 2
 AZIMUTHS_DECENTRED = 8
 RADIUS_BINS = 24
-_START_BEFORE_MM = 5.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,21 +74,6 @@ class EyeTables:
             return float(self.n_vitreous ** 2 * omega[0])
         period = np.append(self.azimuths_rad, 2 * math.pi)
         return float(self.n_vitreous ** 2 * np.interp(azimuth_rad % (2 * math.pi), period, omega + omega[:1]))
-
-
-def chief_ray_radii_mm(eye: SchematicEye, theta_deg: np.ndarray, wavelength_nm: float) -> np.ndarray:
-    """r(θ): where a collimated ray at θ from the axis through the iris plane's axial point meets the retina."""
-    front, stop_z, back = split_at_stop(eye)
-    radii = []
-    for theta in theta_deg:
-        t = math.radians(float(theta))
-        direction = [math.sin(t), 0.0, math.cos(t)]
-        at_iris, _ = aim_collimated(front, direction, [[0.0, 0.0]], stop_z, front[0].vertex_z_mm - _START_BEFORE_MM,
-                                    wavelength_nm=wavelength_nm)
-        on_retina = trace_rays(back, at_iris.points_mm, at_iris.directions, None, wavelength_nm=wavelength_nm,
-                               index_before=at_iris.final_index)
-        radii.append(float(np.hypot(*on_retina.points_mm[0, :2])))
-    return np.array(radii)
 
 
 def _double_array_type():

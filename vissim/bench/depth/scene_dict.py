@@ -30,7 +30,8 @@ from vissim.atomic import atomic_output, cache_output
 from vissim.bench.depth.scene import DepthScene, PanelGeometry, panel_geometries
 from vissim.bench.depth.textures import panel_texture
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer, Viewer, viewing_setup
-from vissim.bench.dslr.bench import MAX_DEPTH, NEAR_CLIP_MM, dslr_scene, hdr_film
+from vissim.bench.dslr.bench import NEAR_CLIP_MM, dslr_scene
+from vissim.bench.scene_parts import MAX_DEPTH, hdr_film
 from vissim.bench.lenses.mesh import mesh_cache_dir
 from vissim.errors import VissimInputError
 from vissim.units import m_to_mm

@@ -23,11 +23,12 @@ Choices, and why:
   constant, like ink dots); bilinear would add a one-texel triangle blur.  The raster is
   cropped around the axis, or padded with its edge values, to cover the field plus blur and
   magnification margins.
-* **Lenses**: PLY meshes with exact normals (`vissim.bench.lenses.mesh`), made of the
-  refraction-only ``vissim_refract`` BSDF (`vissim.render.plugins`).  Thin lenses
-  (``refractive_index`` None) become crown-glass lenses of realistic centre thickness for the
-  clear aperture, and the theory (`DslrBench.viewing_setup`, a
-  `ViewingSetup`) uses those same lenses and gives the aperture.
+* **Lenses**: the holder's rules, shared with the eye bench (`vissim.bench.lenses.holder`): PLY
+  meshes with exact normals (`vissim.bench.lenses.mesh`), made of the refraction-only
+  ``vissim_refract`` BSDF (`vissim.render.plugins`).  Thin lenses (``refractive_index`` None)
+  become crown-glass lenses of realistic centre thickness for the clear aperture, and the theory
+  (`DslrBench.viewing_setup`, a `ViewingSetup`) uses those same lenses and gives the aperture.
+  The chart, its texture, the film and the integrator are `vissim.bench.scene_parts`'s.
 
 The dict is Mitsuba's scene-dict format with plain values only: transforms are 4 x 4 row-major
 nested lists under ``to_world`` and bitmap textures carry a float32 numpy array under
@@ -37,17 +38,19 @@ nested lists under ``to_world`` and bitmap textures carry a float32 numpy array 
 from __future__ import annotations
 
 import functools
-import logging
 import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from vissim.bench.lenses.mesh import cached_lens_ply, realistic_center_thickness_mm
+from vissim.bench.lenses.holder import (LENS_GAP_MM, MESH_RINGS, MESH_SEGMENTS, lens_back_vertex_z_mm,
+                                        lens_clear_aperture_mm, lens_shapes, physical_lens)
+from vissim.bench.scene_parts import chart_emitter, chart_texture, checked_chart_pixels, hdr_film, path_integrator
+from vissim.bench.scene_parts import chart_texture_shape as texture_shape
 from vissim.checks import size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import check_allocation, samples_per_pixel
+from vissim.checks import samples_per_pixel
 from vissim.checks import size_px as check_size_px
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import vertex_distance_mm as check_vertex_mm
@@ -56,20 +59,14 @@ from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, T
                                       entrance_pupil_diameter_mm)
 from vissim.optics.setup import ViewingSetup
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
-from vissim.units import REC709_LUMINANCE, arcmin_to_rad, mm_to_m
+from vissim.units import arcmin_to_rad, mm_to_m
 
-__all__ = ["SAMPLERS", "RENDER_KINDS", "SPECTRAL_MODE", "DslrBench", "lens_clear_aperture_mm", "chart_mm_per_texel", "dslr_scene", "hdr_film"]
-
-log = logging.getLogger(__name__)
+__all__ = ["SAMPLERS", "RENDER_KINDS", "SPECTRAL_MODE", "DslrBench", "chart_mm_per_texel", "chart_texture_shape",
+           "dslr_scene"]
 
 SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler")
-#: Minimum edge and centre thickness of a trial lens made from a thin one, mm.
-MIN_EDGE_MM = 1.0
-MIN_CENTER_MM = 1.0
 #: Near clipping plane of the camera, mm (well below any vertex distance).
 NEAR_CLIP_MM = 1.0
-#: Path length limits: refractions through three lenses plus total internal reflections.
-MAX_DEPTH = 64
 
 
 def _positive(value: Any, name: str, unit: str, *, allow_zero: bool = False) -> float:
@@ -142,7 +139,7 @@ class DslrBench:
     focus_distance_mm: float = THESIS_CHART_DISTANCE_MM
     chart_distance_mm: float = THESIS_CHART_DISTANCE_MM
     vertex_distance_mm: float = THESIS_VERTEX_DISTANCE_MM
-    lens_gap_mm: float = 2.0
+    lens_gap_mm: float = LENS_GAP_MM
     lenses: tuple[TrialLens, ...] = ()
     refractive_index: float = CROWN_GLASS_INDEX
     clear_aperture_mm: float | None = None
@@ -154,8 +151,8 @@ class DslrBench:
     fresnel_loss: bool = False
     texels_per_px: float = 4.0
     radiance_scale: float = 1.0
-    mesh_rings: int = 16
-    mesh_segments: int = 64
+    mesh_rings: int = MESH_RINGS
+    mesh_segments: int = MESH_SEGMENTS
 
     def __post_init__(self) -> None:
         for name, unit in (("focal_length_mm", "mm"), ("f_number", "(f-number)"), ("focus_distance_mm", "mm"),
@@ -203,19 +200,10 @@ class DslrBench:
         return lens_clear_aperture_mm(self.entrance_pupil_diameter_mm, self.field_half_diagonal_rad,
                                       self.vertex_distance_mm, self.lens_gap_mm)
 
-    def _make_physical(self, lens: TrialLens) -> TrialLens:
-        if not lens.is_thin:
-            return lens
-        index = lens.refractive_index or self.refractive_index
-        thickness = realistic_center_thickness_mm(lens.marked_power, self.clear_aperture(), index, MIN_EDGE_MM,
-                                                  MIN_CENTER_MM, back_surface_diopters=lens.back_surface_diopters)
-        return TrialLens(lens.sphere_diopters, lens.cylinder_diopters, lens.axis_deg, refractive_index=index,
-                         center_thickness_mm=thickness, back_surface_diopters=lens.back_surface_diopters)
-
     @functools.cached_property
     def physical_lenses(self) -> tuple[TrialLens, ...]:
-        """The lenses as rendered: thick, with an index (thin ones made realistic)."""
-        return tuple(self._make_physical(lens) for lens in self.lenses)
+        """The lenses as rendered: thick, with an index (thin ones made realistic: `physical_lens`)."""
+        return tuple(physical_lens(lens, self.clear_aperture(), self.refractive_index) for lens in self.lenses)
 
     def trial_lens_setup(self) -> TrialLensSetup:
         """The rendered lenses as a `TrialLensSetup` (object distance = chart distance)."""
@@ -224,11 +212,7 @@ class DslrBench:
 
     def lens_back_vertex_z_mm(self) -> tuple[float, ...]:
         """World z of each lens's back vertex, in the order of ``lenses`` (chart to camera)."""
-        z, positions = self.vertex_distance_mm, []
-        for lens in reversed(self.physical_lenses):
-            positions.append(z)
-            z += lens.center_thickness_mm + self.lens_gap_mm
-        return tuple(reversed(positions))
+        return lens_back_vertex_z_mm(self.physical_lenses, self.vertex_distance_mm, self.lens_gap_mm)
 
     @property
     def pitch_mm(self) -> float:
@@ -250,51 +234,18 @@ def chart_mm_per_texel(bench: DslrBench) -> float:
     return bench.pitch_mm / bench.texels_per_px
 
 
-#: Peak bytes per texel and channel of the chart texture: float32 raster, its padded copy, Mitsuba's bitmap.
-TEXTURE_BYTES_PER_TEXEL = 3 * 4
-
-
 def chart_texture_shape(bench: DslrBench, setup: ViewingSetup, mm_per_px: float) -> tuple[int, int]:
-    """(rows, cols) texels the chart texture needs: the magnified field, the blur and a margin."""
-    blur_mm = max(d for d, _ in setup.blur_diameter_arcmin) / bench.arcmin_per_px * bench.pitch_mm
+    """(rows, cols) texels the chart texture needs: the magnified field, the blur and a margin
+    (`vissim.bench.scene_parts.chart_texture_shape` of the camera's blur and magnification through its lenses)."""
+    blur_px = max(d for d, _ in setup.blur_diameter_arcmin) / bench.arcmin_per_px
     mag = max(abs(m) for m, _ in setup.magnification_principal)
-    need_mm = [0.5 * n * bench.pitch_mm * max(mag, 1.0) * 1.05 + blur_mm + 2.0 * bench.pitch_mm for n in bench.size_px]
-    rows, cols = (2 * math.ceil(h / mm_per_px) for h in need_mm)  # even; centre stays on a texel corner
-    return rows, cols
+    return texture_shape(bench.size_px, bench.pitch_mm, blur_px, mag, mm_per_px)
 
 
 def _chart_texture(bench: DslrBench, setup: ViewingSetup, pixels: np.ndarray, mm_per_px: float) -> tuple[np.ndarray, float, float]:
     """Crop/pad ``pixels`` (centred on the axis) to cover the field with margins; (texture, height_mm, width_mm)."""
-    need_px = chart_texture_shape(bench, setup, mm_per_px)
-    channels = pixels.shape[2] if pixels.ndim == 3 else 1
-    rows, cols = bench.size_px
-    check_allocation(TEXTURE_BYTES_PER_TEXEL * channels * need_px[0] * need_px[1],
-                     f"the bench's {size_text(need_px, 'texel')} chart texture ({size_text((rows, cols))} frame, "
-                     f"blur {max(d for d, _ in setup.blur_diameter_arcmin):.3g} arcmin)")
-    out = pixels
-    for axis, need in enumerate(need_px):
-        have = out.shape[axis]
-        if have > need:
-            start = (have - need) // 2
-            out = np.take(out, np.arange(start, start + need), axis=axis)
-        elif have < need:
-            before = (need - have) // 2
-            pad = [(0, 0)] * out.ndim
-            pad[axis] = (before, need - have - before)
-            out = np.pad(out, pad, mode="edge")
-    if (pixels.shape[0] - out.shape[0]) % 2 or (pixels.shape[1] - out.shape[1]) % 2:
-        log.debug("chart raster of odd size: its centre moved by half a texel (%.3g mm)", 0.5 * mm_per_px)
-    return np.ascontiguousarray(out, dtype=np.float32), out.shape[0] * mm_per_px, out.shape[1] * mm_per_px
-
-
-def lens_clear_aperture_mm(beam_diameter_mm: float, half_angle_rad: float, vertex_distance_mm: float,
-                           lens_gap_mm: float) -> float:
-    """The trial lenses' clear aperture, mm: the beam at the holder's far side (a ``beam_diameter_mm`` pupil's
-    beam widened to ``half_angle_rad`` over the vertex distance + 3 lenses of <= 4 mm and their gaps) x 1.25
-    + 2 mm, rounded up to 0.5 mm. The one rule, for the DSLR and the eye alike."""
-    depth = vertex_distance_mm + MAX_LENSES_IN_HOLDER * (4.0 + lens_gap_mm)
-    beam = beam_diameter_mm + 2.0 * depth * math.tan(half_angle_rad)
-    return math.ceil(2.0 * (1.25 * beam + 2.0)) / 2.0
+    what = f"{size_text(bench.size_px)} frame, blur {max(d for d, _ in setup.blur_diameter_arcmin):.3g} arcmin"
+    return chart_texture(pixels, chart_texture_shape(bench, setup, mm_per_px), mm_per_px, what)
 
 
 #: Render kinds of the bench: one channel, three, or spectral (luminance of a spectral render).
@@ -308,18 +259,6 @@ SPECTRAL_MODE = {
     "wavelengths": "Mitsuba's sampling of the visible range, 4 per path; at a path's first lens surface only the "
                    "hero wavelength continues, weighted by 4 (pbrt-v4's TerminateSecondary)",
 }
-
-
-def hdr_film(size_px: tuple[int, int], kind: str) -> dict[str, Any]:
-    """Mitsuba's float32 ``hdrfilm`` of ``size_px`` (rows, cols); box filter: a pixel integrates its solid angle."""
-    rows, cols = size_px
-    return {"type": "hdrfilm", "width": cols, "height": rows, "rfilter": {"type": "box"},
-            "pixel_format": "rgb" if kind == "rgb" else "luminance", "component_format": "float32",
-            "sample_border": False}
-
-
-def _translate(x: float, y: float, z: float) -> list[list[float]]:
-    return [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]]
 
 
 def dslr_scene(
@@ -342,29 +281,15 @@ def dslr_scene(
     ``chart_pixels``: linear reflectance, (H, W) or (H, W, 3), row 0 the top of the chart as
     the camera sees it, columns to the camera's right; its centre lies on the optical axis.
     """
-    pixels = np.asarray(chart_pixels, dtype=np.float32)
-    if pixels.ndim not in (2, 3) or (pixels.ndim == 3 and pixels.shape[2] not in (1, 3)) or min(pixels.shape[:2]) < 1:
-        raise VissimInputError(f"chart pixels must be (H, W) or (H, W, 3), got shape {pixels.shape}")
-    if not np.all(np.isfinite(pixels)) or pixels.min() < 0.0:
-        raise VissimInputError("chart pixels must be finite, non-negative linear reflectance")
+    pixels = checked_chart_pixels(chart_pixels)
     mm_per_px = _positive(chart_mm_per_px, "chart pixel size", "mm")
     if kind not in RENDER_KINDS:
         raise VissimInputError(f"render kind must be one of {', '.join(RENDER_KINDS)}, got {kind!r}")
     setup = bench.viewing_setup()
     texture, height_mm, width_mm = _chart_texture(bench, setup, pixels, mm_per_px)
-    if texture.ndim == 2:
-        texture = texture[:, :, None]
-    if kind != "rgb" and texture.shape[2] == 3:
-        texture = texture @ np.array(REC709_LUMINANCE, dtype=np.float32)[:, None]
-    # The rectangle spans [-1, 1]^2 with normal +z; turned 180 deg about y it faces the camera
-    # (-z) and its local +x (texture u) runs along world -x, the camera's image right.  Mitsuba
-    # puts bitmap row 0 at v = 0, local y = -1 (the bottom), so the raster goes in upside down.
-    # Pinned by tests/render/test_dslr_render.py::test_letters_are_neither_mirrored_nor_upside_down.
-    chart_to_world = [[-0.5 * width_mm, 0.0, 0.0, 0.0], [0.0, 0.5 * height_mm, 0.0, 0.0],
-                      [0.0, 0.0, -1.0, bench.chart_distance_mm], [0.0, 0.0, 0.0, 1.0]]
     scene: dict[str, Any] = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": MAX_DEPTH, "hide_emitters": False},
+        "integrator": path_integrator(),
         "camera": {
             "type": "thinlens",
             "fov": bench.fov_x_deg(),
@@ -378,33 +303,12 @@ def dslr_scene(
             "sampler": {"type": bench.sampler, "sample_count": int(bench.spp), "seed": int(bench.seed)},
             "film": hdr_film(bench.size_px, kind),
         },
-        "chart": {
-            "type": "rectangle",
-            "to_world": chart_to_world,
-            "emitter": {
-                "type": "area",
-                "radiance": {"type": "bitmap", "data": texture[::-1] * np.float32(bench.radiance_scale),
-                             "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"},
-            },
-        },
+        "chart": chart_emitter(texture, height_mm, width_mm, bench.chart_distance_mm, kind=kind,
+                               radiance_scale=bench.radiance_scale),
     }
-    aperture = bench.clear_aperture()
-    for i, (lens, z) in enumerate(zip(bench.physical_lenses, bench.lens_back_vertex_z_mm())):
-        path = cached_lens_ply(lens, aperture, rings=bench.mesh_rings, segments=bench.mesh_segments,
-                               cache_dir=mesh_cache_dir)
-        scene[f"lens_{i}"] = {
-            "type": "ply",
-            "filename": str(path),
-            "face_normals": False,
-            "to_world": _translate(0.0, 0.0, z),
-            "bsdf": {"type": "vissim_refract", "int_ior": float(lens.refractive_index),
-                     "fresnel_loss": bool(bench.fresnel_loss)},
-        }
-        bsdf = scene[f"lens_{i}"]["bsdf"]
-        if kind == "spectral":  # SPECTRAL_MODE
-            bsdf["dispersion"] = "crown"
-            if sensor_terminates_secondary:
-                bsdf["sensor_terminates_secondary"] = True
-        elif lens_wavelength_nm is not None:
-            bsdf.update(dispersion="crown", wavelength_nm=float(lens_wavelength_nm))
+    scene.update(lens_shapes(bench.physical_lenses, bench.lens_back_vertex_z_mm(), bench.clear_aperture(), kind=kind,
+                             lens_wavelength_nm=lens_wavelength_nm,
+                             sensor_terminates_secondary=sensor_terminates_secondary,
+                             fresnel_loss=bench.fresnel_loss, rings=bench.mesh_rings, segments=bench.mesh_segments,
+                             mesh_cache_dir=mesh_cache_dir))
     return scene

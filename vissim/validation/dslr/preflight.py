@@ -10,7 +10,8 @@ texture's needs are the renderer's own estimates (`vissim.render.run.render_memo
 
 from __future__ import annotations
 
-from vissim.bench.dslr.bench import TEXTURE_BYTES_PER_TEXEL, chart_mm_per_texel, chart_texture_shape
+from vissim.bench.dslr.bench import chart_mm_per_texel, chart_texture_shape
+from vissim.bench.scene_parts import TEXTURE_BYTES_PER_TEXEL
 from vissim.checks import MAX_PSF_SIZE_PX, check_allocation, size_text
 from vissim.errors import VissimInputError
 from vissim.optics.psf import geometric_blur_radius_arcmin, psf_sampling, suggested_size_px

@@ -1,8 +1,9 @@
 """The eye bench as a bench kind of the validation engine (``kind = "eye"``).
 
 A configuration is a letter seen by a schematic eye through an optional trial lens
-(`vissim.validation.eye.schema`).  Its truth is `vissim.render.eye_render.render_eye` at two seeds
-(their difference: the render's noise floor); the simulations (`vissim.validation.eye.simulate`)
+(`vissim.validation.eye.schema`), built once into its eye bench (`vissim.validation.eye.renders`).  Its
+truth is that bench rendered (`vissim.render.eye_render.render_eye_bench`) at two seeds (their
+difference: the render's noise floor); the simulations (`vissim.validation.eye.simulate`)
 blur the chart and are scored against it.
 """
 
@@ -39,14 +40,14 @@ class EyeKind:
         from vissim.validation.eye.renders import spec
 
         settings = campaign.settings
-        return {key: ItemPlan(renders={f"truth_{i}": spec(campaign.configurations[index], settings.spp, seed)
+        return {key: ItemPlan(renders={f"truth_{i}": spec(campaign.built[index], settings.spp, seed)
                                        for i, seed in enumerate(settings.seeds)})
                 for key, index in todo}, []
 
     def render(self, spec):
-        from vissim.render.eye_render import render_eye
+        from vissim.render.eye_render import render_eye_bench
 
-        return render_eye(spec.settings())
+        return render_eye_bench(spec.bench, spec.spp, spec.seed)
 
     def compute_item(self, key: str, campaign: Campaign, index: int, images: dict, plan: ItemPlan,
                      render_provenance: dict, item_dir: Path) -> dict:

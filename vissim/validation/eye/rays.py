@@ -7,7 +7,7 @@ eye's surfaces (`vissim.optics.raytrace`, aimed at a jittered grid filling the i
 the retina.  Each landing point is turned into a field angle as the eye sensor reads its retina:
 its distance from the axis through the inverse of the chief rays' r(θ) (of that eye, no lens, at
 the model's reference wavelength, as the sensor's film:
-`vissim.render.schematic_eye_tables.chief_ray_radii_mm`), the direction
+`vissim.optics.eyes.retina_map.chief_ray_radii_mm`), the direction
 opposite its azimuth, the field angle of that direction by the models' rule (`field_direction`).
 The offsets from the field angle at which the film sees the chart centre (from the entrance pupil,
 `vissim.optics.eyes.sight.film_field_deg`, as the simulations draw the chart) are histogrammed on a grid
@@ -32,7 +32,7 @@ from vissim.optics.eyes.sight import film_field_deg
 from vissim.optics.eyes.wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
                                           trace_to_retina)
 from vissim.optics.trial_lens import TrialLensSetup
-from vissim.render.schematic_eye_tables import chief_ray_radii_mm
+from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 from vissim.units import osa_xy_to_image_colrow
 
 __all__ = ["RayPsf", "ray_psf", "RAYS_ACROSS_IRIS", "MAGNIFICATION_STEP_DEG", "RADIUS_STEP_DEG",

@@ -1,69 +1,68 @@
-"""The eye bench's renders: `vissim.render.eye_render.render_eye` of a configuration, and the lens it renders."""
+"""The eye bench a configuration is built into, once, and the renders its item needs.
+
+`build_bench` builds the configuration's `vissim.bench.eye.bench.EyeBench` (its `Eye` the item's own,
+`EyeConfiguration.eye`), its chart printed and its lens meshed then; each render's `EyeSpec` carries that
+bench with a sample count and a seed, so a seed's worker builds neither again
+(`vissim.render.eye_render.render_eye_bench`).
+"""
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, asdict
+from dataclasses import dataclass
 from typing import ClassVar
 
-from vissim.render.eye_render import EyeRender, eye_bench, eye_chart
+from vissim.bench.eye.bench import EyeBench
+from vissim.optics.trial_lens import TrialLens
 
-__all__ = ["EyeSpec", "EyeBuilt", "build_bench", "eye_render_settings", "chart_half_arcmin", "spec"]
+__all__ = ["EyeSpec", "EyeBuilt", "build_bench", "configuration_bench", "spec"]
 
 
 @dataclass(frozen=True)
 class EyeSpec:
-    """One render: the configuration's `EyeRender` fields (a plain, picklable record)."""
+    """One render: the configuration's bench, at ``spp`` samples per pixel from ``seed``."""
 
     kind: ClassVar[str] = "eye"
-    fields: tuple  # sorted (name, value) pairs of EyeRender
+    bench: EyeBench
+    spp: int
+    seed: int
 
     def as_json(self) -> dict:
-        record = dict(self.fields)
-        if not record.get("surfaces"):  # the model's own surfaces: the key such a render always had
-            record.pop("surfaces", None)
-        return record
-
-    def settings(self) -> EyeRender:
-        return EyeRender(**dict(self.fields))
-
-
-def eye_render_settings(configuration, spp: int, seed: int) -> EyeRender:
-    """The `EyeRender` of one configuration at ``spp`` and ``seed``."""
-    c = configuration
-    return EyeRender(model=c.model, accommodation_diopters=c.accommodation_diopters, pupil_mm=c.pupil_mm,
-                     field_deg=tuple(c.field_deg), wavelength_nm=c.wavelength_nm, spectrum=c.spectrum,
-                     size_px=tuple(c.size_px), arcmin_per_px=c.arcmin_per_px, spp=spp, seed=seed,
-                     chart_distance_m=c.chart_distance_m, letter=c.letter, logmar=c.logmar,
-                     lens=None if c.lens is None else tuple(c.lens), vertex_mm=c.vertex_mm, rx=c.rx,
-                     surfaces=tuple(c.surfaces))
-
-
-def spec(configuration, spp: int, seed: int) -> EyeSpec:
-    settings = eye_render_settings(configuration, spp, seed)
-    return EyeSpec(tuple(sorted((k, v) for k, v in asdict(settings).items())))
+        return {**self.bench.as_json(), "spp": self.spp, "seed": self.seed}
 
 
 @dataclass(frozen=True)
 class EyeBuilt:
-    """What the simulations need of the rendered scene: the trial lens as meshed (thick; None: no lens) and
-    the chart texture's half size (rows, columns) in arcmin: beyond it the scene is black."""
+    """A configuration built once: its bench, with what the simulations need of the rendered scene."""
 
-    lens: object
-    chart_half_arcmin: tuple[float, float]
+    bench: EyeBench
+
+    @property
+    def lens(self) -> TrialLens | None:
+        """The trial lens as meshed (thick; None: no lens)."""
+        return self.bench.physical_lenses[0] if self.bench.lenses else None
+
+    @property
+    def chart_half_arcmin(self) -> tuple[float, float]:
+        """The chart texture's half size (rows, columns), arcmin: beyond it the scene is black."""
+        return self.bench.chart_half_arcmin
+
+
+def configuration_bench(configuration) -> EyeBench:
+    """The `EyeBench` of one configuration (`vissim.validation.eye.schema.EyeConfiguration`)."""
+    c = configuration
+    return EyeBench(eye=c.eye(), chart_distance_m=c.chart_distance_m, letter=c.letter, logmar=c.logmar,
+                    lenses=() if c.lens is None else (TrialLens(*c.lens),), vertex_mm=c.vertex_mm,
+                    field_deg=tuple(c.field_deg), size_px=tuple(c.size_px), arcmin_per_px=c.arcmin_per_px,
+                    wavelength_nm=c.wavelength_nm, spectrum=c.spectrum)
 
 
 def build_bench(configuration, settings) -> EyeBuilt:
-    render = eye_render_settings(configuration, settings.spp, settings.seeds[0])
-    bench = eye_bench(render)
-    return EyeBuilt(bench.physical_lenses[0] if bench.lenses else None, chart_half_arcmin(render, bench))
+    """The configuration's bench, its chart printed and its lens meshed now (carried to each render)."""
+    bench = configuration_bench(configuration)
+    bench.chart_half_arcmin  # noqa: B018 -- prints the chart and sizes its texture once, here
+    return EyeBuilt(bench)
 
 
-def chart_half_arcmin(settings: EyeRender, bench) -> tuple[float, float]:
-    """The chart texture's half size, arcmin (rows, columns), as `render_eye` lays it (`dslr_scene`'s rule)."""
-    from vissim.bench.dslr.bench import chart_texture_shape
-
-    chart = eye_chart(settings, bench)
-    shape = chart_texture_shape(bench, bench.viewing_setup(), chart.mm_per_px)
-    distance_mm = 1000.0 * settings.chart_distance_m
-    return tuple(60.0 * math.degrees(math.atan(0.5 * n * chart.mm_per_px / distance_mm)) for n in shape)
+def spec(built: EyeBuilt, spp: int, seed: int) -> EyeSpec:
+    """The render of ``built``'s bench at ``spp`` and ``seed``."""
+    return EyeSpec(built.bench, int(spp), int(seed))

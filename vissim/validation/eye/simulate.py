@@ -83,7 +83,7 @@ def reference_of(simulation: str) -> str:
 @functools.lru_cache(maxsize=32)
 def chart(letter: str, logmar: float, distance_m: float, step_arcmin: float, shape: tuple[int, int],
           half_size_arcmin: tuple[float, float]) -> np.ndarray:
-    """The rendered chart's letter (printed for ``distance_m``, `vissim.render.eye_render.eye_chart`) in visual angle,
+    """The rendered chart's letter (printed for ``distance_m``, `vissim.bench.eye.bench.EyeBench.chart`) in visual angle,
     centred, ``shape`` pixels of ``step_arcmin``; black beyond the chart's half size (rows, columns; arcmin)."""
     pixels = optotype_tile(letter, logmar, arcmin_per_px=step_arcmin, shape_px=shape,
                            viewing_distance_m=distance_m, snap_to_pixels=False).pixels.astype(np.float64)
