@@ -98,7 +98,7 @@ BAD = [  # (file text, fragments the one error line must hold besides the file's
     ("[spectacles]\ncylinder_diopters = -1.0\n", ["[spectacles].cylinder_diopters", "axis_deg", "degrees"]),
     ("[render]\nspp = 0\n", ["[render].spp", "samples per pixel"]),
     ("[eye]\nmodel = \"gullstrand\"\n", ["[eye].model", "gullstrand"]),
-    ("[eye]\nmodel = \"le-grand\"\naccommodation_diopters = 2.0\n", ["accommodation_diopters", "dioptres"]),
+    ("[eye]\nmodel = \"le-grand\"\naccommodation_diopters = 2.0\n", ["accommodation_diopters", "got 2 D"]),
     ("[chart]\nletter = \"Q\"\n", ["[chart].letter", "Q"]),
     ("[spectacles]\ncylinder_diopters = -1.0\naxis_deg = 200.0\n", ["[spectacles]", "axis_deg", "deg", "200"]),
     ("[eye]\npupil_mm = 3.0\niris_mm = 4.0\n", ["pupil_mm", "iris_mm"]),
