@@ -150,3 +150,57 @@ def test_a_render_takes_an_eye_built_in_python_and_hands_the_sensor_that_same_ey
     by_hand = dataclasses.replace(navarro_1985(), surfaces=navarro_1985().surfaces[:-1])
     with pytest.raises(VissimInputError, match="not a named model with altered surfaces"):
         EyeRender.for_eye(Eye(by_hand))
+
+
+def test_an_accommodating_eye_with_a_prescription_is_the_relaxed_ametrope_accommodating():
+    """A prescription is the relaxed eye's: Navarro made to have it, then accommodated 2 D, refracts as the
+    accommodated emmetrope plus the prescription at the cornea, P / (1 - dP), to within 5 % of it (the eye's
+    power, 2.4 D higher accommodated, steepens the change of refraction with length: measured 0.3-2.8 %). Before,
+    the accommodated model itself was solved to have it, and the eye lost its accommodation (+2.02 D of focus in
+    place of +4.3 D)."""
+    from vissim.optics.eyes.ametropia import corneal_refraction, far_point_vergence_matrix
+
+    emmetrope = build_eye("navarro-1985", accommodation_diopters=2.0)
+    for rx in ("-2.00", "-3.00", "+1.50"):
+        eye = build_eye("navarro-1985", accommodation_diopters=2.0, rx=rx)
+        relaxed = build_eye("navarro-1985", rx=rx)
+        assert eye.accommodation_diopters == 2.0 and eye.optics.surfaces[1:4] == emmetrope.optics.surfaces[1:4]
+        added = (corneal_refraction(eye.optics).prescription.spherical_equivalent_diopters
+                 - corneal_refraction(emmetrope.optics).prescription.spherical_equivalent_diopters)
+        at_cornea = far_point_vergence_matrix(relaxed.rx)[0, 0]
+        assert added == pytest.approx(at_cornea, rel=0.05)
+    with pytest.raises(VissimInputError, match="must be a named model with its surfaces unaltered"):
+        build_eye("navarro-1985", accommodation_diopters=2.0, rx="-1.00", surfaces={"cornea front": {"conic": 0.0}})
+
+
+@pytest.mark.parametrize("field_deg", [(20.0, 0.0), (0.0, 30.0)])
+def test_the_lights_vergence_is_seen_as_itself_across_an_oblique_beam(field_deg):
+    """Oracle: a point source at vergence V has the same curvature V across the beam in every meridian; read back by
+    the refraction over the pupil seen along the chief ray (the one rule, `refraction.along_chief_ray`), the
+    vergence a front adds is V I (to 1e-9 D), not the cos²θ-squeezed V of the entrance-pupil plane (0.54 D of
+    false cylinder at 20° for V = -4 D before)."""
+    from vissim.optics.eyes.refraction import along_chief_ray, paraxial_prescription
+    from vissim.optics.eyes.wavefront import field_direction
+
+    eye = build_eye("escudero-sanz-1999", pupil_mm=1.0)
+    own = vissim.eye_wavefront(eye, field_deg=field_deg).coefficients_um
+    near = vissim.eye_wavefront(eye, field_deg=field_deg, vergence_diopters=-4.0).coefficients_um
+    added = paraxial_prescription({k: near.get(k, 0.0) - own.get(k, 0.0) for k in {*own, *near}}, 1.0)
+    seen = along_chief_ray(added, field_direction(eye.optics, field_deg), 0.0)
+    np.testing.assert_allclose(np.asarray(seen.power_matrix()), 4.0 * np.eye(2), atol=1e-9)
+
+
+def test_the_depth_blur_refuses_a_traced_eye_in_other_light():
+    from vissim.optics.eyes.depth_eye import traced_depth_eye
+
+    viewer = traced_depth_eye(build_eye("navarro-1985", pupil_mm=3.0), wavelength_nm=589.3)
+    image, depth = np.zeros((16, 16)), np.full((16, 16), 2.0)
+    with pytest.raises(VissimInputError, match="holds at 589.3 nm, not at 550 nm"):
+        vissim.blur_depth(image, depth, eye=viewer, arcmin_per_px=1.0, wavelength_nm=550.0)
+    with pytest.raises(VissimInputError, match="holds at 589.3 nm, not at 450 nm"):
+        from vissim.optics.psf_field import suggested_size_px
+        suggested_size_px(viewer.extra_wavefront, 1.0, wavelength_nm=450.0)
+    with pytest.raises(VissimInputError, match="surfaces must be a table"):
+        build_eye("navarro-1985", surfaces=[("cornea front", "conic", 0.0)])
+    with pytest.raises(VissimInputError, match="conic must be a finite number"):
+        build_eye("navarro-1985", surfaces={"cornea front": {"conic": True}})

@@ -110,9 +110,7 @@ def eye_from_args(args, rx_text: str | None):
     place the command line's words become an eye (`build_eye`)."""
     from vissim.optics.eyes.eye import build_eye  # the trace's imports, when used
 
-    rx = None if rx_text is None else Prescription.parse(rx_text)
-    if rx is not None and rx.is_close(Prescription(0.0)):
-        rx = None
+    rx = None if rx_text is None else Prescription.parse(rx_text)  # plano: the eye solved to be exactly plano
     accommodation = 0.0 if args.accommodation_diopters is None else args.accommodation_diopters
     return build_eye(args.eye_model, accommodation_diopters=accommodation, pupil_mm=args.pupil_mm, rx=rx)
 

@@ -152,6 +152,9 @@ def suggested_size_px(
     wavelength_nm = wavelengths_for(wavefront, wavelength_nm, DEFAULT_WAVELENGTH_NM)
     wavelengths = tuple(check_wavelength_nm(w) for w in np.atleast_1d(wavelength_nm))
     weights = (1.0,) * len(wavelengths) if weights is None else tuple(float(w) for w in weights)
+    own = getattr(wavefront, "wavelength_nm", None)
+    for wavelength in wavelengths if own is not None else ():
+        _check_conversion(own, wavelength, lca_reference_nm)
     if hasattr(wavefront, "coefficients_um"):  # campaigns ask again and again for the same eyes
         return _suggested_size_cached(tuple(wavefront.coefficients_um.items()), wavefront.pupil_diameter_mm, diameter,
                                       step, wavelengths, weights, lca_reference_nm, mode, int(minimum_px))

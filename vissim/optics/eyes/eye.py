@@ -83,10 +83,34 @@ class Eye:
         object.__setattr__(self, "_optics", self._traced_optics())  # a prescription the eye cannot have: refused now
 
     def _traced_optics(self) -> SchematicEye:
-        optics = self.schematic
-        if self.wavelength_nm is not None and self.wavelength_nm != optics.reference_wavelength_nm:
-            optics = dataclasses.replace(optics, reference_wavelength_nm=self.wavelength_nm)
-        return optics if self.rx is None else ametropic_eye(optics, self.rx, self.vertex_mm)
+        optics = self._in_own_light(self.schematic)
+        if self.rx is None:
+            return optics
+        if optics.accommodation_diopters == 0.0:
+            return ametropic_eye(optics, self.rx, self.vertex_mm)
+        return self._accommodating_ametrope(optics)
+
+    def _in_own_light(self, schematic: SchematicEye) -> SchematicEye:
+        if self.wavelength_nm is None or self.wavelength_nm == schematic.reference_wavelength_nm:
+            return schematic
+        return dataclasses.replace(schematic, reference_wavelength_nm=self.wavelength_nm)
+
+    def _accommodating_ametrope(self, optics: SchematicEye) -> SchematicEye:
+        """A prescription is the relaxed eye's: the relaxed model is made to have it (its length, its cornea), then
+        accommodates as the model's formulas say (lens and chamber; the vitreous by the model's own change)."""
+        if self.schematic != _named_schematic(self.schematic):
+            raise VissimInputError(f"the {self.model} eye accommodates {self.accommodation_diopters:g} D and has "
+                                   f"{self.rx}: its prescription is the relaxed eye's, solved on the relaxed model, "
+                                   "so it must be a named model with its surfaces unaltered")
+        relaxed = self._in_own_light(eye_model(self.model, 0.0))
+        solved = ametropic_eye(relaxed, self.rx, self.vertex_mm)
+        model_change_mm = optics.surfaces[-2].thickness_after_mm - relaxed.surfaces[-2].thickness_after_mm
+        surfaces = list(optics.surfaces)
+        surfaces[0] = solved.surfaces[0]
+        surfaces[-2] = dataclasses.replace(surfaces[-2], thickness_after_mm=solved.surfaces[-2].thickness_after_mm
+                                           + model_change_mm)
+        return dataclasses.replace(optics, surfaces=tuple(surfaces),
+                                   source=f"{solved.source}; accommodated {self.accommodation_diopters:g} D")
 
     # -- what it is ----------------------------------------------------------------------
     @property
@@ -173,13 +197,14 @@ def altered_schematic(schematic: SchematicEye, surface: str, changes: dict) -> S
 
 def _surface_value(key: str, value, surface: str) -> float:
     unit = SURFACE_OVERRIDES[key] or "(no unit)"
-    allow_inf = key in ("radius_mm", "radius_y_mm")
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise VissimInputError(f"{surface} {key} must be a number {unit}, got {value!r}") from None
-    if math.isnan(number) or (math.isinf(number) and not allow_inf) or (key.startswith("radius") and number == 0):
-        raise VissimInputError(f"{surface} {key} must be a finite, non-zero number {unit}, got {value!r}")
+        number = math.nan
+    if isinstance(value, bool) or not math.isfinite(number):
+        raise VissimInputError(f"{surface} {key} must be a finite number {unit}, got {value!r}")
+    if key.startswith("radius") and number == 0:
+        raise VissimInputError(f"{surface} {key} must be a non-zero number of mm, got {value!r}")
     if key == "thickness_after_mm" and number < 0.0:
         raise VissimInputError(f"{surface} thickness_after_mm must be >= 0 mm, got {number:g} mm")
     return number
@@ -199,6 +224,8 @@ def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0,
         schematic = model
     else:
         schematic = eye_model(model, accommodation_diopters)
+    if surfaces is not None and not isinstance(surfaces, dict):
+        raise VissimInputError(f"surfaces must be a table {{surface name: {{field: value}}}}, got {surfaces!r}")
     for surface, changes in (surfaces or {}).items():
         if not isinstance(changes, dict):
             raise VissimInputError(f"surface {surface!r}'s changes must be a table of fields, got {changes!r}")

@@ -52,7 +52,8 @@ from vissim.checks import MAX_FIELD_DEG
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
-from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, trace_eye_wavefront
+from vissim.optics.eyes.refraction import chief_ray_stretch
+from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
 from vissim.optics.prescription import Prescription
 from vissim.optics.spectral_wavefront import SpectralWavefront
 from vissim.optics.wavefront import Wavefront
@@ -94,14 +95,19 @@ def _own_front(traced: EyeWavefront) -> Wavefront:
                      traced.entrance_pupil_mm, traced.wavelength_nm)
 
 
-def vergence_front(vergence_diopters, pupil_diameter_mm: float) -> Wavefront | None:
+def vergence_front(vergence_diopters, pupil_diameter_mm: float, beam_direction=(0.0, 0.0, 1.0)) -> Wavefront | None:
     """The wavefront error the light's vergence at the entrance pupil adds (D: a scalar, or a 2 x 2 TABO
-    matrix; the object's −1/d plus what lenses in front add): that of an eye whose correcting lens is −V.
-    None for zero vergence."""
+    matrix; the object's −1/d plus what lenses in front add): that of an eye whose correcting lens is −V, V
+    across the beam ``beam_direction`` (optical-axis frame). Its coordinates are the entrance-pupil plane's, which
+    an oblique beam crosses stretched 1/cos θ along the field: there the curvature is S V S, S the inverse of
+    `refraction.chief_ray_stretch` (cos θ along the field, 1 across), so the refraction over the pupil seen along
+    the chief ray reads V back. None for zero vergence."""
     matrix = _vergence_matrix(vergence_diopters)
     if not np.any(matrix):
         return None
-    return Wavefront.from_prescription(Prescription.from_power_matrix(-matrix), pupil_diameter_mm)
+    squeeze = np.linalg.inv(chief_ray_stretch(beam_direction))
+    return Wavefront.from_prescription(Prescription.from_power_matrix(-(squeeze @ matrix @ squeeze)),
+                                       pupil_diameter_mm)
 
 
 def _vergence_matrix(vergence_diopters) -> np.ndarray:
@@ -166,7 +172,7 @@ def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), ve
     eye = checked_eye(eye, "eye_spectral_wavefront")
     _vergence_matrix(vergence_diopters)  # before the traces
     traced = traced_spectral_wavefront(eye.optics, wavelengths_nm, field_deg, samples=samples, **eye.pupil)
-    vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm)
+    vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm, field_direction(eye.optics, field_deg))
     return traced.map(lambda front: _with_vergence(front, vergence))
 
 
