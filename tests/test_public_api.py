@@ -152,7 +152,7 @@ def test_a_wrong_argument_type_is_one_type_error_saying_what_is_accepted(call, a
     (lambda: vissim.eye_wavefront("navarro-1985"), "takes an Eye, not the name 'navarro-1985'"),
     (lambda: vissim.build_eye("navarro-1985", pupil_mm=3.0, iris_mm=3.0), "not both"),
     (lambda: vissim.build_eye("navarro-1985", surfaces={"cornea": {"conic": 0.0}}), "has no surface 'cornea'"),
-    (lambda: vissim.build_eye("navarro-1985", surfaces={"cornea front": {"conic": "flat"}}), "must be a number"),
+    (lambda: vissim.build_eye("navarro-1985", surfaces={"cornea front": {"conic": "flat"}}), "must be a finite number"),
 ])
 def test_a_bad_value_is_one_input_error_naming_it_and_its_unit(call, fragment):
     with pytest.raises(VissimInputError, match=fragment.replace("(", r"\(")):
