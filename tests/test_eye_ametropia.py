@@ -26,7 +26,7 @@ import pytest
 
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, corneal_refraction
-from vissim.optics.eyes.fixation import ametropic_eye, visual_axis_refraction
+from vissim.optics.eyes.fixation import VISUAL_AXIS_TOL_DIOPTERS, ametropic_eye, visual_axis_refraction
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.report import eye_report
 from vissim.optics.eyes.models import arizona, escudero_sanz_1999, le_grand, liou_brennan_1997, navarro_1985
@@ -113,12 +113,12 @@ def test_liou_brennan_reads_its_rx_back_along_the_visual_axis(rx):
     −3.995 −1.465 × 31 (M, J0, J45 off by up to 0.032 D): its own astigmatism along the visual axis
     was not cancelled. The read-back is `vissim eye --rx`'s: the paraxial refraction (curvature at the
     pupil centre) of the wavefront traced from field (0, 0) over a 3 mm entrance pupil (the solve traces
-    1 mm), at the 12 mm spectacle plane. Required: each of M, J0, J45 within 0.002 D (issue 33); measured
-    <= 1e-4 D."""
+    1 mm), at the 12 mm spectacle plane. Required by issue 33: each of M, J0, J45 within 0.002 D. Held here to
+    twice the solve's own tolerance (`VISUAL_AXIS_TOL_DIOPTERS` on each matrix entry at 1 mm; the curvature at
+    the pupil centre reads the same to 1e-4 D at 1, 3 and 5 mm); measured <= 1e-4 D."""
     want = Prescription.parse(rx)
     read = eye_report(build_eye("liou-brennan-1997", pupil_mm=3.0, rx=rx)).refraction.paraxial
-    assert read.power_vector() == pytest.approx(want.power_vector(), abs=0.002)
-    assert read.power_vector() == pytest.approx(want.power_vector(), abs=2e-4)
+    assert read.power_vector() == pytest.approx(want.power_vector(), abs=2 * VISUAL_AXIS_TOL_DIOPTERS)
 
 
 def test_liou_brennan_solved_on_its_optical_axis_alone_keeps_its_own_astigmatism():
@@ -134,13 +134,13 @@ def test_liou_brennan_solved_on_its_optical_axis_alone_keeps_its_own_astigmatism
 def test_centred_eyes_are_solved_once_on_their_optical_axis(build):
     """A centred eye (no visual axis, iris centred) is the closed-form paraxial solve, unchanged by the
     visual-axis rule: the same surfaces with or without it, and its traced read-back is the Rx within
-    0.002 D (issue 33; measured <= 5e-5 D, the trace's Zernike fit of a toric front)."""
+    0.002 D (issue 33), held to the visual-axis eyes' bound, twice `VISUAL_AXIS_TOL_DIOPTERS` (measured <= 5e-5 D,
+    the trace's Zernike fit of a toric front)."""
     rx = Prescription(-2.0, -1.5, 30.0)
     eye = ametropic_eye(build(), rx)
     assert eye.surfaces == ametropic_eye(build(), rx, along_visual_axis=False).surfaces
     read = eye_report(build_eye(build().name, pupil_mm=3.0, rx=rx)).refraction.paraxial
-    assert read.power_vector() == pytest.approx(rx.power_vector(), abs=0.002)
-    assert read.power_vector() == pytest.approx(rx.power_vector(), abs=2e-4)
+    assert read.power_vector() == pytest.approx(rx.power_vector(), abs=2 * VISUAL_AXIS_TOL_DIOPTERS)
 
 
 def test_a_spherical_rx_changes_only_the_vitreous():

@@ -74,8 +74,10 @@ def test_a_sphere_for_navarros_cornea_adds_the_spherical_aberration_of_its_fourt
     eye = build_eye("navarro-1985", pupil_mm=2.0)
     sphere = eye.with_surface("cornea front", conic=0.0)
     added = vissim.eye_wavefront(sphere).coefficients_um[(4, 0)] - vissim.eye_wavefront(eye).coefficients_um[(4, 0)]
-    n_cornea = eye.schematic.surfaces[0].medium_after.index(589.3)
-    expected_um = 1e3 * (n_cornea - 1.0) * 0.26 * (1 / 7.72) ** 3 * 1.0**4 / (48 * math.sqrt(5))
+    cornea = eye.schematic.surfaces[0]
+    n_cornea = cornea.medium_after.index(eye.reference_wavelength_nm)
+    radius_mm = 0.5 * eye.pupil_mm
+    expected_um = 1e3 * (n_cornea - 1.0) * -cornea.conic * (1 / cornea.radius_mm) ** 3 * radius_mm**4 / (48 * math.sqrt(5))
     assert added == pytest.approx(expected_um, rel=0.03)
 
 

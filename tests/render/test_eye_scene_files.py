@@ -17,8 +17,10 @@ import vissim.render.eye_render as eye_render_module
 from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
+from vissim.optics.prescription import Prescription
 from vissim.render.backend import find_libllvm
 from vissim.render.eye_render import EyeRender
+from vissim.optics.prescription import Prescription
 from vissim.render.eye_scene_files import load_eye_scene
 
 REPO = Path(__file__).resolve().parents[2]
@@ -51,7 +53,7 @@ seed = 7
 EVERY_FIELD = dict(model="arizona", accommodation_diopters=1.5, pupil_mm=4.5, iris_mm=None, field_deg=(5.0, -2.5),
                    wavelength_nm=600.0, spectrum="mono", chart_distance_m=0.5, letter="H", logmar=0.3,
                    vertex_mm=14.0, lens=(-1.25, -0.75, 30.0), size_px=(16, 24), arcmin_per_px=0.5, spp=4, seed=7,
-                   rx="-2.00 -0.50 x 90")
+                   rx=Prescription.parse("-2.00 -0.50 x 90"))
 
 
 def scene(tmp_path: Path, text: str, name: str = "eye.toml") -> Path:

@@ -171,7 +171,7 @@ def test_an_axial_myope_sees_the_distant_letter_as_the_emmetrope_does_through_it
         assert main(["render", "eye", "--size", "32x32", "--spp", "64", *extra, "-o", str(path)]) == 0
         image = read_image(path)
         if name == "myope":
-            assert image.provenance["inputs"]["eye"]["rx"] == "-3.00 DS"
+            assert image.provenance["inputs"]["eye"]["rx"] == "-3.000000 DS"
         pixels = image.pixels.astype(float)
         sharpness[name] = float(np.mean(np.diff(pixels, axis=0) ** 2) + np.mean(np.diff(pixels, axis=1) ** 2))
     assert sharpness["myope"] < 0.5 * sharpness["emmetrope"]

@@ -86,8 +86,8 @@ def _myope_scenes(chart_distance_m: float):
     settings, configurations = read_campaign(
         {"item": [{"name": "m", "rx": -3.0}, {"name": "ms", "rx": -3.0, "lens": -3.0}, {"name": "e"}]},
         {"kind": "eye", "vertex_mm": 12.0}, "eye.toml")
-    return [EyeScene(dataclasses.replace(c, chart_distance_m=chart_distance_m), settings, build_bench(c, settings))
-            for c in configurations]
+    moved = [dataclasses.replace(c, chart_distance_m=chart_distance_m) for c in configurations]
+    return [EyeScene(c, settings, build_bench(c, settings)) for c in moved]
 
 
 def test_a_myope_in_its_spectacles_has_no_defocus_left():

@@ -13,6 +13,7 @@ from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, ENTRANCE_PUPIL_
                            NAVARRO_ACCOMMODATION_RANGE_DIOPTERS)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import LE_GRAND_ACCOMMODATED_DIOPTERS
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.prescription import Prescription
 from vissim.optics.wavefront import Wavefront, parse_zernike_terms
 
@@ -102,7 +103,8 @@ def add_eye_model_arg(parser, help_text: str, **extra) -> None:
 
 #: What ``--rx`` means with ``--eye-model``, in every command that takes both.
 EYE_RX_HELP = ("with --eye-model, --rx is the prescription the eye has (the model eye made ametropic: its axial "
-               "length and a toric cornea, measured at the spectacle plane 12 mm in front of the cornea)")
+               f"length and a toric cornea, measured at the spectacle plane {DEFAULT_SPECTACLE_VERTEX_MM:g} mm in front "
+               "of the cornea)")
 
 
 def eye_from_args(args, rx_text: str | None):

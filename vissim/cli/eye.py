@@ -10,6 +10,7 @@ from vissim import __version__
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg,
                                 add_trial_lens_args, field_deg_from_text, parse_float_list, trial_lens_powers)
 from vissim.errors import VissimInputError
+from vissim.optics.prescription import Prescription
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
@@ -134,13 +135,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _rx_line(entry: dict) -> str:
-    """Sphere, cylinder and axis to 0.001 D, then M, J0, J45; a cylinder that rounds to 0 is written
-    ``DS`` with no axis (its axis is noise), the sphere then the spherical equivalent M, and a
-    component that rounds to 0 is +0.000."""
-    if round(entry["cylinder_diopters"], 3) == 0:
-        written = f"{entry['M']:+.3f} DS"
-    else:
-        written = f"{entry['sphere_diopters']:+.3f} {entry['cylinder_diopters']:+.3f} x {entry['axis_deg']:.0f}"
+    """The prescription written by `Prescription.format` to 0.001 D (a cylinder that rounds to 0: ``DS``), then M, J0,
+    J45 (a component that rounds to 0 is +0.000)."""
+    written = Prescription(entry["sphere_diopters"], entry["cylinder_diopters"], entry["axis_deg"]).format(3)
     m, j0, j45 = (round(entry[key], 3) + 0.0 for key in ("M", "J0", "J45"))  # + 0.0: no "-0.000"
     return f"{written:<22} M {m:+.3f}  J0 {j0:+.3f}  J45 {j45:+.3f} D"
 

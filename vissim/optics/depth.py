@@ -93,7 +93,6 @@ from vissim.optics.depth_psfs import LayerOptics, in_order, layer_pool, worker_t
 from vissim.optics.depth_windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import geometric_blur_radius_arcmin
-from vissim.optics.psf_field import front_at_wavelength
 from vissim.optics.setup import DepthViewer
 from vissim.optics.wavefront import Wavefront
 from vissim.progress import Progress
@@ -351,7 +350,7 @@ def blur_depth(
     step = check_arcmin_per_px(arcmin_per_px)
     wavelength, threshold_px, coarse_blur_px, backend = _checked_options(
         mode, padding, wavelength_nm, occlusion_threshold_px, coarse_blur_px, max_layers, device)
-    front_at_wavelength(eye.wavefront, wavelength, None)  # a traced eye's front holds in its own light only
+    eye.check_light(wavelength)
     pixels, proximity, crop = _checked_image_and_depth(image, depth_m, crop_px)
     colour = np.ascontiguousarray(pixels[np.newaxis] if pixels.ndim == 2 else np.moveaxis(pixels, -1, 0), np.float32)
 

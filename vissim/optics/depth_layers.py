@@ -68,7 +68,6 @@ from vissim.optics.depth_windows import grow_box
 from vissim.optics.prescription import Prescription
 from vissim.optics.psf import PSF, geometric_blur_radius_arcmin
 from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
-from vissim.optics.psf_field import front_at_wavelength
 from vissim.optics.setup import DepthViewer
 from vissim.optics.wavefront import Wavefront
 
@@ -335,7 +334,7 @@ def composite_layers(
     pupil = eye.pupil_diameter_mm
     step = check_arcmin_per_px(arcmin_per_px)
     wavelength = check_wavelength_nm(wavelength_nm)
-    front_at_wavelength(eye.wavefront, wavelength, None)  # a traced eye's front holds in its own light only
+    eye.check_light(wavelength)
     if mode not in ("wave", "geometric"):
         raise VissimInputError(f"PSF mode must be 'wave' or 'geometric', got {mode!r}")
     checked, shape = _checked_layers(layers, crop_px)

@@ -41,6 +41,7 @@ from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
 from vissim.optics.accommodation import object_proximity_diopters
 from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.psf_field import front_at_wavelength
 from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, entrance_pupil_diameter_mm, matrix2_tuple,
                                       principal_pairs, tabo_meridian_deg, thesis_eye_pupil_diameter_mm,
                                       thesis_table_4_2_lens_power, thesis_table_4_2_power, trial_lens_effect)
@@ -253,6 +254,11 @@ class DepthViewer:
     def sphere_at_diopters(self, proximity_diopters: float) -> float:
         """The effective prescription's sphere ``Rx_S + L - A`` for an object at ``proximity_diopters``."""
         return self.prescription.sphere_diopters + proximity_diopters - self.accommodation_diopters
+
+    def check_light(self, wavelength_nm: float) -> None:
+        """Refuse ``wavelength_nm`` when the eye's wavefront holds in other light (a traced eye's front: it is used in
+        its own light only, `vissim.optics.psf_field.front_at_wavelength`)."""
+        front_at_wavelength(self.wavefront, wavelength_nm, None)
 
     @property
     def in_focus_proximity_diopters(self) -> float:

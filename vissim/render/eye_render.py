@@ -48,25 +48,25 @@ class EyeRender:
     logmar: float = 1.0
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
-    rx: str | None = None  # the eye made to need this prescription at the spectacle plane vertex_mm
+    rx: object = None  # a Prescription (or its text): the eye made to need it at the spectacle plane vertex_mm
     surfaces: tuple = ()  # the model's surfaces altered: sorted (surface name, field, value) triples
 
     @classmethod
     def for_eye(cls, eye, **view) -> EyeRender:
         """The render of the `Eye` ``eye`` (a named model, its surfaces altered or not), ``view`` the other fields."""
         from vissim.optics.eyes.eye import surface_overrides
-        from vissim.optics.prescription import Prescription
 
         pupil = {"pupil_mm": eye.pupil_mm, "iris_mm": None} if eye.iris_mm is None else \
             {"pupil_mm": None, "iris_mm": eye.iris_mm}
         if eye.wavelength_nm is not None and eye.wavelength_nm != eye.schematic.reference_wavelength_nm:
             raise VissimInputError("render eye maps its film through the model's reference wavelength; an eye with "
                                    f"another ({eye.wavelength_nm:g} nm) cannot be rendered")
-        if eye.rx is not None and not eye.rx.is_close(Prescription.parse(str(eye.rx))):
-            raise VissimInputError(f"render eye holds a prescription in 0.01 D steps and whole degrees; "
-                                   f"{eye.rx.format(4)} is not one")
-        return cls(model=eye.model, accommodation_diopters=eye.accommodation_diopters, rx=eye.rx and str(eye.rx),
+        return cls(model=eye.model, accommodation_diopters=eye.accommodation_diopters, rx=eye.rx,
                    vertex_mm=eye.vertex_mm, surfaces=surface_overrides(eye.schematic), **pupil, **view)
+
+    def as_json(self) -> dict:
+        """The settings as plain values, the prescription written in full (to 1e-6 D)."""
+        return dict(dataclasses.asdict(self), rx=None if self.rx is None else self.rx.format(6))
 
     @property
     def eye(self):
@@ -79,10 +79,10 @@ class EyeRender:
     def __post_init__(self) -> None:
         from vissim.checks import eye_pupil_diameter_mm, positive_number
 
-        if self.rx is not None:
-            from vissim.optics.prescription import Prescription
+        if self.rx is not None:  # a Prescription, or its text once read: held as the number, never as text
+            from vissim.optics.prescription import prescription_from
 
-            object.__setattr__(self, "rx", str(Prescription.parse(self.rx)))
+            object.__setattr__(self, "rx", prescription_from(self.rx))
         object.__setattr__(self, "surfaces", tuple(tuple(t) for t in self.surfaces))
         if (self.pupil_mm is None) == (self.iris_mm is None):
             raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
@@ -135,5 +135,4 @@ def render_eye_bench(bench: EyeBench, spp: int, seed: int, variant: str | None =
 
 def render_eye(settings: EyeRender, variant: str | None = None):
     """Render ``settings`` (module doc); a `vissim.render.run.RenderResult` with provenance."""
-    return render_eye_bench(eye_bench(settings), settings.spp, settings.seed, variant,
-                            record=dataclasses.asdict(settings))
+    return render_eye_bench(eye_bench(settings), settings.spp, settings.seed, variant, record=settings.as_json())

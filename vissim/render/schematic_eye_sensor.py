@@ -49,6 +49,7 @@ import math
 
 import numpy as np
 
+from vissim.bench.eye.scene import SENSOR_TYPE
 from vissim.bench.eye.sensor_eyes import sensor_eye
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
@@ -67,7 +68,7 @@ log = logging.getLogger(__name__)
 #: The tables' reach is rounded up to a multiple of this (deg), so nearby films and fields share them.
 TABLE_REACH_STEP_DEG = 5.0
 #: Plugin name.
-SCHEMATIC_EYE_SENSOR = "vissim_schematic_eye"
+SCHEMATIC_EYE_SENSOR = SENSOR_TYPE  # the scene names it so (vissim.bench.eye.scene)
 
 
 @functools.lru_cache(maxsize=16)

@@ -167,6 +167,7 @@ class EyeBench:
         spec = single_letter_spec(self.letter, self.logmar, viewing_distance_m=self.chart_distance_m)
         return render_chart_print(spec, MM_PER_INCH / (self.pitch_mm / self.texels_per_px))
 
+    @functools.cached_property
     def texture_shape(self) -> tuple[int, int]:
         """(rows, cols) texels of the chart texture (module doc: field, lens blur and magnification, margin)."""
         setup = ViewingSetup.through_lenses(self.pupil_mm, self.trial_lens_setup())
@@ -178,7 +179,7 @@ class EyeBench:
     def chart_half_arcmin(self) -> tuple[float, float]:
         """The chart texture's half size seen from the corneal vertex, arcmin (rows, columns): beyond it, black."""
         mm_per_px, distance_mm = self.chart.mm_per_px, self.chart_distance_mm
-        return tuple(60.0 * math.degrees(math.atan(0.5 * n * mm_per_px / distance_mm)) for n in self.texture_shape())
+        return tuple(60.0 * math.degrees(math.atan(0.5 * n * mm_per_px / distance_mm)) for n in self.texture_shape)
 
     # -- records --------------------------------------------------------------------------
     def as_json(self) -> dict:

@@ -64,7 +64,7 @@ def _chart(bench: EyeBench) -> dict[str, Any]:
     """The chart emitter: the printed letter cropped or padded to the bench's texture."""
     chart = bench.chart
     what = f"{size_text(bench.size_px)} eye image"
-    texture, height_mm, width_mm = chart_texture(chart.pixels, bench.texture_shape(), chart.mm_per_px, what)
+    texture, height_mm, width_mm = chart_texture(chart.pixels, bench.texture_shape, chart.mm_per_px, what)
     return chart_emitter(texture, height_mm, width_mm, bench.chart_distance_mm, kind=_film_kind(bench))
 
 

@@ -146,7 +146,7 @@ class Eye:
     def as_json(self) -> dict:
         return {"model": self.model, "accommodation_diopters": self.accommodation_diopters,
                 "entrance_pupil_mm": self.pupil_mm, "iris_mm": self.iris_mm,
-                "rx": None if self.rx is None else str(self.rx), "vertex_mm": self.vertex_mm,
+                "rx": None if self.rx is None else self.rx.format(6), "vertex_mm": self.vertex_mm,
                 "reference_wavelength_nm": self.reference_wavelength_nm}
 
     # -- builders ------------------------------------------------------------------------
@@ -271,10 +271,20 @@ def overrides_table(triples) -> dict:
     return table
 
 
-@functools.lru_cache(maxsize=64)
 def eye_from_fields(model: str, accommodation_diopters: float, pupil_mm, iris_mm, rx, vertex_mm: float,
                     surfaces: tuple = ()) -> Eye:
-    """`build_eye` of plain, hashable fields (``surfaces``: (surface, field, value) triples), built once per
-    distinct set in a process: a campaign item's eye and its render's are one object."""
+    """`build_eye` of plain, hashable fields (``rx`` a `Prescription` or its text; ``surfaces``: (surface, field,
+    value) triples), built once per distinct set in a process: a campaign item's eye and its render's are one
+    object, whichever form their prescription came in."""
+    return _cached_eye(model, accommodation_diopters, pupil_mm, iris_mm, None if rx is None else prescription_from(rx),
+                       vertex_mm, tuple(surfaces))
+
+
+@functools.lru_cache(maxsize=64)
+def _cached_eye(model: str, accommodation_diopters: float, pupil_mm, iris_mm, rx, vertex_mm: float,
+                surfaces: tuple) -> Eye:
     return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_mm=pupil_mm, iris_mm=iris_mm, rx=rx,
                      vertex_mm=vertex_mm, surfaces=overrides_table(surfaces))
+
+
+eye_from_fields.cache_clear = _cached_eye.cache_clear  # the cache is the builder's

@@ -26,7 +26,7 @@ from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.refraction import eye_refraction
 from vissim.optics.eyes.wavefront import trace_eye_wavefront
 from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 
 __all__ = ["ametropic_eye", "visual_axis_refraction", "VISUAL_AXIS_TOL_DIOPTERS"]
 
@@ -53,7 +53,7 @@ def _off_axis_fixation(eye: SchematicEye) -> bool:
     return eye.visual_axis_deg != 0.0 or eye.stop_decentre_nasal_mm != 0.0
 
 
-def ametropic_eye(eye: SchematicEye, rx: Prescription, vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM,
+def ametropic_eye(eye: SchematicEye, rx: Prescription, vertex_distance_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
                   wavelength_nm: float | None = None, *, along_visual_axis: bool = True) -> SchematicEye:
     """``eye`` made to have the spectacle prescription ``rx`` worn ``vertex_distance_mm`` in front of its corneal
     vertex, at ``wavelength_nm`` (default: the model's reference wavelength), along its visual axis (module doc);

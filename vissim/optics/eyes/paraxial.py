@@ -25,7 +25,7 @@ from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.media import GrinMedium
-from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.models import SchematicEye
 
 __all__ = ["GRIN_STEPS", "LCA_REFERENCE_NM", "ParaxialEye", "grin_matrix", "matrix_to_surface",
@@ -162,7 +162,7 @@ def refraction_diopters(eye: SchematicEye, wavelength_nm: float, steps: int = GR
     return 1000.0 * a / b
 
 
-def spectacle_refraction_diopters(eye: SchematicEye, wavelength_nm: float, vertex_distance_mm: float = SPECTACLE_VERTEX_DISTANCE_MM) -> float:
+def spectacle_refraction_diopters(eye: SchematicEye, wavelength_nm: float, vertex_distance_mm: float = DEFAULT_SPECTACLE_VERTEX_MM) -> float:
     """The thin spectacle lens, D, at ``vertex_distance_mm`` in front of the corneal vertex whose
     image of infinity is the far point: K / (1 + d K), d in metres, K the corneal-plane refraction."""
     d_m = checked_vertex_distance_mm(vertex_distance_mm) / 1000.0

@@ -29,13 +29,12 @@ import numpy as np
 
 from vissim.checks import positive_number
 from vissim.optics.eyes.ametropia import far_point_vergence_matrix
-from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.field_blur import blur_eye, node_field_deg
 from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.eyes.sight import chief_pupil_point_mm, eye_to_world_rotation
-from vissim.optics.eyes.wavefront import field_direction
+from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, field_direction
 from vissim.optics.prescription import Prescription
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import (TrialLensSetup, thesis_table_4_2_power, trial_lens_effect,
@@ -54,12 +53,21 @@ class EyeView:
     chart_distance_m: float
     field_deg: tuple[float, float] = (0.0, 0.0)
     lens: object = None
-    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
+    vertex_mm: float | None = None
 
     def __post_init__(self) -> None:
         checked_eye(self.eye, "EyeView")
         positive_number(self.chart_distance_m, "chart distance", "m")
         object.__setattr__(self, "field_deg", tuple(float(v) for v in self.field_deg))
+        if self.vertex_mm is None:  # the lens at the eye's own spectacle plane, where its prescription is measured
+            object.__setattr__(self, "vertex_mm", self.eye.vertex_mm)
+
+    @property
+    def entrance_pupil_mm(self) -> float:
+        """The eye's entrance pupil, mm: given, or the one its iris gives at its reference wavelength."""
+        if self.eye.pupil_mm is not None:
+            return self.eye.pupil_mm
+        return entrance_pupil_from_iris_mm(self.eye.optics, self.eye.iris_mm, self.eye.reference_wavelength_nm)
 
     # -- the lens and the eye's own refraction ---------------------------------------------------------
     def lens_effect(self, to_pupil_mm: float) -> tuple[np.ndarray, np.ndarray]:
@@ -84,15 +92,15 @@ class EyeView:
         added, magnification = self.lens_effect(0.0)
         vergence = added - np.eye(2) / self.chart_distance_m
         rx = Prescription.from_power_matrix(self.eye_refraction(0.0))
-        setup = ViewingSetup.eye(rx, self.eye.pupil_mm, self.eye.accommodation_diopters, vergence_diopters=vergence,
-                                 wavelength_nm=wavelength_nm)
+        setup = ViewingSetup.eye(rx, self.entrance_pupil_mm, self.eye.accommodation_diopters,
+                                 vergence_diopters=vergence, wavelength_nm=wavelength_nm)
         return setup, magnification
 
     def thesis_setup(self, wavelength_nm: float) -> ViewingSetup:
         """The thesis's setup: the eye's prescription, the lens's P / (1 - dP) (its sphere), the chart at infinity."""
         power = 0.0 if self.lens is None else thesis_table_4_2_power(self.lens.sphere_diopters, self.vertex_mm)
         rx = Prescription.from_power_matrix(self.eye_refraction(0.0))
-        return ViewingSetup.eye(rx, self.eye.pupil_mm, self.eye.accommodation_diopters, vergence_diopters=power,
+        return ViewingSetup.eye(rx, self.entrance_pupil_mm, self.eye.accommodation_diopters, vergence_diopters=power,
                                 wavelength_nm=wavelength_nm)
 
     # -- the schematic eye ------------------------------------------------------------------------------
@@ -129,7 +137,7 @@ class EyeView:
         rows, cols = np.indices(shape)
         to_world = eye_to_world_rotation(optics, self.field_deg)
         sight = field_direction(optics, node_field_deg(rows, cols, shape, step_arcmin, self.field_deg)) @ to_world.T
-        pupil = chief_pupil_point_mm(optics, self.field_deg, self.eye.pupil_mm)  # the trace's frame: z to the retina
+        pupil = chief_pupil_point_mm(optics, self.field_deg, self.entrance_pupil_mm)  # the trace's frame: z to the retina
         start = to_world @ np.array([pupil[0], pupil[1], -pupil[2]])
         distance_mm = 1000.0 * self.chart_distance_m
         reach = (distance_mm - start[2]) / sight[..., 2]

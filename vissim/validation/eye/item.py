@@ -39,8 +39,9 @@ def applies(where: str, configuration) -> bool:
 
 def item_ray_psf(configuration, settings, lens, scene: EyeScene):
     c = configuration
-    return ray_psf(c.eye(), field_deg=c.field_deg, chart_distance_m=c.chart_distance_m, lens=lens,
-                   vertex_mm=c.vertex_mm, wavelengths_nm=scene.wavelengths, weights=scene.weights,
+    view = scene.view  # the rendered bench's eye, lens and chart
+    return ray_psf(view.eye, field_deg=view.field_deg, chart_distance_m=view.chart_distance_m, lens=lens,
+                   vertex_mm=view.vertex_mm, wavelengths_nm=scene.wavelengths, weights=scene.weights,
                    sensor_wavelength_nm=c.wavelength_nm,
                    arcmin_per_px=c.arcmin_per_px, oversample=settings.oversample, rays_across=settings.rays_across)
 

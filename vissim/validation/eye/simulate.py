@@ -104,9 +104,9 @@ class EyeScene:
     def __init__(self, configuration, settings, built):
         self.c, self.s = configuration, settings
         self.lens, self.chart_half_arcmin = built.lens, built.chart_half_arcmin  # `renders.EyeBuilt`
-        self.view = EyeView(configuration.eye(), configuration.chart_distance_m, configuration.field_deg, built.lens,
-                            configuration.vertex_mm)
-        self.the_eye = self.view.eye  # the one `Eye` of the item: rendered, traced and simulated
+        bench = built.bench  # the rendered bench: its eye is the one `Eye` of the item, rendered, traced and simulated
+        self.view = EyeView(bench.eye, bench.chart_distance_m, bench.field_deg, built.lens, bench.vertex_mm)
+        self.the_eye = self.view.eye
         self.eye = self.the_eye.optics
         self._charts: dict = {}  # (step, shape) -> `scene_chart`'s image: every simulation of the item draws it
         self.photopic = configuration.spectrum == "photopic"
