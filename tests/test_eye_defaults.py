@@ -2,7 +2,9 @@
 
 A default is a function parameter's default, a dataclass field's, a ``dict.get``'s fallback or an argparse
 ``default=``. For the model it is the literal name; for a pupil or a spectacle vertex, a number given to a name
-that holds one (``pupil_mm``, ``vertex_mm``, ...). A study's own choice gets its own named constant.
+that holds one (``pupil_mm``, ``vertex_mm``, ...); in the eye's own modules (a path naming an eye), also a number
+or letter given to the light, the chart or the image (``wavelength_nm``, ``logmar``, ``arcmin_per_px``, ...). A
+study's own choice gets its own named constant.
 """
 
 from __future__ import annotations
@@ -17,6 +19,10 @@ PACKAGE = Path(__file__).resolve().parents[1] / "vissim"
 ALLOWED = {"optics/eyes/defaults.py", "optics/eyes/models.py", "optics/eyes/media.py"}
 #: Names that hold an eye's pupil or spectacle vertex.
 EYE_NUMBER_NAMES = ("pupil_mm", "iris_mm", "vertex_mm", "rx_vertex_mm")
+#: Names that hold the eye's light, chart or image, in the eye's own modules (a path naming an eye): the DSLR and
+#: depth benches keep the thesis's chart and sampling.
+EYE_VIEW_NAMES = ("wavelength_nm", "wavelengths_nm", "logmar", "letter", "chart_distance_m", "arcmin_per_px",
+                  "size_px")
 
 
 def _defaults(tree: ast.AST):
@@ -41,6 +47,14 @@ def _defaults(tree: ast.AST):
                     yield "default=", keyword.value, keyword.value.lineno
 
 
+def _literal(value: ast.AST) -> bool:
+    """A number or letter written out (alone or in a tuple); None and keywords such as "auto" are not defaults."""
+    if isinstance(value, ast.Tuple):
+        return bool(value.elts) and all(_literal(v) for v in value.elts)
+    return isinstance(value, ast.Constant) and (isinstance(value.value, (int, float)) and not isinstance(value.value, bool)
+                                                or isinstance(value.value, str) and len(value.value) == 1)
+
+
 def _literal_defaults(package: Path = PACKAGE):
     found = []
     for path in sorted(package.rglob("*.py")):
@@ -48,6 +62,9 @@ def _literal_defaults(package: Path = PACKAGE):
         if relative in ALLOWED:
             continue
         for name, value, line in _defaults(ast.parse(path.read_text(), str(path))):
+            if "eye" in relative and name.endswith(EYE_VIEW_NAMES) and _literal(value):
+                found.append(f"{relative}:{line} {name} = {ast.unparse(value)}")
+                continue
             if not isinstance(value, ast.Constant):
                 continue
             if value.value == DEFAULT_EYE_MODEL:
@@ -66,4 +83,6 @@ def test_the_scan_finds_a_literal_default_where_there_is_one(tmp_path):
     """The scan itself: a planted literal default of each kind is found (it can fail)."""
     (tmp_path / "planted.py").write_text(
         "def f(model='navarro-1985', *, pupil_mm=3.0):\n    return {}.get('vertex_mm', 12.0)\n")
-    assert len(_literal_defaults(tmp_path)) == 3
+    (tmp_path / "eye_planted.py").write_text(
+        "def g(wavelengths_nm=(550.0,), letter='K', logmar=0.5, size_px='auto', wavelength_nm=None):\n    pass\n")
+    assert len(_literal_defaults(tmp_path)) == 6

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-NEEDS_MITSUBA = {"t2_bench_render_vs_simulation.py", "t3_small_campaign.py", "t4_depth_scene.py"}  # render with Mitsuba (a dependency)
+NEEDS_MITSUBA = {"t2_bench_render_vs_simulation.py", "t3_small_campaign.py", "t4_depth_scene.py",
+                 "t7_eye_campaign_item.py"}  # render with Mitsuba (a dependency)
 ROOT = Path(__file__).resolve().parents[1]
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("t*.py"))
 FIGURES = {"t2_bench_render_vs_simulation.py": ["t2_render_vs_simulation.png"],
@@ -16,7 +17,8 @@ FIGURES = {"t2_bench_render_vs_simulation.py": ["t2_render_vs_simulation.png"],
            "t3_small_campaign.py": ["t3_run/figure_geometric.png", "t3_run/figure_wave.png", "t3_run/report.html"],
            "t4_depth_scene.py": ["t4_depth.png"],
            "t5_fit_prescription.py": ["t5_fit.png"],
-           "t6_atv_data.py": ["t6_subject_001_fits.png"]}
+           "t6_atv_data.py": ["t6_subject_001_fits.png"],
+           "t7_eye_campaign_item.py": ["t7_eye_item.png"]}
 
 
 def test_every_tutorial_is_listed_here():

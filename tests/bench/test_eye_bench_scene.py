@@ -17,6 +17,7 @@ from vissim.bench.eye.scene import eye_scene
 from vissim.bench.eye.sensor_eyes import sensor_eye
 from vissim.bench.lenses.holder import LENS_GAP_MM, lens_clear_aperture_mm
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import DEFAULT_EYE_LIGHT_NM
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.trial_lens import TrialLens
 
@@ -40,10 +41,10 @@ def test_the_scene_holds_the_eye_sensor_handed_the_eye_the_chart_and_the_lens():
     assert sensor["type"] == "vissim_schematic_eye" and sensor_eye(sensor["eye_key"]) is b.eye
     assert sensor["sampler"] == {"type": "independent", "sample_count": 4, "seed": 3}
     assert (sensor["film"]["height"], sensor["film"]["width"]) == (16, 24)
-    assert sensor["field_x_deg"] == 5.0 and "wavelength_nm" not in sensor
+    assert sensor["field_x_deg"] == 5.0 and sensor["wavelength_nm"] == DEFAULT_EYE_LIGHT_NM  # the one default light
     assert scene["chart"]["to_world"][2][3] == 6000.0
     assert scene["lens_0"]["to_world"][2][3] == b.vertex_mm
-    assert scene["lens_0"]["bsdf"]["wavelength_nm"] == b.eye.optics.reference_wavelength_nm
+    assert scene["lens_0"]["bsdf"]["wavelength_nm"] == DEFAULT_EYE_LIGHT_NM  # the glass in the same light
     assert "thinlens" not in repr(scene)
 
 
@@ -62,7 +63,8 @@ def test_the_lens_is_sized_by_the_holders_rule_for_the_eyes_beam_and_the_widest_
 def test_the_chart_texture_covers_the_image_and_the_lens_blur():
     plain, blurred = bench(lenses=()), bench(lenses=(TrialLens(4.0),))
     rows, cols = plain.chart_half_arcmin
-    assert rows >= 0.5 * 16 * 1.0 and cols >= 0.5 * 24 * 1.0  # the field, in arcmin
+    step = plain.arcmin_per_px
+    assert rows >= 0.5 * 16 * step and cols >= 0.5 * 24 * step  # the field, in arcmin
     assert blurred.chart_half_arcmin[0] > rows  # + 4 D over a 3 mm pupil: about 41 arcmin of blur
 
 

@@ -87,7 +87,7 @@ def _myope_scenes(chart_distance_m: float):
         {"item": [{"name": "m", "rx": -3.0}, {"name": "ms", "rx": -3.0, "lens": -3.0}, {"name": "e"}]},
         {"kind": "eye", "vertex_mm": 12.0}, "eye.toml")
     moved = [dataclasses.replace(c, chart_distance_m=chart_distance_m) for c in configurations]
-    return [EyeScene(c, settings, build_bench(c, settings)) for c in moved]
+    return [EyeScene.of_item(c, settings, build_bench(c, settings)) for c in moved]
 
 
 def test_a_myope_in_its_spectacles_has_no_defocus_left():
@@ -96,17 +96,15 @@ def test_a_myope_in_its_spectacles_has_no_defocus_left():
     uncorrected D = +2.895753; its -3 D lens 12 mm in front brings light from infinity to the same vergence at the
     cornea, D = 0.  The thick lens (1 mm, its back vertex at 12 mm, back-vertex power -3 D) does it exactly; the
     chart's 1e-6 D is left.  The thesis setup (the lens's P / (1 - dP), the chart at infinity) likewise, at 6 m."""
-    from vissim.validation.eye.simulate import thesis_setup
-
     myope, corrected, emmetrope = _myope_scenes(1e6)
     at_cornea = -3.0 / (1.0 - 0.012 * -3.0)
-    assert np.asarray(myope.reduced_setup()[0].defocus_matrix_diopters) == pytest.approx(
+    assert np.asarray(myope.view.reduced_setup(myope.light.focus_nm)[0].defocus_matrix_diopters) == pytest.approx(
         -at_cornea * np.eye(2) - 1e-6 * np.eye(2), abs=1e-9)
-    assert np.asarray(corrected.reduced_setup()[0].defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=2e-6)
-    assert np.asarray(emmetrope.reduced_setup()[0].defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=2e-6)
+    assert np.asarray(corrected.view.reduced_setup(corrected.light.focus_nm)[0].defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=2e-6)
+    assert np.asarray(emmetrope.view.reduced_setup(emmetrope.light.focus_nm)[0].defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=2e-6)
     myope, corrected, _ = _myope_scenes(6.0)
-    assert np.asarray(thesis_setup(corrected).defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=1e-12)
-    assert np.asarray(thesis_setup(myope).defocus_matrix_diopters) == pytest.approx(-at_cornea * np.eye(2), abs=1e-12)
+    assert np.asarray(corrected.view.thesis_setup(corrected.light.focus_nm).defocus_matrix_diopters) == pytest.approx(np.zeros((2, 2)), abs=1e-12)
+    assert np.asarray(myope.view.thesis_setup(myope.light.focus_nm).defocus_matrix_diopters) == pytest.approx(-at_cornea * np.eye(2), abs=1e-12)
 
 
 def test_the_schematic_eye_is_the_myopes_own_long_eye_seeing_the_lights_vergence_at_its_entrance_pupil():
@@ -121,16 +119,16 @@ def test_the_schematic_eye_is_the_myopes_own_long_eye_seeing_the_lights_vergence
     from vissim.optics.eyes.refraction import paraxial_prescription
 
     myope, corrected, emmetrope = _myope_scenes(6.0)
-    depth_m = 1e-3 * entrance_pupil_position_mm(mean_meridian_eye(myope.eye), myope.mono_nm)
+    depth_m = 1e-3 * entrance_pupil_position_mm(mean_meridian_eye(myope.view.eye.optics), myope.light.focus_nm)
     chart = -1.0 / (6.0 + depth_m)
-    assert myope.schematic_vergence()[0] == pytest.approx(chart * np.eye(2), abs=1e-9)
-    assert emmetrope.schematic_vergence()[0] == pytest.approx(chart * np.eye(2), abs=1e-9)
+    assert myope.view.vergence_at_pupil(myope.light.focus_nm)[0] == pytest.approx(chart * np.eye(2), abs=1e-9)
+    assert emmetrope.view.vergence_at_pupil(emmetrope.light.focus_nm)[0] == pytest.approx(chart * np.eye(2), abs=1e-9)
     gap_m = 0.012 + depth_m
     through_lens = -1.0 / (6.0 - 0.012) - 3.0
     at_pupil = through_lens / (1.0 - gap_m * through_lens)
-    assert corrected.schematic_vergence()[0] == pytest.approx(at_pupil * np.eye(2), abs=1e-3)
-    assert myope.the_eye is corrected.the_eye and str(myope.the_eye.rx) == "-3.00 DS"
-    front = eye_wavefront(myope.the_eye.with_pupil(pupil_mm=1.0))  # at its reference wavelength, as its Rx is
+    assert corrected.view.vergence_at_pupil(corrected.light.focus_nm)[0] == pytest.approx(at_pupil * np.eye(2), abs=1e-3)
+    assert myope.view.eye is corrected.view.eye and str(myope.view.eye.rx) == "-3.00 DS"
+    front = eye_wavefront(myope.view.eye.with_pupil(pupil_mm=1.0))  # at its reference wavelength, as its Rx is
     traced = paraxial_prescription(front.coefficients_um, 1.0).sphere_diopters
     assert traced == pytest.approx(-3.0 / (1.0 + 3.0 * gap_m), abs=0.01)
 

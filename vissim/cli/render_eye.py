@@ -17,6 +17,7 @@ from vissim.checks import size_text
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg, add_trial_lens_args, field_deg_from_text,
                                 refuse_existing, size_from_text, trial_lens_powers)
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import DEFAULT_EYE_LIGHT_NM
 from vissim.render.eye_render import EyeRender
 
 _DEFAULT = {field.name: field.default for field in dataclasses.fields(EyeRender)}  # the one set of defaults
@@ -53,7 +54,7 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
                              "the image stays centred on the chart (default {:g},{:g})".format(*_DEFAULT["field_deg"]))
     colour = parser.add_mutually_exclusive_group()
     colour.add_argument("--wavelength-nm", type=float, metavar="NM",
-                        help="monochromatic light of this wavelength (default: the model's reference wavelength)")
+                        help=f"monochromatic light of this wavelength (default {DEFAULT_EYE_LIGHT_NM:g})")
     colour.add_argument("--spectrum", choices=("photopic",),
                         help="photopic: white light over the visible spectrum, each ray at its own wavelength, the "
                              "image weighted by the eye's photopic sensitivity V(λ)")

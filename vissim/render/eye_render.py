@@ -8,7 +8,7 @@ its back vertex ``vertex_mm`` in front of the eye, the schematic-eye sensor at t
 turned so that the chart's centre lies at ``field_deg``) and `render_eye_bench` renders a bench at a
 sample count and seed (the scene: `vissim.bench.eye.scene.eye_scene`).
 
-Wavelength: ``wavelength_nm`` (monochromatic; default the model's reference) on the mono
+Wavelength: ``wavelength_nm`` (monochromatic; default `DEFAULT_EYE_LIGHT_NM`, as in a campaign) on the mono
 variant, or ``spectrum="photopic"``: the spectral variant, hero wavelength per path, the film
 developing luminance (CIE ȳ = V(λ)).  Determinism: `vissim.render.run.render_scene` (fixed-order
 accumulation): the same seed gives the same pixels.
@@ -23,7 +23,9 @@ from dataclasses import dataclass
 from vissim.bench.eye.bench import EyeBench
 from vissim.bench.eye.scene import eye_scene
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_MODEL,
+                                         DEFAULT_EYE_PUPIL_MM, DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER,
+                                         DEFAULT_LETTER_LOGMAR, DEFAULT_SPECTACLE_VERTEX_MM)
 
 __all__ = ["EyeRender", "eye_bench", "eye_scene_dict", "render_eye", "render_eye_bench"]
 
@@ -39,13 +41,13 @@ class EyeRender:
     field_deg: tuple[float, float] = (0.0, 0.0)
     wavelength_nm: float | None = None
     spectrum: str = "mono"
-    size_px: tuple[int, int] = (64, 64)
-    arcmin_per_px: float = 1.0
+    size_px: tuple[int, int] = DEFAULT_EYE_SIZE_PX
+    arcmin_per_px: float = DEFAULT_EYE_ARCMIN_PER_PX
     spp: int = 64
     seed: int = 0
-    chart_distance_m: float = 6.0
-    letter: str = "K"
-    logmar: float = 1.0
+    chart_distance_m: float = DEFAULT_CHART_DISTANCE_M
+    letter: str = DEFAULT_LETTER
+    logmar: float = DEFAULT_LETTER_LOGMAR
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     rx: object = None  # a Prescription (or its text): the eye made to need it at the spectacle plane vertex_mm
@@ -84,6 +86,7 @@ class EyeRender:
 
             object.__setattr__(self, "rx", prescription_from(self.rx))
         object.__setattr__(self, "surfaces", tuple(tuple(t) for t in self.surfaces))
+        object.__setattr__(self, "wavelength_nm", EyeBench.light_nm(self.wavelength_nm, self.spectrum))
         if (self.pupil_mm is None) == (self.iris_mm is None):
             raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
         eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,

@@ -53,6 +53,7 @@ from vissim.bench.eye.scene import SENSOR_TYPE
 from vissim.bench.eye.sensor_eyes import sensor_eye
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX
 from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
 from vissim.optics.eyes.retina_map import chief_ray_radii_mm
@@ -147,7 +148,7 @@ def _make_class(mi, dr):
                 self.mono_scale = 1.0 / (y_bar * mi.MI_CIE_Y_NORMALIZATION)
             self.wavelength_nm = self.fixed_wavelength_nm or eye.reference_wavelength_nm
             self.pupil_mm, self.iris_mm = _pupils(eye, the_eye.pupil_mm, the_eye.iris_mm, self.wavelength_nm)
-            self.arcmin_per_px = checked_arcmin_per_px(float(props.get("arcmin_per_px", 1.0)))
+            self.arcmin_per_px = checked_arcmin_per_px(float(props.get("arcmin_per_px", DEFAULT_EYE_ARCMIN_PER_PX)))
             self.field_deg = (float(props.get("field_x_deg", 0.0)), float(props.get("field_y_deg", 0.0)))
             self.far_clip = float(props.get("far_clip", 1.0e7))
             width, height = self.film().size()

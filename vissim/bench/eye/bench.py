@@ -17,7 +17,7 @@ cornea, the others stacked towards the chart with ``lens_gap_mm`` of air), eye.
 * **Sensor**: the schematic-eye sensor (`vissim.render.schematic_eye_sensor`) of the `Eye` ``eye``,
   turned so that the chart's centre lies at the field angle ``field_deg`` (OSA's frame: x the
   examiner's right, the observer's left; y up), ``size_px`` pixels of ``arcmin_per_px``; light of
-  ``wavelength_nm`` (None: the eye's reference wavelength) or the ``photopic`` spectrum.
+  ``wavelength_nm`` (None: `DEFAULT_EYE_LIGHT_NM`) or the ``photopic`` spectrum.
 
 `vissim.bench.eye.scene.eye_scene` builds its Mitsuba scene dict.  Nothing here imports Mitsuba.
 """
@@ -29,6 +29,8 @@ import functools
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from vissim.bench.lenses.holder import LENS_GAP_MM, lens_back_vertex_z_mm, lens_clear_aperture_mm, physical_lens
 from vissim.bench.scene_parts import chart_texture_shape
 from vissim.checks import EYE_RENDER_MAX_FIELD_DEG, EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE
@@ -37,13 +39,16 @@ from vissim.checks import finite_number, instance_of, number_within, positive_nu
 from vissim.checks import size_px as check_size_px
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM,
+                                         DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER, DEFAULT_LETTER_LOGMAR,
+                                         DEFAULT_SPECTACLE_VERTEX_MM)
 from vissim.optics.eyes.eye import Eye, surface_overrides
+from vissim.optics.eyes.viewing import EyeView
 from vissim.optics.setup import ViewingSetup
 from vissim.optics.trial_lens import CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup
 from vissim.units import arcmin_to_rad
 
-__all__ = ["EyeBench", "SPECTRA", "TEXELS_PER_PX", "BEAM_MARGIN"]
+__all__ = ["EyeBench", "SPECTRA", "TEXELS_PER_PX", "BEAM_MARGIN", "letter_in_visual_angle"]
 
 #: The light: one wavelength, or white light developed as luminance (CIE ȳ = V(λ)).
 SPECTRA = ("mono", "photopic")
@@ -58,16 +63,16 @@ class EyeBench:
     """Chart, lens stack and eye sensor of the eye bench (module doc); sampling (spp, seed) is the render's."""
 
     eye: Eye
-    chart_distance_m: float = 6.0
-    letter: str = "K"
-    logmar: float = 1.0
+    chart_distance_m: float = DEFAULT_CHART_DISTANCE_M
+    letter: str = DEFAULT_LETTER
+    logmar: float = DEFAULT_LETTER_LOGMAR
     lenses: tuple[TrialLens, ...] = ()
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     lens_gap_mm: float = LENS_GAP_MM
     refractive_index: float = CROWN_GLASS_INDEX
     field_deg: tuple[float, float] = (0.0, 0.0)
-    size_px: tuple[int, int] = (64, 64)
-    arcmin_per_px: float = 1.0
+    size_px: tuple[int, int] = DEFAULT_EYE_SIZE_PX
+    arcmin_per_px: float = DEFAULT_EYE_ARCMIN_PER_PX
     wavelength_nm: float | None = None
     spectrum: str = "mono"
     texels_per_px: float = TEXELS_PER_PX
@@ -86,13 +91,21 @@ class EyeBench:
         check_arcmin_per_px(self.arcmin_per_px)
         self.trial_lens_setup()  # validates the stack against the chart distance
 
+    @staticmethod
+    def light_nm(wavelength_nm: float | None, spectrum: str) -> float | None:
+        """The one wavelength of a ``spectrum`` light (`DEFAULT_EYE_LIGHT_NM` when none is given); None: photopic."""
+        if spectrum not in SPECTRA:
+            raise VissimInputError(f"spectrum must be one of {', '.join(SPECTRA)}, got {spectrum!r}")
+        if spectrum == "photopic":
+            if wavelength_nm is not None:
+                raise VissimInputError("give a wavelength (monochromatic) or the photopic spectrum, not both")
+            return None
+        if wavelength_nm is None:
+            return DEFAULT_EYE_LIGHT_NM
+        return number_within(wavelength_nm, "wavelength", "nm", EYE_RENDER_WAVELENGTH_RANGE_NM)
+
     def _check_light(self) -> None:
-        if self.spectrum not in SPECTRA:
-            raise VissimInputError(f"spectrum must be one of {', '.join(SPECTRA)}, got {self.spectrum!r}")
-        if self.spectrum == "photopic" and self.wavelength_nm is not None:
-            raise VissimInputError("give a wavelength (monochromatic) or the photopic spectrum, not both")
-        if self.wavelength_nm is not None:
-            number_within(self.wavelength_nm, "wavelength", "nm", EYE_RENDER_WAVELENGTH_RANGE_NM)
+        object.__setattr__(self, "wavelength_nm", self.light_nm(self.wavelength_nm, self.spectrum))
 
     def _check_chart(self) -> None:
         from vissim.charts import single_letter_spec
@@ -122,7 +135,7 @@ class EyeBench:
 
     @property
     def lens_wavelength_nm(self) -> float:
-        """The wavelength of a one-wavelength render's glass: ``wavelength_nm``, else the eye's reference."""
+        """The wavelength of a one-wavelength render's glass: ``wavelength_nm``, else (photopic) the eye's reference."""
         return self.wavelength_nm or self.eye.optics.reference_wavelength_nm
 
     # -- the lenses -----------------------------------------------------------------------
@@ -181,6 +194,28 @@ class EyeBench:
         mm_per_px, distance_mm = self.chart.mm_per_px, self.chart_distance_mm
         return tuple(60.0 * math.degrees(math.atan(0.5 * n * mm_per_px / distance_mm)) for n in self.texture_shape)
 
+    # -- what the eye sees -----------------------------------------------------------------
+    @functools.cached_property
+    def view(self) -> EyeView:
+        """The rendered eye looking at the chart through the rendered (thick) lens: the viewing physics
+        (`vissim.optics.eyes.viewing.EyeView`) the simulations of this bench use."""
+        if len(self.lenses) > 1:
+            raise VissimInputError(f"the eye's viewing physics takes one trial lens, the bench holds {len(self.lenses)}")
+        lens = self.physical_lenses[0] if self.lenses else None
+        return EyeView(self.eye, self.chart_distance_m, self.field_deg, lens, self.vertex_mm)
+
+    def seen_chart(self, step_arcmin: float, shape: tuple[int, int]) -> np.ndarray:
+        """The chart as the eye's pixels see it (`EyeView.chart_points_arcmin`: each pixel's line of sight from
+        the entrance pupil to the flat chart), ``shape`` pixels of ``step_arcmin`` centred on the chart; read-only."""
+        key = (float(step_arcmin), tuple(int(n) for n in shape))
+        if key not in self._seen_charts:
+            self._seen_charts[key] = _seen_chart(self, *key)
+        return self._seen_charts[key]
+
+    @functools.cached_property
+    def _seen_charts(self) -> dict:
+        return {}  # (step, shape) -> `seen_chart`: every simulation of an item draws it
+
     # -- records --------------------------------------------------------------------------
     def as_json(self) -> dict:
         """Everything the bench's render depends on but its sampling, as plain values."""
@@ -191,3 +226,39 @@ class EyeBench:
                 "refractive_index": self.refractive_index, "field_deg": self.field_deg, "size_px": self.size_px,
                 "arcmin_per_px": self.arcmin_per_px, "wavelength_nm": self.wavelength_nm, "spectrum": self.spectrum,
                 "texels_per_px": self.texels_per_px}
+
+
+@functools.lru_cache(maxsize=32)
+def letter_in_visual_angle(letter: str, logmar: float, distance_m: float, step_arcmin: float, shape: tuple[int, int],
+                           half_size_arcmin: tuple[float, float]) -> np.ndarray:
+    """The bench's letter (printed for ``distance_m``, `EyeBench.chart`) drawn in visual angle, centred, ``shape``
+    pixels of ``step_arcmin``; black beyond the chart's half size (rows, columns; arcmin)."""
+    from vissim.charts import optotype_tile
+
+    pixels = optotype_tile(letter, logmar, arcmin_per_px=step_arcmin, shape_px=shape,
+                           viewing_distance_m=distance_m, snap_to_pixels=False).pixels.astype(np.float64)
+    for axis, half in enumerate(half_size_arcmin):
+        offset = step_arcmin * np.abs(np.arange(shape[axis]) - (shape[axis] - 1) / 2.0)
+        outside = offset > half
+        if axis == 0:
+            pixels[outside, :] = 0.0
+        else:
+            pixels[:, outside] = 0.0
+    return pixels
+
+
+def _seen_chart(bench: EyeBench, step: float, shape: tuple[int, int]) -> np.ndarray:
+    from scipy import ndimage
+
+    draw = functools.partial(letter_in_visual_angle, bench.letter, bench.logmar, bench.chart_distance_m, step)
+    points = bench.view.chart_points_arcmin(shape, step)
+    if points is None:
+        seen = np.array(draw(shape, bench.chart_half_arcmin))
+    else:
+        base_shape = tuple(int(math.ceil(1.15 * n)) + 8 for n in shape)
+        base = draw(base_shape, bench.chart_half_arcmin)
+        row_arcmin, col_arcmin = points
+        coords = [row_arcmin / step + (base_shape[0] - 1) / 2.0, col_arcmin / step + (base_shape[1] - 1) / 2.0]
+        seen = ndimage.map_coordinates(base, coords, order=1, mode="nearest")
+    seen.setflags(write=False)
+    return seen

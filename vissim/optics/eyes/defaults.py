@@ -5,9 +5,12 @@
 
 from __future__ import annotations
 
+from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
 
-__all__ = ["DEFAULT_EYE_MODEL", "DEFAULT_EYE_PUPIL_MM", "DEFAULT_SPECTACLE_VERTEX_MM"]
+__all__ = ["DEFAULT_EYE_MODEL", "DEFAULT_EYE_PUPIL_MM", "DEFAULT_SPECTACLE_VERTEX_MM", "DEFAULT_EYE_LIGHT_NM",
+           "PHOTOPIC_FOCUS_NM", "PHOTOPIC_STEP_NM", "DEFAULT_CHART_DISTANCE_M", "DEFAULT_LETTER",
+           "DEFAULT_LETTER_LOGMAR", "DEFAULT_EYE_ARCMIN_PER_PX", "DEFAULT_EYE_SIZE_PX"]
 
 #: The schematic eye used when none is named: Navarro, Santamaria & Bescos 1985.
 DEFAULT_EYE_MODEL = "navarro-1985"
@@ -16,3 +19,12 @@ DEFAULT_EYE_MODEL = "navarro-1985"
 DEFAULT_EYE_PUPIL_MM = 4.0
 #: Where a spectacle prescription is measured: this far in front of the corneal vertex, mm.
 DEFAULT_SPECTACLE_VERTEX_MM = SPECTACLE_VERTEX_DISTANCE_MM
+#: The light an eye is shown when none is named (a render, a campaign item): vissim's one default wavelength, nm.
+#: The eye's own reference wavelength (its paraxial numbers, its prescription's light) is its model's.
+DEFAULT_EYE_LIGHT_NM = DEFAULT_WAVELENGTH_NM
+#: White light: where the reduced eye and the thesis are in focus (V(λ)'s peak), and its sampling, nm.
+PHOTOPIC_FOCUS_NM, PHOTOPIC_STEP_NM = 555.0, 25.0
+#: The chart: one Sloan letter, its size (a 16 arcmin letter of 3.2 arcmin strokes), its distance (m).
+DEFAULT_LETTER, DEFAULT_LETTER_LOGMAR, DEFAULT_CHART_DISTANCE_M = "K", 0.5, 6.0
+#: The eye's image: pixel size (arcmin) and size (rows, columns): twice the default letter.
+DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_SIZE_PX = 0.5, (64, 64)

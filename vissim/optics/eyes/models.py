@@ -296,6 +296,14 @@ EYE_MODELS = {
 }
 
 
+def register_eye_model(name: str, builder) -> None:
+    """Add a model: ``builder(accommodation_diopters)`` returns its `SchematicEye` (refusing accommodations it
+    cannot take). Every entry point that takes an eye's name then takes ``name``; a name taken is refused."""
+    if name in EYE_MODELS:
+        raise VissimInputError(f"an eye model named {name!r} is registered already")
+    EYE_MODELS[name] = builder
+
+
 def eye_model(name: str, accommodation_diopters: float = 0.0) -> SchematicEye:
     """The model ``name`` (a key of `EYE_MODELS`) at ``accommodation_diopters``.
 

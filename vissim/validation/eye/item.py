@@ -37,13 +37,13 @@ def applies(where: str, configuration) -> bool:
             "off axis": tuple(configuration.field_deg) != (0.0, 0.0), "lens": configuration.lens is not None}[where]
 
 
-def item_ray_psf(configuration, settings, lens, scene: EyeScene):
-    c = configuration
-    view = scene.view  # the rendered bench's eye, lens and chart
-    return ray_psf(view.eye, field_deg=view.field_deg, chart_distance_m=view.chart_distance_m, lens=lens,
-                   vertex_mm=view.vertex_mm, wavelengths_nm=scene.wavelengths, weights=scene.weights,
-                   sensor_wavelength_nm=c.wavelength_nm,
-                   arcmin_per_px=c.arcmin_per_px, oversample=settings.oversample, rays_across=settings.rays_across)
+def item_ray_psf(scene: EyeScene):
+    """The ray PSF of the rendered bench's eye, lens and chart, in its light (`rays.ray_psf`)."""
+    view, light, bench = scene.view, scene.light, scene.bench
+    return ray_psf(view.eye, field_deg=view.field_deg, chart_distance_m=view.chart_distance_m, lens=view.lens,
+                   vertex_mm=view.vertex_mm, wavelengths_nm=light.wavelengths_nm, weights=light.weights,
+                   sensor_wavelength_nm=bench.wavelength_nm, arcmin_per_px=bench.arcmin_per_px,
+                   oversample=scene.oversample, rays_across=scene.rays_across)
 
 
 def chart_offset_px(truth: np.ndarray, scene: EyeScene, ray, margin: int) -> tuple[tuple[float, float], dict, np.ndarray]:
@@ -75,11 +75,11 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
     truth_a = np.asarray(images["truth_0"], np.float64).squeeze()
     truth_b = np.asarray(images["truth_1"], np.float64).squeeze()
     floor = noise_floor(truth_a, truth_b, IMAGE_PEAK_VALUE)
-    scene = EyeScene(configuration, settings, built)
-    ray = item_ray_psf(configuration, settings, built.lens, scene)
+    scene = EyeScene.of_item(configuration, settings, built)
+    ray = item_ray_psf(scene)
     margin = margin_px(ray, settings.oversample)
     offset, placement, traced = chart_offset_px(truth_a, scene, ray, margin)
-    with_diffraction = np.asarray(blur_image(truth_a, diffraction_psf(scene), arcmin_per_px=configuration.arcmin_per_px,
+    with_diffraction = np.asarray(blur_image(truth_a, diffraction_psf(scene), arcmin_per_px=scene.bench.arcmin_per_px,
                                              padding="edge"), np.float64)
     swaps = [name for name, where in COSTS.values() if applies(where, configuration)]
     rows, saved = [], {}

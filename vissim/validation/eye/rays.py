@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.sight import film_field_deg
 from vissim.optics.eyes.wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
                                           trace_to_retina)
@@ -122,8 +122,8 @@ def _magnification(eye, lens_setup, retina: _Retina, field_deg, distance_mm: flo
 
 
 def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
-            wavelengths_nm=(550.0,), weights=(1.0,), sensor_wavelength_nm: float | None = None,
-            arcmin_per_px: float = 1.0, oversample: int = 4, rays_across: int = RAYS_ACROSS_IRIS,
+            wavelengths_nm=(DEFAULT_EYE_LIGHT_NM,), weights=(1.0,), sensor_wavelength_nm: float | None = None,
+            arcmin_per_px: float = DEFAULT_EYE_ARCMIN_PER_PX, oversample: int = 4, rays_across: int = RAYS_ACROSS_IRIS,
             seed: int = 0) -> RayPsf:
     """The ray PSF (module doc) of the rendered `Eye` ``the_eye`` (its optics: ametropic when it has a
     prescription; its entrance pupil): ``lens`` a thick `TrialLens` (as rendered) or None, its back vertex

@@ -32,19 +32,9 @@ class EyeSpec:
 
 @dataclass(frozen=True)
 class EyeBuilt:
-    """A configuration built once: its bench, with what the simulations need of the rendered scene."""
+    """A configuration built once: its bench (the simulations read the rendered scene from it)."""
 
     bench: EyeBench
-
-    @property
-    def lens(self) -> TrialLens | None:
-        """The trial lens as meshed (thick; None: no lens)."""
-        return self.bench.physical_lenses[0] if self.bench.lenses else None
-
-    @property
-    def chart_half_arcmin(self) -> tuple[float, float]:
-        """The chart texture's half size (rows, columns), arcmin: beyond it the scene is black."""
-        return self.bench.chart_half_arcmin
 
 
 def configuration_bench(configuration) -> EyeBench:

@@ -21,7 +21,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM,
+                                         DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER,
+                                         DEFAULT_LETTER_LOGMAR, DEFAULT_SPECTACLE_VERTEX_MM)
 from vissim.optics.eyes.eye import SURFACE_OVERRIDES, eye_from_fields
 from vissim.optics.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
@@ -45,9 +47,9 @@ class EyeSettings:
 
     spp: int = 256
     seeds: tuple[int, int] = (1, 2)
-    size_px: tuple[int, int] = (64, 64)
-    arcmin_per_px: float = 0.5
-    chart_distance_m: float = 6.0
+    size_px: tuple[int, int] = DEFAULT_EYE_SIZE_PX
+    arcmin_per_px: float = DEFAULT_EYE_ARCMIN_PER_PX
+    chart_distance_m: float = DEFAULT_CHART_DISTANCE_M
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     oversample: int = 2
     rays_across: int = 161
@@ -63,16 +65,16 @@ class EyeConfiguration:
     accommodation_diopters: float = 0.0
     field_deg: tuple[float, float] = (0.0, 0.0)
     spectrum: str = "mono"
-    wavelength_nm: float | None = 550.0
+    wavelength_nm: float | None = DEFAULT_EYE_LIGHT_NM
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
     rx: str | None = None  # the eye's spectacle prescription at vertex_mm (canonical text); None: the model's eye
-    letter: str = "K"
-    logmar: float = 0.5
+    letter: str = DEFAULT_LETTER
+    logmar: float = DEFAULT_LETTER_LOGMAR
     surfaces: tuple = ()  # sorted (surface name, field, value) triples: the model's surfaces altered
     # copied from the settings (so each item's key holds what its renders depend on)
-    size_px: tuple[int, int] = (64, 64)
-    arcmin_per_px: float = 0.5
-    chart_distance_m: float = 6.0
+    size_px: tuple[int, int] = DEFAULT_EYE_SIZE_PX
+    arcmin_per_px: float = DEFAULT_EYE_ARCMIN_PER_PX
+    chart_distance_m: float = DEFAULT_CHART_DISTANCE_M
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
 
     def as_json(self) -> dict:
@@ -144,7 +146,7 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
     unknown = set(entry) - set(ITEM_KEYS)
     if unknown:
         raise field_error(source, where, f"unknown key(s) {sorted(unknown)}; known: {', '.join(ITEM_KEYS)}")
-    spectrum, wavelength = _light(entry.get("light", 550.0), source, f"{where}.light")
+    spectrum, wavelength = _light(entry.get("light", DEFAULT_EYE_LIGHT_NM), source, f"{where}.light")
     trial = lens(entry["lens"], source, f"{where}.lens") if "lens" in entry else None
     trial = None if trial is None or (trial.sphere_diopters, trial.cylinder_diopters) == (0.0, 0.0) else (
         trial.sphere_diopters, trial.cylinder_diopters, trial.axis_deg)
@@ -158,8 +160,8 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
         spectrum=spectrum, wavelength_nm=wavelength, lens=trial,
         rx=_rx(entry["rx"], source, f"{where}.rx") if "rx" in entry else None,
         surfaces=_surfaces(entry.get("surfaces", {}), source, f"{where}.surfaces"),
-        letter=text(entry.get("letter", "K"), source, f"{where}.letter"),
-        logmar=number(entry.get("logmar", 0.5), source, f"{where}.logmar", "logMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1]),
+        letter=text(entry.get("letter", DEFAULT_LETTER), source, f"{where}.letter"),
+        logmar=number(entry.get("logmar", DEFAULT_LETTER_LOGMAR), source, f"{where}.logmar", "logMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1]),
         size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
         vertex_mm=settings.vertex_mm)
     try:  # the model's name and its own accommodation range; the altered and the ametropic eye's own checks
