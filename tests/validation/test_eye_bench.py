@@ -19,7 +19,9 @@ import pytest
 
 from vissim.errors import VissimInputError
 from vissim.validation.engine.validate import validate
+from vissim.optics.prescription import Prescription
 from vissim.validation.eye.rays import ray_psf
+from vissim.validation.eye.report import configuration_label
 from vissim.validation.eye.schema import read_campaign
 
 TOY = """
@@ -63,16 +65,26 @@ def test_an_item_s_rx_is_checked_and_kept_as_its_prescription():
     settings, configurations = read_campaign(
         {"item": [{"name": "a", "rx": -3}, {"name": "b", "rx": "-2 -1 x 90"}, {"name": "c"}],
          "sweep": [{"name": "s", "rx": ["-1.00", 2.5]}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
-    assert [c.rx for c in configurations] == ["-3.00 DS", "-2.00 -1.00 x 90", None, "-1.00 DS", "+2.50 DS"]
+    assert [c.rx for c in configurations] == [Prescription(-3.0, 0.0, 180.0), Prescription(-2.0, -1.0, 90.0), None,
+                                              Prescription(-1.0, 0.0, 180.0), Prescription(2.5, 0.0, 180.0)]
     assert configurations[0].vertex_mm == 14.0 and "rx" not in configurations[2].key_inputs()
     assert configurations[0].key_inputs() != configurations[2].key_inputs()
-    # not a prescription; not text; +90 D: the far point inside the eye (the ametropic eye's own check); 0.125 D and
-    # 90.5 deg: not held by the prescription's text (0.01 D, whole degrees), refused rather than rounded
-    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS at 14 mm"),
-                       (0.125, r"0\.125 is written as '\+0\.12 DS'"), ("-2 -1 x 90.5", "whole degrees")):
+    # not a prescription; not text; +90 D: the far point inside the eye (the ametropic eye's own check)
+    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS at 14 mm")):
         with pytest.raises(VissimInputError, match=rf"eye\.toml: item\[0\]\S*: .*{words}") as caught:
             read_campaign({"item": [{"rx": bad}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
         assert "\n" not in str(caught.value)
+
+
+def test_an_item_s_rx_is_the_number_given_not_its_text():
+    """0.125 D and an axis of 90.5 deg (off the clinical 0.01 D / whole-degree grid) are the eye's prescription exactly;
+    the item's key and record hold the numbers, and the report's label writes them in full."""
+    _, (eighth, half_degree) = read_campaign({"item": [{"name": "a", "rx": 0.125}, {"name": "b", "rx": "-2 -1 x 90.5"}]},
+                                             {"kind": "eye"}, "eye.toml")
+    assert eighth.eye().rx == Prescription(0.125, 0.0, 180.0) and half_degree.eye().rx.axis_deg == 90.5
+    assert eighth.key_inputs()["rx"] == {"sphere_diopters": 0.125, "cylinder_diopters": 0.0, "axis_deg": 180.0}
+    assert "eye Rx +0.125 DS at 12 mm" in configuration_label(eighth.as_json())
+    assert "x 90.5" in configuration_label(half_degree.as_json())
 
 
 def _myope_scenes(chart_distance_m: float):

@@ -141,6 +141,16 @@ class SpheroCylinder:
             return f"{written} DS"
         return f"{written} {cylinder:+.{decimals}f} x {self.axis_deg:.{max(0, decimals - 2)}f}"
 
+    def format_exact(self, most_decimals: int = 6) -> str:
+        """The shortest `format` (2 decimals or more, up to ``most_decimals``) that reads back as this power,
+        e.g. ``-3.00 DS`` and ``+0.125 DS``."""
+        for decimals in range(2, most_decimals):
+            written = self.format(decimals)
+            read_back = Prescription.parse(written).power_matrix()
+            if all(abs(a - b) <= 1e-9 for row, mine in zip(read_back, self.power_matrix()) for a, b in zip(row, mine)):
+                return written
+        return self.format(most_decimals)
+
     # -- transposition ----------------------------------------------------------------
     def transposed(self) -> Self:
         """The same power written with the opposite cylinder sign."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from vissim.optics.prescription import Prescription
 from vissim.validation.engine.metrics import PSNR, SSIM, added_metrics, floor_column, metric_float
 from vissim.validation.engine.protocol import ReportParts
 from vissim.validation.eye.item import SELF_CHECK_MARGIN_DB
@@ -40,7 +41,7 @@ def configuration_label(c: dict) -> str:
     lens = "" if c["lens"] is None else f", lens {c['lens'][0]:+g}" + (
         f" {c['lens'][1]:+g} x {c['lens'][2]:g}" if c["lens"][1] else "") + " D"
     field = c["field_deg"]
-    eye = "" if c.get("rx") is None else f"eye Rx {c['rx']} at {c['vertex_mm']:g} mm, "
+    eye = "" if c.get("rx") is None else f"eye Rx {Prescription(**c['rx']).format_exact()} at {c['vertex_mm']:g} mm, "
     return (f"{eye}{c['pupil_mm']:g} mm, {c['accommodation_diopters']:g} D acc., field {field[0]:g},{field[1]:g} deg, "
             f"{light}{lens}")
 

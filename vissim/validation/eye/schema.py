@@ -18,8 +18,6 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-import numpy as np
-
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM,
                                          DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER,
@@ -67,7 +65,7 @@ class EyeConfiguration:
     spectrum: str = "mono"
     wavelength_nm: float | None = DEFAULT_EYE_LIGHT_NM
     lens: tuple[float, float, float] | None = None  # sphere D, cylinder D, axis deg
-    rx: str | None = None  # the eye's spectacle prescription at vertex_mm (canonical text); None: the model's eye
+    rx: Prescription | None = None  # the eye's spectacle prescription at vertex_mm (a number); None: the model's eye
     letter: str = DEFAULT_LETTER
     logmar: float = DEFAULT_LETTER_LOGMAR
     surfaces: tuple = ()  # sorted (surface name, field, value) triples: the model's surfaces altered
@@ -109,21 +107,15 @@ def _field(value, source: str, where: str) -> tuple[float, float]:
     return tuple(number(v, source, where, "deg", lo=-EYE_RENDER_MAX_FIELD_DEG, hi=EYE_RENDER_MAX_FIELD_DEG) for v in values)
 
 
-def _rx(value, source: str, where: str) -> str:
-    """A prescription text (`Prescription.parse`) or a number (the sphere, D), as its canonical text (the render's
-    `EyeRender.rx`); refused where that text (0.01 D, whole degrees) would not hold it exactly."""
-    written = value
+def _rx(value, source: str, where: str) -> Prescription:
+    """A prescription text (`Prescription.parse`) or a number (the sphere, D): the `Prescription` itself, exactly
+    as given (the render and the simulations take the number, never its text)."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        written = f"{number(value, source, where, 'D'):+.6f}"
+        return Prescription(number(value, source, where, "D"), 0.0, 180.0)
     try:
-        given = Prescription.parse(text(written, source, where))
+        return Prescription.parse(text(value, source, where))
     except VissimInputError as error:
         raise field_error(source, where, str(error)) from None
-    canonical = str(given)
-    if not np.allclose(Prescription.parse(canonical).power_matrix(), given.power_matrix(), rtol=0.0, atol=1e-9):
-        raise field_error(source, where, f"prescription {value!r} is written as {canonical!r}: give it in "
-                                         "0.01 D steps and whole degrees")
-    return canonical
 
 
 def _surfaces(value, source: str, where: str) -> tuple:
