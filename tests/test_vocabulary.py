@@ -89,7 +89,8 @@ def test_success_lines_and_errors_say_sizes_the_same_way(capsys, tmp_path):
 def test_every_wavelength_default_is_the_one_constant():
     # The bench's glass is traced at its d line (render bench --optics wave, bench wavefront), stated in
     # their help; blur's RGB channels have their own wavelengths (mono images take the constant); a
-    # schematic eye is traced at its model's reference wavelength (Escudero-Sanz's 543 nm), said in its help.
+    # schematic eye is reported at its model's reference wavelength (Escudero-Sanz's 543 nm), said in its help;
+    # an eye's render is lit at the constant, as the eye campaign is.
     seen = []
     for path, parser in subcommands():
         for flag in ("--wavelength-nm", "--lca-reference-nm"):
@@ -99,14 +100,14 @@ def test_every_wavelength_default_is_the_one_constant():
             seen.append(path)
             if path in (("render", "bench"), ("bench", "wavefront")):
                 assert action.default in (None, D_LINE_NM) and "the d line" in action.help
-            elif path in (("eye",), ("render", "eye")):
+            elif path == ("eye",):
                 assert action.default is None and "the model's reference wavelength" in action.help
             elif action.default is None:
-                assert path in (("blur",), ("psf",)) and f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help
+                assert path in (("blur",), ("psf",), ("render", "eye")) and f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help
             else:
                 assert float(action.default) == DEFAULT_WAVELENGTH_NM, (path, flag)
                 assert f"default {DEFAULT_WAVELENGTH_NM:g}" in action.help, (path, flag)
-    assert {("psf",), ("blur-depth",), ("fit-rx",), ("atv", "simulate")} <= set(seen)
+    assert {("psf",), ("blur-depth",), ("fit-rx",), ("atv", "simulate"), ("eye",), ("render", "eye")} <= set(seen)
     assert AtvApparatus().wavelength_nm == DEFAULT_WAVELENGTH_NM  # was 555 nm: no reason recorded
 
 
