@@ -94,11 +94,30 @@ FIELD_DEG_HELP = ("field angle, degrees, x (examiner's right: the observer's lef
 
 
 def add_eye_model_arg(parser, help_text: str, **extra) -> None:
-    """``--eye-model MODEL``: one of `EYE_MODELS`, refused by the parser otherwise."""
+    """``--eye-model MODEL``: one of `EYE_MODELS`, or a measured eye (``jaeken-artal-2012:17:right``,
+    ``polans-2015:3``); refused by the parser otherwise."""
     from vissim.optics.eyes.models import EYE_MODELS
 
-    parser.add_argument("--eye-model", choices=tuple(EYE_MODELS), metavar="MODEL",
-                        help=f"{help_text} (one of {', '.join(EYE_MODELS)})", **extra)
+    parser.add_argument("--eye-model", type=_eye_name, metavar="EYE",
+                        help=f"{help_text} (one of {', '.join(EYE_MODELS)}; or a measured eye, "
+                             "jaeken-artal-2012:SUBJECT:right|left or polans-2015:SUBJECT)", **extra)
+
+
+def _eye_name(text: str) -> str:
+    """A schematic model's name or a measured eye's, checked (argparse reports the refusal on one line)."""
+    from vissim.optics.eyes.measured.measured_eye import is_measured_name, parse_measured_eye
+    from vissim.optics.eyes.models import EYE_MODELS
+
+    if is_measured_name(text):
+        try:
+            parse_measured_eye(text)
+        except VissimInputError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+        return text
+    if text not in EYE_MODELS:
+        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(EYE_MODELS)}, or a "
+                                         "measured eye: jaeken-artal-2012:SUBJECT:right|left, polans-2015:SUBJECT)")
+    return text
 
 
 #: What ``--rx`` means with ``--eye-model``, in every command that takes both.

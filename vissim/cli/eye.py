@@ -148,7 +148,7 @@ def _print_text(report: EyeReport) -> None:
     wavelength = "" if report.wavelength_given else " (the model's reference)"
     rx = f", made to need {record['prescription']}" if record["prescription"] else ""
     rows = [
-        ("eye", f"{record['model']} at {record['accommodation_diopters']:g} D accommodation{rx}"),
+        ("eye", f"{record['model']}{_base(record)} at {record['accommodation_diopters']:g} D accommodation{rx}"),
         ("wavelength", f"{record['wavelength_nm']:g} nm{wavelength}"),
         ("field", f"({record['field_deg'][0]:g}, {record['field_deg'][1]:g}) deg from the {record['field_axis']}"),
         *[("lens", f"{lens['marked_power']} (back vertex power), n_d {lens['refractive_index_d']:g}, "
@@ -194,3 +194,8 @@ def _print_lca(lca: dict) -> None:
         print(f"  {r['wavelength_nm']:4.0f}  {traced:+8.3f} {r['traced_minimum_rms_diopters']:+8.3f} "
               f"{r['paraxial_diopters']:+9.3f} {r['thibos_diopters']:+7.3f} {r['atchison_smith_diopters']:+15.3f} "
               f"{traced - r['thibos_diopters']:+14.3f} {traced - r['atchison_smith_diopters']:+11.3f}")
+
+
+def _base(record: dict) -> str:
+    """A measured eye's schematic base, as the text report names it."""
+    return f" (measured; on the {record['base_model']} eye)" if "base_model" in record else ""

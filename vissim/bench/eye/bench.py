@@ -79,6 +79,9 @@ class EyeBench:
 
     def __post_init__(self) -> None:
         instance_of(self.eye, Eye, "the eye bench's eye", "an Eye (vissim.optics.eyes.eye.build_eye)")
+        if self.eye.measured is not None:
+            raise VissimInputError(f"{self.eye.model} is a measured eye: the eye bench renders schematic eyes only "
+                                   "(its measured aberrations have no surface in the scene yet); simulate it instead")
         self._check_light()
         self._check_chart()
         self._check_lenses()

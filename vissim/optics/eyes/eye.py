@@ -41,6 +41,8 @@ from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.fixation import ametropic_eye
 from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
+from vissim.optics.eyes.measured.measured_eye import (BASE_EYE_MODEL, MeasuredWavefront, is_measured_name,
+                                                      parse_measured_eye)
 from vissim.optics.eyes.models import EYE_MODELS, SchematicEye, eye_model
 from vissim.optics.prescription import Prescription, prescription_from
 
@@ -62,6 +64,7 @@ class Eye:
     rx: Prescription | None = None
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     wavelength_nm: float | None = None
+    measured: MeasuredWavefront | None = None
     _optics: SchematicEye = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -80,7 +83,23 @@ class Eye:
                                                                             "eye's reference wavelength"))
         if self.rx is not None:
             object.__setattr__(self, "rx", prescription_from(self.rx))
+        if self.measured is not None:
+            self._check_measured()
         object.__setattr__(self, "_optics", self._traced_optics())  # a prescription the eye cannot have: refused now
+
+    def _check_measured(self) -> None:
+        instance_of(self.measured, MeasuredWavefront, "an Eye's measured wavefront", "a MeasuredWavefront")
+        name = self.measured.name
+        if self.rx is not None:
+            raise VissimInputError(f"{name} is a measured eye with its own refraction; it cannot be given a "
+                                   f"prescription ({self.rx}): put a lens in front, or correct it in the light")
+        if self.schematic != eye_model(BASE_EYE_MODEL):
+            raise VissimInputError(f"{name} is built on the relaxed {BASE_EYE_MODEL} eye as published: its surfaces, "
+                                   "accommodation and model cannot change")
+        limit = self.measured.pupil_mm
+        if self.pupil_mm is not None and self.pupil_mm > limit * (1 + 1e-12):
+            raise VissimInputError(f"{name} was measured over a {limit:g} mm pupil; an entrance pupil of "
+                                   f"{self.pupil_mm:g} mm would extrapolate it: give at most {limit:g} mm")
 
     def _traced_optics(self) -> SchematicEye:
         optics = self._in_own_light(self.schematic)
@@ -120,8 +139,8 @@ class Eye:
 
     @property
     def model(self) -> str:
-        """The schematic model's name."""
-        return self.schematic.name
+        """The eye's name: the schematic model's, or a measured eye's (``jaeken-artal-2012:17:right``)."""
+        return self.schematic.name if self.measured is None else self.measured.name
 
     @property
     def accommodation_diopters(self) -> float:
@@ -144,7 +163,8 @@ class Eye:
         return f"{self.model}, accommodation {self.accommodation_diopters:g} D, {pupil}{rx}"
 
     def as_json(self) -> dict:
-        return {"model": self.model, "accommodation_diopters": self.accommodation_diopters,
+        base = {} if self.measured is None else {"base_model": self.schematic.name}
+        return {"model": self.model, **base, "accommodation_diopters": self.accommodation_diopters,
                 "entrance_pupil_mm": self.pupil_mm, "iris_mm": self.iris_mm,
                 "rx": None if self.rx is None else self.rx.format(6), "vertex_mm": self.vertex_mm,
                 "reference_wavelength_nm": self.reference_wavelength_nm}
@@ -213,10 +233,14 @@ def _surface_value(key: str, value, surface: str) -> float:
 def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0, pupil_mm: float | None = None,
               iris_mm: float | None = None, rx=None, vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
               wavelength_nm: float | None = None, surfaces: dict | None = None) -> Eye:
-    """The `Eye` of the schematic model ``model`` (a key of `EYE_MODELS`, or a `SchematicEye` built by hand)
+    """The `Eye` of the schematic model ``model`` (a key of `EYE_MODELS`, a `SchematicEye` built by hand, or a
+    measured eye's name: `vissim.optics.eyes.measured.measured_eye`)
     at ``accommodation_diopters``, with its pupil, the prescription it has, its reference wavelength and
     ``surfaces`` overrides ({surface name: {field: value}}, `SURFACE_OVERRIDES`). The one place a model's name
     becomes an eye."""
+    if is_measured_name(model):
+        return _measured_eye(parse_measured_eye(model), accommodation_diopters, pupil_mm, iris_mm, rx, vertex_mm,
+                             wavelength_nm, surfaces)
     if isinstance(model, SchematicEye):
         if accommodation_diopters:
             raise VissimInputError("a SchematicEye built by hand has its own accommodation; accommodation_diopters "
@@ -231,6 +255,17 @@ def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0,
             raise VissimInputError(f"surface {surface!r}'s changes must be a table of fields, got {changes!r}")
         schematic = altered_schematic(schematic, surface, changes)
     return Eye(schematic, pupil_mm, iris_mm, rx, vertex_mm, wavelength_nm)
+
+
+def _measured_eye(measured: MeasuredWavefront, accommodation_diopters, pupil_mm, iris_mm, rx, vertex_mm,
+                  wavelength_nm, surfaces) -> Eye:
+    """A measured eye (`vissim.optics.eyes.measured.measured_eye`) on its base eye, relaxed and unaltered."""
+    if accommodation_diopters:
+        raise VissimInputError(f"{measured.name} is a measured eye, measured relaxed: its accommodation is 0 D only, "
+                               f"got {accommodation_diopters!r} D")
+    if surfaces:
+        raise VissimInputError(f"{measured.name} is a measured eye: its base eye's surfaces cannot change")
+    return Eye(eye_model(BASE_EYE_MODEL), pupil_mm, iris_mm, rx, vertex_mm, wavelength_nm, measured)
 
 
 def checked_eye(eye, where: str) -> Eye:

@@ -52,6 +52,7 @@ from vissim.checks import MAX_FIELD_DEG
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
+from vissim.optics.eyes.measured.measured_eye import measured_trace
 from vissim.optics.eyes.refraction import chief_ray_stretch
 from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
 from vissim.optics.prescription import Prescription
@@ -155,6 +156,18 @@ def chromatic_offset_deg(traced: EyeWavefront, reference: EyeWavefront, jacobian
     return float(x), float(y)
 
 
+def _measured(trace: EyeWavefront, measured, base, samples: int, traced: list) -> EyeWavefront:
+    """``trace`` with ``measured``'s aberrations in place of the base eye's: the defocus reference traced at its
+    wavelength (or taken from ``traced``), same field and pupil."""
+    wanted = measured.defocus_wavelength_nm
+    reference = next((t for t in traced if t.wavelength_nm == wanted and t.entrance_pupil_mm == trace.entrance_pupil_mm),
+                     None)
+    if reference is None:
+        reference = trace_eye_wavefront(base, wanted, trace.field_deg, pupil_mm=trace.entrance_pupil_mm,
+                                        samples=samples)
+    return measured_trace(trace, measured, reference)
+
+
 def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), vergence_diopters=0.0,
                            samples: int = DEFAULT_SAMPLES) -> SpectralWavefront:
     """The `SpectralWavefront` of the `Eye` ``eye`` traced at each of ``wavelengths_nm`` over its entrance
@@ -171,21 +184,23 @@ def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), ve
     """
     eye = checked_eye(eye, "eye_spectral_wavefront")
     _vergence_matrix(vergence_diopters)  # before the traces
-    traced = traced_spectral_wavefront(eye.optics, wavelengths_nm, field_deg, samples=samples, **eye.pupil)
+    traced = traced_spectral_wavefront(eye.optics, wavelengths_nm, field_deg, samples=samples, measured=eye.measured,
+                                       **eye.pupil)
     vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm, field_direction(eye.optics, field_deg))
     return traced.map(lambda front: _with_vergence(front, vergence))
 
 
 def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupil_mm=None, iris_mm=None,
                               lenses=None, samples: int = DEFAULT_SAMPLES,
-                              reference_wavelength_nm=None) -> SpectralWavefront:
+                              reference_wavelength_nm=None, measured=None) -> SpectralWavefront:
     """The `SpectralWavefront` of the `SchematicEye` ``eye`` (lenses in front, if given, as
     `trace_eye_wavefront` takes them), its TCA as tilt (module doc), field angles in front of the lenses.
 
     The pupil: ``pupil_mm`` (the eye's entrance pupil) at every wavelength, or, for ``iris_mm``, the
     entrance pupil it gives at the reference wavelength. With lenses in front the system's pupil may
     differ between wavelengths by their dispersion; every front is then re-expanded
-    (`Wavefront.rescaled`) over the smallest.
+    (`Wavefront.rescaled`) over the smallest. ``measured``: a `MeasuredWavefront` whose aberrations replace the
+    base eye's own in every front (`vissim.optics.eyes.measured.measured_eye`).
     """
     reference = (eye.reference_wavelength_nm if reference_wavelength_nm is None
                  else checked_wavelength_nm(reference_wavelength_nm, "reference wavelength"))
@@ -209,7 +224,7 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     common = min(t.entrance_pupil_mm for t in traced)
     fronts = []
     for t in traced:
-        front = _own_front(t)
+        front = _own_front(t if measured is None else _measured(t, measured, eye, samples, traced))
         if t is not anchor:  # the tilt whose slope the field map sends to the chief rays' visual-angle offset
             offset_mrad = np.linalg.solve(np.asarray(anchor.field_map), deg_to_mrad(chromatic_offset_deg(t, anchor, jacobian)))
             front = front + Wavefront.tilt(offset_mrad, front.pupil_diameter_mm)

@@ -66,6 +66,7 @@ from vissim.errors import VissimInputError
 from vissim.optics import psf_metrics
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.lca import LcaCurve, lca_curve
+from vissim.optics.eyes.measured.measured_eye import measured_trace
 from vissim.optics.eyes.paraxial import (image_focal_length_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.psf_wavefront import traced_spectral_wavefront
@@ -190,6 +191,7 @@ class EyeReport:
     lens_setup: TrialLensSetup | None = None
     mtf_spectrum: MtfSpectrum | None = None
     lca: LcaCurve | None = None
+    base_model: str | None = None  # a measured eye's schematic base
 
     def as_json(self) -> dict:
         """The record of ``vissim eye --json`` (plain numbers; Zernikes keyed ``"n,m"``)."""
@@ -206,6 +208,7 @@ class EyeReport:
         refraction = self.refraction.as_json()
         return {
             "model": self.model,
+            **({} if self.base_model is None else {"base_model": self.base_model}),
             "accommodation_diopters": self.accommodation_diopters,
             "prescription": None if self.prescription is None else str(self.prescription),
             "power_diopters": self.power_diopters,
@@ -278,6 +281,8 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
     wavelength = eye.reference_wavelength_nm if wavelength_nm is None else checked_wavelength_nm(wavelength_nm)
     field = tuple(float(v) for v in field_deg)
     front = trace_eye_wavefront(eye, wavelength, field, pupil_mm=pupil_mm, iris_mm=iris_mm, lenses=setup)
+    if eye_in.measured is not None:
+        front = _measured_front(front, eye_in.measured, eye)
     refraction = eye_refraction(front, vertex if setup is None else setup.span_mm)
     mean = mean_meridian_eye(eye)
     if setup is None:
@@ -286,7 +291,7 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
         mm_per_deg = system_retinal_mm_per_deg(eye, setup, wavelength)
     tables_deg, tables_mm = {}, {}
     if len(f_deg) or len(f_mm):
-        everything = _mtf(eye, front, setup, mtf_spectrum, np.concatenate([f_deg, f_mm * mm_per_deg]))
+        everything = _mtf(eye, front, setup, mtf_spectrum, np.concatenate([f_deg, f_mm * mm_per_deg]), eye_in.measured)
         tables_deg = _pairs(f_deg, {k: v[:len(f_deg)] for k, v in everything.items()}) if len(f_deg) else {}
         tables_mm = _pairs(f_mm, {k: v[len(f_deg):] for k, v in everything.items()}) if len(f_mm) else {}
     if setup is None:
@@ -294,13 +299,20 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
     else:
         paraxial_pupil = front.iris_mm * system_entrance_pupil_mm(eye, setup, wavelength)[1]
     curve = lca_curve(eye, iris_mm=front.iris_mm, reference_nm=wavelength, field_deg=field) if lca else None
-    return EyeReport(eye.name, eye_in.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
+    return EyeReport(eye_in.model, eye_in.accommodation_diopters, wavelength, wavelength_nm is not None, prescription,
                      float(equivalent_power_diopters(mean, wavelength)), float(image_focal_length_mm(mean, wavelength)),
                      float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup,
-                     mtf_spectrum, curve)
+                     mtf_spectrum, curve, None if eye_in.measured is None else eye.name)
 
 
-def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg) -> dict:
+def _measured_front(front: EyeWavefront, measured, base) -> EyeWavefront:
+    """The base eye's ``front`` with the measured eye's aberrations (`vissim.optics.eyes.measured.measured_eye`)."""
+    reference = trace_eye_wavefront(base, measured.defocus_wavelength_nm, front.field_deg,
+                                    pupil_mm=front.entrance_pupil_mm)
+    return measured_trace(front, measured, reference)
+
+
+def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg, measured=None) -> dict:
     """`eye_mtf` at the traced front's wavelength (orders 2-8), or over ``spectrum`` (tilts kept: the TCA)."""
     if spectrum is None:
         higher = {k: v for k, v in front.zernike_um.items() if k[0] >= 2}
@@ -309,7 +321,7 @@ def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg) -
         return eye_mtf(own, front.wavelength_nm, f_deg, front.field_deg)
     spectral = traced_spectral_wavefront(eye, spectrum.wavelengths_nm, front.field_deg,
                                          pupil_mm=front.eye_entrance_pupil_mm, lenses=setup,
-                                         reference_wavelength_nm=front.wavelength_nm)
+                                         reference_wavelength_nm=front.wavelength_nm, measured=measured)
     weights = dict(zip(spectrum.wavelengths_nm, spectrum.weights))
     return eye_mtf(spectral, spectral.wavelengths_nm, f_deg, front.field_deg,
                    [weights[w] for w in spectral.wavelengths_nm])
