@@ -19,10 +19,10 @@ import time
 import numpy as np
 import scipy.fft
 
-from vissim.optics.blur import _tile_px, blur_image, padded_shape
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import _tile_px, blur_image, padded_shape
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.pupil.wavefront import Wavefront
 
 
 def timed(fn) -> float:

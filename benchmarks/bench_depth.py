@@ -34,11 +34,11 @@ from pathlib import Path
 import numpy as np
 import scipy.fft
 
-from vissim.optics.blur import BlurKernel, blur_image, padded_shape, padding_width_px
-from vissim.optics.depth import blur_depth
-from vissim.optics.depth_psfs import cached_psf
-from vissim.optics.prescription import Prescription
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import BlurKernel, blur_image, padded_shape, padding_width_px
+from vissim.optics.depth.depth_map import blur_depth
+from vissim.optics.depth.psfs import cached_psf
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.pupil.wavefront import Wavefront
 
 ROWS, COLS = 1080, 1920
 PUPIL_MM, STEP, EYE = 4.0, 1.0, Prescription(-1.5)

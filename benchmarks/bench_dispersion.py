@@ -19,7 +19,7 @@ import numpy as np
 
 from vissim.bench.dslr.bench import SAMPLERS, DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import MM_PER_INCH, render_chart_print, single_letter_spec
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.run import render_scene
 
 

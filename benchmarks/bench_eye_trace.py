@@ -21,9 +21,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vissim.optics.eyes.models import escudero_sanz_1999  # noqa: E402
-from vissim.optics.eyes.wavefront import trace_eye_wavefront  # noqa: E402
-from vissim.optics.psf import compute_psf  # noqa: E402
-from vissim.optics.wavefront import Wavefront  # noqa: E402
+from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront  # noqa: E402
+from vissim.optics.psf.compute import compute_psf  # noqa: E402
+from vissim.optics.pupil.wavefront import Wavefront  # noqa: E402
 
 FIELD_DEG, WAVELENGTH_NM, PUPIL_MM, ARCMIN_PER_PX, REPEATS = (10.0, 0.0), 555.0, 4.0, 0.25, 5
 

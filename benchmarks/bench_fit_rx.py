@@ -24,9 +24,9 @@ import numpy as np  # noqa: E402
 from tests.fit import synthetic  # noqa: E402
 from vissim.bench.dslr.bench import DslrBench  # noqa: E402
 from vissim.fit.rx_fit import fit_rx  # noqa: E402
-from vissim.optics.blur import blur_image  # noqa: E402
-from vissim.optics.psf import compute_psf, suggested_size_px  # noqa: E402
-from vissim.optics.trial_lens import TrialLens  # noqa: E402
+from vissim.optics.blur.convolve import blur_image  # noqa: E402
+from vissim.optics.psf.compute import compute_psf, suggested_size_px  # noqa: E402
+from vissim.optics.rx.trial_lens import TrialLens  # noqa: E402
 
 
 def main() -> None:

@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 import fraunhofer_reference as oracle  # noqa: E402

@@ -1,6 +1,6 @@
 """Accommodation: amplitude from age, and what an uncorrected eye exerts for a target.
 
-Expected values are hand-derived from the sign derivation in ``vissim.optics.accommodation``
+Expected values are hand-derived from the sign derivation in ``vissim.optics.rx.accommodation``
 (need = M + 1/d, M the correcting lens's spherical equivalent, clamped to [0, amplitude])
 and from Hofstetter's (1950) three lines; exact up to float rounding (abs 1e-12).
 """
@@ -10,14 +10,14 @@ import math
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.accommodation import (
+from vissim.optics.rx.accommodation import (
     Accommodation,
     accommodation_for_target,
     amplitude_from_age_diopters,
     clear_vision_range_m,
     required_accommodation_diopters,
 )
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 
 MYOPE = Prescription(-2.0)
 EMMETROPE = Prescription(0.0)

@@ -16,14 +16,14 @@ import pytest
 import scipy.fft
 
 from vissim.errors import VissimInputError
-from vissim.optics import depth as depth_module
-from vissim.optics.array_backend import ArrayBackend, array_backend, array_module, cuda_available
-from vissim.optics.blur import blur_image
-from vissim.optics.blur_device import blur_image_on
-from vissim.optics.depth import blur_depth
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.depth import depth_map as depth_module
+from vissim.optics.runtime.array_backend import ArrayBackend, array_backend, array_module, cuda_available
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.blur.device import blur_image_on
+from vissim.optics.depth.depth_map import blur_depth
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.pupil.wavefront import Wavefront
 
 needs_gpu = pytest.mark.skipif(not cuda_available(), reason="no CuPy with a CUDA device")
 
@@ -118,8 +118,8 @@ def test_a_device_convolves_each_psf_as_the_cpu_does():
     # Transient PSFs (as blur_depth's reflected layers are) die after use, and CPython may give the
     # next one the same id: each must still be convolved with its own spectrum.  Oracle: the CPU's
     # convolution of the same planes with each PSF.
-    from vissim.optics.blur_device import convolve_padded
-    from vissim.optics.psf import PSF
+    from vissim.optics.blur.device import convolve_padded
+    from vissim.optics.psf.compute import PSF
 
     device = ArrayBackend("numpy-as-device", np, scipy.fft)
     rng = np.random.default_rng(3)

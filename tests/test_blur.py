@@ -7,10 +7,10 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import PSF, compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import PSF, compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 
 
 def delta(size=33, step=1.0):
@@ -153,7 +153,7 @@ NDIMAGE_MODES = {"edge": "nearest", "reflect": "reflect", "constant": "constant"
 def test_tiled_blur_equals_direct_convolution(rows, cols, half_kernel, padding, seed):
     from scipy import ndimage
 
-    import vissim.optics.blur as blur
+    import vissim.optics.blur.convolve as blur
 
     rng = np.random.default_rng(seed)
     image = rng.random((rows, cols))
@@ -173,7 +173,7 @@ def test_tiled_blur_equals_direct_convolution(rows, cols, half_kernel, padding, 
 
 
 def test_tiles_only_for_large_images_and_small_kernels():
-    from vissim.optics.blur import _tile_px
+    from vissim.optics.blur.convolve import _tile_px
 
     assert _tile_px((2160, 3840), 45) is not None  # 4K, a 45 px PSF
     assert _tile_px((150, 150), 45) is None  # a campaign tile: one FFT
@@ -182,7 +182,7 @@ def test_tiles_only_for_large_images_and_small_kernels():
 
 def test_wrap_padding_refuses_a_psf_larger_than_the_image_on_both_paths(defocus_psf):
     # The 46 px PSF cannot wrap around a 40 px image: one refusal, decided in checked_blur_inputs.
-    from vissim.optics.blur_device import blur_image_on
+    from vissim.optics.blur.device import blur_image_on
 
     image = random_image(shape=(40, 60))
     for blur in (blur_image, blur_image_on):
@@ -191,8 +191,8 @@ def test_wrap_padding_refuses_a_psf_larger_than_the_image_on_both_paths(defocus_
 
 
 def test_each_padding_mode_continues_the_image_as_named():
-    # Decided once (blur.NUMPY_PAD_MODES) for blur_image, the device blur and the depth blur.
-    from vissim.optics.blur import PADDING_MODES, pad_array
+    # Decided once (convolve.NUMPY_PAD_MODES) for blur_image, the device blur and the depth blur.
+    from vissim.optics.blur.convolve import PADDING_MODES, pad_array
 
     row = np.array([[1.0, 2.0, 3.0]])
     expected = {"constant": [9, 9, 1, 2, 3, 9, 9], "edge": [1, 1, 1, 2, 3, 3, 3],

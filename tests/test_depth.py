@@ -2,7 +2,7 @@
 
 Expected values and where they come from:
 
-* defocus per depth: effective prescription = Rx + 1/d - A (``vissim.optics.depth`` docstring);
+* defocus per depth: effective prescription = Rx + 1/d - A (``vissim.optics.depth.depth_map`` docstring);
   a -2 D myope sees 0.5 m with zero defocus and 6 m with 2 - 1/6 = 1.8333 D;
 * geometric blur-disc diameter = pupil (mm) x defocus (D) mrad (``docs/conventions.md``); the
   disc's radius r follows from the pixel-integrated second moment <x^2 + y^2> = r^2/2 + 2/12 px^2;
@@ -24,19 +24,19 @@ import pytest
 from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image, write_image
-from vissim.optics.accommodation import accommodation_for_target
-from vissim.optics.blur import blur_image
-from vissim.optics.depth import (
+from vissim.optics.rx.accommodation import accommodation_for_target
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.depth.depth_map import (
     matte_indices,
     blur_depth,
     layer_spacing_diopters,
     plan_layers,
 )
-from vissim.optics.depth_windows import extended_layer, occlusion_weight
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.setup import DepthViewer
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.depth.windows import extended_layer, occlusion_weight
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.rx.viewing_setup import DepthViewer
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
 
@@ -387,9 +387,9 @@ def test_crop_px_cuts_the_margin_from_the_result():
 
 def test_coarse_grid_for_wide_blurs_stays_within_its_stated_db():
     """White noise (the hardest input: all its energy above any grid's Nyquist) at one depth whose blur
-    is vissim.optics.depth.COARSE_BLUR_PX (14 px) wide: coarse vs fine >= COARSE_MIN_DB (44 dB); wider
+    is vissim.optics.depth.depth_map.COARSE_BLUR_PX (14 px) wide: coarse vs fine >= COARSE_MIN_DB (44 dB); wider
     blurs come closer (20 px: >= 48 dB).  Measured when written: 44.6 dB and 49.3 dB."""
-    from vissim.optics.depth import COARSE_BLUR_PX, COARSE_MIN_DB
+    from vissim.optics.depth.depth_map import COARSE_BLUR_PX, COARSE_MIN_DB
 
     image = texture((96, 128), seed=7)
     for blur_px, floor_db in ((COARSE_BLUR_PX, COARSE_MIN_DB), (20.0, 48.0)):
@@ -407,7 +407,7 @@ def test_coarse_grid_for_wide_blurs_stays_within_its_stated_db():
 def test_a_layer_of_opposite_defocus_reuses_the_reflected_psf(mode):
     """|F(P e^{-ikW})(x)|^2 = |F(P e^{ikW})(-x)|^2 and rays land at -grad W: the PSF of -W is that of W
     turned through 180 degrees, so the symmetric plan's mirrored layers need not compute it again."""
-    from vissim.optics.depth_psfs import LayerOptics
+    from vissim.optics.depth.psfs import LayerOptics
 
     base = Wavefront.from_prescription(Prescription(-1.5), PUPIL_MM)
     front = base.with_defocus_diopters(1.5 - 0.6)

@@ -1,4 +1,4 @@
-"""Layered depth blur (vissim.optics.depth_layers): the pupil-ray composite of layers rendered alone.
+"""Layered depth blur (vissim.optics.depth.layered): the pupil-ray composite of layers rendered alone.
 
 Expected values and where they come from:
 
@@ -27,12 +27,12 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.depth import blur_depth
-from vissim.optics.depth_layers import SceneLayer, composite_layers
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.depth.depth_map import blur_depth
+from vissim.optics.depth.layered import SceneLayer, composite_layers
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.pupil.wavefront import Wavefront
 
 PUPIL_MM = 4.0
 STEP = 1.0

@@ -9,11 +9,11 @@ back through its C interface (the BLAS guard).
 import numpy as np
 import pytest
 
-import vissim.optics.depth as depth_module
-import vissim.optics.depth_composite as composite_module
-from vissim.optics.depth import blur_depth
-from vissim.optics.prescription import Prescription
-from vissim.optics.threads import _openblas_controls, single_threaded_blas
+import vissim.optics.depth.depth_map as depth_module
+import vissim.optics.depth.composite as composite_module
+from vissim.optics.depth.depth_map import blur_depth
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.runtime.threads import _openblas_controls, single_threaded_blas
 
 
 def ramp_scene(rows=96, cols=160):

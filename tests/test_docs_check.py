@@ -64,7 +64,7 @@ def test_defaults_compare_by_value_not_spelling(documented, signature, same):
 
 
 PAGE = """<html><body><h1 id="psf">PSF</h1>
-<h2 id="vissim.optics.psf.compute_psf" class="doc doc-heading">compute_psf</h2>
+<h2 id="vissim.optics.psf.compute.compute_psf" class="doc doc-heading">compute_psf</h2>
 <p>See :class:<code>PSF</code>, <code>README.md</code> and <code>docs/conventions.md</code>.</p>
 <table><thead><tr><th>Name</th><th>Type</th><th>Description</th><th>Default</th></tr></thead><tbody>
 <tr class="doc-section-item"><td><code>wavefront</code></td><td>Wavefront</td><td>x</td><td><em>required</em></td></tr>

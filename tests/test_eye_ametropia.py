@@ -32,9 +32,9 @@ from vissim.optics.eyes.report import eye_report
 from vissim.optics.eyes.models import arizona, escudero_sanz_1999, le_grand, liou_brennan_1997, navarro_1985
 from vissim.optics.eyes.paraxial import refraction_diopters
 from vissim.optics.eyes.spectacles import residual_refraction, spectacle_lens
-from vissim.optics.glass import D_LINE_NM
-from vissim.optics.prescription import Prescription, RefractiveError
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.glass import D_LINE_NM
+from vissim.optics.rx.prescription import Prescription, RefractiveError
+from vissim.optics.rx.trial_lens import TrialLens
 
 D_M = 0.012  # spectacle vertex distance, m
 

@@ -16,7 +16,7 @@ from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL
 
 PACKAGE = Path(__file__).resolve().parents[1] / "vissim"
 #: Where the defaults are said, and the model tables that name their own models.
-ALLOWED = {"optics/eyes/defaults.py", "optics/eyes/models.py", "optics/eyes/media.py"}
+ALLOWED = {"optics/eyes/defaults.py", "optics/eyes/models.py", "optics/eyes/dispersion.py"}
 #: Names that hold an eye's pupil or spectacle vertex.
 EYE_NUMBER_NAMES = ("pupil_mm", "iris_mm", "vertex_mm", "rx_vertex_mm")
 #: Names that hold the eye's light, chart or image, in the eye's own modules (a path naming an eye): the DSLR and

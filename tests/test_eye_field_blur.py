@@ -17,14 +17,14 @@ import pytest
 
 import vissim
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
+from vissim.optics.blur.convolve import blur_image
 from vissim.optics.eyes.depth_eye import traced_depth_eye
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.field_blur import eye_psf_grid, node_field_deg
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.refraction import eye_refraction
-from vissim.optics.eyes.wavefront import trace_eye_wavefront
-from vissim.optics.field_blur import blur_field_dependent
+from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.blur.field_dependent import blur_field_dependent
 
 MODEL, PUPIL_MM, WAVELENGTH_NM = "navarro-1985", 3.0, 555.0
 STEP = 3.0  # arcmin/px: a 20 degree chart in 401 px

@@ -17,10 +17,10 @@ from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.eyes.sight import film_field_deg
-from vissim.optics.eyes.wavefront import field_direction, field_map, iris_from_entrance_pupil_mm, trace_to_retina
-from vissim.optics.psf import compute_psf
-from vissim.optics.spectral_wavefront import SpectralWavefront, field_mapped
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.eyes.traced_wavefront import field_direction, field_map, iris_from_entrance_pupil_mm, trace_to_retina
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, field_mapped
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 
 

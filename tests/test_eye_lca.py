@@ -9,7 +9,7 @@ Oracles, each separate code from what it checks:
 * Thibos's chromatic eye written out here as the reduced eye it is (n(λ) = 1.320535 +
   0.004685/(λ − 0.214102), λ in µm, r = 5.55 mm; Thibos et al. 1992, Appl. Opt. 31:3594; its
   parameters as on /work/shared/reference/schematic-eyes.md §2), against the curve's Thibos column
-  (`vissim.optics.chromatic`'s Eq. 5 fit), within 0.02 D;
+  (`vissim.optics.rx.chromatic`'s Eq. 5 fit), within 0.02 D;
 * Atchison & Smith 2005 (JOSA A 22:29, Eq. 5, as quoted in a public AOSLO script): the fit is ≈ 0
   near 590 nm and meets the point digitised from their Fig. 1, −1.68 D at 405.7 nm re 589.3 nm
   (reference page §2), within 0.02 D.

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.media import (arizona_medium, le_grand_medium, liou_brennan_medium,
+from vissim.optics.eyes.dispersion import (arizona_medium, le_grand_medium, liou_brennan_medium,
                                       navarro_medium)
 
 MEDIA = ("cornea", "aqueous", "lens", "vitreous")

@@ -18,7 +18,7 @@ from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.optics.eyes import models
 from vissim.optics.eyes.eye import build_eye
-from vissim.optics.eyes.media import Medium
+from vissim.optics.eyes.dispersion import Medium
 from vissim.optics.eyes.models import EyeSurface, SchematicEye, register_eye_model
 from vissim.optics.eyes.paraxial import equivalent_power_diopters, refraction_diopters
 from vissim.optics.eyes.psf_wavefront import eye_wavefront

@@ -1,7 +1,7 @@
 """The `Eye` object: built once from a name, immutable, altered by builders; and a wavefront that knows its light.
 
 Oracles: the fourth-order sag of a conic (c r² / 2 + (1 + Q) c³ r⁴ / 8 + ...) for an altered cornea; Thibos's
-chromatic eye (vissim.optics.chromatic) for the conversion of a front to other light; definitions otherwise.
+chromatic eye (vissim.optics.rx.chromatic) for the conversion of a front to other light; definitions otherwise.
 """
 
 from __future__ import annotations
@@ -14,12 +14,12 @@ import pytest
 
 import vissim
 from vissim.errors import VissimInputError
-from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.rx.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.eye import Eye, build_eye
 from vissim.optics.eyes.models import navarro_1985
-from vissim.optics.spectral_wavefront import SpectralWavefront
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
+from vissim.optics.pupil.wavefront import Wavefront
 
 
 def test_an_eye_is_built_once_from_a_name_with_the_one_set_of_defaults():
@@ -182,7 +182,7 @@ def test_the_lights_vergence_is_seen_as_itself_across_an_oblique_beam(field_deg)
     vergence a front adds is V I (to 1e-9 D), not the cos²θ-squeezed V of the entrance-pupil plane (0.54 D of
     false cylinder at 20° for V = -4 D before)."""
     from vissim.optics.eyes.refraction import along_chief_ray, paraxial_prescription
-    from vissim.optics.eyes.wavefront import field_direction
+    from vissim.optics.eyes.traced_wavefront import field_direction
 
     eye = build_eye("escudero-sanz-1999", pupil_mm=1.0)
     own = vissim.eye_wavefront(eye, field_deg=field_deg).coefficients_um
@@ -200,7 +200,7 @@ def test_the_depth_blur_refuses_a_traced_eye_in_other_light():
     with pytest.raises(VissimInputError, match="holds at 589.3 nm, not at 550 nm"):
         vissim.blur_depth(image, depth, eye=viewer, arcmin_per_px=1.0, wavelength_nm=550.0)
     with pytest.raises(VissimInputError, match="holds at 589.3 nm, not at 450 nm"):
-        from vissim.optics.psf_field import suggested_size_px
+        from vissim.optics.psf.field_size import suggested_size_px
         suggested_size_px(viewer.extra_wavefront, 1.0, wavelength_nm=450.0)
     with pytest.raises(VissimInputError, match="surfaces must be a table"):
         build_eye("navarro-1985", surfaces=[("cornea front", "conic", 0.0)])

@@ -30,8 +30,8 @@ import pytest
 from vissim.optics.eyes.models import escudero_sanz_1999
 from vissim.optics.eyes.refraction import (PUPIL_DEFINITION, along_chief_ray, eye_refraction,
                                            minimum_rms_prescription, paraxial_prescription, transfer_prescription)
-from vissim.optics.eyes.wavefront import trace_eye_wavefront
-from vissim.optics.prescription import Prescription
+from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.rx.prescription import Prescription
 
 #: optiland's 543 nm indices are typed into its sample, ours come from each medium's dispersion (on axis the
 #: two far points differ by 0.002 D); with the fans' O(h²) error and our order-8 fit over 1 mm, each

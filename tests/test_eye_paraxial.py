@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from vissim.optics.eyes.media import GrinMedium
+from vissim.optics.eyes.dispersion import GrinMedium
 from vissim.optics.eyes.models import arizona, escudero_sanz_1999, le_grand, liou_brennan_1997, navarro_1985
 from vissim.optics.eyes.paraxial import (GRIN_STEPS, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, grin_matrix, iris_diameter_mm, lca_diopters,

@@ -23,10 +23,10 @@ from vissim.imageio import read_image
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront
-from vissim.optics.eyes.wavefront import trace_eye_wavefront
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 
 #: Issue 12 and 26: every probed pixel within 2e-3 of the oracle's peak pixel.
 PEAK_FRACTION = 2e-3

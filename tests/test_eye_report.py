@@ -20,11 +20,11 @@ from vissim.optics.eyes.models import navarro_1985
 from vissim.optics.eyes.refraction import eye_refraction
 from vissim.optics.eyes.report import eye_mtf, eye_report
 from vissim.optics.eyes.surfaces import eye_surfaces
-from vissim.optics.eyes.wavefront import trace_eye_wavefront
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf_metrics import diffraction_mtf
+from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.metrics import diffraction_mtf
 from vissim.optics.raytrace import Biconic, Conic
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.pupil.wavefront import Wavefront
 
 REFRACTION_TOL_D = 0.02
 MTF_SAMPLING_TOL = 2e-3
@@ -79,7 +79,7 @@ def test_lens_surfaces_sit_in_front_of_the_cornea_and_refuse_a_thin_lens():
     import math
 
     from vissim.optics.eyes.spectacles import lens_surfaces
-    from vissim.optics.trial_lens import TrialLens, TrialLensSetup
+    from vissim.optics.rx.trial_lens import TrialLens, TrialLensSetup
 
     lens = TrialLens(-3.0, refractive_index=1.523, center_thickness_mm=1.0)
     front, back = lens_surfaces(TrialLensSetup((lens,), 12.0, math.inf))
@@ -101,7 +101,7 @@ def test_the_retina_per_degree_through_a_lens_is_the_spectacle_magnification():
     from vissim.bench.atv.tube import atv_trial_lens
     from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, retinal_mm_per_deg
     from vissim.optics.eyes.spectacles import system_retinal_mm_per_deg
-    from vissim.optics.trial_lens import TrialLensSetup
+    from vissim.optics.rx.trial_lens import TrialLensSetup
 
     eye = ametropic_eye(navarro_1985(), Prescription(-3.0))
     wavelength = eye.reference_wavelength_nm

@@ -26,9 +26,9 @@ from vissim.optics.eyes.paraxial import lca_diopters
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront, eye_wavefront
 from vissim.optics.eyes.report import MtfSpectrum, eye_report
 from vissim.optics.eyes.surfaces import split_at_stop
-from vissim.optics.spectral_wavefront import SpectralWavefront
-from vissim.optics.psf import compute_psf, strehl_ratio
-from vissim.optics.psf_field import energy_outside_field, suggested_size_px
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
+from vissim.optics.psf.compute import compute_psf, strehl_ratio
+from vissim.optics.psf.field_size import energy_outside_field, suggested_size_px
 from vissim.optics.raytrace import aim_collimated, trace_rays
 from vissim.spectra import named_spectrum, photopic_weights
 

@@ -1,6 +1,6 @@
-"""Field angles from the visual axis (`vissim.optics.eyes.wavefront`): Liou–Brennan's 5° angle alpha.
+"""Field angles from the visual axis (`vissim.optics.eyes.traced_wavefront`): Liou–Brennan's 5° angle alpha.
 
-The rule (written once, in `wavefront.field_direction`): for a model with ``visual_axis_deg``
+The rule (written once, in `traced_wavefront.field_direction`): for a model with ``visual_axis_deg``
 (Liou & Brennan 1997: the visual axis 5° from the optical axis, fixation nasal of it; the models
 are right eyes, +x nasal in OSA's frame), a field angle is measured from the visual axis, so field
 (0, 0) is the fixation direction, (+5°, 0) from the optical axis; models without one measure from
@@ -22,7 +22,7 @@ import pytest
 from vissim.cli import main
 from vissim.optics.eyes.models import escudero_sanz_1999, liou_brennan_1997
 from vissim.optics.eyes.paraxial import matrix_to_surface
-from vissim.optics.eyes.wavefront import field_axis, field_from_optical_axis_deg, trace_eye_wavefront
+from vissim.optics.eyes.traced_wavefront import field_axis, field_from_optical_axis_deg, trace_eye_wavefront
 
 FOVEA_TOL = 0.02
 

@@ -1,4 +1,4 @@
-"""The traced wavefront of a schematic eye and its refraction (`vissim.optics.eyes.wavefront`, `.refraction`).
+"""The traced wavefront of a schematic eye and its refraction (`vissim.optics.eyes.traced_wavefront`, `.refraction`).
 
 Oracles, each independent of the trace it checks:
 
@@ -30,9 +30,9 @@ from vissim.optics.eyes.models import escudero_sanz_1999, le_grand, liou_brennan
 from vissim.optics.eyes.paraxial import (entrance_pupil_diameter_mm, refraction_diopters,
                                          spectacle_refraction_diopters)
 from vissim.optics.eyes.refraction import eye_refraction, paraxial_prescription
-from vissim.optics.eyes.wavefront import (entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm,
+from vissim.optics.eyes.traced_wavefront import (entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm,
                                           trace_eye_wavefront)
-from vissim.optics.zernike import fit_zernike_um, zernike_nm
+from vissim.optics.pupil.zernike import fit_zernike_um, zernike_nm
 
 SQRT = math.sqrt
 

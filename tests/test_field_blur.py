@@ -1,4 +1,4 @@
-"""Field-dependent blur (`vissim.optics.field_blur`): bilinear interpolation of node PSFs (Nagy & O'Leary 1998).
+"""Field-dependent blur (`vissim.optics.blur.field_dependent`): bilinear interpolation of node PSFs (Nagy & O'Leary 1998).
 
 Oracles, none of them an FFT: a point source blurred field-dependently is the bilinear mix of its
 neighbouring nodes' PSFs, written here directly as weighted sums of the PSF arrays placed by hand
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.field_blur import PSFGrid, blur_field_dependent, node_positions_px, psf_grid
-from vissim.optics.psf import PSF
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.blur.field_dependent import PSFGrid, blur_field_dependent, node_positions_px, psf_grid
+from vissim.optics.psf.compute import PSF
 
 SHAPE = (61, 81)  # nodes 20 px apart: rows 0, 20, 40, 60; columns 0, 20, ..., 80
 SPACING_PX = 20

@@ -1,6 +1,6 @@
 """The image frame against the TABO/OSA frame: (col, row) = (-x, -y) (docs/conventions.md)."""
 
-from vissim.optics.pupil_grid import pupil_grid
+from vissim.optics.pupil.grid import pupil_grid
 from vissim.units import image_colrow_to_osa_xy, osa_xy_to_image_colrow
 
 

@@ -37,7 +37,7 @@ def test_no_import_loops():
 
 def test_heavy_dependencies_stay_behind_their_doors():
     doors = {"mitsuba": "vissim.render", "drjit": "vissim.render", "rawpy": "vissim.imaging.raw",
-             "OpenEXR": "vissim.imageio", "cupy": "vissim.optics.array_backend"}
+             "OpenEXR": "vissim.imageio", "cupy": "vissim.optics.runtime.array_backend"}
     for name, path in MODULES.items():
         for imported in _imports(path):
             door = doors.get(imported.split(".")[0])

@@ -39,7 +39,7 @@ LAYERS = [
 
 
 def _package(module: str) -> str:
-    """``vissim.optics.psf`` -> ``optics``; the root -> ``""``."""
+    """``vissim.optics.psf.compute`` -> ``optics``; the root -> ``""``."""
     parts = module.split(".")
     return parts[1] if len(parts) > 1 else ""
 
@@ -122,12 +122,12 @@ def test_no_loops_between_packages():
 def test_the_rules_catch_what_they_name(tmp_path):
     """The parser sees an upward import, a private name and a private attribute of a module."""
     source = tmp_path / "probe.py"
-    source.write_text("import vissim.optics.blur as b\nfrom vissim.optics.depth import _x\n"
+    source.write_text("import vissim.optics.blur.convolve as b\nfrom vissim.optics.depth.depth_map import _x\n"
                       "from vissim.cli import blur\nb._padding(1)\nblur._y\n")
     names = {name for name, _ in _imports(source)}
-    assert {"vissim.optics.blur", "vissim.optics.depth._x", "vissim.cli.blur",
-            "vissim.optics.blur._padding", "vissim.cli.blur._y"} <= names
-    assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr.bench") > _layer("vissim.optics.psf") > _layer("vissim.units")
+    assert {"vissim.optics.blur.convolve", "vissim.optics.depth.depth_map._x", "vissim.cli.blur",
+            "vissim.optics.blur.convolve._padding", "vissim.cli.blur._y"} <= names
+    assert _layer("vissim.cli.blur") > _layer("vissim.bench.dslr.bench") > _layer("vissim.optics.psf.compute") > _layer("vissim.units")
 
 
 def test_loading_a_campaign_imports_neither_the_harness_nor_scikit_image():

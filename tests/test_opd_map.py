@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from vissim.errors import VissimInputError
-from vissim.optics.opd_map import OpdMap
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.pupil.opd_map import OpdMap
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 
 FRONT = Wavefront.from_prescription(Prescription.parse("-1.00 -0.50 x 30"), 3.6) + Wavefront(
     {(3, 1): 0.1, (3, -3): 0.06, (4, 0): 0.05}, 3.6

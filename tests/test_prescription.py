@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import (
+from vissim.optics.rx.prescription import (
     LensPower,
     Prescription,
     RefractiveError,

@@ -9,18 +9,18 @@ from hypothesis import strategies as st
 from scipy.special import j0, j1
 
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, psf_sampling, strehl_ratio
-from vissim.optics.psf_metrics import (
+from vissim.optics.rx.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, psf_sampling, strehl_ratio
+from vissim.optics.psf.metrics import (
     diffraction_mtf,
     encircled_energy,
     frequencies_cyc_per_deg,
     mtf,
     radius_of_encircled_energy_arcmin,
 )
-from vissim.optics.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import ARCMIN_PER_RAD
 
 PUPIL_MM = 3.0
@@ -79,7 +79,7 @@ def test_airy_encircled_energy_inside_the_first_zero(airy):
 def test_ring_means_centre_ring_k_on_k_widths():
     # On a 7 x 7 grid about its centre, rings of width 1 hold r = 0 | 1, sqrt 2 | 2, sqrt 5 | sqrt 8, 3, sqrt 10 |
     # sqrt 13, sqrt 18 (rint binning); the mean of r over each ring is exact; a width only rescales radii.
-    from vissim.optics.psf_metrics import ring_means
+    from vissim.optics.psf.metrics import ring_means
 
     rows, cols = np.indices((7, 7)) - 3
     radius = np.hypot(rows, cols)
@@ -266,7 +266,7 @@ def test_bad_inputs_name_the_value_and_unit():
 
 
 def test_gaussian_band_is_a_normalised_symmetric_weighting():
-    from vissim.optics.chromatic import gaussian_band
+    from vissim.optics.rx.chromatic import gaussian_band
 
     wavelengths, weights = gaussian_band(550, 40, samples=7)
     assert sum(weights) == pytest.approx(1.0)
@@ -279,7 +279,7 @@ def test_gaussian_band_is_a_normalised_symmetric_weighting():
 @pytest.mark.parametrize("center_nm, fwhm_nm", [(550, 550), (550, 360), (1900, 200)])
 def test_a_band_reaching_outside_the_wavelength_range_is_refused(center_nm, fwhm_nm):
     from vissim.errors import VissimInputError
-    from vissim.optics.chromatic import gaussian_band
+    from vissim.optics.rx.chromatic import gaussian_band
 
     with pytest.raises(VissimInputError, match="200-2000 nm"):
         gaussian_band(center_nm, fwhm_nm)
@@ -347,7 +347,7 @@ def test_a_forced_matrix_transform_over_a_wide_field_folds_little_light_into_it(
 
 @pytest.mark.parametrize("mode", ["wave", "geometric"])
 def test_an_auto_field_is_the_suggested_size(mode):
-    from vissim.optics.psf import suggested_size_px
+    from vissim.optics.psf.compute import suggested_size_px
 
     front = Wavefront.from_prescription(Prescription(-1.0, -0.5, 60.0), 3.0)
     auto = compute_psf(front, arcmin_per_px=0.5, size_px="auto", mode=mode)

@@ -18,10 +18,10 @@ from fraunhofer_reference import (
 )
 
 from vissim.errors import FieldTooSmallError
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.psf_metrics import frequencies_cyc_per_deg, mtf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.psf.metrics import frequencies_cyc_per_deg, mtf
+from vissim.optics.pupil.wavefront import Wavefront
 
 WAVELENGTH_NM = 550.0
 WAVELENGTH_MM = WAVELENGTH_NM * 1e-6

@@ -13,10 +13,10 @@ from scipy.integrate import quad
 from scipy.special import j1
 
 from vissim.errors import FieldTooSmallError
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.psf_field import airy_tail, energy_outside_field, suggested_size_px
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.psf.field_size import airy_tail, energy_outside_field, suggested_size_px
+from vissim.optics.pupil.wavefront import Wavefront
 
 WAVELENGTH_NM = 550.0
 

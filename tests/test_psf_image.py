@@ -13,11 +13,11 @@ from scipy import integrate
 from scipy.special import j0, j1
 
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.psf_metrics import encircled_energy
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.psf.metrics import encircled_energy
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import ARCMIN_PER_RAD
 
 WAVELENGTH_NM = 550.0
@@ -77,11 +77,11 @@ def test_a_small_defocused_image_is_the_centre_of_a_large_one():
 
 def test_more_than_one_percent_outside_is_one_warning_and_less_none(caplog):
     front = Wavefront.zero(3.0)
-    with caplog.at_level(logging.WARNING, logger="vissim.optics.psf"):
+    with caplog.at_level(logging.WARNING, logger="vissim.optics.psf.compute"):
         compute_psf(front, arcmin_per_px=0.05, size_px=256, normalise="total")
     assert len(caplog.records) == 1 and "1.8 % of the PSF's energy falls outside the 256 px field" in caplog.text
     caplog.clear()
-    with caplog.at_level(logging.WARNING, logger="vissim.optics.psf"):
+    with caplog.at_level(logging.WARNING, logger="vissim.optics.psf.compute"):
         held = compute_psf(front, arcmin_per_px=0.25, size_px=256, normalise="total")
     assert held.energy_in_field > 0.99 and not caplog.records
 

@@ -8,9 +8,9 @@ wavelength for the FFT), each wavelength's pupil and transform, the output pixel
 import numpy as np
 import pytest
 
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 
 
 @pytest.mark.parametrize("method, stages", [("mft", 2 * 2 + 2), ("fft", 2 * 2 + 1)])

@@ -44,7 +44,7 @@ def test_importing_every_public_name_does_not_import_mitsuba():
 def test_the_psf_docstring_example_runs():
     import doctest
 
-    import vissim.optics.psf as module
+    import vissim.optics.psf.compute as module
 
     result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted >= 3 and result.failed == 0
@@ -55,10 +55,10 @@ def test_the_cheap_docstring_examples_run():
     import doctest
     import importlib
 
-    modules = ("vissim.optics.prescription", "vissim.optics.wavefront", "vissim.optics.blur", "vissim.charts",
+    modules = ("vissim.optics.rx.prescription", "vissim.optics.pupil.wavefront", "vissim.optics.blur.convolve", "vissim.charts",
                "vissim.fit.rx_fit", "vissim.validation.engine.loader", "vissim.validation.engine.runner", "vissim.atv.analysis",
-               "vissim.render.run", "vissim.optics.psf_metrics", "vissim.optics.depth", "vissim.atv.data",
-               "vissim.bench.dslr.bench", "vissim.spectra", "vissim.optics.spectral_wavefront")
+               "vissim.render.run", "vissim.optics.psf.metrics", "vissim.optics.depth.depth_map", "vissim.atv.data",
+               "vissim.bench.dslr.bench", "vissim.spectra", "vissim.optics.pupil.spectral_wavefront")
     attempted = 0
     for name in modules:
         result = doctest.testmod(importlib.import_module(name), optionflags=doctest.NORMALIZE_WHITESPACE)

@@ -17,7 +17,7 @@ from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, TRIAL_LENS_RANGE_DIOPTE
                            accommodation_diopters, trial_lens_diopters, vertex_distance_mm)
 from vissim.cli import main
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import TrialLens, TrialLensSetup, thesis_table_4_2_power
+from vissim.optics.rx.trial_lens import TrialLens, TrialLensSetup, thesis_table_4_2_power
 
 API = {
     "DslrBench": lambda mm: DslrBench(vertex_distance_mm=mm),

@@ -1,4 +1,4 @@
-"""vissim.optics.setup.ViewingSetup: each constructor against closed-form vergence arithmetic.
+"""vissim.optics.rx.viewing_setup.ViewingSetup: each constructor against closed-form vergence arithmetic.
 
 Oracles are written out here, independent of the 4 x 4 ray transfer code: thin-lens vergence
 stepping (L' = L + F, then L2 = L' / (1 - d L') across a gap d; Keating, *Geometric, Physical
@@ -16,9 +16,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vissim.optics.prescription import Prescription
-from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import TrialLens, TrialLensSetup
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.viewing_setup import ViewingSetup
+from vissim.optics.rx.trial_lens import TrialLens, TrialLensSetup
 
 ARCMIN_PER_MRAD = 180.0 * 60.0 / math.pi / 1000.0
 
@@ -115,7 +115,7 @@ def test_blur_is_pupil_times_principal_defocus_and_prescription_round_trips(sphe
     (Prescription(1.0), 0.0, math.inf)])
 def test_an_eye_at_a_depth_is_the_viewing_setup_of_that_eye_there(rx, accommodation, distance_m):
     # The depth blurs' DepthViewer and ViewingSetup.eye decide the same defocus: D = A I - Rx - I/d.
-    from vissim.optics.setup import DepthViewer
+    from vissim.optics.rx.viewing_setup import DepthViewer
 
     eye = DepthViewer(rx, 3.0, accommodation)
     proximity = 0.0 if math.isinf(distance_m) else 1.0 / distance_m
@@ -129,8 +129,8 @@ def test_an_eye_at_a_depth_is_the_viewing_setup_of_that_eye_there(rx, accommodat
 
 def test_an_eye_refuses_negative_accommodation_and_a_smaller_extra_wavefront():
     from vissim.errors import VissimInputError
-    from vissim.optics.setup import DepthViewer
-    from vissim.optics.wavefront import Wavefront
+    from vissim.optics.rx.viewing_setup import DepthViewer
+    from vissim.optics.pupil.wavefront import Wavefront
 
     with pytest.raises(VissimInputError, match="accommodation exerted must be >= 0 dioptres"):
         DepthViewer(Prescription(-1.0), 3.0, -0.5)

@@ -15,8 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import LensPower
-from vissim.optics.trial_lens import (
+from vissim.optics.rx.prescription import LensPower
+from vissim.optics.rx.trial_lens import (
     CROWN_GLASS_INDEX,
     TrialLens,
     TrialLensSetup,

@@ -19,9 +19,9 @@ from vissim.checks import (DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_
 from vissim.cli import build_parser, main
 from vissim.errors import VissimInputError
 from vissim.imageio import write_image
-from vissim.optics.glass import D_LINE_NM
-from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import EYE_VERTEX_DISTANCE_MM
+from vissim.optics.rx.glass import D_LINE_NM
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.trial_lens import EYE_VERTEX_DISTANCE_MM
 from vissim.provenance import make_provenance
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
 

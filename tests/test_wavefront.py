@@ -8,8 +8,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.wavefront import (
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.pupil.wavefront import (
     Wavefront,
     parse_zernike_terms,
     prescription_to_zernike_um,

@@ -5,8 +5,8 @@ import threading
 
 import numpy as np
 
-from vissim.optics import workspace
-from vissim.optics.workspace import scratch
+from vissim.optics.runtime import workspace
+from vissim.optics.runtime.workspace import scratch
 
 
 def test_same_request_reuses_the_array_and_others_do_not():

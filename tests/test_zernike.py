@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
-from vissim.optics.zernike import (
+from vissim.optics.pupil.zernike import (
     ansi_j_to_nm,
     nm_to_ansi_j,
     nm_to_noll,

@@ -17,10 +17,10 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.atomic import write_json_atomic
 from vissim.charts import etdrs_chart_spec, render_chart_angular
 from vissim.imageio import to_preview_png, write_image
-from vissim.optics.blur import blur_image
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.provenance import make_provenance
 
 log = logging.getLogger(__name__)

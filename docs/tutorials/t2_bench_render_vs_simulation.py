@@ -27,8 +27,8 @@ import numpy as np
 import vissim
 from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
-from vissim.optics.resample import magnify
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.blur.resample import magnify
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.run import render_bench
 from vissim.imaging.metrics import compare_images
 

@@ -3,7 +3,7 @@
 ``scenes/depth_panels.toml`` places four charts at four distances, each overlapping the next.
 Mitsuba renders three images of it: the eye's view path-traced through its pupil (the truth),
 and, through a pinhole, the all-in-focus image and the depth of every pixel. vissim then blurs
-the all-in-focus image by depth (`vissim.optics.depth.blur_depth`: one PSF per depth layer, nearer layers
+the all-in-focus image by depth (`vissim.optics.depth.depth_map.blur_depth`: one PSF per depth layer, nearer layers
 occluding farther ones) and the result is compared with the path-traced view.
 
 Run it as ``python docs/tutorials/t4_depth_scene.py OUT_DIR``; the figure goes to OUT_DIR
@@ -23,7 +23,7 @@ import numpy as np
 from scipy import ndimage
 
 from vissim.bench.depth.scene_files import load_depth_scene_toml
-from vissim.optics.depth import blur_depth
+from vissim.optics.depth.depth_map import blur_depth
 from vissim.render.depth_render import render_depth
 from vissim.imaging.metrics import compare_images
 

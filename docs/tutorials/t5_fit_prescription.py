@@ -23,8 +23,8 @@ import numpy as np
 import vissim
 from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import optotype_tile
-from vissim.optics.resample import block_mean, magnify
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.blur.resample import block_mean, magnify
+from vissim.optics.rx.trial_lens import TrialLens
 
 args = [a for a in sys.argv[1:] if not a.startswith("--")]
 out = Path(args[0] if args else os.environ.get("VISSIM_TUTORIAL_OUT", "tutorial_out"))

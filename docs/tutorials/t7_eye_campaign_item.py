@@ -29,8 +29,8 @@ import vissim
 from vissim.bench.eye.bench import EyeBench
 from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.optics.eyes.simulations import Light, simulate_view
-from vissim.optics.resample import block_mean
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.blur.resample import block_mean
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.eye_render import render_eye_bench
 from vissim.validation.eye.item import chart_offset_px, item_ray_psf
 from vissim.validation.eye.simulate import EyeScene, margin_px

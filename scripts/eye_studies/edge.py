@@ -108,7 +108,7 @@ def edge_mtf(image: np.ndarray, arcmin_per_px: float) -> EdgeMtf:
 def traced_rays_deg(model: str, pupil_mm: float, wavelength_nm: float, rays_across: int = 161) -> np.ndarray:
     """The geometric PSF's rays: (N, 2) landing offsets from the chief ray, degrees of visual angle (module doc)."""
     from vissim.optics.eyes.models import eye_model
-    from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm, trace_to_retina
+    from vissim.optics.eyes.traced_wavefront import iris_from_entrance_pupil_mm, trace_to_retina
 
     eye = eye_model(model)
     iris_mm = iris_from_entrance_pupil_mm(eye, pupil_mm, wavelength_nm)

@@ -3,7 +3,7 @@
 * **Renders**: `vissim.render.eye_render` (a Sloan letter at ``chart_distance_m``, a trial lens of
   sphere S at 12 mm, a schematic eye relaxed), monochromatic on the mono variant; the lens in
   spectacle crown at the render's wavelength (`eye_render.eye_scene_dict`: n_d 1.523, V_d 58.6,
-  Cauchy, `vissim.optics.glass`).
+  Cauchy, `vissim.optics.rx.glass`).
 * **Sweep**: one lattice of spheres for every wavelength, ``step_diopters`` apart (multiples of the
   step, not centred on any prediction), covering each wavelength's predicted best sphere ± ``margin``.
 * **Sharpness**: the letter's gradient energy, G(I) = Σ (I[r, c+1] − I[r, c])² + (I[r+1, c] − I[r, c])²
@@ -48,7 +48,7 @@ REFERENCE_NM = 550.0
 
 def _thick_lens(sphere_diopters: float, aperture_mm: float = PREDICTION_APERTURE_MM):
     from vissim.bench.lenses.holder import physical_lens
-    from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
+    from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, TrialLens
 
     return physical_lens(TrialLens(sphere_diopters, 0.0, 0.0), aperture_mm, CROWN_GLASS_INDEX)  # the bench's rule
 

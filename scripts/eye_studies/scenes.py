@@ -8,7 +8,7 @@ chart as the schematic-eye sensor's pixels see it before any blur.
 * **A pixel's direction** (`pixel_directions`): the sensor's map (`vissim.render.schematic_eye_sensor`):
   the pixel at film position (u, v) is at the field angle ``(field_x − (u − ½) W a, field_y + (½ − v) H a)``
   degrees (OSA's frame: x the observer's left, y up), whose direction in the eye's frame is
-  (tan x, tan y, 1) turned by the model's visual axis (`vissim.optics.eyes.wavefront.field_direction`,
+  (tan x, tan y, 1) turned by the model's visual axis (`vissim.optics.eyes.traced_wavefront.field_direction`,
   vectorised here and pinned to it by a test), then into the world by
   `vissim.bench.eye.scene.eye_to_world`.  Seen from the corneal vertex: the entrance pupil's
   few mm of parallax are below 1e-5 deg for the far charts the studies use (1 km).
@@ -95,7 +95,7 @@ def pixel_directions(eye, size_px: tuple[int, int], arcmin_per_px: float, field_
     """World unit directions (rows·k, cols·k, 3) of the ``oversample``² sub-pixel centres of a render of the
     `SchematicEye` ``eye`` (module doc)."""
     from vissim.optics.eyes.field_blur import node_field_deg
-    from vissim.optics.eyes.wavefront import field_direction
+    from vissim.optics.eyes.traced_wavefront import field_direction
     from vissim.bench.eye.scene import eye_to_world
 
     rows, cols = size_px

@@ -23,7 +23,7 @@ from vissim.atv.virtual import (
 )
 from vissim.bench.atv.tube import ATV_TRIAL_LENS_DISTANCE_MM
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 
 # The spot depends only on the request, not on the seed: cache it across tests (keeps the suite fast).
 cached_spot = functools.lru_cache(maxsize=None)(fourier_retinal_image)

@@ -30,8 +30,8 @@ from vissim.bench.atv.paraxial import atv_paraxial
 from vissim.bench.atv.scene import LENS_BSDF, atv_scene
 from vissim.bench.lenses.mesh import rim_thickness_mm
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import LensPower, Prescription, RefractiveError
-from vissim.optics.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.optics.rx.prescription import LensPower, Prescription, RefractiveError
+from vissim.optics.rx.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
 from vissim.units import mrad_to_arcmin
 
 PITCH_MM = 25.4 / 326.0

@@ -31,8 +31,8 @@ from vissim.bench.depth.scene_files import load_depth_scene_toml
 from vissim.bench.depth.textures import panel_texture
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.units import rad_to_arcmin
 
 

@@ -18,7 +18,7 @@ from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.bench.lenses.mesh import rim_thickness_mm
 from vissim.bench.dslr.scene_files import load_bench_toml, load_chart_toml
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 
 SCENE = Path(__file__).resolve().parents[2] / "scenes" / "dslr_bench.toml"
 

@@ -19,7 +19,7 @@ from vissim.bench.lenses.holder import LENS_GAP_MM, lens_clear_aperture_mm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_LIGHT_NM
 from vissim.optics.eyes.eye import build_eye
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 
 PACKAGE = Path(__file__).resolve().parents[2] / "vissim"
 

@@ -1,6 +1,6 @@
 """Trial-lens meshes: shape, normals, power, PLY bytes and the cache (no rendering).
 
-Expected values come from the lens's own definition in :mod:`vissim.optics.trial_lens`: the marked
+Expected values come from the lens's own definition in :mod:`vissim.optics.rx.trial_lens`: the marked
 power is the back vertex power, surface radii follow the lensmaker relation
 (``TrialLens.surface_radii_mm``), and a sphere of radius R has sag R - sqrt(R^2 - a^2) at
 semi-aperture a.
@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
+from vissim.optics.rx.trial_lens import lens_surface_curvatures_per_mm
 from vissim.bench.lenses.mesh import (
     cached_lens_ply,
     lens_mesh,
@@ -25,7 +25,7 @@ from vissim.bench.lenses.mesh import (
     write_ply,
 )
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, TrialLens
 
 APERTURE_MM = 30.0
 

@@ -2,7 +2,7 @@
 
 Oracles, each independent of :mod:`vissim.bench.lenses.trace`:
 
-* vergence theory -- the 4x4 ray-transfer matrices of :mod:`vissim.optics.trial_lens` (paraxial);
+* vergence theory -- the 4x4 ray-transfer matrices of :mod:`vissim.optics.rx.trial_lens` (paraxial);
 * optiland 0.6 (a peer ray tracer, test-only, skipped when absent) and a meridional trace of
   exact spheres written out below (closed-form circle intersection, no Newton, no sag code);
 * Mitsuba 3's own trace of the rendered PLY mesh with the ``vissim_refract`` BSDF;
@@ -21,12 +21,12 @@ import pytest
 from vissim.bench.dslr.traced_wavefront import shift_invariance, trace_bench_wavefront
 from vissim.bench.dslr.bench import DslrBench
 from vissim.bench.lenses.mesh import cached_lens_ply
-from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
+from vissim.optics.rx.trial_lens import lens_surface_curvatures_per_mm
 from vissim.bench.lenses.trace import bench_surfaces, object_point_mm
-from vissim.optics.glass import C_LINE_NM, D_LINE_NM, F_LINE_NM, SPECTACLE_CROWN, crown_index
+from vissim.optics.rx.glass import C_LINE_NM, D_LINE_NM, F_LINE_NM, SPECTACLE_CROWN, crown_index
 from vissim.optics.raytrace import aim_rays
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, trial_lens_effect
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, TrialLens, TrialLensSetup, trial_lens_effect
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import mm_to_m
 
 SQRT3, SQRT5 = math.sqrt(3.0), math.sqrt(5.0)
@@ -293,7 +293,7 @@ def test_no_lens_adds_no_wavefront_and_rays_land_on_the_grid():
 
 
 def test_the_opd_map_carries_the_same_wavefront_on_the_psf_cores_grid():
-    from vissim.optics import opd_map
+    from vissim.optics.pupil import opd_map
 
     bench = bench_with(TrialLens(1.0, 2.0, 30.0))
     traced = trace_bench_wavefront(bench, field_deg=CORNER_DEG)

@@ -9,10 +9,10 @@ from vissim.charts import render_chart_angular, single_letter_spec
 from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
-from vissim.optics.blur import blur_image
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.resample import block_mean, magnify
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.blur.resample import block_mean, magnify
+from vissim.optics.rx.trial_lens import TrialLens
 
 D_LINE_NM = 587.5618
 

@@ -72,7 +72,7 @@ def test_an_rgb_point_through_a_navarro_eye_spreads_most_in_the_blue(capsys, tmp
 def test_channel_bands_with_an_eye_model_equal_blur_eye_over_the_same_bands(capsys, tmp_path):
     """--channel-fwhm-nm with --eye-model: each channel a Gaussian band (`gaussian_band`), traced at each
     wavelength, as `vissim.blur_eye` with the same bands and weights (plumbing)."""
-    from vissim.optics.chromatic import gaussian_band
+    from vissim.optics.rx.chromatic import gaussian_band
 
     source, target = tmp_path / "rgb.exr", tmp_path / "out.exr"
     rgb = np.zeros((41, 41, 3), np.float32)

@@ -8,8 +8,8 @@ import pytest
 
 from vissim.cli import main
 from vissim.imageio import read_image, write_image
-from vissim.optics.array_backend import cuda_available
-from vissim.optics.blur_device import blur_image_on
+from vissim.optics.runtime.array_backend import cuda_available
+from vissim.optics.blur.device import blur_image_on
 
 
 def run(capsys, *argv):

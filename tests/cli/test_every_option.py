@@ -55,7 +55,7 @@ def test_every_option_at_bad_values(path, tmp_path, capsys):
     fit_image, fit_reference = tmp_path / "fit_image.exr", tmp_path / "fit_reference.exr"
     if path == ("fit-rx",):  # a +1.50 DS capture of a letter and its sharp reference (tests/fit/synthetic.py)
         from tests.fit.synthetic import capture
-        from vissim.optics.trial_lens import TrialLens
+        from vissim.optics.rx.trial_lens import TrialLens
 
         blurred, sharp, _ = capture(TrialLens(1.5))
         for file, pixels in ((fit_image, blurred), (fit_reference, sharp)):

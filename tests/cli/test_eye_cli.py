@@ -29,11 +29,11 @@ import pytest
 from vissim.cli import main
 from vissim.optics.eyes import models
 from vissim.optics.eyes.fixation import ametropic_eye
-from vissim.optics.eyes.media import Medium
+from vissim.optics.eyes.dispersion import Medium
 from vissim.optics.eyes.spectacles import residual_refraction
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf_metrics import diffraction_mtf
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.metrics import diffraction_mtf
+from vissim.optics.rx.trial_lens import TrialLens
 
 OPTILAND = {"ep_position_mm": 3.04010, "ep_diameter_mm": 3.40022, "image_focal_length_mm": 22.029}
 MTF_SAMPLING_TOL = 2e-3

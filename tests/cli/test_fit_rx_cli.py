@@ -7,7 +7,7 @@ import pytest
 
 from vissim.cli import main
 from vissim.imageio import write_image
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.provenance import make_provenance
 
 from tests.fit.synthetic import capture

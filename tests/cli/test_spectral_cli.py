@@ -15,7 +15,7 @@ from vissim.imageio import read_image
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.eyes.report import MtfSpectrum, eye_report
-from vissim.optics.psf import compute_psf
+from vissim.optics.psf.compute import compute_psf
 from vissim.spectra import named_spectrum
 
 

@@ -1,10 +1,10 @@
 """Synthetic bench captures made by vissim's own forward chain (not by :mod:`vissim.fit.forward`).
 
 The chart is rendered ``OVERSAMPLE`` times finer than the capture, magnified by the bench's
-spectacle magnification (:func:`vissim.optics.resample.magnify`), blurred by the PSF of the
-bench's :class:`~vissim.optics.setup.ViewingSetup` (:func:`vissim.optics.psf.compute_psf`, ray
+spectacle magnification (:func:`vissim.optics.blur.resample.magnify`), blurred by the PSF of the
+bench's :class:`~vissim.optics.rx.viewing_setup.ViewingSetup` (:func:`vissim.optics.psf.compute.compute_psf`, ray
 histogram or wave optics), shifted, integrated onto the capture's pixels
-(:func:`~vissim.optics.resample.block_mean`) and given Gaussian noise: the path the campaign's
+(:func:`~vissim.optics.blur.resample.block_mean`) and given Gaussian noise: the path the campaign's
 simulations take (``vissim.validation.dslr.simulate.simulate(..., oversample=5)``).  The fit's own
 model (analytic OTF, blur before magnification) shares none of it but the ViewingSetup.
 """
@@ -18,10 +18,10 @@ import scipy.ndimage
 
 from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import optotype_tile
-from vissim.optics.blur import blur_image
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.resample import block_mean, magnify
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.blur.resample import block_mean, magnify
+from vissim.optics.rx.trial_lens import TrialLens
 
 OVERSAMPLE = 4
 SHAPE = (96, 96)

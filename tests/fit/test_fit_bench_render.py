@@ -15,8 +15,8 @@ import pytest
 from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.fit.capture import compare_with_theory, fit_capture
-from vissim.optics.prescription import LensPower
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.prescription import LensPower
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
 
 if choose_variant("mono").variant.startswith("scalar"):  # pragma: no cover - machine without LLVM/CUDA

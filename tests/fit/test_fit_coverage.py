@@ -23,7 +23,7 @@ from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import single_letter_spec
 from vissim.fit.capture import fit_capture
 from vissim.fit.result import Z95
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
 
 if choose_variant("mono").variant.startswith("scalar"):  # pragma: no cover - machine without LLVM/CUDA

@@ -12,7 +12,7 @@ import numpy as np
 
 from vissim.fit.result import Z95
 from vissim.fit.rx_fit import fit_rx
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 
 from tests.fit.synthetic import BENCH, capture
 from tests.fit.virtual_dng import through_virtual_dng

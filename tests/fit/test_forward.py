@@ -1,8 +1,8 @@
 """The fit's forward model against vissim's PSF core: orientation, blur size, shift sign.
 
-Oracle: :func:`vissim.optics.psf.compute_psf` in geometric mode, a histogram of traced rays
+Oracle: :func:`vissim.optics.psf.compute.compute_psf` in geometric mode, a histogram of traced rays
 through the same wavefront (pinned for orientation by ``tests/test_psf.py``), convolved by
-:func:`vissim.optics.blur.blur_image`.  The forward model uses the analytic transfer function of
+:func:`vissim.optics.blur.convolve.blur_image`.  The forward model uses the analytic transfer function of
 the uniform ellipse instead; the two share only the prescription -> defocus convention.
 """
 
@@ -11,11 +11,11 @@ import pytest
 
 from vissim.charts import optotype_tile
 from vissim.fit.forward import ForwardModel, _jinc
-from vissim.optics.blur import blur_image
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.resample import magnify
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.blur.resample import magnify
+from vissim.optics.pupil.wavefront import Wavefront
 import scipy.special
 
 
@@ -54,7 +54,7 @@ def test_positive_shift_moves_the_content_down_and_right():
 
 
 def test_magnification_is_the_campaigns_about_the_tile_centre():
-    """Without blur the model magnifies as :func:`vissim.optics.resample.magnify` (same spline, same centre)."""
+    """Without blur the model magnifies as :func:`vissim.optics.blur.resample.magnify` (same spline, same centre)."""
     reference = _letter()
     model = ForwardModel(reference, 1.0, 3.6, max_power_diopters=2.0)
     matrix = np.array([[1.05, 0.01], [0.01, 0.97]])

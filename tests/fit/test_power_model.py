@@ -5,7 +5,7 @@ import pytest
 
 from vissim.bench.dslr.bench import DslrBench
 from vissim.fit.power_model import power_model
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 
 
 @pytest.mark.parametrize("name", ["bench", "free", "none"])

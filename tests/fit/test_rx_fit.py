@@ -12,7 +12,7 @@ import pytest
 
 from vissim.errors import VissimInputError
 from vissim.fit.rx_fit import fit_rx
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 
 from tests.fit.synthetic import BENCH, capture
 

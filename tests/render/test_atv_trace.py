@@ -36,7 +36,7 @@ from vissim.bench.atv.tube import (
 from vissim.bench.atv.paraxial import atv_paraxial
 from vissim.bench.atv.scene import LENS_BSDF
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.units import mrad_to_arcmin
 
 mitsuba_backend = pytest.importorskip("vissim.render.backend")

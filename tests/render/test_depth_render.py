@@ -5,7 +5,7 @@ mrad (docs/conventions.md), defocus = K - 1/z with K = A - Rx for an eye and 1/f
 DSLR (vissim.bench.depth.scene).  Estimator: the edge-spread function of a panel's straight
 edge against the black sky, averaged along the edge and fitted with a uniform disc's ESF
 integrated over the pixel (as tests/render/test_dslr_render.py); its noise at 64 spp is
-~0.3 % (measured when written), so 3 % is 10x the noise.  For vissim.optics.depth.blur_depth, whose
+~0.3 % (measured when written), so 3 % is 10x the noise.  For vissim.optics.depth.depth_map.blur_depth, whose
 layered compositing reshapes edges against the sky (reported by the depth campaign, not
 hidden), the blur is measured instead on the panel's interior: the defocus whose single-plane
 geometric blur of the all-in-focus render best matches it there.
@@ -33,11 +33,11 @@ from vissim.bench.depth.viewers import CameraViewer, EyeViewer, viewing_setup
 from vissim.bench.depth.scene_dict import depth_scene_dict
 from vissim.bench.depth.textures import panel_texture
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.depth import blur_depth
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.depth.depth_map import blur_depth
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.render.backend import choose_variant, mitsuba
 from vissim.render.depth_render import render_aov_depth, render_depth
 from vissim.render.eye_sensor import register_eye_sensor

@@ -27,8 +27,8 @@ import pytest
 from scipy.optimize import least_squares
 
 from vissim.bench.dslr.bench import DslrBench, dslr_scene
-from vissim.optics.glass import D_LINE_NM, crown_index
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.glass import D_LINE_NM, crown_index
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
 from vissim.render.run import render_scene
 

@@ -2,7 +2,7 @@
 
 Theory: :meth:`vissim.bench.dslr.bench.DslrBench.viewing_setup` -- added power and spectacle magnification by
 4 x 4 ray transfer through the same thick lenses that are rendered
-(:func:`vissim.optics.trial_lens.trial_lens_effect`), blur diameter = entrance pupil (3.6 mm) x
+(:func:`vissim.optics.rx.trial_lens.trial_lens_effect`), blur diameter = entrance pupil (3.6 mm) x
 defocus (conventions: dioptres x mm = mrad).  Prototype reference: +2 D at 10 mm, chart at
 914.4 mm, 3.6 mm pupil -> a 24.7 arcmin blur disc.
 
@@ -28,7 +28,7 @@ from scipy.optimize import least_squares
 
 from vissim.bench.dslr.bench import DslrBench, chart_mm_per_texel, dslr_scene
 from vissim.charts import optotype_tile, single_letter_spec
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.backend import choose_variant
 from vissim.render.run import render_bench, render_scene
 
@@ -208,14 +208,14 @@ def test_same_seed_gives_bit_identical_pixels_and_another_seed_does_not():
 
 @pytest.mark.parametrize("lens", [TrialLens(2.0), TrialLens(-2.0, 1.0, 30.0)], ids=["+2DS", "-2+1x30"])
 def test_bench_render_matches_vissims_blur_of_the_magnified_letter(lens):
-    """Render vs vissim.optics.psf (geometric mode) + vissim.optics.blur of the tile magnified by the theory.
+    """Render vs vissim.optics.psf.compute (geometric mode) + vissim.optics.blur.convolve of the tile magnified by the theory.
 
     Same camera prescription (DslrBench.viewing_setup), 3.6 mm pupil, letter scaled by the spectacle
     magnification (ERRATA item 5).  This pins the oblique-axis mirroring of both halves to each
     other.  Measured when written at 256 spp: PSNR 44.8 dB (+2 DS) and 43.2 dB (-2 +1 x 30) over
     the 0.9 white level (46 and 44 dB at 512 spp); the render's own noise is ~48 dB.  Threshold 40 dB."""
-    from vissim.optics.blur import blur_image
-    from vissim.optics.psf import compute_psf
+    from vissim.optics.blur.convolve import blur_image
+    from vissim.optics.psf.compute import compute_psf
 
     bench = DslrBench(lenses=(lens,), spp=256, seed=SEED)
     setup = bench.viewing_setup()

@@ -17,10 +17,10 @@ import vissim.render.eye_render as eye_render_module
 from vissim.cli import main
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.render.backend import find_libllvm
 from vissim.render.eye_render import EyeRender
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.render.eye_scene_files import load_eye_scene
 
 REPO = Path(__file__).resolve().parents[2]

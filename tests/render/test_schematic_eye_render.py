@@ -110,7 +110,7 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
     import math
 
     from vissim.optics.eyes.models import eye_model
-    from vissim.optics.eyes.wavefront import trace_eye_wavefront
+    from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
     from vissim.render.backend import mitsuba
     from vissim.bench.eye.scene import eye_to_world
     from vissim.render.schematic_eye_sensor import register_schematic_eye_sensor

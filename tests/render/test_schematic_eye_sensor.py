@@ -138,14 +138,14 @@ def test_a_light_to_the_observers_right_and_up_appears_right_and_up():
 
 @needs_llvm
 def test_a_distant_point_appears_at_its_chief_ray_plus_the_wavefronts_mean_slope():
-    """Independent oracle: the numpy traced wavefront (`optics.eyes.wavefront`, over the 3 mm entrance
+    """Independent oracle: the numpy traced wavefront (`optics.eyes.traced_wavefront`, over the 3 mm entrance
     pupil, referenced to the chief ray's retinal point).  A geometric image's centroid lies off the
     chief ray by the wavefront's mean slope over the pupil (the G-tilt): for OSA Zernikes
     sum_n c(n, 1) sqrt(2 (n + 1)) / R, the tilt's and the comas' (each Z(n, 1) is 1 on the rim).
     Navarro at 5 deg, 589.3 nm: -0.500 arcmin (towards the axis); the render must put a distant disc's
     centroid there (with 0.009 arcmin of parallax) within 0.03 arcmin.  Measured, seeds 1-3: -0.498, -0.509,
     -0.503 against -0.509."""
-    from vissim.optics.eyes.wavefront import trace_eye_wavefront
+    from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
     from vissim.units import image_colrow_to_osa_xy
 
     field_deg, step_arcmin, distance_mm, size = 5.0, 0.25, 1.0e5, 24
@@ -203,9 +203,9 @@ def test_monochromatic_spectral_render_of_white_gives_its_radiance(wavelength_nm
 @needs_llvm
 @pytest.mark.parametrize("model", ["navarro-1985", pytest.param("liou-brennan-1997", marks=pytest.mark.slow)])
 def test_a_pixel_looks_along_the_direction_the_trace_gives_its_field_angle(model):
-    """The sensor's Dr.Jit copy of the field-angle rule equals `wavefront.field_direction` (the numpy
+    """The sensor's Dr.Jit copy of the field-angle rule equals `traced_wavefront.field_direction` (the numpy
     original: (tan x, tan y, 1), from Liou-Brennan's visual axis), within float32 round-off (2e-7)."""
-    from vissim.optics.eyes.wavefront import field_direction
+    from vissim.optics.eyes.traced_wavefront import field_direction
     from vissim.render.schematic_eye_sensor import register_schematic_eye_sensor
 
     mi = mitsuba("mono")

@@ -140,7 +140,7 @@ def test_toric_cornea_biconic_reverses_the_numpy_trace():
     from drjit.llvm import Float64
 
     from vissim.optics.eyes.fixation import ametropic_eye
-    from vissim.optics.prescription import Prescription
+    from vissim.optics.rx.prescription import Prescription
 
     eye = ametropic_eye(eye_model("navarro-1985"), Prescription.parse("-1.00 -2.00 x 30"))
     assert eye.surfaces[0].is_toric

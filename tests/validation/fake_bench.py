@@ -8,13 +8,13 @@ simulations use, so harness tests would see a setup error.
 import numpy as np
 
 from vissim.charts import optotype_tile
-from vissim.optics.blur import blur_image
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.rx.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.validation.engine.loader import load_campaign
 
-from vissim.optics.resample import magnify
+from vissim.optics.blur.resample import magnify
 
 
 def fake_render(spec):

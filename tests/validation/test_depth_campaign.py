@@ -24,7 +24,7 @@ from tests.bench.depth_scenes import default_panels_scene
 from vissim.bench.depth.scene import panel_geometries
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.render.backend import choose_variant
 from vissim.validation.engine import runner
 from vissim.validation.engine.loader import load_campaign

@@ -19,7 +19,7 @@ import pytest
 
 from vissim.errors import VissimInputError
 from vissim.validation.engine.validate import validate
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.validation.eye.rays import ray_psf
 from vissim.validation.eye.report import configuration_label
 from vissim.validation.eye.schema import read_campaign
@@ -155,7 +155,7 @@ def test_a_defocused_eye_s_ray_psf_is_the_blur_disc():
     from vissim.optics.eyes.eye import build_eye
     from vissim.optics.eyes.models import eye_model
     from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, refraction_diopters
-    from vissim.optics.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
+    from vissim.optics.rx.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
 
     lens = TrialLens(2.0, 0.0, 180.0, refractive_index=1.523, center_thickness_mm=3.0)
     ray = ray_psf(build_eye("navarro-1985", pupil_mm=3.0), field_deg=(0.0, 0.0), chart_distance_m=6.0, lens=lens,

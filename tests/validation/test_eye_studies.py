@@ -92,7 +92,7 @@ def test_traced_psf_is_centred_and_its_scale_is_the_paraxial_one():
     large = traced_rays_deg("navarro-1985", 4.0, 550.0, rays_across=31)
     assert np.all(np.abs(large.mean(axis=0)) < 1e-6)
     assert np.sqrt(np.mean(np.sum(large**2, axis=1))) > 1.5 * np.sqrt(np.mean(np.sum(small**2, axis=1)))
-    from vissim.optics.eyes.wavefront import trace_to_retina
+    from vissim.optics.eyes.traced_wavefront import trace_to_retina
 
     eye = eye_model("navarro-1985")
     centre = trace_to_retina(eye, np.array([[0.0, 0.0]]), 550.0, field_deg=(0.0, 0.0))[0].points_mm
@@ -104,7 +104,7 @@ def test_traced_psf_is_centred_and_its_scale_is_the_paraxial_one():
                                           ("liou-brennan-1997", (-7.0, 3.0))])
 def test_pixel_directions_follow_the_trace_field_rule(model, field):
     """The centre of an odd film looks along world +z, and every pixel along eye_to_world @ field_direction."""
-    from vissim.optics.eyes.wavefront import field_direction
+    from vissim.optics.eyes.traced_wavefront import field_direction
     from vissim.bench.eye.scene import eye_to_world
 
     eye = eye_model(model)

@@ -15,7 +15,7 @@ from scipy import ndimage
 from vissim.render.backend import choose_variant
 from vissim.validation.dslr.schema import CampaignSettings, Configuration
 from vissim.validation.engine.fields import LensSpec
-from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean
+from vissim.optics.blur.resample import SUBPIXELS_PER_PX, block_mean
 from vissim.validation.dslr.align import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align
 from vissim.validation.dslr.item import synthetic_tile
 from vissim.validation.dslr.renders import build_dslr

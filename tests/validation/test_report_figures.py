@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from fake_bench import fake_render, write_campaign
 
-from vissim.optics.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
+from vissim.optics.rx.trial_lens import entrance_pupil_diameter_mm, trial_lens_effect
 from vissim.units import arcmin_to_rad, cyc_per_rad_to_cyc_per_deg
-from vissim.optics.resample import SUBPIXELS_PER_PX
+from vissim.optics.blur.resample import SUBPIXELS_PER_PX
 from vissim.validation.dslr.optics_figures import (THROUGH_FOCUS_STEPS_D, case_psf, mtf_curves, mtf_figure_of,
                                               optics_cases, psf_figure_of, recorded_psf, sampling_label)
 from vissim.validation.engine.loader import load_campaign

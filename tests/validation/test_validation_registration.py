@@ -7,10 +7,10 @@ from skimage.registration import phase_cross_correlation
 
 from vissim.charts import optotype_tile
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.imaging.registration import register
 
 NOISE_SIGMA = 0.005  # linear units on a 0.04-0.9 chart: about what a well-exposed DSLR plane shows

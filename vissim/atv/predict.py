@@ -3,7 +3,7 @@
 The tube is equivalent to a source at (or near) infinity of the pixel's angular extent: the
 retinal image is the pixel's square, mapped by the paraxial system (spectacle magnification
 included), convolved with the eye's blur for the defocus ``K = vergence + E + A`` at the pupil
-(`vissim.bench.atv.paraxial.atv_paraxial`).  The blur comes from `vissim.optics.psf.compute_psf` of
+(`vissim.bench.atv.paraxial.atv_paraxial`).  The blur comes from `vissim.optics.psf.compute.compute_psf` of
 the prescription ``-K``: ``mode="geometric"`` (ray optics, comparable with the light tracer)
 or ``"wave"`` (diffraction).  Pure numpy; no Mitsuba.
 
@@ -29,9 +29,9 @@ from vissim.bench.atv.tube import AtvConfig
 from vissim.bench.atv.paraxial import AtvParaxial, atv_paraxial
 from vissim.bench.atv.spot import spot_metrics, suggested_atv_size_px
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import arcmin_to_rad, mm_to_m
 
 __all__ = ["AtvPrediction", "predicted_spot", "fresnel_transmittance"]

@@ -19,7 +19,7 @@ from vissim.checks import (AUTOREFRACTOR_CYLINDER_RANGE_DIOPTERS, AUTOREFRACTOR_
                            EXAMINATION_DURATION_RANGE_S, ILLUMINANCE_RANGE_LX, PUPIL_DISTANCE_RANGE_MM,
                            TRIAL_LENS_RANGE_DIOPTERS, TRIAL_TIME_RANGE_S, number_within)
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 
 __all__ = ["Autorefraction", "AutorefractorEye", "Discrepancy", "EYES", "Examination", "SubjectData",
            "SummaryRow", "THESIS_TRIAL_LENSES_DIOPTERS", "Trial"]

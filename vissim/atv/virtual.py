@@ -5,9 +5,9 @@ one pixel (iPhone 5: 326 ppi, 77.9 µm) is a source at infinity subtending 77.9 
 0.623 mrad = 2.14 arcmin.  A trial lens of power P at ``trial_lens_vertex_mm`` (d) in front of the
 eye adds the vergence ``P / (1 - d P)`` at the eye -- exact here, the source being at infinity
 (ERRATA item 4 concerns finite distances).  What the eye then focuses, and through which pupil,
-is `vissim.optics.setup.ViewingSetup.atv_observer`.  The eye's correction (a `Prescription`, at the
+is `vissim.optics.rx.viewing_setup.ViewingSetup.atv_observer`.  The eye's correction (a `Prescription`, at the
 eye's principal plane) minus that vergence minus the accommodation exerted is the *residual*
-correction still needed; its wavefront gives the Fourier PSF (`vissim.optics.psf.compute_psf`,
+correction still needed; its wavefront gives the Fourier PSF (`vissim.optics.psf.compute.compute_psf`,
 wave optics, monochromatic at ``wavelength_nm``), which is convolved with the pixel's square.
 
 Accommodation: under cycloplegia none.  Otherwise the eye adds plus power to minimise the blur,
@@ -52,11 +52,11 @@ from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.checks import eye_pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import thesis_table_4_2_power
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.rx.viewing_setup import ViewingSetup
+from vissim.optics.rx.trial_lens import thesis_table_4_2_power
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import diopters_to_mm, rad_to_arcmin
 
 __all__ = ["AtvApparatus", "DetectionModel", "RetinalSpot", "SpotRequest", "VirtualExperiment",

@@ -15,7 +15,7 @@ from typing import Any
 
 from vissim.checks import trial_lens_diopters
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 
 __all__ = ["read_scene_toml", "typed_value", "sub_table", "check_keys", "checked_values", "parse_trial_lenses",
            "image_size_px"]

@@ -14,8 +14,8 @@ from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, ENTRANCE_PUPIL_
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import LE_GRAND_ACCOMMODATED_DIOPTERS
 from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
-from vissim.optics.prescription import Prescription
-from vissim.optics.wavefront import Wavefront, parse_zernike_terms
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.pupil.wavefront import Wavefront, parse_zernike_terms
 
 if TYPE_CHECKING:  # imageio loads OpenEXR; the image only lends its recorded sampling here
     from vissim.imageio import Image

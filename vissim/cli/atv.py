@@ -15,7 +15,7 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import add_rx_arg, check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.rx.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 
 
 def add_parser(subparsers) -> None:
@@ -140,7 +140,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     from vissim.atv.report import write_simulation_report
     from vissim.atv.virtual import AtvApparatus, DetectionModel, VirtualSubject, run_virtual_experiment
     from vissim.cli._common import parse_float_list
-    from vissim.optics.prescription import Prescription
+    from vissim.optics.rx.prescription import Prescription
 
     subject = VirtualSubject(
         Prescription.parse(args.rx), args.pupil_mm, accommodation_amplitude_diopters=args.accommodation_amplitude_diopters,

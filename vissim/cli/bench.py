@@ -23,7 +23,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def add_wavefront_parser(subparsers) -> argparse.ArgumentParser:
-    from vissim.optics.glass import D_LINE_NM
+    from vissim.optics.rx.glass import D_LINE_NM
 
     parser = subparsers.add_parser(
         "wavefront",
@@ -62,7 +62,7 @@ def run_wavefront(args: argparse.Namespace) -> int:
     from vissim.bench.dslr.traced_wavefront import trace_bench_wavefront
     from vissim.bench.dslr.scene_files import bench_from_tables
     from vissim.bench.scene_toml import read_scene_toml
-    from vissim.optics.trial_lens import TrialLens, trial_lens_effect
+    from vissim.optics.rx.trial_lens import TrialLens, trial_lens_effect
 
     field = _field_deg(args.field_deg)
     powers = trial_lens_powers(args)

@@ -13,10 +13,10 @@ from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_H
                                 image_sampling, parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_image, write_image
-from vissim.optics.array_backend import DEVICES, array_backend
-from vissim.optics.blur import PADDING_MODES, blur_image, image_kernel_psf
-from vissim.optics.blur_device import blur_image_on
-from vissim.optics.chromatic import gaussian_band
+from vissim.optics.runtime.array_backend import DEVICES, array_backend
+from vissim.optics.blur.convolve import PADDING_MODES, blur_image, image_kernel_psf
+from vissim.optics.blur.device import blur_image_on
+from vissim.optics.rx.chromatic import gaussian_band
 from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
 
@@ -110,7 +110,7 @@ def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> 
 def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, device: str, progress):
     """``pixels`` blurred channel by channel (each with its PSF), reporting each channel done.
 
-    Off the ``"cpu"`` device: all channels at once by `vissim.optics.blur_device.blur_image_on`.
+    Off the ``"cpu"`` device: all channels at once by `vissim.optics.blur.device.blur_image_on`.
     """
     if device != "cpu":
         return blur_image_on(pixels, psfs if pixels.ndim == 3 else psfs[0], arcmin_per_px=step, padding=padding,
@@ -190,7 +190,7 @@ def _run_eye(args: argparse.Namespace, image, step: float, bands: list) -> int:
     """``blur --eye-model``: one PSF grid per distinct channel band ((wavelengths, weights)), the image
     blurred field-dependently."""
     from vissim.optics.eyes.field_blur import DEFAULT_FIELD_STEP_DEG, eye_psf_grids  # the trace's imports, when used
-    from vissim.optics.field_blur import blur_field_dependent
+    from vissim.optics.blur.field_dependent import blur_field_dependent
 
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
     field_step = DEFAULT_FIELD_STEP_DEG if args.field_step_deg is None else args.field_step_deg

@@ -19,10 +19,10 @@ from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_eye_model_arg, 
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.imageio import image_files, output_bit_depth, read_data_map, read_image, write_image
-from vissim.optics.accommodation import Accommodation, accommodation_for_target
-from vissim.optics.depth import DEFAULT_MAX_LAYERS, blur_depth
-from vissim.optics.prescription import Prescription
-from vissim.optics.setup import DepthViewer
+from vissim.optics.rx.accommodation import Accommodation, accommodation_for_target
+from vissim.optics.depth.depth_map import DEFAULT_MAX_LAYERS, blur_depth
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.viewing_setup import DepthViewer
 from vissim.progress import terminal_progress
 from vissim.provenance import make_provenance
 
@@ -33,7 +33,7 @@ def add_parser(subparsers) -> None:
         help="blur an RGB-D image: defocus per depth for an uncorrected eye, with occlusion",
         description="Blur a linear-light image through an uncorrected eye, each pixel with the defocus "
         "of its depth (effective prescription = eye Rx + 1/d - accommodation), in depth layers "
-        "composited with occlusion so that edges neither glow nor leak (see vissim.optics.depth).",
+        "composited with occlusion so that edges neither glow nor leak (see vissim.optics.depth.depth_map).",
     )
     parser.add_argument("input", type=Path, help="image file (.exr, .png, .tif)")
     parser.add_argument("depth", type=Path, help="depth in metres: .npy, or .exr with one channel (Z/depth/Y); inf = sky")

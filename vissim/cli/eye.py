@@ -10,7 +10,7 @@ from vissim import __version__
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg,
                                 add_trial_lens_args, field_deg_from_text, parse_float_list, trial_lens_powers)
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum

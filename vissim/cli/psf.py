@@ -13,10 +13,10 @@ from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_H
                                 add_eye_model_arg, eye_from_args, field_deg_from_text, parse_float_list,
                                 wavefront_from_args)
 from vissim.errors import VissimInputError
-from vissim.optics.wavefront import Wavefront, parse_zernike_terms
+from vissim.optics.pupil.wavefront import Wavefront, parse_zernike_terms
 from vissim.imageio import to_preview_png, write_image
-from vissim.optics.psf import compute_psf
-from vissim.optics.spectral_wavefront import SpectralWavefront
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.provenance import make_provenance
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
 

@@ -89,7 +89,7 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _lenses(args):
-    from vissim.optics.trial_lens import TrialLens
+    from vissim.optics.rx.trial_lens import TrialLens
 
     powers = trial_lens_powers(args)
     return None if powers is None else (TrialLens(*powers),)

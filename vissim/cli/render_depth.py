@@ -77,8 +77,8 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
 
 def _viewer(args: argparse.Namespace, loaded):
     from vissim.bench.depth.viewers import CameraViewer, EyeViewer
-    from vissim.optics.prescription import Prescription
-    from vissim.optics.trial_lens import TrialLens
+    from vissim.optics.rx.prescription import Prescription
+    from vissim.optics.rx.trial_lens import TrialLens
 
     eye_given = any(v is not None for v in (args.rx, args.pupil_mm, args.accommodation_diopters))
     camera_given = any(v is not None for v in (args.f_number, args.focus_distance_m, args.focal_length_mm,

@@ -6,8 +6,8 @@ import argparse
 import json
 
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.wavefront import prescription_to_zernike_um
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.pupil.wavefront import prescription_to_zernike_um
 
 
 def add_parser(subparsers) -> None:

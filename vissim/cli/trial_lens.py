@@ -10,7 +10,7 @@ import math
 
 from vissim import __version__
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup,
+from vissim.optics.rx.trial_lens import (CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup,
                                       thesis_table_4_2_power, trial_lens_effect)
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
 

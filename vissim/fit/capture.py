@@ -19,8 +19,8 @@ from vissim.bench.dslr.bench import DslrBench
 from vissim.errors import VissimInputError
 from vissim.fit.result import RxFit
 from vissim.fit.rx_fit import fit_rx
-from vissim.optics.prescription import LensPower
-from vissim.optics.trial_lens import TrialLens, thesis_table_4_2_lens_power
+from vissim.optics.rx.prescription import LensPower
+from vissim.optics.rx.trial_lens import TrialLens, thesis_table_4_2_lens_power
 from vissim.units import m_to_mm
 
 __all__ = ["bench_from_provenance", "rendered_bench", "fit_capture", "compare_with_theory", "fit_bench_item"]

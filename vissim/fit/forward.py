@@ -5,7 +5,7 @@ The capture is modelled as ``gain * (PSF_M * R shifted) o M^-1 + offset``: the r
 chart) blurred by the PSF of the defocus matrix D (dioptres, TABO x/y frame, positive for a
 myopic camera) and shifted by a sub-pixel translation, then magnified by the spectacle
 magnification matrix M about the tile's centre (the optical axis, as
-`vissim.optics.resample.magnify`).  Gain and offset are solved in closed form by the fit.
+`vissim.optics.blur.resample.magnify`).  Gain and offset are solved in closed form by the fit.
 
 **The shift is a phase ramp** on the transfer function, not a spline: a spline resampling of
 the sharp, under-sampled reference attenuates its highest frequencies by up to ~30 % at half a
@@ -26,11 +26,11 @@ pixel-integrated chart), so the kernel is the *point* PSF, not a second pixel in
   the pupil mapped linearly by the landing matrix A (arcmin per mm of pupil): uniform over an
   ellipse.  Its transfer function is analytic, ``2 J1(2 pi R |A^T f|) / (2 pi R |A^T f|)``, and
   smooth in the parameters, which is what a least-squares Jacobian needs.  Checked against the
-  ray histogram of `vissim.optics.psf.compute_psf` in ``tests/fit/test_forward.py``.
-* ``wave``: `vissim.optics.psf.compute_psf` (``pixel="sample"``), whose DFT is the OTF.
+  ray histogram of `vissim.optics.psf.compute.compute_psf` in ``tests/fit/test_forward.py``.
+* ``wave``: `vissim.optics.psf.compute.compute_psf` (``pixel="sample"``), whose DFT is the OTF.
 
 The reference is edge-padded by a margin that holds the largest blur allowed
-(``max_power_diopters``), on the grid `vissim.optics.blur.padded_shape` gives that widest
+(``max_power_diopters``), on the grid `vissim.optics.blur.convolve.padded_shape` gives that widest
 kernel, and transformed once; each evaluation is one transfer function, one
 inverse FFT and one cubic-spline resampling (`scipy.ndimage.affine_transform`).  The
 blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
@@ -52,10 +52,10 @@ import scipy.special
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.errors import VissimInputError
-from vissim.optics.blur import kernel_transfer, padded_shape, padding_width_px
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf, suggested_size_px
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import kernel_transfer, padded_shape, padding_width_px
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf, suggested_size_px
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import mrad_to_arcmin, xy_matrix_to_image_rowcol
 
 __all__ = ["ForwardModel", "FORWARD_MODES", "landing_matrix_rc_px"]

@@ -35,8 +35,8 @@ import numpy as np
 
 from vissim.bench.dslr.bench import DslrBench
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import LensPower
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.prescription import LensPower
+from vissim.optics.rx.trial_lens import TrialLens
 
 __all__ = ["ModelOptics", "BenchLensModel", "FreeMagnificationModel", "NoMagnificationModel", "MAGNIFICATION_MODELS",
            "power_model"]

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from vissim.optics.prescription import LensPower
+from vissim.optics.rx.prescription import LensPower
 
 __all__ = ["RxFit", "Solution", "Z95", "UNCERTAINTY_NOTE"]
 

@@ -9,7 +9,7 @@ Three renders of one scene (`vissim.bench.depth.scene_dict.depth_scene_dict`), o
   proximity of its *nearest* surface over the part of the pixel it covers (0 where every sample
   sees sky; `vissim.bench.depth.scene_dict.DEPTH_PASS_STATISTIC`), and the depth map is
   ``1 / proximity`` metres, ``inf`` for sky: the axial distance
-  `vissim.optics.depth.blur_depth` expects for these flat-focal-plane optics.  A pixel
+  `vissim.optics.depth.depth_map.blur_depth` expects for these flat-focal-plane optics.  A pixel
   split between a near panel and the far one behind it takes the near panel's depth, not the
   sample mean (an in-between depth no surface has, which left the near panel's edges too
   sharp in tutorial 4).  Through trial lenses the depth
@@ -21,7 +21,7 @@ Three renders of one scene (`vissim.bench.depth.scene_dict.depth_scene_dict`), o
 * **layers** (on request) -- each panel alone (the scene's other panels removed), through the
   same pinhole: its radiance and its coverage (the panel glowing with 1), seeds ``seed + 3 +
   2 i`` and ``seed + 4 + 2 i``.  What the pupil sees *behind* a nearer panel's edge is there,
-  for `vissim.optics.depth_layers.composite_layers`.
+  for `vissim.optics.depth.layered.composite_layers`.
 
 The frame: the pinhole renders (all in focus, depth, layers) cover ``margin_px`` more pixels on
 every side than the blurred render (`vissim.bench.depth.scene.DepthScene.with_margin`; the

@@ -82,7 +82,7 @@ class EyeRender:
         from vissim.checks import eye_pupil_diameter_mm, positive_number
 
         if self.rx is not None:  # a Prescription, or its text once read: held as the number, never as text
-            from vissim.optics.prescription import prescription_from
+            from vissim.optics.rx.prescription import prescription_from
 
             object.__setattr__(self, "rx", prescription_from(self.rx))
         object.__setattr__(self, "surfaces", tuple(tuple(t) for t in self.surfaces))
@@ -100,7 +100,7 @@ class EyeRender:
     @functools.cached_property
     def bench(self) -> EyeBench:
         """The eye bench these settings describe (`eye_bench`), built once."""
-        from vissim.optics.trial_lens import TrialLens
+        from vissim.optics.rx.trial_lens import TrialLens
 
         return EyeBench(eye=self.eye, chart_distance_m=self.chart_distance_m, letter=self.letter, logmar=self.logmar,
                         lenses=() if self.lens is None else (TrialLens(*self.lens),), vertex_mm=self.vertex_mm,

@@ -81,8 +81,8 @@ def _checked_elsewhere(values: dict, source: str) -> None:
     refuse it later), refused now with the keys named."""
     from vissim.charts import single_letter_spec
     from vissim.optics.eyes.models import eye_model
-    from vissim.optics.prescription import Prescription
-    from vissim.optics.trial_lens import TrialLens
+    from vissim.optics.rx.prescription import Prescription
+    from vissim.optics.rx.trial_lens import TrialLens
 
     defaults = EyeRender.__dataclass_fields__
     if "model" in values or "accommodation_diopters" in values:

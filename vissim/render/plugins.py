@@ -19,9 +19,9 @@ index also defaults to air (1.000277), not 1.
 * has exterior index exactly 1.0; ``int_ior`` is the glass index.
 
 Dispersion (``dispersion = "crown"``; default ``"none"``): the glass becomes
-`vissim.optics.glass.glass_like_crown` of ``int_ior`` -- a Cauchy glass with index ``int_ior`` at
+`vissim.optics.rx.glass.glass_like_crown` of ``int_ior`` -- a Cauchy glass with index ``int_ior`` at
 the d line and spectacle crown's Abbe number, the glass the bench's exact trace uses (with
-``int_ior`` 1.523 it is `vissim.optics.glass.SPECTACLE_CROWN`).  Then:
+``int_ior`` 1.523 it is `vissim.optics.rx.glass.SPECTACLE_CROWN`).  Then:
 
 * **spectral variants**: a path carries several wavelengths (Mitsuba: 4, the hero
   ``si.wavelengths[0]`` and three rotations of it, each distributed like the hero).  The surface
@@ -57,8 +57,8 @@ from __future__ import annotations
 import logging
 
 from vissim.errors import VissimInputError
-from vissim.optics.glass import D_LINE_NM, glass_like_crown
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX
+from vissim.optics.rx.glass import D_LINE_NM, glass_like_crown
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX
 
 __all__ = ["REFRACT_BSDF", "DISPERSIONS", "register_plugins", "register_once", "attach_scene"]
 
@@ -106,7 +106,7 @@ def _make_class(mi, dr):
                     raise VissimInputError("dispersion needs an unpolarised variant; got " + mi.variant())
 
         def _hero_eta(self, si):
-            """Relative index at the hero wavelength (`vissim.optics.glass.CauchyGlass.index_unchecked`)."""
+            """Relative index at the hero wavelength (`vissim.optics.rx.glass.CauchyGlass.index_unchecked`)."""
             return self.glass.index_unchecked(si.wavelengths[0]) / self.ext_ior
 
         def _hero_only(self, si, weight, active):

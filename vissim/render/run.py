@@ -296,7 +296,7 @@ def render_bench(
     (64, 64)
     """
     from vissim.bench.dslr.bench import SPECTRAL_MODE, DslrBench, chart_mm_per_texel, dslr_scene
-    from vissim.optics.trial_lens import trial_lens_effect
+    from vissim.optics.rx.trial_lens import trial_lens_effect
     from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
 
     instance_of(bench, DslrBench, "render_bench's bench", "a DslrBench (vissim.DslrBench(...))")

@@ -5,7 +5,7 @@ Each film pixel is a visual direction: its field angle, OSA's frame as every vis
 ``(field_x_deg - (u - 1/2) W a, field_y_deg + (1/2 - v) H a)`` (u, v the film position in [0, 1], row
 0 at the top, columns to the observer's right; a = ``arcmin_per_px`` / 60; W x H the film's size),
 and its direction is the one the traced wavefront gives that field angle
-(`vissim.optics.eyes.wavefront.field_direction`: (tan x, tan y, 1), from the visual axis for a model
+(`vissim.optics.eyes.traced_wavefront.field_direction`: (tan x, tan y, 1), from the visual axis for a model
 that has one), so a pixel of the render and a pixel of a simulation at the same field angle look
 the same way.  That direction's chief ray **at the model's reference wavelength**
 lands on the curved retina at the radius r(θ) of a table traced at init (`vissim.render.schematic_eye_tables`:
@@ -38,7 +38,7 @@ altered, made ametropic when it has a prescription; the tables are traced in its
 cylinder's distortion is the x meridian's; its pupil, entrance pupil or iris), ``wavelength_nm``,
 ``arcmin_per_px``, ``field_x_deg``, ``field_y_deg``, ``far_clip`` (mm), ``to_world``, ``film``,
 ``sampler``.  The pupil is converted by real rays at ``wavelength_nm`` or the model's reference
-(`vissim.optics.eyes.wavefront`).  Register with `register_schematic_eye_sensor` (idempotent).
+(`vissim.optics.eyes.traced_wavefront`).  Register with `register_schematic_eye_sensor` (idempotent).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ from vissim.bench.eye.sensor_eyes import sensor_eye
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX
-from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
+from vissim.optics.eyes.traced_wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
 from vissim.render.plugins import register_once
 from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 from vissim.render.schematic_eye_tables import EyeTables, eye_tables, table_theta_deg
@@ -173,7 +173,7 @@ def _make_class(mi, dr):
                      "%.3g mm", self.model, 100 * centre, 100 * edge, self.tables.r_edges_mm[-1])
 
         def _direction(self, x_deg, y_deg):
-            """`vissim.optics.eyes.wavefront.field_direction` (the one rule) in Dr.Jit: (tan x, tan y, 1)
+            """`vissim.optics.eyes.traced_wavefront.field_direction` (the one rule) in Dr.Jit: (tan x, tan y, 1)
             normalised, turned from the visual axis to the optical axis by the model's ``visual_axis_deg``."""
             tx, ty = dr.tan(x_deg * (math.pi / 180.0)), dr.tan(y_deg * (math.pi / 180.0))
             norm = dr.rsqrt(tx * tx + ty * ty + 1.0)

@@ -10,7 +10,7 @@ biconic by Newton's method from the vertex plane), the exact normal ``(-grad sag
 the outgoing light) and vector Snell's law; a ray that misses a surface (beyond a conic's
 domain) or is totally reflected is dropped (``valid`` False).  The iris is a plane: a ray that
 crosses it farther than the iris radius from its centre (decentred ``stop_decentre_nasal_mm``
-towards +x, as `vissim.optics.eyes.wavefront` has it) is stopped (``valid`` False, and
+towards +x, as `vissim.optics.eyes.traced_wavefront` has it) is stopped (``valid`` False, and
 ``stopped`` True so a caller can count it).  A gradient-index lens half (Liou & Brennan) is
 crossed by RK4 in Sharma's parameter with the numpy tracer's step rule
 (`vissim.optics.raytrace.grin`: a fixed step h in t, the last step shortened by Newton's method
@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import drjit as dr
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.media import GrinMedium
+from vissim.optics.eyes.dispersion import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.surfaces import vertex_positions_mm
 from vissim.checks import EYE_RENDER_WAVELENGTH_RANGE_NM

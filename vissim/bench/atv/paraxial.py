@@ -1,9 +1,9 @@
 """Paraxial theory of the ATV tube: first-order optics from the phone's screen to the eye's pupil.
 
-Ray transfer matrices (`vissim.optics.trial_lens.transfer_matrix`) of the gaps and lenses
+Ray transfer matrices (`vissim.optics.rx.trial_lens.transfer_matrix`) of the gaps and lenses
 laid out by `vissim.bench.atv.tube.atv_layout` give where a pixel's light lands: the pixel's
 visual angle and size, the eye's defocus and blur diameter (from
-`vissim.optics.setup.ViewingSetup.eye`, given the tube's vergence at the pupil), the etendue and the cone of
+`vissim.optics.rx.viewing_setup.ViewingSetup.eye`, given the tube's vergence at the pupil), the etendue and the cone of
 directions that reach the pupil.  This is the theory both renderers are checked against;
 `vissim.atv.predict.predicted_spot` turns it into a retinal image.
 """
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.bench.atv.tube import AtvConfig
-from vissim.optics.trial_lens import transfer_matrix
+from vissim.optics.rx.trial_lens import transfer_matrix
 from vissim.units import mm_to_m, mrad_to_arcmin
 
 __all__ = ["AtvParaxial", "atv_paraxial"]

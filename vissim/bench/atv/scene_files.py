@@ -14,8 +14,8 @@ from typing import Any
 from vissim.bench.atv.tube import AtvConfig, AtvEye, AtvTube, atv_trial_lens
 from vissim.bench.scene_toml import check_keys, read_scene_toml, sub_table, typed_value
 from vissim.checks import trial_lens_diopters
-from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import EYE_VERTEX_DISTANCE_MM
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.trial_lens import EYE_VERTEX_DISTANCE_MM
 
 __all__ = ["load_atv_toml"]
 

@@ -3,7 +3,7 @@
 `spot_metrics`: ``total_flux`` is the image's integral;
 ``spot_diameter_arcmin`` the **full width at half maximum of the azimuthally averaged radial
 profile** about the centroid (1-pixel annuli centred on whole radii,
-`vissim.optics.psf_metrics.ring_means`; the outermost crossing of half the peak, linearly
+`vissim.optics.psf.metrics.ring_means`; the outermost crossing of half the peak, linearly
 interpolated).  For a uniform blur disc of diameter D it is D (the pixel's square blurs the
 edge symmetrically); for the in-focus square pixel of side s it is ``s / cos(22.5°) = 1.082 s``
 (the radius at which half of a circle lies inside the square).
@@ -25,7 +25,7 @@ import scipy.ndimage
 from vissim.bench.atv.tube import AtvConfig
 from vissim.bench.atv.paraxial import atv_paraxial
 from vissim.errors import VissimInputError
-from vissim.optics.psf_metrics import ring_means
+from vissim.optics.psf.metrics import ring_means
 
 __all__ = ["SpotMetrics", "spot_metrics", "suggested_atv_size_px"]
 

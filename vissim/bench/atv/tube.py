@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
+from vissim.optics.rx.trial_lens import lens_surface_curvatures_per_mm
 from vissim.bench.lenses.mesh import (realistic_center_thickness_mm,
                                       rim_thickness_mm, sag_mm)
 from vissim.charts import MM_PER_INCH
@@ -51,9 +51,9 @@ from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, COLLIMATOR_POWER_RANGE_
                            MAX_PIXEL_RADIANCE, REFRACTIVE_INDEX_RANGE, eye_pupil_diameter_mm, finite_number)
 from vissim.errors import VissimInputError
 from vissim.imageio import srgb_decode
-from vissim.optics.prescription import LensPower, Prescription, RefractiveError
-from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, TrialLens
+from vissim.optics.rx.prescription import LensPower, Prescription, RefractiveError
+from vissim.optics.rx.viewing_setup import ViewingSetup
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, TrialLens
 from vissim.units import diopters_to_mm, m_to_mm, mm_to_m
 
 __all__ = ["IPHONE5_PPI", "DISPLAY_TRANSFERS", "AtvTube", "AtvEye", "AtvConfig", "AtvLayout",

@@ -25,7 +25,7 @@ Observers (a ``viewer``, `vissim.bench.depth.viewers`): an ``EyeViewer`` -- Mits
 sensor ``vissim_eye`` (`vissim.render.eye_sensor`), an ideal thin lens at the pupil
 focusing the vergence matrix ``K = A I - Rx``, so an object at axial distance ``z`` is blurred
 by ``pupil x (K - I/z)``: the defocus ``Rx + 1/z - A`` of
-`vissim.optics.setup.ViewingSetup.eye`, cylinders and hyperopia (focus "beyond infinity",
+`vissim.optics.rx.viewing_setup.ViewingSetup.eye`, cylinders and hyperopia (focus "beyond infinity",
 ``K < 0``) included, which a Mitsuba ``thinlens`` (focus distance > 0, no astigmatism) cannot
 express -- or a ``CameraViewer``, the DSLR bench camera (``thinlens``, f/N entrance pupil)
 with optional trial lenses, taken from `vissim.bench.dslr.bench.dslr_scene` itself.

@@ -9,7 +9,7 @@ pinhole render of it gives each pixel's mean proximity (0 for empty sky).  ``"su
 (kind ``"rgb"``) adds each surface's label ``i + 1`` in G, so that a pixel can keep its *nearest*
 surface (`DEPTH_PASS_STATISTIC`); that is the RGB-D depth pass, which
 `vissim.render.depth_render.render_depth` turns into the axial depth in metres that
-`vissim.optics.depth.blur_depth` expects.  Axial, because these thin lenses have flat focal
+`vissim.optics.depth.depth_map.blur_depth` expects.  Axial, because these thin lenses have flat focal
 planes: the blur is exactly ``pupil x |K - 1/z|`` at every field angle.
 
 Nothing here imports Mitsuba; dicts hold plain values (``to_world`` as nested lists, bitmap

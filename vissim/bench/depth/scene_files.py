@@ -27,7 +27,7 @@ from vissim.bench.scene_toml import (check_keys, checked_values, image_size_px, 
                                      sub_table, typed_value)
 from vissim.checks import samples_per_pixel
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 
 __all__ = ["DepthSceneFile", "load_depth_scene_toml", "depth_scene_from_doc"]
 

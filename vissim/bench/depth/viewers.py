@@ -8,19 +8,19 @@ geometric spot of ``pupil x (K - I/z)`` milliradians (pupil in mm; conventions: 
 * `EyeViewer` -- ``K = A I - Rx``: the eye's correcting lens ``Rx`` (a
   `Prescription`, myope negative, *not* worn) and accommodation
   ``A >= 0``.  So defocus at distance d is ``Rx + 1/d - A``, exactly
-  `vissim.optics.setup.ViewingSetup.eye`: a -2 D myope focuses 0.5 m (K = +2 D), an
+  `vissim.optics.rx.viewing_setup.ViewingSetup.eye`: a -2 D myope focuses 0.5 m (K = +2 D), an
   emmetrope accommodating 3 D focuses 1/3 m, a relaxed +1 D hyperope has K = -1 D (focus
   "beyond infinity": blur at 6 m is pupil x (1 + 1/6) D), and ``plano -2.00 x 90`` has
   K = diag(2, 0) D (excess power in the horizontal meridian: horizontal blur).  Both come from
-  `vissim.optics.setup.ViewingSetup` (`viewing_setup`), which decides them.  Rendered by
+  `vissim.optics.rx.viewing_setup.ViewingSetup` (`viewing_setup`), which decides them.  Rendered by
   the Mitsuba sensor ``vissim_eye`` (`vissim.render.eye_sensor`), which takes any such K.
 * `CameraViewer` -- the DSLR of `vissim.bench.dslr.bench` (Mitsuba ``thinlens``,
   entrance pupil = focal length / f-number): ``K = I / focus distance`` plus the power its
-  trial lenses add (`vissim.optics.trial_lens.trial_lens_effect`, for an object at the focus
+  trial lenses add (`vissim.optics.rx.trial_lens.trial_lens_effect`, for an object at the focus
   distance; the lenses' vergence effect changes it by < 1 % between 0.4 m and infinity).
 
 `equivalent_eye` is the eye that blurs like a viewer (``Rx = -K``, same pupil, A = 0):
-what `vissim.optics.depth.blur_depth` is given to simulate a render of that viewer.
+what `vissim.optics.depth.depth_map.blur_depth` is given to simulate a render of that viewer.
 """
 
 from __future__ import annotations
@@ -34,9 +34,9 @@ import numpy as np
 from vissim.bench.dslr.bench import DslrBench
 from vissim.checks import accommodation_diopters, positive_number
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX, TrialLens, entrance_pupil_diameter_mm
-from vissim.optics.setup import ViewingSetup
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, TrialLens, entrance_pupil_diameter_mm
+from vissim.optics.rx.viewing_setup import ViewingSetup
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import m_to_mm, mm_to_m
 

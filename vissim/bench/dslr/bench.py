@@ -2,7 +2,7 @@
 
 World frame (millimetres): the camera's principal plane (and entrance pupil) at z = 0, looking
 along +z with +y up; the chart at z = ``chart_distance_mm``.  World x is the examiner's right
-(TABO frame of `vissim.optics.trial_lens`), so the camera's image right is world -x.  Light
+(TABO frame of `vissim.optics.rx.trial_lens`), so the camera's image right is world -x.  Light
 travels towards -z: chart, trial lenses (the last lens's back vertex at ``vertex_distance_mm``,
 the others stacked towards the chart with ``lens_gap_mm`` of air), camera.
 
@@ -55,9 +55,9 @@ from vissim.checks import size_px as check_size_px
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup,
+from vissim.optics.rx.trial_lens import (CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup,
                                       entrance_pupil_diameter_mm)
-from vissim.optics.setup import ViewingSetup
+from vissim.optics.rx.viewing_setup import ViewingSetup
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import arcmin_to_rad, mm_to_m
 
@@ -128,7 +128,7 @@ class DslrBench:
     Examples
     --------
     >>> import vissim
-    >>> from vissim.optics.trial_lens import TrialLens
+    >>> from vissim.optics.rx.trial_lens import TrialLens
     >>> bench = vissim.DslrBench(lenses=(TrialLens(2.0),), size_px=(64, 64))
     >>> bench.focal_length_mm, bench.f_number  # the thesis's camera: an 18 mm lens at f/5
     (18.0, 5.0)
@@ -254,7 +254,7 @@ RENDER_KINDS = ("mono", "rgb", "spectral")
 SPECTRAL_MODE = {
     "emitter_spectrum": "equal-energy (CIE illuminant E): the chart's linear reflectance at every wavelength",
     "glass": "spectacle crown dispersion: Cauchy fit to the lens index at the d line and Abbe number 58.6 "
-             "(vissim.optics.glass.glass_like_crown)",
+             "(vissim.optics.rx.glass.glass_like_crown)",
     "response": "CIE 1931 luminance Y (Mitsuba's film: XYZ from the sampled wavelengths, stored as Y)",
     "wavelengths": "Mitsuba's sampling of the visible range, 4 per path; at a path's first lens surface only the "
                    "hero wavelength continues, weighted by 4 (pbrt-v4's TerminateSecondary)",

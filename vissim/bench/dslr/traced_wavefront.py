@@ -24,7 +24,7 @@ a PSF is centred on its image point and the magnification is applied to the char
 Amplitude: the pupil stays uniformly lit; the lenses' ray-density change over a 3.6 mm pupil
 (relative order d P r, ~1e-4) is left out.
 
-The samples are on the grid of `vissim.optics.opd_map.OpdMap` (square, circumscribing
+The samples are on the grid of `vissim.optics.pupil.opd_map.OpdMap` (square, circumscribing
 the pupil, row 0 at +y): every grid point, corners too, is a real aimed ray, so outside the
 disc the map is the traced continuation.
 """
@@ -39,11 +39,11 @@ import numpy as np
 from vissim.bench.lenses.trace import bench_surfaces, object_point_mm
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.optics.glass import D_LINE_NM
-from vissim.optics.prescription import LensPower
+from vissim.optics.rx.glass import D_LINE_NM
+from vissim.optics.rx.prescription import LensPower
 from vissim.optics.raytrace import aim_rays
-from vissim.optics.wavefront import Wavefront
-from vissim.optics.zernike import fit_zernike_um, zernike_nm
+from vissim.optics.pupil.wavefront import Wavefront
+from vissim.optics.pupil.zernike import fit_zernike_um, zernike_nm
 from vissim.units import arcmin_to_rad, mm_to_m
 
 __all__ = ["TracedWavefront", "ShiftInvariance", "fit_zernike_um", "trace_bench_wavefront", "frame_field_points_deg",
@@ -107,8 +107,8 @@ class TracedWavefront:
         return LensPower.from_power_matrix(-np.asarray(rx.power_matrix(), dtype=float)).minus_cylinder()
 
     def as_opd_map(self):
-        """The samples as a `vissim.optics.opd_map.OpdMap` (same grid and sign)."""
-        from vissim.optics.opd_map import OpdMap
+        """The samples as a `vissim.optics.pupil.opd_map.OpdMap` (same grid and sign)."""
+        from vissim.optics.pupil.opd_map import OpdMap
 
         return OpdMap(self.samples_um, self.pupil_diameter_mm)
 

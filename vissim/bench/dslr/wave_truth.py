@@ -37,9 +37,9 @@ from vissim.bench.dslr.traced_wavefront import D_LINE_NM, TracedWavefront, trace
 from vissim.bench.dslr.bench import DslrBench
 from vissim.charts import ChartSpec, chart_sidecar, render_chart_angular
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px
-from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean, magnify
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
+from vissim.optics.blur.resample import SUBPIXELS_PER_PX, block_mean, magnify
 from vissim.provenance import json_safe
 
 __all__ = ["WaveTruth", "image_through_traced_lenses", "wave_truth"]

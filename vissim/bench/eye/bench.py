@@ -44,8 +44,8 @@ from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_A
                                          DEFAULT_SPECTACLE_VERTEX_MM)
 from vissim.optics.eyes.eye import Eye, surface_overrides
 from vissim.optics.eyes.viewing import EyeView
-from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup
+from vissim.optics.rx.viewing_setup import ViewingSetup
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup
 from vissim.units import arcmin_to_rad
 
 __all__ = ["EyeBench", "SPECTRA", "TEXELS_PER_PX", "BEAM_MARGIN", "letter_in_visual_angle"]

@@ -23,7 +23,7 @@ import math
 from typing import Any
 
 from vissim.bench.lenses.mesh import cached_lens_ply, realistic_center_thickness_mm
-from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER, TrialLens
+from vissim.optics.rx.trial_lens import MAX_LENSES_IN_HOLDER, TrialLens
 
 __all__ = ["LENS_GAP_MM", "MIN_EDGE_MM", "MIN_CENTER_MM", "MESH_RINGS", "MESH_SEGMENTS", "lens_clear_aperture_mm",
            "physical_lens", "lens_back_vertex_z_mm", "lens_shapes"]

@@ -2,7 +2,7 @@
 
 Frame and sign conventions (millimetres; the bench's world frame up to a translation):
 
-* x is the examiner's right (TABO frame, `vissim.optics.trial_lens`), y is up, +z points from
+* x is the examiner's right (TABO frame, `vissim.optics.rx.trial_lens`), y is up, +z points from
   the camera towards the chart.  Light travels towards -z.
 * The back vertex (camera side) is at z = 0, the front vertex (chart side) at z = t.
 * A surface of 2x2 curvature matrix K (1/mm) is ``z = z_vertex - sag(x)`` with
@@ -37,10 +37,10 @@ import numpy as np
 
 from vissim.atomic import atomic_output, cache_output
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import LensPower
+from vissim.optics.rx.prescription import LensPower
 from vissim.optics.raytrace.shapes import matrix_sag_gradient as sag_gradient
 from vissim.optics.raytrace.shapes import matrix_sag_mm
-from vissim.optics.trial_lens import TrialLens, lens_surface_curvatures_per_mm
+from vissim.optics.rx.trial_lens import TrialLens, lens_surface_curvatures_per_mm
 
 __all__ = ["LensMesh", "lens_mesh", "sag_mm", "sag_gradient",
            "rim_thickness_mm", "realistic_center_thickness_mm", "write_ply", "ply_bytes", "cached_lens_ply",

@@ -6,7 +6,7 @@ camera towards the chart, light travelling towards -z, so ``travel_z = -1``) a s
 curvature matrix K with its vertex at ``z_v`` is ``z = z_v - sag(K, x)``.  Lens i's back vertex
 is at ``DslrBench.lens_back_vertex_z_mm()[i]``, its front vertex ``t`` further towards the chart.
 
-The glass index comes from `vissim.optics.glass` at the traced wavelength (the bench's lenses
+The glass index comes from `vissim.optics.rx.glass` at the traced wavelength (the bench's lenses
 keep the shape they were built with at n_d, as real glass does).  Air is n = 1, as in
 Mitsuba's ``vissim_refract``.  Rays are aimed from a chart point onto the entrance-pupil plane
 z = 0 (the ``thinlens`` aperture) by `vissim.optics.raytrace.aim_rays`.
@@ -21,9 +21,9 @@ import math
 
 import numpy as np
 
-from vissim.optics.trial_lens import lens_surface_curvatures_per_mm
+from vissim.optics.rx.trial_lens import lens_surface_curvatures_per_mm
 from vissim.errors import VissimInputError
-from vissim.optics.glass import D_LINE_NM, glass_like_crown
+from vissim.optics.rx.glass import D_LINE_NM, glass_like_crown
 from vissim.optics.raytrace import MatrixSag, Surface
 
 __all__ = ["BENCH_TRAVEL_Z", "bench_surfaces", "object_point_mm"]

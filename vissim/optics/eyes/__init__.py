@@ -5,14 +5,14 @@ the traced wavefront and what an eye sees.
   wavelength) and `build_eye`, the one place a model's name becomes an eye; `defaults`: the eye's
   defaults, said once.
 
-* `media`: n(λ) of each model's media (Navarro 1985, Arizona, Le Grand, Liou–Brennan), with sources.
+* `dispersion`: n(λ) of each model's media (Navarro 1985, Arizona, Le Grand, Liou–Brennan), with sources.
 * `models`: `SchematicEye` tables and their builders; `EYE_MODELS` by command-line name.
 * `paraxial`: ray-transfer matrices: power, f′, entrance pupil, refraction, retinal scale, LCA.
 * `ametropia`: the eye that has a spectacle prescription (axial length, toric cornea front), in closed form;
   `fixation`: that eye corrected along its visual axis by the trace (the one callers use).
 * `spectacles`: trial and spectacle lenses before an eye, and the refraction that remains.
 * `surfaces`: a model as surfaces of the exact trace (`vissim.optics.raytrace`), in the eye's frame.
-* `wavefront`: the traced wavefront over the entrance pupil at a field point and a wavelength.
+* `traced_wavefront`: the traced wavefront over the entrance pupil at a field point and a wavelength.
 * `retina_map`: where a visual direction's chief ray lands on the retina, r(θ): the eye sensor's film
   map, read by the render and the eye bench's ray self-check alike.
 * `refraction`: paraxial and minimum-RMS refraction from that wavefront, at the cornea or a spectacle plane.
@@ -24,4 +24,6 @@ the traced wavefront and what an eye sees.
   chromatic eye and Atchison & Smith 2005.
 * `report`: one eye's record at a field point and a wavelength (``vissim eye``): power, pupils,
   Zernikes, refraction and MTF, with an optional prescription and lenses in front.
+* `simulations`: what an eye looking at a chart sees, simulated (reduced, thesis, schematic; `simulate_view`).
+* `measured/`: real eyes: measured human wavefronts (Jaeken & Artal 2012, Polans et al. 2015) on a base eye.
 """

@@ -9,7 +9,7 @@ point, the far point; the gap d carries the vergence matrix L to L (I − d L)�
 at either plane, is the correcting thin lens at that plane: negative for a myope.
 
 **Method: generalized (astigmatic) paraxial optics** (Keating 1981; Harris 1997), as
-`vissim.optics.trial_lens` uses it. Rays are 4-vectors (x, y, n·u_x, n·u_y) in metres and
+`vissim.optics.rx.trial_lens` uses it. Rays are 4-vectors (x, y, n·u_x, n·u_y) in metres and
 radians in the TABO frame (x the examiner's right, y up, as the examiner faces the eye); a
 surface of 2 × 2 dioptric power matrix F is [[I, 0], [−F, I]] and a gap t in index n is
 [[I, (t/n) I], [0, I]]. Only the cornea's front may be toric here; every other surface is one of
@@ -46,11 +46,11 @@ import numpy as np
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.media import GrinMedium
+from vissim.optics.eyes.dispersion import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import matrix_to_surface
-from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix,
+from vissim.optics.rx.prescription import Prescription, as_prescription
+from vissim.optics.rx.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, Matrix2, matrix2_tuple, refraction_matrix,
                                       vergence_after_distance)
 from vissim.units import mm_to_m
 

@@ -6,7 +6,7 @@
 from __future__ import annotations
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.optics.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.rx.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
 
 __all__ = ["DEFAULT_EYE_MODEL", "DEFAULT_EYE_PUPIL_MM", "DEFAULT_SPECTACLE_VERTEX_MM", "DEFAULT_EYE_LIGHT_NM",
            "PHOTOPIC_FOCUS_NM", "PHOTOPIC_STEP_NM", "DEFAULT_CHART_DISTANCE_M", "DEFAULT_LETTER",

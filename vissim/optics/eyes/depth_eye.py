@@ -1,6 +1,6 @@
-"""A schematic eye for the depth blurs (`vissim.optics.depth.blur_depth`): one field point, the traced eye.
+"""A schematic eye for the depth blurs (`vissim.optics.depth.depth_map.blur_depth`): one field point, the traced eye.
 
-`traced_depth_eye` builds the `vissim.optics.setup.DepthViewer` that the depth blur sees every depth
+`traced_depth_eye` builds the `vissim.optics.rx.viewing_setup.DepthViewer` that the depth blur sees every depth
 through: the traced `Eye` (`eye_wavefront` at the field point and the wavelength: its prescription
 as the ametropic eye, its spherical aberration, its own defocus at that wavelength and its
 accommodation) as the viewer's ``extra_wavefront``, with no further prescription and the viewer's
@@ -21,9 +21,9 @@ import numpy as np
 
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.psf_wavefront import eye_wavefront
-from vissim.optics.eyes.wavefront import field_map
-from vissim.optics.prescription import Prescription
-from vissim.optics.setup import DepthViewer
+from vissim.optics.eyes.traced_wavefront import field_map
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.viewing_setup import DepthViewer
 
 __all__ = ["traced_depth_eye"]
 

@@ -44,7 +44,7 @@ from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_
 from vissim.optics.eyes.measured.measured_eye import (BASE_EYE_MODEL, MeasuredWavefront, is_measured_name,
                                                       parse_measured_eye)
 from vissim.optics.eyes.models import EYE_MODELS, SchematicEye, eye_model
-from vissim.optics.prescription import Prescription, prescription_from
+from vissim.optics.rx.prescription import Prescription, prescription_from
 
 __all__ = ["Eye", "build_eye", "eye_from_fields", "SURFACE_OVERRIDES", "checked_eye", "surface_overrides",
            "overrides_table"]

@@ -1,7 +1,7 @@
 """An image blurred by an `Eye`, its PSF varying over the field (`blur_eye`).
 
 * **Nodes**: a regular grid of image points at most ``field_step_deg`` apart, spanning the image
-  (`vissim.optics.field_blur.node_positions_px`); an image narrower than one step along an axis
+  (`vissim.optics.blur.field_dependent.node_positions_px`); an image narrower than one step along an axis
   has one node column (or row) at its centre, and an image within one step both ways one PSF at
   its centre (isoplanatic).
 * **A node's field angle** = the image centre's field ``field_deg`` (OSA's frame, as ``vissim psf
@@ -15,7 +15,7 @@
   field, at each wavelength of the channel's band, with the light's vergence added over its entrance
   pupil; each wavelength's transverse chromatic aberration relative to the eye's reference
   wavelength), then `compute_psf` at the image's sampling.
-* **Between nodes** the PSF is interpolated bilinearly (`vissim.optics.field_blur`, Nagy &
+* **Between nodes** the PSF is interpolated bilinearly (`vissim.optics.blur.field_dependent`, Nagy &
   O'Leary 1998).
 * The image stays in **visual-angle coordinates**: the eye's distortion (the chief ray's retinal
   position against its field angle) is not applied; each PSF is centred on its chief ray.
@@ -36,11 +36,11 @@ import numpy as np
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, positive_number
 from vissim.errors import VissimInputError
-from vissim.optics.blur import image_kernel_psf, pixel_array
+from vissim.optics.blur.convolve import image_kernel_psf, pixel_array
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
-from vissim.optics.field_blur import PSFGrid, blur_field_dependent, psf_grid
-from vissim.optics.psf import PSF
+from vissim.optics.blur.field_dependent import PSFGrid, blur_field_dependent, psf_grid
+from vissim.optics.psf.compute import PSF
 from vissim.units import ARCMIN_PER_DEG, image_colrow_to_osa_xy
 
 __all__ = ["DEFAULT_FIELD_STEP_DEG", "node_field_deg", "eye_psf_grid", "eye_psf_grids", "blur_eye"]

@@ -10,7 +10,7 @@ from field (0, 0) by the one refraction rule, `refraction.eye_refraction`, at th
 three solves); its cornea front is then toric for a spherical prescription too. Centred eyes are
 solved once (their visual-axis refraction is the paraxial one).
 
-This module sits above the trace (`wavefront`), which sits above `ametropia` (through the spectacles'
+This module sits above the trace (`traced_wavefront`), which sits above `ametropia` (through the spectacles'
 paraxial optics): the closed form and its traced correction live apart so that neither imports back.
 """
 
@@ -24,8 +24,8 @@ from vissim.optics.eyes.ametropia import (far_point_vergence_matrix, paraxial_am
                                           solved_eye, with_source)
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.refraction import eye_refraction
-from vissim.optics.eyes.wavefront import trace_eye_wavefront
-from vissim.optics.prescription import Prescription
+from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.rx.prescription import Prescription
 from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 
 __all__ = ["ametropic_eye", "visual_axis_refraction", "VISUAL_AXIS_TOL_DIOPTERS"]

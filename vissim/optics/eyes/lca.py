@@ -11,11 +11,11 @@ Four columns, each referred to the same wavelength:
   field point given (default 0, 0); ``traced_minimum_rms_diopters`` is the minimum-RMS one
   (second-order Zernikes only) over the same pupil, which spherical aberration moves with the pupil.
   The iris is fixed across wavelengths: a given entrance pupil is converted to the iris once, at
-  the reference wavelength, by real rays (`wavefront.iris_from_entrance_pupil_mm`).
+  the reference wavelength, by real rays (`traced_wavefront.iris_from_entrance_pupil_mm`).
 * **paraxial** (``paraxial_diopters``): the y-nu matrices of `paraxial.refraction_diopters`,
   separate code from the real-ray trace (its oracle on axis for a centred eye).
 * **Thibos** (``thibos_diopters``): the "chromatic eye", Thibos, Ye, Zhang & Bradley 1992, Appl.
-  Opt. 31:3594, Eq. 5 (`vissim.optics.chromatic`).
+  Opt. 31:3594, Eq. 5 (`vissim.optics.rx.chromatic`).
 * **Atchison & Smith 2005** (``atchison_smith_diopters``): their Cauchy fit to the human eye's
   measured LCA, JOSA A 22:29-37, Eq. 5, R(λ) = 1.60911 − 6.70941×10⁵/λ² + 5.55334×10¹⁰/λ⁴ −
   5.59998×10¹⁵/λ⁶, λ in nm (`ATCHISON_SMITH_2005_EQ5`; as quoted, "Equation 5 from Atchison &
@@ -34,12 +34,12 @@ import numpy as np
 from vissim.checks import ATCHISON_SMITH_RANGE_NM
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.rx.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import refraction_diopters
 from vissim.optics.eyes.refraction import eye_refraction
 from vissim.spectra import SPECTRUM_STEP_NM, named_spectrum
-from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm, trace_eye_wavefront
+from vissim.optics.eyes.traced_wavefront import iris_from_entrance_pupil_mm, trace_eye_wavefront
 
 __all__ = ["LCA_WAVELENGTHS_NM", "LCA_STEP_NM", "LCA_PUPIL_MM", "LCA_SAMPLES", "ATCHISON_SMITH_2005_EQ5",
            "atchison_smith_2005_diopters", "LcaRow", "LcaCurve", "lca_curve"]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, NAVARRO_ACCOMMODATION_RANGE_DIOPTERS,
                            finite_number, number_within)
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.media import (AIR, GrinMedium, Medium, arizona_medium, le_grand_medium,
+from vissim.optics.eyes.dispersion import (AIR, GrinMedium, Medium, arizona_medium, le_grand_medium,
                                       liou_brennan_medium, navarro_medium)
 
 __all__ = ["EyeSurface", "SchematicEye", "SURFACE_KINDS", "navarro_1985", "escudero_sanz_1999", "arizona",
@@ -72,7 +72,7 @@ class SchematicEye:
     (angle alpha: the visual axis lies nasal of the optical axis). Both are 0 for centred models.
     The models are right eyes (nasal is +x in OSA's frame). A model with a visual axis has its
     field angles measured from it: field (0, 0) is where it fixates (the rule is applied once, by
-    the trace: `vissim.optics.eyes.wavefront.field_from_optical_axis_deg`).
+    the trace: `vissim.optics.eyes.traced_wavefront.field_from_optical_axis_deg`).
     ``accommodation_diopters`` is the model's own accommodation parameter; ``recalled`` marks a
     table not checked against a stored source.
     """
@@ -226,7 +226,7 @@ def liou_brennan_1997() -> SchematicEye:
     lens front decentred 0.5 mm nasally, the visual axis 5° from the optical axis, nasal (field
     angles are measured from it); partly RECALLED table (``_LB_SOURCE`` says which numbers are found).
 
-    Its dispersion adds the same Δn(λ) to every medium (`media.liou_brennan_shift`), so its LCA is
+    Its dispersion adds the same Δn(λ) to every medium (`dispersion.liou_brennan_shift`), so its LCA is
     small: 0.69 D from 450 to 650 nm against 1.23–1.28 D measured (the formula's own result; the media
     module says why).
 

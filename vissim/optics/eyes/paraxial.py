@@ -24,7 +24,7 @@ from vissim.checks import positive_number
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.media import GrinMedium
+from vissim.optics.eyes.dispersion import GrinMedium
 from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.models import SchematicEye
 

@@ -2,7 +2,7 @@
 
 `eye_wavefront` and `eye_spectral_wavefront` take an `Eye` (`vissim.optics.eyes.eye`):
 
-* the eye's own aberrations: the OSA Zernikes of `wavefront.trace_eye_wavefront` (orders up to 8,
+* the eye's own aberrations: the OSA Zernikes of `traced_wavefront.trace_eye_wavefront` (orders up to 8,
   µm) of the eye's optics (the ametropic eye when it has a prescription: its axial length and toric
   cornea, with the higher orders they bring) over its **entrance pupil**, at ``wavelength_nm``, at
   ``field_deg`` and its accommodation: the model's spherical aberration, its dispersion (the eye's
@@ -36,7 +36,7 @@ towards −x). All fronts' PSFs are then centred on the reference wavelength's c
 so a polychromatic PSF off axis shows the TCA.
 
 **Off axis** the fronts' pupil coordinates lie in the entrance-pupil plane, oblique to the beam: the
-`SpectralWavefront` carries the traced front's ``field_map`` (`wavefront.field_map`: 1/cos θ at θ from
+`SpectralWavefront` carries the traced front's ``field_map`` (`traced_wavefront.field_map`: 1/cos θ at θ from
 the axis that plane is normal to), through which `vissim.compute_psf` draws its PSFs in visual angle;
 the TCA's tilt is the slope that map sends to the chief rays' offset. `eye_wavefront` returns one
 `Wavefront`, which cannot carry the map: its PSF off axis is in the slopes' angles (6 % narrower at
@@ -54,10 +54,10 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.measured.measured_eye import measured_trace
 from vissim.optics.eyes.refraction import chief_ray_stretch
-from vissim.optics.eyes.wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
-from vissim.optics.prescription import Prescription
-from vissim.optics.spectral_wavefront import SpectralWavefront
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.eyes.traced_wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import deg_to_mrad
 
 __all__ = ["eye_wavefront", "eye_spectral_wavefront", "vergence_front", "traced_spectral_wavefront", "chromatic_offset_deg",

@@ -1,8 +1,8 @@
 """The refraction of a schematic eye from its traced wavefront: paraxial and minimum RMS.
 
 Both read the OSA Zernike coefficients (µm) over the **entrance pupil** (radius R, mm), as
-`vissim.optics.eyes.wavefront.EyeWavefront` holds them, and give the **correcting lens** (a
-`Prescription`: negative sphere for a myope), as `vissim.optics.wavefront.zernike_um_to_prescription`:
+`vissim.optics.eyes.traced_wavefront.EyeWavefront` holds them, and give the **correcting lens** (a
+`Prescription`: negative sphere for a myope), as `vissim.optics.pupil.wavefront.zernike_um_to_prescription`:
 
 * minimum RMS: from c(2,−2), c(2,0), c(2,2) only, M = −4√3 c(2,0)/R², J0 = −2√6 c(2,2)/R²,
   J45 = −2√6 c(2,−2)/R² (Thibos, Hong, Bradley & Applegate 2004, J. Vision 4:329);
@@ -22,7 +22,7 @@ refractometer sees it, and as the Sturm interval of real tangential and sagittal
 chief ray (Coddington) measures it. The coefficients' coordinates p = (x, y) lie in the
 entrance-pupil plane, normal to the optical axis; off axis the beam crosses that plane obliquely. A
 ray at p lies s = S p from the chief ray in the plane normal to it, o the unit chief-ray direction
-(`wavefront.field_direction`, optical-axis frame): |s|² = pᵀ (I − o⊥ o⊥ᵀ) p, o⊥ = (o_x, o_y), so
+(`traced_wavefront.field_direction`, optical-axis frame): |s|² = pᵀ (I − o⊥ o⊥ᵀ) p, o⊥ = (o_x, o_y), so
 S = (I − o⊥ o⊥ᵀ)^½, cos θ along o⊥ (the tangential meridian, θ the chief ray's angle to the optical
 axis) and 1 across it (`chief_ray_stretch` is S⁻¹; S, symmetric, keeps the x and y axes that
 the tilt about the sagittal line carries into the beam's plane, so the TABO axis keeps its meaning).
@@ -48,10 +48,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
-from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import vergence_after_distance
-from vissim.optics.wavefront import zernike_um_to_prescription
-from vissim.optics.zernike import zernike_norm
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.trial_lens import vergence_after_distance
+from vissim.optics.pupil.wavefront import zernike_um_to_prescription
+from vissim.optics.pupil.zernike import zernike_norm
 from vissim.units import mm_to_m
 
 __all__ = ["paraxial_rho2_coefficient", "paraxial_prescription", "minimum_rms_prescription", "transfer_prescription",

@@ -2,7 +2,7 @@
 
 `eye_report` builds the eye (`models.eye_model`, made ametropic by `fixation.ametropic_eye`
 when a prescription is given), traces its wavefront over the entrance pupil
-(`wavefront.trace_eye_wavefront`), reads its refraction (`refraction.eye_refraction`) and its
+(`traced_wavefront.trace_eye_wavefront`), reads its refraction (`refraction.eye_refraction`) and its
 MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
 ``vissim eye --json``.
 
@@ -21,7 +21,7 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
 * **Power, f′, retinal mm per degree**: paraxial, of the mean meridian for a toric eye
   (`paraxial.mean_meridian_eye`). f′ (``image_focal_length_mm``) is the image-space focal length
   n′/P, in the vitreous (`paraxial.image_focal_length_mm`), not the focal length in air 1/P.
-* **MTF**: of the wave PSF (`vissim.optics.psf.compute_psf`, diffraction included) of the traced
+* **MTF**: of the wave PSF (`vissim.optics.psf.compute.compute_psf`, diffraction included) of the traced
   wavefront's Zernikes (orders 2-8: piston and tilt only move the PSF) over the entrance pupil,
   at one wavelength, pixel sinc divided out. On axis (field (0, 0)) the radial average; off axis
   ``tangential`` (the spatial frequency along the field's meridian, the direction of (x, y)) and
@@ -40,7 +40,7 @@ MTF, and returns an `EyeReport` whose `EyeReport.as_json` has the keys of
 
 * **Lenses in front** (``lenses``: thick `TrialLens` es, object to eye, the last one's back vertex
   ``vertex_distance_mm`` (default 12 mm) in front of the cornea, ``lens_gap_mm`` apart): traced
-  surface by surface with the eye (`vissim.optics.eyes.wavefront`). The Zernikes are then over the
+  surface by surface with the eye (`vissim.optics.eyes.traced_wavefront`). The Zernikes are then over the
   iris's image through the lenses and the cornea, and the refraction is the **over-refraction**: the
   thin lens touching the front of the first lens that would correct what remains, stated at that
   plane (as `spectacles.residual_refraction`'s `SPECTACLE` plane, its paraxial oracle). Thin
@@ -63,7 +63,7 @@ from scipy.ndimage import map_coordinates
 from vissim.checks import finite_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics import psf_metrics
+from vissim.optics.psf import metrics as psf_metrics
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.lca import LcaCurve, lca_curve
 from vissim.optics.eyes.measured.measured_eye import measured_trace
@@ -73,13 +73,13 @@ from vissim.optics.eyes.psf_wavefront import traced_spectral_wavefront
 from vissim.optics.eyes.refraction import EyeRefraction, eye_refraction
 from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retinal_mm_per_deg
 from vissim.units import osa_xy_to_image_colrow
-from vissim.optics.eyes.wavefront import EyeWavefront, trace_eye_wavefront
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import compute_psf
-from vissim.optics.psf_field import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
-from vissim.optics.spectral_wavefront import SpectralWavefront, field_map_stretch
-from vissim.optics.trial_lens import TrialLensSetup
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.eyes.traced_wavefront import EyeWavefront, trace_eye_wavefront
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import compute_psf
+from vissim.optics.psf.field_size import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, field_map_stretch
+from vissim.optics.rx.trial_lens import TrialLensSetup
+from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["EyeReport", "MtfSpectrum", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_SIZE_PX"]
 
@@ -87,7 +87,7 @@ __all__ = ["EyeReport", "MtfSpectrum", "eye_report", "eye_mtf", "MTF_NYQUIST_PER
 MTF_NYQUIST_PER_CUTOFF = 1.25
 #: The PSF's side, pixels: the MTF's frequency step is cutoff * 2 * 1.25 / 512, about 0.5 cyc/deg at 3 mm.
 #: A PSF that leaves more than `MAX_ENERGY_OUTSIDE` of its energy outside is computed again over the
-#: field that holds it (`vissim.optics.psf_field.size_holding_px`): slow (tens of seconds) for an 8 mm
+#: field that holds it (`vissim.optics.psf.field_size.size_holding_px`): slow (tens of seconds) for an 8 mm
 #: pupil at 40°.
 MTF_SIZE_PX = 512
 

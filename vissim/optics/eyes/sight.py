@@ -7,7 +7,7 @@ the entrance pupil, not the corneal vertex: a point ``d`` away at a field angle 
 seen from the pupil, ``e`` mm behind the vertex, nearer the axis by about e · sin θ / d (0.6 arcmin
 for Navarro's 3.04 mm at 20° and 6 m).  This module is the one place that parallax is worked out.
 
-Frames: the trace's (`vissim.optics.eyes.wavefront`): x, y OSA's, z from the corneal vertex towards
+Frames: the trace's (`vissim.optics.eyes.traced_wavefront`): x, y OSA's, z from the corneal vertex towards
 the retina, mm.
 """
 
@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from vissim.optics.eyes.models import SchematicEye
-from vissim.optics.eyes.wavefront import field_direction, field_of_direction, trace_eye_wavefront
+from vissim.optics.eyes.traced_wavefront import field_direction, field_of_direction, trace_eye_wavefront
 
 __all__ = ["chief_pupil_point_mm", "film_field_deg", "eye_to_world_rotation"]
 

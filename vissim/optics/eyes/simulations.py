@@ -31,13 +31,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.optics.blur import blur_image
+from vissim.optics.blur.convolve import blur_image
 from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM, PHOTOPIC_STEP_NM
 from vissim.optics.eyes.viewing import EyeView
-from vissim.optics.eyes.wavefront import iris_from_entrance_pupil_mm
-from vissim.optics.psf import PSF, compute_psf
-from vissim.optics.resample import magnify
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.eyes.traced_wavefront import iris_from_entrance_pupil_mm
+from vissim.optics.psf.compute import PSF, compute_psf
+from vissim.optics.blur.resample import magnify
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.spectra import named_spectrum
 
 __all__ = ["Light", "simulate_view", "VIEW_SIMULATIONS", "ASSUMPTIONS", "WAVE_OPTICS"]

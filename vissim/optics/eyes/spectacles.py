@@ -1,13 +1,13 @@
 """Spectacle and trial lenses in front of a schematic eye: the refraction that remains (paraxial).
 
-**Lenses** are the DSLR bench's `vissim.optics.trial_lens.TrialLens`, ordered from the object to
+**Lenses** are the DSLR bench's `vissim.optics.rx.trial_lens.TrialLens`, ordered from the object to
 the eye, the last one's back vertex ``vertex_distance_mm`` in front of the corneal front vertex
 (12 mm by default), touching or ``lens_gap_mm`` apart (validated as a `TrialLensSetup`):
 
 * a thin lens (``refractive_index`` None) has its marked power at every wavelength (an ideal lens);
 * a thick lens acts through its own surfaces: the front surface that gives its marked back vertex
   power, its back surface and its reduced thickness, in glass of its n_d with crown's Abbe number
-  (`vissim.optics.glass.glass_like_crown`, as the bench's trace `vissim.bench.lenses.trace`): at λ
+  (`vissim.optics.rx.glass.glass_like_crown`, as the bench's trace `vissim.bench.lenses.trace`): at λ
   each surface's power scales by (n(λ) − 1)/(n_d − 1) and the thickness is divided by n(λ); at
   the d line it is `TrialLens.ray_transfer_matrix` exactly. The bench's step that makes thin lenses
   crown lenses of realistic thickness lives in the bench layer (`vissim.bench.lenses.mesh`); pass
@@ -25,7 +25,7 @@ named by its plane:
 **Traced lenses** (`lens_surfaces`): a thick lens as its two surfaces for the exact trace, in the
 eye's frame (`vissim.optics.eyes.surfaces`; light along +z, the corneal vertex at 0, so the lenses
 lie at z < 0): front and back curvature matrices K = F / (n_d − 1) / 1000 per mm of the bench's
-`vissim.optics.trial_lens.lens_surface_curvatures_per_mm` (a `MatrixSag`; x, y are the TABO frame
+`vissim.optics.rx.trial_lens.lens_surface_curvatures_per_mm` (a `MatrixSag`; x, y are the TABO frame
 in both frames, so a cylinder's axis is the same), glass of the lens's n_d with crown's Abbe
 number at the traced wavelength, as `vissim.bench.lenses.trace.bench_surfaces`. Thin lenses
 have no surfaces: make them crown lenses of realistic thickness first (the bench's
@@ -50,10 +50,10 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.ametropia import CORNEA, SPECTACLE, ParaxialRefraction, eye_ray_matrix, refraction_from_matrix
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import matrix_to_surface, mean_meridian_eye
-from vissim.optics.glass import glass_like_crown
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.rx.glass import glass_like_crown
+from vissim.optics.rx.prescription import Prescription, as_prescription
 from vissim.optics.raytrace import MatrixSag, Surface
-from vissim.optics.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup, lens_surface_curvatures_per_mm,
+from vissim.optics.rx.trial_lens import (SPECTACLE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup, lens_surface_curvatures_per_mm,
                                       refraction_matrix,
                                       transfer_matrix)
 from vissim.units import mm_to_m

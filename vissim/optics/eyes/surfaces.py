@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.media import GrinMedium
+from vissim.optics.eyes.dispersion import GrinMedium
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.raytrace import Biconic, Conic, GradientIndex, Plane, Surface
 

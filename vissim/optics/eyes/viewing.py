@@ -34,10 +34,10 @@ from vissim.optics.eyes.field_blur import blur_eye, node_field_deg
 from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 from vissim.optics.eyes.sight import chief_pupil_point_mm, eye_to_world_rotation
-from vissim.optics.eyes.wavefront import entrance_pupil_from_iris_mm, field_direction
-from vissim.optics.prescription import Prescription
-from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import (TrialLensSetup, thesis_table_4_2_power, trial_lens_effect,
+from vissim.optics.eyes.traced_wavefront import entrance_pupil_from_iris_mm, field_direction
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.viewing_setup import ViewingSetup
+from vissim.optics.rx.trial_lens import (TrialLensSetup, thesis_table_4_2_power, trial_lens_effect,
                                       vergence_after_distance)
 from vissim.units import rad_to_arcmin
 

@@ -5,7 +5,7 @@ noise floor) and the pinhole all-in-focus and depth renders (``aux_seed``, optio
 ``oversample`` times finer); ``blur_depth`` of the all-in-focus image and depth for the
 observer's equivalent eye (`vissim.bench.depth_viewers.equivalent_eye`), in geometric
 and wave optics; and the same from the *layered* input -- every panel rendered alone, radiance
-and coverage -- by `vissim.optics.depth_layers.composite_layers`, which needs no guess
+and coverage -- by `vissim.optics.depth.layered.composite_layers`, which needs no guess
 behind occluding edges.  The pinhole renders extend beyond the frame by the scene's largest blur
 radius (``frame_margin``), and the simulations are cropped to the frame.  Mitsuba renders no diffraction, so ``geometric`` is compared with the render
 and ``wave`` with the render convolved with the aperture's in-focus diffraction PSF (`vissim.validation.engine.truth.add_bench_diffraction`, as for the DSLR bench).
@@ -26,7 +26,7 @@ from vissim.atomic import write_json_atomic
 from vissim.bench.depth.scene import panel_geometries
 from vissim.provenance import make_provenance
 from vissim.imaging.metrics import compare_images, noise_floor
-from vissim.optics.resample import block_mean
+from vissim.optics.blur.resample import block_mean
 from vissim.validation.depth.masks import depth_regions
 from vissim.validation.depth.renders import DepthBuilt
 from vissim.validation.depth.schema import DepthCampaignSettings
@@ -65,7 +65,7 @@ def _scene_layers(scene, images: dict) -> list:
     A fronto panel's proximity is ``1 / distance``; a tilted chart's is its own proximity pass
     divided by its coverage (the pass holds the pixel's mean proximity, 0 where it sees nothing).
     """
-    from vissim.optics.depth_layers import SceneLayer
+    from vissim.optics.depth.layered import SceneLayer
 
     layers = []
     for i, panel in enumerate(scene.panels):
@@ -125,8 +125,8 @@ def _regions(item: _DepthItem):
 
 def _simulate(item: _DepthItem, source: str, mode: str, layers):
     """One simulation of the item: from the RGB-D renders (`blur_depth`) or the scene's layers (`composite_layers`)."""
-    from vissim.optics.depth import blur_depth
-    from vissim.optics.depth_layers import composite_layers
+    from vissim.optics.depth.depth_map import blur_depth
+    from vissim.optics.depth.layered import composite_layers
     from vissim.render.depth_render import proximity_to_depth_m
 
     settings, s, scene = item.settings, item.settings.oversample, item.built.configuration.scene

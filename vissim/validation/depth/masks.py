@@ -1,13 +1,13 @@
 """Where to compare a depth render with its simulation: panel interiors, occlusion bands, the frame.
 
 From a rendered proximity map (dioptres, 0 = sky; `vissim.render.depth_render`) and the
-observer's blur (`vissim.optics.setup.ViewingSetup.blur_diameter_at_arcmin`), every pixel gets one
+observer's blur (`vissim.optics.rx.viewing_setup.ViewingSetup.blur_diameter_at_arcmin`), every pixel gets one
 class:
 
 * a **depth discontinuity** is a pixel whose 3 x 3 neighbourhood spans more than
   ``jump_diopters`` dioptres of proximity.  The default ``jump_diopters`` is the proximity step over which
   two blur discs differ by one pixel (``theta / pupil``): the occlusion threshold of
-  `vissim.optics.depth.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
+  `vissim.optics.depth.depth_map.blur_depth` (``occlusion_threshold_px = 1``).  A tilted chart's gradual
   depth stays below it; a panel edge (or a panel against the sky) does not.  A pixel split
   between two depths carries the whole jump in its window, so mixed pixels are caught;
 * the **boundary band** is every pixel within ``r + margin_px`` of a discontinuity, where

@@ -17,7 +17,7 @@ from typing import ClassVar
 from vissim.bench.depth.scene import DepthScene
 from vissim.bench.depth.scene_dict import DEPTH_PASS_CONTENT, DEPTH_PASS_STATISTIC
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer, equivalent_eye, viewing_setup
-from vissim.optics.setup import DepthViewer, ViewingSetup
+from vissim.optics.rx.viewing_setup import DepthViewer, ViewingSetup
 from vissim.provenance import json_safe
 from vissim.validation.depth.schema import DepthCampaignSettings, DepthConfiguration
 

@@ -94,8 +94,8 @@ def depth_tables(results: list[dict]) -> str:
     out = ["### Summary: PSNR minus the noise floor (dB; +3 is a perfect, noise-free simulation)\n",
            summary_table(results),
            "`layered`: each panel rendered alone (radiance and coverage), composited per pupil ray "
-           "(vissim.optics.depth_layers); `rgbd`: one all-in-focus image and its depth map "
-           "(vissim.optics.depth.blur_depth). Both simulate from inputs rendered beyond the frame by the "
+           "(vissim.optics.depth.layered); `rgbd`: one all-in-focus image and its depth map "
+           "(vissim.optics.depth.depth_map.blur_depth). Both simulate from inputs rendered beyond the frame by the "
            "scene's largest blur radius, cropped afterwards. `interiors (min)`: the worst panel interior "
            "(the sky, noise-free in the render, is left out).\n"]
     for result in results:

@@ -22,8 +22,8 @@ from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, DATA_RANGE_RANGE, DEFAU
                            MAX_CAMPAIGN_SEED, OBJECT_DISTANCE_RANGE_M, OVERSAMPLE_RANGE, VERTEX_DISTANCE_RANGE_MM,
                            WAVELENGTH_RANGE_NM)
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.provenance import json_safe
 from vissim.validation.engine.configurations import refuse_duplicate_names
 from vissim.validation.engine.fields import (MAX_SPP, checked_numbers, field_error, lenses, name_text, number,
@@ -33,8 +33,8 @@ __all__ = ["DepthConfiguration", "DepthCampaignSettings", "read_depth_part", "DE
 
 DEPTH_SIMULATIONS = ("geometric", "wave")
 #: What a simulation starts from: the scene's layers rendered alone (radiance and coverage,
-#: `vissim.optics.depth_layers.composite_layers`) or one all-in-focus image and its depth
-#: map (`vissim.optics.depth.blur_depth`).
+#: `vissim.optics.depth.layered.composite_layers`) or one all-in-focus image and its depth
+#: map (`vissim.optics.depth.depth_map.blur_depth`).
 DEPTH_INPUTS = ("layered", "rgbd")
 
 

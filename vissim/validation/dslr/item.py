@@ -22,7 +22,7 @@ from vissim.atomic import write_json_atomic
 from vissim.charts import optotype_tile
 from vissim.fit.capture import fit_bench_item
 from vissim.imaging.metrics import compare_images, noise_floor
-from vissim.optics.resample import SUBPIXELS_PER_PX, block_mean
+from vissim.optics.blur.resample import SUBPIXELS_PER_PX, block_mean
 from vissim.provenance import json_safe, make_provenance
 from vissim.validation.dslr.align import MAX_SHIFT_PX, UNREGISTERED, align
 from vissim.validation.dslr.renders import DslrBuilt

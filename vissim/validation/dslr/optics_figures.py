@@ -20,13 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from vissim.imageio import read_image
-from vissim.optics.blur import blur_image
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px
-from vissim.optics.psf_metrics import (diffraction_cutoff_cyc_per_deg, diffraction_mtf,
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
+from vissim.optics.psf.metrics import (diffraction_cutoff_cyc_per_deg, diffraction_mtf,
                                        frequencies_cyc_per_deg, mtf,
                                        radius_of_encircled_energy_arcmin, ring_means)
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.validation.dslr.schema import trial_lens_phrase
 from vissim.validation.engine.figures import display_norm, pyplot, radiance_colorbar, scale_bar
 from vissim.validation.engine.summary import NO_LENS
@@ -79,7 +79,7 @@ def optics_cases(results: list[dict], run_dir: str | Path, campaign: dict) -> li
 
     ``campaign``: the run's ``campaign.json`` record (its settings).
     """
-    from vissim.optics.resample import SUBPIXELS_PER_PX
+    from vissim.optics.blur.resample import SUBPIXELS_PER_PX
     from vissim.validation.dslr.report_words import group_of
 
     run_dir = Path(run_dir)

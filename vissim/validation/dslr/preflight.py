@@ -14,10 +14,10 @@ from vissim.bench.dslr.bench import chart_mm_per_texel, chart_texture_shape
 from vissim.bench.scene_parts import TEXTURE_BYTES_PER_TEXEL
 from vissim.checks import MAX_PSF_SIZE_PX, check_allocation, size_text
 from vissim.errors import VissimInputError
-from vissim.optics.psf import geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.psf.compute import geometric_blur_radius_arcmin, psf_sampling, suggested_size_px
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.render.run import render_memory_bytes  # no Mitsuba import: that happens when a render starts
-from vissim.optics.resample import SUBPIXELS_PER_PX
+from vissim.optics.blur.resample import SUBPIXELS_PER_PX
 from vissim.validation.dslr.simulate import simulation_setup
 
 __all__ = ["item_memory_bytes", "check_campaign_memory"]

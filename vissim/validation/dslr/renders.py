@@ -6,8 +6,8 @@ from dataclasses import dataclass, replace
 from typing import ClassVar
 
 from vissim.bench.dslr.bench import DslrBench
-from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.viewing_setup import ViewingSetup
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.provenance import json_safe
 from vissim.units import m_to_mm
 from vissim.validation.dslr.schema import CampaignSettings, Configuration

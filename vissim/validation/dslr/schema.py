@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_F_NUMBER, THESIS_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import mm_to_m
 from vissim.validation.engine.fields import LensSpec

@@ -30,11 +30,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from vissim.optics.blur import blur_image
-from vissim.optics.resample import block_mean, magnify
-from vissim.optics.setup import ViewingSetup
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.blur.resample import block_mean, magnify
+from vissim.optics.rx.viewing_setup import ViewingSetup
 from vissim.validation.engine.truth import cached_psf
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 from vissim.validation.dslr.schema import CampaignSettings, Configuration
 
 __all__ = ["SimulationSetup", "simulation_setup", "simulate"]

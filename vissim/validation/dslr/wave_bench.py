@@ -5,7 +5,7 @@ truth (`vissim.bench.wave_truth.wave_truth`): the configuration's chart through 
 trial lenses' traced wave PSF, magnified and pixel-integrated. Choices:
 
 * **One wavelength, the campaign's** ``wavelength_nm``, **traced through the dispersive glass**
-  (spectacle crown, `vissim.optics.glass`). The simulations diffract at that wavelength
+  (spectacle crown, `vissim.optics.rx.glass`). The simulations diffract at that wavelength
   too, but take the lenses' power from vergence theory at the rendered index (1.523, the d
   line's). At 550 nm the glass is 0.0023 denser and a +2 D lens adds 0.37 % more; that
   *dispersion* is a physical difference the truth has and the simulations lack, so it shows in
@@ -49,10 +49,10 @@ from vissim.bench.dslr.traced_wavefront import (
 from vissim.bench.dslr.bench import DslrBench
 from vissim.bench.dslr.wave_truth import WaveTruth, image_through_traced_lenses, wave_truth
 from vissim.charts import ChartSpec, single_letter_spec
-from vissim.optics.glass import D_LINE_NM, glass_like_crown
-from vissim.optics.prescription import LensPower
-from vissim.optics.setup import ViewingSetup
-from vissim.optics.trial_lens import TrialLensSetup
+from vissim.optics.rx.glass import D_LINE_NM, glass_like_crown
+from vissim.optics.rx.prescription import LensPower
+from vissim.optics.rx.viewing_setup import ViewingSetup
+from vissim.optics.rx.trial_lens import TrialLensSetup
 from vissim.units import mm_to_m
 from vissim.validation.dslr.schema import CampaignSettings, Configuration
 

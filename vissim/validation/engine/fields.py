@@ -15,7 +15,7 @@ from typing import Any
 from vissim.checks import (AXIS_RANGE_DEG, MAX_CAMPAIGN_SEED, MAX_DESCRIPTION_CHARS, MAX_SPP, TRIAL_LENS_RANGE_DIOPTERS,
                            name_problem, path_arg)
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import MAX_LENSES_IN_HOLDER
+from vissim.optics.rx.trial_lens import MAX_LENSES_IN_HOLDER
 
 __all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number",
            "checked_numbers", "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs",

@@ -12,7 +12,7 @@ import hashlib
 import json
 from pathlib import Path
 
-from vissim.optics.psf import SIMULATOR_REVISION
+from vissim.optics.psf.compute import SIMULATOR_REVISION
 from vissim.provenance import json_safe
 
 __all__ = ["SCHEMA_VERSION", "item_key", "render_key", "render_path", "item_dir"]

@@ -12,9 +12,9 @@ import functools
 
 import numpy as np
 
-from vissim.optics.blur import blur_image
-from vissim.optics.psf import PSF, compute_psf
-from vissim.optics.setup import ViewingSetup
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.psf.compute import PSF, compute_psf
+from vissim.optics.rx.viewing_setup import ViewingSetup
 
 __all__ = ["cached_psf", "add_bench_diffraction"]
 

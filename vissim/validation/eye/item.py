@@ -14,7 +14,7 @@ import numpy as np
 from vissim.atomic import write_json_atomic
 from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.imaging.registration import register
-from vissim.optics.blur import blur_image
+from vissim.optics.blur.convolve import blur_image
 from vissim.validation.engine.item_files import save_item_image
 from vissim.validation.engine.metrics import PSNR, SSIM, added_scores
 from vissim.validation.eye.rays import ray_psf

@@ -29,9 +29,9 @@ import numpy as np
 
 from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.eyes.sight import film_field_deg
-from vissim.optics.eyes.wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
+from vissim.optics.eyes.traced_wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
                                           trace_to_retina)
-from vissim.optics.trial_lens import TrialLensSetup
+from vissim.optics.rx.trial_lens import TrialLensSetup
 from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 from vissim.units import osa_xy_to_image_colrow
 

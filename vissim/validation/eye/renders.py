@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from vissim.bench.eye.bench import EyeBench
-from vissim.optics.trial_lens import TrialLens
+from vissim.optics.rx.trial_lens import TrialLens
 
 __all__ = ["EyeSpec", "EyeBuilt", "build_bench", "configuration_bench", "spec"]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.validation.engine.metrics import PSNR, SSIM, added_metrics, floor_column, metric_float
 from vissim.validation.engine.protocol import ReportParts
 from vissim.validation.eye.item import SELF_CHECK_MARGIN_DB

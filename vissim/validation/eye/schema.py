@@ -23,7 +23,7 @@ from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_A
                                          DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER,
                                          DEFAULT_LETTER_LOGMAR, DEFAULT_SPECTACLE_VERTEX_MM)
 from vissim.optics.eyes.eye import SURFACE_OVERRIDES, eye_from_fields
-from vissim.optics.prescription import Prescription
+from vissim.optics.rx.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
                            EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
                            EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,

@@ -25,9 +25,9 @@ from scipy import ndimage
 from scipy.signal import fftconvolve
 
 from vissim.optics.eyes.simulations import WAVE_OPTICS, Light, simulate_view
-from vissim.optics.psf import PSF, compute_psf
-from vissim.optics.resample import block_mean, magnify
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.psf.compute import PSF, compute_psf
+from vissim.optics.blur.resample import block_mean, magnify
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.validation.eye.rays import RAYS_ACROSS_IRIS
 
 __all__ = ["SIMULATIONS", "COSTS", "EyeScene", "simulate", "reference_of", "diffraction_psf", "margin_px"]

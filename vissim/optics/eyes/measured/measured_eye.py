@@ -34,8 +34,8 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.measured.datasets import DATASET_NAMES, load_dataset
-from vissim.optics.wavefront import Wavefront
-from vissim.optics.zernike import ansi_j_to_nm
+from vissim.optics.pupil.wavefront import Wavefront
+from vissim.optics.pupil.zernike import ansi_j_to_nm
 
 __all__ = ["MeasuredWavefront", "parse_measured_eye", "is_measured_name", "BASE_EYE_MODEL",
            "MEASURING_WAVELENGTH_NM", "DEFOCUS_WAVELENGTH_NM", "measured_trace"]

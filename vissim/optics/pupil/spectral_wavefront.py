@@ -2,9 +2,9 @@
 
 A `SpectralWavefront` holds a `Wavefront` (OSA Zernikes in µm over one pupil) for each of its
 wavelengths, e.g. a schematic eye traced at each one
-(`vissim.optics.eyes.psf_wavefront.eye_spectral_wavefront`). `vissim.optics.psf.compute_psf`
-and the field sizing of `vissim.optics.psf_field` take it in place of a `Wavefront`: each
-wavelength's PSF is of that wavelength's own front (`psf_field.front_at_wavelength`, the one
+(`vissim.optics.eyes.psf_wavefront.eye_spectral_wavefront`). `vissim.optics.psf.compute.compute_psf`
+and the field sizing of `vissim.optics.psf.field_size` take it in place of a `Wavefront`: each
+wavelength's PSF is of that wavelength's own front (`field_size.front_at_wavelength`, the one
 place it is chosen), and a Thibos chromatic defocus (``lca_reference_nm``) is refused, the
 fronts carrying their own.
 
@@ -14,7 +14,7 @@ the PSF is centred on (for a traced eye, the chief ray's image point at
 
 ``field_map`` (a 2 x 2 matrix over OSA's x, y; None: the identity) takes the angles the fronts' slopes
 give to the visual angles they are seen at: off axis a traced eye's pupil coordinates lie in a plane
-oblique to the beam (`vissim.optics.eyes.wavefront.field_map`). `vissim.optics.psf.compute_psf`
+oblique to the beam (`vissim.optics.eyes.traced_wavefront.field_map`). `vissim.optics.psf.compute.compute_psf`
 draws every PSF of the front through it (`field_mapped`).
 """
 
@@ -28,7 +28,7 @@ import numpy as np
 from vissim.checks import instance_of
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.wavefront import WAVELENGTH_MATCH_NM, Wavefront, same_wavelength
+from vissim.optics.pupil.wavefront import WAVELENGTH_MATCH_NM, Wavefront, same_wavelength
 from vissim.units import xy_matrix_to_image_rowcol
 
 __all__ = ["SpectralWavefront", "WAVELENGTH_MATCH_NM", "wavelengths_for", "field_mapped", "field_map_stretch",
@@ -48,7 +48,7 @@ class SpectralWavefront:
 
     Examples
     --------
-    >>> from vissim.optics.wavefront import Wavefront
+    >>> from vissim.optics.pupil.wavefront import Wavefront
     >>> s = SpectralWavefront((500.0, 600.0), (Wavefront({(2, 0): 0.1}, 3.0), Wavefront({(2, 0): -0.1}, 3.0)))
     >>> s.pupil_diameter_mm, s.at(600.0).coefficients_um[(2, 0)]
     (3.0, -0.1)

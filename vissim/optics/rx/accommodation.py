@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription, as_prescription
+from vissim.optics.rx.prescription import Prescription, as_prescription
 
 __all__ = ["HOFSTETTER_1950", "Accommodation", "accommodation_for_target", "amplitude_from_age_diopters",
            "clear_vision_range_m", "object_proximity_diopters", "required_accommodation_diopters"]

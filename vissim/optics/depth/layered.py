@@ -4,11 +4,11 @@ When the scene is known (every vissim depth scene), each of its layers -- a pane
 surface that never occludes itself -- can be rendered alone, unoccluded: its premultiplied
 radiance ``C_k`` and its coverage ``A_k`` (alpha) per pixel, and its proximity ``L`` (dioptres;
 one value for a fronto-parallel layer, a map for a slanted one).  Then nothing has to be
-guessed behind an edge, unlike the RGB-D path (`vissim.optics.depth.blur_depth`).
+guessed behind an edge, unlike the RGB-D path (`vissim.optics.depth.depth_map.blur_depth`).
 
 Geometric optics (``mode="geometric"``).  A ray through pupil point ``p`` that ends on pixel
 ``x`` left layer ``k`` at ``x - n_k(p)``, where ``n_k(p)`` is the landing offset of that ray
-for the layer's defocus (``-grad W_k(p)``, as in `vissim.optics.psf.compute_psf`); it meets
+for the layer's defocus (``-grad W_k(p)``, as in `vissim.optics.psf.compute.compute_psf`); it meets
 the nearer layers first, so the pixel sees the front-to-back *over* of the layers, each
 shifted by its own parallax for that pupil point, averaged over the pupil::
 
@@ -24,7 +24,7 @@ is the PSF integrated over pixels).  Rays with the same rounded offsets on every
 involved form one term, weighted by their share of the pupil.  A layer that no nearer layer
 overlaps (after both are blurred) is blurred by one FFT; the others are composited term by
 term on the window their blur can reach.  A slanted layer is cut into proximity slices by
-the tent matte of `vissim.optics.depth.blur_depth` (its slices add: a plane never
+the tent matte of `vissim.optics.depth.depth_map.blur_depth` (its slices add: a plane never
 occludes itself), each slice with its own offsets, and their sum is divided by the same sum
 for the plane's uniform continuation (``_density``: the lens gathers radiance along rays, the
 slice sum scatters light, and they differ by a few per cent on a steep slant).
@@ -61,15 +61,15 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image
-from vissim.optics.depth import eye_of, layer_spacing_diopters, matte_indices, plan_layers
-from vissim.optics.depth_psfs import cached_psf
-from vissim.optics.depth_windows import grow_box
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import PSF, geometric_blur_radius_arcmin
-from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
-from vissim.optics.setup import DepthViewer
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.blur.convolve import blur_image
+from vissim.optics.depth.depth_map import eye_of, layer_spacing_diopters, matte_indices, plan_layers
+from vissim.optics.depth.psfs import cached_psf
+from vissim.optics.depth.windows import grow_box
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import PSF, geometric_blur_radius_arcmin
+from vissim.optics.pupil.rays import landing_arcmin, ray_count, stratified_pupil_rays
+from vissim.optics.rx.viewing_setup import DepthViewer
+from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["SceneLayer", "LayeredBlurResult", "composite_layers"]
 
@@ -107,7 +107,7 @@ class LayeredBlurResult:
 
 @functools.lru_cache(maxsize=8)
 def _pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
-    """The geometric PSF's pupil rays (`vissim.optics.pupil_rays.stratified_pupil_rays`), cached read-only."""
+    """The geometric PSF's pupil rays (`vissim.optics.pupil.rays.stratified_pupil_rays`), cached read-only."""
     u, v = stratified_pupil_rays(n_rays)
     u.setflags(write=False)
     v.setflags(write=False)
@@ -168,7 +168,7 @@ def _check_layer(layer: SceneLayer, shape, index: int):
 def _slices(index: int, colour, coverage, proximity, spacing_diopters: float, anchor_diopters: float) -> list[_Slice]:
     """A layer cut into proximity slices by the tent matte (one slice for a constant proximity).
 
-    As `vissim.optics.depth.blur_depth` plans its layers (`vissim.optics.depth.plan_layers`,
+    As `vissim.optics.depth.depth_map.blur_depth` plans its layers (`vissim.optics.depth.depth_map.plan_layers`,
     symmetric): exact ends, and steps of the largest spacing from the in-focus proximity
     ``anchor_diopters`` when the layer spans it.
     """
@@ -203,7 +203,7 @@ def _density(layer: list[_Slice]) -> np.ndarray | None:
     uniform plane images uniformly, while the scatter sum bunches light where the blur grows
     (by about ``1 - slope x p``, a few per cent on a steep slant).  Dividing by the scatter sum
     of the plane's own mattes ``M_s`` (its slices continued over the grid) makes a uniform
-    plane exactly uniform, as `vissim.optics.depth.blur_depth` normalises by its blurred coverage.
+    plane exactly uniform, as `vissim.optics.depth.depth_map.blur_depth` normalises by its blurred coverage.
     """
     if len(layer) < 2:
         return None
@@ -311,17 +311,17 @@ def composite_layers(
         Each layer alone on one pixel grid: premultiplied radiance (H, W) or (H, W, C), coverage
         (H, W) in [0, 1], proximity in dioptres (a value, or an (H, W) map for a slanted layer).
     eye_prescription
-        The eye's prescription, as in `vissim.optics.depth.blur_depth`.
+        The eye's prescription, as in `vissim.optics.depth.depth_map.blur_depth`.
     pupil_diameter_mm
-        The eye's pupil, mm, as in `vissim.optics.depth.blur_depth`.
+        The eye's pupil, mm, as in `vissim.optics.depth.depth_map.blur_depth`.
     accommodation_diopters
-        The eye's accommodation, D, as in `vissim.optics.depth.blur_depth`.
+        The eye's accommodation, D, as in `vissim.optics.depth.depth_map.blur_depth`.
     wavelength_nm
-        The eye's wavelength, nm, as in `vissim.optics.depth.blur_depth`.
+        The eye's wavelength, nm, as in `vissim.optics.depth.depth_map.blur_depth`.
     extra_wavefront
-        The eye's further aberrations, as in `vissim.optics.depth.blur_depth`.
+        The eye's further aberrations, as in `vissim.optics.depth.depth_map.blur_depth`.
     eye : DepthViewer, optional
-        The eye as one object (`vissim.optics.setup.DepthViewer`), instead of the four keywords above.
+        The eye as one object (`vissim.optics.rx.viewing_setup.DepthViewer`), instead of the four keywords above.
     mode : {"geometric", "wave"}
     layer_spacing_fraction : float
         A slanted layer's slices differ in blur by at most this many pixels.
@@ -476,5 +476,5 @@ def _fft_blur(colour: np.ndarray, psf: PSF) -> np.ndarray:
 
 
 def _wave_psf(front: Wavefront, pupil_mm: float, wavelength_nm: float, step: float) -> PSF:
-    # size_px=None passed as depth_psfs.LayerOptics passes it: lru_cache keys an omitted argument apart
+    # size_px=None passed as psfs.LayerOptics passes it: lru_cache keys an omitted argument apart
     return cached_psf(tuple(front.coefficients_um.items()), pupil_mm, wavelength_nm, step, "wave", None)

@@ -1,13 +1,13 @@
 """Point-spread functions from wavefronts, alias-safe at any angular sampling.
 
-Wave optics (`vissim.optics.psf_wave`): the generalised pupil ``P exp(i k W)``, sampled
+Wave optics (`vissim.optics.psf.wave`): the generalised pupil ``P exp(i k W)``, sampled
 as cell averages on as many cells as the wavefront's steepest slope needs, is Fourier
 transformed (matrix transform or FFT, whichever is cheaper) and ``PSF = |transform|^2``
 (Goodman 2005, Ch. 6), on an internal grid finer than the Nyquist interval lambda/(2D), and
 then *integrated* over the requested output pixels (ERRATA item 6); the integration is exact,
 done as the pixel's sinc in the Fourier domain.  ``pixel="sample"`` gives instead the
 band-limited point samples, whose DFT is the OTF: the exact kernel for blurring a
-*well-sampled* image (see `vissim.optics.blur`).  A blur kernel (``normalise="field"``,
+*well-sampled* image (see `vissim.optics.blur.convolve`).  A blur kernel (``normalise="field"``,
 unit sum over the field) whose field would leave more than
 `MAX_ENERGY_OUTSIDE` of the energy outside raises
 `FieldTooSmallError` with the size that would hold it, since truncating a
@@ -42,7 +42,7 @@ from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.optics.psf_field import (
+from vissim.optics.psf.field_size import (
     MAX_ENERGY_OUTSIDE,
     front_at_wavelength,
     leaves_too_much_outside,
@@ -52,13 +52,13 @@ from vissim.optics.psf_field import (
     size_holding_px,
     suggested_size_px,
 )
-from vissim.optics.psf_wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
-from vissim.optics.pupil_grid import generalised_pupil, opd_on_points_um, pupil_grid
-from vissim.optics.pupil_rays import landing_arcmin, ray_count, stratified_pupil_rays
-from vissim.optics.resample import SUBPIXELS_PER_PX
-from vissim.optics.opd_map import OpdMap
-from vissim.optics.spectral_wavefront import SpectralWavefront, field_map_stretch, field_mapped, wavelengths_for
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.psf.wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
+from vissim.optics.pupil.grid import generalised_pupil, opd_on_points_um, pupil_grid
+from vissim.optics.pupil.rays import landing_arcmin, ray_count, stratified_pupil_rays
+from vissim.optics.blur.resample import SUBPIXELS_PER_PX
+from vissim.optics.pupil.opd_map import OpdMap
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, field_map_stretch, field_mapped, wavelengths_for
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import nm_to_mm, rad_to_arcmin
 
@@ -339,7 +339,7 @@ def compute_psf(
     pixel : {"integrate", "sample"}
         ``"integrate"`` (default): each value is the PSF integrated over its pixel, what a
         sensor records.  ``"sample"``: band-limited point samples, the exact kernel for
-        blurring well-sampled images (see `vissim.optics.blur` for when it matters).
+        blurring well-sampled images (see `vissim.optics.blur.convolve` for when it matters).
     dtype : numpy.float32 (default) or numpy.float64
         The arithmetic's and ``PSF.data``'s precision.  float32's round-off (1e-7 to 3e-6 of the
         peak, growing with the pupil cells) is far below the wave PSF's accuracy (2e-3 of the

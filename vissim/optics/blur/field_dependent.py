@@ -14,7 +14,7 @@ between two nodes the mean of theirs. A PSF that sums to 1 at every node conserv
 PSFs do not change (as it should: light spreads differently where they do).
 
 Each node's term is computed on a window: its tent's support (out to its neighbours) plus the
-largest PSF's reach, convolved by `vissim.optics.blur.blur_image` (zero outside the window, where
+largest PSF's reach, convolved by `vissim.optics.blur.convolve.blur_image` (zero outside the window, where
 the weighted image is zero). The padding outside the image (``padding``, ``background``) is that of
 `blur_image`, applied once to the whole image before it is weighted; the edge nodes' tents extend
 flat into it. With one node it is `blur_image` itself (isoplanatic).
@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.errors import VissimInputError
-from vissim.optics.blur import blur_image, border_mean, checked_blur_inputs, pad_array, padding_width_px
-from vissim.optics.psf import PSF
+from vissim.optics.blur.convolve import blur_image, border_mean, checked_blur_inputs, pad_array, padding_width_px
+from vissim.optics.psf.compute import PSF
 
 __all__ = ["PSFGrid", "node_positions_px", "psf_grid", "tent_weights", "blur_field_dependent"]
 
@@ -142,7 +142,7 @@ def blur_field_dependent(image: np.ndarray, grid: PSFGrid | Sequence[PSFGrid], *
                          dtype=np.float32) -> np.ndarray:
     """Blur a linear-light image by PSFs that vary over it (module doc), one `PSFGrid` for all channels or one per channel.
 
-    Parameters and result as `vissim.optics.blur.blur_image` (``padding``, ``background``,
+    Parameters and result as `vissim.optics.blur.convolve.blur_image` (``padding``, ``background``,
     ``dtype``); every node's PSF is checked as `blur_image` checks its PSF. A grid of one node is
     `blur_image` with that PSF.
     """

@@ -1,6 +1,6 @@
 """Pull-push interpolation (Gortler et al. 1996): filling data behind occluders.
 
-Used by `vissim.optics.depth` to extend each depth layer's colour and coverage behind nearer
+Used by `vissim.optics.depth.depth_map` to extend each depth layer's colour and coverage behind nearer
 content, as in Kraus & Strengert (2007), so a blurred near edge shows the background's
 continuation instead of a dark or bright halo.
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vissim.optics.array_backend import array_module
+from vissim.optics.runtime.array_backend import array_module
 
 __all__ = ["pull_push", "upsample2"]
 

@@ -8,7 +8,7 @@ at an object at ``object_distance_m``.  It holds
   the viewer's excess power over what the object's light needs, ``D = E + A I + V`` (E the eye's
   refractive error or the power trial lenses add, A accommodation, V the vergence arriving
   at the pupil: ``-1/d`` for an object at d).  **A myopic viewer has D > 0**; it sees sharply
-  where D = 0.  Its prescription (the correcting lens, `vissim.optics.prescription`) is
+  where D = 0.  Its prescription (the correcting lens, `vissim.optics.rx.prescription`) is
   ``-D``;
 * ``magnification_matrix`` -- maps a chief-ray angle without the trial lenses onto the angle
   with them (spectacle magnification, ERRATA item 5);
@@ -18,7 +18,7 @@ From these follow the wavefront (``W = -P r^2 / 2`` of the prescription P) and t
 blur: pupil (mm) x |principal defocus| (D) milliradians per principal meridian.
 
 A `DepthViewer` is an uncorrected eye at every depth at once (the depth blurs,
-`vissim.optics.depth.blur_depth` and `vissim.optics.depth_layers.composite_layers`): the
+`vissim.optics.depth.depth_map.blur_depth` and `vissim.optics.depth.layered.composite_layers`): the
 same decision per depth as `ViewingSetup.eye`, on the eye's wavefront.
 
 Named constructors only: `ViewingSetup.dslr`, `ViewingSetup.through_lenses`, `ViewingSetup.eye`,
@@ -39,13 +39,13 @@ import numpy as np
 from vissim.checks import DEFAULT_WAVELENGTH_NM, finite_number, instance_of
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
-from vissim.optics.accommodation import object_proximity_diopters
-from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.psf_field import front_at_wavelength
-from vissim.optics.trial_lens import (Matrix2, TrialLens, TrialLensSetup, entrance_pupil_diameter_mm, matrix2_tuple,
+from vissim.optics.rx.accommodation import object_proximity_diopters
+from vissim.optics.rx.prescription import Prescription, as_prescription
+from vissim.optics.psf.field_size import front_at_wavelength
+from vissim.optics.rx.trial_lens import (Matrix2, TrialLens, TrialLensSetup, entrance_pupil_diameter_mm, matrix2_tuple,
                                       principal_pairs, tabo_meridian_deg, thesis_eye_pupil_diameter_mm,
                                       thesis_table_4_2_lens_power, thesis_table_4_2_power, trial_lens_effect)
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import rad_to_arcmin
 
 __all__ = ["ViewingSetup", "DepthViewer", "check_accommodation_diopters"]
@@ -209,7 +209,7 @@ class DepthViewer:
     scene, ``extra_wavefront`` its further aberrations (higher orders, rescaled to the pupil).
     An object at proximity ``L = 1/d`` (D) sees the eye of `ViewingSetup.eye` at ``d``:
     ``D = A I - Rx - L I``, i.e. the prescription ``Rx + (L - A)`` on the sphere
-    (`vissim.optics.accommodation`); astigmatism and the extra terms are the same at every
+    (`vissim.optics.rx.accommodation`); astigmatism and the extra terms are the same at every
     depth.  `wavefront_at` is that decision on the wavefront, `viewing_setup` the setup itself.
 
     A schematic eye (`vissim.optics.eyes.depth_eye.traced_depth_eye`) is built with
@@ -257,7 +257,7 @@ class DepthViewer:
 
     def check_light(self, wavelength_nm: float) -> None:
         """Refuse ``wavelength_nm`` when the eye's wavefront holds in other light (a traced eye's front: it is used in
-        its own light only, `vissim.optics.psf_field.front_at_wavelength`)."""
+        its own light only, `vissim.optics.psf.field_size.front_at_wavelength`)."""
         front_at_wavelength(self.wavefront, wavelength_nm, None)
 
     @property

@@ -1,7 +1,7 @@
 """Depth-dependent blur: one eye, one accommodation state, a scene with a depth map.
 
-Defocus per depth (derivation in `vissim.optics.accommodation`; decided by
-`vissim.optics.setup.DepthViewer`, `vissim.optics.setup.ViewingSetup.eye` at every depth).  An object
+Defocus per depth (derivation in `vissim.optics.rx.accommodation`; decided by
+`vissim.optics.rx.viewing_setup.DepthViewer`, `vissim.optics.rx.viewing_setup.ViewingSetup.eye` at every depth).  An object
 ``d`` metres away has *proximity* ``L = 1/d`` dioptres (``L = 0`` for sky at infinity).  An eye whose correcting
 lens is ``Rx`` (myope negative), exerting accommodation ``A``, is corrected *for that object*
 by the lens::
@@ -49,12 +49,12 @@ focus; every output is a weighted mean of (extended) input colours.
 Cost: per non-empty layer one PSF (cached by wavefront; for an eye whose wavefront is defocus
 alone the symmetric plan pairs layers of opposite defocus, whose PSFs are point reflections of
 each other, so about half are computed), one pull-push and one batched convolution of
-(colours, extended coverage) (one real FFT pair, `vissim.optics.blur_device.convolve_padded`;
+(colours, extended coverage) (one real FFT pair, `vissim.optics.blur.device.convolve_padded`;
 blur.py's overlap-save squares measured no faster on these windows), on the layer's *window*: the box of its tent matte grown by ``2 (r_k + r_max)`` pixels (``r`` the
 PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
 content's blur (``r_max``) lets it show, and both spread once more through partly occluding
 neighbours.  The continuation itself is estimated by pull-push on the window grown by another
-`vissim.optics.depth_composite.EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see
+`vissim.optics.depth.composite.EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see
 the neighbourhood the whole frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
 (same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
 60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
@@ -65,7 +65,7 @@ pull-push sums only the rows that hold the layer's matte (the rest are sums of z
 Threads: a layer's extension and blur depend on no other layer; only its compositing (the
 transmission through nearer layers) does.  On the CPU, one thread per core extends and blurs
 layers ahead (their PSFs computed in the same pool, OpenBLAS held at one thread meanwhile:
-`vissim.optics.threads`) while the calling thread composites them near to far, in order:
+`vissim.optics.runtime.threads`) while the calling thread composites them near to far, in order:
 the result equals the one-thread blur to float32 round-off (``tests/test_depth_threads.py``).
 """
 
@@ -86,15 +86,15 @@ from vissim.checks import describe, instance_of, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError, VissimTypeError
-from vissim.optics.array_backend import array_backend
-from vissim.optics.blur import pixel_array
-from vissim.optics.depth_composite import Compositor, LayerScene, blurred_layer
-from vissim.optics.depth_psfs import LayerOptics, in_order, layer_pool, worker_threads
-from vissim.optics.depth_windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
-from vissim.optics.prescription import Prescription
-from vissim.optics.psf import geometric_blur_radius_arcmin
-from vissim.optics.setup import DepthViewer
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.runtime.array_backend import array_backend
+from vissim.optics.blur.convolve import pixel_array
+from vissim.optics.depth.composite import Compositor, LayerScene, blurred_layer
+from vissim.optics.depth.psfs import LayerOptics, in_order, layer_pool, worker_threads
+from vissim.optics.depth.windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.psf.compute import geometric_blur_radius_arcmin
+from vissim.optics.rx.viewing_setup import DepthViewer
+from vissim.optics.pupil.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import arcmin_to_rad
 
@@ -240,7 +240,7 @@ class DepthBlurResult:
 def eye_of(eye: DepthViewer | None, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront) -> DepthViewer:
     """``eye``, or the `DepthViewer` the keywords describe (accommodation None: 0 D); both at once are refused."""
     if eye is not None:
-        instance_of(eye, DepthViewer, "eye", "a vissim.optics.setup.DepthViewer")
+        instance_of(eye, DepthViewer, "eye", "a vissim.optics.rx.viewing_setup.DepthViewer")
         given = [name for name, value in (("eye_prescription", eye_prescription), ("pupil_diameter_mm", pupil_diameter_mm),
                                           ("accommodation_diopters", accommodation_diopters),
                                           ("extra_wavefront", extra_wavefront)) if value is not None]
@@ -248,7 +248,7 @@ def eye_of(eye: DepthViewer | None, eye_prescription, pupil_diameter_mm, accommo
             raise VissimInputError(f"give the eye as eye= or as its keywords, not both (also given: {', '.join(given)})")
         return eye
     if eye_prescription is None or pupil_diameter_mm is None:
-        raise VissimTypeError("the eye is needed: eye= (a vissim.optics.setup.DepthViewer), or eye_prescription= and "
+        raise VissimTypeError("the eye is needed: eye= (a vissim.optics.rx.viewing_setup.DepthViewer), or eye_prescription= and "
                               "pupil_diameter_mm=")
     accommodation = 0.0 if accommodation_diopters is None else accommodation_diopters
     return DepthViewer(eye_prescription, pupil_diameter_mm, accommodation, extra_wavefront)
@@ -290,11 +290,11 @@ def blur_depth(
         The eye's pupil, mm.
     accommodation_diopters : float, optional
         Accommodation exerted (D, >= 0; default 0), the same for the whole scene; see
-        `vissim.optics.accommodation.accommodation_for_target`.
+        `vissim.optics.rx.accommodation.accommodation_for_target`.
     extra_wavefront : Wavefront, optional
         Further aberrations of the eye (higher orders), the same at every depth.
     eye : DepthViewer, optional
-        The eye as one object (`vissim.optics.setup.DepthViewer`), instead of the four keywords above.
+        The eye as one object (`vissim.optics.rx.viewing_setup.DepthViewer`), instead of the four keywords above.
     layer_spacing_fraction : float
         Neighbouring layers' blur discs differ by at most this many pixels.
     max_layers : int, optional
@@ -313,7 +313,7 @@ def blur_depth(
         At `COARSE_BLUR_PX` (14 px) a layer of white noise, the hardest input, comes out
         within `COARSE_MIN_DB` (44 dB PSNR) of its fine blur; wider blurs come closer.
     device : {"cpu", "cuda", "auto"}
-        Where the layers are blurred (`vissim.optics.array_backend`): ``"cuda"`` on a GPU
+        Where the layers are blurred (`vissim.optics.runtime.array_backend`): ``"cuda"`` on a GPU
         through CuPy (the ``gpu`` extra), ``"auto"`` there when one is present.  PSFs are computed
         on the CPU either way.  On the CPU, layers are blurred on as many threads as the process
         has cores.

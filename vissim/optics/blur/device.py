@@ -1,6 +1,6 @@
-"""``blur_image`` on a device (`vissim.optics.array_backend`): the CPU, or a CUDA GPU through CuPy.
+"""``blur_image`` on a device (`vissim.optics.runtime.array_backend`): the CPU, or a CUDA GPU through CuPy.
 
-Same contract as `vissim.optics.blur.blur_image` (linear light, one PSF or one per channel,
+Same contract as `vissim.optics.blur.convolve.blur_image` (linear light, one PSF or one per channel,
 the same padding modes and default background, float32), computed as one full-frame real FFT
 pair per PSF with every channel that shares it batched: on a GPU a 1080p frame fits in one
 transform, so the CPU's overlap-save squares would only add launches.  On the CPU backend it
@@ -14,10 +14,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from vissim.optics.array_backend import CPU, ArrayBackend, array_backend
-from vissim.optics.blur import (BlurKernel, border_mean, checked_blur_inputs, pad_array, padded_shape,
+from vissim.optics.runtime.array_backend import CPU, ArrayBackend, array_backend
+from vissim.optics.blur.convolve import (BlurKernel, border_mean, checked_blur_inputs, pad_array, padded_shape,
                                 psf_padding_width_px)
-from vissim.optics.psf import PSF
+from vissim.optics.psf.compute import PSF
 
 __all__ = ["blur_image_on", "convolve_padded"]
 
@@ -31,7 +31,7 @@ def blur_image_on(
     background: float | Sequence[float] | None = None,
     device: str = "cpu",
 ) -> np.ndarray:
-    """`vissim.optics.blur.blur_image` on ``device`` (``"cpu"``, ``"cuda"`` or ``"auto"``); float32, on the host."""
+    """`vissim.optics.blur.convolve.blur_image` on ``device`` (``"cpu"``, ``"cuda"`` or ``"auto"``); float32, on the host."""
     backend = array_backend(device)
     xp = backend.xp
     array, psfs, backgrounds = checked_blur_inputs(image, psf, arcmin_per_px, padding, background)

@@ -7,7 +7,7 @@ stood at 914.4 mm.  It also ignores spectacle magnification (ERRATA item 5).  Th
 both properly, by generalized (astigmatic) paraxial ray transfer:
 
 * a ray is the 4-vector ``(x, y, n u_x, n u_y)``: heights in metres, reduced angles in radians,
-  in the TABO frame used by `vissim.optics.prescription.SpheroCylinder.power_matrix`
+  in the TABO frame used by `vissim.optics.rx.prescription.SpheroCylinder.power_matrix`
   (x to the examiner's right, y up), z from the object towards the camera;
 * a refracting surface with 2x2 dioptric power matrix F is ``[[I, 0], [-F, I]]``, a gap of
   thickness t in a medium of index n is ``[[I, (t/n) I], [0, I]]`` (Keating 1981; Harris 1997),
@@ -37,7 +37,7 @@ from vissim.checks import finite_number as _number
 from vissim.checks import LENS_GAP_RANGE_MM
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import LensPower, Prescription
+from vissim.optics.rx.prescription import LensPower, Prescription
 from vissim.thesis import THESIS_EYE_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import diopters_to_per_mm, mm_to_m
 

@@ -1,6 +1,6 @@
 """One depth layer on its window: its tent matte, its continuation behind nearer content, its blur.
 
-Used by `vissim.optics.depth.blur_depth` (module doc there: "Compositing" and "Cost").
+Used by `vissim.optics.depth.depth_map.blur_depth` (module doc there: "Compositing" and "Cost").
 """
 
 from __future__ import annotations
@@ -9,12 +9,12 @@ import math
 
 import numpy as np
 
-from vissim.optics.array_backend import CPU as CPU_BACKEND
-from vissim.optics.array_backend import ArrayBackend, array_module
-from vissim.optics.blur import pad_array, padded_shape, padding_width_px
-from vissim.optics.blur_device import convolve_padded
-from vissim.optics.psf import PSF
-from vissim.optics.pullpush import pull_push, upsample2
+from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
+from vissim.optics.runtime.array_backend import ArrayBackend, array_module
+from vissim.optics.blur.convolve import pad_array, padded_shape, padding_width_px
+from vissim.optics.blur.device import convolve_padded
+from vissim.optics.psf.compute import PSF
+from vissim.optics.depth.pullpush import pull_push, upsample2
 
 __all__ = ["DEPTH_PADDING_MODES", "COARSE_FACTOR", "occlusion_weight", "extended_layer", "layer_boxes", "grow_box",
            "nonzero_box", "add_overlap", "blur_window", "blur_coarse"]
@@ -145,7 +145,7 @@ def add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -
 
 def blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
                 threads: int | None = None) -> tuple:
-    """Blur (C, h, w) planes of a window with one PSF (`vissim.optics.blur_device.convolve_padded`).
+    """Blur (C, h, w) planes of a window with one PSF (`vissim.optics.blur.device.convolve_padded`).
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside

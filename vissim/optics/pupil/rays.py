@@ -3,10 +3,10 @@
 One ray per cell of an ``n x n`` grid over the unit square, jittered within its cell, kept
 inside the unit disc: each ray stands for an equal share of the pupil's area.  The points are
 image-oriented (``u`` along columns, ``v`` along rows; `vissim.units.image_colrow_to_osa_xy`
-gives the OSA pupil point).  The geometric PSF (`vissim.optics.psf.compute_psf`) and the
-layered depth blur (`vissim.optics.depth_layers.composite_layers`) both draw their rays here,
+gives the OSA pupil point).  The geometric PSF (`vissim.optics.psf.compute.compute_psf`) and the
+layered depth blur (`vissim.optics.depth.layered.composite_layers`) both draw their rays here,
 so that one layer alone blurs exactly by the geometric PSF; the field estimate
-(`vissim.optics.psf_field`) takes the grid's cell centres, unjittered.  `landing_arcmin` is
+(`vissim.optics.psf.field_size`) takes the grid's cell centres, unjittered.  `landing_arcmin` is
 where a ray lands in the image, for all of them.
 """
 

@@ -1,6 +1,6 @@
 """The depth blur's PSFs and its threads: one PSF per distinct wavefront, layers worked on ahead.
 
-Used by `vissim.optics.depth.blur_depth` (module doc there: "Cost" and "Threads").
+Used by `vissim.optics.depth.depth_map.blur_depth` (module doc there: "Cost" and "Threads").
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from vissim.optics.array_backend import CPU as CPU_BACKEND
-from vissim.optics.array_backend import ArrayBackend
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px
-from vissim.optics.threads import available_cores, single_threaded_blas
-from vissim.optics.wavefront import Wavefront
+from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
+from vissim.optics.runtime.array_backend import ArrayBackend
+from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
+from vissim.optics.runtime.threads import available_cores, single_threaded_blas
+from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["cached_psf", "LayerOptics", "worker_threads", "layer_pool", "in_order"]
 

@@ -8,7 +8,7 @@ import scipy.fft
 from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
-from vissim.optics.psf import PSF
+from vissim.optics.psf.compute import PSF
 from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm
 
 __all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_of_encircled_energy_arcmin", "diffraction_mtf",

@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vissim.errors import VissimInputError
-from vissim.optics.prescription import Prescription
-from vissim.optics.wavefront import Wavefront, ring_fit_um
+from vissim.optics.rx.prescription import Prescription
+from vissim.optics.pupil.wavefront import Wavefront, ring_fit_um
 
 __all__ = ["OpdMap"]
 

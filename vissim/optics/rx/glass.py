@@ -8,7 +8,7 @@ crown is of this type).  ``V_d = (n_d - 1) / (n_F - n_C)`` with the Fraunhofer l
 The fit ``n(λ) = A + B / λ²`` passes through ``n_d`` at the d line and has ``n_F - n_C = (n_d - 1)
 / V_d`` exactly.  It is written ``n_d + B (1/λ² - 1/λ_d²)`` so that the d line returns ``n_d``
 bit for bit: the bench's lenses are built with the fixed index 1.523
-(`vissim.optics.trial_lens.CROWN_GLASS_INDEX`, also Mitsuba's ``int_ior``), so a trace at
+(`vissim.optics.rx.trial_lens.CROWN_GLASS_INDEX`, also Mitsuba's ``int_ior``), so a trace at
 `D_LINE_NM` reproduces the render's glass exactly.  How good two Cauchy terms are: the same
 fit to Schott N-BK7's n_d and V_d departs from its catalogue Sellmeier formula by at most 1.3e-4
 in index over 400-700 nm (most at 700 nm), i.e. 0.03 % of the power of a lens.
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.optics.trial_lens import CROWN_GLASS_INDEX
+from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX
 
 __all__ = ["D_LINE_NM", "F_LINE_NM", "C_LINE_NM", "CROWN_ABBE_NUMBER", "CauchyGlass", "SPECTACLE_CROWN",
            "crown_index", "glass_like_crown"]

@@ -1,6 +1,6 @@
 """One depth layer extended and blurred on its window, and the layers composited near to far.
 
-The stages of `vissim.optics.depth.blur_depth` after its plan and matte (that module's doc:
+The stages of `vissim.optics.depth.depth_map.blur_depth` after its plan and matte (that module's doc:
 "Compositing" and "Cost"): `blurred_layer` extends a layer behind nearer content by pull-push and
 blurs it on its window; `Compositor` adds the blurred layers, nearest first, each through the
 transmission of the nearer ones, and normalises by the blurred coverage.
@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.optics.depth_psfs import LayerOptics
-from vissim.optics.depth_windows import (add_overlap, blur_coarse, blur_window, extended_layer, grow_box, nonzero_box,
+from vissim.optics.depth.psfs import LayerOptics
+from vissim.optics.depth.windows import (add_overlap, blur_coarse, blur_window, extended_layer, grow_box, nonzero_box,
                                          occlusion_weight)
 
 __all__ = ["Compositor", "EXTENSION_HALO_PX", "LayerScene", "blurred_layer"]

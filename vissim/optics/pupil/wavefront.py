@@ -31,8 +31,8 @@ from vissim.checks import describe, finite_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
-from vissim.optics.prescription import Prescription, as_prescription
-from vissim.optics.zernike import zernike_keys, zernike_nm
+from vissim.optics.rx.prescription import Prescription, as_prescription
+from vissim.optics.pupil.zernike import zernike_keys, zernike_nm
 
 __all__ = ["Wavefront", "WAVELENGTH_MATCH_NM", "same_wavelength", "prescription_to_zernike_um",
            "zernike_um_to_prescription", "parse_zernike_terms",
@@ -124,7 +124,7 @@ class Wavefront:
     ``coefficients_um`` maps ``(n, m)`` to the coefficient in micrometres. ``wavelength_nm``: the
     light the front was traced or measured in, or None for a front that holds at any wavelength (a
     prescription's, the reduced eye's). A front that knows its wavelength is used at that wavelength
-    only, unless told how to convert it (`vissim.optics.psf_field.front_at_wavelength`).
+    only, unless told how to convert it (`vissim.optics.psf.field_size.front_at_wavelength`).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """Wave-optical PSFs: the pupil's Fourier transform by matrix products or by one FFT.
 
-The generalised pupil is sampled as cell averages (`vissim.optics.pupil_grid`), on as
+The generalised pupil is sampled as cell averages (`vissim.optics.pupil.grid`), on as
 many cells as the wavefront needs (``docs/conventions.md``, "Pupil sampling"), independently
 of the output grid.  Its Fraunhofer transform is evaluated on an internal grid finer than the
 intensity's Nyquist interval lambda/(2D), over a field that holds the output pixels and the
@@ -30,9 +30,9 @@ import scipy.fft
 
 from vissim.errors import VissimInputError
 from vissim.progress import Progress, counter
-from vissim.optics.psf_field import airy_tail_radius_lambda_over_d, rim_widening
-from vissim.optics.pupil_grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
-from vissim.optics.workspace import scratch
+from vissim.optics.psf.field_size import airy_tail_radius_lambda_over_d, rim_widening
+from vissim.optics.pupil.grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
+from vissim.optics.runtime.workspace import scratch
 from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
 
 __all__ = ["PHASE_STEP_WAVES", "MIN_PUPIL_CELLS", "PsfSampling", "plan_wave_psf", "wave_psf", "to_output_pixels"]
@@ -100,7 +100,7 @@ def folded_energy(distance_arcmin: float, half_field_arcmin: float, blur_arcmin:
     when the period exceeds it by ``distance_arcmin``.
 
     Each replica's light beyond radius r is the Airy tail 2 / (pi^2 r) (r in lambda/D beyond the
-    geometric blur, widened for a defocused rim as in `vissim.optics.psf_field`).  With a
+    geometric blur, widened for a defocused rim as in `vissim.optics.psf.field_size`).  With a
     1 / r^3 density, 1 / pi of it lies beyond a line at distance d, and of that the fraction
     (sqrt(d^2 + h^2) - d) / h within the field's strip |y| <= h; the four diagonal replicas add
     at most DIAGONAL_SHARE each; the cell average's correction lifts it by up to FOLD_LIFT.

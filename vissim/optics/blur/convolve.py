@@ -42,7 +42,7 @@ import scipy.fft
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe, size_text
 from vissim.errors import FieldTooSmallError, VissimInputError, VissimTypeError
-from vissim.optics.psf import PSF, compute_psf, suggested_size_px
+from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
 
 __all__ = ["blur_image", "image_kernel_psf", "BlurKernel", "PADDING_MODES", "border_mean", "psf_padding_width_px"]
 

@@ -11,11 +11,11 @@ axis).  Each cell carries the *average over the cell* of the generalised pupil
 
 Sampling cell averages makes the grid's discrete Fourier sum the transform of the pupil
 convolved with the cell: at angle ``a`` it carries the factor ``sinc(a_x step/lambda)
-sinc(a_y step/lambda)`` for every wavefront, which `vissim.optics.psf_wave` divides out.
+sinc(a_y step/lambda)`` for every wavefront, which `vissim.optics.psf.wave` divides out.
 What is left is aliasing of light from ``lambda/step`` away, kept out of the field by the
 sampling criterion (``docs/conventions.md``, "Pupil sampling").
 
-Orientation as in `vissim.optics.psf`: array columns run to the observer's right and rows
+Orientation as in `vissim.optics.psf.compute`: array columns run to the observer's right and rows
 down, so a cell at offsets (u, v) is the OSA pupil point (x, y) = (-u, -v)
 (`vissim.units.image_colrow_to_osa_xy`).
 """
@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
-from vissim.optics.workspace import scratch
-from vissim.optics.zernike import zernike_nm
+from vissim.optics.runtime.workspace import scratch
+from vissim.optics.pupil.zernike import zernike_nm
 from vissim.units import image_colrow_to_osa_xy, nm_to_um
 
 __all__ = ["PupilGrid", "pupil_grid", "generalised_pupil", "generalised_pupil_parts"]

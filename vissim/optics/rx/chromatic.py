@@ -41,7 +41,7 @@ def gaussian_band(center_nm: float, fwhm_nm: float, samples: int = 7) -> tuple[t
     """A Gaussian spectral weighting: ``samples`` wavelengths over +-FWHM and their weights.
 
     A simple stand-in for a colour channel's spectral sensitivity (e.g. FWHM 40 nm); pass the
-    result to `vissim.optics.psf.compute_psf` as ``wavelength_nm`` and ``weights``.
+    result to `vissim.optics.psf.compute.compute_psf` as ``wavelength_nm`` and ``weights``.
     """
     center, fwhm = float(center_nm), float(fwhm_nm)
     if not (math.isfinite(center) and math.isfinite(fwhm)) or fwhm <= 0:

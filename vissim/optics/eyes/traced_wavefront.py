@@ -26,7 +26,7 @@ Steps (`trace_eye_wavefront`):
    the plane (o: `field_direction`), so a slope g is seen at δ = J⁻¹ g, J = ∂(o_x, o_y)/∂(field)
    (1/cos θ tangentially at θ off the axis the pupil plane is normal to; 1.064 at 20°). A PSF of the
    front is in the slopes' angles; `field_map` (J⁻¹) takes it to visual angle
-   (`vissim.optics.spectral_wavefront.SpectralWavefront.field_map`, applied by `vissim.compute_psf`).
+   (`vissim.optics.pupil.spectral_wavefront.SpectralWavefront.field_map`, applied by `vissim.compute_psf`).
 
 Pupils: the entrance pupil (clinicians') or the iris (optical design's) may be given; the other
 follows from the real-ray pupil imaging on axis at the trace's wavelength
@@ -63,7 +63,7 @@ from vissim.optics.eyes.paraxial import (entrance_pupil_position_mm, iris_diamet
 from vissim.optics.eyes.spectacles import lens_surfaces, system_entrance_pupil_mm
 from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
-from vissim.optics.zernike import fit_zernike_um
+from vissim.optics.pupil.zernike import fit_zernike_um
 
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",

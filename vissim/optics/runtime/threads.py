@@ -1,8 +1,8 @@
 """CPU threads: how many cores this process may use, and OpenBLAS's own threads held at one.
 
-When vissim runs its own threads (`vissim.optics.depth.blur_depth` blurs layers and computes
+When vissim runs its own threads (`vissim.optics.depth.depth_map.blur_depth` blurs layers and computes
 their PSFs on one thread per core), OpenBLAS's threads inside each small matrix product
-(a wave PSF's, `vissim.optics.psf_wave`) only compete with them: measured on the
+(a wave PSF's, `vissim.optics.psf.wave`) only compete with them: measured on the
 project's 2-core machine under load, 24 depth-layer PSFs took 3.6 s with OpenBLAS's default two
 threads and 1.0 s with one.  `single_threaded_blas` sets OpenBLAS to one thread for a
 block and back after; it finds OpenBLAS among the loaded libraries (Linux) and does nothing

@@ -34,10 +34,10 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.chromatic import chromatic_difference_of_refraction_diopters
-from vissim.optics.pupil_rays import landing_arcmin, pupil_cell_centres
-from vissim.optics.spectral_wavefront import SpectralWavefront, wavelengths_for
-from vissim.optics.wavefront import Wavefront, same_wavelength
+from vissim.optics.rx.chromatic import chromatic_difference_of_refraction_diopters
+from vissim.optics.pupil.rays import landing_arcmin, pupil_cell_centres
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, wavelengths_for
+from vissim.optics.pupil.wavefront import Wavefront, same_wavelength
 from vissim.units import nm_to_mm, rad_to_arcmin
 
 __all__ = [
