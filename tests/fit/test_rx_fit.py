@@ -98,6 +98,7 @@ def test_an_image_without_structure_is_refused():
         _fit(flat, reference)
 
 
+@pytest.mark.slow  # a whole campaign or fit: run with -m slow
 def test_the_wrong_reference_gives_a_flagged_failed_fit_not_an_answer():
     image, _, _ = capture(TrialLens(1.0), letter="K")
     _, other_letter, _ = capture(None, letter="O")

@@ -3,6 +3,7 @@
 from dataclasses import dataclass
 
 import numpy as np
+import pytest
 from fake_bench import fake_render
 from provenance_walk import image_provenance, json_without_provenance
 
@@ -28,6 +29,7 @@ def render_with_provenance(spec):
     return FakeResult(pixels, "fake_variant", spec.bench.spp + 1, {"inputs": {"sampler": "fake"}, "renderer": "fake"})
 
 
+@pytest.mark.slow  # a whole campaign or fit: run with -m slow
 def test_every_image_of_a_run_has_provenance_with_its_renders(tmp_path, monkeypatch, capsys):
     path = tmp_path / "provenance.toml"
     path.write_text(CAMPAIGN)

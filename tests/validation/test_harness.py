@@ -101,6 +101,7 @@ def test_dask_local_cluster_gives_the_same_numbers(tiny, tmp_path):
     assert numbers(remote) == numbers(serial)
 
 
+@pytest.mark.slow  # a whole campaign or fit: run with -m slow
 def test_cli_validate_and_report(tiny, tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(runner, "render_any", fake_render)
     run_dir = tmp_path / "cli_run"

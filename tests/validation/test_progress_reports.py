@@ -6,6 +6,8 @@ counts rise by one from 1 to its total, and nothing is printed by the library.  
 
 import io
 
+import pytest
+
 from fake_bench import fake_render
 from test_harness import TINY
 
@@ -23,6 +25,7 @@ def stages(calls):
     return done, totals
 
 
+@pytest.mark.slow  # a whole campaign or fit: run with -m slow
 def test_a_campaign_reports_each_render_item_and_report_step_once_in_order(campaign_file, tmp_path, capsys):
     calls = []
     run_dir = tmp_path / "run"

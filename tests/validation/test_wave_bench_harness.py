@@ -147,6 +147,7 @@ def test_a_rerun_reuses_every_item(run):
     assert numbers() == before
 
 
+@pytest.mark.slow  # a whole campaign or fit: run with -m slow
 def test_wave_truth_false_skips_the_wave_bench_and_keys_the_items_apart(run, tmp_path):
     tiny, _ = run
     off = write_campaign(tmp_path, TINY.format(extra="wave_truth = false"))
