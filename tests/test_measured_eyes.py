@@ -246,3 +246,35 @@ def test_the_eye_bench_refuses_a_measured_eye_for_now():
     from vissim.bench.eye.bench import EyeBench
     with pytest.raises(VissimInputError, match="measured eye"):
         EyeBench(build_eye("polans-2015:1", pupil_mm=3.0))
+
+
+# -- the data's pupil is normal to the measuring beam -------------------------------------------------------
+
+
+def test_an_oblique_measured_eyes_refraction_is_the_datas_own(capsys):
+    # The data are over the plane normal to the beam, so no oblique stretch applies: J0, J45 and M are the
+    # textbook ones of the coefficients (Thibos et al. 2004: M = -4√3 c20 / r², J0 = -2√6 c22 / r²,
+    # J45 = -2√6 c2-2 / r²), carried from the pupil to the corneal vertex (3 mm / cos 30°: under 4 % at 4 D
+    # and less; a stretch of the pupil would make J0 1/cos² 30° = 1.33 times larger).
+    data = raw_um("jaeken-artal-2012", 17, "right", 30.0)
+    record = eye_json(capsys, "jaeken-artal-2012:17:right", "--pupil-mm", "4", "--field-deg", "30,0",
+                      "--wavelength-nm", "780")
+    paraxial_free = record["refraction"]["minimum_rms"]
+    r2 = 2.0 ** 2
+    expected = {"M": -4 * math.sqrt(3) * data[(2, 0)] / r2, "J0": -2 * math.sqrt(6) * data[(2, 2)] / r2,
+                "J45": -2 * math.sqrt(6) * data[(2, -2)] / r2}
+    for key, value in expected.items():
+        assert paraxial_free[key] == pytest.approx(value, rel=0.04, abs=0.02), key
+    assert abs(expected["J0"]) > 1.0
+
+
+def test_slopes_over_the_beams_plane_go_to_visual_angle_by_the_rotation_they_are():
+    # Turning the beam by δ within its own normal plane moves field x by δ and field y by δ / cos θ (vissim's
+    # field angles are atan(x/z), atan(y/z)); a horizontal field of θ: diag(1, 1 / cos θ).
+    from vissim.optics.eyes.measured.measured_eye import beam_field_map
+    from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+    base = build_eye(BASE_EYE_MODEL, pupil_mm=4.0)
+    for theta in (10.0, 30.0):
+        trace = trace_eye_wavefront(base.optics, 555.0, (theta, 0.0), pupil_mm=4.0)
+        np.testing.assert_allclose(beam_field_map(trace), np.diag([1.0, 1.0 / math.cos(math.radians(theta))]),
+                                   atol=1e-9)

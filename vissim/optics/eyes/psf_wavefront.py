@@ -52,7 +52,7 @@ from vissim.checks import MAX_FIELD_DEG
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
-from vissim.optics.eyes.measured.measured_eye import measured_trace
+from vissim.optics.eyes.measured.measured_eye import beam_field_map, measured_trace
 from vissim.optics.eyes.refraction import chief_ray_stretch
 from vissim.optics.eyes.traced_wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
 from vissim.optics.rx.prescription import Prescription
@@ -222,15 +222,16 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     jacobian = (None if wavelengths == [reference] else
                 retinal_jacobian_mm_per_deg(eye, reference, field_deg, iris_mm=anchor.iris_mm, lenses=lenses))
     common = min(t.entrance_pupil_mm for t in traced)
+    slopes_to_angle = np.asarray(anchor.field_map) if measured is None else beam_field_map(anchor)
     fronts = []
     for t in traced:
         front = _own_front(t if measured is None else _measured(t, measured, eye, samples, traced))
         if t is not anchor:  # the tilt whose slope the field map sends to the chief rays' visual-angle offset
-            offset_mrad = np.linalg.solve(np.asarray(anchor.field_map), deg_to_mrad(chromatic_offset_deg(t, anchor, jacobian)))
+            offset_mrad = np.linalg.solve(slopes_to_angle, deg_to_mrad(chromatic_offset_deg(t, anchor, jacobian)))
             front = front + Wavefront.tilt(offset_mrad, front.pupil_diameter_mm)
         fronts.append(front if front.pupil_diameter_mm == common else front.rescaled(common))
     field = tuple(float(v) for v in field_deg)
     return SpectralWavefront(tuple(wavelengths), tuple(fronts), reference,
                              f"{eye.name} traced at each wavelength, field ({field[0]:g}, {field[1]:g}) deg, "
                              f"accommodation {eye.accommodation_diopters:g} D; tilt: each chief ray's image point "
-                             f"seen from {reference:g} nm's", anchor.field_map)
+                             f"seen from {reference:g} nm's", tuple(tuple(float(v) for v in row) for row in slopes_to_angle))

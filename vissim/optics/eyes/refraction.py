@@ -55,10 +55,13 @@ from vissim.optics.pupil.zernike import zernike_norm
 from vissim.units import mm_to_m
 
 __all__ = ["paraxial_rho2_coefficient", "paraxial_prescription", "minimum_rms_prescription", "transfer_prescription",
-           "chief_ray_stretch", "along_chief_ray", "PUPIL_DEFINITION", "EyeRefraction", "eye_refraction"]
+           "chief_ray_stretch", "along_chief_ray", "PUPIL_DEFINITION", "BEAM_PLANE", "EyeRefraction", "eye_refraction"]
 
 #: The pupil the refraction is over (module doc).
 PUPIL_DEFINITION = "entrance pupil seen along the chief ray"
+#: An `EyeWavefront`'s ``pupil_plane`` when its coefficients are already over the plane normal to the chief ray
+#: (a measured eye's: the wavefront sensor's), not over the entrance pupil's plane.
+BEAM_PLANE = "normal to the chief ray"
 
 
 def paraxial_rho2_coefficient(n: int, m: int) -> float:
@@ -144,6 +147,11 @@ def eye_refraction(wavefront, vertex_distance_mm: float | None = None) -> EyeRef
     plane = "corneal vertex" if vertex_distance_mm is None else "spectacle plane"
     distance = wavefront.entrance_pupil_position_mm + vertex
     pupil, chief = wavefront.entrance_pupil_mm, wavefront.chief_direction
-    return EyeRefraction(plane, vertex, pupil,
-                         along_chief_ray(paraxial_prescription(wavefront.zernike_um, pupil), chief, distance),
-                         along_chief_ray(minimum_rms_prescription(wavefront.zernike_um, pupil), chief, distance))
+    if wavefront.pupil_plane == BEAM_PLANE:  # already seen along the chief ray: carried along it only
+        def seen(rx):
+            return transfer_prescription(rx, distance / abs(float(chief[2])))
+    else:
+        def seen(rx):
+            return along_chief_ray(rx, chief, distance)
+    return EyeRefraction(plane, vertex, pupil, seen(paraxial_prescription(wavefront.zernike_um, pupil)),
+                         seen(minimum_rms_prescription(wavefront.zernike_um, pupil)))

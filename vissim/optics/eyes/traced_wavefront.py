@@ -269,6 +269,8 @@ class EyeWavefront:
     the front's slopes to visual angle (`field_map`; the identity on the axis of a model without a visual axis).
     ``chief_direction``: the unit vector towards the field point, the chief ray's in object space, in the
     optical-axis frame (`field_direction`; the refraction's pupil is seen along it, `refraction` module doc).
+    ``pupil_plane``: the plane the coefficients' pupil lies in: the entrance pupil's (normal to the optical
+    axis), or `refraction.BEAM_PLANE` (normal to the chief ray: a measured eye's data).
     """
 
     model: str
@@ -291,6 +293,7 @@ class EyeWavefront:
     field_axis: str = "optical axis"
     field_map: tuple = ((1.0, 0.0), (0.0, 1.0))
     chief_direction: tuple = (0.0, 0.0, 1.0)
+    pupil_plane: str = "entrance pupil"
 
     @property
     def rms_um(self) -> float:

@@ -20,6 +20,12 @@ rest. Its monochromatic wavefront at a measured field is the measured one:
   defocus is at that wavelength: the data's foveal defocus is about 0.76 D more hyperopic than in the visible.
   Polans et al.'s defocus (j = 4) already had −0.8 D of chromatic difference applied (ISETBio's note) to bring it
   to the visible, 555 nm here; the base eye's traced difference between 780 and 555 nm is −0.76 D.
+* **The pupil's plane**: the data are over a circle in the plane normal to the measuring beam (the
+  wavefront sensor's), not in the entrance pupil's plane as a traced schematic eye's are. A measured eye's
+  front stays in the data's plane (`BEAM_PLANE`, the `EyeWavefront.pupil_plane`): its refraction takes no
+  oblique stretch (`refraction.eye_refraction`), its slopes go to visual angle by `beam_field_map`, the base
+  eye's tilt and ray points are carried into that plane, and its pupil at every field is the circle the data
+  define (the entrance pupil's oblique foreshortening, cos θ, is the instrument's, already in the data).
 * **Lenses** in front of a measured eye are not traced yet (refused): their effect is given as the light's
   vergence at the entrance pupil, as a campaign's trial lens is for the schematic eye.
 """
@@ -34,11 +40,12 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.measured.datasets import DATASET_NAMES, load_dataset
+from vissim.optics.eyes.refraction import BEAM_PLANE, chief_ray_stretch
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.optics.pupil.zernike import ansi_j_to_nm
 
 __all__ = ["MeasuredWavefront", "parse_measured_eye", "is_measured_name", "BASE_EYE_MODEL",
-           "MEASURING_WAVELENGTH_NM", "DEFOCUS_WAVELENGTH_NM", "measured_trace"]
+           "MEASURING_WAVELENGTH_NM", "DEFOCUS_WAVELENGTH_NM", "measured_trace", "beam_field_map"]
 
 #: The schematic eye a measured eye is built on (module doc).
 BASE_EYE_MODEL = "navarro-1985"
@@ -109,19 +116,31 @@ def parse_measured_eye(name: str) -> MeasuredWavefront:
     return MeasuredWavefront(match["dataset"], subject, eye or "right")
 
 
+def beam_field_map(trace) -> np.ndarray:
+    """The 2 x 2 map from slopes over the plane normal to the chief ray to visual angle: the traced front's
+    ``field_map`` (from slopes over the entrance-pupil plane) after the stretch that carries those slopes over
+    (`refraction.chief_ray_stretch`; the identity on axis)."""
+    return np.asarray(trace.field_map, dtype=float) @ np.linalg.inv(chief_ray_stretch(trace.chief_direction))
+
+
 def measured_trace(trace, measured: MeasuredWavefront, defocus_reference):
     """The base eye's `EyeWavefront` ``trace`` (no lenses in front) with its own aberrations replaced by
     ``measured``'s (module doc); ``defocus_reference``: the base eye traced at ``measured.defocus_wavelength_nm``,
-    same field and pupil. The rays' OPD is the new front's at their pupil points."""
+    same field and pupil. The front is over the plane normal to the chief ray (`BEAM_PLANE`), as the data are."""
     if trace.lenses is not None:
         raise VissimInputError(f"{measured.name} is a measured eye: lenses in front of it are not traced yet; give "
                                "their effect as the light's vergence instead")
     front = measured.front(trace.field_deg, trace.entrance_pupil_mm).coefficients_um
     shift = trace.zernike_um.get((2, 0), 0.0) - defocus_reference.zernike_um.get((2, 0), 0.0)
-    zernike = {key: value for key, value in trace.zernike_um.items() if key[0] == 1}  # the chief ray's tilt
-    for key in set(front) | {(2, 0)}:  # plus the data's, whose tilt over a smaller pupil is real (coma's)
+    stretch = chief_ray_stretch(trace.chief_direction)  # slopes over the pupil's plane -> over the beam's
+    tilt = stretch @ np.array([trace.zernike_um.get((1, 1), 0.0), trace.zernike_um.get((1, -1), 0.0)])
+    zernike = {(1, 1): float(tilt[0]), (1, -1): float(tilt[1])}  # the chief ray's, plus the data's over the pupil
+    for key in set(front) | {(2, 0)}:
         if key[0] >= 1:
             zernike[key] = zernike.get(key, 0.0) + front.get(key, 0.0) + (shift if key == (2, 0) else 0.0)
     new = Wavefront(zernike, trace.entrance_pupil_mm, trace.wavelength_nm)
-    opd = np.asarray(new.opd_um(np.asarray(trace.x_mm), np.asarray(trace.y_mm)), dtype=float)
-    return dataclasses.replace(trace, model=measured.name, zernike_um=zernike, opd_um=opd, fit_residual_rms_um=0.0)
+    x_mm, y_mm = np.linalg.inv(stretch) @ np.stack([np.asarray(trace.x_mm, float), np.asarray(trace.y_mm, float)])
+    opd = np.asarray(new.opd_um(x_mm, y_mm), dtype=float)
+    return dataclasses.replace(trace, model=measured.name, zernike_um=zernike, x_mm=x_mm, y_mm=y_mm, opd_um=opd,
+                               fit_residual_rms_um=0.0, pupil_plane=BEAM_PLANE,
+                               field_map=tuple(tuple(float(v) for v in row) for row in beam_field_map(trace)))
