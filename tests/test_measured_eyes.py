@@ -242,6 +242,17 @@ def test_the_command_line_refuses_in_one_line(capsys):
     assert "has subjects 1-10, got 99" in capsys.readouterr().err
 
 
+def test_a_plano_prescription_is_the_eye_as_measured(tmp_path):
+    assert build_eye("polans-2015:4", pupil_mm=3.0, rx="plano").rx is None
+    from vissim.imageio import write_image
+    from vissim.provenance import make_provenance
+    image, depth = tmp_path / "in.exr", tmp_path / "depth.exr"
+    write_image(image, np.full((32, 32), 0.5, np.float32), provenance=make_provenance(command="t", arcmin_per_px=1.0))
+    write_image(depth, np.full((32, 32), 2.0, np.float32), provenance=make_provenance(command="t", arcmin_per_px=1.0))
+    assert main(["blur-depth", str(image), str(depth), "-o", str(tmp_path / "out.exr"), "--rx", "0",
+                 "--pupil-mm", "3", "--eye-model", "polans-2015:4", "--field-deg", "10,5"]) == 0
+
+
 def test_the_eye_bench_refuses_a_measured_eye_for_now():
     from vissim.bench.eye.bench import EyeBench
     with pytest.raises(VissimInputError, match="measured eye"):

@@ -265,6 +265,8 @@ def _measured_eye(measured: MeasuredWavefront, accommodation_diopters, pupil_mm,
                                f"got {accommodation_diopters!r} D")
     if surfaces:
         raise VissimInputError(f"{measured.name} is a measured eye: its base eye's surfaces cannot change")
+    if rx is not None and not any(prescription_from(rx).power_vector()):
+        rx = None  # plano: the eye as measured (blur-depth's --rx 0)
     return Eye(eye_model(BASE_EYE_MODEL), pupil_mm, iris_mm, rx, vertex_mm, wavelength_nm, measured)
 
 
