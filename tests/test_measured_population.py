@@ -1,0 +1,93 @@
+"""Populations of measured eyes: each eye's numbers are the single eye's, the filter reads the data, the
+summary is the quantiles of the eyes.
+
+Oracles: `eye_wavefront` of each eye built alone (the population traces the base eye once per condition),
+the raw data file's defocus with the base eye's traced chromatic shift and Thibos et al.'s M = -4√3 c20 / r²
+(2004), numpy's quantiles.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+import pytest
+
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.eye import build_eye
+from vissim.optics.eyes.measured import datasets
+from vissim.optics.eyes.measured.population import (PopulationCondition, evaluate_population,
+                                                    population_quantiles, select_eyes)
+from vissim.optics.eyes.psf_wavefront import eye_wavefront
+from vissim.optics.psf.compute import strehl_ratio
+from vissim.optics.pupil.wavefront import Wavefront
+
+EYES = select_eyes("jaeken-artal-2012", subjects=[3, 17, 40], eyes=["right", "left"])
+
+
+def test_each_eye_is_the_eye_alone():
+    condition = PopulationCondition(3.0, (10.0, 0.0), "sphero-cylinder", 555.0)
+    for result in evaluate_population(EYES, [condition]):
+        alone = eye_wavefront(build_eye(result.eye, pupil_mm=3.0), wavelength_nm=555.0, field_deg=(10.0, 0.0))
+        higher = {k: v for k, v in alone.coefficients_um.items() if k[0] >= 3}
+        assert result.strehl == pytest.approx(strehl_ratio(Wavefront(higher, 3.0, 555.0), wavelength_nm=555.0),
+                                              rel=1e-9)
+        c20 = alone.coefficients_um[(2, 0)]
+        assert result.m_diopters == pytest.approx(-4 * math.sqrt(3) * c20 / 1.5 ** 2, rel=1e-9)
+        assert result.higher_order_rms_um == pytest.approx(math.sqrt(sum(v * v for v in higher.values())), rel=1e-9)
+
+
+def test_uncorrected_eyes_see_worse_than_corrected_ones():
+    frequencies = [5.0, 10.0, 20.0]
+    plain, corrected = (evaluate_population(EYES, [PopulationCondition(4.0, correction=c)], frequencies)
+                        for c in ("uncorrected", "sphero-cylinder"))
+    for a, b in zip(plain, corrected):
+        assert a.eye == b.eye and a.strehl <= b.strehl + 1e-12
+        assert np.all(b.mtf <= 1.0) and b.mtf[0] > b.mtf[-1]
+
+
+def test_the_spherical_equivalent_filter_reads_the_data():
+    raw = np.load(datasets.DATA_DIR / "jaeken-artal-2012.npz")
+    centre = list(raw["field_deg"]).index(0.0)
+    base = build_eye("navarro-1985", pupil_mm=4.0)
+    shift = (eye_wavefront(base, wavelength_nm=555.0).coefficients_um[(2, 0)]
+             - eye_wavefront(base, wavelength_nm=780.0).coefficients_um[(2, 0)])
+    subjects = list(range(1, 31))
+    kept = {e.subject for e in select_eyes("jaeken-artal-2012", subjects=subjects, eyes=["right"],
+                                           foveal_se_within_diopters=(-0.5, 0.5))}
+    expected = set()
+    for s in subjects:
+        c20 = raw["zernike_um"][s - 1, 0, centre, 4]
+        if not np.isnan(c20) and -0.5 <= -4 * math.sqrt(3) * (c20 + shift) / 2.0 ** 2 <= 0.5:
+            expected.add(s)
+    assert kept == expected and 0 < len(kept) < len(subjects)
+
+
+def test_the_summary_is_the_quantiles_across_eyes():
+    condition = PopulationCondition(3.0)
+    results = evaluate_population(EYES, [condition], [10.0, 30.0])
+    table = population_quantiles(results, quantiles=(0.25, 0.5))[condition.label]
+    assert table["count"] == len(EYES)
+    np.testing.assert_allclose(table["strehl"], np.quantile([r.strehl for r in results], [0.25, 0.5]))
+    np.testing.assert_allclose(table["mtf"][1], np.median([r.mtf for r in results], axis=0))
+
+
+def test_eyes_not_measured_at_a_field_are_skipped_and_named(caplog):
+    eyes = select_eyes("jaeken-artal-2012", subjects=[17], eyes=["right", "left"])
+    with caplog.at_level(logging.INFO, logger="vissim.optics.eyes.measured.population"):
+        results = evaluate_population(eyes, [PopulationCondition(3.0, (-15.0, 0.0))])
+    assert [r.eye for r in results] == ["jaeken-artal-2012:17:left"]
+    assert "jaeken-artal-2012:17:right" in caplog.text
+
+
+@pytest.mark.parametrize("kwargs, words", [({"correction": "contact lens"}, "one of uncorrected, sphero-cylinder"),
+                                           ({"wavelength_nm": 0.0}, "wavelength")])
+def test_bad_conditions_are_refused(kwargs, words):
+    with pytest.raises(VissimInputError, match=words):
+        PopulationCondition(3.0, **kwargs)
+
+
+def test_a_pupil_larger_than_the_datas_is_refused_not_skipped():
+    with pytest.raises(VissimInputError, match="measured over a 4 mm pupil"):
+        evaluate_population(EYES[:1], [PopulationCondition(5.0)])

@@ -1,0 +1,177 @@
+"""Populations of measured eyes: many eyes under the same conditions, each eye's optics and the spread of them.
+
+A population is a set of measured eyes (`select_eyes`: all of a dataset's eyes, a list, or those whose foveal
+spherical equivalent lies within a range) crossed with conditions (`PopulationCondition`: pupil, field,
+wavelength and a correction state). For each eye and condition `evaluate_population` gives the MTF at chosen
+frequencies, the Strehl ratio, the eye's own refraction (M, J0, J45 over the pupil) and the RMS of its orders
+3 and up; `population_quantiles` summarises them across the eyes.
+
+* **Correction states**: ``"uncorrected"`` (the eye as measured, tilt aside); ``"sphero-cylinder"``: the
+  best spectacle correction in the minimum-RMS sense, orders 0-2 removed (what a sphero-cylinder can correct),
+  the higher orders left. Lenses at a vertex distance are not modelled here.
+* **One trace per condition**: the base eye is traced once per condition (field, pupil, wavelength), and
+  every eye's front is made from that trace (`measured_eye.measured_trace`), the same front as
+  `vissim.optics.eyes.psf_wavefront.eye_wavefront` gives for that eye alone (tested).
+* **MTF**: `vissim.optics.eyes.report.eye_mtf`: radial (ring mean) at the fovea; off axis, the mean of the
+  tangential and sagittal MTFs.
+* An eye with no measurement at a condition's field is skipped for that condition (its name is logged).
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
+from vissim.optics.eyes.measured.datasets import load_dataset
+from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL, MeasuredWavefront, measured_trace
+from vissim.optics.eyes.models import eye_model
+from vissim.optics.eyes.refraction import minimum_rms_prescription
+from vissim.optics.eyes.report import eye_mtf
+from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.psf.compute import strehl_ratio
+from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
+from vissim.optics.pupil.wavefront import Wavefront
+
+__all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "evaluate_population",
+           "population_quantiles", "QUANTILES"]
+
+log = logging.getLogger(__name__)
+
+#: The correction states (module doc).
+CORRECTIONS = ("uncorrected", "sphero-cylinder")
+#: The quantiles `population_quantiles` reports by default.
+QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
+
+
+@dataclass(frozen=True)
+class PopulationCondition:
+    """One condition every eye of a population is evaluated under (module doc)."""
+
+    pupil_mm: float
+    field_deg: tuple[float, float] = (0.0, 0.0)
+    correction: str = "sphero-cylinder"
+    wavelength_nm: float = PHOTOPIC_FOCUS_NM  # V(λ)'s peak
+
+    def __post_init__(self) -> None:
+        if self.correction not in CORRECTIONS:
+            raise VissimInputError(f"a population's correction is one of {', '.join(CORRECTIONS)}, "
+                                   f"got {self.correction!r}")
+        object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm))
+        object.__setattr__(self, "field_deg", tuple(float(v) for v in self.field_deg))
+
+    @property
+    def label(self) -> str:
+        x, y = self.field_deg
+        return (f"{self.pupil_mm:g} mm, field {x:g},{y:g} deg, {self.wavelength_nm:g} nm, "
+                f"{self.correction}")
+
+
+@dataclass(frozen=True)
+class EyeResult:
+    """One eye under one condition: MTF (at the population's frequencies), Strehl ratio, the eye's own
+    refraction over the pupil (minimum RMS, dioptres) and the RMS of orders 3 and up (µm)."""
+
+    eye: str
+    condition: PopulationCondition
+    mtf: np.ndarray
+    strehl: float
+    m_diopters: float
+    j0_diopters: float
+    j45_diopters: float
+    higher_order_rms_um: float
+
+
+def select_eyes(dataset: str, *, subjects=None, eyes=None, foveal_se_within_diopters=None,
+                se_pupil_mm: float | None = None,
+                se_wavelength_nm: float = PHOTOPIC_FOCUS_NM) -> tuple[MeasuredWavefront, ...]:
+    """The measured eyes of ``dataset``: all, or the ``subjects`` (numbers) and ``eyes`` (``"right"``,
+    ``"left"``) given, and of those the ones whose foveal spherical equivalent (minimum RMS over
+    ``se_pupil_mm``, default the data's pupil, in ``se_wavelength_nm`` light) lies within
+    ``foveal_se_within_diopters`` (low, high)."""
+    data = load_dataset(dataset)
+    se_pupil_mm = data.pupil_mm if se_pupil_mm is None else se_pupil_mm
+    chosen_subjects = data.subjects if subjects is None else tuple(int(s) for s in subjects)
+    chosen_eyes = data.eyes if eyes is None else tuple(eyes)
+    found = tuple(MeasuredWavefront(dataset, s, e) for s in chosen_subjects for e in chosen_eyes)
+    if foveal_se_within_diopters is None:
+        return found
+    low, high = (float(v) for v in foveal_se_within_diopters)
+    if not low <= high:
+        raise VissimInputError(f"a spherical-equivalent range runs low to high, got {low:g} to {high:g} D")
+    condition = PopulationCondition(se_pupil_mm, (0.0, 0.0), "uncorrected", se_wavelength_nm)
+    kept = [r.eye for r in evaluate_population(found, [condition], ()) if low <= r.m_diopters <= high]
+    return tuple(eye for eye in found if eye.name in set(kept))
+
+
+@functools.lru_cache(maxsize=64)
+def _base_traces(condition: PopulationCondition, defocus_wavelength_nm: float):
+    """The base eye traced once for ``condition``, and at the wavelength a dataset's defocus refers to."""
+    base = eye_model(BASE_EYE_MODEL)
+    trace = trace_eye_wavefront(base, condition.wavelength_nm, condition.field_deg, pupil_mm=condition.pupil_mm)
+    reference = trace_eye_wavefront(base, defocus_wavelength_nm, condition.field_deg, pupil_mm=condition.pupil_mm)
+    return trace, reference
+
+
+def _front(eye: MeasuredWavefront, condition: PopulationCondition):
+    """The eye's orders 2 and up under ``condition`` (µm over its pupil), and its slopes-to-angle map."""
+    trace, reference = _base_traces(condition, eye.defocus_wavelength_nm)
+    traced = measured_trace(trace, eye, reference)
+    own = {k: v for k, v in traced.zernike_um.items() if k[0] >= 2}
+    return Wavefront(own, traced.entrance_pupil_mm, condition.wavelength_nm), traced.field_map
+
+
+def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
+    front, field_map = _front(eye, condition)
+    pupil, nm = front.pupil_diameter_mm, condition.wavelength_nm
+    m, j0, j45 = minimum_rms_prescription(dict(front.coefficients_um), pupil).power_vector()
+    higher = {k: v for k, v in front.coefficients_um.items() if k[0] >= 3}
+    seen = front if condition.correction == "uncorrected" else Wavefront(higher, pupil, nm)
+    mtf = np.zeros(0)
+    if len(frequencies):  # in visual angle: the front with its map (off axis)
+        mapped = SpectralWavefront((nm,), (seen,), nm, eye.name, field_map)
+        curves = eye_mtf(mapped, nm, frequencies, condition.field_deg)
+        mtf = np.mean([curves[k] for k in curves], axis=0)
+    rms = math.sqrt(sum(v * v for v in higher.values()))
+    return EyeResult(eye.name, condition, mtf, float(strehl_ratio(seen, wavelength_nm=condition.wavelength_nm)),
+                     float(m), float(j0), float(j45), rms)
+
+
+def evaluate_population(eyes, conditions, frequencies_cyc_per_deg=()) -> list[EyeResult]:
+    """Every eye of ``eyes`` (`MeasuredWavefront`) under every condition of ``conditions``, in that order
+    (conditions outer); an eye not measured at a condition's field is skipped (logged)."""
+    frequencies = np.asarray(frequencies_cyc_per_deg, dtype=float)
+    results = []
+    for condition in conditions:
+        skipped = []
+        for eye in eyes:
+            try:
+                results.append(_result(eye, condition, frequencies))
+            except VissimInputError as error:
+                if "no measurement at field" not in str(error):
+                    raise
+                skipped.append(eye.name)
+        if skipped:
+            log.info("%s: %d eye(s) not measured there, skipped: %s", condition.label, len(skipped),
+                     ", ".join(skipped))
+    return results
+
+
+def population_quantiles(results, quantiles=QUANTILES) -> dict:
+    """{condition label: {quantity: array (one row per quantile; MTF: quantile x frequency)}} across the eyes."""
+    summary: dict = {}
+    for condition in dict.fromkeys(r.condition for r in results):
+        rows = [r for r in results if r.condition == condition]
+        table = {"count": len(rows)}
+        for name in ("strehl", "m_diopters", "j0_diopters", "j45_diopters", "higher_order_rms_um"):
+            table[name] = np.quantile([getattr(r, name) for r in rows], quantiles)
+        if rows and rows[0].mtf.size:
+            table["mtf"] = np.quantile(np.stack([r.mtf for r in rows]), quantiles, axis=0)
+        summary[condition.label] = table
+    return summary
