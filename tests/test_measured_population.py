@@ -91,3 +91,19 @@ def test_bad_conditions_are_refused(kwargs, words):
 def test_a_pupil_larger_than_the_datas_is_refused_not_skipped():
     with pytest.raises(VissimInputError, match="measured over a 4 mm pupil"):
         evaluate_population(EYES[:1], [PopulationCondition(5.0)])
+
+
+def _numbers(results):
+    return [(r.eye, r.condition, r.strehl, r.m_diopters, tuple(r.mtf)) for r in results]
+
+
+def test_processes_and_a_dask_scheduler_give_the_same_numbers():
+    distributed = pytest.importorskip("distributed")
+    conditions = [PopulationCondition(3.0), PopulationCondition(4.0, (10.0, 0.0), "uncorrected")]
+    eyes = EYES[:3]
+    serial = evaluate_population(eyes, conditions, [10.0, 30.0])
+    pooled = evaluate_population(eyes, conditions, [10.0, 30.0], workers=2, chunk_eyes=2)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            remote = evaluate_population(eyes, conditions, [10.0, 30.0], client=client, chunk_eyes=2)
+    assert _numbers(pooled) == _numbers(serial) == _numbers(remote)

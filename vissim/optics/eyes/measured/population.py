@@ -46,6 +46,8 @@ log = logging.getLogger(__name__)
 
 #: The correction states (module doc).
 CORRECTIONS = ("uncorrected", "sphero-cylinder")
+#: Eyes per task when a population is spread over processes or a Dask cluster.
+CHUNK_EYES = 20
 #: The quantiles `population_quantiles` reports by default.
 QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 
@@ -143,20 +145,53 @@ def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies)
                      float(m), float(j0), float(j45), rms)
 
 
-def evaluate_population(eyes, conditions, frequencies_cyc_per_deg=()) -> list[EyeResult]:
+def _evaluate_chunk(condition: PopulationCondition, identities: tuple, frequencies: np.ndarray):
+    """(results, names skipped) of the eyes ``identities`` ((dataset, subject, eye) each) under ``condition``;
+    a task's whole input: each process reads the package's data itself (`load_dataset`, once per process)."""
+    results, skipped = [], []
+    for dataset, subject, side in identities:
+        eye = MeasuredWavefront(dataset, subject, side)
+        try:
+            results.append(_result(eye, condition, frequencies))
+        except VissimInputError as error:
+            if "no measurement at field" not in str(error):
+                raise
+            skipped.append(eye.name)
+    return results, skipped
+
+
+def evaluate_population(eyes, conditions, frequencies_cyc_per_deg=(), *, workers: int = 1, client=None,
+                        chunk_eyes: int = CHUNK_EYES) -> list[EyeResult]:
     """Every eye of ``eyes`` (`MeasuredWavefront`) under every condition of ``conditions``, in that order
-    (conditions outer); an eye not measured at a condition's field is skipped (logged)."""
+    (conditions outer); an eye not measured at a condition's field is skipped (logged).
+
+    The work is split into tasks of ``chunk_eyes`` eyes under one condition, each named by its eyes' identities
+    only (no data travels): run here (``workers=1``), in ``workers`` processes, or on a Dask ``client``
+    (`dask.distributed.Client`, or anything with its ``map`` and ``gather``). The numbers do not depend on where."""
     frequencies = np.asarray(frequencies_cyc_per_deg, dtype=float)
+    conditions = list(conditions)
+    identities = [(e.dataset, e.subject, e.eye) for e in eyes]
+    tasks = [(c, tuple(identities[i:i + chunk_eyes])) for c in conditions
+             for i in range(0, len(identities), chunk_eyes)]
+    if client is not None:
+        futures = client.map(_evaluate_chunk, [t[0] for t in tasks], [t[1] for t in tasks],
+                             [frequencies] * len(tasks), pure=False)
+        done = client.gather(futures)
+    elif workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            done = list(pool.map(_evaluate_chunk, [t[0] for t in tasks], [t[1] for t in tasks],
+                                 [frequencies] * len(tasks)))
+    else:
+        done = [_evaluate_chunk(c, ids, frequencies) for c, ids in tasks]
     results = []
     for condition in conditions:
         skipped = []
-        for eye in eyes:
-            try:
-                results.append(_result(eye, condition, frequencies))
-            except VissimInputError as error:
-                if "no measurement at field" not in str(error):
-                    raise
-                skipped.append(eye.name)
+        for (task_condition, _), (found, missed) in zip(tasks, done):
+            if task_condition == condition:
+                results.extend(found)
+                skipped.extend(missed)
         if skipped:
             log.info("%s: %d eye(s) not measured there, skipped: %s", condition.label, len(skipped),
                      ", ".join(skipped))
