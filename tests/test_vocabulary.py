@@ -19,6 +19,7 @@ from vissim.checks import (DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_
 from vissim.cli import build_parser, main
 from vissim.errors import VissimInputError
 from vissim.imageio import write_image
+from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
 from vissim.optics.rx.glass import D_LINE_NM
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.rx.trial_lens import EYE_VERTEX_DISTANCE_MM
@@ -100,6 +101,8 @@ def test_every_wavelength_default_is_the_one_constant():
             seen.append(path)
             if path in (("render", "bench"), ("bench", "wavefront")):
                 assert action.default in (None, D_LINE_NM) and "the d line" in action.help
+            elif path == ("population",):  # the published human MTFs' light, V(λ)'s peak
+                assert action.default is None and f"default {PHOTOPIC_FOCUS_NM:g}: V(λ)'s peak" in action.help
             elif path == ("eye",):
                 assert action.default is None and "the model's reference wavelength" in action.help
             elif action.default is None:

@@ -99,7 +99,7 @@ CASES = {"blur": blur, "blur-depth": blur_depth, "fit-rx": fit_rx, "render bench
          "render atv": render_atv, "render depth": render_depth, "render eye": render_eye, "validate": validate, "atv analyze": atv_analyze}
 #: Commands with an output but no input file (nothing to clash with); the outputs of chart/psf are
 #: checked against each other by the output transaction (tests/cli/test_output_safety.py).
-NO_INPUT_FILES = {"psf", "chart", "demo", "atv simulate", "atv run"}
+NO_INPUT_FILES = {"psf", "chart", "demo", "atv simulate", "atv run", "population"}
 HAS_OVERWRITE = {"blur", "blur-depth", "fit-rx", "render bench", "render atv", "render depth", "atv analyze",
                  "render eye"}
 

@@ -33,6 +33,7 @@ COMMAND_MODULES = (
     "vissim.cli.rx",
     "vissim.cli.trial_lens",
     "vissim.cli.eye",
+    "vissim.cli.population",
     "vissim.cli.fit_rx",
     "vissim.cli.psf",
     "vissim.cli.chart",

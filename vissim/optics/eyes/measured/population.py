@@ -40,7 +40,7 @@ from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "evaluate_population",
-           "population_quantiles", "QUANTILES"]
+           "population_quantiles", "schematic_mtf", "QUANTILES", "CHUNK_EYES"]
 
 log = logging.getLogger(__name__)
 
@@ -129,17 +129,34 @@ def _front(eye: MeasuredWavefront, condition: PopulationCondition):
     return Wavefront(own, traced.entrance_pupil_mm, condition.wavelength_nm), traced.field_map
 
 
+def _seen_mtf(front: Wavefront, field_map, condition: PopulationCondition, frequencies, name: str) -> np.ndarray:
+    """The MTF (module doc) of ``front``'s orders the correction leaves, in visual angle (``field_map``)."""
+    lowest = 2 if condition.correction == "uncorrected" else 3
+    nm = condition.wavelength_nm
+    seen = Wavefront({k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}, front.pupil_diameter_mm, nm)
+    curves = eye_mtf(SpectralWavefront((nm,), (seen,), nm, name, field_map), nm, frequencies, condition.field_deg)
+    return np.mean([curves[k] for k in curves], axis=0)
+
+
+def schematic_mtf(model: str, condition: PopulationCondition, frequencies_cyc_per_deg) -> np.ndarray:
+    """The MTF of the schematic eye ``model`` (relaxed, its entrance pupil the condition's) under ``condition``,
+    as a population's eyes are taken (module doc), for the same comparison."""
+    from vissim.optics.eyes.eye import build_eye
+    from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
+
+    eye = build_eye(model, pupil_mm=condition.pupil_mm)
+    spectral = eye_spectral_wavefront(eye, wavelengths_nm=[condition.wavelength_nm], field_deg=condition.field_deg)
+    return _seen_mtf(spectral.fronts[0], spectral.field_map, condition,
+                     np.asarray(frequencies_cyc_per_deg, dtype=float), model)
+
+
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
     front, field_map = _front(eye, condition)
     pupil, nm = front.pupil_diameter_mm, condition.wavelength_nm
     m, j0, j45 = minimum_rms_prescription(dict(front.coefficients_um), pupil).power_vector()
     higher = {k: v for k, v in front.coefficients_um.items() if k[0] >= 3}
     seen = front if condition.correction == "uncorrected" else Wavefront(higher, pupil, nm)
-    mtf = np.zeros(0)
-    if len(frequencies):  # in visual angle: the front with its map (off axis)
-        mapped = SpectralWavefront((nm,), (seen,), nm, eye.name, field_map)
-        curves = eye_mtf(mapped, nm, frequencies, condition.field_deg)
-        mtf = np.mean([curves[k] for k in curves], axis=0)
+    mtf = _seen_mtf(front, field_map, condition, frequencies, eye.name) if len(frequencies) else np.zeros(0)
     rms = math.sqrt(sum(v * v for v in higher.values()))
     return EyeResult(eye.name, condition, mtf, float(strehl_ratio(seen, wavelength_nm=condition.wavelength_nm)),
                      float(m), float(j0), float(j45), rms)

@@ -1,0 +1,50 @@
+"""``vissim population``: its files, and one error line for each bad input."""
+
+import csv
+import json
+
+import pytest
+
+from vissim.cli import main
+from vissim.cli import population as cli_population
+from vissim.optics.eyes.measured.datasets import DATASET_NAMES
+from vissim.optics.eyes.measured.population import CORRECTIONS
+
+
+def test_the_command_line_names_what_the_library_has():
+    assert cli_population.DATASETS == DATASET_NAMES and cli_population.CORRECTIONS == CORRECTIONS
+
+
+def test_a_small_population_writes_its_files(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["population", "jaeken-artal-2012", "--subjects", "1,2", "--pupil-mm", "3",
+                 "--field-deg", "0,0;-15,0", "--mtf-cyc-per-deg", "10,30", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "field 0,0 deg, 555 nm, sphero-cylinder: 4 of 4 eyes" in printed
+    rows = list(csv.DictReader((out / "eyes.csv").open()))
+    assert {r["eye"] for r in rows} == {f"jaeken-artal-2012:{s}:{e}" for s in (1, 2) for e in ("right", "left")}
+    assert all(0.0 < float(r["mtf_30_cyc_per_deg"]) < float(r["mtf_10_cyc_per_deg"]) <= 1.0 for r in rows)
+    summary = json.loads((out / "quantiles.json").read_text())
+    assert summary["frequencies_cyc_per_deg"] == [10.0, 30.0] and summary["provenance"]["inputs"]["command"] == "population"
+    gap = (out / "gap.md").read_text()
+    assert "Watson 2013" in gap and "Artal & Navarro 1994" in gap and "navarro-1985 schematic eye" in gap
+    assert (out / "figure_mtf.png").stat().st_size > 1000 and (out / "figure_mtf.png.json").is_file()
+    assert main(["population", "jaeken-artal-2012", "--subjects", "1", "--pupil-mm", "3", "-o", str(out)]) == 2
+    assert "exists" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--pupil-mm", "5"], "measured over a 4 mm pupil"),
+    (["--correction", "contacts"], "--correction is uncorrected or sphero-cylinder, got 'contacts'"),
+    (["--workers", "0"], "--workers must be > 0 worker processes, got '0'"),
+    (["--subjects", "x"], "--subjects takes whole numbers"),
+    (["--subjects", "500"], "has subjects 1-130, got 500"),
+    (["--foveal-se-diopters", "1"], "--foveal-se-diopters takes LOW,HIGH"),
+    (["--field-deg", "50,0"], "measured at field x -40 to 40 deg, got 50 deg"),
+])
+def test_bad_input_gets_one_error_line(tmp_path, capsys, extra, words):
+    argv = ["population", "jaeken-artal-2012", "--subjects", "1", "-o", str(tmp_path / "run"), *extra]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("vissim: error:") and words in err[0], err
+    assert not (tmp_path / "run" / "eyes.csv").exists()

@@ -1,0 +1,110 @@
+"""``vissim population``: many measured eyes under the same conditions, and their spread."""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+from pathlib import Path
+
+from vissim.checks import MAX_WORKERS
+from vissim.cli._common import FIELD_DEG_HELP, field_deg_from_text, parse_float_list
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
+
+DATASETS = ("jaeken-artal-2012", "polans-2015")  # vissim.optics.eyes.measured.datasets.DATASET_NAMES (test)
+CORRECTIONS = ("uncorrected", "sphero-cylinder")  # ...measured.population.CORRECTIONS (test)
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "population",
+        help="measured eyes en masse: MTF, Strehl, refraction per eye, their quantiles, beside published MTFs",
+        description=(
+            "Evaluate a population of measured eyes (a dataset's eyes, a list, or those whose foveal spherical "
+            "equivalent lies in a range) under every combination of the pupils, fields and corrections given: per eye "
+            "the MTF, the Strehl ratio, the refraction (M, J0, J45 over the pupil) and the higher-order RMS. Writes "
+            "eyes.csv, quantiles.json, gap.md (the population beside the Navarro schematic eye and the published "
+            "human MTFs that share its conditions) and figure_mtf.png into the output folder."),
+    )
+    parser.add_argument("dataset", choices=DATASETS, help="the measured eyes")
+    parser.add_argument("-o", "--output", type=Path, required=True, help="output folder")
+    parser.add_argument("--subjects", metavar="N[,N...]", help="subjects, as numbered in the data (default all)")
+    parser.add_argument("--eyes", metavar="SIDE[,SIDE]", help="right, left or both (default: the dataset's eyes)")
+    parser.add_argument("--foveal-se-diopters", metavar="LOW,HIGH",
+                        help="keep the eyes whose foveal spherical equivalent (4 mm, 555 nm) is within LOW..HIGH D")
+    parser.add_argument("--pupil-mm", default="3,4", metavar="D[,D...]",
+                        help="entrance pupil diameters, mm, at most the data's 4 (default 3,4)")
+    parser.add_argument("--field-deg", default="0,0", metavar="X,Y[;X,Y...]", help=FIELD_DEG_HELP + "; several with ;")
+    parser.add_argument("--correction", default="sphero-cylinder", metavar="STATE[,STATE]",
+                        help=f"{' or '.join(CORRECTIONS)} (default sphero-cylinder: orders 0-2 removed)")
+    parser.add_argument("--wavelength-nm", type=float, metavar="NM",
+                        help=f"light (default {PHOTOPIC_FOCUS_NM:g}: V(λ)'s peak, the published fits' light)")
+    parser.add_argument("--mtf-cyc-per-deg", default="5,10,20,30", metavar="F[,F...]",
+                        help="MTF frequencies, cycles/deg (default 5,10,20,30)")
+    parser.add_argument("--workers", type=int, default=1, metavar="N", help="spread the eyes over N processes")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="spread the eyes over a Dask distributed scheduler")
+    parser.add_argument("--overwrite", action="store_true", help="replace files from an earlier run")
+    parser.set_defaults(func=run)
+    return parser
+
+
+def _conditions(args):
+    from vissim.optics.eyes.measured.population import PopulationCondition
+
+    pupils = parse_float_list(args.pupil_mm, "--pupil-mm", "mm")
+    fields = [field_deg_from_text(text) for text in args.field_deg.split(";") if text.strip()]
+    corrections = [c.strip() for c in args.correction.split(",") if c.strip()]
+    for c in corrections:
+        if c not in CORRECTIONS:
+            raise VissimInputError(f"--correction is {' or '.join(CORRECTIONS)}, got {c!r}")
+    nm = PHOTOPIC_FOCUS_NM if args.wavelength_nm is None else args.wavelength_nm
+    return [PopulationCondition(p, f, c, nm) for p, f, c in itertools.product(pupils, fields, corrections)]
+
+
+def _eyes(args):
+    from vissim.optics.eyes.measured.population import select_eyes
+
+    subjects = None
+    if args.subjects:
+        try:
+            subjects = [int(s) for s in args.subjects.split(",") if s.strip()]
+        except ValueError:
+            raise VissimInputError(f"--subjects takes whole numbers, got {args.subjects!r}") from None
+    sides = None if not args.eyes else [s.strip() for s in args.eyes.split(",") if s.strip()]
+    se = None
+    if args.foveal_se_diopters:
+        se = parse_float_list(args.foveal_se_diopters, "--foveal-se-diopters", "D", positive=False)
+        if len(se) != 2:
+            raise VissimInputError(f"--foveal-se-diopters takes LOW,HIGH, got {args.foveal_se_diopters!r}")
+    return select_eyes(args.dataset, subjects=subjects, eyes=sides, foveal_se_within_diopters=se)
+
+
+def run(args: argparse.Namespace) -> int:
+    from vissim.optics.eyes.measured.population import evaluate_population
+    from vissim.provenance import make_provenance
+    from vissim.validation.population.report import write_population_run
+
+    if not 1 <= args.workers <= MAX_WORKERS:
+        raise VissimInputError(f"--workers must be 1 to {MAX_WORKERS} worker processes, got {args.workers}")
+    if args.output.exists() and not args.output.is_dir():
+        raise VissimInputError(f"-o {args.output} is a file; a population run writes into a folder")
+    frequencies = parse_float_list(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles/deg")
+    conditions = _conditions(args)
+    eyes = _eyes(args)
+    if not eyes:
+        raise VissimInputError(f"no eye of {args.dataset} matches the selection given")
+    client = None
+    if args.scheduler is not None:
+        from vissim.validation.engine.scheduler import connect_scheduler
+
+        client = connect_scheduler(args.scheduler)
+    results = evaluate_population(eyes, conditions, frequencies, workers=args.workers, client=client)
+    provenance = make_provenance(command="population", dataset=args.dataset, eyes=[e.name for e in eyes],
+                                 conditions=[c.label for c in conditions], mtf_cyc_per_deg=frequencies)
+    written = write_population_run(args.output, results, conditions, frequencies, provenance, overwrite=args.overwrite)
+    counts = {c.label: sum(r.condition == c for r in results) for c in conditions}
+    for label, count in counts.items():
+        print(f"{label}: {count} of {len(eyes)} eyes")
+    for path in written:
+        print(f"wrote {path}")
+    return 0

@@ -1,0 +1,148 @@
+"""A population run's files: each eye's numbers, their quantiles, the gap table and the MTF fan chart.
+
+* ``eyes.csv``: one row per eye and condition (`vissim.optics.eyes.measured.population.EyeResult`).
+* ``quantiles.json``: per condition, the 5/25/50/75/95 % quantiles across the eyes.
+* ``gap.md``: the population's MTF beside the Navarro schematic eye's and the published human fits
+  (`vissim.optics.eyes.measured.published`), each with its conditions: orders included, correction, light,
+  and whether scatter is in it (double-pass measurements include it; wavefronts do not).
+* ``figure_mtf.png``: per condition, the population's median MTF with its 25-75 % and 5-95 % bands, the
+  schematic eye's and the published curves that share its conditions.
+
+Every file is written atomically with the run's provenance (`write_population_run`).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import numpy as np
+
+from vissim.atomic import refuse_existing, write_json_atomic, write_text_atomic
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.measured.population import QUANTILES, population_quantiles, schematic_mtf
+from vissim.optics.eyes.measured.published import (ARTAL_NAVARRO_1994, NAVARRO_1993, WATSON_2013_PUPILS_MM,
+                                                   artal_navarro_1994_mtf, navarro_1993_mtf, watson_2013_mtf)
+
+__all__ = ["write_population_run", "gap_table_md", "published_curves"]
+
+SCHEMATIC = "navarro-1985"
+
+
+def published_curves(condition, frequencies) -> dict:
+    """{label: MTF} of the published fits whose conditions ``condition`` matches (pupil, field; module doc)."""
+    curves = {}
+    if condition.correction != "sphero-cylinder":  # every fit is of eyes with their refraction corrected
+        return curves
+    pupil, (x, y) = condition.pupil_mm, condition.field_deg
+    at_fovea = x == 0.0 and y == 0.0
+    low, high = WATSON_2013_PUPILS_MM
+    if at_fovea and low <= pupil <= high:
+        curves["Watson 2013 (wavefronts, orders >= 3, 555 nm)"] = watson_2013_mtf(frequencies, pupil)
+    if at_fovea and pupil in ARTAL_NAVARRO_1994:
+        curves["Artal & Navarro 1994 (double-pass: scatter in)"] = artal_navarro_1994_mtf(frequencies, pupil)
+    eccentricity = float(np.hypot(x, y))
+    if pupil == 4.0 and eccentricity in NAVARRO_1993 and eccentricity > 0:
+        curves["Navarro et al. 1993 (double-pass: scatter in)"] = navarro_1993_mtf(frequencies, eccentricity)
+    return curves
+
+
+def _eyes_csv(results, frequencies) -> str:
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["eye", "condition", "pupil_mm", "field_x_deg", "field_y_deg", "wavelength_nm", "correction",
+                     "strehl", "m_diopters", "j0_diopters", "j45_diopters", "higher_order_rms_um",
+                     *[f"mtf_{f:g}_cyc_per_deg" for f in frequencies]])
+    for r in results:
+        c = r.condition
+        writer.writerow([r.eye, c.label, c.pupil_mm, *c.field_deg, c.wavelength_nm, c.correction, repr(r.strehl),
+                         repr(r.m_diopters), repr(r.j0_diopters), repr(r.j45_diopters), repr(r.higher_order_rms_um),
+                         *[repr(float(v)) for v in r.mtf]])
+    return out.getvalue()
+
+
+def gap_table_md(results, conditions, frequencies) -> str:
+    """The gap table (module doc): one block per condition, one row per source, one column per frequency."""
+    summary = population_quantiles(results)
+    head = "| source | " + " | ".join(f"{f:g} c/deg" for f in frequencies) + " |"
+    rule = "|---|" + "---|" * len(frequencies)
+    lines = ["# Measured eyes beside schematic eyes and published human MTFs", "",
+             "MTFs computed from wavefronts hold no scatter; double-pass MTFs include it, so they lie lower at the "
+             "same optics. Population: median [25-75 %] across its eyes.", ""]
+    for condition in conditions:
+        table = summary.get(condition.label)
+        if table is None or "mtf" not in table:
+            continue
+        lines += [f"## {condition.label} ({table['count']} eyes)", "", head, rule]
+        low, mid, high = (table["mtf"][QUANTILES.index(q)] for q in (0.25, 0.5, 0.75))
+        cells = [f"{m:.3f} [{a:.3f}-{b:.3f}]" for a, m, b in zip(low, mid, high)]
+        lines.append("| population (wavefronts) | " + " | ".join(cells) + " |")
+        schematic = schematic_mtf(SCHEMATIC, condition, frequencies)
+        lines.append(f"| {SCHEMATIC} schematic eye (traced) | " + " | ".join(f"{v:.3f}" for v in schematic) + " |")
+        for label, curve in published_curves(condition, frequencies).items():
+            lines.append(f"| {label} | " + " | ".join(f"{v:.3f}" for v in curve) + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _fan_chart(results, conditions, frequencies) -> bytes:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot
+
+    from vissim.validation.engine.figures import png_bytes
+
+    summary = population_quantiles(results)
+    shown = [c for c in conditions if c.label in summary and "mtf" in summary[c.label]]
+    fig, axes = pyplot.subplots(1, len(shown), figsize=(4.6 * len(shown), 3.8), squeeze=False)
+    for ax, condition in zip(axes[0], shown):
+        mtf = summary[condition.label]["mtf"]
+        ax.fill_between(frequencies, mtf[0], mtf[4], color="tab:blue", alpha=0.15, label="population 5-95 %")
+        ax.fill_between(frequencies, mtf[1], mtf[3], color="tab:blue", alpha=0.35, label="25-75 %")
+        ax.plot(frequencies, mtf[2], color="tab:blue", lw=2, label="median")
+        ax.plot(frequencies, schematic_mtf(SCHEMATIC, condition, frequencies), color="k", lw=1.2, label=SCHEMATIC)
+        for (label, curve), style in zip(published_curves(condition, frequencies).items(), ("--", ":", "-.")):
+            ax.plot(frequencies, curve, style, color="tab:red", label=label)
+        ax.set_title(f"{condition.label}\n({summary[condition.label]['count']} eyes)", fontsize=8)
+        ax.set_xlabel("cycles/deg")
+        ax.set_ylabel("MTF")
+        ax.set_ylim(0, 1)
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    return png_bytes(fig)
+
+
+def _write_png(path: Path, png: bytes, provenance: dict) -> None:
+    """A figure's PNG through `vissim.imageio.write_image`: atomic, with its provenance sidecar."""
+    from PIL import Image as PILImage
+
+    from vissim.imageio import write_image
+
+    codes = np.asarray(PILImage.open(io.BytesIO(png)).convert("RGB"), dtype=np.float32) / 255.0
+    write_image(path, codes, provenance=provenance, overwrite=True, encoding="linear")  # codes kept exactly
+
+
+def write_population_run(run_dir: Path, results, conditions, frequencies, provenance: dict, *,
+                         overwrite: bool = False) -> list[Path]:
+    """The run's files (module doc) in ``run_dir``; each written atomically, the figure with its provenance."""
+    if not results:
+        raise VissimInputError("no eye of the population was measured under any condition given")
+    run_dir = Path(run_dir)
+    frequencies = np.asarray(frequencies, dtype=float)
+    summary = {label: {k: np.asarray(v).tolist() if k != "count" else v for k, v in table.items()}
+               for label, table in population_quantiles(results).items()}
+    names = ["eyes.csv", "quantiles.json"] + (["gap.md", "figure_mtf.png"] if frequencies.size else [])
+    refuse_existing(*(run_dir / name for name in names), overwrite=overwrite)  # before anything is written
+    written = [write_text_atomic(run_dir / "eyes.csv", _eyes_csv(results, frequencies), overwrite=overwrite),
+               write_json_atomic(run_dir / "quantiles.json", {"quantiles": list(QUANTILES), "frequencies_cyc_per_deg":
+                                                              frequencies.tolist(), "conditions": summary,
+                                                              "provenance": provenance}, overwrite=overwrite)]
+    if frequencies.size:
+        written.append(write_text_atomic(run_dir / "gap.md", gap_table_md(results, conditions, frequencies),
+                                         overwrite=overwrite))
+        figure = run_dir / "figure_mtf.png"
+        _write_png(figure, _fan_chart(results, conditions, frequencies), provenance)
+        written.append(figure)
+    return written
