@@ -107,3 +107,13 @@ def test_processes_and_a_dask_scheduler_give_the_same_numbers():
         with distributed.Client(cluster) as client:
             remote = evaluate_population(eyes, conditions, [10.0, 30.0], client=client, chunk_eyes=2)
     assert _numbers(pooled) == _numbers(serial) == _numbers(remote)
+
+
+def test_a_schematic_eyes_refraction_is_taken_as_the_measured_eyes_are():
+    # Over the pupil seen along the chief ray, at the pupil: Escudero-Sanz's oblique astigmatism at 1 mm, 543 nm
+    # is the tangential-sagittal difference optiland's real-ray foci give (tests/test_eye_oblique_refraction.py:
+    # 0.20/0.84/2.00/3.85 D at the corneal vertex, within 0.05 D of this plane's).
+    from vissim.optics.eyes.measured.population import schematic_refraction
+    for field, at_vertex in ((10.0, 0.20), (20.0, 0.84), (30.0, 2.00), (40.0, 3.85)):
+        _, j0, j45 = schematic_refraction("escudero-sanz-1999", PopulationCondition(1.0, (field, 0.0), "uncorrected", 543.0))
+        assert 2 * math.hypot(j0, j45) == pytest.approx(at_vertex, abs=0.05)

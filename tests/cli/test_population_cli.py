@@ -18,7 +18,7 @@ def test_the_command_line_names_what_the_library_has():
 def test_a_small_population_writes_its_files(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["population", "jaeken-artal-2012", "--subjects", "1,2", "--pupil-mm", "3",
-                 "--field-deg", "0,0;-15,0", "--mtf-cyc-per-deg", "10,30", "-o", str(out)]) == 0
+                 "--field-deg", "0,0;-15,0;10,0", "--mtf-cyc-per-deg", "10,30", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "field 0,0 deg, 555 nm, sphero-cylinder: 4 of 4 eyes" in printed
     rows = list(csv.DictReader((out / "eyes.csv").open()))
@@ -28,7 +28,8 @@ def test_a_small_population_writes_its_files(tmp_path, capsys):
     assert summary["frequencies_cyc_per_deg"] == [10.0, 30.0] and summary["provenance"]["inputs"]["command"] == "population"
     gap = (out / "gap.md").read_text()
     assert "Watson 2013" in gap and "Artal & Navarro 1994" in gap and "navarro-1985 schematic eye" in gap
-    assert (out / "figure_mtf.png").stat().st_size > 1000 and (out / "figure_mtf.png.json").is_file()
+    for figure in ("figure_mtf.png", "figure_astigmatism.png"):  # three fields on the meridian: the second
+        assert (out / figure).stat().st_size > 1000 and (out / f"{figure}.json").is_file()
     assert main(["population", "jaeken-artal-2012", "--subjects", "1", "--pupil-mm", "3", "-o", str(out)]) == 2
     assert "exists" in capsys.readouterr().err
 

@@ -7,6 +7,9 @@
   and whether scatter is in it (double-pass measurements include it; wavefronts do not).
 * ``figure_mtf.png``: per condition, the population's median MTF with its 25-75 % and 5-95 % bands, the
   schematic eye's and the published curves that share its conditions.
+* ``figure_astigmatism.png`` (three or more fields on the horizontal meridian): the cylinder, 2√(J0² + J45²),
+  against field: the population's median and quartiles beside every schematic eye's, each over the pupil seen
+  along the chief ray.
 
 Every file is written atomically with the run's provenance (`write_population_run`).
 """
@@ -124,6 +127,53 @@ def _write_png(path: Path, png: bytes, provenance: dict) -> None:
     write_image(path, codes, provenance=provenance, overwrite=True, encoding="linear")  # codes kept exactly
 
 
+def _meridian(conditions) -> list:
+    """The horizontal-meridian conditions sharing the first one's pupil, light and correction, by field x."""
+    if not conditions:
+        return []
+    first = conditions[0]
+    same = [c for c in conditions if c.field_deg[1] == 0.0 and
+            (c.pupil_mm, c.wavelength_nm, c.correction) == (first.pupil_mm, first.wavelength_nm, first.correction)]
+    return sorted(same, key=lambda c: c.field_deg[0])
+
+
+def _cylinder(j0: float, j45: float) -> float:
+    """The cylinder's magnitude, dioptres: 2 √(J0² + J45²) (Thibos et al. 1997)."""
+    return 2.0 * float(np.hypot(j0, j45))
+
+
+def _astigmatism_chart(results, meridian) -> bytes:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot
+
+    from vissim.optics.eyes.measured.population import schematic_refraction
+    from vissim.optics.eyes.models import EYE_MODELS
+    from vissim.validation.engine.figures import png_bytes
+
+    x = np.array([c.field_deg[0] for c in meridian])
+    bands = np.array([np.quantile([_cylinder(r.j0_diopters, r.j45_diopters) for r in results if r.condition == c],
+                                  (0.25, 0.5, 0.75)) for c in meridian])
+    fig, ax = pyplot.subplots(figsize=(6.4, 4.2))
+    ax.fill_between(x, bands[:, 0], bands[:, 2], color="tab:blue", alpha=0.3, label="measured eyes 25-75 %")
+    ax.plot(x, bands[:, 1], color="tab:blue", lw=2, label="measured eyes, median")
+    for model in EYE_MODELS:
+        try:
+            values = [_cylinder(*schematic_refraction(model, c)[1:]) for c in meridian]
+        except VissimInputError:  # a field the model's rays do not reach
+            continue
+        ax.plot(x, values, lw=1, label=model)
+    c = meridian[0]
+    ax.set_title(f"Astigmatism across the horizontal field: {c.pupil_mm:g} mm, {c.wavelength_nm:g} nm, the pupil "
+                 "seen along the chief ray", fontsize=8)
+    ax.set_xlabel("field x, deg (examiner's right)")
+    ax.set_ylabel("cylinder, D")
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    return png_bytes(fig)
+
+
 def write_population_run(run_dir: Path, results, conditions, frequencies, provenance: dict, *,
                          overwrite: bool = False) -> list[Path]:
     """The run's files (module doc) in ``run_dir``; each written atomically, the figure with its provenance."""
@@ -133,7 +183,9 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
     frequencies = np.asarray(frequencies, dtype=float)
     summary = {label: {k: np.asarray(v).tolist() if k != "count" else v for k, v in table.items()}
                for label, table in population_quantiles(results).items()}
-    names = ["eyes.csv", "quantiles.json"] + (["gap.md", "figure_mtf.png"] if frequencies.size else [])
+    meridian = _meridian(list(conditions))
+    names = (["eyes.csv", "quantiles.json"] + (["gap.md", "figure_mtf.png"] if frequencies.size else [])
+             + (["figure_astigmatism.png"] if len(meridian) >= 3 else []))
     refuse_existing(*(run_dir / name for name in names), overwrite=overwrite)  # before anything is written
     written = [write_text_atomic(run_dir / "eyes.csv", _eyes_csv(results, frequencies), overwrite=overwrite),
                write_json_atomic(run_dir / "quantiles.json", {"quantiles": list(QUANTILES), "frequencies_cyc_per_deg":
@@ -144,5 +196,9 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
                                          overwrite=overwrite))
         figure = run_dir / "figure_mtf.png"
         _write_png(figure, _fan_chart(results, conditions, frequencies), provenance)
+        written.append(figure)
+    if len(meridian) >= 3:
+        figure = run_dir / "figure_astigmatism.png"
+        _write_png(figure, _astigmatism_chart(results, meridian), provenance)
         written.append(figure)
     return written

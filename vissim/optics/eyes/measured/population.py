@@ -40,7 +40,7 @@ from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "evaluate_population",
-           "population_quantiles", "schematic_mtf", "QUANTILES", "CHUNK_EYES"]
+           "population_quantiles", "schematic_mtf", "schematic_refraction", "QUANTILES", "CHUNK_EYES"]
 
 log = logging.getLogger(__name__)
 
@@ -148,6 +148,17 @@ def schematic_mtf(model: str, condition: PopulationCondition, frequencies_cyc_pe
     spectral = eye_spectral_wavefront(eye, wavelengths_nm=[condition.wavelength_nm], field_deg=condition.field_deg)
     return _seen_mtf(spectral.fronts[0], spectral.field_map, condition,
                      np.asarray(frequencies_cyc_per_deg, dtype=float), model)
+
+
+def schematic_refraction(model: str, condition: PopulationCondition) -> tuple[float, float, float]:
+    """(M, J0, J45), dioptres, of the schematic eye ``model`` under ``condition``, as a population's eyes are
+    taken: minimum RMS over the pupil seen along the chief ray (the measured data's pupil), in its plane."""
+    from vissim.optics.eyes.refraction import along_chief_ray
+
+    trace = trace_eye_wavefront(eye_model(model), condition.wavelength_nm, condition.field_deg,
+                                pupil_mm=condition.pupil_mm)
+    own = minimum_rms_prescription(trace.zernike_um, trace.entrance_pupil_mm)
+    return tuple(float(v) for v in along_chief_ray(own, trace.chief_direction, 0.0).power_vector())
 
 
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
