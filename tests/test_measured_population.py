@@ -117,3 +117,14 @@ def test_a_schematic_eyes_refraction_is_taken_as_the_measured_eyes_are():
     for field, at_vertex in ((10.0, 0.20), (20.0, 0.84), (30.0, 2.00), (40.0, 3.85)):
         _, j0, j45 = schematic_refraction("escudero-sanz-1999", PopulationCondition(1.0, (field, 0.0), "uncorrected", 543.0))
         assert 2 * math.hypot(j0, j45) == pytest.approx(at_vertex, abs=0.05)
+
+
+def test_an_eye_with_the_higher_strehl_sees_the_letter_with_more_contrast():
+    from vissim.optics.eyes.measured.population import seen_letter
+    condition = PopulationCondition(4.0)
+    results = sorted(evaluate_population(EYES, [condition]), key=lambda r: r.strehl)
+    worst, best = (next(e for e in EYES if e.name == r.eye) for r in (results[0], results[-1]))
+    seen = [seen_letter(e, condition) for e in (worst, best)]
+    assert results[-1].strehl > results[0].strehl + 0.1
+    assert np.ptp(seen[1]) > np.ptp(seen[0])
+    assert abs(seen[0].mean() - seen[1].mean()) < 0.01  # blur moves light, it does not make or lose it

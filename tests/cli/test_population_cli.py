@@ -28,7 +28,7 @@ def test_a_small_population_writes_its_files(tmp_path, capsys):
     assert summary["frequencies_cyc_per_deg"] == [10.0, 30.0] and summary["provenance"]["inputs"]["command"] == "population"
     gap = (out / "gap.md").read_text()
     assert "Watson 2013" in gap and "Artal & Navarro 1994" in gap and "navarro-1985 schematic eye" in gap
-    for figure in ("figure_mtf.png", "figure_astigmatism.png"):  # three fields on the meridian: the second
+    for figure in ("figure_mtf.png", "figure_astigmatism.png", "figure_letters.png"):  # three fields on the meridian: the second
         assert (out / figure).stat().st_size > 1000 and (out / f"{figure}.json").is_file()
     assert main(["population", "jaeken-artal-2012", "--subjects", "1", "--pupil-mm", "3", "-o", str(out)]) == 2
     assert "exists" in capsys.readouterr().err

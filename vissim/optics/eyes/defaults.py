@@ -10,7 +10,9 @@ from vissim.optics.rx.trial_lens import SPECTACLE_VERTEX_DISTANCE_MM
 
 __all__ = ["DEFAULT_EYE_MODEL", "DEFAULT_EYE_PUPIL_MM", "DEFAULT_SPECTACLE_VERTEX_MM", "DEFAULT_EYE_LIGHT_NM",
            "PHOTOPIC_FOCUS_NM", "PHOTOPIC_STEP_NM", "DEFAULT_CHART_DISTANCE_M", "DEFAULT_LETTER",
-           "DEFAULT_LETTER_LOGMAR", "DEFAULT_EYE_ARCMIN_PER_PX", "DEFAULT_EYE_SIZE_PX"]
+           "DEFAULT_LETTER_LOGMAR", "DEFAULT_EYE_ARCMIN_PER_PX", "DEFAULT_EYE_SIZE_PX",
+           "POPULATION_LETTER_LOGMAR", "POPULATION_ARCMIN_PER_PX",
+           "POPULATION_LETTER_SIZE_PX"]
 
 #: The schematic eye used when none is named: Navarro, Santamaria & Bescos 1985.
 DEFAULT_EYE_MODEL = "navarro-1985"
@@ -28,3 +30,6 @@ PHOTOPIC_FOCUS_NM, PHOTOPIC_STEP_NM = 555.0, 25.0
 DEFAULT_LETTER, DEFAULT_LETTER_LOGMAR, DEFAULT_CHART_DISTANCE_M = "K", 0.5, 6.0
 #: The eye's image: pixel size (arcmin) and size (rows, columns): twice the default letter.
 DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_SIZE_PX = 0.5, (64, 64)
+#: A population's letter: near the acuity of a good eye (6/7.5; a 6.3 arcmin letter of 1.26 arcmin strokes),
+#: where eyes differ, drawn at 0.25 arcmin per pixel over 96 x 96 (24 arcmin: the letter and its blur).
+POPULATION_LETTER_LOGMAR, POPULATION_ARCMIN_PER_PX, POPULATION_LETTER_SIZE_PX = 0.1, 0.25, 96

@@ -174,6 +174,35 @@ def _astigmatism_chart(results, meridian) -> bytes:
     return png_bytes(fig)
 
 
+MOSAIC_EYES = 16  # the letter mosaic's eyes: evenly spaced in rank of Strehl ratio
+
+
+def _letter_mosaic(results, condition) -> bytes:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot
+
+    from vissim.optics.eyes.defaults import DEFAULT_LETTER, POPULATION_LETTER_LOGMAR
+    from vissim.optics.eyes.measured.measured_eye import parse_measured_eye
+    from vissim.optics.eyes.measured.population import seen_letter
+    from vissim.validation.engine.figures import png_bytes
+
+    ranked = sorted((r for r in results if r.condition == condition), key=lambda r: r.strehl)
+    picks = [ranked[i] for i in sorted(set(np.linspace(0, len(ranked) - 1, MOSAIC_EYES).round().astype(int)))]
+    side = int(np.ceil(np.sqrt(len(picks))))
+    fig, axes = pyplot.subplots(side, side, figsize=(1.9 * side, 2.05 * side), squeeze=False)
+    for ax in axes.flat:
+        ax.set_axis_off()
+    for ax, r in zip(axes.flat, picks):
+        ax.imshow(seen_letter(parse_measured_eye(r.eye), condition), cmap="gray", vmin=0, vmax=1)
+        ax.set_title(f"{r.eye.split(':', 1)[1]}: Strehl {r.strehl:.2f}", fontsize=7)
+    fig.suptitle(f"{DEFAULT_LETTER} at LogMAR {POPULATION_LETTER_LOGMAR:g} through {len(picks)} of {len(ranked)} eyes, "
+                 f"lowest to highest Strehl ratio ({condition.label})", fontsize=8)
+    fig.tight_layout()
+    return png_bytes(fig)
+
+
 def write_population_run(run_dir: Path, results, conditions, frequencies, provenance: dict, *,
                          overwrite: bool = False) -> list[Path]:
     """The run's files (module doc) in ``run_dir``; each written atomically, the figure with its provenance."""
@@ -184,7 +213,8 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
     summary = {label: {k: np.asarray(v).tolist() if k != "count" else v for k, v in table.items()}
                for label, table in population_quantiles(results).items()}
     meridian = _meridian(list(conditions))
-    names = (["eyes.csv", "quantiles.json"] + (["gap.md", "figure_mtf.png"] if frequencies.size else [])
+    names = (["eyes.csv", "quantiles.json", "figure_letters.png"]
+             + (["gap.md", "figure_mtf.png"] if frequencies.size else [])
              + (["figure_astigmatism.png"] if len(meridian) >= 3 else []))
     refuse_existing(*(run_dir / name for name in names), overwrite=overwrite)  # before anything is written
     written = [write_text_atomic(run_dir / "eyes.csv", _eyes_csv(results, frequencies), overwrite=overwrite),
@@ -197,6 +227,9 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
         figure = run_dir / "figure_mtf.png"
         _write_png(figure, _fan_chart(results, conditions, frequencies), provenance)
         written.append(figure)
+    letters = run_dir / "figure_letters.png"
+    _write_png(letters, _letter_mosaic(results, results[0].condition), provenance)
+    written.append(letters)
     if len(meridian) >= 3:
         figure = run_dir / "figure_astigmatism.png"
         _write_png(figure, _astigmatism_chart(results, meridian), provenance)

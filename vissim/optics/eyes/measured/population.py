@@ -28,7 +28,9 @@ import numpy as np
 
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
+from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_LETTER, PHOTOPIC_FOCUS_NM,
+                                         POPULATION_ARCMIN_PER_PX, POPULATION_LETTER_LOGMAR,
+                                         POPULATION_LETTER_SIZE_PX)
 from vissim.optics.eyes.measured.datasets import load_dataset
 from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL, MeasuredWavefront, measured_trace
 from vissim.optics.eyes.models import eye_model
@@ -40,7 +42,8 @@ from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "evaluate_population",
-           "population_quantiles", "schematic_mtf", "schematic_refraction", "QUANTILES", "CHUNK_EYES"]
+           "population_quantiles", "schematic_mtf", "schematic_refraction", "seen_letter", "QUANTILES",
+           "CHUNK_EYES"]
 
 log = logging.getLogger(__name__)
 
@@ -159,6 +162,27 @@ def schematic_refraction(model: str, condition: PopulationCondition) -> tuple[fl
                                 pupil_mm=condition.pupil_mm)
     own = minimum_rms_prescription(trace.zernike_um, trace.entrance_pupil_mm)
     return tuple(float(v) for v in along_chief_ray(own, trace.chief_direction, 0.0).power_vector())
+
+
+def seen_letter(eye: MeasuredWavefront, condition: PopulationCondition, *, letter: str = DEFAULT_LETTER,
+                logmar: float = POPULATION_LETTER_LOGMAR, arcmin_per_px: float = POPULATION_ARCMIN_PER_PX,
+                size_px: int = POPULATION_LETTER_SIZE_PX) -> np.ndarray:
+    """A Sloan ``letter`` (black on white, printed for `DEFAULT_CHART_DISTANCE_M`) as ``eye`` sees it under
+    ``condition``: the wave PSF of the orders its correction leaves, in visual angle, applied in linear light;
+    ``size_px`` square pixels of ``arcmin_per_px`` centred on the letter."""
+    from vissim.charts import optotype_tile
+    from vissim.optics.blur.convolve import blur_image
+    from vissim.optics.psf.compute import compute_psf
+
+    front, field_map = _front(eye, condition)
+    lowest = 2 if condition.correction == "uncorrected" else 3
+    nm = condition.wavelength_nm
+    kept = Wavefront({k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}, front.pupil_diameter_mm, nm)
+    psf = compute_psf(SpectralWavefront((nm,), (kept,), nm, eye.name, field_map), wavelength_nm=nm,
+                      arcmin_per_px=arcmin_per_px, size_px=size_px)
+    chart = optotype_tile(letter, logmar, arcmin_per_px=arcmin_per_px, shape_px=(size_px, size_px),
+                          viewing_distance_m=DEFAULT_CHART_DISTANCE_M, snap_to_pixels=False)
+    return blur_image(chart.pixels.astype(np.float64), psf, arcmin_per_px=arcmin_per_px, padding="edge")
 
 
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
