@@ -98,7 +98,11 @@ def run(args: argparse.Namespace) -> int:
         from vissim.validation.engine.scheduler import connect_scheduler
 
         client = connect_scheduler(args.scheduler)
-    results = evaluate_population(eyes, conditions, frequencies, workers=args.workers, client=client)
+    try:
+        results = evaluate_population(eyes, conditions, frequencies, workers=args.workers, client=client)
+    finally:
+        if client is not None:
+            client.close()
     provenance = make_provenance(command="population", dataset=args.dataset, eyes=[e.name for e in eyes],
                                  conditions=[c.label for c in conditions], mtf_cyc_per_deg=frequencies)
     written = write_population_run(args.output, results, conditions, frequencies, provenance, overwrite=args.overwrite)

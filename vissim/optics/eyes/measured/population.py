@@ -173,16 +173,23 @@ def seen_letter(eye: MeasuredWavefront, condition: PopulationCondition, *, lette
     from vissim.charts import optotype_tile
     from vissim.optics.blur.convolve import blur_image
     from vissim.optics.psf.compute import compute_psf
+    from vissim.optics.psf.field_size import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
 
     front, field_map = _front(eye, condition)
     lowest = 2 if condition.correction == "uncorrected" else 3
     nm = condition.wavelength_nm
     kept = Wavefront({k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}, front.pupil_diameter_mm, nm)
-    psf = compute_psf(SpectralWavefront((nm,), (kept,), nm, eye.name, field_map), wavelength_nm=nm,
-                      arcmin_per_px=arcmin_per_px, size_px=size_px)
-    chart = optotype_tile(letter, logmar, arcmin_per_px=arcmin_per_px, shape_px=(size_px, size_px),
+    mapped = SpectralWavefront((nm,), (kept,), nm, eye.name, field_map)
+    size = size_px  # the PSF's field: wide enough to hold the blur (a kernel is never cut), then cropped
+    if energy_outside_field(mapped, kept.pupil_diameter_mm, [nm], [1.0], arcmin_per_px, size) > MAX_ENERGY_OUTSIDE:
+        size = size_holding_px(mapped, kept.pupil_diameter_mm, [nm], [1.0], arcmin_per_px, size)
+    size += (size - size_px) % 2  # the crop stays centred
+    psf = compute_psf(mapped, wavelength_nm=nm, arcmin_per_px=arcmin_per_px, size_px=size)
+    chart = optotype_tile(letter, logmar, arcmin_per_px=arcmin_per_px, shape_px=(size, size),
                           viewing_distance_m=DEFAULT_CHART_DISTANCE_M, snap_to_pixels=False)
-    return blur_image(chart.pixels.astype(np.float64), psf, arcmin_per_px=arcmin_per_px, padding="edge")
+    seen = blur_image(chart.pixels.astype(np.float64), psf, arcmin_per_px=arcmin_per_px, padding="edge")
+    start = (size - size_px) // 2
+    return seen[start:start + size_px, start:start + size_px]
 
 
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
