@@ -183,10 +183,17 @@ def _letter_mosaic(results, condition) -> bytes:
     matplotlib.use("Agg")
     from matplotlib import pyplot
 
-    from vissim.optics.eyes.defaults import DEFAULT_LETTER, POPULATION_LETTER_LOGMAR
+    from vissim.charts import optotype_tile
+    from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_LETTER, POPULATION_ARCMIN_PER_PX,
+                                             POPULATION_LETTER_LOGMAR, POPULATION_LETTER_SIZE_PX)
     from vissim.optics.eyes.measured.measured_eye import parse_measured_eye
-    from vissim.optics.eyes.measured.population import seen_letter
+    from vissim.optics.eyes.measured.population import seen_image
     from vissim.validation.engine.figures import png_bytes
+
+    size = POPULATION_LETTER_SIZE_PX
+    letter = optotype_tile(DEFAULT_LETTER, POPULATION_LETTER_LOGMAR, arcmin_per_px=POPULATION_ARCMIN_PER_PX,
+                           shape_px=(size, size), viewing_distance_m=DEFAULT_CHART_DISTANCE_M,
+                           snap_to_pixels=False).pixels
 
     ranked = sorted((r for r in results if r.condition == condition), key=lambda r: r.strehl)
     picks = [ranked[i] for i in sorted(set(np.linspace(0, len(ranked) - 1, MOSAIC_EYES).round().astype(int)))]
@@ -195,7 +202,8 @@ def _letter_mosaic(results, condition) -> bytes:
     for ax in axes.flat:
         ax.set_axis_off()
     for ax, r in zip(axes.flat, picks):
-        ax.imshow(seen_letter(parse_measured_eye(r.eye), condition), cmap="gray", vmin=0, vmax=1)
+        seen = seen_image(parse_measured_eye(r.eye), condition, letter, POPULATION_ARCMIN_PER_PX)
+        ax.imshow(seen, cmap="gray", vmin=0, vmax=1)
         ax.set_title(f"{r.eye.split(':', 1)[1]}: Strehl {r.strehl:.2f}", fontsize=7)
     fig.suptitle(f"{DEFAULT_LETTER} at LogMAR {POPULATION_LETTER_LOGMAR:g} through {len(picks)} of {len(ranked)} eyes, "
                  f"lowest to highest Strehl ratio ({condition.label})", fontsize=8)

@@ -28,9 +28,7 @@ import numpy as np
 
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_LETTER, PHOTOPIC_FOCUS_NM,
-                                         POPULATION_ARCMIN_PER_PX, POPULATION_LETTER_LOGMAR,
-                                         POPULATION_LETTER_SIZE_PX)
+from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
 from vissim.optics.eyes.measured.datasets import load_dataset
 from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL, MeasuredWavefront, measured_trace
 from vissim.optics.eyes.models import eye_model
@@ -42,7 +40,7 @@ from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "evaluate_population",
-           "population_quantiles", "schematic_mtf", "schematic_refraction", "seen_letter", "QUANTILES",
+           "population_quantiles", "schematic_mtf", "schematic_refraction", "seen_image", "QUANTILES",
            "CHUNK_EYES"]
 
 log = logging.getLogger(__name__)
@@ -164,32 +162,27 @@ def schematic_refraction(model: str, condition: PopulationCondition) -> tuple[fl
     return tuple(float(v) for v in along_chief_ray(own, trace.chief_direction, 0.0).power_vector())
 
 
-def seen_letter(eye: MeasuredWavefront, condition: PopulationCondition, *, letter: str = DEFAULT_LETTER,
-                logmar: float = POPULATION_LETTER_LOGMAR, arcmin_per_px: float = POPULATION_ARCMIN_PER_PX,
-                size_px: int = POPULATION_LETTER_SIZE_PX) -> np.ndarray:
-    """A Sloan ``letter`` (black on white, printed for `DEFAULT_CHART_DISTANCE_M`) as ``eye`` sees it under
-    ``condition``: the wave PSF of the orders its correction leaves, in visual angle, applied in linear light;
-    ``size_px`` square pixels of ``arcmin_per_px`` centred on the letter."""
-    from vissim.charts import optotype_tile
+def seen_image(eye: MeasuredWavefront, condition: PopulationCondition, image, arcmin_per_px: float) -> np.ndarray:
+    """``image`` (linear light, square pixels of ``arcmin_per_px``, in visual angle) as ``eye`` sees it under
+    ``condition``: the wave PSF of the orders its correction leaves, in visual angle, applied with the image's
+    edges continued; the PSF's field holds its blur (a kernel is never cut)."""
     from vissim.optics.blur.convolve import blur_image
     from vissim.optics.psf.compute import compute_psf
     from vissim.optics.psf.field_size import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
 
+    pixels = np.asarray(image, dtype=np.float64)
     front, field_map = _front(eye, condition)
     lowest = 2 if condition.correction == "uncorrected" else 3
     nm = condition.wavelength_nm
     kept = Wavefront({k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}, front.pupil_diameter_mm, nm)
     mapped = SpectralWavefront((nm,), (kept,), nm, eye.name, field_map)
-    size = size_px  # the PSF's field: wide enough to hold the blur (a kernel is never cut), then cropped
+    size = max(pixels.shape)
     if energy_outside_field(mapped, kept.pupil_diameter_mm, [nm], [1.0], arcmin_per_px, size) > MAX_ENERGY_OUTSIDE:
         size = size_holding_px(mapped, kept.pupil_diameter_mm, [nm], [1.0], arcmin_per_px, size)
-    size += (size - size_px) % 2  # the crop stays centred
     psf = compute_psf(mapped, wavelength_nm=nm, arcmin_per_px=arcmin_per_px, size_px=size)
-    chart = optotype_tile(letter, logmar, arcmin_per_px=arcmin_per_px, shape_px=(size, size),
-                          viewing_distance_m=DEFAULT_CHART_DISTANCE_M, snap_to_pixels=False)
-    seen = blur_image(chart.pixels.astype(np.float64), psf, arcmin_per_px=arcmin_per_px, padding="edge")
-    start = (size - size_px) // 2
-    return seen[start:start + size_px, start:start + size_px]
+    margin = [((size - n) // 2 + 1, (size - n) // 2 + 1) for n in pixels.shape]
+    seen = blur_image(np.pad(pixels, margin, mode="edge"), psf, arcmin_per_px=arcmin_per_px, padding="edge")
+    return seen[margin[0][0]:margin[0][0] + pixels.shape[0], margin[1][0]:margin[1][0] + pixels.shape[1]]
 
 
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
