@@ -37,6 +37,8 @@ def test_a_small_population_writes_its_files(tmp_path, capsys):
 @pytest.mark.parametrize("extra, words", [
     (["--pupil-mm", "5"], "measured over a 4 mm pupil"),
     (["--correction", "contacts"], "--correction is uncorrected or sphero-cylinder, got 'contacts'"),
+    (["--correction", ""], "--correction is empty"),
+    (["--field-deg", ";"], "--field-deg is empty"),
     (["--workers", "0"], "--workers must be > 0 worker processes, got '0'"),
     (["--subjects", "x"], "--subjects takes whole numbers"),
     (["--subjects", "500"], "has subjects 1-130, got 500"),

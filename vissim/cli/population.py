@@ -41,7 +41,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help=f"light (default {PHOTOPIC_FOCUS_NM:g}: V(λ)'s peak, the published fits' light)")
     parser.add_argument("--mtf-cyc-per-deg", default="5,10,20,30", metavar="F[,F...]",
                         help="MTF frequencies, cycles/deg (default 5,10,20,30)")
-    parser.add_argument("--workers", type=int, default=1, metavar="N", help="spread the eyes over N processes")
+    parser.add_argument("--workers", type=int, default=1, metavar="N", help="spread the eyes over N processes (default 1)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="spread the eyes over a Dask distributed scheduler")
     parser.add_argument("--overwrite", action="store_true", help="replace files from an earlier run")
     parser.set_defaults(func=run)
@@ -54,6 +54,10 @@ def _conditions(args):
     pupils = parse_float_list(args.pupil_mm, "--pupil-mm", "mm")
     fields = [field_deg_from_text(text) for text in args.field_deg.split(";") if text.strip()]
     corrections = [c.strip() for c in args.correction.split(",") if c.strip()]
+    if not fields:
+        raise VissimInputError(f"--field-deg is empty; expected X,Y[;X,Y...] in degrees, got {args.field_deg!r}")
+    if not corrections:
+        raise VissimInputError(f"--correction is empty; expected {' or '.join(CORRECTIONS)}")
     for c in corrections:
         if c not in CORRECTIONS:
             raise VissimInputError(f"--correction is {' or '.join(CORRECTIONS)}, got {c!r}")
