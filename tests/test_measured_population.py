@@ -82,7 +82,9 @@ def test_eyes_not_measured_at_a_field_are_skipped_and_named(caplog):
 
 
 @pytest.mark.parametrize("kwargs, words", [({"correction": "contact lens"}, "one of uncorrected, sphero-cylinder"),
-                                           ({"wavelength_nm": 0.0}, "wavelength")])
+                                           ({"wavelength_nm": 0.0}, "wavelength"),
+                                           ({"field_deg": (1.0,)}, "field is \\(x, y\\)"),
+                                           ({"field_deg": ("a", 0)}, "field angle")])
 def test_bad_conditions_are_refused(kwargs, words):
     with pytest.raises(VissimInputError, match=words):
         PopulationCondition(3.0, **kwargs)
@@ -137,3 +139,8 @@ def test_an_eye_with_the_higher_strehl_sees_the_letter_with_more_contrast():
     assert results[-1].strehl > results[0].strehl + 0.1 and seen[0].shape == letter.shape
     assert np.ptp(seen[1]) > np.ptp(seen[0])
     assert abs(seen[0].mean() - letter.mean()) < 0.01  # blur moves light, it does not make or lose it
+
+
+def test_a_pupil_no_eye_has_is_refused():
+    with pytest.raises(VissimInputError, match="pupil"):
+        PopulationCondition(0.0)

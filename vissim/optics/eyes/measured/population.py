@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import eye_pupil_diameter_mm, finite_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
@@ -66,8 +67,12 @@ class PopulationCondition:
         if self.correction not in CORRECTIONS:
             raise VissimInputError(f"a population's correction is one of {', '.join(CORRECTIONS)}, "
                                    f"got {self.correction!r}")
+        object.__setattr__(self, "pupil_mm", eye_pupil_diameter_mm(self.pupil_mm, "a population's pupil"))
         object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm))
-        object.__setattr__(self, "field_deg", tuple(float(v) for v in self.field_deg))
+        field = tuple(finite_number(v, "a population's field angle", "deg") for v in self.field_deg)
+        if len(field) != 2:
+            raise VissimInputError(f"a population's field is (x, y) in degrees, got {self.field_deg!r}")
+        object.__setattr__(self, "field_deg", field)
 
     @property
     def label(self) -> str:
