@@ -289,3 +289,9 @@ def test_slopes_over_the_beams_plane_go_to_visual_angle_by_the_rotation_they_are
         trace = trace_eye_wavefront(base.optics, 555.0, (theta, 0.0), pupil_mm=4.0)
         np.testing.assert_allclose(beam_field_map(trace), np.diag([1.0, 1.0 / math.cos(math.radians(theta))]),
                                    atol=1e-9)
+
+
+def test_the_json_says_which_plane_the_zernikes_are_over(capsys):
+    measured = eye_json(capsys, "polans-2015:2", "--pupil-mm", "3", "--field-deg", "20,0")
+    schematic = eye_json(capsys, "navarro-1985", "--pupil-mm", "3", "--field-deg", "20,0")
+    assert "normal to the chief ray" in measured["zernike_pupil"] and schematic["zernike_pupil"] == "entrance pupil"

@@ -160,7 +160,7 @@ def _print_text(report: EyeReport) -> None:
         ("entrance pupil", f"{pupil['diameter_mm']:.4f} mm across (real rays; paraxial "
                            f"{pupil['paraxial_diameter_mm']:.4f}), {pupil['position_mm']:.4f} mm behind the cornea"),
         ("iris", f"{record['iris_mm']:.4f} mm ({pupil['given']} given)"),
-        ("RMS (order >= 2)", f"{record['rms_um']:.4f} µm over the entrance pupil"),
+        ("RMS (order >= 2)", f"{record['rms_um']:.4f} µm over the {record['zernike_pupil']}"),
         ("refraction at", refraction["refraction_plane"] + " (correcting lens, minus cylinder)"),
         ("refraction over", refraction["pupil_definition"]),
         ("  paraxial", _rx_line(refraction["paraxial"])),
