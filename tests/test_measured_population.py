@@ -144,3 +144,32 @@ def test_an_eye_with_the_higher_strehl_sees_the_letter_with_more_contrast():
 def test_a_pupil_no_eye_has_is_refused():
     with pytest.raises(VissimInputError, match="pupil"):
         PopulationCondition(0.0)
+
+
+def test_spectacles_of_the_eyes_own_refraction_leave_only_its_higher_orders():
+    # The eye's minimum-RMS refraction at its pupil (Thibos et al. 2004 from c2 terms), carried to the
+    # spectacle plane by each principal meridian's vergence, F / (1 + d F), d = 12 mm + the pupil's depth.
+    from vissim.optics.eyes.report import eye_report
+    from vissim.optics.rx.prescription import Prescription
+    name = "jaeken-artal-2012:40:right"
+    eye = build_eye(name, pupil_mm=4.0)
+    front = eye_wavefront(eye, wavelength_nm=555.0).coefficients_um
+    r2 = 2.0 ** 2
+    m = -4 * math.sqrt(3) * front[(2, 0)] / r2
+    j0, j45 = -2 * math.sqrt(6) * front[(2, 2)] / r2, -2 * math.sqrt(6) * front[(2, -2)] / r2
+    cylinder = -2 * math.hypot(j0, j45)
+    axis = math.degrees(0.5 * math.atan2(j45, j0)) % 180
+    sphere = m - cylinder / 2
+    depth_m = (12.0 + eye_report(eye, wavelength_nm=555.0).wavefront.entrance_pupil_position_mm) / 1000
+    at_spectacles = [f / (1 + depth_m * f) for f in (sphere, sphere + cylinder)]
+    rx = Prescription(at_spectacles[0], at_spectacles[1] - at_spectacles[0], axis)
+    [best], [worn], [none] = (evaluate_population([parse(name)], [PopulationCondition(4.0, correction=c)], [10.0])
+                              for c in ("sphero-cylinder", rx, "uncorrected"))
+    assert worn.strehl == pytest.approx(best.strehl, rel=1e-6) and worn.mtf[0] == pytest.approx(best.mtf[0], rel=1e-6)
+    assert none.strehl < 0.5 * best.strehl
+    assert "wearing" in worn.condition.label and cylinder < -0.25  # the axis matters
+
+
+def parse(name):
+    from vissim.optics.eyes.measured.measured_eye import parse_measured_eye
+    return parse_measured_eye(name)

@@ -9,7 +9,7 @@ from pathlib import Path
 from vissim.checks import MAX_WORKERS
 from vissim.cli._common import FIELD_DEG_HELP, field_deg_from_text, parse_float_list
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM
 
 DATASETS = ("jaeken-artal-2012", "polans-2015")  # vissim.optics.eyes.measured.datasets.DATASET_NAMES (test)
 CORRECTIONS = ("uncorrected", "sphero-cylinder")  # ...measured.population.CORRECTIONS (test)
@@ -36,7 +36,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="entrance pupil diameters, mm, at most the data's 4 (default 3,4)")
     parser.add_argument("--field-deg", default="0,0", metavar="X,Y[;X,Y...]", help=FIELD_DEG_HELP + "; several with ;")
     parser.add_argument("--correction", default="sphero-cylinder", metavar="STATE[,STATE]",
-                        help=f"{' or '.join(CORRECTIONS)} (default sphero-cylinder: orders 0-2 removed)")
+                        help=f"{' or '.join(CORRECTIONS)} (default sphero-cylinder: orders 0-2 removed), or the "
+                             "spectacles worn as a prescription, e.g. '-1.00 -0.50 x 90'")
+    parser.add_argument("--vertex-mm", type=float, default=DEFAULT_SPECTACLE_VERTEX_MM, metavar="MM",
+                        help=f"spectacles' distance in front of the cornea (default {DEFAULT_SPECTACLE_VERTEX_MM:g})")
     parser.add_argument("--wavelength-nm", type=float, metavar="NM",
                         help=f"light (default {PHOTOPIC_FOCUS_NM:g}: V(λ)'s peak, the published fits' light)")
     parser.add_argument("--mtf-cyc-per-deg", default="5,10,20,30", metavar="F[,F...]",
@@ -58,11 +61,21 @@ def _conditions(args):
         raise VissimInputError(f"--field-deg is empty; expected X,Y[;X,Y...] in degrees, got {args.field_deg!r}")
     if not corrections:
         raise VissimInputError(f"--correction is empty; expected {' or '.join(CORRECTIONS)}")
-    for c in corrections:
-        if c not in CORRECTIONS:
-            raise VissimInputError(f"--correction is {' or '.join(CORRECTIONS)}, got {c!r}")
+    corrections = [c if c in CORRECTIONS else _worn(c) for c in corrections]
     nm = PHOTOPIC_FOCUS_NM if args.wavelength_nm is None else args.wavelength_nm
-    return [PopulationCondition(p, f, c, nm) for p, f, c in itertools.product(pupils, fields, corrections)]
+    return [PopulationCondition(p, f, c, nm, args.vertex_mm)
+            for p, f, c in itertools.product(pupils, fields, corrections)]
+
+
+def _worn(text: str):
+    """A --correction that is not a state: spectacles worn, written as a prescription."""
+    from vissim.optics.rx.prescription import prescription_from
+
+    try:
+        return prescription_from(text)
+    except VissimInputError:
+        raise VissimInputError(f"--correction is {' or '.join(CORRECTIONS)} or the spectacles worn (a prescription, "
+                               f"e.g. '-1.00 -0.50 x 90'), got {text!r}") from None
 
 
 def _eyes(args):

@@ -8,7 +8,8 @@ frequencies, the Strehl ratio, the eye's own refraction (M, J0, J45 over the pup
 
 * **Correction states**: ``"uncorrected"`` (the eye as measured, tilt aside); ``"sphero-cylinder"``: the
   best spectacle correction in the minimum-RMS sense, orders 0-2 removed (what a sphero-cylinder can correct),
-  the higher orders left. Lenses at a vertex distance are not modelled here.
+  the higher orders left; or a `Prescription`: those spectacles worn ``vertex_mm`` in front of the cornea,
+  their vergence at the entrance pupil taken from the eye's second-order terms.
 * **One trace per condition**: the base eye is traced once per condition (field, pupil, wavelength), and
   every eye's front is made from that trace (`measured_eye.measured_trace`), the same front as
   `vissim.optics.eyes.psf_wavefront.eye_wavefront` gives for that eye alone (tested).
@@ -29,16 +30,17 @@ import numpy as np
 from vissim.checks import eye_pupil_diameter_mm, finite_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import PHOTOPIC_FOCUS_NM
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM
 from vissim.optics.eyes.measured.datasets import load_dataset
 from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL, MeasuredWavefront, measured_trace
 from vissim.optics.eyes.models import eye_model
-from vissim.optics.eyes.refraction import minimum_rms_prescription
+from vissim.optics.eyes.refraction import minimum_rms_prescription, transfer_prescription
 from vissim.optics.eyes.report import eye_mtf
 from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
 from vissim.optics.psf.compute import strehl_ratio
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
 
 __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "evaluate_population",
            "population_quantiles", "schematic_mtf", "schematic_refraction", "seen_image", "QUANTILES",
@@ -60,13 +62,15 @@ class PopulationCondition:
 
     pupil_mm: float
     field_deg: tuple[float, float] = (0.0, 0.0)
-    correction: str = "sphero-cylinder"
+    correction: str | Prescription = "sphero-cylinder"
     wavelength_nm: float = PHOTOPIC_FOCUS_NM  # V(λ)'s peak
+    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM  # a given Rx's lens, in front of the cornea
 
     def __post_init__(self) -> None:
-        if self.correction not in CORRECTIONS:
-            raise VissimInputError(f"a population's correction is one of {', '.join(CORRECTIONS)}, "
-                                   f"got {self.correction!r}")
+        if not isinstance(self.correction, Prescription) and self.correction not in CORRECTIONS:
+            raise VissimInputError(f"a population's correction is one of {', '.join(CORRECTIONS)} or a "
+                                   f"Prescription (spectacles worn), got {self.correction!r}")
+        object.__setattr__(self, "vertex_mm", finite_number(self.vertex_mm, "a population's vertex distance", "mm"))
         object.__setattr__(self, "pupil_mm", eye_pupil_diameter_mm(self.pupil_mm, "a population's pupil"))
         object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm))
         field = tuple(finite_number(v, "a population's field angle", "deg") for v in self.field_deg)
@@ -77,8 +81,9 @@ class PopulationCondition:
     @property
     def label(self) -> str:
         x, y = self.field_deg
-        return (f"{self.pupil_mm:g} mm, field {x:g},{y:g} deg, {self.wavelength_nm:g} nm, "
-                f"{self.correction}")
+        worn = (f"wearing {self.correction.format()} at {self.vertex_mm:g} mm"
+                if isinstance(self.correction, Prescription) else self.correction)
+        return f"{self.pupil_mm:g} mm, field {x:g},{y:g} deg, {self.wavelength_nm:g} nm, {worn}"
 
 
 @dataclass(frozen=True)
@@ -128,18 +133,35 @@ def _base_traces(condition: PopulationCondition, defocus_wavelength_nm: float):
 
 
 def _front(eye: MeasuredWavefront, condition: PopulationCondition):
-    """The eye's orders 2 and up under ``condition`` (µm over its pupil), and its slopes-to-angle map."""
+    """The eye's orders 2 and up under ``condition`` (µm over its pupil), its slopes-to-angle map, and its
+    entrance pupil's distance behind the cornea (mm)."""
     trace, reference = _base_traces(condition, eye.defocus_wavelength_nm)
     traced = measured_trace(trace, eye, reference)
     own = {k: v for k, v in traced.zernike_um.items() if k[0] >= 2}
-    return Wavefront(own, traced.entrance_pupil_mm, condition.wavelength_nm), traced.field_map
+    return (Wavefront(own, traced.entrance_pupil_mm, condition.wavelength_nm), traced.field_map,
+            traced.entrance_pupil_position_mm)
 
 
-def _seen_mtf(front: Wavefront, field_map, condition: PopulationCondition, frequencies, name: str) -> np.ndarray:
-    """The MTF (module doc) of ``front``'s orders the correction leaves, in visual angle (``field_map``)."""
+def _corrected(front: Wavefront, condition: PopulationCondition, pupil_position_mm: float) -> Wavefront:
+    """What the eye sees through its correction (module doc): orders 2 and up uncorrected, 3 and up with its
+    best sphero-cylinder; wearing a given Rx, the lens's vergence at the pupil (`transfer_prescription`,
+    ``vertex_mm`` plus the pupil's depth; its paraxial power, oblique lens astigmatism aside) taken from the
+    eye's second-order terms."""
+    nm, pupil = condition.wavelength_nm, front.pupil_diameter_mm
     lowest = 2 if condition.correction == "uncorrected" else 3
+    kept = {k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}
+    if isinstance(condition.correction, Prescription):
+        at_pupil = transfer_prescription(condition.correction, -(condition.vertex_mm + pupil_position_mm))
+        lens = Wavefront.from_prescription(at_pupil, pupil).coefficients_um
+        for key, value in front.coefficients_um.items():
+            if key[0] == 2:
+                kept[key] = value - lens.get(key, 0.0)
+    return Wavefront(kept, pupil, nm)
+
+
+def _seen_mtf(seen: Wavefront, field_map, condition: PopulationCondition, frequencies, name: str) -> np.ndarray:
+    """The MTF (module doc) of the corrected front ``seen``, in visual angle (``field_map``)."""
     nm = condition.wavelength_nm
-    seen = Wavefront({k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}, front.pupil_diameter_mm, nm)
     curves = eye_mtf(SpectralWavefront((nm,), (seen,), nm, name, field_map), nm, frequencies, condition.field_deg)
     return np.mean([curves[k] for k in curves], axis=0)
 
@@ -152,8 +174,10 @@ def schematic_mtf(model: str, condition: PopulationCondition, frequencies_cyc_pe
 
     eye = build_eye(model, pupil_mm=condition.pupil_mm)
     spectral = eye_spectral_wavefront(eye, wavelengths_nm=[condition.wavelength_nm], field_deg=condition.field_deg)
-    return _seen_mtf(spectral.fronts[0], spectral.field_map, condition,
-                     np.asarray(frequencies_cyc_per_deg, dtype=float), model)
+    position = trace_eye_wavefront(eye.optics, condition.wavelength_nm, condition.field_deg,
+                                   pupil_mm=condition.pupil_mm).entrance_pupil_position_mm
+    seen = _corrected(spectral.fronts[0], condition, position)
+    return _seen_mtf(seen, spectral.field_map, condition, np.asarray(frequencies_cyc_per_deg, dtype=float), model)
 
 
 def schematic_refraction(model: str, condition: PopulationCondition) -> tuple[float, float, float]:
@@ -176,10 +200,9 @@ def seen_image(eye: MeasuredWavefront, condition: PopulationCondition, image, ar
     from vissim.optics.psf.field_size import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
 
     pixels = np.asarray(image, dtype=np.float64)
-    front, field_map = _front(eye, condition)
-    lowest = 2 if condition.correction == "uncorrected" else 3
+    front, field_map, position = _front(eye, condition)
+    kept = _corrected(front, condition, position)
     nm = condition.wavelength_nm
-    kept = Wavefront({k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}, front.pupil_diameter_mm, nm)
     mapped = SpectralWavefront((nm,), (kept,), nm, eye.name, field_map)
     size = max(pixels.shape)
     if energy_outside_field(mapped, kept.pupil_diameter_mm, [nm], [1.0], arcmin_per_px, size) > MAX_ENERGY_OUTSIDE:
@@ -191,12 +214,12 @@ def seen_image(eye: MeasuredWavefront, condition: PopulationCondition, image, ar
 
 
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
-    front, field_map = _front(eye, condition)
-    pupil, nm = front.pupil_diameter_mm, condition.wavelength_nm
+    front, field_map, position = _front(eye, condition)
+    pupil = front.pupil_diameter_mm
     m, j0, j45 = minimum_rms_prescription(dict(front.coefficients_um), pupil).power_vector()
     higher = {k: v for k, v in front.coefficients_um.items() if k[0] >= 3}
-    seen = front if condition.correction == "uncorrected" else Wavefront(higher, pupil, nm)
-    mtf = _seen_mtf(front, field_map, condition, frequencies, eye.name) if len(frequencies) else np.zeros(0)
+    seen = _corrected(front, condition, position)
+    mtf = _seen_mtf(seen, field_map, condition, frequencies, eye.name) if len(frequencies) else np.zeros(0)
     rms = math.sqrt(sum(v * v for v in higher.values()))
     return EyeResult(eye.name, condition, mtf, float(strehl_ratio(seen, wavelength_nm=condition.wavelength_nm)),
                      float(m), float(j0), float(j45), rms)
