@@ -7,7 +7,7 @@ import itertools
 from pathlib import Path
 
 from vissim.checks import MAX_WORKERS
-from vissim.cli._common import FIELD_DEG_HELP, field_deg_from_text, parse_float_list
+from vissim.cli._common import field_deg_from_text, parse_float_list
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM
 
@@ -24,7 +24,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
             "equivalent lies in a range) under every combination of the pupils, fields and corrections given: per eye "
             "the MTF, the Strehl ratio, the refraction (M, J0, J45 over the pupil) and the higher-order RMS. Writes "
             "eyes.csv, quantiles.json, gap.md (the population beside the Navarro schematic eye and the published "
-            "human MTFs that share its conditions) and figure_mtf.png into the output folder."),
+            "human MTFs that share its conditions), figure_mtf.png (the population's MTFs as a fan chart), "
+            "figure_letters.png (a letter through 16 of the eyes) and, with three or more fields on the horizontal "
+            "meridian, figure_astigmatism.png (cylinder against field beside every schematic eye) into the "
+            "output folder."),
     )
     parser.add_argument("dataset", choices=DATASETS, help="the measured eyes")
     parser.add_argument("-o", "--output", type=Path, required=True, help="output folder")
@@ -34,7 +37,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="keep the eyes whose foveal spherical equivalent (4 mm, 555 nm) is within LOW..HIGH D")
     parser.add_argument("--pupil-mm", default="3,4", metavar="D[,D...]",
                         help="entrance pupil diameters, mm, at most the data's 4 (default 3,4)")
-    parser.add_argument("--field-deg", default="0,0", metavar="X,Y[;X,Y...]", help=FIELD_DEG_HELP + "; several with ;")
+    parser.add_argument("--field-deg", default="0,0", metavar="X,Y[;X,Y...]",
+                        help="field angles, degrees, x (examiner's right: the observer's left) and y (up), from the "
+                             "line of sight, as the data were measured; several with ; (default 0,0: the fovea)")
     parser.add_argument("--correction", default="sphero-cylinder", metavar="STATE[,STATE]",
                         help=f"{' or '.join(CORRECTIONS)} (default sphero-cylinder: orders 0-2 removed), or the "
                              "spectacles worn as a prescription, e.g. '-1.00 -0.50 x 90'")
