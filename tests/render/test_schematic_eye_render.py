@@ -34,11 +34,12 @@ def test_an_eye_accommodated_to_a_near_chart_sees_it_sharper(tmp_path):
     """A letter at 0.5 m (2 D): the eye accommodated 2 D images it with more contrast than the relaxed
     eye.  Paraxially (`optics.eyes.paraxial.refraction_diopters`, 589.3 nm) Navarro's eye focuses at
     +0.03 D relaxed and -2.32 D accommodated 2 D: defocus 2.0 D (a ~21 arcmin blur over the 3 mm pupil,
-    four times the 5 arcmin strokes) against 0.3 D.  Measured at 64 spp: 5-95 % spread 0.49 and 0.97."""
+    four times the 5 arcmin strokes) against 0.3 D.  Measured at 64 spp: 5-95 % spread 0.42 and 0.91."""
     spreads = {}
     for accommodation in ("0", "2"):
         path = tmp_path / f"a{accommodation}.exr"
         assert main(["render", "eye", "--size", "32x32", "--spp", "64", "--logmar", "0.7", "--distance-m", "0.5",
+                     "--arcmin-per-px", "1", "--pupil-mm", "3", "--wavelength-nm", "589.3",  # the conditions above
                      "--accommodation-diopters", accommodation, "-o", str(path)]) == 0
         pixels = read_image(path).pixels
         spreads[accommodation] = float(np.percentile(pixels, 95) - np.percentile(pixels, 5))
