@@ -17,6 +17,7 @@ import pytest
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.measured import datasets
+from vissim.optics.eyes.measured.measured_eye import parse_measured_eye
 from vissim.optics.eyes.measured.population import (PopulationCondition, evaluate_population,
                                                     population_quantiles, select_eyes)
 from vissim.optics.eyes.psf_wavefront import eye_wavefront
@@ -29,7 +30,7 @@ EYES = select_eyes("jaeken-artal-2012", subjects=[3, 17, 40], eyes=["right", "le
 def test_each_eye_is_the_eye_alone():
     condition = PopulationCondition(3.0, (10.0, 0.0), "sphero-cylinder", 555.0)
     for result in evaluate_population(EYES, [condition]):
-        alone = eye_wavefront(build_eye(result.eye, pupil_mm=3.0), wavelength_nm=555.0, field_deg=(10.0, 0.0))
+        alone = eye_wavefront(build_eye(result.eye.name, pupil_mm=3.0), wavelength_nm=555.0, field_deg=(10.0, 0.0))
         higher = {k: v for k, v in alone.coefficients_um.items() if k[0] >= 3}
         assert result.strehl == pytest.approx(strehl_ratio(Wavefront(higher, 3.0, 555.0), wavelength_nm=555.0),
                                               rel=1e-9)
@@ -77,7 +78,7 @@ def test_eyes_not_measured_at_a_field_are_skipped_and_named(caplog):
     eyes = select_eyes("jaeken-artal-2012", subjects=[17], eyes=["right", "left"])
     with caplog.at_level(logging.INFO, logger="vissim.optics.eyes.measured.population"):
         results = evaluate_population(eyes, [PopulationCondition(3.0, (-15.0, 0.0))])
-    assert [r.eye for r in results] == ["jaeken-artal-2012:17:left"]
+    assert [r.eye.name for r in results] == ["jaeken-artal-2012:17:left"]
     assert "jaeken-artal-2012:17:right" in caplog.text
 
 
@@ -122,8 +123,10 @@ def test_a_schematic_eyes_refraction_is_taken_as_the_measured_eyes_are():
     # is the tangential-sagittal difference optiland's real-ray foci give (tests/test_eye_oblique_refraction.py:
     # 0.20/0.84/2.00/3.85 D at the corneal vertex, within 0.05 D of this plane's).
     from vissim.optics.eyes.measured.population import schematic_refraction
+    from vissim.optics.eyes.models import eye_model
     for field, at_vertex in ((10.0, 0.20), (20.0, 0.84), (30.0, 2.00), (40.0, 3.85)):
-        _, j0, j45 = schematic_refraction("escudero-sanz-1999", PopulationCondition(1.0, (field, 0.0), "uncorrected", 543.0))
+        _, j0, j45 = schematic_refraction(eye_model("escudero-sanz-1999"),
+                                          PopulationCondition(1.0, (field, 0.0), "uncorrected", 543.0))
         assert 2 * math.hypot(j0, j45) == pytest.approx(at_vertex, abs=0.05)
 
 
@@ -132,7 +135,7 @@ def test_an_eye_with_the_higher_strehl_sees_the_letter_with_more_contrast():
     from vissim.optics.eyes.measured.population import seen_image
     condition = PopulationCondition(4.0)
     results = sorted(evaluate_population(EYES, [condition]), key=lambda r: r.strehl)
-    worst, best = (next(e for e in EYES if e.name == r.eye) for r in (results[0], results[-1]))
+    worst, best = (r.eye for r in (results[0], results[-1]))
     letter = optotype_tile("K", 0.1, arcmin_per_px=0.25, shape_px=(64, 80), viewing_distance_m=6.0,
                            snap_to_pixels=False).pixels
     seen = [seen_image(e, condition, letter, 0.25) for e in (worst, best)]
@@ -163,13 +166,8 @@ def test_spectacles_of_the_eyes_own_refraction_leave_only_its_higher_orders():
     depth_m = (12.0 + eye_report(eye, wavelength_nm=555.0).wavefront.entrance_pupil_position_mm) / 1000
     at_spectacles = [f / (1 + depth_m * f) for f in (sphere, sphere + cylinder)]
     rx = Prescription(at_spectacles[0], at_spectacles[1] - at_spectacles[0], axis)
-    [best], [worn], [none] = (evaluate_population([parse(name)], [PopulationCondition(4.0, correction=c)], [10.0])
+    [best], [worn], [none] = (evaluate_population([parse_measured_eye(name)], [PopulationCondition(4.0, correction=c)], [10.0])
                               for c in ("sphero-cylinder", rx, "uncorrected"))
     assert worn.strehl == pytest.approx(best.strehl, rel=1e-6) and worn.mtf[0] == pytest.approx(best.mtf[0], rel=1e-6)
     assert none.strehl < 0.5 * best.strehl
     assert "wearing" in worn.condition.label and cylinder < -0.25  # the axis matters
-
-
-def parse(name):
-    from vissim.optics.eyes.measured.measured_eye import parse_measured_eye
-    return parse_measured_eye(name)

@@ -5,14 +5,14 @@ import json
 
 import pytest
 
-from vissim.cli import main
-from vissim.cli import population as cli_population
+from vissim.cli import build_parser, main
 from vissim.optics.eyes.measured.datasets import DATASET_NAMES
-from vissim.optics.eyes.measured.population import CORRECTIONS
 
 
 def test_the_command_line_names_what_the_library_has():
-    assert cli_population.DATASETS == DATASET_NAMES and cli_population.CORRECTIONS == CORRECTIONS
+    parser = next(a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction").choices
+    dataset = next(a for a in parser["population"]._actions if a.dest == "dataset")
+    assert tuple(dataset.choices) == DATASET_NAMES
 
 
 def test_a_small_population_writes_its_files(tmp_path, capsys):

@@ -96,16 +96,17 @@ FIELD_DEG_HELP = ("field angle, degrees, x (examiner's right: the observer's lef
 def add_eye_model_arg(parser, help_text: str, **extra) -> None:
     """``--eye-model MODEL``: one of `EYE_MODELS`, or a measured eye (``jaeken-artal-2012:17:right``,
     ``polans-2015:3``); refused by the parser otherwise."""
+    from vissim.optics.eyes.measured.measured_eye import MEASURED_EYE_SPELLING
     from vissim.optics.eyes.models import EYE_MODELS
 
     parser.add_argument("--eye-model", type=_eye_name, metavar="EYE",
                         help=f"{help_text} (one of {', '.join(EYE_MODELS)}; or a measured eye, "
-                             "jaeken-artal-2012:SUBJECT:right|left or polans-2015:SUBJECT)", **extra)
+                             f"{MEASURED_EYE_SPELLING})", **extra)
 
 
 def _eye_name(text: str) -> str:
     """A schematic model's name or a measured eye's, checked (argparse reports the refusal on one line)."""
-    from vissim.optics.eyes.measured.measured_eye import is_measured_name, parse_measured_eye
+    from vissim.optics.eyes.measured.measured_eye import MEASURED_EYE_SPELLING, is_measured_name, parse_measured_eye
     from vissim.optics.eyes.models import EYE_MODELS
 
     if is_measured_name(text):
@@ -116,7 +117,7 @@ def _eye_name(text: str) -> str:
         return text
     if text not in EYE_MODELS:
         raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from {', '.join(EYE_MODELS)}, or a "
-                                         "measured eye: jaeken-artal-2012:SUBJECT:right|left, polans-2015:SUBJECT)")
+                                         f"measured eye: {MEASURED_EYE_SPELLING})")
     return text
 
 

@@ -9,10 +9,15 @@ from pathlib import Path
 from vissim.checks import MAX_WORKERS
 from vissim.cli._common import field_deg_from_text, parse_float_list
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM
+from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS,
+                                         POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
+from vissim.optics.eyes.measured.datasets import DATASET_NAMES
 
-DATASETS = ("jaeken-artal-2012", "polans-2015")  # vissim.optics.eyes.measured.datasets.DATASET_NAMES (test)
-CORRECTIONS = ("uncorrected", "sphero-cylinder")  # ...measured.population.CORRECTIONS (test)
+CORRECTIONS = POPULATION_CORRECTIONS
+
+
+def _listed(values) -> str:
+    return ",".join(f"{v:g}" for v in values)
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -29,14 +34,15 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
             "meridian, figure_astigmatism.png (cylinder against field beside every schematic eye) into the "
             "output folder."),
     )
-    parser.add_argument("dataset", choices=DATASETS, help="the measured eyes")
+    parser.add_argument("dataset", choices=DATASET_NAMES, help="the measured eyes")
     parser.add_argument("-o", "--output", type=Path, required=True, help="output folder")
     parser.add_argument("--subjects", metavar="N[,N...]", help="subjects, as numbered in the data (default all)")
     parser.add_argument("--eyes", metavar="SIDE[,SIDE]", help="right, left or both (default: the dataset's eyes)")
     parser.add_argument("--foveal-se-diopters", metavar="LOW,HIGH",
-                        help="keep the eyes whose foveal spherical equivalent (4 mm, 555 nm) is within LOW..HIGH D")
-    parser.add_argument("--pupil-mm", default="3,4", metavar="D[,D...]",
-                        help="entrance pupil diameters, mm, at most the data's 4 (default 3,4)")
+                        help="keep the eyes whose foveal spherical equivalent (over the data's pupil, in "
+                             f"{PHOTOPIC_FOCUS_NM:g} nm light) is within LOW..HIGH D")
+    parser.add_argument("--pupil-mm", default=_listed(POPULATION_PUPILS_MM), metavar="D[,D...]",
+                        help=f"entrance pupil diameters, mm, at most the data's (default {_listed(POPULATION_PUPILS_MM)})")
     parser.add_argument("--field-deg", default="0,0", metavar="X,Y[;X,Y...]",
                         help="field angles, degrees, x (examiner's right: the observer's left) and y (up), from the "
                              "line of sight, as the data were measured; several with ; (default 0,0: the fovea)")
@@ -47,8 +53,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help=f"spectacles' distance in front of the cornea (default {DEFAULT_SPECTACLE_VERTEX_MM:g})")
     parser.add_argument("--wavelength-nm", type=float, metavar="NM",
                         help=f"light (default {PHOTOPIC_FOCUS_NM:g}: V(λ)'s peak, the published fits' light)")
-    parser.add_argument("--mtf-cyc-per-deg", default="5,10,20,30", metavar="F[,F...]",
-                        help="MTF frequencies, cycles/deg (default 5,10,20,30)")
+    parser.add_argument("--mtf-cyc-per-deg", default=_listed(POPULATION_MTF_CYC_PER_DEG), metavar="F[,F...]",
+                        help=f"MTF frequencies, cycles/deg (default {_listed(POPULATION_MTF_CYC_PER_DEG)})")
     parser.add_argument("--workers", type=int, default=1, metavar="N", help="spread the eyes over N processes (default 1)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="spread the eyes over a Dask distributed scheduler")
     parser.add_argument("--overwrite", action="store_true", help="replace files from an earlier run")

@@ -12,7 +12,7 @@ __all__ = ["DEFAULT_EYE_MODEL", "DEFAULT_EYE_PUPIL_MM", "DEFAULT_SPECTACLE_VERTE
            "PHOTOPIC_FOCUS_NM", "PHOTOPIC_STEP_NM", "DEFAULT_CHART_DISTANCE_M", "DEFAULT_LETTER",
            "DEFAULT_LETTER_LOGMAR", "DEFAULT_EYE_ARCMIN_PER_PX", "DEFAULT_EYE_SIZE_PX",
            "POPULATION_LETTER_LOGMAR", "POPULATION_ARCMIN_PER_PX",
-           "POPULATION_LETTER_SIZE_PX"]
+           "POPULATION_LETTER_SIZE_PX", "POPULATION_CORRECTIONS", "POPULATION_PUPILS_MM", "POPULATION_MTF_CYC_PER_DEG"]
 
 #: The schematic eye used when none is named: Navarro, Santamaria & Bescos 1985.
 DEFAULT_EYE_MODEL = "navarro-1985"
@@ -33,3 +33,7 @@ DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_SIZE_PX = 0.5, (64, 64)
 #: A population's letter: near the acuity of a good eye (6/7.5; a 6.3 arcmin letter of 1.26 arcmin strokes),
 #: where eyes differ, drawn at 0.25 arcmin per pixel over 96 x 96 (24 arcmin: the letter and its blur).
 POPULATION_LETTER_LOGMAR, POPULATION_ARCMIN_PER_PX, POPULATION_LETTER_SIZE_PX = 0.1, 0.25, 96
+#: A population's correction states (beside spectacles given as a prescription), and its default pupils (mm:
+#: the published fits' 3 and the data's 4) and MTF frequencies (cycles/deg).
+POPULATION_CORRECTIONS = ("uncorrected", "sphero-cylinder")
+POPULATION_PUPILS_MM, POPULATION_MTF_CYC_PER_DEG = (3.0, 4.0), (5.0, 10.0, 20.0, 30.0)

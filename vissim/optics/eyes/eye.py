@@ -96,10 +96,8 @@ class Eye:
         if self.schematic != eye_model(BASE_EYE_MODEL):
             raise VissimInputError(f"{name} is built on the relaxed {BASE_EYE_MODEL} eye as published: its surfaces, "
                                    "accommodation and model cannot change")
-        limit = self.measured.pupil_mm
-        if self.pupil_mm is not None and self.pupil_mm > limit * (1 + 1e-12):
-            raise VissimInputError(f"{name} was measured over a {limit:g} mm pupil; an entrance pupil of "
-                                   f"{self.pupil_mm:g} mm would extrapolate it: give at most {limit:g} mm")
+        if self.pupil_mm is not None:
+            self.measured.checked_pupil_mm(self.pupil_mm)
 
     def _traced_optics(self) -> SchematicEye:
         optics = self._in_own_light(self.schematic)

@@ -52,7 +52,7 @@ from vissim.checks import MAX_FIELD_DEG
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
-from vissim.optics.eyes.measured.measured_eye import beam_field_map, measured_trace
+from vissim.optics.eyes.measured.measured_eye import beam_field_map, measured_front
 from vissim.optics.eyes.refraction import chief_ray_stretch
 from vissim.optics.eyes.traced_wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
 from vissim.optics.rx.prescription import Prescription
@@ -156,18 +156,6 @@ def chromatic_offset_deg(traced: EyeWavefront, reference: EyeWavefront, jacobian
     return float(x), float(y)
 
 
-def _measured(trace: EyeWavefront, measured, base, samples: int, traced: list) -> EyeWavefront:
-    """``trace`` with ``measured``'s aberrations in place of the base eye's: the defocus reference traced at its
-    wavelength (or taken from ``traced``), same field and pupil."""
-    wanted = measured.defocus_wavelength_nm
-    reference = next((t for t in traced if t.wavelength_nm == wanted and t.entrance_pupil_mm == trace.entrance_pupil_mm),
-                     None)
-    if reference is None:
-        reference = trace_eye_wavefront(base, wanted, trace.field_deg, pupil_mm=trace.entrance_pupil_mm,
-                                        samples=samples)
-    return measured_trace(trace, measured, reference)
-
-
 def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), vergence_diopters=0.0,
                            samples: int = DEFAULT_SAMPLES) -> SpectralWavefront:
     """The `SpectralWavefront` of the `Eye` ``eye`` traced at each of ``wavelengths_nm`` over its entrance
@@ -225,7 +213,7 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     slopes_to_angle = np.asarray(anchor.field_map) if measured is None else beam_field_map(anchor)
     fronts = []
     for t in traced:
-        front = _own_front(t if measured is None else _measured(t, measured, eye, samples, traced))
+        front = _own_front(t if measured is None else measured_front(t, measured, eye, samples=samples, traced=traced))
         if t is not anchor:  # the tilt whose slope the field map sends to the chief rays' visual-angle offset
             offset_mrad = np.linalg.solve(slopes_to_angle, deg_to_mrad(chromatic_offset_deg(t, anchor, jacobian)))
             front = front + Wavefront.tilt(offset_mrad, front.pupil_diameter_mm)

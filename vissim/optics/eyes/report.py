@@ -66,7 +66,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.psf import metrics as psf_metrics
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.lca import LcaCurve, lca_curve
-from vissim.optics.eyes.measured.measured_eye import measured_trace
+from vissim.optics.eyes.measured.measured_eye import measured_front
 from vissim.optics.eyes.paraxial import (image_focal_length_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.psf_wavefront import traced_spectral_wavefront
@@ -283,7 +283,7 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
     field = tuple(float(v) for v in field_deg)
     front = trace_eye_wavefront(eye, wavelength, field, pupil_mm=pupil_mm, iris_mm=iris_mm, lenses=setup)
     if eye_in.measured is not None:
-        front = _measured_front(front, eye_in.measured, eye)
+        front = measured_front(front, eye_in.measured, eye, traced=(front,))
     refraction = eye_refraction(front, vertex if setup is None else setup.span_mm)
     mean = mean_meridian_eye(eye)
     if setup is None:
@@ -304,13 +304,6 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
                      float(equivalent_power_diopters(mean, wavelength)), float(image_focal_length_mm(mean, wavelength)),
                      float(mm_per_deg), float(paraxial_pupil), front, refraction, tables_deg, tables_mm, setup,
                      mtf_spectrum, curve, None if eye_in.measured is None else eye.name)
-
-
-def _measured_front(front: EyeWavefront, measured, base) -> EyeWavefront:
-    """The base eye's ``front`` with the measured eye's aberrations (`vissim.optics.eyes.measured.measured_eye`)."""
-    reference = trace_eye_wavefront(base, measured.defocus_wavelength_nm, front.field_deg,
-                                    pupil_mm=front.entrance_pupil_mm)
-    return measured_trace(front, measured, reference)
 
 
 def _mtf(eye, front: EyeWavefront, setup, spectrum: MtfSpectrum | None, f_deg, measured=None) -> dict:

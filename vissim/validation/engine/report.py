@@ -109,13 +109,12 @@ def report_provenance(run_dir: Path, campaign: dict, results: list[dict]) -> dic
                            renders=renders_summary(results))
 
 
-def write_figure(path: Path, png: bytes, provenance: dict) -> bytes:
-    """A figure's PNG through `vissim.imageio.write_image` (so it gets its provenance sidecar); its bytes."""
+def write_figure(path: Path, png: bytes, provenance: dict) -> None:
+    """A figure's PNG through `vissim.imageio.write_image`: written atomically, with its provenance sidecar."""
     from PIL import Image as PILImage
 
     codes = np.asarray(PILImage.open(io.BytesIO(png)).convert("RGB"), dtype=np.float32) / 255.0
     write_image(path, codes, provenance=provenance, overwrite=True, encoding="linear")  # codes kept exactly
-    return path.read_bytes()
 
 
 def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict, rows: tuple[Row, ...], tables_md: str,
@@ -143,9 +142,9 @@ def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict
     written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
     shown = {}
     for name, figure in figures.items():
-        png = write_figure(run_dir / figure.file_name, figure.png,
-                           {**provenance, **figure.extra, "figure": name, "alt": figure.alt})
-        shown[name] = figure._replace(png=png)
+        write_figure(run_dir / figure.file_name, figure.png,
+                     {**provenance, **figure.extra, "figure": name, "alt": figure.alt})
+        shown[name] = figure._replace(png=(run_dir / figure.file_name).read_bytes())  # the page shows the file
         written += [run_dir / figure.file_name, run_dir / f"{figure.file_name}.json"]
     page = html_report(title, tables_md, shown, footer=made, description=description)
     written.append(write_text_atomic(run_dir / "report.html", page, overwrite=True))

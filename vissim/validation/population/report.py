@@ -24,13 +24,21 @@ import numpy as np
 
 from vissim.atomic import refuse_existing, write_json_atomic, write_text_atomic
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL
 from vissim.optics.eyes.measured.population import QUANTILES, population_quantiles, schematic_mtf
-from vissim.optics.eyes.measured.published import (ARTAL_NAVARRO_1994, NAVARRO_1993, WATSON_2013_PUPILS_MM,
-                                                   artal_navarro_1994_mtf, navarro_1993_mtf, watson_2013_mtf)
+from vissim.optics.eyes.measured.published import (ARTAL_NAVARRO_1994, NAVARRO_1993, NAVARRO_1993_PUPIL_MM,
+                                                   WATSON_2013_PUPILS_MM, artal_navarro_1994_mtf, navarro_1993_mtf,
+                                                   watson_2013_mtf)
 
 __all__ = ["write_population_run", "gap_table_md", "published_curves"]
 
-SCHEMATIC = "navarro-1985"
+SCHEMATIC = BASE_EYE_MODEL  # the schematic eye set beside the measured ones: the one they are built on
+
+
+def _schematic():
+    from vissim.optics.eyes.models import eye_model
+
+    return eye_model(SCHEMATIC)
 
 
 def published_curves(condition, frequencies) -> dict:
@@ -46,7 +54,7 @@ def published_curves(condition, frequencies) -> dict:
     if at_fovea and pupil in ARTAL_NAVARRO_1994:
         curves["Artal & Navarro 1994 (double-pass: scatter in)"] = artal_navarro_1994_mtf(frequencies, pupil)
     eccentricity = float(np.hypot(x, y))
-    if pupil == 4.0 and eccentricity in NAVARRO_1993 and eccentricity > 0:
+    if pupil == NAVARRO_1993_PUPIL_MM and eccentricity in NAVARRO_1993 and eccentricity > 0:
         curves["Navarro et al. 1993 (double-pass: scatter in)"] = navarro_1993_mtf(frequencies, eccentricity)
     return curves
 
@@ -59,7 +67,7 @@ def _eyes_csv(results, frequencies) -> str:
                      *[f"mtf_{f:g}_cyc_per_deg" for f in frequencies]])
     for r in results:
         c = r.condition
-        writer.writerow([r.eye, c.label, c.pupil_mm, *c.field_deg, c.wavelength_nm, c.correction, repr(r.strehl),
+        writer.writerow([r.eye.name, c.label, c.pupil_mm, *c.field_deg, c.wavelength_nm, c.correction, repr(r.strehl),
                          repr(r.m_diopters), repr(r.j0_diopters), repr(r.j45_diopters), repr(r.higher_order_rms_um),
                          *[repr(float(v)) for v in r.mtf]])
     return out.getvalue()
@@ -81,7 +89,7 @@ def gap_table_md(results, conditions, frequencies) -> str:
         low, mid, high = (table["mtf"][QUANTILES.index(q)] for q in (0.25, 0.5, 0.75))
         cells = [f"{m:.3f} [{a:.3f}-{b:.3f}]" for a, m, b in zip(low, mid, high)]
         lines.append("| population (wavefronts) | " + " | ".join(cells) + " |")
-        schematic = schematic_mtf(SCHEMATIC, condition, frequencies)
+        schematic = schematic_mtf(_schematic(), condition, frequencies)
         lines.append(f"| {SCHEMATIC} schematic eye (traced) | " + " | ".join(f"{v:.3f}" for v in schematic) + " |")
         for label, curve in published_curves(condition, frequencies).items():
             lines.append(f"| {label} | " + " | ".join(f"{v:.3f}" for v in curve) + " |")
@@ -105,7 +113,7 @@ def _fan_chart(results, conditions, frequencies) -> bytes:
         ax.fill_between(frequencies, mtf[0], mtf[4], color="tab:blue", alpha=0.15, label="population 5-95 %")
         ax.fill_between(frequencies, mtf[1], mtf[3], color="tab:blue", alpha=0.35, label="25-75 %")
         ax.plot(frequencies, mtf[2], color="tab:blue", lw=2, label="median")
-        ax.plot(frequencies, schematic_mtf(SCHEMATIC, condition, frequencies), color="k", lw=1.2, label=SCHEMATIC)
+        ax.plot(frequencies, schematic_mtf(_schematic(), condition, frequencies), color="k", lw=1.2, label=SCHEMATIC)
         for (label, curve), style in zip(published_curves(condition, frequencies).items(), ("--", ":", "-.")):
             ax.plot(frequencies, curve, style, color="tab:red", label=label)
         ax.set_title(f"{condition.label}\n({summary[condition.label]['count']} eyes)", fontsize=8)
@@ -115,16 +123,6 @@ def _fan_chart(results, conditions, frequencies) -> bytes:
         ax.legend(fontsize=6)
     fig.tight_layout()
     return png_bytes(fig)
-
-
-def _write_png(path: Path, png: bytes, provenance: dict) -> None:
-    """A figure's PNG through `vissim.imageio.write_image`: atomic, with its provenance sidecar."""
-    from PIL import Image as PILImage
-
-    from vissim.imageio import write_image
-
-    codes = np.asarray(PILImage.open(io.BytesIO(png)).convert("RGB"), dtype=np.float32) / 255.0
-    write_image(path, codes, provenance=provenance, overwrite=True, encoding="linear")  # codes kept exactly
 
 
 def _meridian(conditions) -> list:
@@ -149,6 +147,7 @@ def _astigmatism_chart(results, meridian) -> bytes:
     from matplotlib import pyplot
 
     from vissim.optics.eyes.measured.population import schematic_refraction
+    from vissim.optics.eyes.models import eye_model
     from vissim.optics.eyes.models import EYE_MODELS
     from vissim.validation.engine.figures import png_bytes
 
@@ -160,7 +159,7 @@ def _astigmatism_chart(results, meridian) -> bytes:
     ax.plot(x, bands[:, 1], color="tab:blue", lw=2, label="measured eyes, median")
     for model in EYE_MODELS:
         try:
-            values = [_cylinder(*schematic_refraction(model, c)[1:]) for c in meridian]
+            values = [_cylinder(*schematic_refraction(eye_model(model), c)[1:]) for c in meridian]
         except VissimInputError:  # a field the model's rays do not reach
             continue
         ax.plot(x, values, lw=1, label=model)
@@ -186,7 +185,6 @@ def _letter_mosaic(results, condition) -> bytes:
     from vissim.charts import optotype_tile
     from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_LETTER, POPULATION_ARCMIN_PER_PX,
                                              POPULATION_LETTER_LOGMAR, POPULATION_LETTER_SIZE_PX)
-    from vissim.optics.eyes.measured.measured_eye import parse_measured_eye
     from vissim.optics.eyes.measured.population import seen_image
     from vissim.validation.engine.figures import png_bytes
 
@@ -202,9 +200,9 @@ def _letter_mosaic(results, condition) -> bytes:
     for ax in axes.flat:
         ax.set_axis_off()
     for ax, r in zip(axes.flat, picks):
-        seen = seen_image(parse_measured_eye(r.eye), condition, letter, POPULATION_ARCMIN_PER_PX)
+        seen = seen_image(r.eye, condition, letter, POPULATION_ARCMIN_PER_PX)
         ax.imshow(seen, cmap="gray", vmin=0, vmax=1)
-        ax.set_title(f"{r.eye.split(':', 1)[1]}: Strehl {r.strehl:.2f}", fontsize=7)
+        ax.set_title(f"{r.eye.subject} {r.eye.eye}: Strehl {r.strehl:.2f}", fontsize=7)
     fig.suptitle(f"{DEFAULT_LETTER} at LogMAR {POPULATION_LETTER_LOGMAR:g} through {len(picks)} of {len(ranked)} eyes, "
                  f"lowest to highest Strehl ratio ({condition.label})", fontsize=8)
     fig.tight_layout()
@@ -213,7 +211,9 @@ def _letter_mosaic(results, condition) -> bytes:
 
 def write_population_run(run_dir: Path, results, conditions, frequencies, provenance: dict, *,
                          overwrite: bool = False) -> list[Path]:
-    """The run's files (module doc) in ``run_dir``; each written atomically, the figure with its provenance."""
+    """The run's files (module doc) in ``run_dir``; each written atomically, the figures with their provenance."""
+    from vissim.validation.engine.report import write_figure
+
     if not results:
         raise VissimInputError("no eye of the population was measured under any condition given")
     run_dir = Path(run_dir)
@@ -233,13 +233,13 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
         written.append(write_text_atomic(run_dir / "gap.md", gap_table_md(results, conditions, frequencies),
                                          overwrite=overwrite))
         figure = run_dir / "figure_mtf.png"
-        _write_png(figure, _fan_chart(results, conditions, frequencies), provenance)
+        write_figure(figure, _fan_chart(results, conditions, frequencies), provenance)
         written.append(figure)
     letters = run_dir / "figure_letters.png"
-    _write_png(letters, _letter_mosaic(results, results[0].condition), provenance)
+    write_figure(letters, _letter_mosaic(results, results[0].condition), provenance)
     written.append(letters)
     if len(meridian) >= 3:
         figure = run_dir / "figure_astigmatism.png"
-        _write_png(figure, _astigmatism_chart(results, meridian), provenance)
+        write_figure(figure, _astigmatism_chart(results, meridian), provenance)
         written.append(figure)
     return written

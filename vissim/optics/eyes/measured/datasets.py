@@ -31,13 +31,18 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["WavefrontDataset", "DATASET_NAMES", "load_dataset", "DATA_DIR", "OPTIC_DISC_X_DEG", "HIGHEST_OSA_J"]
+__all__ = ["UnmeasuredFieldError", "WavefrontDataset", "DATASET_NAMES", "load_dataset", "DATA_DIR", "OPTIC_DISC_X_DEG", "HIGHEST_OSA_J"]
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 #: The highest OSA j either dataset holds.
 HIGHEST_OSA_J = 20
 #: Polans et al.'s right eyes: the optic disc (vissim x, deg), refused as missing (module doc).
 OPTIC_DISC_X_DEG = (-18.0, -10.0)
+
+
+class UnmeasuredFieldError(VissimInputError):
+    """A field an eye was not measured at (the optic disc, a spot too distorted to measure): a population skips
+    the eye there, where a single eye refuses it."""
 
 
 @dataclass(frozen=True)
@@ -102,7 +107,7 @@ class WavefrontDataset:
         for i, wy in zip(yi, yw):
             for k, wx in zip(xi, xw):
                 if np.isnan(grid[i, k, 0]):
-                    raise VissimInputError(f"{self.name} subject {subject} {eye} eye: no measurement at field "
+                    raise UnmeasuredFieldError(f"{self.name} subject {subject} {eye} eye: no measurement at field "
                                            f"{self.x_deg[k]:g},{self.y_deg[i]:g} deg (the optic disc or a spot too "
                                            f"distorted to measure); measured nearby: {self._nearest(grid, x, y)}")
                 result += wy * wx * grid[i, k]

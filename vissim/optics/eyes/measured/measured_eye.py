@@ -41,11 +41,13 @@ import numpy as np
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.measured.datasets import DATASET_NAMES, load_dataset
 from vissim.optics.eyes.refraction import BEAM_PLANE, chief_ray_stretch
+from vissim.optics.eyes.traced_wavefront import DEFAULT_SAMPLES, trace_eye_wavefront
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.optics.pupil.zernike import ansi_j_to_nm
 
 __all__ = ["MeasuredWavefront", "parse_measured_eye", "is_measured_name", "BASE_EYE_MODEL",
-           "MEASURING_WAVELENGTH_NM", "DEFOCUS_WAVELENGTH_NM", "measured_trace", "beam_field_map"]
+           "MEASURING_WAVELENGTH_NM", "DEFOCUS_WAVELENGTH_NM", "measured_trace", "measured_front", "MEASURED_EYE_SPELLING",
+           "beam_field_map"]
 
 #: The schematic eye a measured eye is built on (module doc).
 BASE_EYE_MODEL = "navarro-1985"
@@ -53,6 +55,8 @@ BASE_EYE_MODEL = "navarro-1985"
 MEASURING_WAVELENGTH_NM = {"jaeken-artal-2012": 780.0, "polans-2015": 780.0}
 #: The wavelength each study's defocus (j = 4) refers to, nm (module doc).
 DEFOCUS_WAVELENGTH_NM = {"jaeken-artal-2012": 780.0, "polans-2015": 555.0}
+#: How a measured eye is spelled, for help texts and refusals.
+MEASURED_EYE_SPELLING = "jaeken-artal-2012:SUBJECT:right|left or polans-2015:SUBJECT"
 _NAME = re.compile(r"^(?P<dataset>[a-z0-9-]+):(?P<subject>[^:]*)(?::(?P<eye>[^:]*))?$")
 
 
@@ -83,13 +87,19 @@ class MeasuredWavefront:
     def defocus_wavelength_nm(self) -> float:
         return DEFOCUS_WAVELENGTH_NM[self.dataset]
 
+    def checked_pupil_mm(self, pupil_mm: float) -> float:
+        """``pupil_mm`` if the data cover it (at most their pupil: nothing is extrapolated); else refused."""
+        limit = self.pupil_mm
+        if pupil_mm > limit * (1.0 + 1e-12):
+            raise VissimInputError(f"{self.name} was measured over a {limit:g} mm pupil; an entrance pupil of "
+                                   f"{pupil_mm:g} mm would extrapolate it: give at most {limit:g} mm")
+        return pupil_mm
+
     def front(self, field_deg, pupil_mm: float) -> Wavefront:
         """The data's orders 2 and up (j ≥ 3) at ``field_deg``, µm over a ``pupil_mm`` entrance pupil, in the light
         its defocus refers to."""
         data = load_dataset(self.dataset)
-        if pupil_mm > data.pupil_mm * (1.0 + 1e-12):
-            raise VissimInputError(f"{self.name} was measured over a {data.pupil_mm:g} mm pupil; a {pupil_mm:g} mm "
-                                   "pupil would extrapolate it: give an entrance pupil of at most that")
+        pupil_mm = self.checked_pupil_mm(pupil_mm)
         coefficients = data.at_field(self.subject, self.eye, field_deg)
         terms = {ansi_j_to_nm(j): float(c) for j, c in enumerate(coefficients) if j >= 3 and c != 0.0}
         return Wavefront(terms, data.pupil_mm, self.defocus_wavelength_nm).rescaled(pupil_mm)
@@ -102,7 +112,7 @@ def is_measured_name(name) -> bool:
 
 def parse_measured_eye(name: str) -> MeasuredWavefront:
     """The `MeasuredWavefront` ``name`` spells (module doc); a malformed name is refused with the spelling."""
-    spelling = "jaeken-artal-2012:SUBJECT:right|left (e.g. jaeken-artal-2012:17:right) or polans-2015:SUBJECT"
+    spelling = f"{MEASURED_EYE_SPELLING} (e.g. jaeken-artal-2012:17:right)"
     match = _NAME.match(name)
     if match is None or match["dataset"] not in DATASET_NAMES:
         raise VissimInputError(f"a measured eye is spelled {spelling}, got {name!r}")
@@ -144,3 +154,15 @@ def measured_trace(trace, measured: MeasuredWavefront, defocus_reference):
     return dataclasses.replace(trace, model=measured.name, zernike_um=zernike, x_mm=x_mm, y_mm=y_mm, opd_um=opd,
                                fit_residual_rms_um=0.0, pupil_plane=BEAM_PLANE,
                                field_map=tuple(tuple(float(v) for v in row) for row in beam_field_map(trace)))
+
+
+def measured_front(trace, measured: MeasuredWavefront, base, *, samples: int = DEFAULT_SAMPLES, traced=()):
+    """`measured_trace` of the base eye ``base``'s ``trace``, its defocus reference taken from ``traced`` (traces
+    of the same field and pupil) when one is at ``measured.defocus_wavelength_nm``, else traced here."""
+    wanted = measured.defocus_wavelength_nm
+    reference = next((t for t in traced if t.wavelength_nm == wanted and t.entrance_pupil_mm == trace.entrance_pupil_mm
+                      and t.field_deg == trace.field_deg), None)
+    if reference is None:
+        reference = trace_eye_wavefront(base, wanted, trace.field_deg, pupil_mm=trace.entrance_pupil_mm,
+                                        samples=samples)
+    return measured_trace(trace, measured, reference)

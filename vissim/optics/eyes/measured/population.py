@@ -10,8 +10,8 @@ frequencies, the Strehl ratio, the eye's own refraction (M, J0, J45 over the pup
   best spectacle correction in the minimum-RMS sense, orders 0-2 removed (what a sphero-cylinder can correct),
   the higher orders left; or a `Prescription`: those spectacles worn ``vertex_mm`` in front of the cornea,
   their vergence at the entrance pupil taken from the eye's second-order terms.
-* **One trace per condition**: the base eye is traced once per condition (field, pupil, wavelength), and
-  every eye's front is made from that trace (`measured_eye.measured_trace`), the same front as
+* **One trace per light, field and pupil**: the base eye is traced once for each, shared by every eye and
+  correction, and every eye's front is made from it (`measured_eye.measured_trace`), the same front as
   `vissim.optics.eyes.psf_wavefront.eye_wavefront` gives for that eye alone (tested).
 * **MTF**: `vissim.optics.eyes.report.eye_mtf`: radial (ring mean) at the fovea; off axis, the mean of the
   tangential and sagittal MTFs.
@@ -30,10 +30,10 @@ import numpy as np
 from vissim.checks import eye_pupil_diameter_mm, finite_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM
-from vissim.optics.eyes.measured.datasets import load_dataset
+from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS
+from vissim.optics.eyes.measured.datasets import UnmeasuredFieldError, load_dataset
 from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL, MeasuredWavefront, measured_trace
-from vissim.optics.eyes.models import eye_model
+from vissim.optics.eyes.models import SchematicEye, eye_model
 from vissim.optics.eyes.refraction import minimum_rms_prescription, transfer_prescription
 from vissim.optics.eyes.report import eye_mtf
 from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
@@ -48,8 +48,8 @@ __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "ev
 
 log = logging.getLogger(__name__)
 
-#: The correction states (module doc).
-CORRECTIONS = ("uncorrected", "sphero-cylinder")
+#: The correction states besides spectacles given as a `Prescription` (module doc).
+CORRECTIONS = POPULATION_CORRECTIONS
 #: Eyes per task when a population is spread over processes or a Dask cluster.
 CHUNK_EYES = 20
 #: The quantiles `population_quantiles` reports by default.
@@ -91,7 +91,7 @@ class EyeResult:
     """One eye under one condition: MTF (at the population's frequencies), Strehl ratio, the eye's own
     refraction over the pupil (minimum RMS, dioptres) and the RMS of orders 3 and up (µm)."""
 
-    eye: str
+    eye: MeasuredWavefront
     condition: PopulationCondition
     mtf: np.ndarray
     strehl: float
@@ -119,24 +119,22 @@ def select_eyes(dataset: str, *, subjects=None, eyes=None, foveal_se_within_diop
     if not low <= high:
         raise VissimInputError(f"a spherical-equivalent range runs low to high, got {low:g} to {high:g} D")
     condition = PopulationCondition(se_pupil_mm, (0.0, 0.0), "uncorrected", se_wavelength_nm)
-    kept = [r.eye for r in evaluate_population(found, [condition], ()) if low <= r.m_diopters <= high]
-    return tuple(eye for eye in found if eye.name in set(kept))
+    kept = {r.eye for r in evaluate_population(found, [condition], ()) if low <= r.m_diopters <= high}
+    return tuple(eye for eye in found if eye in kept)
 
 
 @functools.lru_cache(maxsize=64)
-def _base_traces(condition: PopulationCondition, defocus_wavelength_nm: float):
-    """The base eye traced once for ``condition``, and at the wavelength a dataset's defocus refers to."""
-    base = eye_model(BASE_EYE_MODEL)
-    trace = trace_eye_wavefront(base, condition.wavelength_nm, condition.field_deg, pupil_mm=condition.pupil_mm)
-    reference = trace_eye_wavefront(base, defocus_wavelength_nm, condition.field_deg, pupil_mm=condition.pupil_mm)
-    return trace, reference
+def _base_trace(wavelength_nm: float, field_deg: tuple, pupil_mm: float):
+    """The base eye traced once per light, field and pupil: every eye of a population, every correction, and
+    the defocus reference of every condition in that light share it."""
+    return trace_eye_wavefront(eye_model(BASE_EYE_MODEL), wavelength_nm, field_deg, pupil_mm=pupil_mm)
 
 
 def _front(eye: MeasuredWavefront, condition: PopulationCondition):
     """The eye's orders 2 and up under ``condition`` (µm over its pupil), its slopes-to-angle map, and its
     entrance pupil's distance behind the cornea (mm)."""
-    trace, reference = _base_traces(condition, eye.defocus_wavelength_nm)
-    traced = measured_trace(trace, eye, reference)
+    at = (condition.field_deg, condition.pupil_mm)
+    traced = measured_trace(_base_trace(condition.wavelength_nm, *at), eye, _base_trace(eye.defocus_wavelength_nm, *at))
     own = {k: v for k, v in traced.zernike_um.items() if k[0] >= 2}
     return (Wavefront(own, traced.entrance_pupil_mm, condition.wavelength_nm), traced.field_map,
             traced.entrance_pupil_position_mm)
@@ -166,27 +164,27 @@ def _seen_mtf(seen: Wavefront, field_map, condition: PopulationCondition, freque
     return np.mean([curves[k] for k in curves], axis=0)
 
 
-def schematic_mtf(model: str, condition: PopulationCondition, frequencies_cyc_per_deg) -> np.ndarray:
-    """The MTF of the schematic eye ``model`` (relaxed, its entrance pupil the condition's) under ``condition``,
-    as a population's eyes are taken (module doc), for the same comparison."""
+def schematic_mtf(optics: SchematicEye, condition: PopulationCondition, frequencies_cyc_per_deg) -> np.ndarray:
+    """The MTF of the schematic eye ``optics`` (its entrance pupil the condition's) under ``condition``, as a
+    population's eyes are taken (module doc), for the same comparison."""
     from vissim.optics.eyes.eye import build_eye
+    from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
     from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 
-    eye = build_eye(model, pupil_mm=condition.pupil_mm)
-    spectral = eye_spectral_wavefront(eye, wavelengths_nm=[condition.wavelength_nm], field_deg=condition.field_deg)
-    position = trace_eye_wavefront(eye.optics, condition.wavelength_nm, condition.field_deg,
-                                   pupil_mm=condition.pupil_mm).entrance_pupil_position_mm
-    seen = _corrected(spectral.fronts[0], condition, position)
-    return _seen_mtf(seen, spectral.field_map, condition, np.asarray(frequencies_cyc_per_deg, dtype=float), model)
+    eye = build_eye(optics, pupil_mm=condition.pupil_mm)
+    nm = condition.wavelength_nm
+    spectral = eye_spectral_wavefront(eye, wavelengths_nm=[nm], field_deg=condition.field_deg)
+    seen = _corrected(spectral.fronts[0], condition, entrance_pupil_position_mm(mean_meridian_eye(eye.optics), nm))
+    return _seen_mtf(seen, spectral.field_map, condition, np.asarray(frequencies_cyc_per_deg, dtype=float),
+                     optics.name)
 
 
-def schematic_refraction(model: str, condition: PopulationCondition) -> tuple[float, float, float]:
-    """(M, J0, J45), dioptres, of the schematic eye ``model`` under ``condition``, as a population's eyes are
+def schematic_refraction(optics: SchematicEye, condition: PopulationCondition) -> tuple[float, float, float]:
+    """(M, J0, J45), dioptres, of the schematic eye ``optics`` under ``condition``, as a population's eyes are
     taken: minimum RMS over the pupil seen along the chief ray (the measured data's pupil), in its plane."""
     from vissim.optics.eyes.refraction import along_chief_ray
 
-    trace = trace_eye_wavefront(eye_model(model), condition.wavelength_nm, condition.field_deg,
-                                pupil_mm=condition.pupil_mm)
+    trace = trace_eye_wavefront(optics, condition.wavelength_nm, condition.field_deg, pupil_mm=condition.pupil_mm)
     own = minimum_rms_prescription(trace.zernike_um, trace.entrance_pupil_mm)
     return tuple(float(v) for v in along_chief_ray(own, trace.chief_direction, 0.0).power_vector())
 
@@ -197,16 +195,14 @@ def seen_image(eye: MeasuredWavefront, condition: PopulationCondition, image, ar
     edges continued; the PSF's field holds its blur (a kernel is never cut)."""
     from vissim.optics.blur.convolve import blur_image
     from vissim.optics.psf.compute import compute_psf
-    from vissim.optics.psf.field_size import MAX_ENERGY_OUTSIDE, energy_outside_field, size_holding_px
+    from vissim.optics.psf.field_size import suggested_size_px
 
     pixels = np.asarray(image, dtype=np.float64)
     front, field_map, position = _front(eye, condition)
     kept = _corrected(front, condition, position)
     nm = condition.wavelength_nm
     mapped = SpectralWavefront((nm,), (kept,), nm, eye.name, field_map)
-    size = max(pixels.shape)
-    if energy_outside_field(mapped, kept.pupil_diameter_mm, [nm], [1.0], arcmin_per_px, size) > MAX_ENERGY_OUTSIDE:
-        size = size_holding_px(mapped, kept.pupil_diameter_mm, [nm], [1.0], arcmin_per_px, size)
+    size = suggested_size_px(mapped, arcmin_per_px, wavelength_nm=nm, minimum_px=max(pixels.shape))
     psf = compute_psf(mapped, wavelength_nm=nm, arcmin_per_px=arcmin_per_px, size_px=size)
     margin = [((size - n) // 2 + 1, (size - n) // 2 + 1) for n in pixels.shape]
     seen = blur_image(np.pad(pixels, margin, mode="edge"), psf, arcmin_per_px=arcmin_per_px, padding="edge")
@@ -221,7 +217,7 @@ def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies)
     seen = _corrected(front, condition, position)
     mtf = _seen_mtf(seen, field_map, condition, frequencies, eye.name) if len(frequencies) else np.zeros(0)
     rms = math.sqrt(sum(v * v for v in higher.values()))
-    return EyeResult(eye.name, condition, mtf, float(strehl_ratio(seen, wavelength_nm=condition.wavelength_nm)),
+    return EyeResult(eye, condition, mtf, float(strehl_ratio(seen, wavelength_nm=condition.wavelength_nm)),
                      float(m), float(j0), float(j45), rms)
 
 
@@ -233,9 +229,7 @@ def _evaluate_chunk(condition: PopulationCondition, identities: tuple, frequenci
         eye = MeasuredWavefront(dataset, subject, side)
         try:
             results.append(_result(eye, condition, frequencies))
-        except VissimInputError as error:
-            if "no measurement at field" not in str(error):
-                raise
+        except UnmeasuredFieldError:
             skipped.append(eye.name)
     return results, skipped
 

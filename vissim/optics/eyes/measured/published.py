@@ -24,7 +24,7 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 
-__all__ = ["watson_2013_mtf", "artal_navarro_1994_mtf", "navarro_1993_mtf", "ARTAL_NAVARRO_1994", "NAVARRO_1993",
+__all__ = ["watson_2013_mtf", "artal_navarro_1994_mtf", "navarro_1993_mtf", "ARTAL_NAVARRO_1994", "NAVARRO_1993", "NAVARRO_1993_PUPIL_MM",
            "WATSON_2013_PUPILS_MM", "WATSON_2013_WAVELENGTH_NM"]
 
 #: Watson's fit: the pupils (mm) it was fitted over, and its light (nm).
@@ -33,7 +33,8 @@ WATSON_2013_WAVELENGTH_NM = 555.0
 #: Artal & Navarro 1994: pupil (mm) -> (A, B, C).
 ARTAL_NAVARRO_1994 = {2.5: (0.16, 0.06, 0.36), 3.0: (0.16, 0.05, 0.28), 4.0: (0.18, 0.04, 0.18),
                       6.0: (0.31, 0.06, 0.20), 8.0: (0.53, 0.08, 0.11)}
-#: Navarro, Artal & Williams 1993 (4 mm): eccentricity (deg) -> (A, B, C).
+#: Navarro, Artal & Williams 1993: their natural pupil (mm), and eccentricity (deg) -> (A, B, C).
+NAVARRO_1993_PUPIL_MM = 4.0
 NAVARRO_1993 = {0.0: (0.172, 0.037, 0.22), 5.0: (0.245, 0.041, 0.20), 10.0: (0.245, 0.041, 0.20),
                 20.0: (0.328, 0.038, 0.14), 30.0: (0.606, 0.064, 0.12), 40.0: (0.82, 0.064, 0.09),
                 50.0: (0.93, 0.059, 0.067), 60.0: (1.89, 0.108, 0.05)}
