@@ -28,7 +28,7 @@ from scipy import ndimage
 import vissim
 from vissim.bench.eye.bench import EyeBench
 from vissim.imaging.metrics import compare_images, noise_floor
-from vissim.optics.eyes.simulations import Light, simulate_view
+from vissim.optics.eyes.simulations import simulate_view
 from vissim.optics.blur.resample import block_mean
 from vissim.optics.rx.trial_lens import TrialLens
 from vissim.render.eye_render import render_eye_bench
@@ -45,7 +45,7 @@ spp, oversample = (64 if small else 1024), 2  # the campaign's spp and its simul
 #    the eye's defaults (vissim.optics.eyes.defaults); the lens is meshed thick in crown glass, as rendered.
 eye = vissim.build_eye("navarro-1985", pupil_mm=4.0)
 bench = EyeBench(eye, lenses=(TrialLens(1.0),), wavelength_nm=550.0)
-view, light = bench.view, Light.monochromatic(550.0)
+view, light = bench.view, bench.light  # the light the bench renders in: 550 nm
 
 # 2. The truth: two renders, and their noise floor.
 truth_a, truth_b = (np.asarray(render_eye_bench(bench, spp, seed).pixels, np.float64).squeeze() for seed in (1, 2))
@@ -54,7 +54,7 @@ floor = noise_floor(truth_a, truth_b, data_range=1.0)
 # 3. The campaign's geometric self-check (`EyeScene`: the bench, its light and the simulations' grid): its ray PSF sets
 #    the chart's margin, and its simulation registered onto the render finds where the render put the chart
 #    (a few hundredths of a pixel).
-scene = EyeScene(bench, light, oversample)
+scene = EyeScene(bench, oversample)
 ray = item_ray_psf(scene)
 margin = margin_px(ray, oversample)
 (offset_rows, offset_cols), placement, _ = chart_offset_px(truth_a, scene, ray, margin)

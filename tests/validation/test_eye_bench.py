@@ -20,7 +20,7 @@ import pytest
 from vissim.errors import VissimInputError
 from vissim.validation.engine.validate import validate
 from vissim.optics.rx.prescription import Prescription
-from vissim.validation.eye.rays import ray_psf
+from vissim.optics.eyes.retina_map import ray_psf
 from vissim.validation.eye.report import configuration_label
 from vissim.validation.eye.schema import read_campaign
 
@@ -99,7 +99,7 @@ def _myope_scenes(chart_distance_m: float):
         {"item": [{"name": "m", "rx": -3.0}, {"name": "ms", "rx": -3.0, "lens": -3.0}, {"name": "e"}]},
         {"kind": "eye", "vertex_mm": 12.0}, "eye.toml")
     moved = [dataclasses.replace(c, chart_distance_m=chart_distance_m) for c in configurations]
-    return [EyeScene.of_item(c, settings, build_bench(c, settings)) for c in moved]
+    return [EyeScene(build_bench(c, settings).bench, settings.oversample, settings.rays_across) for c in moved]
 
 
 def test_a_myope_in_its_spectacles_has_no_defocus_left():

@@ -43,6 +43,7 @@ from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_A
                                          DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER, DEFAULT_LETTER_LOGMAR,
                                          DEFAULT_SPECTACLE_VERTEX_MM)
 from vissim.optics.eyes.eye import Eye, surface_overrides
+from vissim.optics.eyes.simulations import Light
 from vissim.optics.eyes.viewing import EyeView
 from vissim.optics.rx.viewing_setup import ViewingSetup
 from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup
@@ -135,6 +136,11 @@ class EyeBench:
     def pupil_mm(self) -> float:
         """The eye's pupil as given (entrance pupil, or iris), mm: the beam the lenses and the texture are sized for."""
         return self.eye.pupil_mm or self.eye.iris_mm
+
+    @property
+    def light(self) -> Light:
+        """The light the bench renders in, as the simulations take it: `Light.photopic` or its one wavelength."""
+        return Light.photopic() if self.spectrum == "photopic" else Light.monochromatic(self.wavelength_nm)
 
     @property
     def lens_wavelength_nm(self) -> float:

@@ -13,8 +13,9 @@ the traced wavefront and what an eye sees.
 * `spectacles`: trial and spectacle lenses before an eye, and the refraction that remains.
 * `surfaces`: a model as surfaces of the exact trace (`vissim.optics.raytrace`), in the eye's frame.
 * `traced_wavefront`: the traced wavefront over the entrance pupil at a field point and a wavelength.
-* `retina_map`: where a visual direction's chief ray lands on the retina, r(θ): the eye sensor's film
-  map, read by the render and the eye bench's ray self-check alike.
+* `retina_map`: where rays land on the retina: the chief rays' r(θ) (the eye sensor's film map, read by the
+  render and the ray PSF alike) and `ray_psf`, a chart point's rays through a lens and the eye, binned as the
+  film sees them (the eye bench's geometric self-check).
 * `refraction`: paraxial and minimum-RMS refraction from that wavefront, at the cornea or a spectacle plane.
 * `psf_wavefront`: `eye_wavefront`, an `Eye`'s traced Zernikes with the light's vergence added over
   the entrance pupil: what ``vissim psf --eye-model`` computes its PSF from.

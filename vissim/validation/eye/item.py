@@ -15,9 +15,9 @@ from vissim.atomic import write_json_atomic
 from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.imaging.registration import register
 from vissim.optics.blur.convolve import blur_image
+from vissim.optics.eyes.retina_map import ray_psf
 from vissim.validation.engine.item_files import save_item_image
 from vissim.validation.engine.metrics import PSNR, SSIM, added_scores
-from vissim.validation.eye.rays import ray_psf
 from vissim.validation.eye.simulate import (COSTS, SIMULATIONS, EyeScene, diffraction_psf, margin_px, reference_of,
                                             simulate)
 
@@ -31,14 +31,14 @@ ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES = 0.01, 4
 IMAGE_PEAK_VALUE = 1.0
 
 
-def applies(where: str, configuration) -> bool:
-    """Whether an assumption of `COSTS` applies to ``configuration`` (``where``: its scope)."""
-    return {"always": True, "photopic": configuration.spectrum == "photopic",
-            "off axis": tuple(configuration.field_deg) != (0.0, 0.0), "lens": configuration.lens is not None}[where]
+def applies(where: str, bench) -> bool:
+    """Whether an assumption of `COSTS` applies to the rendered ``bench`` (``where``: its scope)."""
+    return {"always": True, "photopic": bench.spectrum == "photopic",
+            "off axis": tuple(bench.field_deg) != (0.0, 0.0), "lens": bool(bench.lenses)}[where]
 
 
 def item_ray_psf(scene: EyeScene):
-    """The ray PSF of the rendered bench's eye, lens and chart, in its light (`rays.ray_psf`)."""
+    """The ray PSF of the rendered bench's eye, lens and chart, in its light (`vissim.optics.eyes.retina_map.ray_psf`)."""
     view, light, bench = scene.view, scene.light, scene.bench
     return ray_psf(view.eye, field_deg=view.field_deg, chart_distance_m=view.chart_distance_m, lens=view.lens,
                    vertex_mm=view.vertex_mm, wavelengths_nm=light.wavelengths_nm, weights=light.weights,
@@ -75,15 +75,15 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
     truth_a = np.asarray(images["truth_0"], np.float64).squeeze()
     truth_b = np.asarray(images["truth_1"], np.float64).squeeze()
     floor = noise_floor(truth_a, truth_b, IMAGE_PEAK_VALUE)
-    scene = EyeScene.of_item(configuration, settings, built)
+    scene = EyeScene(built.bench, settings.oversample, settings.rays_across)
     ray = item_ray_psf(scene)
     margin = margin_px(ray, settings.oversample)
     offset, placement, traced = chart_offset_px(truth_a, scene, ray, margin)
     with_diffraction = np.asarray(blur_image(truth_a, diffraction_psf(scene), arcmin_per_px=scene.bench.arcmin_per_px,
                                              padding="edge"), np.float64)
-    swaps = [name for name, where in COSTS.values() if applies(where, configuration)]
+    swaps = [name for name, where in COSTS.values() if applies(where, scene.bench)]
     rows, saved = [], {}
-    made = [name for name in SIMULATIONS if name != "schematic" or configuration.spectrum != "photopic"]
+    made = [name for name in SIMULATIONS if name != "schematic" or scene.bench.spectrum != "photopic"]
     for simulation in made + swaps:
         simulated = traced if simulation == "traced_rays" else simulate(simulation, scene, ray, margin, offset)
         reference = with_diffraction if reference_of(simulation) != "render" else truth_a

@@ -8,7 +8,7 @@ convolved with the pupil's in-focus diffraction PSF (wave optics).
 
 ``traced_rays``
     The geometric self-check: the numpy trace's ray PSF and spectacle magnification
-    (`vissim.validation.eye.rays`).
+    (`vissim.optics.eyes.retina_map.ray_psf`).
 The others are the eye models' simulations of the rendered bench's view (`EyeBench.view`), made by the
 library (`vissim.optics.eyes.simulations.simulate_view`, whose doc says what each is): the reduced eye
 (``reduced_wave``, ``reduced_geometric``), the thesis (``thesis``), the schematic eye (``schematic_wave``;
@@ -24,11 +24,11 @@ import numpy as np
 from scipy import ndimage
 from scipy.signal import fftconvolve
 
-from vissim.optics.eyes.simulations import WAVE_OPTICS, Light, simulate_view
+from vissim.optics.eyes.simulations import WAVE_OPTICS, simulate_view
 from vissim.optics.psf.compute import PSF, compute_psf
 from vissim.optics.blur.resample import block_mean, magnify
 from vissim.optics.pupil.wavefront import Wavefront
-from vissim.validation.eye.rays import RAYS_ACROSS_IRIS
+from vissim.optics.eyes.retina_map import RAYS_ACROSS_IRIS
 
 __all__ = ["SIMULATIONS", "COSTS", "EyeScene", "simulate", "reference_of", "diffraction_psf", "margin_px"]
 
@@ -49,23 +49,16 @@ def reference_of(simulation: str) -> str:
 
 class EyeScene:
     """A rendered bench (`vissim.bench.eye.bench.EyeBench`), its view (`EyeBench.view`: its `Eye` through its lens at
-    its chart) and its light, simulated on a grid ``oversample`` times finer than its image; ``rays_across``: the
-    ray PSF's rays across the iris. `of_item` builds one campaign item's."""
+    its chart) and its light (`EyeBench.light`), simulated on a grid ``oversample`` times finer than its image;
+    ``rays_across``: the ray PSF's rays across the iris."""
 
-    def __init__(self, bench, light: Light, oversample: int, rays_across: int = RAYS_ACROSS_IRIS):
-        self.bench, self.view, self.light = bench, bench.view, light
+    def __init__(self, bench, oversample: int, rays_across: int = RAYS_ACROSS_IRIS):
+        self.bench, self.view, self.light = bench, bench.view, bench.light
         self.oversample, self.rays_across = int(oversample), int(rays_across)
-
-    @classmethod
-    def of_item(cls, configuration, settings, built) -> EyeScene:
-        """The scene of one item (`schema.EyeConfiguration`, `schema.EyeSettings`, `renders.EyeBuilt`)."""
-        light = Light.photopic() if configuration.spectrum == "photopic" else \
-            Light.monochromatic(configuration.wavelength_nm)
-        return cls(built.bench, light, settings.oversample, settings.rays_across)
 
 
 def simulate(simulation: str, scene: EyeScene, ray, margin: int, offset_px=(0.0, 0.0)) -> np.ndarray:
-    """``simulation`` (module doc) of ``scene``'s chart, on the image's pixels; ``ray``: its `rays.RayPsf`;
+    """``simulation`` (module doc) of ``scene``'s chart, on the image's pixels; ``ray``: its `RayPsf`;
     ``offset_px``: the chart's placement in the render (rows down, columns right; image pixels)."""
     ov = scene.oversample
     step = scene.bench.arcmin_per_px / ov
