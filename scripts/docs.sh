@@ -15,7 +15,7 @@ cd "$(dirname "$0")/.."
 [ -x .venv/bin/python ] || { echo "docs: no .venv; run bash scripts/setup.sh first" >&2; exit 1; }
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -c constraints.txt -e ".[docs]"
 .venv/bin/python scripts/cli_reference.py docs/cli.md
-rm -rf docs/reports/thesis docs/reports/depth docs/reports/atv docs/reports/eye docs/reports/population
+rm -rf docs/reports/thesis docs/reports/depth docs/reports/atv docs/reports/eye docs/reports/eye_measured docs/reports/population
 for report in validation/reports/*/; do cp -r "$report" docs/reports/; done
 cp -r validation/atv/report docs/reports/atv
 .venv/bin/python scripts/check_docs.py --sources

@@ -253,10 +253,21 @@ def test_a_plano_prescription_is_the_eye_as_measured(tmp_path):
                  "--pupil-mm", "3", "--eye-model", "polans-2015:4", "--field-deg", "10,5"]) == 0
 
 
-def test_the_eye_bench_refuses_a_measured_eye_for_now():
+def test_the_eye_bench_renders_a_measured_eye_through_its_phase_plane_and_no_lens():
     from vissim.bench.eye.bench import EyeBench
-    with pytest.raises(VissimInputError, match="measured eye"):
-        EyeBench(build_eye("polans-2015:1", pupil_mm=3.0))
+    from vissim.bench.eye.scene import eye_sensor
+    from vissim.bench.eye.sensor_eyes import sensor_eye, sensor_phase
+    from vissim.optics.rx.trial_lens import TrialLens
+
+    eye = build_eye("polans-2015:1", pupil_mm=3.0)
+    with pytest.raises(VissimInputError, match="measured eye: lenses"):
+        EyeBench(eye, lenses=(TrialLens(1.0),))
+    bench = EyeBench(eye, field_deg=(10.0, 0.0), wavelength_nm=550.0)
+    key = eye_sensor(bench, 4, 1)["eye_key"]
+    assert sensor_eye(key) is eye and sensor_phase(key) is bench.phase_plane is bench.measured_phase.plane
+    record = bench.as_json()["phase_plane"]
+    assert record["field_deg"] == [10.0, 0.0] and record["wavelength_nm"] == 550.0
+    assert EyeBench(build_eye("navarro-1985", pupil_mm=3.0)).phase_plane is None
 
 
 # -- the data's pupil is normal to the measuring beam -------------------------------------------------------
@@ -295,3 +306,20 @@ def test_the_json_says_which_plane_the_zernikes_are_over(capsys):
     measured = eye_json(capsys, "polans-2015:2", "--pupil-mm", "3", "--field-deg", "20,0")
     schematic = eye_json(capsys, "navarro-1985", "--pupil-mm", "3", "--field-deg", "20,0")
     assert "normal to the chief ray" in measured["zernike_pupil"] and schematic["zernike_pupil"] == "entrance pupil"
+
+
+@pytest.mark.parametrize("field_deg", [(0.0, 0.0), (-20.0, 0.0), (-30.0, 0.0)])
+def test_the_lights_vergence_over_a_measured_eyes_beam_pupil_is_a_sphere(field_deg):
+    """A measured front lies in the plane normal to the beam, so an object's vergence V adds a plain sphere
+    there, at every field (a traced front, over the entrance pupil's plane, sees it stretched off axis). Oracle:
+    the difference is that of an eye whose correcting lens is -V: -V DS, no cylinder (from the second order)."""
+    from vissim.optics.eyes.psf_wavefront import eye_wavefront
+    from vissim.optics.pupil.wavefront import Wavefront
+
+    eye = build_eye("jaeken-artal-2012:92:right", pupil_mm=4.0)
+    near = eye_wavefront(eye, wavelength_nm=550.0, field_deg=field_deg, vergence_diopters=-3.0).coefficients_um
+    far = eye_wavefront(eye, wavelength_nm=550.0, field_deg=field_deg).coefficients_um
+    added = Wavefront({k: near.get(k, 0.0) - far.get(k, 0.0) for k in ((2, -2), (2, 0), (2, 2))}, 4.0, 550.0)
+    rx = added.to_prescription()
+    assert rx.sphere_diopters + 0.5 * rx.cylinder_diopters == pytest.approx(3.0, abs=1e-9)
+    assert abs(rx.cylinder_diopters) < 1e-9

@@ -34,10 +34,10 @@ def inward_rays(count: int, field_deg: float, pupil_mm: float, seed: int = 1):
     return np.concatenate([xy, np.full((count, 1), START_Z_MM)], axis=1), d
 
 
-def traced_out(eye, points, directions, wavelength, array_type, iris_mm=None):
+def traced_out(eye, points, directions, wavelength, array_type, iris_mm=None, phase=None):
     from vissim.render.schematic_eye_trace import SchematicEyeTracer
 
-    tracer = SchematicEyeTracer(eye, iris_mm)
+    tracer = SchematicEyeTracer(eye, iris_mm, phase=phase)
     p = tuple(array_type(points[:, i]) for i in range(3))
     d = tuple(array_type(-directions[:, i]) for i in range(3))
     result = tracer.trace_out(p, d, wavelength)
@@ -64,6 +64,27 @@ def test_retina_outward_trace_reverses_the_numpy_trace(model, wavelength_nm, fie
     wavelength = Float64(np.full(40, wavelength_nm)) if per_ray_wavelength else wavelength_nm
     back, back_d, valid, stopped = traced_out(eye, bundle.points_mm, bundle.directions, wavelength, Float64)
     assert valid.all() and not stopped.any()
+    assert np.abs(back - start).max() < 1e-9
+    assert np.abs(back_d + d).max() < 1e-10
+
+
+@needs_llvm
+@pytest.mark.parametrize("field_deg", [0.0, 25.0])
+def test_a_measured_eyes_phase_plane_reverses_the_numpy_trace(field_deg):
+    """The phase plane (virtual, at the entrance pupil) crossed last on the way out, first on the way in."""
+    mitsuba("mono")
+    from drjit.llvm import Float64
+
+    from vissim.optics.eyes.eye import build_eye
+    from vissim.optics.eyes.measured.phase_plane import measured_phase_plane
+
+    measured = build_eye("jaeken-artal-2012:92:right", pupil_mm=4.0)
+    plane = measured_phase_plane(measured, (-20.0, 0.0), 550.0).plane
+    eye = measured.optics
+    start, d = inward_rays(40, field_deg, 3.0)
+    bundle = trace_rays((plane,) + eye_surfaces(eye), start, d, stop_z_mm=None, wavelength_nm=550.0)
+    back, back_d, valid, _ = traced_out(eye, bundle.points_mm, bundle.directions, 550.0, Float64, phase=plane)
+    assert valid.all()
     assert np.abs(back - start).max() < 1e-9
     assert np.abs(back_d + d).max() < 1e-10
 

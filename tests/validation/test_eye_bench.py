@@ -180,7 +180,7 @@ def test_a_toy_eye_campaign_runs_through_the_engine(tmp_path):
     done = validate(path, tmp_path / "run", show_progress=False)
     assert done.kind == "eye" and done.summary.items_total == 2 and done.summary.renders_made == 4
     tables = (tmp_path / "run" / "tables.md").read_text()
-    for words in ("Geometric self-check", "reduced eye, ray optics", "thesis setup", "schematic eye, wave optics",
+    for words in ("Geometric self-check", "reduced eye, ray optics", "thesis setup", "the eye's wavefront, wave optics",
                   "spherical aberration", "spectacle magnification", "| plain |"):
         assert words in tables
     import json
@@ -247,6 +247,31 @@ def test_an_eye_with_an_altered_cornea_described_in_toml_passes_the_self_check(t
     rows = json.loads((tmp_path / "run" / "metrics.json").read_text())["rows"]
     check = next(r for r in rows if r["simulation"] == "traced_rays")
     assert 2.0 <= check["over_floor_db"] <= 4.0, check
+
+
+MEASURED_TOY = TOY.split("[[item]]")[0].replace('name = "eye toy"', 'name = "measured toy"') + """
+[[item]]
+name = "subject 92 at -20 deg"
+eye_model = "jaeken-artal-2012:92:right"
+pupil_mm = 4.0
+chart_distance_m = 0.33
+field = [-20.0, 0.0]
+"""
+
+
+@pytest.mark.slow
+def test_a_measured_eye_renders_through_its_phase_plane_at_the_noise_floor(tmp_path):
+    """The most aberrated Jaeken & Artal eye at -20 deg: the render's rays cross its phase plane on the way out,
+    the self-check's on the way in (the numpy trace), and the two land at the render's noise floor (>= +2 dB)."""
+    import json
+
+    path = tmp_path / "eye.toml"
+    path.write_text(MEASURED_TOY)
+    validate(path, tmp_path / "run", show_progress=False)
+    result = json.loads(next((tmp_path / "run" / "items").glob("*/result.json")).read_text())
+    assert result["configuration"]["model"] == "jaeken-artal-2012:92:right"
+    rows = {r["simulation"]: r["over_floor_db"] for r in result["rows"]}
+    assert 2.0 <= rows["traced_rays"] <= 4.0, rows
 
 
 def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, monkeypatch):

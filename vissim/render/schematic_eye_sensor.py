@@ -35,7 +35,10 @@ frame); the eye's frame (z towards the retina, x the examiner's right: the subje
 to it by z -> -z; the local origin is the corneal vertex.  Properties: ``eye_key``, the `vissim.optics.eyes.eye.Eye`
 handed over by `vissim.bench.eye.sensor_eyes.register_sensor_eye` (its optics: the model at its accommodation, its surfaces as
 altered, made ametropic when it has a prescription; the tables are traced in its x meridian, so a
-cylinder's distortion is the x meridian's; its pupil, entrance pupil or iris), ``wavelength_nm``,
+cylinder's distortion is the x meridian's; its pupil, entrance pupil or iris) and, for a measured eye, the
+phase plane registered with it (`vissim.optics.eyes.measured.phase_plane`: crossed by every ray as it leaves
+the cornea; the tables, the film's map and Ω are the base eye's, which the plane does not change:
+it lies outside the iris), ``wavelength_nm``,
 ``arcmin_per_px``, ``field_x_deg``, ``field_y_deg``, ``far_clip`` (mm), ``to_world``, ``film``,
 ``sampler``.  The pupil is converted by real rays at ``wavelength_nm`` or the model's reference
 (`vissim.optics.eyes.traced_wavefront`).  Register with `register_schematic_eye_sensor` (idempotent).
@@ -50,7 +53,7 @@ import math
 import numpy as np
 
 from vissim.bench.eye.scene import SENSOR_TYPE
-from vissim.bench.eye.sensor_eyes import sensor_eye
+from vissim.bench.eye.sensor_eyes import sensor_eye, sensor_phase
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX
@@ -133,6 +136,7 @@ def _make_class(mi, dr):
         def __init__(self, props):
             mi.Sensor.__init__(self, props)
             the_eye = sensor_eye(str(props.get("eye_key", "")))
+            self.phase = sensor_phase(str(props.get("eye_key", "")))
             eye = the_eye.optics
             self.model = the_eye.model
             fixed = props.get("wavelength_nm", None)
@@ -183,7 +187,7 @@ def _make_class(mi, dr):
 
         def _init_lookups(self, eye):
             t = self.tables
-            self.tracer = SchematicEyeTracer(eye, self.iris_mm)
+            self.tracer = SchematicEyeTracer(eye, self.iris_mm, phase=self.phase)
             self.radius_of = _Lookup(0.0, float(t.theta_deg[1] - t.theta_deg[0]), self.map_radius_mm)
             self.bin_mm = float(t.r_edges_mm[1] - t.r_edges_mm[0])
             self.bins, self.azimuth_count = t.boxes.shape[:2]

@@ -219,6 +219,24 @@ def _medium(medium, front_z_mm: float):
     return _Index(medium.index)
 
 
+def _phase_gradient(plane, x, y):
+    """(∂φ/∂x, ∂φ/∂y) of a phase plane's polynomial ``Σ c u^p v^q`` (u, v: about its centre over its radius)."""
+    r = plane.radius_mm
+    u, v = (x - plane.centre_mm[0]) / r, (y - plane.centre_mm[1]) / r
+    top = max(max(p, q) for p, q, _ in plane.terms)
+    u_pow, v_pow = [1.0 + 0.0 * u], [1.0 + 0.0 * v]
+    for _ in range(top):
+        u_pow.append(u_pow[-1] * u)
+        v_pow.append(v_pow[-1] * v)
+    gx, gy = 0.0 * u, 0.0 * v
+    for p, q, c in plane.terms:
+        if p > 0:
+            gx = gx + (c * p / r) * u_pow[p - 1] * v_pow[q]
+        if q > 0:
+            gy = gy + (c * q / r) * u_pow[p] * v_pow[q - 1]
+    return gx, gy
+
+
 def _excess(shape: _Shape, z_vertex: float, r):
     """``z_vertex + sag(x, y) - z``: negative before the surface (for light going to -z), positive beyond."""
     sag, _, _ = _sag_and_gradient(shape, r[0], r[1])
@@ -244,11 +262,12 @@ class SchematicEyeTracer:
     """``eye`` traced from the retina outward (module doc); ``iris_mm``: the iris diameter (None: no stop).
 
     ``grin_step_mm``: the RK4 step in t (the numpy tracer's default); ``max_grin_steps``: steps a
-    ray may take in one GRIN half before it is dropped.
+    ray may take in one GRIN half before it is dropped; ``phase``: a phase plane in the air before the
+    cornea (`vissim.optics.raytrace.phase.PhasePlane`: a measured eye's), crossed last (`_through_phase`).
     """
 
     def __init__(self, eye: SchematicEye, iris_mm: float | None, grin_step_mm: float = DEFAULT_GRIN_STEP_MM,
-                 max_grin_steps: int = 2000):
+                 max_grin_steps: int = 2000, phase=None):
         if iris_mm is not None and not (math.isfinite(iris_mm) and iris_mm > 0.0):
             raise VissimInputError(f"iris diameter must be a positive number of mm, got {iris_mm!r}")
         self.eye = eye
@@ -260,6 +279,7 @@ class SchematicEyeTracer:
         self.shapes = tuple(_shape(s) for s in eye.surfaces)
         self.media = tuple(_medium(s.medium_after, z) for s, z in zip(eye.surfaces, positions))
         self.air = _Index(eye.object_medium.index)
+        self.phase = phase
 
     @property
     def retina_z_mm(self) -> float:
@@ -315,7 +335,23 @@ class SchematicEyeTracer:
             # dropped rays continue harmlessly along the axis, so no NaN reaches later surfaces
             p = _select(valid, p, (0.0 * p[0], 0.0 * p[0], z_vertex + 0.0 * p[0]))
             d = _select(valid, d, (0.0 * p[0], 0.0 * p[0], -1.0 + 0.0 * p[0]))
+        if self.phase is not None:
+            p, d, ok = self._through_phase(p, d, self.air(wavelength_nm))
+            valid = valid & ok
         return EyeTraceResult(p, d, valid, stopped)
+
+    def _through_phase(self, p, d, n_air):
+        """The phase plane, virtual (`vissim.optics.raytrace.phase` module doc): along the ray to its plane, the
+        direction cosines across the axis changed by its gradient over the index, back to the ray's own z."""
+        plane = self.phase
+        to_plane = (plane.vertex_z_mm - p[2]) / d[2]
+        hit = _add(p, d, to_plane)
+        gx, gy = _phase_gradient(plane, hit[0], hit[1])
+        ax, ay = d[0] + gx / n_air, d[1] + gy / n_air
+        left = 1.0 - ax * ax - ay * ay
+        turned = (ax, ay, -dr.sqrt(dr.maximum(left, 0.0)))  # out of the eye: towards -z
+        back = (p[2] - hit[2]) / turned[2]
+        return _add(hit, turned, back), turned, left > 0.0
 
     @staticmethod
     def _index(medium, p, wavelength_nm):

@@ -14,6 +14,9 @@ cornea, the others stacked towards the chart with ``lens_gap_mm`` of air), eye.
   lenses made crown glass of realistic thickness, meshed with a clear aperture wide enough for a
   beam 1.2 x the eye's pupil (an iris's entrance pupil is <= ~1.13 x it) along the widest
   direction the image looks (`clear_aperture_mm`).
+* **A measured eye** is its base eye with a phase plane at its entrance pupil that gives it the measured
+  wavefront at the chart's field (`measured_phase`); no lenses are put before it (its simulations do not trace
+  them).
 * **Sensor**: the schematic-eye sensor (`vissim.render.schematic_eye_sensor`) of the `Eye` ``eye``,
   turned so that the chart's centre lies at the field angle ``field_deg`` (OSA's frame: x the
   examiner's right, the observer's left; y up), ``size_px`` pixels of ``arcmin_per_px``; light of
@@ -41,7 +44,7 @@ from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM,
                                          DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER, DEFAULT_LETTER_LOGMAR,
-                                         DEFAULT_SPECTACLE_VERTEX_MM)
+                                         DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM)
 from vissim.optics.eyes.eye import Eye, surface_overrides
 from vissim.optics.eyes.simulations import Light
 from vissim.optics.eyes.viewing import EyeView
@@ -80,9 +83,6 @@ class EyeBench:
 
     def __post_init__(self) -> None:
         instance_of(self.eye, Eye, "the eye bench's eye", "an Eye (vissim.optics.eyes.eye.build_eye)")
-        if self.eye.measured is not None:
-            raise VissimInputError(f"{self.eye.model} is a measured eye: the eye bench renders schematic eyes only "
-                                   "(its measured aberrations have no surface in the scene yet); simulate it instead")
         self._check_light()
         self._check_chart()
         self._check_lenses()
@@ -125,6 +125,9 @@ class EyeBench:
             raise VissimInputError(
                 f"the holder takes up to {MAX_LENSES_IN_HOLDER} TrialLens objects, got {self.lenses!r}")
         object.__setattr__(self, "lenses", lenses)
+        if lenses and self.eye.measured is not None:
+            raise VissimInputError(f"{self.eye.model} is a measured eye: lenses in front of it are not rendered (its "
+                                   "simulations do not trace them); give the chart's distance instead")
         object.__setattr__(self, "vertex_mm", check_vertex_mm(self.vertex_mm))
         if not finite_number(self.lens_gap_mm, "lens gap", "mm") >= 0.0:
             raise VissimInputError(f"lens gap must be >= 0 mm, got {self.lens_gap_mm!r}")
@@ -146,6 +149,22 @@ class EyeBench:
     def lens_wavelength_nm(self) -> float:
         """The wavelength of a one-wavelength render's glass: ``wavelength_nm``, else (photopic) the eye's reference."""
         return self.wavelength_nm or self.eye.optics.reference_wavelength_nm
+
+    @functools.cached_property
+    def measured_phase(self):
+        """A measured eye's phase plane (`vissim.optics.eyes.measured.phase_plane`) at the chart's field, fitted in the
+        render's light (photopic: at its focus, `PHOTOPIC_FOCUS_NM`, and used at every wavelength: the measured eye's
+        chromatic difference is its base eye's); None for a schematic eye."""
+        if self.eye.measured is None:
+            return None
+        from vissim.optics.eyes.measured.phase_plane import measured_phase_plane
+
+        return measured_phase_plane(self.eye, self.field_deg, self.wavelength_nm or PHOTOPIC_FOCUS_NM)
+
+    @property
+    def phase_plane(self):
+        """The `PhasePlane` the sensor's rays cross (`measured_phase`); None for a schematic eye."""
+        return None if self.measured_phase is None else self.measured_phase.plane
 
     # -- the lenses -----------------------------------------------------------------------
     @functools.cached_property
@@ -234,7 +253,8 @@ class EyeBench:
                 "lenses": lenses, "vertex_mm": self.vertex_mm, "lens_gap_mm": self.lens_gap_mm,
                 "refractive_index": self.refractive_index, "field_deg": self.field_deg, "size_px": self.size_px,
                 "arcmin_per_px": self.arcmin_per_px, "wavelength_nm": self.wavelength_nm, "spectrum": self.spectrum,
-                "texels_per_px": self.texels_per_px}
+                "texels_per_px": self.texels_per_px,
+                **({} if self.measured_phase is None else {"phase_plane": self.measured_phase.as_json()})}
 
 
 @functools.lru_cache(maxsize=32)

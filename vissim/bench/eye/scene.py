@@ -48,7 +48,7 @@ def _film_kind(bench: EyeBench) -> str:
 def eye_sensor(bench: EyeBench, spp: int, seed: int) -> dict[str, Any]:
     """The ``vissim_schematic_eye`` sensor of ``bench``: its eye handed over, turned to the field, ``spp``
     samples per pixel from ``seed``."""
-    sensor: dict[str, Any] = {"type": SENSOR_TYPE, "eye_key": register_sensor_eye(bench.eye),
+    sensor: dict[str, Any] = {"type": SENSOR_TYPE, "eye_key": register_sensor_eye(bench.eye, bench.phase_plane),
                               "arcmin_per_px": float(bench.arcmin_per_px), "field_x_deg": float(bench.field_deg[0]),
                               "field_y_deg": float(bench.field_deg[1])}
     if bench.wavelength_nm is not None:

@@ -174,7 +174,9 @@ def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), ve
     _vergence_matrix(vergence_diopters)  # before the traces
     traced = traced_spectral_wavefront(eye.optics, wavelengths_nm, field_deg, samples=samples, measured=eye.measured,
                                        **eye.pupil)
-    vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm, field_direction(eye.optics, field_deg))
+    # a measured front lies in the plane normal to the beam (`measured_eye` module doc): no oblique stretch there
+    across = (0.0, 0.0, 1.0) if eye.measured is not None else field_direction(eye.optics, field_deg)
+    vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm, across)
     return traced.map(lambda front: _with_vergence(front, vergence))
 
 

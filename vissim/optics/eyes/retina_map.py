@@ -100,9 +100,9 @@ def _iris_targets(eye, iris_mm: float, rays_across: int, seed: int) -> np.ndarra
     return np.stack([x[inside] + eye.stop_decentre_nasal_mm, y[inside]], axis=1)
 
 
-def _land(eye, lens_setup, point_mm, targets, wavelength_nm: float) -> np.ndarray:
-    """Retinal landing points (N, 2) of rays from ``point_mm`` aimed at iris ``targets``."""
-    bundle, _ = trace_to_retina(eye, targets, wavelength_nm, object_point_mm=point_mm, lenses=lens_setup)
+def _land(eye, lens_setup, point_mm, targets, wavelength_nm: float, phase=None) -> np.ndarray:
+    """Retinal landing points (N, 2) of rays from ``point_mm`` aimed at iris ``targets`` (``phase``: a phase plane)."""
+    bundle, _ = trace_to_retina(eye, targets, wavelength_nm, object_point_mm=point_mm, lenses=lens_setup, phase=phase)
     return bundle.points_mm[:, :2]
 
 
@@ -150,11 +150,12 @@ def _magnification(eye, lens_setup, retina: _Retina, field_deg, distance_mm: flo
 def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
             wavelengths_nm=(DEFAULT_EYE_LIGHT_NM,), weights=(1.0,), sensor_wavelength_nm: float | None = None,
             arcmin_per_px: float = DEFAULT_EYE_ARCMIN_PER_PX, oversample: int = 4, rays_across: int = RAYS_ACROSS_IRIS,
-            seed: int = 0) -> RayPsf:
+            seed: int = 0, phase=None) -> RayPsf:
     """The ray PSF (module doc) of the rendered `Eye` ``the_eye`` (its optics: ametropic when it has a
     prescription; its entrance pupil): ``lens`` a thick `TrialLens` (as rendered) or None, its back vertex
     ``vertex_mm`` in front of the cornea, ``field_deg`` the chart centre's field angle (OSA) as
-    `vissim.render.eye_render.EyeRender` has it."""
+    `vissim.render.eye_render.EyeRender` has it; ``phase``: a measured eye's phase plane before the cornea
+    (`vissim.bench.eye.bench.EyeBench.phase_plane`)."""
     eye, pupil_mm = the_eye.optics, the_eye.pupil_mm
     sensor_nm = eye.reference_wavelength_nm if sensor_wavelength_nm is None else float(sensor_wavelength_nm)
     iris_mm = iris_from_entrance_pupil_mm(eye, pupil_mm, sensor_nm)
@@ -168,7 +169,7 @@ def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm
     angles, ray_weights = [], []
     seen = film_field_deg(eye, point, pupil_mm)  # the chart centre as the film sees it: the image's origin
     for wavelength, weight in zip(wavelengths_nm, weights):
-        a = retina.field_deg(_land(eye, lens_setup, point, targets, float(wavelength))) - seen
+        a = retina.field_deg(_land(eye, lens_setup, point, targets, float(wavelength), phase)) - seen
         angles.append(a)
         ray_weights.append(np.full(len(a), float(weight) / len(a)))
     angles, ray_weights = np.concatenate(angles), np.concatenate(ray_weights)

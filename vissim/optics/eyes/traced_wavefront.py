@@ -166,11 +166,14 @@ def _beam_direction(eye: SchematicEye, field_deg) -> np.ndarray:
     return np.array([-o[0], -o[1], o[2]])
 
 
-def _front(eye: SchematicEye, lenses) -> tuple[tuple, float, tuple, float]:
-    """(surfaces before the iris, lenses first; the iris z; those after it; the beam's start z), mm."""
+def _front(eye: SchematicEye, lenses, phase=None) -> tuple[tuple, float, tuple, float]:
+    """(surfaces before the iris, lenses first, then the `PhasePlane` ``phase`` if any; the iris z; those after
+    it; the beam's start z), mm."""
     front, stop_z, back = split_at_stop(eye)
-    front = (lens_surfaces(lenses) if lenses is not None and lenses.lenses else ()) + tuple(front)
-    return front, stop_z, back, front[0].vertex_z_mm - _START_BEFORE_MM
+    start_z = (lens_surfaces(lenses)[0] if lenses is not None and lenses.lenses else front[0]).vertex_z_mm
+    front = (lens_surfaces(lenses) if lenses is not None and lenses.lenses else ()) + \
+        (() if phase is None else (phase,)) + tuple(front)
+    return front, stop_z, back, start_z - _START_BEFORE_MM
 
 
 def _axial_starts(eye: SchematicEye, iris_x_mm, wavelength_nm: float, lenses=None) -> np.ndarray:
@@ -322,12 +325,13 @@ def _iris_grid(eye: SchematicEye, iris_mm: float, samples: int) -> tuple[np.ndar
 
 
 def trace_to_retina(eye: SchematicEye, targets, wavelength_nm: float, *, field_deg=None, object_point_mm=None,
-                    lenses=None) -> tuple[RayBundle, np.ndarray]:
+                    lenses=None, phase=None) -> tuple[RayBundle, np.ndarray]:
     """Rays through ``lenses`` (a `TrialLensSetup`, or None) and ``eye`` aimed at the iris points ``targets``
     (N, 2, mm) and traced to the retina: a collimated beam from ``field_deg`` (the models' rule,
     `field_direction`) or the rays of one ``object_point_mm`` (eye frame, z towards the retina). Returns the
-    bundle on the retina (path lengths from the start) and the rays' starts (collimated) or launch directions."""
-    front, stop_z, back, start_z = _front(eye, lenses)
+    bundle on the retina (path lengths from the start) and the rays' starts (collimated) or launch directions.
+    ``phase``: a `vissim.optics.raytrace.PhasePlane` between the lenses and the cornea (a measured eye's)."""
+    front, stop_z, back, start_z = _front(eye, lenses, phase)
     if (field_deg is None) == (object_point_mm is None):
         raise VissimInputError("trace to the retina from a field angle or from an object point, not both or neither")
     if object_point_mm is None:
@@ -358,9 +362,10 @@ def _system_pupil(eye: SchematicEye, lenses, iris: float, pupil: float, waveleng
 
 def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0, 0.0), *, pupil_mm=None,
                         iris_mm=None, samples: int = DEFAULT_SAMPLES, max_order: int = 8,
-                        lenses=None) -> EyeWavefront:
+                        lenses=None, phase=None) -> EyeWavefront:
     """The traced wavefront of ``eye`` (module doc); give ``pupil_mm`` (entrance pupil) or ``iris_mm``;
-    ``lenses``: a `TrialLensSetup` of thick lenses in front (module doc).
+    ``lenses``: a `TrialLensSetup` of thick lenses in front (module doc); ``phase``: a `PhasePlane` before the
+    cornea (`trace_to_retina`).
 
     A field angle where rays miss a surface, meet total internal reflection or leave the GRIN lens
     raises one `VissimInputError` naming the field angle in degrees and what happened.
@@ -374,7 +379,7 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
     try:
         pupil, entrance_z = _system_pupil(eye, lenses, iris, pupil, wavelength)
         targets, edge = _iris_grid(eye, iris, samples)
-        bundle, starts = trace_to_retina(eye, targets, wavelength, field_deg=field, lenses=lenses)
+        bundle, starts = trace_to_retina(eye, targets, wavelength, field_deg=field, lenses=lenses, phase=phase)
     except VissimInputError as error:
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
     exit_z = exit_pupil_position_mm(eye, wavelength)

@@ -13,11 +13,12 @@
 
 from vissim.optics.raytrace.aim import aim_collimated, aim_rays, launch_directions
 from vissim.optics.raytrace.media import GradientIndex, resolve_medium
+from vissim.optics.raytrace.phase import PhasePlane
 from vissim.optics.raytrace.reference_sphere import opl_to_sphere_mm, wavefront_on_reference_sphere_um
 from vissim.optics.raytrace.shapes import Biconic, Conic, MatrixSag, Plane, SagShape
 from vissim.optics.raytrace.surface import Surface
 from vissim.optics.raytrace.trace import RayBundle, trace_rays
 
-__all__ = ["aim_rays", "aim_collimated", "launch_directions", "opl_to_sphere_mm",
+__all__ = ["PhasePlane", "aim_rays", "aim_collimated", "launch_directions", "opl_to_sphere_mm",
            "wavefront_on_reference_sphere_um", "GradientIndex", "resolve_medium", "Biconic", "Conic", "MatrixSag",
            "Plane", "SagShape", "Surface", "RayBundle", "trace_rays"]

@@ -15,6 +15,7 @@ import numpy as np
 from vissim.errors import VissimInputError
 from vissim.optics.raytrace.grin import propagate_grin
 from vissim.optics.raytrace.media import GradientIndex, Medium, resolve_medium
+from vissim.optics.raytrace.phase import PhasePlane, through_phase_plane
 from vissim.optics.raytrace.surface import check_aperture, intersect, refract, unit_normals
 
 __all__ = ["RayBundle", "trace_rays", "travel_sign"]
@@ -69,6 +70,12 @@ def trace_rays(surfaces, points_mm, directions, stop_z_mm: float | None = 0.0, *
     if isinstance(medium, GradientIndex):
         raise VissimInputError("rays must start in a homogeneous medium")
     for surface in surfaces:
+        if isinstance(surface, PhasePlane):
+            if isinstance(medium, GradientIndex):
+                raise VissimInputError(f"the {surface.name} must lie in a homogeneous medium")
+            p, d, path = through_phase_plane(surface, p, d, medium)
+            opl += path
+            continue
         if isinstance(medium, GradientIndex):
             p, d, path = propagate_grin(medium, surface, p, d)
             opl += path

@@ -43,7 +43,7 @@ def item_ray_psf(scene: EyeScene):
     return ray_psf(view.eye, field_deg=view.field_deg, chart_distance_m=view.chart_distance_m, lens=view.lens,
                    vertex_mm=view.vertex_mm, wavelengths_nm=light.wavelengths_nm, weights=light.weights,
                    sensor_wavelength_nm=bench.wavelength_nm, arcmin_per_px=bench.arcmin_per_px,
-                   oversample=scene.oversample, rays_across=scene.rays_across)
+                   oversample=scene.oversample, rays_across=scene.rays_across, phase=bench.phase_plane)
 
 
 def chart_offset_px(truth: np.ndarray, scene: EyeScene, ray, margin: int) -> tuple[tuple[float, float], dict, np.ndarray]:

@@ -50,6 +50,7 @@ def build_bench(configuration, settings) -> EyeBuilt:
     """The configuration's bench, its chart printed and its lens meshed now (carried to each render)."""
     bench = configuration_bench(configuration)
     bench.chart_half_arcmin  # noqa: B018 -- prints the chart and sizes its texture once, here
+    bench.measured_phase  # noqa: B018 -- a measured eye's phase plane, fitted once, here
     return EyeBuilt(bench)
 
 

@@ -1,14 +1,14 @@
 """The eye bench's campaign file: ``[campaign]`` settings, ``[[item]]`` configurations and ``[[sweep]]`` grids.
 
-An item is one rendered view of a letter through a schematic eye: ``eye_model`` (spelled as the command
-line's ``--eye-model``), ``pupil_mm`` (the
-entrance pupil), ``accommodation`` (D), ``field`` (degrees: the chart centre's field angle [x, y], OSA's
+An item is one rendered view of a letter through an eye: ``eye_model`` (spelled as the command line's
+``--eye-model``: a schematic model or a measured eye, ``jaeken-artal-2012:92:right``, rendered as its base
+eye with a phase plane: `vissim.optics.eyes.measured.phase_plane`), ``pupil_mm`` (the entrance pupil), ``accommodation`` (D), ``field`` (degrees: the chart centre's field angle [x, y], OSA's
 frame as every vissim field angle: x the examiner's right, y up; a number is [x, 0]), ``light``
 (``"photopic"`` or a wavelength in nm), an optional trial ``lens``
 (a sphere in D, or {sphere, cylinder, axis}), an optional ``rx`` (the eye made ametropic: the spectacle
 prescription it needs at the campaign's ``vertex_mm``, a text such as ``"-3.00"`` or ``"-2.00 -1.00 x 90"``,
 or a number: the sphere in D; `vissim.optics.eyes.fixation.ametropic_eye`; absent: the model as it is),
-``letter``, ``logmar``, and ``surfaces``: the model's surfaces altered, a table of surface names each with
+``letter``, ``logmar``, ``chart_distance_m`` (the campaign's unless given), and ``surfaces``: the model's surfaces altered, a table of surface names each with
 fields of `vissim.optics.eyes.eye.SURFACE_OVERRIDES` (``surfaces."cornea front".conic = 0.0``: an eye built from
 a model plus overrides).  A ``[[sweep]]`` table gives
 lists for any of them and makes one item per combination (its ``name`` a prefix).
@@ -36,7 +36,7 @@ __all__ = ["EyeSettings", "EyeConfiguration", "read_campaign"]
 
 LIGHTS = ("photopic",)
 ITEM_KEYS = ("name", "eye_model", "pupil_mm", "accommodation", "field", "light", "lens", "rx", "letter", "logmar",
-             "surfaces")
+             "surfaces", "chart_distance_m")
 
 
 @dataclass(frozen=True)
@@ -154,7 +154,7 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
         surfaces=_surfaces(entry.get("surfaces", {}), source, f"{where}.surfaces"),
         letter=text(entry.get("letter", DEFAULT_LETTER), source, f"{where}.letter"),
         logmar=number(entry.get("logmar", DEFAULT_LETTER_LOGMAR), source, f"{where}.logmar", "logMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1]),
-        size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=settings.chart_distance_m,
+        size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=number(entry.get("chart_distance_m", settings.chart_distance_m), source, f"{where}.chart_distance_m", "m", lo=VIEWING_DISTANCE_RANGE_M[0], hi=VIEWING_DISTANCE_RANGE_M[1]),
         vertex_mm=settings.vertex_mm)
     try:  # the model's name and its own accommodation range; the altered and the ametropic eye's own checks
         configuration.eye()

@@ -27,7 +27,9 @@ rest. Its monochromatic wavefront at a measured field is the measured one:
   eye's tilt and ray points are carried into that plane, and its pupil at every field is the circle the data
   define (the entrance pupil's oblique foreshortening, cos θ, is the instrument's, already in the data).
 * **Lenses** in front of a measured eye are not traced yet (refused): their effect is given as the light's
-  vergence at the entrance pupil, as a campaign's trial lens is for the schematic eye.
+  vergence at the entrance pupil, as a campaign's trial lens is for the schematic eye. In the beam's plane a
+  vergence is a plain sphere at every field (no oblique stretch: `psf_wavefront.eye_spectral_wavefront`).
+* **Rendered** (`phase_plane`): the base eye with a phase plane at its entrance pupil that gives it this front.
 """
 
 from __future__ import annotations
