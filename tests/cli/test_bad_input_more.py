@@ -349,3 +349,9 @@ def test_an_unknown_option_points_to_its_own_command_s_help(capfd):
 def test_a_folder_spelled_dot_as_an_image_is_one_error_line(capfd, argv):
     code, _, err = run(capfd, *argv)
     assert_one_error_line(code, err, "unsupported image suffix")
+
+
+@pytest.mark.parametrize("name", ["jaeken-artal-2012:17:right", "le-grand"])
+def test_an_eye_named_without_its_option_is_pointed_to_eye_model(capfd, name):
+    code, _, err = run(capfd, "eye", name, "--pupil-mm", "4")
+    assert_one_error_line(code, err, f"unrecognized arguments: {name}", f"an eye is chosen with --eye-model {name}")

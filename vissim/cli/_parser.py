@@ -147,6 +147,17 @@ class VissimArgumentParser(argparse.ArgumentParser):
         return parser.prog
 
     def error(self, message: str):
-        message = " ".join(message.split())
+        message = " ".join(message.split()) + _eye_hint(message)
         sys.stderr.write(f"vissim: error: {message} (see '{getattr(self, '_help_prog', self.prog)} --help')\n")
         sys.exit(2)
+
+
+def _eye_hint(message: str) -> str:
+    """A hint when a stray argument names an eye: every command chooses its eye with ``--eye-model``."""
+    if not message.startswith("unrecognized arguments:"):
+        return ""
+    from vissim.optics.eyes.measured.measured_eye import is_measured_name
+    from vissim.optics.eyes.models import EYE_MODELS
+
+    names = [t for t in message.split(":", 1)[1].split() if t in EYE_MODELS or is_measured_name(t)]
+    return f"; an eye is chosen with --eye-model {names[0]}" if names else ""
