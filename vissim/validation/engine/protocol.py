@@ -56,6 +56,8 @@ class Campaign:
     built: tuple = ()  # one per configuration: what `BenchKind.build` made of it
     source: str = ""
     manifest: str | None = None
+    workers: int = 1  # where the run spreads its work (the engine's renders; a kind's items that spread their own)
+    scheduler: str | None = None
 
     def item_key(self, configuration) -> str:
         """Stable key of one item's inputs: equal inputs, equal key (results are reused)."""

@@ -39,3 +39,4 @@ def bench_kind(name: str):
 register_bench_kind("dslr", "vissim.validation.dslr.kind")
 register_bench_kind("depth", "vissim.validation.depth.kind")
 register_bench_kind("eye", "vissim.validation.eye.kind")
+register_bench_kind("population", "vissim.validation.population.kind")

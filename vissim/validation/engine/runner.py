@@ -153,6 +153,7 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
                  render: Callable | None, show_progress: bool, progress: Progress | None) -> RunSummary:
     """`run_campaign` once its checks are done and the run folder is locked."""
     campaign, kind = _with_spp(campaign, spp), bench_kind(campaign.kind)
+    campaign = replace(campaign, workers=workers, scheduler=scheduler)
     keys = [campaign.item_key(c) for c in campaign.configurations]
     todo = [(k, i) for i, k in enumerate(keys) if not (item_dir(run_dir, k) / "result.json").exists()]
     plans, skipped = kind.plan_items(campaign, todo)

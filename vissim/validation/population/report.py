@@ -30,7 +30,7 @@ from vissim.optics.eyes.measured.published import (ARTAL_NAVARRO_1994, NAVARRO_1
                                                    WATSON_2013_PUPILS_MM, artal_navarro_1994_mtf, navarro_1993_mtf,
                                                    watson_2013_mtf)
 
-__all__ = ["write_population_run", "gap_table_md", "published_curves"]
+__all__ = ["write_population_run", "gap_table_md", "published_curves", "population_report", "summary_lines"]
 
 SCHEMATIC = BASE_EYE_MODEL  # the schematic eye set beside the measured ones: the one they are built on
 
@@ -243,3 +243,67 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
         write_figure(figure, _astigmatism_chart(results, meridian), provenance)
         written.append(figure)
     return written
+
+
+# -- the population as a campaign kind (`vissim.validation.population.kind`) ------------------------------------
+def _rows(results, frequencies) -> list[dict]:
+    return [{"configuration": r.condition.label, "eye": r.eye.name, "strehl": r.strehl, "m_diopters": r.m_diopters,
+             "j0_diopters": r.j0_diopters, "j45_diopters": r.j45_diopters,
+             "higher_order_rms_um": r.higher_order_rms_um,
+             **{f"mtf_{f:g}_cyc_per_deg": float(v) for f, v in zip(frequencies, r.mtf)}} for r in results]
+
+
+def _medians_md(results, conditions) -> str:
+    summary = population_quantiles(results)
+    lines = ["## Per condition (median [25-75 %] across the eyes)", "",
+             "| condition | eyes | Strehl | M D | J0 D | J45 D | higher-order RMS um |", "|---|---|---|---|---|---|---|"]
+    middle = [QUANTILES.index(q) for q in (0.5, 0.25, 0.75)]
+    for condition in conditions:
+        table = summary.get(condition.label)
+        if table is None:
+            continue
+        cells = [f"{table[k][middle[0]]:.3f} [{table[k][middle[1]]:.3f}-{table[k][middle[2]]:.3f}]"
+                 for k in ("strehl", "m_diopters", "j0_diopters", "j45_diopters", "higher_order_rms_um")]
+        lines.append(f"| {condition.label} | {table['count']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n\n"
+
+
+def population_report(items, record: dict):
+    """The engine's `ReportParts` of a population campaign's finished items (one per condition)."""
+    from vissim.optics.eyes.measured.population import EyeResult, PopulationCondition
+    from vissim.validation.engine.figures import Figure
+    from vissim.validation.engine.protocol import ReportParts
+
+    items = list(items)
+    conditions = [PopulationCondition.from_json(item["configuration"]) for item in items]
+    results = [EyeResult.from_json(r) for item in items for r in item["eyes"]]
+    frequencies = np.asarray(record["settings"]["mtf_cyc_per_deg"], dtype=float)
+    if not results:
+        raise VissimInputError("no eye of the population was measured under any condition given")
+    tables = (f"Every eye of the selection ({items[0]['eyes_selected']} eyes of {record['settings']['dataset']}) under "
+              "each condition, from its measured wavefront (orders 2 and up: the data's; a correction removes what "
+              "it corrects); an eye not measured at a condition's field is left out of it. M, J0 and J45: the eye's "
+              "own refraction over the pupil (minimum RMS).\n\n" + _medians_md(results, conditions))
+    figures = {"letters": Figure("figure_letters.png", _letter_mosaic(results, results[0].condition),
+                                 f"a letter seen through 16 of the eyes ({results[0].condition.label})")}
+    if frequencies.size:
+        tables += gap_table_md(results, conditions, frequencies).split("\n", 1)[1]
+        figures["mtf"] = Figure("figure_mtf.png", _fan_chart(results, conditions, frequencies),
+                                "the population's MTF (median, 25-75 % and 5-95 %) beside the schematic eye and "
+                                "the published human MTFs")
+    meridian = _meridian(conditions)
+    if len(meridian) >= 3:
+        figures["astigmatism"] = Figure("figure_astigmatism.png", _astigmatism_chart(results, meridian),
+                                        "cylinder against field: the population's median and quartiles beside "
+                                        "every schematic eye")
+    return ReportParts("measured-eye population", _rows(results, frequencies), tables, figures)
+
+
+def summary_lines(rows) -> list[str]:
+    """A line per condition: its eyes and their median Strehl ratio."""
+    lines = []
+    for label in dict.fromkeys(r["configuration"] for r in rows):
+        strehl = [r["strehl"] for r in rows if r["configuration"] == label]
+        lines.append(f"{label}: {len(strehl)} eyes, median Strehl ratio {float(np.median(strehl)):.3f}")
+    return lines
+

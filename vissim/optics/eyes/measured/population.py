@@ -85,6 +85,22 @@ class PopulationCondition:
                 if isinstance(self.correction, Prescription) else self.correction)
         return f"{self.pupil_mm:g} mm, field {x:g},{y:g} deg, {self.wavelength_nm:g} nm, {worn}"
 
+    def as_json(self) -> dict:
+        correction = self.correction
+        if isinstance(correction, Prescription):
+            correction = {"sphere_diopters": correction.sphere_diopters,
+                          "cylinder_diopters": correction.cylinder_diopters, "axis_deg": correction.axis_deg}
+        return {"pupil_mm": self.pupil_mm, "field_deg": list(self.field_deg), "correction": correction,
+                "wavelength_nm": self.wavelength_nm, "vertex_mm": self.vertex_mm}
+
+    @classmethod
+    def from_json(cls, record: dict) -> PopulationCondition:
+        """The condition `as_json` wrote."""
+        correction = record["correction"]
+        return cls(record["pupil_mm"], tuple(record["field_deg"]),
+                   Prescription(**correction) if isinstance(correction, dict) else correction,
+                   record["wavelength_nm"], record["vertex_mm"])
+
 
 @dataclass(frozen=True)
 class EyeResult:
@@ -99,6 +115,20 @@ class EyeResult:
     j0_diopters: float
     j45_diopters: float
     higher_order_rms_um: float
+
+    def as_json(self) -> dict:
+        return {"dataset": self.eye.dataset, "subject": self.eye.subject, "eye": self.eye.eye,
+                "condition": self.condition.as_json(), "mtf": self.mtf.tolist(), "strehl": self.strehl,
+                "m_diopters": self.m_diopters, "j0_diopters": self.j0_diopters, "j45_diopters": self.j45_diopters,
+                "higher_order_rms_um": self.higher_order_rms_um}
+
+    @classmethod
+    def from_json(cls, record: dict) -> EyeResult:
+        """The result `as_json` wrote (its numbers exactly: JSON keeps a float's every digit)."""
+        return cls(MeasuredWavefront(record["dataset"], record["subject"], record["eye"]),
+                   PopulationCondition.from_json(record["condition"]), np.asarray(record["mtf"], dtype=float),
+                   record["strehl"], record["m_diopters"], record["j0_diopters"], record["j45_diopters"],
+                   record["higher_order_rms_um"])
 
 
 def select_eyes(dataset: str, *, subjects=None, eyes=None, foveal_se_within_diopters=None,

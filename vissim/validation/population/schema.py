@@ -1,0 +1,148 @@
+"""A population campaign file: the eyes in ``[campaign]``, and the conditions they are crossed with.
+
+``kind = "population"``; ``dataset`` (``jaeken-artal-2012`` or ``polans-2015``) and, to choose among its eyes,
+``subjects`` (numbers as in the data), ``eyes`` (``["right"]``, ``["left"]`` or both) and
+``foveal_se_diopters`` (``[low, high]``: the eyes whose foveal spherical equivalent lies within it); the
+conditions, every combination of ``pupil_mm`` (mm, at most the data's), ``field`` (degrees, [x, y] pairs as
+every vissim field, from the line of sight) and ``correction`` (``"uncorrected"``, ``"sphero-cylinder"`` or
+the spectacles worn, a prescription such as ``"-1.00 -0.50 x 90"``), in ``wavelength_nm`` light with the
+spectacles ``vertex_mm`` in front of the cornea; and ``mtf_cyc_per_deg``, the frequencies of each eye's MTF.
+The defaults are the ``vissim population`` command's. One item per condition.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS,
+                                         POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
+from vissim.validation.engine.fields import field_error, number, text, value_list
+
+__all__ = ["PopulationSettings", "PopulationItem", "read_campaign", "HEAD_KEYS"]
+
+HEAD_KEYS = ("dataset", "subjects", "eyes", "foveal_se_diopters", "pupil_mm", "field", "correction",
+             "wavelength_nm", "vertex_mm", "mtf_cyc_per_deg")
+
+
+@dataclass(frozen=True)
+class PopulationSettings:
+    """Which eyes (the dataset and its selection) and the MTF's frequencies, cycles/deg."""
+
+    dataset: str
+    subjects: tuple[int, ...] | None
+    eyes: tuple[str, ...] | None
+    foveal_se_diopters: tuple[float, float] | None
+    mtf_cyc_per_deg: tuple[float, ...]
+
+    def selected(self):
+        """The `MeasuredWavefront`s this selection names (`select_eyes`)."""
+        from vissim.optics.eyes.measured.population import select_eyes
+
+        return select_eyes(self.dataset, subjects=self.subjects, eyes=self.eyes,
+                           foveal_se_within_diopters=self.foveal_se_diopters)
+
+
+@dataclass(frozen=True)
+class PopulationItem:
+    """One condition (`PopulationCondition`) every eye is evaluated under; ``name``: its label."""
+
+    name: str
+    condition: object
+
+    def as_json(self) -> dict:
+        return {"name": self.name, **self.condition.as_json()}
+
+    def key_inputs(self) -> dict:
+        return self.condition.as_json()
+
+
+def _numbers(value, source: str, where: str, unit: str, **bounds) -> tuple[float, ...]:
+    items = value if isinstance(value, list) else [value]
+    return tuple(number(v, source, f"{where}[{i}]", unit, **bounds) for i, v in enumerate(value_list(items, source,
+                                                                                                      where, "[3, 4]")))
+
+
+def _fields(value, source: str) -> list[tuple[float, float]]:
+    pairs = value if isinstance(value, list) and value and isinstance(value[0], list) else [value]
+    out = []
+    for i, pair in enumerate(pairs):
+        pair = [pair, 0.0] if isinstance(pair, (int, float)) and not isinstance(pair, bool) else pair
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise field_error(source, f"campaign.field[{i}]", f"give [x, y] in degrees, got {pair!r}")
+        out.append(tuple(number(v, source, f"campaign.field[{i}]", "deg") for v in pair))
+    return out
+
+
+def _correction(value, source: str, where: str):
+    from vissim.optics.rx.prescription import prescription_from
+
+    value = text(value, source, where)
+    if value in POPULATION_CORRECTIONS:
+        return value
+    try:
+        return prescription_from(value)
+    except VissimInputError:
+        raise field_error(source, where, f"give {' or '.join(POPULATION_CORRECTIONS)} or the spectacles worn (a "
+                                         f"prescription, e.g. \"-1.00 -0.50 x 90\"), got {value!r}") from None
+
+
+def _subjects(value, dataset: str, source: str) -> tuple[int, ...]:
+    from vissim.optics.eyes.measured.datasets import load_dataset
+
+    known = load_dataset(dataset).subjects
+    chosen = value_list(value, source, "campaign.subjects", "[1, 17]")
+    for s in chosen:
+        if isinstance(s, bool) or not isinstance(s, int) or s not in known:
+            raise field_error(source, "campaign.subjects", f"{s!r} is not a subject of {dataset} (its subjects are "
+                                                           f"numbered {min(known)}-{max(known)})")
+    return tuple(chosen)
+
+
+def _settings(head: dict, source: str) -> PopulationSettings:
+    from vissim.optics.eyes.measured.datasets import DATASET_NAMES
+
+    dataset = text(head.get("dataset", ""), source, "campaign.dataset")
+    if dataset not in DATASET_NAMES:
+        raise field_error(source, "campaign.dataset", f"choose from {', '.join(DATASET_NAMES)}, got {dataset!r}")
+    subjects = None if "subjects" not in head else _subjects(head["subjects"], dataset, source)
+    eyes = None if "eyes" not in head else tuple(
+        text(e, source, "campaign.eyes") for e in value_list(head["eyes"], source, "campaign.eyes", '["right"]'))
+    se = None
+    if "foveal_se_diopters" in head:
+        se = _numbers(head["foveal_se_diopters"], source, "campaign.foveal_se_diopters", "D")
+        if len(se) != 2 or se[0] > se[1]:
+            raise field_error(source, "campaign.foveal_se_diopters", f"give [low, high] in D, got {list(se)!r}")
+    frequencies = _numbers(head.get("mtf_cyc_per_deg", list(POPULATION_MTF_CYC_PER_DEG)), source,
+                           "campaign.mtf_cyc_per_deg", "cycles/deg", positive=True)
+    return PopulationSettings(dataset, subjects, eyes, se, frequencies)
+
+
+def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[PopulationItem, ...]]:
+    """(settings, one item per condition) of a population campaign's ``[campaign]`` ``head`` (module doc)."""
+    from vissim.optics.eyes.measured.population import PopulationCondition
+
+    unknown = sorted(set(head) - set(HEAD_KEYS))
+    if unknown:
+        raise field_error(source, "campaign", f"unknown key(s) {unknown}; known: name, description, kind, "
+                                              f"{', '.join(HEAD_KEYS)}")
+    settings = _settings(head, source)
+    from vissim.optics.eyes.measured.datasets import load_dataset
+
+    largest = load_dataset(settings.dataset).pupil_mm
+    pupils = _numbers(head.get("pupil_mm", list(POPULATION_PUPILS_MM)), source, "campaign.pupil_mm", "mm",
+                      positive=True, hi=largest)  # at most the data's: nothing is extrapolated
+    fields = _fields(head.get("field", [0.0, 0.0]), source)
+    corrections = [_correction(c, source, f"campaign.correction[{i}]") for i, c in enumerate(
+        value_list(head.get("correction", ["sphero-cylinder"]), source, "campaign.correction", '["sphero-cylinder"]'))]
+    nm = number(head.get("wavelength_nm", PHOTOPIC_FOCUS_NM), source, "campaign.wavelength_nm", "nm", positive=True)
+    vertex = number(head.get("vertex_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_mm", "mm")
+    items = []
+    for pupil, field, correction in itertools.product(pupils, fields, corrections):
+        try:
+            condition = PopulationCondition(pupil, field, correction, nm, vertex)
+        except VissimInputError as error:
+            raise field_error(source, "campaign", str(error)) from None
+        items.append(PopulationItem(condition.label, condition))
+    return settings, tuple(items)
