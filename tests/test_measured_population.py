@@ -23,6 +23,7 @@ from vissim.optics.eyes.measured.population import (PopulationCondition, evaluat
 from vissim.optics.eyes.psf_wavefront import eye_wavefront
 from vissim.optics.psf.compute import strehl_ratio
 from vissim.optics.pupil.wavefront import Wavefront
+from vissim.optics.rx.prescription import Prescription
 
 EYES = select_eyes("jaeken-artal-2012", subjects=[3, 17, 40], eyes=["right", "left"])
 
@@ -171,3 +172,42 @@ def test_spectacles_of_the_eyes_own_refraction_leave_only_its_higher_orders():
     assert worn.strehl == pytest.approx(best.strehl, rel=1e-6) and worn.mtf[0] == pytest.approx(best.mtf[0], rel=1e-6)
     assert none.strehl < 0.5 * best.strehl
     assert "wearing" in worn.condition.label and cylinder < -0.25  # the axis matters
+
+
+def _hyperope_and_myope():
+    """A foveal hyperope and a foveal myope of the data (3 mm, 555 nm, uncorrected M), with their M."""
+    eyes = select_eyes("jaeken-artal-2012", subjects=range(1, 41), eyes=["right"])
+    found = evaluate_population(eyes, [PopulationCondition(3.0, correction="uncorrected")])
+    hyperope = max(found, key=lambda r: r.m_diopters)
+    myope = min(found, key=lambda r: r.m_diopters)
+    assert hyperope.m_diopters > 0.3 and myope.m_diopters < -0.3
+    return hyperope, myope
+
+
+def test_an_accommodating_eye_cancels_its_hyperopia_up_to_its_amplitude_and_no_myopia():
+    """Oracle: accommodation is a plus lens at the pupil of power min(M, amplitude) for a hyperope (M > 0) and
+    nothing for a myope: a hyperope with the amplitude to spare sees as it would wearing that sphere at the pupil
+    (vertex 0 from its entrance pupil: spectacles of +M at minus the pupil's depth), a myope as uncorrected."""
+    hyperope, myope = _hyperope_and_myope()
+    m = hyperope.m_diopters
+    accommodating = PopulationCondition(3.0, correction="accommodating", accommodation_amplitude_diopters=m + 1.0)
+    short = PopulationCondition(3.0, correction="accommodating", accommodation_amplitude_diopters=0.5 * m)
+    uncorrected = PopulationCondition(3.0, correction="uncorrected")
+    fronts = {c: evaluate_population([hyperope.eye, myope.eye], [c], [10.0]) for c in (accommodating, short,
+                                                                                          uncorrected)}
+    seen_h = {c: fronts[c][0].strehl for c in fronts}
+    assert seen_h[uncorrected] < seen_h[short] < seen_h[accommodating]
+    assert fronts[accommodating][1].strehl == fronts[uncorrected][1].strehl  # the myope cannot accommodate away
+    from vissim.optics.eyes.measured.population import _base_trace
+
+    depth = _base_trace(555.0, (0.0, 0.0), 3.0).entrance_pupil_position_mm
+    worn = PopulationCondition(3.0, correction=Prescription(m), vertex_mm=-depth)
+    assert evaluate_population([hyperope.eye], [worn])[0].strehl == pytest.approx(seen_h[accommodating], rel=1e-12)
+
+
+@pytest.mark.parametrize("kwargs", [{"correction": "accommodating"},
+                                    {"correction": "uncorrected", "accommodation_amplitude_diopters": 2.0},
+                                    {"correction": "accommodating", "accommodation_amplitude_diopters": -1.0}])
+def test_an_amplitude_goes_with_the_accommodating_correction_only(kwargs):
+    with pytest.raises(VissimInputError, match="accommodation amplitude"):
+        PopulationCondition(3.0, **kwargs)

@@ -51,3 +51,11 @@ def test_bad_input_gets_one_error_line(tmp_path, capsys, extra, words):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("vissim: error:") and words in err[0], err
     assert not (tmp_path / "run" / "eyes.csv").exists()
+
+
+def test_accommodating_eyes_need_their_amplitude(tmp_path, capsys):
+    assert main(["population", "jaeken-artal-2012", "--subjects", "1", "--pupil-mm", "3", "--correction",
+                 "accommodating", "-o", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "needs an accommodation amplitude > 0 D" in err and "got 0 D" in err
+    assert not (tmp_path / "run").exists()

@@ -47,8 +47,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="field angles, degrees, x (examiner's right: the observer's left) and y (up), from the "
                              "line of sight, as the data were measured; several with ; (default 0,0: the fovea)")
     parser.add_argument("--correction", default="sphero-cylinder", metavar="STATE[,STATE]",
-                        help=f"{' or '.join(CORRECTIONS)} (default sphero-cylinder: orders 0-2 removed), or the "
-                             "spectacles worn as a prescription, e.g. '-1.00 -0.50 x 90'")
+                        help=f"{' or '.join(CORRECTIONS)} (default sphero-cylinder: orders 0-2 removed; "
+                             "accommodating: uncorrected, hyperopia cancelled up to --accommodation-amplitude-diopters), "
+                             "or the spectacles worn as a prescription, e.g. '-1.00 -0.50 x 90'")
+    parser.add_argument("--accommodation-amplitude-diopters", type=float, default=0.0, metavar="A",
+                        help="with --correction accommodating: how far the eyes can accommodate to cancel their "
+                             "hyperopia, D (required there)")
     parser.add_argument("--vertex-mm", type=float, default=DEFAULT_SPECTACLE_VERTEX_MM, metavar="MM",
                         help=f"spectacles' distance in front of the cornea (default {DEFAULT_SPECTACLE_VERTEX_MM:g})")
     parser.add_argument("--wavelength-nm", type=float, metavar="NM",
@@ -74,7 +78,8 @@ def _conditions(args):
         raise VissimInputError(f"--correction is empty; expected {' or '.join(CORRECTIONS)}")
     corrections = [c if c in CORRECTIONS else _worn(c) for c in corrections]
     nm = PHOTOPIC_FOCUS_NM if args.wavelength_nm is None else args.wavelength_nm
-    return [PopulationCondition(p, f, c, nm, args.vertex_mm)
+    return [PopulationCondition(p, f, c, nm, args.vertex_mm,
+                                args.accommodation_amplitude_diopters if c == "accommodating" else 0.0)
             for p, f, c in itertools.product(pupils, fields, corrections)]
 
 

@@ -35,5 +35,5 @@ DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_SIZE_PX = 0.5, (64, 64)
 POPULATION_LETTER_LOGMAR, POPULATION_ARCMIN_PER_PX, POPULATION_LETTER_SIZE_PX = 0.1, 0.25, 96
 #: A population's correction states (beside spectacles given as a prescription), and its default pupils (mm:
 #: the published fits' 3 and the data's 4) and MTF frequencies (cycles/deg).
-POPULATION_CORRECTIONS = ("uncorrected", "sphero-cylinder")
+POPULATION_CORRECTIONS = ("uncorrected", "sphero-cylinder", "accommodating")
 POPULATION_PUPILS_MM, POPULATION_MTF_CYC_PER_DEG = (3.0, 4.0), (5.0, 10.0, 20.0, 30.0)

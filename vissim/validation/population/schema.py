@@ -4,8 +4,9 @@
 ``subjects`` (numbers as in the data), ``eyes`` (``["right"]``, ``["left"]`` or both) and
 ``foveal_se_diopters`` (``[low, high]``: the eyes whose foveal spherical equivalent lies within it); the
 conditions, every combination of ``pupil_mm`` (mm, at most the data's), ``field`` (degrees, [x, y] pairs as
-every vissim field, from the line of sight) and ``correction`` (``"uncorrected"``, ``"sphero-cylinder"`` or
-the spectacles worn, a prescription such as ``"-1.00 -0.50 x 90"``), in ``wavelength_nm`` light with the
+every vissim field, from the line of sight) and ``correction`` (``"uncorrected"``, ``"sphero-cylinder"``,
+``"accommodating"`` with ``accommodation_amplitude_diopters``, or the spectacles worn, a prescription such as
+``"-1.00 -0.50 x 90"``), in ``wavelength_nm`` light with the
 spectacles ``vertex_mm`` in front of the cornea; and ``mtf_cyc_per_deg``, the frequencies of each eye's MTF.
 The defaults are the ``vissim population`` command's. One item per condition.
 """
@@ -23,7 +24,7 @@ from vissim.validation.engine.fields import field_error, number, text, value_lis
 __all__ = ["PopulationSettings", "PopulationItem", "read_campaign", "HEAD_KEYS"]
 
 HEAD_KEYS = ("dataset", "subjects", "eyes", "foveal_se_diopters", "pupil_mm", "field", "correction",
-             "wavelength_nm", "vertex_mm", "mtf_cyc_per_deg")
+             "accommodation_amplitude_diopters", "wavelength_nm", "vertex_mm", "mtf_cyc_per_deg")
 
 
 @dataclass(frozen=True)
@@ -138,10 +139,13 @@ def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[Po
         value_list(head.get("correction", ["sphero-cylinder"]), source, "campaign.correction", '["sphero-cylinder"]'))]
     nm = number(head.get("wavelength_nm", PHOTOPIC_FOCUS_NM), source, "campaign.wavelength_nm", "nm", positive=True)
     vertex = number(head.get("vertex_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_mm", "mm")
+    amplitude = number(head.get("accommodation_amplitude_diopters", 0.0), source,
+                       "campaign.accommodation_amplitude_diopters", "D")
     items = []
     for pupil, field, correction in itertools.product(pupils, fields, corrections):
         try:
-            condition = PopulationCondition(pupil, field, correction, nm, vertex)
+            condition = PopulationCondition(pupil, field, correction, nm, vertex,
+                                            amplitude if correction == "accommodating" else 0.0)
         except VissimInputError as error:
             raise field_error(source, "campaign", str(error)) from None
         items.append(PopulationItem(condition.label, condition))

@@ -8,8 +8,12 @@ frequencies, the Strehl ratio, the eye's own refraction (M, J0, J45 over the pup
 
 * **Correction states**: ``"uncorrected"`` (the eye as measured, tilt aside); ``"sphero-cylinder"``: the
   best spectacle correction in the minimum-RMS sense, orders 0-2 removed (what a sphero-cylinder can correct),
-  the higher orders left; or a `Prescription`: those spectacles worn ``vertex_mm`` in front of the cornea,
-  their vergence at the entrance pupil taken from the eye's second-order terms.
+  the higher orders left; ``"accommodating"``: uncorrected, but the eye accommodates up to
+  ``accommodation_amplitude_diopters`` to cancel its own hyperopia (its spherical equivalent M over the pupil,
+  when positive: a hyperope focuses a far target, a myope cannot); accommodation taken as a change of power at the entrance
+  pupil only (the lens's own change of aberrations left out; the data were measured relaxed); or a
+  `Prescription`: those spectacles worn ``vertex_mm`` in front of the cornea, their vergence at the entrance
+  pupil taken from the eye's second-order terms.
 * **One trace per light, field and pupil**: the base eye is traced once for each, shared by every eye and
   correction, and every eye's front is made from it (`measured_eye.measured_trace`), the same front as
   `vissim.optics.eyes.psf_wavefront.eye_wavefront` gives for that eye alone (tested).
@@ -65,11 +69,17 @@ class PopulationCondition:
     correction: str | Prescription = "sphero-cylinder"
     wavelength_nm: float = PHOTOPIC_FOCUS_NM  # V(λ)'s peak
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM  # a given Rx's lens, in front of the cornea
+    accommodation_amplitude_diopters: float = 0.0  # how far an "accommodating" eye can accommodate
 
     def __post_init__(self) -> None:
         if not isinstance(self.correction, Prescription) and self.correction not in CORRECTIONS:
             raise VissimInputError(f"a population's correction is one of {', '.join(CORRECTIONS)} or a "
                                    f"Prescription (spectacles worn), got {self.correction!r}")
+        amplitude = finite_number(self.accommodation_amplitude_diopters, "an accommodation amplitude", "D")
+        if (self.correction == "accommodating") != (amplitude > 0.0) or amplitude < 0.0:
+            raise VissimInputError(f"the accommodating correction needs an accommodation amplitude > 0 D, and no other "
+                                   f"correction takes one; got {amplitude:g} D with {self.correction!r}")
+        object.__setattr__(self, "accommodation_amplitude_diopters", amplitude)
         object.__setattr__(self, "vertex_mm", finite_number(self.vertex_mm, "a population's vertex distance", "mm"))
         object.__setattr__(self, "pupil_mm", eye_pupil_diameter_mm(self.pupil_mm, "a population's pupil"))
         object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm))
@@ -83,6 +93,8 @@ class PopulationCondition:
         x, y = self.field_deg
         worn = (f"wearing {self.correction.format()} at {self.vertex_mm:g} mm"
                 if isinstance(self.correction, Prescription) else self.correction)
+        if self.correction == "accommodating":
+            worn = f"accommodating up to {self.accommodation_amplitude_diopters:g} D"
         return f"{self.pupil_mm:g} mm, field {x:g},{y:g} deg, {self.wavelength_nm:g} nm, {worn}"
 
     def as_json(self) -> dict:
@@ -91,7 +103,9 @@ class PopulationCondition:
             correction = {"sphere_diopters": correction.sphere_diopters,
                           "cylinder_diopters": correction.cylinder_diopters, "axis_deg": correction.axis_deg}
         return {"pupil_mm": self.pupil_mm, "field_deg": list(self.field_deg), "correction": correction,
-                "wavelength_nm": self.wavelength_nm, "vertex_mm": self.vertex_mm}
+                "wavelength_nm": self.wavelength_nm, "vertex_mm": self.vertex_mm,
+                **({"accommodation_amplitude_diopters": self.accommodation_amplitude_diopters}
+                   if self.accommodation_amplitude_diopters else {})}
 
     @classmethod
     def from_json(cls, record: dict) -> PopulationCondition:
@@ -99,7 +113,7 @@ class PopulationCondition:
         correction = record["correction"]
         return cls(record["pupil_mm"], tuple(record["field_deg"]),
                    Prescription(**correction) if isinstance(correction, dict) else correction,
-                   record["wavelength_nm"], record["vertex_mm"])
+                   record["wavelength_nm"], record["vertex_mm"], record.get("accommodation_amplitude_diopters", 0.0))
 
 
 @dataclass(frozen=True)
@@ -176,10 +190,15 @@ def _corrected(front: Wavefront, condition: PopulationCondition, pupil_position_
     ``vertex_mm`` plus the pupil's depth; its paraxial power, oblique lens astigmatism aside) taken from the
     eye's second-order terms."""
     nm, pupil = condition.wavelength_nm, front.pupil_diameter_mm
-    lowest = 2 if condition.correction == "uncorrected" else 3
+    lowest = 2 if condition.correction in ("uncorrected", "accommodating") else 3
     kept = {k: v for k, v in front.coefficients_um.items() if k[0] >= lowest}
+    at_pupil = None
     if isinstance(condition.correction, Prescription):
         at_pupil = transfer_prescription(condition.correction, -(condition.vertex_mm + pupil_position_mm))
+    elif condition.correction == "accommodating":  # a plus lens at the pupil, up to the amplitude
+        m = minimum_rms_prescription(dict(front.coefficients_um), pupil).power_vector()[0]
+        at_pupil = Prescription(float(np.clip(m, 0.0, condition.accommodation_amplitude_diopters)))
+    if at_pupil is not None:
         lens = Wavefront.from_prescription(at_pupil, pupil).coefficients_um
         for key, value in front.coefficients_um.items():
             if key[0] == 2:
