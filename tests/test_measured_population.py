@@ -203,6 +203,11 @@ def test_an_accommodating_eye_cancels_its_hyperopia_up_to_its_amplitude_and_no_m
     depth = _base_trace(555.0, (0.0, 0.0), 3.0).entrance_pupil_position_mm
     worn = PopulationCondition(3.0, correction=Prescription(m), vertex_mm=-depth)
     assert evaluate_population([hyperope.eye], [worn])[0].strehl == pytest.approx(seen_h[accommodating], rel=1e-12)
+    # off axis the eye keeps the accommodation its fovea chose (the same plus sphere), not the periphery's own
+    aside = [PopulationCondition(3.0, (10.0, 0.0), "accommodating", accommodation_amplitude_diopters=m + 1.0),
+             PopulationCondition(3.0, (10.0, 0.0), Prescription(m), vertex_mm=-depth)]
+    off_axis = evaluate_population([hyperope.eye], aside)
+    assert off_axis[0].strehl == pytest.approx(off_axis[1].strehl, rel=1e-12)
 
 
 @pytest.mark.parametrize("kwargs", [{"correction": "accommodating"},

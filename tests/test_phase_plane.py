@@ -46,19 +46,29 @@ def test_a_quadratic_phase_plane_focuses_as_the_grating_equation_says():
     assert np.abs(bundle.directions[:, 0] - np.sin(theta)).max() < 1e-15
 
 
-def test_a_virtual_plane_turns_a_ray_as_a_real_one_and_carries_it_back():
+def test_a_virtual_plane_turns_a_ray_by_the_hand_worked_gradient_and_carries_it_back():
+    """φ = a u² + b u v + c v³ + e u, u = (x − 0.1) / 2, v = (y + 0.2) / 2 (mm), differentiated by hand here; rays
+    in air start at z = 0, the plane stands at z = 3 (virtual: beyond where they are handed back). Oracle: the new
+    direction is (d_x + ∂φ/∂x, d_y + ∂φ/∂y, +√(1 − …)); the ray handed back at z = 0 lies on the line through
+    the hit point along it; the path gained is the signed lengths to the plane and back plus φ (1e-12)."""
+    a, b, c, e = 1e-3, -2e-3, 5e-4, 1e-4
     rng = np.random.default_rng(3)
     points = np.column_stack([rng.uniform(-2, 2, (20, 2)), np.zeros(20)])
     d = np.column_stack([rng.uniform(-0.2, 0.2, (20, 2)), np.ones(20)])
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    plane = PhasePlane(3.0, (0.1, -0.2), 2.0, ((2, 0, 1e-3), (1, 1, -2e-3), (0, 3, 5e-4), (1, 0, 1e-4)))
-    moved, turned, _ = through_phase_plane(plane, points, d, 1.0)
-    hit = points + ((3.0 - points[:, 2]) / d[:, 2])[:, None] * d
-    real = trace_rays((plane,), hit - 1e-9 * d, d, stop_z_mm=None)
-    assert np.abs(turned - real.directions).max() < 1e-12
-    assert np.abs(moved[:, 2] - points[:, 2]).max() < 1e-12
-    back_to_hit = moved + ((3.0 - moved[:, 2]) / turned[:, 2])[:, None] * turned
-    assert np.abs(back_to_hit - hit).max() < 1e-12
+    plane = PhasePlane(3.0, (0.1, -0.2), 2.0, ((2, 0, a), (1, 1, b), (0, 3, c), (1, 0, e)))
+    moved, turned, path = through_phase_plane(plane, points, d, 1.0)
+    s = 3.0 / d[:, 2]
+    hit = points + s[:, None] * d
+    u, v = (hit[:, 0] - 0.1) / 2.0, (hit[:, 1] + 0.2) / 2.0
+    gx, gy = (2 * a * u + b * v + e) / 2.0, (b * u + 3 * c * v ** 2) / 2.0
+    tx, ty = d[:, 0] + gx, d[:, 1] + gy
+    wanted = np.column_stack([tx, ty, np.sqrt(1.0 - tx ** 2 - ty ** 2)])
+    assert np.abs(turned - wanted).max() < 1e-12
+    back = -3.0 / wanted[:, 2]
+    assert np.abs(moved - (hit + back[:, None] * wanted)).max() < 1e-12
+    phi = a * u ** 2 + b * u * v + c * v ** 3 + e * u
+    assert np.abs(path - (s + back + phi)).max() < 1e-12
 
 
 @pytest.mark.parametrize("name, field_deg", [("jaeken-artal-2012:92:right", (0.0, 0.0)),

@@ -91,3 +91,28 @@ def test_a_subject_the_data_has_not_is_refused(tmp_path):
     path.write_text(SMALL.replace("subjects = [1, 2]", "subjects = [1, 999]"))
     with pytest.raises(VissimInputError, match="campaign.subjects: 999 is not a subject of jaeken-artal-2012"):
         load_campaign(path)
+
+
+@pytest.mark.parametrize("line, words", [
+    ('pupil_mm = [3.0, 3.0]', "given twice"),
+    ('subjects = [1, 1]', "lists a subject twice"),
+    ('eyes = ["rigth"]', "campaign.eyes: choose from right, left"),
+    ('field = [[60.0, 0.0]]', "campaign.field[0]: jaeken-artal-2012 was measured at x -40 to 40 deg"),
+    ('accommodation_amplitude_diopters = 2.0', "goes with the \"accommodating\" correction"),
+    ('vertex_mm = 500.0', "campaign.vertex_mm"),
+])
+def test_a_population_file_that_would_count_an_eye_twice_or_miss_the_data_is_refused(tmp_path, line, words):
+    key = line.split(" =")[0]
+    text = "\n".join(x for x in SMALL.splitlines() if not x.startswith(f"{key} =")) + f"\n{line}\n"
+    path = tmp_path / "population.toml"
+    path.write_text(text)
+    with pytest.raises(VissimInputError, match=words.replace("[", r"\[").replace("(", r"\(").replace(")", r"\)")):
+        load_campaign(path)
+
+
+def test_spp_is_refused_for_a_campaign_without_renders(tmp_path):
+    path = tmp_path / "population.toml"
+    path.write_text(SMALL)
+    with pytest.raises(VissimInputError, match="--spp 64: a population campaign makes no renders"):
+        validate(path, tmp_path / "run", spp=64, show_progress=False)
+    assert not (tmp_path / "run").exists()

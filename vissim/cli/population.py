@@ -77,6 +77,9 @@ def _conditions(args):
     if not corrections:
         raise VissimInputError(f"--correction is empty; expected {' or '.join(CORRECTIONS)}")
     corrections = [c if c in CORRECTIONS else _worn(c) for c in corrections]
+    if args.accommodation_amplitude_diopters and "accommodating" not in corrections:
+        raise VissimInputError(f"--accommodation-amplitude-diopters {args.accommodation_amplitude_diopters:g} goes with "
+                               "--correction accommodating only")
     nm = PHOTOPIC_FOCUS_NM if args.wavelength_nm is None else args.wavelength_nm
     return [PopulationCondition(p, f, c, nm, args.vertex_mm,
                                 args.accommodation_amplitude_diopters if c == "accommodating" else 0.0)

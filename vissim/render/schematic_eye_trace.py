@@ -223,7 +223,7 @@ def _phase_gradient(plane, x, y):
     """(∂φ/∂x, ∂φ/∂y) of a phase plane's polynomial ``Σ c u^p v^q`` (u, v: about its centre over its radius)."""
     r = plane.radius_mm
     u, v = (x - plane.centre_mm[0]) / r, (y - plane.centre_mm[1]) / r
-    top = max(max(p, q) for p, q, _ in plane.terms)
+    top = max((max(p, q) for p, q, _ in plane.terms), default=0)
     u_pow, v_pow = [1.0 + 0.0 * u], [1.0 + 0.0 * v]
     for _ in range(top):
         u_pow.append(u_pow[-1] * u)
@@ -350,8 +350,10 @@ class SchematicEyeTracer:
         ax, ay = d[0] + gx / n_air, d[1] + gy / n_air
         left = 1.0 - ax * ax - ay * ay
         turned = (ax, ay, -dr.sqrt(dr.maximum(left, 0.0)))  # out of the eye: towards -z
-        back = (p[2] - hit[2]) / turned[2]
-        return _add(hit, turned, back), turned, left > 0.0
+        ok = left > 0.0
+        back = (p[2] - hit[2]) / dr.select(ok, turned[2], -1.0)
+        point = _select(ok, _add(hit, turned, back), p)  # a ray turned past grazing is dropped, harmlessly
+        return point, _select(ok, turned, (0.0 * p[0], 0.0 * p[0], -1.0 + 0.0 * p[0])), ok
 
     @staticmethod
     def _index(medium, p, wavelength_nm):

@@ -64,6 +64,8 @@ def check_run(campaign: Campaign, run_dir: Path, workers: int, spp: int | None, 
     ``--spp`` and ``--scheduler`` are sound."""
     check_outputs_apart(campaign_inputs(campaign), folders=[run_dir])
     check_run_options(run_dir, workers, spp)
+    if spp is not None and not hasattr(campaign.settings, "spp"):
+        raise VissimInputError(f"--spp {spp}: a {campaign.kind} campaign makes no renders; leave the option out")
     if scheduler is not None and not scheduler.strip():
         raise VissimInputError("--scheduler is empty; expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786 "
                                "(leave the option out to render here)")
@@ -111,10 +113,12 @@ def run_campaign(campaign: Campaign, run_dir: str | Path, *, workers: int = 1, s
         resumed (finished items are reused).
     workers : int
         Local processes that make the renders (1: in this process).  Items are computed here,
-        one after another.
+        one after another; a kind whose items spread their own work (a population's eyes) spreads it
+        over the same ``workers``.
     scheduler : str, optional
         A Dask scheduler's address (``host:port``) to make the renders on instead of
-        ``workers``; checked to answer before anything is written.
+        ``workers`` (and a population's eyes); checked to answer before the renders are written (a
+        population, which makes none, connects when its first item starts).
     spp : int, optional
         Override the campaign's samples per pixel for every render.
     render : callable, optional

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS,
                                          POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
-from vissim.validation.engine.fields import field_error, number, text, value_list
+from vissim.checks import ACCOMMODATION_RANGE_DIOPTERS, VERTEX_DISTANCE_RANGE_MM
+from vissim.validation.engine.fields import choices, field_error, number, text, value_list
 
 __all__ = ["PopulationSettings", "PopulationItem", "read_campaign", "HEAD_KEYS"]
 
@@ -65,14 +66,23 @@ def _numbers(value, source: str, where: str, unit: str, **bounds) -> tuple[float
                                                                                                       where, "[3, 4]")))
 
 
-def _fields(value, source: str) -> list[tuple[float, float]]:
+def _fields(value, dataset: str, source: str) -> list[tuple[float, float]]:
+    from vissim.optics.eyes.measured.datasets import load_dataset
+
+    data = load_dataset(dataset)
+    x_range, y_range = (min(data.x_deg), max(data.x_deg)), (min(data.y_deg), max(data.y_deg))
     pairs = value if isinstance(value, list) and value and isinstance(value[0], list) else [value]
     out = []
     for i, pair in enumerate(pairs):
         pair = [pair, 0.0] if isinstance(pair, (int, float)) and not isinstance(pair, bool) else pair
         if not isinstance(pair, list) or len(pair) != 2:
             raise field_error(source, f"campaign.field[{i}]", f"give [x, y] in degrees, got {pair!r}")
-        out.append(tuple(number(v, source, f"campaign.field[{i}]", "deg") for v in pair))
+        x, y = (number(v, source, f"campaign.field[{i}]", "deg") for v in pair)
+        if not (x_range[0] <= x <= x_range[1] and y_range[0] <= y <= y_range[1]):
+            raise field_error(source, f"campaign.field[{i}]", f"{dataset} was measured at x {x_range[0]:g} to "
+                                                              f"{x_range[1]:g} deg and y {y_range[0]:g} to {y_range[1]:g} deg,"
+                                                              f" got [{x:g}, {y:g}] deg")
+        out.append((x, y))
     return out
 
 
@@ -94,6 +104,8 @@ def _subjects(value, dataset: str, source: str) -> tuple[int, ...]:
 
     known = load_dataset(dataset).subjects
     chosen = value_list(value, source, "campaign.subjects", "[1, 17]")
+    if len(set(map(repr, chosen))) != len(chosen):
+        raise field_error(source, "campaign.subjects", f"lists a subject twice: {chosen!r}")
     for s in chosen:
         if isinstance(s, bool) or not isinstance(s, int) or s not in known:
             raise field_error(source, "campaign.subjects", f"{s!r} is not a subject of {dataset} (its subjects are "
@@ -108,8 +120,9 @@ def _settings(head: dict, source: str) -> PopulationSettings:
     if dataset not in DATASET_NAMES:
         raise field_error(source, "campaign.dataset", f"choose from {', '.join(DATASET_NAMES)}, got {dataset!r}")
     subjects = None if "subjects" not in head else _subjects(head["subjects"], dataset, source)
-    eyes = None if "eyes" not in head else tuple(
-        text(e, source, "campaign.eyes") for e in value_list(head["eyes"], source, "campaign.eyes", '["right"]'))
+    from vissim.optics.eyes.measured.datasets import load_dataset
+
+    eyes = None if "eyes" not in head else choices(head["eyes"], load_dataset(dataset).eyes, source, "campaign.eyes")
     se = None
     if "foveal_se_diopters" in head:
         se = _numbers(head["foveal_se_diopters"], source, "campaign.foveal_se_diopters", "D")
@@ -134,19 +147,36 @@ def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[Po
     largest = load_dataset(settings.dataset).pupil_mm
     pupils = _numbers(head.get("pupil_mm", list(POPULATION_PUPILS_MM)), source, "campaign.pupil_mm", "mm",
                       positive=True, hi=largest)  # at most the data's: nothing is extrapolated
-    fields = _fields(head.get("field", [0.0, 0.0]), source)
+    fields = _fields(head.get("field", [0.0, 0.0]), settings.dataset, source)
     corrections = [_correction(c, source, f"campaign.correction[{i}]") for i, c in enumerate(
         value_list(head.get("correction", ["sphero-cylinder"]), source, "campaign.correction", '["sphero-cylinder"]'))]
     nm = number(head.get("wavelength_nm", PHOTOPIC_FOCUS_NM), source, "campaign.wavelength_nm", "nm", positive=True)
-    vertex = number(head.get("vertex_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_mm", "mm")
-    amplitude = number(head.get("accommodation_amplitude_diopters", 0.0), source,
-                       "campaign.accommodation_amplitude_diopters", "D")
-    items = []
+    vertex = number(head.get("vertex_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_mm", "mm",
+                    lo=VERTEX_DISTANCE_RANGE_MM[0], hi=VERTEX_DISTANCE_RANGE_MM[1])
+    amplitude = _amplitude(head, corrections, source)
+    items, seen = [], {}
     for pupil, field, correction in itertools.product(pupils, fields, corrections):
         try:
             condition = PopulationCondition(pupil, field, correction, nm, vertex,
                                             amplitude if correction == "accommodating" else 0.0)
         except VissimInputError as error:
             raise field_error(source, "campaign", str(error)) from None
+        if condition.label in seen:
+            raise field_error(source, "campaign", f"the condition {condition.label!r} is given twice (a pupil, field or "
+                                                  "correction repeated)")
+        seen[condition.label] = True
         items.append(PopulationItem(condition.label, condition))
     return settings, tuple(items)
+
+
+def _amplitude(head: dict, corrections: list, source: str) -> float:
+    """The accommodating eyes' amplitude, D: given with the ``"accommodating"`` correction, and only with it."""
+    where = "campaign.accommodation_amplitude_diopters"
+    given = "accommodation_amplitude_diopters" in head
+    if given != ("accommodating" in corrections):
+        raise field_error(source, where, "an accommodation amplitude goes with the \"accommodating\" correction, and "
+                                         "that correction needs one")
+    if not given:
+        return 0.0
+    return number(head[where.split(".")[1]], source, where, "D", lo=ACCOMMODATION_RANGE_DIOPTERS[0],
+                  hi=ACCOMMODATION_RANGE_DIOPTERS[1], positive=True)

@@ -9,8 +9,9 @@ frequencies, the Strehl ratio, the eye's own refraction (M, J0, J45 over the pup
 * **Correction states**: ``"uncorrected"`` (the eye as measured, tilt aside); ``"sphero-cylinder"``: the
   best spectacle correction in the minimum-RMS sense, orders 0-2 removed (what a sphero-cylinder can correct),
   the higher orders left; ``"accommodating"``: uncorrected, but the eye accommodates up to
-  ``accommodation_amplitude_diopters`` to cancel its own hyperopia (its spherical equivalent M over the pupil,
-  when positive: a hyperope focuses a far target, a myope cannot); accommodation taken as a change of power at the entrance
+  ``accommodation_amplitude_diopters`` to cancel its own hyperopia (its spherical equivalent M over the pupil
+  at the fovea, when positive: a hyperope focuses a far target, a myope cannot; off axis the eye keeps the
+  accommodation its fovea chose); accommodation taken as a change of power at the entrance
   pupil only (the lens's own change of aberrations left out; the data were measured relaxed); or a
   `Prescription`: those spectacles worn ``vertex_mm`` in front of the cornea, their vergence at the entrance
   pupil taken from the eye's second-order terms.
@@ -24,6 +25,7 @@ frequencies, the Strehl ratio, the eye's own refraction (M, J0, J45 over the pup
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -184,7 +186,8 @@ def _front(eye: MeasuredWavefront, condition: PopulationCondition):
             traced.entrance_pupil_position_mm)
 
 
-def _corrected(front: Wavefront, condition: PopulationCondition, pupil_position_mm: float) -> Wavefront:
+def _corrected(front: Wavefront, condition: PopulationCondition, pupil_position_mm: float,
+               foveal_m_diopters: float = 0.0) -> Wavefront:
     """What the eye sees through its correction (module doc): orders 2 and up uncorrected, 3 and up with its
     best sphero-cylinder; wearing a given Rx, the lens's vergence at the pupil (`transfer_prescription`,
     ``vertex_mm`` plus the pupil's depth; its paraxial power, oblique lens astigmatism aside) taken from the
@@ -196,8 +199,7 @@ def _corrected(front: Wavefront, condition: PopulationCondition, pupil_position_
     if isinstance(condition.correction, Prescription):
         at_pupil = transfer_prescription(condition.correction, -(condition.vertex_mm + pupil_position_mm))
     elif condition.correction == "accommodating":  # a plus lens at the pupil, up to the amplitude
-        m = minimum_rms_prescription(dict(front.coefficients_um), pupil).power_vector()[0]
-        at_pupil = Prescription(float(np.clip(m, 0.0, condition.accommodation_amplitude_diopters)))
+        at_pupil = Prescription(float(np.clip(foveal_m_diopters, 0.0, condition.accommodation_amplitude_diopters)))
     if at_pupil is not None:
         lens = Wavefront.from_prescription(at_pupil, pupil).coefficients_um
         for key, value in front.coefficients_um.items():
@@ -223,7 +225,10 @@ def schematic_mtf(optics: SchematicEye, condition: PopulationCondition, frequenc
     eye = build_eye(optics, pupil_mm=condition.pupil_mm)
     nm = condition.wavelength_nm
     spectral = eye_spectral_wavefront(eye, wavelengths_nm=[nm], field_deg=condition.field_deg)
-    seen = _corrected(spectral.fronts[0], condition, entrance_pupil_position_mm(mean_meridian_eye(eye.optics), nm))
+    foveal = 0.0 if condition.correction != "accommodating" else _spherical_equivalent(
+        eye_spectral_wavefront(eye, wavelengths_nm=[nm]).fronts[0])
+    seen = _corrected(spectral.fronts[0], condition, entrance_pupil_position_mm(mean_meridian_eye(eye.optics), nm),
+                      foveal)
     return _seen_mtf(seen, spectral.field_map, condition, np.asarray(frequencies_cyc_per_deg, dtype=float),
                      optics.name)
 
@@ -258,12 +263,23 @@ def seen_image(eye: MeasuredWavefront, condition: PopulationCondition, image, ar
     return seen[margin[0][0]:margin[0][0] + pixels.shape[0], margin[1][0]:margin[1][0] + pixels.shape[1]]
 
 
+def _spherical_equivalent(front: Wavefront) -> float:
+    return float(minimum_rms_prescription(dict(front.coefficients_um), front.pupil_diameter_mm).power_vector()[0])
+
+
+def _foveal_m(eye: MeasuredWavefront, condition: PopulationCondition) -> float:
+    """The eye's M at the fovea in the condition's pupil and light: what an accommodating eye answers to."""
+    if condition.correction != "accommodating":
+        return 0.0
+    return _spherical_equivalent(_front(eye, dataclasses.replace(condition, field_deg=(0.0, 0.0)))[0])
+
+
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
     front, field_map, position = _front(eye, condition)
     pupil = front.pupil_diameter_mm
     m, j0, j45 = minimum_rms_prescription(dict(front.coefficients_um), pupil).power_vector()
     higher = {k: v for k, v in front.coefficients_um.items() if k[0] >= 3}
-    seen = _corrected(front, condition, position)
+    seen = _corrected(front, condition, position, _foveal_m(eye, condition))
     mtf = _seen_mtf(seen, field_map, condition, frequencies, eye.name) if len(frequencies) else np.zeros(0)
     rms = math.sqrt(sum(v * v for v in higher.values()))
     return EyeResult(eye, condition, mtf, float(strehl_ratio(seen, wavelength_nm=condition.wavelength_nm)),
