@@ -28,34 +28,75 @@ from vissim.atomic import output_transaction
 from vissim.cli._parser import VissimArgumentParser
 from vissim.errors import VissimError
 
-#: Sub-command modules, in the order ``vissim --help`` lists them.
-COMMAND_MODULES = (
-    "vissim.cli.rx",
-    "vissim.cli.trial_lens",
-    "vissim.cli.eye",
-    "vissim.cli.population",
-    "vissim.cli.fit_rx",
-    "vissim.cli.psf",
-    "vissim.cli.chart",
-    "vissim.cli.blur",
-    "vissim.cli.blur_depth",
-    "vissim.cli.demo",
-    "vissim.cli.render",
-    "vissim.cli.validate",
-    "vissim.cli.atv",
-    "vissim.cli.bench",
-)
+#: The sub-commands, in the order ``vissim --help`` lists them: name -> (the module that builds its parser, its
+#: line in that list). Only the command being run has its module imported (`build_parser`).
+COMMANDS = {
+    "rx": ("vissim.cli.rx",
+              "parse a prescription: sphere/cylinder/axis, power vector, Zernike coefficients"),
+    "trial-lens": ("vissim.cli.trial_lens",
+              "power and magnification a trial lens adds at the camera"),
+    "eye": ("vissim.cli.eye",
+              "trace a schematic eye: power, pupils, Zernikes, refraction, MTF"),
+    "population": ("vissim.cli.population",
+              "measured eyes en masse: MTF, Strehl, refraction per eye, their quantiles, beside published MTFs"),
+    "fit-rx": ("vissim.cli.fit_rx",
+              "fit the refraction a capture shows (sphere, cylinder, axis added at the camera)"),
+    "psf": ("vissim.cli.psf",
+              "compute a point-spread function"),
+    "chart": ("vissim.cli.chart",
+              "render a LogMAR letter chart, a single letter or a thesis tile"),
+    "blur": ("vissim.cli.blur",
+              "blur an image through a prescription or Zernike wavefront"),
+    "blur-depth": ("vissim.cli.blur_depth",
+              "blur an RGB-D image: defocus per depth for an uncorrected eye, with occlusion"),
+    "demo": ("vissim.cli.demo",
+              "write a LogMAR chart, two PSFs and the blurred charts (built-in default)"),
+    "render": ("vissim.cli.render",
+              "render the virtual optical bench (Mitsuba 3) to a linear EXR"),
+    "validate": ("vissim.cli.validate",
+              "run a validation campaign: bench renders vs Fourier simulations"),
+    "report": ("vissim.cli.validate",
+              "rebuild a campaign run's report from its results"),
+    "atv": ("vissim.cli.atv",
+              "absolute threshold for vision: analyse, simulate, measure"),
+    "bench": ("vissim.cli.bench",
+              "the virtual DSLR bench's own optics (traced wavefront)"),
+}
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: The modules, each once, in the order of `COMMANDS`.
+COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
+
+
+def command_help(name: str) -> str:
+    """The line ``vissim --help`` gives the command ``name``."""
+    return COMMANDS[name][1]
+
+
+def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
+    """The ``vissim`` parser. Every command's options with ``command="*"``; with a command's name, that
+    command's (and its module's other commands') options only, the rest listed by name and line, their modules
+    (and what they import) left unloaded; with None, every command listed only (``vissim --help``)."""
     parser = VissimArgumentParser(prog="vissim",
                                   description="Simulate how refractive errors blur what an eye or a camera sees.")
     parser.add_argument("--version", action="version", version=f"vissim {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="log more (-vv for debug)")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMAND_MODULES:
-        importlib.import_module(name).add_parser(subparsers)
+    wanted = None if command in (None, "*") else COMMANDS[command][0]
+    built = set()
+    for name, (module, line) in COMMANDS.items():
+        if command == "*" or module == wanted:
+            if module not in built:
+                importlib.import_module(module).add_parser(subparsers)
+                built.add(module)
+        else:
+            subparsers.add_parser(name, help=line)
     return parser
+
+
+def _command_named(argv: list[str]) -> str | None:
+    """The command ``argv`` runs (its first word that names one), or None."""
+    return next((token for token in argv if token in COMMANDS), None)
 
 
 _NEGATIVE_VALUE = re.compile(r"^-(?:\d|\.\d)")
@@ -107,9 +148,10 @@ def _run_command(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_command_named(argv))
     try:
-        args = _unprotect(parser.parse_args(_protect_negative_values(sys.argv[1:] if argv is None else list(argv))))
+        args = _unprotect(parser.parse_args(_protect_negative_values(argv)))
     except SystemExit as exc:  # --help, --version, or one 'vissim: error:' line already printed
         return exc.code if isinstance(exc.code, int) else 2
     handler = logging.StreamHandler()

@@ -15,10 +15,10 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import LE_GRAND_ACCOMMODATED_DIOPTERS
 from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.optics.rx.prescription import Prescription
-from vissim.optics.pupil.wavefront import Wavefront, parse_zernike_terms
 
 if TYPE_CHECKING:  # imageio loads OpenEXR; the image only lends its recorded sampling here
     from vissim.imageio import Image
+    from vissim.optics.pupil.wavefront import Wavefront
 
 log = logging.getLogger(__name__)
 
@@ -73,6 +73,8 @@ def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = Tru
 
 def wavefront_from_args(args: argparse.Namespace) -> Wavefront:
     """The wavefront the user described, over the measurement pupil."""
+    from vissim.optics.pupil.wavefront import Wavefront, parse_zernike_terms
+
     if args.rx is None and args.zernike is None:
         raise VissimInputError("give the aberration with --rx '<prescription>' and/or --zernike 'n,m=µm;...'")
     pupil = args.pupil_mm
@@ -96,7 +98,7 @@ FIELD_DEG_HELP = ("field angle, degrees, x (examiner's right: the observer's lef
 def add_eye_model_arg(parser, help_text: str, **extra) -> None:
     """``--eye-model MODEL``: one of `EYE_MODELS`, or a measured eye (``jaeken-artal-2012:17:right``,
     ``polans-2015:3``); refused by the parser otherwise."""
-    from vissim.optics.eyes.measured.measured_eye import MEASURED_EYE_SPELLING
+    from vissim.optics.eyes.defaults import MEASURED_EYE_SPELLING
     from vissim.optics.eyes.models import EYE_MODELS
 
     parser.add_argument("--eye-model", type=_eye_name, metavar="EYE",

@@ -16,12 +16,13 @@ from vissim.cli._common import add_rx_arg, check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.optics.rx.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.cli import command_help
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "atv",
-        help="absolute threshold for vision: analyse, simulate, measure",
+        help=command_help("atv"),
         description="The thesis's absolute-threshold-for-vision experiment (Ch. 5): analyse participant data, "
         "simulate a virtual subject, or run the threshold procedure with a simulated observer or a person.",
     )

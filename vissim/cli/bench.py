@@ -8,13 +8,14 @@ import json
 from vissim import __version__
 from vissim.cli._common import add_trial_lens_args, parse_float_list, trial_lens_powers
 from vissim.errors import VissimInputError
+from vissim.cli import command_help
 
 #: Terms below this magnitude (µm) are left out of the text table (the JSON has them all).
 _PRINT_FLOOR_UM = 1e-7
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
-    parser = subparsers.add_parser("bench", help="the virtual DSLR bench's own optics (traced wavefront)",
+    parser = subparsers.add_parser("bench", help=command_help("bench"),
                                    description="The virtual DSLR bench's trial lenses, traced exactly.")
     commands = parser.add_subparsers(dest="bench_command", metavar="COMMAND")
     add_wavefront_parser(commands)

@@ -19,6 +19,7 @@ from vissim.optics.blur.device import blur_image_on
 from vissim.optics.rx.chromatic import gaussian_band
 from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
+from vissim.cli import command_help
 
 DEFAULT_CHANNELS_NM = (610.0, 550.0, 465.0)
 
@@ -26,7 +27,7 @@ DEFAULT_CHANNELS_NM = (610.0, 550.0, 465.0)
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "blur",
-        help="blur an image through a prescription or Zernike wavefront",
+        help=command_help("blur"),
         description="Blur an image (EXR linear; PNG/TIFF decoded from sRGB) with the PSF of an "
         "aberration, in linear light. Mono images use --wavelength-nm; RGB images use one "
         "wavelength per channel (--channels-nm, default 610,550,465), or the thesis's single "

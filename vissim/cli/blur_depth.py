@@ -25,12 +25,13 @@ from vissim.optics.rx.prescription import Prescription
 from vissim.optics.rx.viewing_setup import DepthViewer
 from vissim.progress import terminal_progress
 from vissim.provenance import make_provenance
+from vissim.cli import command_help
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "blur-depth",
-        help="blur an RGB-D image: defocus per depth for an uncorrected eye, with occlusion",
+        help=command_help("blur-depth"),
         description="Blur a linear-light image through an uncorrected eye, each pixel with the defocus "
         "of its depth (effective prescription = eye Rx + 1/d - accommodation), in depth layers "
         "composited with occlusion so that edges neither glow nor leak (see vissim.optics.depth.depth_map).",

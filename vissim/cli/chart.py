@@ -17,6 +17,7 @@ from vissim.imageio import image_files, write_image
 from vissim.provenance import make_provenance
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_TILE_SHAPE_PX
 from vissim.units import mm_to_m
+from vissim.cli import command_help
 
 log = logging.getLogger(__name__)
 
@@ -28,7 +29,7 @@ _IMAGE_SUFFIXES = (".exr", ".png", ".tif", ".tiff")
 def add_parser(subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "chart",
-        help="render a LogMAR letter chart, a single letter or a thesis tile",
+        help=command_help("chart"),
         description=(
             "Render Sloan-letter charts in ETDRS layout (5 letters a row, letter gap = letter width, "
             "row gap = next row's letter height).  By default the image is sampled in visual angle "

@@ -7,12 +7,13 @@ from pathlib import Path
 
 from vissim.chart_demo import DEMO_PRESCRIPTIONS, run_demo
 from vissim.errors import VissimInputError
+from vissim.cli import command_help
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "demo",
-        help="write a LogMAR chart, two PSFs and the blurred charts (built-in default)",
+        help=command_help("demo"),
         description="Render a LogMAR chart at 1 arcmin/px and blur it, in linear light, through an "
         "eye corrected by " + " and by ".join(DEMO_PRESCRIPTIONS.values()) + " (3 mm pupil, 550 nm).",
     )

@@ -14,6 +14,7 @@ from vissim.optics.rx.prescription import Prescription
 from vissim.optics.eyes.models import EYE_MODELS
 from vissim.optics.eyes.defaults import DEFAULT_EYE_MODEL, DEFAULT_SPECTACLE_VERTEX_MM
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
+from vissim.cli import command_help
 
 if TYPE_CHECKING:
     from vissim.optics.eyes.report import EyeReport
@@ -22,7 +23,7 @@ if TYPE_CHECKING:
 def add_parser(subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "eye",
-        help="trace a schematic eye: power, pupils, Zernikes, refraction, MTF",
+        help=command_help("eye"),
         description=(
             "Trace a schematic eye surface by surface at one field point and one wavelength: its power and "
             "image-space focal length f' (n'/P, in the vitreous), its entrance pupil (diameter: real rays on "

@@ -16,12 +16,13 @@ from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
 from vissim.units import REC709_LUMINANCE
+from vissim.cli import command_help
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "fit-rx",
-        help="fit the refraction a capture shows (sphere, cylinder, axis added at the camera)",
+        help=command_help("fit-rx"),
         description=(
             "Fit the sphero-cylinder added at the camera (what 'vissim trial-lens' prints as effective_*) that "
             "turns REFERENCE (the sharp no-lens capture, render or chart) into IMAGE, with the Fourier model, in "

@@ -12,6 +12,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS,
                                          POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
 from vissim.optics.eyes.measured.datasets import DATASET_NAMES
+from vissim.cli import command_help
 
 CORRECTIONS = POPULATION_CORRECTIONS
 
@@ -23,7 +24,7 @@ def _listed(values) -> str:
 def add_parser(subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "population",
-        help="measured eyes en masse: MTF, Strehl, refraction per eye, their quantiles, beside published MTFs",
+        help=command_help("population"),
         description=(
             "Evaluate a population of measured eyes (a dataset's eyes, a list, or those whose foveal spherical "
             "equivalent lies in a range) under every combination of the pupils, fields and corrections given: per eye "

@@ -19,12 +19,13 @@ from vissim.optics.psf.compute import compute_psf
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.provenance import make_provenance
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
+from vissim.cli import command_help
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "psf",
-        help="compute a point-spread function",
+        help=command_help("psf"),
         description="Compute the PSF of a prescription or Zernike wavefront at a stated angular "
         "sampling, over any field. Writes a float32 single-channel (Y) EXR normalised to the PSF's total "
         "energy, so it sums to the fraction the field holds (recorded as energy_in_field in the file's "

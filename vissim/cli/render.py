@@ -20,6 +20,7 @@ from vissim.cli.render_depth import add_depth_parser
 from vissim.cli.render_eye import add_eye_parser
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
+from vissim.cli import command_help
 
 log = logging.getLogger(__name__)
 
@@ -29,7 +30,7 @@ __all__ = ["add_parser", "add_bench_parser", "add_atv_parser", "add_depth_parser
 def add_parser(subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "render",
-        help="render the virtual optical bench (Mitsuba 3) to a linear EXR",
+        help=command_help("render"),
         description="Render the virtual optical bench with Mitsuba 3: a camera, trial lenses and a chart.",
     )
     benches = parser.add_subparsers(dest="bench", metavar="BENCH")

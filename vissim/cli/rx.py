@@ -8,12 +8,13 @@ import json
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.pupil.wavefront import prescription_to_zernike_um
+from vissim.cli import command_help
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "rx",
-        help="parse a prescription: sphere/cylinder/axis, power vector, Zernike coefficients",
+        help=command_help("rx"),
         description="Parse a prescription (the correcting lens, TABO axis) and print it in minus "
         "cylinder, its spherical equivalent, power vector (M, J0, J45) and, with --pupil-mm, the "
         "OSA Zernike coefficients c(2,-2), c(2,0), c(2,2) in µm of the eye it corrects.",

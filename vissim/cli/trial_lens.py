@@ -13,6 +13,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.rx.trial_lens import (CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup,
                                       thesis_table_4_2_power, trial_lens_effect)
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
+from vissim.cli import command_help
 
 log = logging.getLogger(__name__)
 
@@ -22,7 +23,7 @@ _INFINITY_WORDS = ("inf", "infinity", "+inf", "∞")
 def add_parser(subparsers) -> argparse.ArgumentParser:
     parser = subparsers.add_parser(
         "trial-lens",
-        help="power and magnification a trial lens adds at the camera",
+        help=command_help("trial-lens"),
         description=(
             "Trace a trial lens in front of a camera (or an eye) by astigmatic ray transfer: the "
             "power it adds at the camera principal plane, the camera's resulting prescription and "

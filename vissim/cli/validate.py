@@ -7,12 +7,13 @@ from pathlib import Path
 
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
+from vissim.cli import command_help
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "validate",
-        help="run a validation campaign: bench renders vs Fourier simulations",
+        help=command_help("validate"),
         description="Render each configuration of a campaign on the virtual bench (the ground truth), "
         "apply the wave, geometric and thesis-mode simulations to the no-lens render and to the "
         "synthetic chart, and compare (SSIM, PSNR, absolute difference, after sub-pixel "
@@ -29,7 +30,7 @@ def add_parser(subparsers) -> None:
 
     report = subparsers.add_parser(
         "report",
-        help="rebuild a campaign run's report from its results",
+        help=command_help("report"),
         description="Rebuild metrics.json/csv, tables.md, figures and report.html of a run folder without rendering.",
     )
     report.add_argument("run", type=Path, help="run folder written by vissim validate")

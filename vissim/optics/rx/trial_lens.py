@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.checks import finite_number as _number
-from vissim.checks import LENS_GAP_RANGE_MM
+from vissim.checks import LENS_GAP_RANGE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import LensPower, Prescription
@@ -50,11 +50,10 @@ log = logging.getLogger(__name__)
 
 #: Refractive index of ophthalmic crown glass (nd), the default for thick trial lenses.
 CROWN_GLASS_INDEX = 1.523
-#: An eye's trial or spectacle lens: 12 mm from the cornea (clinical practice, 12-14 mm) and the
+#: An eye's trial or spectacle lens: `SPECTACLE_VERTEX_DISTANCE_MM` from the cornea (`vissim.checks`) and the
 #: entrance pupil 3 mm behind the cornea, so 15 mm from the lens's back vertex to the pupil, where
 #: vissim's eye has its thin lens (docs/conventions.md, "Defaults").  A camera's default is the
 #: thesis bench's measured THESIS_VERTEX_DISTANCE_MM, to its principal plane.
-SPECTACLE_VERTEX_DISTANCE_MM = 12.0
 CORNEA_TO_ENTRANCE_PUPIL_MM = 3.0
 EYE_VERTEX_DISTANCE_MM = SPECTACLE_VERTEX_DISTANCE_MM + CORNEA_TO_ENTRANCE_PUPIL_MM
 #: The thesis's lens holder takes up to three trial lenses (section 4.4).

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import MEASURED_EYE_SPELLING
 from vissim.optics.eyes.measured.datasets import DATASET_NAMES, load_dataset
 from vissim.optics.eyes.refraction import BEAM_PLANE, chief_ray_stretch
 from vissim.optics.eyes.traced_wavefront import DEFAULT_SAMPLES, trace_eye_wavefront
@@ -57,8 +58,6 @@ BASE_EYE_MODEL = "navarro-1985"
 MEASURING_WAVELENGTH_NM = {"jaeken-artal-2012": 780.0, "polans-2015": 780.0}
 #: The wavelength each study's defocus (j = 4) refers to, nm (module doc).
 DEFOCUS_WAVELENGTH_NM = {"jaeken-artal-2012": 780.0, "polans-2015": 555.0}
-#: How a measured eye is spelled, for help texts and refusals.
-MEASURED_EYE_SPELLING = "jaeken-artal-2012:SUBJECT:right|left or polans-2015:SUBJECT"
 _NAME = re.compile(r"^(?P<dataset>[a-z0-9-]+):(?P<subject>[^:]*)(?::(?P<eye>[^:]*))?$")
 
 
