@@ -9,7 +9,7 @@ from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
 
-__all__ = ["SPECTACLE_VERTEX_DISTANCE_MM", "number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
+__all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
            "EYE_RENDER_MAX_FIELD_DEG", "EYE_RENDER_MAX_THETA_DEG",
@@ -130,8 +130,6 @@ def wavelength_nm(value, name: str = "wavelength") -> float:
 #: Trial-lens vertex distances, mm (the last lens's back vertex to the camera's or eye's principal
 #: plane): the thesis's bench used 10, spectacles sit at 12-15; past 20 cm a lens is no trial lens.
 VERTEX_DISTANCE_RANGE_MM = (0.0, 200.0)
-#: An eye's trial or spectacle lens sits 12 mm from the cornea (clinical practice, 12-14 mm).
-SPECTACLE_VERTEX_DISTANCE_MM = 12.0
 #: The accommodation an eye exerts, dioptres: from relaxed to beyond a child's amplitude
 #: (about 15 D at 8 years, Duane 1922). Every eye a user describes takes it: campaigns, scene files, the ATV.
 ACCOMMODATION_RANGE_DIOPTERS = (0.0, 20.0)

@@ -15,7 +15,7 @@ from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import add_rx_arg, check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
-from vissim.optics.rx.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.rx.conventions import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 from vissim.cli import command_help
 
 

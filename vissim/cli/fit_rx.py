@@ -7,15 +7,12 @@ import json
 import math
 from pathlib import Path
 
-import numpy as np
-
 from vissim.checks import (DEFAULT_WAVELENGTH_NM, FIT_POWER_RANGE_DIOPTERS, MODEL_ERROR_RANGE_DIOPTERS, number_within,
                            VERTEX_DISTANCE_RANGE_MM)
 from vissim.cli._common import check_outputs_apart, image_sampling, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
-from vissim.units import REC709_LUMINANCE
 from vissim.cli import command_help
 
 
@@ -59,7 +56,12 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def _channel(image) -> np.ndarray:
+def _channel(image):
+    """Luminance (ITU-R BT.709) of an RGB image, or the image itself if grey."""
+    import numpy as np
+
+    from vissim.units import REC709_LUMINANCE
+
     pixels = image.pixels
     if pixels.ndim == 3:
         return np.tensordot(pixels, np.asarray(REC709_LUMINANCE, dtype=np.float32), axes=([2], [0]))

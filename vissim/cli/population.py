@@ -9,9 +9,9 @@ from pathlib import Path
 from vissim.checks import MAX_WORKERS
 from vissim.cli._common import field_deg_from_text, parse_float_list
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES as DATASET_NAMES
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS,
                                          POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
-from vissim.optics.eyes.measured.datasets import DATASET_NAMES
 from vissim.cli import command_help
 
 CORRECTIONS = POPULATION_CORRECTIONS

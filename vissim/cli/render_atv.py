@@ -17,7 +17,7 @@ from vissim.checks import EYE_PUPIL_RANGE_MM, size_text
 from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, refuse_existing,
                                 trial_lens_powers)
 from vissim.errors import VissimInputError
-from vissim.optics.rx.trial_lens import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.optics.rx.conventions import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 
 __all__ = ["add_atv_parser", "run_atv"]
 

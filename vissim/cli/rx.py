@@ -7,7 +7,6 @@ import json
 
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
-from vissim.optics.pupil.wavefront import prescription_to_zernike_um
 from vissim.cli import command_help
 
 
@@ -26,6 +25,8 @@ def add_parser(subparsers) -> None:
 
 
 def describe(rx: Prescription, pupil_mm: float | None) -> dict:
+    from vissim.optics.pupil.wavefront import prescription_to_zernike_um
+
     minus = rx.minus_cylinder()
     m, j0, j45 = rx.power_vector()
     out = {

@@ -7,13 +7,16 @@ import dataclasses
 import json
 import logging
 import math
+from typing import TYPE_CHECKING
 
 from vissim import __version__
 from vissim.errors import VissimInputError
-from vissim.optics.rx.trial_lens import (CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM, TrialLens, TrialLensSetup,
-                                      thesis_table_4_2_power, trial_lens_effect)
+from vissim.optics.rx.conventions import CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
 from vissim.cli import command_help
+
+if TYPE_CHECKING:
+    from vissim.optics.rx.trial_lens import TrialLens
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +71,8 @@ def _object_distance_m(text: str) -> float:
 
 
 def _lens_from_args(args: argparse.Namespace) -> TrialLens:
+    from vissim.optics.rx.trial_lens import TrialLens
+
     if args.cylinder != 0.0 and args.axis is None:
         raise VissimInputError(f"--cylinder {args.cylinder:g} D needs --axis in degrees (TABO, 0-180)")
     index = args.index
@@ -80,6 +85,8 @@ def _lens_from_args(args: argparse.Namespace) -> TrialLens:
 
 
 def run(args: argparse.Namespace) -> int:
+    from vissim.optics.rx.trial_lens import TrialLensSetup, thesis_table_4_2_power, trial_lens_effect
+
     lens = _lens_from_args(args)
     setup = TrialLensSetup(lenses=(lens,), vertex_distance_mm=args.vertex_mm,
                            object_distance_m=_object_distance_m(args.object_distance_m))

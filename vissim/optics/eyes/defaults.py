@@ -5,9 +5,10 @@
 
 from __future__ import annotations
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM, SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.optics.rx.conventions import SPECTACLE_VERTEX_DISTANCE_MM
 
-__all__ = ["MEASURED_EYE_SPELLING", "DEFAULT_EYE_MODEL", "DEFAULT_EYE_PUPIL_MM", "DEFAULT_SPECTACLE_VERTEX_MM", "DEFAULT_EYE_LIGHT_NM",
+__all__ = ["MEASURED_DATASET_NAMES", "MEASURED_EYE_SPELLING", "DEFAULT_EYE_MODEL", "DEFAULT_EYE_PUPIL_MM", "DEFAULT_SPECTACLE_VERTEX_MM", "DEFAULT_EYE_LIGHT_NM",
            "PHOTOPIC_FOCUS_NM", "PHOTOPIC_STEP_NM", "DEFAULT_CHART_DISTANCE_M", "DEFAULT_LETTER",
            "DEFAULT_LETTER_LOGMAR", "DEFAULT_EYE_ARCMIN_PER_PX", "DEFAULT_EYE_SIZE_PX",
            "POPULATION_LETTER_LOGMAR", "POPULATION_ARCMIN_PER_PX",
@@ -38,3 +39,5 @@ POPULATION_CORRECTIONS = ("uncorrected", "sphero-cylinder", "accommodating")
 POPULATION_PUPILS_MM, POPULATION_MTF_CYC_PER_DEG = (3.0, 4.0), (5.0, 10.0, 20.0, 30.0)
 #: How a measured eye is spelled (`vissim.optics.eyes.measured.measured_eye`), for help texts and refusals.
 MEASURED_EYE_SPELLING = "jaeken-artal-2012:SUBJECT:right|left or polans-2015:SUBJECT"
+#: The measured-wavefront datasets vissim ships (`vissim.optics.eyes.measured.datasets`, whose files they name).
+MEASURED_DATASET_NAMES = ("jaeken-artal-2012", "polans-2015")

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from vissim.checks import finite_number
 from vissim.errors import VissimInputError
-from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX
+from vissim.optics.rx.conventions import CROWN_GLASS_INDEX
 
 __all__ = ["D_LINE_NM", "F_LINE_NM", "C_LINE_NM", "CROWN_ABBE_NUMBER", "CauchyGlass", "SPECTACLE_CROWN",
            "crown_index", "glass_like_crown"]

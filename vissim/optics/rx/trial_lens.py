@@ -34,9 +34,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.checks import finite_number as _number
-from vissim.checks import LENS_GAP_RANGE_MM, SPECTACLE_VERTEX_DISTANCE_MM
+from vissim.checks import LENS_GAP_RANGE_MM
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
+from vissim.optics.rx.conventions import (CORNEA_TO_ENTRANCE_PUPIL_MM, CROWN_GLASS_INDEX,  # noqa: F401 (re-exported)
+                                          EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM)
 from vissim.optics.rx.prescription import LensPower, Prescription
 from vissim.thesis import THESIS_EYE_FOCAL_LENGTH_MM, THESIS_VERTEX_DISTANCE_MM
 from vissim.units import diopters_to_per_mm, mm_to_m
@@ -48,14 +50,6 @@ __all__ = ["CROWN_GLASS_INDEX", "lens_surface_curvatures_per_mm", "vergence_afte
 
 log = logging.getLogger(__name__)
 
-#: Refractive index of ophthalmic crown glass (nd), the default for thick trial lenses.
-CROWN_GLASS_INDEX = 1.523
-#: An eye's trial or spectacle lens: `SPECTACLE_VERTEX_DISTANCE_MM` from the cornea (`vissim.checks`) and the
-#: entrance pupil 3 mm behind the cornea, so 15 mm from the lens's back vertex to the pupil, where
-#: vissim's eye has its thin lens (docs/conventions.md, "Defaults").  A camera's default is the
-#: thesis bench's measured THESIS_VERTEX_DISTANCE_MM, to its principal plane.
-CORNEA_TO_ENTRANCE_PUPIL_MM = 3.0
-EYE_VERTEX_DISTANCE_MM = SPECTACLE_VERTEX_DISTANCE_MM + CORNEA_TO_ENTRANCE_PUPIL_MM
 #: The thesis's lens holder takes up to three trial lenses (section 4.4).
 MAX_LENSES_IN_HOLDER = 3
 
