@@ -18,7 +18,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.measured import datasets
 from vissim.optics.eyes.measured.measured_eye import parse_measured_eye
-from vissim.optics.eyes.measured.population import (PopulationCondition, evaluate_population,
+from vissim.optics.eyes.measured.population import (PopulationCondition, evaluate_population, population_conditions,
                                                     population_quantiles, select_eyes)
 from vissim.optics.eyes.psf_wavefront import eye_wavefront
 from vissim.optics.psf.compute import strehl_ratio
@@ -198,9 +198,11 @@ def test_an_accommodating_eye_cancels_its_hyperopia_up_to_its_amplitude_and_no_m
     seen_h = {c: fronts[c][0].strehl for c in fronts}
     assert seen_h[uncorrected] < seen_h[short] < seen_h[accommodating]
     assert fronts[accommodating][1].strehl == fronts[uncorrected][1].strehl  # the myope cannot accommodate away
-    from vissim.optics.eyes.measured.population import _base_trace
+    from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL
+    from vissim.optics.eyes.models import eye_model
+    from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
 
-    depth = _base_trace(555.0, (0.0, 0.0), 3.0).entrance_pupil_position_mm
+    depth = entrance_pupil_position_mm(mean_meridian_eye(eye_model(BASE_EYE_MODEL)), 555.0)
     worn = PopulationCondition(3.0, correction=Prescription(m), vertex_mm=-depth)
     assert evaluate_population([hyperope.eye], [worn])[0].strehl == pytest.approx(seen_h[accommodating], rel=1e-12)
     # off axis the eye keeps the accommodation its fovea chose (the same plus sphere), not the periphery's own
@@ -216,3 +218,15 @@ def test_an_accommodating_eye_cancels_its_hyperopia_up_to_its_amplitude_and_no_m
 def test_an_amplitude_goes_with_the_accommodating_correction_only(kwargs):
     with pytest.raises(VissimInputError, match="accommodation amplitude"):
         PopulationCondition(3.0, **kwargs)
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda: select_eyes("jaeken-artal-2012", subjects=[1, 1]), "names each subject once"),
+    (lambda: select_eyes("jaeken-artal-2012", eyes=["right", "right"]), "names each eye once"),
+    (lambda: population_conditions([3.0, 3.0], [(0.0, 0.0)], ["uncorrected"]), "given twice"),
+    (lambda: population_conditions([3.0], [(0.0, 0.0)], ["uncorrected"], accommodation_amplitude_diopters=2.0),
+     "goes with the accommodating correction only"),
+])
+def test_a_population_never_counts_an_eye_twice_nor_drops_an_amplitude(make, words):
+    with pytest.raises(VissimInputError, match=words):
+        make()

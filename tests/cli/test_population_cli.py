@@ -36,7 +36,7 @@ def test_a_small_population_writes_its_files(tmp_path, capsys):
 
 @pytest.mark.parametrize("extra, words", [
     (["--pupil-mm", "5"], "measured over a 4 mm pupil"),
-    (["--correction", "contacts"], "--correction is uncorrected or sphero-cylinder or accommodating or the spectacles worn"),
+    (["--correction", "contacts"], "--correction: a correction is uncorrected or sphero-cylinder or accommodating or the spectacles worn"),
     (["--correction", ""], "--correction is empty"),
     (["--field-deg", ";"], "--field-deg is empty"),
     (["--workers", "0"], "--workers must be > 0 worker processes, got '0'"),

@@ -46,8 +46,9 @@ def test_each_command_listed_is_the_one_its_module_builds():
 
 
 def test_the_light_names_are_the_packages_own():
-    """The names the help texts read without loading numpy match what the heavy modules hold."""
+    """The dataset names the help texts read without loading numpy are the package's data files, each loadable."""
     from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES
-    from vissim.optics.eyes.measured import datasets
+    from vissim.optics.eyes.measured.datasets import DATA_DIR, load_dataset
 
-    assert tuple(datasets._SOURCES) == MEASURED_DATASET_NAMES
+    assert sorted(MEASURED_DATASET_NAMES) == sorted(p.stem for p in DATA_DIR.glob("*.npz"))
+    assert all(load_dataset(name).name == name for name in MEASURED_DATASET_NAMES)

@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import itertools
 from pathlib import Path
 
 from vissim.checks import MAX_WORKERS
 from vissim.cli._common import field_deg_from_text, parse_float_list
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES as DATASET_NAMES
-from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS,
-                                         POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
+from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
+                                         POPULATION_CORRECTIONS, POPULATION_FIELD_DEG, POPULATION_MTF_CYC_PER_DEG,
+                                         POPULATION_PUPILS_MM)
 from vissim.cli import command_help
 
 CORRECTIONS = POPULATION_CORRECTIONS
@@ -44,11 +44,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              f"{PHOTOPIC_FOCUS_NM:g} nm light) is within LOW..HIGH D")
     parser.add_argument("--pupil-mm", default=_listed(POPULATION_PUPILS_MM), metavar="D[,D...]",
                         help=f"entrance pupil diameters, mm, at most the data's (default {_listed(POPULATION_PUPILS_MM)})")
-    parser.add_argument("--field-deg", default="0,0", metavar="X,Y[;X,Y...]",
+    parser.add_argument("--field-deg", default=_listed(POPULATION_FIELD_DEG), metavar="X,Y[;X,Y...]",
                         help="field angles, degrees, x (examiner's right: the observer's left) and y (up), from the "
-                             "line of sight, as the data were measured; several with ; (default 0,0: the fovea)")
-    parser.add_argument("--correction", default="sphero-cylinder", metavar="STATE[,STATE]",
-                        help=f"{' or '.join(CORRECTIONS)} (default sphero-cylinder: orders 0-2 removed; "
+                             "line of sight, as the data were measured; several with ; "
+                             f"(default {_listed(POPULATION_FIELD_DEG)}: the fovea)")
+    parser.add_argument("--correction", default=POPULATION_CORRECTION, metavar="STATE[,STATE]",
+                        help=f"{' or '.join(CORRECTIONS)} (default {POPULATION_CORRECTION}: orders 0-2 removed; "
                              "accommodating: uncorrected, hyperopia cancelled up to --accommodation-amplitude-diopters), "
                              "or the spectacles worn as a prescription, e.g. '-1.00 -0.50 x 90'")
     parser.add_argument("--accommodation-amplitude-diopters", type=float, default=0.0, metavar="A",
@@ -68,7 +69,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 
 
 def _conditions(args):
-    from vissim.optics.eyes.measured.population import PopulationCondition
+    from vissim.optics.eyes.measured.population import parse_correction, population_conditions
 
     pupils = parse_float_list(args.pupil_mm, "--pupil-mm", "mm")
     fields = [field_deg_from_text(text) for text in args.field_deg.split(";") if text.strip()]
@@ -77,25 +78,13 @@ def _conditions(args):
         raise VissimInputError(f"--field-deg is empty; expected X,Y[;X,Y...] in degrees, got {args.field_deg!r}")
     if not corrections:
         raise VissimInputError(f"--correction is empty; expected {' or '.join(CORRECTIONS)}")
-    corrections = [c if c in CORRECTIONS else _worn(c) for c in corrections]
-    if args.accommodation_amplitude_diopters and "accommodating" not in corrections:
-        raise VissimInputError(f"--accommodation-amplitude-diopters {args.accommodation_amplitude_diopters:g} goes with "
-                               "--correction accommodating only")
-    nm = PHOTOPIC_FOCUS_NM if args.wavelength_nm is None else args.wavelength_nm
-    return [PopulationCondition(p, f, c, nm, args.vertex_mm,
-                                args.accommodation_amplitude_diopters if c == "accommodating" else 0.0)
-            for p, f, c in itertools.product(pupils, fields, corrections)]
-
-
-def _worn(text: str):
-    """A --correction that is not a state: spectacles worn, written as a prescription."""
-    from vissim.optics.rx.prescription import prescription_from
-
     try:
-        return prescription_from(text)
-    except VissimInputError:
-        raise VissimInputError(f"--correction is {' or '.join(CORRECTIONS)} or the spectacles worn (a prescription, "
-                               f"e.g. '-1.00 -0.50 x 90'), got {text!r}") from None
+        corrections = [parse_correction(c) for c in corrections]
+    except VissimInputError as error:
+        raise VissimInputError(f"--correction: {error}") from None
+    nm = PHOTOPIC_FOCUS_NM if args.wavelength_nm is None else args.wavelength_nm
+    return population_conditions(pupils, fields, corrections, wavelength_nm=nm, vertex_mm=args.vertex_mm,
+                                 accommodation_amplitude_diopters=args.accommodation_amplitude_diopters)
 
 
 def _eyes(args):

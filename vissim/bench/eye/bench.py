@@ -44,9 +44,8 @@ from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM,
                                          DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER, DEFAULT_LETTER_LOGMAR,
-                                         DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM)
+                                         DEFAULT_SPECTACLE_VERTEX_MM)
 from vissim.optics.eyes.eye import Eye, surface_overrides
-from vissim.optics.eyes.simulations import Light
 from vissim.optics.eyes.viewing import EyeView
 from vissim.optics.rx.viewing_setup import ViewingSetup
 from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, MAX_LENSES_IN_HOLDER, TrialLens, TrialLensSetup
@@ -141,8 +140,11 @@ class EyeBench:
         return self.eye.pupil_mm or self.eye.iris_mm
 
     @property
-    def light(self) -> Light:
-        """The light the bench renders in, as the simulations take it: `Light.photopic` or its one wavelength."""
+    def light(self):
+        """The light the bench renders in, as the simulations take it (`vissim.optics.eyes.simulations.Light`):
+        photopic or its one wavelength."""
+        from vissim.optics.eyes.simulations import Light
+
         return Light.photopic() if self.spectrum == "photopic" else Light.monochromatic(self.wavelength_nm)
 
     @property
@@ -153,13 +155,13 @@ class EyeBench:
     @functools.cached_property
     def measured_phase(self):
         """A measured eye's phase plane (`vissim.optics.eyes.measured.phase_plane`) at the chart's field, fitted in the
-        render's light (photopic: at its focus, `PHOTOPIC_FOCUS_NM`, and used at every wavelength: the measured eye's
+        render's light (photopic: at its focus, `Light.focus_nm`, and used at every wavelength: the measured eye's
         chromatic difference is its base eye's); None for a schematic eye."""
         if self.eye.measured is None:
             return None
         from vissim.optics.eyes.measured.phase_plane import measured_phase_plane
 
-        return measured_phase_plane(self.eye, self.field_deg, self.wavelength_nm or PHOTOPIC_FOCUS_NM)
+        return measured_phase_plane(self.eye, self.field_deg, self.light.focus_nm)
 
     @property
     def phase_plane(self):

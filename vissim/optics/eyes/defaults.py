@@ -12,7 +12,7 @@ __all__ = ["MEASURED_DATASET_NAMES", "MEASURED_EYE_SPELLING", "DEFAULT_EYE_MODEL
            "PHOTOPIC_FOCUS_NM", "PHOTOPIC_STEP_NM", "DEFAULT_CHART_DISTANCE_M", "DEFAULT_LETTER",
            "DEFAULT_LETTER_LOGMAR", "DEFAULT_EYE_ARCMIN_PER_PX", "DEFAULT_EYE_SIZE_PX",
            "POPULATION_LETTER_LOGMAR", "POPULATION_ARCMIN_PER_PX",
-           "POPULATION_LETTER_SIZE_PX", "POPULATION_CORRECTIONS", "POPULATION_PUPILS_MM", "POPULATION_MTF_CYC_PER_DEG"]
+           "POPULATION_LETTER_SIZE_PX", "POPULATION_CORRECTIONS", "POPULATION_CORRECTION", "POPULATION_FIELD_DEG", "POPULATION_PUPILS_MM", "POPULATION_MTF_CYC_PER_DEG"]
 
 #: The schematic eye used when none is named: Navarro, Santamaria & Bescos 1985.
 DEFAULT_EYE_MODEL = "navarro-1985"
@@ -36,6 +36,8 @@ POPULATION_LETTER_LOGMAR, POPULATION_ARCMIN_PER_PX, POPULATION_LETTER_SIZE_PX = 
 #: A population's correction states (beside spectacles given as a prescription), and its default pupils (mm:
 #: the published fits' 3 and the data's 4) and MTF frequencies (cycles/deg).
 POPULATION_CORRECTIONS = ("uncorrected", "sphero-cylinder", "accommodating")
+#: A population's default correction (the published fits' own: best corrected) and field (the fovea).
+POPULATION_CORRECTION, POPULATION_FIELD_DEG = "sphero-cylinder", (0.0, 0.0)
 POPULATION_PUPILS_MM, POPULATION_MTF_CYC_PER_DEG = (3.0, 4.0), (5.0, 10.0, 20.0, 30.0)
 #: How a measured eye is spelled (`vissim.optics.eyes.measured.measured_eye`), for help texts and refusals.
 MEASURED_EYE_SPELLING = "jaeken-artal-2012:SUBJECT:right|left or polans-2015:SUBJECT"

@@ -53,7 +53,7 @@ from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.measured.measured_eye import beam_field_map, measured_front
-from vissim.optics.eyes.refraction import chief_ray_stretch
+from vissim.optics.eyes.refraction import BEAM_PLANE, chief_ray_stretch
 from vissim.optics.eyes.traced_wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
@@ -96,17 +96,19 @@ def _own_front(traced: EyeWavefront) -> Wavefront:
                      traced.entrance_pupil_mm, traced.wavelength_nm)
 
 
-def vergence_front(vergence_diopters, pupil_diameter_mm: float, beam_direction=(0.0, 0.0, 1.0)) -> Wavefront | None:
+def vergence_front(vergence_diopters, pupil_diameter_mm: float, beam_direction=(0.0, 0.0, 1.0), *,
+                   pupil_plane: str = "entrance pupil") -> Wavefront | None:
     """The wavefront error the light's vergence at the entrance pupil adds (D: a scalar, or a 2 x 2 TABO
     matrix; the object's −1/d plus what lenses in front add): that of an eye whose correcting lens is −V, V
     across the beam ``beam_direction`` (optical-axis frame). Its coordinates are the entrance-pupil plane's, which
     an oblique beam crosses stretched 1/cos θ along the field: there the curvature is S V S, S the inverse of
     `refraction.chief_ray_stretch` (cos θ along the field, 1 across), so the refraction over the pupil seen along
-    the chief ray reads V back. None for zero vergence."""
+    the chief ray reads V back; a front over the plane normal to the beam (``pupil_plane`` `BEAM_PLANE`: a
+    measured eye's) sees it unstretched, as `refraction.eye_refraction` reads such a front. None for zero vergence."""
     matrix = _vergence_matrix(vergence_diopters)
     if not np.any(matrix):
         return None
-    squeeze = np.linalg.inv(chief_ray_stretch(beam_direction))
+    squeeze = np.eye(2) if pupil_plane == BEAM_PLANE else np.linalg.inv(chief_ray_stretch(beam_direction))
     return Wavefront.from_prescription(Prescription.from_power_matrix(-(squeeze @ matrix @ squeeze)),
                                        pupil_diameter_mm)
 
@@ -174,9 +176,9 @@ def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), ve
     _vergence_matrix(vergence_diopters)  # before the traces
     traced = traced_spectral_wavefront(eye.optics, wavelengths_nm, field_deg, samples=samples, measured=eye.measured,
                                        **eye.pupil)
-    # a measured front lies in the plane normal to the beam (`measured_eye` module doc): no oblique stretch there
-    across = (0.0, 0.0, 1.0) if eye.measured is not None else field_direction(eye.optics, field_deg)
-    vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm, across)
+    plane = BEAM_PLANE if eye.measured is not None else "entrance pupil"  # a measured front's (`measured_eye`)
+    vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm, field_direction(eye.optics, field_deg),
+                              pupil_plane=plane)
     return traced.map(lambda front: _with_vergence(front, vergence))
 
 

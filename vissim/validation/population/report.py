@@ -59,17 +59,25 @@ def published_curves(condition, frequencies) -> dict:
     return curves
 
 
-def _eyes_csv(results, frequencies) -> str:
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["eye", "condition", "pupil_mm", "field_x_deg", "field_y_deg", "wavelength_nm", "correction",
-                     "strehl", "m_diopters", "j0_diopters", "j45_diopters", "higher_order_rms_um",
-                     *[f"mtf_{f:g}_cyc_per_deg" for f in frequencies]])
+def _eye_rows(results, frequencies) -> list[dict]:
+    """One row per eye and condition: ``eyes.csv``'s, and (the condition as its configuration) the campaign's."""
+    rows = []
     for r in results:
         c = r.condition
-        writer.writerow([r.eye.name, c.label, c.pupil_mm, *c.field_deg, c.wavelength_nm, c.correction, repr(r.strehl),
-                         repr(r.m_diopters), repr(r.j0_diopters), repr(r.j45_diopters), repr(r.higher_order_rms_um),
-                         *[repr(float(v)) for v in r.mtf]])
+        rows.append({"eye": r.eye.name, "condition": c.label, "pupil_mm": c.pupil_mm, "field_x_deg": c.field_deg[0],
+                     "field_y_deg": c.field_deg[1], "wavelength_nm": c.wavelength_nm, "correction": c.correction,
+                     "strehl": r.strehl, "m_diopters": r.m_diopters, "j0_diopters": r.j0_diopters,
+                     "j45_diopters": r.j45_diopters, "higher_order_rms_um": r.higher_order_rms_um,
+                     **{f"mtf_{f:g}_cyc_per_deg": float(v) for f, v in zip(frequencies, r.mtf)}})
+    return rows
+
+
+def _eyes_csv(results, frequencies) -> str:
+    rows = _eye_rows(results, frequencies)
+    out = io.StringIO()
+    writer = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
     return out.getvalue()
 
 
@@ -209,6 +217,24 @@ def _letter_mosaic(results, condition) -> bytes:
     return png_bytes(fig)
 
 
+def _figures(results, conditions, frequencies) -> list:
+    """The run's figures (module doc), as `vissim.validation.engine.figures.Figure`s."""
+    from vissim.validation.engine.figures import Figure
+
+    figures = [Figure("figure_letters.png", _letter_mosaic(results, results[0].condition),
+                      f"a letter seen through 16 of the eyes ({results[0].condition.label})")]
+    if len(frequencies):
+        figures.append(Figure("figure_mtf.png", _fan_chart(results, conditions, frequencies),
+                              "the population's MTF (median, 25-75 % and 5-95 %) beside the schematic eye and the "
+                              "published human MTFs"))
+    meridian = _meridian(list(conditions))
+    if len(meridian) >= 3:
+        figures.append(Figure("figure_astigmatism.png", _astigmatism_chart(results, meridian),
+                              "cylinder against field: the population's median and quartiles beside every schematic "
+                              "eye"))
+    return figures
+
+
 def write_population_run(run_dir: Path, results, conditions, frequencies, provenance: dict, *,
                          overwrite: bool = False) -> list[Path]:
     """The run's files (module doc) in ``run_dir``; each written atomically, the figures with their provenance."""
@@ -232,27 +258,13 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
     if frequencies.size:
         written.append(write_text_atomic(run_dir / "gap.md", gap_table_md(results, conditions, frequencies),
                                          overwrite=overwrite))
-        figure = run_dir / "figure_mtf.png"
-        write_figure(figure, _fan_chart(results, conditions, frequencies), provenance)
-        written.append(figure)
-    letters = run_dir / "figure_letters.png"
-    write_figure(letters, _letter_mosaic(results, results[0].condition), provenance)
-    written.append(letters)
-    if len(meridian) >= 3:
-        figure = run_dir / "figure_astigmatism.png"
-        write_figure(figure, _astigmatism_chart(results, meridian), provenance)
-        written.append(figure)
+    for figure in _figures(results, conditions, frequencies):
+        write_figure(run_dir / figure.file_name, figure.png, provenance)
+        written.append(run_dir / figure.file_name)
     return written
 
 
 # -- the population as a campaign kind (`vissim.validation.population.kind`) ------------------------------------
-def _rows(results, frequencies) -> list[dict]:
-    return [{"configuration": r.condition.label, "eye": r.eye.name, "strehl": r.strehl, "m_diopters": r.m_diopters,
-             "j0_diopters": r.j0_diopters, "j45_diopters": r.j45_diopters,
-             "higher_order_rms_um": r.higher_order_rms_um,
-             **{f"mtf_{f:g}_cyc_per_deg": float(v) for f, v in zip(frequencies, r.mtf)}} for r in results]
-
-
 def _medians_md(results, conditions) -> str:
     summary = population_quantiles(results)
     lines = ["## Per condition (median [25-75 %] across the eyes)", "",
@@ -271,7 +283,6 @@ def _medians_md(results, conditions) -> str:
 def population_report(items, record: dict):
     """The engine's `ReportParts` of a population campaign's finished items (one per condition)."""
     from vissim.optics.eyes.measured.population import EyeResult, PopulationCondition
-    from vissim.validation.engine.figures import Figure
     from vissim.validation.engine.protocol import ReportParts
 
     items = list(items)
@@ -284,19 +295,11 @@ def population_report(items, record: dict):
               "each condition, from its measured wavefront (orders 2 and up: the data's; a correction removes what "
               "it corrects); an eye not measured at a condition's field is left out of it. M, J0 and J45: the eye's "
               "own refraction over the pupil (minimum RMS).\n\n" + _medians_md(results, conditions))
-    figures = {"letters": Figure("figure_letters.png", _letter_mosaic(results, results[0].condition),
-                                 f"a letter seen through 16 of the eyes ({results[0].condition.label})")}
     if frequencies.size:
         tables += gap_table_md(results, conditions, frequencies).split("\n", 1)[1]
-        figures["mtf"] = Figure("figure_mtf.png", _fan_chart(results, conditions, frequencies),
-                                "the population's MTF (median, 25-75 % and 5-95 %) beside the schematic eye and "
-                                "the published human MTFs")
-    meridian = _meridian(conditions)
-    if len(meridian) >= 3:
-        figures["astigmatism"] = Figure("figure_astigmatism.png", _astigmatism_chart(results, meridian),
-                                        "cylinder against field: the population's median and quartiles beside "
-                                        "every schematic eye")
-    return ReportParts("measured-eye population", _rows(results, frequencies), tables, figures)
+    figures = {figure.file_name: figure for figure in _figures(results, conditions, frequencies)}
+    rows = [{"configuration": row.pop("condition"), **row} for row in _eye_rows(results, frequencies)]
+    return ReportParts("measured-eye population", rows, tables, figures)
 
 
 def summary_lines(rows) -> list[str]:

@@ -13,12 +13,11 @@ The defaults are the ``vissim population`` command's. One item per condition.
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS,
-                                         POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
+from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
+                                         POPULATION_FIELD_DEG, POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
 from vissim.checks import ACCOMMODATION_RANGE_DIOPTERS, VERTEX_DISTANCE_RANGE_MM
 from vissim.validation.engine.fields import choices, field_error, number, text, value_list
 
@@ -69,60 +68,39 @@ def _numbers(value, source: str, where: str, unit: str, **bounds) -> tuple[float
 def _fields(value, dataset: str, source: str) -> list[tuple[float, float]]:
     from vissim.optics.eyes.measured.datasets import load_dataset
 
-    data = load_dataset(dataset)
-    x_range, y_range = (min(data.x_deg), max(data.x_deg)), (min(data.y_deg), max(data.y_deg))
     pairs = value if isinstance(value, list) and value and isinstance(value[0], list) else [value]
     out = []
     for i, pair in enumerate(pairs):
         pair = [pair, 0.0] if isinstance(pair, (int, float)) and not isinstance(pair, bool) else pair
         if not isinstance(pair, list) or len(pair) != 2:
             raise field_error(source, f"campaign.field[{i}]", f"give [x, y] in degrees, got {pair!r}")
-        x, y = (number(v, source, f"campaign.field[{i}]", "deg") for v in pair)
-        if not (x_range[0] <= x <= x_range[1] and y_range[0] <= y <= y_range[1]):
-            raise field_error(source, f"campaign.field[{i}]", f"{dataset} was measured at x {x_range[0]:g} to "
-                                                              f"{x_range[1]:g} deg and y {y_range[0]:g} to {y_range[1]:g} deg,"
-                                                              f" got [{x:g}, {y:g}] deg")
-        out.append((x, y))
+        field = tuple(number(v, source, f"campaign.field[{i}]", "deg") for v in pair)
+        out.append(_checked(load_dataset(dataset).check_field, source, f"campaign.field[{i}]", field))
     return out
 
 
-def _correction(value, source: str, where: str):
-    from vissim.optics.rx.prescription import prescription_from
-
-    value = text(value, source, where)
-    if value in POPULATION_CORRECTIONS:
-        return value
+def _checked(check, source: str, where: str, *args, **kwargs):
+    """``check(*args, **kwargs)``, its refusal named by the file and ``where``."""
     try:
-        return prescription_from(value)
-    except VissimInputError:
-        raise field_error(source, where, f"give {' or '.join(POPULATION_CORRECTIONS)} or the spectacles worn (a "
-                                         f"prescription, e.g. \"-1.00 -0.50 x 90\"), got {value!r}") from None
-
-
-def _subjects(value, dataset: str, source: str) -> tuple[int, ...]:
-    from vissim.optics.eyes.measured.datasets import load_dataset
-
-    known = load_dataset(dataset).subjects
-    chosen = value_list(value, source, "campaign.subjects", "[1, 17]")
-    if len(set(map(repr, chosen))) != len(chosen):
-        raise field_error(source, "campaign.subjects", f"lists a subject twice: {chosen!r}")
-    for s in chosen:
-        if isinstance(s, bool) or not isinstance(s, int) or s not in known:
-            raise field_error(source, "campaign.subjects", f"{s!r} is not a subject of {dataset} (its subjects are "
-                                                           f"numbered {min(known)}-{max(known)})")
-    return tuple(chosen)
+        return check(*args, **kwargs)
+    except VissimInputError as error:
+        raise field_error(source, where, str(error)) from None
 
 
 def _settings(head: dict, source: str) -> PopulationSettings:
-    from vissim.optics.eyes.measured.datasets import DATASET_NAMES
+    from vissim.optics.eyes.measured.datasets import DATASET_NAMES, load_dataset
+    from vissim.optics.eyes.measured.population import select_eyes
 
     dataset = text(head.get("dataset", ""), source, "campaign.dataset")
     if dataset not in DATASET_NAMES:
         raise field_error(source, "campaign.dataset", f"choose from {', '.join(DATASET_NAMES)}, got {dataset!r}")
-    subjects = None if "subjects" not in head else _subjects(head["subjects"], dataset, source)
-    from vissim.optics.eyes.measured.datasets import load_dataset
-
+    subjects = None
+    if "subjects" in head:
+        subjects = tuple(value_list(head["subjects"], source, "campaign.subjects", "[1, 17]"))
+        if not all(isinstance(s, int) and not isinstance(s, bool) for s in subjects):
+            raise field_error(source, "campaign.subjects", f"give subjects' numbers, got {list(subjects)!r}")
     eyes = None if "eyes" not in head else choices(head["eyes"], load_dataset(dataset).eyes, source, "campaign.eyes")
+    _checked(select_eyes, source, "campaign.subjects", dataset, subjects=subjects, eyes=eyes)  # each known, once
     se = None
     if "foveal_se_diopters" in head:
         se = _numbers(head["foveal_se_diopters"], source, "campaign.foveal_se_diopters", "D")
@@ -135,48 +113,29 @@ def _settings(head: dict, source: str) -> PopulationSettings:
 
 def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[PopulationItem, ...]]:
     """(settings, one item per condition) of a population campaign's ``[campaign]`` ``head`` (module doc)."""
-    from vissim.optics.eyes.measured.population import PopulationCondition
+    from vissim.optics.eyes.measured.datasets import load_dataset
+    from vissim.optics.eyes.measured.population import parse_correction, population_conditions
 
     unknown = sorted(set(head) - set(HEAD_KEYS))
     if unknown:
         raise field_error(source, "campaign", f"unknown key(s) {unknown}; known: name, description, kind, "
                                               f"{', '.join(HEAD_KEYS)}")
     settings = _settings(head, source)
-    from vissim.optics.eyes.measured.datasets import load_dataset
-
     largest = load_dataset(settings.dataset).pupil_mm
     pupils = _numbers(head.get("pupil_mm", list(POPULATION_PUPILS_MM)), source, "campaign.pupil_mm", "mm",
                       positive=True, hi=largest)  # at most the data's: nothing is extrapolated
-    fields = _fields(head.get("field", [0.0, 0.0]), settings.dataset, source)
-    corrections = [_correction(c, source, f"campaign.correction[{i}]") for i, c in enumerate(
-        value_list(head.get("correction", ["sphero-cylinder"]), source, "campaign.correction", '["sphero-cylinder"]'))]
-    nm = number(head.get("wavelength_nm", PHOTOPIC_FOCUS_NM), source, "campaign.wavelength_nm", "nm", positive=True)
-    vertex = number(head.get("vertex_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_mm", "mm",
-                    lo=VERTEX_DISTANCE_RANGE_MM[0], hi=VERTEX_DISTANCE_RANGE_MM[1])
-    amplitude = _amplitude(head, corrections, source)
-    items, seen = [], {}
-    for pupil, field, correction in itertools.product(pupils, fields, corrections):
-        try:
-            condition = PopulationCondition(pupil, field, correction, nm, vertex,
-                                            amplitude if correction == "accommodating" else 0.0)
-        except VissimInputError as error:
-            raise field_error(source, "campaign", str(error)) from None
-        if condition.label in seen:
-            raise field_error(source, "campaign", f"the condition {condition.label!r} is given twice (a pupil, field or "
-                                                  "correction repeated)")
-        seen[condition.label] = True
-        items.append(PopulationItem(condition.label, condition))
-    return settings, tuple(items)
-
-
-def _amplitude(head: dict, corrections: list, source: str) -> float:
-    """The accommodating eyes' amplitude, D: given with the ``"accommodating"`` correction, and only with it."""
-    where = "campaign.accommodation_amplitude_diopters"
-    given = "accommodation_amplitude_diopters" in head
-    if given != ("accommodating" in corrections):
-        raise field_error(source, where, "an accommodation amplitude goes with the \"accommodating\" correction, and "
-                                         "that correction needs one")
-    if not given:
-        return 0.0
-    return number(head[where.split(".")[1]], source, where, "D", lo=ACCOMMODATION_RANGE_DIOPTERS[0],
-                  hi=ACCOMMODATION_RANGE_DIOPTERS[1], positive=True)
+    fields = _fields(head.get("field", list(POPULATION_FIELD_DEG)), settings.dataset, source)
+    corrections = [_checked(parse_correction, source, f"campaign.correction[{i}]", text(c, source, "campaign.correction"))
+                   for i, c in enumerate(value_list(head.get("correction", [POPULATION_CORRECTION]), source,
+                                                    "campaign.correction", f'["{POPULATION_CORRECTION}"]'))]
+    amplitude = 0.0 if "accommodation_amplitude_diopters" not in head else number(
+        head["accommodation_amplitude_diopters"], source, "campaign.accommodation_amplitude_diopters", "D",
+        lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1], positive=True)
+    conditions = _checked(
+        population_conditions, source, "campaign", pupils, fields, corrections,
+        wavelength_nm=number(head.get("wavelength_nm", PHOTOPIC_FOCUS_NM), source, "campaign.wavelength_nm", "nm",
+                             positive=True),
+        vertex_mm=number(head.get("vertex_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_mm", "mm",
+                         lo=VERTEX_DISTANCE_RANGE_MM[0], hi=VERTEX_DISTANCE_RANGE_MM[1]),
+        accommodation_amplitude_diopters=amplitude)
+    return settings, tuple(PopulationItem(c.label, c) for c in conditions)

@@ -103,7 +103,7 @@ class WavefrontDataset:
         row, column = self.eye_index(subject, eye)
         grid = self.zernike_um[row, column]  # y, x, j
         x, y = (float(v) for v in field_deg)
-        (xi, xw), (yi, yw) = _bracket(self.x_deg, x, "x", self.name), _bracket(self.y_deg, y, "y", self.name)
+        (xi, xw), (yi, yw) = self._brackets(x, y)
         result = np.zeros(grid.shape[-1])
         for i, wy in zip(yi, yw):
             for k, wx in zip(xi, xw):
@@ -113,6 +113,16 @@ class WavefrontDataset:
                                            f"distorted to measure); measured nearby: {self._nearest(grid, x, y)}")
                 result += wy * wx * grid[i, k]
         return result
+
+    def check_field(self, field_deg) -> tuple[float, float]:
+        """``field_deg`` (x, y), if it lies within the fields the data span (each eye may still miss it); else
+        refused, naming the span."""
+        x, y = (float(v) for v in field_deg)
+        self._brackets(x, y)
+        return x, y
+
+    def _brackets(self, x: float, y: float):
+        return _bracket(self.x_deg, x, "x", self.name), _bracket(self.y_deg, y, "y", self.name)
 
     def _nearest(self, grid: np.ndarray, x: float, y: float, count: int = 2) -> str:
         measured = [(abs(self.x_deg[k] - x) + abs(self.y_deg[i] - y), self.x_deg[k], self.y_deg[i])

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import logging
 import math
 from dataclasses import dataclass
@@ -36,7 +37,8 @@ import numpy as np
 from vissim.checks import eye_pupil_diameter_mm, finite_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
-from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTIONS
+from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
+                                         POPULATION_CORRECTIONS, POPULATION_FIELD_DEG)
 from vissim.optics.eyes.measured.datasets import UnmeasuredFieldError, load_dataset
 from vissim.optics.eyes.measured.measured_eye import BASE_EYE_MODEL, MeasuredWavefront, measured_trace
 from vissim.optics.eyes.models import SchematicEye, eye_model
@@ -48,7 +50,7 @@ from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.optics.rx.prescription import Prescription
 
-__all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "evaluate_population",
+__all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "population_conditions", "parse_correction", "evaluate_population",
            "population_quantiles", "schematic_mtf", "schematic_refraction", "seen_image", "QUANTILES",
            "CHUNK_EYES"]
 
@@ -67,8 +69,8 @@ class PopulationCondition:
     """One condition every eye of a population is evaluated under (module doc)."""
 
     pupil_mm: float
-    field_deg: tuple[float, float] = (0.0, 0.0)
-    correction: str | Prescription = "sphero-cylinder"
+    field_deg: tuple[float, float] = POPULATION_FIELD_DEG
+    correction: str | Prescription = POPULATION_CORRECTION
     wavelength_nm: float = PHOTOPIC_FOCUS_NM  # V(λ)'s peak
     vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM  # a given Rx's lens, in front of the cornea
     accommodation_amplitude_diopters: float = 0.0  # how far an "accommodating" eye can accommodate
@@ -158,6 +160,9 @@ def select_eyes(dataset: str, *, subjects=None, eyes=None, foveal_se_within_diop
     se_pupil_mm = data.pupil_mm if se_pupil_mm is None else se_pupil_mm
     chosen_subjects = data.subjects if subjects is None else tuple(int(s) for s in subjects)
     chosen_eyes = data.eyes if eyes is None else tuple(eyes)
+    for what, chosen in (("subject", chosen_subjects), ("eye", chosen_eyes)):
+        if len(set(chosen)) != len(chosen):  # an eye counted twice would weigh twice in every quantile
+            raise VissimInputError(f"a population names each {what} once, got {list(chosen)!r}")
     found = tuple(MeasuredWavefront(dataset, s, e) for s in chosen_subjects for e in chosen_eyes)
     if foveal_se_within_diopters is None:
         return found
@@ -167,6 +172,39 @@ def select_eyes(dataset: str, *, subjects=None, eyes=None, foveal_se_within_diop
     condition = PopulationCondition(se_pupil_mm, (0.0, 0.0), "uncorrected", se_wavelength_nm)
     kept = {r.eye for r in evaluate_population(found, [condition], ()) if low <= r.m_diopters <= high}
     return tuple(eye for eye in found if eye in kept)
+
+
+def parse_correction(text: str) -> str | Prescription:
+    """A correction state (`CORRECTIONS`) as written, or the spectacles worn written as a prescription."""
+    from vissim.optics.rx.prescription import prescription_from
+
+    if text in CORRECTIONS:
+        return text
+    try:
+        return prescription_from(text)
+    except VissimInputError:
+        raise VissimInputError(f"a correction is {' or '.join(CORRECTIONS)} or the spectacles worn (a prescription, "
+                               f"e.g. '-1.00 -0.50 x 90'), got {text!r}") from None
+
+
+def population_conditions(pupils_mm, fields_deg, corrections, *, wavelength_nm: float = PHOTOPIC_FOCUS_NM,
+                          vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
+                          accommodation_amplitude_diopters: float = 0.0) -> list[PopulationCondition]:
+    """Every combination of pupil, field and correction (pupils outer), in one light and vertex; an amplitude goes
+    to the accommodating correction only, and must come with it. A condition given twice is refused (its eyes
+    would count twice)."""
+    amplitude = float(accommodation_amplitude_diopters)
+    if amplitude and "accommodating" not in corrections:
+        raise VissimInputError(f"an accommodation amplitude ({amplitude:g} D) goes with the accommodating "
+                               "correction only")
+    conditions = [PopulationCondition(p, tuple(f), c, wavelength_nm, vertex_mm,
+                                      amplitude if c == "accommodating" else 0.0)
+                  for p, f, c in itertools.product(pupils_mm, fields_deg, corrections)]
+    labels = [c.label for c in conditions]
+    twice = sorted({label for label in labels if labels.count(label) > 1})
+    if twice:
+        raise VissimInputError(f"the condition {twice[0]!r} is given twice (a pupil, field or correction repeated)")
+    return conditions
 
 
 @functools.lru_cache(maxsize=64)
@@ -267,11 +305,14 @@ def _spherical_equivalent(front: Wavefront) -> float:
     return float(minimum_rms_prescription(dict(front.coefficients_um), front.pupil_diameter_mm).power_vector()[0])
 
 
-def _foveal_m(eye: MeasuredWavefront, condition: PopulationCondition) -> float:
-    """The eye's M at the fovea in the condition's pupil and light: what an accommodating eye answers to."""
+def _foveal_m(eye: MeasuredWavefront, condition: PopulationCondition, front: Wavefront) -> float:
+    """The eye's M at the fovea in the condition's pupil and light (``front``: its front at the condition's field):
+    what an accommodating eye answers to."""
     if condition.correction != "accommodating":
         return 0.0
-    return _spherical_equivalent(_front(eye, dataclasses.replace(condition, field_deg=(0.0, 0.0)))[0])
+    if condition.field_deg != (0.0, 0.0):
+        front = _front(eye, dataclasses.replace(condition, field_deg=(0.0, 0.0)))[0]
+    return _spherical_equivalent(front)
 
 
 def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies) -> EyeResult:
@@ -279,7 +320,7 @@ def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies)
     pupil = front.pupil_diameter_mm
     m, j0, j45 = minimum_rms_prescription(dict(front.coefficients_um), pupil).power_vector()
     higher = {k: v for k, v in front.coefficients_um.items() if k[0] >= 3}
-    seen = _corrected(front, condition, position, _foveal_m(eye, condition))
+    seen = _corrected(front, condition, position, _foveal_m(eye, condition, front))
     mtf = _seen_mtf(seen, field_map, condition, frequencies, eye.name) if len(frequencies) else np.zeros(0)
     rms = math.sqrt(sum(v * v for v in higher.values()))
     return EyeResult(eye, condition, mtf, float(strehl_ratio(seen, wavelength_nm=condition.wavelength_nm)),
