@@ -3,10 +3,11 @@
 Read from the source with ``ast`` (nothing is imported), every ``import`` at any depth. The
 layers, lowest first (docs/conventions.md, "Layers"):
 
-1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``, ``thesis``, ``spectra``
+1. core: ``units``, ``errors``, ``checks``, ``atomic``, ``provenance``, ``progress``, ``thesis``, ``spectra``,
+   ``lazy_import``
 2. ``optics``: the physics (prescriptions, wavefronts, PSFs, blur, depth)
 3. imaging: ``imageio``, ``imaging`` (image registration), ``optotypes``, ``acuity``,
-   ``charts``, ``chart_demo``
+   ``charts``, ``chart_defaults``, ``chart_demo``
 4. ``bench``: the benches' geometry and scenes as plain data
 5. ``render`` (the Mitsuba door) and ``fit`` (prescriptions fitted to captures)
 6. ``validation`` (campaigns) and ``atv`` (ATV data, predictions, procedures)
@@ -28,9 +29,9 @@ from source_modules import MODULES, PACKAGE, loops, owner
 from vissim.validation.engine.registry import BENCH_KINDS, bench_kind_names
 
 LAYERS = [
-    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis", "spectra"},
+    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis", "spectra", "lazy_import"},
     {"optics"},
-    {"imageio", "imaging", "optotypes", "acuity", "charts", "chart_demo"},
+    {"imageio", "imaging", "optotypes", "acuity", "charts", "chart_defaults", "chart_demo"},
     {"bench"},
     {"render", "fit"},
     {"validation", "atv"},

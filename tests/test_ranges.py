@@ -83,6 +83,7 @@ NOT_INPUT_BOUNDS = {
     "MIN_RAYS": "the geometric PSF's ray budget", "MAX_RAYS": "the geometric PSF's ray budget",
     "MAX_ARRAYS": "the workspace cache", "MAX_KEPT_BYTES": "the workspace cache",
     "MAX_NEWTON": "the ray tracer's iteration budget", "MAX_GRIN_STEPS": "the GRIN integrator's step budget",
+    "MAX_MONOMIAL_ORDER": "which of two exact ways a Zernike sum is evaluated",
 }
 
 

@@ -13,7 +13,12 @@ from vissim.optics.pupil.zernike import (
     nm_to_ansi_j,
     nm_to_noll,
     noll_to_nm,
+    zernike_basis,
+    zernike_keys,
+    zernike_monomials,
     zernike_nm,
+    zernike_radial,
+    zernike_sum,
 )
 
 
@@ -75,3 +80,70 @@ def test_high_orders_stay_bounded():
         values = zernike_nm(n, n % 2, rho, 0.0) / math.sqrt(2 * (n + 1) / (2 if n % 2 == 0 else 1))
         assert np.max(np.abs(values)) <= 1 + 1e-9
         assert values[-1] == pytest.approx(1.0)
+
+
+def _radial_by_factorials(n, m, rho):
+    """Born & Wolf 9.2 (the factorial sum), in exact integers then floats: the oracle for low orders."""
+    m = abs(m)
+    return sum((-1) ** s * math.factorial(n - s) / (math.factorial(s) * math.factorial((n + m) // 2 - s)
+                                                    * math.factorial((n - m) // 2 - s)) * rho ** (n - 2 * s)
+               for s in range((n - m) // 2 + 1))
+
+
+def test_radial_polynomials_match_scipys_jacobi_and_the_factorial_sum():
+    """vissim's own Jacobi recurrence (no scipy.special at import) against scipy.special.eval_jacobi to order 40,
+    and against the factorial sum to order 12 (where the sum's cancellation is still harmless)."""
+    from scipy.special import eval_jacobi
+
+    rho = np.linspace(0.0, 1.0, 401)
+    for n in range(41):
+        for m in range(n % 2, n + 1, 2):
+            k = (n - m) // 2
+            jacobi = (-1) ** k * rho**m * eval_jacobi(k, m, 0.0, 1.0 - 2.0 * rho**2)
+            np.testing.assert_allclose(zernike_radial(n, m, rho), jacobi, rtol=0, atol=1e-12)
+            if n <= 12:
+                np.testing.assert_allclose(zernike_radial(n, m, rho), _radial_by_factorials(n, m, rho), atol=1e-12)
+
+
+@pytest.mark.parametrize("order", [2, 8, 12, 16])
+def test_sum_basis_and_monomials_equal_the_terms_one_by_one(order):
+    """`zernike_sum` (monomials by Horner to order 12, shared recurrences above), `zernike_basis` and
+    `zernike_monomials` equal summing `zernike_nm` term by term, inside and just outside the disc, to 1e-12 of
+    the front's largest value."""
+    rng = np.random.default_rng(order)
+    coefficients = {key: rng.normal() for key in zernike_keys(order)}
+    rho, theta = np.sqrt(rng.uniform(0.0, 1.2, 2000)), rng.uniform(0.0, 2 * np.pi, 2000)
+    u, v = rho * np.cos(theta), rho * np.sin(theta)
+    terms = sum(c * zernike_nm(n, m, rho, theta) for (n, m), c in coefficients.items())
+    scale = np.max(np.abs(terms))
+    np.testing.assert_allclose(zernike_sum(coefficients, u, v), terms, rtol=0, atol=1e-12 * scale)
+    basis = zernike_basis(list(coefficients), u, v)
+    np.testing.assert_allclose(basis @ np.array(list(coefficients.values())), terms, rtol=0, atol=1e-12 * scale)
+    if order <= 12:
+        table = zernike_monomials(coefficients)
+        np.testing.assert_allclose(np.polynomial.polynomial.polyval2d(u, v, table), terms, rtol=0,
+                                   atol=1e-12 * scale)
+
+
+def test_monomials_of_the_second_order_are_the_textbooks():
+    """Z(2,0) = sqrt3 (2u^2 + 2v^2 - 1), Z(2,-2) = sqrt6 2uv, Z(2,2) = sqrt6 (u^2 - v^2) (errata item 2)."""
+    assert zernike_monomials({(2, 0): 1.0}) == pytest.approx(
+        math.sqrt(3) * np.array([[-1, 0, 2], [0, 0, 0], [2, 0, 0]]))
+    assert zernike_monomials({(2, -2): 1.0}) == pytest.approx(math.sqrt(6) * np.array([[0, 0, 0], [0, 2, 0], [0, 0, 0]]))
+    assert zernike_monomials({(2, 2): 1.0}) == pytest.approx(math.sqrt(6) * np.array([[0, 0, -1], [0, 0, 0], [1, 0, 0]]))
+
+
+@pytest.mark.parametrize("order", [8, 14])
+def test_a_pupil_grid_takes_the_front_term_by_term(order):
+    """The wave PSF's OPD on its pupil grid (cell centres as two matrix products of monomials to order 12, the
+    rim's quadrature points by `zernike_sum`; above order 12 every point summed) equals the terms one by one."""
+    from vissim.optics.pupil.grid import opd_on_points_um, pupil_grid
+    from vissim.optics.pupil.wavefront import Wavefront
+
+    rng = np.random.default_rng(order)
+    front = Wavefront({key: 0.2 * rng.normal() for key in zernike_keys(order)}, 6.0)
+    grid = pupil_grid(0.11, 5.0)
+    x, y = grid.points()
+    rho, theta = np.hypot(x, y) / 3.0, np.arctan2(y, x)
+    terms = sum(c * zernike_nm(n, m, rho, theta) for (n, m), c in front.coefficients_um.items() if n > 0)
+    np.testing.assert_allclose(opd_on_points_um(grid, front), terms, rtol=0, atol=1e-12 * np.max(np.abs(terms)))

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vissim.chart_defaults import DEMO_PRESCRIPTIONS
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.atomic import write_json_atomic
 from vissim.charts import etdrs_chart_spec, render_chart_angular
@@ -24,9 +25,6 @@ from vissim.optics.pupil.wavefront import Wavefront
 from vissim.provenance import make_provenance
 
 log = logging.getLogger(__name__)
-
-DEMO_PRESCRIPTIONS = {"myopia": "-2.00 DS", "astigmatism": "-2.00 DC x 90"}
-
 
 @dataclass(frozen=True)
 class DemoSettings:

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from vissim.acuity import letter_height_arcmin, letter_height_mm, logmar_to_snellen, subtense_arcmin, subtense_mm
+from vissim.chart_defaults import DEFAULT_LETTER_SEED, INK_REFLECTANCE, MM_PER_INCH, PAPER_REFLECTANCE, POLARITIES
 from vissim.checks import VIEWING_DISTANCE_RANGE_M, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, describe, finite_number, instance_of, positive_number
@@ -50,17 +51,9 @@ __all__ = ["DEFAULT_LETTER_SEED", "MM_PER_INCH", "POLARITIES", "Chart", "ChartLa
            "optotype_tile", "render_chart_angular", "render_chart_print", "save_chart_pdf", "save_chart_png",
            "single_letter_spec"]
 
-POLARITIES = ("black-on-white", "white-on-black")
-DEFAULT_LETTER_SEED = 2015
-MM_PER_INCH = 25.4
 _LETTERS_PER_ROW = 5
 _SIDECAR_SCHEMA = "vissim.chart-letters/1"
 _BOX_KEYS = ("top", "left", "bottom", "right")
-
-
-#: Linear reflectances of laser-printed paper and toner ink (the charts' defaults).
-PAPER_REFLECTANCE = 0.9
-INK_REFLECTANCE = 0.04
 
 
 def _number(value: Any, name: str, unit: str, *, positive: bool = False) -> float:

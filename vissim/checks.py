@@ -91,6 +91,8 @@ CIE_YBAR_RANGE_NM = (360.0, 830.0)
 #: this far from the eye's optical axis (deg; its tables' reach).
 EYE_RENDER_MAX_FIELD_DEG = 45.0
 EYE_RENDER_MAX_THETA_DEG = 60.0
+#: A depth scene needing more layers is refused unless its ``max_layers`` is raised (or None: no limit).
+DEFAULT_MAX_LAYERS = 256
 #: The eye campaign (validation/eye): its image's side, px (each item renders and simulates it several times),
 #: and the rays across the iris of its self-check's trace.
 EYE_BENCH_SIZE_RANGE_PX = (16, 512)

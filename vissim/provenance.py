@@ -12,11 +12,10 @@ import enum
 import json
 import math
 import platform
+import sys
 from collections.abc import Mapping
 from pathlib import PurePath
 from typing import Any
-
-import numpy as np
 
 from vissim import __version__
 from vissim.errors import VissimInputError
@@ -34,9 +33,10 @@ def json_safe(value: Any) -> Any:
     """
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return json_safe({f.name: getattr(value, f.name) for f in dataclasses.fields(value)})
-    if isinstance(value, np.ndarray):
+    np = sys.modules.get("numpy")  # a NumPy value exists only where NumPy is loaded: none is imported here
+    if np is not None and isinstance(value, np.ndarray):
         return json_safe(value.tolist())
-    if isinstance(value, np.generic):
+    if np is not None and isinstance(value, np.generic):
         return json_safe(value.item())
     if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
         return value
@@ -62,10 +62,12 @@ def make_provenance(**inputs: Any) -> dict[str, Any]:
     Keys: ``vissim_version``, ``python``, ``numpy``, ``created_utc`` (ISO 8601, UTC) and
     ``inputs`` (the keyword arguments, made JSON-safe by `json_safe`).
     """
+    import numpy  # the numerical code is paid when a record is made, not when a command's help is built
+
     return {
         "vissim_version": __version__,
         "python": platform.python_version(),
-        "numpy": np.__version__,
+        "numpy": numpy.__version__,
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "inputs": json_safe(inputs),
     }

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
+from vissim.lazy_import import lazy_module
+
+np = lazy_module("numpy")  # conversions of arrays import NumPy; the command line's help reads numbers only
 
 __all__ = ["xy_matrix_to_image_rowcol", "ARCMIN_PER_RAD", "ARCMIN_PER_DEG", "deg_to_mrad", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
            "cyc_per_rad_to_cyc_per_deg", "mrad_to_arcmin", "MM_PER_M", "mm_to_m", "m_to_mm", "diopters_to_mm",
@@ -51,7 +53,9 @@ REC709_LUMINANCE = (0.2126, 0.7152, 0.0722)
 
 def _number(x):
     """Floats and numpy values as they are; other scalars as float, sequences as float arrays."""
-    if isinstance(x, (float, np.ndarray, np.generic)):
+    if isinstance(x, (float, int)) and not isinstance(x, bool):
+        return float(x) if isinstance(x, int) else x
+    if isinstance(x, (np.ndarray, np.generic)):
         return x
     return np.asarray(x, dtype=float) if np.ndim(x) else float(x)
 

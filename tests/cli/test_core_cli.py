@@ -151,14 +151,15 @@ def test_blur_with_spectral_bands_per_channel(capsys, tmp_path):
 
 @pytest.mark.skipif(cuda_available(), reason="auto would run on the GPU: tests/test_array_backend.py compares that")
 def test_blur_on_device_auto_without_a_gpu_runs_the_device_code_and_equals_the_cpu_blur(capsys, tmp_path, monkeypatch):
-    import vissim.cli.blur as blur_cli
+    import vissim.optics.blur.device as device_module  # the command imports it when it blurs
 
     source = tmp_path / "rgb.exr"
     rgb = np.full((40, 56, 3), 0.8, np.float32)
     rgb[12:28, 20:30] = (0.05, 0.1, 0.2)
     write_image(source, rgb, provenance={"inputs": {"arcmin_per_px": 1.0}})
     calls = []
-    monkeypatch.setattr(blur_cli, "blur_image_on", lambda *a, **k: calls.append(k["device"]) or blur_image_on(*a, **k))
+    monkeypatch.setattr(device_module, "blur_image_on",
+                        lambda *a, **k: calls.append(k["device"]) or blur_image_on(*a, **k))
     outputs = {}
     for device in ("cpu", "auto"):
         target = tmp_path / f"{device}.exr"

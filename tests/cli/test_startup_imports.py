@@ -1,4 +1,5 @@
-"""Instant start: ``vissim --help``, ``vissim eye --help`` and most commands' help import no numerical code.
+"""Instant start: ``vissim --help`` and every command's help import no numerical code; ``vissim eye --json`` no
+scipy; and no vissim module imports one of scipy's namespaces when it is imported.
 
 Measured, not timed: a fresh interpreter runs the command and lists the heavy packages in ``sys.modules``
 (a timing would depend on the machine and its load).  A command imports what it uses when it runs.
@@ -25,13 +26,40 @@ print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & set({heavy!r}
 """
 
 
-#: The commands whose help is light so far (the image and render commands' help still loads numpy).
-LIGHT_COMMANDS = ("rx", "trial-lens", "eye", "population", "fit-rx", "validate", "report", "atv", "bench")
-
-
-@pytest.mark.parametrize("argv", [["--help"], ["bogus"], *([c, "--help"] for c in LIGHT_COMMANDS)])
+@pytest.mark.parametrize("argv", [["--help"], ["bogus"], *([c, "--help"] for c in COMMANDS)])
 def test_help_and_a_refusal_import_no_numerical_code(argv):
     done = subprocess.run([sys.executable, "-c", PROBE.format(argv=argv, heavy=HEAVY)], capture_output=True,
+                          text=True, check=True)
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == []
+
+
+def test_an_eye_report_imports_no_scipy():
+    """The eye's refraction and aberrations (``vissim eye --json``, no MTF) need the trace and NumPy only: scipy's
+    import alone (its FFT module pulls in its special functions) took longer than the whole report."""
+    argv = ["eye", "--eye-model", "navarro-1985", "--pupil-mm", "4", "--json"]
+    probe = PROBE.replace("main({argv!r})", "import contextlib, io\nwith contextlib.redirect_stdout(io.StringIO()):\n"
+                                              "    main({argv!r})")
+    done = subprocess.run([sys.executable, "-c", probe.format(argv=argv, heavy=HEAVY)], capture_output=True,
+                          text=True, check=True)
+    assert json.loads(done.stdout.strip().splitlines()[-1]) == ["numpy"]
+
+
+SCIPY_NAMESPACES = ("scipy.fft", "scipy.special", "scipy.ndimage", "scipy.signal", "scipy.stats", "scipy.optimize",
+                    "scipy.sparse", "scipy.linalg", "scipy.integrate", "scipy.interpolate")
+
+
+def test_no_module_imports_scipy_when_imported():
+    """Every vissim module (its ``__main__`` aside: it runs the command line) imported in one fresh interpreter leaves
+    scipy's namespaces unloaded: each is reached through `vissim.lazy_import.lazy_module` when first used."""
+    probe = """
+import importlib, json, pkgutil, sys
+import vissim
+names = [m.name for m in pkgutil.walk_packages(vissim.__path__, "vissim.") if m.name != "vissim.__main__"]
+for name in names:
+    importlib.import_module(name)
+print(json.dumps(sorted(m for m in sys.modules if m.startswith({namespaces!r}))))
+"""
+    done = subprocess.run([sys.executable, "-c", probe.format(namespaces=SCIPY_NAMESPACES)], capture_output=True,
                           text=True, check=True)
     assert json.loads(done.stdout.strip().splitlines()[-1]) == []
 

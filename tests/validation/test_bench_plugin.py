@@ -45,6 +45,26 @@ def test_a_bench_in_its_own_folder_runs_through_the_engine(toy_kind, tmp_path):
     assert again.summary.items_reused == 2 and again.summary.renders_made == 0
 
 
+def test_a_run_says_where_its_time_went(toy_kind, tmp_path):
+    """timings.json and the summary's "time:" line: the renders, each item computed (slowest first) and the
+    report; a resumed run that computes nothing has no items to time."""
+    import json
+
+    path = tmp_path / "toy.toml"
+    path.write_text(CAMPAIGN)
+    done = validate(path, tmp_path / "run", show_progress=False)
+    timings = json.loads((tmp_path / "run" / "timings.json").read_text())
+    seconds = [item["seconds"] for item in timings["items"]]
+    assert len(seconds) == 2 and seconds == sorted(seconds, reverse=True) and all(s >= 0 for s in seconds)
+    assert timings["renders_seconds"] > 0 and timings["report_seconds"] > 0
+    assert timings["items_seconds"] == pytest.approx(sum(seconds), abs=0.01)
+    line = next(line for line in done.lines if line.startswith("time: "))
+    assert "slowest items: " + timings["items"][0]["key"] in line
+    again = validate(path, tmp_path / "run", show_progress=False)
+    assert json.loads((tmp_path / "run" / "timings.json").read_text())["items"] == []
+    assert "slowest items" not in next(line for line in again.lines if line.startswith("time: "))
+
+
 def test_its_tables_are_checked_like_any_kind(toy_kind, tmp_path):
     path = tmp_path / "toy.toml"
     path.write_text(CAMPAIGN.replace("sigma_px = 3.0", "sigma_px = 30.0"))

@@ -33,12 +33,14 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
-import scipy.linalg
-import scipy.stats
 
 from vissim.atv.data import EYES, SubjectData
 from vissim.checks import finite_number, instance_of, number_array
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
+
+scipy_linalg = lazy_module("scipy.linalg")
+scipy_stats = lazy_module("scipy.stats")
 
 __all__ = ["CONDITIONS", "CurveAnalysis", "QuadraticFit", "VertexInterval", "analyse_curve",
            "analyse_subject", "fit_quadratic"]
@@ -157,7 +159,7 @@ class QuadraticFit:
     def _t(self, level: float) -> float:
         if not 0.0 < level < 1.0:
             raise VissimInputError(f"confidence level must be within (0, 1), got {level!r}")
-        return float(scipy.stats.t.ppf(0.5 + level / 2.0, self.dof))
+        return float(scipy_stats.t.ppf(0.5 + level / 2.0, self.dof))
 
     def predict(self, x_diopters) -> np.ndarray:
         sc = self._scaled()
@@ -269,11 +271,11 @@ def fit_quadratic(x_diopters: Sequence[float], y_code: Sequence[float]) -> Quadr
     xc, h = _centring(float(x.min()), float(x.max()))
     t = (x - xc) / h
     q, r = np.linalg.qr(np.stack([t * t, t, np.ones_like(t)], axis=1))
-    coef_t = scipy.linalg.solve_triangular(r, q.T @ y)
+    coef_t = scipy_linalg.solve_triangular(r, q.T @ y)
     residual = y - ((coef_t[0] * t + coef_t[1]) * t + coef_t[2])
     dof = x.size - 3
     s2 = float(residual @ residual) / dof
-    root = math.sqrt(s2) * scipy.linalg.solve_triangular(r, np.eye(3))  # V_t = s^2 R^-1 R^-T = W W^T
+    root = math.sqrt(s2) * scipy_linalg.solve_triangular(r, np.eye(3))  # V_t = s^2 R^-1 R^-T = W W^T
     to_x = _to_x(xc, h)
     cov = (to_x @ root) @ (to_x @ root).T
     fit = QuadraticFit(coefficients=tuple(float(c) for c in to_x @ coef_t),

@@ -22,17 +22,19 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.bench.atv.tube import AtvConfig
 from vissim.bench.atv.paraxial import AtvParaxial, atv_paraxial
 from vissim.bench.atv.spot import spot_metrics, suggested_atv_size_px
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.psf.compute import compute_psf
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import arcmin_to_rad, mm_to_m
+
+scipy_signal = lazy_module("scipy.signal")
 
 __all__ = ["AtvPrediction", "predicted_spot", "fresnel_transmittance"]
 
@@ -133,7 +135,7 @@ def predicted_spot(config: AtvConfig, *, arcmin_per_px: float = 0.5, size_px: in
     psf = compute_psf(Wavefront.from_prescription(rx, pupil), pupil_diameter_mm=pupil, wavelength_nm=wavelength_nm,
                       arcmin_per_px=fine, size_px=odd * fine_factor, mode=mode)
     kernel = _pixel_kernel(par, config.tube.pixel_pitch_mm, config.tube.pixel_offset_mm, fine)
-    fine_image = np.maximum(scipy.signal.fftconvolve(psf.data, kernel, mode="same"), 0.0)
+    fine_image = np.maximum(scipy_signal.fftconvolve(psf.data, kernel, mode="same"), 0.0)
     coarse = fine_image.reshape(odd, fine_factor, odd, fine_factor).sum(axis=(1, 3))[:size, :size]
     flux = config.tube.pixel_radiance * par.etendue_m2_sr * fresnel_transmittance(config)
     image = (flux * coarse / step**2).astype(np.float32)

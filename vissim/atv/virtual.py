@@ -39,7 +39,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
-import scipy.signal
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.atv.analysis import CurveAnalysis, analyse_curve
@@ -52,12 +51,15 @@ from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.checks import eye_pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.psf.compute import compute_psf, suggested_size_px
 from vissim.optics.rx.viewing_setup import ViewingSetup
 from vissim.optics.rx.trial_lens import thesis_table_4_2_power
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import diopters_to_mm, rad_to_arcmin
+
+scipy_signal = lazy_module("scipy.signal")
 
 __all__ = ["AtvApparatus", "DetectionModel", "RetinalSpot", "SpotRequest", "VirtualExperiment",
            "VirtualSubject", "VirtualTrial", "fourier_retinal_image", "run_virtual_experiment",
@@ -198,7 +200,7 @@ def fourier_retinal_image(request: SpotRequest, *, arcmin_per_px: float = 0.25) 
     size = max(size + int(math.ceil(source_px)) + 2, int(math.ceil(request.field_arcmin / arcmin_per_px)) + 3)
     size += 1 - size % 2
     psf = compute_psf(wavefront, arcmin_per_px=arcmin_per_px, size_px=size, wavelength_nm=request.apparatus.wavelength_nm, mode="wave")
-    image = scipy.signal.fftconvolve(psf.data, _box_kernel(source_px), mode="same")
+    image = scipy_signal.fftconvolve(psf.data, _box_kernel(source_px), mode="same")
     return RetinalSpot(np.maximum(image, 0.0), arcmin_per_px, psf.energy_in_field)
 
 

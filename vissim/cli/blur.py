@@ -5,18 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
                                 add_eye_model_arg, check_outputs_apart, eye_from_args, field_deg_from_text,
                                 image_sampling, parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
-from vissim.imageio import image_files, output_bit_depth, read_image, write_image
-from vissim.optics.runtime.array_backend import DEVICES, array_backend
-from vissim.optics.blur.convolve import PADDING_MODES, blur_image, image_kernel_psf
-from vissim.optics.blur.device import blur_image_on
-from vissim.optics.rx.chromatic import gaussian_band
+from vissim.optics.blur.padding import PADDING_MODES
+from vissim.optics.runtime.devices import DEVICES
 from vissim.progress import counter, terminal_progress
 from vissim.provenance import make_provenance
 from vissim.cli import command_help
@@ -90,6 +85,8 @@ def add_eye_model_args(parser) -> None:
 def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> tuple[list, dict]:
     """One PSF per channel (computed once per distinct band, `image_kernel_psf`), and the distinct ones by band;
     an image too small for its blur is refused naming the file."""
+    from vissim.optics.blur.convolve import image_kernel_psf  # the numerical code, when the command runs
+
     psfs, cache = [], {}
     advance = counter(progress, "PSFs", len(set(bands)))
     for wavelengths, weights in bands:
@@ -108,11 +105,16 @@ def _channel_psfs(bands, wavefront, step: float, args, lca, shape, progress) -> 
     return psfs, cache
 
 
-def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, device: str, progress):
+def _blur_channels(pixels, psfs: list, step: float, padding: str, device: str, progress):
     """``pixels`` blurred channel by channel (each with its PSF), reporting each channel done.
 
     Off the ``"cpu"`` device: all channels at once by `vissim.optics.blur.device.blur_image_on`.
     """
+    import numpy as np
+
+    from vissim.optics.blur.convolve import blur_image
+    from vissim.optics.blur.device import blur_image_on
+
     if device != "cpu":
         return blur_image_on(pixels, psfs if pixels.ndim == 3 else psfs[0], arcmin_per_px=step, padding=padding,
                              device=device)
@@ -127,6 +129,10 @@ def _blur_channels(pixels: np.ndarray, psfs: list, step: float, padding: str, de
 
 
 def run(args: argparse.Namespace) -> int:
+    from vissim.imageio import image_files, output_bit_depth, read_image, write_image
+    from vissim.optics.runtime.array_backend import array_backend
+    from vissim.optics.rx.chromatic import gaussian_band
+
     check_outputs_apart(image_files(args.input), image_files(args.output))
     _check_eye_options(args)
     if args.device == "cuda":
@@ -190,6 +196,7 @@ def _check_eye_options(args: argparse.Namespace) -> None:
 def _run_eye(args: argparse.Namespace, image, step: float, bands: list) -> int:
     """``blur --eye-model``: one PSF grid per distinct channel band ((wavelengths, weights)), the image
     blurred field-dependently."""
+    from vissim.imageio import output_bit_depth, write_image
     from vissim.optics.eyes.field_blur import DEFAULT_FIELD_STEP_DEG, eye_psf_grids  # the trace's imports, when used
     from vissim.optics.blur.field_dependent import blur_field_dependent
 

@@ -10,22 +10,21 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
 from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_eye_model_arg, add_rx_arg, check_outputs_apart,
                                 eye_from_args, field_deg_from_text, image_sampling)
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
-from vissim.imageio import image_files, output_bit_depth, read_data_map, read_image, write_image
-from vissim.optics.rx.accommodation import Accommodation, accommodation_for_target
-from vissim.optics.depth.depth_map import DEFAULT_MAX_LAYERS, blur_depth
+from vissim.checks import DEFAULT_MAX_LAYERS
 from vissim.optics.rx.prescription import Prescription
-from vissim.optics.rx.viewing_setup import DepthViewer
 from vissim.progress import terminal_progress
 from vissim.provenance import make_provenance
 from vissim.cli import command_help
+
+if TYPE_CHECKING:
+    from vissim.optics.rx.viewing_setup import DepthViewer
 
 
 def add_parser(subparsers) -> None:
@@ -90,12 +89,18 @@ def recorded_margin_px(provenance: dict | None) -> int:
     return value
 
 
-def read_depth_m(path: Path) -> np.ndarray:
+def read_depth_m(path: Path):
     """A depth map in metres from ``.npy`` or a single-channel (or Z/depth/Y) EXR."""
+    import numpy as np  # the numerical code, when the command runs
+
+    from vissim.imageio import read_data_map
+
     return read_data_map(path).pixels.astype(np.float64)
 
 
-def _accommodation(args: argparse.Namespace, eye: Prescription, depth: np.ndarray) -> tuple[float, dict]:
+def _accommodation(args: argparse.Namespace, eye: Prescription, depth) -> tuple[float, dict]:
+    from vissim.optics.rx.accommodation import Accommodation, accommodation_for_target
+
     targeted = args.age is not None or args.amplitude_diopters is not None or args.focus_distance_m is not None
     if args.accommodation_diopters is not None:
         if targeted:
@@ -141,6 +146,10 @@ def _schematic_eye(args: argparse.Namespace) -> tuple[DepthViewer, float, dict]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from vissim.imageio import image_files, output_bit_depth, read_image, write_image
+    from vissim.optics.depth.depth_map import blur_depth
+    from vissim.optics.rx.viewing_setup import DepthViewer
+
     check_outputs_apart((*image_files(args.input), args.depth), image_files(args.output))
     image = read_image(args.input)
     step = image_sampling(image, args.arcmin_per_px, args.input)

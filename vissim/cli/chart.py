@@ -8,12 +8,9 @@ from pathlib import Path
 
 from vissim.checks import size_text
 from vissim.atomic import write_json_atomic
-from vissim.charts import (DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTANCE, POLARITIES, chart_sidecar,
-                           etdrs_chart_spec, layout_chart, optotype_tile, render_chart_angular, save_chart_pdf,
-                           save_chart_png)
+from vissim.chart_defaults import DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTANCE, POLARITIES
 from vissim.cli._common import refuse_existing
 from vissim.errors import VissimInputError
-from vissim.imageio import image_files, write_image
 from vissim.provenance import make_provenance
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_TILE_SHAPE_PX
 from vissim.units import mm_to_m
@@ -89,6 +86,10 @@ def _letters(args: argparse.Namespace) -> str | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from vissim.charts import (chart_sidecar, etdrs_chart_spec, layout_chart, optotype_tile,  # paid when it runs
+                               render_chart_angular, save_chart_pdf, save_chart_png)
+    from vissim.imageio import image_files, write_image
+
     out = Path(args.output)
     suffix = out.suffix.lower()
     letters = _letters(args)

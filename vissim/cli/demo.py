@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.chart_demo import DEMO_PRESCRIPTIONS, run_demo
+from vissim.chart_defaults import DEMO_PRESCRIPTIONS
 from vissim.errors import VissimInputError
 from vissim.cli import command_help
 
@@ -23,6 +23,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from vissim.chart_demo import run_demo  # paid when it runs
+
     if args.output.exists() and not args.output.is_dir():
         raise VissimInputError(f"-o {args.output} is a file; the demo writes into a folder")
     for path in run_demo(args.output, overwrite=args.overwrite):

@@ -113,12 +113,11 @@ def _light(args: argparse.Namespace):
 
 
 def run(args: argparse.Namespace) -> int:
-    from vissim.bench.atv.tube import atv_trial_lens  # the trace's imports are paid when the command runs
-    from vissim.optics.eyes.eye import build_eye
+    from vissim.optics.eyes.eye import build_eye  # the trace's imports are paid when the command runs
     from vissim.optics.eyes.report import eye_report
 
     powers = trial_lens_powers(args)
-    lenses = () if powers is None else (atv_trial_lens(*powers),)
+    lenses = () if powers is None else (_trial_lens(*powers),)
     wavelength, spectrum = _light(args)
     eye = build_eye(args.eye_model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
                     iris_mm=args.iris_mm, rx=args.rx,
@@ -133,6 +132,12 @@ def run(args: argparse.Namespace) -> int:
         return 0
     _print_text(report)
     return 0
+
+
+def _trial_lens(*powers):
+    from vissim.bench.atv.tube import atv_trial_lens  # the tube's image code only when a lens is asked for
+
+    return atv_trial_lens(*powers)
 
 
 def _rx_line(entry: dict) -> str:

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
@@ -13,13 +12,13 @@ from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_H
                                 add_eye_model_arg, eye_from_args, field_deg_from_text, parse_float_list,
                                 wavefront_from_args)
 from vissim.errors import VissimInputError
-from vissim.optics.pupil.wavefront import Wavefront, parse_zernike_terms
-from vissim.imageio import to_preview_png, write_image
-from vissim.optics.psf.compute import compute_psf
-from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.provenance import make_provenance
 from vissim.spectra import SPECTRA, SPECTRUM_START_NM, SPECTRUM_STEP_NM, SPECTRUM_STOP_NM, named_spectrum
 from vissim.cli import command_help
+
+if TYPE_CHECKING:
+    from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
+    from vissim.optics.pupil.wavefront import Wavefront
 
 
 def add_parser(subparsers) -> None:
@@ -79,6 +78,11 @@ def _light(args: argparse.Namespace) -> tuple[list[float], list[float] | None]:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np  # the numerical code is paid when the command runs
+
+    from vissim.imageio import to_preview_png, write_image
+    from vissim.optics.psf.compute import compute_psf
+
     wavelengths, weights = _light(args)
     if args.eye_model is None and (args.field_deg is not None or args.accommodation_diopters is not None):
         raise VissimInputError("--field-deg and --accommodation-diopters need --eye-model (the reduced eye has one "
@@ -112,6 +116,8 @@ def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront 
     """The schematic eye's traced wavefront at each wavelength, the eye having --rx, with --zernike added
     (`eye_spectral_wavefront`: one wavelength's front is `eye_wavefront`'s, with its map to visual angle)."""
     from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront  # paid when it runs
+    from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
+    from vissim.optics.pupil.wavefront import Wavefront, parse_zernike_terms
 
     if args.lca:
         raise VissimInputError("--eye-model takes no --lca: the traced eye has its own dispersion")
@@ -128,6 +134,8 @@ def _eye_front(args: argparse.Namespace, wavelengths: list[float]) -> Wavefront 
 
 def _eye_record(front: Wavefront | SpectralWavefront) -> dict:
     """The eye's Zernikes for the provenance: ``"n,m"`` -> µm, or per wavelength (nm) for several."""
+    from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
+
     if isinstance(front, SpectralWavefront) and len(front.fronts) == 1:
         return _eye_record(front.fronts[0])
     if isinstance(front, SpectralWavefront):

@@ -13,7 +13,7 @@ import logging
 from pathlib import Path
 
 from vissim.checks import size_text
-from vissim.charts import POLARITIES
+from vissim.chart_defaults import POLARITIES
 from vissim.cli._common import add_trial_lens_args, size_from_text, check_outputs_apart, refuse_existing, trial_lens_powers
 from vissim.cli.render_atv import add_atv_parser
 from vissim.cli.render_depth import add_depth_parser

@@ -23,8 +23,6 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-import numpy as np
-
 from vissim.checks import EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
 from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, refuse_existing,
                                 trial_lens_powers)
@@ -114,12 +112,14 @@ def _check_outputs(args: argparse.Namespace) -> None:
     refuse_existing(*paths, overwrite=args.overwrite)
 
 
-def write_depth(path: Path, depth_m: np.ndarray, *, provenance: dict | None = None, overwrite: bool = False,
+def write_depth(path: Path, depth_m, *, provenance: dict | None = None, overwrite: bool = False,
                 arcmin_per_px: float | None = None) -> Path:
     """Write an axial depth map (metres, inf = sky) as a one-channel ``Z`` EXR or a ``.npy``, atomically.
 
     ``arcmin_per_px`` is recorded in the EXR's provenance (a ``.npy`` holds none).
     """
+    import numpy as np  # paid when it runs
+
     from vissim.atomic import atomic_output
     from vissim.imageio import write_data_map
 

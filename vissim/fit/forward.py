@@ -32,7 +32,7 @@ pixel-integrated chart), so the kernel is the *point* PSF, not a second pixel in
 The reference is edge-padded by a margin that holds the largest blur allowed
 (``max_power_diopters``), on the grid `vissim.optics.blur.convolve.padded_shape` gives that widest
 kernel, and transformed once; each evaluation is one transfer function, one
-inverse FFT and one cubic-spline resampling (`scipy.ndimage.affine_transform`).  The
+inverse FFT and one cubic-spline resampling (`scipy_ndimage.affine_transform`).  The
 blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
 so the Jacobian's steps in the shift alone reuse it and pay only the ramp and the inverse FFT.
 Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame
@@ -46,17 +46,19 @@ import math
 from collections import OrderedDict
 
 import numpy as np
-import scipy.fft
-import scipy.ndimage
-import scipy.special
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.blur.convolve import kernel_transfer, padded_shape, padding_width_px
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.psf.compute import compute_psf, suggested_size_px
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.units import mrad_to_arcmin, xy_matrix_to_image_rowcol
+
+scipy_fft = lazy_module("scipy.fft")
+scipy_ndimage = lazy_module("scipy.ndimage")
+scipy_special = lazy_module("scipy.special")
 
 __all__ = ["ForwardModel", "FORWARD_MODES", "landing_matrix_rc_px"]
 
@@ -76,7 +78,7 @@ def landing_matrix_rc_px(defocus_xy, magnification_xy, arcmin_per_px: float) -> 
 
 
 #: The jinc 2 J1(x) / x tabulated (step `_JINC_STEP`), interpolated linearly: 20x faster than
-#: `scipy.special.j1` on a transfer-function grid, within 2e-7 of it.
+#: `scipy_special.j1` on a transfer-function grid, within 2e-7 of it.
 _JINC_STEP = 1e-3
 _JINC_TABLE = np.empty(0)
 
@@ -87,7 +89,7 @@ def _jinc(x: np.ndarray) -> np.ndarray:
     if top >= (_JINC_TABLE.size - 2) * _JINC_STEP:
         grid = np.arange(int(top / _JINC_STEP * 1.25) + 1024) * _JINC_STEP
         table = np.ones_like(grid)
-        table[1:] = 2.0 * scipy.special.j1(grid[1:]) / grid[1:]
+        table[1:] = 2.0 * scipy_special.j1(grid[1:]) / grid[1:]
         _JINC_TABLE = table
     position = x * (1.0 / _JINC_STEP)
     index = position.astype(np.intp)
@@ -137,9 +139,9 @@ class ForwardModel:
         # the blurred image is resampled from a window this much larger than the tile on each side
         # (the shift, up to 10 % magnification at the tile's corners, the spline's reach)
         self.window_px = int(math.ceil(max_shift_px + 0.05 * max(self.shape) + 4))
-        self._reference_fft = scipy.fft.rfft2(padded, workers=-1)
-        fr = scipy.fft.fftfreq(padded.shape[0])[:, None]
-        fc = scipy.fft.rfftfreq(padded.shape[1])[None, :]
+        self._reference_fft = scipy_fft.rfft2(padded, workers=-1)
+        fr = scipy_fft.fftfreq(padded.shape[0])[:, None]
+        fc = scipy_fft.rfftfreq(padded.shape[1])[None, :]
         self._freq = (fr, fc)
         self.centre_rc = (np.array(self.shape, dtype=float) - 1.0) / 2.0
         self._spectra: OrderedDict[bytes, np.ndarray] = OrderedDict()
@@ -194,7 +196,7 @@ class ForwardModel:
         # the ramp is separable: two 1-D exponentials, not one over the grid
         ramp_rows = np.exp(-2j * math.pi * float(shift_rc[0]) * fr)
         ramp_cols = np.exp(-2j * math.pi * float(shift_rc[1]) * fc)
-        return scipy.fft.irfft2(spectrum * ramp_rows * ramp_cols, s=self.padded_shape, workers=-1)
+        return scipy_fft.irfft2(spectrum * ramp_rows * ramp_cols, s=self.padded_shape, workers=-1)
 
     def predict(self, defocus_xy, magnification_xy=((1.0, 0.0), (0.0, 1.0)), shift_rc=(0.0, 0.0),
                 pupil_diameter_mm: float | None = None) -> np.ndarray:
@@ -208,5 +210,5 @@ class ForwardModel:
         m_inv = np.linalg.inv(xy_matrix_to_image_rowcol(magnification))
         c = self.centre_rc
         offset = self.window_px + c - m_inv @ c
-        return scipy.ndimage.affine_transform(window, m_inv, offset=offset, output_shape=self.shape, order=3,
+        return scipy_ndimage.affine_transform(window, m_inv, offset=offset, output_shape=self.shape, order=3,
                                               mode="nearest", prefilter=True)

@@ -13,14 +13,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.optimize
 
 from vissim.bench.dslr.bench import DslrBench
 from vissim.fit.forward import ForwardModel
 from vissim.fit.power_model import power_model
 from vissim.fit.problem import FitProblem, parameter_bounds
 from vissim.imaging.registration import register
+from vissim.lazy_import import lazy_module
 from vissim.progress import Progress, counter
+
+scipy_optimize = lazy_module("scipy.optimize")
 
 __all__ = ["forward_reach_diopters", "fit_blur", "fit_signs", "refine_in_wave_optics"]
 
@@ -79,7 +81,7 @@ def fit_signs(problem: FitProblem, stage_a, blur_names: list[str], lower, upper,
         if determines_sign:
             results.append(_fitted(_least_squares(problem, theta, lower, upper), advance))
         else:  # the blur is even in each principal power: every combination fits alike
-            results.append(scipy.optimize.OptimizeResult(x=np.clip(theta, lower, upper), cost=stage_a.cost,
+            results.append(scipy_optimize.OptimizeResult(x=np.clip(theta, lower, upper), cost=stage_a.cost,
                                                          jac=stage_a.jac, fun=stage_a.fun))
     return results
 
@@ -121,7 +123,7 @@ def _sign_combinations(power_vector) -> list[tuple[float, float, float]]:
 
 def _least_squares(problem: FitProblem, start: np.ndarray, lower, upper, forward: ForwardModel | None = None):
     diff_step = 1e-4 if (forward or problem.forward).mode == "geometric" else 2e-3
-    return scipy.optimize.least_squares(lambda t: problem.residual(t, forward), np.clip(start, lower, upper),
+    return scipy_optimize.least_squares(lambda t: problem.residual(t, forward), np.clip(start, lower, upper),
                                         bounds=(lower, upper), x_scale="jac", diff_step=diff_step, method="trf",
                                         xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
 

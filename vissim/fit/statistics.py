@@ -12,12 +12,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.signal
 
 from vissim.fit.forward import ForwardModel
 from vissim.fit.problem import FitProblem
 from vissim.fit.result import Solution
 from vissim.imaging.metrics import psnr_db
+from vissim.lazy_import import lazy_module
+
+scipy_signal = lazy_module("scipy.signal")
 
 __all__ = ["sandwich_covariance", "residual_correlation_lag_px", "fitted_solution", "rank_solutions", "Ranking",
            "residual_statistics", "Residual", "MODEL_ERROR_DIOPTERS", "SAME_SOLUTION_DIOPTERS",
@@ -53,7 +55,7 @@ def sandwich_covariance(jac: np.ndarray, residual: np.ndarray, shape: tuple[int,
     scores = (jac * np.asarray(residual, dtype=float)[:, None]).T.reshape(k, *shape)
     taper = 1.0 - np.abs(np.arange(-lag_px, lag_px + 1)) / (lag_px + 1.0)
     window = np.outer(taper, taper)
-    smoothed = [scipy.signal.fftconvolve(s, window, mode="same") for s in scores]
+    smoothed = [scipy_signal.fftconvolve(s, window, mode="same") for s in scores]
     meat = np.array([[float(np.sum(smoothed[a] * scores[b])) for b in range(k)] for a in range(k)])
     meat = 0.5 * (meat + meat.T)
     return n / max(n - k - 2, 1) * (bread @ meat @ bread)

@@ -27,10 +27,12 @@ import math
 from typing import Any
 
 import numpy as np
-from skimage.metrics import structural_similarity
 
 from vissim.checks import size_text
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
+
+skimage_metrics = lazy_module("skimage.metrics")
 
 logger = logging.getLogger(__name__)
 
@@ -131,7 +133,7 @@ def compare_images(reference: Any, test: Any, *, data_range: float) -> Compariso
     if ref.shape != tst.shape:
         raise VissimInputError(f"reference is {size_text(ref.shape)} but test is {size_text(tst.shape)}; sizes must match")
     channel_axis = -1 if ref.ndim == 3 else None
-    ssim, ssim_map = structural_similarity(ref, tst, data_range=data_range, channel_axis=channel_axis, full=True,
+    ssim, ssim_map = skimage_metrics.structural_similarity(ref, tst, data_range=data_range, channel_axis=channel_axis, full=True,
                                            **SSIM_SETTINGS)
     diff = ref - tst
     squared = diff * diff

@@ -49,14 +49,16 @@ from typing import Any
 
 import numpy as np
 import rawpy
-import scipy.sparse
 import tifffile
 
 from vissim.charts import Chart
 from vissim.checks import size_text
 from vissim.checks import positive_number as _positive
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.units import REC709_LUMINANCE, m_to_mm, rad_to_arcmin
+
+scipy_sparse = lazy_module("scipy.sparse")
 
 logger = logging.getLogger(__name__)
 
@@ -428,7 +430,7 @@ class ResampledImage:
         return self.source_arcmin_per_px / self.arcmin_per_px
 
 
-def _area_matrix(n_in: int, scale: float) -> scipy.sparse.csr_matrix:
+def _area_matrix(n_in: int, scale: float) -> scipy_sparse.csr_matrix:
     """(n_out, n_in) weights: output pixel k averages input span [k/scale, (k+1)/scale) by overlap."""
     n_out = int(math.floor(n_in * scale + 1e-9))
     if n_out < 1:
@@ -440,7 +442,7 @@ def _area_matrix(n_in: int, scale: float) -> scipy.sparse.csr_matrix:
     weight = np.clip(np.minimum(hi[:, None], j + 1) - np.maximum(lo[:, None], j), 0.0, None) * scale
     keep = (weight > 0) & (j < n_in)
     rows = np.broadcast_to(np.arange(n_out)[:, None], j.shape)[keep]
-    return scipy.sparse.csr_matrix((weight[keep], (rows, j[keep])), shape=(n_out, n_in))
+    return scipy_sparse.csr_matrix((weight[keep], (rows, j[keep])), shape=(n_out, n_in))
 
 
 def resample_to_arcmin(

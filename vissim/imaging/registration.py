@@ -14,7 +14,7 @@ shifts each): worst error 0.007 px with ``None``, 0.25 px with ``"phase"``; at s
 0.03 px versus 1.7 px.  ``tests/validation/test_validation_registration.py`` pins the difference.
 
 **Applying the shift: cubic spline, not a Fourier shift.**  The moving image is resampled with
-`scipy.ndimage.shift` (``order=3``, ``mode="nearest"``).  A Fourier shift is exact only
+`scipy_ndimage.shift` (``order=3``, ``mode="nearest"``).  A Fourier shift is exact only
 for band-limited, periodic images; a capture is neither (pixel-integrated edges, content cut at
 the border), so it rings and wraps unless padded.  Measured on pixel-integrated letters shifted
 by exactly (2.3, -1.7), (-0.4, 0.8) and (5.5, 3.2) px (rendered at 0.1 arcmin/px, rolled and
@@ -36,11 +36,13 @@ import math
 from typing import Any
 
 import numpy as np
-import scipy.ndimage
-from skimage.registration import phase_cross_correlation
 
 from vissim.checks import size_text
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
+
+scipy_ndimage = lazy_module("scipy.ndimage")
+skimage_registration = lazy_module("skimage.registration")
 
 logger = logging.getLogger(__name__)
 
@@ -69,7 +71,7 @@ class Registration:
     def as_json(self) -> dict[str, Any]:
         return {"shift_rows_px": self.shift_rows_px, "shift_cols_px": self.shift_cols_px, "error": self.error,
                 "upsample_factor": self.upsample_factor, "method": "cross-correlation (normalization=None), "
-                "cubic-spline shift (scipy.ndimage.shift order=3, mode=nearest)"}
+                "cubic-spline shift (scipy_ndimage.shift order=3, mode=nearest)"}
 
 
 def _as_2d(image: Any, name: str) -> np.ndarray:
@@ -119,7 +121,7 @@ def register(
         raise VissimInputError(f"upsample_factor must be an integer in 1-10000 (1/px), got {upsample_factor!r}")
     if max_shift_px is not None and not (math.isfinite(float(max_shift_px)) and max_shift_px >= 0):
         raise VissimInputError(f"max_shift_px must be a finite number >= 0 px, got {max_shift_px!r}")
-    shift, error, _ = phase_cross_correlation(
+    shift, error, _ = skimage_registration.phase_cross_correlation(
         ref - ref.mean(), mov - mov.mean(), upsample_factor=int(upsample_factor), normalization=None
     )
     rows, cols = (float(s) for s in shift)
@@ -128,7 +130,7 @@ def register(
             f"registration found a shift of ({rows:.2f}, {cols:.2f}) px (rows, cols), more than "
             f"max_shift_px = {max_shift_px:g} px"
         )
-    registered = scipy.ndimage.shift(mov, (rows, cols), order=3, mode="nearest", prefilter=True)
+    registered = scipy_ndimage.shift(mov, (rows, cols), order=3, mode="nearest", prefilter=True)
     logger.debug("registered %s px image: shift (%.3f, %.3f) px, error %.3g", ref.shape, rows, cols, error)
     return Registration(shift_rows_px=rows, shift_cols_px=cols, error=float(error),
                         upsample_factor=int(upsample_factor), registered=registered)

@@ -48,17 +48,19 @@ import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.stats import qmc
 
 from vissim.bench.atv.spot import spot_metrics, suggested_atv_size_px
 from vissim.bench.atv.tube import AtvConfig
 from vissim.bench.atv.paraxial import atv_paraxial
 from vissim.bench.atv.scene import atv_scene
 from vissim.errors import VissimError, VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.render.backend import mitsuba
 from vissim.render.plugins import register_plugins
 from vissim.render.run import pass_seeds, render_scene, to_mitsuba_dict
 from vissim.units import ARCMIN_PER_RAD, arcmin_to_rad, mm_to_m
+
+stats = lazy_module("scipy.stats")
 
 __all__ = ["AtvResult", "trace_atv", "render_atv_camera", "DEFAULT_N_RAYS"]
 
@@ -274,7 +276,7 @@ def trace_atv(config: AtvConfig, *, n_rays: int = DEFAULT_N_RAYS, seed: int = 0,
     cone = _CONE_MARGIN * par.cone_radius_rad + _CONE_PAD_RAD
     radiance = config.tube.pixel_radiance
     while True:
-        sobol = qmc.Sobol(4, scramble=True, seed=int(seed))
+        sobol = stats.qmc.Sobol(4, scramble=True, seed=int(seed))
         flux, flux_sq = np.zeros((size, size)), np.zeros((size, size))
         in_pupil, outside, total, fill = 0, 0, 0.0, 0.0
         per_ray = radiance * mm_to_m(pitch) ** 2 * math.pi * cone**2 / total_rays

@@ -19,13 +19,15 @@ from __future__ import annotations
 import dataclasses
 import functools
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from vissim.bench.eye.bench import EyeBench
-from vissim.bench.eye.scene import eye_scene
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_MODEL,
                                          DEFAULT_EYE_PUPIL_MM, DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER,
                                          DEFAULT_LETTER_LOGMAR, DEFAULT_SPECTACLE_VERTEX_MM)
+
+if TYPE_CHECKING:
+    from vissim.bench.eye.bench import EyeBench
 
 __all__ = ["EyeRender", "eye_bench", "eye_scene_dict", "render_eye", "render_eye_bench"]
 
@@ -86,6 +88,8 @@ class EyeRender:
 
             object.__setattr__(self, "rx", prescription_from(self.rx))
         object.__setattr__(self, "surfaces", tuple(tuple(t) for t in self.surfaces))
+        from vissim.bench.eye.bench import EyeBench  # the bench's numerical code when settings are made, not read
+
         object.__setattr__(self, "wavelength_nm", EyeBench.light_nm(self.wavelength_nm, self.spectrum))
         if (self.pupil_mm is None) == (self.iris_mm is None):
             raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
@@ -100,6 +104,7 @@ class EyeRender:
     @functools.cached_property
     def bench(self) -> EyeBench:
         """The eye bench these settings describe (`eye_bench`), built once."""
+        from vissim.bench.eye.bench import EyeBench
         from vissim.optics.rx.trial_lens import TrialLens
 
         return EyeBench(eye=self.eye, chart_distance_m=self.chart_distance_m, letter=self.letter, logmar=self.logmar,
@@ -115,12 +120,15 @@ def eye_bench(settings: EyeRender) -> EyeBench:
 
 def eye_scene_dict(settings: EyeRender) -> dict:
     """The plain scene dict of ``settings``'s bench at its spp and seed (`vissim.bench.eye.scene.eye_scene`)."""
+    from vissim.bench.eye.scene import eye_scene
+
     return eye_scene(eye_bench(settings), settings.spp, settings.seed)
 
 
 def render_eye_bench(bench: EyeBench, spp: int, seed: int, variant: str | None = None, *, record: dict | None = None):
     """Render the eye bench ``bench`` at ``spp`` samples per pixel from ``seed``; a `vissim.render.run.RenderResult`
     whose provenance holds ``record`` under ``eye`` (default: the bench's `EyeBench.as_json`)."""
+    from vissim.bench.eye.scene import eye_scene
     from vissim.provenance import json_safe, make_provenance
     from vissim.render.backend import choose_variant, mitsuba
     from vissim.render.run import mitsuba_versions, render_scene

@@ -20,12 +20,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.ndimage
 
 from vissim.bench.atv.tube import AtvConfig
 from vissim.bench.atv.paraxial import atv_paraxial
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.psf.metrics import ring_means
+
+scipy_ndimage = lazy_module("scipy.ndimage")
 
 __all__ = ["SpotMetrics", "spot_metrics", "suggested_atv_size_px"]
 
@@ -76,14 +78,14 @@ def spot_metrics(image, arcmin_per_px: float, std_image=None) -> SpotMetrics:
     where, profile = ring_means(data, np.hypot(rows - cy, cols - cx))
     first = _half_max_diameter_px(where, profile, 0.5 * profile.max())
     sigma = first / 20.0 if math.isfinite(first) and first >= 10.0 else 0.0
-    smoothed = scipy.ndimage.gaussian_filter(data, sigma, mode="constant") if sigma else data
+    smoothed = scipy_ndimage.gaussian_filter(data, sigma, mode="constant") if sigma else data
     at = np.unravel_index(int(np.argmax(smoothed)), data.shape)
     fwhm_px = _half_max_diameter_px(where, profile, 0.5 * float(smoothed[at])) if sigma else first
     relative_std = math.nan
     if std_image is not None:
         variance = np.square(np.asarray(std_image, dtype=float))
         if sigma:  # a normalised Gaussian g has sum(g^2) = 1 / (4 pi sigma^2), g^2 ~ Gaussian of sigma / sqrt 2
-            variance = scipy.ndimage.gaussian_filter(variance, sigma / math.sqrt(2.0), mode="constant")
+            variance = scipy_ndimage.gaussian_filter(variance, sigma / math.sqrt(2.0), mode="constant")
             variance /= 4.0 * math.pi * sigma**2
         relative_std = float(math.sqrt(variance[at]) / smoothed[at]) if smoothed[at] > 0 else math.inf
     n0, n1 = data.shape

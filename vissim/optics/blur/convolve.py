@@ -37,18 +37,20 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe, size_text
 from vissim.errors import FieldTooSmallError, VissimInputError, VissimTypeError
+from vissim.lazy_import import lazy_module
+from vissim.optics.blur.padding import PADDING_MODES
 from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
+
+scipy_fft = lazy_module("scipy.fft")
 
 __all__ = ["blur_image", "image_kernel_psf", "BlurKernel", "PADDING_MODES", "border_mean", "psf_padding_width_px"]
 
 log = logging.getLogger(__name__)
 
-PADDING_MODES = ("constant", "edge", "reflect", "wrap")
 #: ``numpy.pad``'s (and CuPy's) name for each padding mode: "reflect" repeats the border pixel.
 NUMPY_PAD_MODES = {"constant": "constant", "edge": "edge", "reflect": "symmetric", "wrap": "wrap"}
 
@@ -101,10 +103,10 @@ def kernel_transfer(kernel: np.ndarray, padded_shape: tuple[int, int], dtype=np.
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     placed = np.zeros((n_rows, cols), dtype=dtype)
     placed[:, (np.arange(n_cols) - n_cols // 2) % cols] = kernel
-    along_cols = scipy.fft.rfft(placed, axis=1, workers=workers)
+    along_cols = scipy_fft.rfft(placed, axis=1, workers=workers)
     scattered = np.zeros((rows, along_cols.shape[1]), dtype=complex_dtype)
     scattered[(np.arange(n_rows) - n_rows // 2) % rows] = along_cols
-    return scipy.fft.fft(scattered, axis=0, workers=workers, overwrite_x=True)
+    return scipy_fft.fft(scattered, axis=0, workers=workers, overwrite_x=True)
 
 
 def padding_width_px(kernel_px: int) -> int:
@@ -115,7 +117,7 @@ def padding_width_px(kernel_px: int) -> int:
 def padded_shape(shape: tuple[int, int], kernel_px: int) -> tuple[int, int]:
     """The full-frame FFT's grid: the image plus the kernel's reach on each side, at a fast size."""
     width = padding_width_px(kernel_px)
-    return tuple(scipy.fft.next_fast_len(n + 2 * width, real=True) for n in shape)
+    return tuple(scipy_fft.next_fast_len(n + 2 * width, real=True) for n in shape)
 
 
 def psf_padding_width_px(psf: PSF) -> int:
@@ -159,9 +161,17 @@ def _check_sampling(psf: PSF, arcmin_per_px: float) -> None:
         raise VissimInputError(f"PSF must be square, got {psf.data.shape}")
 
 
+def _is_5_smooth(n: int) -> bool:
+    """Whether n has no prime factor above 5 (what ``scipy.fft.next_fast_len(n, real=True)`` keeps)."""
+    for prime in (2, 3, 5):
+        while n % prime == 0:
+            n //= prime
+    return n == 1
+
+
 #: Tile sizes (px) tried for overlap-save convolution of large images: the even 5-smooth sizes (fast
 #: FFTs) from 256 to 512 (larger squares measured slower than one full-frame FFT: cache).
-TILE_SIZES_PX = tuple(n for n in range(256, 513, 2) if scipy.fft.next_fast_len(n, real=True) == n)
+TILE_SIZES_PX = tuple(n for n in range(256, 513, 2) if _is_5_smooth(n))
 #: A tiled blur is chosen when its estimated cost is below this fraction of the full FFT's.
 #: The estimate counts FFT operations (n log n); measured on 2 cores, the small tiles' FFTs run
 #: at about 1.6x the full-frame FFT's rate per operation (cache), so their count is scaled by this.
@@ -213,11 +223,11 @@ def _blur_tiled(channel, psf, padding, background, dtype, tile):
         widths = ((max(-r0, 0), max(r0 + tile - rows, 0)), (max(-c0, 0), max(c0 + tile - cols, 0)))
         if any(map(any, widths)):
             square = pad_array(square, widths, padding, background)
-        spectrum = scipy.fft.rfft2(square, workers=1)
+        spectrum = scipy_fft.rfft2(square, workers=1)
         spectrum *= transfer
-        spectrum = scipy.fft.ifft(spectrum, axis=0, workers=1, overwrite_x=True)
+        spectrum = scipy_fft.ifft(spectrum, axis=0, workers=1, overwrite_x=True)
         height, width = min(valid, rows - top), min(valid, cols - left)
-        blurred = scipy.fft.irfft(spectrum[first_valid : first_valid + height], n=tile, axis=1, workers=1,
+        blurred = scipy_fft.irfft(spectrum[first_valid : first_valid + height], n=tile, axis=1, workers=1,
                                   overwrite_x=True)
         out[top : top + height, left : left + width] = blurred[:, first_valid : first_valid + width]
 
@@ -241,9 +251,9 @@ def _blur_channel(channel, psf, padding, background, dtype):
             return _blur_tiled(channel, psf, padding, background, dtype, tile)
         padded = _pad(channel, offset, shape, padding, background)
     kernel = BlurKernel.prepare(psf, shape, dtype=dtype)
-    spectrum = scipy.fft.rfft2(padded.astype(dtype, copy=False), workers=-1)
+    spectrum = scipy_fft.rfft2(padded.astype(dtype, copy=False), workers=-1)
     spectrum *= kernel.transfer
-    out = scipy.fft.irfft2(spectrum, s=shape, workers=-1, overwrite_x=True)
+    out = scipy_fft.irfft2(spectrum, s=shape, workers=-1, overwrite_x=True)
     return out[offset : offset + rows, offset : offset + cols]
 
 

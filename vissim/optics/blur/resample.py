@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
 
+from vissim.lazy_import import lazy_module
 from vissim.units import xy_matrix_to_image_rowcol
+
+ndimage = lazy_module("scipy.ndimage")
 
 __all__ = ["magnify", "block_mean", "SUBPIXELS_PER_PX"]
 

@@ -80,7 +80,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM, size_text
+from vissim.checks import DEFAULT_MAX_LAYERS, DEFAULT_WAVELENGTH_NM, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe, instance_of, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
@@ -107,8 +107,6 @@ log = logging.getLogger(__name__)
 #: of its coarse blur against the fine one on white noise there (``tests/test_depth.py``).
 COARSE_BLUR_PX = 14.0
 COARSE_MIN_DB = 44.0
-#: Plans with more layers are refused unless ``max_layers`` is raised (or None: no limit).
-DEFAULT_MAX_LAYERS = 256
 
 
 # -- the optics of one depth ------------------------------------------------------------

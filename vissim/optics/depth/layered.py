@@ -55,12 +55,12 @@ import logging
 from dataclasses import dataclass, fields
 
 import numpy as np
-from scipy import ndimage
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.blur.convolve import blur_image
 from vissim.optics.depth.depth_map import eye_of, layer_spacing_diopters, matte_indices, plan_layers
 from vissim.optics.depth.psfs import cached_psf
@@ -70,6 +70,8 @@ from vissim.optics.psf.compute import PSF, geometric_blur_radius_arcmin
 from vissim.optics.pupil.rays import landing_arcmin, ray_count, stratified_pupil_rays
 from vissim.optics.rx.viewing_setup import DepthViewer
 from vissim.optics.pupil.wavefront import Wavefront
+
+ndimage = lazy_module("scipy.ndimage")
 
 __all__ = ["SceneLayer", "LayeredBlurResult", "composite_layers"]
 

@@ -54,7 +54,8 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.measured.measured_eye import beam_field_map, measured_front
 from vissim.optics.eyes.refraction import BEAM_PLANE, chief_ray_stretch
-from vissim.optics.eyes.traced_wavefront import DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront
+from vissim.optics.eyes.traced_wavefront import (DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront,
+                                                trace_eye_wavefronts)
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
@@ -207,10 +208,10 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     anchor = trace_eye_wavefront(eye, reference, field_deg, pupil_mm=pupil_mm, iris_mm=iris_mm,
                                  samples=samples if wanted else ANCHOR_SAMPLES, max_order=8 if wanted else 2,
                                  lenses=lenses)
-    pupil = anchor.eye_entrance_pupil_mm
-    traced = [anchor if w == reference else
-              trace_eye_wavefront(eye, w, field_deg, pupil_mm=pupil, samples=samples, lenses=lenses)
-              for w in wavelengths]
+    others = [w for w in wavelengths if w != reference]
+    others = dict(zip(others, trace_eye_wavefronts(eye, others, field_deg, pupil_mm=anchor.eye_entrance_pupil_mm,
+                                                   samples=samples, lenses=lenses) if others else []))
+    traced = [anchor if w == reference else others[w] for w in wavelengths]
     jacobian = (None if wavelengths == [reference] else
                 retinal_jacobian_mm_per_deg(eye, reference, field_deg, iris_mm=anchor.iris_mm, lenses=lenses))
     common = min(t.entrance_pupil_mm for t in traced)

@@ -58,11 +58,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import map_coordinates
 
 from vissim.checks import finite_number
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.psf import metrics as psf_metrics
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.lca import LcaCurve, lca_curve
@@ -80,6 +80,8 @@ from vissim.optics.psf.field_size import MAX_ENERGY_OUTSIDE, energy_outside_fiel
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, field_map_stretch
 from vissim.optics.rx.trial_lens import TrialLensSetup
 from vissim.optics.pupil.wavefront import Wavefront
+
+ndimage = lazy_module("scipy.ndimage")
 
 __all__ = ["EyeReport", "MtfSpectrum", "eye_report", "eye_mtf", "MTF_NYQUIST_PER_CUTOFF", "MTF_SIZE_PX"]
 
@@ -139,7 +141,7 @@ def eye_mtf(wavefront: Wavefront, wavelength_nm, frequencies_cyc_per_deg, field_
         else:  # the field direction, OSA (x, y), as image (col, row) offsets
             d_col, d_row = osa_xy_to_image_colrow(direction[0], direction[1])
             cols, rows = centre + f * d_col / df, centre + f * d_row / df
-            values = map_coordinates(m, [rows, cols], order=1, mode="nearest")
+            values = ndimage.map_coordinates(m, [rows, cols], order=1, mode="nearest")
         out[name] = np.where(f >= cutoff, 0.0, np.minimum(values, 1.0))
     return out
 

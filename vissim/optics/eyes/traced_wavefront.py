@@ -67,6 +67,7 @@ from vissim.optics.pupil.zernike import fit_zernike_um
 
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
+           "trace_eye_wavefronts", "entrance_pupils_from_irises_mm", "irises_from_entrance_pupil_mm",
            "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
 #: Samples across the iris (odd: the chief ray is the grid's centre) and the grid's reach, in iris radii.
@@ -184,26 +185,46 @@ def _axial_starts(eye: SchematicEye, iris_x_mm, wavelength_nm: float, lenses=Non
     return starts[:, 0]
 
 
+def entrance_pupils_from_irises_mm(eye: SchematicEye, irises_mm, wavelengths_nm, lenses=None) -> np.ndarray:
+    """The entrance-pupil diameters (mm) of irises ``irises_mm`` across at ``wavelengths_nm`` (one each, or one for
+    all), by real rays on axis (their x extent) through the cornea and, if given, the lenses of the
+    `TrialLensSetup` ``lenses``: every rim ray in one trace."""
+    irises, waves = np.broadcast_arrays(np.asarray(irises_mm, dtype=float).ravel(),
+                                        np.asarray(wavelengths_nm, dtype=float).ravel())
+    centre, radius = eye.stop_decentre_nasal_mm, 0.5 * irises
+    rim = _axial_starts(eye, np.concatenate([centre + radius, centre - radius]), np.concatenate([waves, waves]),
+                        lenses)
+    return rim[: len(irises)] - rim[len(irises):]
+
+
 def entrance_pupil_from_iris_mm(eye: SchematicEye, iris_mm: float, wavelength_nm: float, lenses=None) -> float:
-    """The entrance-pupil diameter (mm) of an iris ``iris_mm`` across, by real rays on axis (its x extent),
-    through the cornea and, if given, the lenses of the `TrialLensSetup` ``lenses``."""
-    centre, radius = eye.stop_decentre_nasal_mm, 0.5 * iris_mm
-    rim = _axial_starts(eye, [centre + radius, centre - radius], wavelength_nm, lenses)
-    return float(rim[0] - rim[1])
+    """The entrance-pupil diameter (mm) of an iris ``iris_mm`` across (`entrance_pupils_from_irises_mm`)."""
+    return float(entrance_pupils_from_irises_mm(eye, [iris_mm], [wavelength_nm], lenses)[0])
+
+
+def irises_from_entrance_pupil_mm(eye: SchematicEye, entrance_pupil_mm: float, wavelengths_nm) -> np.ndarray:
+    """The iris diameters (mm) whose real-ray entrance pupil is ``entrance_pupil_mm`` at each of
+    ``wavelengths_nm``: the secant method from the paraxial iris, every wavelength's search in one trace a step."""
+    waves = np.asarray(wavelengths_nm, dtype=float).ravel()
+    d0 = np.array([iris_diameter_mm(mean_meridian_eye(eye), entrance_pupil_mm, w) for w in waves])
+    d1 = 1.01 * d0
+    f0 = entrance_pupils_from_irises_mm(eye, d0, waves) - entrance_pupil_mm
+    irises, active = np.empty(len(waves)), np.arange(len(waves))
+    for _ in range(30):
+        f1 = entrance_pupils_from_irises_mm(eye, d1, waves[active]) - entrance_pupil_mm
+        done = (np.abs(f1) < _PUPIL_TOL_MM) | (f1 == f0)
+        irises[active[done]] = d1[done]
+        if done.all():
+            return irises
+        going = ~done
+        d0, d1, f0 = d1[going], (d1 - f1 * (d1 - d0) / (f1 - f0))[going], f1[going]
+        active = active[going]
+    raise VissimInputError(f"no iris gives a {entrance_pupil_mm:g} mm entrance pupil")  # pragma: no cover
 
 
 def iris_from_entrance_pupil_mm(eye: SchematicEye, entrance_pupil_mm: float, wavelength_nm: float) -> float:
-    """The iris diameter (mm) whose real-ray entrance pupil is ``entrance_pupil_mm``: the secant method from
-    the paraxial iris."""
-    d0 = iris_diameter_mm(mean_meridian_eye(eye), entrance_pupil_mm, wavelength_nm)
-    d1 = 1.01 * d0
-    f0 = entrance_pupil_from_iris_mm(eye, d0, wavelength_nm) - entrance_pupil_mm
-    for _ in range(30):
-        f1 = entrance_pupil_from_iris_mm(eye, d1, wavelength_nm) - entrance_pupil_mm
-        if abs(f1) < _PUPIL_TOL_MM or f1 == f0:
-            return d1
-        d0, d1, f0 = d1, d1 - f1 * (d1 - d0) / (f1 - f0), f1
-    raise VissimInputError(f"no iris gives a {entrance_pupil_mm:g} mm entrance pupil")  # pragma: no cover
+    """The iris diameter (mm) whose real-ray entrance pupil is ``entrance_pupil_mm`` (`irises_from_entrance_pupil_mm`)."""
+    return float(irises_from_entrance_pupil_mm(eye, entrance_pupil_mm, [wavelength_nm])[0])
 
 
 def max_iris_mm(eye: SchematicEye) -> float:
@@ -222,9 +243,10 @@ def max_iris_mm(eye: SchematicEye) -> float:
     return 2.0 * low
 
 
-def _pupils(eye: SchematicEye, wavelength_nm: float, pupil_mm, iris_mm) -> tuple[float, float, str]:
-    """(entrance pupil, iris, which was given), each mm. The iris may open to the top of a human eye's
-    `EYE_PUPIL_RANGE_MM` and to `max_iris_mm` of this eye; an entrance pupil is held to the iris it needs."""
+def _pupils(eye: SchematicEye, wavelengths_nm: np.ndarray, pupil_mm, iris_mm) -> tuple[np.ndarray, np.ndarray, str]:
+    """(entrance pupils, irises, which was given), mm, one each of ``wavelengths_nm``. The iris may open to the top
+    of a human eye's `EYE_PUPIL_RANGE_MM` and to `max_iris_mm` of this eye; an entrance pupil is held to the iris it
+    needs."""
     if (pupil_mm is None) == (iris_mm is None):
         raise VissimInputError("give either the entrance-pupil diameter (pupil_mm) or the iris diameter (iris_mm), "
                                "not both or neither")
@@ -232,27 +254,28 @@ def _pupils(eye: SchematicEye, wavelength_nm: float, pupil_mm, iris_mm) -> tuple
     widest = min(human, max_iris_mm(eye))
     if pupil_mm is not None:
         pupil, given = positive_number(pupil_mm, "entrance pupil diameter", "mm"), "entrance pupil"
-        widest_pupil = entrance_pupil_from_iris_mm(eye, widest, wavelength_nm)
+        widest_pupil = float(np.min(entrance_pupils_from_irises_mm(eye, widest, wavelengths_nm)))
         if pupil > widest_pupil:  # checked before the search, which a huge pupil would send out of range
             raise VissimInputError(f"entrance pupil {pupil:g} mm, wider than the {widest_pupil:.3g} mm that the "
                                    f"{eye.name} eye's widest iris, {widest:.3g} mm, gives (a human iris opens to "
                                    f"{human:g} mm at most, and to no wider than where the iris plane meets the "
                                    "cornea's back)")
         try:
-            iris = iris_from_entrance_pupil_mm(eye, pupil, wavelength_nm)
+            irises = irises_from_entrance_pupil_mm(eye, pupil, wavelengths_nm)
         except VissimInputError as error:
             raise VissimInputError(f"entrance pupil {pupil:g} mm: {error}") from None
-        asked = f"entrance pupil {pupil:g} mm needs an iris of {iris:.3f} mm"
+        asked = f"entrance pupil {pupil:g} mm needs an iris of {float(np.max(irises)):.3f} mm"
+        pupils = np.full(len(irises), float(pupil))
     else:
         iris, given = positive_number(iris_mm, "iris diameter", "mm"), "iris"
-        asked = f"iris {iris:g} mm"
-    if iris > widest:
+        irises, asked = np.full(len(wavelengths_nm), float(iris)), f"iris {iris:g} mm"
+    if np.max(irises) > widest:
         raise VissimInputError(f"{asked}, wider than the {widest:.3g} mm the {eye.name} eye's iris allows (a human "
                                f"iris opens to {human:g} mm at most, and to no wider than where the iris plane meets "
                                "the cornea's back)")
     if given == "iris":
-        pupil = entrance_pupil_from_iris_mm(eye, iris, wavelength_nm)
-    return float(pupil), float(iris), given
+        pupils = entrance_pupils_from_irises_mm(eye, irises, wavelengths_nm)
+    return pupils, irises, given
 
 
 @dataclass(frozen=True, eq=False)
@@ -327,8 +350,9 @@ def _iris_grid(eye: SchematicEye, iris_mm: float, samples: int) -> tuple[np.ndar
 def trace_to_retina(eye: SchematicEye, targets, wavelength_nm: float, *, field_deg=None, object_point_mm=None,
                     lenses=None, phase=None) -> tuple[RayBundle, np.ndarray]:
     """Rays through ``lenses`` (a `TrialLensSetup`, or None) and ``eye`` aimed at the iris points ``targets``
-    (N, 2, mm) and traced to the retina: a collimated beam from ``field_deg`` (the models' rule,
-    `field_direction`) or the rays of one ``object_point_mm`` (eye frame, z towards the retina). Returns the
+    (N, 2, mm) at ``wavelength_nm`` (one, or one per target) and traced to the retina: a collimated beam from
+    ``field_deg`` (the models' rule, `field_direction`) or the rays of one ``object_point_mm`` (eye frame, z
+    towards the retina). Returns the
     bundle on the retina (path lengths from the start) and the rays' starts (collimated) or launch directions.
     ``phase``: a `vissim.optics.raytrace.PhasePlane` between the lenses and the cornea (a measured eye's)."""
     front, stop_z, back, start_z = _front(eye, lenses, phase)
@@ -352,46 +376,79 @@ def _checked_samples(samples) -> int:
     return int(samples)
 
 
-def _system_pupil(eye: SchematicEye, lenses, iris: float, pupil: float, wavelength: float) -> tuple[float, float]:
-    """(entrance-pupil diameter, its position behind the corneal vertex), mm: the eye's, or with lenses the system's."""
+def _system_pupils(eye: SchematicEye, lenses, irises, pupils, wavelengths) -> tuple[np.ndarray, list[float]]:
+    """(entrance-pupil diameters, their positions behind the corneal vertex), mm, one each of ``wavelengths``: the
+    eye's, or with lenses the system's."""
     if lenses is None or not lenses.lenses:
-        return pupil, entrance_pupil_position_mm(mean_meridian_eye(eye), wavelength)
-    return entrance_pupil_from_iris_mm(eye, iris, wavelength, lenses), system_entrance_pupil_mm(eye, lenses,
-                                                                                                 wavelength)[0]
+        return pupils, [entrance_pupil_position_mm(mean_meridian_eye(eye), w) for w in wavelengths]
+    return (entrance_pupils_from_irises_mm(eye, irises, wavelengths, lenses),
+            [system_entrance_pupil_mm(eye, lenses, w)[0] for w in wavelengths])
 
 
 def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0, 0.0), *, pupil_mm=None,
                         iris_mm=None, samples: int = DEFAULT_SAMPLES, max_order: int = 8,
                         lenses=None, phase=None) -> EyeWavefront:
-    """The traced wavefront of ``eye`` (module doc); give ``pupil_mm`` (entrance pupil) or ``iris_mm``;
-    ``lenses``: a `TrialLensSetup` of thick lenses in front (module doc); ``phase``: a `PhasePlane` before the
-    cornea (`trace_to_retina`).
+    """The traced wavefront of ``eye`` (module doc) at one wavelength; give ``pupil_mm`` (entrance pupil) or
+    ``iris_mm``; ``lenses``: a `TrialLensSetup` of thick lenses in front (module doc); ``phase``: a `PhasePlane`
+    before the cornea (`trace_to_retina`).
 
     A field angle where rays miss a surface, meet total internal reflection or leave the GRIN lens
     raises one `VissimInputError` naming the field angle in degrees and what happened.
     """
-    wavelength = checked_wavelength_nm(wavelength_nm)
-    direction = _beam_direction(eye, field_deg)
-    samples = _checked_samples(samples)
-    pupil, iris, given = _pupils(eye, wavelength, pupil_mm, iris_mm)
-    field = tuple(float(v) for v in field_deg)
-    eye_pupil = pupil
+    return trace_eye_wavefronts(eye, [wavelength_nm], field_deg, pupil_mm=pupil_mm, iris_mm=iris_mm,
+                                samples=samples, max_order=max_order, lenses=lenses, phase=phase)[0]
+
+
+def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupil_mm=None,
+                         iris_mm=None, samples: int = DEFAULT_SAMPLES, max_order: int = 8,
+                         lenses=None, phase=None) -> list[EyeWavefront]:
+    """`trace_eye_wavefront` at each of ``wavelengths_nm``, in one trace: the rays of every wavelength travel
+    together, their paths differing only through the media's indices (one per ray, `trace_rays`), and each
+    wavelength's pupil search runs in the same traces. Equal to tracing each wavelength alone (to round-off;
+    tests/test_eye_multi_wavelength.py). ``pupil_mm``: the entrance pupil at every wavelength; ``iris_mm``: one iris,
+    its entrance pupil each wavelength's."""
     try:
-        pupil, entrance_z = _system_pupil(eye, lenses, iris, pupil, wavelength)
-        targets, edge = _iris_grid(eye, iris, samples)
-        bundle, starts = trace_to_retina(eye, targets, wavelength, field_deg=field, lenses=lenses, phase=phase)
+        wavelengths = [checked_wavelength_nm(w) for w in wavelengths_nm]
+    except TypeError:
+        raise VissimInputError(f"wavelengths must be a list of nm, got {wavelengths_nm!r}") from None
+    if not wavelengths:
+        raise VissimInputError("trace at least one wavelength, got none")
+    _beam_direction(eye, field_deg)  # the field's checks first
+    samples = _checked_samples(samples)
+    pupils, irises, given = _pupils(eye, np.array(wavelengths), pupil_mm, iris_mm)
+    field = tuple(float(v) for v in field_deg)
+    try:
+        system, entrance_z = _system_pupils(eye, lenses, irises, pupils, wavelengths)
+        grids = [_iris_grid(eye, iris, samples) for iris in irises]
+        targets = np.concatenate([targets for targets, _ in grids])
+        waves = np.repeat(wavelengths, [len(edge) for _, edge in grids])
+        bundle, starts = trace_to_retina(eye, targets, waves, field_deg=field, lenses=lenses, phase=phase)
     except VissimInputError as error:
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
+    fronts, first = [], 0
+    for k, (_, edge) in enumerate(grids):
+        rays = slice(first, first + len(edge))
+        first += len(edge)
+        fronts.append(_fitted_front(eye, field, wavelengths[k], bundle.rows(rays), starts[rays], edge, max_order,
+                                    (float(system[k]), float(irises[k]), given, entrance_z[k], float(pupils[k])),
+                                    lenses))
+    return fronts
+
+
+def _fitted_front(eye, field, wavelength, bundle, starts, edge, max_order, pupil, lenses) -> EyeWavefront:
+    """One wavelength's rays on the retina, their OPD on the reference sphere fitted over the entrance pupil."""
+    diameter, iris, given, entrance_z, eye_pupil = pupil
+    direction = _beam_direction(eye, field)
     exit_z = exit_pupil_position_mm(eye, wavelength)
     opd_um = wavefront_on_reference_sphere_um(bundle, 0, exit_z)
     xy = starts[:, :2] + direction[:2] / direction[2] * (entrance_z - starts[:, 2:3])
     chief = tuple(float(v) for v in xy[0])
     xy = xy - xy[0]
-    if np.any(np.hypot(xy[edge, 0], xy[edge, 1]) <= 0.5 * pupil):
+    if np.any(np.hypot(xy[edge, 0], xy[edge, 1]) <= 0.5 * diameter):
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: the traced rays do not cover the "
-                               f"{pupil:g} mm entrance pupil")
-    coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, pupil, max_order)
-    return EyeWavefront(eye.name, field, wavelength, pupil, iris, given, entrance_z, exit_z,
+                               f"{diameter:g} mm entrance pupil")
+    coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, diameter, max_order)
+    return EyeWavefront(eye.name, field, wavelength, diameter, iris, given, entrance_z, exit_z,
                         tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,
                         coefficients, residual, lenses, eye_pupil, field_axis(eye),
                         tuple(tuple(float(v) for v in row) for row in field_map(eye, field)),

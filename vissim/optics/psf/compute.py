@@ -34,7 +34,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.fft
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, MAX_PSF_SIZE_PX
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
@@ -42,6 +41,7 @@ from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import FieldTooSmallError, VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.psf.field_size import (
     MAX_ENERGY_OUTSIDE,
     front_at_wavelength,
@@ -61,6 +61,8 @@ from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, field_map_
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.progress import Progress
 from vissim.units import nm_to_mm, rad_to_arcmin
+
+scipy_fft = lazy_module("scipy.fft")
 
 __all__ = [
     "NORMALISATIONS",

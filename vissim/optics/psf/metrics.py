@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.fft
 
 from vissim.checks import instance_of, number_array
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
+from vissim.lazy_import import lazy_module
 from vissim.optics.psf.compute import PSF
 from vissim.units import cyc_per_rad_to_cyc_per_deg, nm_to_mm
+
+scipy_fft = lazy_module("scipy.fft")
 
 __all__ = ["otf", "mtf", "frequencies_cyc_per_deg", "encircled_energy", "radius_of_encircled_energy_arcmin", "diffraction_mtf",
            "ring_means"]
@@ -59,7 +61,7 @@ def frequencies_cyc_per_deg(psf: PSF) -> np.ndarray:
     """
     instance_of(psf, PSF, "frequencies_cyc_per_deg's psf", PSF_ACCEPTED)
     n = psf.data.shape[0]
-    return scipy.fft.fftshift(scipy.fft.fftfreq(n, d=psf.arcmin_per_px / 60.0))
+    return scipy_fft.fftshift(scipy_fft.fftfreq(n, d=psf.arcmin_per_px / 60.0))
 
 
 def otf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
@@ -92,7 +94,7 @@ def otf(psf: PSF, *, remove_pixel: bool = False) -> np.ndarray:
     """
     instance_of(psf, PSF, "the psf", PSF_ACCEPTED)
     data = np.asarray(psf.data, dtype=float)
-    spectrum = scipy.fft.fftshift(scipy.fft.fft2(scipy.fft.ifftshift(data)))
+    spectrum = scipy_fft.fftshift(scipy_fft.fft2(scipy_fft.ifftshift(data)))
     spectrum /= spectrum[data.shape[0] // 2, data.shape[1] // 2]
     if remove_pixel:
         f = frequencies_cyc_per_deg(psf) * psf.arcmin_per_px / 60.0  # cycles per pixel

@@ -26,14 +26,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.fft
 
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.progress import Progress, counter
 from vissim.optics.psf.field_size import airy_tail_radius_lambda_over_d, rim_widening
 from vissim.optics.pupil.grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
 from vissim.optics.runtime.workspace import scratch
 from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
+
+scipy_fft = lazy_module("scipy.fft")
 
 __all__ = ["PHASE_STEP_WAVES", "MIN_PUPIL_CELLS", "PsfSampling", "plan_wave_psf", "wave_psf", "to_output_pixels"]
 
@@ -163,7 +165,7 @@ def plan_wave_psf(
     n = len(wavelengths_nm)
     mft_seconds = n * 2.0 * (grid**2 * size + grid * size**2) / GEMM_FLOPS_PER_S + _fft_seconds(size)
     # FFT: its field is the period; one FFT per wavelength and one for the pixels.
-    fft = scipy.fft.next_fast_len(max(size, int(math.ceil(max(period) / internal - 1e-9))))
+    fft = scipy_fft.next_fast_len(max(size, int(math.ceil(max(period) / internal - 1e-9))))
     fft += fft % 2
     fft_seconds = (n + 1) * _fft_seconds(fft)
     if method is None:
@@ -290,7 +292,7 @@ def _mft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: N
 @functools.lru_cache(maxsize=8)
 def _cell_transfer(size: int) -> np.ndarray:
     """1 / sinc of the FFT's angles in units of lambda / step: the cell average divided out."""
-    return 1.0 / np.sinc(scipy.fft.fftfreq(size))
+    return 1.0 / np.sinc(scipy_fft.fftfreq(size))
 
 
 def _fft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: None) -> np.ndarray:
@@ -298,7 +300,7 @@ def _fft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: N
     complex_dtype = np.complex64 if dtype == np.float32 else np.complex128
     m = plans[0].internal_size
     total = np.zeros((m, m), dtype=dtype)
-    correction = scipy.fft.fftshift(_cell_transfer(m)).astype(dtype)
+    correction = scipy_fft.fftshift(_cell_transfer(m)).astype(dtype)
     for front, weight, plan in zip(fronts, weights, plans):
         grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
         offsets = np.arange(-grid.half, grid.half + 1)
@@ -308,7 +310,7 @@ def _fft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: N
         pupil[np.ix_(window, window)] = (generalised_pupil(grid, opd_on_points_um(grid, front), plan.wavelength_nm,
                                                            complex_dtype) * checker[:, None] * checker[None, :])
         advance()
-        spectrum = scipy.fft.fft2(pupil, workers=-1, overwrite_x=True)
+        spectrum = scipy_fft.fft2(pupil, workers=-1, overwrite_x=True)
         spectrum *= correction[:, None]
         spectrum *= correction[None, :]
         total += (weight / (m * m * grid.area_cells)) * (np.square(spectrum.real) + np.square(spectrum.imag))
@@ -327,8 +329,8 @@ def _profile(cycles_per_pixel: np.ndarray, pixel: str) -> np.ndarray:
 @functools.lru_cache(maxsize=16)
 def _pixel_transfer(m: int, oversample: int, dtype, pixel: str) -> np.ndarray:
     """Transfer function applied before decimation onto output pixels, rfft2 grid (cached)."""
-    y = _profile(scipy.fft.fftfreq(m) * oversample, pixel)
-    x = _profile(scipy.fft.rfftfreq(m) * oversample, pixel)
+    y = _profile(scipy_fft.fftfreq(m) * oversample, pixel)
+    x = _profile(scipy_fft.rfftfreq(m) * oversample, pixel)
     transfer = (y[:, None] * x[None, :]).astype(dtype)
     transfer.setflags(write=False)
     return transfer
@@ -349,9 +351,9 @@ def to_output_pixels(intensity: np.ndarray, size_px: int, oversample: int, pixel
     m = intensity.shape[0]
     if oversample * size_px > m:
         raise AssertionError("output field larger than the internal field")  # pragma: no cover
-    spectrum = scipy.fft.rfft2(intensity, workers=-1)
+    spectrum = scipy_fft.rfft2(intensity, workers=-1)
     spectrum *= _pixel_transfer(m, oversample, intensity.dtype.type, pixel)
-    averaged = scipy.fft.irfft2(spectrum, s=intensity.shape, workers=-1, overwrite_x=True)
+    averaged = scipy_fft.irfft2(spectrum, s=intensity.shape, workers=-1, overwrite_x=True)
     first = m // 2 - (size_px // 2) * oversample
     averaged = averaged[first : first + size_px * oversample : oversample, first : first + size_px * oversample : oversample]
     return averaged * oversample**2 if oversample != 1 else averaged

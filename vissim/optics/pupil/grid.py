@@ -30,7 +30,7 @@ import numpy as np
 from numpy.polynomial.legendre import leggauss
 
 from vissim.optics.runtime.workspace import scratch
-from vissim.optics.pupil.zernike import zernike_nm
+from vissim.optics.pupil.zernike import MAX_MONOMIAL_ORDER, zernike_monomials, zernike_sum
 from vissim.units import image_colrow_to_osa_xy, nm_to_um
 
 __all__ = ["PupilGrid", "pupil_grid", "generalised_pupil", "generalised_pupil_parts"]
@@ -131,31 +131,30 @@ def pupil_grid(step_mm: float, diameter_mm: float) -> PupilGrid:
     return PupilGrid(step_mm, diameter_mm, half, *arrays)
 
 
-@functools.lru_cache(maxsize=96)
-def _zernike_on_points(grid: PupilGrid, measured_mm: float, n: int, m: int, dtype=np.float64) -> np.ndarray:
-    x, y = grid.points()
-    values = zernike_nm(n, m, np.hypot(x, y) / (measured_mm / 2.0), np.arctan2(y, x)).astype(dtype)
-    values.setflags(write=False)
-    return values
-
-
 def opd_on_points_um(grid: PupilGrid, wavefront, dtype=np.float64, out: np.ndarray | None = None) -> np.ndarray:
     """The wavefront's optical path difference (µm) at `PupilGrid.points`, of ``dtype``.
 
-    Zernike wavefronts use cached polynomials on the points; any other wavefront (an
-    `OpdMap`) is evaluated through its ``opd_um(x, y)``.
-    Written into ``out`` when given.
+    A Zernike wavefront's cell centres, a square lattice, take its polynomial in monomials
+    (`zernike_monomials`) as two small matrix products (x^p along the columns, y^q down the rows), and the rim's
+    points `zernike_sum`; above `MAX_MONOMIAL_ORDER` every point takes `zernike_sum`. Any other wavefront (an
+    `OpdMap`) is evaluated through its ``opd_um(x, y)``. Written into ``out`` when given.
     """
     size = grid.centre_x_mm.size + grid.rim_x_mm.size
     opd = np.empty(size, dtype) if out is None else out
     if not hasattr(wavefront, "coefficients_um"):
         opd[...] = wavefront.opd_um(*grid.points())
         return opd
-    opd[...] = 0.0
-    term = scratch("zernike_term", (size,), dtype)
-    for (n, m), value in wavefront.coefficients_um.items():
-        if n > 0:  # piston changes nothing
-            opd += np.multiply(_zernike_on_points(grid, wavefront.pupil_diameter_mm, n, m, dtype), value, out=term)
+    terms = [(key, value) for key, value in wavefront.coefficients_um.items() if key[0] > 0]  # piston changes nothing
+    radius = wavefront.pupil_diameter_mm / 2.0
+    centres = grid.centre_x_mm.size
+    if max((n for (n, _), _ in terms), default=0) <= MAX_MONOMIAL_ORDER:
+        table = zernike_monomials(terms)
+        columns = np.vander(grid.centre_x_mm[0] / radius, len(table), increasing=True)  # x varies along a row
+        rows = np.vander(grid.centre_y_mm[:, 0] / radius, len(table), increasing=True)  # y down a column
+        opd[:centres] = (rows @ table.T @ columns.T).ravel()
+    else:
+        opd[:centres] = zernike_sum(terms, grid.centre_x_mm.ravel() / radius, grid.centre_y_mm.ravel() / radius)
+    opd[centres:] = zernike_sum(terms, grid.rim_x_mm / radius, grid.rim_y_mm / radius)
     return opd
 
 

@@ -28,8 +28,11 @@ import numpy as np
 from vissim.checks import instance_of
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.pupil.wavefront import WAVELENGTH_MATCH_NM, Wavefront, same_wavelength
 from vissim.units import xy_matrix_to_image_rowcol
+
+ndimage = lazy_module("scipy.ndimage")
 
 __all__ = ["SpectralWavefront", "WAVELENGTH_MATCH_NM", "wavelengths_for", "field_mapped", "field_map_stretch",
            "FIELD_MAP_IDENTITY_TOL"]
@@ -152,12 +155,11 @@ def field_mapped(array: np.ndarray, field_map) -> np.ndarray:
     moves beyond the field is lost (the caller's field check sees it)."""
     if field_map is None:
         return array
-    from scipy.ndimage import map_coordinates  # only for a mapped front
 
     in_rows = xy_matrix_to_image_rowcol(np.linalg.inv(np.asarray(field_map, dtype=float)))
     centre = np.array([array.shape[0] // 2, array.shape[1] // 2], dtype=float)
     rows, cols = np.indices(array.shape, dtype=float)
     offsets = np.stack([rows.ravel() - centre[0], cols.ravel() - centre[1]])
     source = in_rows @ offsets + centre[:, None]
-    values = map_coordinates(np.asarray(array, dtype=np.float64), source, order=3, mode="constant", cval=0.0)
+    values = ndimage.map_coordinates(np.asarray(array, dtype=np.float64), source, order=3, mode="constant", cval=0.0)
     return np.maximum(values.reshape(array.shape), 0.0) / float(np.linalg.det(np.asarray(field_map, dtype=float)))

@@ -32,7 +32,7 @@ from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.rx.prescription import Prescription, as_prescription
-from vissim.optics.pupil.zernike import zernike_keys, zernike_nm
+from vissim.optics.pupil.zernike import nm_to_ansi_j, zernike_basis, zernike_keys, zernike_sum
 
 __all__ = ["Wavefront", "WAVELENGTH_MATCH_NM", "same_wavelength", "prescription_to_zernike_um",
            "zernike_um_to_prescription", "parse_zernike_terms",
@@ -87,7 +87,7 @@ def parse_zernike_terms(text: str) -> dict[tuple[int, int], float]:
         if not math.isfinite(value):
             raise VissimInputError(f"Zernike term {part!r}: coefficient must be finite µm")
         key = (int(match.group("n")), int(match.group("m")))
-        zernike_nm(*key, np.zeros(1), np.zeros(1))  # validates (n, m)
+        nm_to_ansi_j(*key)  # validates (n, m)
         terms[key] = terms.get(key, 0.0) + value
     return terms
 
@@ -103,7 +103,7 @@ def ring_fit_um(opd_um, pupil_diameter_mm: float, max_order: int, rings: int, sp
     rr, tt = np.meshgrid(rho, theta, indexing="ij")
     radius = pupil_diameter_mm / 2.0
     target = opd_um(radius * rr * np.cos(tt), radius * rr * np.sin(tt)).ravel()
-    basis = np.stack([zernike_nm(n, m, rr, tt).ravel() for n, m in keys], axis=1)
+    basis = zernike_basis(keys, rr * np.cos(tt), rr * np.sin(tt))
     solution, *_ = np.linalg.lstsq(basis, target, rcond=None)
     return keys, solution
 
@@ -157,7 +157,7 @@ class Wavefront:
         clean: dict[tuple[int, int], float] = {}
         for key, value in dict(self.coefficients_um).items():
             n, m = _zernike_key(key)
-            zernike_nm(n, m, np.zeros(1), np.zeros(1))  # validates (n, m)
+            nm_to_ansi_j(n, m)  # validates (n, m)
             value = finite_number(value, f"Zernike coefficient ({n},{m})", "µm")
             if value != 0.0:
                 clean[(n, m)] = clean.get((n, m), 0.0) + value
@@ -280,12 +280,7 @@ class Wavefront:
         x = np.asarray(x_mm, dtype=float)
         y = np.asarray(y_mm, dtype=float)
         radius = self.pupil_diameter_mm / 2.0
-        rho = np.hypot(x, y) / radius
-        theta = np.arctan2(y, x)
-        out = np.zeros(np.broadcast(x, y).shape)
-        for (n, m), value in self._items:
-            out += value * zernike_nm(n, m, rho, theta)
-        return out
+        return zernike_sum(self._items, x / radius, y / radius)
 
     def slopes_mrad(self, x_mm: np.ndarray, y_mm: np.ndarray, step_mm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(dW/dx, dW/dy) in µm/mm = mrad, by central differences of the analytic expansion."""

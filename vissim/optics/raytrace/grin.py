@@ -91,16 +91,17 @@ def propagate_grin(medium: GradientIndex, exit_surface: Surface, points: np.ndar
         if not active.any():
             return r, t_vec / np.linalg.norm(t_vec, axis=1, keepdims=True), opl
         idx = np.flatnonzero(active)
-        r1, t1, l1 = rk4_step(medium, r[idx], t_vec[idx], opl[idx], h)
+        moving = medium.rows(idx)
+        r1, t1, l1 = rk4_step(moving, r[idx], t_vec[idx], opl[idx], h)
         e1 = surface_excess_mm(exit_surface, r1)
-        _check_inside(medium, exit_surface, r1, t1, e1)
+        _check_inside(moving, exit_surface, r1, t1, e1)
         crossed = e1 >= 0.0
         stay = idx[~crossed]
         r[stay], t_vec[stay], opl[stay], excess[stay] = r1[~crossed], t1[~crossed], l1[~crossed], e1[~crossed]
         if crossed.any():
             land = idx[crossed]
-            r[land], t_vec[land], opl[land] = _land(medium, exit_surface, r[land], t_vec[land], opl[land], h,
-                                                    excess[land], e1[crossed])
+            r[land], t_vec[land], opl[land] = _land(medium.rows(land), exit_surface, r[land], t_vec[land], opl[land],
+                                                    h, excess[land], e1[crossed])
             active[land] = False
     raise _left_lens(medium, exit_surface, int(active.sum()), f"took {MAX_GRIN_STEPS} steps")
 

@@ -10,7 +10,9 @@ A medium is given as
   by one function of wavelength).
 
 `resolve_medium` turns any of them into a number or a `GradientIndex` with a numeric ``a0`` at
-one wavelength, once per trace.
+one wavelength, once per trace; or, for a trace of many wavelengths at once (one per ray), into an
+array of indices, one per ray, or a `GradientIndex` whose ``a0`` is that array (`GradientIndex.rows`
+keeps it aligned with a subset of the rays).
 """
 
 from __future__ import annotations
@@ -53,8 +55,12 @@ class GradientIndex:
         if not (math.isfinite(float(self.step_mm)) and self.step_mm > 0.0):
             raise VissimInputError(f"GRIN step must be a positive number of mm, got {self.step_mm!r}")
 
+    def rows(self, which) -> GradientIndex:
+        """The medium for the rays ``which`` (indices or a mask) when ``a0`` holds one value per ray."""
+        return self if np.ndim(self.a0) == 0 else replace(self, a0=self.a0[which])
+
     def index(self, points_mm: np.ndarray) -> np.ndarray:
-        """n at points (N, 3) mm (``a0`` numeric: a resolved medium)."""
+        """n at points (N, 3) mm (``a0`` numeric, or one per point: a resolved medium)."""
         u = points_mm[:, 2] - self.origin_z_mm
         r2 = points_mm[:, 0] ** 2 + points_mm[:, 1] ** 2
         return self.a0 + u * (self.a1_per_mm + self.a2_per_mm2 * u) + self.b_per_mm2 * r2
@@ -69,19 +75,32 @@ class GradientIndex:
 Medium = Union[float, Callable[[float], float], GradientIndex]
 
 
-def _index_number(value, wavelength_nm, what: str) -> float:
+def _index_number(value, wavelength_nm, what: str):
     if callable(value):
         if wavelength_nm is None:
             raise VissimInputError(f"the {what} is dispersive: trace it at a wavelength (wavelength_nm)")
+        if np.ndim(wavelength_nm):  # one wavelength per ray: the medium evaluated once per distinct wavelength
+            distinct, where = np.unique(np.asarray(wavelength_nm, dtype=float), return_inverse=True)
+            return _index_array(np.array([_index_number(value, w, what) for w in distinct])[where], what)
         value = value(float(wavelength_nm))
+    if np.ndim(value):
+        return _index_array(value, what)
     index = float(value)
     if not (math.isfinite(index) and index > 0.0):
         raise VissimInputError(f"the {what}'s refractive index must be a positive number, got {value!r}")
     return index
 
 
-def resolve_medium(medium: Medium, wavelength_nm: float | None, what: str = "medium"):
-    """A number (homogeneous) or a `GradientIndex` with numeric ``a0``, at ``wavelength_nm``."""
+def _index_array(values, what: str) -> np.ndarray:
+    index = np.asarray(values, dtype=float)
+    if not np.all(np.isfinite(index) & (index > 0.0)):
+        raise VissimInputError(f"the {what}'s refractive index must be a positive number at every wavelength")
+    return index
+
+
+def resolve_medium(medium: Medium, wavelength_nm, what: str = "medium"):
+    """A number (homogeneous) or a `GradientIndex` with numeric ``a0``, at ``wavelength_nm``; for an array of
+    wavelengths (one per ray), an array of indices or a `GradientIndex` with one ``a0`` per ray."""
     if isinstance(medium, GradientIndex):
         return replace(medium, a0=_index_number(medium.a0, wavelength_nm, medium.name))
     return _index_number(medium, wavelength_nm, what)

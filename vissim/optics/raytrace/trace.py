@@ -24,12 +24,22 @@ __all__ = ["RayBundle", "trace_rays", "travel_sign"]
 @dataclass(frozen=True, eq=False)
 class RayBundle:
     """Traced rays: positions (N, 3) mm, unit directions (N, 3), optical path lengths (N,) mm from
-    the start points, and ``final_index``, the (homogeneous) index of the medium they end in."""
+    the start points, and ``final_index``, the (homogeneous) index of the medium they end in: a number, or one
+    per ray for a trace of many wavelengths (`trace_rays`)."""
 
     points_mm: np.ndarray
     directions: np.ndarray
     opl_mm: np.ndarray
-    final_index: float = 1.0
+    final_index: float | np.ndarray = 1.0
+
+    def rows(self, which) -> RayBundle:
+        """The rays ``which`` (a slice, indices or a mask); a per-ray index follows them, one shared index is
+        returned as a number."""
+        index = self.final_index
+        if np.ndim(index):
+            index = index[which]
+            index = float(index[0]) if np.all(index == index[0]) else index
+        return RayBundle(self.points_mm[which], self.directions[which], self.opl_mm[which], index)
 
 
 def travel_sign(surfaces, directions: np.ndarray) -> int:
@@ -57,8 +67,9 @@ def trace_rays(surfaces, points_mm, directions, stop_z_mm: float | None = 0.0, *
     lengths from the start points (mm).  A ray outside a surface's clear aperture raises,
     except rays where the boolean mask ``apertured`` (N,) is False: they follow the analytic
     surfaces beyond the rim (the smooth continuation of a map outside the pupil).  Media that
-    are callables are evaluated at ``wavelength_nm``; ``index_before`` is the medium the rays
-    start in (homogeneous).
+    are callables are evaluated at ``wavelength_nm``: one number, or one per ray (N,), which traces many
+    wavelengths in one pass, the rays' paths differing only through the media's indices; ``index_before``
+    is the medium the rays start in (homogeneous; a number or one per ray).
     """
     p = np.array(points_mm, dtype=float).reshape(-1, 3)
     d = np.array(directions, dtype=float).reshape(-1, 3)

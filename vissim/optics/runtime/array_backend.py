@@ -22,15 +22,17 @@ from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
-import scipy.fft
 
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
+from vissim.optics.runtime.devices import DEVICES
+
+scipy_fft = lazy_module("scipy.fft")
 
 __all__ = ["ArrayBackend", "DEVICES", "array_backend", "array_module", "cuda_available"]
 
 log = logging.getLogger(__name__)
 
-DEVICES = ("cpu", "cuda", "auto")
 
 
 @dataclass(frozen=True)
@@ -54,7 +56,7 @@ class ArrayBackend:
         return {"workers": -1} if self.name == "cpu" else {}
 
 
-CPU = ArrayBackend("cpu", np, scipy.fft)
+CPU = ArrayBackend("cpu", np, scipy_fft)
 
 
 @functools.lru_cache(maxsize=1)

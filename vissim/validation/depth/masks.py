@@ -30,10 +30,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.units import arcmin_to_rad, mm_to_m
+
+ndimage = lazy_module("scipy.ndimage")
 
 __all__ = ["RegionMasks", "depth_regions", "SKY"]
 

@@ -17,9 +17,11 @@ import logging
 from dataclasses import replace
 
 import numpy as np
-from scipy import ndimage
 
 from vissim.imaging.registration import Registration, register
+from vissim.lazy_import import lazy_module
+
+ndimage = lazy_module("scipy.ndimage")
 
 __all__ = ["align", "ALIGN_TOLERANCE_PX", "MAX_ALIGN_PASSES", "MAX_SHIFT_PX", "UNREGISTERED"]
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
@@ -50,6 +51,12 @@ class RunSummary:
     renders_made: int
     renders_reused: int
     skipped: tuple[str, ...] = ()  # one message per item that could not run (e.g. an absent capture)
+    renders_seconds: float = 0.0  # wall time of this run's renders (none made: 0)
+    item_seconds: tuple[tuple[str, float], ...] = ()  # (item key, wall seconds) of each item computed, slowest first
+
+    @property
+    def items_seconds(self) -> float:
+        return sum(seconds for _, seconds in self.item_seconds)
 
 
 def progress_of(show_progress: bool, progress: Progress | None):
@@ -166,16 +173,22 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
     for message in skipped:
         log.warning("%s", message)
     needed = {spec_key(spec): spec for plan in plans.values() for spec in plan.renders.values()}
+    timed = []
     with progress_of(show_progress, progress) as report:
+        start = time.perf_counter()
         made = _make_missing_renders(run_dir, needed, campaign.record(keys), workers=workers, scheduler=scheduler,
                                      render=render or render_any, progress=report,
                                      items=f"{len(todo)} of {len(keys)} items")
+        renders_seconds = time.perf_counter() - start
         advance = counter(report, "items", len(todo))
         for key, index in todo:
             if key in plans:
+                start = time.perf_counter()
                 _compute_item(kind, campaign, key, index, plans[key], run_dir)
+                timed.append((key, time.perf_counter() - start))
             advance()
-    return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped))
+    return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped),
+                      renders_seconds, tuple(sorted(timed, key=lambda pair: -pair[1])))
 
 
 def _compute_item(kind, campaign: Campaign, key: str, index: int, plan, run_dir: Path) -> None:

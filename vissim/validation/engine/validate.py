@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from vissim.atomic import check_outputs_apart
+from vissim.atomic import check_outputs_apart, write_json_atomic
 from vissim.errors import VissimInputError
 from vissim.progress import Progress
 from vissim.validation.engine.inputs import recorded_inputs
@@ -43,12 +45,31 @@ def validate(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: 
     with run_folder_lock(out):
         summary = run_unlocked(campaign, out, workers=workers, scheduler=scheduler, spp=spp, render=None,
                                show_progress=show_progress, progress=progress)
+        start = time.perf_counter()
         written, lines = write_report(out, progress=progress)
+        timing = write_timings(out, summary, time.perf_counter() - start, workers)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
-    return CampaignRun(campaign.kind, summary, tuple(written),
-                       (head, *lines, f"report: {report} ({len(written)} files)"))
+    return CampaignRun(campaign.kind, summary, (*written, out / TIMINGS_FILE),
+                       (head, *lines, timing, f"report: {report} ({len(written) + 1} files)"))
+
+
+#: Where a run's time went (`write_timings`), beside its report; it changes from run to run, so it is kept apart.
+TIMINGS_FILE = "timings.json"
+SLOWEST_ITEMS = 5
+
+
+def write_timings(run_dir: Path, summary: RunSummary, report_seconds: float, workers: int) -> str:
+    """Write ``timings.json`` (this run's wall seconds in its renders, its items, each item slowest first, and its
+    report, with the cores and workers it had) and return its one line for the command's summary."""
+    record = {"renders_seconds": round(summary.renders_seconds, 3), "items_seconds": round(summary.items_seconds, 3),
+              "report_seconds": round(report_seconds, 3), "workers": workers, "cores": os.cpu_count(),
+              "items": [{"key": key, "seconds": round(seconds, 3)} for key, seconds in summary.item_seconds]}
+    write_json_atomic(run_dir / TIMINGS_FILE, record, overwrite=True)
+    slowest = ", ".join(f"{key} {seconds:.1f} s" for key, seconds in summary.item_seconds[:SLOWEST_ITEMS])
+    return (f"time: renders {summary.renders_seconds:.1f} s, items {summary.items_seconds:.1f} s, report "
+            f"{report_seconds:.1f} s" + (f"; slowest items: {slowest}" if slowest else ""))
 
 
 def rebuild_report(run_dir: str | Path, progress: Progress | None = None) -> tuple[list[Path], list[str]]:

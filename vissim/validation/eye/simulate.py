@@ -21,14 +21,16 @@ assumption put into ``schematic_wave`` one at a time (`COSTS`). Photopic light i
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
-from scipy.signal import fftconvolve
 
+from vissim.lazy_import import lazy_module
 from vissim.optics.eyes.simulations import WAVE_OPTICS, simulate_view
 from vissim.optics.psf.compute import PSF, compute_psf
 from vissim.optics.blur.resample import block_mean, magnify
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.optics.eyes.retina_map import RAYS_ACROSS_IRIS
+
+ndimage = lazy_module("scipy.ndimage")
+signal = lazy_module("scipy.signal")
 
 __all__ = ["SIMULATIONS", "COSTS", "EyeScene", "simulate", "reference_of", "diffraction_psf", "margin_px"]
 
@@ -69,7 +71,7 @@ def simulate(simulation: str, scene: EyeScene, ray, margin: int, offset_px=(0.0,
     if simulation == "traced_rays":
         image = np.asarray(magnify(image, ray.magnification), np.float64)
         half = ray.psf.shape[0] // 2
-        blurred = fftconvolve(np.pad(image, half, mode="edge"), ray.psf, mode="valid")
+        blurred = signal.fftconvolve(np.pad(image, half, mode="edge"), ray.psf, mode="valid")
     else:
         size = ray.psf.shape[0] + 16 if simulation not in WAVE_OPTICS else "auto"
         blurred = simulate_view(scene.view, scene.light, simulation, np.asarray(image, np.float64), step, size_px=size)

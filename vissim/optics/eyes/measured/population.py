@@ -25,6 +25,7 @@ frequencies, the Strehl ratio, the eye's own refraction (M, J0, J45 over the pup
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import itertools
@@ -48,6 +49,7 @@ from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
 from vissim.optics.psf.compute import strehl_ratio
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
+from vissim.optics.runtime.threads import single_threaded_blas
 from vissim.optics.rx.prescription import Prescription
 
 __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "population_conditions", "parse_correction", "evaluate_population",
@@ -327,16 +329,20 @@ def _result(eye: MeasuredWavefront, condition: PopulationCondition, frequencies)
                      float(m), float(j0), float(j45), rms)
 
 
-def _evaluate_chunk(condition: PopulationCondition, identities: tuple, frequencies: np.ndarray):
+def _evaluate_chunk(condition: PopulationCondition, identities: tuple, frequencies: np.ndarray,
+                    one_thread: bool = False):
     """(results, names skipped) of the eyes ``identities`` ((dataset, subject, eye) each) under ``condition``;
-    a task's whole input: each process reads the package's data itself (`load_dataset`, once per process)."""
+    a task's whole input: each process reads the package's data itself (`load_dataset`, once per process).
+    ``one_thread``: OpenBLAS on one thread, as a worker beside others must be (a population on 2 cores in 2
+    processes: 29 s with BLAS's own threads, 17 s without)."""
     results, skipped = [], []
-    for dataset, subject, side in identities:
-        eye = MeasuredWavefront(dataset, subject, side)
-        try:
-            results.append(_result(eye, condition, frequencies))
-        except UnmeasuredFieldError:
-            skipped.append(eye.name)
+    with single_threaded_blas() if one_thread else contextlib.nullcontext():
+        for dataset, subject, side in identities:
+            eye = MeasuredWavefront(dataset, subject, side)
+            try:
+                results.append(_result(eye, condition, frequencies))
+            except UnmeasuredFieldError:
+                skipped.append(eye.name)
     return results, skipped
 
 
@@ -355,14 +361,14 @@ def evaluate_population(eyes, conditions, frequencies_cyc_per_deg=(), *, workers
              for i in range(0, len(identities), chunk_eyes)]
     if client is not None:
         futures = client.map(_evaluate_chunk, [t[0] for t in tasks], [t[1] for t in tasks],
-                             [frequencies] * len(tasks), pure=False)
+                             [frequencies] * len(tasks), [True] * len(tasks), pure=False)
         done = client.gather(futures)
     elif workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(max_workers=workers) as pool:
             done = list(pool.map(_evaluate_chunk, [t[0] for t in tasks], [t[1] for t in tasks],
-                                 [frequencies] * len(tasks)))
+                                 [frequencies] * len(tasks), [True] * len(tasks)))
     else:
         done = [_evaluate_chunk(c, ids, frequencies) for c, ids in tasks]
     results = []
