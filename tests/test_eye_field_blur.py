@@ -138,3 +138,20 @@ def test_halving_the_default_node_step_changes_a_wide_chart_by_less_than_50_db()
     fine = vissim.blur_eye(chart, eye, field_step_deg=DEFAULT_FIELD_STEP_DEG / 2, **common)
     psnr_db = 10 * np.log10((chart.max() - chart.min()) ** 2 / np.mean((coarse - fine) ** 2))
     assert psnr_db >= 50.0
+
+
+def test_a_node_step_finer_than_a_pixel_or_too_many_nodes_is_refused_before_any_psf(monkeypatch):
+    """A step under one pixel (0.001 deg at 1 arcmin/px: nodes closer than the pixels they blend) and one that
+    needs more than MAX_FIELD_NODES PSFs (0.02 deg over 48 px: 41 x 41) are refused at once, naming the step in
+    degrees and the least step that runs; no eye is traced first."""
+    import vissim.optics.eyes.field_blur as field_blur
+    from vissim.checks import MAX_FIELD_NODES
+
+    monkeypatch.setattr(field_blur, "eye_spectral_wavefront", lambda *a, **k: pytest.fail("traced before refusing"))
+    eye = vissim.build_eye("navarro-1985", pupil_mm=3.0)
+    image = np.full((48, 48), 0.5)
+    with pytest.raises(VissimInputError, match=r"field step 0.001 deg is finer than the image's pixels.*at least "
+                                               r"0.01667 deg"):
+        vissim.blur_eye(image, eye, arcmin_per_px=1.0, field_step_deg=0.001)
+    with pytest.raises(VissimInputError, match=rf"field step 0.02 deg needs 1681 PSF nodes .*at most {MAX_FIELD_NODES}"):
+        vissim.blur_eye(image, eye, arcmin_per_px=1.0, field_step_deg=0.02)

@@ -270,6 +270,9 @@ def single_letter_spec(letter: str, logmar: float, **spec_kwargs: Any) -> ChartS
     >>> vissim.single_letter_spec("Z", 0.5).rows
     (ChartRow(logmar=0.5, letters='Z'),)
     """
+    if isinstance(letter, str) and len(letter) != 1:
+        raise VissimInputError(f"a single-letter chart takes one Sloan letter ({' '.join(SLOAN_LETTERS)}), got "
+                               f"{letter!r}")
     return ChartSpec((ChartRow(logmar, letter),), **spec_kwargs)
 
 

@@ -266,6 +266,8 @@ def output_bit_depth(image: Image, path: str | os.PathLike[str]) -> int:
 
 
 def _kind(path: Path) -> str:
+    if path.is_dir():
+        raise VissimInputError(f"{path} is a folder, not an image file (.exr, .png, .tif or .tiff)")
     kind = _SUFFIX_KIND.get(path.suffix.lower())
     if kind is None:
         raise VissimInputError(f"{path}: unsupported image suffix {path.suffix!r} (expected .exr, .png, .tif or .tiff)")

@@ -73,3 +73,21 @@ def test_its_tables_are_checked_like_any_kind(toy_kind, tmp_path):
     path.write_text(CAMPAIGN + "[[item]]\nletter = 'K'\n")
     with pytest.raises(VissimInputError, match="add kind = \"dslr\""):
         validate(path, tmp_path / "run", show_progress=False)
+
+
+def test_an_item_that_fails_is_named_and_its_renders_kept(toy_kind, tmp_path, monkeypatch):
+    """A refusal from inside an item (a simulation the campaign's values make impossible) names the configuration
+    and its key, and leaves the renders for the next run; no lock is left."""
+    from toy_bench import kind as toy
+
+    def refuse(self, key, campaign, index, *rest):
+        raise VissimInputError("4 ray(s) miss the cornea back")
+
+    monkeypatch.setattr(toy.ToyKind, "compute_item", refuse)
+    path = tmp_path / "toy.toml"
+    path.write_text(CAMPAIGN)
+    with pytest.raises(VissimInputError, match=r"toy.toml: configuration 'sharp' \(item \w+\): 4 ray\(s\) miss the "
+                                               r"cornea back; its renders are kept"):
+        validate(path, tmp_path / "run", show_progress=False)
+    assert len(list((tmp_path / "run" / "renders").iterdir())) == 4
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == ["campaign.json", "renders"]

@@ -69,8 +69,8 @@ def test_an_item_s_rx_is_checked_and_kept_as_its_prescription():
                                               Prescription(-1.0, 0.0, 180.0), Prescription(2.5, 0.0, 180.0)]
     assert configurations[0].vertex_mm == 14.0 and "rx" not in configurations[2].key_inputs()
     assert configurations[0].key_inputs() != configurations[2].key_inputs()
-    # not a prescription; not text; +90 D: the far point inside the eye (the ametropic eye's own check)
-    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS at 14 mm")):
+    # not a prescription; not text; +90 D: beyond the trial lenses' range (the eye's own check)
+    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 D lies outside the -30 to \+30 D")):
         with pytest.raises(VissimInputError, match=rf"eye\.toml: item\[0\]\S*: .*{words}") as caught:
             read_campaign({"item": [{"rx": bad}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
         assert "\n" not in str(caught.value)

@@ -71,6 +71,14 @@ def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = Tru
     parser.set_defaults(_aberration_required=required)
 
 
+def check_zernike_pupil(args: argparse.Namespace) -> None:
+    """``--zernike-pupil-mm`` belongs to ``--zernike``: alone it would be ignored, so it is refused."""
+    if getattr(args, "zernike_pupil_mm", None) is not None and args.zernike is None:
+        raise VissimInputError(f"--zernike-pupil-mm {args.zernike_pupil_mm:g} mm is the pupil the --zernike "
+                               "coefficients were measured over, and no --zernike is given: add it, or drop "
+                               "--zernike-pupil-mm")
+
+
 def wavefront_from_args(args: argparse.Namespace) -> Wavefront:
     """The wavefront the user described, over the measurement pupil."""
     from vissim.optics.pupil.wavefront import Wavefront, parse_zernike_terms

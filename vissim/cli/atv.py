@@ -196,7 +196,11 @@ def run_procedure_command(args: argparse.Namespace) -> int:
     record = make_provenance(command="atv run", observer=observer_record, trial_lens_diopters=args.sphere, eye=args.eye_side)
     record["result"] = result.as_json()
     write_json_atomic(args.output, record, overwrite=args.overwrite)
-    print(f"threshold {result.threshold_code:.4f} (code value), interval [{result.lower_code:.4f}, {result.upper_code:.4f}], "
-          f"{len(result.presentations)} presentations")
+    if result.never_seen:  # no number: the procedure only narrowed down to the display's white
+        print(f"never seen: none of the {len(result.presentations)} presentations, up to code {result.upper_code:.4f} "
+              "(the display's white), was seen; the threshold lies above what the display shows")
+    else:
+        print(f"threshold {result.threshold_code:.4f} (code value), interval [{result.lower_code:.4f}, "
+              f"{result.upper_code:.4f}], {len(result.presentations)} presentations")
     print(f"wrote {args.output}")
     return 0

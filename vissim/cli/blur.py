@@ -7,6 +7,7 @@ from pathlib import Path
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
+                                check_zernike_pupil,
                                 add_eye_model_arg, check_outputs_apart, eye_from_args, field_deg_from_text,
                                 image_sampling, parse_float_list, wavefront_from_args)
 from vissim.errors import FieldTooSmallError, VissimInputError
@@ -133,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
     from vissim.optics.runtime.array_backend import array_backend
     from vissim.optics.rx.chromatic import gaussian_band
 
+    check_zernike_pupil(args)
     check_outputs_apart(image_files(args.input), image_files(args.output))
     _check_eye_options(args)
     if args.device == "cuda":
@@ -203,8 +205,10 @@ def _run_eye(args: argparse.Namespace, image, step: float, bands: list) -> int:
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
     field_step = DEFAULT_FIELD_STEP_DEG if args.field_step_deg is None else args.field_step_deg
     the_eye = eye_from_args(args, args.rx)
-    channel_grids = eye_psf_grids(image.pixels.shape[:2], the_eye, [b[0] for b in bands], [b[1] for b in bands],
-                                  arcmin_per_px=step, field_deg=field, field_step_deg=field_step, mode=args.mode)
+    with terminal_progress() as progress:
+        channel_grids = eye_psf_grids(image.pixels.shape[:2], the_eye, [b[0] for b in bands], [b[1] for b in bands],
+                                      arcmin_per_px=step, field_deg=field, field_step_deg=field_step, mode=args.mode,
+                                      progress=progress)
     blurred = blur_field_dependent(image.pixels, channel_grids if image.pixels.ndim == 3 else channel_grids[0],
                                    arcmin_per_px=step, padding=args.padding)
     any_grid = channel_grids[0]

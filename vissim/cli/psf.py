@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
+                                check_zernike_pupil,
                                 add_eye_model_arg, eye_from_args, field_deg_from_text, parse_float_list,
                                 wavefront_from_args)
 from vissim.errors import VissimInputError
@@ -83,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
     from vissim.imageio import to_preview_png, write_image
     from vissim.optics.psf.compute import compute_psf
 
+    check_zernike_pupil(args)
     wavelengths, weights = _light(args)
     if args.eye_model is None and (args.field_deg is not None or args.accommodation_diopters is not None):
         raise VissimInputError("--field-deg and --accommodation-diopters need --eye-model (the reduced eye has one "

@@ -32,7 +32,7 @@ pixel-integrated chart), so the kernel is the *point* PSF, not a second pixel in
 The reference is edge-padded by a margin that holds the largest blur allowed
 (``max_power_diopters``), on the grid `vissim.optics.blur.convolve.padded_shape` gives that widest
 kernel, and transformed once; each evaluation is one transfer function, one
-inverse FFT and one cubic-spline resampling (`scipy_ndimage.affine_transform`).  The
+inverse FFT and one cubic-spline resampling (`scipy.ndimage.affine_transform`).  The
 blurred spectrum (reference x transfer) is cached by the optics (defocus, magnification, pupil),
 so the Jacobian's steps in the shift alone reuse it and pay only the ramp and the inverse FFT.
 Orientation: image (col, row) = (-x, -y) of the TABO/OSA frame
@@ -78,7 +78,7 @@ def landing_matrix_rc_px(defocus_xy, magnification_xy, arcmin_per_px: float) -> 
 
 
 #: The jinc 2 J1(x) / x tabulated (step `_JINC_STEP`), interpolated linearly: 20x faster than
-#: `scipy_special.j1` on a transfer-function grid, within 2e-7 of it.
+#: `scipy.special.j1` on a transfer-function grid, within 2e-7 of it.
 _JINC_STEP = 1e-3
 _JINC_TABLE = np.empty(0)
 

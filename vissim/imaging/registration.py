@@ -14,7 +14,7 @@ shifts each): worst error 0.007 px with ``None``, 0.25 px with ``"phase"``; at s
 0.03 px versus 1.7 px.  ``tests/validation/test_validation_registration.py`` pins the difference.
 
 **Applying the shift: cubic spline, not a Fourier shift.**  The moving image is resampled with
-`scipy_ndimage.shift` (``order=3``, ``mode="nearest"``).  A Fourier shift is exact only
+`scipy.ndimage.shift` (``order=3``, ``mode="nearest"``).  A Fourier shift is exact only
 for band-limited, periodic images; a capture is neither (pixel-integrated edges, content cut at
 the border), so it rings and wraps unless padded.  Measured on pixel-integrated letters shifted
 by exactly (2.3, -1.7), (-0.4, 0.8) and (5.5, 3.2) px (rendered at 0.1 arcmin/px, rolled and

@@ -35,9 +35,8 @@ import functools
 import math
 from dataclasses import dataclass, field
 
-from vissim.checks import instance_of, positive_number
+from vissim.checks import TRIAL_LENS_RANGE_DIOPTERS, eye_wavelength_nm, instance_of, positive_number
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
-from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.fixation import ametropic_eye
 from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_VERTEX_MM
@@ -79,13 +78,24 @@ class Eye:
             object.__setattr__(self, "pupil_mm", positive_number(pupil, "entrance pupil diameter", "mm"))
         object.__setattr__(self, "vertex_mm", checked_vertex_distance_mm(self.vertex_mm, "spectacle vertex distance"))
         if self.wavelength_nm is not None:
-            object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm,
-                                                                            "eye's reference wavelength"))
+            object.__setattr__(self, "wavelength_nm", eye_wavelength_nm(self.wavelength_nm,
+                                                                        "eye's reference wavelength"))
         if self.rx is not None:
             object.__setattr__(self, "rx", prescription_from(self.rx))
+            self._check_rx_range()
         if self.measured is not None:
             self._check_measured()
         object.__setattr__(self, "_optics", self._traced_optics())  # a prescription the eye cannot have: refused now
+
+    def _check_rx_range(self) -> None:
+        """The prescription an eye is made to need lies, in each principal meridian, within the trial lenses'
+        `TRIAL_LENS_RANGE_DIOPTERS` (the lenses that would correct it): checked before its eye is built."""
+        low, high = TRIAL_LENS_RANGE_DIOPTERS
+        for meridian in (self.rx.sphere_diopters, self.rx.sphere_diopters + self.rx.cylinder_diopters):
+            if not low <= meridian <= high:
+                raise VissimInputError(f"prescription {self.rx}: a principal meridian of {meridian:+.2f} D lies "
+                                       f"outside the {low:g} to {high:+g} D the trial lenses span; an eye is made to "
+                                       "need a prescription within it")
 
     def _check_measured(self) -> None:
         instance_of(self.measured, MeasuredWavefront, "an Eye's measured wavefront", "a MeasuredWavefront")

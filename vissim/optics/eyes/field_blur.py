@@ -29,17 +29,19 @@ steps 4, 2, 1 and 0.5°; the PSNR between each step and its half was, Navarro 19
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import finite_number, positive_number
+from vissim.checks import MAX_FIELD_NODES, finite_number, positive_number, size_text
 from vissim.errors import VissimInputError
+from vissim.progress import counter
 from vissim.optics.blur.convolve import image_kernel_psf, pixel_array
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
-from vissim.optics.blur.field_dependent import PSFGrid, blur_field_dependent, psf_grid
+from vissim.optics.blur.field_dependent import PSFGrid, blur_field_dependent, node_positions_px, psf_grid
 from vissim.optics.psf.compute import PSF
 from vissim.units import ARCMIN_PER_DEG, image_colrow_to_osa_xy
 
@@ -74,13 +76,14 @@ def _band(wavelength_nm, weights) -> tuple[tuple[float, ...], tuple[float, ...] 
 
 def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wavelength_nm=None, weights=None,
                  vergence_diopters=0.0, field_deg=(0.0, 0.0), field_step_deg: float | None = None,
-                 mode: str = "wave") -> PSFGrid:
+                 mode: str = "wave", progress=None) -> PSFGrid:
     """The `Eye` ``eye``'s PSFs at the nodes over an image of ``shape`` (rows, cols) (module doc).
 
     ``wavelength_nm``: one wavelength (default the eye's reference wavelength), or a band of several
     weighted by ``weights`` (default equal): each node's eye is traced at each (`eye_spectral_wavefront`,
     its transverse chromatic aberration relative to the eye's reference wavelength, as for one
     wavelength). Each PSF's field is cut to twice the image's longer side plus one (no pixel sees farther).
+    ``progress(stage, done, total)`` (`vissim.progress`) after each node's PSF.
     """
     eye = checked_eye(eye, "eye_psf_grid")
     step = check_arcmin_per_px(arcmin_per_px, "the image's arcmin_per_px")
@@ -91,12 +94,35 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
         raise VissimInputError(f"the field angle must be two angles (x, y) in degrees, got {field_deg!r}")
     band, band_weights = _band(eye.reference_wavelength_nm if wavelength_nm is None else wavelength_nm, weights)
 
+    spacing_px = spacing_deg * ARCMIN_PER_DEG / step
+    nodes = _check_nodes(shape, spacing_px, spacing_deg, step)
+    advance = counter(progress, "field PSFs", nodes)
+
     def psf_at(row_px: float, col_px: float) -> PSF:
         front = eye_spectral_wavefront(eye, wavelengths_nm=band, vergence_diopters=vergence_diopters,
                                        field_deg=node_field_deg(row_px, col_px, shape, step, centre))
-        return image_kernel_psf(front, shape, arcmin_per_px=step, wavelength_nm=band, weights=band_weights, mode=mode)
+        psf = image_kernel_psf(front, shape, arcmin_per_px=step, wavelength_nm=band, weights=band_weights, mode=mode)
+        advance()
+        return psf
 
-    return psf_grid(shape, spacing_deg * ARCMIN_PER_DEG / step, psf_at)
+    return psf_grid(shape, spacing_px, psf_at)
+
+
+def _check_nodes(shape: tuple[int, int], spacing_px: float, spacing_deg: float, arcmin_per_px: float) -> int:
+    """The number of PSF nodes; refused, before any PSF, for a node step finer than a pixel (nodes closer than the
+    pixels they blend) or one that would need more than `MAX_FIELD_NODES` PSFs."""
+    pixel_deg = arcmin_per_px / ARCMIN_PER_DEG
+    if spacing_px < 1.0:
+        raise VissimInputError(f"field step {spacing_deg:g} deg is finer than the image's pixels ({pixel_deg:.4g} deg "
+                               f"at {arcmin_per_px:g} arcmin/px): give at least {pixel_deg:.4g} deg")
+    nodes = len(node_positions_px(shape[0], spacing_px)) * len(node_positions_px(shape[1], spacing_px))
+    if nodes > MAX_FIELD_NODES:
+        span_deg = max(shape) * pixel_deg
+        least = span_deg / (math.isqrt(MAX_FIELD_NODES) - 1)
+        raise VissimInputError(f"field step {spacing_deg:g} deg needs {nodes} PSF nodes over the {size_text(shape)} "
+                               f"image (at most {MAX_FIELD_NODES}, each a trace and a PSF): give a step of at least "
+                               f"{least:.3g} deg")
+    return nodes
 
 
 def eye_psf_grids(shape: tuple[int, int], eye: Eye, channels_nm: Sequence, channel_weights=None,

@@ -54,8 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, positive_number
-from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, eye_wavelength_nm, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.paraxial import (entrance_pupil_position_mm, iris_diameter_mm, matrix_to_surface,
@@ -408,7 +407,7 @@ def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0)
     tests/test_eye_multi_wavelength.py). ``pupil_mm``: the entrance pupil at every wavelength; ``iris_mm``: one iris,
     its entrance pupil each wavelength's."""
     try:
-        wavelengths = [checked_wavelength_nm(w) for w in wavelengths_nm]
+        wavelengths = [eye_wavelength_nm(w) for w in wavelengths_nm]
     except TypeError:
         raise VissimInputError(f"wavelengths must be a list of nm, got {wavelengths_nm!r}") from None
     if not wavelengths:

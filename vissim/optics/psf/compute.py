@@ -60,7 +60,7 @@ from vissim.optics.pupil.opd_map import OpdMap
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, field_map_stretch, field_mapped, wavelengths_for
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.progress import Progress
-from vissim.units import nm_to_mm, rad_to_arcmin
+from vissim.units import nm_to_mm, nm_to_um, rad_to_arcmin
 
 scipy_fft = lazy_module("scipy.fft")
 
@@ -286,10 +286,24 @@ def _accumulated_psf(fronts, wavelengths, weights, blurs, diameter: float, step:
     if mode != "wave":
         return sum(weight * _geometric_psf(front, diameter, step, size_px, blur, pixel)
                    for front, weight, blur in zip(fronts, weights, blurs)), ()
-    samplings = plan_wave_psf(diameter, wavelengths, step, size_px, blurs, method)
+    try:
+        samplings = plan_wave_psf(diameter, wavelengths, step, size_px, blurs, method)
+    except VissimInputError as error:
+        raise VissimInputError(f"{error}{_largest_term_words(fronts, wavelengths)}") from None
     log.debug("wave PSF by %s: %d^2 internal, %.0f pupil cells", samplings[0].method, samplings[0].internal_size,
               samplings[0].pupil_cells)
     return wave_psf(fronts, weights, diameter, samplings, size_px, dtype, pixel, progress), samplings
+
+
+def _largest_term_words(fronts, wavelengths) -> str:
+    """What in a Zernike front makes its PSF too wide to sample: its largest term, in µm and in waves."""
+    terms = [(abs(v), key, v, w) for front, w in zip(fronts, wavelengths)
+             for key, v in getattr(front, "coefficients_um", {}).items() if key[0] >= 2]
+    if not terms:
+        return ""
+    _, (n, m), value, wavelength = max(terms)
+    return (f" (the wavefront's largest term, Zernike {n},{m} = {value:g} µm, is {abs(value) / nm_to_um(wavelength):.3g} "
+            f"waves at {wavelength:g} nm: check its coefficients and order)")
 
 
 def compute_psf(

@@ -106,7 +106,7 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
     prefix = name_text(raw.get("name", ""), source, f"{where}.name")
     out = []
     axes = {"letter": letters, "logmar": logmars, "polarity": polarities, "lenses": lens_sets or [[]]}
-    for combination in sweep_combinations(axes):
+    for combination in sweep_combinations(axes, source, where):
         item = {**combination, "f_number": raw.get("f_number", f_number)}
         config = _configuration(item, settings, source, where, f_number)
         label = f"{prefix}: {config.name}" if prefix else config.name

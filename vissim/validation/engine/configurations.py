@@ -20,8 +20,13 @@ SWEEP_NAME_HINT = ("give each its own name (a sweep's generated names round lens
                    "make such values differ by more, or list them as named items)")
 
 
-def sweep_combinations(axes: dict[str, list]) -> list[dict]:
-    """Every combination of the ``axes``' values (axis name -> values), the last axis varying fastest."""
+def sweep_combinations(axes: dict[str, list], source: str = "campaign", where: str = "sweep") -> list[dict]:
+    """Every combination of the ``axes``' values (axis name -> values), the last axis varying fastest; an empty axis,
+    which would leave the sweep no configuration, refused naming ``where`` in ``source``."""
+    for name, values in axes.items():
+        if len(values) == 0:
+            raise field_error(source, f"{where}.{name}", "an empty list sweeps nothing (the sweep would make no "
+                                                          "configuration): give at least one value, or leave it out")
     names = list(axes)
     return [dict(zip(names, values)) for values in itertools.product(*axes.values())]
 

@@ -71,7 +71,14 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     title = name_text(head.pop("name"), source, "campaign.name") if "name" in head else path.stem
     description = description_text(head.pop("description"), source, "campaign.description") \
         if "description" in head else ""
-    settings, configurations, manifest = kind.read(doc, head, path)
+    try:
+        settings, configurations, manifest = kind.read(doc, head, path)
+    except VissimInputError as error:
+        if "kind" in table(doc.get("campaign", {}), source, "[campaign]"):
+            raise
+        others = " or ".join(f'"{name}"' for name in bench_kind_names() if name != kind_name)
+        raise VissimInputError(f"{error} (no [campaign] kind is given, so the file was read as a {kind_name} "
+                               f"campaign: add kind = {others} for another)") from None
     if not configurations:
         raise field_error(source, "top level", f"no configurations: add {' or '.join(f'[[{t}]]' for t in kind.tables)} "
                                                "tables")

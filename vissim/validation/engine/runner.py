@@ -192,11 +192,16 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
 
 
 def _compute_item(kind, campaign: Campaign, key: str, index: int, plan, run_dir: Path) -> None:
-    """One item from its renders in ``run_dir`` and its given images."""
+    """One item from its renders in ``run_dir`` and its given images; a refusal names the item."""
     renders = {role: read_image(render_path(run_dir, spec_key(spec))) for role, spec in plan.renders.items()}
     images = {**plan.given, **{role: image.pixels for role, image in renders.items()}}
     provenance = {**plan.given_provenance, **{role: image.provenance for role, image in renders.items()}}
-    kind.compute_item(key, campaign, index, images, plan, provenance, item_dir(run_dir, key))
+    try:
+        kind.compute_item(key, campaign, index, images, plan, provenance, item_dir(run_dir, key))
+    except VissimInputError as error:
+        name = getattr(campaign.configurations[index], "name", key)
+        raise VissimInputError(f"{campaign.source}: configuration {name!r} (item {key}): {error}; its renders are "
+                               "kept, and a run after the fix reuses them") from None
 
 
 def _make_missing_renders(run_dir: Path, needed: dict, record: dict, *, workers: int, scheduler: str | None,

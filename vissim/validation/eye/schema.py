@@ -180,7 +180,7 @@ def _sweep(entry: dict, index: int, source: str) -> list[dict]:
     prefix = name_text(entry.get("name", where), source, f"{where}.name")
     axes = {k: _axis_values(k, v) for k, v in entry.items() if k != "name"}
     out = []
-    for chosen in sweep_combinations(axes):
+    for chosen in sweep_combinations(axes, source, where):
         label = " ".join(f"{k} {_words(v)}" for k, v in chosen.items() if len(axes[k]) > 1)
         out.append({"name": f"{prefix} {label}".strip(), **chosen})
     return out
