@@ -10,7 +10,7 @@ kernels and plans FFTs), each printing ``ratio GPU/CPU`` and how far the two res
   `vissim.optics.blur.convolve.blur_image` against `vissim.optics.blur.device.blur_image_on` with
   ``device="cuda"``; the difference as PSNR (dB) of the GPU's image against the CPU's.
 * **eye render**: ``vissim render eye``'s scene (Navarro 1985, 3 mm, a Sloan letter at 6 m, 256 x 256 px,
-  256 spp) on the CPU variant vissim chooses and on ``cuda_mono``; the difference as the two renders' PSNR
+  256 spp) on the CPU variant vissim chooses and on ``cuda_ad_mono``; the difference as the two renders' PSNR
   (their noise differs: equal seeds on different devices draw different samples, so this is near the noise
   floor, not 100 dB).
 * **population**: 40 measured eyes (Jaeken & Artal 2012, 4 mm, uncorrected) in one process against as many
@@ -87,11 +87,11 @@ def render_part() -> None:
     cpu_seconds, cpu = best_seconds(lambda: render_eye(settings, cpu_variant), repeats=2)
     print(f"eye render 256x256 at 256 spp: {cpu_variant} {cpu_seconds:.2f} s")
     try:
-        gpu_seconds, gpu = best_seconds(lambda: render_eye(settings, "cuda_mono"), repeats=2)
+        gpu_seconds, gpu = best_seconds(lambda: render_eye(settings, "cuda_ad_mono"), repeats=2)
     except Exception as error:  # noqa: BLE001  (no CUDA: Mitsuba says why in its own words)
-        print(f"eye render on cuda_mono: skipped ({str(error).splitlines()[0]})")
+        print(f"eye render on cuda_ad_mono: skipped ({str(error).splitlines()[0]})")
         return
-    print(f"eye render on cuda_mono: {gpu_seconds:.2f} s; ratio GPU/CPU {gpu_seconds / cpu_seconds:.3f}; "
+    print(f"eye render on cuda_ad_mono: {gpu_seconds:.2f} s; ratio GPU/CPU {gpu_seconds / cpu_seconds:.3f}; "
           f"PSNR between the two renders {psnr_db(cpu.pixels, gpu.pixels):.1f} dB")
 
 
