@@ -348,7 +348,7 @@ def test_an_unknown_option_points_to_its_own_command_s_help(capfd):
                                                                          "--pupil-mm", "3")])
 def test_a_folder_spelled_dot_as_an_image_is_one_error_line(capfd, argv):
     code, _, err = run(capfd, *argv)
-    assert_one_error_line(code, err, "unsupported image suffix")
+    assert_one_error_line(code, err, ". is a folder, not an image file")
 
 
 @pytest.mark.parametrize("name", ["jaeken-artal-2012:17:right", "le-grand"])

@@ -59,7 +59,8 @@ def test_a_run_says_where_its_time_went(toy_kind, tmp_path):
     assert timings["renders_seconds"] > 0 and timings["report_seconds"] > 0
     assert timings["items_seconds"] == pytest.approx(sum(seconds), abs=0.01)
     line = next(line for line in done.lines if line.startswith("time: "))
-    assert "slowest items: " + timings["items"][0]["key"] in line
+    assert {item["name"] for item in timings["items"]} == {"sharp", "soft"}
+    assert "slowest items: " + timings["items"][0]["name"] in line
     again = validate(path, tmp_path / "run", show_progress=False)
     assert json.loads((tmp_path / "run" / "timings.json").read_text())["items"] == []
     assert "slowest items" not in next(line for line in again.lines if line.startswith("time: "))

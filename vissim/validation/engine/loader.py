@@ -74,8 +74,8 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
     try:
         settings, configurations, manifest = kind.read(doc, head, path)
     except VissimInputError as error:
-        if "kind" in table(doc.get("campaign", {}), source, "[campaign]"):
-            raise
+        if "kind" in table(doc.get("campaign", {}), source, "[campaign]") or "unknown" not in str(error):
+            raise  # only a setting or table the default kind does not know may mean another kind was meant
         others = " or ".join(f'"{name}"' for name in bench_kind_names() if name != kind_name)
         raise VissimInputError(f"{error} (no [campaign] kind is given, so the file was read as a {kind_name} "
                                f"campaign: add kind = {others} for another)") from None

@@ -47,7 +47,8 @@ def validate(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: 
                                show_progress=show_progress, progress=progress)
         start = time.perf_counter()
         written, lines = write_report(out, progress=progress)
-        timing = write_timings(out, summary, time.perf_counter() - start, workers)
+        names = {campaign.item_key(c): getattr(c, "name", "") for c in campaign.configurations}
+        timing = write_timings(out, summary, time.perf_counter() - start, workers, names)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
@@ -60,14 +61,19 @@ TIMINGS_FILE = "timings.json"
 SLOWEST_ITEMS = 5
 
 
-def write_timings(run_dir: Path, summary: RunSummary, report_seconds: float, workers: int) -> str:
-    """Write ``timings.json`` (this run's wall seconds in its renders, its items, each item slowest first, and its
-    report, with the cores and workers it had) and return its one line for the command's summary."""
+def write_timings(run_dir: Path, summary: RunSummary, report_seconds: float, workers: int,
+                  names: dict | None = None) -> str:
+    """Write ``timings.json`` (this run's wall seconds in its renders, its items, each item slowest first with its
+    configuration's name, and its report, with the cores and workers it had) and return its one line for the
+    command's summary."""
+    names = names or {}
     record = {"renders_seconds": round(summary.renders_seconds, 3), "items_seconds": round(summary.items_seconds, 3),
               "report_seconds": round(report_seconds, 3), "workers": workers, "cores": os.cpu_count(),
-              "items": [{"key": key, "seconds": round(seconds, 3)} for key, seconds in summary.item_seconds]}
+              "items": [{"key": key, "name": names.get(key, ""), "seconds": round(seconds, 3)}
+                        for key, seconds in summary.item_seconds]}
     write_json_atomic(run_dir / TIMINGS_FILE, record, overwrite=True)
-    slowest = ", ".join(f"{key} {seconds:.1f} s" for key, seconds in summary.item_seconds[:SLOWEST_ITEMS])
+    slowest = ", ".join(f"{names.get(key) or key} {seconds:.1f} s"
+                        for key, seconds in summary.item_seconds[:SLOWEST_ITEMS])
     return (f"time: renders {summary.renders_seconds:.1f} s, items {summary.items_seconds:.1f} s, report "
             f"{report_seconds:.1f} s" + (f"; slowest items: {slowest}" if slowest else ""))
 
