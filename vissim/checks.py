@@ -367,6 +367,10 @@ TILE_RANGE_PX = (16, 1 << 20)
 MARGIN_RANGE_PX = (0.0, 1000.0)
 #: Depth layers' spacing, as a fraction of a blur-free depth step: finer is no faster, coarser blurs wrongly.
 LAYER_SPACING_FRACTION_RANGE = (1e-3, 1.0)
+#: The ATV analysis's local parabola: lenses within this many dioptres of the least value, unless told otherwise.
+ATV_PARABOLA_WINDOW_DIOPTERS = 2.5
+#: Neighbouring depth layers' blur discs differ by at most this many pixels unless told otherwise.
+DEFAULT_LAYER_SPACING_FRACTION = 0.5
 #: Sub-pixels per pixel per axis a render or a wave truth takes: 16 x 16 costs 256 times one.
 OVERSAMPLE_RANGE = (1, 16)
 #: The ATV's collimator power, dioptres (> 0): the thesis's is 8; 40 is a 25 mm focal length.

@@ -48,6 +48,8 @@ def grey_image(tmp_path):
     (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "200"], "within 365-1014 nm"),
     (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "-40"], "-40.00 D lies outside the -30 to"),
     (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "-28 -4 x 90"], "-32.00 D"),
+    (["eye", "--eye-model", "navarro-1985", "--iris-mm", "9.5"], "iris 9.5 mm gives a 10.2 mm entrance pupil, wider "
+                                                                 "than a human eye's 10 mm"),
 ])
 def test_an_eye_outside_its_media_or_its_lenses_is_refused(capsys, argv, says):
     _refused(capsys, argv, says=says)

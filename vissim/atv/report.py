@@ -21,6 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from vissim.checks import ATV_PARABOLA_WINDOW_DIOPTERS
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.atv.analysis import CONDITION_LABELS, CurveAnalysis  # noqa: E402
 from vissim.atv.data import Discrepancy  # noqa: E402
@@ -254,7 +255,7 @@ def analyse_directory(
     strict: bool = False,
     level: float = 0.95,
     average_sessions: bool = True,
-    window_diopters: float | None = 2.5,
+    window_diopters: float | None = ATV_PARABOLA_WINDOW_DIOPTERS,
     overwrite: bool = False,
 ) -> tuple[list[Path], list[CurveAnalysis]]:
     """Load every subject in ``data_dir``, fit, plot and write the report into ``out_dir``."""
@@ -312,7 +313,7 @@ procedure with a bisection phase 2 (seed {seed}). The trial lens that corrects t
 {correcting:+.3f} D."""
 
 
-def write_simulation_report(experiment, out_dir: str | Path, *, window_diopters: float | None = 2.5, level: float = 0.95,
+def write_simulation_report(experiment, out_dir: str | Path, *, window_diopters: float | None = ATV_PARABOLA_WINDOW_DIOPTERS, level: float = 0.95,
                             overwrite: bool = False) -> tuple[list[Path], list[CurveAnalysis]]:
     """Write the figure, ``report.md``/``.html`` and ``simulation.json`` of a `VirtualExperiment`."""
     from vissim.provenance import make_provenance

@@ -11,6 +11,7 @@ import argparse
 import math
 from pathlib import Path
 
+from vissim.checks import ATV_PARABOLA_WINDOW_DIOPTERS
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import add_rx_arg, check_outputs_apart, refuse_existing
 from vissim.cli._parser import Number
@@ -37,8 +38,9 @@ def add_parser(subparsers) -> None:
     analyze.add_argument("--strict", action="store_true", help="fail if the data disagree with the thesis's own numbers")
     analyze.add_argument("--level", type=float, default=0.95, help="confidence level (default 0.95)")
     analyze.add_argument("--all-sessions", action="store_true", help="fit every session's value instead of the per-lens means")
-    analyze.add_argument("--window-diopters", type=float, default=2.5, metavar="W",
-                         help="also fit a local parabola over lenses within W D of the least value (default 2.5; 0 to skip)")
+    analyze.add_argument("--window-diopters", type=float, default=ATV_PARABOLA_WINDOW_DIOPTERS, metavar="W",
+                         help="also fit a local parabola over lenses within W D of the least value "
+                              f"(default {ATV_PARABOLA_WINDOW_DIOPTERS:g}; 0 to skip)")
     analyze.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     analyze.set_defaults(func=run_analyze)
 
@@ -64,7 +66,8 @@ def add_parser(subparsers) -> None:
     sim.add_argument("--gamma", type=float, default=2.2, help="display gamma, code value -> luminance (default 2.2)")
     _observer_args(sim, threshold=False)
     sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    sim.add_argument("--window-diopters", type=float, default=2.5, metavar="W", help="also fit a ±W D local parabola (0 to skip)")
+    sim.add_argument("--window-diopters", type=float, default=ATV_PARABOLA_WINDOW_DIOPTERS, metavar="W",
+                     help=f"also fit a ±W D local parabola (default {ATV_PARABOLA_WINDOW_DIOPTERS:g}; 0 to skip)")
     sim.add_argument("-o", "--output", type=Path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     sim.set_defaults(func=run_simulate)

@@ -17,7 +17,7 @@ from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_eye_model_arg, 
                                 eye_from_args, field_deg_from_text, image_sampling)
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
-from vissim.checks import DEFAULT_MAX_LAYERS
+from vissim.checks import DEFAULT_LAYER_SPACING_FRACTION, DEFAULT_MAX_LAYERS
 from vissim.optics.rx.prescription import Prescription
 from vissim.progress import terminal_progress
 from vissim.provenance import make_provenance
@@ -65,7 +65,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--wavelength-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
                         help=f"wavelength, nm (default {DEFAULT_WAVELENGTH_NM:g})")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="PSF optics (default wave)")
-    parser.add_argument("--layer-spacing-fraction", type=float, default=0.5, metavar="F", help="max blur step between layers, pixels")
+    parser.add_argument("--layer-spacing-fraction", type=float, default=DEFAULT_LAYER_SPACING_FRACTION, metavar="F",
+                        help="the most neighbouring layers' blur discs may differ, in pixels (a fraction of one; "
+                             f"default {DEFAULT_LAYER_SPACING_FRACTION:g})")
     parser.add_argument("--max-layers", type=Number(int, positive=True), default=DEFAULT_MAX_LAYERS, metavar="N",
                         help=f"refuse scenes that need more depth layers (default {DEFAULT_MAX_LAYERS})")
     parser.add_argument("--coarse-blur-px", type=float, metavar="B",

@@ -23,7 +23,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("campaign", type=Path, help="campaign TOML, e.g. validation/quick.toml")
     parser.add_argument("-o", "--output", type=Path, required=True, help="run folder, e.g. runs/quick")
-    parser.add_argument("--workers", type=int, default=1, metavar="N", help="render in N local processes")
+    parser.add_argument("--workers", type=int, default=1, metavar="N", help="render in N local processes (default 1: in this one)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="send renders to a Dask distributed scheduler")
     parser.add_argument("--spp", type=int, metavar="N", help="override the campaign's samples per pixel")
     parser.set_defaults(func=run_validate, writes_progressively=True)

@@ -80,7 +80,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import DEFAULT_MAX_LAYERS, DEFAULT_WAVELENGTH_NM, size_text
+from vissim.checks import DEFAULT_LAYER_SPACING_FRACTION, DEFAULT_MAX_LAYERS, DEFAULT_WAVELENGTH_NM, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import describe, instance_of, positive_number
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
@@ -265,7 +265,7 @@ def blur_depth(
     mode: str = "wave",
     extra_wavefront: Wavefront | None = None,
     eye: DepthViewer | None = None,
-    layer_spacing_fraction: float = 0.5,
+    layer_spacing_fraction: float = DEFAULT_LAYER_SPACING_FRACTION,
     max_layers: int | None = DEFAULT_MAX_LAYERS,
     occlusion_threshold_px: float = 1.0,
     padding: str = "edge",

@@ -274,6 +274,9 @@ def _pupils(eye: SchematicEye, wavelengths_nm: np.ndarray, pupil_mm, iris_mm) ->
                                "the cornea's back)")
     if given == "iris":
         pupils = entrance_pupils_from_irises_mm(eye, irises, wavelengths_nm)
+        if np.max(pupils) > human:  # the range is the pupil one sees; the cornea magnifies the iris (about 1.13)
+            raise VissimInputError(f"{asked} gives a {float(np.max(pupils)):.3g} mm entrance pupil, wider than a human "
+                                   f"eye's {human:g} mm: give a smaller iris")
     return pupils, irises, given
 
 
