@@ -14,7 +14,7 @@ __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATIO
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
            "EYE_RENDER_MAX_FIELD_DEG", "EYE_RENDER_MAX_THETA_DEG",
            "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
-           "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "EYE_WAVELENGTH_RANGE_NM", "eye_wavelength_nm", "ACCOMMODATION_RANGE_DIOPTERS",
+           "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "EYE_WAVELENGTH_RANGE_NM", "EYE_LIGHT_RANGE_NM", "eye_wavelength_nm", "ACCOMMODATION_RANGE_DIOPTERS",
            "accommodation_diopters", "trial_lens_diopters", "F_NUMBER_RANGE", "FOCAL_LENGTH_RANGE_MM",
            "OBJECT_DISTANCE_RANGE_M", "MAX_SAMPLER_SEED", "MAX_POWER_DIOPTERS", "available_memory_bytes",
            "format_bytes", "check_allocation", "instance_of", "describe", "MAX_NAME_CHARS", "MAX_DESCRIPTION_CHARS",
@@ -89,6 +89,10 @@ EYE_RENDER_WAVELENGTH_RANGE_NM = (350.0, 850.0)
 #: written through (Navarro 1985: 365 and 1014 nm; `vissim.optics.eyes.dispersion`); outside it the formulas
 #: extrapolate (at 200 nm Navarro's eye has 290 D of myopia).
 EYE_WAVELENGTH_RANGE_NM = (365.0, 1014.0)
+#: One wavelength an eye is rendered and simulated in (an eye campaign's ``light``, ``render eye --wavelength-nm``,
+#: scene files): where the renderer's tables and the media's dispersion both hold.
+EYE_LIGHT_RANGE_NM = (max(EYE_WAVELENGTH_RANGE_NM[0], EYE_RENDER_WAVELENGTH_RANGE_NM[0]),
+                      min(EYE_WAVELENGTH_RANGE_NM[1], EYE_RENDER_WAVELENGTH_RANGE_NM[1]))
 #: Where CIE 1931 ȳ(λ) is tabulated (nm): a monochromatic spectral render divides it out.
 CIE_YBAR_RANGE_NM = (360.0, 830.0)
 #: The schematic-eye renderer: the chart's field angle at most this (deg), and the image's widest direction at most
@@ -155,8 +159,9 @@ ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
 #: A field angle through a schematic eye, degrees from its optical axis per axis: the models are
 #: built for 0-40; beyond, rays may miss a surface (refused by the trace, naming it); 90 is grazing.
 MAX_FIELD_DEG = 89.0
-#: A field-dependent blur's PSF nodes (each a trace and a PSF, 0.2-0.4 s on 2 cores): at most this many per image.
-MAX_FIELD_NODES = 400
+#: A field-dependent blur's PSF nodes (each a trace and a PSF, 0.2-0.4 s on 2 cores, with progress shown): at most
+#: this many per image (the default 2 deg step over a 4K image at 1 arcmin/px needs 627).
+MAX_FIELD_NODES = 1600
 
 
 #: Viewing distances a chart (or a depth panel's chart) may be made for, m; far beyond, its sizes in mm overflow.

@@ -23,10 +23,14 @@ class _LazyModule:
         self._module: ModuleType | None = None
 
     def __getattr__(self, attribute: str):
-        module = self.__dict__["_module"]
+        if attribute.startswith("__") or "_name" not in self.__dict__:  # copy and pickle probe before __init__
+            raise AttributeError(attribute)
+        module = self.__dict__.get("_module")
         if module is None:
             module = self.__dict__["_module"] = importlib.import_module(self.__dict__["_name"])
-        return getattr(module, attribute)
+        value = getattr(module, attribute)
+        self.__dict__[attribute] = value  # read once through here; after, as fast as the module's own attribute
+        return value
 
     def __repr__(self) -> str:
         return f"<module {self._name!r}, imported on first use>"

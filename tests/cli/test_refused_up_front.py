@@ -84,6 +84,12 @@ def test_a_threshold_above_the_displays_white_is_reported_never_seen(capsys, tmp
     assert printed.startswith("never seen: none of the ") and "threshold 0.9" not in printed
 
 
+def test_a_render_in_light_the_eyes_media_do_not_describe_is_refused(capsys, tmp_path):
+    out = tmp_path / "eye.exr"
+    _refused(capsys, ["render", "eye", "--wavelength-nm", "355", "--size", "16x16", "--spp", "1", "-o", str(out)],
+             says="within 365-850 nm, got 355 nm", outputs=[out])
+
+
 def test_a_letter_is_one_sloan_letter(capsys, tmp_path):
     out = tmp_path / "eye.exr"
     _refused(capsys, ["render", "eye", "--letter", "KZ", "--size", "16x16", "--spp", "1", "-o", str(out)],
@@ -93,6 +99,7 @@ def test_a_letter_is_one_sloan_letter(capsys, tmp_path):
 @pytest.mark.parametrize("body, says", [
     ('[[item]]\nname = "myope"\nrx = -40.0', "item[0]: prescription -40.00 DS"),
     ('[[sweep]]\nname = "pupil"\npupil_mm = []', "sweep[0].pupil_mm: an empty list sweeps nothing"),
+    ('[[item]]\nname = "uv"\nlight = 355.0', "item[0].light: must be within 365 to 850 nm, got 355.0"),
 ])
 def test_an_eye_campaign_is_refused_at_load(capsys, tmp_path, body, says):
     path, run_dir = tmp_path / "eye.toml", tmp_path / "run"

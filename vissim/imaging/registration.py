@@ -71,7 +71,7 @@ class Registration:
     def as_json(self) -> dict[str, Any]:
         return {"shift_rows_px": self.shift_rows_px, "shift_cols_px": self.shift_cols_px, "error": self.error,
                 "upsample_factor": self.upsample_factor, "method": "cross-correlation (normalization=None), "
-                "cubic-spline shift (scipy_ndimage.shift order=3, mode=nearest)"}
+                "cubic-spline shift (scipy.ndimage.shift order=3, mode=nearest)"}
 
 
 def _as_2d(image: Any, name: str) -> np.ndarray:

@@ -22,7 +22,7 @@ import os
 from typing import Any
 
 from vissim.bench.scene_toml import check_keys, read_scene_toml, sub_table, typed_value
-from vissim.checks import (EYE_RENDER_WAVELENGTH_RANGE_NM, arcmin_per_px, eye_pupil_diameter_mm, number_within,
+from vissim.checks import (EYE_LIGHT_RANGE_NM, arcmin_per_px, eye_pupil_diameter_mm, number_within,
                            positive_number, size_px, trial_lens_diopters)
 from vissim.errors import VissimInputError
 from vissim.render.eye_render import EyeRender
@@ -56,7 +56,7 @@ def _field_deg(value: list, where: str) -> tuple[float, float]:
 def _ranged(values: dict, source: str) -> None:
     """The ranges `EyeRender` checks, with the check's message naming the file and the key."""
     checks = {"pupil_mm": ("eye", eye_pupil_diameter_mm), "iris_mm": ("eye", eye_pupil_diameter_mm),
-              "wavelength_nm": ("light", lambda v, n: number_within(v, n, "nm", EYE_RENDER_WAVELENGTH_RANGE_NM)),
+              "wavelength_nm": ("light", lambda v, n: number_within(v, n, "nm", EYE_LIGHT_RANGE_NM)),
               "arcmin_per_px": ("render", arcmin_per_px),
               "chart_distance_m": ("chart", lambda v, n: positive_number(v, n, "m")),
               "vertex_mm": ("spectacles", lambda v, n: positive_number(v, n, "mm"))}

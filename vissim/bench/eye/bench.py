@@ -36,7 +36,7 @@ import numpy as np
 
 from vissim.bench.lenses.holder import LENS_GAP_MM, lens_back_vertex_z_mm, lens_clear_aperture_mm, physical_lens
 from vissim.bench.scene_parts import chart_texture_shape
-from vissim.checks import EYE_RENDER_MAX_FIELD_DEG, EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE
+from vissim.checks import EYE_RENDER_MAX_FIELD_DEG, EYE_LIGHT_RANGE_NM, LOGMAR_RANGE
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, instance_of, number_within, positive_number
 from vissim.checks import size_px as check_size_px
@@ -105,7 +105,7 @@ class EyeBench:
             return None
         if wavelength_nm is None:
             return DEFAULT_EYE_LIGHT_NM
-        return number_within(wavelength_nm, "wavelength", "nm", EYE_RENDER_WAVELENGTH_RANGE_NM)
+        return number_within(wavelength_nm, "wavelength", "nm", EYE_LIGHT_RANGE_NM)
 
     def _check_light(self) -> None:
         object.__setattr__(self, "wavelength_nm", self.light_nm(self.wavelength_nm, self.spectrum))

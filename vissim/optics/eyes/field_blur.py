@@ -95,6 +95,8 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
     band, band_weights = _band(eye.reference_wavelength_nm if wavelength_nm is None else wavelength_nm, weights)
 
     spacing_px = spacing_deg * ARCMIN_PER_DEG / step
+    if field_step_deg is None:  # the default step over pixels coarser than it: a node at each pixel at most
+        spacing_px = max(spacing_px, 1.0)
     nodes = _check_nodes(shape, spacing_px, spacing_deg, step)
     advance = counter(progress, "field PSFs", nodes)
 

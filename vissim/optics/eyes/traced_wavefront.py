@@ -216,7 +216,7 @@ def irises_from_entrance_pupil_mm(eye: SchematicEye, entrance_pupil_mm: float, w
         if done.all():
             return irises
         going = ~done
-        d0, d1, f0 = d1[going], (d1 - f1 * (d1 - d0) / (f1 - f0))[going], f1[going]
+        d0, d1, f0 = d1[going], d1[going] - f1[going] * (d1[going] - d0[going]) / (f1[going] - f0[going]), f1[going]
         active = active[going]
     raise VissimInputError(f"no iris gives a {entrance_pupil_mm:g} mm entrance pupil")  # pragma: no cover
 

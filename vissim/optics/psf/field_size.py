@@ -187,7 +187,8 @@ def bessel_j0_j1(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     (Abramowitz & Stegun 9.1.27 and 9.1.46); 1e-15 absolute to x = 300.  Written here so that the field's
     size needs no scipy.special, whose import costs more than the table."""
     x = np.asarray(x, dtype=float)
-    safe = np.where(x > 0, x, 1.0)
+    tiny = x < 1e-20  # J0 = 1 and J1 = x/2 to double precision; the recurrence's first step would overflow
+    safe = np.where(tiny, 1.0, x)
     start = 2 * int((safe.max() + 12.0 * np.cbrt(safe.max()) + 40.0) / 2)  # well above x: the recurrence is stable
     following, current = np.zeros_like(safe), np.full_like(safe, 1e-300)
     norm, j1 = np.zeros_like(safe), np.zeros_like(safe)
@@ -203,7 +204,7 @@ def bessel_j0_j1(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             previous, current, norm, j1 = previous * scale, current * scale, norm * scale, j1 * scale
         following, current = current, previous
     norm = norm + current
-    return np.where(x > 0, current / norm, 1.0), np.where(x > 0, j1 / norm, 0.0)
+    return np.where(tiny, 1.0, current / norm), np.where(tiny, 0.5 * x, j1 / norm)
 
 
 def airy_tail(r_lambda_over_d: np.ndarray) -> np.ndarray:

@@ -141,7 +141,7 @@ def _zernike_terms(keys, u: np.ndarray, v: np.ndarray, visit) -> None:
     ``visit(row, values)`` one by one.  Shared work: rho^|m| cos|m|theta and rho^|m| sin|m|theta are the real
     and imaginary parts of (u + iv)^|m|, raised step by step (no arctan2, no trigonometry), and each |m|'s
     radial polynomials come from one Jacobi recurrence in k (`_jacobi_beta0`'s, carried along)."""
-    groups = _by_azimuth(tuple(keys))
+    groups = _by_azimuth(tuple(_check_nm(*key) for key in keys))
     x = 1.0 - 2.0 * (u * u + v * v)
     real, imag = np.ones_like(x), np.zeros_like(x)
     for alpha in range(max(groups, default=-1) + 1):
@@ -166,7 +166,7 @@ def zernike_sum(coefficients, u, v) -> np.ndarray:
     a mapping or pairs ``(n, m) -> c``.  Equals summing `zernike_nm` term by term (to 1e-13, tested), several
     times faster: up to `MAX_MONOMIAL_ORDER` as its monomials (`zernike_monomials`) by Horner's rule, above it
     term by term with shared recurrences.  Points outside the disc get the polynomials' continuation."""
-    items = list(coefficients.items() if hasattr(coefficients, "items") else coefficients)
+    items = _checked_items(coefficients)
     u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
     if max((n for (n, _), _ in items), default=0) <= MAX_MONOMIAL_ORDER:
         table = zernike_monomials(items)
@@ -206,6 +206,12 @@ def zernike_basis(keys, u, v) -> np.ndarray:
     return basis
 
 
+def _checked_items(coefficients) -> list[tuple[tuple[int, int], float]]:
+    """``(n, m) -> c`` pairs from a mapping or pairs, each index pair checked and made whole numbers."""
+    pairs = coefficients.items() if hasattr(coefficients, "items") else coefficients
+    return [(_check_nm(*key), value) for key, value in pairs]
+
+
 @functools.lru_cache(maxsize=None)
 def _monomials_nm(n: int, m: int) -> dict[tuple[int, int], int]:
     """Z_n^m / N_n^m as a polynomial in (u, v) with whole-number coefficients, {(power of u, power of v): c}:
@@ -232,7 +238,7 @@ def zernike_monomials(coefficients) -> np.ndarray:
     """``sum c Z_n^m`` as a polynomial ``sum A[p, q] u^p v^q`` in unit-disc coordinates: A, (order+1, order+1).
     Exact whole-number coefficients scaled once; fit for the low orders of eyes (tested against `zernike_sum` to
     1e-12 of the front's scale up to order 10: the monomials cancel more as the order grows)."""
-    items = list(coefficients.items() if hasattr(coefficients, "items") else coefficients)
+    items = _checked_items(coefficients)
     order = max((n for (n, _), _ in items), default=0)
     table = np.zeros((order + 1, order + 1))
     for (n, m), value in items:

@@ -53,6 +53,7 @@ class RunSummary:
     skipped: tuple[str, ...] = ()  # one message per item that could not run (e.g. an absent capture)
     renders_seconds: float = 0.0  # wall time of this run's renders (none made: 0)
     item_seconds: tuple[tuple[str, float], ...] = ()  # (item key, wall seconds) of each item computed, slowest first
+    item_names: tuple[tuple[str, str], ...] = ()  # (item key, its configuration's name) of every item
 
     @property
     def items_seconds(self) -> float:
@@ -187,8 +188,9 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
                 _compute_item(kind, campaign, key, index, plans[key], run_dir)
                 timed.append((key, time.perf_counter() - start))
             advance()
+    names = tuple((key, str(getattr(c, "name", ""))) for key, c in zip(keys, campaign.configurations))
     return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped),
-                      renders_seconds, tuple(sorted(timed, key=lambda pair: -pair[1])))
+                      renders_seconds, tuple(sorted(timed, key=lambda pair: -pair[1])), names)
 
 
 def _compute_item(kind, campaign: Campaign, key: str, index: int, plan, run_dir: Path) -> None:

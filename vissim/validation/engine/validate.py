@@ -47,8 +47,7 @@ def validate(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: 
                                show_progress=show_progress, progress=progress)
         start = time.perf_counter()
         written, lines = write_report(out, progress=progress)
-        names = {campaign.item_key(c): getattr(c, "name", "") for c in campaign.configurations}
-        timing = write_timings(out, summary, time.perf_counter() - start, workers, names)
+        timing = write_timings(out, summary, time.perf_counter() - start, workers)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")
@@ -61,12 +60,11 @@ TIMINGS_FILE = "timings.json"
 SLOWEST_ITEMS = 5
 
 
-def write_timings(run_dir: Path, summary: RunSummary, report_seconds: float, workers: int,
-                  names: dict | None = None) -> str:
+def write_timings(run_dir: Path, summary: RunSummary, report_seconds: float, workers: int) -> str:
     """Write ``timings.json`` (this run's wall seconds in its renders, its items, each item slowest first with its
     configuration's name, and its report, with the cores and workers it had) and return its one line for the
     command's summary."""
-    names = names or {}
+    names = dict(summary.item_names)
     record = {"renders_seconds": round(summary.renders_seconds, 3), "items_seconds": round(summary.items_seconds, 3),
               "report_seconds": round(report_seconds, 3), "workers": workers, "cores": os.cpu_count(),
               "items": [{"key": key, "name": names.get(key, ""), "seconds": round(seconds, 3)}

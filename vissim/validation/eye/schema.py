@@ -26,7 +26,7 @@ from vissim.optics.eyes.eye import SURFACE_OVERRIDES, eye_from_fields
 from vissim.optics.rx.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
                            EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
-                           EYE_RENDER_WAVELENGTH_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
+                           EYE_LIGHT_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
                            VERTEX_DISTANCE_RANGE_MM, VIEWING_DISTANCE_RANGE_M)
 from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
 from vissim.validation.engine.fields import (field_error, lens, name_text, number, settings_kwargs, tables, text,
@@ -97,7 +97,7 @@ class EyeConfiguration:
 def _light(value, source: str, where: str) -> tuple[str, float | None]:
     if value == "photopic":
         return "photopic", None
-    return "mono", number(value, source, where, "nm", lo=EYE_RENDER_WAVELENGTH_RANGE_NM[0], hi=EYE_RENDER_WAVELENGTH_RANGE_NM[1])
+    return "mono", number(value, source, where, "nm", lo=EYE_LIGHT_RANGE_NM[0], hi=EYE_LIGHT_RANGE_NM[1])
 
 
 def _field(value, source: str, where: str) -> tuple[float, float]:
