@@ -56,6 +56,7 @@ def psnr_db(reference: np.ndarray, other: np.ndarray) -> float:
 
 def blur_part() -> None:
     from vissim.charts import etdrs_chart_spec, render_chart_angular
+    from vissim.checks import DEFAULT_WAVELENGTH_NM
     from vissim.optics.blur.convolve import blur_image, image_kernel_psf
     from vissim.optics.blur.device import blur_image_on
     from vissim.optics.pupil.wavefront import Wavefront
@@ -67,7 +68,7 @@ def blur_part() -> None:
     rows, cols = min(chart.shape[0], 1080), min(chart.shape[1], 1920)
     image[:rows, :cols] = chart[:rows, :cols]
     front = Wavefront.from_prescription(Prescription.parse("-2.00 -1.00 x 30"), 3.0)
-    psf = image_kernel_psf(front, image.shape, arcmin_per_px=1.0, wavelength_nm=550.0)
+    psf = image_kernel_psf(front, image.shape, arcmin_per_px=1.0, wavelength_nm=DEFAULT_WAVELENGTH_NM)
     cpu_seconds, cpu = best_seconds(lambda: blur_image(image, psf, arcmin_per_px=1.0))
     print(f"blur 1920x1080, PSF {psf.size_px} px: CPU {cpu_seconds:.3f} s")
     if not cuda_available():
@@ -96,11 +97,12 @@ def render_part() -> None:
 
 
 def population_part() -> None:
+    from vissim.optics.eyes.defaults import POPULATION_MTF_CYC_PER_DEG
     from vissim.optics.eyes.measured.population import PopulationCondition, evaluate_population, select_eyes
 
     eyes = select_eyes("jaeken-artal-2012")[:40]
-    condition = [PopulationCondition(pupil_mm=4.0)]
-    frequencies = (5.0, 10.0, 20.0, 30.0)
+    condition = [PopulationCondition(pupil_mm=4.0, correction="uncorrected")]
+    frequencies = POPULATION_MTF_CYC_PER_DEG
     one_seconds, _ = best_seconds(lambda: evaluate_population(eyes, condition, frequencies), repeats=1)
     cores = os.cpu_count() or 1
     many_seconds, _ = best_seconds(lambda: evaluate_population(eyes, condition, frequencies, workers=cores),

@@ -161,7 +161,7 @@ def test_tiled_blur_equals_direct_convolution(rows, cols, half_kernel, padding, 
     kernel = rng.random((size, size))
     psf = PSF.from_array(kernel / kernel.sum(), 1.0)
     with pytest.MonkeyPatch.context() as patch:  # force tiles small enough for these images
-        patch.setattr(blur, "TILE_SIZES_PX", (32, 48, 64, 96, 128))
+        patch.setattr(blur, "tile_sizes_px", lambda: (32, 48, 64, 96, 128))
         patch.setattr(blur, "TILE_COST_FACTOR", 0.0)
         tile = blur._tile_px((rows, cols), size)
         out = blur_image(image, psf, arcmin_per_px=1.0, padding=padding, dtype=np.float64)

@@ -105,3 +105,12 @@ def test_unknown_medium_and_bad_wavelength_are_one_line_errors():
         navarro_medium("retina")
     with pytest.raises(VissimInputError, match="wavelength"):
         navarro_medium("lens").index(np.nan)
+
+
+def test_the_eyes_wavelength_range_is_the_span_of_navarros_reference_lines():
+    """`EYE_WAVELENGTH_RANGE_NM` (checks, which cannot import the optics) is where Navarro's dispersion is an
+    interpolation: its first and last reference lines, 365 and 1014 nm (Navarro et al. 1985, eq. 5)."""
+    from vissim.checks import EYE_WAVELENGTH_RANGE_NM
+    from vissim.optics.eyes.dispersion import NAVARRO_LINES_UM
+
+    assert EYE_WAVELENGTH_RANGE_NM == (1000.0 * NAVARRO_LINES_UM[0], 1000.0 * NAVARRO_LINES_UM[-1])

@@ -54,7 +54,8 @@ def test_an_altered_eye_says_what_changed_and_refuses_the_accommodation_formulas
 @pytest.mark.parametrize("kwargs, fragment", [
     (dict(pupil_mm=3.0, iris_mm=3.0), "not both"),
     (dict(pupil_mm=-1.0), "entrance pupil diameter must be a positive number of mm"),
-    (dict(rx="+60.00"), r"a principal meridian of \+60.00 D lies outside the -30 to \+30 D the trial lenses span"),
+    (dict(rx="+60.00"), r"prescription \+60.00 DS an eye is made to need must be within -30 to 30 dioptres \(a trial "
+                        r"lens\), got 60 dioptres"),
     (dict(vertex_mm=-2.0), "spectacle vertex distance must be within"),
     (dict(wavelength_nm=100.0), "reference wavelength must be within"),
     (dict(accommodation_diopters=20.0), "accommodation"),

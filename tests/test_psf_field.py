@@ -103,15 +103,3 @@ def test_suggested_size_holds_99_percent(measured, name):
     size = suggested_size_px(front, STEP)
     assert size % 2 == 1 and outside[size] <= 0.01
 
-
-def test_bessel_j0_j1_match_scipy_special():
-    """The field size's own Bessel functions (Miller's recurrence) against scipy.special's Cephes J0/J1, from 0 to
-    past the Airy table's 64 lambda/D (x = 201), to 1e-14 absolute."""
-    from scipy.special import j0, j1
-
-    from vissim.optics.psf.field_size import bessel_j0_j1
-
-    x = np.concatenate([[0.0], np.geomspace(1e-8, 1.0, 200), np.linspace(1.0, 250.0, 5001)])
-    ours_j0, ours_j1 = bessel_j0_j1(x)
-    assert np.max(np.abs(ours_j0 - j0(x))) < 1e-14
-    assert np.max(np.abs(ours_j1 - j1(x))) < 1e-14

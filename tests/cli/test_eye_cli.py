@@ -264,7 +264,7 @@ def _dense_cornea_air_chamber(accommodation_diopters=0.0):
     (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "5000"], ["5000", "nm"]),
     (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--sphere", "100"], ["+100.00 DS trial lens", "radius of curvature"]),
     (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--cylinder", "-1"], ["--cylinder -1 D", "--axis", "degrees"]),
-    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "+200"], ["+200", "-30 to +30 D"]),
+    (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "+200"], ["+200", "within -30 to 30 dioptres (a trial lens), got 200 dioptres"]),
 ])
 def test_bad_input_is_one_error_line_naming_the_value(capsys, argv, fragments):
     code, out, err = run(capsys, "eye", *argv)

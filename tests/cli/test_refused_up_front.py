@@ -46,13 +46,21 @@ def grey_image(tmp_path):
 
 @pytest.mark.parametrize("argv, says", [
     (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--wavelength-nm", "200"], "within 365-1014 nm"),
-    (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "-40"], "-40.00 D lies outside the -30 to"),
-    (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "-28 -4 x 90"], "-32.00 D"),
+    (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "-40"], "-40.00 DS an eye is made to need must be within -30 to 30 dioptres"),
+    (["eye", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--rx", "-28 -4 x 90"], "got -32 dioptres"),
     (["eye", "--eye-model", "navarro-1985", "--iris-mm", "9.5"], "iris 9.5 mm gives a 10.2 mm entrance pupil, wider "
                                                                  "than a human eye's 10 mm"),
 ])
 def test_an_eye_outside_its_media_or_its_lenses_is_refused(capsys, argv, says):
     _refused(capsys, argv, says=says)
+
+
+@pytest.mark.parametrize("option, says", [(["--vertex-mm", "500", "--correction", "-1"], "--vertex-mm must be within"),
+                                          (["--correction", "accommodating", "--accommodation-amplitude-diopters",
+                                            "50"], "accommodation amplitude must be within 0-20 dioptres")])
+def test_a_population_outside_the_ranges_a_campaign_file_keeps_is_refused(capsys, tmp_path, option, says):
+    out = tmp_path / "population"
+    _refused(capsys, ["population", "jaeken-artal-2012", "-o", str(out), *option], says=says, outputs=[out])
 
 
 def test_a_psf_of_an_eye_in_ultraviolet_light_is_refused(capsys, tmp_path):
@@ -90,6 +98,12 @@ def test_a_render_in_light_the_eyes_media_do_not_describe_is_refused(capsys, tmp
              says="within 365-850 nm, got 355 nm", outputs=[out])
 
 
+def test_an_iris_wider_than_a_human_pupil_is_refused_before_a_render(capsys, tmp_path):
+    out = tmp_path / "eye.exr"
+    _refused(capsys, ["render", "eye", "--iris-mm", "9.5", "--size", "16x16", "--spp", "1", "-o", str(out)],
+             says="iris 9.5 mm gives a 10.2 mm entrance pupil", outputs=[out])
+
+
 def test_a_letter_is_one_sloan_letter(capsys, tmp_path):
     out = tmp_path / "eye.exr"
     _refused(capsys, ["render", "eye", "--letter", "KZ", "--size", "16x16", "--spp", "1", "-o", str(out)],
@@ -97,7 +111,7 @@ def test_a_letter_is_one_sloan_letter(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("body, says", [
-    ('[[item]]\nname = "myope"\nrx = -40.0', "item[0]: prescription -40.00 DS"),
+    ('[[item]]\nname = "myope"\nrx = -40.0', "item[0]: the principal meridian of the prescription -40.00 DS"),
     ('[[sweep]]\nname = "pupil"\npupil_mm = []', "sweep[0].pupil_mm: an empty list sweeps nothing"),
     ('[[item]]\nname = "uv"\nlight = 355.0', "item[0].light: must be within 365 to 850 nm, got 355.0"),
 ])

@@ -57,7 +57,7 @@ def test_a_run_says_where_its_time_went(toy_kind, tmp_path):
     seconds = [item["seconds"] for item in timings["items"]]
     assert len(seconds) == 2 and seconds == sorted(seconds, reverse=True) and all(s >= 0 for s in seconds)
     assert timings["renders_seconds"] > 0 and timings["report_seconds"] > 0
-    assert timings["items_seconds"] == pytest.approx(sum(seconds), abs=0.01)
+    assert timings["items_seconds"] == pytest.approx(sum(seconds), rel=1e-12)
     line = next(line for line in done.lines if line.startswith("time: "))
     assert {item["name"] for item in timings["items"]} == {"sharp", "soft"}
     assert "slowest items: " + timings["items"][0]["name"] in line

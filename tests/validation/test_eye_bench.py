@@ -70,7 +70,7 @@ def test_an_item_s_rx_is_checked_and_kept_as_its_prescription():
     assert configurations[0].vertex_mm == 14.0 and "rx" not in configurations[2].key_inputs()
     assert configurations[0].key_inputs() != configurations[2].key_inputs()
     # not a prescription; not text; +90 D: beyond the trial lenses' range (the eye's own check)
-    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 D lies outside the -30 to \+30 D")):
+    for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS an eye is made to need must be within -30 to 30 dioptres")):
         with pytest.raises(VissimInputError, match=rf"eye\.toml: item\[0\]\S*: .*{words}") as caught:
             read_campaign({"item": [{"rx": bad}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
         assert "\n" not in str(caught.value)

@@ -57,6 +57,12 @@ def test_each_condition_is_an_item_spectacles_worn_included(tmp_path):
     assert [c.name for c in campaign.configurations][:2] == [
         "3 mm, field 0,0 deg, 555 nm, uncorrected", "3 mm, field 0,0 deg, 555 nm, wearing -1.00 -0.50 x 90 at 12 mm"]
     assert len(campaign.configurations) == 6
+    worn = tmp_path / "worn.toml"  # one worn condition run to its report: the prescription is written as text
+    worn.write_text(SMALL.replace('correction = ["sphero-cylinder"]', 'correction = ["-1.00 -0.50 x 90"]')
+                    .replace("field = [[0.0, 0.0], [-15.0, 0.0], [10.0, 0.0]]", "field = [[0.0, 0.0]]"))
+    validate(worn, tmp_path / "run", show_progress=False)
+    with open(tmp_path / "run" / "metrics.csv", newline="") as handle:
+        assert {row["correction"] for row in csv.DictReader(handle)} == {"-1.00 -0.50 x 90"}
 
 
 @pytest.mark.parametrize("line, words", [

@@ -64,10 +64,6 @@ COMMANDS = {
 }
 
 
-#: The modules, each once, in the order of `COMMANDS`.
-COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
-
-
 def command_help(name: str) -> str:
     """The line ``vissim --help`` gives the command ``name``."""
     return COMMANDS[name][1]

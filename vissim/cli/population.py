@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.checks import MAX_WORKERS
+from vissim.checks import MAX_WORKERS, vertex_distance_mm
 from vissim.cli._common import field_deg_from_text, parse_float_list
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES as DATASET_NAMES
@@ -42,9 +42,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--foveal-se-diopters", metavar="LOW,HIGH",
                         help="keep the eyes whose foveal spherical equivalent (over the data's pupil, in "
                              f"{PHOTOPIC_FOCUS_NM:g} nm light) is within LOW..HIGH D")
-    parser.add_argument("--pupil-mm", default=_listed(POPULATION_PUPILS_MM), metavar="D[,D...]",
+    parser.add_argument("--pupil-mm", metavar="D[,D...]",
                         help=f"entrance pupil diameters, mm, at most the data's (default {_listed(POPULATION_PUPILS_MM)})")
-    parser.add_argument("--field-deg", default=_listed(POPULATION_FIELD_DEG), metavar="X,Y[;X,Y...]",
+    parser.add_argument("--field-deg", metavar="X,Y[;X,Y...]",
                         help="field angles, degrees, x (examiner's right: the observer's left) and y (up), from the "
                              "line of sight, as the data were measured; several with ; "
                              f"(default {_listed(POPULATION_FIELD_DEG)}: the fovea)")
@@ -52,7 +52,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help=f"{' or '.join(CORRECTIONS)} (default {POPULATION_CORRECTION}: orders 0-2 removed; "
                              "accommodating: uncorrected, hyperopia cancelled up to --accommodation-amplitude-diopters), "
                              "or the spectacles worn as a prescription, e.g. '-1.00 -0.50 x 90'")
-    parser.add_argument("--accommodation-amplitude-diopters", type=float, default=0.0, metavar="A",
+    parser.add_argument("--accommodation-amplitude-diopters", type=float, metavar="A",
                         help="with --correction accommodating: how far the eyes can accommodate to cancel their "
                              "hyperopia, D (required there)")
     parser.add_argument("--vertex-mm", type=float, default=DEFAULT_SPECTACLE_VERTEX_MM, metavar="MM",
@@ -71,8 +71,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
 def _conditions(args):
     from vissim.optics.eyes.measured.population import parse_correction, population_conditions
 
-    pupils = parse_float_list(args.pupil_mm, "--pupil-mm", "mm")
-    fields = [field_deg_from_text(text) for text in args.field_deg.split(";") if text.strip()]
+    pupils = (list(POPULATION_PUPILS_MM) if args.pupil_mm is None  # the defaults as numbers, not read back from text
+              else parse_float_list(args.pupil_mm, "--pupil-mm", "mm"))
+    fields = ([POPULATION_FIELD_DEG] if args.field_deg is None
+              else [field_deg_from_text(text) for text in args.field_deg.split(";") if text.strip()])
     corrections = [c.strip() for c in args.correction.split(",") if c.strip()]
     if not fields:
         raise VissimInputError(f"--field-deg is empty; expected X,Y[;X,Y...] in degrees, got {args.field_deg!r}")
@@ -83,8 +85,10 @@ def _conditions(args):
     except VissimInputError as error:
         raise VissimInputError(f"--correction: {error}") from None
     nm = PHOTOPIC_FOCUS_NM if args.wavelength_nm is None else args.wavelength_nm
-    return population_conditions(pupils, fields, corrections, wavelength_nm=nm, vertex_mm=args.vertex_mm,
-                                 accommodation_amplitude_diopters=args.accommodation_amplitude_diopters)
+    amplitude = {} if args.accommodation_amplitude_diopters is None else {
+        "accommodation_amplitude_diopters": args.accommodation_amplitude_diopters}
+    return population_conditions(pupils, fields, corrections, wavelength_nm=nm,
+                                 vertex_mm=vertex_distance_mm(args.vertex_mm, "--vertex-mm"), **amplitude)
 
 
 def _eyes(args):

@@ -57,7 +57,7 @@ from vissim.bench.eye.sensor_eyes import sensor_eye, sensor_phase
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX
-from vissim.optics.eyes.traced_wavefront import entrance_pupil_from_iris_mm, iris_from_entrance_pupil_mm
+from vissim.optics.eyes.traced_wavefront import pupils_mm
 from vissim.render.plugins import register_once
 from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 from vissim.render.schematic_eye_tables import EyeTables, eye_tables, table_theta_deg
@@ -85,15 +85,6 @@ def sensor_tables(optics, iris_mm: float, wavelength_nm: float, max_theta_deg: f
 def sensor_map_radii_mm(optics, wavelength_nm: float, max_theta_deg: float) -> np.ndarray:
     """The film's map r(θ) at ``wavelength_nm`` on the tables' θ grid (`chief_ray_radii_mm`), cached."""
     return chief_ray_radii_mm(optics, table_theta_deg(max_theta_deg), wavelength_nm)
-
-
-def _pupils(eye, pupil_mm, iris_mm, wavelength_nm: float) -> tuple[float, float]:
-    """(entrance pupil, iris) in mm from the one given."""
-    if (pupil_mm is None) == (iris_mm is None):
-        raise VissimInputError("give the schematic-eye sensor either pupil_mm (entrance pupil) or iris_mm, not both")
-    if iris_mm is not None:
-        return entrance_pupil_from_iris_mm(eye, float(iris_mm), wavelength_nm), float(iris_mm)
-    return float(pupil_mm), iris_from_entrance_pupil_mm(eye, float(pupil_mm), wavelength_nm)
 
 
 class _Lookup:
@@ -151,7 +142,7 @@ def _make_class(mi, dr):
                 y_bar = float(y_bar[0] if dr.is_array_v(y_bar) else y_bar)
                 self.mono_scale = 1.0 / (y_bar * mi.MI_CIE_Y_NORMALIZATION)
             self.wavelength_nm = self.fixed_wavelength_nm or eye.reference_wavelength_nm
-            self.pupil_mm, self.iris_mm = _pupils(eye, the_eye.pupil_mm, the_eye.iris_mm, self.wavelength_nm)
+            self.pupil_mm, self.iris_mm = pupils_mm(eye, self.wavelength_nm, the_eye.pupil_mm, the_eye.iris_mm)
             self.arcmin_per_px = checked_arcmin_per_px(float(props.get("arcmin_per_px", DEFAULT_EYE_ARCMIN_PER_PX)))
             self.field_deg = (float(props.get("field_x_deg", 0.0)), float(props.get("field_y_deg", 0.0)))
             self.far_clip = float(props.get("far_clip", 1.0e7))

@@ -19,8 +19,7 @@ _EYES: dict = {}
 def register_sensor_eye(eye, phase=None) -> str:
     """Hand the `Eye` ``eye`` to the sensors of scenes loaded in this process, with its phase plane ``phase`` (a
     measured eye's `vissim.optics.raytrace.phase.PhasePlane`; None: none); the key a scene names them by."""
-    plane = "" if phase is None else \
-        f"-{hash((phase.vertex_z_mm, phase.centre_mm, phase.radius_mm, phase.terms)) & 0xFFFFFFFFFFFF:012x}"
+    plane = "" if phase is None else f"-{hash(phase) & 0xFFFFFFFFFFFF:012x}"
     key = f"eye-{hash(eye.optics) & 0xFFFFFFFFFFFF:012x}-{eye.pupil}{plane}"
     _EYES[key] = (eye, phase)
     return key

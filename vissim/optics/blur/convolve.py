@@ -26,6 +26,7 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 import os
@@ -161,17 +162,18 @@ def _check_sampling(psf: PSF, arcmin_per_px: float) -> None:
         raise VissimInputError(f"PSF must be square, got {psf.data.shape}")
 
 
-def _is_5_smooth(n: int) -> bool:
-    """Whether n has no prime factor above 5 (what ``scipy.fft.next_fast_len(n, real=True)`` keeps)."""
-    for prime in (2, 3, 5):
-        while n % prime == 0:
-            n //= prime
-    return n == 1
+#: The smallest and largest tile (px) tried for overlap-save convolution of large images (larger squares measured
+#: slower than one full-frame FFT: cache); `tile_sizes_px` keeps the sizes between whose FFT is fast.
+SMALLEST_TILE_PX, LARGEST_TILE_PX = 256, 512
 
 
-#: Tile sizes (px) tried for overlap-save convolution of large images: the even 5-smooth sizes (fast
-#: FFTs) from 256 to 512 (larger squares measured slower than one full-frame FFT: cache).
-TILE_SIZES_PX = tuple(n for n in range(256, 513, 2) if _is_5_smooth(n))
+@functools.cache
+def tile_sizes_px() -> tuple[int, ...]:
+    """The tile sizes tried: the even sizes from `SMALLEST_TILE_PX` to `LARGEST_TILE_PX` that ``scipy.fft.next_fast_len`` keeps (5-smooth),
+    found when a blur first needs them (not when the module is imported)."""
+    return tuple(n for n in range(SMALLEST_TILE_PX, LARGEST_TILE_PX + 1, 2) if scipy_fft.next_fast_len(n, real=True) == n)
+
+
 #: A tiled blur is chosen when its estimated cost is below this fraction of the full FFT's.
 #: The estimate counts FFT operations (n log n); measured on 2 cores, the small tiles' FFTs run
 #: at about 1.6x the full-frame FFT's rate per operation (cache), so their count is scaled by this.
@@ -188,7 +190,7 @@ def _fft_cost(shape) -> float:
 def _tile_px(shape: tuple[int, int], kernel_px: int) -> int | None:
     """The overlap-save tile size for an image of ``shape`` that beats one full-frame FFT, or None."""
     best, best_cost = None, _fft_cost(padded_shape(shape, kernel_px))
-    for tile in TILE_SIZES_PX:
+    for tile in tile_sizes_px():
         valid = tile - kernel_px + 1
         if valid < 3 * kernel_px or tile >= min(shape):
             continue

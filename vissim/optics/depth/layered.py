@@ -56,7 +56,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.checks import DEFAULT_LAYER_SPACING_FRACTION, DEFAULT_WAVELENGTH_NM
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError
@@ -301,7 +301,7 @@ def composite_layers(
     mode: str = "geometric",
     extra_wavefront: Wavefront | None = None,
     eye: DepthViewer | None = None,
-    layer_spacing_fraction: float = 0.5,
+    layer_spacing_fraction: float = DEFAULT_LAYER_SPACING_FRACTION,
     n_rays: int | None = None,
     crop_px: int = 0,
 ) -> LayeredBlurResult:

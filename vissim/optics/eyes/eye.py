@@ -35,7 +35,7 @@ import functools
 import math
 from dataclasses import dataclass, field
 
-from vissim.checks import TRIAL_LENS_RANGE_DIOPTERS, eye_wavelength_nm, instance_of, positive_number
+from vissim.checks import eye_wavelength_nm, instance_of, positive_number, trial_lens_diopters
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.fixation import ametropic_eye
@@ -43,6 +43,7 @@ from vissim.optics.eyes.defaults import DEFAULT_EYE_PUPIL_MM, DEFAULT_SPECTACLE_
 from vissim.optics.eyes.measured.measured_eye import (BASE_EYE_MODEL, MeasuredWavefront, is_measured_name,
                                                       parse_measured_eye)
 from vissim.optics.eyes.models import EYE_MODELS, SchematicEye, eye_model
+from vissim.optics.eyes.traced_wavefront import pupils_mm
 from vissim.optics.rx.prescription import Prescription, prescription_from
 
 __all__ = ["Eye", "build_eye", "eye_from_fields", "SURFACE_OVERRIDES", "checked_eye", "surface_overrides",
@@ -86,16 +87,15 @@ class Eye:
         if self.measured is not None:
             self._check_measured()
         object.__setattr__(self, "_optics", self._traced_optics())  # a prescription the eye cannot have: refused now
+        if self.measured is None:  # a pupil or iris no trace of this eye takes: refused now, not inside a render
+            pupils_mm(self._optics, self.reference_wavelength_nm, self.pupil_mm if self.iris_mm is None else None,
+                      self.iris_mm)
 
     def _check_rx_range(self) -> None:
         """The prescription an eye is made to need lies, in each principal meridian, within the trial lenses'
-        `TRIAL_LENS_RANGE_DIOPTERS` (the lenses that would correct it): checked before its eye is built."""
-        low, high = TRIAL_LENS_RANGE_DIOPTERS
+        range (the lenses that would correct it): checked before its eye is built."""
         for meridian in (self.rx.sphere_diopters, self.rx.sphere_diopters + self.rx.cylinder_diopters):
-            if not low <= meridian <= high:
-                raise VissimInputError(f"prescription {self.rx}: a principal meridian of {meridian:+.2f} D lies "
-                                       f"outside the {low:g} to {high:+g} D the trial lenses span; an eye is made to "
-                                       "need a prescription within it")
+            trial_lens_diopters(meridian, f"the principal meridian of the prescription {self.rx} an eye is made to need")
 
     def _check_measured(self) -> None:
         instance_of(self.measured, MeasuredWavefront, "an Eye's measured wavefront", "a MeasuredWavefront")

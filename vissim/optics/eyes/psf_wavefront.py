@@ -49,11 +49,11 @@ from __future__ import annotations
 import numpy as np
 
 from vissim.checks import MAX_FIELD_DEG
-from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.checks import eye_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.measured.measured_eye import beam_field_map, measured_front
-from vissim.optics.eyes.refraction import BEAM_PLANE, chief_ray_stretch
+from vissim.optics.eyes.refraction import BEAM_PLANE, ENTRANCE_PUPIL_PLANE, chief_ray_stretch
 from vissim.optics.eyes.traced_wavefront import (DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront,
                                                 trace_eye_wavefronts)
 from vissim.optics.rx.prescription import Prescription
@@ -98,7 +98,7 @@ def _own_front(traced: EyeWavefront) -> Wavefront:
 
 
 def vergence_front(vergence_diopters, pupil_diameter_mm: float, beam_direction=(0.0, 0.0, 1.0), *,
-                   pupil_plane: str = "entrance pupil") -> Wavefront | None:
+                   pupil_plane: str = ENTRANCE_PUPIL_PLANE) -> Wavefront | None:
     """The wavefront error the light's vergence at the entrance pupil adds (D: a scalar, or a 2 x 2 TABO
     matrix; the object's −1/d plus what lenses in front add): that of an eye whose correcting lens is −V, V
     across the beam ``beam_direction`` (optical-axis frame). Its coordinates are the entrance-pupil plane's, which
@@ -177,7 +177,7 @@ def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), ve
     _vergence_matrix(vergence_diopters)  # before the traces
     traced = traced_spectral_wavefront(eye.optics, wavelengths_nm, field_deg, samples=samples, measured=eye.measured,
                                        **eye.pupil)
-    plane = BEAM_PLANE if eye.measured is not None else "entrance pupil"  # a measured front's (`measured_eye`)
+    plane = BEAM_PLANE if eye.measured is not None else ENTRANCE_PUPIL_PLANE  # a measured front's (`measured_eye`)
     vergence = vergence_front(vergence_diopters, traced.pupil_diameter_mm, field_direction(eye.optics, field_deg),
                               pupil_plane=plane)
     return traced.map(lambda front: _with_vergence(front, vergence))
@@ -196,9 +196,9 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     base eye's own in every front (`vissim.optics.eyes.measured.measured_eye`).
     """
     reference = (eye.reference_wavelength_nm if reference_wavelength_nm is None
-                 else checked_wavelength_nm(reference_wavelength_nm, "reference wavelength"))
+                 else eye_wavelength_nm(reference_wavelength_nm, "reference wavelength"))
     try:
-        wavelengths = sorted({checked_wavelength_nm(w) for w in wavelengths_nm})
+        wavelengths = sorted({eye_wavelength_nm(w) for w in wavelengths_nm})
     except TypeError:
         raise VissimInputError(f"wavelengths must be a list of nm, got {wavelengths_nm!r}") from None
     if not wavelengths:

@@ -62,6 +62,9 @@ PUPIL_DEFINITION = "entrance pupil seen along the chief ray"
 #: An `EyeWavefront`'s ``pupil_plane`` when its coefficients are already over the plane normal to the chief ray
 #: (a measured eye's: the wavefront sensor's), not over the entrance pupil's plane.
 BEAM_PLANE = "normal to the chief ray"
+#: An `EyeWavefront`'s ``pupil_plane`` when its coefficients are over the entrance pupil's plane (normal to the
+#: optical axis: a traced schematic eye's).
+ENTRANCE_PUPIL_PLANE = "entrance pupil"
 
 
 def paraxial_rho2_coefficient(n: int, m: int) -> float:

@@ -70,7 +70,7 @@ from vissim.optics.eyes.measured.measured_eye import measured_front
 from vissim.optics.eyes.paraxial import (image_focal_length_mm, entrance_pupil_diameter_mm,
                                          equivalent_power_diopters, mean_meridian_eye, retinal_mm_per_deg)
 from vissim.optics.eyes.psf_wavefront import traced_spectral_wavefront
-from vissim.optics.eyes.refraction import BEAM_PLANE, EyeRefraction, eye_refraction
+from vissim.optics.eyes.refraction import BEAM_PLANE, ENTRANCE_PUPIL_PLANE, EyeRefraction, eye_refraction
 from vissim.optics.eyes.spectacles import system_entrance_pupil_mm, system_retinal_mm_per_deg
 from vissim.units import osa_xy_to_image_colrow
 from vissim.optics.eyes.traced_wavefront import EyeWavefront, trace_eye_wavefront
@@ -229,7 +229,7 @@ class EyeReport:
             "field_deg": list(wf.field_deg),
             "field_axis": wf.field_axis,
             "zernike_um": {f"{n},{m}": float(v) for (n, m), v in sorted(wf.zernike_um.items())},
-            "zernike_pupil": ("entrance pupil" if wf.pupil_plane != BEAM_PLANE
+            "zernike_pupil": (ENTRANCE_PUPIL_PLANE if wf.pupil_plane != BEAM_PLANE
                               else f"entrance pupil seen along the chief ray ({BEAM_PLANE}: the data's)"),
             "rms_um": wf.rms_um,
             "refraction": {"paraxial": refraction["paraxial"], "minimum_rms": refraction["minimum_rms"],

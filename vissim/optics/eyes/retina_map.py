@@ -19,7 +19,7 @@ the models' rule (`field_direction`).  The offsets from the field angle at which
 centre (from the entrance pupil, `vissim.optics.eyes.sight.film_field_deg`, as the simulations draw the
 chart) are histogrammed on a grid ``oversample`` times finer than the image's pixels.  The trial lens's
 spectacle magnification is measured by the same trace (chief rays from chart points off the centre, with
-the lens over without it).  Photopic light: one trace per wavelength of the photopic spectrum, weighted by
+the lens over without it).  Photopic light: every wavelength of the photopic spectrum in one trace, weighted by
 V(λ) (the render's film develops luminance).
 
 The renderer traces the other way (retina to scene, Dr.Jit, the lens as a mesh): this trace shares none of
@@ -100,8 +100,9 @@ def _iris_targets(eye, iris_mm: float, rays_across: int, seed: int) -> np.ndarra
     return np.stack([x[inside] + eye.stop_decentre_nasal_mm, y[inside]], axis=1)
 
 
-def _land(eye, lens_setup, point_mm, targets, wavelength_nm: float, phase=None) -> np.ndarray:
-    """Retinal landing points (N, 2) of rays from ``point_mm`` aimed at iris ``targets`` (``phase``: a phase plane)."""
+def _land(eye, lens_setup, point_mm, targets, wavelength_nm, phase=None) -> np.ndarray:
+    """Retinal landing points (N, 2) of rays from ``point_mm`` aimed at iris ``targets`` at ``wavelength_nm`` (one,
+    or one per target) (``phase``: a phase plane)."""
     bundle, _ = trace_to_retina(eye, targets, wavelength_nm, object_point_mm=point_mm, lenses=lens_setup, phase=phase)
     return bundle.points_mm[:, :2]
 
@@ -166,13 +167,12 @@ def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm
     point = _object_point_mm(eye, field, distance_mm)
     targets = _iris_targets(eye, iris_mm, rays_across, seed)
     step_deg = arcmin_per_px / oversample / 60.0
-    angles, ray_weights = [], []
     seen = film_field_deg(eye, point, pupil_mm)  # the chart centre as the film sees it: the image's origin
-    for wavelength, weight in zip(wavelengths_nm, weights):
-        a = retina.field_deg(_land(eye, lens_setup, point, targets, float(wavelength), phase)) - seen
-        angles.append(a)
-        ray_weights.append(np.full(len(a), float(weight) / len(a)))
-    angles, ray_weights = np.concatenate(angles), np.concatenate(ray_weights)
+    wavelengths = np.asarray(wavelengths_nm, dtype=float)  # every wavelength's rays in one trace (one index per ray)
+    landed = _land(eye, lens_setup, point, np.tile(targets, (len(wavelengths), 1)), np.repeat(wavelengths, len(targets)),
+                   phase)
+    angles = retina.field_deg(landed) - seen
+    ray_weights = np.repeat(np.asarray(weights, dtype=float) / len(targets), len(targets))
     cols, rows = osa_xy_to_image_colrow(angles[:, 0] / step_deg, angles[:, 1] / step_deg)
     half = int(math.ceil(max(np.abs(cols).max(), np.abs(rows).max()))) + 2
     edges = np.arange(-half - 0.5, half + 1.0)

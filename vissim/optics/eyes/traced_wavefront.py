@@ -57,6 +57,7 @@ import numpy as np
 from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, eye_wavelength_nm, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
+from vissim.optics.eyes.refraction import ENTRANCE_PUPIL_PLANE
 from vissim.optics.eyes.paraxial import (entrance_pupil_position_mm, iris_diameter_mm, matrix_to_surface,
                                          mean_meridian_eye)
 from vissim.optics.eyes.spectacles import lens_surfaces, system_entrance_pupil_mm
@@ -65,7 +66,7 @@ from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_ra
 from vissim.optics.pupil.zernike import fit_zernike_um
 
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
-           "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm",
+           "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm", "pupils_mm",
            "trace_eye_wavefronts", "entrance_pupils_from_irises_mm", "irises_from_entrance_pupil_mm",
            "DEFAULT_SAMPLES", "GRID_MARGIN"]
 
@@ -170,10 +171,9 @@ def _front(eye: SchematicEye, lenses, phase=None) -> tuple[tuple, float, tuple, 
     """(surfaces before the iris, lenses first, then the `PhasePlane` ``phase`` if any; the iris z; those after
     it; the beam's start z), mm."""
     front, stop_z, back = split_at_stop(eye)
-    start_z = (lens_surfaces(lenses)[0] if lenses is not None and lenses.lenses else front[0]).vertex_z_mm
-    front = (lens_surfaces(lenses) if lenses is not None and lenses.lenses else ()) + \
-        (() if phase is None else (phase,)) + tuple(front)
-    return front, stop_z, back, start_z - _START_BEFORE_MM
+    lens_part = lens_surfaces(lenses) if lenses is not None and lenses.lenses else ()
+    start_z = (lens_part + tuple(front))[0].vertex_z_mm
+    return lens_part + (() if phase is None else (phase,)) + tuple(front), stop_z, back, start_z - _START_BEFORE_MM
 
 
 def _axial_starts(eye: SchematicEye, iris_x_mm, wavelength_nm: float, lenses=None) -> np.ndarray:
@@ -280,6 +280,13 @@ def _pupils(eye: SchematicEye, wavelengths_nm: np.ndarray, pupil_mm, iris_mm) ->
     return pupils, irises, given
 
 
+def pupils_mm(eye: SchematicEye, wavelength_nm: float, pupil_mm=None, iris_mm=None) -> tuple[float, float]:
+    """(entrance pupil, iris), mm, at ``wavelength_nm`` from the one given, within the limits every trace of
+    ``eye`` keeps (`_pupils`: the widest iris, a human eye's widest pupil)."""
+    pupils, irises, _ = _pupils(eye, np.array([eye_wavelength_nm(wavelength_nm)]), pupil_mm, iris_mm)
+    return float(pupils[0]), float(irises[0])
+
+
 @dataclass(frozen=True, eq=False)
 class EyeWavefront:
     """The traced wavefront of ``model`` at ``field_deg`` and ``wavelength_nm`` (module doc).
@@ -321,7 +328,7 @@ class EyeWavefront:
     field_axis: str = "optical axis"
     field_map: tuple = ((1.0, 0.0), (0.0, 1.0))
     chief_direction: tuple = (0.0, 0.0, 1.0)
-    pupil_plane: str = "entrance pupil"
+    pupil_plane: str = ENTRANCE_PUPIL_PLANE
 
     @property
     def rms_um(self) -> float:

@@ -33,11 +33,14 @@ from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.checks import wavelength_nm as check_wavelength_nm
 from vissim.errors import VissimInputError
+from vissim.lazy_import import lazy_module
 from vissim.optics.rx.chromatic import chromatic_difference_of_refraction_diopters
 from vissim.optics.pupil.rays import landing_arcmin, pupil_cell_centres
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, wavelengths_for
 from vissim.optics.pupil.wavefront import Wavefront, same_wavelength
 from vissim.units import nm_to_mm, rad_to_arcmin
+
+scipy_special = lazy_module("scipy.special")
 
 __all__ = [
     "MAX_ENERGY_OUTSIDE",
@@ -178,33 +181,7 @@ def _suggested_size(wavefront, diameter, step, wavelengths, weights, lca_referen
 @functools.cache
 def _airy_tail_table() -> tuple[np.ndarray, np.ndarray]:
     r = np.linspace(0.0, _AIRY_TABLE_LAMBDA_OVER_D, 20001)
-    j0, j1 = bessel_j0_j1(np.pi * r)
-    return r, np.square(j0) + np.square(j1)
-
-
-def bessel_j0_j1(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Bessel J0 and J1 at x >= 0 by Miller's backward recurrence, normalised by J0 + 2 sum J_2k = 1
-    (Abramowitz & Stegun 9.1.27 and 9.1.46); 1e-15 absolute to x = 300.  Written here so that the field's
-    size needs no scipy.special, whose import costs more than the table."""
-    x = np.asarray(x, dtype=float)
-    tiny = x < 1e-20  # J0 = 1 and J1 = x/2 to double precision; the recurrence's first step would overflow
-    safe = np.where(tiny, 1.0, x)
-    start = 2 * int((safe.max() + 12.0 * np.cbrt(safe.max()) + 40.0) / 2)  # well above x: the recurrence is stable
-    following, current = np.zeros_like(safe), np.full_like(safe, 1e-300)
-    norm, j1 = np.zeros_like(safe), np.zeros_like(safe)
-    for k in range(start, 0, -1):
-        previous = (2.0 * k / safe) * current - following  # J_(k-1), unnormalised
-        if k - 1 == 1:
-            j1 = previous
-        elif (k - 1) % 2 == 0 and k > 1:
-            norm += 2.0 * previous
-        big = np.abs(previous) > 1e250
-        if big.any():  # rescale before the recurrence overflows
-            scale = np.where(big, 1e-250, 1.0)
-            previous, current, norm, j1 = previous * scale, current * scale, norm * scale, j1 * scale
-        following, current = current, previous
-    norm = norm + current
-    return np.where(tiny, 1.0, current / norm), np.where(tiny, 0.5 * x, j1 / norm)
+    return r, np.square(scipy_special.j0(np.pi * r)) + np.square(scipy_special.j1(np.pi * r))
 
 
 def airy_tail(r_lambda_over_d: np.ndarray) -> np.ndarray:

@@ -97,18 +97,26 @@ def zernike_radial(n: int, m: int, rho: np.ndarray) -> np.ndarray:
 
 
 def _jacobi_beta0(k: int, alpha: int, x: np.ndarray) -> np.ndarray:
-    """Jacobi polynomial P_k^(alpha, 0)(x) by its three-term recurrence (Abramowitz & Stegun 22.7.1), stable on
-    [-1, 1]."""
+    """Jacobi polynomial P_k^(alpha, 0)(x) (`_jacobi_beta0_up_to`'s last)."""
+    for value in _jacobi_beta0_up_to(k, alpha, x):
+        pass
+    return value
+
+
+def _jacobi_beta0_up_to(k: int, alpha: int, x: np.ndarray):
+    """P_0^(alpha, 0)(x), ..., P_k^(alpha, 0)(x) in turn, by the three-term recurrence (Abramowitz & Stegun
+    22.7.1), stable on [-1, 1]."""
     previous, current = np.ones_like(x), (alpha + 1.0) + (alpha + 2.0) * (x - 1.0) / 2.0
-    if k == 0:
-        return previous
+    yield previous
+    if k >= 1:
+        yield current
     for order in range(2, k + 1):
         total = 2 * order + alpha  # 2n + alpha + beta, beta = 0
         a = 2.0 * order * (order + alpha) * (total - 2)
         b = (total - 1) * (total * (total - 2) * x + alpha * alpha)
         c = 2.0 * (order + alpha - 1) * (order - 1) * total
         previous, current = current, (b * current - c * previous) / a
-    return current
+        yield current
 
 
 def zernike_nm(n: int, m: int, rho: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -140,30 +148,23 @@ def _zernike_terms(keys, u: np.ndarray, v: np.ndarray, visit) -> None:
     """Every term of ``keys`` at the unit-disc points (u, v) = rho (cos theta, sin theta), handed to
     ``visit(row, values)`` one by one.  Shared work: rho^|m| cos|m|theta and rho^|m| sin|m|theta are the real
     and imaginary parts of (u + iv)^|m|, raised step by step (no arctan2, no trigonometry), and each |m|'s
-    radial polynomials come from one Jacobi recurrence in k (`_jacobi_beta0`'s, carried along)."""
+    radial polynomials come from one Jacobi recurrence in k (`_jacobi_beta0_up_to`)."""
     groups = _by_azimuth(tuple(_check_nm(*key) for key in keys))
     x = 1.0 - 2.0 * (u * u + v * v)
     real, imag = np.ones_like(x), np.zeros_like(x)
     for alpha in range(max(groups, default=-1) + 1):
         wanted = groups.get(alpha)
         if wanted:
-            previous, current = np.ones_like(x), (alpha + 1.0) + (alpha + 2.0) * (x - 1.0) / 2.0
-            for k in range(max(wanted) + 1):
-                radial = previous if k == 0 else current
+            for k, radial in enumerate(_jacobi_beta0_up_to(max(wanted), alpha, x)):
                 for row, norm, sine in wanted.get(k, ()):
                     visit(row, norm * radial * (imag if sine else real))
-                if k >= 1:
-                    order, total = k + 1, 2 * (k + 1) + alpha
-                    a = 2.0 * order * (order + alpha) * (total - 2)
-                    b = (total - 1) * (total * (total - 2) * x + alpha * alpha)
-                    c = 2.0 * (order + alpha - 1) * (order - 1) * total
-                    previous, current = current, (b * current - c * previous) / a
         real, imag = real * u - imag * v, real * v + imag * u
 
 
 def zernike_sum(coefficients, u, v) -> np.ndarray:
     """``sum c Z_n^m`` at unit-disc points (u, v) (x and y over the pupil radius; OSA frame): ``coefficients``
-    a mapping or pairs ``(n, m) -> c``.  Equals summing `zernike_nm` term by term (to 1e-13, tested), several
+    a mapping or pairs ``(n, m) -> c``.  Equals summing `zernike_nm` term by term (to 1e-12 of the front's scale to order 16:
+    tests/test_zernike.py), several
     times faster: up to `MAX_MONOMIAL_ORDER` as its monomials (`zernike_monomials`) by Horner's rule, above it
     term by term with shared recurrences.  Points outside the disc get the polynomials' continuation."""
     items = _checked_items(coefficients)
@@ -189,8 +190,8 @@ def zernike_sum(coefficients, u, v) -> np.ndarray:
     return out
 
 
-#: The highest radial order `zernike_sum` takes as monomials (their cancellation costs 1e-15 of the front's scale
-#: at order 12, tested).
+#: The highest radial order `zernike_sum` takes as monomials (their cancellation stays under 1e-12 of the front's
+#: scale there: tests/test_zernike.py).
 MAX_MONOMIAL_ORDER = 12
 
 
@@ -236,8 +237,8 @@ def _monomials_nm(n: int, m: int) -> dict[tuple[int, int], int]:
 
 def zernike_monomials(coefficients) -> np.ndarray:
     """``sum c Z_n^m`` as a polynomial ``sum A[p, q] u^p v^q`` in unit-disc coordinates: A, (order+1, order+1).
-    Exact whole-number coefficients scaled once; fit for the low orders of eyes (tested against `zernike_sum` to
-    1e-12 of the front's scale up to order 10: the monomials cancel more as the order grows)."""
+    Exact whole-number coefficients scaled once; for the low orders of eyes (to 1e-12 of the front's scale up to
+    `MAX_MONOMIAL_ORDER`, tests/test_zernike.py: the monomials cancel more as the order grows)."""
     items = _checked_items(coefficients)
     order = max((n for (n, _), _ in items), default=0)
     table = np.zeros((order + 1, order + 1))

@@ -28,7 +28,7 @@ from vissim.errors import VissimInputError
 __all__ = ["PhasePlane", "through_phase_plane"]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True)
 class PhasePlane:
     """φ(x, y) (module doc) on the plane ``z = vertex_z_mm``; ``travel_z`` as a `Surface`'s."""
 

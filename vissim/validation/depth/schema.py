@@ -17,7 +17,7 @@ from typing import Any
 from vissim.bench.depth.scene import DepthScene
 from vissim.bench.depth.scene_files import load_depth_scene_toml
 from vissim.bench.depth.viewers import CameraViewer, EyeViewer
-from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, DATA_RANGE_RANGE, DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM,
+from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, DEFAULT_LAYER_SPACING_FRACTION, DATA_RANGE_RANGE, DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM,
                            F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, LAYER_SPACING_FRACTION_RANGE, MARGIN_RANGE_PX,
                            MAX_CAMPAIGN_SEED, OBJECT_DISTANCE_RANGE_M, OVERSAMPLE_RANGE, VERTEX_DISTANCE_RANGE_MM,
                            WAVELENGTH_RANGE_NM)
@@ -73,7 +73,7 @@ class DepthCampaignSettings:
     wavelength_nm: float = DEFAULT_WAVELENGTH_NM
     data_range: float = 1.0
     margin_px: float = 1.0
-    layer_spacing_fraction: float = 0.5
+    layer_spacing_fraction: float = DEFAULT_LAYER_SPACING_FRACTION
     inputs: tuple[str, ...] = DEPTH_INPUTS
     frame_margin: bool = True  # render the simulations' inputs beyond the frame by the largest blur radius
 

@@ -56,7 +56,7 @@ def _f_number(value: Any, source: str, where: str) -> float:
 def _configuration(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> Configuration:
     unknown = set(raw) - {"name", "letter", "logmar", "polarity", "lenses", "f_number", "capture"}
     if unknown:
-        raise field_error(source, where, f"unknown field(s) {sorted(unknown)}")
+        raise unknown_field_error(source, where, f"unknown field(s) {sorted(unknown)}")
     letter = raw.get("letter")
     if not isinstance(letter, str) or len(letter) != 1 or letter.upper() not in SLOAN_LETTERS:
         raise field_error(source, f"{where}.letter", f"must be one of the Sloan letters {', '.join(SLOAN_LETTERS)}, "
@@ -89,7 +89,7 @@ def _describe(c: Configuration) -> str:
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
     unknown = set(raw) - {"name", "letters", "logmars", "polarities", "lenses", "f_number", "spheres", "cylinders"}
     if unknown:
-        raise field_error(source, where, f"unknown field(s) {sorted(unknown)}")
+        raise unknown_field_error(source, where, f"unknown field(s) {sorted(unknown)}")
     letters = value_list(raw.get("letters", ["N"]), source, f"{where}.letters", '["K", "N"]')
     logmars = value_list(raw.get("logmars", [1.0]), source, f"{where}.logmars", "[1.0, 0.5]")
     polarities = value_list(raw.get("polarities", ["black-on-white"]), source, f"{where}.polarities",

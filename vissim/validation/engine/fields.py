@@ -29,6 +29,14 @@ def field_error(source: str, where: str, message: str) -> VissimInputError:
     return VissimInputError(f"{source}: {where}: {message}")
 
 
+class UnknownFieldError(VissimInputError):
+    """A campaign file's key that its kind does not know: perhaps another kind's (`vissim.validation.engine.loader`)."""
+
+
+def unknown_field_error(source: str, where: str, message: str) -> UnknownFieldError:
+    return UnknownFieldError(f"{source}: {where}: {message}")
+
+
 def read_toml_file(path: str | Path, what: str = "campaign file") -> dict:
     """The TOML document at ``path``; one clean error naming it if it is absent, a folder, binary or not TOML."""
     path = path_arg(path, f"the {what}'s path")
@@ -166,7 +174,7 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
     known = {f.name for f in fields(settings_class)}
     unknown = set(head) - known - set(texts) - set(read_elsewhere)
     if unknown:
-        raise field_error(source, f"[{where}]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
+        raise unknown_field_error(source, f"[{where}]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
     kwargs = checked_numbers(head, numbers, source, where)
     kwargs |= checked_numbers(head, whole_numbers, source, where, whole=True)
     if "seeds" in head:

@@ -13,7 +13,8 @@ from pathlib import Path
 
 from vissim.checks import path_arg
 from vissim.errors import VissimInputError
-from vissim.validation.engine.fields import description_text, field_error, name_text, read_campaign_toml, table, text
+from vissim.validation.engine.fields import (UnknownFieldError, description_text, field_error, name_text,
+                                             read_campaign_toml, table, text)
 from vissim.validation.engine.protocol import Campaign
 from vissim.validation.engine.registry import DEFAULT_KIND, bench_kind, bench_kind_names
 
@@ -73,9 +74,9 @@ def load_campaign(path: str | Path, *, check_memory: bool = True) -> Campaign:
         if "description" in head else ""
     try:
         settings, configurations, manifest = kind.read(doc, head, path)
-    except VissimInputError as error:
-        if "kind" in table(doc.get("campaign", {}), source, "[campaign]") or "unknown" not in str(error):
-            raise  # only a setting or table the default kind does not know may mean another kind was meant
+    except UnknownFieldError as error:
+        if "kind" in table(doc.get("campaign", {}), source, "[campaign]"):
+            raise  # a key the default kind does not know may mean another kind was meant; a kind given was meant
         others = " or ".join(f'"{name}"' for name in bench_kind_names() if name != kind_name)
         raise VissimInputError(f"{error} (no [campaign] kind is given, so the file was read as a {kind_name} "
                                f"campaign: add kind = {others} for another)") from None

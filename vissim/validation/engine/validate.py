@@ -65,9 +65,9 @@ def write_timings(run_dir: Path, summary: RunSummary, report_seconds: float, wor
     configuration's name, and its report, with the cores and workers it had) and return its one line for the
     command's summary."""
     names = dict(summary.item_names)
-    record = {"renders_seconds": round(summary.renders_seconds, 3), "items_seconds": round(summary.items_seconds, 3),
-              "report_seconds": round(report_seconds, 3), "workers": workers, "cores": os.cpu_count(),
-              "items": [{"key": key, "name": names.get(key, ""), "seconds": round(seconds, 3)}
+    record = {"renders_seconds": summary.renders_seconds, "items_seconds": summary.items_seconds,
+              "report_seconds": report_seconds, "workers": workers, "cores": os.cpu_count(),
+              "items": [{"key": key, "name": names.get(key, ""), "seconds": seconds}
                         for key, seconds in summary.item_seconds]}
     write_json_atomic(run_dir / TIMINGS_FILE, record, overwrite=True)
     slowest = ", ".join(f"{names.get(key) or key} {seconds:.1f} s"

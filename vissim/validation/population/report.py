@@ -17,6 +17,7 @@ Every file is written atomically with the run's provenance (`write_population_ru
 from __future__ import annotations
 
 import csv
+import functools
 import io
 from pathlib import Path
 
@@ -35,10 +36,18 @@ __all__ = ["write_population_run", "gap_table_md", "published_curves", "populati
 SCHEMATIC = BASE_EYE_MODEL  # the schematic eye set beside the measured ones: the one they are built on
 
 
-def _schematic():
+def _schematic_curve(condition, frequencies) -> np.ndarray:
+    """The schematic eye's MTF under ``condition`` (`schematic_mtf`), traced once for the gap table and the fan."""
+    return _schematic_curve_cached(condition, tuple(float(f) for f in frequencies))
+
+
+@functools.lru_cache(maxsize=32)
+def _schematic_curve_cached(condition, frequencies: tuple) -> np.ndarray:
     from vissim.optics.eyes.models import eye_model
 
-    return eye_model(SCHEMATIC)
+    curve = schematic_mtf(eye_model(SCHEMATIC), condition, frequencies)
+    curve.setflags(write=False)
+    return curve
 
 
 def published_curves(condition, frequencies) -> dict:
@@ -65,7 +74,7 @@ def _eye_rows(results, frequencies) -> list[dict]:
     for r in results:
         c = r.condition
         rows.append({"eye": r.eye.name, "condition": c.label, "pupil_mm": c.pupil_mm, "field_x_deg": c.field_deg[0],
-                     "field_y_deg": c.field_deg[1], "wavelength_nm": c.wavelength_nm, "correction": c.correction,
+                     "field_y_deg": c.field_deg[1], "wavelength_nm": c.wavelength_nm, "correction": str(c.correction),
                      "strehl": r.strehl, "m_diopters": r.m_diopters, "j0_diopters": r.j0_diopters,
                      "j45_diopters": r.j45_diopters, "higher_order_rms_um": r.higher_order_rms_um,
                      **{f"mtf_{f:g}_cyc_per_deg": float(v) for f, v in zip(frequencies, r.mtf)}})
@@ -97,7 +106,7 @@ def gap_table_md(results, conditions, frequencies) -> str:
         low, mid, high = (table["mtf"][QUANTILES.index(q)] for q in (0.25, 0.5, 0.75))
         cells = [f"{m:.3f} [{a:.3f}-{b:.3f}]" for a, m, b in zip(low, mid, high)]
         lines.append("| population (wavefronts) | " + " | ".join(cells) + " |")
-        schematic = schematic_mtf(_schematic(), condition, frequencies)
+        schematic = _schematic_curve(condition, frequencies)
         lines.append(f"| {SCHEMATIC} schematic eye (traced) | " + " | ".join(f"{v:.3f}" for v in schematic) + " |")
         for label, curve in published_curves(condition, frequencies).items():
             lines.append(f"| {label} | " + " | ".join(f"{v:.3f}" for v in curve) + " |")
@@ -121,7 +130,7 @@ def _fan_chart(results, conditions, frequencies) -> bytes:
         ax.fill_between(frequencies, mtf[0], mtf[4], color="tab:blue", alpha=0.15, label="population 5-95 %")
         ax.fill_between(frequencies, mtf[1], mtf[3], color="tab:blue", alpha=0.35, label="25-75 %")
         ax.plot(frequencies, mtf[2], color="tab:blue", lw=2, label="median")
-        ax.plot(frequencies, schematic_mtf(_schematic(), condition, frequencies), color="k", lw=1.2, label=SCHEMATIC)
+        ax.plot(frequencies, _schematic_curve(condition, frequencies), color="k", lw=1.2, label=SCHEMATIC)
         for (label, curve), style in zip(published_curves(condition, frequencies).items(), ("--", ":", "-.")):
             ax.plot(frequencies, curve, style, color="tab:red", label=label)
         ax.set_title(f"{condition.label}\n({summary[condition.label]['count']} eyes)", fontsize=8)

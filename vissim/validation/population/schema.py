@@ -13,6 +13,8 @@ The defaults are the ``vissim population`` command's. One item per condition.
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 
 from vissim.errors import VissimInputError
@@ -38,11 +40,17 @@ class PopulationSettings:
     mtf_cyc_per_deg: tuple[float, ...]
 
     def selected(self):
-        """The `MeasuredWavefront`s this selection names (`select_eyes`)."""
-        from vissim.optics.eyes.measured.population import select_eyes
+        """The `MeasuredWavefront`s this selection names (`select_eyes`), chosen once for all the campaign's
+        conditions (a range of foveal spherical equivalents evaluates every eye of the dataset)."""
+        return _selected(self)
 
-        return select_eyes(self.dataset, subjects=self.subjects, eyes=self.eyes,
-                           foveal_se_within_diopters=self.foveal_se_diopters)
+
+@functools.lru_cache(maxsize=8)
+def _selected(settings: PopulationSettings):
+    from vissim.optics.eyes.measured.population import select_eyes
+
+    return select_eyes(settings.dataset, subjects=settings.subjects, eyes=settings.eyes,
+                       foveal_se_within_diopters=settings.foveal_se_diopters)
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ import numpy as np
 
 from vissim.optics.eyes.measured.measured_eye import measured_front
 from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.pupil.zernike import fit_zernike_um, zernike_monomials
 from vissim.optics.raytrace.phase import PhasePlane
 
 __all__ = ["MeasuredPhase", "measured_phase_plane", "PHASE_DEGREE"]
@@ -55,10 +56,6 @@ class MeasuredPhase:
                 "wavelength_nm": self.wavelength_nm, "fit_residual_um": self.fit_residual_um}
 
 
-def _monomials(degree: int) -> list[tuple[int, int]]:
-    return [(p, total - p) for total in range(degree + 1) for p in range(total, -1, -1)]
-
-
 def measured_phase_plane(eye, field_deg, wavelength_nm: float) -> MeasuredPhase:
     """The phase plane (module doc) of the measured `Eye` ``eye`` at the chart's ``field_deg`` (OSA, deg) in
     light of ``wavelength_nm``."""
@@ -66,16 +63,15 @@ def measured_phase_plane(eye, field_deg, wavelength_nm: float) -> MeasuredPhase:
     base = eye.optics
     trace = trace_eye_wavefront(base, float(wavelength_nm), field, pupil_mm=eye.pupil_mm, iris_mm=eye.iris_mm)
     measured = measured_front(trace, eye.measured, base, traced=(trace,))
-    inside = trace.inside()
     radius = 0.5 * trace.entrance_pupil_mm
-    u, v = np.asarray(trace.x_mm)[inside] / radius, np.asarray(trace.y_mm)[inside] / radius
-    path_mm = -1e-3 * (np.asarray(measured.opd_um) - np.asarray(trace.opd_um))[inside]
-    powers = _monomials(PHASE_DEGREE)
-    basis = np.stack([u ** p * v ** q for p, q in powers], axis=1)
-    solution, *_ = np.linalg.lstsq(basis, path_mm, rcond=None)
-    residual_um = 1e3 * float(np.sqrt(np.mean((path_mm - basis @ solution) ** 2)))
-    plane = PhasePlane(trace.entrance_pupil_position_mm, tuple(trace.chief_entrance_pupil_mm), radius,
-                       tuple((p, q, float(c)) for (p, q), c in zip(powers, solution)), name=f"{eye.model} phase plane")
+    difference_um = -(np.asarray(measured.opd_um) - np.asarray(trace.opd_um))  # φ, µm; fitted inside the pupil
+    coefficients, residual_um = fit_zernike_um(trace.x_mm, trace.y_mm, difference_um, trace.entrance_pupil_mm,
+                                               PHASE_DEGREE)
+    table = zernike_monomials(coefficients)  # the same polynomial in u = x / R, v = y / R
+    terms = tuple((p, q, 1e-3 * float(table[p, q])) for p in range(len(table)) for q in range(len(table))
+                  if p + q <= PHASE_DEGREE)
+    plane = PhasePlane(trace.entrance_pupil_position_mm, tuple(trace.chief_entrance_pupil_mm), radius, terms,
+                       name=f"{eye.model} phase plane")
     log.info("%s at (%g, %g) deg, %g nm: phase plane fitted to %.2g um RMS", eye.model, *field, wavelength_nm,
              residual_um)
     return MeasuredPhase(plane, field, float(wavelength_nm), residual_um)

@@ -35,8 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import eye_pupil_diameter_mm, finite_number
-from vissim.checks import wavelength_nm as checked_wavelength_nm
+from vissim.checks import accommodation_diopters, eye_pupil_diameter_mm, eye_wavelength_nm, finite_number
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
                                          POPULATION_CORRECTIONS, POPULATION_FIELD_DEG)
@@ -81,14 +80,16 @@ class PopulationCondition:
         if not isinstance(self.correction, Prescription) and self.correction not in CORRECTIONS:
             raise VissimInputError(f"a population's correction is one of {', '.join(CORRECTIONS)} or a "
                                    f"Prescription (spectacles worn), got {self.correction!r}")
-        amplitude = finite_number(self.accommodation_amplitude_diopters, "an accommodation amplitude", "D")
+        amplitude = accommodation_diopters(self.accommodation_amplitude_diopters, "an accommodation amplitude")
         if (self.correction == "accommodating") != (amplitude > 0.0) or amplitude < 0.0:
             raise VissimInputError(f"the accommodating correction needs an accommodation amplitude > 0 D, and no other "
                                    f"correction takes one; got {amplitude:g} D with {self.correction!r}")
         object.__setattr__(self, "accommodation_amplitude_diopters", amplitude)
+        # any finite vertex: a lens at the pupil (minus its depth) is the accommodating eye's oracle; the command
+        # line and campaign files hold a user's to `VERTEX_DISTANCE_RANGE_MM`
         object.__setattr__(self, "vertex_mm", finite_number(self.vertex_mm, "a population's vertex distance", "mm"))
         object.__setattr__(self, "pupil_mm", eye_pupil_diameter_mm(self.pupil_mm, "a population's pupil"))
-        object.__setattr__(self, "wavelength_nm", checked_wavelength_nm(self.wavelength_nm))
+        object.__setattr__(self, "wavelength_nm", eye_wavelength_nm(self.wavelength_nm))  # the base eye is traced
         field = tuple(finite_number(v, "a population's field angle", "deg") for v in self.field_deg)
         if len(field) != 2:
             raise VissimInputError(f"a population's field is (x, y) in degrees, got {self.field_deg!r}")
