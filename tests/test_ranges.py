@@ -64,7 +64,7 @@ SIGN_OR_COUNT = {0, 1}
 #: design rules, each beside the code it governs.
 NOT_INPUT_BOUNDS = {
     "DISSIMILARITY_RANGE": "a report figure's axis",
-    "MAX_SHIFT_PX": "the alignment's own search", "MAX_ALIGN_PASSES": "the alignment's own iterations",
+    "MAX_SHIFT_PX": "the alignment's own search", "MAX_NORMAL_CONDITION": "a least-squares fit's method switch", "MAX_ALIGN_PASSES": "the alignment's own iterations",
     "MAX_HANDSHAKE_BYTES": "the scheduler protocol's message size",
     "MIN_AIR_GAP_MM": "a layout rule on derived lens positions",
     "MIN_EDGE_MM": "a realistic lens's design rule", "MIN_CENTER_MM": "a realistic lens's design rule",

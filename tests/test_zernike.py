@@ -147,3 +147,32 @@ def test_a_pupil_grid_takes_the_front_term_by_term(order):
     rho, theta = np.hypot(x, y) / 3.0, np.arctan2(y, x)
     terms = sum(c * zernike_nm(n, m, rho, theta) for (n, m), c in front.coefficients_um.items() if n > 0)
     np.testing.assert_allclose(opd_on_points_um(grid, front), terms, rtol=0, atol=1e-12 * np.max(np.abs(terms)))
+
+
+def test_a_fit_recovers_known_terms_and_equals_the_svd_solution():
+    # Independent oracle: numpy's SVD least squares on a basis written term by term with zernike_nm.
+    from vissim.optics.pupil.zernike import fit_zernike_um, zernike_keys, zernike_nm
+
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(-2.0, 2.0, (2, 4000))
+    keys = zernike_keys(8)
+    truth = {k: rng.normal(0.0, 0.2) for k in keys}
+    rho, theta = np.hypot(x, y) / 2.0, np.arctan2(y, x)
+    basis = np.stack([zernike_nm(n, m, rho, theta) for n, m in keys], axis=1)
+    opd = basis @ np.array([truth[k] for k in keys]) + rng.normal(0.0, 1e-3, x.size)
+    fitted, residual = fit_zernike_um(x, y, opd, 4.0, 8)
+    inside = rho <= 1.0
+    svd, *_ = np.linalg.lstsq(basis[inside], opd[inside], rcond=None)
+    assert max(abs(fitted[k] - v) for k, v in zip(keys, svd)) < 1e-12
+    assert max(abs(fitted[k] - truth[k]) for k in keys) < 1e-3  # the noise's reach, 1e-3 / sqrt(N) per term
+    assert residual == pytest.approx(1e-3, rel=0.1)
+
+
+def test_a_fit_whose_samples_cannot_tell_terms_apart_goes_by_the_svd():
+    # Samples on one line (y = 0) make the odd-in-y terms invisible: the normal matrix is singular.
+    from vissim.optics.pupil.zernike import fit_zernike_um
+
+    x = np.linspace(-1.9, 1.9, 400)
+    fitted, residual = fit_zernike_um(x, np.zeros_like(x), 0.3 * x**2, 4.0, 2)
+    assert np.isfinite(list(fitted.values())).all() and residual < 1e-12
+    assert fitted[(1, -1)] == pytest.approx(0.0, abs=1e-12) and fitted[(2, -2)] == pytest.approx(0.0, abs=1e-12)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
+import threading
 from collections.abc import Callable, Iterator
 
 __all__ = ["Progress", "counter", "terminal_progress"]
@@ -20,14 +21,17 @@ Progress = Callable[[str, int, int], None]
 
 
 def counter(progress: Progress | None, stage: str, total: int) -> Callable[[], None]:
-    """A function to call after each step of ``stage``: reports 1, 2, ... ``total`` (nothing without ``progress``)."""
+    """A function to call after each step of ``stage``, from any thread: reports 1, 2, ... ``total`` (nothing without
+    ``progress``)."""
     done = 0
+    lock = threading.Lock()
 
-    def step() -> None:
+    def step() -> None:  # from any thread
         nonlocal done
-        done += 1
-        if progress is not None:
-            progress(stage, done, total)
+        with lock:
+            done += 1
+            if progress is not None:
+                progress(stage, done, total)
 
     return step
 

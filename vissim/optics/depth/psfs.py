@@ -15,7 +15,7 @@ import numpy as np
 from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
 from vissim.optics.runtime.array_backend import ArrayBackend
 from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
-from vissim.optics.runtime.threads import available_cores, single_threaded_blas
+from vissim.optics.runtime.threads import single_threaded_blas, spare_threads
 from vissim.optics.pupil.wavefront import Wavefront
 
 __all__ = ["cached_psf", "LayerOptics", "worker_threads", "layer_pool", "in_order"]
@@ -108,8 +108,9 @@ class LayerOptics:
 
 
 def worker_threads(backend: ArrayBackend) -> int:
-    """Threads that blur layers at once: the cores this process may use on the CPU; one on a GPU."""
-    return available_cores() if backend is CPU_BACKEND else 1
+    """Threads that blur layers at once: the cores this process may use on the CPU (one inside another's threads,
+    `spare_threads`); one on a GPU."""
+    return spare_threads() if backend is CPU_BACKEND else 1
 
 
 @contextlib.contextmanager

@@ -64,6 +64,7 @@ from vissim.optics.eyes.spectacles import lens_surfaces, system_entrance_pupil_m
 from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.pupil.zernike import fit_zernike_um
+from vissim.optics.runtime.threads import map_on_threads, spare_threads, split_evenly
 
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm", "pupils_mm",
@@ -411,8 +412,8 @@ def trace_eye_wavefront(eye: SchematicEye, wavelength_nm: float, field_deg=(0.0,
 def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupil_mm=None,
                          iris_mm=None, samples: int = DEFAULT_SAMPLES, max_order: int = 8,
                          lenses=None, phase=None) -> list[EyeWavefront]:
-    """`trace_eye_wavefront` at each of ``wavelengths_nm``, in one trace: the rays of every wavelength travel
-    together, their paths differing only through the media's indices (one per ray, `trace_rays`), and each
+    """`trace_eye_wavefront` at each of ``wavelengths_nm``, in one trace per core: the rays of several wavelengths
+    travel together, their paths differing only through the media's indices (one per ray, `trace_rays`), and each
     wavelength's pupil search runs in the same traces. Equal to tracing each wavelength alone (to round-off;
     tests/test_eye_multi_wavelength.py). ``pupil_mm``: the entrance pupil at every wavelength; ``iris_mm``: one iris,
     its entrance pupil each wavelength's."""
@@ -429,19 +430,29 @@ def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0)
     try:
         system, entrance_z = _system_pupils(eye, lenses, irises, pupils, wavelengths)
         grids = [_iris_grid(eye, iris, samples) for iris in irises]
-        targets = np.concatenate([targets for targets, _ in grids])
-        waves = np.repeat(wavelengths, [len(edge) for _, edge in grids])
-        bundle, starts = trace_to_retina(eye, targets, waves, field_deg=field, lenses=lenses, phase=phase)
+
+        def trace_share(share):  # the rays of several wavelengths, traced together
+            targets = np.concatenate([grids[k][0] for k in share])
+            waves = np.repeat([wavelengths[k] for k in share], [len(grids[k][1]) for k in share])
+            return share, trace_to_retina(eye, targets, waves, field_deg=field, lenses=lenses, phase=phase)
+
+        traced = map_on_threads(trace_share, split_evenly(range(len(grids)), spare_threads()))
     except VissimInputError as error:
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
-    fronts, first = [], 0
-    for k, (_, edge) in enumerate(grids):
-        rays = slice(first, first + len(edge))
-        first += len(edge)
-        fronts.append(_fitted_front(eye, field, wavelengths[k], bundle.rows(rays), starts[rays], edge, max_order,
-                                    (float(system[k]), float(irises[k]), given, entrance_z[k], float(pupils[k])),
-                                    lenses))
-    return fronts
+
+    def fit_share(share_traced):
+        share, (bundle, starts) = share_traced
+        fronts, first = [], 0
+        for k in share:
+            edge = grids[k][1]
+            rays = slice(first, first + len(edge))
+            first += len(edge)
+            fronts.append(_fitted_front(eye, field, wavelengths[k], bundle.rows(rays), starts[rays], edge, max_order,
+                                        (float(system[k]), float(irises[k]), given, entrance_z[k], float(pupils[k])),
+                                        lenses))
+        return fronts
+
+    return [front for fronts in map_on_threads(fit_share, traced) for front in fronts]
 
 
 def _fitted_front(eye, field, wavelength, bundle, starts, edge, max_order, pupil, lenses) -> EyeWavefront:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -32,6 +33,7 @@ from vissim.lazy_import import lazy_module
 from vissim.progress import Progress, counter
 from vissim.optics.psf.field_size import airy_tail_radius_lambda_over_d, rim_widening
 from vissim.optics.pupil.grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
+from vissim.optics.runtime.threads import map_on_threads, spare_threads, split_evenly
 from vissim.optics.runtime.workspace import scratch
 from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
 
@@ -264,16 +266,35 @@ def _quadrant_intensities(pupil: tuple[np.ndarray, np.ndarray], cos: np.ndarray,
 def _mft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: None) -> np.ndarray:
     """Sum over wavelengths of weight x unit-energy intensity on the internal grid (origin at [M/2, M/2]).
 
-    ``advance()`` after the pupil grid, and after each wavelength's pupil and transform.
+    ``advance()`` after the pupil grid, and after each wavelength's pupil and transform. Several wavelengths are
+    shared out over `spare_threads` (each its own pupil and partial sum, OpenBLAS on one thread meanwhile), and
+    the partial sums added in a fixed order.
     """
-    plan = plans[0]
-    grid = pupil_grid(plan.pupil_step_mm, diameter_mm)
+    grid = pupil_grid(plans[0].pupil_step_mm, diameter_mm)
     advance()
+    jobs = list(zip(fronts, weights, plans))
+    lock = threading.Lock()
+
+    def locked_advance():
+        with lock:
+            advance()
+
+    partials = map_on_threads(lambda share: _mft_partial(grid, share, dtype, locked_advance),
+                              split_evenly(jobs, spare_threads()))
+    total = partials[0]
+    for partial in partials[1:]:
+        total += partial
+    return total
+
+
+def _mft_partial(grid, jobs, dtype, advance) -> np.ndarray:
+    """`_mft_intensity`'s sum over ``jobs`` ((front, weight, plan) each), on this thread."""
+    plan = jobs[0][2]
     m = plan.internal_size
     total = np.empty((m, m), dtype=dtype)
     opd = scratch("opd", (grid.centre_x_mm.size + grid.rim_x_mm.size,), dtype)
     parts = scratch("real", (grid.size, grid.size), dtype), scratch("imag", (grid.size, grid.size), dtype)
-    for index, (front, weight, each) in enumerate(zip(fronts, weights, plans)):
+    for index, (front, weight, each) in enumerate(jobs):
         real, imag = generalised_pupil_parts(grid, opd_on_points_um(grid, front, dtype, out=opd), each.wavelength_nm,
                                              dtype, out=parts)
         advance()

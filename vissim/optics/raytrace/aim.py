@@ -29,6 +29,13 @@ def launch_directions(object_point: np.ndarray, aim_xy: np.ndarray, stop_z_mm: f
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
+def _solve_2x2(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``jac[k]^-1 rhs[k]`` for each (2, 2) ``jac[k]``, by Cramer's rule (a batched LU costs ten times as much)."""
+    (a, b), (c, d) = jac[:, 0].T, jac[:, 1].T
+    det = a * d - b * c
+    return np.stack([d * rhs[:, 0] - b * rhs[:, 1], a * rhs[:, 1] - c * rhs[:, 0]], axis=1) / det[:, None]
+
+
 def _solve_aim(trace, aim, targets, apertured):
     """Newton's method on the landing error ``trace(aim, mask).points - targets``; Jacobian by finite differences."""
     for _ in range(MAX_NEWTON):
@@ -42,7 +49,7 @@ def _solve_aim(trace, aim, targets, apertured):
             shifted[:, axis] += AIM_STEP_MM
             moved = trace(shifted, False)
             jac[:, :, axis] = (moved.points_mm[:, :2] - bundle.points_mm[:, :2]) / AIM_STEP_MM
-        aim = aim - np.linalg.solve(jac, error[..., None])[..., 0]
+        aim = aim - _solve_2x2(jac, error)
     raise VissimInputError(f"ray aiming did not converge (landing error {np.max(np.abs(error)):.3g} mm)")
 
 

@@ -17,8 +17,9 @@ import functools
 import logging
 import os
 import threading
+from concurrent.futures import ThreadPoolExecutor
 
-__all__ = ["available_cores", "single_threaded_blas"]
+__all__ = ["available_cores", "map_on_threads", "single_threaded_blas", "spare_threads"]
 
 log = logging.getLogger(__name__)
 
@@ -38,25 +39,33 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-@functools.cache
 def _openblas_controls() -> tuple:
-    """(set, get) functions of each OpenBLAS loaded in this process."""
+    """(set, get) functions of each OpenBLAS loaded in this process now (SciPy's may load after NumPy's)."""
     try:
         with open("/proc/self/maps") as maps:
             paths = sorted({line.split()[-1] for line in maps if "openblas" in line.lower() and "/" in line})
     except OSError:  # pragma: no cover  (not Linux)
         return ()
-    controls = []
-    for path in paths:
-        try:
-            library = ctypes.CDLL(path)
-        except OSError:  # pragma: no cover
-            continue
-        for set_name, get_name in _OPENBLAS_SYMBOLS:
-            if hasattr(library, set_name) and hasattr(library, get_name):
-                controls.append((getattr(library, set_name), getattr(library, get_name)))
-                break
-    return tuple(controls)
+    return tuple(control for path in paths for control in _controls_of(path))
+
+
+@functools.cache
+def _controls_of(path: str) -> tuple:
+    try:
+        library = ctypes.CDLL(path)
+    except OSError:  # pragma: no cover
+        return ()
+    for set_name, get_name in _OPENBLAS_SYMBOLS:
+        if hasattr(library, set_name) and hasattr(library, get_name):
+            return ((getattr(library, set_name), getattr(library, get_name)),)
+    return ()
+
+
+def spare_threads() -> int:
+    """Threads a computation may run at once: the available cores, or one inside a `single_threaded_blas` block
+    (whose owner already runs its work on every core)."""
+    with _LOCK:
+        return 1 if _DEPTH[0] else available_cores()
 
 
 @contextlib.contextmanager
@@ -77,3 +86,29 @@ def single_threaded_blas():
             if _DEPTH[0] == 0:
                 for setter, threads in _DEPTH[1]:
                     setter(threads)
+
+
+def map_on_threads(work, shares) -> list:
+    """``[work(share) for share in shares]``, the shares at once on `spare_threads` threads (OpenBLAS on one thread
+    meanwhile), or one after another where there is one thread or one share. The first failure (in the shares'
+    order) is raised once the shares started have finished; those not started are dropped."""
+    shares = list(shares)
+    threads = min(spare_threads(), len(shares))
+    if threads <= 1:
+        return [work(share) for share in shares]
+    with single_threaded_blas(), ThreadPoolExecutor(threads) as pool:
+        futures = [pool.submit(work, share) for share in shares]
+        try:
+            return [future.result() for future in futures]
+        except BaseException:
+            for future in futures:  # a failure stops what has not started
+                future.cancel()
+            raise
+
+
+def split_evenly(items, parts: int) -> list[list]:
+    """``items`` in at most ``parts`` contiguous runs of near-equal length, in order (none empty)."""
+    items = list(items)
+    parts = max(1, min(parts, len(items)))
+    bounds = [round(k * len(items) / parts) for k in range(parts + 1)]
+    return [items[a:b] for a, b in zip(bounds, bounds[1:])]

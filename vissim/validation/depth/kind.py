@@ -21,6 +21,7 @@ class DepthKind:
 
     name = "depth"
     tables = ("config",)
+    items_on_threads = True
 
     def read(self, doc: dict, head: dict, path: Path):
         return read_depth_part(doc, head, path)

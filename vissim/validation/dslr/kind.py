@@ -23,6 +23,7 @@ class DslrKind:
 
     name = "dslr"
     tables = ("item", "sweep")
+    items_on_threads = True
 
     def read(self, doc: dict, head: dict, path: Path):
         return read_dslr_part(doc, head, path)

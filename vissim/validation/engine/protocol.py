@@ -78,6 +78,8 @@ class BenchKind(Protocol):
     name: str
     #: The campaign file's tables of configurations this kind reads (e.g. ``("item", "sweep")``).
     tables: tuple[str, ...]
+    #: Whether its items may be computed on threads at once (False: a kind whose items run their own processes).
+    items_on_threads: bool
 
     def read(self, doc: dict, head: dict, path: Path) -> tuple[Any, tuple, str | None]:
         """(settings, configurations, manifest path or None) from the file's ``[campaign]`` ``head`` and tables."""

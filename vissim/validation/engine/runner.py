@@ -1,4 +1,5 @@
-"""Run a campaign into a run folder: renders first (in parallel), then items; reuse what is done.
+"""Run a campaign into a run folder: renders first (in parallel), then items (one per core at once); reuse what
+is done.
 
 Run folder layout::
 
@@ -28,6 +29,7 @@ from vissim.atomic import check_outputs_apart, write_json_atomic
 from vissim.checks import MAX_WORKERS, instance_of, path_arg, samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
+from vissim.optics.runtime.threads import map_on_threads
 from vissim.progress import Progress, counter, terminal_progress
 from vissim.provenance import make_provenance
 from vissim.validation.engine.inputs import campaign_inputs
@@ -182,12 +184,20 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
                                      items=f"{len(todo)} of {len(keys)} items")
         renders_seconds = time.perf_counter() - start
         advance = counter(report, "items", len(todo))
-        for key, index in todo:
+
+        def compute(pair):
+            key, index = pair
             if key in plans:
                 start = time.perf_counter()
                 _compute_item(kind, campaign, key, index, plans[key], run_dir)
                 timed.append((key, time.perf_counter() - start))
             advance()
+
+        if getattr(kind, "items_on_threads", True):
+            map_on_threads(compute, todo)  # items are independent: one per core at once
+        else:
+            for pair in todo:
+                compute(pair)
     names = tuple((key, str(getattr(c, "name", ""))) for key, c in zip(keys, campaign.configurations))
     return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped),
                       renders_seconds, tuple(sorted(timed, key=lambda pair: -pair[1])), names)

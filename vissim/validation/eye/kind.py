@@ -21,6 +21,7 @@ class EyeKind:
 
     name = "eye"
     tables = ("item", "sweep")
+    items_on_threads = True
 
     def read(self, doc: dict, head: dict, path: Path):
         from vissim.validation.eye.schema import read_campaign

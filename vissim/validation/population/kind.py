@@ -22,6 +22,7 @@ class PopulationKind:
 
     name = "population"
     tables = ()
+    items_on_threads = False  # each item spreads its eyes over --workers processes or a Dask cluster
 
     def read(self, doc: dict, head: dict, path: Path):
         from vissim.validation.population.schema import read_campaign
