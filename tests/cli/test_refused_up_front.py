@@ -112,8 +112,8 @@ def test_a_letter_is_one_sloan_letter(capsys, tmp_path):
 
 @pytest.mark.parametrize("body, says", [
     ('[[item]]\nname = "myope"\nprescription = -40.0', "item[0]: the principal meridian of the prescription -40.00 DS"),
-    ('[[sweep]]\nname = "pupil"\npupil_diameter_mm = []', "sweep[0].pupil_mm: an empty list sweeps nothing"),
-    ('[[item]]\nname = "uv"\nwavelength_nm = 355.0', "item[0].light: must be within 365 to 850 nm, got 355.0"),
+    ('[[sweep]]\nname = "pupil"\npupil_diameter_mm = []', "sweep[0].pupil_diameter_mm: an empty list sweeps nothing"),
+    ('[[item]]\nname = "uv"\nwavelength_nm = 355.0', "item[0].wavelength_nm: must be within 365 to 850 nm, got 355.0"),
 ])
 def test_an_eye_campaign_is_refused_at_load(capsys, tmp_path, body, says):
     path, run_dir = tmp_path / "eye.toml", tmp_path / "run"

@@ -105,7 +105,7 @@ BAD = [  # (file text, fragments the one error line must hold besides the file's
     ("[eye]\nmodel = \"le-grand\"\naccommodation_diopters = 2.0\n", ["accommodation_diopters", "got 2 D"]),
     ("[chart]\nletter = \"Q\"\n", ["[chart].letter", "Q"]),
     ("[spectacles]\ncylinder_diopters = -1.0\naxis_deg = 200.0\n", ["[spectacles]", "axis_deg", "deg", "200"]),
-    ("[eye]\npupil_diameter_mm = 3.0\niris_mm = 4.0\n", ["pupil_diameter_mm", "iris_mm"]),
+    ("[eye]\npupil_diameter_mm = 3.0\niris_mm = 4.0\n", ["pupil", "iris_mm", "not both"]),
     ("[eye]\nfield_deg = [50.0, 0.0]\n", ["[eye].field_deg", "50", "deg"]),
     ("[light]\nwavelength_nm = 550.0\nspectrum = \"photopic\"\n", ["wavelength", "photopic"]),
     ("[eye]\nprescription = \"minus two\"\n", ["[eye].prescription", "minus two", "dioptres"]),
