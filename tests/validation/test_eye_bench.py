@@ -326,7 +326,7 @@ def test_each_seeds_render_spec_carries_the_one_built_bench_with_its_chart(monke
     from vissim.validation.engine.protocol import Campaign
     from vissim.validation.eye.kind import BENCH
 
-    settings, (configuration,) = read_campaign({"item": [{"name": "lens", "lens": 1.0, "pupil_mm": 3.0}]},
+    settings, (configuration,) = read_campaign({"item": [{"name": "lens", "lens": 1.0, "pupil_diameter_mm": 3.0}]},
                                                {"kind": "eye", "size_px": [16, 16]}, "eye.toml")
     built = BENCH.build(configuration, settings)
     campaign = Campaign(kind="eye", name="one", description="", settings=settings, configurations=(configuration,),
