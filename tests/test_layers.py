@@ -29,7 +29,7 @@ from source_modules import MODULES, PACKAGE, loops, owner
 from vissim.validation.engine.registry import BENCH_KINDS, bench_kind_names
 
 LAYERS = [
-    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis", "spectra", "lazy_import"},
+    {"units", "errors", "checks", "atomic", "provenance", "progress", "thesis", "spectra", "lazy_import", "vocabulary"},
     {"optics"},
     {"imageio", "imaging", "optotypes", "acuity", "charts", "chart_defaults", "chart_demo"},
     {"bench"},

@@ -288,7 +288,7 @@ def test_the_spp_check_of_the_library_names_the_range_first():
 # -- configuration names -----------------------------------------------------------------------
 def named_campaign(tmp_path, name: str, where: str = "item"):
     path = tmp_path / "named.toml"
-    entry = 'letter = "K"\nlogmar = 0.5\n' if where == "item" else 'letters = ["K"]\nlogmars = [0.5]\n'
+    entry = 'letter = "K"\nlogmar = 0.5\n' if where == "item" else 'letter = ["K"]\nlogmar = [0.5]\n'
     path.write_text(TINY_CAMPAIGN.split("[[item]]")[0] + f"[[{where}]]\nname = {name}\n{entry}")
     return path
 

@@ -111,9 +111,9 @@ def test_a_letter_is_one_sloan_letter(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("body, says", [
-    ('[[item]]\nname = "myope"\nrx = -40.0', "item[0]: the principal meridian of the prescription -40.00 DS"),
-    ('[[sweep]]\nname = "pupil"\npupil_mm = []', "sweep[0].pupil_mm: an empty list sweeps nothing"),
-    ('[[item]]\nname = "uv"\nlight = 355.0', "item[0].light: must be within 365 to 850 nm, got 355.0"),
+    ('[[item]]\nname = "myope"\nprescription = -40.0', "item[0]: the principal meridian of the prescription -40.00 DS"),
+    ('[[sweep]]\nname = "pupil"\npupil_diameter_mm = []', "sweep[0].pupil_diameter_mm: an empty list sweeps nothing"),
+    ('[[item]]\nname = "uv"\nwavelength_nm = 355.0', "item[0].wavelength_nm: must be within 365 to 850 nm, got 355.0"),
 ])
 def test_an_eye_campaign_is_refused_at_load(capsys, tmp_path, body, says):
     path, run_dir = tmp_path / "eye.toml", tmp_path / "run"
@@ -137,6 +137,6 @@ def test_an_absurd_zernike_is_named_when_its_psf_cannot_be_sampled(capsys, tmp_p
 
 def test_a_campaign_without_a_kind_says_it_was_read_as_a_dslr_campaign(capsys, tmp_path):
     path, run_dir = tmp_path / "eye.toml", tmp_path / "run"
-    path.write_text('[campaign]\nname = "x"\npupil_mm = 3\n[[item]]\nname = "a"\n')
+    path.write_text('[campaign]\nname = "x"\npupil_diameter_mm = 3\n[[item]]\nname = "a"\n')
     _refused(capsys, ["validate", str(path), "-o", str(run_dir)],
              says="no [campaign] kind is given, so the file was read as a dslr campaign", outputs=[run_dir])

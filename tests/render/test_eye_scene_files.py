@@ -29,8 +29,8 @@ EVERY_KEY = """
 [eye]
 model = "arizona"
 accommodation_diopters = 1.5
-pupil_mm = 4.5
-rx = "-2.00 -0.50 x 90"
+pupil_diameter_mm = 4.5
+prescription = "-2.00 -0.50 x 90"
 field_deg = [5.0, -2.5]
 [light]
 wavelength_nm = 600.0
@@ -40,7 +40,7 @@ distance_m = 0.5
 letter = "H"
 logmar = 0.3
 [spectacles]
-vertex_mm = 14.0
+vertex_distance_mm = 14.0
 sphere_diopters = -1.25
 cylinder_diopters = -0.75
 axis_deg = 30.0
@@ -85,17 +85,19 @@ def test_the_shipped_scene_loads_and_writes_down_the_defaults():
 
 BAD = [  # (file text, fragments the one error line must hold besides the file's path)
     ("[camera]\nf_number = 5\n", ["unknown key 'camera'"]),
-    ("[eye]\npupil_diameter_mm = 3\n", ["[eye]", "'pupil_diameter_mm'", "pupil_mm"]),
+    ("[eye]\npupil_mm = 3\n", ["[eye]", "'pupil_mm' is now 'pupil_diameter_mm'"]),
+    ("[spectacles]\nvertex_mm = 12\n", ["[spectacles]", "'vertex_mm' is now 'vertex_distance_mm'"]),
+    ("[eye]\nrx = \"-1.00\"\n", ["[eye]", "'rx' is now 'prescription'"]),
     ("[chart]\ndistance_mm = 6000\n", ["[chart]", "'distance_mm'", "distance_m"]),
-    ("[eye]\npupil_mm = \"3\"\n", ["[eye].pupil_mm", "mm"]),
+    ("[eye]\npupil_diameter_mm = \"3\"\n", ["[eye].pupil_diameter_mm", "mm"]),
     ("[render]\nspp = 4.5\n", ["[render].spp", "samples per pixel"]),
     ("[render]\nsize_px = [16]\n", ["[render].size_px", "pixels"]),
     ("[eye]\nfield_deg = [1.0, \"up\"]\n", ["[eye].field_deg", "degrees"]),
-    ("[eye]\npupil_mm = 30.0\n", ["[eye].pupil_mm", "mm", "30"]),
+    ("[eye]\npupil_diameter_mm = 30.0\n", ["[eye].pupil_diameter_mm", "mm", "30"]),
     ("[light]\nwavelength_nm = 1000.0\n", ["[light].wavelength_nm", "nm", "1000"]),
     ("[render]\narcmin_per_px = 0.0\n", ["[render].arcmin_per_px", "arcmin per pixel"]),
     ("[chart]\ndistance_m = -1.0\n", ["[chart].distance_m", " m"]),
-    ("[spectacles]\nvertex_mm = 0.0\n", ["[spectacles].vertex_mm", "mm"]),
+    ("[spectacles]\nvertex_distance_mm = 0.0\n", ["[spectacles].vertex_distance_mm", "mm"]),
     ("[spectacles]\nsphere_diopters = 40.0\n", ["[spectacles].sphere_diopters", "dioptres", "40"]),
     ("[spectacles]\ncylinder_diopters = -1.0\n", ["[spectacles].cylinder_diopters", "axis_deg", "degrees"]),
     ("[render]\nspp = 0\n", ["[render].spp", "samples per pixel"]),
@@ -103,10 +105,10 @@ BAD = [  # (file text, fragments the one error line must hold besides the file's
     ("[eye]\nmodel = \"le-grand\"\naccommodation_diopters = 2.0\n", ["accommodation_diopters", "got 2 D"]),
     ("[chart]\nletter = \"Q\"\n", ["[chart].letter", "Q"]),
     ("[spectacles]\ncylinder_diopters = -1.0\naxis_deg = 200.0\n", ["[spectacles]", "axis_deg", "deg", "200"]),
-    ("[eye]\npupil_mm = 3.0\niris_mm = 4.0\n", ["pupil_mm", "iris_mm"]),
+    ("[eye]\npupil_diameter_mm = 3.0\niris_mm = 4.0\n", ["pupil", "iris_mm", "not both"]),
     ("[eye]\nfield_deg = [50.0, 0.0]\n", ["[eye].field_deg", "50", "deg"]),
     ("[light]\nwavelength_nm = 550.0\nspectrum = \"photopic\"\n", ["wavelength", "photopic"]),
-    ("[eye]\nrx = \"minus two\"\n", ["[eye].rx", "minus two", "dioptres"]),
+    ("[eye]\nprescription = \"minus two\"\n", ["[eye].prescription", "minus two", "dioptres"]),
     ("[eye\n", ["not valid TOML"]),
 ]
 
@@ -177,10 +179,10 @@ def test_the_output_is_never_the_scene_file(tmp_path, capsys):
 
 
 def test_a_bad_scene_file_fails_the_command_in_one_line(tmp_path, capsys):
-    path = scene(tmp_path, "[eye]\npupil_mm = 30.0\n")
+    path = scene(tmp_path, "[eye]\npupil_diameter_mm = 30.0\n")
     assert main(["render", "eye", "--scene", str(path), "-o", str(tmp_path / "o.exr")]) == 2
     err = capsys.readouterr().err
-    assert len(err.splitlines()) == 1 and str(path) in err and "[eye].pupil_mm" in err, err
+    assert len(err.splitlines()) == 1 and str(path) in err and "[eye].pupil_diameter_mm" in err, err
 
 
 @pytest.mark.skipif(find_libllvm() is None, reason="no usable libLLVM: llvm variants unavailable")
@@ -196,7 +198,7 @@ def test_the_scene_file_is_in_the_provenance(tmp_path):
 @pytest.mark.skipif(find_libllvm() is None, reason="no usable libLLVM: llvm variants unavailable")
 def test_a_scene_file_renders_the_image_its_options_render(tmp_path):
     """The same settings written in a file or given as options: the same pixels, bit for bit (fixed seed)."""
-    path = scene(tmp_path, '[eye]\npupil_mm = 4.0\naccommodation_diopters = 1.0\n[chart]\ndistance_m = 2.0\n'
+    path = scene(tmp_path, '[eye]\npupil_diameter_mm = 4.0\naccommodation_diopters = 1.0\n[chart]\ndistance_m = 2.0\n'
                            'letter = "Z"\nlogmar = 0.4\n[spectacles]\nsphere_diopters = 0.5\n'
                            '[render]\nsize_px = [16, 16]\nspp = 4\nseed = 9\n')
     from_file, from_options = tmp_path / "file.exr", tmp_path / "options.exr"

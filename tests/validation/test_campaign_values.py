@@ -22,9 +22,9 @@ SINGLE_PLANE = {
         "simulations": ["wave", "geometric"], "inputs": ["render", "synthetic"], "wave_truth": True,
     },
     "item": [{"name": "plus two", "letter": "K", "logmar": 0.5, "polarity": "black-on-white",
-              "lenses": [{"sphere": 2.0, "cylinder": -1.0, "axis": 90}], "f_number": 5.0, "capture": "none"}],
-    "sweep": [{"name": "sweep", "letters": ["N"], "logmars": [0.5], "polarities": ["white-on-black"],
-               "spheres": [1.0], "cylinders": [{"cylinder": 1.0, "axis": 180}], "lenses": [[0.5]], "f_number": 4.0}],
+              "lenses": [{"sphere_diopters": 2.0, "cylinder_diopters": -1.0, "axis_deg": 90}], "f_number": 5.0, "capture": "none"}],
+    "sweep": [{"name": "sweep", "letter": ["N"], "logmar": [0.5], "polarity": ["white-on-black"],
+               "lens": [1.0, {"cylinder_diopters": 1.0, "axis_deg": 180}], "lenses": [[0.5]], "f_number": 4.0}],
 }
 
 SCENE = """
@@ -44,7 +44,7 @@ DEPTH = {
     "campaign": {"kind": "depth", "name": "fuzz", "description": "mutated values", "spp": 4, "aux_spp": 4, "seeds": [1, 2],
                        "aux_seed": 3, "oversample": 1, "simulations": ["geometric", "wave"], "wavelength_nm": 550.0,
                        "data_range": 1.0, "margin_px": 1.0, "layer_spacing_fraction": 0.5},
-    "config": [{"name": "eye", "scene": "scene.toml", "eye": "-1.00 DS", "pupil_mm": 3.0, "accommodation_diopters": 0.5},
+    "config": [{"name": "eye", "scene": "scene.toml", "prescription": "-1.00 DS", "pupil_diameter_mm": 3.0, "accommodation_diopters": 0.5},
                {"name": "camera", "scene": "scene.toml",
                 "camera": {"f_number": 5.0, "focus_distance_m": 2.0, "focal_length_mm": 18.0,
                            "vertex_distance_mm": 10.0, "lenses": [1.0]}}],
@@ -143,7 +143,7 @@ def test_single_plane_campaigns_take_the_ranges_of_checks(tmp_path, field, value
 @pytest.mark.parametrize("where, value, fragments", [
     (("campaign", "wavelength_nm"), 2200.0, ["campaign.wavelength_nm", "within 200 to 2000 nm"]),
     (("config", 1, "camera", "vertex_distance_mm"), 201.0, ["vertex_distance_mm", "within 0 to 200 mm"]),
-    (("config", 0, "pupil_mm"), 0.5, ["config[0].pupil_mm", "within 1 to 10 mm"]),
+    (("config", 0, "pupil_diameter_mm"), 0.5, ["config[0].pupil_diameter_mm", "within 1 to 10 mm"]),
 ])
 def test_depth_campaigns_take_the_ranges_of_checks(tmp_path, where, value, fragments):
     (tmp_path / "scene.toml").write_text(SCENE)

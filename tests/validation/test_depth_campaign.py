@@ -106,7 +106,7 @@ def test_shipped_depth_campaign_loads():
     ("[campaign]\nkind = 'depth'\nspp = 0\n", "spp"),
     ("[campaign]\nkind = 'depth'\nseeds = [1, 1]\n[[config]]\nscene = 'scene.toml'\n", "two different integer seeds"),
     ("[campaign]\nkind = 'depth'\n[[config]]\nname = 'x'\n", "needs scene"),
-    ("[campaign]\nkind = 'depth'\n[[config]]\nscene = 'scene.toml'\neye = 'plano'\ncamera = { f_number = 4.0 }\n", "not both"),
+    ("[campaign]\nkind = 'depth'\n[[config]]\nscene = 'scene.toml'\nprescription = 'plano'\ncamera = { f_number = 4.0 }\n", "not both"),
     ("[campaign]\nkind = 'depth'\nsimulations = ['thesis']\n", "choose from geometric, wave"),
     ("[campaign]\nkind = 'depth'\n", "no configurations"),
     ("[campaign]\nname = 'flat'\n[[config]]\nscene = 'scene.toml'\n", "add kind = \"depth\" to \\[campaign\\]"),

@@ -36,26 +36,26 @@ rays_across = 61
 
 [[item]]
 name = "plain"
-pupil_mm = 3.0
+pupil_diameter_mm = 3.0
 
 [[sweep]]
 name = "lens"
 lens = [1.0]
-field = 0.0
+field_deg = 0.0
 """
 
 
 def test_the_campaign_file_is_checked():
-    doc = {"item": [{"name": "a", "lens": 1.0, "field": 10.0}]}
+    doc = {"item": [{"name": "a", "lens": 1.0, "field_deg": 10.0}]}
     with pytest.raises(VissimInputError, match=r"item\[0\].*lens"):
         read_campaign(doc, {"kind": "eye"}, "eye.toml")
     with pytest.raises(VissimInputError, match="pupil"):
-        read_campaign({"item": [{"pupil_mm": 10.5}]}, {"kind": "eye"}, "eye.toml")  # an eye's pupil: 1-10 mm
+        read_campaign({"item": [{"pupil_diameter_mm": 10.5}]}, {"kind": "eye"}, "eye.toml")  # an eye's pupil: 1-10 mm
     with pytest.raises(VissimInputError, match=r"item\[0\].*accommodation"):  # Arizona's range is 0-6 D
-        read_campaign({"item": [{"eye_model": "arizona", "accommodation": 7.0}]}, {"kind": "eye"}, "eye.toml")
+        read_campaign({"item": [{"eye_model": "arizona", "accommodation_diopters": 7.0}]}, {"kind": "eye"}, "eye.toml")
     with pytest.raises(VissimInputError, match="colour"):
         read_campaign({"item": [{"colour": 1}]}, {"kind": "eye"}, "eye.toml")
-    settings, configurations = read_campaign({"sweep": [{"name": "p", "pupil_mm": [3.0, 6.0], "light": "photopic"}]},
+    settings, configurations = read_campaign({"sweep": [{"name": "p", "pupil_diameter_mm": [3.0, 6.0], "spectrum": "photopic"}]},
                                              {"kind": "eye", "spp": 8}, "eye.toml")
     assert settings.spp == 8 and [c.pupil_mm for c in configurations] == [3.0, 6.0]
     assert {c.spectrum for c in configurations} == {"photopic"}
@@ -63,8 +63,8 @@ def test_the_campaign_file_is_checked():
 
 def test_an_item_s_rx_is_checked_and_kept_as_its_prescription():
     settings, configurations = read_campaign(
-        {"item": [{"name": "a", "rx": -3}, {"name": "b", "rx": "-2 -1 x 90"}, {"name": "c"}],
-         "sweep": [{"name": "s", "rx": ["-1.00", 2.5]}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
+        {"item": [{"name": "a", "prescription": -3}, {"name": "b", "prescription": "-2 -1 x 90"}, {"name": "c"}],
+         "sweep": [{"name": "s", "prescription": ["-1.00", 2.5]}]}, {"kind": "eye", "vertex_distance_mm": 14.0}, "eye.toml")
     assert [c.rx for c in configurations] == [Prescription(-3.0, 0.0, 180.0), Prescription(-2.0, -1.0, 90.0), None,
                                               Prescription(-1.0, 0.0, 180.0), Prescription(2.5, 0.0, 180.0)]
     assert configurations[0].vertex_mm == 14.0 and "rx" not in configurations[2].key_inputs()
@@ -72,14 +72,14 @@ def test_an_item_s_rx_is_checked_and_kept_as_its_prescription():
     # not a prescription; not text; +90 D: beyond the trial lenses' range (the eye's own check)
     for bad, words in (("abc", "'abc'"), (True, "True"), ("+90", r"\+90\.00 DS an eye is made to need must be within -30 to 30 dioptres")):
         with pytest.raises(VissimInputError, match=rf"eye\.toml: item\[0\]\S*: .*{words}") as caught:
-            read_campaign({"item": [{"rx": bad}]}, {"kind": "eye", "vertex_mm": 14.0}, "eye.toml")
+            read_campaign({"item": [{"prescription": bad}]}, {"kind": "eye", "vertex_distance_mm": 14.0}, "eye.toml")
         assert "\n" not in str(caught.value)
 
 
 def test_an_item_s_rx_is_the_number_given_not_its_text():
     """0.125 D and an axis of 90.5 deg (off the clinical 0.01 D / whole-degree grid) are the eye's prescription exactly;
     the item's key and record hold the numbers, and the report's label writes them in full."""
-    _, (eighth, half_degree) = read_campaign({"item": [{"name": "a", "rx": 0.125}, {"name": "b", "rx": "-2 -1 x 90.5"}]},
+    _, (eighth, half_degree) = read_campaign({"item": [{"name": "a", "prescription": 0.125}, {"name": "b", "prescription": "-2 -1 x 90.5"}]},
                                              {"kind": "eye"}, "eye.toml")
     assert eighth.eye().rx == Prescription(0.125, 0.0, 180.0) and half_degree.eye().rx.axis_deg == 90.5
     assert eighth.key_inputs()["rx"] == {"sphere_diopters": 0.125, "cylinder_diopters": 0.0, "axis_deg": 180.0}
@@ -96,8 +96,8 @@ def _myope_scenes(chart_distance_m: float):
     from vissim.validation.eye.simulate import EyeScene
 
     settings, configurations = read_campaign(
-        {"item": [{"name": "m", "rx": -3.0}, {"name": "ms", "rx": -3.0, "lens": -3.0}, {"name": "e"}]},
-        {"kind": "eye", "vertex_mm": 12.0}, "eye.toml")
+        {"item": [{"name": "m", "prescription": -3.0}, {"name": "ms", "prescription": -3.0, "lens": -3.0}, {"name": "e"}]},
+        {"kind": "eye", "vertex_distance_mm": 12.0}, "eye.toml")
     moved = [dataclasses.replace(c, chart_distance_m=chart_distance_m) for c in configurations]
     return [EyeScene(build_bench(c, settings).bench, settings.oversample, settings.rays_across) for c in moved]
 
@@ -197,13 +197,13 @@ def test_a_toy_eye_campaign_runs_through_the_engine(tmp_path):
 MYOPE_TOY = TOY.split("[[item]]")[0].replace('name = "eye toy"', 'name = "myope toy"') + """
 [[item]]
 name = "myope"
-pupil_mm = 3.0
-rx = -3.0
+pupil_diameter_mm = 3.0
+prescription = -3.0
 
 [[item]]
 name = "myope in spectacles"
-pupil_mm = 3.0
-rx = -3.0
+pupil_diameter_mm = 3.0
+prescription = -3.0
 lens = -3.0
 """
 
@@ -229,7 +229,7 @@ def test_the_myope_with_and_without_its_spectacles_passes_the_self_check(tmp_pat
 ALTERED_TOY = TOY.split("[[item]]")[0].replace('name = "eye toy"', 'name = "altered toy"') + """
 [[item]]
 name = "spherical cornea"
-pupil_mm = 4.0
+pupil_diameter_mm = 4.0
 surfaces."cornea front".conic = 0.0
 """
 
@@ -253,9 +253,9 @@ MEASURED_TOY = TOY.split("[[item]]")[0].replace('name = "eye toy"', 'name = "mea
 [[item]]
 name = "subject 92 at -20 deg"
 eye_model = "jaeken-artal-2012:92:right"
-pupil_mm = 4.0
+pupil_diameter_mm = 4.0
 chart_distance_m = 0.33
-field = [-20.0, 0.0]
+field_deg = [-20.0, 0.0]
 """
 
 
@@ -303,7 +303,7 @@ def test_one_bench_and_one_model_eye_are_built_per_eye_campaign_item(tmp_path, m
         original_init(self)
 
     monkeypatch.setattr(eye_bench.EyeBench, "__post_init__", counted_init)
-    doc = {"item": [{"name": "myope in spectacles", "pupil_mm": 3.0, "rx": -1.0, "lens": -1.0,
+    doc = {"item": [{"name": "myope in spectacles", "pupil_diameter_mm": 3.0, "prescription": -1.0, "lens": -1.0,
                      "eye_model": "escudero-sanz-1999"}]}
     settings, (configuration,) = read_campaign(doc, {"kind": "eye", "size_px": [16, 16], "rays_across": 41,
                                                      "oversample": 1}, "eye.toml")
@@ -326,7 +326,7 @@ def test_each_seeds_render_spec_carries_the_one_built_bench_with_its_chart(monke
     from vissim.validation.engine.protocol import Campaign
     from vissim.validation.eye.kind import BENCH
 
-    settings, (configuration,) = read_campaign({"item": [{"name": "lens", "lens": 1.0, "pupil_mm": 3.0}]},
+    settings, (configuration,) = read_campaign({"item": [{"name": "lens", "lens": 1.0, "pupil_diameter_mm": 3.0}]},
                                                {"kind": "eye", "size_px": [16, 16]}, "eye.toml")
     built = BENCH.build(configuration, settings)
     campaign = Campaign(kind="eye", name="one", description="", settings=settings, configurations=(configuration,),

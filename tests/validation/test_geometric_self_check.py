@@ -36,7 +36,7 @@ inputs = ["synthetic"]
 name = "astigmatism"
 letter = "N"
 logmar = 0.7
-lenses = [{ sphere = 0.0, cylinder = 2.0, axis = 90 }]
+lenses = [{ sphere_diopters = 0.0, cylinder_diopters = 2.0, axis_deg = 90 }]
 """
 
 

@@ -33,7 +33,7 @@ lenses = [2.0]
 name = "cylinder"
 letter = "N"
 logmar = 0.7
-lenses = [{ cylinder = 2.0, axis = 90 }]
+lenses = [{ cylinder_diopters = 2.0, axis_deg = 90 }]
 """
 
 
@@ -119,7 +119,7 @@ def test_cli_validate_and_report(tiny, tmp_path, monkeypatch, capsys):
     [
         ('[campaign]\nspp = 0\n[[item]]\nletter = "K"\n', "campaign.spp"),
         ('[[item]]\nletter = "E"\n', "Sloan letters"),
-        ('[[item]]\nletter = "K"\nlenses = [{ cylinder = 1.0 }]\n', "axis"),
+        ('[[item]]\nletter = "K"\nlenses = [{ cylinder_diopters = 1.0 }]\n', "axis"),
         ('[[item]]\nletter = "K"\nlenses = [1, 2, 3, 4]\n', "at most 3"),
         ('[campaign]\nseeds = [1, 1]\n[[item]]\nletter = "K"\n', "seeds"),
         ("[campaign]\n", "no configurations"),
@@ -154,9 +154,9 @@ wave_truth = false
 
 [[sweep]]
 name = "myopia"
-letters = ["K"]
-logmars = [0.7]
-spheres = [0.5, 1.0]
+letter = ["K"]
+logmar = [0.7]
+lens = [0.5, 1.0]
 
 [[item]]
 name = "myopia: not in the sweep"

@@ -22,8 +22,8 @@ kind = "population"
 name = "small population"
 dataset = "jaeken-artal-2012"
 subjects = [1, 2]
-pupil_mm = [3.0]
-field = [[0.0, 0.0], [-15.0, 0.0], [10.0, 0.0]]
+pupil_diameter_mm = [3.0]
+field_deg = [[0.0, 0.0], [-15.0, 0.0], [10.0, 0.0]]
 correction = ["sphero-cylinder"]
 mtf_cyc_per_deg = [10.0, 30.0]
 """
@@ -59,25 +59,26 @@ def test_each_condition_is_an_item_spectacles_worn_included(tmp_path):
     assert len(campaign.configurations) == 6
     worn = tmp_path / "worn.toml"  # one worn condition run to its report: the prescription is written as text
     worn.write_text(SMALL.replace('correction = ["sphero-cylinder"]', 'correction = ["-1.00 -0.50 x 90"]')
-                    .replace("field = [[0.0, 0.0], [-15.0, 0.0], [10.0, 0.0]]", "field = [[0.0, 0.0]]"))
+                    .replace("field_deg = [[0.0, 0.0], [-15.0, 0.0], [10.0, 0.0]]", "field_deg = [[0.0, 0.0]]"))
     validate(worn, tmp_path / "run", show_progress=False)
     with open(tmp_path / "run" / "metrics.csv", newline="") as handle:
         assert {row["correction"] for row in csv.DictReader(handle)} == {"-1.00 -0.50 x 90"}
 
 
 @pytest.mark.parametrize("line, words", [
-    ('pupil_mm = [5.0]', "campaign.pupil_mm[0]: must be"),
+    ('pupil_diameter_mm = [5.0]', "campaign.pupil_diameter_mm[0]: must be"),
     ('dataset = "nobody-2020"', "campaign.dataset: choose from"),
     ('correction = ["squinting"]', "campaign.correction[0]: a correction is uncorrected or"),
-    ('field = [[0.0]]', "campaign.field[0]"),
+    ('field_deg = [[0.0]]', "campaign.field_deg[0]"),
     ('spp = 64', "unknown key(s) ['spp']"),
-    ('pupil_mm = [3.0, 3.0]', "given twice"),
+    ('pupil_diameter_mm = [3.0, 3.0]', "given twice"),
     ('subjects = [1, 1]', "campaign.subjects: a population names each subject once"),
     ('subjects = [1, 999]', "campaign.subjects: jaeken-artal-2012 has subjects 1-130, got 999"),
     ('eyes = ["rigth"]', "campaign.eyes: choose from right, left"),
-    ('field = [[60.0, 0.0]]', "campaign.field[0]: jaeken-artal-2012 was measured at field x -40 to 40 deg"),
+    ('field_deg = [[60.0, 0.0]]', "campaign.field_deg[0]: jaeken-artal-2012 was measured at field x -40 to 40 deg"),
     ('accommodation_amplitude_diopters = 2.0', "goes with the accommodating correction only"),
-    ('vertex_mm = 500.0', "campaign.vertex_mm"),
+    ('vertex_distance_mm = 500.0', "campaign.vertex_distance_mm"),
+    ('vertex_mm = 12.0', "campaign: 'vertex_mm' is now 'vertex_distance_mm'"),
 ])
 def test_a_bad_population_file_is_refused_naming_its_field(tmp_path, line, words):
     """Each refusal names the file's field; a repeated condition or subject would count an eye twice."""
@@ -92,7 +93,7 @@ def test_a_bad_population_file_is_refused_naming_its_field(tmp_path, line, words
 def test_a_population_campaign_spreads_its_eyes_over_a_dask_scheduler(tmp_path):
     distributed = pytest.importorskip("distributed")
     path = tmp_path / "population.toml"
-    path.write_text(SMALL.replace("field = [[0.0, 0.0], [-15.0, 0.0], [10.0, 0.0]]", "field = [0.0, 0.0]"))
+    path.write_text(SMALL.replace("field_deg = [[0.0, 0.0], [-15.0, 0.0], [10.0, 0.0]]", "field_deg = [0.0, 0.0]"))
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
         validate(path, tmp_path / "remote", scheduler=cluster.scheduler_address, show_progress=False)
     validate(path, tmp_path / "here", show_progress=False)

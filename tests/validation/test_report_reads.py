@@ -39,15 +39,15 @@ inputs = ["render", "synthetic"]
 
 [[sweep]]
 name = "myopia"
-letters = ["K"]
-logmars = [0.7]
-spheres = [0.0, 1.0]
+letter = ["K"]
+logmar = [0.7]
+lens = [0.0, 1.0]
 
 [[item]]
 name = "cylinder"
 letter = "N"
 logmar = 0.7
-lenses = [{ cylinder = 1.5, axis = 90 }]
+lenses = [{ cylinder_diopters = 1.5, axis_deg = 90 }]
 """
 
 

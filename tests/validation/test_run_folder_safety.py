@@ -46,7 +46,7 @@ def test_two_items_with_one_name_are_refused_naming_both(tmp_path):
 def test_a_sweep_whose_labels_round_to_one_name_is_refused(tmp_path):
     """LogMAR 1.0 and 1.04 both print as '+1.0' in the generated name."""
     path = tmp_path / "sweep.toml"
-    path.write_text(HEAD + "[[sweep]]\nletters = ['N']\nlogmars = [1.0, 1.04]\n")
+    path.write_text(HEAD + "[[sweep]]\nletter = ['N']\nlogmar = [1.0, 1.04]\n")
     with pytest.raises(VissimInputError, match=r"sweep\[0\] #1 and sweep\[0\] #2") as err:
         load_campaign(path, check_memory=False)
     assert "LogMAR 1," in str(err.value) and "LogMAR 1.04," in str(err.value)
@@ -62,8 +62,8 @@ def test_the_same_configuration_twice_still_runs_once(tmp_path):
 def test_two_depth_configurations_with_one_name_are_refused(tmp_path):
     (tmp_path / "scene.toml").write_text(SCENE)
     path = tmp_path / "depth.toml"
-    path.write_text("[campaign]\nkind = 'depth'\n[[config]]\nname = 'eye'\nscene = 'scene.toml'\neye = '-1.00 DS'\n"
-                    "[[config]]\nname = 'eye'\nscene = 'scene.toml'\neye = '-2.00 DS'\n")
+    path.write_text("[campaign]\nkind = 'depth'\n[[config]]\nname = 'eye'\nscene = 'scene.toml'\nprescription = '-1.00 DS'\n"
+                    "[[config]]\nname = 'eye'\nscene = 'scene.toml'\nprescription = '-2.00 DS'\n")
     with pytest.raises(VissimInputError, match=r"config\[0\] and config\[1\]: two configurations named 'eye'"):
         load_campaign(path, check_memory=False)
 
@@ -71,8 +71,8 @@ def test_two_depth_configurations_with_one_name_are_refused(tmp_path):
 def test_two_eye_items_with_one_name_are_refused_naming_both(tmp_path):
     """The eye kind calls the engine's one check: an item and a sweep's combination that share a name."""
     path = tmp_path / "eye.toml"
-    path.write_text("[campaign]\nkind = 'eye'\n[[item]]\nname = 'p 3'\npupil_mm = 3.0\n"
-                    "[[sweep]]\nname = 'p'\npupil_mm = [4.0, 5.0]\n[[sweep]]\nname = 'p 3'\npupil_mm = 6.0\n")
+    path.write_text("[campaign]\nkind = 'eye'\n[[item]]\nname = 'p 3'\npupil_diameter_mm = 3.0\n"
+                    "[[sweep]]\nname = 'p'\npupil_diameter_mm = [4.0, 5.0]\n[[sweep]]\nname = 'p 3'\npupil_diameter_mm = 6.0\n")
     with pytest.raises(VissimInputError, match=r"item\[0\] and sweep\[1\] p 3: two configurations named 'p 3'") as err:
         load_campaign(path, check_memory=False)
     assert "pupil 3 mm" in str(err.value) and "pupil 6 mm" in str(err.value)  # what each compares

@@ -16,6 +16,7 @@ from typing import Any
 from vissim.checks import trial_lens_diopters
 from vissim.errors import VissimInputError
 from vissim.optics.rx.trial_lens import TrialLens
+from vissim.vocabulary import refuse_renamed_keys
 
 __all__ = ["read_scene_toml", "typed_value", "sub_table", "check_keys", "checked_values", "parse_trial_lenses",
            "image_size_px"]
@@ -54,7 +55,8 @@ def sub_table(doc: dict, name: str, source: str) -> dict:
 
 
 def check_keys(table: dict, allowed, where: str) -> None:
-    """Refuse a key of ``table`` that is not in ``allowed``."""
+    """Refuse a key of ``table`` that is not in ``allowed`` (a renamed key by its new name)."""
+    refuse_renamed_keys(table, allowed, where)
     for key in table:
         if key not in allowed:
             raise VissimInputError(f"{where}: unknown key {key!r}; expected one of {', '.join(allowed)}")

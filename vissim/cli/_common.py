@@ -63,9 +63,9 @@ def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = Tru
                        help=RX_HELP + ", e.g. '-2.00 -1.25 x 180', '+1.50 DS', 'plano' (TABO axis)")
     group.add_argument("--zernike", metavar="TERMS",
                        help="OSA Zernike terms in µm, 'n,m=µm;n,m=µm' (e.g. '2,0=0.5;4,0=0.1'); adds to --rx")
-    group.add_argument("--zernike-pupil-mm", type=float, metavar="D",
+    group.add_argument("--zernike-pupil-mm", type=float, metavar="MM",
                        help="pupil diameter the --zernike coefficients were measured over (default: --pupil-mm)")
-    group.add_argument("--pupil-mm", type=float, required=required, metavar="D",
+    group.add_argument("--pupil-mm", type=float, required=required, metavar="MM",
                        help="entrance pupil diameter in mm, an eye's or a camera's "
                             f"({ENTRANCE_PUPIL_RANGE_MM[0]:g}-{ENTRANCE_PUPIL_RANGE_MM[1]:g})")
     parser.set_defaults(_aberration_required=required)
@@ -156,11 +156,14 @@ def field_deg_from_text(text: str) -> tuple[float, float]:
 
 
 def size_from_text(text: str, example: str = "133x113") -> tuple[int, int]:
-    """``--size ROWSxCOLS``: an image size (rows, columns) in pixels, each at least 1."""
+    """``--size N`` (a square, as every command's ``--size N``) or ``--size ROWSxCOLS``: an image size (rows,
+    columns) in pixels, each at least 1."""
     try:
-        rows, cols = (int(v) for v in text.lower().replace("×", "x").split("x"))
+        parts = [int(v) for v in text.lower().replace("×", "x").split("x")]
+        rows, cols = parts * 2 if len(parts) == 1 else parts
     except ValueError:
-        raise VissimInputError(f"--size must be ROWSxCOLS in pixels, e.g. {example}, got {text!r}") from None
+        raise VissimInputError(f"--size must be N (a square) or ROWSxCOLS in pixels, e.g. {example}, "
+                               f"got {text!r}") from None
     if rows < 1 or cols < 1:
         raise VissimInputError(f"--size must be at least 1x1 px, got {text!r}")
     return rows, cols
@@ -191,3 +194,30 @@ def image_sampling(image: Image, given: float | None, path: Path) -> float:
     if step is None:
         raise VissimInputError(f"{path} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)")
     return step
+
+
+#: ``--json``'s help, the same on every command that computes numbers.
+JSON_HELP = "print one JSON object instead of the text lines: the numbers, the files written and their provenance"
+
+
+def add_json_arg(parser) -> None:
+    """``--json`` (`JSON_HELP`)."""
+    parser.add_argument("--json", action="store_true", help=JSON_HELP)
+
+
+def print_result(args: argparse.Namespace, lines: list[str], record: dict | None = None, written=(),
+                 provenance: dict | None = None) -> None:
+    """The command's text ``lines``, or with ``--json`` one JSON object: ``record`` (the numbers the lines say),
+    ``written`` (the files, as paths) and ``provenance`` (what the files record)."""
+    if not getattr(args, "json", False):
+        for line in lines:
+            print(line)
+        return
+    import json
+
+    from vissim.provenance import json_safe
+
+    out = {**(record or {}), "written": [str(p) for p in written]}
+    if provenance is not None:
+        out["provenance"] = provenance
+    print(json.dumps(json_safe(out), indent=2, allow_nan=False))

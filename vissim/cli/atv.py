@@ -48,7 +48,7 @@ def add_parser(subparsers) -> None:
                          description="Fourier retinal image of one phone pixel through the ATV tube and a trial lens, "
                          "threshold by spatial summation, Listing 5.1 with a simulated observer at every lens.")
     add_rx_arg(sim, required=True)
-    sim.add_argument("--pupil-mm", type=float, required=True, metavar="D", help="pupil diameter in mm")
+    sim.add_argument("--pupil-mm", type=float, required=True, metavar="MM", help="pupil diameter in mm")
     sim.add_argument("--accommodation-amplitude-diopters", type=float, default=8.0, metavar="A",
                      help="amplitude of accommodation, D: the most the subject can exert (default 8); the "
                           "accommodation exerted at each lens follows from it")

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
+                                add_json_arg, print_result,
                                 check_zernike_pupil,
                                 add_eye_model_arg, check_outputs_apart, eye_from_args, field_deg_from_text,
                                 image_sampling, parse_float_list, wavefront_from_args)
@@ -59,6 +60,7 @@ def add_parser(subparsers) -> None:
                              "per PSF and equal cpu to float32 round-off")
     add_eye_model_args(parser)
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
 
 
@@ -173,7 +175,8 @@ def run(args: argparse.Namespace) -> int:
                                  psfs=[p.as_json() for p in cache.values()], rx=args.rx, zernike=args.zernike)
     written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
                           alpha=image.alpha, bit_depth=output_bit_depth(image, args.output))
-    print(f"wrote {written}")
+    print_result(args, [f"wrote {written}"], {"arcmin_per_px": step, "size_px": list(blurred.shape[:2]),
+                                              "psfs": len(cache)}, [written], provenance)
     return 0
 
 
@@ -221,6 +224,8 @@ def _run_eye(args: argparse.Namespace, image, step: float, bands: list) -> int:
                                  eye_model=eye)
     written = write_image(args.output, blurred, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
                           alpha=image.alpha, bit_depth=output_bit_depth(image, args.output))
-    print(f"wrote {written} ({args.eye_model}, {any_grid.shape[0]} x {any_grid.shape[1]} PSF nodes "
-          f"{field_step:g} deg apart)")
+    print_result(args, [f"wrote {written} ({args.eye_model}, {any_grid.shape[0]} x {any_grid.shape[1]} PSF nodes "
+                        f"{field_step:g} deg apart)"],
+                 {"arcmin_per_px": step, "size_px": list(blurred.shape[:2]), "psf_nodes": list(any_grid.shape),
+                  "field_step_deg": field_step}, [written], provenance)
     return 0

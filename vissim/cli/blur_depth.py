@@ -13,7 +13,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from vissim.checks import DEFAULT_WAVELENGTH_NM, EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_eye_model_arg, add_rx_arg, check_outputs_apart,
+from vissim.cli._common import (EYE_RX_HELP, FIELD_DEG_HELP, add_eye_model_arg, add_json_arg, add_rx_arg,
+                                check_outputs_apart, print_result,
                                 eye_from_args, field_deg_from_text, image_sampling)
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
@@ -39,24 +40,24 @@ def add_parser(subparsers) -> None:
     parser.add_argument("depth", type=Path, help="depth in metres: .npy, or .exr with one channel (Z/depth/Y); inf = sky")
     parser.add_argument("-o", "--output", required=True, type=Path, help="output image (.exr, .png, .tif)")
     add_rx_arg(parser, required=True)
-    parser.add_argument("--pupil-mm", required=True, type=float, metavar="D",
+    parser.add_argument("--pupil-mm", required=True, type=float, metavar="MM",
                         help=f"the eye's pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm")
     focus = parser.add_argument_group(
         "accommodation (none of these options: relaxed, 0 D exerted)",
         "Give the accommodation exerted (--accommodation-diopters), or let the eye focus a target as far as "
         "its amplitude allows: any of --focus-distance-m (the target; if omitted, the depth at the image "
-        "centre), --age (amplitude by Hofstetter 1950's mean) or --amplitude-diopters (if neither, unlimited).",
+        "centre), --age (amplitude by Hofstetter 1950's mean) or --accommodation-amplitude-diopters (if neither, unlimited).",
     )
     focus.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres")
     focus.add_argument("--age", type=float, metavar="Y", help="age in years: amplitude 18.5 - 0.3 Y D (Hofstetter 1950)")
-    focus.add_argument("--amplitude-diopters", type=float, metavar="A", help="amplitude of accommodation, dioptres")
+    focus.add_argument("--accommodation-amplitude-diopters", type=float, metavar="A", help="amplitude of accommodation, dioptres")
     focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres")
     eye = parser.add_argument_group(
         "schematic eye (in place of the reduced eye)",
         "With --eye-model the eye is a traced schematic eye at one field point (--field-deg, default 0,0): its spherical aberration and its own defocus at --wavelength-nm and at the accommodation "
         "exerted (--accommodation-diopters, physical: its lens changes shape), over the --pupil-mm entrance pupil; "
         + EYE_RX_HELP + "; each depth adds its defocus as for the reduced eye, and the eye is in "
-        "focus where its whole wavefront says. The focus-target options (--age, --amplitude-diopters, "
+        "focus where its whole wavefront says. The focus-target options (--age, --accommodation-amplitude-diopters, "
         "--focus-distance-m) are the reduced eye's and are refused with it.")
     add_eye_model_arg(eye, "a schematic eye")
     eye.add_argument("--field-deg", metavar="X,Y",
@@ -80,6 +81,7 @@ def add_parser(subparsers) -> None:
                         help="crop M px from every side of the output (default: the margin_px the input's "
                              "provenance records, as render depth writes it; else 0)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
 
 
@@ -103,19 +105,19 @@ def read_depth_m(path: Path):
 def _accommodation(args: argparse.Namespace, eye: Prescription, depth) -> tuple[float, dict]:
     from vissim.optics.rx.accommodation import Accommodation, accommodation_for_target
 
-    targeted = args.age is not None or args.amplitude_diopters is not None or args.focus_distance_m is not None
+    targeted = args.age is not None or args.accommodation_amplitude_diopters is not None or args.focus_distance_m is not None
     if args.accommodation_diopters is not None:
         if targeted:
-            raise VissimInputError("give --accommodation-diopters alone, or a focus target (--focus-distance-m/--age/--amplitude-diopters)")
+            raise VissimInputError("give --accommodation-diopters alone, or a focus target (--focus-distance-m/--age/--accommodation-amplitude-diopters)")
         return args.accommodation_diopters, {"accommodation_diopters": args.accommodation_diopters}
     if not targeted:
         return 0.0, {"accommodation_diopters": 0.0, "note": "relaxed"}
-    if args.age is not None and args.amplitude_diopters is not None:
-        raise VissimInputError("give --age or --amplitude-diopters, not both")
+    if args.age is not None and args.accommodation_amplitude_diopters is not None:
+        raise VissimInputError("give --age or --accommodation-amplitude-diopters, not both")
     if args.age is not None:
         amplitude = Accommodation.from_age(args.age)
     else:
-        amplitude = Accommodation(math.inf if args.amplitude_diopters is None else args.amplitude_diopters, "given")
+        amplitude = Accommodation(math.inf if args.accommodation_amplitude_diopters is None else args.accommodation_amplitude_diopters, "given")
     centre = float(depth[depth.shape[0] // 2, depth.shape[1] // 2])  # the default target
     target = centre if args.focus_distance_m is None else args.focus_distance_m
     exerted = accommodation_for_target(eye, target, amplitude.amplitude_diopters)
@@ -132,7 +134,7 @@ def _schematic_eye(args: argparse.Namespace) -> tuple[DepthViewer, float, dict]:
     record."""
     from vissim.optics.eyes.depth_eye import traced_depth_eye  # the trace's imports, when used
 
-    targets = [name for name, value in (("--age", args.age), ("--amplitude-diopters", args.amplitude_diopters),
+    targets = [name for name, value in (("--age", args.age), ("--accommodation-amplitude-diopters", args.accommodation_amplitude_diopters),
                                         ("--focus-distance-m", args.focus_distance_m)) if value is not None]
     if targets:
         raise VissimInputError(f"{', '.join(targets)} do(es) not go with --eye-model: give the accommodation the "
@@ -186,8 +188,8 @@ def run(args: argparse.Namespace) -> int:
     alpha = None if image.alpha is None else image.alpha[crop:rows - crop, crop:cols - crop]  # carried, not blurred
     written = write_image(args.output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step,
                           alpha=alpha, bit_depth=output_bit_depth(image, args.output))
-    print(
-        f"wrote {written} ({result.n_layers} depth layers, {len(result.layers)} non-empty, "
-        f"accommodation {accommodation:.3f} D)"
-    )
+    print_result(args, [f"wrote {written} ({result.n_layers} depth layers, {len(result.layers)} non-empty, "
+                        f"accommodation {accommodation:.3f} D)"],
+                 {"depth_layers": result.n_layers, "non_empty_layers": len(result.layers),
+                  "accommodation_diopters": accommodation, "arcmin_per_px": step}, [written], provenance)
     return 0

@@ -39,8 +39,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
                         help=f"accommodation exerted, {EYE_ACCOMMODATION_HELP} (default 0, relaxed)")
     pupil = parser.add_mutually_exclusive_group(required=True)
-    pupil.add_argument("--pupil-mm", type=float, metavar="D", help="entrance pupil diameter, mm (a clinician's)")
-    pupil.add_argument("--iris-mm", type=float, metavar="D", help="iris (stop) diameter, mm (optical design's)")
+    pupil.add_argument("--pupil-mm", type=float, metavar="MM", help="entrance pupil diameter, mm (a clinician's)")
+    pupil.add_argument("--iris-mm", type=float, metavar="MM", help="iris (stop) diameter, mm (optical design's)")
     parser.add_argument("--wavelength-nm", default=None, metavar="NM[,NM...]",
                         help="wavelength, nm (default: the model's reference wavelength); several: the MTF is of "
                              "their light (see --spectrum), all else at the model's reference wavelength")

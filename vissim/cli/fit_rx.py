@@ -30,7 +30,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("image", type=Path, metavar="IMAGE", help="the blurred capture (EXR, PNG, TIFF)")
     parser.add_argument("--reference", type=Path, required=True, metavar="REF", help="the sharp reference, same size")
-    parser.add_argument("--pupil-mm", type=float, metavar="D", help="entrance pupil diameter (default: from the bench in IMAGE's provenance)")
+    parser.add_argument("--pupil-mm", type=float, metavar="MM", help="entrance pupil diameter (default: from the bench in IMAGE's provenance)")
     parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: from the files)")
     parser.add_argument("--mode", choices=("wave", "geometric"),
                         help="optics of the model: geometric (default for Mitsuba renders, which have no diffraction) or wave (default otherwise)")

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.checks import size_text
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
+                                add_json_arg, print_result,
                                 check_zernike_pupil,
                                 add_eye_model_arg, eye_from_args, field_deg_from_text, parse_float_list,
                                 wavefront_from_args)
@@ -56,11 +57,12 @@ def add_parser(subparsers) -> None:
                         help=f"with --eye-model: accommodation exerted, {EYE_ACCOMMODATION_HELP} "
                         "(default 0, relaxed)")
     parser.add_argument("--arcmin-per-px", type=float, default=0.25, metavar="S", help="output sampling (default 0.25)")
-    parser.add_argument("--size", type=int, default=256, metavar="N", help="output field in pixels (default 256)")
+    parser.add_argument("--size", type=int, default=256, metavar="N", help="output field, N x N pixels (default 256)")
     parser.add_argument("--mode", choices=("wave", "geometric"), default="wave", help="wave (default) or geometric optics")
     parser.add_argument("--float64", action="store_true", help="compute in float64 (default float32; files are float32)")
     parser.add_argument("-o", "--output", required=True, type=Path, help="out.exr or out.png")
     parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
 
 
@@ -105,12 +107,15 @@ def run(args: argparse.Namespace) -> int:
     written = [write_image(exr_path, data, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step)]
     if output.suffix.lower() == ".png":
         written.append(to_preview_png(output, data, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=step))
-    for path in written:
-        print(f"wrote {path}")
-    print(
+    lines = [f"wrote {path}" for path in written]
+    lines.append(
         f"PSF {size_text(psf.size_px)} at {psf.arcmin_per_px:g} arcmin/px, pupil "
         f"{psf.pupil_diameter_mm:g} mm, {psf.mode} optics, {100 * psf.energy_in_field:.2f} % of the energy in the field"
     )
+    record = {"size_px": list(psf.size_px), "arcmin_per_px": psf.arcmin_per_px,
+              "pupil_diameter_mm": psf.pupil_diameter_mm, "mode": psf.mode, "energy_in_field": psf.energy_in_field,
+              "wavelength_nm": list(psf.wavelengths_nm)}
+    print_result(args, lines, record, written, provenance)
     return 0
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from vissim.checks import size_text
 from vissim.chart_defaults import POLARITIES
-from vissim.cli._common import add_trial_lens_args, size_from_text, check_outputs_apart, refuse_existing, trial_lens_powers
+from vissim.cli._common import add_json_arg, add_trial_lens_args, print_result, size_from_text, check_outputs_apart, refuse_existing, trial_lens_powers
 from vissim.cli.render_atv import add_atv_parser
 from vissim.cli.render_depth import add_depth_parser
 from vissim.cli.render_eye import add_eye_parser
@@ -61,7 +61,8 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--logmar", type=float, metavar="L", help="letter size in LogMAR (with --letter)")
     parser.add_argument("--polarity", choices=POLARITIES, help="default black-on-white")
     parser.add_argument("--arcmin-per-px", type=float, metavar="ARCMIN", help="angular pixel size (default 1)")
-    parser.add_argument("--size", metavar="ROWSxCOLS", help="image size (default 133x113)")
+    parser.add_argument("--size", metavar="N|ROWSxCOLS",
+                        help="image size in pixels: N (a square) or ROWSxCOLS (default 133x113)")
     parser.add_argument("--spp", type=int, metavar="N", help="samples per pixel (default 256)")
     parser.add_argument("--seed", type=int, metavar="S", help="sampler seed (default 0)")
     parser.add_argument("--sampler", choices=("independent", "stratified", "multijitter", "ldsampler"))
@@ -85,6 +86,7 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
                              "(default the d line, 587.5618 nm, where the glass has the rendered index)")
     parser.add_argument("-o", "--output", required=True, metavar="PATH", help="output .exr (linear float32)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_json_arg(parser)
     parser.set_defaults(func=run_bench)
     return parser
 
@@ -139,8 +141,11 @@ def run_bench(args: argparse.Namespace) -> int:
     theory = result.provenance["inputs"]["theory"]
     blur = ", ".join(f"{d:.2f}' along {m:g}°" for d, m in theory["blur_diameter_arcmin"])
     added = "no trial lens" if theory["added_power"] is None else f"added {theory['added_power']}"
-    print(f"wrote {output}: {size_text(result.pixels.shape)}, {result.spp} spp, "
-          f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, {added}")
+    print_result(args, [f"wrote {output}: {size_text(result.pixels.shape)}, {result.spp} spp, "
+                        f"{result.variant}, {result.seconds:.1f} s; theory: blur {blur}, {added}"],
+                 {"size_px": list(result.pixels.shape[:2]), "spp": result.spp, "variant": result.variant,
+                  "seconds": result.seconds, "blur_diameter_arcmin": theory["blur_diameter_arcmin"],
+                  "added_power": theory["added_power"]}, [output], result.provenance)
     return 0
 
 
@@ -157,12 +162,14 @@ def _write_wave_truth(bench, chart, args, output: Path) -> int:
                                "--optics wave computes the image without Mitsuba")
     wavelengths = [D_LINE_NM] if args.wavelength_nm is None else parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm")
     truth = wave_truth(bench, chart, wavelengths_nm=wavelengths)
-    write_image(output, truth.pixels, provenance=make_provenance(command="render bench --optics wave", **truth.provenance),
-                overwrite=args.overwrite, arcmin_per_px=bench.arcmin_per_px)
+    provenance = make_provenance(command="render bench --optics wave", **truth.provenance)
+    write_image(output, truth.pixels, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=bench.arcmin_per_px)
     traced = truth.provenance["traced"][0]
-    print(f"wrote {output}: {size_text(truth.pixels.shape)}, wave truth at "
-          f"{', '.join(f'{w:g}' for w in wavelengths)} nm; traced RMS {traced['rms_um']:.4g} µm over "
-          f"{traced['pupil_diameter_mm']:g} mm")
+    print_result(args, [f"wrote {output}: {size_text(truth.pixels.shape)}, wave truth at "
+                        f"{', '.join(f'{w:g}' for w in wavelengths)} nm; traced RMS {traced['rms_um']:.4g} µm over "
+                        f"{traced['pupil_diameter_mm']:g} mm"],
+                 {"size_px": list(truth.pixels.shape[:2]), "wavelength_nm": wavelengths, "rms_um": traced["rms_um"],
+                  "pupil_diameter_mm": traced["pupil_diameter_mm"]}, [output], provenance)
     return 0
 
 

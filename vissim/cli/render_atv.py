@@ -42,7 +42,7 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
                            f"{EYE_VERTEX_DISTANCE_MM:g}: a {SPECTACLE_VERTEX_DISTANCE_MM:g} mm spectacle vertex "
                            f"distance + {CORNEA_TO_ENTRANCE_PUPIL_MM:g} mm cornea to pupil)")
     eye = parser.add_argument_group("eye")
-    eye.add_argument("--pupil-mm", type=float, metavar="D",
+    eye.add_argument("--pupil-mm", type=float, metavar="MM",
                      help=f"pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm (default 4)")
     add_rx_arg(eye, default_text=" (default: emmetropic)")
     eye.add_argument("--accommodation-diopters", type=float, metavar="A",
@@ -65,7 +65,7 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
     method.add_argument("--seed", type=int, default=0, metavar="S", help="seed (default 0)")
     method.add_argument("--arcmin-per-px", type=float, metavar="S",
                         help="angular pixel size (default 0.5 for trace, 1 for camera)")
-    method.add_argument("--size", type=int, metavar="N", help="image size in pixels (default: holds the spot)")
+    method.add_argument("--size", type=int, metavar="N", help="image size, N x N pixels (default: holds the spot)")
     method.add_argument("--fresnel-loss", action="store_true",
                         help="uncoated lenses: Fresnel transmittance per surface")
     method.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")

@@ -24,7 +24,7 @@ import dataclasses
 from pathlib import Path
 
 from vissim.checks import EYE_PUPIL_RANGE_MM, eye_pupil_diameter_mm, size_text
-from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, refuse_existing,
+from vissim.cli._common import (add_json_arg, add_rx_arg, print_result, add_trial_lens_args, check_outputs_apart, refuse_existing,
                                 trial_lens_powers)
 from vissim.errors import VissimInputError
 
@@ -46,7 +46,7 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("scene", type=Path, help="depth scene TOML, e.g. scenes/depth_panels.toml")
     eye = parser.add_argument_group("eye (an eye focused at 1 / (A - Rx) metres; Rx not worn)")
     add_rx_arg(eye)
-    eye.add_argument("--pupil-mm", type=float, metavar="D",
+    eye.add_argument("--pupil-mm", type=float, metavar="MM",
                      help=f"the eye's pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm")
     eye.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres >= 0")
     camera = parser.add_argument_group("DSLR bench camera (thin lens, entrance pupil focal length / f-number)")
@@ -69,6 +69,7 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
                                "(default: the scene's largest blur radius + 2 px; 0: none)")
     sampling.add_argument("--rgb", action="store_true", help="render RGB (default: monochrome)")
     sampling.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
+    add_json_arg(parser)
     parser.set_defaults(func=run_depth)
     return parser
 
@@ -173,14 +174,19 @@ def run_depth(args: argparse.Namespace) -> int:
         write_depth(args.depth, result.depth_m, provenance=depth, overwrite=args.overwrite, arcmin_per_px=step)
         written.append(str(args.depth))
     rows, cols = loaded.scene.size_px
-    print(f"wrote {', '.join(written)}: {size_text((rows, cols))}, {result.spp} spp, {result.variant}, "
-          f"{result.seconds:.1f} s; {viewer.label()}")
+    lines = [f"wrote {', '.join(written)}: {size_text((rows, cols))}, {result.spp} spp, {result.variant}, "
+             f"{result.seconds:.1f} s; {viewer.label()}"]
     if result.margin_px:
-        print(f"  all-in-focus and depth: {size_text((rows + 2 * result.margin_px, cols + 2 * result.margin_px))} "
-              f"(a {result.margin_px} px margin beyond the frame; blur-depth crops it)")
+        lines.append(f"  all-in-focus and depth: {size_text((rows + 2 * result.margin_px, cols + 2 * result.margin_px))} "
+                     f"(a {result.margin_px} px margin beyond the frame; blur-depth crops it)")
     setup = viewing_setup(viewer, loaded.scene)
+    panels = []
     for g in panel_geometries(loaded.scene):
         blur = [float(setup.blur_diameter_at_arcmin(d)) for d in (g.distance_left_m, g.distance_right_m)]
         where = f"{blur[0]:.1f}'" if g.kind == "panel" else f"{blur[0]:.1f}' (left) to {blur[1]:.1f}' (right)"
-        print(f"  {g.name}: predicted blur diameter {where}")
+        lines.append(f"  {g.name}: predicted blur diameter {where}")
+        panels.append({"name": g.name, "kind": g.kind, "blur_diameter_arcmin": blur if g.kind != "panel" else blur[0]})
+    print_result(args, lines, {"size_px": [rows, cols], "spp": result.spp, "variant": result.variant,
+                               "seconds": result.seconds, "viewer": viewer.label(), "margin_px": result.margin_px,
+                               "panels": panels}, written, provenance)
     return 0

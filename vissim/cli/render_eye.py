@@ -14,7 +14,8 @@ from pathlib import Path
 
 from vissim.atomic import check_outputs_apart
 from vissim.checks import size_text
-from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg, add_trial_lens_args, field_deg_from_text,
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg, add_json_arg,
+                                print_result, add_trial_lens_args, field_deg_from_text,
                                 refuse_existing, size_from_text, trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_LIGHT_NM
@@ -46,9 +47,9 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
                         help=f"the eye's accommodation, {EYE_ACCOMMODATION_HELP} "
                              f"(default {_DEFAULT['accommodation_diopters']:g})")
     pupil = parser.add_mutually_exclusive_group()
-    pupil.add_argument("--pupil-mm", type=float, metavar="D",
+    pupil.add_argument("--pupil-mm", type=float, metavar="MM",
                        help=f"entrance-pupil diameter, mm (default {_DEFAULT['pupil_mm']:g})")
-    pupil.add_argument("--iris-mm", type=float, metavar="D", help="or the iris diameter, mm")
+    pupil.add_argument("--iris-mm", type=float, metavar="MM", help="or the iris diameter, mm")
     parser.add_argument("--field-deg", metavar="X,Y",
                         help=f"where the chart lies: the eye turns so that the chart's centre is at this {FIELD_DEG_HELP}; "
                              "the image stays centred on the chart (default {:g},{:g})".format(*_DEFAULT["field_deg"]))
@@ -71,8 +72,8 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--vertex-mm", type=float, metavar="MM",
                         help="the spectacle plane, mm in front of the cornea: where --rx is written and the trial "
                              f"lens's back vertex sits (default {_DEFAULT['vertex_mm']:g})")
-    parser.add_argument("--size", metavar="ROWSxCOLS",
-                        help="image size (default {}x{})".format(*_DEFAULT["size_px"]))
+    parser.add_argument("--size", metavar="N|ROWSxCOLS",
+                        help="image size in pixels: N (a square) or ROWSxCOLS (default {}x{})".format(*_DEFAULT["size_px"]))
     parser.add_argument("--arcmin-per-px", type=float, metavar="ARCMIN",
                         help=f"angular pixel size (default {_DEFAULT['arcmin_per_px']:g})")
     parser.add_argument("--spp", type=int, metavar="N", help=f"samples per pixel (default {_DEFAULT['spp']})")
@@ -81,6 +82,7 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
     parser.add_argument("-o", "--output", required=True, type=Path, metavar="PATH", help="output .exr (linear)")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_json_arg(parser)
     parser.set_defaults(func=run_eye)
     return parser
 
@@ -121,6 +123,8 @@ def run_eye(args: argparse.Namespace) -> int:
         provenance["inputs"] = dict(provenance["inputs"], scene_file=str(args.scene))
     write_image(args.output, result.pixels, provenance=provenance, overwrite=args.overwrite,
                 arcmin_per_px=settings.arcmin_per_px)
-    print(f"wrote {args.output}: {size_text(result.pixels.shape)}, {result.spp} spp, {result.variant}, "
-          f"{result.seconds:.1f} s; {settings.model}")
+    print_result(args, [f"wrote {args.output}: {size_text(result.pixels.shape)}, {result.spp} spp, {result.variant}, "
+                        f"{result.seconds:.1f} s; {settings.model}"],
+                 {"size_px": list(result.pixels.shape[:2]), "spp": result.spp, "variant": result.variant,
+                  "seconds": result.seconds, "eye_model": settings.model}, [args.output], provenance)
     return 0

@@ -2,11 +2,11 @@
 
 Tables (every one and every key optional; a key left out keeps `EyeRender`'s default):
 
-* ``[eye]``: ``model``, ``accommodation_diopters``, ``pupil_mm`` or ``iris_mm``, ``rx`` (the
+* ``[eye]``: ``model``, ``accommodation_diopters``, ``pupil_diameter_mm`` or ``iris_mm``, ``prescription`` (the
   prescription the eye needs at the spectacle plane), ``field_deg`` (``[x, y]``, OSA's frame);
 * ``[light]``: ``wavelength_nm`` or ``spectrum`` (``"mono"``, ``"photopic"``);
 * ``[chart]``: ``distance_m``, ``letter``, ``logmar``;
-* ``[spectacles]``: ``vertex_mm`` and one trial lens, ``sphere_diopters``, ``cylinder_diopters``,
+* ``[spectacles]``: ``vertex_distance_mm`` and one trial lens, ``sphere_diopters``, ``cylinder_diopters``,
   ``axis_deg`` (the key names of every scene file's trial lens, `vissim.bench.scene_toml`);
 * ``[render]``: ``size_px`` (``[rows, cols]``), ``arcmin_per_px``, ``spp``, ``seed``.
 
@@ -33,13 +33,13 @@ __all__ = ["EYE_SCENE_KEYS", "eye_scene_values", "eye_render_from_values", "load
 EYE_SCENE_KEYS: dict[str, dict[str, tuple[str, type, str]]] = {
     "eye": {"model": ("model", str, "(a schematic eye's name)"),
             "accommodation_diopters": ("accommodation_diopters", float, "D"),
-            "pupil_mm": ("pupil_mm", float, "mm"), "iris_mm": ("iris_mm", float, "mm"),
-            "rx": ("rx", str, "(a prescription, e.g. '-2.00 -0.50 x 180')"),
+            "pupil_diameter_mm": ("pupil_mm", float, "mm"), "iris_mm": ("iris_mm", float, "mm"),
+            "prescription": ("rx", str, "(a prescription, e.g. '-2.00 -0.50 x 180')"),
             "field_deg": ("field_deg", list, "([x, y] degrees)")},
     "light": {"wavelength_nm": ("wavelength_nm", float, "nm"), "spectrum": ("spectrum", str, "('mono' or 'photopic')")},
     "chart": {"distance_m": ("chart_distance_m", float, "m"), "letter": ("letter", str, "(one Sloan letter)"),
               "logmar": ("logmar", float, "LogMAR")},
-    "spectacles": {"vertex_mm": ("vertex_mm", float, "mm")},
+    "spectacles": {"vertex_distance_mm": ("vertex_mm", float, "mm")},
     "render": {"size_px": ("size_px", list, "([rows, cols] whole px)"), "arcmin_per_px": ("arcmin_per_px", float,
                                                                                           "arcmin per pixel"),
                "spp": ("spp", int, "samples per pixel"), "seed": ("seed", int, "(sampler seed)")},
@@ -89,7 +89,7 @@ def _checked_elsewhere(values: dict, source: str) -> None:
         _named(f"{source} [eye].model, accommodation_diopters", eye_model,
                *(values.get(k, defaults[k].default) for k in ("model", "accommodation_diopters")))
     if "rx" in values:
-        _named(f"{source} [eye].rx", Prescription.parse, values["rx"])
+        _named(f"{source} [eye].prescription", Prescription.parse, values["rx"])
     if "letter" in values or "logmar" in values:
         letter, logmar, distance = (values.get(k, defaults[k].default) for k in ("letter", "logmar", "chart_distance_m"))
         _named(f"{source} [chart].letter, logmar", lambda *a: single_letter_spec(*a, viewing_distance_m=distance),
@@ -141,7 +141,7 @@ def eye_scene_values(path: str | os.PathLike[str]) -> dict[str, Any]:
 
 def _whole(values: dict, source: str) -> None:
     """`EyeRender` of ``values``; a refusal names the key that alone is refused (field_deg beyond the
-    sensor's reach), or the file when it takes two keys (pupil_mm with iris_mm)."""
+    sensor's reach), or the file when it takes two keys (pupil_diameter_mm with iris_mm)."""
     try:
         EyeRender(**values)
     except VissimInputError as exc:

@@ -2,7 +2,7 @@
 
 Tables ``[tube]`` (`AtvTube`'s fields), ``[eye]`` (``pupil_diameter_mm``, ``prescription``,
 ``accommodation_diopters``) and ``[trial_lens]`` (``sphere_diopters``, ``cylinder_diopters``,
-``axis_deg``, ``distance_mm``, ``fresnel_loss``); every key is optional.  Unknown tables or keys,
+``axis_deg``, ``vertex_distance_mm``, ``fresnel_loss``); every key is optional.  Unknown tables or keys,
 and values of the wrong type, raise `VissimInputError` naming the file, the key and the unit.
 """
 
@@ -48,7 +48,7 @@ def load_atv_toml(path: str | os.PathLike[str]):
         refractive_error=None if rx in (None, "") else Prescription.parse(value("eye", "prescription", None, str, "")),
         accommodation_diopters=value("eye", "accommodation_diopters", 0.0, float, "dioptres"),
     )
-    lens = checked("trial_lens", "sphere_diopters", "cylinder_diopters", "axis_deg", "distance_mm", "fresnel_loss")
+    lens = checked("trial_lens", "sphere_diopters", "cylinder_diopters", "axis_deg", "vertex_distance_mm", "fresnel_loss")
     trial = None
     if "sphere_diopters" in lens or "cylinder_diopters" in lens:
         powers = (("sphere_diopters", 0.0, "dioptres"), ("cylinder_diopters", 0.0, "dioptres"),
@@ -58,5 +58,5 @@ def load_atv_toml(path: str | os.PathLike[str]):
         trial = atv_trial_lens(trial_lens_diopters(sphere, f"{where}.sphere_diopters"),
                                trial_lens_diopters(cylinder, f"{where}.cylinder_diopters"), axis)
     return AtvConfig(tube=tube, eye=eye, trial_lens=trial,
-                     trial_lens_distance_mm=value("trial_lens", "distance_mm", EYE_VERTEX_DISTANCE_MM, float, "mm"),
+                     trial_lens_distance_mm=value("trial_lens", "vertex_distance_mm", EYE_VERTEX_DISTANCE_MM, float, "mm"),
                      fresnel_loss=value("trial_lens", "fresnel_loss", False, bool, "(true/false)"))

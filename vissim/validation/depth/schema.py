@@ -2,7 +2,7 @@
 
 A depth campaign's ``[campaign]`` table has ``kind = "depth"`` and its settings; each
 ``[[config]]`` table is a scene file (``scene``, relative to the campaign file) and an observer:
-an eye (``eye`` = prescription, ``pupil_mm``, ``accommodation_diopters``), the DSLR (``camera =
+an eye (``prescription``, ``pupil_diameter_mm``, ``accommodation_diopters``), the DSLR (``camera =
 {f_number, focus_distance_m, focal_length_mm, lenses}``), or none (the scene file's).
 ``validation/depth.toml`` is the commented example; `vissim.validation.depth.kind` is the bench kind.
 """
@@ -25,6 +25,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.rx.trial_lens import TrialLens
 from vissim.provenance import json_safe
+from vissim.vocabulary import refuse_renamed_keys
 from vissim.validation.engine.configurations import refuse_duplicate_names
 from vissim.validation.engine.fields import (MAX_SPP, checked_numbers, field_error, lenses, name_text, number,
                                              settings_kwargs, tables, text)
@@ -112,15 +113,20 @@ CAMERA_FIELDS = {
 }
 
 
+#: An eye observer's keys in a ``[[config]]`` table, and all its keys.
+EYE_KEYS = ("prescription", "pupil_diameter_mm", "accommodation_diopters")
+CONFIG_KEYS = ("name", "scene", *EYE_KEYS, "camera")
+
+
 def _eye(raw: dict, viewer, source: str, where: str) -> EyeViewer:
     base_eye = viewer if isinstance(viewer, EyeViewer) else EyeViewer()
     rx = base_eye.prescription
-    if "eye" in raw:
+    if "prescription" in raw:
         try:
-            rx = Prescription.parse(text(raw["eye"], source, f"{where}.eye"))
+            rx = Prescription.parse(text(raw["prescription"], source, f"{where}.prescription"))
         except VissimInputError as exc:
-            raise field_error(source, f"{where}.eye", str(exc)) from None
-    pupil = number(raw.get("pupil_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_mm", "mm",
+            raise field_error(source, f"{where}.prescription", str(exc)) from None
+    pupil = number(raw.get("pupil_diameter_mm", base_eye.pupil_diameter_mm), source, f"{where}.pupil_diameter_mm", "mm",
                    lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1])
     accommodation = number(raw.get("accommodation_diopters", base_eye.accommodation_diopters), source, f"{where}.accommodation_diopters",
                            "dioptres", lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1])
@@ -144,7 +150,8 @@ def _camera(camera: Any, viewer, source: str, where: str) -> CameraViewer:
 
 
 def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfiguration:
-    unknown = set(raw) - {"name", "scene", "eye", "pupil_mm", "accommodation_diopters", "camera"}
+    unknown = set(raw) - set(CONFIG_KEYS)
+    refuse_renamed_keys(unknown, CONFIG_KEYS, f"{source}: {where}")
     if unknown:
         raise field_error(source, where, f"unknown field(s) {sorted(unknown)}")
     if "scene" not in raw:
@@ -156,10 +163,9 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
         loaded = load_depth_scene_toml(scene_file)
     except VissimInputError as exc:
         raise field_error(source, f"{where}.scene", str(exc)) from None
-    eye_keys = {"eye", "pupil_mm", "accommodation_diopters"} & set(raw)
+    eye_keys = set(EYE_KEYS) & set(raw)
     if eye_keys and "camera" in raw:
-        raise field_error(source, where,
-                          "give an eye (eye, pupil_mm, accommodation_diopters) or a camera, not both")
+        raise field_error(source, where, f"give an eye ({', '.join(EYE_KEYS)}) or a camera, not both")
     viewer = loaded.viewer
     if eye_keys:
         viewer = _eye(raw, viewer, source, where)

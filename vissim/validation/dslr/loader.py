@@ -19,6 +19,7 @@ from vissim.checks import (ARCMIN_PER_PX_RANGE, DATA_RANGE_RANGE, F_NUMBER_RANGE
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.dslr.schema import INPUTS, SIMULATIONS, CampaignSettings, Configuration, trial_lens_phrase
 from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
+from vissim.vocabulary import refuse_renamed_keys
 from vissim.validation.engine.fields import (
     MAX_SPP,
     field_error,
@@ -26,9 +27,9 @@ from vissim.validation.engine.fields import (
     name_text,
     number,
     settings_kwargs,
-    table,
     tables,
     text,
+    unknown_field_error,
     value_list,
     whole_number,
 )
@@ -54,7 +55,8 @@ def _f_number(value: Any, source: str, where: str) -> float:
 
 
 def _configuration(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> Configuration:
-    unknown = set(raw) - {"name", "letter", "logmar", "polarity", "lenses", "f_number", "capture"}
+    unknown = set(raw) - set(ITEM_KEYS)
+    refuse_renamed_keys(unknown, ITEM_KEYS, f"{source}: {where}")
     if unknown:
         raise unknown_field_error(source, where, f"unknown field(s) {sorted(unknown)}")
     letter = raw.get("letter")
@@ -86,21 +88,29 @@ def _describe(c: Configuration) -> str:
     return f"letter {c.letter}, LogMAR {c.logmar:g}, {c.polarity}, {c.lens_label()}, f/{c.f_number:g}{capture}"
 
 
+#: Keys of an ``[[item]]`` and of a ``[[sweep]]`` (where a list sweeps ``letter``, ``logmar``, ``polarity``, one
+#: ``lens`` per configuration and ``lenses``, a set per configuration).
+ITEM_KEYS = ("name", "letter", "logmar", "polarity", "lenses", "f_number", "capture")
+SWEEP_KEYS = ("name", "letter", "logmar", "polarity", "lens", "lenses", "f_number")
+
+
+def _swept(value: Any, source: str, where: str, example: str) -> list:
+    """A sweep's values: its list, or the one value it gives."""
+    return value_list(value if isinstance(value, list) else [value], source, where, example)
+
+
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
-    unknown = set(raw) - {"name", "letters", "logmars", "polarities", "lenses", "f_number", "spheres", "cylinders"}
+    unknown = set(raw) - set(SWEEP_KEYS)
+    refuse_renamed_keys(unknown, SWEEP_KEYS, f"{source}: {where}")
     if unknown:
         raise unknown_field_error(source, where, f"unknown field(s) {sorted(unknown)}")
-    letters = value_list(raw.get("letters", ["N"]), source, f"{where}.letters", '["K", "N"]')
-    logmars = value_list(raw.get("logmars", [1.0]), source, f"{where}.logmars", "[1.0, 0.5]")
-    polarities = value_list(raw.get("polarities", ["black-on-white"]), source, f"{where}.polarities",
-                            '["black-on-white"]')
+    letters = _swept(raw.get("letter", ["N"]), source, f"{where}.letter", '["K", "N"]')
+    logmars = _swept(raw.get("logmar", [1.0]), source, f"{where}.logmar", "[1.0, 0.5]")
+    polarities = _swept(raw.get("polarity", ["black-on-white"]), source, f"{where}.polarity", '["black-on-white"]')
     lens_sets: list[Any] = []
-    if "spheres" in raw:
-        spheres = value_list(raw["spheres"], source, f"{where}.spheres", "[0.0, 2.0] (dioptres)")
-        lens_sets += [[{"sphere": s}] for s in spheres]
-    if "cylinders" in raw:
-        cylinders = value_list(raw["cylinders"], source, f"{where}.cylinders", "[{ cylinder = 2.0, axis = 90 }]")
-        lens_sets += [[table(c, source, f"{where}.cylinders[{i}]")] for i, c in enumerate(cylinders)]
+    if "lens" in raw:  # one lens per configuration: a number (a sphere, D) or a lens table
+        single = _swept(raw["lens"], source, f"{where}.lens", "[0.0, 2.0, { cylinder_diopters = 2.0, axis_deg = 90 }]")
+        lens_sets += [[entry] for entry in single]
     if "lenses" in raw:
         lens_sets += list(value_list(raw["lenses"], source, f"{where}.lenses", "[[2.0], [1.0, -0.5]] (lens sets)"))
     prefix = name_text(raw.get("name", ""), source, f"{where}.name")

@@ -16,10 +16,11 @@ from vissim.checks import (AXIS_RANGE_DEG, MAX_CAMPAIGN_SEED, MAX_DESCRIPTION_CH
                            name_problem, path_arg)
 from vissim.errors import VissimInputError
 from vissim.optics.rx.trial_lens import MAX_LENSES_IN_HOLDER
+from vissim.vocabulary import refuse_renamed_keys
 
 __all__ = ["field_error", "read_toml_file", "read_campaign_toml", "number", "whole_number",
            "checked_numbers", "seed_pair", "text", "table", "tables", "value_list", "choices", "settings_kwargs",
-           "lens", "lenses", "LensSpec", "MAX_SPP", "CAMPAIGN_TABLES"]
+           "lens", "lenses", "LensSpec", "LENS_KEYS", "MAX_SPP", "CAMPAIGN_TABLES"]
 
 #: Top-level tables that make a TOML file a campaign: its head and any bench kind's configurations.
 CAMPAIGN_TABLES = ("campaign", "item", "sweep", "config")
@@ -173,6 +174,7 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
     """
     known = {f.name for f in fields(settings_class)}
     unknown = set(head) - known - set(texts) - set(read_elsewhere)
+    refuse_renamed_keys(unknown, known | set(read_elsewhere), f"{source}: [{where}]")
     if unknown:
         raise unknown_field_error(source, f"[{where}]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
     kwargs = checked_numbers(head, numbers, source, where)
@@ -209,23 +211,28 @@ class LensSpec:
         return f"{self.sphere_diopters:+.2f} {self.cylinder_diopters:+.2f} x {self.axis_deg:g}"
 
 
+#: A trial lens's keys in a campaign file, as in every scene file (`vissim.bench.scene_toml`).
+LENS_KEYS = ("sphere_diopters", "cylinder_diopters", "axis_deg")
+
+
 def lens(entry: Any, source: str, where: str) -> LensSpec:
-    """One trial lens: a number (sphere, D) or a table {sphere, cylinder, axis}."""
+    """One trial lens: a number (sphere, D) or a table {sphere_diopters, cylinder_diopters, axis_deg}."""
     limit = dict(zip(("lo", "hi"), TRIAL_LENS_RANGE_DIOPTERS))
     if isinstance(entry, (int, float)) and not isinstance(entry, bool):
         return LensSpec(number(entry, source, where, "dioptres", **limit))
     if not isinstance(entry, dict):
-        raise field_error(source, where, f"a lens is a number (sphere, D) or a table {{sphere, cylinder, axis}}, "
+        raise field_error(source, where, f"a lens is a number (sphere, D) or a table {{{', '.join(LENS_KEYS)}}}, "
                                          f"got {entry!r}")
-    unknown = set(entry) - {"sphere", "cylinder", "axis"}
+    unknown = set(entry) - set(LENS_KEYS)
+    refuse_renamed_keys(unknown, LENS_KEYS, f"{source}: {where}")
     if unknown:
-        raise field_error(source, where, f"unknown lens field(s) {sorted(unknown)}; use sphere, cylinder, axis")
-    cyl = number(entry.get("cylinder", 0.0), source, f"{where}.cylinder", "dioptres", **limit)
-    if cyl != 0 and "axis" not in entry:
-        raise field_error(source, where, "a cylinder needs an axis in degrees (TABO)")
+        raise field_error(source, where, f"unknown lens field(s) {sorted(unknown)}; use {', '.join(LENS_KEYS)}")
+    cyl = number(entry.get("cylinder_diopters", 0.0), source, f"{where}.cylinder_diopters", "dioptres", **limit)
+    if cyl != 0 and "axis_deg" not in entry:
+        raise field_error(source, where, "a cylinder needs axis_deg, its axis in degrees (TABO)")
     low, high = AXIS_RANGE_DEG
-    axis = number(entry.get("axis", 180.0), source, f"{where}.axis", "degrees", lo=low, hi=high)
-    sphere = number(entry.get("sphere", 0.0), source, f"{where}.sphere", "dioptres", **limit)
+    axis = number(entry.get("axis_deg", 180.0), source, f"{where}.axis_deg", "degrees", lo=low, hi=high)
+    sphere = number(entry.get("sphere_diopters", 0.0), source, f"{where}.sphere_diopters", "dioptres", **limit)
     return LensSpec(sphere, cyl, axis if cyl else 180.0)
 
 

@@ -2,16 +2,19 @@
 
 An item is one rendered view of a letter through an eye: ``eye_model`` (spelled as the command line's
 ``--eye-model``: a schematic model or a measured eye, ``jaeken-artal-2012:92:right``, rendered as its base
-eye with a phase plane: `vissim.optics.eyes.measured.phase_plane`), ``pupil_mm`` (the entrance pupil), ``accommodation`` (D), ``field`` (degrees: the chart centre's field angle [x, y], OSA's
-frame as every vissim field angle: x the examiner's right, y up; a number is [x, 0]), ``light``
-(``"photopic"`` or a wavelength in nm), an optional trial ``lens``
-(a sphere in D, or {sphere, cylinder, axis}), an optional ``rx`` (the eye made ametropic: the spectacle
-prescription it needs at the campaign's ``vertex_mm``, a text such as ``"-3.00"`` or ``"-2.00 -1.00 x 90"``,
-or a number: the sphere in D; `vissim.optics.eyes.fixation.ametropic_eye`; absent: the model as it is),
-``letter``, ``logmar``, ``chart_distance_m`` (the campaign's unless given), and ``surfaces``: the model's surfaces altered, a table of surface names each with
-fields of `vissim.optics.eyes.eye.SURFACE_OVERRIDES` (``surfaces."cornea front".conic = 0.0``: an eye built from
-a model plus overrides).  A ``[[sweep]]`` table gives
-lists for any of them and makes one item per combination (its ``name`` a prefix).
+eye with a phase plane: `vissim.optics.eyes.measured.phase_plane`), ``pupil_diameter_mm`` (the entrance pupil),
+``accommodation_diopters``, ``field_deg`` (the chart centre's field angle [x, y], OSA's frame as every vissim
+field angle: x the examiner's right, y up; a number is [x, 0]), its light: ``wavelength_nm`` (one wavelength)
+or ``spectrum = "photopic"``, an optional trial ``lens`` (a sphere in D, or {sphere_diopters,
+cylinder_diopters, axis_deg}), an optional ``prescription`` (the eye made ametropic: the spectacle
+prescription it needs at the campaign's ``vertex_distance_mm``, a text such as ``"-3.00"`` or
+``"-2.00 -1.00 x 90"``, or a number: the sphere in D; `vissim.optics.eyes.fixation.ametropic_eye`; absent: the
+model as it is), ``letter``, ``logmar``, ``chart_distance_m`` (the campaign's unless given), and ``surfaces``:
+the model's surfaces altered, a table of surface names each with fields of
+`vissim.optics.eyes.eye.SURFACE_OVERRIDES` (``surfaces."cornea front".conic = 0.0``: an eye built from a model
+plus overrides).  A ``[[sweep]]`` table gives lists for any of them and makes one item per combination (its
+``name`` a prefix).  Keys spell the scene files' names (`vissim.vocabulary`); the old spellings
+(``pupil_mm``, ``accommodation``, ``field``, ``light``, ``rx``, ``vertex_mm``) are refused naming the new one.
 """
 
 from __future__ import annotations
@@ -29,14 +32,15 @@ from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EY
                            EYE_LIGHT_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
                            VERTEX_DISTANCE_RANGE_MM, VIEWING_DISTANCE_RANGE_M)
 from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
+from vissim.vocabulary import refuse_renamed_keys
 from vissim.validation.engine.fields import (field_error, lens, name_text, number, settings_kwargs, tables, text,
                                              whole_number)
 
 __all__ = ["EyeSettings", "EyeConfiguration", "read_campaign"]
 
 LIGHTS = ("photopic",)
-ITEM_KEYS = ("name", "eye_model", "pupil_mm", "accommodation", "field", "light", "lens", "rx", "letter", "logmar",
-             "surfaces", "chart_distance_m")
+ITEM_KEYS = ("name", "eye_model", "pupil_diameter_mm", "accommodation_diopters", "field_deg", "wavelength_nm",
+             "spectrum", "lens", "prescription", "letter", "logmar", "surfaces", "chart_distance_m")
 
 
 @dataclass(frozen=True)
@@ -48,7 +52,7 @@ class EyeSettings:
     size_px: tuple[int, int] = DEFAULT_EYE_SIZE_PX
     arcmin_per_px: float = DEFAULT_EYE_ARCMIN_PER_PX
     chart_distance_m: float = DEFAULT_CHART_DISTANCE_M
-    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
+    vertex_distance_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     oversample: int = 2
     rays_across: int = 161
 
@@ -94,10 +98,16 @@ class EyeConfiguration:
                                self.surfaces)
 
 
-def _light(value, source: str, where: str) -> tuple[str, float | None]:
-    if value == "photopic":
+def _light(entry: dict, source: str, where: str) -> tuple[str, float | None]:
+    """("photopic", None) for ``spectrum = "photopic"``, else ("mono", ``wavelength_nm``)."""
+    if "spectrum" in entry:
+        if "wavelength_nm" in entry:
+            raise field_error(source, where, "give wavelength_nm (one wavelength) or spectrum, not both")
+        if entry["spectrum"] not in LIGHTS:
+            raise field_error(source, f"{where}.spectrum", f"choose from {', '.join(LIGHTS)}, got {entry['spectrum']!r}")
         return "photopic", None
-    return "mono", number(value, source, where, "nm", lo=EYE_LIGHT_RANGE_NM[0], hi=EYE_LIGHT_RANGE_NM[1])
+    return "mono", number(entry.get("wavelength_nm", DEFAULT_EYE_LIGHT_NM), source, f"{where}.wavelength_nm", "nm",
+                          lo=EYE_LIGHT_RANGE_NM[0], hi=EYE_LIGHT_RANGE_NM[1])
 
 
 def _field(value, source: str, where: str) -> tuple[float, float]:
@@ -136,26 +146,27 @@ def _surfaces(value, source: str, where: str) -> tuple:
 
 def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
     unknown = set(entry) - set(ITEM_KEYS)
+    refuse_renamed_keys(unknown, ITEM_KEYS, f"{source}: {where}")
     if unknown:
         raise field_error(source, where, f"unknown key(s) {sorted(unknown)}; known: {', '.join(ITEM_KEYS)}")
-    spectrum, wavelength = _light(entry.get("light", DEFAULT_EYE_LIGHT_NM), source, f"{where}.light")
+    spectrum, wavelength = _light(entry, source, where)
     trial = lens(entry["lens"], source, f"{where}.lens") if "lens" in entry else None
     trial = None if trial is None or (trial.sphere_diopters, trial.cylinder_diopters) == (0.0, 0.0) else (
         trial.sphere_diopters, trial.cylinder_diopters, trial.axis_deg)
     configuration = EyeConfiguration(
         name=name_text(entry.get("name", where), source, f"{where}.name"),
         model=text(entry.get("eye_model", DEFAULT_EYE_MODEL), source, f"{where}.eye_model"),
-        pupil_mm=number(entry.get("pupil_mm", DEFAULT_EYE_PUPIL_MM), source, f"{where}.pupil_mm", "mm", lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1]),
-        accommodation_diopters=number(entry.get("accommodation", 0.0), source, f"{where}.accommodation", "D",
+        pupil_mm=number(entry.get("pupil_diameter_mm", DEFAULT_EYE_PUPIL_MM), source, f"{where}.pupil_diameter_mm", "mm", lo=EYE_PUPIL_RANGE_MM[0], hi=EYE_PUPIL_RANGE_MM[1]),
+        accommodation_diopters=number(entry.get("accommodation_diopters", 0.0), source, f"{where}.accommodation_diopters", "D",
                                       lo=ACCOMMODATION_RANGE_DIOPTERS[0], hi=ACCOMMODATION_RANGE_DIOPTERS[1]),
-        field_deg=_field(entry.get("field", 0.0), source, f"{where}.field"),
+        field_deg=_field(entry.get("field_deg", 0.0), source, f"{where}.field_deg"),
         spectrum=spectrum, wavelength_nm=wavelength, lens=trial,
-        rx=_rx(entry["rx"], source, f"{where}.rx") if "rx" in entry else None,
+        rx=_rx(entry["prescription"], source, f"{where}.prescription") if "prescription" in entry else None,
         surfaces=_surfaces(entry.get("surfaces", {}), source, f"{where}.surfaces"),
         letter=text(entry.get("letter", DEFAULT_LETTER), source, f"{where}.letter"),
         logmar=number(entry.get("logmar", DEFAULT_LETTER_LOGMAR), source, f"{where}.logmar", "logMAR", lo=LOGMAR_RANGE[0], hi=LOGMAR_RANGE[1]),
         size_px=settings.size_px, arcmin_per_px=settings.arcmin_per_px, chart_distance_m=number(entry.get("chart_distance_m", settings.chart_distance_m), source, f"{where}.chart_distance_m", "m", lo=VIEWING_DISTANCE_RANGE_M[0], hi=VIEWING_DISTANCE_RANGE_M[1]),
-        vertex_mm=settings.vertex_mm)
+        vertex_mm=settings.vertex_distance_mm)
     try:  # the model's name and its own accommodation range; the altered and the ametropic eye's own checks
         configuration.eye()
     except VissimInputError as error:
@@ -169,7 +180,8 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
 def _words(value) -> str:
     """A swept value as a name's words: a lens table as "+0 +1 x 90", a list as "10,0"."""
     if isinstance(value, dict):
-        return f"{value.get('sphere', 0.0):+g} {value.get('cylinder', 0.0):+g} x {value.get('axis', 180):g}"
+        return (f"{value.get('sphere_diopters', 0.0):+g} {value.get('cylinder_diopters', 0.0):+g} x "
+                f"{value.get('axis_deg', 180):g}")
     if isinstance(value, list):
         return ",".join(f"{v:g}" for v in value)
     return f"{value:g}" if isinstance(value, (int, float)) else str(value)
@@ -188,7 +200,7 @@ def _sweep(entry: dict, index: int, source: str) -> list[dict]:
 
 def _axis_values(key: str, value) -> list:
     """A sweep field's values: its list, or the one value it gives (a field is a list of [x, y] pairs to sweep)."""
-    if key == "field":
+    if key == "field_deg":
         return value if isinstance(value, list) and value and isinstance(value[0], list) else [value]
     return value if isinstance(value, list) else [value]
 
@@ -197,7 +209,7 @@ def _settings(head: dict, source: str) -> EyeSettings:
     kwargs = settings_kwargs(head, EyeSettings, source, "campaign",
                              numbers={"arcmin_per_px": ("arcmin/px", *ARCMIN_PER_PX_RANGE),
                                       "chart_distance_m": ("m", *VIEWING_DISTANCE_RANGE_M),
-                                      "vertex_mm": ("mm", *VERTEX_DISTANCE_RANGE_MM)},
+                                      "vertex_distance_mm": ("mm", *VERTEX_DISTANCE_RANGE_MM)},
                              whole_numbers={"spp": ("samples per pixel", 1, MAX_SPP),
                                             "oversample": ("", *OVERSAMPLE_RANGE),
                                             "rays_across": ("rays", *EYE_BENCH_RAYS_ACROSS_RANGE)},

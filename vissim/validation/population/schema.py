@@ -3,11 +3,11 @@
 ``kind = "population"``; ``dataset`` (``jaeken-artal-2012`` or ``polans-2015``) and, to choose among its eyes,
 ``subjects`` (numbers as in the data), ``eyes`` (``["right"]``, ``["left"]`` or both) and
 ``foveal_se_diopters`` (``[low, high]``: the eyes whose foveal spherical equivalent lies within it); the
-conditions, every combination of ``pupil_mm`` (mm, at most the data's), ``field`` (degrees, [x, y] pairs as
+conditions, every combination of ``pupil_diameter_mm`` (mm, at most the data's), ``field_deg`` ([x, y] pairs as
 every vissim field, from the line of sight) and ``correction`` (``"uncorrected"``, ``"sphero-cylinder"``,
 ``"accommodating"`` with ``accommodation_amplitude_diopters``, or the spectacles worn, a prescription such as
 ``"-1.00 -0.50 x 90"``), in ``wavelength_nm`` light with the
-spectacles ``vertex_mm`` in front of the cornea; and ``mtf_cyc_per_deg``, the frequencies of each eye's MTF.
+spectacles ``vertex_distance_mm`` in front of the cornea; and ``mtf_cyc_per_deg``, the frequencies of each eye's MTF.
 The defaults are the ``vissim population`` command's. One item per condition.
 """
 
@@ -21,12 +21,13 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
                                          POPULATION_FIELD_DEG, POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
 from vissim.checks import ACCOMMODATION_RANGE_DIOPTERS, VERTEX_DISTANCE_RANGE_MM
+from vissim.vocabulary import refuse_renamed_keys
 from vissim.validation.engine.fields import choices, field_error, number, text, value_list
 
 __all__ = ["PopulationSettings", "PopulationItem", "read_campaign", "HEAD_KEYS"]
 
-HEAD_KEYS = ("dataset", "subjects", "eyes", "foveal_se_diopters", "pupil_mm", "field", "correction",
-             "accommodation_amplitude_diopters", "wavelength_nm", "vertex_mm", "mtf_cyc_per_deg")
+HEAD_KEYS = ("dataset", "subjects", "eyes", "foveal_se_diopters", "pupil_diameter_mm", "field_deg", "correction",
+             "accommodation_amplitude_diopters", "wavelength_nm", "vertex_distance_mm", "mtf_cyc_per_deg")
 
 
 @dataclass(frozen=True)
@@ -81,9 +82,9 @@ def _fields(value, dataset: str, source: str) -> list[tuple[float, float]]:
     for i, pair in enumerate(pairs):
         pair = [pair, 0.0] if isinstance(pair, (int, float)) and not isinstance(pair, bool) else pair
         if not isinstance(pair, list) or len(pair) != 2:
-            raise field_error(source, f"campaign.field[{i}]", f"give [x, y] in degrees, got {pair!r}")
-        field = tuple(number(v, source, f"campaign.field[{i}]", "deg") for v in pair)
-        out.append(_checked(load_dataset(dataset).check_field, source, f"campaign.field[{i}]", field))
+            raise field_error(source, f"campaign.field_deg[{i}]", f"give [x, y] in degrees, got {pair!r}")
+        field = tuple(number(v, source, f"campaign.field_deg[{i}]", "deg") for v in pair)
+        out.append(_checked(load_dataset(dataset).check_field, source, f"campaign.field_deg[{i}]", field))
     return out
 
 
@@ -125,14 +126,15 @@ def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[Po
     from vissim.optics.eyes.measured.population import parse_correction, population_conditions
 
     unknown = sorted(set(head) - set(HEAD_KEYS))
+    refuse_renamed_keys(unknown, HEAD_KEYS, f"{source}: campaign")
     if unknown:
         raise field_error(source, "campaign", f"unknown key(s) {unknown}; known: name, description, kind, "
                                               f"{', '.join(HEAD_KEYS)}")
     settings = _settings(head, source)
     largest = load_dataset(settings.dataset).pupil_mm
-    pupils = _numbers(head.get("pupil_mm", list(POPULATION_PUPILS_MM)), source, "campaign.pupil_mm", "mm",
+    pupils = _numbers(head.get("pupil_diameter_mm", list(POPULATION_PUPILS_MM)), source, "campaign.pupil_diameter_mm", "mm",
                       positive=True, hi=largest)  # at most the data's: nothing is extrapolated
-    fields = _fields(head.get("field", list(POPULATION_FIELD_DEG)), settings.dataset, source)
+    fields = _fields(head.get("field_deg", list(POPULATION_FIELD_DEG)), settings.dataset, source)
     corrections = [_checked(parse_correction, source, f"campaign.correction[{i}]", text(c, source, "campaign.correction"))
                    for i, c in enumerate(value_list(head.get("correction", [POPULATION_CORRECTION]), source,
                                                     "campaign.correction", f'["{POPULATION_CORRECTION}"]'))]
@@ -143,7 +145,7 @@ def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[Po
         population_conditions, source, "campaign", pupils, fields, corrections,
         wavelength_nm=number(head.get("wavelength_nm", PHOTOPIC_FOCUS_NM), source, "campaign.wavelength_nm", "nm",
                              positive=True),
-        vertex_mm=number(head.get("vertex_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_mm", "mm",
+        vertex_mm=number(head.get("vertex_distance_mm", DEFAULT_SPECTACLE_VERTEX_MM), source, "campaign.vertex_distance_mm", "mm",
                          lo=VERTEX_DISTANCE_RANGE_MM[0], hi=VERTEX_DISTANCE_RANGE_MM[1]),
         accommodation_amplitude_diopters=amplitude)
     return settings, tuple(PopulationItem(c.label, c) for c in conditions)
