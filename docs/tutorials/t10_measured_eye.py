@@ -90,7 +90,7 @@ print("  spherical equivalent M median {:+.2f} D, 5-95 % {:+.2f}...{:+.2f} D".fo
 # Navarro's schematic eye sits at or above the population's upper quartile: schematic eyes are built with the
 # average eye's spherical aberration and nothing else, while every real eye has some coma, trefoil and
 # more. Watson's curve lies far below both, though it too is computed from corrected wavefronts at 555 nm;
-# vissim does not yet explain that difference (docs: Results, "Measured eyes").
+# vissim does not yet explain that difference (the Command-line guide, "Populations of measured eyes").
 
 # 4. The figure: MTF curves of subject 17, the population's median and quartiles, Navarro's and Watson's.
 frequencies = np.linspace(0.0, 60.0, 31)
