@@ -19,7 +19,9 @@ FIGURES = {"t2_bench_render_vs_simulation.py": ["t2_render_vs_simulation.png"],
            "t5_fit_prescription.py": ["t5_fit.png"],
            "t6_atv_data.py": ["t6_subject_001_fits.png"],
            "t7_eye_campaign_item.py": ["t7_eye_item.png"],
-           "t8_twenty_real_eyes.py": ["t8_twenty_eyes.png"]}
+           "t8_twenty_real_eyes.py": ["t8_twenty_eyes.png"],
+           "t9_schematic_eye.py": ["t9_schematic_eye.png"],
+           "t10_measured_eye.py": ["t10_measured_eye.png"]}
 
 
 def test_every_tutorial_is_listed_here():
