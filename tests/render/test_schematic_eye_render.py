@@ -130,7 +130,7 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
     from vissim.optics.eyes.eye import build_eye
     from vissim.bench.eye.sensor_eyes import register_sensor_eye
 
-    key = register_sensor_eye(build_eye("escudero-sanz-1999", pupil_mm=3.0))
+    key = register_sensor_eye(build_eye("escudero-sanz-1999", pupil_diameter_mm=3.0))
     sensor = {"type": "vissim_schematic_eye", "eye_key": key, "arcmin_per_px": step,
               "field_x_deg": field[0], "field_y_deg": field[1],
               "to_world": mi.ScalarTransform4f(eye_to_world(eye, field)),

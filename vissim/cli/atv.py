@@ -53,7 +53,7 @@ def add_parser(subparsers) -> None:
                      help="amplitude of accommodation, D: the most the subject can exert (default 8); the "
                           "accommodation exerted at each lens follows from it")
     sim.add_argument("--cycloplegia", action="store_true", help="no accommodation (cycloplegic drops)")
-    sim.add_argument("--proximal-diopters", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
+    sim.add_argument("--proximal-diopters", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D (default 0)")
     sim.add_argument("--lenses", metavar="D[,D...]", help="trial lenses in D (default: the thesis's 17)")
     sim.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
                      help=f"vertex distance: trial lens back vertex to the eye's pupil (default "
@@ -75,8 +75,9 @@ def add_parser(subparsers) -> None:
     run = sub.add_parser("run", help="run the threshold procedure once (Listing 5.1)",
                          description="Phase 1: quasi-random narrowing in steps of 0.1; phase 2: bisection down to "
                          "--resolution. A person answers in a one-pixel window (keys y/n/q) or in the terminal.")
-    run.add_argument("--observer", choices=("simulated", "person"), default="simulated", action=_ObserverChoice)
-    run.add_argument("--display", choices=("auto", "window", "terminal"), default="auto", help="how a person sees the stimulus")
+    run.add_argument("--observer", choices=("simulated", "person"), default="simulated", action=_ObserverChoice,
+                     help="who answers: the simulated observer below, or a person at the display (default simulated)")
+    run.add_argument("--display", choices=("auto", "window", "terminal"), default="auto", help="how a person sees the stimulus (default auto)")
     _observer_args(run, threshold=True)
     run.add_argument("--resolution", type=float, default=0.001, help="phase-2 resolution, code value (default 0.001)")
     run.add_argument("--sphere", type=float, metavar="D", help="trial lens sphere in use, dioptres (recorded only)")

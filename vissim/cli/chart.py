@@ -36,18 +36,20 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         ),
     )
     rows = parser.add_mutually_exclusive_group()
-    rows.add_argument("--logmar", type=float, metavar="L", help="one row at this LogMAR")
+    rows.add_argument("--logmar", type=float, metavar="L", help="one row at this LogMAR (default: the rows of --logmar-range)")
     rows.add_argument("--logmar-range", metavar="START,STOP",
                       help="rows from START to STOP inclusive (default 1.0,-0.3 as in the thesis)")
     parser.add_argument("--logmar-step", type=float, default=0.1, metavar="L", help="row step (default 0.1)")
     which = parser.add_mutually_exclusive_group()
     which.add_argument("--letters", metavar="LETTERS",
-                       help="letters of every row (e.g. NCKZO), or one group per row separated by commas")
-    which.add_argument("--letter", metavar="X", help="a single letter (one per row)")
+                       help="letters of every row (e.g. NCKZO), or one group per row separated by commas (default: 5 distinct "
+                            "letters a row, picked by --seed)")
+    which.add_argument("--letter", metavar="X", help="a single letter (one per row; default: as --letters)")
     parser.add_argument("--seed", type=int, default=DEFAULT_LETTER_SEED,
                         help=f"seed that picks 5 distinct letters per row when none are given "
                              f"(default {DEFAULT_LETTER_SEED})")
-    parser.add_argument("--polarity", choices=POLARITIES, default="black-on-white")
+    parser.add_argument("--polarity", choices=POLARITIES, default="black-on-white",
+                        help="black letters on white paper, or white on black (default black-on-white)")
     parser.add_argument("--arcmin-per-px", type=float, default=1.0, metavar="ARCMIN",
                         help="angular pixel size (default 1, as the thesis)")
     parser.add_argument("--distance-m", type=float, default=mm_to_m(THESIS_CHART_DISTANCE_MM), metavar="M",
@@ -125,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.tile:
             chart = optotype_tile(letters.strip(), args.logmar, arcmin_per_px=args.arcmin_per_px,
-                                  shape_px=THESIS_TILE_SHAPE_PX, **look)
+                                  size_px=THESIS_TILE_SHAPE_PX, **look)
         else:
             chart = render_chart_angular(spec, args.arcmin_per_px)
         write_image(out, chart.pixels, provenance=provenance, overwrite=args.overwrite, encoding="srgb",

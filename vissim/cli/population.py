@@ -41,7 +41,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--eyes", metavar="SIDE[,SIDE]", help="right, left or both (default: the dataset's eyes)")
     parser.add_argument("--foveal-se-diopters", metavar="LOW,HIGH",
                         help="keep the eyes whose foveal spherical equivalent (over the data's pupil, in "
-                             f"{PHOTOPIC_FOCUS_NM:g} nm light) is within LOW..HIGH D")
+                             f"{PHOTOPIC_FOCUS_NM:g} nm light) is within LOW..HIGH D (default: every eye)")
     parser.add_argument("--pupil-mm", metavar="MM[,MM...]",
                         help=f"entrance pupil diameters, mm, at most the data's (default {_listed(POPULATION_PUPILS_MM)})")
     parser.add_argument("--field-deg", metavar="X,Y[;X,Y...]",
