@@ -467,3 +467,28 @@ def test_atv_json_is_the_record_of_what_it_printed(capsys, tmp_path):
     assert all(Path(p).is_file() for p in record["written"])
     code, out, err = run(capsys, "atv", "run", "--observer", "person", "-o", tmp_path / "p.json", "--json")
     assert code == 2 and err.count("\n") == 1 and "--json goes with --observer simulated" in err
+
+
+@pytest.mark.parametrize("table, says", [
+    ("[chart]\ndistance_mm = 914.4\n", "[chart]: 'distance_mm' is now 'chart_distance_m' (metres, not mm)"),
+    ("[holder]\ndistance_mm = 10.0\n", "[holder]: 'distance_mm' is now 'vertex_distance_mm'"),
+])
+def test_a_renamed_scene_key_is_refused_naming_its_tables_new_key(tmp_path, table, says):
+    from vissim.bench.dslr.scene_files import load_bench_toml
+
+    path = tmp_path / "old.toml"
+    path.write_text(table, encoding="utf-8")
+    with pytest.raises(VissimInputError) as caught:
+        load_bench_toml(path)
+    assert says in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_the_chart_distance_is_one_spelling_in_every_scene_and_flag():
+    from vissim.bench.dslr.scene_files import load_bench_toml
+    from vissim.thesis import THESIS_CHART_DISTANCE_MM
+
+    bench, spec = load_bench_toml(ROOT / "scenes" / "dslr_bench.toml")
+    assert bench.chart_distance_mm == THESIS_CHART_DISTANCE_MM and spec.viewing_distance_m == pytest.approx(0.9144)
+    eye = tomllib.loads((ROOT / "scenes" / "eye.toml").read_text(encoding="utf-8"))
+    assert eye["chart"]["chart_distance_m"] == 6.0
+    assert {" ".join(p) for p, leaf in subcommands() if option(leaf, "--chart-distance-m")} == {"chart", "render eye"}

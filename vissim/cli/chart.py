@@ -52,7 +52,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="black letters on white paper, or white on black (default black-on-white)")
     parser.add_argument("--arcmin-per-px", type=float, default=1.0, metavar="ARCMIN",
                         help="angular pixel size (default 1, as the thesis)")
-    parser.add_argument("--distance-m", type=float, default=mm_to_m(THESIS_CHART_DISTANCE_MM), metavar="M",
+    parser.add_argument("--chart-distance-m", type=float, default=mm_to_m(THESIS_CHART_DISTANCE_MM), metavar="M",
                         help="viewing distance in metres (default 0.9144, three feet)")
     parser.add_argument("--paper-reflectance", type=float, default=PAPER_REFLECTANCE, metavar="R",
                         help=f"linear reflectance of the paper (default {PAPER_REFLECTANCE})")
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     suffix = out.suffix.lower()
     letters = _letters(args)
-    look = {"viewing_distance_m": args.distance_m, "polarity": args.polarity,
+    look = {"viewing_distance_m": args.chart_distance_m, "polarity": args.polarity,
             "paper_reflectance": args.paper_reflectance, "ink_reflectance": args.ink_reflectance}
     if args.tile:
         if args.print_form or args.logmar_range is not None:
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     lines += [f"wrote {provenance_path} (provenance)" for provenance_path in images[1:]]
     write_json_atomic(sidecar_path, sidecar | {"provenance": provenance}, overwrite=args.overwrite)
     lines.append(f"wrote {sidecar_path} (letter boxes)")
-    record |= {"letters": [box["letter"] for box in sidecar["letters"]], "chart_distance_m": args.distance_m,
+    record |= {"letters": [box["letter"] for box in sidecar["letters"]], "chart_distance_m": args.chart_distance_m,
                "polarity": args.polarity}
     print_result(args, lines, record, [*images, sidecar_path], provenance)
     return 0

@@ -59,7 +59,7 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     colour.add_argument("--spectrum", choices=("photopic",),
                         help="photopic: white light over the visible spectrum, each ray at its own wavelength, the "
                              "image weighted by the eye's photopic sensitivity V(λ) (default none: one wavelength, --wavelength-nm)")
-    parser.add_argument("--distance-m", type=float, metavar="M",
+    parser.add_argument("--chart-distance-m", type=float, metavar="M",
                         help=f"chart distance (default {_DEFAULT['chart_distance_m']:g} m)")
     parser.add_argument("--letter", metavar="X", help=f"one Sloan letter (default {_DEFAULT['letter']})")
     parser.add_argument("--logmar", type=float, metavar="L",
@@ -94,7 +94,7 @@ def _settings(args: argparse.Namespace):
 
     values = {} if args.scene is None else eye_scene_values(args.scene)
     options = {"model": args.eye_model, "accommodation_diopters": args.accommodation_diopters,
-               "chart_distance_m": args.distance_m, "letter": args.letter, "logmar": args.logmar, "rx": args.rx,
+               "chart_distance_m": args.chart_distance_m, "letter": args.letter, "logmar": args.logmar, "rx": args.rx,
                "vertex_mm": args.vertex_mm, "arcmin_per_px": args.arcmin_per_px, "spp": args.spp, "seed": args.seed,
                "field_deg": None if args.field_deg is None else field_deg_from_text(args.field_deg),
                "size_px": None if args.size is None else size_from_text(args.size, "64x64"),
