@@ -112,7 +112,7 @@ def main() -> None:
     image, depth = scene()
     if args.cli_only:
         return print_cli_times(image, depth, args)
-    kwargs = dict(eye_prescription=EYE, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+    kwargs = dict(rx=EYE, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
                   coarse_blur_px=args.coarse_blur_px)
 
     def cold():

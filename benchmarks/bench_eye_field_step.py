@@ -49,7 +49,7 @@ def main(models: list[str]) -> None:
         blurred = {}
         for step in STEPS_DEG:
             start = time.perf_counter()
-            eye = vissim.build_eye(model, pupil_mm=PUPIL_MM)
+            eye = vissim.build_eye(model, pupil_diameter_mm=PUPIL_MM)
             blurred[step] = vissim.blur_eye(chart, eye, field_step_deg=step, dtype=np.float64, **CASE)
             print(f"  {model} step {step:g} deg: {time.perf_counter() - start:.1f} s", flush=True)
         for coarse, fine in zip(STEPS_DEG, STEPS_DEG[1:]):

@@ -91,7 +91,7 @@ def test_gpu_blur_image_matches_the_cpu_within_60_db():
 @needs_gpu
 def test_gpu_blur_depth_matches_the_cpu_within_60_db():
     picture, depth = depth_scene()
-    kwargs = dict(eye_prescription=Prescription(-1.5), pupil_diameter_mm=4.0, arcmin_per_px=1.0)
+    kwargs = dict(rx=Prescription(-1.5), pupil_diameter_mm=4.0, arcmin_per_px=1.0)
     cpu = blur_depth(picture, depth, **kwargs).image
     assert psnr_db(blur_depth(picture, depth, device="cuda", **kwargs).image, cpu) >= 60.0
 
@@ -100,7 +100,7 @@ def test_blur_depth_by_the_device_code_equals_the_cpus(monkeypatch):
     # A NumPy backend that is not the CPU's takes the GPU's route (kernel spectra cached "on the
     # device", transforms without scipy's workers): the same numbers as the CPU, to float32 round-off.
     picture, depth = depth_scene()
-    kwargs = dict(eye_prescription=Prescription(-1.5), pupil_diameter_mm=4.0, arcmin_per_px=1.0, padding="reflect")
+    kwargs = dict(rx=Prescription(-1.5), pupil_diameter_mm=4.0, arcmin_per_px=1.0, padding="reflect")
     cpu = blur_depth(picture, depth, **kwargs).image
     spectra_sent = []
 

@@ -90,7 +90,7 @@ def test_myopic_eye_sees_the_half_metre_panel_sharp():
     # Left half at 0.5 m (the -2 D myope's far point), right half at 6 m.
     image = texture((64, 256))
     depth = np.where(np.arange(256) < 128, 0.5, 6.0)[None, :].repeat(64, axis=0)
-    result = blur_depth(image, depth, eye_prescription=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP)
+    result = blur_depth(image, depth, rx=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP)
     diffraction_only = single_psf_blur(image, Prescription(0.0))
     m = margin_px(result)
     np.testing.assert_allclose(result.image[:, : 128 - m], diffraction_only[:, : 128 - m], atol=ATOL)
@@ -105,7 +105,7 @@ def test_myopic_eye_blurs_a_six_metre_point_into_a_disc_of_pupil_times_1_83_D():
     image[40, 50] = image[40, 150] = 1.0
     depth = np.where(np.arange(200) < 100, 0.5, 6.0)[None, :].repeat(80, axis=0)
     result = blur_depth(
-        image, depth, eye_prescription=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode="geometric"
+        image, depth, rx=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode="geometric"
     )
     expected_px = rad_to_arcmin(PUPIL_MM * (2.0 - 1 / 6) * 1e-3) / STEP  # 25.21 px
     measured = disc_diameter_px(result.image[10:71, 120:181])
@@ -127,7 +127,7 @@ def test_emmetrope_accommodating_to_each_panel_in_turn_sees_it_sharp():
     for i, distance in enumerate(distances):
         exerted = accommodation_for_target(Prescription(0.0), distance, 3.0)
         result = blur_depth(
-            image, depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+            image, depth, rx=Prescription(0.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
             accommodation_diopters=exerted,
         )
         m = margin_px(result)
@@ -163,7 +163,7 @@ def test_layer_count_grows_with_the_dioptric_range():
     # blur_depth reports the same count for a depth ramp over that range (in focus: 0 D, outside)
     proximity = np.linspace(0.5, 1.5, 32)[None, :].repeat(8, axis=0)
     result = blur_depth(
-        texture((8, 32)), 1.0 / proximity, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM,
+        texture((8, 32)), 1.0 / proximity, rx=Prescription(0.0), pupil_diameter_mm=PUPIL_MM,
         arcmin_per_px=STEP,
     )
     assert result.n_layers == counts[0]
@@ -172,7 +172,7 @@ def test_layer_count_grows_with_the_dioptric_range():
 def test_too_many_layers_is_a_clear_error():
     depth = np.where(np.arange(16) < 8, 0.1, 10.0)[None, :].repeat(16, axis=0)
     with pytest.raises(VissimInputError, match=r"needs \d+ layers .*max_layers=20"):
-        blur_depth(texture((16, 16)), depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM,
+        blur_depth(texture((16, 16)), depth, rx=Prescription(0.0), pupil_diameter_mm=PUPIL_MM,
                    arcmin_per_px=STEP, max_layers=20)
     # refused by default (DEFAULT_MAX_LAYERS = 256), naming the range it found; None lifts the limit
     with pytest.raises(VissimInputError, match=r"0 to 100 D of proximity \(0.01 m to infinity\), which needs 3335 layers"):
@@ -189,7 +189,7 @@ def test_finer_layers_change_the_result_by_less_than_a_percent():
     image = texture((rows, cols), seed=2)
     proximity = np.linspace(1 / 6, 2.5, rows)[:, None].repeat(cols, axis=1)
     proximity[30:60, 30:60] = 1.9
-    kwargs = dict(eye_prescription=Prescription(-1.0), pupil_diameter_mm=3.0, arcmin_per_px=2.0)
+    kwargs = dict(rx=Prescription(-1.0), pupil_diameter_mm=3.0, arcmin_per_px=2.0)
     coarse = blur_depth(image, 1.0 / proximity, layer_spacing_fraction=0.5, **kwargs)
     fine = blur_depth(image, 1.0 / proximity, layer_spacing_fraction=0.25, **kwargs)
     assert fine.n_layers > 1.9 * coarse.n_layers
@@ -203,7 +203,7 @@ def test_finer_layers_change_the_result_by_less_than_a_percent():
 def test_constant_depth_is_exactly_the_single_psf_blur(distance_m, padding):
     image = texture((48, 64, 3), seed=3)
     depth = np.full((48, 64), distance_m)
-    result = blur_depth(image, depth, eye_prescription=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+    result = blur_depth(image, depth, rx=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
                         padding=padding)
     assert result.n_layers == 1 and result.image.shape == image.shape and result.image.dtype == np.float32
     rx = effective_prescription(Prescription(-2.0), distance_m)
@@ -216,7 +216,7 @@ def test_paddings_without_a_meaning_for_depth_are_refused_not_replaced(padding):
     # put the far side's depths beside the near; blur_depth refuses both rather than padding by "edge".
     image, depth = texture((24, 32)), np.full((24, 32), 2.0)
     with pytest.raises(VissimInputError, match="depth-blur padding must be one of edge, reflect"):
-        blur_depth(image, depth, eye_prescription=Prescription(-1.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+        blur_depth(image, depth, rx=Prescription(-1.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
                    padding=padding)
 
 
@@ -224,7 +224,7 @@ def test_two_depth_scene_equals_each_single_psf_blur_away_from_the_boundary():
     image = texture((48, 192), seed=4)
     depth = np.where(np.arange(192) < 96, 0.4, 3.0)[None, :].repeat(48, axis=0)
     result = blur_depth(
-        image, depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, accommodation_diopters=1.0
+        image, depth, rx=Prescription(0.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, accommodation_diopters=1.0
     )
     m = margin_px(result)
     near = single_psf_blur(image, Prescription(2.5 - 1.0))
@@ -274,7 +274,7 @@ def panel_scene(size=96):
 def test_bright_near_panel_leaks_no_light_beyond_its_own_blur(case):
     eye, accommodation = OCCLUSION_CASES[case]
     mask, depth = panel_scene()
-    result = blur_depth(mask, depth, eye_prescription=eye, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+    result = blur_depth(mask, depth, rx=eye, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
                         accommodation_diopters=accommodation)
     own_blur = single_psf_blur(mask, effective_prescription(eye, 0.5, accommodation))
     np.testing.assert_allclose(result.image, own_blur, atol=ATOL)
@@ -284,7 +284,7 @@ def test_bright_near_panel_leaks_no_light_beyond_its_own_blur(case):
 def test_dark_near_panel_over_a_bright_background_shows_no_halo(case):
     eye, accommodation = OCCLUSION_CASES[case]
     mask, depth = panel_scene()
-    result = blur_depth(1.0 - mask, depth, eye_prescription=eye, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
+    result = blur_depth(1.0 - mask, depth, rx=eye, pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP,
                         accommodation_diopters=accommodation)
     assert result.image.max() <= 1.0 + ATOL  # no glow
     # The near panel's blurred edge attenuates the background by its own blurred coverage,
@@ -299,7 +299,7 @@ def test_astigmatism_rides_along_at_every_depth():
     image = np.zeros((80, 160), np.float32)
     image[40, 40] = image[40, 120] = 1.0
     depth = np.where(np.arange(160) < 80, 1.0, 6.0)[None, :].repeat(80, axis=0)
-    result = blur_depth(image, depth, eye_prescription=Prescription(-1.0, -2.0, 90.0), pupil_diameter_mm=PUPIL_MM,
+    result = blur_depth(image, depth, rx=Prescription(-1.0, -2.0, 90.0), pupil_diameter_mm=PUPIL_MM,
                         arcmin_per_px=STEP, mode="geometric")
     for centre in (40, 120):
         patch = result.image[10:71, centre - 30 : centre + 31].astype(np.float64)
@@ -315,17 +315,17 @@ def test_depth_must_be_positive_metres_or_inf(bad):
     depth = np.full((8, 8), 2.0)
     depth[3, 3] = bad
     with pytest.raises(VissimInputError, match="depth map has 1 pixels that are not positive metres"):
-        blur_depth(texture((8, 8)), depth, eye_prescription=Prescription(0.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
+        blur_depth(texture((8, 8)), depth, rx=Prescription(0.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
 
 
 def test_other_bad_inputs():
-    kwargs = dict(eye_prescription=Prescription(0.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
+    kwargs = dict(rx=Prescription(0.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
     with pytest.raises(VissimInputError, match=r"the depth map is 9 × 8 px \(width × height\) but the image 8 × 8 px"):
         blur_depth(texture((8, 8)), np.ones((8, 9)), **kwargs)
     with pytest.raises(VissimInputError, match="accommodation exerted must be >= 0 dioptres"):
         blur_depth(texture((8, 8)), np.ones((8, 8)), accommodation_diopters=-1.0, **kwargs)
     with pytest.raises(TypeError, match="RefractiveError"):
-        blur_depth(texture((8, 8)), np.ones((8, 8)), eye_prescription=Prescription(-1.0).refractive_error(),
+        blur_depth(texture((8, 8)), np.ones((8, 8)), rx=Prescription(-1.0).refractive_error(),
                    pupil_diameter_mm=3.0, arcmin_per_px=1.0)
     with pytest.raises(VissimInputError, match="not both .also given: pupil_diameter_mm"):
         blur_depth(texture((8, 8)), np.ones((8, 8)), eye=DepthViewer(Prescription(0.0), 3.0), pupil_diameter_mm=3.0,
@@ -338,7 +338,7 @@ def test_an_eye_object_blurs_as_its_keywords_do():
     rx, extra = Prescription(-1.0, -0.5, 20.0), Wavefront({(3, 1): 0.05}, 4.0)
     image, depth = texture((24, 24)), np.where(np.arange(24) < 12, 0.5, 2.0)[None, :].repeat(24, axis=0)
     kwargs = dict(arcmin_per_px=1.0, mode="geometric")
-    by_keywords = blur_depth(image, depth, eye_prescription=rx, pupil_diameter_mm=3.0, accommodation_diopters=0.5,
+    by_keywords = blur_depth(image, depth, rx=rx, pupil_diameter_mm=3.0, accommodation_diopters=0.5,
                              extra_wavefront=extra, **kwargs)
     by_eye = blur_depth(image, depth, eye=DepthViewer(rx, 3.0, 0.5, extra), **kwargs)
     np.testing.assert_array_equal(by_eye.image, by_keywords.image)
@@ -378,7 +378,7 @@ def test_crop_px_cuts_the_margin_from_the_result():
     image = texture((40, 50))
     depth = np.full((40, 50), 2.0)
     depth[:, 25:] = 0.5
-    kwargs = dict(eye_prescription=Prescription(-1.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode="geometric")
+    kwargs = dict(rx=Prescription(-1.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP, mode="geometric")
     whole = blur_depth(image, depth, **kwargs).image
     np.testing.assert_array_equal(blur_depth(image, depth, crop_px=6, **kwargs).image, whole[6:-6, 6:-6])
     with pytest.raises(VissimInputError, match="crop_px"):
@@ -395,7 +395,7 @@ def test_coarse_grid_for_wide_blurs_stays_within_its_stated_db():
     for blur_px, floor_db in ((COARSE_BLUR_PX, COARSE_MIN_DB), (20.0, 48.0)):
         defocus = blur_px * STEP / rad_to_arcmin(PUPIL_MM * 1e-3)  # dioptres that blur this wide
         depth = np.full(image.shape, 1.0 / (2.0 + defocus))
-        kwargs = dict(eye_prescription=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP)
+        kwargs = dict(rx=Prescription(-2.0), pupil_diameter_mm=PUPIL_MM, arcmin_per_px=STEP)
         fine = blur_depth(image, depth, **kwargs)
         coarse = blur_depth(image, depth, coarse_blur_px=COARSE_BLUR_PX - 1e-6, **kwargs)
         assert coarse.layers[0].blur_diameter_arcmin == pytest.approx(blur_px * STEP, rel=1e-9)
@@ -430,5 +430,5 @@ def test_blur_depth_refuses_a_wavelength_outside_the_checks_range(wavelength_nm)
 
     image, depth = np.ones((16, 16), np.float32), np.full((16, 16), 2.0)
     with pytest.raises(VissimInputError, match=f"{WAVELENGTH_RANGE_NM[0]:g}.*{WAVELENGTH_RANGE_NM[1]:g}"):
-        blur_depth(image, depth, eye_prescription=Prescription(-1.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0,
+        blur_depth(image, depth, rx=Prescription(-1.0), pupil_diameter_mm=3.0, arcmin_per_px=1.0,
                    wavelength_nm=wavelength_nm)

@@ -52,7 +52,7 @@ def blur(image, psf):
 
 
 def composite(layers, **kwargs):
-    kwargs = {"eye_prescription": EYE, "pupil_diameter_mm": PUPIL_MM, "arcmin_per_px": STEP} | kwargs
+    kwargs = {"rx": EYE, "pupil_diameter_mm": PUPIL_MM, "arcmin_per_px": STEP} | kwargs
     return composite_layers(layers, **kwargs)
 
 
@@ -108,7 +108,7 @@ def test_a_slanted_layer_alone_is_blur_depth_of_its_depth_map():
     proximity = np.broadcast_to(np.linspace(1.5, 2.5, SHAPE[1]), SHAPE)
     ones = np.ones(SHAPE, np.float32)
     out = composite([SceneLayer(image, ones, proximity)]).image
-    reference = blur_depth(image, 1.0 / proximity, eye_prescription=EYE, pupil_diameter_mm=PUPIL_MM,
+    reference = blur_depth(image, 1.0 / proximity, rx=EYE, pupil_diameter_mm=PUPIL_MM,
                            arcmin_per_px=STEP, mode="geometric", occlusion_threshold_px=100.0).image
     inner = (slice(12, -12), slice(12, -12))  # away from the grids' borders (zero vs edge padding)
     np.testing.assert_allclose(out[inner], reference[inner], atol=1e-4)

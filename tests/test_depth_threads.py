@@ -24,7 +24,7 @@ def ramp_scene(rows=96, cols=160):
     return image, depth_m
 
 
-EYE = dict(eye_prescription=Prescription(-1.5), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
+EYE = dict(rx=Prescription(-1.5), pupil_diameter_mm=3.0, arcmin_per_px=1.0)
 
 
 @pytest.mark.parametrize("padding", ["edge", "reflect"])

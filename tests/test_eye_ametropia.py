@@ -117,7 +117,7 @@ def test_liou_brennan_reads_its_rx_back_along_the_visual_axis(rx):
     twice the solve's own tolerance (`VISUAL_AXIS_TOL_DIOPTERS` on each matrix entry at 1 mm; the curvature at
     the pupil centre reads the same to 1e-4 D at 1, 3 and 5 mm); measured <= 1e-4 D."""
     want = Prescription.parse(rx)
-    read = eye_report(build_eye("liou-brennan-1997", pupil_mm=3.0, rx=rx)).refraction.paraxial
+    read = eye_report(build_eye("liou-brennan-1997", pupil_diameter_mm=3.0, rx=rx)).refraction.paraxial
     assert read.power_vector() == pytest.approx(want.power_vector(), abs=2 * VISUAL_AXIS_TOL_DIOPTERS)
 
 
@@ -139,7 +139,7 @@ def test_centred_eyes_are_solved_once_on_their_optical_axis(build):
     rx = Prescription(-2.0, -1.5, 30.0)
     eye = ametropic_eye(build(), rx)
     assert eye.surfaces == ametropic_eye(build(), rx, along_visual_axis=False).surfaces
-    read = eye_report(build_eye(build().name, pupil_mm=3.0, rx=rx)).refraction.paraxial
+    read = eye_report(build_eye(build().name, pupil_diameter_mm=3.0, rx=rx)).refraction.paraxial
     assert read.power_vector() == pytest.approx(rx.power_vector(), abs=2 * VISUAL_AXIS_TOL_DIOPTERS)
 
 

@@ -41,7 +41,7 @@ def test_a_node_right_of_and_above_the_centre_is_at_smaller_x_and_larger_y():
 
 @pytest.fixture(scope="module")
 def wide_grid():
-    return eye_psf_grid(SHAPE, build_eye(MODEL, pupil_mm=PUPIL_MM), arcmin_per_px=STEP, wavelength_nm=WAVELENGTH_NM,
+    return eye_psf_grid(SHAPE, build_eye(MODEL, pupil_diameter_mm=PUPIL_MM), arcmin_per_px=STEP, wavelength_nm=WAVELENGTH_NM,
                         field_step_deg=10.0)
 
 
@@ -78,19 +78,19 @@ def test_mirrored_field_points_are_blurred_by_mirrored_psfs(wide_grid):
 def test_an_image_within_one_step_is_blurred_by_the_one_psf_at_its_field():
     """Plumbing: a small image is isoplanatic, its one PSF that of the image centre's field (not the axis)."""
     image = np.random.default_rng(0).random((40, 50))
-    grid = eye_psf_grid(image.shape, build_eye(MODEL, pupil_mm=PUPIL_MM), arcmin_per_px=1.0,
+    grid = eye_psf_grid(image.shape, build_eye(MODEL, pupil_diameter_mm=PUPIL_MM), arcmin_per_px=1.0,
                         wavelength_nm=WAVELENGTH_NM, field_deg=(8.0, 0.0))
     assert grid.node_count == 1
-    front = vissim.eye_wavefront(build_eye(MODEL, pupil_mm=PUPIL_MM), wavelength_nm=WAVELENGTH_NM, field_deg=(8.0, 0.0))
+    front = vissim.eye_wavefront(build_eye(MODEL, pupil_diameter_mm=PUPIL_MM), wavelength_nm=WAVELENGTH_NM, field_deg=(8.0, 0.0))
     assert grid.psfs[0][0].wavefront.at(WAVELENGTH_NM).coefficients_um == pytest.approx(front.coefficients_um)
-    blurred = vissim.blur_eye(image, build_eye(MODEL, pupil_mm=PUPIL_MM), arcmin_per_px=1.0,
+    blurred = vissim.blur_eye(image, build_eye(MODEL, pupil_diameter_mm=PUPIL_MM), arcmin_per_px=1.0,
                               wavelength_nm=WAVELENGTH_NM, field_deg=(8.0, 0.0))
     np.testing.assert_allclose(blurred, blur_image(image, grid.psfs[0][0], arcmin_per_px=1.0), atol=1e-6)
 
 
 def test_bad_eye_blur_inputs_are_refused():
     image = np.zeros((20, 20))
-    eye = build_eye(MODEL, pupil_mm=PUPIL_MM)
+    eye = build_eye(MODEL, pupil_diameter_mm=PUPIL_MM)
     with pytest.raises(VissimInputError, match="2 wavelengths .* 1 channels"):
         vissim.blur_eye(image, eye, arcmin_per_px=1.0, wavelength_nm=[550.0, 600.0])
     with pytest.raises(VissimInputError, match="field step must be a positive number of degrees"):
@@ -98,14 +98,14 @@ def test_bad_eye_blur_inputs_are_refused():
     with pytest.raises(VissimInputError, match="beyond"):
         vissim.blur_eye(image, eye, arcmin_per_px=1.0, wavelength_nm=550.0, field_deg=(95.0, 0.0))
     with pytest.raises(VissimInputError, match="too small for this blur: its PSF needs a .* px field"):
-        vissim.blur_eye(np.zeros((6, 6)), build_eye(MODEL, pupil_mm=6.0, rx="-3"), arcmin_per_px=0.25,
+        vissim.blur_eye(np.zeros((6, 6)), build_eye(MODEL, pupil_diameter_mm=6.0, rx="-3"), arcmin_per_px=0.25,
                         wavelength_nm=555.0)
     with pytest.raises(VissimInputError, match="takes an Eye, not the name 'cyclops'"):
         vissim.blur_eye(image, "cyclops", arcmin_per_px=1.0, wavelength_nm=550.0)
 
 
 def test_a_navarro_eye_accommodated_2_d_is_in_focus_at_its_traced_refraction():
-    eye = traced_depth_eye(build_eye(MODEL, pupil_mm=PUPIL_MM, accommodation_diopters=2.0), wavelength_nm=WAVELENGTH_NM)
+    eye = traced_depth_eye(build_eye(MODEL, pupil_diameter_mm=PUPIL_MM, accommodation_diopters=2.0), wavelength_nm=WAVELENGTH_NM)
     assert eye.accommodation_diopters == 0.0  # the accommodation is in the traced wavefront, counted once
     refraction = eye_refraction(trace_eye_wavefront(eye_model(MODEL, 2.0), WAVELENGTH_NM, pupil_mm=PUPIL_MM))
     far_point = -refraction.minimum_rms.spherical_equivalent_diopters  # at the cornea
@@ -132,7 +132,7 @@ def test_halving_the_default_node_step_changes_a_wide_chart_by_less_than_50_db()
 
     chart = np.full((41, 401), 0.9)
     chart[10:31, ::8] = chart[10:31, 1::8] = 0.04  # 6 arcmin bars, 24 arcmin apart
-    eye = build_eye("escudero-sanz-1999", pupil_mm=4.0)
+    eye = build_eye("escudero-sanz-1999", pupil_diameter_mm=4.0)
     common = dict(arcmin_per_px=STEP, wavelength_nm=555.0, field_deg=(10.0, 0.0), dtype=np.float64)
     coarse = vissim.blur_eye(chart, eye, **common)
     fine = vissim.blur_eye(chart, eye, field_step_deg=DEFAULT_FIELD_STEP_DEG / 2, **common)
@@ -148,7 +148,7 @@ def test_a_node_step_finer_than_a_pixel_or_too_many_nodes_is_refused_before_any_
     from vissim.checks import MAX_FIELD_NODES
 
     monkeypatch.setattr(field_blur, "eye_spectral_wavefront", lambda *a, **k: pytest.fail("traced before refusing"))
-    eye = vissim.build_eye("navarro-1985", pupil_mm=3.0)
+    eye = vissim.build_eye("navarro-1985", pupil_diameter_mm=3.0)
     image = np.full((48, 48), 0.5)
     with pytest.raises(VissimInputError, match=r"field step 0.001 deg is finer than the image's pixels.*at least "
                                                r"0.01667 deg"):

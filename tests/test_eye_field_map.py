@@ -99,7 +99,7 @@ def test_off_axis_psf_centroid_follows_the_traced_rays():
     eye = eye_model("navarro-1985")
     field = (20.0, 0.0)
     truth = _ray_centroid_arcmin(eye, field, 4.0, 589.3)
-    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=4.0), wavelengths_nm=[589.3], field_deg=field)
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=4.0), wavelengths_nm=[589.3], field_deg=field)
     step = 0.5
 
     def centroid_x(front):
@@ -135,7 +135,7 @@ def test_depth_eye_warns_off_axis_where_its_psfs_miss_the_field_map(caplog):
     from vissim.optics.eyes.depth_eye import traced_depth_eye
 
     with caplog.at_level("WARNING"):
-        eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-1.00")
+        eye = build_eye("navarro-1985", pupil_diameter_mm=3.0, rx="-1.00")
         traced_depth_eye(eye, wavelength_nm=555.0)
         assert not caplog.records
         traced_depth_eye(eye, wavelength_nm=555.0, field_deg=(20.0, 0.0))

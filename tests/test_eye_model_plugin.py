@@ -46,15 +46,15 @@ def registered(monkeypatch):
 
 
 def test_the_registered_model_is_the_reduced_eye_of_the_textbooks(registered):
-    eye = build_eye(registered, pupil_mm=3.0)
+    eye = build_eye(registered, pupil_diameter_mm=3.0)
     assert equivalent_power_diopters(eye.optics, 589.3) == pytest.approx(60.0, abs=1e-9)
     assert refraction_diopters(eye.optics, 589.3) == pytest.approx(0.0, abs=1e-9)
-    front = eye_wavefront(eye.with_pupil(pupil_mm=1.0))  # traced: paraxially emmetropic, as the paraxial numbers say
+    front = eye_wavefront(eye.with_pupil(pupil_diameter_mm=1.0))  # traced: paraxially emmetropic, as the paraxial numbers say
     assert paraxial_prescription(front.coefficients_um, 1.0).sphere_diopters == pytest.approx(0.0, abs=0.01)
 
 
 def test_the_registered_model_is_taken_by_a_campaign_and_the_command_line(registered, capsys):
-    _, (item,) = read_campaign({"item": [{"eye_model": registered, "pupil_mm": 3.0}]}, {"kind": "eye"}, "eye.toml")
+    _, (item,) = read_campaign({"item": [{"eye_model": registered, "pupil_diameter_mm": 3.0}]}, {"kind": "eye"}, "eye.toml")
     assert item.eye().model == registered
     assert main(["eye", "--eye-model", registered, "--pupil-mm", "3", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["model"] == registered

@@ -24,17 +24,17 @@ from vissim.optics.pupil.wavefront import Wavefront
 
 def test_an_eye_is_built_once_from_a_name_with_the_one_set_of_defaults():
     eye = build_eye("navarro-1985")
-    assert eye.model == "navarro-1985" and eye.pupil_mm == DEFAULT_EYE_PUPIL_MM and eye.iris_mm is None
-    assert eye.vertex_mm == DEFAULT_SPECTACLE_VERTEX_MM and eye.rx is None
+    assert eye.model == "navarro-1985" and eye.pupil_diameter_mm == DEFAULT_EYE_PUPIL_MM and eye.iris_mm is None
+    assert eye.vertex_distance_mm == DEFAULT_SPECTACLE_VERTEX_MM and eye.rx is None
     assert eye.reference_wavelength_nm == 589.3 and eye.optics is eye.schematic
     with pytest.raises(dataclasses.FrozenInstanceError):
-        eye.pupil_mm = 3.0  # type: ignore[misc]
+        eye.pupil_diameter_mm = 3.0  # type: ignore[misc]
 
 
 def test_the_builders_change_one_thing_and_leave_the_eye_they_came_from():
-    eye = build_eye("navarro-1985", pupil_mm=3.0)
+    eye = build_eye("navarro-1985", pupil_diameter_mm=3.0)
     myope = eye.with_rx("-3.00")
-    assert eye.rx is None and str(myope.rx) == "-3.00 DS" and myope.pupil_mm == 3.0
+    assert eye.rx is None and str(myope.rx) == "-3.00 DS" and myope.pupil_diameter_mm == 3.0
     assert myope.optics.axial_length_mm > eye.optics.axial_length_mm + 1.0  # about 0.37 mm per dioptre
     assert eye.with_pupil(iris_mm=3.0).pupil == {"iris_mm": 3.0}
     assert eye.accommodated(2.0).accommodation_diopters == 2.0
@@ -52,11 +52,11 @@ def test_an_altered_eye_says_what_changed_and_refuses_the_accommodation_formulas
 
 
 @pytest.mark.parametrize("kwargs, fragment", [
-    (dict(pupil_mm=3.0, iris_mm=3.0), "not both"),
-    (dict(pupil_mm=-1.0), "entrance pupil diameter must be a positive number of mm"),
+    (dict(pupil_diameter_mm=3.0, iris_mm=3.0), "not both"),
+    (dict(pupil_diameter_mm=-1.0), "entrance pupil diameter must be a positive number of mm"),
     (dict(rx="+60.00"), r"prescription \+60.00 DS an eye is made to need must be within -30 to 30 dioptres \(a trial "
                         r"lens\), got 60 dioptres"),
-    (dict(vertex_mm=-2.0), "spectacle vertex distance must be within"),
+    (dict(vertex_distance_mm=-2.0), "spectacle vertex distance must be within"),
     (dict(wavelength_nm=100.0), "reference wavelength must be within"),
     (dict(accommodation_diopters=20.0), "accommodation"),
     (dict(surfaces={"retina": {"thickness_after_mm": -1.0}}), "thickness_after_mm must be >= 0 mm"),
@@ -72,12 +72,12 @@ def test_a_sphere_for_navarros_cornea_adds_the_spherical_aberration_of_its_fourt
     path (n - 1) at the cornea, seen by a collimated beam at the entrance pupil's radius; as c(4,0) (its ρ⁴ term is
     6√5 ρ⁴) that is (n - 1) 0.26 c³ R⁴ / (48√5). The next order (r⁶) adds (c R)² ~ 2 % at a 2 mm pupil (3 % bound;
     measured 1.6 %, and 6.5 % at 4 mm)."""
-    eye = build_eye("navarro-1985", pupil_mm=2.0)
+    eye = build_eye("navarro-1985", pupil_diameter_mm=2.0)
     sphere = eye.with_surface("cornea front", conic=0.0)
     added = vissim.eye_wavefront(sphere).coefficients_um[(4, 0)] - vissim.eye_wavefront(eye).coefficients_um[(4, 0)]
     cornea = eye.schematic.surfaces[0]
     n_cornea = cornea.medium_after.index(eye.reference_wavelength_nm)
-    radius_mm = 0.5 * eye.pupil_mm
+    radius_mm = 0.5 * eye.pupil_diameter_mm
     expected_um = 1e3 * (n_cornea - 1.0) * -cornea.conic * (1 / cornea.radius_mm) ** 3 * radius_mm**4 / (48 * math.sqrt(5))
     assert added == pytest.approx(expected_um, rel=0.03)
 
@@ -87,7 +87,7 @@ def test_an_eye_built_in_python_goes_through_the_psf_the_blur_and_the_depth_blur
     blur's traced eye: the same eye object each time, and each sees its extra aberration."""
     from vissim.optics.eyes.depth_eye import traced_depth_eye
 
-    eye = build_eye("navarro-1985", pupil_mm=5.0)
+    eye = build_eye("navarro-1985", pupil_diameter_mm=5.0)
     sphere = eye.with_surface("cornea front", conic=0.0)
     peaks = [vissim.compute_psf(vissim.eye_wavefront(e), arcmin_per_px=0.5, size_px="auto").data.max()
              for e in (eye, sphere)]
@@ -102,7 +102,7 @@ def test_an_eye_built_in_python_goes_through_the_psf_the_blur_and_the_depth_blur
 
 # -- a wavefront knows its light ---------------------------------------------------------------------------------
 def test_a_traced_front_knows_its_wavelength_and_is_refused_in_other_light():
-    front = vissim.eye_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelength_nm=550.0)
+    front = vissim.eye_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelength_nm=550.0)
     assert front.wavelength_nm == 550.0
     assert vissim.compute_psf(front, size_px="auto").wavelengths_nm == (550.0,)  # its own light by default
     with pytest.raises(VissimInputError, match="holds at 550 nm, not at 450 nm"):
@@ -114,7 +114,7 @@ def test_a_traced_front_knows_its_wavelength_and_is_refused_in_other_light():
 
 
 def test_told_how_a_front_converts_by_the_chromatic_eye_from_its_own_wavelength():
-    front = vissim.eye_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelength_nm=550.0)
+    front = vissim.eye_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelength_nm=550.0)
     converted = vissim.compute_psf(front, wavelength_nm=450.0, lca_reference_nm=550.0, size_px=129)
     shift = chromatic_difference_of_refraction_diopters(450.0, 550.0)
     anywhere = Wavefront(dict(front.coefficients_um), 3.0).with_defocus_diopters(shift)
@@ -145,7 +145,7 @@ def test_a_render_takes_an_eye_built_in_python_and_hands_the_sensor_that_same_ey
     from vissim.render.eye_render import EyeRender, eye_scene_dict
     from vissim.bench.eye.sensor_eyes import sensor_eye
 
-    eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-2.00 -0.50 x 20").with_surface("cornea front", conic=0.0)
+    eye = build_eye("navarro-1985", pupil_diameter_mm=3.0, rx="-2.00 -0.50 x 20").with_surface("cornea front", conic=0.0)
     settings = EyeRender.for_eye(eye, size_px=(16, 16), spp=4)
     assert settings.surfaces == (("cornea front", "conic", 0.0),) and settings.eye.optics == eye.optics
     sensor = eye_scene_dict(settings)["camera"]
@@ -185,7 +185,7 @@ def test_the_lights_vergence_is_seen_as_itself_across_an_oblique_beam(field_deg)
     from vissim.optics.eyes.refraction import along_chief_ray, paraxial_prescription
     from vissim.optics.eyes.traced_wavefront import field_direction
 
-    eye = build_eye("escudero-sanz-1999", pupil_mm=1.0)
+    eye = build_eye("escudero-sanz-1999", pupil_diameter_mm=1.0)
     own = vissim.eye_wavefront(eye, field_deg=field_deg).coefficients_um
     near = vissim.eye_wavefront(eye, field_deg=field_deg, vergence_diopters=-4.0).coefficients_um
     added = paraxial_prescription({k: near.get(k, 0.0) - own.get(k, 0.0) for k in {*own, *near}}, 1.0)
@@ -196,7 +196,7 @@ def test_the_lights_vergence_is_seen_as_itself_across_an_oblique_beam(field_deg)
 def test_the_depth_blur_refuses_a_traced_eye_in_other_light():
     from vissim.optics.eyes.depth_eye import traced_depth_eye
 
-    viewer = traced_depth_eye(build_eye("navarro-1985", pupil_mm=3.0), wavelength_nm=589.3)
+    viewer = traced_depth_eye(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelength_nm=589.3)
     image, depth = np.zeros((16, 16)), np.full((16, 16), 2.0)
     with pytest.raises(VissimInputError, match="holds at 589.3 nm, not at 550 nm"):
         vissim.blur_depth(image, depth, eye=viewer, arcmin_per_px=1.0, wavelength_nm=550.0)

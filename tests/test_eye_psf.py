@@ -38,7 +38,7 @@ def test_navarro_psf_matches_the_fraunhofer_quadrature_of_its_traced_wavefront(p
                                                                               arcmin_per_px, size_px):
     traced = trace_eye_wavefront(eye_model("navarro-1985"), wavelength_nm, pupil_mm=pupil_mm)
     assert traced.fit_residual_rms_um < 1e-3 * wavelength_nm * 1e-3  # the Zernikes are the traced OPD
-    front = eye_wavefront(build_eye("navarro-1985", pupil_mm=pupil_mm), wavelength_nm=wavelength_nm)
+    front = eye_wavefront(build_eye("navarro-1985", pupil_diameter_mm=pupil_mm), wavelength_nm=wavelength_nm)
     assert front.coefficients_um[(4, 0)] > 0.0  # the eye's own spherical aberration is there
     psf = compute_psf(front, wavelength_nm=wavelength_nm, arcmin_per_px=arcmin_per_px, size_px=size_px,
                       mode="wave", pixel="integrate", dtype=np.float64)
@@ -56,7 +56,7 @@ def test_the_lights_vergence_adds_the_reduced_eyes_wavefront_over_the_entrance_p
     """Oracle: an object at vergence V (D) blurs as the reduced eye whose correcting lens is -V (docs/conventions.md,
     "Prescriptions"); the matrix form for a toric vergence (a lens in front)."""
     vergence = -np.asarray(Prescription.parse("-1.50 -0.75 x 30").power_matrix())
-    eye = build_eye("navarro-1985", pupil_mm=4.0)
+    eye = build_eye("navarro-1985", pupil_diameter_mm=4.0)
     own = eye_wavefront(eye, wavelength_nm=589.3)
     both = eye_wavefront(eye, wavelength_nm=589.3, vergence_diopters=vergence)
     reduced = Wavefront.from_prescription(Prescription.parse("-1.50 -0.75 x 30"), 4.0)
@@ -79,7 +79,7 @@ def test_an_eye_with_a_prescription_is_the_ametropic_eye_and_reads_it_back_at_th
     from vissim.optics.eyes.refraction import paraxial_prescription
 
     rx = Prescription.parse("-2.00 -1.00 x 30")
-    eye = build_eye("navarro-1985", pupil_mm=1.0, rx=rx, vertex_mm=12.0)
+    eye = build_eye("navarro-1985", pupil_diameter_mm=1.0, rx=rx, vertex_distance_mm=12.0)
     front = eye_wavefront(eye)
     at_pupil = np.asarray(paraxial_prescription(front.coefficients_um, 1.0).power_matrix())
     distance_m = 1e-3 * (12.0 + entrance_pupil_position_mm(mean_meridian_eye(eye.optics), 589.3))
@@ -118,7 +118,7 @@ def test_cli_psf_eye_model_takes_field_and_accommodation_as_the_library_does(cap
     code = main(["psf", "--eye-model", "navarro-1985", "--pupil-mm", "4", "--wavelength-nm", "555", "--field-deg", "10,0",
                  "--accommodation-diopters", "1", "--arcmin-per-px", "0.5", "--size", "65", "-o", str(target)])
     assert code == 0
-    eye = build_eye("navarro-1985", pupil_mm=4.0, accommodation_diopters=1.0)
+    eye = build_eye("navarro-1985", pupil_diameter_mm=4.0, accommodation_diopters=1.0)
     front = eye_wavefront(eye, wavelength_nm=555.0, field_deg=(10.0, 0.0))
     assert abs(front.coefficients_um[(2, 2)]) > 1e-3  # off-axis astigmatism is there
     spectral = eye_spectral_wavefront(eye, wavelengths_nm=[555.0], field_deg=(10.0, 0.0))

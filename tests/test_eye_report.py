@@ -64,13 +64,13 @@ def test_negative_frequencies_are_refused_naming_the_value():
     with pytest.raises(VissimInputError, match=r"MTF frequency \(per degree\) must be >= 0, got -3"):
         eye_mtf(Wavefront.zero(3.0), 550.0, [1.0, -3.0])
     with pytest.raises(VissimInputError, match="per mm"):
-        eye_report(build_eye("navarro-1985", pupil_mm=3.0), mtf_cyc_per_mm=[-1.0])
+        eye_report(build_eye("navarro-1985", pupil_diameter_mm=3.0), mtf_cyc_per_mm=[-1.0])
 
 
 def test_a_toric_eyes_power_is_the_mean_of_its_meridians():
     base = navarro_1985()
-    sphere = eye_report(build_eye("navarro-1985", pupil_mm=2.0, rx="-2.00 DS"))
-    toric = eye_report(build_eye("navarro-1985", pupil_mm=2.0, rx="-1.00 -2.00 x 30"))  # the same spherical equivalent
+    sphere = eye_report(build_eye("navarro-1985", pupil_diameter_mm=2.0, rx="-2.00 DS"))
+    toric = eye_report(build_eye("navarro-1985", pupil_diameter_mm=2.0, rx="-1.00 -2.00 x 30"))  # the same spherical equivalent
     assert toric.power_diopters == pytest.approx(sphere.power_diopters, abs=1e-9)
     assert base.name == toric.model
 

@@ -40,7 +40,7 @@ PEAK_FRACTION = 2e-3
 def test_polychromatic_eye_psf_is_the_weighted_sum_of_fraunhofer_quadratures_of_each_wavelengths_front():
     wavelengths = (470.0, 555.0, 640.0)
     weights = photopic_weights(wavelengths)
-    traced = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelengths_nm=wavelengths, field_deg=(10, 0))
+    traced = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelengths_nm=wavelengths, field_deg=(10, 0))
     # the fronts in their own slope angles: the map to visual angle is tested in tests/test_eye_field_map.py
     spectral = SpectralWavefront(traced.wavelengths_nm, traced.fronts, traced.reference_wavelength_nm)
     step, size = 0.25, 65
@@ -62,7 +62,7 @@ def test_each_wavelengths_defocus_is_the_eyes_own_chromatic_difference_of_refrac
     # At a 1 mm pupil the traced refraction is the paraxial one (tests/test_eye_wavefront.py, 1e-5 D); the
     # spherical aberration's change with wavelength adds < 1e-3 D there. Thibos 2002: M = -4√3 c(2,0) / r².
     wavelengths = (450.0, 500.0, 650.0, 700.0)
-    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=1.0), wavelengths_nm=wavelengths + (589.3,))
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=1.0), wavelengths_nm=wavelengths + (589.3,))
     radius = 0.5
 
     def m(w):
@@ -115,7 +115,7 @@ def _seen_at_deg(eye, field_deg, wavelength_nm, reference_nm):
 def test_transverse_chromatic_aberration_is_the_chief_rays_retinal_separation(field_deg):
     eye = eye_model("navarro-1985")
     blue, red = 450.0, 650.0
-    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelengths_nm=(blue, red), field_deg=field_deg)
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelengths_nm=(blue, red), field_deg=field_deg)
     step = 0.25
     size = suggested_size_px(spectral, step)
     centroids = {w: _centroid_colrow_arcmin(compute_psf(spectral, wavelength_nm=w, arcmin_per_px=step, size_px=size,
@@ -133,14 +133,14 @@ def test_transverse_chromatic_aberration_is_the_chief_rays_retinal_separation(fi
 
 
 def test_on_axis_a_centred_eye_has_no_transverse_chromatic_aberration():
-    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelengths_nm=(450.0, 650.0))
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelengths_nm=(450.0, 650.0))
     for front in spectral.fronts:
         assert abs(front.coefficients_um.get((1, 1), 0.0)) < 1e-9
         assert abs(front.coefficients_um.get((1, -1), 0.0)) < 1e-9
 
 
 def test_one_wavelength_of_a_spectral_front_is_the_monochromatic_eye_front_on_axis():
-    eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-1.00")
+    eye = build_eye("navarro-1985", pupil_diameter_mm=3.0, rx="-1.00")
     spectral = eye_spectral_wavefront(eye, wavelengths_nm=(500.0, 600.0))
     alone = eye_wavefront(eye, wavelength_nm=600.0)
     for key, value in alone.coefficients_um.items():
@@ -148,7 +148,7 @@ def test_one_wavelength_of_a_spectral_front_is_the_monochromatic_eye_front_on_ax
 
 
 def test_a_spectral_front_refuses_an_lca_reference_and_wavelengths_it_does_not_hold():
-    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=2.0), wavelengths_nm=(500.0, 600.0))
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=2.0), wavelengths_nm=(500.0, 600.0))
     with pytest.raises(VissimInputError, match="own dispersion"):
         compute_psf(spectral, lca_reference_nm=555.0, size_px=65)
     with pytest.raises(VissimInputError, match="550 nm is not one"):
@@ -168,7 +168,7 @@ def test_halving_the_photopic_spectrums_step_changes_the_eye_mtf_by_less_than_1e
     tables = []
     for step_nm in (10.0, 5.0):
         light = MtfSpectrum(*named_spectrum("photopic", step_nm), "photopic")
-        report = eye_report(build_eye("navarro-1985", pupil_mm=pupil_mm), field_deg=field_deg, mtf_cyc_per_deg=frequencies,
+        report = eye_report(build_eye("navarro-1985", pupil_diameter_mm=pupil_mm), field_deg=field_deg, mtf_cyc_per_deg=frequencies,
                             mtf_spectrum=light)
         tables.append({k: np.array([v for _, v in pairs]) for k, pairs in report.mtf_cyc_per_deg.items()})
     change = max(np.abs(tables[0][k] - tables[1][k]).max() for k in tables[0])
@@ -177,7 +177,7 @@ def test_halving_the_photopic_spectrums_step_changes_the_eye_mtf_by_less_than_1e
 
 
 def test_the_field_sizing_and_the_strehl_ratio_take_each_wavelengths_own_front():
-    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelengths_nm=(450.0, 650.0), field_deg=(5, 0))
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelengths_nm=(450.0, 650.0), field_deg=(5, 0))
     blue, red = spectral.at(450.0), spectral.at(650.0)
     both = energy_outside_field(spectral, 3.0, [450.0, 650.0], [1.0, 3.0], 0.25, 33)
     each = [energy_outside_field(front, 3.0, [w], [1.0], 0.25, 33) for front, w in ((blue, 450.0), (red, 650.0))]

@@ -101,7 +101,7 @@ def test_the_optic_disc_lies_in_each_eyes_temporal_field():
 def test_coma_grows_with_field_as_in_the_base_eye():
     # Horizontal coma (3,1) against x, vertical coma (3,-1) against y: the population's slopes have the base
     # eye's signs (Navarro: about -0.012 µm/deg at 4 mm, traced here).
-    base = build_eye(BASE_EYE_MODEL, pupil_mm=4.0)
+    base = build_eye(BASE_EYE_MODEL, pupil_diameter_mm=4.0)
     slope_x = (eye_wavefront(base, field_deg=(10, 0)).coefficients_um[(3, 1)]
                - eye_wavefront(base, field_deg=(-10, 0)).coefficients_um[(3, 1)]) / 20
     slope_y = (eye_wavefront(base, field_deg=(0, 10)).coefficients_um[(3, -1)]
@@ -146,8 +146,8 @@ def test_the_json_zernikes_are_the_data_at_a_measured_field(capsys, name, field)
 
 def test_defocus_in_other_light_moves_by_the_base_eyes_traced_difference():
     field = (20.0, 0.0)
-    measured = build_eye("jaeken-artal-2012:40:right", pupil_mm=3.0)
-    base = build_eye(BASE_EYE_MODEL, pupil_mm=3.0)
+    measured = build_eye("jaeken-artal-2012:40:right", pupil_diameter_mm=3.0)
+    base = build_eye(BASE_EYE_MODEL, pupil_diameter_mm=3.0)
     for nm in (450.0, 555.0, 650.0):
         shift = (eye_wavefront(measured, wavelength_nm=nm, field_deg=field).coefficients_um[(2, 0)]
                  - eye_wavefront(measured, wavelength_nm=780.0, field_deg=field).coefficients_um[(2, 0)])
@@ -185,7 +185,7 @@ def test_a_smaller_pupil_equals_a_least_squares_refit(name, field, pupil):
     opd = sum(v * zernike_cartesian(n, m, rho * scale, theta) for (n, m), v in data.items())
     basis = np.stack([zernike_cartesian(n, m, rho, theta) for n, m in keys], axis=1)
     refit = dict(zip(keys, np.linalg.lstsq(basis, opd, rcond=None)[0]))
-    eye = build_eye(name, pupil_mm=pupil)
+    eye = build_eye(name, pupil_diameter_mm=pupil)
     got = eye_wavefront(eye, wavelength_nm=DEFOCUS_WAVELENGTH_NM[measured.dataset], field_deg=field).coefficients_um
     for key in keys[3:]:
         assert got.get(key, 0.0) == pytest.approx(refit[key], abs=1e-6), key
@@ -213,14 +213,14 @@ def test_between_measured_fields_the_coefficients_are_interpolated_linearly():
     ("polans-2015:1", {}, (0.0, 26.0), "measured at field y -25 to 25 deg, got 26 deg"),
 ])
 def test_fields_without_a_measurement_are_refused(name, kwargs, field, words):
-    eye = build_eye(name, pupil_mm=3.0, **kwargs)
+    eye = build_eye(name, pupil_diameter_mm=3.0, **kwargs)
     with pytest.raises(VissimInputError, match=words):
         eye_wavefront(eye, field_deg=field)
 
 
 @pytest.mark.parametrize("name, kwargs, words", [
-    ("jaeken-artal-2012:17:right", {"pupil_mm": 4.5}, "measured over a 4 mm pupil"),
-    ("jaeken-artal-2012:17:right", {"pupil_mm": 3.0, "rx": "-1.00"}, "cannot be given a prescription"),
+    ("jaeken-artal-2012:17:right", {"pupil_diameter_mm": 4.5}, "measured over a 4 mm pupil"),
+    ("jaeken-artal-2012:17:right", {"pupil_diameter_mm": 3.0, "rx": "-1.00"}, "cannot be given a prescription"),
     ("jaeken-artal-2012:17:right", {"accommodation_diopters": 2.0}, "its accommodation is 0 D only"),
     ("jaeken-artal-2012:17:right", {"surfaces": {"cornea front": {"radius_mm": 7.5}}}, "surfaces cannot change"),
     ("jaeken-artal-2012:131:right", {}, "has subjects 1-130, got 131"),
@@ -243,7 +243,7 @@ def test_the_command_line_refuses_in_one_line(capsys):
 
 
 def test_a_plano_prescription_is_the_eye_as_measured(tmp_path):
-    assert build_eye("polans-2015:4", pupil_mm=3.0, rx="plano").rx is None
+    assert build_eye("polans-2015:4", pupil_diameter_mm=3.0, rx="plano").rx is None
     from vissim.imageio import write_image
     from vissim.provenance import make_provenance
     image, depth = tmp_path / "in.exr", tmp_path / "depth.exr"
@@ -259,7 +259,7 @@ def test_the_eye_bench_renders_a_measured_eye_through_its_phase_plane_and_no_len
     from vissim.bench.eye.sensor_eyes import sensor_eye, sensor_phase
     from vissim.optics.rx.trial_lens import TrialLens
 
-    eye = build_eye("polans-2015:1", pupil_mm=3.0)
+    eye = build_eye("polans-2015:1", pupil_diameter_mm=3.0)
     with pytest.raises(VissimInputError, match="measured eye: lenses"):
         EyeBench(eye, lenses=(TrialLens(1.0),))
     bench = EyeBench(eye, field_deg=(10.0, 0.0), wavelength_nm=550.0)
@@ -267,7 +267,7 @@ def test_the_eye_bench_renders_a_measured_eye_through_its_phase_plane_and_no_len
     assert sensor_eye(key) is eye and sensor_phase(key) is bench.phase_plane is bench.measured_phase.plane
     record = bench.as_json()["phase_plane"]
     assert record["field_deg"] == [10.0, 0.0] and record["wavelength_nm"] == 550.0
-    assert EyeBench(build_eye("navarro-1985", pupil_mm=3.0)).phase_plane is None
+    assert EyeBench(build_eye("navarro-1985", pupil_diameter_mm=3.0)).phase_plane is None
 
 
 # -- the data's pupil is normal to the measuring beam -------------------------------------------------------
@@ -295,7 +295,7 @@ def test_slopes_over_the_beams_plane_go_to_visual_angle_by_the_rotation_they_are
     # field angles are atan(x/z), atan(y/z)); a horizontal field of θ: diag(1, 1 / cos θ).
     from vissim.optics.eyes.measured.measured_eye import beam_field_map
     from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
-    base = build_eye(BASE_EYE_MODEL, pupil_mm=4.0)
+    base = build_eye(BASE_EYE_MODEL, pupil_diameter_mm=4.0)
     for theta in (10.0, 30.0):
         trace = trace_eye_wavefront(base.optics, 555.0, (theta, 0.0), pupil_mm=4.0)
         np.testing.assert_allclose(beam_field_map(trace), np.diag([1.0, 1.0 / math.cos(math.radians(theta))]),
@@ -316,7 +316,7 @@ def test_the_lights_vergence_over_a_measured_eyes_beam_pupil_is_a_sphere(field_d
     from vissim.optics.eyes.psf_wavefront import eye_wavefront
     from vissim.optics.pupil.wavefront import Wavefront
 
-    eye = build_eye("jaeken-artal-2012:92:right", pupil_mm=4.0)
+    eye = build_eye("jaeken-artal-2012:92:right", pupil_diameter_mm=4.0)
     near = eye_wavefront(eye, wavelength_nm=550.0, field_deg=field_deg, vergence_diopters=-3.0).coefficients_um
     far = eye_wavefront(eye, wavelength_nm=550.0, field_deg=field_deg).coefficients_um
     added = Wavefront({k: near.get(k, 0.0) - far.get(k, 0.0) for k in ((2, -2), (2, 0), (2, 2))}, 4.0, 550.0)

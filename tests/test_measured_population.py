@@ -31,7 +31,7 @@ EYES = select_eyes("jaeken-artal-2012", subjects=[3, 17, 40], eyes=["right", "le
 def test_each_eye_is_the_eye_alone():
     condition = PopulationCondition(3.0, (10.0, 0.0), "sphero-cylinder", 555.0)
     for result in evaluate_population(EYES, [condition]):
-        alone = eye_wavefront(build_eye(result.eye.name, pupil_mm=3.0), wavelength_nm=555.0, field_deg=(10.0, 0.0))
+        alone = eye_wavefront(build_eye(result.eye.name, pupil_diameter_mm=3.0), wavelength_nm=555.0, field_deg=(10.0, 0.0))
         higher = {k: v for k, v in alone.coefficients_um.items() if k[0] >= 3}
         assert result.strehl == pytest.approx(strehl_ratio(Wavefront(higher, 3.0, 555.0), wavelength_nm=555.0),
                                               rel=1e-9)
@@ -52,7 +52,7 @@ def test_uncorrected_eyes_see_worse_than_corrected_ones():
 def test_the_spherical_equivalent_filter_reads_the_data():
     raw = np.load(datasets.DATA_DIR / "jaeken-artal-2012.npz")
     centre = list(raw["field_deg"]).index(0.0)
-    base = build_eye("navarro-1985", pupil_mm=4.0)
+    base = build_eye("navarro-1985", pupil_diameter_mm=4.0)
     shift = (eye_wavefront(base, wavelength_nm=555.0).coefficients_um[(2, 0)]
              - eye_wavefront(base, wavelength_nm=780.0).coefficients_um[(2, 0)])
     subjects = list(range(1, 31))
@@ -137,7 +137,7 @@ def test_an_eye_with_the_higher_strehl_sees_the_letter_with_more_contrast():
     condition = PopulationCondition(4.0)
     results = sorted(evaluate_population(EYES, [condition]), key=lambda r: r.strehl)
     worst, best = (r.eye for r in (results[0], results[-1]))
-    letter = optotype_tile("K", 0.1, arcmin_per_px=0.25, shape_px=(64, 80), viewing_distance_m=6.0,
+    letter = optotype_tile("K", 0.1, arcmin_per_px=0.25, size_px=(64, 80), viewing_distance_m=6.0,
                            snap_to_pixels=False).pixels
     seen = [seen_image(e, condition, letter, 0.25) for e in (worst, best)]
     assert results[-1].strehl > results[0].strehl + 0.1 and seen[0].shape == letter.shape
@@ -156,7 +156,7 @@ def test_spectacles_of_the_eyes_own_refraction_leave_only_its_higher_orders():
     from vissim.optics.eyes.report import eye_report
     from vissim.optics.rx.prescription import Prescription
     name = "jaeken-artal-2012:40:right"
-    eye = build_eye(name, pupil_mm=4.0)
+    eye = build_eye(name, pupil_diameter_mm=4.0)
     front = eye_wavefront(eye, wavelength_nm=555.0).coefficients_um
     r2 = 2.0 ** 2
     m = -4 * math.sqrt(3) * front[(2, 0)] / r2

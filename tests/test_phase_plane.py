@@ -76,7 +76,7 @@ def test_a_virtual_plane_turns_a_ray_by_the_hand_worked_gradient_and_carries_it_
                                              ("jaeken-artal-2012:44:right", (30.0, 0.0)),
                                              ("polans-2015:3", (0.0, 0.0)), ("polans-2015:3", (-30.0, 0.0))])
 def test_the_base_eye_through_its_phase_plane_has_the_measured_front(name, field_deg):
-    eye = vissim.build_eye(name, pupil_mm=4.0)
+    eye = vissim.build_eye(name, pupil_diameter_mm=4.0)
     phase = measured_phase_plane(eye, field_deg, 550.0)
     base = trace_eye_wavefront(eye.optics, 550.0, field_deg, pupil_mm=4.0)
     wanted = measured_front(base, eye.measured, eye.optics, traced=(base,))

@@ -348,12 +348,12 @@ def layout_chart(
     *,
     arcmin_per_px: float | None = None,
     dpi: float | None = None,
-    shape_px: tuple[int, int] | None = None,
+    size_px: tuple[int, int] | None = None,
     snap_to_pixels: bool = False,
 ) -> ChartLayout:
     """Letter boxes of ``spec`` on an angular grid (``arcmin_per_px``) or a print grid (``dpi``).
 
-    ``shape_px`` (angular only) fixes the image size and centres the letters in it, ignoring
+    ``size_px`` (rows, cols; angular only) fixes the image size and centres the letters in it, ignoring
     the margins; ``snap_to_pixels`` moves each letter's top-left corner to the nearest pixel
     corner (by < 0.5 px) so that letters a whole number of pixels tall have crisp edges.
     """
@@ -373,7 +373,7 @@ def layout_chart(
         mm_per_px = subtense_mm(arcmin_per_px, spec.viewing_distance_m)
         src_boxes, src_size, px_per_unit = arcmin_boxes, arcmin_size, 1.0 / arcmin_per_px
     offset = (0.0, 0.0)
-    if shape_px is None:
+    if size_px is None:
         extent = [s * px_per_unit for s in src_size]
         if not all(math.isfinite(e) for e in extent):
             step = f"{dpi:g} dpi" if dpi is not None else f"{arcmin_per_px:g} arcmin/px"
@@ -381,8 +381,8 @@ def layout_chart(
         shape = tuple(max(1, math.ceil(e - 1e-9)) for e in extent)
     else:
         if dpi is not None:
-            raise VissimInputError("shape_px applies to angular charts only; a print chart's size follows its layout")
-        shape = tuple(int(s) for s in shape_px)
+            raise VissimInputError("size_px applies to angular charts only; a print chart's size follows its layout")
+        shape = tuple(int(s) for s in size_px)
         flat = [b for row in src_boxes for b in row]
         lo = (min(b[0] for b in flat), min(b[1] for b in flat))
         hi = (max(b[2] for b in flat), max(b[3] for b in flat))
@@ -498,7 +498,7 @@ def render_chart_angular(
     spec: ChartSpec,
     arcmin_per_px: float = 1.0,
     *,
-    shape_px: tuple[int, int] | None = None,
+    size_px: tuple[int, int] | None = None,
     snap_to_pixels: bool = False,
     supersample: int = 16,
 ) -> Chart:
@@ -510,7 +510,7 @@ def render_chart_angular(
         From `etdrs_chart_spec` or `single_letter_spec`.
     arcmin_per_px : float
         Angular sampling, arcmin per pixel.
-    shape_px : (int, int), optional
+    size_px : (int, int), optional
         Image size (rows, cols); default: just large enough for the chart and its margin.
     snap_to_pixels : bool
         Round letter positions and sizes to whole pixels.
@@ -530,7 +530,7 @@ def render_chart_angular(
     >>> chart.pixels.shape, chart.pixels.dtype.name, chart.arcmin_per_px
     ((150, 150), 'float32', 1.0)
     """
-    layout = layout_chart(spec, arcmin_per_px=arcmin_per_px, shape_px=shape_px, snap_to_pixels=snap_to_pixels)
+    layout = layout_chart(spec, arcmin_per_px=arcmin_per_px, size_px=size_px, snap_to_pixels=snap_to_pixels)
     return _render(spec, layout, supersample)
 
 
@@ -573,7 +573,7 @@ def optotype_tile(
     logmar: float,
     *,
     arcmin_per_px: float = 1.0,
-    shape_px: tuple[int, int] = THESIS_TILE_SHAPE_PX,
+    size_px: tuple[int, int] = THESIS_TILE_SHAPE_PX,
     polarity: str = "black-on-white",
     paper_reflectance: float = PAPER_REFLECTANCE,
     ink_reflectance: float = INK_REFLECTANCE,
@@ -583,12 +583,12 @@ def optotype_tile(
 ) -> Chart:
     """One letter centred on a tile: the thesis's 113 x 133 px (1.88 x 2.22 deg) tile at 1 arcmin/px.
 
-    ``shape_px`` is (rows, cols).  With ``snap_to_pixels`` the letter's top-left corner sits
+    ``size_px`` is (rows, cols).  With ``snap_to_pixels`` the letter's top-left corner sits
     on a pixel corner, so it is centred to within half a pixel.
     """
     spec = single_letter_spec(letter, logmar, viewing_distance_m=viewing_distance_m, polarity=polarity,
                               paper_reflectance=paper_reflectance, ink_reflectance=ink_reflectance)
-    return render_chart_angular(spec, arcmin_per_px, shape_px=shape_px, snap_to_pixels=snap_to_pixels,
+    return render_chart_angular(spec, arcmin_per_px, size_px=size_px, snap_to_pixels=snap_to_pixels,
                                 supersample=supersample)
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from vissim.errors import VissimInputError
 
-__all__ = ["Concept", "CONCEPTS", "RENAMED_KEYS", "renamed_key_error", "refuse_renamed_keys"]
+__all__ = ["Concept", "CONCEPTS", "RENAMED_KEYS", "RENAMED_KEYS_ELSEWHERE", "renamed_key_error", "refuse_renamed_keys"]
 
 
 @dataclass(frozen=True)
@@ -74,6 +74,11 @@ CONCEPTS: tuple[Concept, ...] = (
     Concept("image size", "--size", "size_px", "size_px", "size_px", "px (N, or ROWSxCOLS in array order)",
             "each command's, said in its help", "the image's memory (check_allocation)", ("size", "shape"),
             ("size_text", "tile", "step_size", "font_size")),
+    Concept("chart distance (the chart to the viewer)", "--chart-distance-m", "chart_distance_m", "chart_distance_m",
+            "chart_distance_mm", "m (mm in DslrBench, whose lengths are all mm)",
+            "the thesis's bench 0.9144 (THESIS_CHART_DISTANCE_MM); an eye's 6 (DEFAULT_CHART_DISTANCE_M)",
+            "an eye's VIEWING_DISTANCE_RANGE_M, the bench's OBJECT_DISTANCE_RANGE_M",
+            ("chart_distance", "viewing_distance")),
     Concept("angular sampling", "--arcmin-per-px", "arcmin_per_px", "arcmin_per_px", "arcmin_per_px", "arcmin/px",
             "each command's, said in its help", "ARCMIN_PER_PX_RANGE", ("arcmin_per_px", "sampling_arcmin")),
 )
@@ -96,12 +101,21 @@ RENAMED_KEYS: dict[str, str] = {
     "cylinder": "cylinder_diopters",
     "axis": "axis_deg",
     "distance_mm": "vertex_distance_mm",
+    "distance_m": "chart_distance_m",
+}
+
+#: Keys renamed one way in one table and another way in another (old -> new): refused as `RENAMED_KEYS` are,
+#: where the table takes the new key (a DSLR scene's ``[holder] distance_mm`` is ``vertex_distance_mm``, its
+#: ``[chart] distance_mm`` ``chart_distance_m``).
+RENAMED_KEYS_ELSEWHERE: dict[str, str] = {
+    "distance_mm": "chart_distance_m (metres, not mm)",
 }
 
 
-def renamed_key_error(where: str, key: str) -> VissimInputError:
-    """The one-line refusal of a renamed key: ``WHERE: 'vertex_mm' is now 'vertex_distance_mm'``."""
-    new = RENAMED_KEYS[key]
+def renamed_key_error(where: str, key: str, new: str | None = None) -> VissimInputError:
+    """The one-line refusal of a renamed key: ``WHERE: 'vertex_mm' is now 'vertex_distance_mm'`` (``new``: the
+    new key and its note, default `RENAMED_KEYS`'s)."""
+    new = RENAMED_KEYS[key] if new is None else new
     quoted = f"'{new}'" if " " not in new else f"'{new.split(' ', 1)[0]}' {new.split(' ', 1)[1]}"
     return VissimInputError(f"{where}: {key!r} is now {quoted}")
 
@@ -109,5 +123,8 @@ def renamed_key_error(where: str, key: str) -> VissimInputError:
 def refuse_renamed_keys(keys, allowed, where: str) -> None:
     """Refuse the first of ``keys`` (a table's keys) that `RENAMED_KEYS` renamed to a key ``allowed`` holds."""
     for key in sorted(keys):
-        if key not in allowed and key in RENAMED_KEYS and RENAMED_KEYS[key].split(" ", 1)[0] in allowed:
-            raise renamed_key_error(where, key)
+        if key in allowed:
+            continue
+        for renamed in (RENAMED_KEYS, RENAMED_KEYS_ELSEWHERE):
+            if key in renamed and renamed[key].split(" ", 1)[0] in allowed:
+                raise renamed_key_error(where, key, renamed[key])

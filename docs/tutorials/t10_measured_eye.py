@@ -46,7 +46,7 @@ out.mkdir(parents=True, exist_ok=True)
 #    chromatic difference of focus.
 pupil_mm, nm = 4.0, 555.0
 name = "jaeken-artal-2012:17:right"
-eye = vissim.build_eye(name, pupil_mm=pupil_mm)
+eye = vissim.build_eye(name, pupil_diameter_mm=pupil_mm)
 report = eye_report(eye, wavelength_nm=nm)
 rx = report.refraction.minimum_rms
 m, j0, j45 = rx.power_vector()

@@ -46,7 +46,7 @@ rendered = render_depth(loaded.scene, eye, spp=loaded.spp, seed=loaded.seed, aux
                         all_in_focus=True, depth=True, margin_px=margin)
 
 # 3. Blur the all-in-focus image by depth, for the same eye.
-blurred = blur_depth(rendered.all_in_focus, rendered.depth_m, eye_prescription=eye.prescription,
+blurred = blur_depth(rendered.all_in_focus, rendered.depth_m, rx=eye.prescription,
                             pupil_diameter_mm=eye.pupil_diameter_mm, accommodation_diopters=eye.accommodation_diopters,
                             arcmin_per_px=loaded.scene.arcmin_per_px, mode="geometric", crop_px=margin)
 comparison = compare_images(rendered.blurred, blurred.image, data_range=1.0)

@@ -38,7 +38,7 @@ setup = dataclasses.replace(bench, lenses=(lens,)).viewing_setup()
 
 # 2. A synthetic capture and its sharp reference (the same chart without the lens).
 q = 4  # render 4x finer, blur there, then average onto the capture's pixels
-fine = optotype_tile("K", 1.0, arcmin_per_px=1.0 / q, shape_px=(shape[0] * q, shape[1] * q)).pixels
+fine = optotype_tile("K", 1.0, arcmin_per_px=1.0 / q, size_px=(shape[0] * q, shape[1] * q)).pixels
 psf = vissim.compute_psf(setup.wavefront, arcmin_per_px=1.0 / q, size_px=256, mode="geometric",
                          wavelength_nm=setup.wavelength_nm)
 seen = vissim.blur_image(magnify(fine, setup.magnification_matrix), psf, arcmin_per_px=1.0 / q, padding="edge")

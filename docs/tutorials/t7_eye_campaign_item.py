@@ -43,7 +43,7 @@ spp, oversample = (64 if small else 1024), 2  # the campaign's spp and its simul
 
 # 1. The eye and the bench: the chart (K, LogMAR 0.5, 6 m), the image (64 x 64 px of 0.5 arcmin) and the light are
 #    the eye's defaults (vissim.optics.eyes.defaults); the lens is meshed thick in crown glass, as rendered.
-eye = vissim.build_eye("navarro-1985", pupil_mm=4.0)
+eye = vissim.build_eye("navarro-1985", pupil_diameter_mm=4.0)
 bench = EyeBench(eye, lenses=(TrialLens(1.0),), wavelength_nm=550.0)
 view, light = bench.view, bench.light  # the light the bench renders in: 550 nm
 

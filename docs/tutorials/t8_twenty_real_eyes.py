@@ -31,7 +31,7 @@ out.mkdir(parents=True, exist_ok=True)
 # 1. The letter: a Sloan K at LogMAR 0.1 (6/7.5), in visual angle at 0.25 arcmin per pixel.
 step = 0.25  # arcmin per pixel
 size = 96 if small else 160
-letter = optotype_tile("K", 0.1, arcmin_per_px=step, shape_px=(size, size), viewing_distance_m=6.0,
+letter = optotype_tile("K", 0.1, arcmin_per_px=step, size_px=(size, size), viewing_distance_m=6.0,
                        snap_to_pixels=False).pixels.astype(np.float64)
 
 # 2. Twenty measured eyes: a measured eye is named by its dataset, subject and eye. It sits on the
@@ -40,7 +40,7 @@ pupil_mm, nm = 4.0, 555.0
 names = [f"jaeken-artal-2012:{subject}:right" for subject in range(1, 21)] + ["navarro-1985"]
 panels = []
 for name in names:
-    eye = vissim.build_eye(name, pupil_mm=pupil_mm)
+    eye = vissim.build_eye(name, pupil_diameter_mm=pupil_mm)
     front = vissim.eye_wavefront(eye, wavelength_nm=nm)  # at the fovea
     # 3. Best spectacles: a sphero-cylinder removes orders 0-2 (piston, tilt, defocus, astigmatism) and
     #    leaves the higher orders, which spectacles cannot correct.

@@ -41,7 +41,7 @@ out.mkdir(parents=True, exist_ok=True)
 #    are in 555 nm light, the peak of photopic (daylight) vision. Navarro's eye is focused for 589.3 nm,
 #    its reference wavelength; in greener light it is a little myopic (the eye's chromatic aberration).
 pupil_mm, nm = 4.0, 555.0
-eye = vissim.build_eye("navarro-1985", pupil_mm=pupil_mm)
+eye = vissim.build_eye("navarro-1985", pupil_diameter_mm=pupil_mm)
 report = eye_report(eye, wavelength_nm=nm, mtf_cyc_per_deg=[10, 20, 30])
 print(f"power {report.power_diopters:.2f} D, f' {report.image_focal_length_mm:.2f} mm, "
       f"{report.retinal_mm_per_deg * 1000:.1f} um of retina per degree")
@@ -86,7 +86,7 @@ for field in (10.0, 20.0):
 # 4. A myope: the same model made to need -3.00 D at the spectacle plane (12 mm in front of the cornea;
 #    its eyeball is longer). Bare, it sees nothing fine; through a -3.00 D crown-glass trial lens at 12 mm
 #    the over-refraction (what is left to correct, in front of the lens) is back near the relaxed eye's.
-myope = vissim.build_eye("navarro-1985", pupil_mm=pupil_mm, rx="-3.00")
+myope = vissim.build_eye("navarro-1985", pupil_diameter_mm=pupil_mm, rx="-3.00")
 bare = eye_report(myope, wavelength_nm=nm, mtf_cyc_per_deg=[10])
 worn = eye_report(myope, wavelength_nm=nm, mtf_cyc_per_deg=[10], lenses=(atv_trial_lens(-3.0),))
 print(f"-3 D myope: refraction {bare.refraction.minimum_rms}, MTF at 10 c/deg {bare.mtf_cyc_per_deg['radial'][0][1]:.3f}; "

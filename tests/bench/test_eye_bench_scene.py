@@ -30,7 +30,7 @@ def _mesh_cache(tmp_path, monkeypatch):
 
 
 def bench(**changes) -> EyeBench:
-    values = dict(eye=build_eye("navarro-1985", pupil_mm=3.0), lenses=(TrialLens(2.0),), size_px=(16, 24))
+    values = dict(eye=build_eye("navarro-1985", pupil_diameter_mm=3.0), lenses=(TrialLens(2.0),), size_px=(16, 24))
     return EyeBench(**{**values, **changes})
 
 

@@ -26,7 +26,7 @@ def vergence_simulation(bench, chart, oversample=5, mode="wave"):
     setup = bench.viewing_setup(D_LINE_NM)
     step = bench.arcmin_per_px / oversample
     rows, cols = bench.size_px
-    fine = render_chart_angular(chart, step, shape_px=(rows * oversample, cols * oversample)).pixels
+    fine = render_chart_angular(chart, step, size_px=(rows * oversample, cols * oversample)).pixels
     front = setup.wavefront
     psf = compute_psf(front, wavelength_nm=D_LINE_NM, arcmin_per_px=step, mode=mode,
                       size_px=suggested_size_px(front, step, wavelength_nm=D_LINE_NM, mode="wave"))

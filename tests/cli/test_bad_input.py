@@ -124,7 +124,7 @@ FAST_COMMANDS = {
     "psf": (["psf", "--rx", "-1", "--pupil-mm", "3", "--size", "65", "--arcmin-per-px", "0.5"],
             ["--pupil-mm", "--arcmin-per-px", "--size", "--wavelength-nm", "--lca-reference-nm", "--zernike-pupil-mm"]),
     "chart": (["chart", "--logmar", "1"],
-              ["--logmar", "--logmar-step", "--seed", "--arcmin-per-px", "--distance-m", "--paper-reflectance",
+              ["--logmar", "--logmar-step", "--seed", "--arcmin-per-px", "--chart-distance-m", "--paper-reflectance",
                "--ink-reflectance"]),
     "blur": (["blur", "{chart}", "--rx", "-1", "--pupil-mm", "2"],
              ["--pupil-mm", "--arcmin-per-px", "--wavelength-nm", "--channel-fwhm-nm", "--lca-reference-nm"]),
@@ -175,6 +175,6 @@ def test_a_chart_for_an_impossible_distance_is_refused_before_writing(tmp_path, 
     # Found by hypothesis: 1.12e306 m made letter sizes overflow to inf after the image was written,
     # so the JSON sidecar failed and the image stayed. The range is checked when the spec is made.
     out = tmp_path / "chart.exr"
-    code, _, err = run(capsys, "chart", "--logmar", "1", "--distance-m", distance_m, "-o", out)
+    code, _, err = run(capsys, "chart", "--logmar", "1", "--chart-distance-m", distance_m, "-o", out)
     assert_one_error_line(code, err, "viewing distance must be 0.001-1e+06 m")
     assert list(tmp_path.iterdir()) == []

@@ -46,7 +46,7 @@ def test_blur_with_an_eye_model_equals_blur_eye_and_records_the_eye(capsys, tmp_
                          "--wavelength-nm", "555", "--field-deg", "5,0", "--field-step-deg", "0.7")
     assert code == 0, err
     blurred = read_image(target)
-    expected = vissim.blur_eye(image, vissim.build_eye(MODEL, pupil_mm=3.0), arcmin_per_px=1.0, wavelength_nm=555.0,
+    expected = vissim.blur_eye(image, vissim.build_eye(MODEL, pupil_diameter_mm=3.0), arcmin_per_px=1.0, wavelength_nm=555.0,
                                field_deg=(5.0, 0.0), field_step_deg=0.7)
     np.testing.assert_allclose(blurred.pixels, expected, atol=1e-6)
     eye = blurred.provenance["inputs"]["eye_model"]
@@ -82,7 +82,7 @@ def test_channel_bands_with_an_eye_model_equal_blur_eye_over_the_same_bands(caps
                        "--padding", "constant", "--channel-fwhm-nm", "40")
     assert code == 0, err
     bands = [gaussian_band(w, 40.0) for w in (610.0, 550.0, 465.0)]
-    expected = vissim.blur_eye(rgb, vissim.build_eye(MODEL, pupil_mm=3.0), arcmin_per_px=0.5,
+    expected = vissim.blur_eye(rgb, vissim.build_eye(MODEL, pupil_diameter_mm=3.0), arcmin_per_px=0.5,
                                wavelength_nm=[b[0] for b in bands], weights=[b[1] for b in bands], background=0.0)
     np.testing.assert_allclose(read_image(target).pixels, expected, atol=1e-6)
     assert len(read_image(target).provenance["inputs"]["eye_model"]["channel_wavelengths_nm"][0]) == len(bands[0][0])

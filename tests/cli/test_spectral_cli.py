@@ -34,7 +34,7 @@ def test_psf_of_an_eye_model_at_several_wavelengths_is_the_librarys_spectral_psf
                  "--wavelength-nm", "450,550,650", "--weights", "1,2,1", "--arcmin-per-px", "0.5", "--size", "65",
                  "-o", str(target)])
     assert code == 0
-    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelengths_nm=(450, 550, 650), field_deg=(10, 0))
+    spectral = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelengths_nm=(450, 550, 650), field_deg=(10, 0))
     psf = compute_psf(spectral, weights=(1, 2, 1), arcmin_per_px=0.5, size_px=65, normalise="total")
     image = read_image(target)
     inputs = image.provenance["inputs"]
@@ -78,8 +78,8 @@ def test_eye_mtf_over_several_wavelengths_keeps_zernikes_at_the_reference_and_re
     out = capsys.readouterr().out
     assert code == 0
     record = json.loads(out)
-    mono = eye_report(build_eye("navarro-1985", pupil_mm=3.0), mtf_cyc_per_deg=[10, 30])
-    poly = eye_report(build_eye("navarro-1985", pupil_mm=3.0), mtf_cyc_per_deg=[10, 30],
+    mono = eye_report(build_eye("navarro-1985", pupil_diameter_mm=3.0), mtf_cyc_per_deg=[10, 30])
+    poly = eye_report(build_eye("navarro-1985", pupil_diameter_mm=3.0), mtf_cyc_per_deg=[10, 30],
                       mtf_spectrum=MtfSpectrum((470.0, 555.0, 640.0), (1.0, 2.0, 1.0)))
     assert record["wavelength_nm"] == 589.3 and record["zernike_um"] == mono.as_json()["zernike_um"]
     assert record["mtf"]["spectrum"] == {"name": "wavelengths given", "wavelengths_nm": [470.0, 555.0, 640.0],

@@ -40,7 +40,7 @@ def capture(lens: TrialLens | None, *, letter: str = "K", logmar: float = 1.0, m
     """(image, reference, truth (M, J0, J45)) at 1 arcmin/px, ``SHAPE`` px."""
     q = OVERSAMPLE
     step = 1.0 / q
-    fine = optotype_tile(letter, logmar, arcmin_per_px=step, shape_px=(SHAPE[0] * q, SHAPE[1] * q)).pixels
+    fine = optotype_tile(letter, logmar, arcmin_per_px=step, size_px=(SHAPE[0] * q, SHAPE[1] * q)).pixels
     rng = np.random.default_rng(seed)
     reference = block_mean(fine, q).astype(np.float64) + reference_noise * rng.standard_normal(SHAPE)
     setup = dataclasses.replace(bench, lenses=() if lens is None else (lens,)).viewing_setup()

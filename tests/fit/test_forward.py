@@ -20,7 +20,7 @@ import scipy.special
 
 
 def _letter():
-    return optotype_tile("K", 1.0, arcmin_per_px=1.0, shape_px=(96, 96)).pixels.astype(np.float64)
+    return optotype_tile("K", 1.0, arcmin_per_px=1.0, size_px=(96, 96)).pixels.astype(np.float64)
 
 
 @pytest.mark.parametrize("rx", ["-2.00 DS", "plano -2.00 x 30", "+1.00 -1.50 x 120"])

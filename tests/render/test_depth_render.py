@@ -186,7 +186,7 @@ def test_myopic_eye_sees_the_half_metre_panel_sharp_and_6m_blurred_by_pupil_time
     assert edge_blur_px(result.blurred, scene, 0, "right", theory_px) == pytest.approx(theory_px, rel=0.03)
     assert edge_blur_px(result.blurred, scene, 1, "left", 0.0) < 1.0
     # The Fourier side: blur_depth of the all-in-focus render and depth blurs the 6 m panel by the same defocus.
-    simulated = blur_depth(result.all_in_focus, result.depth_m, eye_prescription=eye.prescription,
+    simulated = blur_depth(result.all_in_focus, result.depth_m, rx=eye.prescription,
                            pupil_diameter_mm=4.0, arcmin_per_px=scene.arcmin_per_px, mode="geometric").image
     radius = 0.5 * theory_px
     for target in (result.blurred, simulated):

@@ -36,7 +36,7 @@ field_deg = [5.0, -2.5]
 wavelength_nm = 600.0
 spectrum = "mono"
 [chart]
-distance_m = 0.5
+chart_distance_m = 0.5
 letter = "H"
 logmar = 0.3
 [spectacles]
@@ -88,7 +88,8 @@ BAD = [  # (file text, fragments the one error line must hold besides the file's
     ("[eye]\npupil_mm = 3\n", ["[eye]", "'pupil_mm' is now 'pupil_diameter_mm'"]),
     ("[spectacles]\nvertex_mm = 12\n", ["[spectacles]", "'vertex_mm' is now 'vertex_distance_mm'"]),
     ("[eye]\nrx = \"-1.00\"\n", ["[eye]", "'rx' is now 'prescription'"]),
-    ("[chart]\ndistance_mm = 6000\n", ["[chart]", "'distance_mm'", "distance_m"]),
+    ("[chart]\ndistance_mm = 6000\n", ["[chart]", "'distance_mm' is now 'chart_distance_m' (metres, not mm)"]),
+    ("[chart]\ndistance_m = 6.0\n", ["[chart]", "'distance_m' is now 'chart_distance_m'"]),
     ("[eye]\npupil_diameter_mm = \"3\"\n", ["[eye].pupil_diameter_mm", "mm"]),
     ("[render]\nspp = 4.5\n", ["[render].spp", "samples per pixel"]),
     ("[render]\nsize_px = [16]\n", ["[render].size_px", "pixels"]),
@@ -96,7 +97,7 @@ BAD = [  # (file text, fragments the one error line must hold besides the file's
     ("[eye]\npupil_diameter_mm = 30.0\n", ["[eye].pupil_diameter_mm", "mm", "30"]),
     ("[light]\nwavelength_nm = 1000.0\n", ["[light].wavelength_nm", "nm", "1000"]),
     ("[render]\narcmin_per_px = 0.0\n", ["[render].arcmin_per_px", "arcmin per pixel"]),
-    ("[chart]\ndistance_m = -1.0\n", ["[chart].distance_m", " m"]),
+    ("[chart]\nchart_distance_m = -1.0\n", ["[chart].chart_distance_m", " m"]),
     ("[spectacles]\nvertex_distance_mm = 0.0\n", ["[spectacles].vertex_distance_mm", "mm"]),
     ("[spectacles]\nsphere_diopters = 40.0\n", ["[spectacles].sphere_diopters", "dioptres", "40"]),
     ("[spectacles]\ncylinder_diopters = -1.0\n", ["[spectacles].cylinder_diopters", "axis_deg", "degrees"]),
@@ -198,12 +199,12 @@ def test_the_scene_file_is_in_the_provenance(tmp_path):
 @pytest.mark.skipif(find_libllvm() is None, reason="no usable libLLVM: llvm variants unavailable")
 def test_a_scene_file_renders_the_image_its_options_render(tmp_path):
     """The same settings written in a file or given as options: the same pixels, bit for bit (fixed seed)."""
-    path = scene(tmp_path, '[eye]\npupil_diameter_mm = 4.0\naccommodation_diopters = 1.0\n[chart]\ndistance_m = 2.0\n'
+    path = scene(tmp_path, '[eye]\npupil_diameter_mm = 4.0\naccommodation_diopters = 1.0\n[chart]\nchart_distance_m = 2.0\n'
                            'letter = "Z"\nlogmar = 0.4\n[spectacles]\nsphere_diopters = 0.5\n'
                            '[render]\nsize_px = [16, 16]\nspp = 4\nseed = 9\n')
     from_file, from_options = tmp_path / "file.exr", tmp_path / "options.exr"
     assert main(["render", "eye", "--scene", str(path), "-o", str(from_file)]) == 0
-    assert main(["render", "eye", "--pupil-mm", "4", "--accommodation-diopters", "1", "--distance-m", "2",
+    assert main(["render", "eye", "--pupil-mm", "4", "--accommodation-diopters", "1", "--chart-distance-m", "2",
                  "--letter", "Z", "--logmar", "0.4", "--sphere", "0.5", "--size", "16x16", "--spp", "4",
                  "--seed", "9", "-o", str(from_options)]) == 0
     a, b = read_image(from_file), read_image(from_options)

@@ -38,7 +38,7 @@ def test_an_eye_accommodated_to_a_near_chart_sees_it_sharper(tmp_path):
     spreads = {}
     for accommodation in ("0", "2"):
         path = tmp_path / f"a{accommodation}.exr"
-        assert main(["render", "eye", "--size", "32x32", "--spp", "64", "--logmar", "0.7", "--distance-m", "0.5",
+        assert main(["render", "eye", "--size", "32x32", "--spp", "64", "--logmar", "0.7", "--chart-distance-m", "0.5",
                      "--arcmin-per-px", "1", "--pupil-mm", "3", "--wavelength-nm", "589.3",  # the conditions above
                      "--accommodation-diopters", accommodation, "-o", str(path)]) == 0
         pixels = read_image(path).pixels
@@ -71,7 +71,7 @@ def test_a_plus_trial_lens_brings_a_near_chart_into_focus_for_the_relaxed_eye(tm
     spreads = {}
     for name, lens in (("none", []), ("plus", ["--sphere", "2"])):
         path = tmp_path / f"{name}.exr"
-        assert main(["render", "eye", "--size", "32x32", "--spp", "64", "--logmar", "0.7", "--distance-m", "0.5",
+        assert main(["render", "eye", "--size", "32x32", "--spp", "64", "--logmar", "0.7", "--chart-distance-m", "0.5",
                      *lens, "-o", str(path)]) == 0
         pixels = read_image(path).pixels
         spreads[name] = float(np.percentile(pixels, 95) - np.percentile(pixels, 5))
@@ -130,7 +130,7 @@ def test_a_turned_eye_sees_the_chart_centre_at_the_image_centre_plus_its_g_tilt(
     from vissim.optics.eyes.eye import build_eye
     from vissim.bench.eye.sensor_eyes import register_sensor_eye
 
-    key = register_sensor_eye(build_eye("escudero-sanz-1999", pupil_mm=3.0))
+    key = register_sensor_eye(build_eye("escudero-sanz-1999", pupil_diameter_mm=3.0))
     sensor = {"type": "vissim_schematic_eye", "eye_key": key, "arcmin_per_px": step,
               "field_x_deg": field[0], "field_y_deg": field[1],
               "to_world": mi.ScalarTransform4f(eye_to_world(eye, field)),

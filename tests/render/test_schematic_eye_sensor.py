@@ -20,7 +20,7 @@ def eye_sensor(model="navarro-1985", spp=64, arcmin_per_px=60.0, pixel_format="l
     from vissim.optics.eyes.eye import build_eye
     from vissim.bench.eye.sensor_eyes import register_sensor_eye
 
-    key = register_sensor_eye(build_eye(model, pupil_mm=3.0))
+    key = register_sensor_eye(build_eye(model, pupil_diameter_mm=3.0))
     return {"type": "vissim_schematic_eye", "eye_key": key, "arcmin_per_px": arcmin_per_px,
             "film": {"type": "hdrfilm", "width": SIZE, "height": SIZE, "rfilter": {"type": "box"},
                      "pixel_format": pixel_format},

@@ -78,7 +78,7 @@ def test_a_measured_eyes_phase_plane_reverses_the_numpy_trace(field_deg):
     from vissim.optics.eyes.eye import build_eye
     from vissim.optics.eyes.measured.phase_plane import measured_phase_plane
 
-    measured = build_eye("jaeken-artal-2012:92:right", pupil_mm=4.0)
+    measured = build_eye("jaeken-artal-2012:92:right", pupil_diameter_mm=4.0)
     plane = measured_phase_plane(measured, (-20.0, 0.0), 550.0).plane
     eye = measured.optics
     start, d = inward_rays(40, field_deg, 3.0)

@@ -20,7 +20,7 @@ from vissim.optics.blur.resample import magnify
 def fake_render(spec):
     bench = spec.bench
     step = bench.arcmin_per_px
-    tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=step, shape_px=bench.size_px,
+    tile = optotype_tile(spec.letter, spec.logmar, arcmin_per_px=step, size_px=bench.size_px,
                          polarity=spec.polarity, viewing_distance_m=bench.chart_distance_mm / 1000.0,
                          snap_to_pixels=False).pixels
     if bench.lenses:

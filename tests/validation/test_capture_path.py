@@ -83,7 +83,7 @@ def test_paper_ring_is_measured_on_the_sky_for_a_long_lens(tmp_path):
     # ring of 0.75-1.5 tile half-widths counted in sensor px (6-12 arcmin: 84 % ink); counted on
     # the sky (24-48 arcmin) the ring is all paper, so the paper comes back at 0.9.
     scale = camera_arcmin_per_px(5.2, 68.0, object_distance_m=3.0)
-    chart = optotype_tile("O", 0.7, arcmin_per_px=scale, shape_px=(416, 416), viewing_distance_m=3.0,
+    chart = optotype_tile("O", 0.7, arcmin_per_px=scale, size_px=(416, 416), viewing_distance_m=3.0,
                           snap_to_pixels=False).pixels.astype(np.float64) / 0.9 * 0.6
     noisy = add_sensor_noise(mosaic_bayer(chart[..., None] * GAINS, "RGGB"), full_well_electrons=30000,
                              read_noise_electrons=2.0, rng=5)
@@ -93,7 +93,7 @@ def test_paper_ring_is_measured_on_the_sky_for_a_long_lens(tmp_path):
         '[[capture]]\nid = "o"\nfile = "o.dng"\nfocal_length_mm = 68.0\nchart_distance_m = 3.0\n'
         'letter = "O"\nlogmar = 0.7\nletter_center_px = [208.0, 208.0]\n')
     tile = capture_tile(load_manifest(tmp_path / "manifest.toml")["o"], 1.0, (64, 64))
-    reference = optotype_tile("O", 0.7, arcmin_per_px=1.0, shape_px=(64, 64), viewing_distance_m=3.0,
+    reference = optotype_tile("O", 0.7, arcmin_per_px=1.0, size_px=(64, 64), viewing_distance_m=3.0,
                               snap_to_pixels=False).pixels
     assert np.median(tile[:8]) == pytest.approx(0.9, abs=0.01)
     assert np.percentile(tile, 1) == pytest.approx(0.04, abs=0.03)

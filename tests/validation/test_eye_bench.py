@@ -140,7 +140,7 @@ def test_the_schematic_eye_is_the_myopes_own_long_eye_seeing_the_lights_vergence
     at_pupil = through_lens / (1.0 - gap_m * through_lens)
     assert corrected.view.vergence_at_pupil(corrected.light.focus_nm)[0] == pytest.approx(at_pupil * np.eye(2), abs=1e-3)
     assert myope.view.eye is corrected.view.eye and str(myope.view.eye.rx) == "-3.00 DS"
-    front = eye_wavefront(myope.view.eye.with_pupil(pupil_mm=1.0))  # at its reference wavelength, as its Rx is
+    front = eye_wavefront(myope.view.eye.with_pupil(pupil_diameter_mm=1.0))  # at its reference wavelength, as its Rx is
     traced = paraxial_prescription(front.coefficients_um, 1.0).sphere_diopters
     assert traced == pytest.approx(-3.0 / (1.0 + 3.0 * gap_m), abs=0.01)
 
@@ -158,7 +158,7 @@ def test_a_defocused_eye_s_ray_psf_is_the_blur_disc():
     from vissim.optics.rx.trial_lens import TrialLens, TrialLensSetup, trial_lens_effect
 
     lens = TrialLens(2.0, 0.0, 180.0, refractive_index=1.523, center_thickness_mm=3.0)
-    ray = ray_psf(build_eye("navarro-1985", pupil_mm=3.0), field_deg=(0.0, 0.0), chart_distance_m=6.0, lens=lens,
+    ray = ray_psf(build_eye("navarro-1985", pupil_diameter_mm=3.0), field_deg=(0.0, 0.0), chart_distance_m=6.0, lens=lens,
                   arcmin_per_px=1.0, oversample=4, rays_across=61)
     rows, cols = np.indices(ray.psf.shape)
     centre = (ray.psf.shape[0] - 1) / 2.0

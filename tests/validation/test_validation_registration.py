@@ -18,7 +18,7 @@ NOISE_SIGMA = 0.005  # linear units on a 0.04-0.9 chart: about what a well-expos
 
 def blurred_letter(arcmin_per_px=1.0, scale=1, size_px=48):
     """A Sloan R at 1.0 LogMAR (50 arcmin) on the thesis tile, blurred by -1 D over a 3 mm pupil."""
-    tile = optotype_tile("R", 1.0, arcmin_per_px=arcmin_per_px, shape_px=(133 * scale, 113 * scale))
+    tile = optotype_tile("R", 1.0, arcmin_per_px=arcmin_per_px, size_px=(133 * scale, 113 * scale))
     psf = compute_psf(Wavefront.from_prescription(Prescription(-1.0), 3.0), arcmin_per_px=arcmin_per_px,
                       size_px=size_px * scale)
     return blur_image(tile.pixels, psf, arcmin_per_px=arcmin_per_px, dtype=np.float64)

@@ -38,11 +38,14 @@ def add_rx_arg(parser, *, required: bool = False, default_text: str = "") -> Non
                         help=f"{RX_HELP}, e.g. '-2.00 -0.50 x 180'{default_text}")
 
 
-def add_trial_lens_args(group) -> None:
-    """``--sphere`` / ``--cylinder`` / ``--axis``: one trial lens (read with `trial_lens_powers`)."""
-    group.add_argument("--sphere", type=float, metavar="D", help="trial lens sphere in dioptres (plus lens > 0)")
+def add_trial_lens_args(group, *, none_given: str = "no trial lens") -> None:
+    """``--sphere`` / ``--cylinder`` / ``--axis``: one trial lens (read with `trial_lens_powers`); ``none_given``
+    says what there is when none of them is given (a scene's own lenses)."""
+    group.add_argument("--sphere", type=float, metavar="D",
+                       help=f"trial lens sphere in dioptres (plus lens > 0; default 0 with --cylinder, else {none_given})")
     group.add_argument("--cylinder", type=float, metavar="D", help="trial lens cylinder in dioptres (needs --axis)")
-    group.add_argument("--axis", type=float, metavar="DEG", help="trial lens cylinder axis, TABO degrees 0-180")
+    group.add_argument("--axis", type=float, metavar="DEG",
+                       help="trial lens cylinder axis, TABO degrees 0-180 (required with a --cylinder; no default)")
 
 
 def trial_lens_powers(args: argparse.Namespace) -> tuple[float, float, float] | None:
@@ -60,9 +63,10 @@ def trial_lens_powers(args: argparse.Namespace) -> tuple[float, float, float] | 
 def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
     group = parser.add_argument_group("aberration (at least one of --rx / --zernike)")
     group.add_argument("--rx", metavar="PRESCRIPTION",
-                       help=RX_HELP + ", e.g. '-2.00 -1.25 x 180', '+1.50 DS', 'plano' (TABO axis)")
+                       help=RX_HELP + ", e.g. '-2.00 -1.25 x 180', '+1.50 DS', 'plano' (TABO axis; default none)")
     group.add_argument("--zernike", metavar="TERMS",
-                       help="OSA Zernike terms in µm, 'n,m=µm;n,m=µm' (e.g. '2,0=0.5;4,0=0.1'); adds to --rx")
+                       help="OSA Zernike terms in µm, 'n,m=µm;n,m=µm' (e.g. '2,0=0.5;4,0=0.1'); adds to --rx "
+                            "(default none)")
     group.add_argument("--zernike-pupil-mm", type=float, metavar="MM",
                        help="pupil diameter the --zernike coefficients were measured over (default: --pupil-mm)")
     group.add_argument("--pupil-mm", type=float, required=required, metavar="MM",
@@ -144,7 +148,7 @@ def eye_from_args(args, rx_text: str | None):
 
     rx = None if rx_text is None else Prescription.parse(rx_text)  # plano: the eye solved to be exactly plano
     accommodation = 0.0 if args.accommodation_diopters is None else args.accommodation_diopters
-    return build_eye(args.eye_model, accommodation_diopters=accommodation, pupil_mm=args.pupil_mm, rx=rx)
+    return build_eye(args.eye_model, accommodation_diopters=accommodation, pupil_diameter_mm=args.pupil_mm, rx=rx)
 
 
 def field_deg_from_text(text: str) -> tuple[float, float]:

@@ -102,7 +102,7 @@ _POWERS = {"sphere", "cylinder", "back_surface_diopters",
 #: Plain ``type=float`` options that only make sense positive.
 _POSITIVE_FLOATS = {
     "pupil_mm", "zernike_pupil_mm", "arcmin_per_px", "wavelength_nm", "lca_reference_nm", "channel_fwhm_nm",
-    "dpi", "f_number", "focal_length_mm", "distance_m", "summation_arcmin", "layer_spacing_fraction", "index",
+    "dpi", "f_number", "focal_length_mm", "chart_distance_m", "summation_arcmin", "layer_spacing_fraction", "index",
 }
 
 

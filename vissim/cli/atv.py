@@ -1,7 +1,7 @@
 """``vissim atv``: the absolute threshold for vision (thesis Ch. 5).
 
 * ``vissim atv analyze DIR -o OUT`` -- fit every subject file in DIR; figures, report.md/.html, analysis.json.
-* ``vissim atv simulate --rx RX --pupil-mm D [--accommodation-amplitude-diopters A] [--cycloplegia] -o OUT`` -- a virtual subject.
+* ``vissim atv simulate --rx RX --pupil-mm MM [--accommodation-amplitude-diopters A] [--cycloplegia] -o OUT`` -- a virtual subject.
 * ``vissim atv run [--observer simulated|person] -o result.json`` -- one threshold by Listing 5.1.
 """
 
@@ -13,7 +13,7 @@ from pathlib import Path
 
 from vissim.checks import ATV_PARABOLA_WINDOW_DIOPTERS
 from vissim.checks import DEFAULT_WAVELENGTH_NM
-from vissim.cli._common import add_rx_arg, check_outputs_apart, refuse_existing
+from vissim.cli._common import JSON_HELP, add_json_arg, add_rx_arg, check_outputs_apart, print_result, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.optics.rx.conventions import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
@@ -42,6 +42,7 @@ def add_parser(subparsers) -> None:
                          help="also fit a local parabola over lenses within W D of the least value "
                               f"(default {ATV_PARABOLA_WINDOW_DIOPTERS:g}; 0 to skip)")
     analyze.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    add_json_arg(analyze)
     analyze.set_defaults(func=run_analyze)
 
     sim = sub.add_parser("simulate", help="simulate the experiment for a virtual subject",
@@ -53,7 +54,7 @@ def add_parser(subparsers) -> None:
                      help="amplitude of accommodation, D: the most the subject can exert (default 8); the "
                           "accommodation exerted at each lens follows from it")
     sim.add_argument("--cycloplegia", action="store_true", help="no accommodation (cycloplegic drops)")
-    sim.add_argument("--proximal-diopters", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D")
+    sim.add_argument("--proximal-diopters", type=float, default=0.0, metavar="P", help="accommodation exerted even when it blurs, D (default 0)")
     sim.add_argument("--lenses", metavar="D[,D...]", help="trial lenses in D (default: the thesis's 17)")
     sim.add_argument("--vertex-mm", type=float, default=None, metavar="MM",
                      help=f"vertex distance: trial lens back vertex to the eye's pupil (default "
@@ -70,13 +71,15 @@ def add_parser(subparsers) -> None:
                      help=f"also fit a ±W D local parabola (default {ATV_PARABOLA_WINDOW_DIOPTERS:g}; 0 to skip)")
     sim.add_argument("-o", "--output", type=Path, required=True, help="output directory")
     sim.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    add_json_arg(sim)
     sim.set_defaults(func=run_simulate)
 
     run = sub.add_parser("run", help="run the threshold procedure once (Listing 5.1)",
                          description="Phase 1: quasi-random narrowing in steps of 0.1; phase 2: bisection down to "
                          "--resolution. A person answers in a one-pixel window (keys y/n/q) or in the terminal.")
-    run.add_argument("--observer", choices=("simulated", "person"), default="simulated", action=_ObserverChoice)
-    run.add_argument("--display", choices=("auto", "window", "terminal"), default="auto", help="how a person sees the stimulus")
+    run.add_argument("--observer", choices=("simulated", "person"), default="simulated", action=_ObserverChoice,
+                     help="who answers: the simulated observer below, or a person at the display (default simulated)")
+    run.add_argument("--display", choices=("auto", "window", "terminal"), default="auto", help="how a person sees the stimulus (default auto)")
     _observer_args(run, threshold=True)
     run.add_argument("--resolution", type=float, default=0.001, help="phase-2 resolution, code value (default 0.001)")
     run.add_argument("--sphere", type=float, metavar="D", help="trial lens sphere in use, dioptres (recorded only)")
@@ -84,6 +87,8 @@ def add_parser(subparsers) -> None:
     run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     run.add_argument("-o", "--output", type=Path, required=True, help="result JSON file")
     run.add_argument("--overwrite", action="store_true", help="replace an existing result")
+    run.add_argument("--json", action="store_true",
+                     help=JSON_HELP + " (with --observer simulated only: a person's prompts share that output)")
     run.set_defaults(func=run_procedure_command, prints_live=False)
 
 
@@ -131,12 +136,13 @@ def run_analyze(args: argparse.Namespace) -> int:
         args.data_dir, args.output, strict=args.strict, level=args.level, average_sessions=not args.all_sessions,
         window_diopters=_window(args.window_diopters), overwrite=args.overwrite,
     )
+    lines = []
     for a in analyses:
         se = f"SE {a.measured_se_diopters:+.3f} D" if a.measured_se_diopters is not None else "no SE"
         fit = "all lenses" if a.window_diopters is None else f"±{a.window_diopters:g} D"
-        print(f"subject {a.subject_id} {a.eye} {a.condition.replace('_', ' ')} ({fit}): vertex {_vertex(a)}; {se}")
-    for path in written:
-        print(f"wrote {path}")
+        lines.append(f"subject {a.subject_id} {a.eye} {a.condition.replace('_', ' ')} ({fit}): vertex {_vertex(a)}; {se}")
+    lines += [f"wrote {path}" for path in written]
+    print_result(args, lines, {"analyses": [a.as_json() for a in analyses]}, written)
     return 0
 
 
@@ -161,15 +167,14 @@ def run_simulate(args: argparse.Namespace) -> int:
         kwargs["lenses_diopters"] = parse_float_list(args.lenses, "--lenses", "D", positive=False)
     experiment = run_virtual_experiment(subject, apparatus=apparatus, detection=detection, seed=args.seed, **kwargs)
     written, analyses = write_simulation_report(experiment, args.output, window_diopters=_window(args.window_diopters), overwrite=args.overwrite)
-    for t in experiment.trials:
-        print(f"lens {t.trial_lens_diopters:+.2f} D: residual {t.residual_se_diopters:+.2f} D, accommodation "
-              f"{t.accommodation_diopters:.2f} D, flux in summation area {t.summation_fraction:.3f}, threshold "
-              f"{t.minimum_visible_code:.4f} (model {t.model_threshold_code:.4f})")
+    lines = [f"lens {t.trial_lens_diopters:+.2f} D: residual {t.residual_se_diopters:+.2f} D, accommodation "
+             f"{t.accommodation_diopters:.2f} D, flux in summation area {t.summation_fraction:.3f}, threshold "
+             f"{t.minimum_visible_code:.4f} (model {t.model_threshold_code:.4f})" for t in experiment.trials]
     for a in analyses:
         fit = "all lenses" if a.window_diopters is None else f"±{a.window_diopters:g} D window"
-        print(f"fit over {fit}: vertex {_vertex(a)}; SE {a.measured_se_diopters:+.3f} D")
-    for path in written:
-        print(f"wrote {path}")
+        lines.append(f"fit over {fit}: vertex {_vertex(a)}; SE {a.measured_se_diopters:+.3f} D")
+    lines += [f"wrote {path}" for path in written]
+    print_result(args, lines, {"experiment": experiment.as_json(), "analyses": [a.as_json() for a in analyses]}, written)
     return 0
 
 
@@ -179,6 +184,9 @@ def run_procedure_command(args: argparse.Namespace) -> int:
     from vissim.provenance import make_provenance
 
     config = ProcedureConfig(resolution_code=args.resolution)
+    if args.json and args.observer == "person":
+        raise VissimInputError("--json goes with --observer simulated: a person's prompts share the output the JSON "
+                               "is printed on")
     refuse_existing(args.output, overwrite=args.overwrite)  # fail before a person spends minutes answering
     observer_record: dict = {"kind": args.observer}
     if args.observer == "simulated":
@@ -200,10 +208,13 @@ def run_procedure_command(args: argparse.Namespace) -> int:
     record["result"] = result.as_json()
     write_json_atomic(args.output, record, overwrite=args.overwrite)
     if result.never_seen:  # no number: the procedure only narrowed down to the display's white
-        print(f"never seen: none of the {len(result.presentations)} presentations, up to code {result.upper_code:.4f} "
-              "(the display's white), was seen; the threshold lies above what the display shows")
+        lines = [f"never seen: none of the {len(result.presentations)} presentations, up to code "
+                 f"{result.upper_code:.4f} (the display's white), was seen; the threshold lies above what the "
+                 "display shows"]
     else:
-        print(f"threshold {result.threshold_code:.4f} (code value), interval [{result.lower_code:.4f}, "
-              f"{result.upper_code:.4f}], {len(result.presentations)} presentations")
-    print(f"wrote {args.output}")
+        lines = [f"threshold {result.threshold_code:.4f} (code value), interval [{result.lower_code:.4f}, "
+                 f"{result.upper_code:.4f}], {len(result.presentations)} presentations"]
+    lines.append(f"wrote {args.output}")
+    print_result(args, lines, {"observer": observer_record, "result": result.as_json()}, [args.output],
+                 {k: v for k, v in record.items() if k != "result"})
     return 0

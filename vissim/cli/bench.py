@@ -38,7 +38,7 @@ def add_wavefront_parser(subparsers) -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument("--scene", metavar="TOML", help="bench scene file (see scenes/dslr_bench.toml)")
-    add_trial_lens_args(parser.add_argument_group("trial lens (replaces the scene's lenses)"))
+    add_trial_lens_args(parser.add_argument_group("trial lens (replaces the scene's lenses)"), none_given="the scene's lenses")
     parser.add_argument("--f-number", type=float, metavar="N", help="camera f-number (default 5)")
     parser.add_argument("--wavelength-nm", type=float, default=D_LINE_NM, metavar="NM",
                         help=f"wavelength (default {D_LINE_NM:g}, the d line, where the glass has the "

@@ -47,7 +47,8 @@ def add_parser(subparsers) -> None:
         "--channel-fwhm-nm",
         type=float,
         metavar="W",
-        help="spectral weighting per channel: a Gaussian band of this FWHM around each channel's wavelength",
+        help="spectral weighting per channel: a Gaussian band of this FWHM around each channel's wavelength "
+             "(default none: each channel at its one wavelength)",
     )
     parser.add_argument("--lca", action="store_true", help="add the eye's chromatic defocus (Thibos 1992)")
     parser.add_argument("--lca-reference-nm", type=float, default=DEFAULT_WAVELENGTH_NM, metavar="NM",
@@ -74,7 +75,7 @@ def add_eye_model_args(parser) -> None:
         "over the image: it is traced at a grid of field points --field-step-deg apart and interpolated between "
         "them; an image within one step is blurred by the one PSF at its centre. The image stays in visual angle "
         "(the eye's distortion is not applied).")
-    add_eye_model_arg(eye, "a schematic eye")
+    add_eye_model_arg(eye, "a schematic eye (default none: the reduced eye)")
     eye.add_argument("--field-deg", metavar="X,Y",
                      help=f"with --eye-model: the image centre's {FIELD_DEG_HELP} (default 0,0: the eye looks at "
                      "the image centre)")

@@ -48,10 +48,11 @@ def add_parser(subparsers) -> None:
         "its amplitude allows: any of --focus-distance-m (the target; if omitted, the depth at the image "
         "centre), --age (amplitude by Hofstetter 1950's mean) or --accommodation-amplitude-diopters (if neither, unlimited).",
     )
-    focus.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres")
-    focus.add_argument("--age", type=float, metavar="Y", help="age in years: amplitude 18.5 - 0.3 Y D (Hofstetter 1950)")
-    focus.add_argument("--accommodation-amplitude-diopters", type=float, metavar="A", help="amplitude of accommodation, dioptres")
-    focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres")
+    focus.add_argument("--accommodation-diopters", type=float, metavar="A",
+                       help="accommodation exerted, dioptres (default none: see above)")
+    focus.add_argument("--age", type=float, metavar="Y", help="age in years: amplitude 18.5 - 0.3 Y D (Hofstetter 1950; default none)")
+    focus.add_argument("--accommodation-amplitude-diopters", type=float, metavar="A", help="amplitude of accommodation, dioptres (default none: see above)")
+    focus.add_argument("--focus-distance-m", type=float, metavar="F", help="distance the eye tries to focus, metres (default none: see above)")
     eye = parser.add_argument_group(
         "schematic eye (in place of the reduced eye)",
         "With --eye-model the eye is a traced schematic eye at one field point (--field-deg, default 0,0): its spherical aberration and its own defocus at --wavelength-nm and at the accommodation "
@@ -59,7 +60,7 @@ def add_parser(subparsers) -> None:
         + EYE_RX_HELP + "; each depth adds its defocus as for the reduced eye, and the eye is in "
         "focus where its whole wavefront says. The focus-target options (--age, --accommodation-amplitude-diopters, "
         "--focus-distance-m) are the reduced eye's and are refused with it.")
-    add_eye_model_arg(eye, "a schematic eye")
+    add_eye_model_arg(eye, "a schematic eye (default none: the reduced eye)")
     eye.add_argument("--field-deg", metavar="X,Y",
                      help=f"with --eye-model: the {FIELD_DEG_HELP}, where the eye is traced (default 0,0)")
     parser.add_argument("--arcmin-per-px", type=float, metavar="S", help="angular sampling (default: the one the image file records)")

@@ -9,7 +9,7 @@ from pathlib import Path
 from vissim.checks import size_text
 from vissim.atomic import write_json_atomic
 from vissim.chart_defaults import DEFAULT_LETTER_SEED, INK_REFLECTANCE, PAPER_REFLECTANCE, POLARITIES
-from vissim.cli._common import refuse_existing
+from vissim.cli._common import add_json_arg, print_result, refuse_existing
 from vissim.errors import VissimInputError
 from vissim.provenance import make_provenance
 from vissim.thesis import THESIS_CHART_DISTANCE_MM, THESIS_TILE_SHAPE_PX
@@ -36,21 +36,23 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         ),
     )
     rows = parser.add_mutually_exclusive_group()
-    rows.add_argument("--logmar", type=float, metavar="L", help="one row at this LogMAR")
+    rows.add_argument("--logmar", type=float, metavar="L", help="one row at this LogMAR (default: the rows of --logmar-range)")
     rows.add_argument("--logmar-range", metavar="START,STOP",
                       help="rows from START to STOP inclusive (default 1.0,-0.3 as in the thesis)")
     parser.add_argument("--logmar-step", type=float, default=0.1, metavar="L", help="row step (default 0.1)")
     which = parser.add_mutually_exclusive_group()
     which.add_argument("--letters", metavar="LETTERS",
-                       help="letters of every row (e.g. NCKZO), or one group per row separated by commas")
-    which.add_argument("--letter", metavar="X", help="a single letter (one per row)")
+                       help="letters of every row (e.g. NCKZO), or one group per row separated by commas (default: 5 distinct "
+                            "letters a row, picked by --seed)")
+    which.add_argument("--letter", metavar="X", help="a single letter (one per row; default: as --letters)")
     parser.add_argument("--seed", type=int, default=DEFAULT_LETTER_SEED,
                         help=f"seed that picks 5 distinct letters per row when none are given "
                              f"(default {DEFAULT_LETTER_SEED})")
-    parser.add_argument("--polarity", choices=POLARITIES, default="black-on-white")
+    parser.add_argument("--polarity", choices=POLARITIES, default="black-on-white",
+                        help="black letters on white paper, or white on black (default black-on-white)")
     parser.add_argument("--arcmin-per-px", type=float, default=1.0, metavar="ARCMIN",
                         help="angular pixel size (default 1, as the thesis)")
-    parser.add_argument("--distance-m", type=float, default=mm_to_m(THESIS_CHART_DISTANCE_MM), metavar="M",
+    parser.add_argument("--chart-distance-m", type=float, default=mm_to_m(THESIS_CHART_DISTANCE_MM), metavar="M",
                         help="viewing distance in metres (default 0.9144, three feet)")
     parser.add_argument("--paper-reflectance", type=float, default=PAPER_REFLECTANCE, metavar="R",
                         help=f"linear reflectance of the paper (default {PAPER_REFLECTANCE})")
@@ -64,6 +66,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("-o", "--output", required=True, metavar="PATH",
                         help="image to write (.exr recommended; with --print .pdf or .png)")
     parser.add_argument("--overwrite", action="store_true", help="replace existing outputs")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
     return parser
 
@@ -93,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     suffix = out.suffix.lower()
     letters = _letters(args)
-    look = {"viewing_distance_m": args.distance_m, "polarity": args.polarity,
+    look = {"viewing_distance_m": args.chart_distance_m, "polarity": args.polarity,
             "paper_reflectance": args.paper_reflectance, "ink_reflectance": args.ink_reflectance}
     if args.tile:
         if args.print_form or args.logmar_range is not None:
@@ -111,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     sidecar_path = out.with_name(out.name + _SIDECAR_SUFFIX)
     images = (out,) if suffix == ".pdf" else image_files(out)  # a PDF keeps its provenance inside
     refuse_existing(*images, sidecar_path, overwrite=args.overwrite)
-    provenance = make_provenance(command="vissim chart", options={k: v for k, v in vars(args).items() if k != "func"}, spec=spec)
+    provenance = make_provenance(command="vissim chart", options={k: v for k, v in vars(args).items() if k not in ("func", "json")}, spec=spec)
 
     if args.print_form:
         layout = layout_chart(spec, dpi=args.dpi)
@@ -122,20 +125,26 @@ def run(args: argparse.Namespace) -> int:
         height_mm, width_mm = layout.page_size_mm
         what = f"print chart {size_text((round(height_mm, 1), round(width_mm, 1)), 'mm')}" + ("" if suffix == ".pdf" else f" at {args.dpi:g} dpi")
         sidecar = chart_sidecar(spec, layout)
+        record = {"kind": "print chart", "page_size_mm": [height_mm, width_mm],
+                  "dpi": None if suffix == ".pdf" else args.dpi}
     else:
         if args.tile:
             chart = optotype_tile(letters.strip(), args.logmar, arcmin_per_px=args.arcmin_per_px,
-                                  shape_px=THESIS_TILE_SHAPE_PX, **look)
+                                  size_px=THESIS_TILE_SHAPE_PX, **look)
         else:
             chart = render_chart_angular(spec, args.arcmin_per_px)
         write_image(out, chart.pixels, provenance=provenance, overwrite=args.overwrite, encoding="srgb",
                     arcmin_per_px=args.arcmin_per_px)
         what = f"{'tile' if args.tile else 'chart'} {size_text(chart.pixels.shape)} at {args.arcmin_per_px:g} arcmin/px"
         sidecar = chart.sidecar()
+        record = {"kind": "tile" if args.tile else "chart", "size_px": list(chart.pixels.shape[:2]),
+                  "arcmin_per_px": args.arcmin_per_px}
     n = len(sidecar["letters"])
-    print(f"wrote {out} ({what}, {n} letter{'s' if n != 1 else ''})")
-    for provenance_path in images[1:]:
-        print(f"wrote {provenance_path} (provenance)")
+    lines = [f"wrote {out} ({what}, {n} letter{'s' if n != 1 else ''})"]
+    lines += [f"wrote {provenance_path} (provenance)" for provenance_path in images[1:]]
     write_json_atomic(sidecar_path, sidecar | {"provenance": provenance}, overwrite=args.overwrite)
-    print(f"wrote {sidecar_path} (letter boxes)")
+    lines.append(f"wrote {sidecar_path} (letter boxes)")
+    record |= {"letters": [box["letter"] for box in sidecar["letters"]], "chart_distance_m": args.chart_distance_m,
+               "polarity": args.polarity}
+    print_result(args, lines, record, [*images, sidecar_path], provenance)
     return 0

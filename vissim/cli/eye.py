@@ -39,8 +39,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--accommodation-diopters", type=float, default=0.0, metavar="A",
                         help=f"accommodation exerted, {EYE_ACCOMMODATION_HELP} (default 0, relaxed)")
     pupil = parser.add_mutually_exclusive_group(required=True)
-    pupil.add_argument("--pupil-mm", type=float, metavar="MM", help="entrance pupil diameter, mm (a clinician's)")
-    pupil.add_argument("--iris-mm", type=float, metavar="MM", help="iris (stop) diameter, mm (optical design's)")
+    pupil.add_argument("--pupil-mm", type=float, metavar="MM", help="entrance pupil diameter, mm (a clinician's; this or --iris-mm is required)")
+    pupil.add_argument("--iris-mm", type=float, metavar="MM", help="iris (stop) diameter, mm (optical design's; this or --pupil-mm is required)")
     parser.add_argument("--wavelength-nm", default=None, metavar="NM[,NM...]",
                         help="wavelength, nm (default: the model's reference wavelength); several: the MTF is of "
                              "their light (see --spectrum), all else at the model's reference wavelength")
@@ -56,7 +56,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help=f"the {FIELD_DEG_HELP} (default 0,0)")
     parser.add_argument("--rx", metavar="PRESCRIPTION",
                         help=f"{RX_HELP}: trace the eye that has it (axial length for its sphere, a toric cornea "
-                             "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea")
+                             "for its cylinder), written at the spectacle plane --vertex-mm in front of the cornea (default "
+                             "none: the emmetropic model)")
     lens = parser.add_argument_group(
         "trial or spectacle lens (traced with the eye)",
         "Crown glass of realistic centre thickness "
@@ -68,9 +69,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              f"back vertex sits and the refraction is stated (default {DEFAULT_SPECTACLE_VERTEX_MM:g} "
                              "with --rx or a lens; without them and --vertex-mm the refraction is at the corneal vertex)")
     parser.add_argument("--mtf-cyc-per-mm", metavar="F1,F2,...",
-                        help="MTF at these retinal frequencies, cycles per mm (>= 0)")
+                        help="MTF at these retinal frequencies, cycles per mm (>= 0; default none)")
     parser.add_argument("--mtf-cyc-per-deg", metavar="F1,F2,...",
-                        help="MTF at these frequencies, cycles per degree of visual angle (>= 0)")
+                        help="MTF at these frequencies, cycles per degree of visual angle (>= 0; default none)")
     parser.add_argument("--lca", action="store_true",
                         help="add the eye's longitudinal chromatic aberration over 400-700 nm in 10 nm steps: its "
                              "refraction at each wavelength minus that at --wavelength-nm (default the model's "
@@ -119,9 +120,9 @@ def run(args: argparse.Namespace) -> int:
     powers = trial_lens_powers(args)
     lenses = () if powers is None else (_trial_lens(*powers),)
     wavelength, spectrum = _light(args)
-    eye = build_eye(args.eye_model, accommodation_diopters=args.accommodation_diopters, pupil_mm=args.pupil_mm,
+    eye = build_eye(args.eye_model, accommodation_diopters=args.accommodation_diopters, pupil_diameter_mm=args.pupil_mm,
                     iris_mm=args.iris_mm, rx=args.rx,
-                    vertex_mm=DEFAULT_SPECTACLE_VERTEX_MM if args.vertex_mm is None else args.vertex_mm)
+                    vertex_distance_mm=DEFAULT_SPECTACLE_VERTEX_MM if args.vertex_mm is None else args.vertex_mm)
     report = eye_report(eye, wavelength_nm=wavelength, mtf_spectrum=spectrum,
                         field_deg=field_deg_from_text(args.field_deg), at_spectacle_plane=args.vertex_mm is not None,
                         mtf_cyc_per_mm=_frequencies(args.mtf_cyc_per_mm, "--mtf-cyc-per-mm", "cycles per mm"),

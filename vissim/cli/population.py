@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from vissim.checks import MAX_WORKERS, vertex_distance_mm
-from vissim.cli._common import field_deg_from_text, parse_float_list
+from vissim.cli._common import add_json_arg, field_deg_from_text, parse_float_list, print_result
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES as DATASET_NAMES
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
@@ -41,7 +41,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--eyes", metavar="SIDE[,SIDE]", help="right, left or both (default: the dataset's eyes)")
     parser.add_argument("--foveal-se-diopters", metavar="LOW,HIGH",
                         help="keep the eyes whose foveal spherical equivalent (over the data's pupil, in "
-                             f"{PHOTOPIC_FOCUS_NM:g} nm light) is within LOW..HIGH D")
+                             f"{PHOTOPIC_FOCUS_NM:g} nm light) is within LOW..HIGH D (default: every eye)")
     parser.add_argument("--pupil-mm", metavar="MM[,MM...]",
                         help=f"entrance pupil diameters, mm, at most the data's (default {_listed(POPULATION_PUPILS_MM)})")
     parser.add_argument("--field-deg", metavar="X,Y[;X,Y...]",
@@ -64,6 +64,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--workers", type=int, default=1, metavar="N", help="spread the eyes over N processes (default 1)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="spread the eyes over a Dask distributed scheduler")
     parser.add_argument("--overwrite", action="store_true", help="replace files from an earlier run")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
     return parser
 
@@ -137,8 +138,9 @@ def run(args: argparse.Namespace) -> int:
                                  conditions=[c.label for c in conditions], mtf_cyc_per_deg=frequencies)
     written = write_population_run(args.output, results, conditions, frequencies, provenance, overwrite=args.overwrite)
     counts = {c.label: sum(r.condition == c for r in results) for c in conditions}
-    for label, count in counts.items():
-        print(f"{label}: {count} of {len(eyes)} eyes")
-    for path in written:
-        print(f"wrote {path}")
+    lines = [f"{label}: {count} of {len(eyes)} eyes" for label, count in counts.items()]
+    lines += [f"wrote {path}" for path in written]
+    record = {"dataset": args.dataset, "eyes": [e.name for e in eyes], "mtf_cyc_per_deg": frequencies,
+              "conditions": [{"condition": label, "eyes_evaluated": count} for label, count in counts.items()]}
+    print_result(args, lines, record, written, provenance)
     return 0

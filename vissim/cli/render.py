@@ -53,10 +53,10 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument("--scene", metavar="TOML", help="bench scene file (see scenes/dslr_bench.toml)")
-    add_trial_lens_args(parser.add_argument_group("trial lens (replaces the scene's lenses)"))
+    add_trial_lens_args(parser.add_argument_group("trial lens (replaces the scene's lenses)"), none_given="the scene's lenses")
     parser.add_argument("--f-number", type=float, metavar="N", help="camera f-number (default 5)")
     chart = parser.add_mutually_exclusive_group()
-    chart.add_argument("--letter", metavar="X", help="one Sloan letter (C D H K N O R S V Z)")
+    chart.add_argument("--letter", metavar="X", help="one Sloan letter (C D H K N O R S V Z; default: the scene's chart, R)")
     chart.add_argument("--chart", metavar="TOML", help="a file whose [chart] table describes the chart")
     parser.add_argument("--logmar", type=float, metavar="L", help="letter size in LogMAR (with --letter)")
     parser.add_argument("--polarity", choices=POLARITIES, help="default black-on-white")
@@ -65,7 +65,8 @@ def add_bench_parser(subparsers) -> argparse.ArgumentParser:
                         help="image size in pixels: N (a square) or ROWSxCOLS (default 133x113)")
     parser.add_argument("--spp", type=int, metavar="N", help="samples per pixel (default 256)")
     parser.add_argument("--seed", type=int, metavar="S", help="sampler seed (default 0)")
-    parser.add_argument("--sampler", choices=("independent", "stratified", "multijitter", "ldsampler"))
+    parser.add_argument("--sampler", choices=("independent", "stratified", "multijitter", "ldsampler"),
+                        help="Mitsuba sampler (default multijitter)")
     parser.add_argument("--fresnel-loss", action="store_true", default=None,
                         help="uncoated lenses: weight by the Fresnel transmittance of each surface")
     colour = parser.add_mutually_exclusive_group()

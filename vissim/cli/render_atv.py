@@ -49,9 +49,9 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
                      help="accommodation in dioptres, >= 0 (default 0: focused at infinity)")
     light = parser.add_argument_group("pixel intensity (default: linear radiance 1)")
     given = light.add_mutually_exclusive_group()
-    given.add_argument("--pixel-intensity", type=float, metavar="L", help="linear radiance of the lit pixel")
+    given.add_argument("--pixel-intensity", type=float, metavar="L", help="linear radiance of the lit pixel (default 1)")
     given.add_argument("--display-code", type=float, metavar="C",
-                       help="display code value in [0, 1] (the thesis's 'iPhone intensity'), decoded by --transfer")
+                       help="display code value in [0, 1] (the thesis's 'iPhone intensity'), decoded by --transfer (default none: --pixel-intensity)")
     light.add_argument("--transfer", choices=("srgb", "gamma2.2"), default="gamma2.2",
                        help="display transfer function for --display-code (default gamma2.2, as atv simulate)")
     light.add_argument("--white-radiance", type=float, default=1.0, metavar="L",

@@ -45,25 +45,28 @@ def add_depth_parser(subparsers) -> argparse.ArgumentParser:
     )
     parser.add_argument("scene", type=Path, help="depth scene TOML, e.g. scenes/depth_panels.toml")
     eye = parser.add_argument_group("eye (an eye focused at 1 / (A - Rx) metres; Rx not worn)")
-    add_rx_arg(eye)
+    add_rx_arg(eye, default_text=" (default: the file's observer; plano when another eye option is given)")
     eye.add_argument("--pupil-mm", type=float, metavar="MM",
-                     help=f"the eye's pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm")
-    eye.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres >= 0")
+                     help=f"the eye's pupil diameter, {EYE_PUPIL_RANGE_MM[0]:g}-{EYE_PUPIL_RANGE_MM[1]:g} mm (default: the file's "
+                          "observer; 4 when another eye option is given)")
+    eye.add_argument("--accommodation-diopters", type=float, metavar="A", help="accommodation exerted, dioptres >= 0 (default: the file's observer; 0 "
+                     "when another eye option is given)")
     camera = parser.add_argument_group("DSLR bench camera (thin lens, entrance pupil focal length / f-number)")
     camera.add_argument("--f-number", type=float, metavar="N", help="f-number (default 5)")
     camera.add_argument("--focus-distance-m", type=float, metavar="F", help="focus distance in metres (default 0.9144)")
     camera.add_argument("--focal-length-mm", type=float, metavar="MM", help="focal length (default 18)")
-    add_trial_lens_args(parser.add_argument_group("trial lens on the DSLR bench camera (replaces the file's lenses)"))
+    add_trial_lens_args(parser.add_argument_group("trial lens on the DSLR bench camera (replaces the file's lenses)"),
+                        none_given="the file's lenses")
     out = parser.add_argument_group("outputs")
     out.add_argument("-o", "--output", required=True, type=Path, metavar="PATH", help="blurred image, .exr (linear)")
     out.add_argument("--all-in-focus", type=Path, metavar="PATH", help="also the all-in-focus image, .exr")
     out.add_argument("--depth", type=Path, metavar="PATH", help="also the axial depth map in metres, .exr (Z) or .npy")
     out.add_argument("--overwrite", action="store_true", help="replace existing outputs")
     sampling = parser.add_argument_group("sampling (defaults: the scene file's)")
-    sampling.add_argument("--spp", type=int, metavar="N", help="samples per pixel of the blurred render")
+    sampling.add_argument("--spp", type=int, metavar="N", help="samples per pixel of the blurred render (default: the file's, else 64)")
     sampling.add_argument("--aux-spp", type=int, metavar="N",
-                          help="samples per pixel of the all-in-focus and depth renders")
-    sampling.add_argument("--seed", type=int, metavar="S", help="seed (all-in-focus: S + 1, depth: S + 2)")
+                          help="samples per pixel of the all-in-focus and depth renders (default: the file's, else 64)")
+    sampling.add_argument("--seed", type=int, metavar="S", help="seed (all-in-focus: S + 1, depth: S + 2; default: the file's, else 0)")
     sampling.add_argument("--margin-px", type=int, metavar="M",
                           help="render the all-in-focus image and the depth M px beyond every side of the frame "
                                "(default: the scene's largest blur radius + 2 px; 0: none)")

@@ -58,8 +58,8 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
                         help=f"monochromatic light of this wavelength (default {DEFAULT_EYE_LIGHT_NM:g})")
     colour.add_argument("--spectrum", choices=("photopic",),
                         help="photopic: white light over the visible spectrum, each ray at its own wavelength, the "
-                             "image weighted by the eye's photopic sensitivity V(λ)")
-    parser.add_argument("--distance-m", type=float, metavar="M",
+                             "image weighted by the eye's photopic sensitivity V(λ) (default none: one wavelength, --wavelength-nm)")
+    parser.add_argument("--chart-distance-m", type=float, metavar="M",
                         help=f"chart distance (default {_DEFAULT['chart_distance_m']:g} m)")
     parser.add_argument("--letter", metavar="X", help=f"one Sloan letter (default {_DEFAULT['letter']})")
     parser.add_argument("--logmar", type=float, metavar="L",
@@ -67,8 +67,9 @@ def add_eye_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--rx", metavar="PRESCRIPTION",
                         help=f"{RX_HELP}: render the eye that has it (axial length for its sphere, a toric cornea for "
                              "its cylinder), written at the spectacle plane --vertex-mm in front of the cornea, as "
-                             "vissim eye --rx does")
-    add_trial_lens_args(parser.add_argument_group("trial lens in front of the eye (replaces the scene file's)"))
+                             "vissim eye --rx does (default: the scene file's, or none: the emmetropic model)")
+    add_trial_lens_args(parser.add_argument_group("trial lens in front of the eye (replaces the scene file's)"),
+                        none_given="the scene file's, or none")
     parser.add_argument("--vertex-mm", type=float, metavar="MM",
                         help="the spectacle plane, mm in front of the cornea: where --rx is written and the trial "
                              f"lens's back vertex sits (default {_DEFAULT['vertex_mm']:g})")
@@ -93,7 +94,7 @@ def _settings(args: argparse.Namespace):
 
     values = {} if args.scene is None else eye_scene_values(args.scene)
     options = {"model": args.eye_model, "accommodation_diopters": args.accommodation_diopters,
-               "chart_distance_m": args.distance_m, "letter": args.letter, "logmar": args.logmar, "rx": args.rx,
+               "chart_distance_m": args.chart_distance_m, "letter": args.letter, "logmar": args.logmar, "rx": args.rx,
                "vertex_mm": args.vertex_mm, "arcmin_per_px": args.arcmin_per_px, "spp": args.spp, "seed": args.seed,
                "field_deg": None if args.field_deg is None else field_deg_from_text(args.field_deg),
                "size_px": None if args.size is None else size_from_text(args.size, "64x64"),

@@ -19,7 +19,7 @@ def add_parser(subparsers) -> None:
         "OSA Zernike coefficients c(2,-2), c(2,0), c(2,2) in µm of the eye it corrects.",
     )
     parser.add_argument("prescription", help="e.g. '-2.00 -1.25 x 180', '-2.00/-1.25x180', 'plano -0.75 x 90'")
-    parser.add_argument("--pupil-mm", type=float, metavar="MM", help="pupil diameter in mm for Zernike coefficients")
+    parser.add_argument("--pupil-mm", type=float, metavar="MM", help="pupil diameter in mm for Zernike coefficients (default none: no Zernike coefficients)")
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.set_defaults(func=run)
 

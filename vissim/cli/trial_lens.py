@@ -40,7 +40,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--cylinder", type=float, default=0.0, metavar="D",
                         help="marked cylinder in dioptres (needs --axis)")
     parser.add_argument("--axis", type=float, default=None, metavar="DEG",
-                        help="cylinder axis, TABO degrees 0-180")
+                        help="cylinder axis, TABO degrees 0-180 (required with a --cylinder; no default)")
     parser.add_argument("--vertex-mm", type=float, default=THESIS_VERTEX_DISTANCE_MM, metavar="MM",
                         help=f"vertex distance: back surface of the lens to the camera principal plane (default "
                              f"{THESIS_VERTEX_DISTANCE_MM:g}, the thesis's DSLR bench; an eye's is "
@@ -53,7 +53,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     parser.add_argument("--thickness-mm", type=float, default=0.0, metavar="MM",
                         help="centre thickness; 0 (default) = thin lens")
     parser.add_argument("--back-surface-diopters", type=float, default=0.0, metavar="D",
-                        help="power of the back (camera-side) surface of a thick lens; 0 = plano")
+                        help="power of the back (camera-side) surface of a thick lens; 0 (default) = plano")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     parser.set_defaults(func=run)
     return parser

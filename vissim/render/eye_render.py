@@ -60,13 +60,13 @@ class EyeRender:
         """The render of the `Eye` ``eye`` (a named model, its surfaces altered or not), ``view`` the other fields."""
         from vissim.optics.eyes.eye import surface_overrides
 
-        pupil = {"pupil_mm": eye.pupil_mm, "iris_mm": None} if eye.iris_mm is None else \
+        pupil = {"pupil_mm": eye.pupil_diameter_mm, "iris_mm": None} if eye.iris_mm is None else \
             {"pupil_mm": None, "iris_mm": eye.iris_mm}
         if eye.wavelength_nm is not None and eye.wavelength_nm != eye.schematic.reference_wavelength_nm:
             raise VissimInputError("render eye maps its film through the model's reference wavelength; an eye with "
                                    f"another ({eye.wavelength_nm:g} nm) cannot be rendered")
         return cls(model=eye.model, accommodation_diopters=eye.accommodation_diopters, rx=eye.rx,
-                   vertex_mm=eye.vertex_mm, surfaces=surface_overrides(eye.schematic), **pupil, **view)
+                   vertex_mm=eye.vertex_distance_mm, surfaces=surface_overrides(eye.schematic), **pupil, **view)
 
     def as_json(self) -> dict:
         """The settings as plain values, the prescription written in full (to 1e-6 D)."""

@@ -5,7 +5,7 @@ Tables (every one and every key optional; a key left out keeps `EyeRender`'s def
 * ``[eye]``: ``model``, ``accommodation_diopters``, ``pupil_diameter_mm`` or ``iris_mm``, ``prescription`` (the
   prescription the eye needs at the spectacle plane), ``field_deg`` (``[x, y]``, OSA's frame);
 * ``[light]``: ``wavelength_nm`` or ``spectrum`` (``"mono"``, ``"photopic"``);
-* ``[chart]``: ``distance_m``, ``letter``, ``logmar``;
+* ``[chart]``: ``chart_distance_m``, ``letter``, ``logmar``;
 * ``[spectacles]``: ``vertex_distance_mm`` and one trial lens, ``sphere_diopters``, ``cylinder_diopters``,
   ``axis_deg`` (the key names of every scene file's trial lens, `vissim.bench.scene_toml`);
 * ``[render]``: ``size_px`` (``[rows, cols]``), ``arcmin_per_px``, ``spp``, ``seed``.
@@ -37,7 +37,7 @@ EYE_SCENE_KEYS: dict[str, dict[str, tuple[str, type, str]]] = {
             "prescription": ("rx", str, "(a prescription, e.g. '-2.00 -0.50 x 180')"),
             "field_deg": ("field_deg", list, "([x, y] degrees)")},
     "light": {"wavelength_nm": ("wavelength_nm", float, "nm"), "spectrum": ("spectrum", str, "('mono' or 'photopic')")},
-    "chart": {"distance_m": ("chart_distance_m", float, "m"), "letter": ("letter", str, "(one Sloan letter)"),
+    "chart": {"chart_distance_m": ("chart_distance_m", float, "m"), "letter": ("letter", str, "(one Sloan letter)"),
               "logmar": ("logmar", float, "LogMAR")},
     "spectacles": {"vertex_distance_mm": ("vertex_mm", float, "mm")},
     "render": {"size_px": ("size_px", list, "([rows, cols] whole px)"), "arcmin_per_px": ("arcmin_per_px", float,

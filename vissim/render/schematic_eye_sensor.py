@@ -142,7 +142,7 @@ def _make_class(mi, dr):
                 y_bar = float(y_bar[0] if dr.is_array_v(y_bar) else y_bar)
                 self.mono_scale = 1.0 / (y_bar * mi.MI_CIE_Y_NORMALIZATION)
             self.wavelength_nm = self.fixed_wavelength_nm or eye.reference_wavelength_nm
-            self.pupil_mm, self.iris_mm = pupils_mm(eye, self.wavelength_nm, the_eye.pupil_mm, the_eye.iris_mm)
+            self.pupil_mm, self.iris_mm = pupils_mm(eye, self.wavelength_nm, the_eye.pupil_diameter_mm, the_eye.iris_mm)
             self.arcmin_per_px = checked_arcmin_per_px(float(props.get("arcmin_per_px", DEFAULT_EYE_ARCMIN_PER_PX)))
             self.field_deg = (float(props.get("field_x_deg", 0.0)), float(props.get("field_y_deg", 0.0)))
             self.far_clip = float(props.get("far_clip", 1.0e7))

@@ -8,8 +8,9 @@ type, raise `VissimInputError` naming the file, the key and the unit.
 
 The ``[chart]`` table alone also makes a *chart file* (`load_chart_toml`): either one
 letter (``letter``, ``logmar``) or an ETDRS chart (``letters``, ``logmar_range``,
-``logmar_step``, ``seed``), with ``polarity``, ``paper_reflectance``, ``ink_reflectance``.  The
-chart's viewing distance is the bench's chart distance.
+``logmar_step``, ``seed``), with ``polarity``, ``paper_reflectance``, ``ink_reflectance``, and
+``chart_distance_m`` (metres, as everywhere a file names it; the bench's own lengths are mm), which
+is also the chart's viewing distance.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from vissim.bench.scene_toml import (check_keys, checked_values, image_size_px, 
                                      sub_table, typed_value)
 from vissim.charts import DEFAULT_LETTER_SEED, ChartSpec, etdrs_chart_spec, single_letter_spec
 from vissim.errors import VissimInputError
-from vissim.units import mm_to_m
+from vissim.units import m_to_mm, mm_to_m
 
 __all__ = ["load_bench_toml", "load_chart_toml", "chart_spec_from_table", "bench_from_tables"]
 
@@ -48,7 +49,7 @@ _SAMPLING = {
     "texels_per_px": ("texels_per_px", float, "texels per camera pixel"),
 }
 _CHART = {
-    "distance_mm": (float, "mm"),
+    "chart_distance_m": (float, "m"),
     "letter": (str, "(Sloan letter)"),
     "logmar": (float, "LogMAR"),
     "letters": (str, "(Sloan letters, rows separated by spaces)"),
@@ -99,8 +100,9 @@ def bench_from_tables(doc: dict, source: str, **overrides: Any) -> DslrBench:
     holder_lenses = sub_table(doc, "holder", source).get("lenses", [])
     fields["lenses"] = parse_trial_lenses(holder_lenses, f"{source} [[holder.lenses]]")
     chart = sub_table(doc, "chart", source)
-    if "distance_mm" in chart:
-        fields["chart_distance_mm"] = typed_value(chart["distance_mm"], float, f"{source} [chart] distance_mm", "mm")
+    if "chart_distance_m" in chart:
+        fields["chart_distance_mm"] = m_to_mm(typed_value(chart["chart_distance_m"], float,
+                                                          f"{source} [chart] chart_distance_m", "m"))
     fields.update({key: value for key, value in overrides.items() if value is not None})
     return DslrBench(**fields)
 

@@ -143,7 +143,7 @@ def wave_truth(
     _check(bench, oversample, mode)
     rows, cols = bench.size_px
     step = bench.arcmin_per_px / oversample
-    fine = render_chart_angular(chart, step, shape_px=(rows * oversample, cols * oversample), snap_to_pixels=False)
+    fine = render_chart_angular(chart, step, size_px=(rows * oversample, cols * oversample), snap_to_pixels=False)
     image = image_through_traced_lenses(bench, fine.pixels, oversample=oversample, wavelengths_nm=wavelengths_nm,
                                         weights=weights, mode=mode)
     provenance = {**image.provenance, "chart": chart_sidecar(chart, fine.layout)}

@@ -137,7 +137,7 @@ class EyeBench:
     @property
     def pupil_mm(self) -> float:
         """The eye's pupil as given (entrance pupil, or iris), mm: the beam the lenses and the texture are sized for."""
-        return self.eye.pupil_mm or self.eye.iris_mm
+        return self.eye.pupil_diameter_mm or self.eye.iris_mm
 
     @property
     def light(self):
@@ -266,7 +266,7 @@ def letter_in_visual_angle(letter: str, logmar: float, distance_m: float, step_a
     pixels of ``step_arcmin``; black beyond the chart's half size (rows, columns; arcmin)."""
     from vissim.charts import optotype_tile
 
-    pixels = optotype_tile(letter, logmar, arcmin_per_px=step_arcmin, shape_px=shape,
+    pixels = optotype_tile(letter, logmar, arcmin_per_px=step_arcmin, size_px=shape,
                            viewing_distance_m=distance_m, snap_to_pixels=False).pixels.astype(np.float64)
     for axis, half in enumerate(half_size_arcmin):
         offset = step_arcmin * np.abs(np.arange(shape[axis]) - (shape[axis] - 1) / 2.0)

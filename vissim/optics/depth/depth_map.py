@@ -235,21 +235,21 @@ class DepthBlurResult:
 
 
 # -- the eye ---------------------------------------------------------------------------
-def eye_of(eye: DepthViewer | None, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront) -> DepthViewer:
+def eye_of(eye: DepthViewer | None, rx, pupil_diameter_mm, accommodation_diopters, extra_wavefront) -> DepthViewer:
     """``eye``, or the `DepthViewer` the keywords describe (accommodation None: 0 D); both at once are refused."""
     if eye is not None:
         instance_of(eye, DepthViewer, "eye", "a vissim.optics.rx.viewing_setup.DepthViewer")
-        given = [name for name, value in (("eye_prescription", eye_prescription), ("pupil_diameter_mm", pupil_diameter_mm),
+        given = [name for name, value in (("rx", rx), ("pupil_diameter_mm", pupil_diameter_mm),
                                           ("accommodation_diopters", accommodation_diopters),
                                           ("extra_wavefront", extra_wavefront)) if value is not None]
         if given:
             raise VissimInputError(f"give the eye as eye= or as its keywords, not both (also given: {', '.join(given)})")
         return eye
-    if eye_prescription is None or pupil_diameter_mm is None:
-        raise VissimTypeError("the eye is needed: eye= (a vissim.optics.rx.viewing_setup.DepthViewer), or eye_prescription= and "
+    if rx is None or pupil_diameter_mm is None:
+        raise VissimTypeError("the eye is needed: eye= (a vissim.optics.rx.viewing_setup.DepthViewer), or rx= and "
                               "pupil_diameter_mm=")
     accommodation = 0.0 if accommodation_diopters is None else accommodation_diopters
-    return DepthViewer(eye_prescription, pupil_diameter_mm, accommodation, extra_wavefront)
+    return DepthViewer(rx, pupil_diameter_mm, accommodation, extra_wavefront)
 
 
 # -- the layered blur -----------------------------------------------------------------
@@ -257,7 +257,7 @@ def blur_depth(
     image,
     depth_m,
     *,
-    eye_prescription: Prescription | None = None,
+    rx: Prescription | None = None,
     pupil_diameter_mm: float | None = None,
     arcmin_per_px: float,
     accommodation_diopters: float | None = None,
@@ -282,7 +282,7 @@ def blur_depth(
         Linear light, indexed ``[row, col]``.
     depth_m : ndarray of shape (H, W)
         Distance of each pixel's surface from the eye, metres; ``inf`` for sky.
-    eye_prescription : Prescription
+    rx : Prescription
         The eye's correcting lens (myope negative), *not worn*: the eye is uncorrected.
     pupil_diameter_mm : float
         The eye's pupil, mm.
@@ -336,14 +336,14 @@ def blur_depth(
     >>> image = np.full((32, 48), 0.9, np.float32)
     >>> image[:, :24] = 0.04
     >>> depth_m = np.where(np.arange(48) < 24, 0.5, 2.0) * np.ones((32, 1))
-    >>> result = vissim.blur_depth(image, depth_m, eye_prescription=vissim.Prescription(-2.0),
+    >>> result = vissim.blur_depth(image, depth_m, rx=vissim.Prescription(-2.0),
     ...                            pupil_diameter_mm=4.0, arcmin_per_px=1.0, mode="geometric")
     >>> result.image.shape, result.image.dtype.name, result.in_focus_proximity_diopters
     ((32, 48), 'float32', 2.0)
     >>> [round(layer.proximity_diopters, 2) for layer in result.layers]  # far to near
     [0.5, 2.0]
     """
-    eye = eye_of(eye, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront)
+    eye = eye_of(eye, rx, pupil_diameter_mm, accommodation_diopters, extra_wavefront)
     pupil = eye.pupil_diameter_mm
     step = check_arcmin_per_px(arcmin_per_px)
     wavelength, threshold_px, coarse_blur_px, backend = _checked_options(

@@ -293,7 +293,7 @@ def _composite_layer(target: list[_Slice], occluders: list[list[_Slice]], window
 def composite_layers(
     layers,
     *,
-    eye_prescription: Prescription | None = None,
+    rx: Prescription | None = None,
     pupil_diameter_mm: float | None = None,
     arcmin_per_px: float,
     accommodation_diopters: float | None = None,
@@ -312,7 +312,7 @@ def composite_layers(
     layers : sequence of SceneLayer
         Each layer alone on one pixel grid: premultiplied radiance (H, W) or (H, W, C), coverage
         (H, W) in [0, 1], proximity in dioptres (a value, or an (H, W) map for a slanted layer).
-    eye_prescription
+    rx
         The eye's prescription, as in `vissim.optics.depth.depth_map.blur_depth`.
     pupil_diameter_mm
         The eye's pupil, mm, as in `vissim.optics.depth.depth_map.blur_depth`.
@@ -332,7 +332,7 @@ def composite_layers(
     crop_px : int
         Pixels cut from every side of the result (the layers cover a margin beyond the frame).
     """
-    eye = eye_of(eye, eye_prescription, pupil_diameter_mm, accommodation_diopters, extra_wavefront)
+    eye = eye_of(eye, rx, pupil_diameter_mm, accommodation_diopters, extra_wavefront)
     pupil = eye.pupil_diameter_mm
     step = check_arcmin_per_px(arcmin_per_px)
     wavelength = check_wavelength_nm(wavelength_nm)

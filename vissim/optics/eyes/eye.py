@@ -3,11 +3,11 @@
 An `Eye` is a schematic model's surfaces and media (`SchematicEye`: any of the five models, one
 altered, or one built by hand) at its accommodation, with
 
-* the prescription it **has** (``rx``, a spectacle prescription measured ``vertex_mm`` in front of
+* the prescription it **has** (``rx``, a spectacle prescription measured ``vertex_distance_mm`` in front of
   the cornea): the eye is then the ametropic eye that needs it (`fixation.ametropic_eye`: axial
   length for the spherical equivalent, a toric cornea front for the cylinder). ``rx`` never means a
   defocus added to the emmetropic model: a lens worn in front is a lens, not part of the eye;
-* its pupil, given once: the entrance pupil ``pupil_mm`` or the ``iris_mm`` (default:
+* its pupil, given once: the entrance pupil ``pupil_diameter_mm`` or the ``iris_mm`` (default:
   `DEFAULT_EYE_PUPIL_MM` of entrance pupil);
 * its reference wavelength ``wavelength_nm`` (default: the model's): the light its prescription
   is measured in and the chief ray that is the image frame's origin.
@@ -19,8 +19,8 @@ name; entry points take an `Eye` and never a name, so a name is resolved once, a
 Examples
 --------
 >>> from vissim.optics.eyes.eye import build_eye
->>> eye = build_eye("navarro-1985", pupil_mm=3.0, rx="-2.00")
->>> eye.model, eye.pupil_mm, str(eye.rx)
+>>> eye = build_eye("navarro-1985", pupil_diameter_mm=3.0, rx="-2.00")
+>>> eye.model, eye.pupil_diameter_mm, str(eye.rx)
 ('navarro-1985', 3.0, '-2.00 DS')
 >>> round(eye.optics.axial_length_mm - eye.schematic.axial_length_mm, 3)
 0.751
@@ -59,25 +59,25 @@ class Eye:
     """An eye to simulate or render (module doc). Build one with `build_eye`."""
 
     schematic: SchematicEye
-    pupil_mm: float | None = None
+    pupil_diameter_mm: float | None = None
     iris_mm: float | None = None
     rx: Prescription | None = None
-    vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
+    vertex_distance_mm: float = DEFAULT_SPECTACLE_VERTEX_MM
     wavelength_nm: float | None = None
     measured: MeasuredWavefront | None = None
     _optics: SchematicEye = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         instance_of(self.schematic, SchematicEye, "an Eye's schematic", "a SchematicEye (vissim.optics.eyes.models)")
-        if self.pupil_mm is not None and self.iris_mm is not None:
-            raise VissimInputError(f"give the eye's entrance pupil ({self.pupil_mm!r} mm) or its iris "
+        if self.pupil_diameter_mm is not None and self.iris_mm is not None:
+            raise VissimInputError(f"give the eye's entrance pupil ({self.pupil_diameter_mm!r} mm) or its iris "
                                    f"({self.iris_mm!r} mm), not both")
         if self.iris_mm is not None:
             object.__setattr__(self, "iris_mm", positive_number(self.iris_mm, "iris diameter", "mm"))
         else:
-            pupil = DEFAULT_EYE_PUPIL_MM if self.pupil_mm is None else self.pupil_mm
-            object.__setattr__(self, "pupil_mm", positive_number(pupil, "entrance pupil diameter", "mm"))
-        object.__setattr__(self, "vertex_mm", checked_vertex_distance_mm(self.vertex_mm, "spectacle vertex distance"))
+            pupil = DEFAULT_EYE_PUPIL_MM if self.pupil_diameter_mm is None else self.pupil_diameter_mm
+            object.__setattr__(self, "pupil_diameter_mm", positive_number(pupil, "entrance pupil diameter", "mm"))
+        object.__setattr__(self, "vertex_distance_mm", checked_vertex_distance_mm(self.vertex_distance_mm, "spectacle vertex distance"))
         if self.wavelength_nm is not None:
             object.__setattr__(self, "wavelength_nm", eye_wavelength_nm(self.wavelength_nm,
                                                                         "eye's reference wavelength"))
@@ -88,7 +88,7 @@ class Eye:
             self._check_measured()
         object.__setattr__(self, "_optics", self._traced_optics())  # a prescription the eye cannot have: refused now
         if self.measured is None:  # a pupil or iris no trace of this eye takes: refused now, not inside a render
-            pupils_mm(self._optics, self.reference_wavelength_nm, self.pupil_mm if self.iris_mm is None else None,
+            pupils_mm(self._optics, self.reference_wavelength_nm, self.pupil_diameter_mm if self.iris_mm is None else None,
                       self.iris_mm)
 
     def _check_rx_range(self) -> None:
@@ -106,15 +106,15 @@ class Eye:
         if self.schematic != eye_model(BASE_EYE_MODEL):
             raise VissimInputError(f"{name} is built on the relaxed {BASE_EYE_MODEL} eye as published: its surfaces, "
                                    "accommodation and model cannot change")
-        if self.pupil_mm is not None:
-            self.measured.checked_pupil_mm(self.pupil_mm)
+        if self.pupil_diameter_mm is not None:
+            self.measured.checked_pupil_mm(self.pupil_diameter_mm)
 
     def _traced_optics(self) -> SchematicEye:
         optics = self._in_own_light(self.schematic)
         if self.rx is None:
             return optics
         if optics.accommodation_diopters == 0.0:
-            return ametropic_eye(optics, self.rx, self.vertex_mm)
+            return ametropic_eye(optics, self.rx, self.vertex_distance_mm)
         return self._accommodating_ametrope(optics)
 
     def _in_own_light(self, schematic: SchematicEye) -> SchematicEye:
@@ -130,7 +130,7 @@ class Eye:
                                    f"{self.rx}: its prescription is the relaxed eye's, solved on the relaxed model, "
                                    "so it must be a named model with its surfaces unaltered")
         relaxed = self._in_own_light(eye_model(self.model, 0.0))
-        solved = ametropic_eye(relaxed, self.rx, self.vertex_mm)
+        solved = ametropic_eye(relaxed, self.rx, self.vertex_distance_mm)
         model_change_mm = optics.surfaces[-2].thickness_after_mm - relaxed.surfaces[-2].thickness_after_mm
         surfaces = list(optics.surfaces)
         surfaces[0] = solved.surfaces[0]
@@ -162,29 +162,31 @@ class Eye:
     @property
     def pupil(self) -> dict:
         """The pupil as the traces take it: ``{"pupil_mm": d}`` or ``{"iris_mm": d}``."""
-        return {"iris_mm": self.iris_mm} if self.iris_mm is not None else {"pupil_mm": self.pupil_mm}
+        return {"iris_mm": self.iris_mm} if self.iris_mm is not None else {"pupil_mm": self.pupil_diameter_mm}
 
     def describe(self) -> str:
         """One line: model, accommodation, pupil, prescription."""
-        pupil = f"iris {self.iris_mm:g} mm" if self.iris_mm is not None else f"entrance pupil {self.pupil_mm:g} mm"
-        rx = "" if self.rx is None else f", has {self.rx} at {self.vertex_mm:g} mm"
+        pupil = f"iris {self.iris_mm:g} mm" if self.iris_mm is not None else f"entrance pupil {self.pupil_diameter_mm:g} mm"
+        rx = "" if self.rx is None else f", has {self.rx} at {self.vertex_distance_mm:g} mm"
         return f"{self.model}, accommodation {self.accommodation_diopters:g} D, {pupil}{rx}"
 
     def as_json(self) -> dict:
         base = {} if self.measured is None else {"base_model": self.schematic.name}
         return {"model": self.model, **base, "accommodation_diopters": self.accommodation_diopters,
-                "entrance_pupil_mm": self.pupil_mm, "iris_mm": self.iris_mm,
-                "rx": None if self.rx is None else self.rx.format(6), "vertex_mm": self.vertex_mm,
+                "entrance_pupil_mm": self.pupil_diameter_mm, "iris_mm": self.iris_mm,
+                "rx": None if self.rx is None else self.rx.format(6), "vertex_mm": self.vertex_distance_mm,
                 "reference_wavelength_nm": self.reference_wavelength_nm}
 
     # -- builders ------------------------------------------------------------------------
-    def with_pupil(self, pupil_mm: float | None = None, iris_mm: float | None = None) -> Eye:
+    def with_pupil(self, pupil_diameter_mm: float | None = None, iris_mm: float | None = None) -> Eye:
         """The same eye with its entrance pupil or its iris (one of them) set."""
-        return dataclasses.replace(self, pupil_mm=pupil_mm, iris_mm=iris_mm)
+        return dataclasses.replace(self, pupil_diameter_mm=pupil_diameter_mm, iris_mm=iris_mm)
 
-    def with_rx(self, rx, vertex_mm: float | None = None) -> Eye:
-        """The same eye made to have ``rx`` (None: emmetropic), measured ``vertex_mm`` in front (default: its own)."""
-        return dataclasses.replace(self, rx=rx, vertex_mm=self.vertex_mm if vertex_mm is None else vertex_mm)
+    def with_rx(self, rx, vertex_distance_mm: float | None = None) -> Eye:
+        """The same eye made to have ``rx`` (None: emmetropic), measured ``vertex_distance_mm`` in front (default:
+        its own)."""
+        return dataclasses.replace(self, rx=rx, vertex_distance_mm=self.vertex_distance_mm if vertex_distance_mm is None
+                                   else vertex_distance_mm)
 
     def accommodated(self, accommodation_diopters: float) -> Eye:
         """The same eye accommodating ``accommodation_diopters``: its model rebuilt (refused for an eye whose
@@ -238,8 +240,8 @@ def _surface_value(key: str, value, surface: str) -> float:
     return number
 
 
-def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0, pupil_mm: float | None = None,
-              iris_mm: float | None = None, rx=None, vertex_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
+def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0, pupil_diameter_mm: float | None = None,
+              iris_mm: float | None = None, rx=None, vertex_distance_mm: float = DEFAULT_SPECTACLE_VERTEX_MM,
               wavelength_nm: float | None = None, surfaces: dict | None = None) -> Eye:
     """The `Eye` of the schematic model ``model`` (a key of `EYE_MODELS`, a `SchematicEye` built by hand, or a
     measured eye's name: `vissim.optics.eyes.measured.measured_eye`)
@@ -247,7 +249,8 @@ def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0,
     ``surfaces`` overrides ({surface name: {field: value}}, `SURFACE_OVERRIDES`). The one place a model's name
     becomes an eye."""
     if is_measured_name(model):
-        return _measured_eye(parse_measured_eye(model), accommodation_diopters, pupil_mm, iris_mm, rx, vertex_mm,
+        return _measured_eye(parse_measured_eye(model), accommodation_diopters, pupil_diameter_mm, iris_mm, rx,
+                             vertex_distance_mm,
                              wavelength_nm, surfaces)
     if isinstance(model, SchematicEye):
         if accommodation_diopters:
@@ -262,10 +265,10 @@ def build_eye(model: str | SchematicEye, *, accommodation_diopters: float = 0.0,
         if not isinstance(changes, dict):
             raise VissimInputError(f"surface {surface!r}'s changes must be a table of fields, got {changes!r}")
         schematic = altered_schematic(schematic, surface, changes)
-    return Eye(schematic, pupil_mm, iris_mm, rx, vertex_mm, wavelength_nm)
+    return Eye(schematic, pupil_diameter_mm, iris_mm, rx, vertex_distance_mm, wavelength_nm)
 
 
-def _measured_eye(measured: MeasuredWavefront, accommodation_diopters, pupil_mm, iris_mm, rx, vertex_mm,
+def _measured_eye(measured: MeasuredWavefront, accommodation_diopters, pupil_diameter_mm, iris_mm, rx, vertex_distance_mm,
                   wavelength_nm, surfaces) -> Eye:
     """A measured eye (`vissim.optics.eyes.measured.measured_eye`) on its base eye, relaxed and unaltered."""
     if accommodation_diopters:
@@ -275,14 +278,14 @@ def _measured_eye(measured: MeasuredWavefront, accommodation_diopters, pupil_mm,
         raise VissimInputError(f"{measured.name} is a measured eye: its base eye's surfaces cannot change")
     if rx is not None and not any(prescription_from(rx).power_vector()):
         rx = None  # plano: the eye as measured (blur-depth's --rx 0)
-    return Eye(eye_model(BASE_EYE_MODEL), pupil_mm, iris_mm, rx, vertex_mm, wavelength_nm, measured)
+    return Eye(eye_model(BASE_EYE_MODEL), pupil_diameter_mm, iris_mm, rx, vertex_distance_mm, wavelength_nm, measured)
 
 
 def checked_eye(eye, where: str) -> Eye:
     """``eye`` if it is an `Eye`; a model's name is refused with how to make one."""
     if isinstance(eye, str):
         raise VissimInputError(f"{where} takes an Eye, not the name {eye!r}: build it once with "
-                               f"vissim.build_eye({eye!r}, pupil_mm=..., rx=...)")
+                               f"vissim.build_eye({eye!r}, pupil_diameter_mm=..., rx=...)")
     return instance_of(eye, Eye, f"{where}'s eye", "an Eye (vissim.build_eye)")
 
 
@@ -316,20 +319,20 @@ def overrides_table(triples) -> dict:
     return table
 
 
-def eye_from_fields(model: str, accommodation_diopters: float, pupil_mm, iris_mm, rx, vertex_mm: float,
+def eye_from_fields(model: str, accommodation_diopters: float, pupil_diameter_mm, iris_mm, rx, vertex_distance_mm: float,
                     surfaces: tuple = ()) -> Eye:
     """`build_eye` of plain, hashable fields (``rx`` a `Prescription` or its text; ``surfaces``: (surface, field,
     value) triples), built once per distinct set in a process: a campaign item's eye and its render's are one
     object, whichever form their prescription came in."""
-    return _cached_eye(model, accommodation_diopters, pupil_mm, iris_mm, None if rx is None else prescription_from(rx),
-                       vertex_mm, tuple(surfaces))
+    return _cached_eye(model, accommodation_diopters, pupil_diameter_mm, iris_mm,
+                       None if rx is None else prescription_from(rx), vertex_distance_mm, tuple(surfaces))
 
 
 @functools.lru_cache(maxsize=64)
-def _cached_eye(model: str, accommodation_diopters: float, pupil_mm, iris_mm, rx, vertex_mm: float,
+def _cached_eye(model: str, accommodation_diopters: float, pupil_diameter_mm, iris_mm, rx, vertex_distance_mm: float,
                 surfaces: tuple) -> Eye:
-    return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_mm=pupil_mm, iris_mm=iris_mm, rx=rx,
-                     vertex_mm=vertex_mm, surfaces=overrides_table(surfaces))
+    return build_eye(model, accommodation_diopters=accommodation_diopters, pupil_diameter_mm=pupil_diameter_mm, iris_mm=iris_mm,
+                     rx=rx, vertex_distance_mm=vertex_distance_mm, surfaces=overrides_table(surfaces))
 
 
 eye_from_fields.cache_clear = _cached_eye.cache_clear  # the cache is the builder's

@@ -185,7 +185,7 @@ def blur_eye(image: np.ndarray, eye: Eye, *, arcmin_per_px: float, wavelength_nm
     --------
     >>> import numpy as np, vissim
     >>> image = np.zeros((41, 41)); image[20, 20] = 1.0
-    >>> eye = vissim.build_eye("navarro-1985", pupil_mm=3.0)
+    >>> eye = vissim.build_eye("navarro-1985", pupil_diameter_mm=3.0)
     >>> blurred = vissim.blur_eye(image, eye, arcmin_per_px=1.0, wavelength_nm=555.0, background=0.0)
     >>> round(float(blurred.sum()), 4)
     1.0

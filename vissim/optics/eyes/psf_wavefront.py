@@ -80,7 +80,7 @@ def eye_wavefront(eye: Eye, *, wavelength_nm: float | None = None, field_deg=(0.
     Examples
     --------
     >>> from vissim.optics.eyes.eye import build_eye
-    >>> front = eye_wavefront(build_eye("navarro-1985", pupil_mm=3.0, rx="-1.00"))
+    >>> front = eye_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0, rx="-1.00"))
     >>> front.pupil_diameter_mm, front.wavelength_nm
     (3.0, 589.3)
     """
@@ -168,7 +168,7 @@ def eye_spectral_wavefront(eye: Eye, *, wavelengths_nm, field_deg=(0.0, 0.0), ve
     Examples
     --------
     >>> from vissim.optics.eyes.eye import build_eye
-    >>> s = eye_spectral_wavefront(build_eye("navarro-1985", pupil_mm=3.0), wavelengths_nm=[450, 650],
+    >>> s = eye_spectral_wavefront(build_eye("navarro-1985", pupil_diameter_mm=3.0), wavelengths_nm=[450, 650],
     ...                            field_deg=(10, 0))
     >>> s.wavelengths_nm, s.reference_wavelength_nm
     ((450.0, 650.0), 589.3)

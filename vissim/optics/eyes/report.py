@@ -264,7 +264,7 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
                mtf_spectrum: MtfSpectrum | None = None, lca: bool = False) -> EyeReport:
     """The `EyeReport` of the `Eye` ``eye`` (its model, accommodation, pupil and the prescription it has), module doc.
 
-    ``lenses``: thick trial or spectacle lenses worn at the eye's spectacle plane (``eye.vertex_mm`` in front of
+    ``lenses``: thick trial or spectacle lenses worn at the eye's spectacle plane (``eye.vertex_distance_mm`` in front of
     the cornea, module doc); the refraction is stated there when the eye has a prescription, wears lenses or
     ``at_spectacle_plane``, else at the corneal vertex; ``lca``: add the eye's LCA curve (module doc). Bad input --
     a pupil the iris cannot give, a field where rays miss a surface, meet total internal reflection or leave the
@@ -274,10 +274,10 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
     eye_in = checked_eye(eye, "eye_report")
     f_mm = _frequencies(mtf_cyc_per_mm, "MTF frequency (per mm)")
     f_deg = _frequencies(mtf_cyc_per_deg, "MTF frequency (per degree)")
-    vertex = eye_in.vertex_mm if (at_spectacle_plane or eye_in.rx is not None or len(lenses)) else None
+    vertex = eye_in.vertex_distance_mm if (at_spectacle_plane or eye_in.rx is not None or len(lenses)) else None
     prescription = eye_in.rx
     eye = eye_in.optics
-    pupil_mm, iris_mm = eye_in.pupil_mm, eye_in.iris_mm
+    pupil_mm, iris_mm = eye_in.pupil_diameter_mm, eye_in.iris_mm
     setup = None
     if len(lenses):
         setup = TrialLensSetup(tuple(lenses), vertex, math.inf, lens_gap_mm)

@@ -157,7 +157,7 @@ def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm
     ``vertex_mm`` in front of the cornea, ``field_deg`` the chart centre's field angle (OSA) as
     `vissim.render.eye_render.EyeRender` has it; ``phase``: a measured eye's phase plane before the cornea
     (`vissim.bench.eye.bench.EyeBench.phase_plane`)."""
-    eye, pupil_mm = the_eye.optics, the_eye.pupil_mm
+    eye, pupil_mm = the_eye.optics, the_eye.pupil_diameter_mm
     sensor_nm = eye.reference_wavelength_nm if sensor_wavelength_nm is None else float(sensor_wavelength_nm)
     iris_mm = iris_from_entrance_pupil_mm(eye, pupil_mm, sensor_nm)
     field = tuple(float(v) for v in field_deg)

@@ -60,13 +60,13 @@ class EyeView:
         positive_number(self.chart_distance_m, "chart distance", "m")
         object.__setattr__(self, "field_deg", tuple(float(v) for v in self.field_deg))
         if self.vertex_mm is None:  # the lens at the eye's own spectacle plane, where its prescription is measured
-            object.__setattr__(self, "vertex_mm", self.eye.vertex_mm)
+            object.__setattr__(self, "vertex_mm", self.eye.vertex_distance_mm)
 
     @property
     def entrance_pupil_mm(self) -> float:
         """The eye's entrance pupil, mm: given, or the one its iris gives at its reference wavelength."""
-        if self.eye.pupil_mm is not None:
-            return self.eye.pupil_mm
+        if self.eye.pupil_diameter_mm is not None:
+            return self.eye.pupil_diameter_mm
         return entrance_pupil_from_iris_mm(self.eye.optics, self.eye.iris_mm, self.eye.reference_wavelength_nm)
 
     # -- the lens and the eye's own refraction ---------------------------------------------------------
@@ -83,7 +83,7 @@ class EyeView:
         prescription at its spectacle plane carried there (the far point's vergence); zero for an emmetrope."""
         if self.eye.rx is None:
             return np.zeros((2, 2))
-        at_cornea = far_point_vergence_matrix(self.eye.rx, self.eye.vertex_mm)
+        at_cornea = far_point_vergence_matrix(self.eye.rx, self.eye.vertex_distance_mm)
         return vergence_after_distance(at_cornea, 1e-3 * depth_mm)
 
     # -- the reduced eye --------------------------------------------------------------------------------

@@ -56,7 +56,7 @@ def synthetic_tile(configuration: Configuration, settings: CampaignSettings, ove
         configuration.letter,
         configuration.logmar,
         arcmin_per_px=settings.arcmin_per_px / oversample,
-        shape_px=(rows * oversample, cols * oversample),
+        size_px=(rows * oversample, cols * oversample),
         polarity=configuration.polarity,
         viewing_distance_m=settings.chart_distance_m,
         snap_to_pixels=False,

@@ -207,7 +207,7 @@ def _letter_mosaic(results, condition) -> bytes:
 
     size = POPULATION_LETTER_SIZE_PX
     letter = optotype_tile(DEFAULT_LETTER, POPULATION_LETTER_LOGMAR, arcmin_per_px=POPULATION_ARCMIN_PER_PX,
-                           shape_px=(size, size), viewing_distance_m=DEFAULT_CHART_DISTANCE_M,
+                           size_px=(size, size), viewing_distance_m=DEFAULT_CHART_DISTANCE_M,
                            snap_to_pixels=False).pixels
 
     ranked = sorted((r for r in results if r.condition == condition), key=lambda r: r.strehl)

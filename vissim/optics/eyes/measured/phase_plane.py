@@ -61,7 +61,7 @@ def measured_phase_plane(eye, field_deg, wavelength_nm: float) -> MeasuredPhase:
     light of ``wavelength_nm``."""
     field = tuple(float(f) for f in field_deg)
     base = eye.optics
-    trace = trace_eye_wavefront(base, float(wavelength_nm), field, pupil_mm=eye.pupil_mm, iris_mm=eye.iris_mm)
+    trace = trace_eye_wavefront(base, float(wavelength_nm), field, pupil_mm=eye.pupil_diameter_mm, iris_mm=eye.iris_mm)
     measured = measured_front(trace, eye.measured, base, traced=(trace,))
     radius = 0.5 * trace.entrance_pupil_mm
     difference_um = -(np.asarray(measured.opd_um) - np.asarray(trace.opd_um))  # φ, µm; fitted inside the pupil

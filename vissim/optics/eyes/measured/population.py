@@ -263,7 +263,7 @@ def schematic_mtf(optics: SchematicEye, condition: PopulationCondition, frequenc
     from vissim.optics.eyes.paraxial import entrance_pupil_position_mm, mean_meridian_eye
     from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
 
-    eye = build_eye(optics, pupil_mm=condition.pupil_mm)
+    eye = build_eye(optics, pupil_diameter_mm=condition.pupil_mm)
     nm = condition.wavelength_nm
     spectral = eye_spectral_wavefront(eye, wavelengths_nm=[nm], field_deg=condition.field_deg)
     foveal = 0.0 if condition.correction != "accommodating" else _spherical_equivalent(
