@@ -256,13 +256,14 @@ MAX_NORMAL_CONDITION = 1e6
 
 def _least_squares(basis: np.ndarray, values: np.ndarray) -> np.ndarray:
     """``argmin |basis c - values|``: by the normal equations when they are well conditioned (Zernike terms over
-    a disc are near orthogonal: cond 2-4 for pupil grids), ten times faster than an SVD; else by the SVD."""
-    normal = basis.T @ basis
+    a disc are near orthogonal: cond 2-4 for pupil grids), ten times faster than an SVD; else by the SVD. The sums
+    by einsum, not BLAS, whose threads would change their round-off from machine to machine and task to task."""
+    normal = np.einsum("ki,kj->ij", basis, basis, optimize=False)
     scale = np.sqrt(np.diag(normal))
     if np.all(scale > 0):
         scaled = normal / np.outer(scale, scale)
         if np.linalg.cond(scaled) <= MAX_NORMAL_CONDITION:
-            return np.linalg.solve(scaled, (basis.T @ values) / scale) / scale
+            return np.linalg.solve(scaled, np.einsum("ki,k->i", basis, values, optimize=False) / scale) / scale
     solution, *_ = np.linalg.lstsq(basis, values, rcond=None)
     return solution
 

@@ -48,7 +48,7 @@ from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
 from vissim.optics.psf.compute import strehl_ratio
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
-from vissim.optics.runtime.threads import single_threaded_blas
+from vissim.optics.runtime.threads import map_on_threads, single_threaded_blas
 from vissim.optics.rx.prescription import Prescription
 
 __all__ = ["CORRECTIONS", "PopulationCondition", "EyeResult", "select_eyes", "population_conditions", "parse_correction", "evaluate_population",
@@ -353,7 +353,8 @@ def evaluate_population(eyes, conditions, frequencies_cyc_per_deg=(), *, workers
     (conditions outer); an eye not measured at a condition's field is skipped (logged).
 
     The work is split into tasks of ``chunk_eyes`` eyes under one condition, each named by its eyes' identities
-    only (no data travels): run here (``workers=1``), in ``workers`` processes, or on a Dask ``client``
+    only (no data travels): run here (``workers=1``, on this process's threads), in ``workers`` processes, or on a
+    Dask ``client``
     (`dask.distributed.Client`, or anything with its ``map`` and ``gather``). The numbers do not depend on where."""
     frequencies = np.asarray(frequencies_cyc_per_deg, dtype=float)
     conditions = list(conditions)
@@ -370,8 +371,8 @@ def evaluate_population(eyes, conditions, frequencies_cyc_per_deg=(), *, workers
         with ProcessPoolExecutor(max_workers=workers) as pool:
             done = list(pool.map(_evaluate_chunk, [t[0] for t in tasks], [t[1] for t in tasks],
                                  [frequencies] * len(tasks), [True] * len(tasks)))
-    else:
-        done = [_evaluate_chunk(c, ids, frequencies) for c, ids in tasks]
+    else:  # on this process's cores, OpenBLAS on one thread as in the workers: the same round-off everywhere
+        done = map_on_threads(lambda task: _evaluate_chunk(task[0], task[1], frequencies, True), tasks)
     results = []
     for condition in conditions:
         skipped = []
