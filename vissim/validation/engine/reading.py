@@ -104,6 +104,10 @@ GLOSSARY: dict[str, tuple[tuple[str, ...], str]] = {
 }
 
 
+#: Terms every page defines: "How this page was built" (`how_built`, written after the rest) uses them.
+ALWAYS = ("render", "spp")
+
+
 def _uses(text: str, patterns: tuple[str, ...]) -> bool:
     return any(re.search(p, text, flags=re.IGNORECASE) for p in patterns)
 
@@ -116,7 +120,7 @@ def terms_used(text: str) -> list[str]:
 def how_to_read(page: str, scores: str = "") -> str:
     """Markdown: the "How to read this page" section defining every `GLOSSARY` term ``page`` (the rest of the
     page) uses, then ``scores`` (the page's own paragraph on how its scores are read)."""
-    used = terms_used(page + scores)
+    used = [term for term in GLOSSARY if term in ALWAYS or term in terms_used(page + scores)]
     lines = ["### How to read this page\n",
              "Every term this page uses, defined here. Every number is in metrics.csv beside this page (one row per "
              "configuration and simulation).\n"]

@@ -192,9 +192,7 @@ def _above_three_db(results: list[dict], optics: dict) -> str:
                  + (f"is within that configuration's {ceiling:+.2f} dB." if ceiling is not None and score <= ceiling + 0.5
                     else f"is against {ceiling:+.2f} dB for a perfect one there." if ceiling is not None else "."))
     text[1] += line
-    text.append(" Photopic renders are noisier (their floor is 5 dB lower), so their diffraction removes a larger "
-                "share of what separates the simulation from the render. Read a wave-optics score against that "
-                "configuration's perfect score, not against +3 dB.\n")
+    text.append(" Read a wave-optics score against that configuration's perfect score, not against +3 dB.\n")
     return text[0] + "\n" + text[1] + text[2] + "\n"
 
 
@@ -203,27 +201,31 @@ def _optics_table(results: list[dict], optics: dict) -> str:
     lines = ["### The simulated eye's optics beside its score\n",
              ("The schematic eye as simulated (the eye's wavefront, wave optics, in the configuration's light, with its "
               "trial lens and the chart's vergence): its Strehl ratio and its MTF at a few spatial frequencies, beside "
-              "its score and the score a perfect wave-optics simulation would have here. Off axis the MTF is given "
-              "tangential / sagittal. A low Strehl ratio or MTF says the eye blurs much; it is not a fault of the "
-              "simulation.\n"),
-             f"| configuration | eye's wavefront, wave optics (dB over floor) | a perfect wave simulation (dB over floor) | "
-             f"Strehl ratio | {freqs} |",
+              "its score (dB over the floor) and the score a perfect wave-optics simulation has there. Off axis the MTF "
+              "differs by direction: a row for the tangential (along the field's meridian) and one for the sagittal. A "
+              "low Strehl ratio or MTF says the eye blurs much; it is not a fault of the simulation.\n"),
+             f"| configuration | score (dB) | perfect score (dB) | Strehl ratio | {freqs} |",
              "|---|---|---|---|" + "---|" * len(MTF_FREQUENCIES_CPD)]
     for r in results:
         name = r["configuration"]["name"]
         by = {x["simulation"]: x for x in r["rows"]}
         o = optics.get(name) or {}
         score = f"{by['schematic_wave']['over_floor_db']:+.2f}" if "schematic_wave" in by else "-"
-        mtf = o.get("mtf")
-        cells = []
-        for k in range(len(MTF_FREQUENCIES_CPD)):
-            if mtf is None:
-                cells.append("—")
-            else:
-                cells.append(" / ".join(f"{values[k]:.2f}" for values in mtf.values()))
-        lines.append(f"| {name} | {score} | {_signed(o.get('perfect_wave_db'))} | "
-                     f"{format_number(o.get('strehl'), 3)} | " + " | ".join(cells) + " |")
+        mtf = o.get("mtf") or {"": [math.nan] * len(MTF_FREQUENCIES_CPD)}
+        for k, (direction, values) in enumerate(mtf.items()):
+            label = name if direction in ("", "radial") else f"{name}, {direction}"
+            head = [score, _signed(o.get("perfect_wave_db")), _strehl(o.get("strehl"))] if k == 0 else [
+                "″", "″", "″"]
+            lines.append(f"| {label} | " + " | ".join(head) + " | "
+                         + " | ".join(format_number(float(v), 2) for v in values) + " |")
     return "\n".join(lines) + "\n\n"
+
+
+def _strehl(value) -> str:
+    """A Strehl ratio: 3 decimals, or one significant digit below 0.01 (a defocused eye's 0.0004 is not 0)."""
+    if value is None or not math.isfinite(value):
+        return "—"
+    return f"{value:.3f}" if value >= 0.01 else f"{value:.1g}"
 
 
 def _signed(value) -> str:
@@ -396,7 +398,8 @@ def eye_report(results: list[dict], run_dir: Path | None = None, record: dict | 
     results = sorted(results, key=lambda r: r["configuration"]["name"])
     measured = any(is_measured_name(r["configuration"].get("model")) for r in results)
     optics = _all_optics(results)
-    body = (INTRO + (MEASURED_INTRO if measured else "") + _verdict(results, optics) + _setups_table(results)
+    verdict = _verdict(results, optics)
+    body = (INTRO + (MEASURED_INTRO if measured else "") + _setups_table(results)
             + _self_check_table(results) + _simulations_table(results) + _above_three_db(results, optics)
             + _optics_table(results, optics) + _costs_table(results) + LIMITATIONS)
     figures = {}
@@ -419,7 +422,7 @@ def eye_report(results: list[dict], run_dir: Path | None = None, record: dict | 
               "with an error e² of its own scores 10·log10(2σ² / (σ² + e²)): 0 dB when e² = σ², below 0 dB when its "
               "error exceeds the render's noise. Scores far above +3 dB occur where the reference holds less than one "
               "render's noise: the wave-optics columns (a section below explains and computes them).\n")
-    tables = how_to_read(body, scores) + body
+    tables = verdict + how_to_read(verdict + body, scores) + body
     return ReportParts("Schematic-eye validation" if not measured else "Measured-eye validation", _rows(results),
                        tables, figures)
 
