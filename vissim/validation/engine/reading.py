@@ -150,8 +150,9 @@ def how_built(command: str, record: dict, provenance: dict, extra: str = "") -> 
     renders = (f" Each configuration was rendered twice, at {spp} spp, with seeds {', '.join(map(str, seeds))}."
                if spp and seeds else "")
     return ("### How this page was built\n\n"
-            f"`{command}` (campaign file {record.get('source', 'unknown')}), then `vissim report` of that run "
-            f"folder, by vissim {provenance.get('vissim_version', '?')} on {provenance.get('created_utc', '?')}."
+            f"`{command}` wrote it (campaign file {record.get('source', 'unknown')}; `vissim report` of a finished "
+            f"run folder writes it again without rendering), with vissim {provenance.get('vissim_version', '?')} on "
+            f"{provenance.get('created_utc', '?')}."
             f"{renders} Beside this page: metrics.csv (every number on it) and each figure's provenance (a .json "
             "file of the same name: the campaign, its settings and the renders behind it). "
             "The run folder also holds metrics.json, every item's result.json and images; they are not copied "
