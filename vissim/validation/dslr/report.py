@@ -124,16 +124,25 @@ def markdown_tables(results: list[dict], all_rows: list[dict] | None = None) -> 
     return "\n".join(out)
 
 
-#: The columns of the per-configuration table (simulation, input); the rest (the one-error variants, SSIM, the
-#: absolute PSNRs) are in metrics.csv and the summary's medians.
-SCORE_COLUMNS = (("wave", "render"), ("wave", "synthetic"), ("geometric", "render"), ("geometric", "synthetic"),
-                 ("thesis", "render"))
+#: The columns of the per-configuration table (simulation, input): vissim's own simulations (the verdict's); the rest
+#: (the thesis method and its one-error variants, SSIM, the absolute PSNRs) are in metrics.csv and the summary's
+#: medians.  Four, so that the table fits a page 800 px wide.
+SCORE_COLUMNS = (("wave", "render"), ("wave", "synthetic"), ("geometric", "render"), ("geometric", "synthetic"))
 
 
 def column_words(column: tuple[str, str]) -> str:
     """A (simulation, input) column in words: ``wave optics on the no-lens render``."""
     simulation, input_kind = column
     return f"{SIMULATION_WORDS.get(simulation, simulation)} {INPUT_WORDS.get(input_kind, input_kind)}"
+
+
+#: The per-configuration table's short column names (its paragraph says them in full).
+SHORT_WORDS = {"wave": "wave", "geometric": "ray", "thesis": "thesis", "render": "render", "synthetic": "chart"}
+
+
+def _short_words(column: tuple[str, str]) -> str:
+    """A (simulation, input) column in two words: ``wave, render``; ``ray, chart``."""
+    return f"{SHORT_WORDS.get(column[0], column[0])}, {SHORT_WORDS.get(column[1], column[1])}"
 
 
 def _render_floor(cells: dict) -> float:
@@ -148,15 +157,16 @@ def _scores_table(by_config: dict, columns: list[tuple[str, str]]) -> str:
     """One row per configuration with a lens: the trial lens, the camera's Rx, the noise floor and the main
     simulations' dB over the floor; the configurations without a lens apart, by PSNR against one grey level."""
     shown = [c for c in SCORE_COLUMNS if c in columns]
-    header = ["configuration", "trial lens(es)", "camera Rx (result)", "noise floor (dB)"] + [column_words(c) for c in shown]
+    header = ["configuration", "trial lens(es) → camera Rx", "floor (dB)"] + [_short_words(c) for c in shown]
     out = ["### Scores per configuration (dB over the noise floor)\n",
            ("The main simulations of each configuration with a lens, scored as in How to read this page: "
             f"+{PERFECT_MARGIN_DB:.2f} dB a perfect simulation, 0 dB as close as a second render. The trial lens is "
             "the power in the holder in front of the camera; the camera Rx is the prescription the camera then has "
-            "(the correcting lens at its pupil), which the simulations blur with. Wave optics and the thesis method "
+            "(the correcting lens at its pupil), which the simulations blur with; floor: the render's noise floor (PSNR). Wave optics and the thesis method "
             "are scored against the render blurred by the bench aperture's diffraction (the render has none), "
-            "with that reference's own noise floor; ray optics against the render as it is. The noise floor shown is "
-            "the render's. Every other column (the thesis method's one-error variants, SSIM, PSNR itself) is in "
+            "with that reference's own noise floor; ray optics against the render as it is. Columns: wave = wave optics, ray = ray optics; render = applied "
+            "to the bench's no-lens render (as the thesis did), chart = applied to the chart drawn by vissim. Every "
+            "other column (the thesis method and its one-error variants, SSIM, PSNR itself) is in "
             "metrics.csv; the summary above gives their medians.\n"),
            "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     bare = []
@@ -167,7 +177,7 @@ def _scores_table(by_config: dict, columns: list[tuple[str, str]]) -> str:
             continue
         floor = _render_floor(cells)
         values = [f"{margin(cells[c]):+.2f}" if c in cells and math.isfinite(margin(cells[c])) else "—" for c in shown]
-        out.append("| " + " | ".join([name, first["lenses"], cells["_rx"], _fmt(floor, 1)] + values) + " |")
+        out.append("| " + " | ".join([name, f"{first['lenses']} → {cells['_rx']}", _fmt(floor, 1)] + values) + " |")
     out.append("")
     if bare:
         out += ["### Configurations without a lens\n",
@@ -179,7 +189,7 @@ def _scores_table(by_config: dict, columns: list[tuple[str, str]]) -> str:
                  f"RMS difference from the render is below one grey level of an 8-bit display (PSNR >= "
                  f"{ONE_GREY_LEVEL_PSNR_DB:.1f} dB), a difference no display shows: identical to the render within "
                  "what can be seen. PSNR in dB:\n"),
-                "| configuration | " + " | ".join(column_words(c) for c in shown) + " | all within one grey level |",
+                "| configuration | " + " | ".join(_short_words(c) for c in shown) + " | all within one grey level |",
                 "|---|" + "---|" * (len(shown) + 1)]
         for name, cells in bare:
             judged = [cells[c][PSNR.name] for c in shown if c in cells and c[0] in LIBRARY_SIMULATIONS]
@@ -333,7 +343,8 @@ def dslr_report(results: list[dict], run_dir: Path, record: dict, progress=None)
               "diffraction, with the floor of two such blurred renders, so +3 dB is its perfect score too. A "
               "configuration without a lens has nothing to blur and is judged by PSNR instead (Configurations without "
               "a lens).\n")
-    return ReportParts(title, rows, how_to_read(body, scores) + body, figures)
+    shown = " ".join(f"{name} {figure.alt}" for name, figure in figures.items())  # the engine appends them
+    return ReportParts(title, rows, how_to_read(body + shown, scores) + body, figures)
 
 
 #: vissim's own simulations of the bench: the verdict's subject.  ``thesis`` and its one-error variants reproduce the
@@ -381,7 +392,8 @@ def summary_lines(rows: list[dict]) -> list[str]:
     if bare:
         low = min(bare, key=lambda r: r[PSNR.name])
         passed = sum(r[PSNR.name] >= ONE_GREY_LEVEL_PSNR_DB for r in bare)
-        lines.append(f"no lens ({len({r['configuration'] for r in bare})} configuration(s), nothing to blur, so no noise "
+        count = len({r["configuration"] for r in bare})
+        lines.append(f"no lens ({count} configuration{'s' if count > 1 else ''}, nothing to blur, so no noise "
                      f"floor to judge by): {passed} of {len(bare)} simulations within one 8-bit grey level of the render "
                      f"(PSNR >= {ONE_GREY_LEVEL_PSNR_DB:.1f} dB); lowest {low[PSNR.name]:.1f} dB ({_name(low)}).")
     checks = [r for r in scored if r["simulation"] == TRACED_RAYS and r["lenses"] != NO_LENS]

@@ -423,7 +423,8 @@ def eye_report(results: list[dict], run_dir: Path | None = None, record: dict | 
               "with an error e² of its own scores 10·log10(2σ² / (σ² + e²)): 0 dB when e² = σ², below 0 dB when its "
               "error exceeds the render's noise. Scores far above +3 dB occur where the reference holds less than one "
               "render's noise: the wave-optics columns (a section below explains and computes them).\n")
-    tables = verdict + how_to_read(verdict + body, scores) + body
+    shown = " ".join(f"{name} {figure.alt}" for name, figure in figures.items())  # the engine appends them
+    tables = verdict + how_to_read(verdict + body + shown, scores) + body
     return ReportParts("Schematic-eye validation" if not measured else "Measured-eye validation", _rows(results),
                        tables, figures)
 
