@@ -58,4 +58,7 @@ def test_every_image_of_a_run_has_provenance_with_its_renders(tmp_path, monkeypa
             assert {(r["variant"], r["spp_used"]) for r in renders} == {("fake_variant", 5)}
     assert any(p.suffix == ".png" for p in found) and any(p.suffix == ".exr" for p in found)
     assert json_without_provenance(run_dir) == []
-    assert "provenance in metrics.json" in (run_dir / "tables.md").read_text()
+    tables = (run_dir / "tables.md").read_text()
+    # the page cites only what lies beside it when committed: metrics.csv and the figures' sidecars
+    assert "### How this page was built" in tables and "metrics.csv" in tables
+    assert "provenance in metrics.json" not in tables and "not copied here" in tables

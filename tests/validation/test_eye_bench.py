@@ -83,7 +83,7 @@ def test_an_item_s_rx_is_the_number_given_not_its_text():
                                              {"kind": "eye"}, "eye.toml")
     assert eighth.eye().rx == Prescription(0.125, 0.0, 180.0) and half_degree.eye().rx.axis_deg == 90.5
     assert eighth.key_inputs()["rx"] == {"sphere_diopters": 0.125, "cylinder_diopters": 0.0, "axis_deg": 180.0}
-    assert "eye Rx +0.125 DS at 12 mm" in configuration_label(eighth.as_json())
+    assert "eye Rx +0.125 DS (at a 12 mm spectacle plane)" in configuration_label(eighth.as_json())
     assert "x 90.5" in configuration_label(half_degree.as_json())
 
 
@@ -180,7 +180,7 @@ def test_a_toy_eye_campaign_runs_through_the_engine(tmp_path):
     done = validate(path, tmp_path / "run", show_progress=False)
     assert done.kind == "eye" and done.summary.items_total == 2 and done.summary.renders_made == 4
     tables = (tmp_path / "run" / "tables.md").read_text()
-    for words in ("Geometric self-check", "reduced eye, ray optics", "thesis setup", "the eye's wavefront, wave optics",
+    for words in ("Geometric self-check", "reduced eye, ray optics", "thesis method", "the eye's wavefront, wave optics",
                   "spherical aberration", "spectacle magnification", "| plain |"):
         assert words in tables
     import json
@@ -218,7 +218,7 @@ def test_the_myope_with_and_without_its_spectacles_passes_the_self_check(tmp_pat
     path.write_text(MYOPE_TOY)
     done = validate(path, tmp_path / "run", show_progress=False)
     assert done.summary.items_total == 2 and done.summary.renders_made == 4
-    assert "eye Rx -3.00 DS at 12 mm" in (tmp_path / "run" / "tables.md").read_text()
+    assert "eye Rx -3.00 DS (at a 12 mm spectacle plane)" in (tmp_path / "run" / "tables.md").read_text()
     rows = json.loads((tmp_path / "run" / "metrics.json").read_text())["rows"]
     checks = {r["configuration"]: r["over_floor_db"] for r in rows if r["simulation"] == "traced_rays"}
     assert set(checks) == {"myope", "myope in spectacles"}

@@ -8,6 +8,8 @@ outside the interval the row says so (`vissim.fit.capture.compare_with_theory`).
 
 from __future__ import annotations
 
+from vissim.validation.dslr.schema import lens_label_of
+
 __all__ = ["fit_table"]
 
 _KEYS = ("M_diopters", "J0_diopters", "J45_diopters")
@@ -43,7 +45,7 @@ def fit_table(results: list[dict]) -> str:
         half_widths = _per_key(record.get("interval_95"), lambda lo_hi: f"{0.5 * (lo_hi[1] - lo_hi[0]):.3f}")
         errors = _per_key(comparison.get("errors_diopters"), lambda error: f"{error:+.3f}")
         name = result["configuration"]["name"]
-        lenses = result.get("lens_label", "")
+        lenses = lens_label_of(result)
         out.append(f"| {name} | {lenses} | {comparison.get('vergence_theory', '—')} | "
                    f"{comparison.get('table_4_2') or '—'} | {comparison.get('fitted') or '—'} | "
                    f"{half_widths} | {errors} | {_verdict(comparison)} |")

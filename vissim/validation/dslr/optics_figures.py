@@ -27,7 +27,7 @@ from vissim.optics.psf.metrics import (diffraction_cutoff_cyc_per_deg, diffracti
                                        frequencies_cyc_per_deg, mtf,
                                        radius_of_encircled_energy_arcmin, ring_means)
 from vissim.optics.pupil.wavefront import Wavefront
-from vissim.validation.dslr.schema import trial_lens_phrase
+from vissim.validation.dslr.schema import lens_label_of, trial_lens_phrase
 from vissim.validation.engine.figures import display_norm, pyplot, radiance_colorbar, scale_bar
 from vissim.validation.engine.summary import NO_LENS
 
@@ -95,7 +95,7 @@ def optics_cases(results: list[dict], run_dir: str | Path, campaign: dict) -> li
                           Prescription.from_power_matrix(wave["setup"]["camera_power_matrix_diopters"]),
                           float(wave["setup"]["pupil_diameter_mm"]), float(settings["wavelength_nm"]),
                           float(settings["arcmin_per_px"]), step, run_dir / synthetic if synthetic else None,
-                          result["lens_label"], run_dir / psf["image"] if psf.get("image") else None)
+                          lens_label_of(result), run_dir / psf["image"] if psf.get("image") else None)
         groups.setdefault(case.group, []).append((result["lens_label"] != NO_LENS, case))
     cases = []
     for members in groups.values():

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from vissim.validation.dslr.schema import trial_lens_phrase
+from vissim.validation.dslr.schema import lens_label_of, trial_lens_phrase
 
 __all__ = ["arcmin_per_px_of", "column_title", "camera_rx", "group_of"]
 
@@ -19,7 +19,7 @@ def arcmin_per_px_of(result: dict, campaign: dict | None = None) -> float | None
 def column_title(result: dict, comparison: dict | None = None) -> str:
     """A figure column's header: the letter and its LogMAR, the trial lens, the camera's resulting Rx (`camera_rx`)."""
     config = result["configuration"]
-    title = f"{config['letter']}, LogMAR {config['logmar']:.1f}\n{trial_lens_phrase(result['lens_label'])}"
+    title = f"{config['letter']}, LogMAR {config['logmar']:.1f}\n{trial_lens_phrase(lens_label_of(result))}"
     if comparison is not None:
         title += f"\ncamera Rx {camera_rx(result, comparison)}"
     return title

@@ -21,7 +21,7 @@ __all__ = ["Configuration", "CampaignSettings", "SIMULATIONS", "INPUTS", "trial_
 SIMULATIONS = ("wave", "geometric", "thesis", "thesis_power", "thesis_pupil", "no_magnification")
 #: Inputs the simulations are applied to: the bench's no-lens render, or the synthetic chart.
 INPUTS = ("render", "synthetic")
-#: Between the lenses of a set in a lens label: ``+1.00 DS + -0.50 DC x 30``.
+#: Between the lenses of a set in a lens label: ``+1.00 DS + plano -0.50 x 30``.
 LENS_JOINER = " + "
 
 
@@ -49,9 +49,19 @@ class Configuration:
         return {"configuration": {k: v for k, v in self.as_json().items() if k not in ("name", "group")}}
 
 
+def lens_label_of(result: dict) -> str:
+    """An item's trial lenses as `Configuration.lens_label` writes them now (an item computed before keeps the label
+    of its day in its ``lens_label``; its configuration's lenses are what count)."""
+    lenses = (result.get("configuration") or {}).get("lenses")
+    if lenses is None:
+        return result.get("lens_label", NO_LENS)
+    specs = [LensSpec(**lens) if isinstance(lens, dict) else LensSpec(*lens) for lens in lenses]
+    return LENS_JOINER.join(spec.label() for spec in specs) if specs else NO_LENS
+
+
 def trial_lens_phrase(lens_label: str) -> str:
     """A lens label (`Configuration.lens_label`) in words, as configuration names and figure headings say it:
-    ``trial lens +2.00 DS``, ``trial lenses +1.00 DS + -0.50 DC x 30`` or ``no lens``."""
+    ``trial lens +2.00 DS``, ``trial lenses +1.00 DS + plano -0.50 x 30`` or ``no lens``."""
     if lens_label == NO_LENS:
         return NO_LENS
     return f"trial lens{'es' if LENS_JOINER in lens_label else ''} {lens_label}"

@@ -44,12 +44,13 @@ def self_check_table(rows: list[dict]) -> str:
         return ""
     with_lenses = [r for r in rows if r["lenses"] != NO_LENS]
     traced, geometric = _margins(with_lenses, TRACED_RAYS), _margins(with_lenses, "geometric")
-    header = ["group (configurations with lenses)", "traced rays, median", "traced rays, lowest", "lowest at",
-              "geometric / synthetic, median", "geometric / synthetic, lowest"]
+    header = ["group (configurations with lenses)", "self-check, median", "self-check, lowest", "lowest at",
+              "ray optics on the drawn chart, median", "ray optics on the drawn chart, lowest"]
     out = [
         "### Summary: the geometric self-check, traced rays against the render (dB)\n",
-        (f"The lens trace's ray optics (`{TRACED_RAYS}`: the ray PSF of the trial lenses' traced wavefront at the "
-         "d line, where the glass has the index Mitsuba renders) applied to the synthetic chart and compared with the render, "
+        ("The self-check: the lens trace's ray optics (the ray PSF of the trial lenses' traced wavefront at the "
+         "d line, where the glass has the index Mitsuba renders) applied to the synthetic chart and compared with the render "
+         "(`traced_rays` in metrics.csv), "
          "aligned on the fine grid like the geometric simulation beside it. PSNR minus the render noise floor: "
          f"+3 dB is perfect, 0 dB the floor; a configuration passes at >= +{SELF_CHECK_MARGIN_DB:g} dB. "
          "Configurations without lenses are listed apart, below.\n"),

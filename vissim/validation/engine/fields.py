@@ -204,11 +204,11 @@ class LensSpec:
     axis_deg: float = 180.0
 
     def label(self) -> str:
-        if self.cylinder_diopters == 0:
-            return f"{self.sphere_diopters:+.2f} DS"
-        if self.sphere_diopters == 0:
-            return f"{self.cylinder_diopters:+.2f} DC x {self.axis_deg:g}"
-        return f"{self.sphere_diopters:+.2f} {self.cylinder_diopters:+.2f} x {self.axis_deg:g}"
+        """The lens's power as this project writes every power: minus cylinder, the sphere's sign shown
+        (``+1.00 DS``, ``+2.00 -2.00 x 180`` for a +2.00 cylinder at 90, ``plano -1.00 x 90``)."""
+        from vissim.optics.rx.prescription import Prescription
+
+        return Prescription(self.sphere_diopters, self.cylinder_diopters, self.axis_deg).minus_cylinder().format()
 
 
 #: A trial lens's keys in a campaign file, as in every scene file (`vissim.bench.scene_toml`).

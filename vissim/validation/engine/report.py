@@ -23,6 +23,7 @@ from vissim.progress import Progress
 from vissim.provenance import make_provenance
 from vissim.validation.engine.figures import Figure
 from vissim.validation.engine.html_page import html_report
+from vissim.validation.engine.reading import how_built
 from vissim.validation.engine.records import Item, Row
 from vissim.validation.engine.registry import DEFAULT_KIND, bench_kind
 
@@ -134,11 +135,13 @@ def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict
             writer.writeheader()
             writer.writerows(rows)
     written.append(run_dir / "metrics.csv")
-    made = (f"Made by vissim {provenance['vissim_version']} on {provenance['created_utc']} from "
-            f"{campaign.get('source', 'an unknown campaign file')}; provenance in metrics.json.")
+    source = campaign.get("source", "an unknown campaign file")
+    made = (f"Made by vissim {provenance['vissim_version']} on {provenance['created_utc']} from {source}; "
+            "every number in metrics.csv beside this page.")
+    built = how_built(f"vissim validate {source} -o runs/{Path(str(source)).stem}", campaign, provenance)
     links = "".join(f"### {name}\n\n![{_markdown_alt(f.alt)}]({f.file_name})\n\n" for name, f in figures.items())
     description = campaign.get("description", "")
-    text = f"# {title}\n\n{description}\n\n{tables_md}\n{links}{made}\n"
+    text = f"# {title}\n\n{description}\n\n{tables_md}\n{links}{built}{made}\n"
     written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
     shown = {}
     for name, figure in figures.items():
@@ -146,7 +149,7 @@ def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict
                      {**provenance, **figure.extra, "figure": name, "alt": figure.alt})
         shown[name] = figure._replace(png=(run_dir / figure.file_name).read_bytes())  # the page shows the file
         written += [run_dir / figure.file_name, run_dir / f"{figure.file_name}.json"]
-    page = html_report(title, tables_md, shown, footer=made, description=description)
+    page = html_report(title, tables_md + "\n" + built, shown, footer=made, description=description)
     written.append(write_text_atomic(run_dir / "report.html", page, overwrite=True))
     return written
 

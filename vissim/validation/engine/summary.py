@@ -36,7 +36,12 @@ def _median_cell(values: list[float]) -> str:
     return "∞" if math.isinf(value) else f"{value:+.1f}"
 
 
-def _table(rows: list[dict], columns: list[tuple[str, str]], mark_no_lens: bool) -> list[str]:
+def _slash(column: tuple[str, str]) -> str:
+    return f"{column[0]} / {column[1]}"
+
+
+def _table(rows: list[dict], columns: list[tuple[str, str]], mark_no_lens: bool, words=_slash) -> list[str]:
+    """One row per (simulation, input), one column per group: the medians (a table as wide as the groups)."""
     groups: dict[str, dict] = {}
     bare: dict[str, set] = {}
     for r in rows:
@@ -44,31 +49,35 @@ def _table(rows: list[dict], columns: list[tuple[str, str]], mark_no_lens: bool)
         groups.setdefault(group, {}).setdefault((r["simulation"], r["input"]), []).append(margin(r))
         if r["lenses"] == NO_LENS:
             bare.setdefault(group, set()).add(r["configuration"])
-    lines = ["| " + " | ".join(["group (configurations)"] + [f"{s} / {i}" for s, i in columns]) + " |",
-             "|" + "---|" * (len(columns) + 1)]
+    labels = []
     for group, cells in groups.items():
         n = max(len(v) for v in cells.values())
         label = f"{group} ({n})"
         if mark_no_lens and group in bare:
             label = f"{group} ({n}, {len(bare[group])} without a lens)¹"
-        lines.append("| " + " | ".join([label] + [_median_cell(cells.get(c, [])) for c in columns]) + " |")
+        labels.append(label)
+    lines = ["| " + " | ".join(["simulation (group: configurations)"] + labels) + " |", "|" + "---|" * (len(labels) + 1)]
+    for column in columns:
+        lines.append("| " + " | ".join([words(column)] + [_median_cell(cells.get(column, [])) for cells in groups.values()])
+                     + " |")
     return lines
 
 
-def summary_table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
+def summary_table(rows: list[dict], columns: list[tuple[str, str]], words=_slash) -> str:
     """Markdown: median PSNR minus the noise floor per group (a sweep, or one item), then the notes."""
     lines = [
         "### Summary: median PSNR minus the noise floor (dB)\n",
         ("Each entry is the median, over a group's configurations, of a simulation's PSNR against the bench "
          "minus the bench's noise floor (two renders with different seeds compared with each other). 0 dB: "
          "the simulation differs from the bench as much as two renders differ from each other; "
-         f"+{PERFECT_MARGIN_DB:.2f} dB: what a perfect, noise-free simulation scores on average. Columns are "
-         "simulation / input: applied to the bench's no-lens render, or to the synthetic chart.\n"),
-        *_table(rows, columns, mark_no_lens=True),
+         f"+{PERFECT_MARGIN_DB:.2f} dB: what a perfect, noise-free simulation scores on average. A row is a "
+         "simulation and its input: the bench's no-lens render (as the thesis did), or the chart drawn by vissim; "
+         "a column is a group of configurations.\n"),
+        *_table(rows, columns, mark_no_lens=True, words=words),
     ]
     if any(r["lenses"] == NO_LENS for r in rows):
         lines += ["", "¹ Includes configurations without a lens; the next table explains them and leaves them out."]
-    return "\n".join(lines) + "\n" + summary_notes(rows, columns)
+    return "\n".join(lines) + "\n" + summary_notes(rows, columns, words)
 
 
 def value_span(values: list[float], spec: str) -> str:
@@ -77,7 +86,7 @@ def value_span(values: list[float], spec: str) -> str:
     return low if low == high else f"{low}…{high}"
 
 
-def _above_perfect(rows: list[dict], columns: list[tuple[str, str]]) -> str:
+def _above_perfect(rows: list[dict], columns: list[tuple[str, str]], words=_slash) -> str:
     """The sentence on the highest margin in the summary's columns, if it is above the perfect simulation's."""
     scored = [(margin(r), r) for r in rows if r["lenses"] != NO_LENS and math.isfinite(margin(r))
               and (r["simulation"], r["input"]) in columns]
@@ -87,12 +96,12 @@ def _above_perfect(rows: list[dict], columns: list[tuple[str, str]]) -> str:
     if best <= PERFECT_MARGIN_DB + 0.005:
         return f" In this run no configuration with lenses scores above +{PERFECT_MARGIN_DB:.2f} dB."
     ratio = 10.0 ** (best / 10.0)
-    return (f" This run's highest is {best:+.2f} dB ({row['configuration']}, {row['simulation']} / {row['input']}): "
+    return (f" This run's highest is {best:+.2f} dB ({row['configuration']}, {words((row['simulation'], row['input']))}): "
             f"there the two renders' squared difference is {ratio:.2f} times the simulation's instead of 2, as if the "
             f"second render held {100 * (ratio - 2):.0f} % more noise energy than the first.")
 
 
-def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
+def summary_notes(rows: list[dict], columns: list[tuple[str, str]], words=_slash) -> str:
     """Markdown: why a score can exceed +3.01 dB; the no-lens configurations and the medians without them."""
     out = [
         "\n### Reading the summary: above +3 dB, and the configurations without a lens\n",
@@ -103,7 +112,7 @@ def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
          "tile, and the noise lives only in the pixels that see an edge of the blurred letter (a uniform "
          "background has none). Where the first render's noise happens to be weaker than the second's over those "
          "pixels, or the two renders' noise is slightly anticorrelated, a perfect simulation scores more. The fewer "
-         "the noisy pixels (small letters, little blur), the larger the swing." + _above_perfect(rows, columns) + "\n"),
+         "the noisy pixels (small letters, little blur), the larger the swing." + _above_perfect(rows, columns, words) + "\n"),
     ]
     bare = [r for r in rows if r["lenses"] == NO_LENS and (r["simulation"], r["input"]) in columns]
     if not bare:
@@ -123,5 +132,5 @@ def summary_notes(rows: list[dict], columns: list[tuple[str, str]]) -> str:
         "the medians of these groups over the configurations with lenses only.\n")
     out.append("### Summary of the groups with no-lens configurations, over those with lenses only (dB)\n")
     with_lenses = [r for r in rows if r["lenses"] != NO_LENS and r["group"] in groups]
-    out += _table(with_lenses, columns, mark_no_lens=False) if with_lenses else ["No configuration with lenses."]
+    out += _table(with_lenses, columns, mark_no_lens=False, words=words) if with_lenses else ["No configuration with lenses."]
     return "\n".join(out) + "\n"

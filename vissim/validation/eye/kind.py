@@ -63,7 +63,7 @@ class EyeKind:
     def report(self, results: list[dict], run_dir: Path, record: dict, progress=None):
         from vissim.validation.eye.report import eye_report
 
-        return eye_report(results)
+        return eye_report(results, run_dir, record)
 
     def summary_lines(self, rows: list[dict]) -> list[str]:
         from vissim.validation.eye.report import summary_lines

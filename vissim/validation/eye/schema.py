@@ -178,24 +178,82 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
 
 
 def _words(value) -> str:
-    """A swept value as a name's words: a lens table as "+0 +1 x 90", a list as "10,0"."""
+    """A swept value as plain words (a list as "10,0"), for a key `axis_phrase` does not know."""
     if isinstance(value, dict):
-        return (f"{value.get('sphere_diopters', 0.0):+g} {value.get('cylinder_diopters', 0.0):+g} x "
-                f"{value.get('axis_deg', 180):g}")
+        return ", ".join(f"{k} {_words(v)}" for k, v in value.items())
     if isinstance(value, list):
         return ",".join(f"{v:g}" for v in value)
     return f"{value:g}" if isinstance(value, (int, float)) else str(value)
+
+
+def _rx_words(value) -> str:
+    """A lens or prescription as written in this project: sphere with its sign, minus cylinder, TABO axis."""
+    if isinstance(value, dict):
+        rx = Prescription(float(value.get("sphere_diopters", 0.0)), float(value.get("cylinder_diopters", 0.0)),
+                          float(value.get("axis_deg", 180.0)))
+    elif isinstance(value, (int, float)) and not isinstance(value, bool):
+        rx = Prescription(float(value))
+    else:
+        try:
+            rx = Prescription.parse(str(value))
+        except (VissimInputError, ValueError):
+            return str(value)
+    return rx.minus_cylinder().format()
+
+
+def axis_phrase(key: str, value) -> str:
+    """One swept setting in words, as a configuration's name says it: ``3 mm pupil``, ``10° field``,
+    ``photopic light``, ``trial lens +1.00 -1.00 x 180`` (minus cylinder), ``2 D accommodation``."""
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if key == "pupil_diameter_mm" and number:
+        return f"{value:g} mm pupil"
+    if key == "accommodation_diopters" and number:
+        return f"{value:g} D accommodation"
+    if key == "field_deg":
+        x, y = (value if isinstance(value, list) and len(value) == 2 else [value, 0.0])
+        if isinstance(x, (int, float)) and isinstance(y, (int, float)):
+            if (x, y) == (0, 0):
+                return "on axis"
+            return f"{x:g}° field" if y == 0 else f"field {x:g}°, {y:g}° (x, y)"
+    if key == "spectrum":
+        return f"{value} light"
+    if key == "wavelength_nm" and number:
+        return f"{value:g} nm light"
+    if key == "lens":
+        if number and value == 0:
+            return "no lens"
+        return f"trial lens {_rx_words(value)}"
+    if key == "prescription":
+        return f"eye Rx {_rx_words(value)}"
+    if key == "logmar" and number:
+        return f"LogMAR {value:g}"
+    if key == "letter":
+        return f"letter {value}"
+    if key == "chart_distance_m" and number:
+        return f"chart at {value:g} m"
+    if key == "eye_model":
+        return str(value)
+    return f"{key} {_words(value)}"
+
+
+def _tokens(text: str) -> set[str]:
+    return {t.strip(",;:()").lower() for t in text.split()} - {""}
+
+
+def sweep_name(prefix: str, chosen: dict) -> str:
+    """A sweep member's name: its settings in words (`axis_phrase`), after the sweep's name unless every word of that
+    name is said by them already ("field" before "10° field" would read "field 10° field")."""
+    said = ", ".join(axis_phrase(k, v) for k, v in chosen.items())
+    if not prefix or _tokens(prefix) <= _tokens(said):
+        return said
+    return f"{prefix}, {said}" if said else prefix
 
 
 def _sweep(entry: dict, index: int, source: str) -> list[dict]:
     where = f"sweep[{index}]"
     prefix = name_text(entry.get("name", where), source, f"{where}.name")
     axes = {k: _axis_values(k, v) for k, v in entry.items() if k != "name"}
-    out = []
-    for chosen in sweep_combinations(axes, source, where):
-        label = " ".join(f"{k} {_words(v)}" for k, v in chosen.items() if len(axes[k]) > 1)
-        out.append({"name": f"{prefix} {label}".strip(), **chosen})
-    return out
+    return [{"name": sweep_name(prefix, chosen), **chosen} for chosen in sweep_combinations(axes, source, where)]
 
 
 def _axis_values(key: str, value) -> list:
@@ -240,6 +298,6 @@ def read_campaign(doc: dict, head: dict, source: str) -> tuple[EyeSettings, tupl
 def _describe(c: EyeConfiguration) -> str:
     """What an item compares, for messages: the eye, its pupil, accommodation, field, light and lens."""
     light = "photopic" if c.wavelength_nm is None else f"{c.wavelength_nm:g} nm"
-    lens = "no lens" if c.lens is None else "lens {:+g} {:+g} x {:g}".format(*c.lens)
+    lens = "no lens" if c.lens is None else f"trial lens {Prescription(*c.lens).minus_cylinder().format()}"
     return (f"{c.model}{'' if c.rx is None else f' Rx {c.rx}'}, pupil {c.pupil_mm:g} mm, "
             f"accommodation {c.accommodation_diopters:g} D, field {c.field_deg[0]:g},{c.field_deg[1]:g} deg, {light}, {lens}")
