@@ -63,7 +63,7 @@ SIGN_OR_COUNT = {0, 1}
 #: Limits outside vissim/checks.py that bound no value a user gives: internal budgets, tolerances and
 #: design rules, each beside the code it governs.
 NOT_INPUT_BOUNDS = {
-    "DISSIMILARITY_RANGE": "a report figure's axis",
+    "DISSIMILARITY_RANGE": "a report figure's axis", "DIFFERENCE_RANGE": "a report figure's scale",
     "MAX_SHIFT_PX": "the alignment's own search", "MAX_NORMAL_CONDITION": "a least-squares fit's method switch", "MAX_ALIGN_PASSES": "the alignment's own iterations",
     "MAX_HANDSHAKE_BYTES": "the scheduler protocol's message size",
     "MIN_AIR_GAP_MM": "a layout rule on derived lens positions",

@@ -82,7 +82,7 @@ report = Path(__file__).resolve().parents[2] / "validation" / "reports" / "eye" 
 if report.exists():
     with report.open(newline="") as rows_file:
         row = next(r for r in csv.DictReader(rows_file)
-                   if r["configuration"] == "trial lens lens 1" and r["simulation"] == "schematic_wave")
+                   if r["configuration"] == "trial lens +1.00 DS" and r["simulation"] == "schematic_wave")
     print(f"committed row:  PSNR {float(row['psnr_db']):.4f} dB, SSIM {float(row['ssim']):.4f}, "
           f"{float(row['over_floor_db']):+.4f} dB over the noise floor ({float(row['noise_floor_psnr_db']):.4f} dB)")
 

@@ -53,11 +53,14 @@ def test_the_eye_campaign_s_sweeps_are_named_in_words():
 
 
 def test_a_sweep_keeps_its_name_where_its_settings_do_not_say_it():
-    assert sweep_name("baseline", {"pupil_mm": 3.0}) == "baseline, 3 mm pupil"
-    assert sweep_name("pupil", {"pupil_mm": 3.0}) == "3 mm pupil"
-    assert sweep_name("field", {"field": [10.0, 5.0]}) == "field 10°, 5° (x, y)"
+    assert sweep_name("baseline", {"pupil_diameter_mm": 3.0}) == "baseline, 3 mm pupil"
+    assert sweep_name("pupil", {"pupil_diameter_mm": 3.0}) == "3 mm pupil"
+    assert sweep_name("field", {"field_deg": [10.0, 5.0]}) == "field 10°, 5° (x, y)"
+    assert sweep_name("light", {"spectrum": "photopic"}) == "photopic light"
+    assert sweep_name("light", {"wavelength_nm": 450.0}) == "450 nm light"
+    assert sweep_name("myope", {"prescription": -3.0}) == "myope, eye Rx -3.00 DS"
     # a +1.00 cylinder at 90 is +1.00 -1.00 x 180: the same power in minus cylinder
-    assert sweep_name("lens", {"lens": {"cylinder": 1.0, "axis": 90}}) == "trial lens +1.00 -1.00 x 180"
+    assert sweep_name("lens", {"lens": {"cylinder_diopters": 1.0, "axis_deg": 90}}) == "trial lens +1.00 -1.00 x 180"
     assert np.allclose(Prescription.parse("+1.00 -1.00 x 180").power_matrix(), Prescription(0.0, 1.0, 90.0).power_matrix())
 
 

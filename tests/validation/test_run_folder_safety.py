@@ -71,9 +71,10 @@ def test_two_depth_configurations_with_one_name_are_refused(tmp_path):
 def test_two_eye_items_with_one_name_are_refused_naming_both(tmp_path):
     """The eye kind calls the engine's one check: an item and a sweep's combination that share a name."""
     path = tmp_path / "eye.toml"
-    path.write_text("[campaign]\nkind = 'eye'\n[[item]]\nname = 'p 3'\npupil_diameter_mm = 3.0\n"
-                    "[[sweep]]\nname = 'p'\npupil_diameter_mm = [4.0, 5.0]\n[[sweep]]\nname = 'p 3'\npupil_diameter_mm = 6.0\n")
-    with pytest.raises(VissimInputError, match=r"item\[0\] and sweep\[1\] p 3: two configurations named 'p 3'") as err:
+    path.write_text("[campaign]\nkind = 'eye'\n[[item]]\nname = 'p, 6 mm pupil'\npupil_diameter_mm = 3.0\n"
+                    "[[sweep]]\nname = 'p'\npupil_diameter_mm = [4.0, 6.0]\n")
+    with pytest.raises(VissimInputError, match=r"item\[0\] and sweep\[0\] p, 6 mm pupil: two configurations named "
+                                               r"'p, 6 mm pupil'") as err:
         load_campaign(path, check_memory=False)
     assert "pupil 3 mm" in str(err.value) and "pupil 6 mm" in str(err.value)  # what each compares
     assert "\n" not in str(err.value)
