@@ -12,7 +12,8 @@ from vissim.errors import VissimInputError, VissimTypeError
 __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
-           "EYE_RENDER_MAX_FIELD_DEG", "EYE_RENDER_MAX_THETA_DEG",
+           "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "EYE_MTF_RANGE_CYC_PER_DEG",
+           "mtf_cyc_per_deg", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE",
            "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "DEFAULT_MAX_LAYERS", "ATV_PARABOLA_WINDOW_DIOPTERS",
            "DEFAULT_LAYER_SPACING_FRACTION", "MAX_FIELD_NODES", "EYE_WAVELENGTH_RANGE_NM", "EYE_LIGHT_RANGE_NM", "eye_wavelength_nm", "ACCOMMODATION_RANGE_DIOPTERS",
@@ -96,9 +97,8 @@ EYE_LIGHT_RANGE_NM = (max(EYE_WAVELENGTH_RANGE_NM[0], EYE_RENDER_WAVELENGTH_RANG
                       min(EYE_WAVELENGTH_RANGE_NM[1], EYE_RENDER_WAVELENGTH_RANGE_NM[1]))
 #: Where CIE 1931 ȳ(λ) is tabulated (nm): a monochromatic spectral render divides it out.
 CIE_YBAR_RANGE_NM = (360.0, 830.0)
-#: The schematic-eye renderer: the chart's field angle at most this (deg), and the image's widest direction at most
-#: this far from the eye's optical axis (deg; its tables' reach).
-EYE_RENDER_MAX_FIELD_DEG = 45.0
+#: The schematic-eye renderer: the image's widest direction at most this far from the eye's optical axis (deg; its
+#: tables' reach). A chart's field angle is held to `MAX_FIELD_DEG`, which keeps a chart's image within it.
 EYE_RENDER_MAX_THETA_DEG = 60.0
 #: A depth scene needing more layers is refused unless its ``max_layers`` is raised (or None: no limit).
 DEFAULT_MAX_LAYERS = 256
@@ -157,9 +157,13 @@ NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
 #: peaks at A ≈ 5.8 D and falls beyond: we accept 0-6 D, the range over which it rises (the
 #: Field Guide gives no range; the FRED example accommodates to 4 D).
 ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
-#: A field angle through a schematic eye, degrees from its optical axis per axis: the models are
-#: built for 0-40; beyond, rays may miss a surface (refused by the trace, naming it); 90 is grazing.
-MAX_FIELD_DEG = 89.0
+#: A field angle through an eye, degrees per axis (x, y), for every command, file and function that takes one
+#: (`eye`, `psf`, `blur`, `render eye`, eye and population campaigns, `build_eye`'s traces): the schematic models are
+#: built for 0-40 deg and the measured eyes go to 40 (Jaeken & Artal 2012: -40 to 40 horizontally); every model
+#: traces a 6 mm pupil to (+-45, +-45), and the renderer's tables keep a chart there in view. Beyond, the widest
+#: pupils' rays start to miss the cornea (a 9.9 mm pupil already at -45 deg in Navarro's eye: that trace refuses, naming
+#: the surface); from 55-80 deg every model's do.
+MAX_FIELD_DEG = 45.0
 #: A field-dependent blur's PSF nodes (each a trace and a PSF, 0.2-0.4 s on 2 cores, with progress shown): at most
 #: this many per image (the default 2 deg step over a 4K image at 1 arcmin/px needs 627).
 MAX_FIELD_NODES = 1600
@@ -173,6 +177,17 @@ LENS_GAP_RANGE_MM = (0.0, 1000.0)
 F_NUMBER_RANGE = (0.5, 128.0)
 FOCAL_LENGTH_RANGE_MM = (1.0, 1000.0)
 OBJECT_DISTANCE_RANGE_M = (0.01, 1000.0)
+
+
+def eye_field_deg(value, name: str = "field angle") -> tuple[float, float]:
+    """An eye's field angle (x, y), degrees, each within +-`MAX_FIELD_DEG`."""
+    try:
+        x, y = value
+    except (TypeError, ValueError):
+        raise VissimInputError(f"{name} must be two angles (x, y) in degrees, got {describe(value)}") from None
+    limit = (-MAX_FIELD_DEG, MAX_FIELD_DEG)
+    return (number_within(x, f"{name} x", "deg", limit, " (an eye's field)"),
+            number_within(y, f"{name} y", "deg", limit, " (an eye's field)"))
 
 
 def accommodation_diopters(value, name: str = "accommodation") -> float:
@@ -253,6 +268,18 @@ ENTRANCE_PUPIL_RANGE_MM = MIN_PUPIL_MM, MAX_PUPIL_MM = 0.01, 1000.0
 EYE_PUPIL_RANGE_MM = 1.0, 10.0
 
 
+#: Spatial frequencies an eye's MTF is asked at, cycles per degree: from 0 to the incoherent cutoff of the widest eye
+#: pupil in the shortest light an eye is traced in (`EYE_PUPIL_RANGE_MM` over `EYE_WAVELENGTH_RANGE_NM`: 10 mm / 365 nm,
+#: 478 cycles/deg); beyond, every eye's MTF is 0.
+EYE_MTF_RANGE_CYC_PER_DEG = (0.0, EYE_PUPIL_RANGE_MM[1] * 1e-3 / (EYE_WAVELENGTH_RANGE_NM[0] * 1e-9) * math.pi / 180.0)
+
+
+def mtf_cyc_per_deg(values, name: str = "MTF frequency") -> list[float]:
+    """Frequencies an eye's MTF is asked at, each within `EYE_MTF_RANGE_CYC_PER_DEG`."""
+    return [number_within(v, name, "cycles/deg", EYE_MTF_RANGE_CYC_PER_DEG, " (to the widest eye pupil's cutoff)")
+            for v in values]
+
+
 def pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
     """An entrance pupil diameter within `ENTRANCE_PUPIL_RANGE_MM` mm."""
     return _pupil_within(value, name, ENTRANCE_PUPIL_RANGE_MM, "")
@@ -294,6 +321,11 @@ def size_px(value, name: str = "size_px") -> tuple[int, int]:
         raise VissimInputError(f"{name} must be (rows, cols) in whole pixels >= 1, got {value!r}")
     return size  # type: ignore[return-value]
 
+
+#: A chart's row step, LogMAR: more than 0, at most the whole `LOGMAR_RANGE`.
+LOGMAR_STEP_RANGE = (0.0, 3.0)
+#: A printed chart's resolution, dots per inch: 1 to beyond any printer's (photo printers 4800, imagesetters 5080).
+PRINT_DPI_RANGE = (1.0, 10000.0)
 
 #: Largest PSF field a user may ask for, pixels (``psf --size``, `compute_psf`): 16384² complex doubles take 4 GiB.
 MAX_PSF_SIZE_PX = 16384

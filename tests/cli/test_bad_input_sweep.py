@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import signal
 import time
 from dataclasses import dataclass, field
@@ -59,8 +60,8 @@ BASES = {
                   "-o", "{out}/fit.json"],
     ("psf",): ["psf", "--rx", "-2", "--pupil-mm", "3", "--size", "64", "-o", "{out}/p.exr"],
     ("chart",): ["chart", "--logmar", "1", "-o", "{out}/c.exr"],
-    ("blur",): ["blur", "{in}/grey.exr", "-o", "{out}/b.exr", "--rx", "-2", "--pupil-mm", "3"],
-    ("blur-depth",): ["blur-depth", "{in}/grey.exr", "{in}/depth.npy", "-o", "{out}/b.exr", "--rx", "-2",
+    ("blur",): ["blur", "{in}/rgb.exr", "-o", "{out}/b.exr", "--rx", "-2", "--pupil-mm", "3"],
+    ("blur-depth",): ["blur-depth", "{in}/rgb.exr", "{in}/depth.npy", "-o", "{out}/b.exr", "--rx", "-2",
                       "--pupil-mm", "3"],
     ("demo",): ["demo", "-o", "{out}/demo"],
     ("render", "bench"): ["render", "bench", "--spp", "4", "--size", "21x21", "-o", "{out}/r.exr"],
@@ -87,8 +88,8 @@ NEEDS = {
     ("blur", "--accommodation-diopters"): ["--eye-model", "navarro-1985"],
     ("psf", "--lca-reference-nm"): ["--lca"],
     ("blur", "--lca-reference-nm"): ["--lca"],
-    ("psf", "--zernike-pupil-mm"): ["--zernike", "Z(2,0)=0.1"],
-    ("blur", "--zernike-pupil-mm"): ["--zernike", "Z(2,0)=0.1"],
+    ("psf", "--zernike-pupil-mm"): ["--zernike", "2,0=0.1"],
+    ("blur", "--zernike-pupil-mm"): ["--zernike", "2,0=0.1"],
     ("eye", "--mtf-cyc-per-mm"): [],
     ("blur", "--channel-fwhm-nm"): ["--channels-nm", "450,550,650"],
     ("eye", "--cylinder"): ["--sphere", "0", "--axis", "90"],
@@ -311,6 +312,19 @@ def _missing(argv, extra):
     return kept
 
 
+def _names(option, value):
+    """What an error about ``value`` of ``option`` may name: the option, the value as typed or quoted, or a number
+    in it as the error writes numbers."""
+    names = [option, repr(value)] + ([value] if value.strip() else [])
+    for token in re.findall(r"[-+]?(?:\d+\.?\d*(?:e[-+]?\d+)?|nan|inf)", value):
+        names.append(token)
+        try:
+            names.append(f"{float(token):g}")
+        except ValueError:
+            pass
+    return tuple(dict.fromkeys(names))
+
+
 def cli_cases():
     cases = []
     for path, parser in _leaves(build_parser()):
@@ -323,9 +337,8 @@ def cli_cases():
                 raise AssertionError(f"{' '.join(path)} {action.dest}: no bad values for it; add them to the sweep")
             option = action.option_strings[-1] if action.option_strings else action.dest
             for value in values:
-                names = (option, *([value] if value.strip() else []))
                 cases.append(Case(f"{' '.join(path)} {option}={value!r}", tuple(_argv_with(path, parser, base, action, value)),
-                                  names))
+                                  _names(option, value)))
     return cases
 
 
@@ -472,12 +485,17 @@ def _mutations(document):
         for index, table in enumerate(tables):
             where = f"{section}[{index}]" if isinstance(body, list) else section
             for key, value in table.items():
-                wrong = list(WRONG_BY_KEY.get(key, [])) + [w for w in WRONG_ANY if (key, repr(w)) not in ANY_OK]
+                wrong = _unique([*WRONG_BY_KEY.get(key, []), *(w for w in WRONG_ANY if (key, repr(w)) not in ANY_OK)])
                 for bad in wrong:
                     if bad == value or (isinstance(value, str) and bad == "abc" and key in ("name", "description")):
                         continue  # a name may be any text
                     yield f"{where}.{key}={bad!r}"[:90], _replace(document, section, index, key, bad), (key,)
             yield f"{where}.no_such_key", _replace(document, section, index, "no_such_key", 1.0), ("no_such_key",)
+
+
+def _unique(values):
+    """``values`` without repeats (by repr: NaN, lists and tables included)."""
+    return list({repr(v): v for v in values}.values())
 
 
 def _replace(document, section, index, key, value):
@@ -543,7 +561,7 @@ def _scene_mutations(document):
             for key, value in table.items():
                 if key.startswith("["):
                     continue
-                for bad in [*WRONG_BY_KEY.get(key, []), *SCENE_WRONG]:
+                for bad in _unique([*WRONG_BY_KEY.get(key, []), *SCENE_WRONG]):
                     if bad == value or (isinstance(value, str) and bad == "abc" and key in ("prescription",)):
                         continue
                     yield f"{where}.{key}={bad!r}"[:90], _replace(document, section, index, key, bad), (key,)
@@ -564,6 +582,8 @@ def inputs(tmp_path_factory):
     grey = np.full((48, 64), 0.5, np.float32)
     for name in ("grey.exr", "grey_reference.exr"):
         write_image(folder / name, grey, provenance=make_provenance(command="test", arcmin_per_px=1.0))
+    write_image(folder / "rgb.exr", np.full((48, 64, 3), 0.5, np.float32),
+                provenance=make_provenance(command="test", arcmin_per_px=1.0))
     np.save(folder / "depth.npy", np.full((48, 64), 2.0))
     (folder / "folder").mkdir()
     (folder / "not_an_image.png").write_text("this is no image\n")
@@ -635,7 +655,8 @@ def test_bad_input_is_refused_up_front(case, inputs, tmp_path, capsys, monkeypat
     assert code == 2, f"exit {code}: {argv}\n{stdout[-1000:]}\n{err[-2000:]}"
     assert "Traceback" not in err, err
     assert len(lines) == 1 and lines[0].startswith("vissim: error: "), err
-    assert any(name in lines[0] for name in case.names), f"{lines[0]!r} names none of {case.names}"
+    names = [name.replace("{in}", str(case_in)) for name in case.names]
+    assert any(name in lines[0] for name in names), f"{lines[0]!r} names none of {names}"
     assert _listing(out) == [], f"written: {_listing(out)}"
     assert _listing(inputs) == before
     assert not list(tmp_path.rglob(LOCK_FILE_NAME))

@@ -54,7 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, eye_wavelength_nm, positive_number
+from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, eye_pupil_diameter_mm, eye_wavelength_nm, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.refraction import ENTRANCE_PUPIL_PLANE
@@ -115,8 +115,8 @@ def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:
         bad = ~np.isfinite(value) | (np.abs(value) > MAX_FIELD_DEG)
         if np.any(bad):
             first = float(np.ravel(value)[np.argmax(np.ravel(bad))])
-            raise VissimInputError(f"field angle {first:g} deg is beyond +-{MAX_FIELD_DEG:g} deg"
-                                   if math.isfinite(first) else f"field angle must be finite deg, got {first}")
+            raise VissimInputError(f"field angle {first:g} deg is beyond an eye's field, +-{MAX_FIELD_DEG:g} deg per "
+                                   "axis" if math.isfinite(first) else f"field angle must be finite deg, got {first}")
     tx, ty = np.broadcast_arrays(np.tan(np.radians(fx)), np.tan(np.radians(fy)))
     o = np.stack([tx, ty, np.ones_like(tx)], axis=-1)
     o /= np.linalg.norm(o, axis=-1, keepdims=True)
@@ -252,7 +252,7 @@ def _pupils(eye: SchematicEye, wavelengths_nm: np.ndarray, pupil_mm, iris_mm) ->
     human = EYE_PUPIL_RANGE_MM[1]
     widest = min(human, max_iris_mm(eye))
     if pupil_mm is not None:
-        pupil, given = positive_number(pupil_mm, "entrance pupil diameter", "mm"), "entrance pupil"
+        pupil, given = eye_pupil_diameter_mm(pupil_mm, "entrance pupil diameter"), "entrance pupil"
         widest_pupil = float(np.min(entrance_pupils_from_irises_mm(eye, widest, wavelengths_nm)))
         if pupil > widest_pupil:  # checked before the search, which a huge pupil would send out of range
             raise VissimInputError(f"entrance pupil {pupil:g} mm, wider than the {widest_pupil:.3g} mm that the "
@@ -277,6 +277,9 @@ def _pupils(eye: SchematicEye, wavelengths_nm: np.ndarray, pupil_mm, iris_mm) ->
         if np.max(pupils) > human:  # the range is the pupil one sees; the cornea magnifies the iris (about 1.13)
             raise VissimInputError(f"{asked} gives a {float(np.max(pupils)):.3g} mm entrance pupil, wider than a human "
                                    f"eye's {human:g} mm: give a smaller iris")
+        if np.min(pupils) < EYE_PUPIL_RANGE_MM[0]:
+            raise VissimInputError(f"{asked} gives a {float(np.min(pupils)):.3g} mm entrance pupil, narrower than a "
+                                   f"human eye's {EYE_PUPIL_RANGE_MM[0]:g} mm: give a larger iris")
     return pupils, irises, given
 
 
@@ -433,7 +436,8 @@ def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0)
         waves = np.repeat(wavelengths, [len(edge) for _, edge in grids])
         bundle, starts = trace_to_retina(eye, targets, waves, field_deg=field, lenses=lenses, phase=phase)
     except VissimInputError as error:
-        raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
+        raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg, {given} {_widest(pupils, irises, given)} "
+                               f"mm: {error}; the {eye.name} eye traces a smaller pupil or field angle") from None
     fronts, first = [], 0
     for k, (_, edge) in enumerate(grids):
         rays = slice(first, first + len(edge))
@@ -442,6 +446,11 @@ def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0)
                                     (float(system[k]), float(irises[k]), given, entrance_z[k], float(pupils[k])),
                                     lenses))
     return fronts
+
+
+def _widest(pupils, irises, given: str) -> str:
+    """The widest pupil (or iris) of a trace, as its refusal names it."""
+    return f"{float(np.max(pupils if given == 'entrance pupil' else irises)):.3g}"
 
 
 def _fitted_front(eye, field, wavelength, bundle, starts, edge, max_order, pupil, lenses) -> EyeWavefront:
