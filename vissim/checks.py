@@ -13,7 +13,9 @@ __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATIO
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
            "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "EYE_MTF_RANGE_CYC_PER_DEG",
-           "mtf_cyc_per_deg", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE",
+           "mtf_cyc_per_deg", "eye_prescription_meridians", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE", "BENCH_LENGTH_RANGE_MM", "DISPLAY_PPI_RANGE",
+           "ATV_PARABOLA_WINDOW_RANGE_DIOPTERS", "SUMMATION_RANGE_ARCMIN", "TEXELS_PER_PX_RANGE",
+           "PANEL_PADDING_RANGE_ARCMIN", "GUESS_LAPSE_RANGE", "sampler_seed",
            "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "DEFAULT_MAX_LAYERS", "ATV_PARABOLA_WINDOW_DIOPTERS",
            "DEFAULT_LAYER_SPACING_FRACTION", "MAX_FIELD_NODES", "EYE_WAVELENGTH_RANGE_NM", "EYE_LIGHT_RANGE_NM", "eye_wavelength_nm", "ACCOMMODATION_RANGE_DIOPTERS",
@@ -200,6 +202,13 @@ def trial_lens_diopters(value, name: str = "trial lens power") -> float:
     return number_within(value, name, "dioptres", TRIAL_LENS_RANGE_DIOPTERS, " (a trial lens)")
 
 
+def eye_prescription_meridians(sphere_diopters, cylinder_diopters, name: str) -> None:
+    """An eye's prescription (sphere, cylinder) lies, in each principal meridian, within `TRIAL_LENS_RANGE_DIOPTERS`:
+    the trial lenses that would correct it (every eye a user describes: `build_eye`, depth viewers, campaigns)."""
+    for meridian in (sphere_diopters, sphere_diopters + cylinder_diopters):
+        trial_lens_diopters(meridian, f"the principal meridian of {name}")
+
+
 def vertex_distance_mm(value, name: str = "vertex distance") -> float:
     """A vertex distance within `VERTEX_DISTANCE_RANGE_MM`."""
     return number_within(value, name, "mm", VERTEX_DISTANCE_RANGE_MM)
@@ -327,6 +336,30 @@ LOGMAR_STEP_RANGE = (0.0, 3.0)
 #: A printed chart's resolution, dots per inch: 1 to beyond any printer's (photo printers 4800, imagesetters 5080).
 PRINT_DPI_RANGE = (1.0, 10000.0)
 
+#: A bench part's length, mm (the ATV's tube, eye relief, a lens's thickness and clear aperture): within a metre,
+#: the scale of any bench (the thesis's tube is 125 mm).
+BENCH_LENGTH_RANGE_MM = (0.0, 1000.0)
+#: A display's resolution, pixels per inch: to beyond microdisplays' (about 3000-5000; the thesis's phone 326).
+DISPLAY_PPI_RANGE = (1.0, 10000.0)
+
+#: The ATV analysis's local parabola window, dioptres: more than 0 (a parabola needs neighbouring lenses) to the whole
+#: trial set (`TRIAL_LENS_RANGE_DIOPTERS`: 60 D).
+ATV_PARABOLA_WINDOW_RANGE_DIOPTERS = (0.0, 60.0)
+#: Spatial summation (Ricco's area) diameter, arcmin: more than 0 to 10 deg, beyond the 1-2 deg of the dark-adapted
+#: periphery (the thesis takes 10 arcmin).
+SUMMATION_RANGE_ARCMIN = (0.0, 600.0)
+
+#: A chart texture's texels per image pixel (per axis): from a texture as coarse as 4 pixels a texel to 64 (the
+#: benches take 4; beyond 16 a texel is finer than any sample lands on).
+TEXELS_PER_PX_RANGE = (0.25, 64.0)
+
+#: Blank paper around a depth panel's chart, arcmin: none to 90 deg (a panel seen from its front fills at most the half
+#: of the view before it).
+PANEL_PADDING_RANGE_ARCMIN = (0.0, 90.0 * 60.0)
+
+#: A psychometric function's guess and lapse rates: at least 0, below one half (at 0.5 the observer's "yes" is a coin).
+GUESS_LAPSE_RANGE = (0.0, 0.5)
+
 #: Largest PSF field a user may ask for, pixels (``psf --size``, `compute_psf`): 16384² complex doubles take 4 GiB.
 MAX_PSF_SIZE_PX = 16384
 #: Most samples per pixel a render takes (Mitsuba counts them in 32 bits; 65536 spp of the
@@ -338,6 +371,15 @@ MAX_SPP = 1 << 16
 MAX_SAMPLER_SEED = 2**32 - 1
 #: Campaign seeds: the no-lens render uses seed_a + seed_b + 1, which must stay a sampler seed.
 MAX_CAMPAIGN_SEED = (MAX_SAMPLER_SEED - 1) // 2
+
+
+def sampler_seed(value, name: str = "seed") -> int:
+    """A render's seed: a whole number within 0-`MAX_SAMPLER_SEED` (the samplers' 32-bit state)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value or value in (math.inf, -math.inf) \
+            or not 0 <= value <= MAX_SAMPLER_SEED or value != int(value):
+        raise VissimInputError(f"{name} must be a whole number within 0-{MAX_SAMPLER_SEED} (the samplers' 32-bit "
+                               f"state), got {value!r}")
+    return int(value)
 
 
 def samples_per_pixel(value, name: str = "spp") -> int:
@@ -359,6 +401,8 @@ MAX_DESCRIPTION_CHARS = 2000
 
 def name_problem(value: str) -> str | None:
     """Why ``value`` cannot be a campaign or configuration name (too long, a control character), or None."""
+    if not value.strip():
+        return f"a name is at least one visible character, got {value!r}"
     if len(value) > MAX_NAME_CHARS:
         return (f"a name is at most {MAX_NAME_CHARS} characters, got {len(value)} "
                 f"({value[:24]!r}...)")

@@ -18,6 +18,7 @@ through `vissim.cli.main`.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import re
 import signal
@@ -111,8 +112,9 @@ NEEDS = {
 ALWAYS_BAD = ["nan", "-nan", "abc", "", "1e999x", "-inf"]
 #: Options for which infinity means something (a step-function observer's slope).
 INF_OK = {"luminance_slope", "code_value_slope"}
-#: Options at which 1e300 is legitimate: a step observer's slope; an observer who never sees the display.
-LARGE_OK = {"luminance_slope", "code_value_slope", "threshold"}
+#: Options at which 1e300 is legitimate: a step observer's slope; an observer who never sees the display; a blur
+#: no layer reaches (blur-depth --coarse-blur-px: off, as its default).
+LARGE_OK = {"luminance_slope", "code_value_slope", "threshold", "coarse_blur_px"}
 
 
 def _eye_pupil(path):
@@ -170,12 +172,19 @@ RANGES = {
     "layer_spacing_fraction": checks.LAYER_SPACING_FRACTION_RANGE,
     "display_code": checks.DISPLAY_CODE_RANGE,
     "full_capture_code": checks.DISPLAY_CODE_RANGE,
-    "guess": (0.0, 0.99),
-    "lapse": (0.0, 0.99),
-    "level": (0.01, 0.99),
+    "window_diopters": checks.ATV_PARABOLA_WINDOW_RANGE_DIOPTERS,
+    "summation_arcmin": checks.SUMMATION_RANGE_ARCMIN,
+    "thickness_mm": checks.BENCH_LENGTH_RANGE_MM,
+    "dpi": checks.PRINT_DPI_RANGE,
+    "logmar_step": checks.LOGMAR_STEP_RANGE,
+    "focus_distance_m": checks.OBJECT_DISTANCE_RANGE_M,
+    "margin_px": checks.MARGIN_RANGE_PX,
+    "field_step_deg": (0.0, 2 * checks.MAX_FIELD_DEG),
     "max_power_diopters": checks.FIT_POWER_RANGE_DIOPTERS,
     "model_error_diopters": checks.MODEL_ERROR_RANGE_DIOPTERS,
 }
+#: Values beyond those above: the ends of ranges open at both (a confidence level, a probability).
+EXTRA = {"level": ["0", "1", "1.5"], "guess": ["-0.1", "0.5", "1"], "lapse": ["-0.1", "0.5", "1"]}
 #: Quantities that are positive (zero and a negative value are refused) though no range above names them.
 POSITIVE = {"iris_mm", "channel_fwhm_nm", "dpi", "focus_distance_m", "field_step_deg", "max_layers", "summation_arcmin",
             "window_diopters", "gamma", "luminance_slope", "code_value_slope", "resolution", "rays", "object_distance_m",
@@ -218,7 +227,7 @@ TEXT_BAD = {
 PATH_BAD = ["{in}/missing.exr", "{in}/folder", "{in}/not_an_image.png"]
 #: Options not swept here, with why.
 NOT_SWEPT = {"output": "where outputs go: tests/cli/test_outputs_never_inputs.py and test_output_safety.py",
-             "all_in_focus": "an output path", "depth_out": "an output path"}
+             ("render", "depth", "all_in_focus"): "an output path", ("render", "depth", "depth"): "an output path"}
 
 
 def _leaves(parser, path=()):
@@ -267,6 +276,7 @@ def _option_values(path, action):
             values += ["0", "-1"]
         if dest in NONNEGATIVE:
             values += ["-1"]
+        values += EXTRA.get(dest, [])
         return list(dict.fromkeys(values))
     text = TEXT_BAD.get(path + (dest,), TEXT_BAD.get(dest))
     if text is not None:
@@ -315,7 +325,7 @@ def _missing(argv, extra):
 def _names(option, value):
     """What an error about ``value`` of ``option`` may name: the option, the value as typed or quoted, or a number
     in it as the error writes numbers."""
-    names = [option, repr(value)] + ([value] if value.strip() else [])
+    names = [option, repr(value)] + ([value] if value.strip() else []) + [repr(c) for c in value]
     for token in re.findall(r"[-+]?(?:\d+\.?\d*(?:e[-+]?\d+)?|nan|inf)", value):
         names.append(token)
         try:
@@ -330,7 +340,8 @@ def cli_cases():
     for path, parser in _leaves(build_parser()):
         base = BASES[path]
         for action in parser._actions:
-            if action.dest in ("help", "version") or action.nargs == 0 or action.dest in NOT_SWEPT:
+            if action.dest in ("help", "version") or action.nargs == 0 or action.dest in NOT_SWEPT \
+                    or path + (action.dest,) in NOT_SWEPT:
                 continue
             values = _option_values(path, action)
             if values is None:
@@ -355,7 +366,7 @@ def _toml_value(value) -> str:
     if isinstance(value, int):
         return str(value)
     if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return json.dumps(value)  # a TOML basic string: JSON's escapes
     if isinstance(value, list):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     if isinstance(value, dict):
@@ -431,7 +442,7 @@ WRONG_BY_KEY = {
     "scene": ["missing.toml", ""],
     "eye": ["abc", "-40 DS", 7],
     "camera": [{"f_number": 0.1, "focus_distance_m": 1.0}, {"f_number": 5.0, "focus_distance_m": -1.0},
-               {"f_number": 5.0, "focus_distance_m": 1.0, "lenses": [100.0]}, {"f_number": 5.0}],
+               {"f_number": 5.0, "focus_distance_m": 1.0, "lenses": [100.0]}],
     "description": [7, "x" * (checks.MAX_DESCRIPTION_CHARS + 1)],
 }
 #: Keys where the WRONG_ANY value named is legitimate.
@@ -439,7 +450,7 @@ ANY_OK = {("chart_distance_m", "inf")}
 
 DSLR = {
     "campaign": {"name": "sweep", "f_number": 5.0, "spp": 4, "seeds": [1, 2], "arcmin_per_px": 1.0,
-                 "tile_px": [48, 48], "chart_distance_m": 0.9144, "vertex_distance_mm": 10.0, "wavelength_nm": 550.0,
+                 "tile_px": [64, 64], "chart_distance_m": 0.9144, "vertex_distance_mm": 10.0, "wavelength_nm": 550.0,
                  "simulations": ["wave", "geometric"], "inputs": ["render", "synthetic"], "wave_truth": False,
                  "fit_rx": False},
     "sweep": [{"name": "myopia", "letters": ["K"], "logmars": [1.0], "polarities": ["black-on-white"],
@@ -454,8 +465,10 @@ EYE = {
     "campaign": {"kind": "eye", "name": "sweep", "spp": 4, "seeds": [1, 2], "size_px": [16, 16],
                  "arcmin_per_px": 1.0, "chart_distance_m": 6.0, "oversample": 1},
     "sweep": [{"name": "pupil", "pupil_mm": [3.0, 4.0], "lens": [1.0, {"cylinder": 1.0, "axis": 90}],
-               "accommodation": 1.0, "field": [[10.0, 0.0]], "light": "photopic"}],
-    "item": [{"name": "myope", "rx": -3.0, "lens": -3.0, "pupil_mm": 3.0, "light": 550.0, "field": 5.0}],
+               "accommodation": 1.0, "light": "photopic"},
+              {"name": "field", "field": [[10.0, 0.0], [0.0, -20.0]]}],
+    "item": [{"name": "myope", "rx": -3.0, "lens": -3.0, "pupil_mm": 3.0, "light": 550.0},
+             {"name": "off axis", "field": 5.0}],
 }
 MEASURED = {
     "campaign": {**EYE["campaign"], "name": "measured"},
@@ -487,10 +500,47 @@ def _mutations(document):
             for key, value in table.items():
                 wrong = _unique([*WRONG_BY_KEY.get(key, []), *(w for w in WRONG_ANY if (key, repr(w)) not in ANY_OK)])
                 for bad in wrong:
-                    if bad == value or (isinstance(value, str) and bad == "abc" and key in ("name", "description")):
-                        continue  # a name may be any text
-                    yield f"{where}.{key}={bad!r}"[:90], _replace(document, section, index, key, bad), (key,)
+                    if _legitimate(key, value, bad):
+                        continue
+                    yield (f"{where}.{key}={bad!r}"[:90], _replace(document, section, index, key, bad),
+                           _key_names(key) + _value_names(bad))
             yield f"{where}.no_such_key", _replace(document, section, index, "no_such_key", 1.0), ("no_such_key",)
+
+
+#: Keys at which an empty list is legitimate (a holder without lenses).
+EMPTY_OK = {"lenses"}
+
+
+def _legitimate(key, value, bad) -> bool:
+    """Whether ``bad`` is no mistake at ``key`` (whose valid value is ``value``): a name may be any text, a switch
+    either boolean, an empty holder holds no lens."""
+    if repr(bad) == repr(value):
+        return True
+    if isinstance(value, str) and isinstance(bad, str) and key in ("name", "description") \
+            and bad not in WRONG_BY_KEY.get(key, []):
+        return True
+    if isinstance(value, bool) and isinstance(bad, bool):
+        return True
+    if key == "letters" and isinstance(value, str) and isinstance(bad, str) and bad.isalpha():
+        return True  # a scene's panel letters are one string of Sloan letters
+    return bad == [] and key in EMPTY_OK
+
+
+def _value_names(value):
+    """How a refusal may write ``value``: as typed, a number as `%g` writes it, or a number inside it."""
+    if isinstance(value, dict):
+        return (repr(value), *(name for v in value.values() for name in _value_names(v)))
+    if isinstance(value, list):
+        return (repr(value), *(name for v in value for name in _value_names(v)))
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return (repr(value), str(value))
+    return (repr(value), f"{value:g}", str(value))
+
+
+def _key_names(key):
+    """What a refusal of ``key`` may name: the key, or the one value of a list key (``logmars``: ``logmar``)."""
+    singular = key[:-3] + "y" if key.endswith("ies") else key[:-1] if key.endswith("s") else key
+    return (key, singular)
 
 
 def _unique(values):
@@ -562,9 +612,10 @@ def _scene_mutations(document):
                 if key.startswith("["):
                     continue
                 for bad in _unique([*WRONG_BY_KEY.get(key, []), *SCENE_WRONG]):
-                    if bad == value or (isinstance(value, str) and bad == "abc" and key in ("prescription",)):
+                    if _legitimate(key, value, bad):
                         continue
-                    yield f"{where}.{key}={bad!r}"[:90], _replace(document, section, index, key, bad), (key,)
+                    yield (f"{where}.{key}={bad!r}"[:90], _replace(document, section, index, key, bad),
+                           _key_names(key) + _value_names(bad))
             yield f"{where}.no_such_key", _replace(document, section, index, "no_such_key", 1.0), ("no_such_key",)
 
 
@@ -608,9 +659,15 @@ def test_the_sweep_has_at_least_300_cases():
     assert len({case.id for case in CASES}) == len(CASES)
 
 
+#: Commands with no input to sweep: ``demo`` takes its output folder alone.
+NOTHING_TO_SWEEP = {("demo",)}
+
+
 def test_every_leaf_command_is_swept():
     swept = {case.argv[:2] for case in CASES} | {case.argv[:1] for case in CASES}
     for path, _ in _leaves(build_parser()):
+        if path in NOTHING_TO_SWEEP:
+            continue
         assert path in BASES and tuple(BASES[path][:len(path)]) in swept, path
 
 
@@ -661,3 +718,85 @@ def test_bad_input_is_refused_up_front(case, inputs, tmp_path, capsys, monkeypat
     assert _listing(inputs) == before
     assert not list(tmp_path.rglob(LOCK_FILE_NAME))
     assert seconds < SECONDS
+
+
+# -- limits every command shares (one decision in vissim.checks each) -------------------------------------------
+def _one_error(capsys, argv) -> str:
+    code = main([str(a) for a in argv])
+    _, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("vissim: error: "), err
+    return lines[0]
+
+
+@pytest.mark.parametrize("model", ["navarro-1985", "escudero-sanz-1999", "arizona", "le-grand", "liou-brennan-1997"])
+def test_every_model_traces_a_6_mm_pupil_to_the_corners_of_the_eye_field(model):
+    """The field limit is where rays still reach the retina: each schematic eye traces a 6 mm entrance pupil at
+    (+-MAX_FIELD_DEG, +-MAX_FIELD_DEG), 54.7 deg off axis (checks.MAX_FIELD_DEG's account)."""
+    from vissim.optics.eyes.eye import build_eye
+    from vissim.optics.eyes.psf_wavefront import eye_wavefront
+
+    limit = checks.MAX_FIELD_DEG
+    eye = build_eye(model, pupil_mm=6.0)
+    for field_deg in ((limit, limit), (-limit, limit), (limit, -limit), (-limit, -limit)):
+        assert eye_wavefront(eye, field_deg=field_deg).pupil_diameter_mm == pytest.approx(6.0)
+
+
+@pytest.mark.parametrize("argv", [
+    ["eye", "--pupil-mm", "3", "--field-deg", "{f},0"],
+    ["psf", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "0,-{f}", "-o", "{out}/p.exr"],
+    ["blur", "{image}", "--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "{f},0", "-o", "{out}/b.exr"],
+    ["render", "eye", "--field-deg", "-{f},0", "--size", "16x16", "--spp", "1", "-o", "{out}/e.exr"],
+    ["population", "jaeken-artal-2012", "--field-deg", "{f},0", "-o", "{out}/population"],
+], ids=["eye", "psf", "blur", "render eye", "population"])
+def test_one_eye_field_limit_for_every_command(capsys, tmp_path, inputs, argv):
+    beyond = f"{checks.MAX_FIELD_DEG + 0.5:g}"
+    out = tmp_path / "out"
+    out.mkdir()
+    line = _one_error(capsys, [a.replace("{f}", beyond).replace("{out}", str(out))
+                               .replace("{image}", str(inputs / "grey.exr")) for a in argv])
+    assert f"within -{checks.MAX_FIELD_DEG:g} to {checks.MAX_FIELD_DEG:g} deg" in line and beyond in line, line
+    assert _listing(out) == []
+
+
+def test_an_eye_campaign_keeps_the_same_field_limit(capsys, tmp_path):
+    beyond = checks.MAX_FIELD_DEG + 0.5
+    document = _replace(EYE, "item", 1, "field", beyond)
+    (tmp_path / "eye.toml").write_text(toml_text(document))
+    line = _one_error(capsys, ["validate", tmp_path / "eye.toml", "-o", tmp_path / "run"])
+    assert "item[1].field" in line and f"{beyond:g}" in line and f"{checks.MAX_FIELD_DEG:g}" in line, line
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_lens_at_the_cornea_is_one_rule_for_eye_and_render_eye(capsys):
+    """Vertex 0 (a lens touching the cornea) is within VERTEX_DISTANCE_RANGE_MM for every eye command; past its end
+    both refuse with one message."""
+    from vissim.render.eye_render import EyeRender
+
+    assert checks.VERTEX_DISTANCE_RANGE_MM[0] == 0.0
+    assert EyeRender(vertex_mm=0.0, lens=(-2.0, 0.0, 180.0)).vertex_mm == 0.0
+    assert main(["eye", "--pupil-mm", "3", "--sphere", "-2", "--vertex-mm", "0", "--json"]) == 0
+    capsys.readouterr()
+    beyond = f"{checks.VERTEX_DISTANCE_RANGE_MM[1] + 1:g}"
+    for argv in (["eye", "--pupil-mm", "3", "--sphere", "-2", "--vertex-mm", beyond],
+                 ["render", "eye", "--sphere", "-2", "--vertex-mm", beyond, "--size", "16x16", "-o", "unused.exr"]):
+        assert "--vertex-mm must be within 0-200 mm" in _one_error(capsys, argv)
+
+
+@pytest.mark.parametrize("argv", [
+    ["eye", "--pupil-mm", "{p}"],
+    ["psf", "--eye-model", "navarro-1985", "--pupil-mm", "{p}", "-o", "{out}/p.exr"],
+    ["render", "eye", "--pupil-mm", "{p}", "--size", "16x16", "--spp", "1", "-o", "{out}/e.exr"],
+    ["blur-depth", "{image}", "{depth}", "--rx", "-1", "--pupil-mm", "{p}", "-o", "{out}/b.exr"],
+    ["atv", "simulate", "--rx", "1", "--pupil-mm", "{p}", "-o", "{out}/sim"],
+], ids=["eye", "psf", "render eye", "blur-depth", "atv simulate"])
+@pytest.mark.parametrize("pupil_mm", [checks.EYE_PUPIL_RANGE_MM[0] - 0.5, checks.EYE_PUPIL_RANGE_MM[1] + 0.5])
+def test_one_eye_pupil_range_for_every_command(capsys, tmp_path, inputs, argv, pupil_mm):
+    out = tmp_path / "out"
+    out.mkdir()
+    line = _one_error(capsys, [a.replace("{p}", f"{pupil_mm:g}").replace("{out}", str(out))
+                               .replace("{image}", str(inputs / "rgb.exr")).replace("{depth}", str(inputs / "depth.npy"))
+                               for a in argv])
+    low, high = checks.EYE_PUPIL_RANGE_MM
+    assert f"within {low:g}-{high:g} mm" in line and f"{pupil_mm:g}" in line, line
+    assert _listing(out) == []

@@ -35,6 +35,7 @@ UNITS_BY_DEST = {
     "workers": "worker processes", "max_layers": "depth layers", "seed": "(a whole number)", "age": "years",
     "dpi": "dots per inch", "f_number": "(f-number)", "logmar": "LogMAR", "logmar_step": "LogMAR",
     "index": "(refractive index)", "gamma": "(display gamma)", "level": "(confidence level)",
+    "guess": "(a probability)", "lapse": "(a probability)",
 }
 
 
@@ -65,6 +66,7 @@ class Number:
     allow_inf: bool = False
     unit: str | None = None
     bounds: tuple[float, float] | None = None
+    below_upper: bool = False
 
     def parse(self, text: str, name: str, unit: str) -> float | int:
         stripped = text.strip()
@@ -75,8 +77,12 @@ class Number:
             raise argparse.ArgumentTypeError(f"{name} must be {kind} in {unit}, got {stripped!r}") from None
         if math.isnan(value) or (math.isinf(value) and not self.allow_inf):
             raise argparse.ArgumentTypeError(f"{name} must be a finite number in {unit}, got {stripped!r}")
-        if self.bounds is not None and math.isfinite(value) and not self.bounds[0] <= value <= self.bounds[1]:
-            raise argparse.ArgumentTypeError(f"{name} must be {range_text(self.bounds, unit)}, got {stripped!r}")
+        if self.bounds is not None and math.isfinite(value) and not (self.bounds[0] <= value <= self.bounds[1] and (
+                value < self.bounds[1] or not self.below_upper)):
+            lower = "more than" if self.positive else "at least"
+            allowed = (f"{lower} {self.bounds[0]:g} and less than {self.bounds[1]:g} {unit}" if self.below_upper
+                       else range_text(self.bounds, unit))
+            raise argparse.ArgumentTypeError(f"{name} must be {allowed}, got {stripped!r}")
         if self.kind is int:
             if abs(value) > MAX_WHOLE_NUMBER:  # no count or index is this large, and floats skip whole numbers there
                 raise argparse.ArgumentTypeError(f"{name} must be a whole number in {unit} below 2^53, got {stripped!r}")
@@ -143,9 +149,17 @@ RANGES_BY_DEST = {
     "pixel_intensity": (0.0, checks.MAX_PIXEL_RADIANCE),
     "white_radiance": (0.0, checks.MAX_PIXEL_RADIANCE),
     "field_step_deg": (0.0, 2 * checks.MAX_FIELD_DEG),
+    "window_diopters": checks.ATV_PARABOLA_WINDOW_RANGE_DIOPTERS,
+    "summation_arcmin": checks.SUMMATION_RANGE_ARCMIN,
+    "thickness_mm": checks.BENCH_LENGTH_RANGE_MM,
+    "level": (0.0, 1.0),
+    "guess": checks.GUESS_LAPSE_RANGE,
+    "lapse": checks.GUESS_LAPSE_RANGE,
 }
 #: Of those, the quantities that must exceed their lower bound (an f-number or a print resolution of 0 is none).
-_ABOVE_LOWER = {"white_radiance", "field_step_deg", "logmar_step"}
+_ABOVE_LOWER = {"white_radiance", "field_step_deg", "logmar_step", "window_diopters", "summation_arcmin", "level"}
+#: Of those, the quantities that must stay below their upper bound (a confidence level of 1 is no interval).
+_BELOW_UPPER = {"level", "guess", "lapse"}
 
 
 def _number_type(action: argparse.Action) -> Number | None:
@@ -158,7 +172,8 @@ def _number_type(action: argparse.Action) -> Number | None:
     if action.type is float:
         if action.dest in _POWERS:
             return Number(float, max_magnitude=MAX_POWER_DIOPTERS, bounds=bounds)
-        return Number(float, positive=action.dest in _POSITIVE_FLOATS or action.dest in _ABOVE_LOWER, bounds=bounds)
+        return Number(float, positive=action.dest in _POSITIVE_FLOATS or action.dest in _ABOVE_LOWER, bounds=bounds,
+                      below_upper=action.dest in _BELOW_UPPER)
     return None
 
 

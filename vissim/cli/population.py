@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.checks import MAX_WORKERS, vertex_distance_mm
+from vissim.checks import MAX_POWER_DIOPTERS, MAX_WORKERS, mtf_cyc_per_deg, number_within, vertex_distance_mm
 from vissim.cli._common import field_deg_from_text, parse_float_list
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES as DATASET_NAMES
@@ -94,6 +94,10 @@ def _conditions(args):
 def _eyes(args):
     from vissim.optics.eyes.measured.population import select_eyes
 
+    for option, text in (("--subjects", args.subjects), ("--eyes", args.eyes), ("--foveal-se-diopters",
+                                                                              args.foveal_se_diopters)):
+        if text is not None and not text.replace(",", "").strip():
+            raise VissimInputError(f"{option} is empty ({text!r}); leave it out to take every eye")
     subjects = None
     if args.subjects:
         try:
@@ -106,6 +110,8 @@ def _eyes(args):
         se = parse_float_list(args.foveal_se_diopters, "--foveal-se-diopters", "D", positive=False)
         if len(se) != 2:
             raise VissimInputError(f"--foveal-se-diopters takes LOW,HIGH, got {args.foveal_se_diopters!r}")
+        se = [number_within(v, "--foveal-se-diopters", "dioptres", (-MAX_POWER_DIOPTERS, MAX_POWER_DIOPTERS))
+              for v in se]
     return select_eyes(args.dataset, subjects=subjects, eyes=sides, foveal_se_within_diopters=se)
 
 
@@ -118,7 +124,8 @@ def run(args: argparse.Namespace) -> int:
         raise VissimInputError(f"--workers must be 1 to {MAX_WORKERS} worker processes, got {args.workers}")
     if args.output.exists() and not args.output.is_dir():
         raise VissimInputError(f"-o {args.output} is a file; a population run writes into a folder")
-    frequencies = parse_float_list(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles/deg")
+    frequencies = mtf_cyc_per_deg(parse_float_list(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles/deg"),
+                                  "--mtf-cyc-per-deg")
     conditions = _conditions(args)
     eyes = _eyes(args)
     if not eyes:

@@ -35,7 +35,7 @@ import functools
 import math
 from dataclasses import dataclass, field
 
-from vissim.checks import eye_wavelength_nm, instance_of, positive_number, trial_lens_diopters
+from vissim.checks import eye_prescription_meridians, eye_wavelength_nm, instance_of, positive_number
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.fixation import ametropic_eye
@@ -94,8 +94,8 @@ class Eye:
     def _check_rx_range(self) -> None:
         """The prescription an eye is made to need lies, in each principal meridian, within the trial lenses'
         range (the lenses that would correct it): checked before its eye is built."""
-        for meridian in (self.rx.sphere_diopters, self.rx.sphere_diopters + self.rx.cylinder_diopters):
-            trial_lens_diopters(meridian, f"the principal meridian of the prescription {self.rx} an eye is made to need")
+        eye_prescription_meridians(self.rx.sphere_diopters, self.rx.cylinder_diopters,
+                                   f"the prescription {self.rx} an eye is made to need")
 
     def _check_measured(self) -> None:
         instance_of(self.measured, MeasuredWavefront, "an Eye's measured wavefront", "a MeasuredWavefront")

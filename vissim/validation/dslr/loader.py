@@ -29,6 +29,7 @@ from vissim.validation.engine.fields import (
     table,
     tables,
     text,
+    unknown_field_error,
     value_list,
     whole_number,
 )

@@ -104,7 +104,7 @@ def _field(value, source: str, where: str) -> tuple[float, float]:
     values = [value, 0.0] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
     if not isinstance(values, list) or len(values) != 2:
         raise field_error(source, where, f"a field is degrees (x, a number) or [x, y], got {value!r}")
-    return tuple(number(v, source, where, "deg", lo=-MAX_FIELD_DEG, hi=EYE_RENDER_MAX_FIELD_DEG) for v in values)
+    return tuple(number(v, source, where, "deg", lo=-MAX_FIELD_DEG, hi=MAX_FIELD_DEG) for v in values)
 
 
 def _rx(value, source: str, where: str) -> Prescription:
