@@ -15,7 +15,7 @@ __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATIO
            "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "EYE_MTF_RANGE_CYC_PER_DEG",
            "mtf_cyc_per_deg", "eye_prescription_meridians", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE", "BENCH_LENGTH_RANGE_MM", "DISPLAY_PPI_RANGE",
            "ATV_PARABOLA_WINDOW_RANGE_DIOPTERS", "SUMMATION_RANGE_ARCMIN", "TEXELS_PER_PX_RANGE",
-           "PANEL_PADDING_RANGE_ARCMIN", "GUESS_LAPSE_RANGE", "sampler_seed",
+           "PANEL_PADDING_RANGE_ARCMIN", "GUESS_LAPSE_RANGE", "MAX_WHOLE_NUMBER", "sampler_seed",
            "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "DEFAULT_MAX_LAYERS", "ATV_PARABOLA_WINDOW_DIOPTERS",
            "DEFAULT_LAYER_SPACING_FRACTION", "MAX_FIELD_NODES", "EYE_WAVELENGTH_RANGE_NM", "EYE_LIGHT_RANGE_NM", "eye_wavelength_nm", "ACCOMMODATION_RANGE_DIOPTERS",
@@ -359,6 +359,9 @@ PANEL_PADDING_RANGE_ARCMIN = (0.0, 90.0 * 60.0)
 
 #: A psychometric function's guess and lapse rates: at least 0, below one half (at 0.5 the observer's "yes" is a coin).
 GUESS_LAPSE_RANGE = (0.0, 0.5)
+
+#: The largest whole number (a count, a size, an index) a user may type: 2^53, beyond which floats skip whole numbers.
+MAX_WHOLE_NUMBER = 2**53
 
 #: Largest PSF field a user may ask for, pixels (``psf --size``, `compute_psf`): 16384² complex doubles take 4 GiB.
 MAX_PSF_SIZE_PX = 16384

@@ -84,7 +84,7 @@ class Number:
                        else range_text(self.bounds, unit))
             raise argparse.ArgumentTypeError(f"{name} must be {allowed}, got {stripped!r}")
         if self.kind is int:
-            if abs(value) > MAX_WHOLE_NUMBER:  # no count or index is this large, and floats skip whole numbers there
+            if abs(value) > checks.MAX_WHOLE_NUMBER:  # no count or index is this large, and floats skip whole numbers there
                 raise argparse.ArgumentTypeError(f"{name} must be a whole number in {unit} below 2^53, got {stripped!r}")
             if value != int(value):
                 raise argparse.ArgumentTypeError(f"{name} must be a whole number in {unit}, got {stripped!r}")
@@ -102,9 +102,6 @@ class Number:
     def __call__(self, text: str):  # argparse checks that a type is callable; parsing goes through parse
         return self.parse(text, "value", self.unit or "(a number)")
 
-
-#: The largest whole number an option takes (2^53: beyond, floats skip whole numbers).
-MAX_WHOLE_NUMBER = 2**53
 
 #: The range of plain ``type=int`` options by name: counts are positive, seeds 32-bit.
 _INTS_BY_DEST = {
