@@ -816,3 +816,25 @@ def test_one_eye_pupil_range_for_every_command(capsys, tmp_path, inputs, argv, p
     low, high = checks.EYE_PUPIL_RANGE_MM
     assert f"within {low:g}-{high:g} mm" in line and f"{pupil_mm:g}" in line, line
     assert _listing(out) == []
+
+
+def test_a_population_folder_holding_its_files_is_refused_before_the_eyes_are_evaluated(capsys, tmp_path):
+    """Once refused only after every eye was traced (minutes): the files it would replace are known up front."""
+    out = tmp_path / "population"
+    out.mkdir()
+    (out / "eyes.csv").write_text("kept\n")
+    started = time.perf_counter()
+    line = _one_error(capsys, ["population", "jaeken-artal-2012", "-o", out])
+    assert "eyes.csv already exists" in line and time.perf_counter() - started < SECONDS, line
+    assert (out / "eyes.csv").read_text() == "kept\n" and _listing(out) == ["eyes.csv"]
+
+
+def test_an_image_wider_than_an_eyes_field_is_refused_before_its_psfs(capsys, tmp_path):
+    """100 px at 60 arcmin/px reach 49.5 deg from the axis: refused naming the image, before any node's PSF."""
+    from vissim.imageio import write_image
+
+    image, out = tmp_path / "wide.exr", tmp_path / "out.exr"
+    write_image(image, np.full((100, 100), 0.5, np.float32), arcmin_per_px=60.0)
+    line = _one_error(capsys, ["blur", image, "-o", out, "--eye-model", "navarro-1985", "--pupil-mm", "3",
+                               "--field-step-deg", "10"])
+    assert "reaches 49.5 deg" in line and f"+-{checks.MAX_FIELD_DEG:g} deg" in line and not out.exists(), line

@@ -130,6 +130,11 @@ def run(args: argparse.Namespace) -> int:
     eyes = _eyes(args)
     if not eyes:
         raise VissimInputError(f"no eye of {args.dataset} matches the selection given")
+    from vissim.atomic import refuse_existing
+    from vissim.validation.population.report import population_run_files
+
+    refuse_existing(*(args.output / name for name in population_run_files(conditions, frequencies)),
+                    overwrite=args.overwrite)  # before the eyes are evaluated
     client = None
     if args.scheduler is not None:
         from vissim.validation.engine.scheduler import connect_scheduler
