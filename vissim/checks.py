@@ -12,7 +12,7 @@ from vissim.errors import VissimInputError, VissimTypeError
 __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
-           "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "EYE_MTF_RANGE_CYC_PER_DEG",
+           "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "MAX_TRACE_FIELD_DEG", "EYE_MTF_RANGE_CYC_PER_DEG",
            "mtf_cyc_per_deg", "eye_prescription_meridians", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE", "BENCH_LENGTH_RANGE_MM", "DISPLAY_PPI_RANGE",
            "ATV_PARABOLA_WINDOW_RANGE_DIOPTERS", "SUMMATION_RANGE_ARCMIN", "TEXELS_PER_PX_RANGE",
            "PANEL_PADDING_RANGE_ARCMIN", "GUESS_LAPSE_RANGE", "MAX_WHOLE_NUMBER", "sampler_seed",
@@ -159,13 +159,17 @@ NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
 #: peaks at A ≈ 5.8 D and falls beyond: we accept 0-6 D, the range over which it rises (the
 #: Field Guide gives no range; the FRED example accommodates to 4 D).
 ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
-#: A field angle through an eye, degrees per axis (x, y), for every command, file and function that takes one
-#: (`eye`, `psf`, `blur`, `render eye`, eye and population campaigns, `build_eye`'s traces): the schematic models are
+#: A field angle through an eye that a user gives, degrees per axis (x, y): the chart's centre or a PSF's field, for
+#: every command and file that takes one (`eye`, `psf`, `blur`, `render eye`, `population`, eye and population
+#: campaigns, `EyeBench`). An image around it reaches to `EYE_RENDER_MAX_THETA_DEG` from the axis. The schematic models are
 #: built for 0-40 deg and the measured eyes go to 40 (Jaeken & Artal 2012: -40 to 40 horizontally); every model
 #: traces a 6 mm pupil to (+-45, +-45), and the renderer's tables keep a chart there in view. Beyond, the widest
 #: pupils' rays start to miss the cornea (a 9.9 mm pupil already at -45 deg in Navarro's eye: that trace refuses, naming
 #: the surface); from 55-80 deg every model's do.
 MAX_FIELD_DEG = 45.0
+#: The widest direction a trace takes, degrees per axis from the eye's axis (90 is grazing): a pixel of an image about
+#: a field at `MAX_FIELD_DEG` lies beyond it; rays that miss a surface there are refused by the trace, naming it.
+MAX_TRACE_FIELD_DEG = 89.0
 #: A field-dependent blur's PSF nodes (each a trace and a PSF, 0.2-0.4 s on 2 cores, with progress shown): at most
 #: this many per image (the default 2 deg step over a 4K image at 1 arcmin/px needs 627).
 MAX_FIELD_NODES = 1600

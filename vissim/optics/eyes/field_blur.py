@@ -35,7 +35,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import MAX_FIELD_DEG, MAX_FIELD_NODES, finite_number, positive_number, size_text
+from vissim.checks import EYE_RENDER_MAX_THETA_DEG, MAX_FIELD_NODES, finite_number, positive_number, size_text
 from vissim.errors import VissimInputError
 from vissim.progress import counter
 from vissim.optics.blur.convolve import image_kernel_psf, pixel_array
@@ -112,16 +112,18 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
 
 
 def _check_image_field(shape: tuple[int, int], arcmin_per_px: float, centre) -> None:
-    """The image's corners within an eye's field (`MAX_FIELD_DEG` per axis), refused before any PSF."""
+    """The image's corners within `EYE_RENDER_MAX_THETA_DEG` of the eye's axis (as far as an eye's image is rendered),
+    refused before any PSF."""
     rows, cols = shape[:2]
     xs, ys = node_field_deg(np.array([0.0, 0.0, rows - 1.0, rows - 1.0]), np.array([0.0, cols - 1.0, 0.0, cols - 1.0]),
                             (rows, cols), arcmin_per_px, centre)
-    widest = max(float(np.max(np.abs(xs))), float(np.max(np.abs(ys))))
-    if widest > MAX_FIELD_DEG:
+    tangents = np.hypot(np.tan(np.radians(np.clip(xs, -89.9, 89.9))), np.tan(np.radians(np.clip(ys, -89.9, 89.9))))
+    widest = float(np.degrees(np.arctan(np.max(tangents))))
+    if widest > EYE_RENDER_MAX_THETA_DEG:
         raise VissimInputError(f"the image reaches {widest:.4g} deg from the eye's axis ({size_text((rows, cols))} at "
                                f"{arcmin_per_px:g} arcmin/px about the field angle ({centre[0]:g}, {centre[1]:g}) deg), "
-                               f"beyond an eye's field of +-{MAX_FIELD_DEG:g} deg per axis: crop it, or give its "
-                               "true (finer) sampling")
+                               f"beyond the {EYE_RENDER_MAX_THETA_DEG:g} deg an eye's image is simulated and rendered "
+                               "to: crop it, or give its true (finer) sampling")
 
 
 def _check_nodes(shape: tuple[int, int], spacing_px: float, spacing_deg: float, arcmin_per_px: float) -> int:

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vissim.checks import MAX_FIELD_DEG
+from vissim.checks import MAX_TRACE_FIELD_DEG
 from vissim.checks import eye_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
@@ -133,12 +133,12 @@ def _with_vergence(front: Wavefront, vergence: Wavefront | None) -> Wavefront:
 def retinal_jacobian_mm_per_deg(eye, wavelength_nm: float, field_deg, *, iris_mm: float,
                                 lenses=None) -> np.ndarray:
     """d(chief ray's retinal point x, y, mm) / d(field angle x, y, deg) at ``field_deg``: a 2 × 2 matrix by
-    central differences of ±`JACOBIAN_STEP_DEG` (one-sided at ±`MAX_FIELD_DEG`) of chief rays traced
+    central differences of ±`JACOBIAN_STEP_DEG` (one-sided at ±`MAX_TRACE_FIELD_DEG`) of chief rays traced
     through the ``iris_mm`` iris (and ``lenses``) at ``wavelength_nm``. About −(mm per degree) × I near the axis."""
     columns = []
     for axis in (0, 1):
-        low = max(field_deg[axis] - JACOBIAN_STEP_DEG, -MAX_FIELD_DEG)
-        high = min(field_deg[axis] + JACOBIAN_STEP_DEG, MAX_FIELD_DEG)
+        low = max(field_deg[axis] - JACOBIAN_STEP_DEG, -MAX_TRACE_FIELD_DEG)
+        high = min(field_deg[axis] + JACOBIAN_STEP_DEG, MAX_TRACE_FIELD_DEG)
         points = []
         for value in (low, high):
             field = [float(v) for v in field_deg]

@@ -54,7 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, eye_pupil_diameter_mm, eye_wavelength_nm, positive_number
+from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_TRACE_FIELD_DEG, eye_pupil_diameter_mm, eye_wavelength_nm, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.refraction import ENTRANCE_PUPIL_PLANE
@@ -112,11 +112,11 @@ def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:
     except (TypeError, ValueError):
         raise VissimInputError(f"a field angle must be two numbers (x, y) in deg, got {field_deg!r}") from None
     for value in (fx, fy):
-        bad = ~np.isfinite(value) | (np.abs(value) > MAX_FIELD_DEG)
+        bad = ~np.isfinite(value) | (np.abs(value) > MAX_TRACE_FIELD_DEG)
         if np.any(bad):
             first = float(np.ravel(value)[np.argmax(np.ravel(bad))])
-            raise VissimInputError(f"field angle {first:g} deg is beyond an eye's field, +-{MAX_FIELD_DEG:g} deg per "
-                                   "axis" if math.isfinite(first) else f"field angle must be finite deg, got {first}")
+            raise VissimInputError(f"field angle {first:g} deg is beyond +-{MAX_TRACE_FIELD_DEG:g} deg (90 is grazing)"
+                                   if math.isfinite(first) else f"field angle must be finite deg, got {first}")
     tx, ty = np.broadcast_arrays(np.tan(np.radians(fx)), np.tan(np.radians(fy)))
     o = np.stack([tx, ty, np.ones_like(tx)], axis=-1)
     o /= np.linalg.norm(o, axis=-1, keepdims=True)
