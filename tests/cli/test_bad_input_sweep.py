@@ -842,3 +842,17 @@ def test_an_image_wider_than_an_eyes_field_is_refused_before_its_psfs(capsys, tm
     corner = math.degrees(math.atan(math.hypot(math.tan(math.radians(59.5)), math.tan(math.radians(59.5)))))
     assert f"reaches {corner:.4g} deg" in line and f"{checks.EYE_RENDER_MAX_THETA_DEG:g} deg" in line, line
     assert not out.exists()
+
+
+@pytest.mark.parametrize("model", ["navarro-1985", "escudero-sanz-1999", "arizona", "le-grand"])
+def test_the_widest_eye_pupil_is_traced_in_any_light_not_only_the_models_own(model):
+    """A 10 mm pupil (the top of EYE_PUPIL_RANGE_MM) traced at 550 nm as at the model's reference wavelength: the
+    chief-ray traces beside it (the TCA's anchor and Jacobian) once reached 1.75 iris radii on their coarse grid and
+    missed the cornea ('9.5 mm failing in psf' while `eye` took 10.5 mm)."""
+    from vissim.optics.eyes.eye import build_eye
+    from vissim.optics.eyes.psf_wavefront import eye_wavefront
+
+    eye = build_eye(model, pupil_mm=checks.EYE_PUPIL_RANGE_MM[1])
+    for wavelength_nm in (None, checks.DEFAULT_WAVELENGTH_NM):
+        front = eye_wavefront(eye, wavelength_nm=wavelength_nm)
+        assert front.pupil_diameter_mm == pytest.approx(checks.EYE_PUPIL_RANGE_MM[1])

@@ -35,7 +35,8 @@ import functools
 import math
 from dataclasses import dataclass, field
 
-from vissim.checks import eye_prescription_meridians, eye_wavelength_nm, instance_of, positive_number
+from vissim.checks import (eye_prescription_meridians, eye_pupil_diameter_mm, eye_wavelength_nm, instance_of,
+                           positive_number)
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.fixation import ametropic_eye
@@ -76,7 +77,9 @@ class Eye:
             object.__setattr__(self, "iris_mm", positive_number(self.iris_mm, "iris diameter", "mm"))
         else:
             pupil = DEFAULT_EYE_PUPIL_MM if self.pupil_mm is None else self.pupil_mm
-            object.__setattr__(self, "pupil_mm", positive_number(pupil, "entrance pupil diameter", "mm"))
+            # a human eye's (`EYE_PUPIL_RANGE_MM`), for every command and file that builds an eye; a bare trace
+            # (`trace_eye_wavefront`) takes any pupil, for the physics of its limits
+            object.__setattr__(self, "pupil_mm", eye_pupil_diameter_mm(pupil, "entrance pupil diameter"))
         object.__setattr__(self, "vertex_mm", checked_vertex_distance_mm(self.vertex_mm, "spectacle vertex distance"))
         if self.wavelength_nm is not None:
             object.__setattr__(self, "wavelength_nm", eye_wavelength_nm(self.wavelength_nm,

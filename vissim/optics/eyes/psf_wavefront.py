@@ -65,7 +65,7 @@ __all__ = ["eye_wavefront", "eye_spectral_wavefront", "vergence_front", "traced_
            "retinal_jacobian_mm_per_deg", "JACOBIAN_STEP_DEG"]
 
 #: The iris grid (samples across) of a trace made only for its chief ray and pupil.
-ANCHOR_SAMPLES = 9
+ANCHOR_SAMPLES = 17
 #: Field step (deg) of the central differences that give the retina's local mm per degree.
 JACOBIAN_STEP_DEG = 0.1
 
@@ -143,7 +143,7 @@ def retinal_jacobian_mm_per_deg(eye, wavelength_nm: float, field_deg, *, iris_mm
         for value in (low, high):
             field = [float(v) for v in field_deg]
             field[axis] = value
-            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=9, max_order=2,
+            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=ANCHOR_SAMPLES, max_order=2,
                                          lenses=lenses)
             points.append(np.array(traced.image_point_mm[:2]))
         columns.append((points[1] - points[0]) / (high - low))

@@ -54,7 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_TRACE_FIELD_DEG, eye_pupil_diameter_mm, eye_wavelength_nm, positive_number
+from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_TRACE_FIELD_DEG, eye_wavelength_nm, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.refraction import ENTRANCE_PUPIL_PLANE
@@ -252,7 +252,7 @@ def _pupils(eye: SchematicEye, wavelengths_nm: np.ndarray, pupil_mm, iris_mm) ->
     human = EYE_PUPIL_RANGE_MM[1]
     widest = min(human, max_iris_mm(eye))
     if pupil_mm is not None:
-        pupil, given = eye_pupil_diameter_mm(pupil_mm, "entrance pupil diameter"), "entrance pupil"
+        pupil, given = positive_number(pupil_mm, "entrance pupil diameter", "mm"), "entrance pupil"
         widest_pupil = float(np.min(entrance_pupils_from_irises_mm(eye, widest, wavelengths_nm)))
         if pupil > widest_pupil:  # checked before the search, which a huge pupil would send out of range
             raise VissimInputError(f"entrance pupil {pupil:g} mm, wider than the {widest_pupil:.3g} mm that the "
@@ -277,9 +277,6 @@ def _pupils(eye: SchematicEye, wavelengths_nm: np.ndarray, pupil_mm, iris_mm) ->
         if np.max(pupils) > human:  # the range is the pupil one sees; the cornea magnifies the iris (about 1.13)
             raise VissimInputError(f"{asked} gives a {float(np.max(pupils)):.3g} mm entrance pupil, wider than a human "
                                    f"eye's {human:g} mm: give a smaller iris")
-        if np.min(pupils) < EYE_PUPIL_RANGE_MM[0]:
-            raise VissimInputError(f"{asked} gives a {float(np.min(pupils)):.3g} mm entrance pupil, narrower than a "
-                                   f"human eye's {EYE_PUPIL_RANGE_MM[0]:g} mm: give a larger iris")
     return pupils, irises, given
 
 
@@ -348,7 +345,10 @@ def _iris_grid(eye: SchematicEye, iris_mm: float, samples: int) -> tuple[np.ndar
     `GRID_MARGIN` iris radii plus two steps, the chief ray (the iris centre) first -- and which of
     them are on the grid's edge (a 4-neighbour missing)."""
     step = iris_mm / (samples - 1)
-    half = math.ceil(GRID_MARGIN * (samples - 1) / 2) + 2
+    # two steps beyond GRID_MARGIN, but never farther (in iris diameters) than the default grid's: a coarse grid's
+    # two steps would otherwise reach rays far beyond the iris that miss the cornea of a wide pupil
+    reach = GRID_MARGIN / 2 + 2 / (DEFAULT_SAMPLES - 1)
+    half = min(math.ceil(GRID_MARGIN * (samples - 1) / 2) + 2, math.ceil(reach * (samples - 1) - 1e-9))
     axis = step * np.arange(-half, half + 1)
     x, y = np.meshgrid(axis, axis[::-1])
     keep = np.hypot(x, y) <= step * (half + 1e-9)
@@ -464,7 +464,7 @@ def _fitted_front(eye, field, wavelength, bundle, starts, edge, max_order, pupil
     xy = xy - xy[0]
     if np.any(np.hypot(xy[edge, 0], xy[edge, 1]) <= 0.5 * diameter):
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: the traced rays do not cover the "
-                               f"{diameter:g} mm entrance pupil")
+                               f"{diameter:g} mm entrance pupil; the {eye.name} eye traces a smaller pupil or field angle")
     coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, diameter, max_order)
     return EyeWavefront(eye.name, field, wavelength, diameter, iris, given, entrance_z, exit_z,
                         tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,
