@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import unicodedata
 from pathlib import Path
@@ -13,7 +14,8 @@ __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATIO
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
            "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "MAX_TRACE_FIELD_DEG", "EYE_MTF_RANGE_CYC_PER_DEG",
-           "mtf_cyc_per_deg", "eye_prescription_meridians", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE", "BENCH_LENGTH_RANGE_MM", "DISPLAY_PPI_RANGE",
+           "mtf_cyc_per_deg", "eye_prescription_meridians", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE",
+           "BENCH_LENGTH_RANGE_MM", "DISPLAY_PPI_RANGE",
            "ATV_PARABOLA_WINDOW_RANGE_DIOPTERS", "SUMMATION_RANGE_ARCMIN", "TEXELS_PER_PX_RANGE",
            "PANEL_PADDING_RANGE_ARCMIN", "GUESS_LAPSE_RANGE", "MAX_WHOLE_NUMBER", "sampler_seed",
            "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
@@ -161,11 +163,11 @@ NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
 ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
 #: A field angle through an eye that a user gives, degrees per axis (x, y): the chart's centre or a PSF's field, for
 #: every command and file that takes one (`eye`, `psf`, `blur`, `render eye`, `population`, eye and population
-#: campaigns, `EyeBench`). An image around it reaches to `EYE_RENDER_MAX_THETA_DEG` from the axis. The schematic models are
-#: built for 0-40 deg and the measured eyes go to 40 (Jaeken & Artal 2012: -40 to 40 horizontally); every model
-#: traces a 6 mm pupil to (+-45, +-45), and the renderer's tables keep a chart there in view. Beyond, the widest
-#: pupils' rays start to miss the cornea (a 9.9 mm pupil already at -45 deg in Navarro's eye: that trace refuses, naming
-#: the surface); from 55-80 deg every model's do.
+#: campaigns, `EyeBench`); an image around it reaches to `EYE_RENDER_MAX_THETA_DEG` from the axis. The schematic
+#: models are built for 0-40 deg and the measured eyes go to 40 (Jaeken & Artal 2012: -40 to 40 horizontally); every
+#: model traces a 6 mm pupil to (+-45, +-45), and the renderer's tables keep a chart there in view. Beyond, the
+#: widest pupils' rays start to miss the cornea (a 9.9 mm pupil already at -45 deg in Navarro's eye: that trace
+#: refuses, naming the surface and the pupil); from 55-80 deg every model's do.
 MAX_FIELD_DEG = 45.0
 #: The widest direction a trace takes, degrees per axis from the eye's axis (90 is grazing): a pixel of an image about
 #: a field at `MAX_FIELD_DEG` lies beyond it; rays that miss a surface there are refused by the trace, naming it.
@@ -382,8 +384,8 @@ MAX_CAMPAIGN_SEED = (MAX_SAMPLER_SEED - 1) // 2
 
 def sampler_seed(value, name: str = "seed") -> int:
     """A render's seed: a whole number within 0-`MAX_SAMPLER_SEED` (the samplers' 32-bit state)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value or value in (math.inf, -math.inf) \
-            or not 0 <= value <= MAX_SAMPLER_SEED or value != int(value):
+    is_number = isinstance(value, numbers.Real) and not isinstance(value, bool)  # NumPy's integers too
+    if not is_number or not math.isfinite(value) or not 0 <= value <= MAX_SAMPLER_SEED or value != int(value):
         raise VissimInputError(f"{name} must be a whole number within 0-{MAX_SAMPLER_SEED} (the samplers' 32-bit "
                                f"state), got {value!r}")
     return int(value)

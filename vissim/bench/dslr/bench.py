@@ -48,9 +48,8 @@ from vissim.bench.lenses.holder import (LENS_GAP_MM, MESH_RINGS, MESH_SEGMENTS, 
                                         lens_clear_aperture_mm, lens_shapes, physical_lens)
 from vissim.bench.scene_parts import chart_emitter, chart_texture, checked_chart_pixels, hdr_film, path_integrator
 from vissim.bench.scene_parts import chart_texture_shape as texture_shape
-from vissim.checks import (F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, LENS_GAP_RANGE_MM, OBJECT_DISTANCE_RANGE_M,
-                           REFRACTIVE_INDEX_RANGE, TEXELS_PER_PX_RANGE, check_allocation, number_within, sampler_seed,
-                           size_text)
+from vissim.checks import (LENS_GAP_RANGE_MM, REFRACTIVE_INDEX_RANGE, TEXELS_PER_PX_RANGE, check_allocation,
+                           number_within, sampler_seed, size_text)
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import samples_per_pixel
 from vissim.checks import size_px as check_size_px
@@ -166,10 +165,7 @@ class DslrBench:
                            ("chart_distance_mm", "mm"), ("arcmin_per_px", "arcmin/px"),
                            ("texels_per_px", "texels per camera pixel"), ("radiance_scale", "(relative)")):
             object.__setattr__(self, name, _positive(getattr(self, name), name.replace("_", " "), unit))
-        for name, unit, bounds in (("focal_length_mm", "mm", FOCAL_LENGTH_RANGE_MM), ("f_number", "(f-number)", F_NUMBER_RANGE),
-                                   ("focus_distance_mm", "mm", tuple(1e3 * d for d in OBJECT_DISTANCE_RANGE_M)),
-                                   ("refractive_index", "(dimensionless)", REFRACTIVE_INDEX_RANGE),
-                                   ("chart_distance_mm", "mm", tuple(1e3 * d for d in OBJECT_DISTANCE_RANGE_M)),
+        for name, unit, bounds in (("refractive_index", "(dimensionless)", REFRACTIVE_INDEX_RANGE),
                                    ("texels_per_px", "texels per camera pixel", TEXELS_PER_PX_RANGE)):
             number_within(getattr(self, name), name.replace("_", " "), unit, bounds)
         object.__setattr__(self, "seed", sampler_seed(self.seed))
