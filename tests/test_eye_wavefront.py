@@ -239,7 +239,7 @@ def test_liou_brennans_decentred_iris_adds_coma_and_astigmatism_on_axis():
 
 def test_bad_input_names_the_value_and_its_unit():
     eye = escudero_sanz_1999()
-    with pytest.raises(VissimInputError, match=r"field angle \(89, 0\) deg: .*miss the lens front"):
+    with pytest.raises(VissimInputError, match=r"field angle \(89, 0\) deg, entrance pupil 4 mm: .*miss the lens front"):
         _trace(eye, 543.0, (89.0, 0.0), pupil_mm=4.0, samples=9)
     with pytest.raises(VissimInputError, match=r"field angle 95 deg"):
         _trace(eye, 543.0, (95.0, 0.0), pupil_mm=4.0)

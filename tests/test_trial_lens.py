@@ -246,7 +246,7 @@ def test_camera_at_f5_has_a_3_6_mm_entrance_pupil():
         (lambda: TrialLensSetup((TrialLens(2.0),), object_distance_m=-1.0), "-1 m"),
         (lambda: TrialLensSetup((TrialLens(2.0),), vertex_distance_mm=-1.0), "-1 mm"),
         (lambda: TrialLensSetup((TrialLens(1.0),) * 4), "at most 3"),
-        (lambda: TrialLens(2.0, refractive_index=1.0), "index must exceed 1"),
+        (lambda: TrialLens(2.0, refractive_index=1.0), "refractive index must be within 1.01-3"),
         (lambda: TrialLens(2.0, refractive_index=0.5, center_thickness_mm=2.0), "0.5"),
         (lambda: TrialLens(2.0, refractive_index=1.5, center_thickness_mm=-1.0), "-1 mm"),
         (lambda: TrialLens(2.0, center_thickness_mm=3.0), "refractive index"),

@@ -36,7 +36,7 @@ import numpy as np
 
 from vissim.acuity import letter_height_arcmin, letter_height_mm, logmar_to_snellen, subtense_arcmin, subtense_mm
 from vissim.chart_defaults import DEFAULT_LETTER_SEED, INK_REFLECTANCE, MM_PER_INCH, PAPER_REFLECTANCE, POLARITIES
-from vissim.checks import VIEWING_DISTANCE_RANGE_M, size_text
+from vissim.checks import LOGMAR_RANGE, VIEWING_DISTANCE_RANGE_M, number_within, size_text
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import check_allocation, describe, finite_number, instance_of, positive_number
 from vissim.errors import VissimInputError, VissimTypeError
@@ -88,7 +88,8 @@ class ChartRow:
     letters: str
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "logmar", _number(self.logmar, "LogMAR", "log10 arcmin"))
+        object.__setattr__(self, "logmar", number_within(self.logmar, "LogMAR", "LogMAR", LOGMAR_RANGE,
+                                                         " (20/2 to 20/2000, beyond any chart)"))
         letters = "".join(sloan_letter(ch).name for ch in str(self.letters) if not ch.isspace())
         if not letters:
             raise VissimInputError(f"a chart row needs at least one letter, got {self.letters!r}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import unicodedata
 from pathlib import Path
@@ -12,7 +13,11 @@ from vissim.errors import VissimInputError, VissimTypeError
 __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
-           "EYE_RENDER_MAX_FIELD_DEG", "EYE_RENDER_MAX_THETA_DEG",
+           "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "MAX_TRACE_FIELD_DEG", "EYE_MTF_RANGE_CYC_PER_DEG",
+           "mtf_cyc_per_deg", "eye_prescription_meridians", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE",
+           "BENCH_LENGTH_RANGE_MM", "DISPLAY_PPI_RANGE",
+           "ATV_PARABOLA_WINDOW_RANGE_DIOPTERS", "SUMMATION_RANGE_ARCMIN", "TEXELS_PER_PX_RANGE",
+           "PANEL_PADDING_RANGE_ARCMIN", "GUESS_LAPSE_RANGE", "MAX_WHOLE_NUMBER", "sampler_seed",
            "ATCHISON_SMITH_RANGE_NM", "DEFAULT_WAVELENGTH_NM", "wavelength_nm",
            "VERTEX_DISTANCE_RANGE_MM", "vertex_distance_mm", "DEFAULT_MAX_LAYERS", "ATV_PARABOLA_WINDOW_DIOPTERS",
            "DEFAULT_LAYER_SPACING_FRACTION", "MAX_FIELD_NODES", "EYE_WAVELENGTH_RANGE_NM", "EYE_LIGHT_RANGE_NM", "eye_wavelength_nm", "ACCOMMODATION_RANGE_DIOPTERS",
@@ -96,9 +101,8 @@ EYE_LIGHT_RANGE_NM = (max(EYE_WAVELENGTH_RANGE_NM[0], EYE_RENDER_WAVELENGTH_RANG
                       min(EYE_WAVELENGTH_RANGE_NM[1], EYE_RENDER_WAVELENGTH_RANGE_NM[1]))
 #: Where CIE 1931 ȳ(λ) is tabulated (nm): a monochromatic spectral render divides it out.
 CIE_YBAR_RANGE_NM = (360.0, 830.0)
-#: The schematic-eye renderer: the chart's field angle at most this (deg), and the image's widest direction at most
-#: this far from the eye's optical axis (deg; its tables' reach).
-EYE_RENDER_MAX_FIELD_DEG = 45.0
+#: The schematic-eye renderer: the image's widest direction at most this far from the eye's optical axis (deg; its
+#: tables' reach). A chart's field angle is held to `MAX_FIELD_DEG`, which keeps a chart's image within it.
 EYE_RENDER_MAX_THETA_DEG = 60.0
 #: A depth scene needing more layers is refused unless its ``max_layers`` is raised (or None: no limit).
 DEFAULT_MAX_LAYERS = 256
@@ -157,9 +161,17 @@ NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
 #: peaks at A ≈ 5.8 D and falls beyond: we accept 0-6 D, the range over which it rises (the
 #: Field Guide gives no range; the FRED example accommodates to 4 D).
 ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
-#: A field angle through a schematic eye, degrees from its optical axis per axis: the models are
-#: built for 0-40; beyond, rays may miss a surface (refused by the trace, naming it); 90 is grazing.
-MAX_FIELD_DEG = 89.0
+#: A field angle through an eye that a user gives, degrees per axis (x, y): the chart's centre or a PSF's field, for
+#: every command and file that takes one (`eye`, `psf`, `blur`, `render eye`, `population`, eye and population
+#: campaigns, `EyeBench`); an image around it reaches to `EYE_RENDER_MAX_THETA_DEG` from the axis. The schematic
+#: models are built for 0-40 deg and the measured eyes go to 40 (Jaeken & Artal 2012: -40 to 40 horizontally); every
+#: model traces a 6 mm pupil to (+-45, +-45), and the renderer's tables keep a chart there in view. Beyond, the
+#: widest pupils' rays start to miss the cornea (a 9.9 mm pupil already at -45 deg in Navarro's eye: that trace
+#: refuses, naming the surface and the pupil); from 55-80 deg every model's do.
+MAX_FIELD_DEG = 45.0
+#: The widest direction a trace takes, degrees per axis from the eye's axis (90 is grazing): a pixel of an image about
+#: a field at `MAX_FIELD_DEG` lies beyond it; rays that miss a surface there are refused by the trace, naming it.
+MAX_TRACE_FIELD_DEG = 89.0
 #: A field-dependent blur's PSF nodes (each a trace and a PSF, 0.2-0.4 s on 2 cores, with progress shown): at most
 #: this many per image (the default 2 deg step over a 4K image at 1 arcmin/px needs 627).
 MAX_FIELD_NODES = 1600
@@ -175,6 +187,17 @@ FOCAL_LENGTH_RANGE_MM = (1.0, 1000.0)
 OBJECT_DISTANCE_RANGE_M = (0.01, 1000.0)
 
 
+def eye_field_deg(value, name: str = "field angle") -> tuple[float, float]:
+    """An eye's field angle (x, y), degrees, each within +-`MAX_FIELD_DEG`."""
+    try:
+        x, y = value
+    except (TypeError, ValueError):
+        raise VissimInputError(f"{name} must be two angles (x, y) in degrees, got {describe(value)}") from None
+    limit = (-MAX_FIELD_DEG, MAX_FIELD_DEG)
+    return (number_within(x, f"{name} x", "deg", limit, " (an eye's field)"),
+            number_within(y, f"{name} y", "deg", limit, " (an eye's field)"))
+
+
 def accommodation_diopters(value, name: str = "accommodation") -> float:
     """An accommodation exerted within `ACCOMMODATION_RANGE_DIOPTERS`."""
     return number_within(value, name, "dioptres", ACCOMMODATION_RANGE_DIOPTERS)
@@ -183,6 +206,13 @@ def accommodation_diopters(value, name: str = "accommodation") -> float:
 def trial_lens_diopters(value, name: str = "trial lens power") -> float:
     """A trial lens's sphere or cylinder within `TRIAL_LENS_RANGE_DIOPTERS`."""
     return number_within(value, name, "dioptres", TRIAL_LENS_RANGE_DIOPTERS, " (a trial lens)")
+
+
+def eye_prescription_meridians(sphere_diopters, cylinder_diopters, name: str) -> None:
+    """An eye's prescription (sphere, cylinder) lies, in each principal meridian, within `TRIAL_LENS_RANGE_DIOPTERS`:
+    the trial lenses that would correct it (every eye a user describes: `build_eye`, depth viewers, campaigns)."""
+    for meridian in (sphere_diopters, sphere_diopters + cylinder_diopters):
+        trial_lens_diopters(meridian, f"the principal meridian of {name}")
 
 
 def vertex_distance_mm(value, name: str = "vertex distance") -> float:
@@ -253,6 +283,18 @@ ENTRANCE_PUPIL_RANGE_MM = MIN_PUPIL_MM, MAX_PUPIL_MM = 0.01, 1000.0
 EYE_PUPIL_RANGE_MM = 1.0, 10.0
 
 
+#: Spatial frequencies an eye's MTF is asked at, cycles per degree: from 0 to the incoherent cutoff of the widest eye
+#: pupil in the shortest light an eye is traced in (`EYE_PUPIL_RANGE_MM` over `EYE_WAVELENGTH_RANGE_NM`: 10 mm / 365 nm,
+#: 478 cycles/deg); beyond, every eye's MTF is 0.
+EYE_MTF_RANGE_CYC_PER_DEG = (0.0, EYE_PUPIL_RANGE_MM[1] * 1e-3 / (EYE_WAVELENGTH_RANGE_NM[0] * 1e-9) * math.pi / 180.0)
+
+
+def mtf_cyc_per_deg(values, name: str = "MTF frequency") -> list[float]:
+    """Frequencies an eye's MTF is asked at, each within `EYE_MTF_RANGE_CYC_PER_DEG`."""
+    return [number_within(v, name, "cycles/deg", EYE_MTF_RANGE_CYC_PER_DEG, " (to the widest eye pupil's cutoff)")
+            for v in values]
+
+
 def pupil_diameter_mm(value, name: str = "pupil diameter") -> float:
     """An entrance pupil diameter within `ENTRANCE_PUPIL_RANGE_MM` mm."""
     return _pupil_within(value, name, ENTRANCE_PUPIL_RANGE_MM, "")
@@ -295,6 +337,38 @@ def size_px(value, name: str = "size_px") -> tuple[int, int]:
     return size  # type: ignore[return-value]
 
 
+#: A chart's row step, LogMAR: more than 0, at most the whole `LOGMAR_RANGE`.
+LOGMAR_STEP_RANGE = (0.0, 3.0)
+#: A printed chart's resolution, dots per inch: 1 to beyond any printer's (photo printers 4800, imagesetters 5080).
+PRINT_DPI_RANGE = (1.0, 10000.0)
+
+#: A bench part's length, mm (the ATV's tube, eye relief, a lens's thickness and clear aperture): within a metre,
+#: the scale of any bench (the thesis's tube is 125 mm).
+BENCH_LENGTH_RANGE_MM = (0.0, 1000.0)
+#: A display's resolution, pixels per inch: to beyond microdisplays' (about 3000-5000; the thesis's phone 326).
+DISPLAY_PPI_RANGE = (1.0, 10000.0)
+
+#: The ATV analysis's local parabola window, dioptres: more than 0 (a parabola needs neighbouring lenses) to the whole
+#: trial set (`TRIAL_LENS_RANGE_DIOPTERS`: 60 D).
+ATV_PARABOLA_WINDOW_RANGE_DIOPTERS = (0.0, 60.0)
+#: Spatial summation (Ricco's area) diameter, arcmin: more than 0 to 10 deg, beyond the 1-2 deg of the dark-adapted
+#: periphery (the thesis takes 10 arcmin).
+SUMMATION_RANGE_ARCMIN = (0.0, 600.0)
+
+#: A chart texture's texels per image pixel (per axis): from a texture as coarse as 4 pixels a texel to 64 (the
+#: benches take 4; beyond 16 a texel is finer than any sample lands on).
+TEXELS_PER_PX_RANGE = (0.25, 64.0)
+
+#: Blank paper around a depth panel's chart, arcmin: none to 90 deg (a panel seen from its front fills at most the half
+#: of the view before it).
+PANEL_PADDING_RANGE_ARCMIN = (0.0, 90.0 * 60.0)
+
+#: A psychometric function's guess and lapse rates: at least 0, below one half (at 0.5 the observer's "yes" is a coin).
+GUESS_LAPSE_RANGE = (0.0, 0.5)
+
+#: The largest whole number (a count, a size, an index) a user may type: 2^53, beyond which floats skip whole numbers.
+MAX_WHOLE_NUMBER = 2**53
+
 #: Largest PSF field a user may ask for, pixels (``psf --size``, `compute_psf`): 16384² complex doubles take 4 GiB.
 MAX_PSF_SIZE_PX = 16384
 #: Most samples per pixel a render takes (Mitsuba counts them in 32 bits; 65536 spp of the
@@ -306,6 +380,15 @@ MAX_SPP = 1 << 16
 MAX_SAMPLER_SEED = 2**32 - 1
 #: Campaign seeds: the no-lens render uses seed_a + seed_b + 1, which must stay a sampler seed.
 MAX_CAMPAIGN_SEED = (MAX_SAMPLER_SEED - 1) // 2
+
+
+def sampler_seed(value, name: str = "seed") -> int:
+    """A render's seed: a whole number within 0-`MAX_SAMPLER_SEED` (the samplers' 32-bit state)."""
+    is_number = isinstance(value, numbers.Real) and not isinstance(value, bool)  # NumPy's integers too
+    if not is_number or not math.isfinite(value) or not 0 <= value <= MAX_SAMPLER_SEED or value != int(value):
+        raise VissimInputError(f"{name} must be a whole number within 0-{MAX_SAMPLER_SEED} (the samplers' 32-bit "
+                               f"state), got {value!r}")
+    return int(value)
 
 
 def samples_per_pixel(value, name: str = "spp") -> int:
@@ -327,6 +410,8 @@ MAX_DESCRIPTION_CHARS = 2000
 
 def name_problem(value: str) -> str | None:
     """Why ``value`` cannot be a campaign or configuration name (too long, a control character), or None."""
+    if not value.strip():
+        return f"a name is at least one visible character, got {value!r}"
     if len(value) > MAX_NAME_CHARS:
         return (f"a name is at most {MAX_NAME_CHARS} characters, got {len(value)} "
                 f"({value[:24]!r}...)")

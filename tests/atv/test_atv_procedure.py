@@ -79,7 +79,7 @@ def test_psychometric_function_is_one_half_at_threshold_with_equal_guess_and_lap
     [
         ({"threshold": -0.1}, "threshold must be a positive display code value"),
         ({"threshold": 0.1, "slope": 0}, "psychometric slope must be > 0"),
-        ({"threshold": 0.1, "lapse_rate": 0.6}, r"lapse_rate must be within \[0, 0.5\)"),
+        ({"threshold": 0.1, "lapse_rate": 0.6}, r"lapse_rate must be at least 0 and less than 0.5"),
     ],
 )
 def test_psychometric_function_validates(kwargs, message):

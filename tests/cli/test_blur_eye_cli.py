@@ -92,7 +92,7 @@ def test_channel_bands_with_an_eye_model_equal_blur_eye_over_the_same_bands(caps
     (["--lca"], ["--lca", "own dispersion"]),
     (["--channel-fwhm-nm", "20", "--wavelength-nm", "550,600"], ["--channel-fwhm-nm", "one centre wavelength"]),
     (["--field-deg", "95,0"], ["95", "deg"]),
-    (["--field-step-deg", "0"], ["field step", "degrees"]),
+    (["--field-step-deg", "0"], ["--field-step-deg", "degrees"]),
     (["--accommodation-diopters", "12"], ["12"]),
     (["--zernike", "4,0=0.1"], ["--zernike"]),
     (["--device", "cuda"], ["--device cuda", "cpu"]),

@@ -43,7 +43,8 @@ def test_a_small_population_writes_its_files(tmp_path, capsys):
     (["--subjects", "x"], "--subjects takes whole numbers"),
     (["--subjects", "500"], "has subjects 1-130, got 500"),
     (["--foveal-se-diopters", "1"], "--foveal-se-diopters takes LOW,HIGH"),
-    (["--field-deg", "50,0"], "measured at field x -40 to 40 deg, got 50 deg"),
+    (["--field-deg", "42,0"], "measured at field x -40 to 40 deg, got 42 deg"),
+    (["--field-deg", "50,0"], "--field-deg x must be within -45 to 45 deg (an eye's field), got 50 deg"),
 ])
 def test_bad_input_gets_one_error_line(tmp_path, capsys, extra, words):
     argv = ["population", "jaeken-artal-2012", "--subjects", "1", "-o", str(tmp_path / "run"), *extra]

@@ -57,7 +57,7 @@ def test_an_eye_outside_its_media_or_its_lenses_is_refused(capsys, argv, says):
 
 @pytest.mark.parametrize("option, says", [(["--vertex-mm", "500", "--correction", "-1"], "--vertex-mm must be within"),
                                           (["--correction", "accommodating", "--accommodation-amplitude-diopters",
-                                            "50"], "accommodation amplitude must be within 0-20 dioptres")])
+                                            "50"], "--accommodation-amplitude-diopters must be within 0-20 dioptres")])
 def test_a_population_outside_the_ranges_a_campaign_file_keeps_is_refused(capsys, tmp_path, option, says):
     out = tmp_path / "population"
     _refused(capsys, ["population", "jaeken-artal-2012", "-o", str(out), *option], says=says, outputs=[out])

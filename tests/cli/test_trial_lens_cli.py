@@ -68,7 +68,7 @@ def test_readable_output_shows_the_table_4_2_value(capsys):
         (["--sphere", "2", "--object-distance-m", "far"], "far"),
         (["--sphere", "2", "--object-distance-m", "0.005"], "0.005 m"),
         (["--sphere", "2", "--index", "0.9", "--thickness-mm", "2"], "0.9"),
-        (["--sphere", "2", "--thickness-mm", "-1"], "-1 mm"),
+        (["--sphere", "2", "--thickness-mm", "-1"], "--thickness-mm must be within 0-1000 mm, got '-1'"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(capsys, args, fragment):

@@ -26,7 +26,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from vissim.checks import finite_number
+from vissim.checks import GUESS_LAPSE_RANGE, finite_number
 from vissim.errors import VissimInputError
 
 __all__ = ["Observer", "Presentation", "ProcedureConfig", "PsychometricFunction", "SimulatedObserver",
@@ -66,8 +66,9 @@ class PsychometricFunction:
             raise VissimInputError(f"psychometric slope must be > 0 (Weibull exponent), got {self.slope!r}")
         for name in ("guess_rate", "lapse_rate"):
             v = finite_number(getattr(self, name), name, "probability")
-            if not 0.0 <= v < 0.5:
-                raise VissimInputError(f"{name} must be within [0, 0.5), got {v!r}")
+            low, high = GUESS_LAPSE_RANGE
+            if not low <= v < high:
+                raise VissimInputError(f"{name} must be at least {low:g} and less than {high:g}, got {v!r}")
         object.__setattr__(self, "threshold", t)
         object.__setattr__(self, "slope", s)
 

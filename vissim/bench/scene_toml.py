@@ -72,6 +72,8 @@ def checked_values(table: Any, schema: dict, where: str) -> dict:
 
 def parse_trial_lenses(entries: list, where: str) -> tuple[TrialLens, ...]:
     """The trial lenses of an array of ``_LENS`` tables called ``where`` (e.g. ``[[holder.lenses]]``)."""
+    if not isinstance(entries, list) or not all(isinstance(entry, dict) for entry in entries):
+        raise VissimInputError(f"{where} must be an array of tables (sphere_diopters, ...), got {entries!r}")
     lenses = []
     for i, entry in enumerate(entries):
         lens_where = f"{where} #{i + 1}"
@@ -95,6 +97,8 @@ def image_size_px(size: list, source: str) -> tuple[int, int]:
 
 def read_scene_toml(path: str | os.PathLike[str]) -> tuple[dict, str]:
     """(the TOML document, its path as text) of a scene file; one clean error if unreadable or not TOML."""
+    if isinstance(path, str) and not path.strip():
+        raise VissimInputError(f"the scene file's path {path!r} is empty; give a TOML file")
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")

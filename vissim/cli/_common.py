@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from vissim.atomic import check_outputs_apart, refuse_existing  # noqa: F401  (the commands' one door)
-from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, ENTRANCE_PUPIL_RANGE_MM,
-                           NAVARRO_ACCOMMODATION_RANGE_DIOPTERS)
+from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, AXIS_RANGE_DEG, ENTRANCE_PUPIL_RANGE_MM,
+                           NAVARRO_ACCOMMODATION_RANGE_DIOPTERS, eye_field_deg, number_within, trial_lens_diopters)
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import LE_GRAND_ACCOMMODATED_DIOPTERS
 from vissim.optics.eyes.defaults import DEFAULT_SPECTACLE_VERTEX_MM
@@ -54,10 +54,12 @@ def trial_lens_powers(args: argparse.Namespace) -> tuple[float, float, float] | 
         if args.axis is not None:
             raise VissimInputError("--axis needs --cylinder (dioptres)")
         return None
-    cylinder = args.cylinder or 0.0
+    sphere = trial_lens_diopters(args.sphere or 0.0, "--sphere")
+    cylinder = trial_lens_diopters(args.cylinder or 0.0, "--cylinder")
     if cylinder != 0.0 and args.axis is None:
         raise VissimInputError(f"--cylinder {cylinder:g} D needs --axis in degrees (TABO, 0-180)")
-    return args.sphere or 0.0, cylinder, 180.0 if args.axis is None else args.axis
+    axis = 180.0 if args.axis is None else number_within(args.axis, "--axis", "degrees", AXIS_RANGE_DEG, " (TABO)")
+    return sphere, cylinder, axis
 
 
 def add_aberration_args(parser: argparse.ArgumentParser, *, required: bool = True) -> None:
@@ -152,11 +154,11 @@ def eye_from_args(args, rx_text: str | None):
 
 
 def field_deg_from_text(text: str) -> tuple[float, float]:
-    """``--field-deg X,Y``: a field angle's (x, y) in degrees."""
+    """``--field-deg X,Y``: a field angle's (x, y) in degrees; an eye's within `checks.MAX_FIELD_DEG`."""
     values = parse_float_list(text, "--field-deg", "degrees", positive=False)
     if len(values) != 2:
         raise VissimInputError(f"--field-deg must be two angles X,Y in degrees, got {text!r}")
-    return values[0], values[1]
+    return eye_field_deg(values, "--field-deg")
 
 
 def size_from_text(text: str, example: str = "133x113") -> tuple[int, int]:

@@ -15,9 +15,11 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import dataclasses
 from dataclasses import dataclass
 
-from vissim.checks import MAX_POWER_DIOPTERS, MAX_SAMPLER_SEED, MAX_SPP
+from vissim import checks
+from vissim.checks import MAX_POWER_DIOPTERS, MAX_SAMPLER_SEED, MAX_SPP, range_text
 
 __all__ = ["Number", "VissimArgumentParser", "unit_of"]
 
@@ -33,6 +35,7 @@ UNITS_BY_DEST = {
     "workers": "worker processes", "max_layers": "depth layers", "seed": "(a whole number)", "age": "years",
     "dpi": "dots per inch", "f_number": "(f-number)", "logmar": "LogMAR", "logmar_step": "LogMAR",
     "index": "(refractive index)", "gamma": "(display gamma)", "level": "(confidence level)",
+    "guess": "(a probability)", "lapse": "(a probability)",
 }
 
 
@@ -62,6 +65,8 @@ class Number:
     max_magnitude: float | None = None
     allow_inf: bool = False
     unit: str | None = None
+    bounds: tuple[float, float] | None = None
+    below_upper: bool = False
 
     def parse(self, text: str, name: str, unit: str) -> float | int:
         stripped = text.strip()
@@ -72,7 +77,15 @@ class Number:
             raise argparse.ArgumentTypeError(f"{name} must be {kind} in {unit}, got {stripped!r}") from None
         if math.isnan(value) or (math.isinf(value) and not self.allow_inf):
             raise argparse.ArgumentTypeError(f"{name} must be a finite number in {unit}, got {stripped!r}")
+        if self.bounds is not None and math.isfinite(value) and not (self.bounds[0] <= value <= self.bounds[1] and (
+                value < self.bounds[1] or not self.below_upper)):
+            lower = "more than" if self.positive else "at least"
+            allowed = (f"{lower} {self.bounds[0]:g} and less than {self.bounds[1]:g} {unit}" if self.below_upper
+                       else range_text(self.bounds, unit))
+            raise argparse.ArgumentTypeError(f"{name} must be {allowed}, got {stripped!r}")
         if self.kind is int:
+            if abs(value) > checks.MAX_WHOLE_NUMBER:  # no count or index is this large, and floats skip whole numbers there
+                raise argparse.ArgumentTypeError(f"{name} must be a whole number in {unit} below 2^53, got {stripped!r}")
             if value != int(value):
                 raise argparse.ArgumentTypeError(f"{name} must be a whole number in {unit}, got {stripped!r}")
             value = int(value)
@@ -94,7 +107,8 @@ class Number:
 _INTS_BY_DEST = {
     "seed": Number(int, nonnegative=True, maximum=MAX_SAMPLER_SEED),
     **{dest: Number(int, positive=True, maximum=MAX_SPP) for dest in ("spp", "aux_spp")},
-    **{dest: Number(int, positive=True) for dest in ("size", "rays", "workers")},
+    **{dest: Number(int, positive=True) for dest in ("size", "rays")},
+    "workers": Number(int, positive=True, maximum=checks.MAX_WORKERS),
 }
 #: Powers, dioptres: within +-MAX_POWER_DIOPTERS.
 _POWERS = {"sphere", "cylinder", "back_surface_diopters",
@@ -106,15 +120,57 @@ _POSITIVE_FLOATS = {
 }
 
 
+#: Plain number options whose quantity has one range every command keeps (`vissim.checks`, docs/conventions.md,
+#: "Input ranges and refusals"); a command may narrow it further (an eye's wavelengths, its model's accommodation).
+RANGES_BY_DEST = {
+    "arcmin_per_px": checks.ARCMIN_PER_PX_RANGE,
+    "wavelength_nm": checks.WAVELENGTH_RANGE_NM,
+    "lca_reference_nm": checks.WAVELENGTH_RANGE_NM,
+    "f_number": checks.F_NUMBER_RANGE,
+    "focal_length_mm": checks.FOCAL_LENGTH_RANGE_MM,
+    "focus_distance_m": checks.OBJECT_DISTANCE_RANGE_M,
+    "axis": checks.AXIS_RANGE_DEG,
+    "vertex_mm": checks.VERTEX_DISTANCE_RANGE_MM,
+    "index": checks.REFRACTIVE_INDEX_RANGE,
+    "layer_spacing_fraction": checks.LAYER_SPACING_FRACTION_RANGE,
+    "accommodation_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
+    "amplitude_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
+    "accommodation_amplitude_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
+    "proximal_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
+    "display_code": checks.DISPLAY_CODE_RANGE,
+    "full_capture_code": checks.DISPLAY_CODE_RANGE,
+    "logmar": checks.LOGMAR_RANGE,
+    "logmar_step": checks.LOGMAR_STEP_RANGE,
+    "dpi": checks.PRINT_DPI_RANGE,
+    "margin_px": checks.MARGIN_RANGE_PX,
+    "pixel_intensity": (0.0, checks.MAX_PIXEL_RADIANCE),
+    "white_radiance": (0.0, checks.MAX_PIXEL_RADIANCE),
+    "field_step_deg": (0.0, 2 * checks.MAX_FIELD_DEG),
+    "window_diopters": checks.ATV_PARABOLA_WINDOW_RANGE_DIOPTERS,
+    "summation_arcmin": checks.SUMMATION_RANGE_ARCMIN,
+    "thickness_mm": checks.BENCH_LENGTH_RANGE_MM,
+    "level": (0.0, 1.0),
+    "guess": checks.GUESS_LAPSE_RANGE,
+    "lapse": checks.GUESS_LAPSE_RANGE,
+}
+#: Of those, the quantities that must exceed their lower bound (an f-number or a print resolution of 0 is none).
+_ABOVE_LOWER = {"white_radiance", "field_step_deg", "logmar_step", "window_diopters", "summation_arcmin", "level"}
+#: Of those, the quantities that must stay below their upper bound (a confidence level of 1 is no interval).
+_BELOW_UPPER = {"level", "guess", "lapse"}
+
+
 def _number_type(action: argparse.Action) -> Number | None:
     if isinstance(action.type, Number):
         return action.type
+    bounds = RANGES_BY_DEST.get(action.dest)
     if action.type is int:
-        return _INTS_BY_DEST.get(action.dest, Number(int))
+        number = _INTS_BY_DEST.get(action.dest, Number(int))
+        return number if bounds is None else dataclasses.replace(number, bounds=bounds)
     if action.type is float:
         if action.dest in _POWERS:
-            return Number(float, max_magnitude=MAX_POWER_DIOPTERS)
-        return Number(float, positive=action.dest in _POSITIVE_FLOATS)
+            return Number(float, max_magnitude=MAX_POWER_DIOPTERS, bounds=bounds)
+        return Number(float, positive=action.dest in _POSITIVE_FLOATS or action.dest in _ABOVE_LOWER, bounds=bounds,
+                      below_upper=action.dest in _BELOW_UPPER)
     return None
 
 

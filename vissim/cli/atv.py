@@ -11,7 +11,7 @@ import argparse
 import math
 from pathlib import Path
 
-from vissim.checks import ATV_PARABOLA_WINDOW_DIOPTERS
+from vissim.checks import ATV_PARABOLA_WINDOW_DIOPTERS, trial_lens_diopters
 from vissim.checks import DEFAULT_WAVELENGTH_NM
 from vissim.cli._common import JSON_HELP, add_json_arg, add_rx_arg, check_outputs_apart, print_result, refuse_existing
 from vissim.cli._parser import Number
@@ -164,7 +164,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     )
     kwargs = {}
     if args.lenses is not None:  # an empty --lenses is an error, not the default lenses
-        kwargs["lenses_diopters"] = parse_float_list(args.lenses, "--lenses", "D", positive=False)
+        kwargs["lenses_diopters"] = [trial_lens_diopters(v, "--lenses")
+                                     for v in parse_float_list(args.lenses, "--lenses", "D", positive=False)]
     experiment = run_virtual_experiment(subject, apparatus=apparatus, detection=detection, seed=args.seed, **kwargs)
     written, analyses = write_simulation_report(experiment, args.output, window_diopters=_window(args.window_diopters), overwrite=args.overwrite)
     lines = [f"lens {t.trial_lens_diopters:+.2f} D: residual {t.residual_se_diopters:+.2f} D, accommodation "

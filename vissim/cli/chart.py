@@ -85,6 +85,8 @@ def _letters(args: argparse.Namespace) -> str | None:
         if len(args.letter.strip()) != 1:
             raise VissimInputError(f"--letter takes one Sloan letter, got {args.letter!r}; use --letters for more")
         return args.letter.strip()
+    if args.letters is not None and not args.letters.replace(",", "").strip():
+        raise VissimInputError(f"--letters is empty ({args.letters!r}); give Sloan letters, e.g. NCKZO")
     return args.letters
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.checks import MAX_WORKERS, vertex_distance_mm
+from vissim.checks import MAX_POWER_DIOPTERS, MAX_WORKERS, mtf_cyc_per_deg, number_within, vertex_distance_mm
 from vissim.cli._common import add_json_arg, field_deg_from_text, parse_float_list, print_result
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES as DATASET_NAMES
@@ -95,6 +95,10 @@ def _conditions(args):
 def _eyes(args):
     from vissim.optics.eyes.measured.population import select_eyes
 
+    for option, text in (("--subjects", args.subjects), ("--eyes", args.eyes), ("--foveal-se-diopters",
+                                                                              args.foveal_se_diopters)):
+        if text is not None and not text.replace(",", "").strip():
+            raise VissimInputError(f"{option} is empty ({text!r}); leave it out to take every eye")
     subjects = None
     if args.subjects:
         try:
@@ -107,6 +111,8 @@ def _eyes(args):
         se = parse_float_list(args.foveal_se_diopters, "--foveal-se-diopters", "D", positive=False)
         if len(se) != 2:
             raise VissimInputError(f"--foveal-se-diopters takes LOW,HIGH, got {args.foveal_se_diopters!r}")
+        se = [number_within(v, "--foveal-se-diopters", "dioptres", (-MAX_POWER_DIOPTERS, MAX_POWER_DIOPTERS))
+              for v in se]
     return select_eyes(args.dataset, subjects=subjects, eyes=sides, foveal_se_within_diopters=se)
 
 
@@ -119,11 +125,17 @@ def run(args: argparse.Namespace) -> int:
         raise VissimInputError(f"--workers must be 1 to {MAX_WORKERS} worker processes, got {args.workers}")
     if args.output.exists() and not args.output.is_dir():
         raise VissimInputError(f"-o {args.output} is a file; a population run writes into a folder")
-    frequencies = parse_float_list(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles/deg")
+    frequencies = mtf_cyc_per_deg(parse_float_list(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles/deg"),
+                                  "--mtf-cyc-per-deg")
     conditions = _conditions(args)
     eyes = _eyes(args)
     if not eyes:
         raise VissimInputError(f"no eye of {args.dataset} matches the selection given")
+    from vissim.atomic import refuse_existing
+    from vissim.validation.population.report import population_run_files
+
+    refuse_existing(*(args.output / name for name in population_run_files(conditions, frequencies)),
+                    overwrite=args.overwrite)  # before the eyes are evaluated
     client = None
     if args.scheduler is not None:
         from vissim.validation.engine.scheduler import connect_scheduler

@@ -128,6 +128,8 @@ def choose_variant(kind: str = "mono", variant: str | None = None) -> VariantCho
     """The Mitsuba variant for ``kind`` ('mono', 'rgb' or 'spectral'), by the rules above."""
     if kind not in _KINDS:
         raise VissimInputError(f"render kind must be one of {', '.join(_KINDS)}, got {kind!r}")
+    if variant is not None and not str(variant).strip():
+        raise VissimInputError("the Mitsuba variant '' is empty; name one (e.g. llvm_ad_mono) or leave --variant out")
     requested = variant or os.environ.get("VISSIM_MITSUBA_VARIANT") or None
     base = _backend_kind(requested)
     if base.reason == "requested":

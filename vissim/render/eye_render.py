@@ -81,7 +81,7 @@ class EyeRender:
                                self.vertex_mm, self.surfaces)
 
     def __post_init__(self) -> None:
-        from vissim.checks import eye_pupil_diameter_mm, positive_number
+        from vissim.checks import eye_pupil_diameter_mm, sampler_seed, samples_per_pixel, vertex_distance_mm
 
         if self.rx is not None:  # a Prescription, or its text once read: held as the number, never as text
             from vissim.optics.rx.prescription import prescription_from
@@ -95,9 +95,9 @@ class EyeRender:
             raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
         eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,
                               "entrance pupil" if self.iris_mm is None else "iris")
-        positive_number(self.vertex_mm, "vertex distance", "mm")
-        if int(self.spp) < 1:
-            raise VissimInputError(f"samples per pixel must be >= 1, got {self.spp}")
+        vertex_distance_mm(self.vertex_mm)
+        samples_per_pixel(self.spp, "samples per pixel")
+        sampler_seed(self.seed)
         self.eye  # the eye's own checks: its model's name and accommodation range, its surfaces, its prescription
         self.bench  # the bench's: the light, the chart and its letter, the lens, the field, the image
 

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from vissim.checks import check_allocation, instance_of, samples_per_pixel, size_text
+from vissim.checks import check_allocation, instance_of, sampler_seed, samples_per_pixel, size_text
 from vissim.errors import VissimInputError
 from vissim.provenance import json_safe, make_provenance
 from vissim.render.backend import mitsuba
@@ -173,6 +173,7 @@ def render_scene(
     and ``"spectral"`` (a luminance film: CIE Y of the spectrum), (H, W, 3) for ``"rgb"``.
     """
     spp = samples_per_pixel(spp)
+    seed = sampler_seed(seed)
     if statistic not in PIXEL_STATISTICS:
         raise VissimInputError(f"pixel statistic must be one of {', '.join(PIXEL_STATISTICS)}, got {statistic!r}")
     if statistic != "mean" and kind != "rgb":

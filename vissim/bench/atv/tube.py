@@ -47,8 +47,9 @@ from vissim.optics.rx.trial_lens import lens_surface_curvatures_per_mm
 from vissim.bench.lenses.mesh import (realistic_center_thickness_mm,
                                       rim_thickness_mm, sag_mm)
 from vissim.charts import MM_PER_INCH
-from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, COLLIMATOR_POWER_RANGE_DIOPTERS, DISPLAY_CODE_RANGE,
-                           MAX_PIXEL_RADIANCE, REFRACTIVE_INDEX_RANGE, eye_pupil_diameter_mm, finite_number)
+from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, BENCH_LENGTH_RANGE_MM, COLLIMATOR_POWER_RANGE_DIOPTERS,
+                           DISPLAY_CODE_RANGE, DISPLAY_PPI_RANGE, MAX_PIXEL_RADIANCE, REFRACTIVE_INDEX_RANGE,
+                           VERTEX_DISTANCE_RANGE_MM, eye_pupil_diameter_mm, finite_number)
 from vissim.errors import VissimInputError
 from vissim.imageio import srgb_decode
 from vissim.optics.rx.prescription import LensPower, Prescription, RefractiveError
@@ -129,15 +130,16 @@ class AtvTube:
 
     def __post_init__(self) -> None:
         for name, (what, unit, lo, lo_open, hi) in {  # field: (what, unit, lowest, lowest excluded, highest)
-            "tube_length_mm": ("tube length", "mm", 0.0, True, None),
+            "tube_length_mm": ("tube length", "mm", 0.0, True, BENCH_LENGTH_RANGE_MM[1]),
             "lens_power_diopters": ("collimator power", "dioptres", COLLIMATOR_POWER_RANGE_DIOPTERS[0], True,
                                     COLLIMATOR_POWER_RANGE_DIOPTERS[1]),
             "lens_refractive_index": ("collimator refractive index", "(dimensionless)",
                                       REFRACTIVE_INDEX_RANGE[0], False, REFRACTIVE_INDEX_RANGE[1]),
-            "lens_center_thickness_mm": ("collimator centre thickness", "mm", 0.0, True, None),
-            "lens_clear_aperture_mm": ("collimator clear aperture", "mm", 0.0, True, None),
-            "eye_relief_mm": ("eye relief", "mm", 0.0, True, None),
-            "pixels_per_inch": ("display resolution", "pixels per inch", 0.0, True, None),
+            "lens_center_thickness_mm": ("collimator centre thickness", "mm", 0.0, True, BENCH_LENGTH_RANGE_MM[1]),
+            "lens_clear_aperture_mm": ("collimator clear aperture", "mm", 0.0, True, BENCH_LENGTH_RANGE_MM[1]),
+            "eye_relief_mm": ("eye relief", "mm", 0.0, True, BENCH_LENGTH_RANGE_MM[1]),
+            "pixels_per_inch": ("display resolution", "pixels per inch", DISPLAY_PPI_RANGE[0], False,
+                                DISPLAY_PPI_RANGE[1]),
             "pixel_radiance": ("pixel radiance", "linear radiance units", 0.0, False, MAX_PIXEL_RADIANCE),
         }.items():
             object.__setattr__(self, name, _number(getattr(self, name), what, unit, lo=lo, lo_open=lo_open, hi=hi))
@@ -260,9 +262,11 @@ class AtvConfig:
         if not isinstance(self.tube, AtvTube) or not isinstance(self.eye, AtvEye):
             raise VissimInputError("AtvConfig needs an AtvTube and an AtvEye")
         object.__setattr__(self, "trial_lens_distance_mm", _number(
-            self.trial_lens_distance_mm, "trial lens distance", "mm", lo=0.0, lo_open=True))
+            self.trial_lens_distance_mm, "trial lens distance", "mm", lo=0.0, lo_open=True,
+            hi=VERTEX_DISTANCE_RANGE_MM[1]))
         object.__setattr__(self, "trial_clear_aperture_mm", _number(
-            self.trial_clear_aperture_mm, "trial lens clear aperture", "mm", lo=0.0, lo_open=True))
+            self.trial_clear_aperture_mm, "trial lens clear aperture", "mm", lo=0.0, lo_open=True,
+            hi=BENCH_LENGTH_RANGE_MM[1]))
         object.__setattr__(self, "fresnel_loss", bool(self.fresnel_loss))
         lens = self.trial_lens
         if lens is None:

@@ -45,7 +45,7 @@ import numpy as np
 from vissim.bench.dslr.bench import SAMPLERS
 from vissim.charts import (INK_REFLECTANCE, MM_PER_INCH, PAPER_REFLECTANCE, POLARITIES, ChartRow, ChartSpec,
                            layout_chart)
-from vissim.checks import finite_number, positive_number
+from vissim.checks import PANEL_PADDING_RANGE_ARCMIN, TEXELS_PER_PX_RANGE, finite_number, number_within, positive_number
 from vissim.checks import size_px as check_size_px
 from vissim.errors import VissimInputError
 from vissim.units import arcmin_to_rad, m_to_mm, rad_to_arcmin
@@ -79,9 +79,8 @@ class PanelChart:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "logmar", finite_number(self.logmar, "chart LogMAR", "LogMAR"))
-        padding = finite_number(self.padding_arcmin, "panel padding", "arcmin")
-        if padding < 0.0:
-            raise VissimInputError(f"panel padding must be >= 0 arcmin, got {padding:g} arcmin")
+        padding = number_within(self.padding_arcmin, "panel padding", "arcmin", PANEL_PADDING_RANGE_ARCMIN,
+                                " (paper around the chart, within the half of the view a panel can fill)")
         object.__setattr__(self, "padding_arcmin", padding)
         if self.polarity not in POLARITIES:
             raise VissimInputError(f"polarity must be one of {', '.join(POLARITIES)}, got {self.polarity!r}")
@@ -153,6 +152,7 @@ class DepthScene:
         for name, unit in (("arcmin_per_px", "arcmin/px"), ("texels_per_px", "texels per pixel"),
                            ("radiance_scale", "(relative)")):
             object.__setattr__(self, name, positive_number(getattr(self, name), name.replace("_", " "), unit))
+        number_within(self.texels_per_px, "texels per px", "texels per pixel", TEXELS_PER_PX_RANGE)
         object.__setattr__(self, "size_px", check_size_px(self.size_px))
         if self.sampler not in SAMPLERS:
             raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")

@@ -48,7 +48,8 @@ from vissim.bench.lenses.holder import (LENS_GAP_MM, MESH_RINGS, MESH_SEGMENTS, 
                                         lens_clear_aperture_mm, lens_shapes, physical_lens)
 from vissim.bench.scene_parts import chart_emitter, chart_texture, checked_chart_pixels, hdr_film, path_integrator
 from vissim.bench.scene_parts import chart_texture_shape as texture_shape
-from vissim.checks import size_text
+from vissim.checks import (LENS_GAP_RANGE_MM, REFRACTIVE_INDEX_RANGE, TEXELS_PER_PX_RANGE, check_allocation,
+                           number_within, sampler_seed, size_text)
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import samples_per_pixel
 from vissim.checks import size_px as check_size_px
@@ -77,6 +78,11 @@ def _positive(value: Any, name: str, unit: str, *, allow_zero: bool = False) -> 
     if not math.isfinite(number) or number < 0.0 or (number == 0.0 and not allow_zero):
         raise VissimInputError(f"{name} must be {'>= 0' if allow_zero else '> 0'} {unit}, got {value!r}")
     return number
+
+
+#: The least a render holds per pixel, bytes (a float32 value and its weight): a size beyond memory at this is refused
+#: before anything is sized for it (the renderer's own estimate, `vissim.render.run`, is larger and checked again).
+RENDER_BYTES_PER_PX = 8
 
 
 @dataclass(frozen=True)
@@ -159,8 +165,12 @@ class DslrBench:
                            ("chart_distance_mm", "mm"), ("arcmin_per_px", "arcmin/px"),
                            ("texels_per_px", "texels per camera pixel"), ("radiance_scale", "(relative)")):
             object.__setattr__(self, name, _positive(getattr(self, name), name.replace("_", " "), unit))
+        for name, unit, bounds in (("refractive_index", "(dimensionless)", REFRACTIVE_INDEX_RANGE),
+                                   ("texels_per_px", "texels per camera pixel", TEXELS_PER_PX_RANGE)):
+            number_within(getattr(self, name), name.replace("_", " "), unit, bounds)
+        object.__setattr__(self, "seed", sampler_seed(self.seed))
         object.__setattr__(self, "vertex_distance_mm", check_vertex_mm(self.vertex_distance_mm))
-        object.__setattr__(self, "lens_gap_mm", _positive(self.lens_gap_mm, "lens gap mm", "mm", allow_zero=True))
+        object.__setattr__(self, "lens_gap_mm", number_within(self.lens_gap_mm, "lens gap", "mm", LENS_GAP_RANGE_MM))
         index = _positive(self.refractive_index, "refractive index", "(dimensionless)")
         if index <= 1.0:
             raise VissimInputError(f"refractive index must exceed 1, got {index:g}")
@@ -170,6 +180,8 @@ class DslrBench:
                 f"the holder takes up to {MAX_LENSES_IN_HOLDER} TrialLens objects, got {self.lenses!r}")
         object.__setattr__(self, "lenses", lenses)
         object.__setattr__(self, "size_px", check_size_px(self.size_px))
+        check_allocation(RENDER_BYTES_PER_PX * self.size_px[0] * self.size_px[1],
+                         f"a {size_text(self.size_px)} render")  # before the lenses are sized for its field
         object.__setattr__(self, "spp", samples_per_pixel(self.spp))
         if self.sampler not in SAMPLERS:
             raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")

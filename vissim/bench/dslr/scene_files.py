@@ -22,6 +22,7 @@ from vissim.bench.dslr.bench import DslrBench
 from vissim.bench.scene_toml import (check_keys, checked_values, image_size_px, parse_trial_lenses, read_scene_toml,
                                      sub_table, typed_value)
 from vissim.charts import DEFAULT_LETTER_SEED, ChartSpec, etdrs_chart_spec, single_letter_spec
+from vissim.checks import F_NUMBER_RANGE, FOCAL_LENGTH_RANGE_MM, OBJECT_DISTANCE_RANGE_M, number_within
 from vissim.errors import VissimInputError
 from vissim.units import m_to_mm, mm_to_m
 
@@ -33,6 +34,9 @@ _CAMERA = {
     "f_number": ("f_number", float, "(f-number)"),
     "focus_distance_mm": ("focus_distance_mm", float, "mm"),
 }
+#: The ranges of a file's camera (`vissim.checks`): any camera lens and bench.
+_CAMERA_BOUNDS = {"focal_length_mm": FOCAL_LENGTH_RANGE_MM, "f_number": F_NUMBER_RANGE,
+                  "focus_distance_mm": tuple(1e3 * d for d in OBJECT_DISTANCE_RANGE_M)}
 _HOLDER = {
     "vertex_distance_mm": ("vertex_distance_mm", float, "mm"),
     "lens_gap_mm": ("lens_gap_mm", float, "mm"),
@@ -95,14 +99,18 @@ def bench_from_tables(doc: dict, source: str, **overrides: Any) -> DslrBench:
             field, kind, unit = schema[key]
             if field is not None:
                 fields[field] = typed_value(value, kind, f"{source} [{name}] {key}", unit)
+    for name, bounds in _CAMERA_BOUNDS.items():  # a camera a file describes; the API also takes a pinhole's f/1000
+        if name in fields:
+            number_within(fields[name], f"{source} [camera] {name}", _CAMERA[name][2], bounds)
     if "size_px" in fields:
         fields["size_px"] = image_size_px(fields["size_px"], source)
     holder_lenses = sub_table(doc, "holder", source).get("lenses", [])
     fields["lenses"] = parse_trial_lenses(holder_lenses, f"{source} [[holder.lenses]]")
     chart = sub_table(doc, "chart", source)
     if "chart_distance_m" in chart:
-        fields["chart_distance_mm"] = m_to_mm(typed_value(chart["chart_distance_m"], float,
-                                                          f"{source} [chart] chart_distance_m", "m"))
+        fields["chart_distance_mm"] = m_to_mm(number_within(
+            typed_value(chart["chart_distance_m"], float, f"{source} [chart] chart_distance_m", "m"),
+            f"{source} [chart] chart_distance_m", "m", OBJECT_DISTANCE_RANGE_M))
     fields.update({key: value for key, value in overrides.items() if value is not None})
     return DslrBench(**fields)
 

@@ -36,7 +36,7 @@ import numpy as np
 
 from vissim.bench.lenses.holder import LENS_GAP_MM, lens_back_vertex_z_mm, lens_clear_aperture_mm, physical_lens
 from vissim.bench.scene_parts import chart_texture_shape
-from vissim.checks import EYE_RENDER_MAX_FIELD_DEG, EYE_LIGHT_RANGE_NM, LOGMAR_RANGE
+from vissim.checks import EYE_LIGHT_RANGE_NM, LOGMAR_RANGE, eye_field_deg
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
 from vissim.checks import finite_number, instance_of, number_within, positive_number
 from vissim.checks import size_px as check_size_px
@@ -85,11 +85,7 @@ class EyeBench:
         self._check_light()
         self._check_chart()
         self._check_lenses()
-        object.__setattr__(self, "field_deg", tuple(float(f) for f in self.field_deg))
-        for value in self.field_deg:
-            if abs(finite_number(value, "field angle", "deg")) > EYE_RENDER_MAX_FIELD_DEG:
-                raise VissimInputError(f"field angle {value:g} deg: the eye sensor renders within "
-                                       f"{EYE_RENDER_MAX_FIELD_DEG:g} deg of the axis")
+        object.__setattr__(self, "field_deg", eye_field_deg(self.field_deg))
         object.__setattr__(self, "size_px", check_size_px(self.size_px))
         check_arcmin_per_px(self.arcmin_per_px)
         self.trial_lens_setup()  # validates the stack against the chart distance

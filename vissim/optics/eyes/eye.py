@@ -35,7 +35,8 @@ import functools
 import math
 from dataclasses import dataclass, field
 
-from vissim.checks import eye_wavelength_nm, instance_of, positive_number, trial_lens_diopters
+from vissim.checks import (eye_prescription_meridians, eye_pupil_diameter_mm, eye_wavelength_nm, instance_of,
+                           positive_number)
 from vissim.checks import vertex_distance_mm as checked_vertex_distance_mm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.fixation import ametropic_eye
@@ -76,7 +77,9 @@ class Eye:
             object.__setattr__(self, "iris_mm", positive_number(self.iris_mm, "iris diameter", "mm"))
         else:
             pupil = DEFAULT_EYE_PUPIL_MM if self.pupil_diameter_mm is None else self.pupil_diameter_mm
-            object.__setattr__(self, "pupil_diameter_mm", positive_number(pupil, "entrance pupil diameter", "mm"))
+            # a human eye's (`EYE_PUPIL_RANGE_MM`), for every command and file that builds an eye; a bare trace
+            # (`trace_eye_wavefront`) takes any pupil, for the physics of its limits
+            object.__setattr__(self, "pupil_diameter_mm", eye_pupil_diameter_mm(pupil, "entrance pupil diameter"))
         object.__setattr__(self, "vertex_distance_mm", checked_vertex_distance_mm(self.vertex_distance_mm, "spectacle vertex distance"))
         if self.wavelength_nm is not None:
             object.__setattr__(self, "wavelength_nm", eye_wavelength_nm(self.wavelength_nm,
@@ -94,8 +97,8 @@ class Eye:
     def _check_rx_range(self) -> None:
         """The prescription an eye is made to need lies, in each principal meridian, within the trial lenses'
         range (the lenses that would correct it): checked before its eye is built."""
-        for meridian in (self.rx.sphere_diopters, self.rx.sphere_diopters + self.rx.cylinder_diopters):
-            trial_lens_diopters(meridian, f"the principal meridian of the prescription {self.rx} an eye is made to need")
+        eye_prescription_meridians(self.rx.sphere_diopters, self.rx.cylinder_diopters,
+                                   f"the prescription {self.rx} an eye is made to need")
 
     def _check_measured(self) -> None:
         instance_of(self.measured, MeasuredWavefront, "an Eye's measured wavefront", "a MeasuredWavefront")

@@ -35,7 +35,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from vissim.checks import arcmin_per_px as check_arcmin_per_px
-from vissim.checks import MAX_FIELD_NODES, finite_number, positive_number, size_text
+from vissim.checks import EYE_RENDER_MAX_THETA_DEG, MAX_FIELD_NODES, finite_number, positive_number, size_text
 from vissim.errors import VissimInputError
 from vissim.progress import counter
 from vissim.optics.blur.convolve import image_kernel_psf, pixel_array
@@ -93,6 +93,7 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
     if len(centre) != 2:
         raise VissimInputError(f"the field angle must be two angles (x, y) in degrees, got {field_deg!r}")
     band, band_weights = _band(eye.reference_wavelength_nm if wavelength_nm is None else wavelength_nm, weights)
+    _check_image_field(shape, step, centre)
 
     spacing_px = spacing_deg * ARCMIN_PER_DEG / step
     if field_step_deg is None:  # the default step over pixels coarser than it: a node at each pixel at most
@@ -108,6 +109,21 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
         return psf
 
     return psf_grid(shape, spacing_px, psf_at)
+
+
+def _check_image_field(shape: tuple[int, int], arcmin_per_px: float, centre) -> None:
+    """The image's corners within `EYE_RENDER_MAX_THETA_DEG` of the eye's axis (as far as an eye's image is rendered),
+    refused before any PSF."""
+    rows, cols = shape[:2]
+    xs, ys = node_field_deg(np.array([0.0, 0.0, rows - 1.0, rows - 1.0]), np.array([0.0, cols - 1.0, 0.0, cols - 1.0]),
+                            (rows, cols), arcmin_per_px, centre)
+    tangents = np.hypot(np.tan(np.radians(np.clip(xs, -89.9, 89.9))), np.tan(np.radians(np.clip(ys, -89.9, 89.9))))
+    widest = float(np.degrees(np.arctan(np.max(tangents))))
+    if widest > EYE_RENDER_MAX_THETA_DEG:
+        raise VissimInputError(f"the image reaches {widest:.4g} deg from the eye's axis ({size_text((rows, cols))} at "
+                               f"{arcmin_per_px:g} arcmin/px about the field angle ({centre[0]:g}, {centre[1]:g}) deg), "
+                               f"beyond the {EYE_RENDER_MAX_THETA_DEG:g} deg an eye's image is simulated and rendered "
+                               "to: crop it, or give its true (finer) sampling")
 
 
 def _check_nodes(shape: tuple[int, int], spacing_px: float, spacing_deg: float, arcmin_per_px: float) -> int:

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vissim.checks import MAX_FIELD_DEG
+from vissim.checks import MAX_TRACE_FIELD_DEG
 from vissim.checks import eye_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
@@ -65,7 +65,7 @@ __all__ = ["eye_wavefront", "eye_spectral_wavefront", "vergence_front", "traced_
            "retinal_jacobian_mm_per_deg", "JACOBIAN_STEP_DEG"]
 
 #: The iris grid (samples across) of a trace made only for its chief ray and pupil.
-ANCHOR_SAMPLES = 9
+ANCHOR_SAMPLES = 17
 #: Field step (deg) of the central differences that give the retina's local mm per degree.
 JACOBIAN_STEP_DEG = 0.1
 
@@ -133,17 +133,17 @@ def _with_vergence(front: Wavefront, vergence: Wavefront | None) -> Wavefront:
 def retinal_jacobian_mm_per_deg(eye, wavelength_nm: float, field_deg, *, iris_mm: float,
                                 lenses=None) -> np.ndarray:
     """d(chief ray's retinal point x, y, mm) / d(field angle x, y, deg) at ``field_deg``: a 2 × 2 matrix by
-    central differences of ±`JACOBIAN_STEP_DEG` (one-sided at ±`MAX_FIELD_DEG`) of chief rays traced
+    central differences of ±`JACOBIAN_STEP_DEG` (one-sided at ±`MAX_TRACE_FIELD_DEG`) of chief rays traced
     through the ``iris_mm`` iris (and ``lenses``) at ``wavelength_nm``. About −(mm per degree) × I near the axis."""
     columns = []
     for axis in (0, 1):
-        low = max(field_deg[axis] - JACOBIAN_STEP_DEG, -MAX_FIELD_DEG)
-        high = min(field_deg[axis] + JACOBIAN_STEP_DEG, MAX_FIELD_DEG)
+        low = max(field_deg[axis] - JACOBIAN_STEP_DEG, -MAX_TRACE_FIELD_DEG)
+        high = min(field_deg[axis] + JACOBIAN_STEP_DEG, MAX_TRACE_FIELD_DEG)
         points = []
         for value in (low, high):
             field = [float(v) for v in field_deg]
             field[axis] = value
-            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=9, max_order=2,
+            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=ANCHOR_SAMPLES, max_order=2,
                                          lenses=lenses)
             points.append(np.array(traced.image_point_mm[:2]))
         columns.append((points[1] - points[0]) / (high - low))

@@ -59,7 +59,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import finite_number
+from vissim.checks import EYE_MTF_RANGE_CYC_PER_DEG, finite_number
+from vissim.checks import mtf_cyc_per_deg as mtf_cyc_per_deg_in_range
 from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.errors import VissimInputError
 from vissim.lazy_import import lazy_module
@@ -99,6 +100,16 @@ def _frequencies(values, name: str) -> np.ndarray:
     if np.any(out < 0.0):
         raise VissimInputError(f"{name} must be >= 0, got {float(out[out < 0.0][0]):g}")
     return out
+
+
+def _within_cutoff(f_mm: np.ndarray, mm_per_deg: float) -> None:
+    """Retinal frequencies (cycles/mm) within `EYE_MTF_RANGE_CYC_PER_DEG` once in cycles/deg on this eye's retina."""
+    high = EYE_MTF_RANGE_CYC_PER_DEG[1]
+    beyond = f_mm[f_mm * mm_per_deg > high]
+    if len(beyond):
+        raise VissimInputError(f"MTF frequency (per mm) {float(beyond[0]):g} cycles/mm is {float(beyond[0]) * mm_per_deg:g} "
+                               f"cycles/deg on this retina ({mm_per_deg:.4g} mm/deg), beyond the {high:.0f} cycles/deg "
+                               "cutoff of the widest eye pupil in the shortest light (every eye's MTF is 0 there)")
 
 
 def _mtf_directions(field_deg) -> dict[str, tuple[float, float] | None]:
@@ -273,7 +284,8 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
     """
     eye_in = checked_eye(eye, "eye_report")
     f_mm = _frequencies(mtf_cyc_per_mm, "MTF frequency (per mm)")
-    f_deg = _frequencies(mtf_cyc_per_deg, "MTF frequency (per degree)")
+    f_deg = np.array(mtf_cyc_per_deg_in_range(_frequencies(mtf_cyc_per_deg, "MTF frequency (per degree)"),
+                                              "MTF frequency (per degree)"), dtype=float)
     vertex = eye_in.vertex_distance_mm if (at_spectacle_plane or eye_in.rx is not None or len(lenses)) else None
     prescription = eye_in.rx
     eye = eye_in.optics
@@ -292,6 +304,7 @@ def eye_report(eye: Eye, *, wavelength_nm=None, field_deg=(0.0, 0.0), at_spectac
         mm_per_deg = retinal_mm_per_deg(mean, wavelength)
     else:
         mm_per_deg = system_retinal_mm_per_deg(eye, setup, wavelength)
+    _within_cutoff(f_mm, mm_per_deg)
     tables_deg, tables_mm = {}, {}
     if len(f_deg) or len(f_mm):
         everything = _mtf(eye, front, setup, mtf_spectrum, np.concatenate([f_deg, f_mm * mm_per_deg]), eye_in.measured)

@@ -23,7 +23,7 @@ from vissim.optics.eyes.traced_wavefront import field_direction, field_of_direct
 __all__ = ["chief_pupil_point_mm", "film_field_deg", "eye_to_world_rotation"]
 
 #: The iris grid of the trace made for a chief ray only (samples across).
-_CHIEF_SAMPLES = 9
+_CHIEF_SAMPLES = 17
 
 
 def chief_pupil_point_mm(eye: SchematicEye, field_deg, pupil_mm: float) -> np.ndarray:

@@ -54,7 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG, eye_wavelength_nm, positive_number
+from vissim.checks import EYE_PUPIL_RANGE_MM, MAX_TRACE_FIELD_DEG, eye_wavelength_nm, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.models import SchematicEye
 from vissim.optics.eyes.refraction import ENTRANCE_PUPIL_PLANE
@@ -113,10 +113,10 @@ def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:
     except (TypeError, ValueError):
         raise VissimInputError(f"a field angle must be two numbers (x, y) in deg, got {field_deg!r}") from None
     for value in (fx, fy):
-        bad = ~np.isfinite(value) | (np.abs(value) > MAX_FIELD_DEG)
+        bad = ~np.isfinite(value) | (np.abs(value) > MAX_TRACE_FIELD_DEG)
         if np.any(bad):
             first = float(np.ravel(value)[np.argmax(np.ravel(bad))])
-            raise VissimInputError(f"field angle {first:g} deg is beyond +-{MAX_FIELD_DEG:g} deg"
+            raise VissimInputError(f"field angle {first:g} deg is beyond +-{MAX_TRACE_FIELD_DEG:g} deg (90 is grazing)"
                                    if math.isfinite(first) else f"field angle must be finite deg, got {first}")
     tx, ty = np.broadcast_arrays(np.tan(np.radians(fx)), np.tan(np.radians(fy)))
     o = np.stack([tx, ty, np.ones_like(tx)], axis=-1)
@@ -346,7 +346,10 @@ def _iris_grid(eye: SchematicEye, iris_mm: float, samples: int) -> tuple[np.ndar
     `GRID_MARGIN` iris radii plus two steps, the chief ray (the iris centre) first -- and which of
     them are on the grid's edge (a 4-neighbour missing)."""
     step = iris_mm / (samples - 1)
-    half = math.ceil(GRID_MARGIN * (samples - 1) / 2) + 2
+    # two steps beyond GRID_MARGIN, but never farther (in iris diameters) than the default grid's: a coarse grid's
+    # two steps would otherwise reach rays far beyond the iris that miss the cornea of a wide pupil
+    reach = GRID_MARGIN / 2 + 2 / (DEFAULT_SAMPLES - 1)
+    half = min(math.ceil(GRID_MARGIN * (samples - 1) / 2) + 2, math.ceil(reach * (samples - 1) - 1e-9))
     axis = step * np.arange(-half, half + 1)
     x, y = np.meshgrid(axis, axis[::-1])
     keep = np.hypot(x, y) <= step * (half + 1e-9)
@@ -438,7 +441,8 @@ def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0)
 
         traced = map_on_threads(trace_share, split_evenly(range(len(grids)), spare_threads()))
     except VissimInputError as error:
-        raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: {error}") from None
+        raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg, {given} {_widest(pupils, irises, given)} "
+                               f"mm: {error}; the {eye.name} eye traces a smaller pupil or field angle") from None
 
     def fit_share(share_traced):
         share, (bundle, starts) = share_traced
@@ -455,6 +459,11 @@ def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0)
     return [front for fronts in map_on_threads(fit_share, traced) for front in fronts]
 
 
+def _widest(pupils, irises, given: str) -> str:
+    """The widest pupil (or iris) of a trace, as its refusal names it."""
+    return f"{float(np.max(pupils if given == 'entrance pupil' else irises)):.3g}"
+
+
 def _fitted_front(eye, field, wavelength, bundle, starts, edge, max_order, pupil, lenses) -> EyeWavefront:
     """One wavelength's rays on the retina, their OPD on the reference sphere fitted over the entrance pupil."""
     diameter, iris, given, entrance_z, eye_pupil = pupil
@@ -466,7 +475,7 @@ def _fitted_front(eye, field, wavelength, bundle, starts, edge, max_order, pupil
     xy = xy - xy[0]
     if np.any(np.hypot(xy[edge, 0], xy[edge, 1]) <= 0.5 * diameter):
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg: the traced rays do not cover the "
-                               f"{diameter:g} mm entrance pupil")
+                               f"{diameter:g} mm entrance pupil; the {eye.name} eye traces a smaller pupil or field angle")
     coefficients, residual = fit_zernike_um(xy[:, 0], xy[:, 1], opd_um, diameter, max_order)
     return EyeWavefront(eye.name, field, wavelength, diameter, iris, given, entrance_z, exit_z,
                         tuple(float(v) for v in bundle.points_mm[0]), chief, xy[:, 0].copy(), xy[:, 1].copy(), opd_um,

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.checks import finite_number as _number
-from vissim.checks import LENS_GAP_RANGE_MM
+from vissim.checks import BENCH_LENGTH_RANGE_MM, LENS_GAP_RANGE_MM, REFRACTIVE_INDEX_RANGE, number_within
 from vissim.checks import vertex_distance_mm as check_vertex_mm
 from vissim.errors import VissimInputError
 from vissim.optics.rx.conventions import (CORNEA_TO_ENTRANCE_PUPIL_MM, CROWN_GLASS_INDEX,  # noqa: F401 (re-exported)
@@ -144,13 +144,10 @@ class TrialLens:
         for name in ("sphere_diopters", "cylinder_diopters", "axis_deg"):
             object.__setattr__(self, name, getattr(marked, name))
         if self.refractive_index is not None:
-            index = _number(self.refractive_index, "refractive index", "(dimensionless)")
-            if index <= 1.0:
-                raise VissimInputError(f"refractive index must exceed 1, got {index:g}")
+            index = number_within(self.refractive_index, "refractive index", "(dimensionless)", REFRACTIVE_INDEX_RANGE,
+                                  " (above air to beyond any optical glass)")
             object.__setattr__(self, "refractive_index", index)
-        thickness = _number(self.center_thickness_mm, "centre thickness", "mm")
-        if thickness < 0.0:
-            raise VissimInputError(f"centre thickness must be >= 0 mm, got {thickness:g} mm")
+        thickness = number_within(self.center_thickness_mm, "centre thickness", "mm", BENCH_LENGTH_RANGE_MM)
         if thickness > 0.0 and self.refractive_index is None:
             raise VissimInputError(
                 f"a {thickness:g} mm thick lens needs a refractive index (crown: {CROWN_GLASS_INDEX})"

@@ -113,7 +113,7 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
         lens_sets += [[entry] for entry in single]
     if "lenses" in raw:
         lens_sets += list(value_list(raw["lenses"], source, f"{where}.lenses", "[[2.0], [1.0, -0.5]] (lens sets)"))
-    prefix = name_text(raw.get("name", ""), source, f"{where}.name")
+    prefix = name_text(raw["name"], source, f"{where}.name") if "name" in raw else ""
     out = []
     axes = {"letter": letters, "logmar": logmars, "polarity": polarities, "lenses": lens_sets or [[]]}
     for combination in sweep_combinations(axes, source, where):

@@ -28,7 +28,7 @@ from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_A
 from vissim.optics.eyes.eye import SURFACE_OVERRIDES, eye_from_fields
 from vissim.optics.rx.prescription import Prescription
 from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EYE_BENCH_RAYS_ACROSS_RANGE,
-                           EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, EYE_RENDER_MAX_FIELD_DEG,
+                           EYE_BENCH_SIZE_RANGE_PX, EYE_PUPIL_RANGE_MM, MAX_FIELD_DEG,
                            EYE_LIGHT_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
                            VERTEX_DISTANCE_RANGE_MM, VIEWING_DISTANCE_RANGE_M)
 from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
@@ -114,7 +114,7 @@ def _field(value, source: str, where: str) -> tuple[float, float]:
     values = [value, 0.0] if isinstance(value, (int, float)) and not isinstance(value, bool) else value
     if not isinstance(values, list) or len(values) != 2:
         raise field_error(source, where, f"a field is degrees (x, a number) or [x, y], got {value!r}")
-    return tuple(number(v, source, where, "deg", lo=-EYE_RENDER_MAX_FIELD_DEG, hi=EYE_RENDER_MAX_FIELD_DEG) for v in values)
+    return tuple(number(v, source, where, "deg", lo=-MAX_FIELD_DEG, hi=MAX_FIELD_DEG) for v in values)
 
 
 def _rx(value, source: str, where: str) -> Prescription:

@@ -244,6 +244,14 @@ def _figures(results, conditions, frequencies) -> list:
     return figures
 
 
+def population_run_files(conditions, frequencies) -> list[str]:
+    """The names of the files `write_population_run` writes for ``conditions`` at ``frequencies``: known before any
+    eye is evaluated, so that a run folder holding them is refused before the work."""
+    names = ["eyes.csv", "quantiles.json", "figure_letters.png"]
+    names += ["gap.md", "figure_mtf.png"] if np.asarray(frequencies, dtype=float).size else []
+    return names + (["figure_astigmatism.png"] if len(_meridian(list(conditions))) >= 3 else [])
+
+
 def write_population_run(run_dir: Path, results, conditions, frequencies, provenance: dict, *,
                          overwrite: bool = False) -> list[Path]:
     """The run's files (module doc) in ``run_dir``; each written atomically, the figures with their provenance."""
@@ -255,10 +263,7 @@ def write_population_run(run_dir: Path, results, conditions, frequencies, proven
     frequencies = np.asarray(frequencies, dtype=float)
     summary = {label: {k: np.asarray(v).tolist() if k != "count" else v for k, v in table.items()}
                for label, table in population_quantiles(results).items()}
-    meridian = _meridian(list(conditions))
-    names = (["eyes.csv", "quantiles.json", "figure_letters.png"]
-             + (["gap.md", "figure_mtf.png"] if frequencies.size else [])
-             + (["figure_astigmatism.png"] if len(meridian) >= 3 else []))
+    names = population_run_files(conditions, frequencies)
     refuse_existing(*(run_dir / name for name in names), overwrite=overwrite)  # before anything is written
     written = [write_text_atomic(run_dir / "eyes.csv", _eyes_csv(results, frequencies), overwrite=overwrite),
                write_json_atomic(run_dir / "quantiles.json", {"quantiles": list(QUANTILES), "frequencies_cyc_per_deg":

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
                                          POPULATION_FIELD_DEG, POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
-from vissim.checks import ACCOMMODATION_RANGE_DIOPTERS, VERTEX_DISTANCE_RANGE_MM
+from vissim.checks import ACCOMMODATION_RANGE_DIOPTERS, EYE_MTF_RANGE_CYC_PER_DEG, VERTEX_DISTANCE_RANGE_MM
 from vissim.vocabulary import refuse_renamed_keys
 from vissim.validation.engine.fields import choices, field_error, number, text, value_list
 
@@ -116,7 +116,7 @@ def _settings(head: dict, source: str) -> PopulationSettings:
         if len(se) != 2 or se[0] > se[1]:
             raise field_error(source, "campaign.foveal_se_diopters", f"give [low, high] in D, got {list(se)!r}")
     frequencies = _numbers(head.get("mtf_cyc_per_deg", list(POPULATION_MTF_CYC_PER_DEG)), source,
-                           "campaign.mtf_cyc_per_deg", "cycles/deg", positive=True)
+                           "campaign.mtf_cyc_per_deg", "cycles/deg", positive=True, hi=EYE_MTF_RANGE_CYC_PER_DEG[1])
     return PopulationSettings(dataset, subjects, eyes, se, frequencies)
 
 
