@@ -32,7 +32,7 @@ from typing import Union
 import numpy as np
 
 from vissim.bench.dslr.bench import DslrBench
-from vissim.checks import accommodation_diopters, eye_prescription_meridians, positive_number
+from vissim.checks import accommodation_diopters, eye_prescription_meridians, eye_pupil_diameter_mm, positive_number
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.rx.trial_lens import CROWN_GLASS_INDEX, TrialLens, entrance_pupil_diameter_mm
@@ -55,7 +55,8 @@ class EyeViewer:
     def __post_init__(self) -> None:
         eye_prescription_meridians(self.prescription.sphere_diopters, self.prescription.cylinder_diopters,
                                    f"the eye's prescription {self.prescription}")
-        setup = ViewingSetup.eye(self.prescription, self.pupil_diameter_mm, self.accommodation_diopters)  # validates
+        pupil = eye_pupil_diameter_mm(self.pupil_diameter_mm, "the eye's pupil diameter")  # a human eye's
+        setup = ViewingSetup.eye(self.prescription, pupil, self.accommodation_diopters)  # validates
         object.__setattr__(self, "pupil_diameter_mm", setup.pupil_diameter_mm)
         object.__setattr__(self, "accommodation_diopters", accommodation_diopters(self.accommodation_diopters))
 
