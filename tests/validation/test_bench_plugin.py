@@ -57,7 +57,8 @@ def test_a_run_says_where_its_time_went(toy_kind, tmp_path):
     seconds = [item["seconds"] for item in timings["items"]]
     assert len(seconds) == 2 and seconds == sorted(seconds, reverse=True) and all(s >= 0 for s in seconds)
     assert timings["renders_seconds"] > 0 and timings["report_seconds"] > 0
-    assert timings["items_seconds"] == pytest.approx(sum(seconds), rel=1e-12)
+    # the items' wall time: at least the slowest item's, at most their sum (they run at once, one per core)
+    assert max(seconds) <= timings["items_seconds"] <= sum(seconds) + 0.05
     line = next(line for line in done.lines if line.startswith("time: "))
     assert {item["name"] for item in timings["items"]} == {"sharp", "soft"}
     assert "slowest items: " + timings["items"][0]["name"] in line

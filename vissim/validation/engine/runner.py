@@ -56,10 +56,7 @@ class RunSummary:
     renders_seconds: float = 0.0  # wall time of this run's renders (none made: 0)
     item_seconds: tuple[tuple[str, float], ...] = ()  # (item key, wall seconds) of each item computed, slowest first
     item_names: tuple[tuple[str, str], ...] = ()  # (item key, its configuration's name) of every item
-
-    @property
-    def items_seconds(self) -> float:
-        return sum(seconds for _, seconds in self.item_seconds)
+    items_seconds: float = 0.0  # wall time of this run's items (several at once: less than their sum)
 
 
 def progress_of(show_progress: bool, progress: Progress | None):
@@ -193,14 +190,16 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
                 timed.append((key, time.perf_counter() - start))
             advance()
 
+        start = time.perf_counter()
         if getattr(kind, "items_on_threads", True):
             map_on_threads(compute, todo)  # items are independent: one per core at once
         else:
             for pair in todo:
                 compute(pair)
+        items_seconds = time.perf_counter() - start
     names = tuple((key, str(getattr(c, "name", ""))) for key, c in zip(keys, campaign.configurations))
     return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped),
-                      renders_seconds, tuple(sorted(timed, key=lambda pair: -pair[1])), names)
+                      renders_seconds, tuple(sorted(timed, key=lambda pair: -pair[1])), names, items_seconds)
 
 
 def _compute_item(kind, campaign: Campaign, key: str, index: int, plan, run_dir: Path) -> None:

@@ -61,9 +61,9 @@ SLOWEST_ITEMS = 5
 
 
 def write_timings(run_dir: Path, summary: RunSummary, report_seconds: float, workers: int) -> str:
-    """Write ``timings.json`` (this run's wall seconds in its renders, its items, each item slowest first with its
-    configuration's name, and its report, with the cores and workers it had) and return its one line for the
-    command's summary."""
+    """Write ``timings.json`` (this run's wall seconds in its renders, its items (computed several at once: each
+    item's own seconds add up to more), each item slowest first with its configuration's name, and its report, with
+    the cores and workers it had) and return its one line for the command's summary."""
     names = dict(summary.item_names)
     record = {"renders_seconds": summary.renders_seconds, "items_seconds": summary.items_seconds,
               "report_seconds": report_seconds, "workers": workers, "cores": os.cpu_count(),
