@@ -19,7 +19,6 @@ through `vissim.cli.main`.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import re
 import signal
@@ -29,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from campaign_toml import toml_value
 
 from vissim import checks
 from vissim.cli import build_parser, main
@@ -356,26 +356,6 @@ def cli_cases():
 
 
 # -- campaign and scene files ----------------------------------------------------------------------------------
-def _toml_value(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "nan"
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return repr(value)
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, str):
-        return json.dumps(value)  # a TOML basic string: JSON's escapes
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    if isinstance(value, dict):
-        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
-    raise TypeError(value)
-
-
 def toml_text(document: dict) -> str:
     """``document`` as TOML: top-level tables (one nested level), arrays of tables, inline values inside."""
     lines = []
@@ -388,10 +368,10 @@ def toml_text(document: dict) -> str:
                 if isinstance(value, dict) and key.startswith("["):
                     subtables.append((key.strip("[]"), value))
                 else:
-                    lines.append(f"{key} = {_toml_value(value)}")
+                    lines.append(f"{key} = {toml_value(value)}")
             for key, value in subtables:
                 lines.append(f"[{name}.{key}]")
-                lines += [f"{k} = {_toml_value(v)}" for k, v in value.items()]
+                lines += [f"{k} = {toml_value(v)}" for k, v in value.items()]
     return "\n".join(lines) + "\n"
 
 
