@@ -189,8 +189,8 @@ def _check_eye_options(args: argparse.Namespace) -> None:
     if args.eye_model is None:
         given = [name for name, value in eye_only.items() if value is not None]
         if given:
-            raise VissimInputError(f"{', '.join(given)} need(s) --eye-model (the reduced eye has one PSF over the "
-                                   "field and no accommodation)")
+            raise VissimInputError(f"{' and '.join(given)} {'needs' if len(given) == 1 else 'need'} --eye-model (the "
+                                   "reduced eye has one PSF over the field and no accommodation)")
         return
     if args.lca:
         raise VissimInputError("--lca does not go with --eye-model: the traced eye has its own dispersion")

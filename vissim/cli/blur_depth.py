@@ -138,8 +138,8 @@ def _schematic_eye(args: argparse.Namespace) -> tuple[DepthViewer, float, dict]:
     targets = [name for name, value in (("--age", args.age), ("--accommodation-amplitude-diopters", args.accommodation_amplitude_diopters),
                                         ("--focus-distance-m", args.focus_distance_m)) if value is not None]
     if targets:
-        raise VissimInputError(f"{', '.join(targets)} do(es) not go with --eye-model: give the accommodation the "
-                               "schematic eye exerts with --accommodation-diopters")
+        raise VissimInputError(f"{' and '.join(targets)} {'does' if len(targets) == 1 else 'do'} not go with "
+                               "--eye-model: give the accommodation the schematic eye exerts with --accommodation-diopters")
     accommodation = 0.0 if args.accommodation_diopters is None else args.accommodation_diopters
     field = field_deg_from_text(args.field_deg) if args.field_deg is not None else (0.0, 0.0)
     the_eye = eye_from_args(args, args.rx)
