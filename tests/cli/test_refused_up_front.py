@@ -149,6 +149,6 @@ def test_a_campaign_without_a_kind_says_it_was_read_as_a_dslr_campaign(capsys, t
 def test_an_option_of_the_traced_eye_alone_is_refused_in_plain_words(capsys, tmp_path, extra, said):
     image = tmp_path / "grey.exr"
     write_image(image, np.full((16, 16), 0.5, np.float32), arcmin_per_px=1.0)
-    code = main(["blur", str(image), "--rx", "-1", "-o", str(tmp_path / "out.exr"), *extra])
+    code = main(["blur", str(image), "--rx", "-1", "--pupil-mm", "3", "-o", str(tmp_path / "out.exr"), *extra])
     err = capsys.readouterr().err
     assert code == 2 and said in err and "(s)" not in err and err.count("\n") == 1

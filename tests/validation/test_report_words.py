@@ -171,3 +171,10 @@ def test_a_tile_strip_is_its_images_side_by_side_under_their_labels():
     image = np.asarray(Image.open(BytesIO(png)).convert("L"))
     assert image.shape == (20 + LABEL_PX, 3 * 24 + 2 * 6)
     assert image[LABEL_PX + 5, -5] == 128  # no difference: mid-grey
+
+
+def test_a_measured_eye_is_named_by_its_study_subject_and_eye():
+    name = sweep_name("subject 92", {"eye_model": "jaeken-artal-2012:92:right", "field_deg": [-20.0, 0.0]})
+    assert name == "Jaeken & Artal 2012 subject 92, right eye, -20° field"
+    assert sweep_name("x", {"eye_model": "polans-2015:3:right"}) == "x, Polans et al. 2015 subject 3, right eye"
+    assert sweep_name("model", {"eye_model": "navarro-1985"}) == "model, navarro-1985"

@@ -289,8 +289,10 @@ def _verdict(results: list[dict], optics: dict) -> str:
                      f"{worst[0]:+.2f} dB ({worst[1]}).")
     ceilings = [o["perfect_wave_db"] for o in optics.values() if o and "perfect_wave_db" in o]
     if ceilings:
-        lines.append(f"* Read the wave-optics scores against what a perfect one scores here, {min(ceilings):+.1f} to "
-                     f"{max(ceilings):+.1f} dB, not +{PERFECT_MARGIN_DB:.2f} dB (Why some scores are far above +3 dB).")
+        low, high = f"{min(ceilings):+.1f}", f"{max(ceilings):+.1f}"
+        span = low if low == high else f"{low} to {high}"
+        lines.append(f"* Read the wave-optics scores against what a perfect one scores here, {span} dB, not "
+                     f"+{PERFECT_MARGIN_DB:.2f} dB (Why some scores are far above +3 dB).")
     lines.append("* The reduced eye and the thesis method leave out what the schematic eye has (its higher-order "
                  "aberrations, its field dependence, its entrance pupil); their scores below 0 dB measure those "
                  "omissions, priced one by one in What each reduced-eye assumption costs.")
@@ -391,7 +393,7 @@ def _tile(result: dict, run_dir: Path, optics: dict) -> Figure | None:
 def _slug(name: str) -> str:
     import re
 
-    text = name.replace("°", "deg").replace("+", "plus").replace("-", "minus")
+    text = re.sub(r"-(?=\d)", "minus", name.replace("°", "deg").replace("+", "plus"))  # a sign, not a hyphen
     return re.sub(r"[^A-Za-z0-9]+", "_", text).strip("_").lower()
 
 

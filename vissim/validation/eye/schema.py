@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 from vissim.errors import VissimInputError
+from vissim.optics.eyes.measured.datasets import measured_eye_words
 from vissim.optics.eyes.defaults import (DEFAULT_CHART_DISTANCE_M, DEFAULT_EYE_ARCMIN_PER_PX, DEFAULT_EYE_LIGHT_NM,
                                          DEFAULT_EYE_MODEL, DEFAULT_EYE_PUPIL_MM, DEFAULT_EYE_SIZE_PX, DEFAULT_LETTER,
                                          DEFAULT_LETTER_LOGMAR, DEFAULT_SPECTACLE_VERTEX_MM)
@@ -232,7 +233,7 @@ def axis_phrase(key: str, value) -> str:
     if key == "chart_distance_m" and number:
         return f"chart at {value:g} m"
     if key == "eye_model":
-        return str(value)
+        return measured_eye_words(value)
     return f"{key} {_words(value)}"
 
 

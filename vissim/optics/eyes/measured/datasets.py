@@ -32,7 +32,7 @@ import numpy as np
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES
 
-__all__ = ["UnmeasuredFieldError", "WavefrontDataset", "DATASET_NAMES", "load_dataset", "DATA_DIR", "OPTIC_DISC_X_DEG", "HIGHEST_OSA_J"]
+__all__ = ["UnmeasuredFieldError", "WavefrontDataset", "DATASET_NAMES", "load_dataset", "DATA_DIR", "OPTIC_DISC_X_DEG", "HIGHEST_OSA_J", "measured_eye_words"]
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 #: The highest OSA j either dataset holds.
@@ -52,6 +52,7 @@ class _Source:
     sha256: str
     arrays: dict  # name -> shape
     citation: str
+    label: str  # as a report names it: authors and year
 
 
 _SOURCES = {
@@ -59,13 +60,25 @@ _SOURCES = {
         "jaeken-artal-2012.npz", "0cadea733f7776c071ae5488e3c03ef04faf11aa69bf0dab2b3f0b2614d99781",
         {"zernike_um": (130, 2, 81, 15), "subject": (130,), "eye": (2,), "field_deg": (81,), "osa_j": (15,),
          "pupil_mm": ()},
-        "Jaeken B., Artal P. (2012) Invest. Ophthalmol. Vis. Sci. 53(7):3405-3413; via ISETBio (MIT)"),
+        "Jaeken B., Artal P. (2012) Invest. Ophthalmol. Vis. Sci. 53(7):3405-3413; via ISETBio (MIT)",
+        "Jaeken & Artal 2012"),
     "polans-2015": _Source(
         "polans-2015.npz", "33bafc6bc0d53422fc42f71beb3891f85aed09038dddfc24816a676b7cb72ff3",
         {"zernike_um": (10, 11, 81, 18), "subject": (10,), "vertical_deg": (11,), "horizontal_deg": (81,),
          "osa_j": (18,), "pupil_mm": ()},
-        "Polans J., Jaeken B., McNabb R.P., Artal P., Izatt J.A. (2015) Optica 2(2):124-134; via ISETBio (MIT)"),
+        "Polans J., Jaeken B., McNabb R.P., Artal P., Izatt J.A. (2015) Optica 2(2):124-134; via ISETBio (MIT)",
+        "Polans et al. 2015"),
 }
+def measured_eye_words(name: str) -> str:
+    """A measured eye's name (``jaeken-artal-2012:17:right``) as a report says it: ``Jaeken & Artal 2012
+    subject 17, right eye``; any other name as it is."""
+    dataset, _, rest = str(name).partition(":")
+    subject, _, side = rest.partition(":")
+    if dataset not in _SOURCES or not subject or not side:
+        return str(name)
+    return f"{_SOURCES[dataset].label} subject {subject}, {side} eye"
+
+
 #: The datasets' names, as a measured eye's name begins (``jaeken-artal-2012:17:right``).
 DATASET_NAMES = MEASURED_DATASET_NAMES  # the light list the command line reads; a test pins it to the files
 
