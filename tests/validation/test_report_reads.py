@@ -203,11 +203,11 @@ def test_a_score_above_three_db_is_explained_with_the_runs_numbers():
 
 
 def test_the_synthetic_inputs_get_figures(run_dir, tables, page):
-    for simulation in ("wave", "geometric"):
+    for simulation, words in (("wave", "wave optics"), ("geometric", "ray optics")):
         name = f"figure_{simulation}_synthetic.png"
         assert (run_dir / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert f"]({name})" in tables
-        assert f"{simulation} simulation on the synthetic chart</h2>" in page
+        assert f"{words} on the drawn chart</h2>" in page and f"{simulation} simulation on the" not in page
 
 
 class Images(HTMLParser):

@@ -263,7 +263,7 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
     lo, hi = DISSIMILARITY_RANGE
     truth_label = "wave bench (truth)" if wave_bench else "bench (truth)"
     rows = [(truth_label, "gray", display_norm, None),
-            (f"{simulation} sim.", "gray", display_norm, None),
+            (SIMULATION_WORDS.get(simulation, simulation), "gray", display_norm, None),
             ("1 − SSIM (log)", "viridis", lambda: LogNorm(lo, hi), "1 − SSIM"),
             ("|difference|", "magma", lambda: Normalize(0, ad_max), "|difference| (relative radiance, linear)")]
     fig, axes, bar_axes = _fixed_grid(len(rows), len(columns))
@@ -293,11 +293,11 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
         else:
             bar.set_label(bar_label, fontsize=8)
     scale = f"; scale bars {bar_arcmin:g} arcmin" if bar_arcmin else ""
-    fig.suptitle(f"{simulation} simulation applied to the {input_kind} input, against {reference_note(columns[0][1])}"
+    fig.suptitle(f"{column_words((simulation, input_kind))}, against {reference_note(columns[0][1])}"
                  f"{scale}", fontsize=10)
-    alt = tiles_alt(f"{simulation} simulation of the {input_kind} input against {reference_note(columns[0][1])}, "
+    alt = tiles_alt(f"{column_words((simulation, input_kind))}, against {reference_note(columns[0][1])}, "
                     "as letter tiles with an angular scale bar",
-                    [truth_label, f"the {simulation} simulation", "1 − SSIM map on a log scale",
+                    [truth_label, SIMULATION_WORDS.get(simulation, simulation), "1 − SSIM map on a log scale",
                      "absolute difference map"],
                     [f"{r['configuration']['name']}: SSIM {c['metrics'][SSIM.name]:.3f}, "
                      f"PSNR {_fmt(metric_float(c['metrics'][PSNR.name]), 1)} dB" for r, c in columns])
@@ -313,10 +313,10 @@ def dslr_report(results: list[dict], run_dir: Path, record: dict, progress=None)
     ``progress(stage, done, total)`` after each figure (`vissim.progress`).
     """
     figures = {}
-    wanted = [(s, "render", False, f"{s} simulation on the no-lens render", f"figure_{s}.png") for s in ORDER]
-    wanted += [(s, "synthetic", False, f"{s} simulation on the synthetic chart", f"figure_{s}_synthetic.png")
+    wanted = [(s, "render", False, column_words((s, "render")), f"figure_{s}.png") for s in ORDER]
+    wanted += [(s, "synthetic", False, column_words((s, "synthetic")), f"figure_{s}_synthetic.png")
                for s in SYNTHETIC_FIGURES]
-    wanted.append(("wave", "synthetic", True, "wave simulation on the synthetic chart against the wave bench",
+    wanted.append(("wave", "synthetic", True, f"{column_words(('wave', 'synthetic'))}, against the wave bench",
                    f"figure_wave_{WAVE_BENCH}.png"))
     advance = counter(progress, "figures", len(wanted) + 1)
     for simulation, input_kind, wave_bench, name, file_name in wanted:
