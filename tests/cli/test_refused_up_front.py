@@ -152,3 +152,18 @@ def test_an_option_of_the_traced_eye_alone_is_refused_in_plain_words(capsys, tmp
     code = main(["blur", str(image), "--rx", "-1", "--pupil-mm", "3", "-o", str(tmp_path / "out.exr"), *extra])
     err = capsys.readouterr().err
     assert code == 2 and said in err and "(s)" not in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("body, said", [
+    ('lens = [{sphere_diopters = "x"}]', "expected a number in dioptres, got 'x'"),
+    ("lens = [{sphere_diopters = [1]}]", "expected a number in dioptres, got [1]"),
+    ('field_deg = [["a", "b"]]', "expected a number in deg, got 'a'"),
+])
+def test_a_sweep_value_of_a_wrong_type_is_refused_naming_its_sweep(capsys, tmp_path, body, said):
+    # The sweep's configuration names are made before its values are checked: a wrong type must still be refused.
+    path = tmp_path / "eye.toml"
+    path.write_text(f"[campaign]\nkind = 'eye'\n[[sweep]]\nname = 's'\n{body}\n")
+    code = main(["validate", str(path), "-o", str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    assert code == 2 and "sweep[0] s" in err and said in err and err.count("\n") == 1
+    assert not (tmp_path / "run").exists()

@@ -112,7 +112,7 @@ _INTS_BY_DEST = {
 }
 #: Powers, dioptres: within +-MAX_POWER_DIOPTERS.
 _POWERS = {"sphere", "cylinder", "back_surface_diopters",
-           "accommodation_diopters", "amplitude_diopters", "accommodation_amplitude_diopters", "proximal_diopters"}
+           "accommodation_diopters", "accommodation_amplitude_diopters", "proximal_diopters"}
 #: Plain ``type=float`` options that only make sense positive.
 _POSITIVE_FLOATS = {
     "pupil_mm", "zernike_pupil_mm", "arcmin_per_px", "wavelength_nm", "lca_reference_nm", "channel_fwhm_nm",
@@ -134,7 +134,6 @@ RANGES_BY_DEST = {
     "index": checks.REFRACTIVE_INDEX_RANGE,
     "layer_spacing_fraction": checks.LAYER_SPACING_FRACTION_RANGE,
     "accommodation_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
-    "amplitude_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
     "accommodation_amplitude_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
     "proximal_diopters": checks.ACCOMMODATION_RANGE_DIOPTERS,
     "display_code": checks.DISPLAY_CODE_RANGE,

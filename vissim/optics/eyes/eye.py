@@ -185,6 +185,13 @@ class Eye:
         """The same eye with its entrance pupil or its iris (one of them) set."""
         return dataclasses.replace(self, pupil_diameter_mm=pupil_diameter_mm, iris_mm=iris_mm)
 
+    def with_assumed_pupil(self, pupil_diameter_mm: float) -> Eye:
+        """The same eye with an entrance pupil a simulation assumes (its iris taken for the pupil, say): any
+        positive diameter, where an eye one builds holds to a human eye's `EYE_PUPIL_RANGE_MM`."""
+        eye = dataclasses.replace(self, pupil_diameter_mm=None, iris_mm=None)
+        object.__setattr__(eye, "pupil_diameter_mm", positive_number(pupil_diameter_mm, "assumed entrance pupil", "mm"))
+        return eye
+
     def with_rx(self, rx, vertex_distance_mm: float | None = None) -> Eye:
         """The same eye made to have ``rx`` (None: emmetropic), measured ``vertex_distance_mm`` in front (default:
         its own)."""

@@ -125,7 +125,7 @@ def _schematic(view: EyeView, light: Light, image: np.ndarray, step: float, mode
     """The schematic eye's blur of ``image`` with one assumption swapped (module doc). Unswapped, in wave optics, it
     is `blur_eye`; in ray optics the same PSF (the image lies within one of `blur_eye`'s PSF nodes) on ``size_px``."""
     field = view.field_deg if field is None else field
-    eye = view.eye if pupil_mm is None else view.eye.with_pupil(pupil_diameter_mm=pupil_mm)
+    eye = view.eye if pupil_mm is None else view.eye.with_assumed_pupil(pupil_mm)
     if mode == "wave" and not (drop_higher or thibos or field != view.field_deg or pupil_mm is not None):
         bands = [light.wavelengths_nm] if light.is_white else light.focus_nm
         weights = [light.weights] if light.is_white else None

@@ -192,11 +192,11 @@ def airy_tail(r_lambda_over_d: np.ndarray) -> np.ndarray:
     r, tail = _airy_tail_table()
     x = np.asarray(r_lambda_over_d, dtype=float)
     far = (2.0 / np.pi**2) / np.maximum(x, r[-1])
-    position = np.clip(x, 0.0, r[-1]) * ((len(r) - 1) / r[-1])  # a uniform table: the cell by division
+    position = np.clip(np.nan_to_num(x), 0.0, r[-1]) * ((len(r) - 1) / r[-1])  # a uniform table: the cell by division
     cell = np.minimum(position.astype(np.intp), len(r) - 2)
     fraction = position - cell
     near = tail[cell] * (1.0 - fraction) + tail[cell + 1] * fraction
-    return np.where(x < r[-1], near, far)
+    return np.where(np.isnan(x), np.nan, np.where(x < r[-1], near, far))
 
 
 def rim_widening(blur_arcmin: float, lambda_over_d_arcmin: float) -> float:

@@ -268,7 +268,8 @@ def _mft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: N
 
     ``advance()`` after the pupil grid, and after each wavelength's pupil and transform. Several wavelengths are
     shared out over `spare_threads` (each its own pupil and partial sum, OpenBLAS on one thread meanwhile), and
-    the partial sums added in a fixed order.
+    the partial sums added in a fixed order; how many there are follows the cores, so results on machines with
+    other core counts differ by round-off (1e-9 of the peak in float32, 1e-13 of it in float64).
     """
     grid = pupil_grid(plans[0].pupil_step_mm, diameter_mm)
     advance()

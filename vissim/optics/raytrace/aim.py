@@ -33,6 +33,9 @@ def _solve_2x2(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """``jac[k]^-1 rhs[k]`` for each (2, 2) ``jac[k]``, by Cramer's rule (a batched LU costs ten times as much)."""
     (a, b), (c, d) = jac[:, 0].T, jac[:, 1].T
     det = a * d - b * c
+    if np.any(det == 0.0):
+        raise VissimInputError("ray aiming met a singular landing Jacobian (a ray whose landing point does not move "
+                               "with its start): the rays graze a surface")
     return np.stack([d * rhs[:, 0] - b * rhs[:, 1], a * rhs[:, 1] - c * rhs[:, 0]], axis=1) / det[:, None]
 
 

@@ -17,7 +17,7 @@ import functools
 import logging
 import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
 __all__ = ["available_cores", "map_on_threads", "single_threaded_blas", "spare_threads"]
 
@@ -90,20 +90,23 @@ def single_threaded_blas():
 
 def map_on_threads(work, shares) -> list:
     """``[work(share) for share in shares]``, the shares at once on `spare_threads` threads (OpenBLAS on one thread
-    meanwhile), or one after another where there is one thread or one share. The first failure (in the shares'
-    order) is raised once the shares started have finished; those not started are dropped."""
+    meanwhile), or one after another where there is one thread or one share. The first failure is raised as soon as
+    the shares then running have finished; shares not yet started are dropped."""
     shares = list(shares)
     threads = min(spare_threads(), len(shares))
     if threads <= 1:
         return [work(share) for share in shares]
-    with single_threaded_blas(), ThreadPoolExecutor(threads) as pool:
-        futures = [pool.submit(work, share) for share in shares]
+    with single_threaded_blas():
+        pool = ThreadPoolExecutor(threads)
         try:
+            futures = [pool.submit(work, share) for share in shares]
+            done, _ = wait(futures, return_when=FIRST_EXCEPTION)
+            failed = [future for future in futures if future in done and future.exception() is not None]
+            if failed:
+                raise failed[0].exception()
             return [future.result() for future in futures]
-        except BaseException:
-            for future in futures:  # a failure stops what has not started
-                future.cancel()
-            raise
+        finally:  # on a failure or Ctrl-C, what has not started is dropped; what runs finishes its share
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def split_evenly(items, parts: int) -> list[list]:

@@ -21,7 +21,7 @@ class DepthKind:
 
     name = "depth"
     tables = ("config",)
-    items_on_threads = True
+    items_on_threads = False  # each item blurs its layers on every core, and its memory check is for one item
 
     def read(self, doc: dict, head: dict, path: Path):
         return read_depth_part(doc, head, path)

@@ -119,9 +119,10 @@ def run_campaign(campaign: Campaign, run_dir: str | Path, *, workers: int = 1, s
         Directory for renders, simulations, metrics and the report; an existing run there is
         resumed (finished items are reused).
     workers : int
-        Local processes that make the renders (1: in this process).  Items are computed here,
-        one after another; a kind whose items spread their own work (a population's eyes) spreads it
-        over the same ``workers``.
+        Local processes that make the renders (1: in this process).  Items are computed here, one per
+        core at once (the cores this process may use: ``taskset`` limits them), each with OpenBLAS on one
+        thread; a kind whose items spread their own work (a population's eyes over the same ``workers``,
+        a depth scene's layers over the cores) computes them one after another.
     scheduler : str, optional
         A Dask scheduler's address (``host:port``) to make the renders on instead of
         ``workers`` (and a population's eyes); checked to answer before the renders are written (a

@@ -203,6 +203,15 @@ def _rx_words(value) -> str:
 
 
 def axis_phrase(key: str, value) -> str:
+    """`_axis_phrase`, or the key and value as written where the value is of a wrong type (the configuration's
+    own checks refuse it, naming the item, after the name is made)."""
+    try:
+        return _axis_phrase(key, value)
+    except (TypeError, ValueError, VissimInputError):
+        return f"{key} {value!r}"
+
+
+def _axis_phrase(key: str, value) -> str:
     """One swept setting in words, as a configuration's name says it: ``3 mm pupil``, ``10° field``,
     ``photopic light``, ``trial lens +1.00 -1.00 x 180`` (minus cylinder), ``2 D accommodation``."""
     number = isinstance(value, (int, float)) and not isinstance(value, bool)
