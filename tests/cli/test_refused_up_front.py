@@ -167,3 +167,12 @@ def test_a_sweep_value_of_a_wrong_type_is_refused_naming_its_sweep(capsys, tmp_p
     err = capsys.readouterr().err
     assert code == 2 and "sweep[0] s" in err and said in err and err.count("\n") == 1
     assert not (tmp_path / "run").exists()
+
+
+def test_an_eye_scene_with_a_pupil_and_an_iris_is_refused_in_its_own_keys(capsys, tmp_path):
+    scene = tmp_path / "eye.toml"
+    scene.write_text("[eye]\npupil_diameter_mm = 4.0\niris_mm = 3.5\n")
+    code = main(["render", "eye", "--scene", str(scene), "-o", str(tmp_path / "e.exr")])
+    err = capsys.readouterr().err
+    assert code == 2 and "pupil_diameter_mm or iris_mm" in err and "(pupil_mm)" not in err and err.count("\n") == 1
+    assert not (tmp_path / "e.exr").exists()

@@ -92,7 +92,8 @@ class EyeRender:
 
         object.__setattr__(self, "wavelength_nm", EyeBench.light_nm(self.wavelength_nm, self.spectrum))
         if (self.pupil_mm is None) == (self.iris_mm is None):
-            raise VissimInputError("give the entrance pupil (pupil_mm) or the iris (iris_mm), not both or neither")
+            raise VissimInputError("give the entrance pupil's diameter or the iris's, not both or neither (a scene "
+                                   "file's [eye] pupil_diameter_mm or iris_mm; --pupil-mm or --iris-mm)")
         eye_pupil_diameter_mm(self.pupil_mm if self.iris_mm is None else self.iris_mm,
                               "entrance pupil" if self.iris_mm is None else "iris")
         vertex_distance_mm(self.vertex_mm)
