@@ -492,3 +492,21 @@ def test_the_chart_distance_is_one_spelling_in_every_scene_and_flag():
     eye = tomllib.loads((ROOT / "scenes" / "eye.toml").read_text(encoding="utf-8"))
     assert eye["chart"]["chart_distance_m"] == 6.0
     assert {" ".join(p) for p, leaf in subcommands() if option(leaf, "--chart-distance-m")} == {"chart", "render eye"}
+
+
+def test_a_count_agrees_with_its_noun():
+    from vissim.checks import counted
+
+    assert (counted(1, "ray"), counted(0, "ray"), counted(4, "ray")) == ("1 ray", "0 rays", "4 rays")
+    assert counted(2, "axis", "axes") == "2 axes"
+
+
+def test_no_message_writes_a_noun_as_singular_or_plural():
+    # "4 ray(s) miss" reads as code: a count's noun follows the count (vissim.checks.counted).
+    import re
+
+    hedged = [f"{path.relative_to(ROOT)}:{number}: {line.strip()}"
+              for path in sorted((ROOT / "vissim").rglob("*.py"))
+              for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+              if re.search(r"(Error|error)\(.*\w\(s\)", line) or re.search(r"^\s*f?\".*\{[^}]*\}[^\"]*\w\(s\) ", line)]
+    assert hedged == []

@@ -11,7 +11,7 @@ from pathlib import Path
 from vissim.errors import VissimInputError, VissimTypeError
 
 __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
-           "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text",
+           "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text", "counted",
            "samples_per_pixel", "MAX_SPP", "WAVELENGTH_RANGE_NM", "EYE_RENDER_WAVELENGTH_RANGE_NM", "CIE_YBAR_RANGE_NM",
            "EYE_RENDER_MAX_THETA_DEG", "eye_field_deg", "MAX_TRACE_FIELD_DEG", "EYE_MTF_RANGE_CYC_PER_DEG",
            "mtf_cyc_per_deg", "eye_prescription_meridians", "LOGMAR_STEP_RANGE", "PRINT_DPI_RANGE",
@@ -311,6 +311,11 @@ def _pupil_within(value, name: str, bounds: tuple[float, float], what: str) -> f
     if not low <= pupil <= high:
         raise VissimInputError(f"{name} must be {range_text(bounds, 'mm')}{what}, got {pupil:g} mm")
     return pupil
+
+
+def counted(count: int, noun: str, plural: str | None = None) -> str:
+    """``count`` and its noun in number, as messages write them: ``1 ray``, ``4 rays``, ``2 keys``."""
+    return f"{count} {noun if count == 1 else plural or noun + 's'}"
 
 
 def size_text(shape, unit: str = "px") -> str:

@@ -83,12 +83,12 @@ def test_an_item_that_fails_is_named_and_its_renders_kept(toy_kind, tmp_path, mo
     from toy_bench import kind as toy
 
     def refuse(self, key, campaign, index, *rest):
-        raise VissimInputError("4 ray(s) miss the cornea back")
+        raise VissimInputError("4 rays miss the cornea back")
 
     monkeypatch.setattr(toy.ToyKind, "compute_item", refuse)
     path = tmp_path / "toy.toml"
     path.write_text(CAMPAIGN)
-    with pytest.raises(VissimInputError, match=r"toy.toml: configuration 'sharp' \(item \w+\): 4 ray\(s\) miss the "
+    with pytest.raises(VissimInputError, match=r"toy.toml: configuration 'sharp' \(item \w+\): 4 rays miss the "
                                                r"cornea back; its renders are kept"):
         validate(path, tmp_path / "run", show_progress=False)
     assert len(list((tmp_path / "run" / "renders").iterdir())) == 4

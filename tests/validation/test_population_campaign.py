@@ -70,7 +70,7 @@ def test_each_condition_is_an_item_spectacles_worn_included(tmp_path):
     ('dataset = "nobody-2020"', "campaign.dataset: choose from"),
     ('correction = ["squinting"]', "campaign.correction[0]: a correction is uncorrected or"),
     ('field_deg = [[0.0]]', "campaign.field_deg[0]"),
-    ('spp = 64', "unknown key(s) ['spp']"),
+    ('spp = 64', "unknown key ['spp']"),
     ('pupil_diameter_mm = [3.0, 3.0]', "given twice"),
     ('subjects = [1, 1]', "campaign.subjects: a population names each subject once"),
     ('subjects = [1, 999]', "campaign.subjects: jaeken-artal-2012 has subjects 1-130, got 999"),

@@ -30,7 +30,7 @@ import numpy as np
 from vissim.atv.records import (EYES, THESIS_TRIAL_LENSES_DIOPTERS, Autorefraction, AutorefractorEye,
                                 Discrepancy, Examination, SubjectData, SummaryRow, Trial)
 from vissim.atv.schema import SCHEMA, SCHEMA_VERSION, parse_subject
-from vissim.checks import path_arg
+from vissim.checks import counted, path_arg
 from vissim.errors import VissimInputError
 
 __all__ = ["AtvDataDiscrepancyError", "Autorefraction", "AutorefractorEye", "Discrepancy", "Examination",
@@ -125,14 +125,14 @@ def _check_summary(subject: SubjectData) -> list[Discrepancy]:
             continue
         if abs(calc.mean_code - row.mean_code) > MEAN_TOLERANCE_CODE:
             message = (
-                f"{where}: printed mean {row.mean_code:.4f} but the {len(values)} printed session value(s) "
+                f"{where}: printed mean {row.mean_code:.4f} but the {counted(len(values), 'printed session value')} "
                 f"(of {n_sessions} without drops) give {calc.mean_code:.4f}"
             )
             missing = n_sessions - len(values)
             if missing > 0:
                 implied_sum = n_sessions * row.mean_code - sum(values)
                 message += (
-                    f"; printed mean x {n_sessions} minus the printed values implies the {missing} missing value(s) "
+                    f"; printed mean x {n_sessions} minus the printed values implies the {counted(missing, 'missing value')} "
                     f"sum to {implied_sum:.4f}, and Max - Diff implies a minimum of {row.max_code - row.diff_code:.4f}"
                 )
             found.append(Discrepancy("summary_mean", where, message, printed=row.mean_code, computed=calc.mean_code))
@@ -184,7 +184,8 @@ def check_subject(subject: SubjectData) -> tuple[Discrepancy, ...]:
         if earlier:
             found.append(Discrepancy(
                 "protocol_date_order", "examinations",
-                f"the session with eye drops is dated {first_drops.isoformat()}, after the session(s) without drops "
+                f"the session with eye drops is dated {first_drops.isoformat()}, after the "
+                f"{'session' if len(earlier) == 1 else 'sessions'} without drops "
                 f"dated {', '.join(e.date.isoformat() for e in earlier)}; thesis §5.1 says the cycloplegic session came first",
                 printed=first_drops.isoformat(), computed=min(e.date for e in without).isoformat(),
             ))
@@ -199,7 +200,7 @@ def _report(subject: SubjectData, strict: bool) -> SubjectData:
     origin = str(subject.path) if subject.path is not None else f"subject {subject.subject_id}"
     if found and strict:
         raise AtvDataDiscrepancyError(
-            f"{origin}: {len(found)} disagreement(s) with the thesis's own numbers; first: {found[0].message}"
+            f"{origin}: {counted(len(found), 'disagreement')} with the thesis's own numbers; first: {found[0].message}"
         )
     for d in found:
         log.warning("%s: %s", origin, d.message)

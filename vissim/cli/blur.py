@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.checks import DEFAULT_WAVELENGTH_NM
+from vissim.checks import DEFAULT_WAVELENGTH_NM, counted
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, EYE_RX_HELP, FIELD_DEG_HELP, add_aberration_args,
                                 add_json_arg, print_result,
                                 check_zernike_pupil,
@@ -148,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     n_channels = 1 if image.pixels.ndim == 2 else image.pixels.shape[2]
     if args.channels_nm is not None:
         if n_channels != 3:
-            raise VissimInputError(f"--channels-nm needs an RGB image; {args.input} has {n_channels} channel(s)")
+            raise VissimInputError(f"--channels-nm needs an RGB image; {args.input} has {counted(n_channels, 'channel')}")
         per_channel = [[w] for w in parse_float_list(args.channels_nm, "--channels-nm", "nm")]
         if len(per_channel) != 3:
             raise VissimInputError(f"--channels-nm needs three wavelengths (R,G,B) in nm, got {args.channels_nm!r}")

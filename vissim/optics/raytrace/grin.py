@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vissim.checks import counted
 from vissim.errors import VissimInputError
 from vissim.optics.raytrace.media import GradientIndex
 from vissim.optics.raytrace.surface import INTERSECT_TOL_MM, MAX_NEWTON, Surface, surface_excess_mm
@@ -52,8 +53,8 @@ def rk4_step(medium: GradientIndex, r, t_vec, opl, h):
 
 
 def _left_lens(medium: GradientIndex, exit_surface: Surface, count: int, why: str) -> VissimInputError:
-    return VissimInputError(f"{count} ray(s) in the {medium.name} {why} before reaching the {exit_surface.name} "
-                            "(they leave the lens)")
+    return VissimInputError(f"{counted(count, 'ray')} in the {medium.name} {why} before reaching the "
+                            f"{exit_surface.name} (leaving the lens)")
 
 
 def _land(medium, exit_surface, r, t_vec, opl, h, excess_before, excess_after):

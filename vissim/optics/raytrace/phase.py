@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import counted
 from vissim.errors import VissimInputError
 
 __all__ = ["PhasePlane", "through_phase_plane"]
@@ -71,8 +72,9 @@ def through_phase_plane(plane: PhasePlane, points: np.ndarray, directions: np.nd
     across = np.stack([directions[:, 0] + gx / index, directions[:, 1] + gy / index], axis=1)
     left = 1.0 - np.einsum("ij,ij->i", across, across)
     if np.any(left <= 0.0):
-        raise VissimInputError(f"{int(np.sum(left <= 0.0))} ray(s) are turned along the {plane.name} (its "
-                               "gradient exceeds the medium's index)")
+        turned_along = int(np.sum(left <= 0.0))
+        raise VissimInputError(f"{counted(turned_along, 'ray')} {'is' if turned_along == 1 else 'are'} turned along "
+                               f"the {plane.name} (its gradient exceeds the medium's index)")
     turned = np.column_stack([across, np.sign(d_z) * np.sqrt(left)])
     back = (points[:, 2] - plane.vertex_z_mm) / turned[:, 2]
     path = index * (to_plane + back) + plane.path_mm(hit[:, 0], hit[:, 1])

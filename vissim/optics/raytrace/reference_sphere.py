@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vissim.checks import counted
 from vissim.errors import VissimInputError
 from vissim.optics.raytrace.trace import RayBundle
 
@@ -30,7 +31,9 @@ def opl_to_sphere_mm(bundle: RayBundle, centre_mm, radius_mm: float) -> np.ndarr
     c = np.einsum("ij,ij->i", rel, rel) - float(radius_mm) ** 2
     disc = b * b - c
     if np.any(disc < 0.0):
-        raise VissimInputError(f"{int(np.sum(disc < 0.0))} ray(s) never meet the {radius_mm:g} mm reference sphere")
+        never = int(np.sum(disc < 0.0))
+        raise VissimInputError(f"{counted(never, 'ray')} never {'meets' if never == 1 else 'meet'} the {radius_mm:g} mm "
+                               "reference sphere")
     t = -b - np.sqrt(disc)  # the crossing before the ray's closest approach to the centre
     return bundle.opl_mm + bundle.final_index * t
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vissim.checks import counted
 from vissim.errors import VissimInputError
 from vissim.optics.raytrace.media import Medium
 from vissim.optics.raytrace.shapes import SagShape
@@ -60,8 +61,8 @@ def surface_excess_mm(surface: Surface, points: np.ndarray) -> np.ndarray:
 
 
 def _missed(surface: Surface, count: int) -> VissimInputError:
-    return VissimInputError(f"{count} ray(s) miss the {surface.name} (beyond its rim or its conic's domain, "
-                            "or grazing it)")
+    return VissimInputError(f"{counted(count, 'ray')} {'misses' if count == 1 else 'miss'} the {surface.name} "
+                            "(beyond its rim or its conic's domain, or grazing it)")
 
 
 def intersect(surface: Surface, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
@@ -116,10 +117,11 @@ def refract(directions: np.ndarray, normals: np.ndarray, n1, n2, name: str) -> n
     mu = n1 / n2
     cos_i = -np.einsum("ij,ij->i", normals, directions)
     if np.any(cos_i <= 0.0):
-        raise VissimInputError(f"{int(np.sum(cos_i <= 0.0))} ray(s) meet the {name} from behind")
+        behind = int(np.sum(cos_i <= 0.0))
+        raise VissimInputError(f"{counted(behind, 'ray')} {'meets' if behind == 1 else 'meet'} the {name} from behind")
     sin2_t = mu * mu * (1.0 - cos_i * cos_i)
     if np.any(sin2_t >= 1.0):
-        raise VissimInputError(f"total internal reflection of {int(np.sum(sin2_t >= 1.0))} ray(s) at the {name}")
+        raise VissimInputError(f"total internal reflection of {counted(int(np.sum(sin2_t >= 1.0)), 'ray')} at the {name}")
     cos_t = np.sqrt(1.0 - sin2_t)
     mu_rows = np.reshape(mu, (-1, 1)) if np.ndim(mu) else mu
     out = mu_rows * directions + np.reshape(mu * cos_i - cos_t, (-1, 1)) * normals

@@ -153,7 +153,7 @@ def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfi
     unknown = set(raw) - set(CONFIG_KEYS)
     refuse_renamed_keys(unknown, CONFIG_KEYS, f"{source}: {where}")
     if unknown:
-        raise field_error(source, where, f"unknown field(s) {sorted(unknown)}")
+        raise field_error(source, where, f"unknown {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}")
     if "scene" not in raw:
         raise field_error(source, where, "needs scene = a depth scene file (relative to the campaign file)")
     scene_file = (base / text(raw["scene"], source, f"{where}.scene")).resolve()

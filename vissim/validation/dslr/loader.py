@@ -58,7 +58,7 @@ def _configuration(raw: dict, settings: CampaignSettings, source: str, where: st
     unknown = set(raw) - set(ITEM_KEYS)
     refuse_renamed_keys(unknown, ITEM_KEYS, f"{source}: {where}")
     if unknown:
-        raise unknown_field_error(source, where, f"unknown field(s) {sorted(unknown)}")
+        raise unknown_field_error(source, where, f"unknown {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}")
     letter = raw.get("letter")
     if not isinstance(letter, str) or len(letter) != 1 or letter.upper() not in SLOAN_LETTERS:
         raise field_error(source, f"{where}.letter", f"must be one of the Sloan letters {', '.join(SLOAN_LETTERS)}, "
@@ -103,7 +103,7 @@ def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_num
     unknown = set(raw) - set(SWEEP_KEYS)
     refuse_renamed_keys(unknown, SWEEP_KEYS, f"{source}: {where}")
     if unknown:
-        raise unknown_field_error(source, where, f"unknown field(s) {sorted(unknown)}")
+        raise unknown_field_error(source, where, f"unknown {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}")
     letters = _swept(raw.get("letter", ["N"]), source, f"{where}.letter", '["K", "N"]')
     logmars = _swept(raw.get("logmar", [1.0]), source, f"{where}.logmar", "[1.0, 0.5]")
     polarities = _swept(raw.get("polarity", ["black-on-white"]), source, f"{where}.polarity", '["black-on-white"]')

@@ -176,7 +176,7 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
     unknown = set(head) - known - set(texts) - set(read_elsewhere)
     refuse_renamed_keys(unknown, known | set(read_elsewhere), f"{source}: [{where}]")
     if unknown:
-        raise unknown_field_error(source, f"[{where}]", f"unknown setting(s) {sorted(unknown)}; known: {sorted(known)}")
+        raise unknown_field_error(source, f"[{where}]", f"unknown {'setting' if len(unknown) == 1 else 'settings'} {sorted(unknown)}; known: {sorted(known)}")
     kwargs = checked_numbers(head, numbers, source, where)
     kwargs |= checked_numbers(head, whole_numbers, source, where, whole=True)
     if "seeds" in head:
@@ -226,7 +226,7 @@ def lens(entry: Any, source: str, where: str) -> LensSpec:
     unknown = set(entry) - set(LENS_KEYS)
     refuse_renamed_keys(unknown, LENS_KEYS, f"{source}: {where}")
     if unknown:
-        raise field_error(source, where, f"unknown lens field(s) {sorted(unknown)}; use {', '.join(LENS_KEYS)}")
+        raise field_error(source, where, f"unknown lens {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}; use {', '.join(LENS_KEYS)}")
     cyl = number(entry.get("cylinder_diopters", 0.0), source, f"{where}.cylinder_diopters", "dioptres", **limit)
     if cyl != 0 and "axis_deg" not in entry:
         raise field_error(source, where, "a cylinder needs axis_deg, its axis in degrees (TABO)")

@@ -32,7 +32,7 @@ def campaign_kind(doc: dict, source: str) -> str:
     if unknown:
         owners = sorted(k for k in bench_kind_names() if k != name and set(unknown) <= {"campaign", *bench_kind(k).tables})
         hint = f" (tables of kind {owners[0]!r}: add kind = \"{owners[0]}\" to [campaign])" if owners else ""
-        raise field_error(source, "top level", f"unknown table(s) {unknown} for a {name} campaign{hint}; "
+        raise field_error(source, "top level", f"unknown {'table' if len(unknown) == 1 else 'tables'} {unknown} for a {name} campaign{hint}; "
                                                f"use [campaign] and {', '.join(f'[[{t}]]' for t in bench_kind(name).tables)}")
     return name
 

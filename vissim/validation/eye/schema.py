@@ -149,7 +149,7 @@ def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) 
     unknown = set(entry) - set(ITEM_KEYS)
     refuse_renamed_keys(unknown, ITEM_KEYS, f"{source}: {where}")
     if unknown:
-        raise field_error(source, where, f"unknown key(s) {sorted(unknown)}; known: {', '.join(ITEM_KEYS)}")
+        raise field_error(source, where, f"unknown {'key' if len(unknown) == 1 else 'keys'} {sorted(unknown)}; known: {', '.join(ITEM_KEYS)}")
     spectrum, wavelength = _light(entry, source, where)
     trial = lens(entry["lens"], source, f"{where}.lens") if "lens" in entry else None
     trial = None if trial is None or (trial.sphere_diopters, trial.cylinder_diopters) == (0.0, 0.0) else (

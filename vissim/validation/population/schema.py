@@ -128,7 +128,7 @@ def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[Po
     unknown = sorted(set(head) - set(HEAD_KEYS))
     refuse_renamed_keys(unknown, HEAD_KEYS, f"{source}: campaign")
     if unknown:
-        raise field_error(source, "campaign", f"unknown key(s) {unknown}; known: name, description, kind, "
+        raise field_error(source, "campaign", f"unknown {'key' if len(unknown) == 1 else 'keys'} {unknown}; known: name, description, kind, "
                                               f"{', '.join(HEAD_KEYS)}")
     settings = _settings(head, source)
     largest = load_dataset(settings.dataset).pupil_mm
