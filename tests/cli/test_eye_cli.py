@@ -255,7 +255,7 @@ def _dense_cornea_air_chamber(accommodation_diopters=0.0):
                                                                                  "got 80 deg"]),
     # within the eye's field, a pupil wider than the model's rays can fill there: the trace names both
     (["--eye-model", "navarro-1985", "--pupil-mm", "9.9", "--field-deg", "-45,0"],
-     ["(-45, 0) deg, entrance pupil 9.9 mm", "miss the cornea front", "smaller pupil or field angle"]),
+     ["(-45, 0) deg, entrance pupil 9.9 mm", "the cornea front (beyond its rim", "smaller pupil or field angle"]),
     (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "1,2,3"], ["--field-deg", "'1,2,3'", "degrees"]),
     (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "a,b"], ["--field-deg", "'a,b'", "degrees"]),
     (["--eye-model", "navarro-1985", "--pupil-mm", "3", "--field-deg", "nan,0"], ["--field-deg", "degrees"]),

@@ -53,8 +53,8 @@ def rk4_step(medium: GradientIndex, r, t_vec, opl, h):
 
 
 def _left_lens(medium: GradientIndex, exit_surface: Surface, count: int, why: str) -> VissimInputError:
-    return VissimInputError(f"{counted(count, 'ray')} in the {medium.name} {why} before reaching the "
-                            f"{exit_surface.name} (leaving the lens)")
+    return VissimInputError(f"rays in the {medium.name} {why} before reaching the {exit_surface.name} "
+                            f"({counted(count, 'ray')}: they leave the lens)")
 
 
 def _land(medium, exit_surface, r, t_vec, opl, h, excess_before, excess_after):
