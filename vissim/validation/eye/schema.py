@@ -187,21 +187,6 @@ def _words(value) -> str:
     return f"{value:g}" if isinstance(value, (int, float)) else str(value)
 
 
-def _rx_words(value) -> str:
-    """A lens or prescription as written in this project: sphere with its sign, minus cylinder, TABO axis."""
-    if isinstance(value, dict):
-        rx = Prescription(float(value.get("sphere_diopters", 0.0)), float(value.get("cylinder_diopters", 0.0)),
-                          float(value.get("axis_deg", 180.0)))
-    elif isinstance(value, (int, float)) and not isinstance(value, bool):
-        rx = Prescription(float(value))
-    else:
-        try:
-            rx = Prescription.parse(str(value))
-        except (VissimInputError, ValueError):
-            return str(value)
-    return rx.minus_cylinder().format()
-
-
 def axis_phrase(key: str, value) -> str:
     """`_axis_phrase`, or the key and value as written where the value is of a wrong type (the configuration's
     own checks refuse it, naming the item, after the name is made)."""
@@ -232,9 +217,9 @@ def _axis_phrase(key: str, value) -> str:
     if key == "lens":
         if number and value == 0:
             return "no lens"
-        return f"trial lens {_rx_words(value)}"
+        return f"trial lens {lens(value, '', key).label()}"  # the loader's own reading, in minus cylinder
     if key == "prescription":
-        return f"eye Rx {_rx_words(value)}"
+        return f"eye Rx {_rx(value, '', key).minus_cylinder().format()}"
     if key == "logmar" and number:
         return f"LogMAR {value:g}"
     if key == "letter":
