@@ -111,3 +111,13 @@ def test_run_bad_input_is_one_line(capsys, tmp_path, monkeypatch, argv, message)
     monkeypatch.chdir(tmp_path)
     code, _, err = run(capsys, *argv)
     assert code == 2 and message in err and err.count("\n") == 1
+
+
+def test_a_window_of_zero_skips_the_local_parabola_as_its_help_says():
+    from vissim.cli import build_parser
+    from vissim.cli.atv import _window
+
+    args = build_parser().parse_args(["atv", "analyze", "x", "-o", "y", "--window-diopters", "0"])
+    assert args.window_diopters == 0.0 and _window(args.window_diopters) is None
+    assert "0 to skip" in " ".join(build_parser()._subparsers._group_actions[0].choices["atv"]
+                                   ._subparsers._group_actions[0].choices["analyze"].format_help().split())

@@ -153,7 +153,7 @@ RANGES_BY_DEST = {
     "lapse": checks.GUESS_LAPSE_RANGE,
 }
 #: Of those, the quantities that must exceed their lower bound (an f-number or a print resolution of 0 is none).
-_ABOVE_LOWER = {"white_radiance", "field_step_deg", "logmar_step", "window_diopters", "summation_arcmin", "level"}
+_ABOVE_LOWER = {"white_radiance", "field_step_deg", "logmar_step", "summation_arcmin", "level"}
 #: Of those, the quantities that must stay below their upper bound (a confidence level of 1 is no interval).
 _BELOW_UPPER = {"level", "guess", "lapse"}
 

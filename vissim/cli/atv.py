@@ -8,7 +8,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from vissim.checks import ATV_PARABOLA_WINDOW_DIOPTERS, trial_lens_diopters
@@ -117,9 +116,7 @@ def _observer_args(parser: argparse.ArgumentParser, *, threshold: bool) -> None:
 
 
 def _window(value: float) -> float | None:
-    if not math.isfinite(value) or value < 0:
-        raise VissimInputError(f"--window-diopters must be a half-width >= 0 D, got {value!r} D")
-    return value or None
+    return value or None  # 0: no window (the parser holds it to ATV_PARABOLA_WINDOW_RANGE_DIOPTERS)
 
 
 def _vertex(a) -> str:

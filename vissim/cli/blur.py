@@ -153,8 +153,8 @@ def run(args: argparse.Namespace) -> int:
         if len(per_channel) != 3:
             raise VissimInputError(f"--channels-nm needs three wavelengths (R,G,B) in nm, got {args.channels_nm!r}")
     elif args.wavelength_nm is not None or n_channels == 1:
-        wavelengths = parse_float_list(f"{DEFAULT_WAVELENGTH_NM:g}" if args.wavelength_nm is None else args.wavelength_nm,
-                                       "--wavelength-nm", "nm")
+        wavelengths = ([DEFAULT_WAVELENGTH_NM] if args.wavelength_nm is None
+                       else parse_float_list(args.wavelength_nm, "--wavelength-nm", "nm"))
         per_channel = [wavelengths] * n_channels
     else:
         per_channel = [[w] for w in DEFAULT_CHANNELS_NM]

@@ -22,8 +22,8 @@ import os
 from typing import Any
 
 from vissim.bench.scene_toml import check_keys, read_scene_toml, sub_table, typed_value
-from vissim.checks import (EYE_LIGHT_RANGE_NM, arcmin_per_px, eye_pupil_diameter_mm, number_within,
-                           positive_number, size_px, trial_lens_diopters, vertex_distance_mm)
+from vissim.checks import (EYE_LIGHT_RANGE_NM, VIEWING_DISTANCE_RANGE_M, arcmin_per_px, eye_pupil_diameter_mm, number_within,
+                           size_px, trial_lens_diopters, vertex_distance_mm)
 from vissim.errors import VissimInputError
 from vissim.render.eye_render import EyeRender
 
@@ -58,7 +58,7 @@ def _ranged(values: dict, source: str) -> None:
     checks = {"pupil_mm": ("eye", eye_pupil_diameter_mm), "iris_mm": ("eye", eye_pupil_diameter_mm),
               "wavelength_nm": ("light", lambda v, n: number_within(v, n, "nm", EYE_LIGHT_RANGE_NM)),
               "arcmin_per_px": ("render", arcmin_per_px),
-              "chart_distance_m": ("chart", lambda v, n: positive_number(v, n, "m")),
+              "chart_distance_m": ("chart", lambda v, n: number_within(v, n, "m", VIEWING_DISTANCE_RANGE_M)),
               "vertex_mm": ("spectacles", vertex_distance_mm)}
     keys = {field: key for table in EYE_SCENE_KEYS.values() for key, (field, _, _) in table.items()}
     for field, (table, check) in checks.items():

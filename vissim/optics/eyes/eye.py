@@ -30,6 +30,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import math
@@ -188,8 +189,9 @@ class Eye:
     def with_assumed_pupil(self, pupil_diameter_mm: float) -> Eye:
         """The same eye with an entrance pupil a simulation assumes (its iris taken for the pupil, say): any
         positive diameter, where an eye one builds holds to a human eye's `EYE_PUPIL_RANGE_MM`."""
-        eye = dataclasses.replace(self, pupil_diameter_mm=None, iris_mm=None)
+        eye = copy.copy(self)  # the optics do not depend on the pupil: nothing to rebuild
         object.__setattr__(eye, "pupil_diameter_mm", positive_number(pupil_diameter_mm, "assumed entrance pupil", "mm"))
+        object.__setattr__(eye, "iris_mm", None)
         return eye
 
     def with_rx(self, rx, vertex_distance_mm: float | None = None) -> Eye:

@@ -93,9 +93,6 @@ MTF_NYQUIST_PER_CUTOFF = 1.25
 #: field that holds it (`vissim.optics.psf.field_size.size_holding_px`): slow (tens of seconds) for an 8 mm
 #: pupil at 40°.
 MTF_SIZE_PX = 512
-#: The PSF an MTF is taken from: single precision moves a photopic MTF by 2e-8 at most (5-100 cyc/deg, Navarro's eye,
-#: 4 mm, against double), and halves its time.
-MTF_PSF_DTYPE = np.float32
 
 
 def _frequencies(values, name: str) -> np.ndarray:
@@ -142,7 +139,7 @@ def eye_mtf(wavefront: Wavefront, wavelength_nm, frequencies_cyc_per_deg, field_
         size = size_holding_px(wavefront, diameter, wavelengths, weights, step_arcmin, size)  # a cut PSF smooths its OTF
     size = 2 * math.ceil(field_map_stretch(getattr(wavefront, "field_map", None)) * size / 2)  # a mapped front's widening
     psf = compute_psf(wavefront, wavelength_nm=wavelengths, weights=weights, arcmin_per_px=step_arcmin, size_px=size,
-                      dtype=MTF_PSF_DTYPE, normalise="total")
+                      normalise="total")  # compute_psf's precision: a photopic MTF within 2e-8 of double
     m = psf_metrics.mtf(psf, remove_pixel=True)
     axis = psf_metrics.frequencies_cyc_per_deg(psf)
     df, centre = axis[1] - axis[0], m.shape[0] // 2

@@ -64,7 +64,7 @@ from vissim.optics.eyes.spectacles import lens_surfaces, system_entrance_pupil_m
 from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.pupil.zernike import fit_zernike_um
-from vissim.optics.runtime.threads import map_on_threads, spare_threads, split_evenly
+from vissim.optics.runtime.threads import map_on_threads, map_shares
 
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm", "pupils_mm",
@@ -439,7 +439,7 @@ def trace_eye_wavefronts(eye: SchematicEye, wavelengths_nm, field_deg=(0.0, 0.0)
             waves = np.repeat([wavelengths[k] for k in share], [len(grids[k][1]) for k in share])
             return share, trace_to_retina(eye, targets, waves, field_deg=field, lenses=lenses, phase=phase)
 
-        traced = map_on_threads(trace_share, split_evenly(range(len(grids)), spare_threads()))
+        traced = map_shares(trace_share, range(len(grids)))
     except VissimInputError as error:
         raise VissimInputError(f"field angle ({field[0]:g}, {field[1]:g}) deg, {given} {_widest(pupils, irises, given)} "
                                f"mm: {error}; the {eye.name} eye traces a smaller pupil or field angle") from None

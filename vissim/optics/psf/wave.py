@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import functools
 import math
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -33,7 +32,7 @@ from vissim.lazy_import import lazy_module
 from vissim.progress import Progress, counter
 from vissim.optics.psf.field_size import airy_tail_radius_lambda_over_d, rim_widening
 from vissim.optics.pupil.grid import generalised_pupil, generalised_pupil_parts, opd_on_points_um, pupil_grid
-from vissim.optics.runtime.threads import map_on_threads, spare_threads, split_evenly
+from vissim.optics.runtime.threads import map_shares
 from vissim.optics.runtime.workspace import scratch
 from vissim.units import arcmin_to_rad, nm_to_mm, rad_to_arcmin
 
@@ -274,14 +273,7 @@ def _mft_intensity(fronts, weights, diameter_mm, plans, dtype, advance=lambda: N
     grid = pupil_grid(plans[0].pupil_step_mm, diameter_mm)
     advance()
     jobs = list(zip(fronts, weights, plans))
-    lock = threading.Lock()
-
-    def locked_advance():
-        with lock:
-            advance()
-
-    partials = map_on_threads(lambda share: _mft_partial(grid, share, dtype, locked_advance),
-                              split_evenly(jobs, spare_threads()))
+    partials = map_shares(lambda share: _mft_partial(grid, share, dtype, advance), jobs)  # advance: a thread-safe counter
     total = partials[0]
     for partial in partials[1:]:
         total += partial

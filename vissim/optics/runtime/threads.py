@@ -19,7 +19,7 @@ import os
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
-__all__ = ["available_cores", "map_on_threads", "single_threaded_blas", "spare_threads"]
+__all__ = ["available_cores", "map_on_threads", "map_shares", "single_threaded_blas", "spare_threads", "split_evenly"]
 
 log = logging.getLogger(__name__)
 
@@ -115,3 +115,9 @@ def split_evenly(items, parts: int) -> list[list]:
     parts = max(1, min(parts, len(items)))
     bounds = [round(k * len(items) / parts) for k in range(parts + 1)]
     return [items[a:b] for a, b in zip(bounds, bounds[1:])]
+
+
+def map_shares(work, items) -> list:
+    """``work(share)`` for ``items`` split in one contiguous share per spare thread (`split_evenly`), at once
+    (`map_on_threads`): one result per share, in order."""
+    return map_on_threads(work, split_evenly(items, spare_threads()))

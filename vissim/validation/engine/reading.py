@@ -19,8 +19,7 @@ __all__ = ["GLOSSARY", "how_to_read", "terms_used", "how_built", "perfect_score_
 #: renders hold the noise twice (MSE 2 sigma^2), a comparison with one render once (sigma^2).
 PERFECT_MARGIN_DB = 10.0 * math.log10(2.0)
 #: The PSNR of an image whose RMS difference from its reference is one grey level of an 8-bit display (1/255 of
-#: white): a difference no display shows.  The score of a configuration with no blur to simulate (module
-#: `vissim.validation.engine.verdict`).
+#: white): a difference no display shows.  The score of a configuration with no blur to simulate.
 ONE_GREY_LEVEL_PSNR_DB = 20.0 * math.log10(255.0)
 
 #: term -> (the words that show the page uses it (regular expressions, case-insensitive), its definition).
@@ -39,7 +38,7 @@ GLOSSARY: dict[str, tuple[tuple[str, ...], str]] = {
              "noise; read it against the noise floor."),
     "dB over the floor": ((r"over (the )?(noise )?floor", r"minus the (noise )?floor", r"dB over"),
                           "a simulation's score: its PSNR against the render minus the noise floor. 0 dB: the "
-                          "simulation differs from the render as much as a second render does. +3.01 dB: a perfect, "
+                          f"simulation differs from the render as much as a second render does. +{PERFECT_MARGIN_DB:.2f} dB: a perfect, "
                           "noise-free simulation (see below). Below 0 dB the simulation itself differs from the "
                           "render."),
     "SSIM": ((r"\bSSIM\b",),

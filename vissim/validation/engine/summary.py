@@ -12,13 +12,13 @@ import math
 import numpy as np
 
 from vissim.validation.engine.metrics import PSNR, floor_column
+from vissim.validation.engine.reading import PERFECT_MARGIN_DB
 
 
 __all__ = ["PERFECT_MARGIN_DB", "summary_table", "summary_notes", "margin", "NO_LENS", "value_span"]
 
 #: What a perfect, noise-free simulation scores over the noise floor on average: the floor's two
 #: renders hold the noise twice (MSE 2 sigma^2), a comparison with one render once (sigma^2).
-PERFECT_MARGIN_DB = 10.0 * math.log10(2.0)
 #: The lens label of a configuration without trial lenses.
 NO_LENS = "no lens"
 

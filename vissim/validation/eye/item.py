@@ -17,14 +17,22 @@ from vissim.imaging.registration import register
 from vissim.optics.blur.convolve import blur_image
 from vissim.optics.eyes.retina_map import ray_psf
 from vissim.validation.engine.item_files import save_item_image
-from vissim.validation.engine.metrics import PSNR, SSIM, added_scores
+from vissim.validation.engine.metrics import PSNR, SSIM, added_scores, metric_float
 from vissim.validation.eye.simulate import (COSTS, SIMULATIONS, EyeScene, diffraction_psf, margin_px, reference_of,
                                             simulate)
 
-__all__ = ["compute_eye_item", "SELF_CHECK_MARGIN_DB", "IMAGE_PEAK_VALUE", "applies"]
+__all__ = ["compute_eye_item", "SELF_CHECK_MARGIN_DB", "IMAGE_PEAK_VALUE", "applies", "self_check_passes"]
 
 #: The geometric self-check's required margin over the render's noise floor, dB.
 SELF_CHECK_MARGIN_DB = 2.0
+
+
+def self_check_passes(result: dict) -> bool:
+    """The self-check's two criteria: at least `SELF_CHECK_MARGIN_DB` over the noise floor, and an SSIM against the
+    render at least the two renders' SSIM with each other (an item's ``result.json``, old ones too)."""
+    row = next(x for x in result["rows"] if x["simulation"] == "traced_rays")
+    floor_ssim = metric_float(result["noise_floor"].get(SSIM.name))
+    return row["over_floor_db"] >= SELF_CHECK_MARGIN_DB and not (row[SSIM.name] < floor_ssim)
 #: The chart's placement is searched until less than this is left (image px), in at most this many passes.
 ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES = 0.01, 4
 #: The images' data range for PSNR and SSIM (the chart's white is 0.9).
@@ -97,7 +105,7 @@ def compute_eye_item(key: str, configuration, settings, built, images: dict, ite
     result = {"key": key, "configuration": configuration.as_json(), "noise_floor": floor.as_json(),
               "chart_placement": placement, "rows": rows, "costs_db": costs,
               "ray_psf": {"rays": ray.rays, "step_arcmin": ray.step_arcmin, "magnification": ray.magnification.tolist()},
-              "self_check_pass": by_name["traced_rays"]["over_floor_db"] >= SELF_CHECK_MARGIN_DB,
               "images": saved}
+    result["self_check_pass"] = self_check_passes(result)
     write_json_atomic(item_dir / "result.json", result, overwrite=True)
     return result

@@ -15,7 +15,7 @@ from vissim.validation.engine.protocol import ReportParts
 from vissim.validation.engine.reading import PERFECT_MARGIN_DB, how_to_read, own_error_fraction, perfect_score_db
 from vissim.validation.engine.report import format_number
 from vissim.validation.engine.tiles import TILE_ZOOM, tile_strip
-from vissim.validation.eye.item import SELF_CHECK_MARGIN_DB
+from vissim.validation.eye.item import SELF_CHECK_MARGIN_DB, self_check_passes
 from vissim.validation.eye.simulate import COSTS, SIMULATIONS
 
 log = logging.getLogger(__name__)
@@ -105,14 +105,6 @@ def _rows(results: list[dict]) -> list[dict]:
 
 def _check_row(result: dict) -> dict:
     return next(x for x in result["rows"] if x["simulation"] == "traced_rays")
-
-
-def self_check_passes(result: dict) -> bool:
-    """The self-check's two criteria (`SELF_CHECK_CRITERIA`): at least `SELF_CHECK_MARGIN_DB` over the noise floor,
-    and an SSIM against the render at least the two renders' SSIM with each other."""
-    row = _check_row(result)
-    floor_ssim = metric_float(result["noise_floor"].get(SSIM.name))
-    return row["over_floor_db"] >= SELF_CHECK_MARGIN_DB and not (row[SSIM.name] < floor_ssim)
 
 
 def _self_check_table(results: list[dict]) -> str:
