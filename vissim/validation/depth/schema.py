@@ -25,10 +25,9 @@ from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.rx.trial_lens import TrialLens
 from vissim.provenance import json_safe
-from vissim.vocabulary import refuse_renamed_keys
 from vissim.validation.engine.configurations import refuse_duplicate_names
 from vissim.validation.engine.fields import (MAX_SPP, checked_numbers, field_error, lenses, name_text, number,
-                                             settings_kwargs, tables, text)
+                                             refuse_unknown_keys, settings_kwargs, tables, text)
 
 __all__ = ["DepthConfiguration", "DepthCampaignSettings", "read_depth_part", "DEPTH_SIMULATIONS", "DEPTH_INPUTS"]
 
@@ -150,10 +149,7 @@ def _camera(camera: Any, viewer, source: str, where: str) -> CameraViewer:
 
 
 def _configuration(raw: dict, base: Path, source: str, where: str) -> DepthConfiguration:
-    unknown = set(raw) - set(CONFIG_KEYS)
-    refuse_renamed_keys(unknown, CONFIG_KEYS, f"{source}: {where}")
-    if unknown:
-        raise field_error(source, where, f"unknown {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}")
+    refuse_unknown_keys(raw, CONFIG_KEYS, source, where, "field")
     if "scene" not in raw:
         raise field_error(source, where, "needs scene = a depth scene file (relative to the campaign file)")
     scene_file = (base / text(raw["scene"], source, f"{where}.scene")).resolve()

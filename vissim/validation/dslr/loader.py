@@ -19,7 +19,6 @@ from vissim.checks import (ARCMIN_PER_PX_RANGE, DATA_RANGE_RANGE, F_NUMBER_RANGE
 from vissim.optotypes import SLOAN_LETTERS
 from vissim.validation.dslr.schema import INPUTS, SIMULATIONS, CampaignSettings, Configuration, trial_lens_phrase
 from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
-from vissim.vocabulary import refuse_renamed_keys
 from vissim.validation.engine.fields import (
     MAX_SPP,
     field_error,
@@ -29,7 +28,7 @@ from vissim.validation.engine.fields import (
     settings_kwargs,
     tables,
     text,
-    unknown_field_error,
+    refuse_unknown_keys,
     value_list,
     whole_number,
 )
@@ -55,10 +54,7 @@ def _f_number(value: Any, source: str, where: str) -> float:
 
 
 def _configuration(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> Configuration:
-    unknown = set(raw) - set(ITEM_KEYS)
-    refuse_renamed_keys(unknown, ITEM_KEYS, f"{source}: {where}")
-    if unknown:
-        raise unknown_field_error(source, where, f"unknown {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}")
+    refuse_unknown_keys(raw, ITEM_KEYS, source, where, "field")
     letter = raw.get("letter")
     if not isinstance(letter, str) or len(letter) != 1 or letter.upper() not in SLOAN_LETTERS:
         raise field_error(source, f"{where}.letter", f"must be one of the Sloan letters {', '.join(SLOAN_LETTERS)}, "
@@ -100,10 +96,7 @@ def _swept(value: Any, source: str, where: str, example: str) -> list:
 
 
 def _sweep(raw: dict, settings: CampaignSettings, source: str, where: str, f_number: float) -> list[Configuration]:
-    unknown = set(raw) - set(SWEEP_KEYS)
-    refuse_renamed_keys(unknown, SWEEP_KEYS, f"{source}: {where}")
-    if unknown:
-        raise unknown_field_error(source, where, f"unknown {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}")
+    refuse_unknown_keys(raw, SWEEP_KEYS, source, where, "field")
     letters = _swept(raw.get("letter", ["N"]), source, f"{where}.letter", '["K", "N"]')
     logmars = _swept(raw.get("logmar", [1.0]), source, f"{where}.logmar", "[1.0, 0.5]")
     polarities = _swept(raw.get("polarity", ["black-on-white"]), source, f"{where}.polarity", '["black-on-white"]')

@@ -38,6 +38,16 @@ def unknown_field_error(source: str, where: str, message: str) -> UnknownFieldEr
     return UnknownFieldError(f"{source}: {where}: {message}")
 
 
+def refuse_unknown_keys(table: dict, known, source: str, where: str, noun: str = "key") -> None:
+    """Refuse a table's keys that are not ``known``: a renamed one naming its new spelling
+    (`vissim.vocabulary.refuse_renamed_keys`), else one `UnknownFieldError` listing them and the keys known."""
+    unknown = set(table) - set(known)
+    refuse_renamed_keys(unknown, known, f"{source}: {where}")
+    if unknown:
+        raise unknown_field_error(source, where, f"unknown {noun if len(unknown) == 1 else noun + 's'} "
+                                                 f"{sorted(unknown)}; known: {', '.join(known)}")
+
+
 def read_toml_file(path: str | Path, what: str = "campaign file") -> dict:
     """The TOML document at ``path``; one clean error naming it if it is absent, a folder, binary or not TOML."""
     path = path_arg(path, f"the {what}'s path")

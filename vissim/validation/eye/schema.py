@@ -33,9 +33,8 @@ from vissim.checks import (ACCOMMODATION_RANGE_DIOPTERS, ARCMIN_PER_PX_RANGE, EY
                            EYE_LIGHT_RANGE_NM, LOGMAR_RANGE, MAX_SPP, OVERSAMPLE_RANGE,
                            VERTEX_DISTANCE_RANGE_MM, VIEWING_DISTANCE_RANGE_M)
 from vissim.validation.engine.configurations import refuse_duplicate_names, sweep_combinations
-from vissim.vocabulary import refuse_renamed_keys
-from vissim.validation.engine.fields import (field_error, lens, name_text, number, settings_kwargs, tables, text,
-                                             whole_number)
+from vissim.validation.engine.fields import (field_error, lens, name_text, number, refuse_unknown_keys,
+                                             settings_kwargs, tables, text, whole_number)
 
 __all__ = ["EyeSettings", "EyeConfiguration", "read_campaign"]
 
@@ -146,10 +145,7 @@ def _surfaces(value, source: str, where: str) -> tuple:
 
 
 def _configuration(entry: dict, settings: EyeSettings, source: str, where: str) -> EyeConfiguration:
-    unknown = set(entry) - set(ITEM_KEYS)
-    refuse_renamed_keys(unknown, ITEM_KEYS, f"{source}: {where}")
-    if unknown:
-        raise field_error(source, where, f"unknown {'key' if len(unknown) == 1 else 'keys'} {sorted(unknown)}; known: {', '.join(ITEM_KEYS)}")
+    refuse_unknown_keys(entry, ITEM_KEYS, source, where)
     spectrum, wavelength = _light(entry, source, where)
     trial = lens(entry["lens"], source, f"{where}.lens") if "lens" in entry else None
     trial = None if trial is None or (trial.sphere_diopters, trial.cylinder_diopters) == (0.0, 0.0) else (
