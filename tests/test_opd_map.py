@@ -61,3 +61,22 @@ def test_bad_maps_are_refused():
         OpdMap(np.full((8, 8), np.nan), 3.0)
     with pytest.raises(VissimInputError, match="positive mm"):
         OpdMap(np.zeros((8, 8)), -1.0)
+
+
+@pytest.mark.parametrize("derivative", [(0, 0), (1, 0), (0, 1)])
+def test_the_cell_polynomials_are_fitpacks_spline(derivative):
+    # Oracle: FITPACK's own evaluation (RectBivariateSpline.ev) of the same spline, at random points, at knots and
+    # beyond the grid (both clamp to it); agreement to round-off.
+    from scipy.interpolate import RectBivariateSpline
+
+    from vissim.optics.pupil.spline_cells import CellPolynomials
+
+    rng = np.random.default_rng(5)
+    axis = np.linspace(-1.8, 1.8, 33)
+    spline = RectBivariateSpline(axis, axis, rng.standard_normal((33, 33)))
+    x = np.concatenate([rng.uniform(-1.8, 1.8, 5000), axis, [-2.5, 2.5, 1.8, -1.8]])
+    y = np.concatenate([rng.uniform(-1.8, 1.8, 5000), axis[::-1], [0.3, -2.5, 1.8, -1.8]])
+    cells = CellPolynomials.of(spline.partial_derivative(*derivative) if any(derivative) else spline)
+    expected = spline.ev(x, y, dx=derivative[0], dy=derivative[1])
+    np.testing.assert_allclose(cells(x, y), expected, atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_array_equal(cells(x[:5000].reshape(-1, 2), y[:5000].reshape(-1, 2)).ravel(), cells(x, y)[:5000])

@@ -354,3 +354,21 @@ def test_an_auto_field_is_the_suggested_size(mode):
     size = suggested_size_px(front, 0.5)
     assert auto.size_px == (size, size)
     np.testing.assert_array_equal(auto.data, compute_psf(front, arcmin_per_px=0.5, size_px=size, mode=mode).data)
+
+
+def test_the_ray_histogram_is_numpys_bin_for_bin():
+    # Oracle: np.histogram2d on the same edges; values on edges (the last edge counts in the last bin), just below
+    # them, outside, NaN and infinite, with and without weights.
+    from vissim.optics.pupil.rays import histogram_on_edges
+
+    rng = np.random.default_rng(3)
+    edges = (np.arange(5 * 21 + 1) - (5 * 21) // 2 - 0.5) / 5
+    row, col = rng.normal(0, 4, 20000), rng.normal(0, 4, 20000)
+    row[:300], col[300:600] = rng.choice(edges, 300), rng.choice(edges, 300)
+    row[600:700] = np.nextafter(rng.choice(edges, 100), -np.inf)
+    row[700], col[701], row[702], col[703] = np.nan, np.inf, edges[-1], edges[0]
+    weights = rng.random(len(row))
+    expected = np.histogram2d(row, col, bins=(edges, edges))[0]
+    np.testing.assert_array_equal(histogram_on_edges(row, col, edges), expected)
+    np.testing.assert_array_equal(histogram_on_edges(row, col, edges, weights),
+                                  np.histogram2d(row, col, bins=(edges, edges), weights=weights)[0])

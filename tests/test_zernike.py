@@ -9,11 +9,13 @@ from hypothesis import strategies as st
 
 from vissim.errors import VissimInputError
 from vissim.optics.pupil.zernike import (
+    MAX_MONOMIAL_ORDER,
     ansi_j_to_nm,
     nm_to_ansi_j,
     nm_to_noll,
     noll_to_nm,
     zernike_basis,
+    zernike_gradient,
     zernike_keys,
     zernike_monomials,
     zernike_nm,
@@ -176,3 +178,38 @@ def test_a_fit_whose_samples_cannot_tell_terms_apart_goes_by_the_svd():
     fitted, residual = fit_zernike_um(x, np.zeros_like(x), 0.3 * x**2, 4.0, 2)
     assert np.isfinite(list(fitted.values())).all() and residual < 1e-12
     assert fitted[(1, -1)] == pytest.approx(0.0, abs=1e-12) and fitted[(2, -2)] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_gradient_of_a_defocus_and_astigmatism_is_the_textbooks():
+    # Oracle: W = c20 sqrt(3) (2 rho^2 - 1) + c22 sqrt(6) (u^2 - v^2) + c2m2 sqrt(6) 2 u v (Thibos et al. 2002,
+    # Table 1), differentiated by hand: dW/du = 4 sqrt(3) c20 u + 2 sqrt(6) (c22 u + c2m2 v), and likewise in v.
+    c20, c22, c2m2 = 0.7, -0.3, 0.2
+    u, v = np.meshgrid(np.linspace(-1.2, 1.2, 9), np.linspace(-1.1, 1.0, 7))
+    du, dv = zernike_gradient({(2, 0): c20, (2, 2): c22, (2, -2): c2m2}, u, v)
+    np.testing.assert_allclose(du, 4 * math.sqrt(3) * c20 * u + 2 * math.sqrt(6) * (c22 * u + c2m2 * v), atol=1e-13)
+    np.testing.assert_allclose(dv, 4 * math.sqrt(3) * c20 * v + 2 * math.sqrt(6) * (-c22 * v + c2m2 * u), atol=1e-13)
+
+
+@pytest.mark.parametrize("order", [1, 4, 8, 12])
+def test_the_gradient_equals_central_differences_of_the_terms_one_by_one(order):
+    # Oracle: zernike_nm term by term (its own Jacobi radial polynomials, not the monomials), differenced at a step
+    # of 1e-5: truncation ~1e-10, round-off ~1e-11 of the front's scale.
+    rng = np.random.default_rng(order)
+    terms = {key: rng.normal() for key in zernike_keys(order)}
+    u, v = rng.uniform(-0.7, 0.7, 200), rng.uniform(-0.7, 0.7, 200)
+    h = 1e-5
+
+    def front(a, b):
+        rho, theta = np.hypot(a, b), np.arctan2(b, a)
+        return sum(c * zernike_nm(n, m, rho, theta) for (n, m), c in terms.items())
+
+    du, dv = zernike_gradient(terms, u, v)
+    scale = max(np.abs(du).max(), np.abs(dv).max())
+    np.testing.assert_allclose(du, (front(u + h, v) - front(u - h, v)) / (2 * h), atol=1e-8 * scale)
+    np.testing.assert_allclose(dv, (front(u, v + h) - front(u, v - h)) / (2 * h), atol=1e-8 * scale)
+
+
+def test_no_gradient_above_the_monomial_orders():
+    assert zernike_gradient({(MAX_MONOMIAL_ORDER + 1, 1): 1.0}, 0.1, 0.2) is None
+    du, dv = zernike_gradient({}, np.zeros(3), np.zeros(3))
+    assert not du.any() and not dv.any()

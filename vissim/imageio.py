@@ -602,6 +602,28 @@ def write_image(
     return path
 
 
+#: The eight bytes every PNG file begins with.
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def write_png_bytes(path: str | os.PathLike[str], png: bytes, *, provenance: dict | None = None,
+                    overwrite: bool = False) -> Path:
+    """An already encoded PNG (a report figure) written as it is, atomically, with its provenance sidecar."""
+    path = Path(path)
+    if _kind(path) != "png" or not bytes(png[:8]) == PNG_SIGNATURE:
+        raise VissimInputError(f"cannot write {path}: expected PNG bytes for a .png file")
+    sidecar = _sidecar_path(path)
+    refuse_existing(path, sidecar, overwrite=overwrite)
+    with output_transaction():  # the image and its sidecar appear together, or neither
+        with atomic_output(path, overwrite=overwrite) as tmp:
+            Path(tmp).write_bytes(png)
+        if provenance is not None:
+            write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
+    if provenance is None:
+        remove_output(sidecar)
+    return path
+
+
 def _quantise(path: Path, arr: np.ndarray, encoding: str, bit_depth: int) -> np.ndarray:
     lin = arr.astype(np.float64)
     n_out = int(np.count_nonzero((lin < 0.0) | (lin > 1.0)))

@@ -186,7 +186,7 @@ def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path
     shutil.copytree(run_dir, copy)
     for name in FIGURES:
         (copy / name).unlink()
-    monkeypatch.setattr(report, "optics_figures", unreadable)
+    monkeypatch.setattr(report, "optics_figure", unreadable)
     write_report(copy)
     assert (copy / "tables.md").exists() and (copy / "report.html").exists()
     assert not any((copy / name).exists() for name in FIGURES)

@@ -23,6 +23,7 @@ renders; nothing is written to disk here, so an interrupted render leaves no fil
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
 import time
@@ -244,6 +245,17 @@ def mitsuba_versions() -> dict:
     return {"mitsuba_version": _mi_module.__version__, "drjit_version": _dr_module.__version__}
 
 
+@functools.lru_cache(maxsize=8)
+def _print_chart(spec, dpi: float):
+    """``spec`` rendered for print at ``dpi``, kept read-only: a campaign renders each chart with several seeds
+    and lenses (0.1-0.2 s a chart)."""
+    from vissim.charts import render_chart_print
+
+    chart = render_chart_print(spec, dpi)
+    chart.pixels.setflags(write=False)
+    return chart
+
+
 def render_bench(
     bench,
     chart,
@@ -298,13 +310,13 @@ def render_bench(
     """
     from vissim.bench.dslr.bench import SPECTRAL_MODE, DslrBench, chart_mm_per_texel, dslr_scene
     from vissim.optics.rx.trial_lens import trial_lens_effect
-    from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar, render_chart_print
+    from vissim.charts import MM_PER_INCH, Chart, ChartSpec, chart_sidecar
 
     instance_of(bench, DslrBench, "render_bench's bench", "a DslrBench (vissim.DslrBench(...))")
     instance_of(chart, (ChartSpec, Chart), "render_bench's chart",
                 "a ChartSpec (vissim.single_letter_spec('K', 1.0)) or a Chart (vissim.render_chart_print(spec))")
     if isinstance(chart, ChartSpec):
-        chart = render_chart_print(chart, MM_PER_INCH / chart_mm_per_texel(bench))
+        chart = _print_chart(chart, MM_PER_INCH / chart_mm_per_texel(bench))
     scene = dslr_scene(bench, chart.pixels, chart.mm_per_px, kind=kind)
     result = render_scene(scene, kind=kind, spp=bench.spp, seed=bench.seed, variant=variant,
                           pass_spp=pass_spp, progress=progress)

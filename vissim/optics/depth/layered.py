@@ -50,7 +50,6 @@ interpenetrate.  Behind the last layer is black (these scenes are self-emitting 
 
 from __future__ import annotations
 
-import functools
 import logging
 from dataclasses import dataclass, fields
 
@@ -105,15 +104,6 @@ class LayeredBlurResult:
 
     def as_json(self) -> dict:
         return {f.name: getattr(self, f.name) for f in fields(self) if f.name != "image"}
-
-
-@functools.lru_cache(maxsize=8)
-def _pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
-    """The geometric PSF's pupil rays (`vissim.optics.pupil.rays.stratified_pupil_rays`), cached read-only."""
-    u, v = stratified_pupil_rays(n_rays)
-    u.setflags(write=False)
-    v.setflags(write=False)
-    return u, v
 
 
 def _offsets_px(front: Wavefront, pupil_mm: float, step: float, rays) -> np.ndarray:
@@ -399,7 +389,7 @@ def _trace_slices(slices: list[_Slice], fronts: dict, pupil: float, step: float,
     if n_rays is None:
         blur_px = max(geometric_blur_radius_arcmin(f, pupil) for f in fronts.values()) / step
         n_rays = ray_count(blur_px)
-    rays = _pupil_rays(int(n_rays))
+    rays = stratified_pupil_rays(int(n_rays))
     for s in slices:
         s.offsets = _offsets_px(fronts[id(s)], pupil, step, rays)
         s.psf = _histogram_psf(s.offsets, step, pupil, wavelength)

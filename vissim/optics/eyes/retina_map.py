@@ -39,6 +39,7 @@ from vissim.optics.eyes.sight import film_field_deg
 from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.eyes.traced_wavefront import (field_direction, field_of_direction, iris_from_entrance_pupil_mm,
                                                  trace_to_retina)
+from vissim.optics.pupil.rays import histogram_on_edges
 from vissim.optics.raytrace import aim_collimated, trace_rays
 from vissim.optics.rx.trial_lens import TrialLensSetup
 from vissim.units import osa_xy_to_image_colrow
@@ -176,6 +177,6 @@ def ray_psf(the_eye, *, field_deg, chart_distance_m: float, lens=None, vertex_mm
     cols, rows = osa_xy_to_image_colrow(angles[:, 0] / step_deg, angles[:, 1] / step_deg)
     half = int(math.ceil(max(np.abs(cols).max(), np.abs(rows).max()))) + 2
     edges = np.arange(-half - 0.5, half + 1.0)
-    psf, _, _ = np.histogram2d(rows, cols, bins=(edges, edges), weights=ray_weights)
+    psf = histogram_on_edges(rows, cols, edges, ray_weights)
     magnification = _magnification(eye, lens_setup, retina, field, distance_mm, sensor_nm)
     return RayPsf(psf / psf.sum(), arcmin_per_px / oversample, magnification, len(angles))

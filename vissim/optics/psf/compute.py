@@ -54,7 +54,7 @@ from vissim.optics.psf.field_size import (
 )
 from vissim.optics.psf.wave import PsfSampling, plan_wave_psf, to_output_pixels, wave_psf
 from vissim.optics.pupil.grid import generalised_pupil, opd_on_points_um, pupil_grid
-from vissim.optics.pupil.rays import landing_arcmin, ray_count, stratified_pupil_rays
+from vissim.optics.pupil.rays import histogram_on_edges, landing_arcmin, ray_count, stratified_pupil_rays
 from vissim.optics.blur.resample import SUBPIXELS_PER_PX
 from vissim.optics.pupil.opd_map import OpdMap
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront, field_map_stretch, field_mapped, wavelengths_for
@@ -208,12 +208,12 @@ def _geometric_psf(wavefront, diameter_mm, arcmin_per_px, size_px, blur_arcmin, 
     col, row = col / arcmin_per_px, row / arcmin_per_px  # landing offsets in output pixels
     if pixel == "integrate":  # the histogram on output pixels is the exact pixel integral
         edges = np.arange(size_px + 1) - size_px // 2 - 0.5
-        counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
+        counts = histogram_on_edges(row, col, edges)
         return counts / len(u)
     q = SUBPIXELS_PER_PX  # band-limits the histogram (``pixel="sample"``)
     fine = q * size_px
     edges = (np.arange(fine + 1) - fine // 2 - 0.5) / q
-    counts, _, _ = np.histogram2d(row, col, bins=(edges, edges))
+    counts = histogram_on_edges(row, col, edges)
     return to_output_pixels(counts, size_px, q, pixel) / len(u)
 
 

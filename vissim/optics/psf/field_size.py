@@ -171,11 +171,10 @@ def _suggested_size_cached(items, measured_mm, diameter, step, wavelengths, weig
 
 def _suggested_size(wavefront, diameter, step, wavelengths, weights, lca_reference_nm, mode, minimum_px) -> int:
     start = minimum_px | 1  # the smallest odd size allowed
-    if energy_outside_field(wavefront, diameter, wavelengths, weights, step, start, mode=mode,
-                            lca_reference_nm=lca_reference_nm) <= MAX_ENERGY_OUTSIDE:
+    fans = _ray_fans(wavefront, diameter, wavelengths, weights, mode, lca_reference_nm)
+    if _outside_of(fans, step, start) <= MAX_ENERGY_OUTSIDE:
         return start
-    return size_holding_px(wavefront, diameter, wavelengths, weights, step, start, mode=mode,
-                           lca_reference_nm=lca_reference_nm)
+    return _search_size(fans, wavefront, diameter, wavelengths, step, start, lca_reference_nm, MAX_ENERGY_OUTSIDE)
 
 
 @functools.cache
@@ -248,9 +247,14 @@ def energy_outside_field(
     (see the module docstring), so the estimate is not below the PSF's; otherwise the plain
     ray-optics-times-Airy model, which can be well below it for a defocused pupil.
     """
-    low = -(size_px // 2 + 0.5) * arcmin_per_px  # pixel edges; the origin is at [N//2, N//2]
-    high = (size_px - size_px // 2 - 0.5) * arcmin_per_px
-    outside = 0.0
+    fans = _ray_fans(wavefront, diameter_mm, wavelengths_nm, weights, mode, lca_reference_nm, conservative)
+    return _outside_of(fans, arcmin_per_px, size_px)
+
+
+def _ray_fans(wavefront, diameter_mm, wavelengths_nm, weights, mode, lca_reference_nm, conservative=True) -> list:
+    """Per wavelength: its weight, the rays' landing offsets (col, row, arcmin) and their diffraction spread
+    (arcmin; None in ray optics) -- what `energy_outside_field` needs whatever the field's size."""
+    fans = []
     for w, weight in zip(wavelengths_nm, weights):
         front = front_at_wavelength(wavefront, w, lca_reference_nm)
         col, row = _rays(front, diameter_mm)
@@ -259,17 +263,32 @@ def energy_outside_field(
             lambda_over_d = float(rad_to_arcmin(nm_to_mm(w) / diameter_mm))
             blur = geometric_blur_radius_arcmin(front, diameter_mm)
             spread = lambda_over_d * (rim_widening(blur, lambda_over_d) if conservative else 1.0)
-        outside += weight * (1.0 - _inside_fraction(col, row, low, high, spread))
-    return outside / sum(weights)
+        fans.append((weight, col, row, spread))
+    return fans
+
+
+def _outside_of(fans: list, arcmin_per_px: float, size_px: int) -> float:
+    """The weighted fraction of the ``fans``' energy outside a ``size_px`` field."""
+    low = -(size_px // 2 + 0.5) * arcmin_per_px  # pixel edges; the origin is at [N//2, N//2]
+    high = (size_px - size_px // 2 - 0.5) * arcmin_per_px
+    outside = sum(weight * (1.0 - _inside_fraction(col, row, low, high, spread)) for weight, col, row, spread in fans)
+    return outside / sum(weight for weight, _, _, _ in fans)
 
 
 def size_holding_px(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_px, size_px, *, mode="wave",
                     lca_reference_nm=None, fraction: float = MAX_ENERGY_OUTSIDE) -> int:
     """Smallest odd size > ``size_px`` whose field leaves at most ``fraction`` of the energy outside
     (conservative estimate); ``size_px`` itself is taken to be too small."""
+    fans = _ray_fans(wavefront, diameter_mm, wavelengths_nm, weights, mode, lca_reference_nm)
+    return _search_size(fans, wavefront, diameter_mm, wavelengths_nm, arcmin_per_px, size_px, lca_reference_nm,
+                        fraction)
+
+
+def _search_size(fans, wavefront, diameter_mm, wavelengths_nm, arcmin_per_px, size_px, lca_reference_nm,
+                 fraction) -> int:
+    """`size_holding_px` with the rays already landed (``fans``, `_ray_fans`)."""
     def too_small(n):
-        return energy_outside_field(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_px, n,
-                                    mode=mode, lca_reference_nm=lca_reference_nm) > fraction
+        return _outside_of(fans, arcmin_per_px, n) > fraction
     # First guess: the blur plus the Airy tail's radius for ``fraction``, widened as the estimate is.
     blur = max(geometric_blur_radius_arcmin(front_at_wavelength(wavefront, w, lca_reference_nm), diameter_mm)
                for w in wavelengths_nm)

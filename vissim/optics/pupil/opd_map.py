@@ -2,8 +2,8 @@
 
 `compute_psf` accepts an `OpdMap` wherever it accepts a Zernike
 `Wavefront`: the PSF core evaluates it at its own pupil
-quadrature points (bicubic spline through the samples), and its slopes give the ray-optics PSF
-and the field size.
+quadrature points (bicubic spline through the samples, evaluated cell by cell:
+`vissim.optics.pupil.spline_cells`), and its slopes give the ray-optics PSF and the field size.
 
 Grid (``docs/conventions.md``, OSA pupil frame): ``samples_um[i, j]`` is the OPD in µm at
 ``x_j = -R + 2 R j / (n - 1)`` (column index increases towards the examiner's right, +x) and
@@ -15,6 +15,7 @@ the rim) so that the spline is exact inside it.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -22,6 +23,7 @@ import numpy as np
 
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
+from vissim.optics.pupil.spline_cells import CellPolynomials
 from vissim.optics.pupil.wavefront import Wavefront, ring_fit_um
 
 __all__ = ["OpdMap"]
@@ -69,20 +71,26 @@ class OpdMap:
         x, y = np.broadcast_arrays(np.asarray(x_mm, dtype=float), np.asarray(y_mm, dtype=float))
         radius = self.pupil_diameter_mm / 2.0
         cx, cy = np.clip(x, -radius, radius).ravel(), np.clip(y, -radius, radius).ravel()
-        out = self._spline.ev(cx, cy)
-        out += self._spline.ev(cx, cy, dx=1) * (x.ravel() - cx) + self._spline.ev(cx, cy, dy=1) * (y.ravel() - cy)
+        value, along_x, along_y = self._cells
+        out = value(cx, cy) + along_x(cx, cy) * (x.ravel() - cx) + along_y(cx, cy) * (y.ravel() - cy)
         out = out.reshape(x.shape)
         return out if self.added is None else out + self.added.opd_um(x, y)
 
     def slopes_mrad(self, x_mm: np.ndarray, y_mm: np.ndarray, step_mm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(dW/dx, dW/dy) in µm/mm = mrad, from the spline's derivatives."""
         x, y = np.broadcast_arrays(np.asarray(x_mm, dtype=float), np.asarray(y_mm, dtype=float))
-        dx = self._spline.ev(x.ravel(), y.ravel(), dx=1).reshape(x.shape)
-        dy = self._spline.ev(x.ravel(), y.ravel(), dy=1).reshape(x.shape)
+        _, along_x, along_y = self._cells
+        dx, dy = along_x(x, y), along_y(x, y)
         if self.added is not None:
             ax, ay = self.added.slopes_mrad(x, y, step_mm)
             dx, dy = dx + ax, dy + ay
         return dx, dy
+
+    @functools.cached_property
+    def _cells(self) -> tuple[CellPolynomials, CellPolynomials, CellPolynomials]:
+        """The spline and its x and y derivatives, a polynomial per knot cell (`vissim.optics.pupil.spline_cells`)."""
+        return tuple(CellPolynomials.of(s) for s in (self._spline, self._spline.partial_derivative(1, 0),
+                                                      self._spline.partial_derivative(0, 1)))
 
     def with_defocus_diopters(self, extra_sphere_diopters: float) -> OpdMap:
         """Add a spherical *prescription* change (negative = more myopic), as Zernike terms."""

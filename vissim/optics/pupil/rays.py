@@ -12,6 +12,7 @@ where a ray lands in the image, for all of them.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from vissim.units import image_colrow_to_osa_xy, osa_xy_to_image_colrow, rad_to_arcmin
 
 __all__ = ["PUPIL_RAY_SEED", "MIN_RAYS", "MAX_RAYS", "RAYS_PER_COVERED_PX", "ray_count", "stratified_pupil_rays",
-           "pupil_cell_centres", "landing_arcmin"]
+           "pupil_cell_centres", "landing_arcmin", "histogram_on_edges"]
 
 #: Fixed: the same wavefront gives the same rays, hence the same PSF.
 PUPIL_RAY_SEED = 20151218
@@ -34,14 +35,21 @@ def ray_count(blur_radius_px: float) -> int:
     return int(min(MAX_RAYS, max(MIN_RAYS, RAYS_PER_COVERED_PX * covered_px)))
 
 
+@functools.lru_cache(maxsize=8)
 def stratified_pupil_rays(n_rays: int) -> tuple[np.ndarray, np.ndarray]:
-    """Image-oriented unit-disc pupil points ``(u, v)``: about ``n_rays`` of them (the grid's cells inside the disc)."""
+    """Image-oriented unit-disc pupil points ``(u, v)``: about ``n_rays`` of them (the grid's cells inside the disc).
+
+    Kept, read-only: every PSF and depth layer of the same ray count draws the same rays.
+    """
     n_side = int(math.ceil(math.sqrt(n_rays * 4.0 / math.pi)))
     rng = np.random.default_rng(PUPIL_RAY_SEED)
     u, v = _cell_grid(n_side)
     u = u + (rng.random(u.shape) - 0.5) * (2.0 / n_side)
     v = v + (rng.random(v.shape) - 0.5) * (2.0 / n_side)
-    return _in_disc(u, v)
+    u, v = _in_disc(u, v)
+    u.setflags(write=False)
+    v.setflags(write=False)
+    return u, v
 
 
 def pupil_cell_centres(n_side: int) -> tuple[np.ndarray, np.ndarray]:
@@ -70,3 +78,32 @@ def landing_arcmin(wavefront, pupil_diameter_mm: float, u: np.ndarray, v: np.nda
     sx, sy = wavefront.slopes_mrad(*image_colrow_to_osa_xy(u * radius, v * radius))  # image-oriented pupil -> OSA
     col_mrad, row_mrad = osa_xy_to_image_colrow(sx, sy)
     return rad_to_arcmin(col_mrad * 1e-3), rad_to_arcmin(row_mrad * 1e-3)
+
+
+def _bins_on_edges(x: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each value's bin among near-uniform ``edges`` (``edges[i] <= x < edges[i + 1]``; the last edge in the last
+    bin), and which values fall inside: a division's guess, then put right against the edges themselves."""
+    n = len(edges) - 1
+    inside = (x >= edges[0]) & (x <= edges[-1])  # NaN is outside
+    guess = np.floor((np.where(inside, x, edges[0]) - edges[0]) * (n / (edges[-1] - edges[0])))
+    index = np.clip(guess, 0, n - 1).astype(np.intp)
+    while True:
+        low = x < edges[index]
+        high = (x >= edges[index + 1]) & (index < n - 1)
+        moved = inside & (low | high)
+        if not moved.any():
+            return index, inside
+        index = np.clip(index - (moved & low) + (moved & high), 0, n - 1)
+
+
+def histogram_on_edges(row: np.ndarray, col: np.ndarray, edges: np.ndarray, weights=None) -> np.ndarray:
+    """``np.histogram2d(row, col, bins=(edges, edges), weights=weights)[0]``, bin for bin, without its binary
+    search: ``edges`` are near uniform (a pixel grid), so each value's bin is found by division and checked."""
+    edges = np.asarray(edges, dtype=float)
+    n = len(edges) - 1
+    row_bin, row_in = _bins_on_edges(np.asarray(row, dtype=float), edges)
+    col_bin, col_in = _bins_on_edges(np.asarray(col, dtype=float), edges)
+    keep = row_in & col_in
+    flat = row_bin[keep] * n + col_bin[keep]
+    kept = None if weights is None else np.asarray(weights, dtype=float)[keep]
+    return np.bincount(flat, kept, minlength=n * n).reshape(n, n).astype(float)

@@ -32,7 +32,7 @@ from vissim.checks import wavelength_nm as checked_wavelength_nm
 from vissim.checks import pupil_diameter_mm as check_pupil_mm
 from vissim.errors import VissimInputError, VissimTypeError
 from vissim.optics.rx.prescription import Prescription, as_prescription
-from vissim.optics.pupil.zernike import nm_to_ansi_j, zernike_basis, zernike_keys, zernike_sum
+from vissim.optics.pupil.zernike import nm_to_ansi_j, zernike_basis, zernike_gradient, zernike_keys, zernike_sum
 
 __all__ = ["Wavefront", "WAVELENGTH_MATCH_NM", "same_wavelength", "prescription_to_zernike_um",
            "zernike_um_to_prescription", "parse_zernike_terms",
@@ -283,10 +283,15 @@ class Wavefront:
         return zernike_sum(self._items, x / radius, y / radius)
 
     def slopes_mrad(self, x_mm: np.ndarray, y_mm: np.ndarray, step_mm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """(dW/dx, dW/dy) in µm/mm = mrad, by central differences of the analytic expansion."""
-        h = step_mm if step_mm is not None else 1e-5 * self.pupil_diameter_mm
+        """(dW/dx, dW/dy) in µm/mm = mrad: the expansion's exact derivatives (`zernike_gradient`); by central
+        differences of step ``step_mm`` when it is given, or above the orders whose monomials hold."""
         x = np.asarray(x_mm, dtype=float)
         y = np.asarray(y_mm, dtype=float)
+        radius = self.pupil_diameter_mm / 2.0
+        gradient = zernike_gradient(self._items, x / radius, y / radius) if step_mm is None else None
+        if gradient is not None:
+            return gradient[0] / radius, gradient[1] / radius
+        h = step_mm if step_mm is not None else 1e-5 * self.pupil_diameter_mm
         dwdx = (self.opd_um(x + h, y) - self.opd_um(x - h, y)) / (2.0 * h)
         dwdy = (self.opd_um(x, y + h) - self.opd_um(x, y - h)) / (2.0 * h)
         return dwdx, dwdy

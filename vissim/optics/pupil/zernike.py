@@ -23,7 +23,8 @@ import numpy as np
 from vissim.errors import VissimInputError
 
 __all__ = ["ansi_j_to_nm", "nm_to_ansi_j", "noll_to_nm", "nm_to_noll", "zernike_keys", "zernike_norm",
-           "zernike_radial", "zernike_nm", "zernike_sum", "zernike_basis", "zernike_monomials", "fit_zernike_um"]
+           "zernike_radial", "zernike_nm", "zernike_sum", "zernike_basis", "zernike_monomials", "zernike_gradient",
+           "fit_zernike_um"]
 
 
 def _check_nm(n: int, m: int) -> tuple[int, int]:
@@ -170,16 +171,7 @@ def zernike_sum(coefficients, u, v) -> np.ndarray:
     items = _checked_items(coefficients)
     u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
     if max((n for (n, _), _ in items), default=0) <= MAX_MONOMIAL_ORDER:
-        table = zernike_monomials(items)
-        out = np.zeros(u.shape)
-        for q in range(len(table) - 1, -1, -1):  # sum_q v^q (sum_p A[p, q] u^p)
-            along_u = np.full(u.shape, table[-1, q])
-            for p in range(len(table) - 2, -1, -1):
-                along_u *= u
-                along_u += table[p, q]
-            out *= v
-            out += along_u
-        return out
+        return _horner(zernike_monomials(items), u, v)
     out = np.zeros(u.shape)
     values = [value for _, value in items]
 
@@ -188,6 +180,35 @@ def zernike_sum(coefficients, u, v) -> np.ndarray:
 
     _zernike_terms([key for key, _ in items], u, v, add)
     return out
+
+
+def _horner(table: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``sum A[p, q] u^p v^q`` (``table`` = A) at the points (u, v), by Horner's rule in each variable."""
+    out = np.zeros(u.shape)
+    if table.size == 0:
+        return out
+    for q in range(table.shape[1] - 1, -1, -1):  # sum_q v^q (sum_p A[p, q] u^p)
+        along_u = np.full(u.shape, table[-1, q])
+        for p in range(table.shape[0] - 2, -1, -1):
+            along_u *= u
+            along_u += table[p, q]
+        out *= v
+        out += along_u
+    return out
+
+
+def zernike_gradient(coefficients, u, v) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(d/du, d/dv)`` of ``sum c Z_n^m`` at unit-disc points (u, v): the monomials' exact derivatives, by Horner's
+    rule; None above `MAX_MONOMIAL_ORDER` (where the monomials cancel too much)."""
+    items = _checked_items(coefficients)
+    if max((n for (n, _), _ in items), default=0) > MAX_MONOMIAL_ORDER:
+        return None
+    u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+    table = zernike_monomials(items)
+    powers = np.arange(1, table.shape[0])
+    along_u = table[1:, :] * powers[:, None]  # A[p, q] u^p -> p A[p, q] u^(p-1)
+    along_v = table[:, 1:] * powers[None, :]
+    return _horner(along_u, u, v), _horner(along_v, u, v)
 
 
 #: The highest radial order `zernike_sum` takes as monomials (their cancellation stays under 1e-12 of the front's

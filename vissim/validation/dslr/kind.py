@@ -24,6 +24,7 @@ class DslrKind:
     name = "dslr"
     tables = ("item", "sweep")
     items_on_threads = True
+    figure_modules = ("vissim.validation.dslr.report",)  # what its report's figure helper imports ahead
 
     def read(self, doc: dict, head: dict, path: Path):
         return read_dslr_part(doc, head, path)

@@ -32,7 +32,7 @@ from vissim.validation.engine.figures import display_norm, pyplot, radiance_colo
 from vissim.validation.engine.summary import NO_LENS
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
-           "mtf_figure_of", "through_focus_figure_of", "optics_figures", "recorded_psf", "THROUGH_FOCUS_STEPS_D",
+           "mtf_figure_of", "through_focus_figure_of", "optics_figures", "optics_figure", "OPTICS_FIGURE_FILES", "recorded_psf", "THROUGH_FOCUS_STEPS_D",
            "LOG_PSF_DECADES"]
 
 log = logging.getLogger(__name__)
@@ -269,32 +269,47 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
     return fig
 
 
-def optics_figures(results: list[dict], run_dir: str | Path, campaign: dict,
-                   image_norm=None) -> dict[str, tuple[str, object, dict, str]]:
-    """The report's optics figures: name -> (file name, matplotlib figure, provenance extras, alt text).
+#: The optics figures, by name: their files.
+OPTICS_FIGURE_FILES = {"wave PSF (log scale) per group": "figure_psf.png",
+                       "MTF against the diffraction limit per group": "figure_mtf.png",
+                       "through focus per group": "figure_through_focus.png"}
 
-    Empty without wave items.  ``campaign``: the run's ``campaign.json`` record; ``image_norm``
-    as in `through_focus_figure_of`.
+
+def optics_figure(results: list[dict], run_dir: str | Path, campaign: dict, name: str,
+                  image_norm=None) -> tuple[str, object, dict, str] | None:
+    """One of the report's optics figures (`OPTICS_FIGURE_FILES`): (file name, matplotlib figure, provenance extras,
+    alt text), or None (no wave items; no synthetic chart for the through-focus strip).
+
+    ``campaign``: the run's ``campaign.json`` record; ``image_norm`` as in `through_focus_figure_of`.
     """
     cases = optics_cases(results, run_dir, campaign)
     if not cases:
-        return {}
-    psfs = [recorded_psf(case) for case in cases]
+        return None
     extra = {"optics": [case.as_json() for case in cases]}
     panels = "; ".join(_panel_title(c).replace("\n", ", ") for c in cases)
-    figures = {
-        "wave PSF (log scale) per group": ("figure_psf.png", psf_figure_of(cases, psfs), extra, (
+    file_name = OPTICS_FIGURE_FILES[name]
+    if file_name == "figure_psf.png":
+        return file_name, psf_figure_of(cases, [recorded_psf(case) for case in cases]), extra, (
             f"The wave simulation's point spread function, log10 of PSF over peak down to 1e-{LOG_PSF_DECADES}, axes "
-            f"in arcmin, one panel per group: {panels}.")),
-        "MTF against the diffraction limit per group": ("figure_mtf.png", mtf_figure_of(cases, psfs), extra, (
+            f"in arcmin, one panel per group: {panels}.")
+    if file_name == "figure_mtf.png":
+        return file_name, mtf_figure_of(cases, [recorded_psf(case) for case in cases]), extra, (
             "MTF of the wave simulation's PSF against cycles per degree (log scale), along x, along y and the ring "
-            f"mean, with the diffraction-limited MTF of the pupil, one panel per group: {panels}.")),
-    }
+            f"mean, with the diffraction-limited MTF of the pupil, one panel per group: {panels}.")
     strip = through_focus_figure_of(cases, image_norm)
-    if strip is not None:
-        steps = ", ".join(f"{s:+g} D" for s in THROUGH_FOCUS_STEPS_D)
-        figures["through focus per group"] = ("figure_through_focus.png", strip, extra, (
-            f"The synthetic letter blurred by the wave PSF with the camera prescription's sphere stepped by {steps}, "
-            f"one row per group ({panels}), with an angular scale bar in arcmin."))
-    log.info("optics figures of %d groups: %s", len(cases), ", ".join(f for f, *_ in figures.values()))
+    if strip is None:
+        return None
+    steps = ", ".join(f"{s:+g} D" for s in THROUGH_FOCUS_STEPS_D)
+    return file_name, strip, extra, (
+        f"The synthetic letter blurred by the wave PSF with the camera prescription's sphere stepped by {steps}, "
+        f"one row per group ({panels}), with an angular scale bar in arcmin.")
+
+
+def optics_figures(results: list[dict], run_dir: str | Path, campaign: dict,
+                   image_norm=None) -> dict[str, tuple[str, object, dict, str]]:
+    """The report's optics figures (`optics_figure`): name -> (file name, matplotlib figure, provenance extras, alt
+    text); empty without wave items."""
+    figures = {name: optics_figure(results, run_dir, campaign, name, image_norm) for name in OPTICS_FIGURE_FILES}
+    figures = {name: figure for name, figure in figures.items() if figure is not None}
+    log.info("optics figures: %s", ", ".join(f for f, *_ in figures.values()))
     return figures

@@ -16,11 +16,12 @@ from vissim.imageio import read_image
 from vissim.progress import counter
 from vissim.validation.dslr.fit_report import fit_table
 from vissim.validation.dslr.schema import lens_label_of
-from vissim.validation.dslr.optics_figures import optics_figures
+from vissim.validation.dslr.optics_figures import OPTICS_FIGURE_FILES, optics_figure
 from vissim.validation.dslr.report_words import arcmin_per_px_of, column_title, group_of
 from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE
 from vissim.validation.dslr.wave_bench_report import (SELF_CHECK_MARGIN_DB, is_wave_bench_row, self_check_table,
                                                       wave_bench_tables)
+from vissim.validation.engine.figure_processes import draw_figures
 from vissim.validation.engine.figures import (Figure, display_norm, pyplot, png_bytes, radiance_colorbar, scale_bar,
                                               tiles_alt)
 from vissim.validation.engine.protocol import ReportParts
@@ -304,6 +305,19 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
     return Figure("", png_bytes(fig), alt)
 
 
+def _optics_figure(results: list[dict], run_dir: Path, record: dict, name: str) -> Figure | str | None:
+    """One optics figure (`vissim.validation.dslr.optics_figures.optics_figure`), None, or why it was skipped; the rest
+    of the report does not depend on it."""
+    try:
+        drawn = optics_figure(results, run_dir, record, name, display_norm)
+    except (KeyError, OSError, ValueError, VissimInputError) as error:
+        return f"report: the optics figures were skipped ({type(error).__name__}: {error})"
+    if drawn is None:
+        return None
+    file_name, fig, extra, alt = drawn
+    return Figure(file_name, png_bytes(fig), alt, extra)
+
+
 def dslr_report(results: list[dict], run_dir: Path, record: dict, progress=None) -> ReportParts:
     """The DSLR report's rows, tables and figures.
 
@@ -318,20 +332,18 @@ def dslr_report(results: list[dict], run_dir: Path, record: dict, progress=None)
                for s in SYNTHETIC_FIGURES]
     wanted.append(("wave", "synthetic", True, f"{column_words(('wave', 'synthetic'))}, against the wave bench",
                    f"figure_wave_{WAVE_BENCH}.png"))
-    advance = counter(progress, "figures", len(wanted) + 1)
-    for simulation, input_kind, wave_bench, name, file_name in wanted:
-        figure = _figure(results, run_dir, simulation, input_kind, wave_bench=wave_bench, campaign=record)
+    advance = counter(progress, "figures", len(wanted) + len(OPTICS_FIGURE_FILES))
+    optics = [(_optics_figure, (results, run_dir, record, name)) for name in reversed(OPTICS_FIGURE_FILES)]
+    tiles = [(_figure, (results, run_dir, simulation, input_kind, wave_bench, record))
+             for simulation, input_kind, wave_bench, _, _ in wanted]
+    drawn = draw_figures(optics + tiles, advance)  # the slowest first: the through-focus strip
+    for (_, _, _, name, file_name), figure in zip(wanted, drawn[len(optics):]):
         if figure is not None:
             figures[name] = figure._replace(file_name=file_name)
-        advance()
-    try:  # per group: the PSF (log), its MTF, through focus; the rest of the report does not depend on them
-        optics = optics_figures(results, run_dir, record, display_norm)
-    except (KeyError, OSError, ValueError, VissimInputError) as error:
-        log.warning("report: the optics figures were skipped (%s: %s)", type(error).__name__, error)
-        optics = {}
-    for name, (file_name, fig, extra, alt) in optics.items():
-        figures[name] = Figure(file_name, png_bytes(fig), alt, extra)
-    advance()
+    optics_drawn = dict(zip(reversed(OPTICS_FIGURE_FILES), drawn[:len(optics)]))
+    for message in sorted({figure for figure in optics_drawn.values() if isinstance(figure, str)}):
+        log.warning("%s", message)
+    figures.update({name: optics_drawn[name] for name in OPTICS_FIGURE_FILES if isinstance(optics_drawn[name], Figure)})
     title = f"vissim validation: {record.get('name', run_dir.name)}"
     rows = metrics_rows(results)
     body = markdown_tables(results, rows)

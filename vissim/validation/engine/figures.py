@@ -29,6 +29,8 @@ DISPLAY_TICKS = (0.0, 0.25, 0.5, 0.75, 1.0)
 #: A scale bar is the longest of these (arcmin) that fits in this fraction of a tile's width.
 SCALE_BAR_STEPS_ARCMIN = (1, 2, 5, 10, 20, 50, 100, 200, 500)
 SCALE_BAR_FRACTION = 0.4
+#: Pixels per inch of every report figure.
+FIGURE_DPI = 110
 #: Orange reads on both the white paper and a white-on-black letter.
 SCALE_BAR_COLOUR = "tab:orange"
 
@@ -84,8 +86,13 @@ def tiles_alt(what: str, rows: list[str], columns: list[str], extra: str = "") -
 
 
 def png_bytes(fig) -> bytes:
-    """A figure as PNG bytes (110 dpi); the figure is closed."""
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
+    """A figure as RGB PNG bytes (110 dpi, opaque: the figure's white background); the figure is closed."""
+    from PIL import Image
+
+    fig.set_dpi(FIGURE_DPI)
+    fig.canvas.draw()
+    rgba = np.asarray(fig.canvas.buffer_rgba())
     pyplot.close(fig)
+    buffer = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(rgba[..., :3])).save(buffer, format="PNG")
     return buffer.getvalue()

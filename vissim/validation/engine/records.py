@@ -37,6 +37,9 @@ class Item(Mapping[str, Any]):
         """The ``result.json`` record, for JSON."""
         return dict(self.record)
 
+    def __reduce__(self):  # pickled as its record (a read-only mapping does not pickle): for a figure process
+        return _item, (self.key, dict(self.record))
+
     def __getitem__(self, field: str) -> Any:
         return self.record[field]
 
@@ -58,6 +61,9 @@ class Row(Mapping[str, Any]):
         """A row of ``cells`` (a kind's dict, or a `Row`, kept as it is)."""
         return cells if isinstance(cells, Row) else cls(MappingProxyType(dict(cells)))
 
+    def __reduce__(self):
+        return Row.of, (dict(self.cells),)
+
     def __getitem__(self, column: str) -> Any:
         return self.cells[column]
 
@@ -66,3 +72,7 @@ class Row(Mapping[str, Any]):
 
     def __len__(self) -> int:
         return len(self.cells)
+
+
+def _item(key: str, record: dict) -> Item:
+    return Item(key, MappingProxyType(record))

@@ -9,16 +9,13 @@ module writes them, each with its provenance.
 from __future__ import annotations
 
 import csv
-import io
 import json
 import logging
 import math
 from pathlib import Path
 
-import numpy as np
-
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic
-from vissim.imageio import write_image
+from vissim.imageio import write_png_bytes
 from vissim.progress import Progress
 from vissim.provenance import make_provenance
 from vissim.validation.engine.figures import Figure
@@ -111,11 +108,9 @@ def report_provenance(run_dir: Path, campaign: dict, results: list[dict]) -> dic
 
 
 def write_figure(path: Path, png: bytes, provenance: dict) -> None:
-    """A figure's PNG through `vissim.imageio.write_image`: written atomically, with its provenance sidecar."""
-    from PIL import Image as PILImage
-
-    codes = np.asarray(PILImage.open(io.BytesIO(png)).convert("RGB"), dtype=np.float32) / 255.0
-    write_image(path, codes, provenance=provenance, overwrite=True, encoding="linear")  # codes kept exactly
+    """A figure's PNG (RGB, as `vissim.validation.engine.figures.png_bytes` encodes it) written as it is, atomically,
+    with its provenance sidecar."""
+    write_png_bytes(path, png, provenance=provenance, overwrite=True)
 
 
 def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict, rows: tuple[Row, ...], tables_md: str,

@@ -12,7 +12,9 @@ from vissim.atomic import check_outputs_apart, write_json_atomic
 from vissim.errors import VissimInputError
 from vissim.progress import Progress
 from vissim.validation.engine.inputs import recorded_inputs
+from vissim.validation.engine.figure_processes import figure_helper
 from vissim.validation.engine.loader import load_campaign
+from vissim.validation.engine.registry import bench_kind
 from vissim.validation.engine.report import write_report
 from vissim.validation.engine.run_lock import run_folder_lock
 from vissim.validation.engine.runner import RunSummary, check_run, run_unlocked
@@ -42,7 +44,7 @@ def validate(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: 
     out = Path(out)
     campaign = load_campaign(path)
     check_run(campaign, out, workers, spp, scheduler)
-    with run_folder_lock(out):
+    with run_folder_lock(out), figure_helper(*getattr(bench_kind(campaign.kind), "figure_modules", ())):
         summary = run_unlocked(campaign, out, workers=workers, scheduler=scheduler, spp=spp, render=None,
                                show_progress=show_progress, progress=progress)
         start = time.perf_counter()
