@@ -268,6 +268,9 @@ def test_letter_tiles_carry_an_angular_scale_bar(drawn):
     assert expected == 20.0  # the longest round length within 40 % of 64 arcmin
     for bar in bars:
         rectangle = bar.size_bar.get_children()[0]
-        assert rectangle.get_width() * 1.0 == pytest.approx(expected)  # px x arcmin/px
+        tile = bar.axes.get_images()[0]  # the row's tiles share one axes: its data units per tile pixel
+        left, right, _, _ = tile.get_extent()
+        per_px = (right - left) / tile.get_array().shape[1]
+        assert rectangle.get_width() / per_px * 1.0 == pytest.approx(expected)  # px x arcmin/px
         assert bar.txt_label.get_text() == "20′"
     assert "scale bars 20 arcmin" in drawn._suptitle.get_text()

@@ -9,6 +9,7 @@ import logging
 import math
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 
 from vissim.errors import VissimInputError
@@ -226,25 +227,67 @@ def _columns(results: list[dict], simulation: str, input_kind: str, wave_bench: 
 #: the column headings; bottom: the scores) and the gaps between tiles.  A fixed layout, not matplotlib's
 #: constrained one, which took over half of the report's time.
 GRID_LEFT_IN, GRID_RIGHT_IN, GRID_TOP_IN, GRID_BOTTOM_IN, GRID_GAP_IN = 0.35, 1.45, 0.95, 0.45, 0.08
+#: Points between a tile and its heading above, its scores below, its row's label to the left (matplotlib's
+#: title pad and label pad).
+TITLE_PAD_PT, LABEL_PAD_PT = 6.0, 4.0
 
 
-def _fixed_grid(n_rows: int, n_cols: int):
-    """A figure of ``n_rows`` x ``n_cols`` image tiles (1.9 in a column) and a colour-bar axes per row."""
-    width, height = 1.9 * n_cols + 1.8, 9.2
-    fig = pyplot.figure(figsize=(width, height))
-    cell_w = (width - GRID_LEFT_IN - GRID_RIGHT_IN - GRID_GAP_IN * (n_cols - 1)) / n_cols
-    cell_h = (height - GRID_TOP_IN - GRID_BOTTOM_IN - GRID_GAP_IN * (n_rows - 1)) / n_rows
-    axes = np.empty((n_rows, n_cols), dtype=object)
-    bars = []
-    for i in range(n_rows):
-        bottom = height - GRID_TOP_IN - (i + 1) * cell_h - i * GRID_GAP_IN
-        for j in range(n_cols):
-            left = GRID_LEFT_IN + j * (cell_w + GRID_GAP_IN)
-            axes[i, j] = fig.add_axes((left / width, bottom / height, cell_w / width, cell_h / height))
-        bar_left = width - GRID_RIGHT_IN + 0.15
-        bars.append(fig.add_axes((bar_left / width, (bottom + 0.08 * cell_h) / height, 0.13 / width,
-                                  0.84 * cell_h / height)))
-    return fig, axes, bars
+class _TileRows:
+    """A figure of ``n_rows`` x ``n_cols`` image tiles (1.9 in a column), one axes a row and a colour bar a row.
+
+    A row's tiles are images in one axes whose data coordinates are inches (an axes a tile made a figure 24
+    axes, which cost more to draw than the images); each tile is centred in its cell at its own aspect and
+    framed, as an axes of its own would show it.
+    """
+
+    def __init__(self, n_rows: int, n_cols: int):
+        self.width, height = 1.9 * n_cols + 1.8, 9.2
+        self.fig = pyplot.figure(figsize=(self.width, height))
+        self.cell_w = (self.width - GRID_LEFT_IN - GRID_RIGHT_IN - GRID_GAP_IN * (n_cols - 1)) / n_cols
+        self.cell_h = (height - GRID_TOP_IN - GRID_BOTTOM_IN - GRID_GAP_IN * (n_rows - 1)) / n_rows
+        row_w = self.width - GRID_LEFT_IN - GRID_RIGHT_IN
+        self.rows, self.bars = [], []
+        for i in range(n_rows):
+            bottom = height - GRID_TOP_IN - (i + 1) * self.cell_h - i * GRID_GAP_IN
+            ax = self.fig.add_axes((GRID_LEFT_IN / self.width, bottom / height, row_w / self.width,
+                                    self.cell_h / height))
+            ax.set_axis_off()
+            ax.set_xlim(0.0, row_w)
+            ax.set_ylim(0.0, self.cell_h)
+            self.rows.append(ax)
+            bar_left = self.width - GRID_RIGHT_IN + 0.15
+            self.bars.append(self.fig.add_axes((bar_left / self.width, (bottom + 0.08 * self.cell_h) / height,
+                                                0.13 / self.width, 0.84 * self.cell_h / height)))
+
+    def show(self, i: int, j: int, image: np.ndarray, **imshow) -> tuple:
+        """Tile (i, j): ``image`` drawn and framed; the image artist and its box (x0, y0, width, height, inches)."""
+        from matplotlib.patches import Rectangle
+
+        rows, cols = image.shape[:2]
+        inch_per_px = min(self.cell_w / cols, self.cell_h / rows)
+        w, h = cols * inch_per_px, rows * inch_per_px
+        x0, y0 = j * (self.cell_w + GRID_GAP_IN) + (self.cell_w - w) / 2, (self.cell_h - h) / 2
+        ax = self.rows[i]
+        shown = ax.imshow(image, extent=(x0, x0 + w, y0, y0 + h), aspect="auto", **imshow)
+        ax.add_patch(Rectangle((x0, y0), w, h, fill=False, edgecolor="black", clip_on=False, zorder=2.5,
+                               linewidth=matplotlib.rcParams["axes.linewidth"]))  # as an axes' spines
+        return shown, (x0, y0, w, h, inch_per_px)
+
+    def text_by(self, i: int, box: tuple, where: str, text: str, fontsize: float) -> None:
+        """``text`` above (``"top"``), below (``"bottom"``) or left of (``"left"``) a tile, as an axes' title, x label
+        or y label would stand."""
+        from matplotlib.transforms import offset_copy
+
+        x0, y0, w, h = box[:4]
+        ax = self.rows[i]
+        if where == "left":
+            shifted = offset_copy(ax.transData, fig=self.fig, x=-LABEL_PAD_PT, units="points")
+            ax.text(x0, y0 + h / 2, text, transform=shifted, rotation=90, ha="right", va="center", fontsize=fontsize)
+            return
+        up = TITLE_PAD_PT if where == "top" else -LABEL_PAD_PT
+        shifted = offset_copy(ax.transData, fig=self.fig, y=up, units="points")
+        ax.text(x0 + w / 2, y0 + h if where == "top" else y0, text, transform=shifted, ha="center",
+                va="bottom" if where == "top" else "top", fontsize=fontsize, multialignment="center")
 
 
 def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str,
@@ -263,46 +306,47 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
     ad_max = max(1e-4 if wave_bench else 0.01, highest)  # the wave bench's differences are 100x smaller
     lo, hi = DISSIMILARITY_RANGE
     truth_label = "wave bench (truth)" if wave_bench else "bench (truth)"
-    rows = [(truth_label, "gray", display_norm, None),
-            (SIMULATION_WORDS.get(simulation, simulation), "gray", display_norm, None),
-            ("1 − SSIM (log)", "viridis", lambda: LogNorm(lo, hi), "1 − SSIM"),
-            ("|difference|", "magma", lambda: Normalize(0, ad_max), "|difference| (relative radiance, linear)")]
-    fig, axes, bar_axes = _fixed_grid(len(rows), len(columns))
-    shown = [None] * len(rows)
+    rows = [(truth_label, "gray", display_norm(), None),
+            (SIMULATION_WORDS.get(simulation, simulation), "gray", display_norm(), None),
+            ("1 − SSIM (log)", "viridis", LogNorm(lo, hi), "1 − SSIM"),
+            ("|difference|", "magma", Normalize(0, ad_max), "|difference| (relative radiance, linear)")]
+    grid = _TileRows(len(rows), len(columns))
+    shown, first = [None] * len(rows), [None] * len(rows)
     bar_arcmin = None
     for j, (result, comp) in enumerate(columns):
         truth = _load(result, run_dir, comp["reference_image"])
         sim = read_image(run_dir / comp["images"]["simulation"]).pixels
         ssim_map = read_image(run_dir / comp["images"]["ssim_map"]).pixels
         images = [truth, sim, np.clip(1.0 - ssim_map, lo, hi), ad_maps[j]]
+        boxes = []
         for i, (img, (_, cmap, norm, _)) in enumerate(zip(images, rows)):
-            ax = axes[i, j]
-            shown[i] = ax.imshow(img, cmap=cmap, norm=norm(), interpolation="nearest")
-            ax.set_xticks([])
-            ax.set_yticks([])
+            shown[i], box = grid.show(i, j, img, cmap=cmap, norm=norm, interpolation="nearest")
+            first[i] = first[i] or box
+            boxes.append(box)
         step = arcmin_per_px_of(result, campaign)
         if step is not None:
-            bar_arcmin = scale_bar(axes[0, j], truth.shape[1], step)
-        axes[0, j].set_title(column_title(result, comp), fontsize=7)
-        axes[3, j].set_xlabel(f"SSIM {comp['metrics'][SSIM.name]:.3f}\nPSNR {_fmt(metric_float(comp['metrics'][PSNR.name]), 1)} dB", fontsize=8)
+            bar_arcmin = scale_bar(grid.rows[0], truth.shape[1], step, corner=boxes[0][:2], inch_per_px=boxes[0][4])
+        grid.text_by(0, boxes[0], "top", column_title(result, comp), 7)
+        grid.text_by(len(rows) - 1, boxes[-1], "bottom", f"SSIM {comp['metrics'][SSIM.name]:.3f}\nPSNR "
+                     f"{_fmt(metric_float(comp['metrics'][PSNR.name]), 1)} dB", 8)
     for i, (label, _, _, bar_label) in enumerate(rows):
-        axes[i, 0].set_ylabel(label, fontsize=9)
-        bar = fig.colorbar(shown[i], cax=bar_axes[i])
+        grid.text_by(i, first[i], "left", label, 9)
+        bar = grid.fig.colorbar(shown[i], cax=grid.bars[i])
         bar.ax.tick_params(labelsize=7)
         if bar_label is None:
             radiance_colorbar(bar)
         else:
             bar.set_label(bar_label, fontsize=8)
     scale = f"; scale bars {bar_arcmin:g} arcmin" if bar_arcmin else ""
-    fig.suptitle(f"{column_words((simulation, input_kind))}, against {reference_note(columns[0][1])}"
-                 f"{scale}", fontsize=10)
+    grid.fig.suptitle(f"{column_words((simulation, input_kind))}, against {reference_note(columns[0][1])}"
+                      f"{scale}", fontsize=10)
     alt = tiles_alt(f"{column_words((simulation, input_kind))}, against {reference_note(columns[0][1])}, "
                     "as letter tiles with an angular scale bar",
                     [truth_label, SIMULATION_WORDS.get(simulation, simulation), "1 − SSIM map on a log scale",
                      "absolute difference map"],
                     [f"{r['configuration']['name']}: SSIM {c['metrics'][SSIM.name]:.3f}, "
                      f"PSNR {_fmt(metric_float(c['metrics'][PSNR.name]), 1)} dB" for r, c in columns])
-    return Figure("", png_bytes(fig), alt)
+    return Figure("", png_bytes(grid.fig), alt)
 
 
 def _optics_figure(results: list[dict], run_dir: Path, record: dict, name: str) -> Figure | str | None:

@@ -4,7 +4,8 @@ Drawing is most of a report's time (0.3-1 s a figure, all of it on one core) and
 not thread-safe, so a spare core draws in a process of its own: it takes the figures from the end
 of the list while this process takes them from the front, until they meet.  The process is spawned
 (this one may hold Dr.Jit's threads, which do not survive a fork) and needs about a second to
-start; this process draws meanwhile, so nothing waits for it.  A campaign starts it before its renders
+start; this process draws meanwhile, so nothing waits for it.  The helper is handed one figure at a
+time, so neither waits for figures the other has queued.  A campaign starts it before its renders
 (`figure_helper`), so that it is ready when the report begins.  Each figure is drawn whole by one
 process, by the same code, so a figure does not depend on where it was drawn.
 """
@@ -15,6 +16,7 @@ import concurrent.futures
 import contextlib
 import importlib
 import multiprocessing
+import threading
 from typing import Callable
 
 from vissim.optics.runtime.threads import available_cores
@@ -70,15 +72,36 @@ def draw_figures(calls: list[tuple[Callable, tuple]], advance: Callable[[], None
 
 
 def _shared(calls: list[tuple[Callable, tuple]], advance: Callable[[], None], helper) -> list:
-    futures = [helper.submit(draw, *arguments) for draw, arguments in reversed(calls)][::-1]  # from the end
-    drawn = [_drawn(draw, arguments, advance) if future.cancel() else future
-             for (draw, arguments), future in zip(calls, futures)]
-    out = []
-    for figure in drawn:
-        if isinstance(figure, concurrent.futures.Future):
-            figure = figure.result()
+    """This process draws from the front of ``calls``, the helper from the back, one figure at a time each."""
+    out: list = [None] * len(calls)
+    ends = [0, len(calls) - 1]  # the next figure this process draws, the next the helper draws
+    lock = threading.Lock()
+
+    def take(side: int) -> int | None:
+        with lock:
+            if ends[0] > ends[1]:
+                return None
+            index = ends[side]
+            ends[side] += 1 if side == 0 else -1
+            return index
+
+    def feed() -> None:  # a thread here hands the helper one figure at a time and waits for it
+        while (index := take(1)) is not None:
+            draw, arguments = calls[index]
+            out[index] = helper.submit(draw, *arguments).result()
             advance()
-        out.append(figure)
+
+    feeder = concurrent.futures.ThreadPoolExecutor(max_workers=1)
+    fed = feeder.submit(feed)
+    try:
+        while (index := take(0)) is not None:
+            draw, arguments = calls[index]
+            out[index] = _drawn(draw, arguments, advance)
+    finally:
+        with lock:
+            ends[1] = ends[0] - 1  # on a failure here, the helper takes nothing more
+        feeder.shutdown(wait=True)
+    fed.result()  # the helper's failure, if any
     return out
 
 

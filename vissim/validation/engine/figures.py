@@ -65,16 +65,23 @@ def scale_bar_arcmin(width_px: int, arcmin_per_px: float) -> float:
     return float(fitting[-1]) if fitting else room
 
 
-def scale_bar(ax, width_px: int, arcmin_per_px: float) -> float:
-    """Draw an angular scale bar (arcmin) at the bottom left of an image tile; its length, arcmin."""
+def scale_bar(ax, width_px: int, arcmin_per_px: float, *, corner: tuple[float, float] | None = None,
+              inch_per_px: float = 1.0) -> float:
+    """Draw an angular scale bar (arcmin) at the bottom left of an image tile; its length, arcmin.
+
+    The tile is ``ax``'s image, or one of several in ``ax`` whose lower left corner is at ``corner`` (data
+    coordinates, ``inch_per_px`` of them a pixel: `vissim.validation.dslr.report`'s rows of tiles).
+    """
     from matplotlib.font_manager import FontProperties
     from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
     length = scale_bar_arcmin(width_px, arcmin_per_px)
     label = f"{length:g}′" if length >= 1 else f"{length:.2g}′"
-    bar = AnchoredSizeBar(ax.transData, length / arcmin_per_px, label, "lower left", pad=0.3, borderpad=0.3,
-                          color=SCALE_BAR_COLOUR, frameon=False, size_vertical=max(0.5, width_px / 80),
-                          fontproperties=FontProperties(size=7, weight="bold"))
+    anchor = {} if corner is None else {"bbox_to_anchor": corner, "bbox_transform": ax.transData}
+    bar = AnchoredSizeBar(ax.transData, length / arcmin_per_px * inch_per_px, label, "lower left", pad=0.3,
+                          borderpad=0.3, color=SCALE_BAR_COLOUR, frameon=False,
+                          size_vertical=max(0.5, width_px / 80) * inch_per_px,
+                          fontproperties=FontProperties(size=7, weight="bold"), **anchor)
     ax.add_artist(bar)
     return length
 
