@@ -641,7 +641,7 @@ def _write_exr(path: Path, arr: np.ndarray, provenance: dict | None, overwrite: 
     channels = {n: OpenEXR.Channel(np.ascontiguousarray(p, dtype=np.float32)) for n, p in zip(names, planes)}
     header: dict[str, Any] = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     if provenance is not None:
-        header[PROVENANCE_ATTRIBUTE] = to_json(provenance)  # one Python str -> one EXR string attribute
+        header[PROVENANCE_ATTRIBUTE] = to_json(provenance, compact=True)  # one str -> one EXR string attribute
     with atomic_output(path, overwrite=overwrite) as tmp:
         OpenEXR.File(header, channels).write(str(tmp))
 

@@ -188,10 +188,14 @@ def _horner(table: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     if table.size == 0:
         return out
     for q in range(table.shape[1] - 1, -1, -1):  # sum_q v^q (sum_p A[p, q] u^p)
-        along_u = np.full(u.shape, table[-1, q])
-        for p in range(table.shape[0] - 2, -1, -1):
-            along_u *= u
-            along_u += table[p, q]
+        if table.shape[0] == 1:
+            along_u = np.full(u.shape, table[0, q])
+        else:
+            along_u = u * table[-1, q]
+            along_u += table[-2, q]
+            for p in range(table.shape[0] - 3, -1, -1):
+                along_u *= u
+                along_u += table[p, q]
         out *= v
         out += along_u
     return out
