@@ -16,12 +16,16 @@ import concurrent.futures
 import contextlib
 import importlib
 import multiprocessing
+import logging
 import threading
+from concurrent.futures.process import BrokenProcessPool
 from typing import Callable
 
 from vissim.optics.runtime.threads import available_cores
 
 __all__ = ["draw_figures", "figure_helper", "FIGURES_WORTH_A_PROCESS"]
+
+log = logging.getLogger(__name__)
 
 #: Fewer figures than this are drawn here: a helper process costs about a second to start.
 FIGURES_WORTH_A_PROCESS = 4
@@ -85,10 +89,20 @@ def _shared(calls: list[tuple[Callable, tuple]], advance: Callable[[], None], he
             ends[side] += 1 if side == 0 else -1
             return index
 
+    left: list[int] = []  # figures the helper took but could not draw: it died (killed for memory, say)
+
     def feed() -> None:  # a thread here hands the helper one figure at a time and waits for it
         while (index := take(1)) is not None:
             draw, arguments = calls[index]
-            out[index] = helper.submit(draw, *arguments).result()
+            try:
+                out[index] = helper.submit(draw, *arguments).result()
+            except BrokenProcessPool:
+                log.warning("the figure helper process stopped; this process draws the rest of the figures")
+                left.append(index)
+                with lock:
+                    left.extend(range(ends[0], ends[1] + 1))
+                    ends[1] = ends[0] - 1
+                return
             advance()
 
     feeder = concurrent.futures.ThreadPoolExecutor(max_workers=1)
@@ -102,6 +116,9 @@ def _shared(calls: list[tuple[Callable, tuple]], advance: Callable[[], None], he
             ends[1] = ends[0] - 1  # on a failure here, the helper takes nothing more
         feeder.shutdown(wait=True)
     fed.result()  # the helper's failure, if any
+    for index in sorted(left):
+        draw, arguments = calls[index]
+        out[index] = _drawn(draw, arguments, advance)
     return out
 
 
