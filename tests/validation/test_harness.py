@@ -91,6 +91,20 @@ def test_parallel_workers_give_the_same_numbers(tiny, tmp_path):
     assert numbers(parallel) == numbers(serial)
 
 
+def test_items_shared_with_a_helper_process_give_the_same_numbers(tiny, tmp_path, monkeypatch):
+    # The campaign's helper process computes items from the end of the list while this process takes them from
+    # the front: every item's numbers are those of a run without it.
+    from vissim.validation.engine import helper_process
+
+    monkeypatch.setattr(helper_process, "available_cores", lambda: 2)
+    alone, shared = tmp_path / "alone", tmp_path / "shared"
+    run_campaign(tiny, alone, render=fake_render, show_progress=False)
+    with helper_process.campaign_helper("vissim.validation.dslr.item"):
+        summary = run_campaign(tiny, shared, render=fake_render, show_progress=False)
+    assert numbers(shared) == numbers(alone)
+    assert sorted(key for key, _ in summary.item_seconds) == sorted(tiny.item_key(c) for c in tiny.configurations)
+
+
 @pytest.mark.slow  # a local dask cluster takes ~5 s to start; the process-pool test above covers parallel runs by default
 def test_dask_local_cluster_gives_the_same_numbers(tiny, tmp_path):
     distributed = pytest.importorskip("distributed")

@@ -24,7 +24,10 @@ class DslrKind:
     name = "dslr"
     tables = ("item", "sweep")
     items_on_threads = True
-    figure_modules = ("vissim.validation.dslr.report",)  # what its report's figure helper imports ahead
+    #: What the campaign's helper process imports ahead (its items' libraries among them, 1-2 s): it computes
+    #: items and draws the report's figures.
+    helper_modules = ("vissim.validation.dslr.item", "vissim.validation.dslr.report", "scipy.ndimage",
+                      "scipy.interpolate", "scipy.optimize", "skimage.metrics", "skimage.registration")
 
     def read(self, doc: dict, head: dict, path: Path):
         return read_dslr_part(doc, head, path)

@@ -22,7 +22,7 @@ from vissim.validation.dslr.report_words import arcmin_per_px_of, column_title, 
 from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE
 from vissim.validation.dslr.wave_bench_report import (SELF_CHECK_MARGIN_DB, is_wave_bench_row, self_check_table,
                                                       wave_bench_tables)
-from vissim.validation.engine.figure_processes import draw_figures
+from vissim.validation.engine.helper_process import draw_figures
 from vissim.validation.engine.figures import (Figure, display_norm, pyplot, png_bytes, radiance_colorbar, scale_bar,
                                               tiles_alt)
 from vissim.validation.engine.protocol import ReportParts

@@ -29,10 +29,11 @@ from vissim.atomic import check_outputs_apart, write_json_atomic
 from vissim.checks import MAX_WORKERS, instance_of, path_arg, samples_per_pixel
 from vissim.errors import VissimInputError
 from vissim.imageio import read_image
-from vissim.optics.runtime.threads import map_on_threads
+from vissim.optics.runtime.threads import map_on_threads, single_threaded_blas
 from vissim.progress import Progress, counter, terminal_progress
 from vissim.provenance import make_provenance
 from vissim.validation.engine.inputs import campaign_inputs
+from vissim.validation.engine.helper_process import share_work, started_helper
 from vissim.validation.engine.keys import item_dir, render_path
 from vissim.validation.engine.protocol import Campaign
 from vissim.validation.engine.registry import bench_kind
@@ -192,7 +193,10 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
             advance()
 
         start = time.perf_counter()
-        if getattr(kind, "items_on_threads", True):
+        helper = started_helper()
+        if getattr(kind, "items_on_threads", True) and helper is not None:
+            timed += _items_with_helper(campaign, plans, todo, run_dir, helper, advance)
+        elif getattr(kind, "items_on_threads", True):
             map_on_threads(compute, todo)  # items are independent: one per core at once
         else:
             for pair in todo:
@@ -201,6 +205,25 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
     names = tuple((key, str(getattr(c, "name", ""))) for key, c in zip(keys, campaign.configurations))
     return RunSummary(run_dir, len(keys), len(keys) - len(todo), made, len(needed) - made, tuple(skipped),
                       renders_seconds, tuple(sorted(timed, key=lambda pair: -pair[1])), names, items_seconds)
+
+
+def _items_with_helper(campaign: Campaign, plans: dict, todo: list, run_dir: Path, helper, advance) -> list:
+    """The items of ``todo`` shared between this process and the campaign's helper process
+    (`vissim.validation.engine.helper_process`), one at a time each: (item key, seconds) of each."""
+    planned = [(key, index) for key, index in todo if key in plans]
+    for _ in range(len(todo) - len(planned)):
+        advance()
+    calls = [(timed_item, (campaign, key, index, plans[key], run_dir)) for key, index in planned]
+    return list(zip((key for key, _ in planned), share_work(calls, helper, advance)))
+
+
+def timed_item(campaign: Campaign, key: str, index: int, plan, run_dir: Path) -> float:
+    """`_compute_item` on this process's core alone (OpenBLAS on one thread, no threads of its own): its seconds.
+    Made here or in the campaign's helper process."""
+    start = time.perf_counter()
+    with single_threaded_blas():
+        _compute_item(bench_kind(campaign.kind), campaign, key, index, plan, run_dir)
+    return time.perf_counter() - start
 
 
 def _compute_item(kind, campaign: Campaign, key: str, index: int, plan, run_dir: Path) -> None:

@@ -12,7 +12,7 @@ from vissim.atomic import check_outputs_apart, write_json_atomic
 from vissim.errors import VissimInputError
 from vissim.progress import Progress
 from vissim.validation.engine.inputs import recorded_inputs
-from vissim.validation.engine.figure_processes import figure_helper
+from vissim.validation.engine.helper_process import campaign_helper
 from vissim.validation.engine.loader import load_campaign
 from vissim.validation.engine.registry import bench_kind
 from vissim.validation.engine.report import write_report
@@ -42,14 +42,23 @@ def validate(path: str | Path, out: str | Path, *, workers: int = 1, scheduler: 
     ``progress(stage, done, total)`` (`vissim.progress`): renders, items, then the report's steps.
     """
     out = Path(out)
-    campaign = load_campaign(path)
+    campaign = load_campaign(path, check_memory=False)
     check_run(campaign, out, workers, spp, scheduler)
-    with run_folder_lock(out), figure_helper(*getattr(bench_kind(campaign.kind), "figure_modules", ())):
-        summary = run_unlocked(campaign, out, workers=workers, scheduler=scheduler, spp=spp, render=None,
-                               show_progress=show_progress, progress=progress)
-        start = time.perf_counter()
-        written, lines = write_report(out, progress=progress)
-        timing = write_timings(out, summary, time.perf_counter() - start, workers)
+    kind = bench_kind(campaign.kind)
+    with campaign_helper(*getattr(kind, "helper_modules", ())):  # it imports while the memory is checked
+        kind.check_memory(campaign)
+        with run_folder_lock(out):
+            return _run_and_report(campaign, out, workers, scheduler, spp, show_progress, progress)
+
+
+def _run_and_report(campaign, out: Path, workers: int, scheduler: str | None, spp: int | None, show_progress: bool,
+                    progress: Progress | None) -> CampaignRun:
+    """`validate` once its checks are done and the run folder is locked."""
+    summary = run_unlocked(campaign, out, workers=workers, scheduler=scheduler, spp=spp, render=None,
+                           show_progress=show_progress, progress=progress)
+    start = time.perf_counter()
+    written, lines = write_report(out, progress=progress)
+    timing = write_timings(out, summary, time.perf_counter() - start, workers)
     head = (f"{summary.items_total} items ({summary.items_reused} reused), {summary.renders_made} renders made, "
             f"{summary.renders_reused} reused")
     report = out / ("report.html" if (out / "report.html").exists() else "tables.md")

@@ -5,8 +5,8 @@ import os
 
 import pytest
 
-import vissim.validation.engine.figure_processes as figure_processes
-from vissim.validation.engine.figure_processes import draw_figures, figure_helper
+import vissim.validation.engine.helper_process as helper_process
+from vissim.validation.engine.helper_process import campaign_helper, draw_figures
 
 
 def square(x):
@@ -26,7 +26,7 @@ def refuse(x):
 
 @pytest.fixture
 def two_cores(monkeypatch):
-    monkeypatch.setattr(figure_processes, "available_cores", lambda: 2)
+    monkeypatch.setattr(helper_process, "available_cores", lambda: 2)
 
 
 def test_shared_figures_are_the_ones_drawn_here_in_order(two_cores):
@@ -37,10 +37,10 @@ def test_shared_figures_are_the_ones_drawn_here_in_order(two_cores):
 
 
 def test_a_started_helper_serves_the_figures_and_ends_with_the_block(two_cores):
-    with figure_helper("math"):
-        assert figure_processes._STARTED
+    with campaign_helper("math"):
+        assert helper_process._STARTED
         assert draw_figures([(square, (x,)) for x in range(6)]) == [x * x for x in range(6)]
-    assert not figure_processes._STARTED
+    assert not helper_process._STARTED
 
 
 def test_a_figure_that_fails_fails_the_report(two_cores):
@@ -51,4 +51,16 @@ def test_a_figure_that_fails_fails_the_report(two_cores):
 def test_a_dead_helper_leaves_its_figures_to_this_process(two_cores, caplog):
     drawn = draw_figures([(square_here_only, (x,)) for x in range(8)])
     assert drawn == [x * x for x in range(8)]
-    assert "figure helper process stopped" in caplog.text
+    assert "helper process stopped" in caplog.text
+
+
+def test_a_refusal_inside_the_block_stops_the_helper_at_once(two_cores, tmp_path, monkeypatch):
+    # The helper imports a module that would take a minute; a refusal meanwhile terminates it (SIGTERM) rather
+    # than waiting for the import.
+    (tmp_path / "minute_long_import.py").write_text("import time\ntime.sleep(60)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(RuntimeError, match="refused"):
+        with campaign_helper("minute_long_import"):
+            processes = list(helper_process.started_helper()._processes.values())
+            raise RuntimeError("refused")
+    assert [process.exitcode for process in processes] == [-15]
