@@ -1,5 +1,5 @@
-"""Run a campaign into a run folder: renders first (in parallel), then items (one per core at once); reuse what
-is done.
+"""Run a campaign into a run folder: renders first (in parallel), then items (one per core at once: shared with the
+campaign's helper process where one was started, else on threads); reuse what is done.
 
 Run folder layout::
 
@@ -120,10 +120,12 @@ def run_campaign(campaign: Campaign, run_dir: str | Path, *, workers: int = 1, s
         Directory for renders, simulations, metrics and the report; an existing run there is
         resumed (finished items are reused).
     workers : int
-        Local processes that make the renders (1: in this process).  Items are computed here, one per
-        core at once (the cores this process may use: ``taskset`` limits them), each with OpenBLAS on one
-        thread; a kind whose items spread their own work (a population's eyes over the same ``workers``,
-        a depth scene's layers over the cores) computes them one after another.
+        Local processes that make the renders (1: in this process).  Items are computed one per core at
+        once (the cores this process may use: ``taskset`` limits them), each with OpenBLAS on one thread:
+        shared with the campaign's helper process inside a `vissim.validation.engine.helper_process.campaign_helper`
+        block (``vissim validate`` starts one for a DSLR campaign), else on this process's threads; a kind whose
+        items spread their own work (a population's eyes over the same ``workers``, a depth scene's layers over
+        the cores) computes them one after another.
     scheduler : str, optional
         A Dask scheduler's address (``host:port``) to make the renders on instead of
         ``workers`` (and a population's eyes); checked to answer before the renders are written (a
