@@ -256,6 +256,11 @@ def campaign_keys() -> dict[str, set]:
         "dslr [campaign]": [f.name for f in fields(CampaignSettings)],
         "population [campaign]": population.HEAD_KEYS, "a lens table": LENS_KEYS,
     }
+    return _by_key(declared)
+
+
+def _by_key(declared: dict) -> dict[str, set]:
+    """{where: keys} turned round: {key: {where}}."""
     out: dict[str, set] = {}
     for where, keys in declared.items():
         for key in keys:
@@ -277,11 +282,7 @@ def scene_keys() -> dict[str, set]:
     declared |= {"atv [tube]": tuple(atv._ATV_TUBE_KEYS), "a trial lens": tuple(scene_toml._LENS)}
     source = Path(atv.__file__).read_text(encoding="utf-8")  # the ATV eye's and lens's keys are written inline
     declared["atv [eye], [trial_lens]"] = tuple(re.findall(r'"(\w+_(?:mm|diopters|deg)|prescription)"', source))
-    out: dict[str, set] = {}
-    for where, keys in declared.items():
-        for key in keys:
-            out.setdefault(key, set()).add(where)
-    return out
+    return _by_key(declared)
 
 
 def api_names() -> dict[str, set]:

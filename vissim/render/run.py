@@ -245,7 +245,7 @@ def mitsuba_versions() -> dict:
     return {"mitsuba_version": _mi_module.__version__, "drjit_version": _dr_module.__version__}
 
 
-@functools.lru_cache(maxsize=8)
+@functools.lru_cache(maxsize=4)  # a campaign renders a chart for its configuration's renders in a row
 def _print_chart(spec, dpi: float):
     """``spec`` rendered for print at ``dpi``, kept read-only: a campaign renders each chart with several seeds
     and lenses (0.1-0.2 s a chart)."""

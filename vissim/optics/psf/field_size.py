@@ -21,10 +21,10 @@ size that would hold the PSF.
 from __future__ import annotations
 
 import dataclasses
-
 import functools
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -174,7 +174,7 @@ def _suggested_size(wavefront, diameter, step, wavelengths, weights, lca_referen
     fans = _ray_fans(wavefront, diameter, wavelengths, weights, mode, lca_reference_nm)
     if _outside_of(fans, step, start) <= MAX_ENERGY_OUTSIDE:
         return start
-    return _search_size(fans, wavefront, diameter, wavelengths, step, start, lca_reference_nm, MAX_ENERGY_OUTSIDE)
+    return _search_size(fans, diameter, wavelengths, step, start, MAX_ENERGY_OUTSIDE)
 
 
 @functools.cache
@@ -251,19 +251,29 @@ def energy_outside_field(
     return _outside_of(fans, arcmin_per_px, size_px)
 
 
+class _Fan(NamedTuple):
+    """One wavelength's rays: its weight, their landing offsets (arcmin), their diffraction spread (arcmin; None in
+    ray optics) and the widest landing, the geometric blur radius (arcmin)."""
+
+    weight: float
+    col: np.ndarray
+    row: np.ndarray
+    spread: float | None
+    blur_arcmin: float
+
+
 def _ray_fans(wavefront, diameter_mm, wavelengths_nm, weights, mode, lca_reference_nm, conservative=True) -> list:
-    """Per wavelength: its weight, the rays' landing offsets (col, row, arcmin) and their diffraction spread
-    (arcmin; None in ray optics) -- what `energy_outside_field` needs whatever the field's size."""
+    """Each wavelength's `_Fan`: what `energy_outside_field` needs whatever the field's size."""
     fans = []
     for w, weight in zip(wavelengths_nm, weights):
         front = front_at_wavelength(wavefront, w, lca_reference_nm)
         col, row = _rays(front, diameter_mm)
+        blur = geometric_blur_radius_arcmin(front, diameter_mm)
         spread = None
         if mode == "wave":
             lambda_over_d = float(rad_to_arcmin(nm_to_mm(w) / diameter_mm))
-            blur = geometric_blur_radius_arcmin(front, diameter_mm)
             spread = lambda_over_d * (rim_widening(blur, lambda_over_d) if conservative else 1.0)
-        fans.append((weight, col, row, spread))
+        fans.append(_Fan(weight, col, row, spread, blur))
     return fans
 
 
@@ -271,8 +281,8 @@ def _outside_of(fans: list, arcmin_per_px: float, size_px: int) -> float:
     """The weighted fraction of the ``fans``' energy outside a ``size_px`` field."""
     low = -(size_px // 2 + 0.5) * arcmin_per_px  # pixel edges; the origin is at [N//2, N//2]
     high = (size_px - size_px // 2 - 0.5) * arcmin_per_px
-    outside = sum(weight * (1.0 - _inside_fraction(col, row, low, high, spread)) for weight, col, row, spread in fans)
-    return outside / sum(weight for weight, _, _, _ in fans)
+    outside = sum(f.weight * (1.0 - _inside_fraction(f.col, f.row, low, high, f.spread)) for f in fans)
+    return outside / sum(f.weight for f in fans)
 
 
 def size_holding_px(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_px, size_px, *, mode="wave",
@@ -280,18 +290,15 @@ def size_holding_px(wavefront, diameter_mm, wavelengths_nm, weights, arcmin_per_
     """Smallest odd size > ``size_px`` whose field leaves at most ``fraction`` of the energy outside
     (conservative estimate); ``size_px`` itself is taken to be too small."""
     fans = _ray_fans(wavefront, diameter_mm, wavelengths_nm, weights, mode, lca_reference_nm)
-    return _search_size(fans, wavefront, diameter_mm, wavelengths_nm, arcmin_per_px, size_px, lca_reference_nm,
-                        fraction)
+    return _search_size(fans, diameter_mm, wavelengths_nm, arcmin_per_px, size_px, fraction)
 
 
-def _search_size(fans, wavefront, diameter_mm, wavelengths_nm, arcmin_per_px, size_px, lca_reference_nm,
-                 fraction) -> int:
+def _search_size(fans, diameter_mm, wavelengths_nm, arcmin_per_px, size_px, fraction) -> int:
     """`size_holding_px` with the rays already landed (``fans``, `_ray_fans`)."""
     def too_small(n):
         return _outside_of(fans, arcmin_per_px, n) > fraction
     # First guess: the blur plus the Airy tail's radius for ``fraction``, widened as the estimate is.
-    blur = max(geometric_blur_radius_arcmin(front_at_wavelength(wavefront, w, lca_reference_nm), diameter_mm)
-               for w in wavelengths_nm)
+    blur = max(f.blur_arcmin for f in fans)
     widest = float(rad_to_arcmin(nm_to_mm(max(wavelengths_nm)) / diameter_mm))
     reach = blur + airy_tail_radius_lambda_over_d(fraction) * widest * rim_widening(blur, widest)
     guess = int(2 * math.ceil(reach / arcmin_per_px))

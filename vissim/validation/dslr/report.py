@@ -9,7 +9,6 @@ import logging
 import math
 from pathlib import Path
 
-import matplotlib
 import numpy as np
 
 from vissim.errors import VissimInputError
@@ -270,7 +269,7 @@ class _TileRows:
         ax = self.rows[i]
         shown = ax.imshow(image, extent=(x0, x0 + w, y0, y0 + h), aspect="auto", **imshow)
         ax.add_patch(Rectangle((x0, y0), w, h, fill=False, edgecolor="black", clip_on=False, zorder=2.5,
-                               linewidth=matplotlib.rcParams["axes.linewidth"]))  # as an axes' spines
+                               linewidth=pyplot.rcParams["axes.linewidth"]))  # as an axes' spines
         return shown, (x0, y0, w, h, inch_per_px)
 
     def text_by(self, i: int, box: tuple, where: str, text: str, fontsize: float) -> None:

@@ -93,7 +93,7 @@ def tiles_alt(what: str, rows: list[str], columns: list[str], extra: str = "") -
 
 
 def png_bytes(fig) -> bytes:
-    """A figure as RGB PNG bytes (110 dpi, opaque: the figure's white background); the figure is closed."""
+    """A figure as RGB PNG bytes (`FIGURE_DPI`, opaque: the figure's white background); the figure is closed."""
     from PIL import Image
 
     fig.set_dpi(FIGURE_DPI)

@@ -138,13 +138,11 @@ def write_report_files(run_dir: Path, record: dict, *, title: str, metrics: dict
     description = campaign.get("description", "")
     text = f"# {title}\n\n{description}\n\n{tables_md}\n{links}{built}{made}\n"
     written.append(write_text_atomic(run_dir / "tables.md", text, overwrite=True))
-    shown = {}
-    for name, figure in figures.items():
+    for name, figure in figures.items():  # the file holds the figure's bytes as they are: the page shows them
         write_figure(run_dir / figure.file_name, figure.png,
                      {**provenance, **figure.extra, "figure": name, "alt": figure.alt})
-        shown[name] = figure._replace(png=(run_dir / figure.file_name).read_bytes())  # the page shows the file
         written += [run_dir / figure.file_name, run_dir / f"{figure.file_name}.json"]
-    page = html_report(title, tables_md + "\n" + built, shown, footer=made, description=description)
+    page = html_report(title, tables_md + "\n" + built, figures, footer=made, description=description)
     written.append(write_text_atomic(run_dir / "report.html", page, overwrite=True))
     return written
 

@@ -186,7 +186,7 @@ def run_unlocked(campaign: Campaign, run_dir: Path, *, workers: int, scheduler: 
         renders_seconds = time.perf_counter() - start
         advance = counter(report, "items", len(todo))
 
-        def compute(pair):
+        def compute(pair):  # kinds whose items spread their own work run it here as it is
             key, index = pair
             if key in plans:
                 start = time.perf_counter()
