@@ -9,6 +9,7 @@ import unicodedata
 from pathlib import Path
 
 from vissim.errors import VissimInputError, VissimTypeError
+from vissim.units import CYC_PER_DEG_PER_CYC_PER_RAD, nm_to_mm
 
 __all__ = ["number_within", "range_text", "MAX_FIELD_DEG", "NAVARRO_ACCOMMODATION_RANGE_DIOPTERS", "ARIZONA_ACCOMMODATION_RANGE_DIOPTERS", "finite_number", "positive_number", "arcmin_per_px", "MAX_ARCMIN_PER_PX", "pupil_diameter_mm",
            "eye_pupil_diameter_mm", "ENTRANCE_PUPIL_RANGE_MM", "EYE_PUPIL_RANGE_MM", "size_px", "size_text", "counted",
@@ -286,7 +287,7 @@ EYE_PUPIL_RANGE_MM = 1.0, 10.0
 #: Spatial frequencies an eye's MTF is asked at, cycles per degree: from 0 to the incoherent cutoff of the widest eye
 #: pupil in the shortest light an eye is traced in (`EYE_PUPIL_RANGE_MM` over `EYE_WAVELENGTH_RANGE_NM`: 10 mm / 365 nm,
 #: 478 cycles/deg); beyond, every eye's MTF is 0.
-EYE_MTF_RANGE_CYC_PER_DEG = (0.0, EYE_PUPIL_RANGE_MM[1] * 1e-3 / (EYE_WAVELENGTH_RANGE_NM[0] * 1e-9) * math.pi / 180.0)
+EYE_MTF_RANGE_CYC_PER_DEG = (0.0, EYE_PUPIL_RANGE_MM[1] / nm_to_mm(EYE_WAVELENGTH_RANGE_NM[0]) * CYC_PER_DEG_PER_CYC_PER_RAD)
 
 
 def mtf_cyc_per_deg(values, name: str = "MTF frequency") -> list[float]:

@@ -42,8 +42,12 @@ def nm_to_um(nm: float) -> float:
     return float(nm) * 1e-3
 
 
+#: Cycles per degree in one cycle per radian (a degree is pi/180 rad).
+CYC_PER_DEG_PER_CYC_PER_RAD = math.pi / 180.0
+
+
 def cyc_per_rad_to_cyc_per_deg(cyc_per_rad):
-    return np.asarray(cyc_per_rad, dtype=float) * (math.pi / 180.0)
+    return np.asarray(cyc_per_rad, dtype=float) * CYC_PER_DEG_PER_CYC_PER_RAD
 
 
 MM_PER_M = 1000.0

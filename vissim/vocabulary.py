@@ -40,7 +40,7 @@ class Concept:
 CONCEPTS: tuple[Concept, ...] = (
     Concept("entrance pupil diameter", "--pupil-mm", "pupil_diameter_mm", "pupil_diameter_mm", "pupil_diameter_mm",
             "mm", "4 (an eye's; a camera's: focal length / f-number)",
-            "an eye's 1-10 (EYE_PUPIL_RANGE_MM), any entrance pupil 0.01-1000 (PUPIL_RANGE_MM)",
+            "an eye's 1-10 (EYE_PUPIL_RANGE_MM), any entrance pupil 0.01-1000 (ENTRANCE_PUPIL_RANGE_MM)",
             ("pupil", "pupil_diameter"), ("zernike_pupil", "thesis_pupil", "fit_pupil", "pupil_distance", "pupils")),
     Concept("iris (stop) diameter", "--iris-mm", None, "iris_mm", "iris_mm", "mm", "none (the pupil is given)",
             "as the pupil", ("iris", "iris_diameter")),

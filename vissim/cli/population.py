@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from vissim.checks import MAX_POWER_DIOPTERS, MAX_WORKERS, mtf_cyc_per_deg, number_within, vertex_distance_mm
+from vissim.checks import MAX_POWER_DIOPTERS, mtf_cyc_per_deg, number_within, vertex_distance_mm
 from vissim.cli._common import add_json_arg, field_deg_from_text, parse_float_list, print_result
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import MEASURED_DATASET_NAMES as DATASET_NAMES
@@ -121,8 +121,6 @@ def run(args: argparse.Namespace) -> int:
     from vissim.provenance import make_provenance
     from vissim.validation.population.report import write_population_run
 
-    if not 1 <= args.workers <= MAX_WORKERS:
-        raise VissimInputError(f"--workers must be 1 to {MAX_WORKERS} worker processes, got {args.workers}")
     if args.output.exists() and not args.output.is_dir():
         raise VissimInputError(f"-o {args.output} is a file; a population run writes into a folder")
     frequencies = mtf_cyc_per_deg(parse_float_list(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles/deg"),

@@ -53,7 +53,8 @@ def run_validate(args: argparse.Namespace) -> int:
     record = {"kind": done.kind, "items_total": summary.items_total, "items_reused": summary.items_reused,
               "renders_made": summary.renders_made, "renders_reused": summary.renders_reused,
               "renders_seconds": summary.renders_seconds, "items_seconds": summary.items_seconds,
-              "skipped": list(summary.skipped), "lines": list(done.lines), "metrics": _metrics(args.output)}
+              "skipped": list(summary.skipped), "lines": list(done.lines),
+              "metrics": _metrics(args.output) if args.json else None}  # read back only for --json
     print_result(args, [*done.lines, *(f"skipped: {message}" for message in summary.skipped)], record, done.report_files)
     return 0
 
@@ -72,5 +73,5 @@ def run_report(args: argparse.Namespace) -> int:
     with terminal_progress() as progress:
         written, lines = rebuild_report(args.run, progress=progress)
     print_result(args, [*lines, f"report: {args.run / 'report.html'} ({len(written)} files)"],
-                 {"lines": list(lines), "metrics": _metrics(args.run)}, written)
+                 {"lines": list(lines), "metrics": _metrics(args.run) if args.json else None}, written)
     return 0

@@ -149,10 +149,10 @@ class DepthScene:
         if not panels or not all(isinstance(p, (ChartPanel, TiltedChart)) for p in panels):
             raise VissimInputError(f"a depth scene needs ChartPanel/TiltedChart panels, got {self.panels!r}")
         object.__setattr__(self, "panels", panels)
-        for name, unit in (("arcmin_per_px", "arcmin/px"), ("texels_per_px", "texels per pixel"),
-                           ("radiance_scale", "(relative)")):
+        for name, unit in (("arcmin_per_px", "arcmin/px"), ("radiance_scale", "(relative)")):
             object.__setattr__(self, name, positive_number(getattr(self, name), name.replace("_", " "), unit))
-        number_within(self.texels_per_px, "texels per px", "texels per pixel", TEXELS_PER_PX_RANGE)
+        object.__setattr__(self, "texels_per_px", number_within(self.texels_per_px, "texels per px",
+                                                                "texels per pixel", TEXELS_PER_PX_RANGE))
         object.__setattr__(self, "size_px", check_size_px(self.size_px))
         if self.sampler not in SAMPLERS:
             raise VissimInputError(f"sampler must be one of {', '.join(SAMPLERS)}, got {self.sampler!r}")

@@ -162,18 +162,14 @@ class DslrBench:
 
     def __post_init__(self) -> None:
         for name, unit in (("focal_length_mm", "mm"), ("f_number", "(f-number)"), ("focus_distance_mm", "mm"),
-                           ("chart_distance_mm", "mm"), ("arcmin_per_px", "arcmin/px"),
-                           ("texels_per_px", "texels per camera pixel"), ("radiance_scale", "(relative)")):
+                           ("chart_distance_mm", "mm"), ("arcmin_per_px", "arcmin/px"), ("radiance_scale", "(relative)")):
             object.__setattr__(self, name, _positive(getattr(self, name), name.replace("_", " "), unit))
         for name, unit, bounds in (("refractive_index", "(dimensionless)", REFRACTIVE_INDEX_RANGE),
                                    ("texels_per_px", "texels per camera pixel", TEXELS_PER_PX_RANGE)):
-            number_within(getattr(self, name), name.replace("_", " "), unit, bounds)
+            object.__setattr__(self, name, number_within(getattr(self, name), name.replace("_", " "), unit, bounds))
         object.__setattr__(self, "seed", sampler_seed(self.seed))
         object.__setattr__(self, "vertex_distance_mm", check_vertex_mm(self.vertex_distance_mm))
         object.__setattr__(self, "lens_gap_mm", number_within(self.lens_gap_mm, "lens gap", "mm", LENS_GAP_RANGE_MM))
-        index = _positive(self.refractive_index, "refractive index", "(dimensionless)")
-        if index <= 1.0:
-            raise VissimInputError(f"refractive index must exceed 1, got {index:g}")
         lenses = (self.lenses,) if isinstance(self.lenses, TrialLens) else tuple(self.lenses)
         if len(lenses) > MAX_LENSES_IN_HOLDER or not all(isinstance(lens, TrialLens) for lens in lenses):
             raise VissimInputError(

@@ -36,7 +36,7 @@ _CAMERA = {
 }
 #: The ranges of a file's camera (`vissim.checks`): any camera lens and bench.
 _CAMERA_BOUNDS = {"focal_length_mm": FOCAL_LENGTH_RANGE_MM, "f_number": F_NUMBER_RANGE,
-                  "focus_distance_mm": tuple(1e3 * d for d in OBJECT_DISTANCE_RANGE_M)}
+                  "focus_distance_mm": tuple(m_to_mm(d) for d in OBJECT_DISTANCE_RANGE_M)}
 _HOLDER = {
     "vertex_distance_mm": ("vertex_distance_mm", float, "mm"),
     "lens_gap_mm": ("lens_gap_mm", float, "mm"),

@@ -54,8 +54,8 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.measured.measured_eye import beam_field_map, measured_front
 from vissim.optics.eyes.refraction import BEAM_PLANE, ENTRANCE_PUPIL_PLANE, chief_ray_stretch
-from vissim.optics.eyes.traced_wavefront import (DEFAULT_SAMPLES, EyeWavefront, field_direction, trace_eye_wavefront,
-                                                trace_eye_wavefronts)
+from vissim.optics.eyes.traced_wavefront import (CHIEF_RAY_SAMPLES, DEFAULT_SAMPLES, EyeWavefront, field_direction,
+                                                trace_eye_wavefront, trace_eye_wavefronts)
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.pupil.spectral_wavefront import SpectralWavefront
 from vissim.optics.pupil.wavefront import Wavefront
@@ -64,8 +64,6 @@ from vissim.units import deg_to_mrad
 __all__ = ["eye_wavefront", "eye_spectral_wavefront", "vergence_front", "traced_spectral_wavefront", "chromatic_offset_deg",
            "retinal_jacobian_mm_per_deg", "JACOBIAN_STEP_DEG"]
 
-#: The iris grid (samples across) of a trace made only for its chief ray and pupil.
-ANCHOR_SAMPLES = 17
 #: Field step (deg) of the central differences that give the retina's local mm per degree.
 JACOBIAN_STEP_DEG = 0.1
 
@@ -143,7 +141,7 @@ def retinal_jacobian_mm_per_deg(eye, wavelength_nm: float, field_deg, *, iris_mm
         for value in (low, high):
             field = [float(v) for v in field_deg]
             field[axis] = value
-            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=ANCHOR_SAMPLES, max_order=2,
+            traced = trace_eye_wavefront(eye, wavelength_nm, tuple(field), iris_mm=iris_mm, samples=CHIEF_RAY_SAMPLES, max_order=2,
                                          lenses=lenses)
             points.append(np.array(traced.image_point_mm[:2]))
         columns.append((points[1] - points[0]) / (high - low))
@@ -206,7 +204,7 @@ def traced_spectral_wavefront(eye, wavelengths_nm, field_deg=(0.0, 0.0), *, pupi
     # the reference's chief ray and pupil only, unless its front is wanted too (they do not depend on the grid)
     wanted = reference in wavelengths
     anchor = trace_eye_wavefront(eye, reference, field_deg, pupil_mm=pupil_mm, iris_mm=iris_mm,
-                                 samples=samples if wanted else ANCHOR_SAMPLES, max_order=8 if wanted else 2,
+                                 samples=samples if wanted else CHIEF_RAY_SAMPLES, max_order=8 if wanted else 2,
                                  lenses=lenses)
     others = [w for w in wavelengths if w != reference]
     others = dict(zip(others, trace_eye_wavefronts(eye, others, field_deg, pupil_mm=anchor.eye_entrance_pupil_mm,

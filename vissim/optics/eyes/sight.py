@@ -18,19 +18,16 @@ import math
 import numpy as np
 
 from vissim.optics.eyes.models import SchematicEye
-from vissim.optics.eyes.traced_wavefront import field_direction, field_of_direction, trace_eye_wavefront
+from vissim.optics.eyes.traced_wavefront import (CHIEF_RAY_SAMPLES, field_direction, field_of_direction,
+                                                 trace_eye_wavefront)
 
 __all__ = ["chief_pupil_point_mm", "film_field_deg", "eye_to_world_rotation"]
-
-#: The iris grid of the trace made for a chief ray only (samples across).
-_CHIEF_SAMPLES = 17
-
 
 def chief_pupil_point_mm(eye: SchematicEye, field_deg, pupil_mm: float) -> np.ndarray:
     """Where the chief ray of the collimated beam at ``field_deg`` (the model's reference wavelength) crosses the
     paraxial entrance-pupil plane: (x, y, z) mm in the trace's frame (module doc)."""
     traced = trace_eye_wavefront(eye, eye.reference_wavelength_nm, tuple(float(v) for v in field_deg),
-                                 pupil_mm=pupil_mm, samples=_CHIEF_SAMPLES, max_order=2)
+                                 pupil_mm=pupil_mm, samples=CHIEF_RAY_SAMPLES, max_order=2)
     x, y = traced.chief_entrance_pupil_mm
     return np.array([x, y, traced.entrance_pupil_position_mm])
 

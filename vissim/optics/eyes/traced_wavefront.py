@@ -69,11 +69,13 @@ from vissim.optics.runtime.threads import map_on_threads, map_shares
 __all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm", "pupils_mm",
            "trace_eye_wavefronts", "entrance_pupils_from_irises_mm", "irises_from_entrance_pupil_mm",
-           "DEFAULT_SAMPLES", "GRID_MARGIN"]
+           "DEFAULT_SAMPLES", "CHIEF_RAY_SAMPLES", "GRID_MARGIN"]
 
 #: Samples across the iris (odd: the chief ray is the grid's centre) and the grid's reach, in iris radii.
 DEFAULT_SAMPLES = 65
 GRID_MARGIN = 1.05
+#: The iris grid (samples across) of a trace made only for its chief ray and pupil.
+CHIEF_RAY_SAMPLES = 17
 #: The plane the collimated beam starts on, mm in front of the first surface's vertex.
 _START_BEFORE_MM = 5.0
 _PUPIL_TOL_MM = 1e-12

@@ -183,10 +183,8 @@ def settings_kwargs(head: dict, settings_class, source: str, where: str, *, numb
     ``texts`` must be strings and, like ``read_elsewhere``, are no fields; any other key is refused.
     """
     known = {f.name for f in fields(settings_class)}
-    unknown = set(head) - known - set(texts) - set(read_elsewhere)
-    refuse_renamed_keys(unknown, known | set(read_elsewhere), f"{source}: [{where}]")
-    if unknown:
-        raise unknown_field_error(source, f"[{where}]", f"unknown {'setting' if len(unknown) == 1 else 'settings'} {sorted(unknown)}; known: {sorted(known)}")
+    refuse_unknown_keys({k: v for k, v in head.items() if k not in texts}, sorted(known | set(read_elsewhere)), source,
+                        f"[{where}]", "setting")
     kwargs = checked_numbers(head, numbers, source, where)
     kwargs |= checked_numbers(head, whole_numbers, source, where, whole=True)
     if "seeds" in head:

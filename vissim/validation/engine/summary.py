@@ -17,8 +17,6 @@ from vissim.validation.engine.reading import PERFECT_MARGIN_DB
 
 __all__ = ["PERFECT_MARGIN_DB", "summary_table", "summary_notes", "margin", "NO_LENS", "value_span"]
 
-#: What a perfect, noise-free simulation scores over the noise floor on average: the floor's two
-#: renders hold the noise twice (MSE 2 sigma^2), a comparison with one render once (sigma^2).
 #: The lens label of a configuration without trial lenses.
 NO_LENS = "no lens"
 

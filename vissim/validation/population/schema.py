@@ -21,8 +21,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import (DEFAULT_SPECTACLE_VERTEX_MM, PHOTOPIC_FOCUS_NM, POPULATION_CORRECTION,
                                          POPULATION_FIELD_DEG, POPULATION_MTF_CYC_PER_DEG, POPULATION_PUPILS_MM)
 from vissim.checks import ACCOMMODATION_RANGE_DIOPTERS, EYE_MTF_RANGE_CYC_PER_DEG, VERTEX_DISTANCE_RANGE_MM
-from vissim.vocabulary import refuse_renamed_keys
-from vissim.validation.engine.fields import choices, field_error, number, text, value_list
+from vissim.validation.engine.fields import choices, field_error, number, refuse_unknown_keys, text, value_list
 
 __all__ = ["PopulationSettings", "PopulationItem", "read_campaign", "HEAD_KEYS"]
 
@@ -125,11 +124,7 @@ def read_campaign(head: dict, source: str) -> tuple[PopulationSettings, tuple[Po
     from vissim.optics.eyes.measured.datasets import load_dataset
     from vissim.optics.eyes.measured.population import parse_correction, population_conditions
 
-    unknown = sorted(set(head) - set(HEAD_KEYS))
-    refuse_renamed_keys(unknown, HEAD_KEYS, f"{source}: campaign")
-    if unknown:
-        raise field_error(source, "campaign", f"unknown {'key' if len(unknown) == 1 else 'keys'} {unknown}; known: name, description, kind, "
-                                              f"{', '.join(HEAD_KEYS)}")
+    refuse_unknown_keys(head, ("name", "description", "kind", *HEAD_KEYS), source, "campaign")
     settings = _settings(head, source)
     largest = load_dataset(settings.dataset).pupil_mm
     pupils = _numbers(head.get("pupil_diameter_mm", list(POPULATION_PUPILS_MM)), source, "campaign.pupil_diameter_mm", "mm",
