@@ -155,3 +155,53 @@ def test_a_node_step_finer_than_a_pixel_or_too_many_nodes_is_refused_before_any_
         vissim.blur_eye(image, eye, arcmin_per_px=1.0, field_step_deg=0.001)
     with pytest.raises(VissimInputError, match=rf"field step 0.02 deg needs 1681 PSF nodes .*at most {MAX_FIELD_NODES}"):
         vissim.blur_eye(image, eye, arcmin_per_px=1.0, field_step_deg=0.02)
+
+
+# -- how wide an eye's image may be: one rule for the blur and the renderer --------------------------------------
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from vissim.checks import EYE_RENDER_MAX_THETA_DEG  # noqa: E402
+from vissim.optics.eyes.traced_wavefront import image_reach_deg  # noqa: E402
+
+
+def _corner_angles_deg(shape, arcmin_per_px, field_deg, alpha_deg):
+    """Each frame corner's angle from the optical axis, from unit vectors (tan x, tan y, 1) / norm turned by the
+    visual axis's alpha about y (an independent statement of the frames: docs/conventions.md)."""
+    half_x, half_y = shape[1] * arcmin_per_px / 120.0, shape[0] * arcmin_per_px / 120.0
+    a = np.radians(alpha_deg)
+    angles = []
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            v = np.array([np.tan(np.radians(field_deg[0] + sx * half_x)), np.tan(np.radians(field_deg[1] + sy * half_y)),
+                          1.0])
+            v /= np.linalg.norm(v)
+            optical = np.array([v[0] * np.cos(a) + v[2] * np.sin(a), v[1], -v[0] * np.sin(a) + v[2] * np.cos(a)])
+            angles.append(np.degrees(np.arccos(np.clip(optical[2], -1.0, 1.0))))
+    return angles
+
+
+@settings(max_examples=60, deadline=None)
+@given(rows=st.integers(1, 400), cols=st.integers(1, 400), step=st.floats(0.2, 8.0),
+       fx=st.floats(-30.0, 30.0), fy=st.floats(-30.0, 30.0), alpha=st.sampled_from([0.0, 5.0]))
+def test_an_images_reach_bounds_its_corners_angle_from_the_optical_axis(rows, cols, step, fx, fy, alpha):
+    """Without a visual axis the reach is the widest corner's angle (to 1e-9 deg); with one, a bound: at least that
+    angle, at most 2 alpha above it (a corner beyond the axis's side lies alpha nearer the optical axis)."""
+    reach = image_reach_deg((rows, cols), step, (fx, fy), alpha)
+    widest = max(_corner_angles_deg((rows, cols), step, (fx, fy), alpha))
+    if alpha == 0.0:
+        assert reach == pytest.approx(widest, abs=1e-9)
+    else:
+        assert widest - 1e-9 <= reach <= widest + 2 * alpha + 1e-9
+
+
+def test_the_blur_refuses_what_the_renderer_refuses_the_visual_axis_included():
+    """Liou-Brennan's visual axis lies 5 deg from its optical axis: an image reaching 57 deg from the line of sight
+    reaches 62 deg by the rule the renderer's tables follow, and the blur refuses it too (it used to take pixel
+    centres about the line of sight, and let it through)."""
+    eye = build_eye("liou-brennan-1997", pupil_diameter_mm=3.0)
+    shape, step = (95, 95), 60.0  # 47.5 deg each way from its centre: its corners lie 57.1 deg out
+    reach = image_reach_deg(shape, step, (0.0, 0.0), eye.schematic.visual_axis_deg)
+    assert reach - eye.schematic.visual_axis_deg < EYE_RENDER_MAX_THETA_DEG < reach
+    with pytest.raises(VissimInputError, match=f"reaches {reach:.4g} deg"):
+        eye_psf_grid(shape, eye, arcmin_per_px=step, field_step_deg=40.0)

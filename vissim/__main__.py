@@ -1,5 +1,3 @@
-import sys
+from vissim.cli import run
 
-from vissim.cli import main
-
-sys.exit(main())
+run()

@@ -831,15 +831,15 @@ def test_a_population_folder_holding_its_files_is_refused_before_the_eyes_are_ev
 
 
 def test_an_image_wider_than_an_eyes_field_is_refused_before_its_psfs(capsys, tmp_path):
-    """120 px at 60 arcmin/px reach (59.5, 59.5) deg, 67.8 deg from the axis: beyond the 60 deg an eye's image is
-    rendered to, refused naming the image before any node's PSF."""
+    """120 px at 60 arcmin/px reach (60, 60) deg at their frame's corners, 67.8 deg from the axis: beyond the 60 deg
+    an eye's image is rendered to, refused naming the image before any node's PSF."""
     from vissim.imageio import write_image
 
     image, out = tmp_path / "wide.exr", tmp_path / "out.exr"
     write_image(image, np.full((120, 120), 0.5, np.float32), arcmin_per_px=60.0)
     line = _one_error(capsys, ["blur", image, "-o", out, "--eye-model", "navarro-1985", "--pupil-mm", "3",
                                "--field-step-deg", "10"])
-    corner = math.degrees(math.atan(math.hypot(math.tan(math.radians(59.5)), math.tan(math.radians(59.5)))))
+    corner = math.degrees(math.atan(math.hypot(math.tan(math.radians(60.0)), math.tan(math.radians(60.0)))))
     assert f"reaches {corner:.4g} deg" in line and f"{checks.EYE_RENDER_MAX_THETA_DEG:g} deg" in line, line
     assert not out.exists()
 

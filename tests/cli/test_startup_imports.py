@@ -80,3 +80,18 @@ def test_the_light_names_are_the_packages_own():
 
     assert sorted(MEASURED_DATASET_NAMES) == sorted(p.stem for p in DATA_DIR.glob("*.npz"))
     assert all(load_dataset(name).name == name for name in MEASURED_DATASET_NAMES)
+
+
+@pytest.mark.parametrize("argv, code", [(["--version"], 0), (["rx", "-2.00"], 0), (["rx", "bogus"], 2)])
+def test_the_command_exits_with_mains_code(argv, code):
+    """``python -m vissim`` (as the ``vissim`` script) runs `main` and exits with its code: 0, or 2 after one error
+    line; the process's objects are frozen for its exit, never those of a caller of `main`."""
+    done = subprocess.run([sys.executable, "-m", "vissim", *argv], capture_output=True, text=True, timeout=120)
+    assert done.returncode == code, done.stderr
+    assert done.stderr.count("vissim: error:") == (code == 2)
+    import gc
+
+    from vissim.cli import main
+
+    frozen = gc.get_freeze_count()
+    assert main(["--version"]) == 0 and gc.get_freeze_count() == frozen

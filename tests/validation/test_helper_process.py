@@ -64,3 +64,12 @@ def test_a_refusal_inside_the_block_stops_the_helper_at_once(two_cores, tmp_path
             processes = list(helper_process.started_helper()._processes.values())
             raise RuntimeError("refused")
     assert [process.exitcode for process in processes] == [-15]
+
+
+def test_the_blocks_end_stops_the_helper_rather_than_waiting_for_its_teardown(two_cores):
+    # Its work handed back, the helper has nothing left: it is stopped (SIGTERM), not left to tear its interpreter
+    # down while this process waits; exit code -15, not 0.
+    with campaign_helper("json"):
+        assert draw_figures([(square, (x,)) for x in range(4)]) == [0, 1, 4, 9]
+        processes = list(helper_process.started_helper()._processes.values())
+    assert [process.exitcode for process in processes] == [-15]

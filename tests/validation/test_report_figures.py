@@ -191,3 +191,30 @@ def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path
     assert (copy / "tables.md").exists() and (copy / "report.html").exists()
     assert not any((copy / name).exists() for name in FIGURES)
     assert "optics figures were skipped (OSError" in caplog.text
+
+
+@pytest.mark.parametrize("n_panels", [1, 3])
+def test_fixed_layouts_keep_every_label_inside_the_figure_and_off_other_panels(cases, run_dir, n_panels):
+    """The optics figures are laid out at fixed places (inches), not by matplotlib's layout engine: every text
+    the figures draw lies inside the figure, and no panel's text overlaps another panel's plotting area."""
+    from vissim.validation.dslr.optics_figures import through_focus_figure_of
+
+    chosen = (cases * 3)[:n_panels]
+    psfs = [case_psf(case) for case in chosen]
+    for fig in (psf_figure_of(chosen, psfs), mtf_figure_of(chosen, psfs), through_focus_figure_of(chosen)):
+        try:
+            assert fig.get_layout_engine() is None
+            fig.canvas.draw()
+            renderer = fig.canvas.get_renderer()
+            frame = fig.bbox
+            drawn = [(ax, ax.get_tightbbox(renderer)) for ax in fig.axes]  # each axes with its drawn labels
+            drawn += [(None, t.get_window_extent(renderer)) for t in fig.texts if t.get_text()]  # the title
+            plotting = [ax for ax in fig.axes if ax.get_images() or ax.get_lines()]
+            for owner, box in drawn:
+                assert frame.x0 - 0.5 <= box.x0 and box.x1 <= frame.x1 + 0.5, (owner, box, frame)
+                assert frame.y0 - 0.5 <= box.y0 and box.y1 <= frame.y1 + 0.5, (owner, box, frame)
+                for ax in plotting:
+                    if ax is not owner:
+                        assert not box.overlaps(ax.get_window_extent(renderer)), (owner, ax)
+        finally:
+            plt.close(fig)

@@ -25,6 +25,7 @@ from vissim.checks import ATV_PARABOLA_WINDOW_DIOPTERS
 from vissim.atomic import atomic_output, write_json_atomic, write_text_atomic  # noqa: E402
 from vissim.atv.analysis import CONDITION_LABELS, CurveAnalysis  # noqa: E402
 from vissim.atv.data import Discrepancy  # noqa: E402
+from vissim.imageio import PNG_COMPRESS_LEVEL  # noqa: E402
 from vissim.provenance import json_safe  # noqa: E402
 
 __all__ = ["plot_fits", "plot_overview", "summary_rows", "report_pages", "write_report"]
@@ -38,7 +39,8 @@ _EYE_NAME = {"R": "right eye", "L": "left eye"}
 def _save(fig, path: Path, overwrite: bool) -> Path:
     fig.tight_layout()
     with atomic_output(path, overwrite=overwrite) as tmp:
-        fig.savefig(tmp, dpi=FIGURE_DPI, format="png", metadata={"Software": None})
+        fig.savefig(tmp, dpi=FIGURE_DPI, format="png", metadata={"Software": None},
+                    pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
     plt.close(fig)
     return path
 

@@ -57,7 +57,7 @@ from vissim.bench.eye.sensor_eyes import sensor_eye, sensor_phase
 from vissim.checks import number_within
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX
-from vissim.optics.eyes.traced_wavefront import pupils_mm
+from vissim.optics.eyes.traced_wavefront import image_reach_deg, pupils_mm
 from vissim.render.plugins import register_once
 from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 from vissim.render.schematic_eye_tables import EyeTables, eye_tables, table_theta_deg
@@ -149,9 +149,7 @@ def _make_class(mi, dr):
             width, height = self.film().size()
             self.span_deg = (width * self.arcmin_per_px / 60.0, height * self.arcmin_per_px / 60.0)
             self.visual_axis_rad = math.radians(eye.visual_axis_deg)
-            corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0)))
-                      for f, span in zip(self.field_deg, self.span_deg)]
-            reach = math.degrees(math.atan(math.hypot(*corner))) + eye.visual_axis_deg  # widest angle from the axis
+            reach = image_reach_deg((height, width), self.arcmin_per_px, self.field_deg, eye.visual_axis_deg)
             if reach <= EYE_RENDER_MAX_THETA_DEG:  # beyond it the tables refuse the image, naming its reach
                 reach = min(math.ceil(reach / TABLE_REACH_STEP_DEG) * TABLE_REACH_STEP_DEG, EYE_RENDER_MAX_THETA_DEG)
             self.tables = sensor_tables(eye, self.iris_mm, self.wavelength_nm, reach)

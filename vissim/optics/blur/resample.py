@@ -29,9 +29,11 @@ def magnify(image: np.ndarray, matrix_xy, *, background: float | None = None) ->
     inverse = np.linalg.inv(xy_matrix_to_image_rowcol(m))
     centre = (np.array(image.shape[:2], dtype=float) - 1.0) / 2.0
     fill = float(np.median(np.concatenate([image[0], image[-1]]))) if background is None else background
-    out = ndimage.affine_transform(
-        np.asarray(image, dtype=np.float64), inverse, offset=centre - inverse @ centre, order=3, mode="constant", cval=fill
-    )
+    offset = centre - inverse @ centre
+    if inverse[0, 1] == 0.0 and inverse[1, 0] == 0.0:  # a scaling along the image's axes: SciPy's separable zoom
+        inverse = np.diag(inverse)
+    out = ndimage.affine_transform(np.asarray(image, dtype=np.float64), inverse, offset=offset, order=3,
+                                   mode="constant", cval=fill)
     return out.astype(np.float32)
 
 

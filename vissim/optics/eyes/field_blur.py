@@ -41,6 +41,7 @@ from vissim.progress import counter
 from vissim.optics.blur.convolve import image_kernel_psf, pixel_array
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
+from vissim.optics.eyes.traced_wavefront import image_reach_deg
 from vissim.optics.blur.field_dependent import PSFGrid, blur_field_dependent, node_positions_px, psf_grid
 from vissim.optics.psf.compute import PSF
 from vissim.units import ARCMIN_PER_DEG, image_colrow_to_osa_xy
@@ -93,7 +94,7 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
     if len(centre) != 2:
         raise VissimInputError(f"the field angle must be two angles (x, y) in degrees, got {field_deg!r}")
     band, band_weights = _band(eye.reference_wavelength_nm if wavelength_nm is None else wavelength_nm, weights)
-    _check_image_field(shape, step, centre)
+    _check_image_field(shape, step, centre, eye)
 
     spacing_px = spacing_deg * ARCMIN_PER_DEG / step
     if field_step_deg is None:  # the default step over pixels coarser than it: a node at each pixel at most
@@ -111,16 +112,12 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
     return psf_grid(shape, spacing_px, psf_at)
 
 
-def _check_image_field(shape: tuple[int, int], arcmin_per_px: float, centre) -> None:
-    """The image's corners within `EYE_RENDER_MAX_THETA_DEG` of the eye's axis (as far as an eye's image is rendered),
-    refused before any PSF."""
-    rows, cols = shape[:2]
-    xs, ys = node_field_deg(np.array([0.0, 0.0, rows - 1.0, rows - 1.0]), np.array([0.0, cols - 1.0, 0.0, cols - 1.0]),
-                            (rows, cols), arcmin_per_px, centre)
-    tangents = np.hypot(np.tan(np.radians(np.clip(xs, -89.9, 89.9))), np.tan(np.radians(np.clip(ys, -89.9, 89.9))))
-    widest = float(np.degrees(np.arctan(np.max(tangents))))
+def _check_image_field(shape: tuple[int, int], arcmin_per_px: float, centre, eye: Eye) -> None:
+    """The image within `EYE_RENDER_MAX_THETA_DEG` of the eye's optical axis (`image_reach_deg`: as far as an eye's
+    image is rendered), refused before any PSF."""
+    widest = image_reach_deg(shape[:2], arcmin_per_px, centre, eye.schematic.visual_axis_deg)
     if widest > EYE_RENDER_MAX_THETA_DEG:
-        raise VissimInputError(f"the image reaches {widest:.4g} deg from the eye's axis ({size_text((rows, cols))} at "
+        raise VissimInputError(f"the image reaches {widest:.4g} deg from the eye's axis ({size_text(shape[:2])} at "
                                f"{arcmin_per_px:g} arcmin/px about the field angle ({centre[0]:g}, {centre[1]:g}) deg), "
                                f"beyond the {EYE_RENDER_MAX_THETA_DEG:g} deg an eye's image is simulated and rendered "
                                "to: crop it, or give its true (finer) sampling")

@@ -65,8 +65,9 @@ from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.pupil.zernike import fit_zernike_um
 from vissim.optics.runtime.threads import map_on_threads, map_shares
+from vissim.units import ARCMIN_PER_DEG
 
-__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "image_reach_deg", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm", "pupils_mm",
            "trace_eye_wavefronts", "entrance_pupils_from_irises_mm", "irises_from_entrance_pupil_mm",
            "DEFAULT_SAMPLES", "CHIEF_RAY_SAMPLES", "GRID_MARGIN"]
@@ -95,6 +96,20 @@ def exit_pupil_position_mm(eye: SchematicEye, wavelength_nm: float) -> float:
 def field_axis(eye: SchematicEye) -> str:
     """The axis field angles are measured from: ``"visual axis"`` for a model with one, else ``"optical axis"``."""
     return "visual axis" if eye.visual_axis_deg != 0.0 else "optical axis"
+
+
+def image_reach_deg(shape: tuple[int, int], arcmin_per_px: float, field_deg=(0.0, 0.0),
+                    visual_axis_deg: float = 0.0) -> float:
+    """How far from the eye's optical axis an image of ``shape`` (rows, cols) reaches, deg: the one rule for how
+    wide an eye's image may be (`vissim blur`'s check, the renderer's tables).
+
+    The frame's widest corner (its pixels' outer edges: the film covers them) as (tan x, tan y) about the image's
+    field angle ``field_deg`` (OSA's x, y; `field_direction`), each axis at most 89 deg, plus the visual axis's
+    angle from the optical axis: a bound, reached by a corner on the visual axis's side.
+    """
+    span_deg = (shape[1] * arcmin_per_px / ARCMIN_PER_DEG, shape[0] * arcmin_per_px / ARCMIN_PER_DEG)  # x: columns
+    corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0))) for f, span in zip(field_deg, span_deg)]
+    return math.degrees(math.atan(math.hypot(*corner))) + visual_axis_deg
 
 
 def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:

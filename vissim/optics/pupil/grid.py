@@ -91,18 +91,16 @@ def _rim_points(centres_u, centres_v, step, radius):
         breaks += [root, -root]
     cuts = np.sort(np.clip(np.stack(breaks, axis=1), u0[:, None], u1[:, None]), axis=1)
     nodes, w = leggauss(RIM_POINTS)
-    us, vs, ws = [], [], []
-    for a, b in zip(cuts[:, :-1].T, cuts[:, 1:].T):  # pieces, some of zero length
-        for ni, wi in zip(nodes, w):
-            u = (a + b) / 2 + (b - a) / 2 * ni
-            chord = np.sqrt(np.maximum(radius**2 - u**2, 0.0))
-            lo, hi = np.maximum(v0, -chord), np.minimum(v1, chord)
-            height = np.maximum(hi - lo, 0.0)
-            for nj, wj in zip(nodes, w):
-                us.append(u)
-                vs.append((lo + hi) / 2 + height / 2 * nj)
-                ws.append(wi * wj * (b - a) / 2 * height / 2 / step**2)
-    return np.stack(us, axis=1), np.stack(vs, axis=1), np.stack(ws, axis=1)
+    a, b = cuts[:, :-1, None], cuts[:, 1:, None]  # (cell, piece, node in u); pieces may have zero length
+    u = (a + b) / 2 + (b - a) / 2 * nodes
+    chord = np.sqrt(np.maximum(radius**2 - u**2, 0.0))
+    lo, hi = np.maximum(v0[:, None, None], -chord), np.minimum(v1[:, None, None], chord)
+    height = np.maximum(hi - lo, 0.0)
+    v = (lo + hi)[..., None] / 2 + (height / 2)[..., None] * nodes  # (cell, piece, node in u, node in v)
+    weights = np.multiply.outer(w, w) * (b - a)[..., None] / 2 * height[..., None] / 2 / step**2
+    cells = len(centres_u)
+    return (np.broadcast_to(u[..., None], v.shape).reshape(cells, -1), v.reshape(cells, -1),
+            weights.reshape(cells, -1))
 
 
 @functools.lru_cache(maxsize=32)

@@ -28,7 +28,8 @@ from vissim.optics.psf.metrics import (diffraction_cutoff_cyc_per_deg, diffracti
                                        radius_of_encircled_energy_arcmin, ring_means)
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.validation.dslr.schema import lens_label_of, trial_lens_phrase
-from vissim.validation.engine.figures import display_norm, pyplot, radiance_colorbar, scale_bar
+from vissim.validation.engine.figures import (PanelLayout, colorbar_beside, display_norm, radiance_colorbar, scale_bar,
+                                              titled_panel_grid)
 from vissim.validation.engine.summary import NO_LENS
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
@@ -141,10 +142,15 @@ def _panel_title(case: OpticsCase) -> str:
     return f"{case.configuration}\n{trial_lens_phrase(case.trial_lenses)} → camera Rx {case.prescription.format(2)}"
 
 
-def _grid(n: int, rows: int = 1, width: float = 3.0, height: float = 3.0):
-    fig, axes = pyplot.subplots(rows, n, figsize=(width * n + 1.0, height * rows + 0.8), squeeze=False,
-                             layout="constrained")
-    return fig, axes
+#: The optics figures' fixed layouts (`vissim.validation.engine.figures.PanelLayout`), inches: above the panels the
+#: figure's title and each panel's two-line title, below them tick labels and a two-line x label, to the left the
+#: first panel's y label, to the right of the PSF panels and the strip a colour bar.
+PSF_LAYOUT = PanelLayout(2.6, 2.6, left_in=0.6, right_in=1.05, top_in=0.72, bottom_in=0.62, column_gap_in=0.45,
+                         row_gap_in=0.0)
+MTF_LAYOUT = PanelLayout(2.8, 2.1, left_in=0.55, right_in=0.3, top_in=0.72, bottom_in=0.7, column_gap_in=0.4,
+                         row_gap_in=0.0)
+THROUGH_FOCUS_LAYOUT = PanelLayout(1.45, 1.7, left_in=0.75, right_in=1.15, top_in=0.8, bottom_in=0.1,
+                                   column_gap_in=0.1, row_gap_in=0.2)
 
 
 def psf_panel(ax, psf: PSF):
@@ -167,16 +173,16 @@ def psf_panel(ax, psf: PSF):
 
 def psf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
     """The log-PSF figure (a panel per case) as a matplotlib figure."""
-    fig, axes = _grid(len(cases))
+    fig, axes, layout = titled_panel_grid(
+        1, len(cases), PSF_LAYOUT, "The wave simulation's PSF on a log scale (the synthetic chart's sampling; "
+        "pixel-integrated, origin at the chief ray, +y up)", fontsize=9)
     shown = None
     for ax, case, psf in zip(axes[0], cases, psfs):
         shown = psf_panel(ax, psf)
         ax.set_title(_panel_title(case), fontsize=8)
     axes[0, 0].set_ylabel("y (arcmin)", fontsize=8)
-    bar = fig.colorbar(shown, ax=axes[0, :], shrink=0.8, pad=0.02, aspect=20)
+    bar = colorbar_beside(fig, layout, 1, len(cases), shown)
     bar.set_label("log10 PSF / peak", fontsize=8)
-    fig.suptitle("The wave simulation's PSF on a log scale (the synthetic chart's sampling; pixel-integrated, "
-                 "origin at the chief ray, +y up)", fontsize=9)
     return fig
 
 
@@ -213,7 +219,8 @@ def mtf_curves(psf: PSF, pad: int = MTF_PADDING) -> dict[str, np.ndarray]:
 
 def mtf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
     """The MTF figure (a panel per case) as a matplotlib figure."""
-    fig, axes = _grid(len(cases), width=3.2, height=2.8)
+    fig, axes, _ = titled_panel_grid(1, len(cases), MTF_LAYOUT, "MTF of the wave simulation's PSF (pixel removed) "
+                                     "against the diffraction-limited MTF of its pupil", fontsize=9)
     for ax, case, psf in zip(axes[0], cases, psfs):
         curves = mtf_curves(psf)
         freq, cutoff = curves["frequency_cyc_per_deg"], float(curves["cutoff_cyc_per_deg"])
@@ -230,8 +237,6 @@ def mtf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
         ax.grid(alpha=0.3)
     axes[0, 0].set_ylabel("MTF", fontsize=8)
     axes[0, 0].legend(fontsize=7, loc="upper right")
-    fig.suptitle("MTF of the wave simulation's PSF (pixel removed) against the diffraction-limited MTF of its "
-                 "pupil", fontsize=9)
     return fig
 
 
@@ -245,8 +250,12 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
     if not cases:
         return None
     steps = THROUGH_FOCUS_STEPS_D
-    fig, axes = pyplot.subplots(len(cases), len(steps), figsize=(1.6 * len(steps) + 1.2, 1.9 * len(cases) + 0.9),
-                             squeeze=False, layout="constrained")
+    first = cases[0]
+    fig, axes, layout = titled_panel_grid(
+        len(cases), len(steps), THROUGH_FOCUS_LAYOUT,
+        f"Through focus: the synthetic chart through the wave PSF of the camera prescription with its sphere stepped\n"
+        f"({first.arcmin_per_px:g} arcmin/px, {first.pupil_diameter_mm:g} mm pupil, {first.wavelength_nm:g} nm, no "
+        "spectacle magnification; scale bars in arcmin)", fontsize=9)
     for i, case in enumerate(cases):
         chart = read_image(case.synthetic).pixels
         for j, step in enumerate(steps):
@@ -261,11 +270,7 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
         scale_bar(axes[i, 0], chart.shape[1], case.arcmin_per_px)
         axes[i, 0].set_ylabel(f"{case.group}\n{trial_lens_phrase(case.trial_lenses)}\ncamera Rx "
                               f"{case.prescription.format(2)}", fontsize=7)
-    radiance_colorbar(fig.colorbar(shown, ax=axes[:, :], shrink=0.8, pad=0.02, aspect=25))
-    first = cases[0]
-    fig.suptitle(f"Through focus: the synthetic chart through the wave PSF of the camera prescription with its sphere "
-                 f"stepped\n({first.arcmin_per_px:g} arcmin/px, {first.pupil_diameter_mm:g} mm pupil, "
-                 f"{first.wavelength_nm:g} nm, no spectacle magnification; scale bars in arcmin)", fontsize=9)
+    radiance_colorbar(colorbar_beside(fig, layout, len(cases), len(steps), shown))
     return fig
 
 

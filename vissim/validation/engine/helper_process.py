@@ -38,20 +38,28 @@ _STARTED: list = []  # the helper a `campaign_helper` block started, while it la
 @contextlib.contextmanager
 def campaign_helper(*modules: str):
     """Within the block, `started_helper` is a helper process started now, which imports ``modules`` while this
-    process goes on; none without a spare core or modules."""
+    process goes on; none without a spare core or modules.  The block's end stops it (`share_work` has waited for
+    every piece it took)."""
     if available_cores() < 2 or not modules or _STARTED:
         yield
         return
-    helper = _spawn_helper()
-    helper.submit(_import_all, modules)
-    _STARTED.append(helper)
+    with _stopped_at_end(_spawn_helper()) as helper:
+        helper.submit(_import_all, modules)
+        _STARTED.append(helper)
+        try:
+            yield
+        finally:
+            _STARTED.clear()
+
+
+@contextlib.contextmanager
+def _stopped_at_end(helper):
+    """``helper`` within the block; at its end (its work handed back, or a refusal, or Ctrl-C) its process is stopped,
+    not waited for: neither its imports nor its interpreter's teardown (0.1-0.2 s) delay this one."""
     try:
-        yield
-    except BaseException:  # a refusal or Ctrl-C is not kept waiting for the helper's imports
-        _terminate(helper)
-        raise
+        yield helper
     finally:
-        _STARTED.clear()
+        _terminate(helper)
         helper.shutdown(wait=True, cancel_futures=True)
 
 
@@ -102,7 +110,7 @@ def draw_figures(calls: list[tuple[Callable, tuple]], advance: Callable[[], None
         return share_work(calls, started_helper(), advance)
     if available_cores() < 2 or len(calls) < FIGURES_WORTH_A_PROCESS:
         return [_done(work, arguments, advance) for work, arguments in calls]
-    with _spawn_helper() as helper:
+    with _stopped_at_end(_spawn_helper()) as helper:
         return share_work(calls, helper, advance)
 
 

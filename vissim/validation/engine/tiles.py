@@ -11,7 +11,7 @@ import io
 
 import numpy as np
 
-from vissim.imageio import srgb_encode
+from vissim.imageio import PNG_COMPRESS_LEVEL, srgb_encode
 
 __all__ = ["tile_strip", "TILE_ZOOM", "GAP_PX", "LABEL_PX"]
 
@@ -54,5 +54,5 @@ def tile_strip(images: list[np.ndarray], kinds: list[str], labels: list[str], di
         draw.multiline_text((x + 1, 1), label, fill=0, font=font, spacing=1)
         x += tile.shape[1] + GAP_PX
     buffer = io.BytesIO()
-    canvas.convert("RGB").save(buffer, format="PNG", optimize=False)
+    canvas.convert("RGB").save(buffer, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
     return buffer.getvalue()
