@@ -511,3 +511,47 @@ def test_no_message_writes_a_noun_as_singular_or_plural():
               for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
               if re.search(r"(Error|error)\(.*\w\(s\)", line) or re.search(r"^\s*f?\".*\{[^}]*\}[^\"]*\w\(s\) ", line)]
     assert hedged == []
+
+
+# -- the vocabulary's defaults and limits name constants: each exists and holds the number the text states ----------
+_CONSTANT_MODULES = ("vissim.checks", "vissim.thesis", "vissim.optics.eyes.defaults", "vissim.optics.rx.conventions")
+_NUMBER = r"(-?\d+(?:\.\d+)?)"
+_UNIT_WORD = r"(?: (?:D|mm|m|nm|deg))?"  # "±30 D (TRIAL_LENS_RANGE_DIOPTERS)"
+
+
+def _constant(name: str):
+    import importlib
+
+    for module in _CONSTANT_MODULES:
+        value = getattr(importlib.import_module(module), name, None)
+        if value is not None:
+            return value
+    raise AssertionError(f"the vocabulary names {name}, which none of {', '.join(_CONSTANT_MODULES)} defines")
+
+
+def _in_concept_unit(value: float, name: str, unit: str) -> float:
+    """A constant in its name's unit (_MM, _M) in the concept's first unit (mm or m)."""
+    if name.endswith("_MM") and unit.startswith("m ") or name.endswith("_MM") and unit == "m":
+        return value / 1000.0
+    if name.endswith("_M") and unit.startswith("mm"):
+        return value * 1000.0
+    return value
+
+
+@pytest.mark.parametrize("concept", CONCEPTS, ids=lambda c: c.name)
+def test_each_constant_the_vocabulary_names_holds_the_number_it_states(concept):
+    """A default or limit written as ``550 (DEFAULT_WAVELENGTH_NM)`` or ``0-200 (VERTEX_DISTANCE_RANGE_MM)``: the
+    constant exists, and holds that number or range (in the concept's unit); a bare name need only exist."""
+    for text in (concept.default, concept.limit):
+        for name in re.findall(r"\b[A-Z][A-Z0-9]*(?:_[A-Z0-9]+)+\b", text):
+            _constant(name)
+        for low, high, name in re.findall(_NUMBER + r"-" + _NUMBER + _UNIT_WORD + r" \(([A-Z_0-9]+)\)", text):
+            value = tuple(_in_concept_unit(float(v), name, concept.unit) for v in _constant(name))
+            assert value == (float(low), float(high)), (concept.name, name, value)
+        for plus_minus, single, name in re.findall(r"(±)?(?<![\d.-])" + _NUMBER + _UNIT_WORD + r" \(([A-Z_0-9]+)\)",
+                                                   text):
+            value = _constant(name)
+            expected = (-float(single), float(single)) if plus_minus else float(single)
+            got = tuple(_in_concept_unit(float(v), name, concept.unit) for v in value) if plus_minus else \
+                _in_concept_unit(float(value), name, concept.unit)
+            assert got == expected, (concept.name, name, got)
