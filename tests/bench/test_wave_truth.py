@@ -50,6 +50,22 @@ def test_wave_simulation_matches_the_wave_truth(lens):
     assert truth.dtype == np.float32 and truth.shape == bench.size_px
 
 
+def test_a_chart_rendered_on_the_fine_grid_gives_the_same_truth_and_another_is_refused():
+    """A campaign hands the wave truth the synthetic chart it rendered: the same pixels as the truth's own
+    rendering of the spec, bit for bit; a chart at another sampling is refused, naming both."""
+    bench = DslrBench(lenses=(TrialLens(1.5),))
+    spec = single_letter_spec("N", 1.0, viewing_distance_m=bench.chart_distance_mm / 1000)
+    rows, cols = bench.size_px
+    fine = render_chart_angular(spec, bench.arcmin_per_px / 5, size_px=(rows * 5, cols * 5), snap_to_pixels=False)
+    given, own = wave_truth(bench, fine, oversample=5), wave_truth(bench, spec, oversample=5)
+    np.testing.assert_array_equal(given.pixels, own.pixels)
+    assert given.provenance["chart"] == own.provenance["chart"]
+    coarse = render_chart_angular(spec, bench.arcmin_per_px / 4, size_px=(rows * 4, cols * 4), snap_to_pixels=False)
+    with pytest.raises(VissimInputError, match=f"at {bench.arcmin_per_px / 5:g} arcmin/px.*drawn in visual angle "
+                                               f"at {bench.arcmin_per_px / 4:g} arcmin/px"):
+        wave_truth(bench, coarse, oversample=5)
+
+
 def test_the_camera_must_be_focused_on_the_chart():
     bench = DslrBench(lenses=(TrialLens(1.0),), focus_distance_mm=2000.0)
     with pytest.raises(VissimInputError, match="focused on the chart"):

@@ -35,7 +35,7 @@ import numpy as np
 from vissim.checks import OVERSAMPLE_RANGE, size_text
 from vissim.bench.dslr.traced_wavefront import D_LINE_NM, TracedWavefront, trace_bench_wavefront
 from vissim.bench.dslr.bench import DslrBench
-from vissim.charts import ChartSpec, chart_sidecar, render_chart_angular
+from vissim.charts import Chart, ChartSpec, chart_sidecar, render_chart_angular
 from vissim.errors import VissimInputError
 from vissim.optics.blur.convolve import blur_image
 from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
@@ -128,7 +128,7 @@ def image_through_traced_lenses(
 
 def wave_truth(
     bench: DslrBench,
-    chart: ChartSpec,
+    chart: ChartSpec | Chart,
     *,
     wavelengths_nm: Sequence[float] = (D_LINE_NM,),
     weights: Sequence[float] | None = None,
@@ -137,14 +137,22 @@ def wave_truth(
 ) -> WaveTruth:
     """The wave-optical image of ``chart`` on ``bench``'s sensor (module docstring).
 
+    ``chart``: a `ChartSpec`, rendered here on the fine grid (`render_chart_angular`, centred, not snapped to
+    pixels), or a `Chart` already rendered so (a campaign's synthetic chart): refused at another sampling or size.
     ``mode="geometric"``: the same trace's ray optics instead (the PSF of its ray landing
     points): the geometric self-check, which must match the Mitsuba render to its noise floor.
     """
     _check(bench, oversample, mode)
     rows, cols = bench.size_px
-    step = bench.arcmin_per_px / oversample
-    fine = render_chart_angular(chart, step, size_px=(rows * oversample, cols * oversample), snap_to_pixels=False)
+    step, shape = bench.arcmin_per_px / oversample, (rows * oversample, cols * oversample)
+    fine = chart if isinstance(chart, Chart) else render_chart_angular(chart, step, size_px=shape, snap_to_pixels=False)
+    layout = fine.layout
+    if layout.rendering != "angular" or layout.arcmin_per_px != step or tuple(layout.shape_px) != shape:
+        drawn = "in visual angle" if layout.rendering == "angular" else "for print"
+        raise VissimInputError(f"the wave truth needs the chart in visual angle at {step:g} arcmin/px over "
+                               f"{size_text(shape)}; the chart given was drawn {drawn} at {layout.arcmin_per_px:g} "
+                               f"arcmin/px over {size_text(layout.shape_px)}")
     image = image_through_traced_lenses(bench, fine.pixels, oversample=oversample, wavelengths_nm=wavelengths_nm,
                                         weights=weights, mode=mode)
-    provenance = {**image.provenance, "chart": chart_sidecar(chart, fine.layout)}
+    provenance = {**image.provenance, "chart": chart_sidecar(fine.spec, layout)}
     return WaveTruth(image.pixels.astype(np.float32), provenance)

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from vissim.atomic import write_json_atomic
-from vissim.charts import optotype_tile
+from vissim.charts import Chart, optotype_tile
 from vissim.fit.capture import fit_bench_item
 from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.optics.blur.resample import SUBPIXELS_PER_PX, block_mean
@@ -40,12 +40,12 @@ from vissim.validation.engine.item_files import save_item_image
 from vissim.validation.engine.metrics import added_scores
 from vissim.validation.engine.truth import add_bench_diffraction, cached_psf
 
-__all__ = ["compute_item", "synthetic_tile"]
+__all__ = ["compute_item", "synthetic_chart", "synthetic_tile"]
 
 log = logging.getLogger(__name__)
 
 
-def synthetic_tile(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> np.ndarray:
+def synthetic_chart(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> Chart:
     """The synthetic chart tile: the same letter, size, contrast and position the bench shows.
 
     The letter is centred on the tile's centre (the bench's optical axis), not snapped to the
@@ -60,7 +60,12 @@ def synthetic_tile(configuration: Configuration, settings: CampaignSettings, ove
         polarity=configuration.polarity,
         viewing_distance_m=settings.chart_distance_m,
         snap_to_pixels=False,
-    ).pixels
+    )
+
+
+def synthetic_tile(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> np.ndarray:
+    """`synthetic_chart`'s pixels."""
+    return synthetic_chart(configuration, settings, oversample).pixels
 
 
 def _comparison(kind: str, input_name: str, reference_kind: str, reference_image: str, setup: dict,
@@ -138,7 +143,7 @@ def _truths(item: _Item, truth_a: np.ndarray, truth_b: np.ndarray | None) -> Non
                     "truth_diffracted": item.save("truth_diffracted", item.references["wave"])}
 
 
-def _wave_bench(item: _Item):
+def _wave_bench(item: _Item, fine_chart: Chart):
     """The wave bench (module wave_bench): the chart through the traced lenses' wave PSF, and its residual budget.
 
     None for a capture: the virtual bench's wave optics does not stand in for a photograph.
@@ -146,7 +151,7 @@ def _wave_bench(item: _Item):
     if not item.settings.wave_truth or item.captured:
         return None, None
     bench, settings = item.built.bench, item.settings
-    traced = compute_wave_bench(bench, item.built.configuration, settings, SUBPIXELS_PER_PX)
+    traced = compute_wave_bench(bench, item.built.configuration, settings, SUBPIXELS_PER_PX, fine_chart)
     item.images["wave_truth"] = save_item_image(item.item_dir, "wave_truth", traced.pixels,
                                                 {**item.provenance, "wave_truth": json_safe(traced.provenance)})
     item.floors[WAVE_BENCH] = None  # noise-free: no floor
@@ -213,13 +218,15 @@ def compute_item(key: str, built: DslrBuilt, settings: CampaignSettings, truth_a
     configuration, source = built.configuration, source or {}
     provenance = make_provenance(item=key, configuration=configuration.as_json(), settings=settings, source=source,
                                  render_provenance=render_provenance or {})
-    fine_synthetic = synthetic_tile(configuration, settings, SUBPIXELS_PER_PX)
+    fine_chart = synthetic_chart(configuration, settings, SUBPIXELS_PER_PX)  # the simulations' and the wave bench's
+    fine_chart.pixels.setflags(write=False)
+    fine_synthetic = fine_chart.pixels
     item = _Item(built, settings, item_dir, provenance, source.get("ground_truth") == "capture",
                  {"render": (no_lens, 1), "synthetic": (fine_synthetic, SUBPIXELS_PER_PX)})
     _truths(item, truth_a, truth_b)
     item.images |= {"no_lens_render": item.save("no_lens_render", no_lens),
                     "synthetic": item.save("synthetic", block_mean(fine_synthetic, SUBPIXELS_PER_PX))}
-    traced_truth, budget = _wave_bench(item)
+    traced_truth, budget = _wave_bench(item, fine_chart)
     _simulations(item, traced_truth)
     if traced_truth is not None:
         _self_check(item)

@@ -48,7 +48,7 @@ from vissim.bench.dslr.traced_wavefront import (
 )
 from vissim.bench.dslr.bench import DslrBench
 from vissim.bench.dslr.wave_truth import WaveTruth, image_through_traced_lenses, wave_truth
-from vissim.charts import ChartSpec, single_letter_spec
+from vissim.charts import Chart, ChartSpec, single_letter_spec
 from vissim.optics.rx.glass import D_LINE_NM, glass_like_crown
 from vissim.optics.rx.prescription import LensPower
 from vissim.optics.rx.viewing_setup import ViewingSetup
@@ -87,10 +87,14 @@ def wave_bench_chart(configuration: Configuration, settings: CampaignSettings) -
 
 
 def compute_wave_bench(bench: DslrBench, configuration: Configuration, settings: CampaignSettings,
-                       oversample: int) -> WaveTruth:
-    """The wave truth of ``bench`` (the configuration's) at the campaign's wavelength, ``oversample`` x finer."""
-    return wave_truth(bench, wave_bench_chart(configuration, settings), wavelengths_nm=(settings.wavelength_nm,),
-                      oversample=oversample)
+                       oversample: int, fine_chart: Chart | None = None) -> WaveTruth:
+    """The wave truth of ``bench`` (the configuration's) at the campaign's wavelength, ``oversample`` x finer.
+
+    ``fine_chart``: that chart already rendered on the fine grid (the item's synthetic chart), used when it is the
+    bench's chart; otherwise the chart is rendered here."""
+    chart = wave_bench_chart(configuration, settings)
+    return wave_truth(bench, fine_chart if fine_chart is not None and fine_chart.spec == chart else chart,
+                      wavelengths_nm=(settings.wavelength_nm,), oversample=oversample)
 
 
 def traced_ray_image(bench: DslrBench, fine: np.ndarray, oversample: int) -> np.ndarray:
