@@ -183,25 +183,24 @@ def _corner_angles_deg(shape, arcmin_per_px, field_deg, alpha_deg):
 
 @settings(max_examples=60, deadline=None)
 @given(rows=st.integers(1, 400), cols=st.integers(1, 400), step=st.floats(0.2, 8.0),
-       fx=st.floats(-30.0, 30.0), fy=st.floats(-30.0, 30.0), alpha=st.sampled_from([0.0, 5.0]))
-def test_an_images_reach_bounds_its_corners_angle_from_the_optical_axis(rows, cols, step, fx, fy, alpha):
-    """Without a visual axis the reach is the widest corner's angle (to 1e-9 deg); with one, a bound: at least that
-    angle, at most 2 alpha above it (a corner beyond the axis's side lies alpha nearer the optical axis)."""
-    reach = image_reach_deg((rows, cols), step, (fx, fy), alpha)
-    widest = max(_corner_angles_deg((rows, cols), step, (fx, fy), alpha))
-    if alpha == 0.0:
-        assert reach == pytest.approx(widest, abs=1e-9)
-    else:
-        assert widest - 1e-9 <= reach <= widest + 2 * alpha + 1e-9
+       fx=st.floats(-30.0, 30.0), fy=st.floats(-30.0, 30.0),
+       model=st.sampled_from(["navarro-1985", "liou-brennan-1997"]))
+def test_an_images_reach_is_its_widest_corners_angle_from_the_optical_axis(rows, cols, step, fx, fy, model):
+    """Navarro's visual axis is its optical axis; Liou-Brennan's lies 5 deg from it: to 1e-9 deg either way."""
+    eye = eye_model(model)
+    reach = image_reach_deg(eye, (rows, cols), step, (fx, fy))
+    assert reach == pytest.approx(max(_corner_angles_deg((rows, cols), step, (fx, fy), eye.visual_axis_deg)),
+                                  abs=1e-9)
 
 
 def test_the_blur_refuses_what_the_renderer_refuses_the_visual_axis_included():
-    """Liou-Brennan's visual axis lies 5 deg from its optical axis: an image reaching 57 deg from the line of sight
-    reaches 62 deg by the rule the renderer's tables follow, and the blur refuses it too (it used to take pixel
-    centres about the line of sight, and let it through)."""
+    """Liou-Brennan's visual axis lies 5 deg from its optical axis. A frame whose corners lie 57.1 deg from the line
+    of sight reaches 60.7 deg from the optical axis: the blur refuses it, as the renderer does (it used to take pixel
+    centres about the line of sight, and let it through). A tile at field (45, 45), 59.3 deg out, is taken."""
     eye = build_eye("liou-brennan-1997", pupil_diameter_mm=3.0)
-    shape, step = (95, 95), 60.0  # 47.5 deg each way from its centre: its corners lie 57.1 deg out
-    reach = image_reach_deg(shape, step, (0.0, 0.0), eye.schematic.visual_axis_deg)
-    assert reach - eye.schematic.visual_axis_deg < EYE_RENDER_MAX_THETA_DEG < reach
+    shape, step = (95, 95), 60.0  # 47.5 deg each way from its centre
+    reach = image_reach_deg(eye.schematic, shape, step, (0.0, 0.0))
+    assert image_reach_deg(eye_model("navarro-1985"), shape, step, (0.0, 0.0)) < EYE_RENDER_MAX_THETA_DEG < reach
     with pytest.raises(VissimInputError, match=f"reaches {reach:.4g} deg"):
         eye_psf_grid(shape, eye, arcmin_per_px=step, field_step_deg=40.0)
+    assert image_reach_deg(eye.schematic, (133, 113), 1.0, (45.0, 45.0)) < EYE_RENDER_MAX_THETA_DEG

@@ -18,6 +18,7 @@ SPLINE_TOLERANCE = 5e-5  # of the peak: cubic-spline interpolation of a 6 px Gau
     [[1.06, 0.0], [0.0, 1.06]],  # a plus lens: the same along x and y
     [[1.0, 0.0], [0.0, 0.94]],  # a cylinder at axis 180: only y
     [[1.03, 0.02], [0.02, 0.99]],  # an oblique cylinder: not along the image's axes
+    [[1.02, 0.03], [-0.01, 0.98]],  # not symmetric: a transposed matrix would show
 ])
 def test_magnify_matches_the_magnified_spot(matrix_xy):
     rows, cols = np.mgrid[0:ROWS, 0:COLS].astype(float)

@@ -4,6 +4,7 @@ decided once, and every command reading it from there."""
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import re
 import tomllib
@@ -520,8 +521,6 @@ _UNIT_WORD = r"(?: (?:D|mm|m|nm|deg))?"  # "±30 D (TRIAL_LENS_RANGE_DIOPTERS)"
 
 
 def _constant(name: str):
-    import importlib
-
     for module in _CONSTANT_MODULES:
         value = getattr(importlib.import_module(module), name, None)
         if value is not None:
@@ -530,12 +529,9 @@ def _constant(name: str):
 
 
 def _in_concept_unit(value: float, name: str, unit: str) -> float:
-    """A constant in its name's unit (_MM, _M) in the concept's first unit (mm or m)."""
-    if name.endswith("_MM") and unit.startswith("m ") or name.endswith("_MM") and unit == "m":
-        return value / 1000.0
-    if name.endswith("_M") and unit.startswith("mm"):
-        return value * 1000.0
-    return value
+    """A constant in its name's unit, in the concept's first unit: a length in mm where the concept's is metres."""
+    concept_in_metres = unit == "m" or unit.startswith("m ")
+    return value / 1000.0 if name.endswith("_MM") and concept_in_metres else value
 
 
 @pytest.mark.parametrize("concept", CONCEPTS, ids=lambda c: c.name)

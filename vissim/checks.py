@@ -164,7 +164,7 @@ NAVARRO_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 10.0)
 ARIZONA_ACCOMMODATION_RANGE_DIOPTERS = (0.0, 6.0)
 #: A field angle through an eye that a user gives, degrees per axis (x, y): the chart's centre or a PSF's field, for
 #: every command and file that takes one (`eye`, `psf`, `blur`, `render eye`, `population`, eye and population
-#: campaigns, `EyeBench`); an image around it reaches to `EYE_RENDER_MAX_THETA_DEG` from the axis. The schematic
+#: campaigns, `EyeBench`); an image around it reaches to `EYE_RENDER_MAX_THETA_DEG` from the optical axis. The schematic
 #: models are built for 0-40 deg and the measured eyes go to 40 (Jaeken & Artal 2012: -40 to 40 horizontally); every
 #: model traces a 6 mm pupil to (+-45, +-45), and the renderer's tables keep a chart there in view. Beyond, the
 #: widest pupils' rays start to miss the cornea (a 9.9 mm pupil already at -45 deg in Navarro's eye: that trace

@@ -193,13 +193,19 @@ def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path
     assert "optics figures were skipped (OSError" in caplog.text
 
 
-@pytest.mark.parametrize("n_panels", [1, 3])
-def test_fixed_layouts_keep_every_label_inside_the_figure_and_off_other_panels(cases, run_dir, n_panels):
+@pytest.mark.parametrize("n_panels, long_names", [(1, False), (3, False), (3, True)])
+def test_fixed_layouts_keep_every_label_inside_the_figure_and_off_other_panels(cases, run_dir, n_panels, long_names):
     """The optics figures are laid out at fixed places (inches), not by matplotlib's layout engine: every text
-    the figures draw lies inside the figure, and no panel's text overlaps another panel's plotting area."""
+    the figures draw lies inside the figure; no panel's labels overlap another panel or colour bar; no title
+    overlaps another, long configuration names (wrapped to their panel) included."""
+    from dataclasses import replace
+
     from vissim.validation.dslr.optics_figures import through_focus_figure_of
 
     chosen = (cases * 3)[:n_panels]
+    if long_names:
+        chosen = [replace(case, configuration=f"configuration {i} with a name of fifty-four characters"[:54])
+                  for i, case in enumerate(chosen)]
     psfs = [case_psf(case) for case in chosen]
     for fig in (psf_figure_of(chosen, psfs), mtf_figure_of(chosen, psfs), through_focus_figure_of(chosen)):
         try:
@@ -207,14 +213,17 @@ def test_fixed_layouts_keep_every_label_inside_the_figure_and_off_other_panels(c
             fig.canvas.draw()
             renderer = fig.canvas.get_renderer()
             frame = fig.bbox
-            drawn = [(ax, ax.get_tightbbox(renderer)) for ax in fig.axes]  # each axes with its drawn labels
-            drawn += [(None, t.get_window_extent(renderer)) for t in fig.texts if t.get_text()]  # the title
-            plotting = [ax for ax in fig.axes if ax.get_images() or ax.get_lines()]
-            for owner, box in drawn:
-                assert frame.x0 - 0.5 <= box.x0 and box.x1 <= frame.x1 + 0.5, (owner, box, frame)
-                assert frame.y0 - 0.5 <= box.y0 and box.y1 <= frame.y1 + 0.5, (owner, box, frame)
-                for ax in plotting:
-                    if ax is not owner:
-                        assert not box.overlaps(ax.get_window_extent(renderer)), (owner, ax)
+            areas = [ax.get_window_extent(renderer) for ax in fig.axes]  # panels and colour bars
+            titles = [t.get_window_extent(renderer) for t in [*fig.texts, *(ax.title for ax in fig.axes)]
+                      if t.get_text()]
+            for box in [ax.get_tightbbox(renderer) for ax in fig.axes] + titles:
+                assert frame.x0 - 0.5 <= box.x0 and box.x1 <= frame.x1 + 0.5, (box, frame)
+                assert frame.y0 - 0.5 <= box.y0 and box.y1 <= frame.y1 + 0.5, (box, frame)
+            for i, ax in enumerate(fig.axes):  # an axes' labels off every other axes
+                labels = ax.get_tightbbox(renderer)
+                assert not any(labels.overlaps(area) for j, area in enumerate(areas) if j != i), ax
+            for i, title in enumerate(titles):  # a title off every axes and every other title
+                assert not any(title.overlaps(area) for area in areas), title
+                assert not any(title.overlaps(other) for other in titles[i + 1:]), title
         finally:
             plt.close(fig)

@@ -71,6 +71,17 @@ log = logging.getLogger(__name__)
 
 #: The tables' reach is rounded up to a multiple of this (deg), so nearby films and fields share them.
 TABLE_REACH_STEP_DEG = 5.0
+
+
+def _table_extent_deg(field_deg, span_deg, visual_axis_deg: float) -> float:
+    """How far from the optical axis the sensor's tables reach, deg: a bound on the image's reach
+    (`vissim.optics.eyes.traced_wavefront.image_reach_deg`) -- its widest corner from the line of sight plus the
+    visual axis's angle -- rounded up to `TABLE_REACH_STEP_DEG`, at most `EYE_RENDER_MAX_THETA_DEG`."""
+    corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0))) for f, span in zip(field_deg, span_deg)]
+    bound = math.degrees(math.atan(math.hypot(*corner))) + abs(visual_axis_deg)
+    return min(math.ceil(bound / TABLE_REACH_STEP_DEG) * TABLE_REACH_STEP_DEG, EYE_RENDER_MAX_THETA_DEG)
+
+
 #: Plugin name.
 SCHEMATIC_EYE_SENSOR = SENSOR_TYPE  # the scene names it so (vissim.bench.eye.scene)
 
@@ -149,9 +160,9 @@ def _make_class(mi, dr):
             width, height = self.film().size()
             self.span_deg = (width * self.arcmin_per_px / 60.0, height * self.arcmin_per_px / 60.0)
             self.visual_axis_rad = math.radians(eye.visual_axis_deg)
-            reach = image_reach_deg((height, width), self.arcmin_per_px, self.field_deg, eye.visual_axis_deg)
+            reach = image_reach_deg(eye, (height, width), self.arcmin_per_px, self.field_deg)
             if reach <= EYE_RENDER_MAX_THETA_DEG:  # beyond it the tables refuse the image, naming its reach
-                reach = min(math.ceil(reach / TABLE_REACH_STEP_DEG) * TABLE_REACH_STEP_DEG, EYE_RENDER_MAX_THETA_DEG)
+                reach = _table_extent_deg(self.field_deg, self.span_deg, eye.visual_axis_deg)
             self.tables = sensor_tables(eye, self.iris_mm, self.wavelength_nm, reach)
             # the film's map: where the chief ray lands at the model's reference wavelength, as every simulation
             # places its PSFs (`vissim.optics.eyes.psf_wavefront`): at another wavelength the image shifts by the

@@ -115,7 +115,7 @@ def eye_psf_grid(shape: tuple[int, int], eye: Eye, *, arcmin_per_px: float, wave
 def _check_image_field(shape: tuple[int, int], arcmin_per_px: float, centre, eye: Eye) -> None:
     """The image within `EYE_RENDER_MAX_THETA_DEG` of the eye's optical axis (`image_reach_deg`: as far as an eye's
     image is rendered), refused before any PSF."""
-    widest = image_reach_deg(shape[:2], arcmin_per_px, centre, eye.schematic.visual_axis_deg)
+    widest = image_reach_deg(eye.schematic, shape[:2], arcmin_per_px, centre)
     if widest > EYE_RENDER_MAX_THETA_DEG:
         raise VissimInputError(f"the image reaches {widest:.4g} deg from the eye's axis ({size_text(shape[:2])} at "
                                f"{arcmin_per_px:g} arcmin/px about the field angle ({centre[0]:g}, {centre[1]:g}) deg), "

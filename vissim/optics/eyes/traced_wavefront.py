@@ -98,18 +98,20 @@ def field_axis(eye: SchematicEye) -> str:
     return "visual axis" if eye.visual_axis_deg != 0.0 else "optical axis"
 
 
-def image_reach_deg(shape: tuple[int, int], arcmin_per_px: float, field_deg=(0.0, 0.0),
-                    visual_axis_deg: float = 0.0) -> float:
-    """How far from the eye's optical axis an image of ``shape`` (rows, cols) reaches, deg: the one rule for how
-    wide an eye's image may be (`vissim blur`'s check, the renderer's tables).
+def image_reach_deg(eye: SchematicEye, shape: tuple[int, int], arcmin_per_px: float, field_deg) -> float:
+    """How far from ``eye``'s optical axis an image of ``shape`` (rows, cols) reaches, deg: the one rule for how wide
+    an eye's image may be (`vissim blur`'s check and the renderer's refusal, both against `EYE_RENDER_MAX_THETA_DEG`).
 
-    The frame's widest corner (its pixels' outer edges: the film covers them) as (tan x, tan y) about the image's
-    field angle ``field_deg`` (OSA's x, y; `field_direction`), each axis at most 89 deg, plus the visual axis's
-    angle from the optical axis: a bound, reached by a corner on the visual axis's side.
+    The widest of the frame's corners (its pixels' outer edges: the film covers them) about the image's field angle
+    ``field_deg`` (OSA's x, y), each corner turned to the optical axis by `field_direction`; a corner beyond 89 deg
+    along an axis is taken at 89 (the image is refused either way). A frame's widest point is a corner: the
+    directions within an angle of an axis project onto the tangent plane as a convex region.
     """
-    span_deg = (shape[1] * arcmin_per_px / ARCMIN_PER_DEG, shape[0] * arcmin_per_px / ARCMIN_PER_DEG)  # x: columns
-    corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0))) for f, span in zip(field_deg, span_deg)]
-    return math.degrees(math.atan(math.hypot(*corner))) + visual_axis_deg
+    half_x, half_y = shape[1] * arcmin_per_px / (2 * ARCMIN_PER_DEG), shape[0] * arcmin_per_px / (2 * ARCMIN_PER_DEG)
+    xs = np.clip([field_deg[0] - half_x, field_deg[0] + half_x], -MAX_TRACE_FIELD_DEG, MAX_TRACE_FIELD_DEG)
+    ys = np.clip([field_deg[1] - half_y, field_deg[1] + half_y], -MAX_TRACE_FIELD_DEG, MAX_TRACE_FIELD_DEG)
+    corners = field_direction(eye, np.meshgrid(xs, ys))
+    return float(np.degrees(np.arccos(np.clip(corners[..., 2].min(), -1.0, 1.0))))
 
 
 def field_direction(eye: SchematicEye, field_deg) -> np.ndarray:

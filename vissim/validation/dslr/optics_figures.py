@@ -175,11 +175,11 @@ def psf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
     """The log-PSF figure (a panel per case) as a matplotlib figure."""
     fig, axes, layout = titled_panel_grid(
         1, len(cases), PSF_LAYOUT, "The wave simulation's PSF on a log scale (the synthetic chart's sampling; "
-        "pixel-integrated, origin at the chief ray, +y up)", fontsize=9)
+        "pixel-integrated, origin at the chief ray, +y up)", fontsize=9,
+        panel_titles=tuple(_panel_title(case) for case in cases))
     shown = None
-    for ax, case, psf in zip(axes[0], cases, psfs):
+    for ax, psf in zip(axes[0], psfs):
         shown = psf_panel(ax, psf)
-        ax.set_title(_panel_title(case), fontsize=8)
     axes[0, 0].set_ylabel("y (arcmin)", fontsize=8)
     bar = colorbar_beside(fig, layout, 1, len(cases), shown)
     bar.set_label("log10 PSF / peak", fontsize=8)
@@ -220,8 +220,9 @@ def mtf_curves(psf: PSF, pad: int = MTF_PADDING) -> dict[str, np.ndarray]:
 def mtf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
     """The MTF figure (a panel per case) as a matplotlib figure."""
     fig, axes, _ = titled_panel_grid(1, len(cases), MTF_LAYOUT, "MTF of the wave simulation's PSF (pixel removed) "
-                                     "against the diffraction-limited MTF of its pupil", fontsize=9)
-    for ax, case, psf in zip(axes[0], cases, psfs):
+                                     "against the diffraction-limited MTF of its pupil", fontsize=9,
+                                     panel_titles=tuple(_panel_title(case) for case in cases))
+    for ax, psf in zip(axes[0], psfs):
         curves = mtf_curves(psf)
         freq, cutoff = curves["frequency_cyc_per_deg"], float(curves["cutoff_cyc_per_deg"])
         ax.plot(freq, curves["diffraction"], color="black", lw=1.2, label="diffraction limit")
@@ -231,7 +232,6 @@ def mtf_figure_of(cases: list[OpticsCase], psfs: list[PSF]):
         ax.set_xscale("log")
         ax.set_xlim(freq[1], min(1.05 * cutoff, float(freq[-1])))
         ax.set_ylim(0, 1.02)
-        ax.set_title(_panel_title(case), fontsize=8)
         ax.set_xlabel(f"cycles/degree (log scale)\n{sampling_label(psf)}", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
@@ -255,7 +255,8 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
         len(cases), len(steps), THROUGH_FOCUS_LAYOUT,
         f"Through focus: the synthetic chart through the wave PSF of the camera prescription with its sphere stepped\n"
         f"({first.arcmin_per_px:g} arcmin/px, {first.pupil_diameter_mm:g} mm pupil, {first.wavelength_nm:g} nm, no "
-        "spectacle magnification; scale bars in arcmin)", fontsize=9)
+        "spectacle magnification; scale bars in arcmin)", fontsize=9,
+        panel_titles=tuple("camera Rx (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it" for step in steps))
     for i, case in enumerate(cases):
         chart = read_image(case.synthetic).pixels
         for j, step in enumerate(steps):
@@ -265,8 +266,6 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
             shown = ax.imshow(seen, cmap="gray", norm=image_norm(), interpolation="nearest")
             ax.set_xticks([])
             ax.set_yticks([])
-            if i == 0:
-                ax.set_title("camera Rx (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it", fontsize=8)
         scale_bar(axes[i, 0], chart.shape[1], case.arcmin_per_px)
         axes[i, 0].set_ylabel(f"{case.group}\n{trial_lens_phrase(case.trial_lenses)}\ncamera Rx "
                               f"{case.prescription.format(2)}", fontsize=7)

@@ -9,7 +9,6 @@ the display scale, labelled with the linear radiance they stand for.
 from __future__ import annotations
 
 import io
-import textwrap
 from typing import NamedTuple
 
 import matplotlib
@@ -22,7 +21,7 @@ from vissim.imageio import PNG_COMPRESS_LEVEL, srgb_decode, srgb_encode  # noqa:
 
 __all__ = ["Figure", "display_norm", "radiance_colorbar", "RADIANCE_LABEL", "DISPLAY_TICKS", "scale_bar",
            "scale_bar_arcmin", "tiles_alt", "png_bytes", "pyplot", "PanelLayout", "panel_grid", "titled_panel_grid",
-           "colorbar_beside"]
+           "wrapped_lines", "colorbar_beside"]
 
 #: The label of every grey image's colour bar.
 RADIANCE_LABEL = "relative radiance, display gamma"
@@ -73,36 +72,65 @@ def panel_grid(n_rows: int, n_cols: int, layout: PanelLayout):
     return fig, axes
 
 
-#: A figure title is wrapped to the figure's width at this many ems a character (the sans-serif's widest average,
-#: capitals and digits included), and each line added above the panels takes this many ems of height.
-TITLE_EM_PER_CHAR, TITLE_LINE_EM = 0.62, 1.25
+#: Titles are wrapped to this share of their width (glyph widths measured unhinted; the drawn text, hinted, may
+#: be a little wider), and each line the wrapping adds above the panels takes this many ems of height.
+TITLE_WIDTH_SHARE, TITLE_LINE_EM = 0.97, 1.25
 
 
-def titled_panel_grid(n_rows: int, n_cols: int, layout: PanelLayout, title: str, fontsize: float):
-    """`panel_grid` under ``title``, wrapped to the figure's width: (figure, axes, the layout used).
+def wrapped_lines(text: str, width_in: float, fontsize: float) -> list[str]:
+    """``text`` wrapped to ``width_in`` at ``fontsize`` (points), its own line breaks (blank lines too) kept: words
+    added to a line while the line's measured width fits; a single word wider than that stands alone."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import text_to_path
 
-    ``layout.top_in`` holds the title as written (its own line breaks); each line the wrapping adds raises the top
-    margin by one line."""
+    font, room_pt = FontProperties(size=fontsize), TITLE_WIDTH_SHARE * width_in * 72.0
+    lines = []
+    for part in text.split("\n"):
+        line = ""
+        for word in part.split():
+            longer = f"{line} {word}" if line else word
+            if line and text_to_path.get_text_width_height_descent(longer, font, ismath=False)[0] > room_pt:
+                lines.append(line)
+                longer = word
+            line = longer
+        lines.append(line)
+    return lines
+
+
+def titled_panel_grid(n_rows: int, n_cols: int, layout: PanelLayout, title: str, fontsize: float,
+                      panel_titles: tuple[str, ...] = (), panel_fontsize: float = 8.0):
+    """`panel_grid` under ``title``, wrapped to the figure's width, its first row's panels under ``panel_titles``
+    (one a column), each wrapped to its panel and the gap beside it: (figure, axes, the layout used).
+
+    ``layout.top_in`` holds the titles as written (their own line breaks); each line the wrapping adds to the
+    figure's title, or to the longest panel title, raises the top margin by one line."""
     width_in, _ = layout.size_in(n_rows, n_cols)
-    chars = max(20, int(width_in * 72.0 / (TITLE_EM_PER_CHAR * fontsize)))
-    lines = [line for part in title.split("\n") for line in textwrap.wrap(part, chars)]
-    added = len(lines) - (title.count("\n") + 1)
-    layout = layout._replace(top_in=layout.top_in + added * TITLE_LINE_EM * fontsize / 72.0)
+    lines = wrapped_lines(title, width_in, fontsize)
+    panels = [wrapped_lines(t, layout.panel_width_in + layout.column_gap_in, panel_fontsize) for t in panel_titles]
+    added_in = (len(lines) - (title.count("\n") + 1)) * TITLE_LINE_EM * fontsize / 72.0
+    added_in += max((len(w) - (t.count("\n") + 1) for w, t in zip(panels, panel_titles)), default=0) * (
+        TITLE_LINE_EM * panel_fontsize / 72.0)
+    layout = layout._replace(top_in=layout.top_in + added_in)
     fig, axes = panel_grid(n_rows, n_cols, layout)
     fig.suptitle("\n".join(lines), fontsize=fontsize)
+    for ax, wrapped in zip(axes[0], panels):
+        ax.set_title("\n".join(wrapped), fontsize=panel_fontsize)
     return fig, axes, layout
 
 
 #: A colour bar beside a panel grid: its gap from the grid and its width, inches; its share of the grid's height.
 COLORBAR_GAP_IN, COLORBAR_WIDTH_IN, COLORBAR_SHARE = 0.2, 0.15, 0.8
+#: The least room (inches) between a title spreading into a gap and the colour bar beyond it.
+TITLE_CLEARANCE_IN = 0.05
 
 
 def colorbar_beside(fig, layout: PanelLayout, n_rows: int, n_cols: int, shown):
-    """A colour bar of ``shown`` to the right of a `panel_grid`, centred on its height (in ``layout.right_in``)."""
+    """A colour bar of ``shown`` to the right of a `panel_grid`, centred on its height (in ``layout.right_in``), clear
+    of the last panel's title (`titled_panel_grid` lets a title spread half a gap beyond its panel)."""
     width, height = layout.size_in(n_rows, n_cols)
     grid_height = height - layout.top_in - layout.bottom_in
     bar_height = COLORBAR_SHARE * grid_height
-    left = width - layout.right_in + COLORBAR_GAP_IN
+    left = width - layout.right_in + max(COLORBAR_GAP_IN, layout.column_gap_in / 2 + TITLE_CLEARANCE_IN)
     bottom = layout.bottom_in + (grid_height - bar_height) / 2
     cax = fig.add_axes((left / width, bottom / height, COLORBAR_WIDTH_IN / width, bar_height / height))
     return fig.colorbar(shown, cax=cax)
