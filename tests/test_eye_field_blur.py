@@ -168,7 +168,7 @@ from vissim.optics.eyes.traced_wavefront import image_reach_deg  # noqa: E402
 def _corner_angles_deg(shape, arcmin_per_px, field_deg, alpha_deg):
     """Each frame corner's angle from the optical axis, from unit vectors (tan x, tan y, 1) / norm turned by the
     visual axis's alpha about y (an independent statement of the frames: docs/conventions.md)."""
-    half_x, half_y = shape[1] * arcmin_per_px / 120.0, shape[0] * arcmin_per_px / 120.0
+    half_x, half_y = (n * arcmin_per_px / 2 / 60.0 for n in (shape[1], shape[0]))  # 60 arcmin a degree
     a = np.radians(alpha_deg)
     angles = []
     for sx in (-1, 1):

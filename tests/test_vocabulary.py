@@ -26,6 +26,7 @@ from vissim.optics.rx.prescription import Prescription
 from vissim.optics.rx.trial_lens import EYE_VERTEX_DISTANCE_MM
 from vissim.provenance import make_provenance
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
+from vissim.units import mm_to_m
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -531,7 +532,7 @@ def _constant(name: str):
 def _in_concept_unit(value: float, name: str, unit: str) -> float:
     """A constant in its name's unit, in the concept's first unit: a length in mm where the concept's is metres."""
     concept_in_metres = unit == "m" or unit.startswith("m ")
-    return value / 1000.0 if name.endswith("_MM") and concept_in_metres else value
+    return mm_to_m(value) if name.endswith("_MM") and concept_in_metres else value
 
 
 @pytest.mark.parametrize("concept", CONCEPTS, ids=lambda c: c.name)

@@ -79,7 +79,7 @@ MONO_CHANNELS = ("Y",)
 RGB_CHANNELS = ("R", "G", "B")
 _SUFFIX_KIND = {".exr": "exr", ".png": "png", ".tif": "tiff", ".tiff": "tiff"}
 #: The eight bytes every PNG file begins with.
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: zlib's level for every PNG written: 3 takes 40 % less time than Pillow's default 6 for files 6 % larger.
 PNG_COMPRESS_LEVEL = 3
 
@@ -401,7 +401,7 @@ def _read_sidecar(path: Path) -> dict:
 def _read_png(path: Path) -> np.ndarray:
     with open(path, "rb") as fh:
         head = fh.read(33)
-    if len(head) < 33 or head[:8] != PNG_SIGNATURE or head[12:16] != b"IHDR":
+    if len(head) < 33 or head[:8] != _PNG_SIGNATURE or head[12:16] != b"IHDR":
         raise VissimInputError(f"{path}: not a PNG file (bad signature or header)")
     bit_depth, colour_type = struct.unpack(">BB", head[24:26])
     if colour_type != 3 and bit_depth not in (8, 16):
@@ -591,35 +591,37 @@ def write_image(
     if alpha_plane is not None:
         codes = np.dstack([codes, _quantise(path, alpha_plane, "linear", bit_depth)])
         extra["extrasamples"] = ["unassalpha"]
-    with output_transaction():  # the image and its sidecar appear together, or neither
-        with atomic_output(path, overwrite=overwrite) as tmp:
-            if kind == "png":
-                _PILImage.fromarray(codes).save(tmp, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
-            else:
-                photometric = "minisblack" if arr.ndim == 2 else "rgb"
-                tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib", **extra)
-        if provenance is not None:
-            write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
-    if provenance is None:
-        remove_output(sidecar)  # a stale provenance sidecar: gone once the image is in place
-    return path
+
+    def encode(tmp) -> None:
+        if kind == "png":
+            _PILImage.fromarray(codes).save(tmp, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
+        else:
+            photometric = "minisblack" if arr.ndim == 2 else "rgb"
+            tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib", **extra)
+
+    return _write_with_sidecar(path, sidecar, encode, provenance, overwrite)
 
 
 def write_png_bytes(path: str | os.PathLike[str], png: bytes, *, provenance: dict | None = None,
                     overwrite: bool = False) -> Path:
     """An already encoded PNG (a report figure) written as it is, atomically, with its provenance sidecar."""
     path = Path(path)
-    if _kind(path) != "png" or not bytes(png[:8]) == PNG_SIGNATURE:
+    if _kind(path) != "png" or not bytes(png[:8]) == _PNG_SIGNATURE:
         raise VissimInputError(f"cannot write {path}: expected PNG bytes for a .png file")
     sidecar = _sidecar_path(path)
     refuse_existing(path, sidecar, overwrite=overwrite)
-    with output_transaction():  # the image and its sidecar appear together, or neither
+    return _write_with_sidecar(path, sidecar, lambda tmp: Path(tmp).write_bytes(png), provenance, overwrite)
+
+
+def _write_with_sidecar(path: Path, sidecar: Path, write, provenance: dict | None, overwrite: bool) -> Path:
+    """``write(tmp)`` put in place at ``path`` with its provenance ``sidecar``, together or neither (checked before)."""
+    with output_transaction():
         with atomic_output(path, overwrite=overwrite) as tmp:
-            Path(tmp).write_bytes(png)
+            write(tmp)
         if provenance is not None:
             write_text_atomic(sidecar, to_json(provenance) + "\n", overwrite=overwrite)
     if provenance is None:
-        remove_output(sidecar)
+        remove_output(sidecar)  # a stale provenance sidecar: gone once the image is in place
     return path
 
 

@@ -45,7 +45,7 @@ def json_safe(value: Any) -> Any:
         return json_safe(value.tolist())
     if np is not None and isinstance(value, np.generic):
         return json_safe(value.item())
-    if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
+    if isinstance(value, (int, str)):  # their subclasses (the plain types returned above): IntEnum, a str Enum
         return value
     if isinstance(value, float):
         return value if math.isfinite(value) else ("nan" if math.isnan(value) else ("inf" if value > 0 else "-inf"))

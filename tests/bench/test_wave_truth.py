@@ -13,6 +13,7 @@ from vissim.optics.blur.convolve import blur_image
 from vissim.optics.psf.compute import compute_psf, suggested_size_px
 from vissim.optics.blur.resample import block_mean, magnify
 from vissim.optics.rx.trial_lens import TrialLens
+from vissim.units import mm_to_m
 
 D_LINE_NM = 587.5618
 
@@ -54,7 +55,7 @@ def test_a_chart_rendered_on_the_fine_grid_gives_the_same_truth_and_another_is_r
     """A campaign hands the wave truth the synthetic chart it rendered: the same pixels as the truth's own
     rendering of the spec, bit for bit; a chart at another sampling is refused, naming both."""
     bench = DslrBench(lenses=(TrialLens(1.5),))
-    spec = single_letter_spec("N", 1.0, viewing_distance_m=bench.chart_distance_mm / 1000)
+    spec = single_letter_spec("N", 1.0, viewing_distance_m=mm_to_m(bench.chart_distance_mm))
     rows, cols = bench.size_px
     fine = render_chart_angular(spec, bench.arcmin_per_px / 5, size_px=(rows * 5, cols * 5), snap_to_pixels=False)
     given, own = wave_truth(bench, fine, oversample=5), wave_truth(bench, spec, oversample=5)

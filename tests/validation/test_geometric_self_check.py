@@ -17,7 +17,7 @@ from vissim.validation.dslr.schema import CampaignSettings, Configuration
 from vissim.validation.engine.fields import LensSpec
 from vissim.optics.blur.resample import SUBPIXELS_PER_PX, block_mean
 from vissim.validation.dslr.align import ALIGN_TOLERANCE_PX, MAX_ALIGN_PASSES, align
-from vissim.validation.dslr.item import synthetic_tile
+from vissim.validation.dslr.item import synthetic_chart
 from vissim.validation.dslr.renders import build_dslr
 from vissim.validation.dslr.simulate import simulate, simulation_setup
 from vissim.validation.dslr.wave_bench import TRACED_RAYS, traced_ray_image
@@ -50,7 +50,7 @@ def test_the_trace_s_ray_image_is_the_vergence_geometric_simulation():
     for lenses in ((LensSpec(2.0),), (LensSpec(0.0, 2.0, 90.0),)):
         configuration = Configuration("c", "N", 0.7, lenses=lenses)
         bench = build_dslr(configuration, settings).bench
-        fine = synthetic_tile(configuration, settings, SUBPIXELS_PER_PX)
+        fine = synthetic_chart(configuration, settings, SUBPIXELS_PER_PX).pixels
         setup = simulation_setup("geometric", bench.viewing_setup(settings.wavelength_nm), bench.physical_lenses,
                                  configuration, settings)
         vergence = simulate(setup, fine, settings, oversample=SUBPIXELS_PER_PX)
@@ -66,7 +66,7 @@ def test_a_synthetic_input_is_aligned_on_its_fine_grid_and_the_result_is_not_res
     # offset (to its 0.01 px tolerance) and compare the simulation of the shifted fine input as
     # it comes out, not a resampled copy of it.
     settings = CampaignSettings(tile_px=(64, 64))
-    fine = ndimage.gaussian_filter(synthetic_tile(Configuration("c", "N", 0.7), settings, 5), 6.0)
+    fine = ndimage.gaussian_filter(synthetic_chart(Configuration("c", "N", 0.7), settings, 5).pixels, 6.0)
     reference = block_mean(np.roll(fine, (2, 1), axis=(0, 1)), 5)
     calls = []
 

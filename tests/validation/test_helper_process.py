@@ -38,9 +38,9 @@ def test_shared_figures_are_the_ones_drawn_here_in_order(two_cores):
 
 def test_a_started_helper_serves_the_figures_and_ends_with_the_block(two_cores):
     with campaign_helper("math"):
-        assert helper_process._STARTED
+        assert helper_process.started_helper() is not None
         assert draw_figures([(square, (x,)) for x in range(6)]) == [x * x for x in range(6)]
-    assert not helper_process._STARTED
+    assert helper_process.started_helper() is None
 
 
 def test_a_figure_that_fails_fails_the_report(two_cores):
@@ -61,7 +61,7 @@ def test_a_refusal_inside_the_block_stops_the_helper_at_once(two_cores, tmp_path
     monkeypatch.syspath_prepend(str(tmp_path))
     with pytest.raises(RuntimeError, match="refused"):
         with campaign_helper("minute_long_import"):
-            processes = list(helper_process.started_helper()._processes.values())
+            processes = [helper_process.started_helper().process]
             raise RuntimeError("refused")
     assert [process.exitcode for process in processes] == [-15]
 
@@ -71,5 +71,12 @@ def test_the_blocks_end_stops_the_helper_rather_than_waiting_for_its_teardown(tw
     # down while this process waits; exit code -15, not 0.
     with campaign_helper("json"):
         assert draw_figures([(square, (x,)) for x in range(4)]) == [0, 1, 4, 9]
-        processes = list(helper_process.started_helper()._processes.values())
+        processes = [helper_process.started_helper().process]
     assert [process.exitcode for process in processes] == [-15]
+
+
+def test_no_helper_beside_more_cores_than_it_was_measured_for(monkeypatch):
+    # On more than HELPER_CORES cores a campaign's items run on one thread a core, as before the helper.
+    monkeypatch.setattr(helper_process, "available_cores", lambda: helper_process.HELPER_CORES + 2)
+    with campaign_helper("json"):
+        assert helper_process.started_helper() is None

@@ -264,13 +264,14 @@ def test_letter_tiles_carry_an_angular_scale_bar(drawn):
 
     bars = [a for ax in drawn.axes for a in ax.artists if isinstance(a, AnchoredSizeBar)]
     assert len(bars) == 3  # one per column (configuration), on the truth tile
-    expected = scale_bar_arcmin(64, 1.0)  # the campaign: 64 px tiles at 1 arcmin/px
+    arcmin_per_px = 1.0  # the campaign: 64 px tiles at 1 arcmin/px
+    expected = scale_bar_arcmin(64, arcmin_per_px)
     assert expected == 20.0  # the longest round length within 40 % of 64 arcmin
     for bar in bars:
         rectangle = bar.size_bar.get_children()[0]
         tile = bar.axes.get_images()[0]  # the row's tiles share one axes: its data units per tile pixel
         left, right, _, _ = tile.get_extent()
         per_px = (right - left) / tile.get_array().shape[1]
-        assert rectangle.get_width() / per_px * 1.0 == pytest.approx(expected)  # px x arcmin/px
+        assert rectangle.get_width() / per_px * arcmin_per_px == pytest.approx(expected)
         assert bar.txt_label.get_text() == "20′"
     assert "scale bars 20 arcmin" in drawn._suptitle.get_text()

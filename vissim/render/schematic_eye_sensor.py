@@ -58,6 +58,7 @@ from vissim.checks import number_within
 from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX
 from vissim.optics.eyes.traced_wavefront import image_reach_deg, pupils_mm
+from vissim.units import ARCMIN_PER_DEG
 from vissim.render.plugins import register_once
 from vissim.optics.eyes.retina_map import chief_ray_radii_mm
 from vissim.render.schematic_eye_tables import EyeTables, eye_tables, table_theta_deg
@@ -71,15 +72,6 @@ log = logging.getLogger(__name__)
 
 #: The tables' reach is rounded up to a multiple of this (deg), so nearby films and fields share them.
 TABLE_REACH_STEP_DEG = 5.0
-
-
-def _table_extent_deg(field_deg, span_deg, visual_axis_deg: float) -> float:
-    """How far from the optical axis the sensor's tables reach, deg: a bound on the image's reach
-    (`vissim.optics.eyes.traced_wavefront.image_reach_deg`) -- its widest corner from the line of sight plus the
-    visual axis's angle -- rounded up to `TABLE_REACH_STEP_DEG`, at most `EYE_RENDER_MAX_THETA_DEG`."""
-    corner = [math.tan(math.radians(min(abs(f) + 0.5 * span, 89.0))) for f, span in zip(field_deg, span_deg)]
-    bound = math.degrees(math.atan(math.hypot(*corner))) + abs(visual_axis_deg)
-    return min(math.ceil(bound / TABLE_REACH_STEP_DEG) * TABLE_REACH_STEP_DEG, EYE_RENDER_MAX_THETA_DEG)
 
 
 #: Plugin name.
@@ -158,11 +150,12 @@ def _make_class(mi, dr):
             self.field_deg = (float(props.get("field_x_deg", 0.0)), float(props.get("field_y_deg", 0.0)))
             self.far_clip = float(props.get("far_clip", 1.0e7))
             width, height = self.film().size()
-            self.span_deg = (width * self.arcmin_per_px / 60.0, height * self.arcmin_per_px / 60.0)
+            self.span_deg = (width * self.arcmin_per_px / ARCMIN_PER_DEG,
+                             height * self.arcmin_per_px / ARCMIN_PER_DEG)
             self.visual_axis_rad = math.radians(eye.visual_axis_deg)
             reach = image_reach_deg(eye, (height, width), self.arcmin_per_px, self.field_deg)
             if reach <= EYE_RENDER_MAX_THETA_DEG:  # beyond it the tables refuse the image, naming its reach
-                reach = _table_extent_deg(self.field_deg, self.span_deg, eye.visual_axis_deg)
+                reach = min(math.ceil(reach / TABLE_REACH_STEP_DEG) * TABLE_REACH_STEP_DEG, EYE_RENDER_MAX_THETA_DEG)
             self.tables = sensor_tables(eye, self.iris_mm, self.wavelength_nm, reach)
             # the film's map: where the chief ray lands at the model's reference wavelength, as every simulation
             # places its PSFs (`vissim.optics.eyes.psf_wavefront`): at another wavelength the image shifts by the

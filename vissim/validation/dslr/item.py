@@ -40,7 +40,7 @@ from vissim.validation.engine.item_files import save_item_image
 from vissim.validation.engine.metrics import added_scores
 from vissim.validation.engine.truth import add_bench_diffraction, cached_psf
 
-__all__ = ["compute_item", "synthetic_chart", "synthetic_tile"]
+__all__ = ["compute_item", "synthetic_chart"]
 
 log = logging.getLogger(__name__)
 
@@ -61,11 +61,6 @@ def synthetic_chart(configuration: Configuration, settings: CampaignSettings, ov
         viewing_distance_m=settings.chart_distance_m,
         snap_to_pixels=False,
     )
-
-
-def synthetic_tile(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> np.ndarray:
-    """`synthetic_chart`'s pixels."""
-    return synthetic_chart(configuration, settings, oversample).pixels
 
 
 def _comparison(kind: str, input_name: str, reference_kind: str, reference_image: str, setup: dict,

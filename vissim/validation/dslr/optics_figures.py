@@ -33,8 +33,8 @@ from vissim.validation.engine.figures import (PanelLayout, colorbar_beside, disp
 from vissim.validation.engine.summary import NO_LENS
 
 __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_panel", "mtf_curves", "psf_figure_of",
-           "mtf_figure_of", "through_focus_figure_of", "optics_figures", "optics_figure", "OPTICS_FIGURE_FILES", "recorded_psf", "THROUGH_FOCUS_STEPS_D",
-           "LOG_PSF_DECADES"]
+           "mtf_figure_of", "through_focus_figure_of", "optics_figure", "OPTICS_FIGURES", "recorded_psf",
+           "THROUGH_FOCUS_STEPS_D", "LOG_PSF_DECADES"]
 
 log = logging.getLogger(__name__)
 
@@ -273,47 +273,44 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
     return fig
 
 
-#: The optics figures, by name: their files.
-OPTICS_FIGURE_FILES = {"wave PSF (log scale) per group": "figure_psf.png",
-                       "MTF against the diffraction limit per group": "figure_mtf.png",
-                       "through focus per group": "figure_through_focus.png"}
+def _psf_figure(cases: list[OpticsCase], image_norm) -> tuple[object, str]:
+    return psf_figure_of(cases, [recorded_psf(case) for case in cases]), (
+        f"The wave simulation's point spread function, log10 of PSF over peak down to 1e-{LOG_PSF_DECADES}, axes "
+        f"in arcmin, one panel per group: {_panels(cases)}.")
 
 
-def optics_figure(results: list[dict], run_dir: str | Path, campaign: dict, name: str,
-                  image_norm=None) -> tuple[str, object, dict, str] | None:
-    """One of the report's optics figures (`OPTICS_FIGURE_FILES`): (file name, matplotlib figure, provenance extras,
-    alt text), or None (no wave items; no synthetic chart for the through-focus strip).
+def _mtf_figure(cases: list[OpticsCase], image_norm) -> tuple[object, str]:
+    return mtf_figure_of(cases, [recorded_psf(case) for case in cases]), (
+        "MTF of the wave simulation's PSF against cycles per degree (log scale), along x, along y and the ring "
+        f"mean, with the diffraction-limited MTF of the pupil, one panel per group: {_panels(cases)}.")
 
-    ``campaign``: the run's ``campaign.json`` record; ``image_norm`` as in `through_focus_figure_of`.
+
+def _through_focus_figure(cases: list[OpticsCase], image_norm) -> tuple[object, str] | None:
+    strip = through_focus_figure_of(cases, image_norm)
+    steps = ", ".join(f"{s:+g} D" for s in THROUGH_FOCUS_STEPS_D)
+    return None if strip is None else (strip, (
+        f"The synthetic letter blurred by the wave PSF with the camera prescription's sphere stepped by {steps}, "
+        f"one row per group ({_panels(cases)}), with an angular scale bar in arcmin."))
+
+
+def _panels(cases: list[OpticsCase]) -> str:
+    return "; ".join(_panel_title(c).replace("\n", ", ") for c in cases)
+
+
+#: The optics figures, by name: their files and how each is drawn.
+OPTICS_FIGURES = {"wave PSF (log scale) per group": ("figure_psf.png", _psf_figure),
+                  "MTF against the diffraction limit per group": ("figure_mtf.png", _mtf_figure),
+                  "through focus per group": ("figure_through_focus.png", _through_focus_figure)}
+
+
+def optics_figure(cases: list[OpticsCase], name: str, image_norm=None) -> tuple[str, object, dict, str] | None:
+    """One of the report's optics figures (`OPTICS_FIGURES`) of ``cases`` (`optics_cases`): (file name, matplotlib
+    figure, provenance extras, alt text), or None (no wave items; no synthetic chart for the through-focus strip).
+
+    ``image_norm`` as in `through_focus_figure_of`.
     """
-    cases = optics_cases(results, run_dir, campaign)
     if not cases:
         return None
-    extra = {"optics": [case.as_json() for case in cases]}
-    panels = "; ".join(_panel_title(c).replace("\n", ", ") for c in cases)
-    file_name = OPTICS_FIGURE_FILES[name]
-    if file_name == "figure_psf.png":
-        return file_name, psf_figure_of(cases, [recorded_psf(case) for case in cases]), extra, (
-            f"The wave simulation's point spread function, log10 of PSF over peak down to 1e-{LOG_PSF_DECADES}, axes "
-            f"in arcmin, one panel per group: {panels}.")
-    if file_name == "figure_mtf.png":
-        return file_name, mtf_figure_of(cases, [recorded_psf(case) for case in cases]), extra, (
-            "MTF of the wave simulation's PSF against cycles per degree (log scale), along x, along y and the ring "
-            f"mean, with the diffraction-limited MTF of the pupil, one panel per group: {panels}.")
-    strip = through_focus_figure_of(cases, image_norm)
-    if strip is None:
-        return None
-    steps = ", ".join(f"{s:+g} D" for s in THROUGH_FOCUS_STEPS_D)
-    return file_name, strip, extra, (
-        f"The synthetic letter blurred by the wave PSF with the camera prescription's sphere stepped by {steps}, "
-        f"one row per group ({panels}), with an angular scale bar in arcmin.")
-
-
-def optics_figures(results: list[dict], run_dir: str | Path, campaign: dict,
-                   image_norm=None) -> dict[str, tuple[str, object, dict, str]]:
-    """The report's optics figures (`optics_figure`): name -> (file name, matplotlib figure, provenance extras, alt
-    text); empty without wave items."""
-    figures = {name: optics_figure(results, run_dir, campaign, name, image_norm) for name in OPTICS_FIGURE_FILES}
-    figures = {name: figure for name, figure in figures.items() if figure is not None}
-    log.info("optics figures: %s", ", ".join(f for f, *_ in figures.values()))
-    return figures
+    file_name, draw = OPTICS_FIGURES[name]
+    drawn = draw(cases, image_norm)
+    return None if drawn is None else (file_name, drawn[0], {"optics": [case.as_json() for case in cases]}, drawn[1])

@@ -16,7 +16,7 @@ from vissim.imageio import read_image
 from vissim.progress import counter
 from vissim.validation.dslr.fit_report import fit_table
 from vissim.validation.dslr.schema import lens_label_of
-from vissim.validation.dslr.optics_figures import OPTICS_FIGURE_FILES, optics_figure
+from vissim.validation.dslr.optics_figures import OPTICS_FIGURES, optics_cases, optics_figure
 from vissim.validation.dslr.report_words import arcmin_per_px_of, column_title, group_of
 from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENCH_NOTE
 from vissim.validation.dslr.wave_bench_report import (SELF_CHECK_MARGIN_DB, is_wave_bench_row, self_check_table,
@@ -348,17 +348,29 @@ def _figure(results: list[dict], run_dir: Path, simulation: str, input_kind: str
     return Figure("", png_bytes(grid.fig), alt)
 
 
-def _optics_figure(results: list[dict], run_dir: Path, record: dict, name: str) -> Figure | str | None:
+_SKIPPED = (KeyError, OSError, ValueError, VissimInputError)  # what a run folder's records can hold against a figure
+
+
+def _optics_figure(cases: list, name: str) -> Figure | str | None:
     """One optics figure (`vissim.validation.dslr.optics_figures.optics_figure`), None, or why it was skipped; the rest
     of the report does not depend on it."""
     try:
-        drawn = optics_figure(results, run_dir, record, name, display_norm)
-    except (KeyError, OSError, ValueError, VissimInputError) as error:
-        return f"report: the optics figures were skipped ({type(error).__name__}: {error})"
+        drawn = optics_figure(cases, name, display_norm)
+    except _SKIPPED as error:
+        return f"report: the optics figure {name!r} was skipped ({type(error).__name__}: {error})"
     if drawn is None:
         return None
     file_name, fig, extra, alt = drawn
     return Figure(file_name, png_bytes(fig), alt, extra)
+
+
+def _cases_or_none(results: list[dict], run_dir: Path, record: dict) -> list:
+    """The optics figures' cases (read once, here), or none, the reason logged."""
+    try:
+        return optics_cases(results, run_dir, record)
+    except _SKIPPED as error:
+        log.warning("report: the optics figures were skipped (%s: %s)", type(error).__name__, error)
+        return []
 
 
 def dslr_report(results: list[dict], run_dir: Path, record: dict, progress=None) -> ReportParts:
@@ -375,18 +387,20 @@ def dslr_report(results: list[dict], run_dir: Path, record: dict, progress=None)
                for s in SYNTHETIC_FIGURES]
     wanted.append(("wave", "synthetic", True, f"{column_words(('wave', 'synthetic'))}, against the wave bench",
                    f"figure_wave_{WAVE_BENCH}.png"))
-    advance = counter(progress, "figures", len(wanted) + len(OPTICS_FIGURE_FILES))
-    optics = [(_optics_figure, (results, run_dir, record, name)) for name in reversed(OPTICS_FIGURE_FILES)]
+    advance = counter(progress, "figures", len(wanted) + len(OPTICS_FIGURES))
+    cases = _cases_or_none(results, run_dir, record)
+    order = list(reversed(OPTICS_FIGURES))  # the slowest first: the through-focus strip
+    optics = [(_optics_figure, (cases, name)) for name in order]
     tiles = [(_figure, (results, run_dir, simulation, input_kind, wave_bench, record))
              for simulation, input_kind, wave_bench, _, _ in wanted]
-    drawn = draw_figures(optics + tiles, advance)  # the slowest first: the through-focus strip
+    drawn = draw_figures(optics + tiles, advance)
     for (_, _, _, name, file_name), figure in zip(wanted, drawn[len(optics):]):
         if figure is not None:
             figures[name] = figure._replace(file_name=file_name)
-    optics_drawn = dict(zip(reversed(OPTICS_FIGURE_FILES), drawn[:len(optics)]))
-    for message in sorted({figure for figure in optics_drawn.values() if isinstance(figure, str)}):
+    optics_drawn = dict(zip(order, drawn[:len(optics)]))
+    for message in (figure for figure in optics_drawn.values() if isinstance(figure, str)):
         log.warning("%s", message)
-    figures.update({name: optics_drawn[name] for name in OPTICS_FIGURE_FILES if isinstance(optics_drawn[name], Figure)})
+    figures.update({name: optics_drawn[name] for name in OPTICS_FIGURES if isinstance(optics_drawn[name], Figure)})
     title = f"vissim validation: {record.get('name', run_dir.name)}"
     rows = metrics_rows(results)
     body = markdown_tables(results, rows)
