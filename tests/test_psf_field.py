@@ -62,6 +62,16 @@ def test_airy_tail_is_the_integrated_airy_pattern():
         assert float(airy_tail(np.array(r))) == pytest.approx(1 - energy, abs=1e-5), r
 
 
+def test_airy_tail_at_its_limits():
+    # Nothing lies within a radius <= 0, all of it within an infinite one; beyond the table, the asymptote
+    # 2 / (pi^2 r) (Born & Wolf's large-v limit); NaN stays NaN.
+    r = np.array([-3.0, -0.0, 0.0, np.inf, -np.inf, 100.0, np.nan])
+    tail = airy_tail(r)
+    np.testing.assert_array_equal(tail[:5], [1.0, 1.0, 1.0, 0.0, 1.0])
+    assert tail[5] == pytest.approx(2.0 / (math.pi**2 * 100.0), rel=1e-12)
+    assert np.isnan(tail[6])
+
+
 @pytest.mark.parametrize("name", list(CASES))
 def test_estimates_bracket_the_measured_energy_outside(measured, name):
     # Near the 1 % limit (0.5-2 % outside) the conservative estimate, which sizes fields, is

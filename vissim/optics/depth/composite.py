@@ -49,7 +49,9 @@ class LayerScene:
         """The scene and its tent ``matte`` (lower, upper, frac) moved to ``backend``; each non-empty layer's
         reach found from its PSF's size."""
         reach = {k: (optics.sizes[k] // 2 + 1) * optics.scales[k] for k in optics.fronts}
-        colour, lower, upper, frac = (backend.asarray(a) for a in (colour, *matte))
+        lower, upper, frac = matte
+        lower, upper = (np.asarray(a, np.intp) for a in (lower, upper))  # take()'s own index type: no copy per layer
+        colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
         return cls(colour, lower, upper, frac, layer_diopters, threshold_diopters, boxes, reach, optics, padding,
                    backend, threads)
 
@@ -105,7 +107,24 @@ class Compositor:
 
     def add(self, k: int, window: tuple, blurred, shape: tuple[int, int]) -> None:
         """Layer ``k`` (nearer ones added before it), through its transmission ``T_k``."""
-        proximity, threshold = self.scene.layer_diopters[k], self.scene.threshold_diopters
+        proximity = self.scene.layer_diopters[k]
+        transmitted = self._transmission(proximity, window)
+        self.largest = max(self.largest, shape)
+        if proximity - self.scene.threshold_diopters > self.farthest:  # it occludes layers behind: keep its coverage
+            self.pending.append((proximity, window, blurred[-1].copy()))
+        seen = np.flatnonzero(self.scene.backend.to_numpy(transmitted.any(axis=1)))  # rows fully hidden add nothing
+        if seen.size == 0:
+            return
+        first, end = int(seen[0]), int(seen[-1]) + 1
+        r0, c0, c1 = window[0], window[2], window[3]
+        blurred = blurred[:, first:end]
+        blurred *= transmitted[first:end]
+        self.numerator[:, r0 + first : r0 + end, c0:c1] += blurred[:-1]
+        self.denominator[r0 + first : r0 + end, c0:c1] += blurred[-1]
+
+    def _transmission(self, proximity: float, window: tuple):
+        """``T`` on ``window`` for a layer at ``proximity`` (D): what the nearer layers added so far let through."""
+        threshold, xp = self.scene.threshold_diopters, self.scene.backend.xp
         while self.pending and self.pending[0][0] - proximity >= 2 * threshold:  # near to far
             _, (r0, r1, c0, c1), matte_j = self.pending.pop(0)
             self.occluders[r0:r1, c0:c1] += matte_j
@@ -114,14 +133,10 @@ class Compositor:
         for proximity_j, window_j, matte_j in self.pending:
             weight = occlusion_weight(proximity_j - proximity, threshold)
             if weight > 0:
-                add_overlap(transmitted, window, weight * matte_j, window_j)
-        self.scene.backend.xp.clip(1.0 - transmitted, 0.0, 1.0, out=transmitted)
-        self.largest = max(self.largest, shape)
-        if proximity - threshold > self.farthest:  # it occludes layers behind: keep its coverage
-            self.pending.append((proximity, window, blurred[-1].copy()))
-        blurred *= transmitted
-        self.numerator[:, r0:r1, c0:c1] += blurred[:-1]
-        self.denominator[r0:r1, c0:c1] += blurred[-1]
+                add_overlap(transmitted, window, matte_j, window_j, scale=weight)
+        xp.subtract(1.0, transmitted, out=transmitted)
+        xp.clip(transmitted, 0.0, 1.0, out=transmitted)
+        return transmitted
 
     def image(self, crop: int) -> np.ndarray:
         """The composite, normalised by the blurred coverage, ``crop`` px cut from each side: (C, H', W') on the CPU."""

@@ -49,8 +49,9 @@ focus; every output is a weighted mean of (extended) input colours.
 Cost: per non-empty layer one PSF (cached by wavefront; for an eye whose wavefront is defocus
 alone the symmetric plan pairs layers of opposite defocus, whose PSFs are point reflections of
 each other, so about half are computed), one pull-push and one batched convolution of
-(colours, extended coverage) (one real FFT pair, `vissim.optics.blur.device.convolve_padded`;
-blur.py's overlap-save squares measured no faster on these windows), on the layer's *window*: the box of its tent matte grown by ``2 (r_k + r_max)`` pixels (``r`` the
+(colours, extended coverage) (one real FFT pair, `vissim.optics.depth.windows.blur_window`,
+whose row transforms skip the padding rows on the CPU; blur.py's overlap-save squares measured
+no faster on these windows), on the layer's *window*: the box of its tent matte grown by ``2 (r_k + r_max)`` pixels (``r`` the
 PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
 content's blur (``r_max``) lets it show, and both spread once more through partly occluding
 neighbours.  The continuation itself is estimated by pull-push on the window grown by another
@@ -60,7 +61,8 @@ the neighbourhood the whole frame would give them: the depth campaign's RGB-D re
 60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
 a floor, each window is a few per cent of the frame.  Within it, the FFT covers only the box of
 the extended layer's nonzero pixels grown by ``r_k`` (beyond it the blur is exactly zero), and
-pull-push sums only the rows that hold the layer's matte (the rest are sums of zeros).
+pull-push sums only the rows that hold the layer's matte (the rest are sums of zeros).  The
+compositor adds a layer only on the rows where nearer content leaves it visible.
 
 Threads: a layer's extension and blur depend on no other layer; only its compositing (the
 transmission through nearer layers) does.  On the CPU, one thread per core extends and blurs
@@ -93,6 +95,7 @@ from vissim.optics.depth.psfs import LayerOptics, in_order, layer_pool, worker_t
 from vissim.optics.depth.windows import COARSE_FACTOR, DEPTH_PADDING_MODES, layer_boxes
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.psf.compute import geometric_blur_radius_arcmin
+from vissim.optics.psf.field_size import load_size_tables
 from vissim.optics.rx.viewing_setup import DepthViewer
 from vissim.optics.pupil.wavefront import Wavefront
 from vissim.progress import Progress
@@ -356,9 +359,11 @@ def blur_depth(
     plan, threshold_diopters = _depth_plan(proximity, in_focus_diopters, step, pupil, layer_spacing_fraction,
                                            threshold_px, max_layers)
     layer_diopters = np.array(plan.proximities_diopters)
-    matte = _tent_matte(proximity, layer_diopters)
     threads = worker_threads(backend)
     with layer_pool(threads) as pool:  # one thread per core on the CPU: blur sizes, PSFs, layers
+        if pool is not None:  # the PSF sizes' tables load (and their imports run) while the matte is cut
+            pool.submit(load_size_tables)
+        matte = _tent_matte(proximity, layer_diopters)
         boxes_job = None if pool is None else pool.submit(layer_boxes, matte.lower, matte.upper, matte.frac, plan.n_layers)
         optics, layers = _layer_optics(eye, layer_diopters, matte, wavelength, step, mode, coarse_blur_px, pool)
         boxes = layer_boxes(matte.lower, matte.upper, matte.frac, plan.n_layers) if boxes_job is None else boxes_job.result()

@@ -130,7 +130,8 @@ def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, 
     """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
 
     With a ``pool`` (of ``threads``) the layers are worked on ahead on it (at most ``2 threads`` ahead
-    of the caller; their PSFs twice as far ahead, so that a layer seldom waits for its own):
+    of the caller; their PSFs twice as far ahead, so that a layer seldom waits for its own, each
+    submitted just before its layer, so that the first layers start at once):
     a layer's extension and blur depend on no other layer, only its compositing (the caller's)
     does.  A layer's task waits only for PSF tasks submitted before it, which have therefore
     started: no deadlock.
@@ -142,9 +143,8 @@ def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, 
         return
     futures: dict = {}
     for i, k in enumerate(order):
-        for later in order[i : i + 4 * threads + 1]:
-            optics.prefetch(pool, later)
-        for later in order[i : i + 2 * threads + 1]:
-            if later not in futures:
+        for j, later in enumerate(order[i : i + 4 * threads + 1]):
+            optics.prefetch(pool, later)  # each layer's PSF just before its blur: the first blurs start at once
+            if j <= 2 * threads and later not in futures:
                 futures[later] = pool.submit(work, later)
         yield k, futures.pop(k).result()

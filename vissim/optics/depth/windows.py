@@ -5,13 +5,14 @@ Used by `vissim.optics.depth.depth_map.blur_depth` (module doc there: "Compositi
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
 from vissim.optics.runtime.array_backend import ArrayBackend, array_module
-from vissim.optics.blur.convolve import pad_array, padded_shape, padding_width_px
+from vissim.optics.blur.convolve import BlurKernel, pad_array, padded_shape, padding_width_px
 from vissim.optics.blur.device import convolve_padded
 from vissim.optics.psf.compute import PSF
 from vissim.optics.depth.pullpush import pull_push, upsample2
@@ -74,14 +75,17 @@ def extended_layer(colour, lower, upper, frac, layer_diopters: np.ndarray, k: in
     # (rows without hidden pixels: nothing to add).
     r0, r1 = int(hidden_rows[0]) // 2, (int(hidden_rows[-1]) + 2) // 2  # estimate rows: 2 x 2 cells
     estimate = pull_push(stack, scratch, rows=(first, end), wanted=(r0, r1))
-    upsampled = work["upsampled"][:, 2 * r0 : 2 * r1]
-    upsampled.reshape(n_ch + 1, r1 - r0, 2, estimate.shape[2], 2)[...] = estimate[:, :, None, :, None]
+    # each estimate cell's two columns, then its two rows one parity at a time (nearest upsampling, unbuilt)
+    columns = xp.repeat(estimate, 2, axis=2)[:, :, : hidden.shape[1]]
     low, high = max(2 * r0, keep_first), min(2 * r1, keep_end)
-    upsampled = upsampled[:, low - 2 * r0 : high - 2 * r0, : hidden.shape[1]]
-    hidden = hidden[low:high]
-    hidden *= hidden
-    upsampled *= hidden
-    stack[:, low:high] += upsampled
+    squared = hidden[low:high]
+    squared *= squared
+    for parity in (0, 1):
+        start = low + (parity - low) % 2  # the first row of this parity
+        count = len(range(start, high, 2))
+        if count:
+            cells = columns[:, (start - 2 * r0) // 2 : (start - 2 * r0) // 2 + count]
+            stack[:, start:high:2] += cells * squared[start - low :: 2]
     return stack
 
 
@@ -134,43 +138,99 @@ def _to_host(array) -> np.ndarray:
     return array.get() if hasattr(array, "get") and not isinstance(array, np.ndarray) else np.asarray(array)
 
 
-def add_overlap(target: np.ndarray, window, source: np.ndarray, source_window) -> None:
-    """``target`` (on ``window``) += ``source`` (on ``source_window``) where the two windows overlap."""
+def add_overlap(target: np.ndarray, window, source: np.ndarray, source_window, scale=None) -> None:
+    """``target`` (on ``window``) += ``source`` (on ``source_window``), times ``scale`` if given, where the two
+    windows overlap."""
     r0, r1 = max(window[0], source_window[0]), min(window[1], source_window[1])
     c0, c1 = max(window[2], source_window[2]), min(window[3], source_window[3])
     if r0 < r1 and c0 < c1:
+        part = source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
         target[r0 - window[0] : r1 - window[0], c0 - window[2] : c1 - window[2]] += \
-            source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
+            part if scale is None else scale * part
 
 
 def blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
                 threads: int | None = None) -> tuple:
-    """Blur (C, h, w) planes of a window with one PSF (`vissim.optics.blur.device.convolve_padded`).
+    """Blur (C, h, w) planes of a window with one PSF: one real FFT pair on the padded grid.
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
     Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
     the image they are zero (the window already holds everything of the layer that reaches it).
     ``backend`` holds the planes (NumPy or CuPy);
     ``threads``: the CPU FFT's threads (default all).  Returns the blurred planes and the padded grid's shape.
+    On the CPU the rows' transforms skip the padding rows (`_pruned_convolution`); on a GPU the
+    padded grid goes whole to `vissim.optics.blur.device.convolve_padded`.
     """
     if padding not in DEPTH_PADDING_MODES:
         raise AssertionError(f"depth padding {padding!r}")  # pragma: no cover  (blur_depth refuses it)
     n, h, w = planes.shape
     offset = padding_width_px(psf.data.shape[0])
     shape = padded_shape((h, w), psf.data.shape[0])
-    padded = pad_array(planes, ((0, 0), (offset, shape[0] - h - offset), (offset, shape[1] - w - offset)), padding,
-                       xp=backend.xp)
-    top, bottom, left, right = touches
-    if not top:
-        padded[:, :offset] = 0.0
-    if not bottom:
-        padded[:, offset + h :] = 0.0
-    if not left:
-        padded[:, :, :offset] = 0.0
-    if not right:
-        padded[:, :, offset + w :] = 0.0
+    if backend is CPU_BACKEND:
+        return _pruned_convolution(planes, psf, padding, touches, offset, shape, threads), shape
+    padded = _padded(planes, -2, (offset, shape[0] - h - offset), padding, touches[:2], backend.xp)
+    padded = _padded(padded, -1, (offset, shape[1] - w - offset), padding, touches[2:], backend.xp)
     blurred = convolve_padded(padded, psf, backend, threads=threads)
     return blurred[:, offset : offset + h, offset : offset + w], shape
+
+
+def _padded(array, axis: int, widths: tuple[int, int], padding: str, touches: tuple[bool, bool], xp=np):
+    """``array`` padded along ``axis`` by ``widths`` (before, after): as ``padding`` says on a side that
+    ``touches`` the image's border, zeros on a side inside the image (`numpy.pad`'s values, faster)."""
+    size = array.shape[axis]
+    (before, after), along = widths, functools.partial(_along, axis, array.ndim)
+    if padding == "reflect" and max(widths) > size:  # reflections of reflections: numpy.pad's own
+        full = [(0, 0)] * array.ndim
+        full[axis] = widths
+        padded = pad_array(array, full, padding, xp=xp)
+    else:
+        shape = list(array.shape)
+        shape[axis] += before + after
+        padded = xp.empty(shape, array.dtype)
+    padded[along(before, before + size)] = array
+    # each side: where it lies, the pixel "edge" repeats, the pixels "reflect" mirrors (numpy.pad's "symmetric")
+    for touching, side, edge, mirrored in ((touches[0], (0, before), (0, 1), (0, before)),
+                                           (touches[1], (before + size, before + size + after), (size - 1, size),
+                                            (size - after, size))):
+        if side[0] == side[1]:
+            continue
+        if not touching:
+            padded[along(*side)] = 0.0
+        elif padding == "edge":
+            padded[along(*side)] = array[along(*edge)]
+        elif max(widths) <= size:
+            padded[along(*side)] = xp.flip(array[along(*mirrored)], axis=axis)
+    return padded
+
+
+def _along(axis: int, ndim: int, start: int, stop: int) -> tuple:
+    index = [slice(None)] * ndim
+    index[axis] = slice(start, stop)
+    return tuple(index)
+
+
+def _pruned_convolution(planes, psf: PSF, padding: str, touches, offset: int, shape: tuple[int, int],
+                        threads: int | None):
+    """`vissim.optics.blur.device.convolve_padded` of the padded planes, cropped to the planes, bit for bit, for
+    about three quarters of its work: the real transforms along the rows run only on the planes' own rows.
+
+    A 2-D real FFT transforms each row, then each column.  A padding row is zero or a copy of a
+    plane's row (edge, reflect), so its row transform is zero or a copy: the rows' spectra are
+    padded instead of the rows.  Backwards, only the planes' rows are transformed back, and the
+    inverse's 1 / (rows x cols) is applied last, as pocketfft applies it.
+    """
+    n, h, w = planes.shape
+    workers = -1 if threads is None else threads
+    top, bottom, left, right = offset, shape[0] - h - offset, offset, shape[1] - w - offset
+    fft = CPU_BACKEND.fft
+    rows = fft.rfft(_padded(planes, -1, (left, right), padding, touches[2:]), axis=-1, workers=workers)
+    spectrum = fft.fft(_padded(rows, -2, (top, bottom), padding, touches[:2]), axis=-2, workers=workers,
+                       overwrite_x=True)
+    spectrum *= BlurKernel.prepare(psf, shape, dtype=np.float32, workers=workers).transfer
+    spectrum = fft.ifft(spectrum, axis=-2, workers=workers, overwrite_x=True, norm="forward")
+    blurred = fft.irfft(spectrum[:, top : top + h], n=shape[1], axis=-1, workers=workers, norm="forward")
+    blurred *= blurred.dtype.type(1.0 / (shape[0] * shape[1]))
+    return blurred[:, :, left : left + w]
 
 
 #: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of `blur_depth`).
@@ -205,5 +265,4 @@ def _workspace(shape: tuple[int, int, int], xp=np) -> dict:
         "stack": xp.empty((n_ch + 1, rows, cols), np.float32),
         "hidden": xp.empty((rows, cols), np.float32),
         "scratch": xp.empty((rows, cols), np.float32),
-        "upsampled": xp.empty((n_ch + 1, rows + rows % 2, cols + cols % 2), np.float32),
     }

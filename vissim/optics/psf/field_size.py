@@ -45,6 +45,7 @@ scipy_special = lazy_module("scipy.special")
 __all__ = [
     "MAX_ENERGY_OUTSIDE",
     "leaves_too_much_outside",
+    "load_size_tables",
     "energy_outside_field",
     "geometric_blur_radius_arcmin",
     "size_holding_px",
@@ -177,6 +178,12 @@ def _suggested_size(wavefront, diameter, step, wavelengths, weights, lca_referen
     return _search_size(fans, diameter, wavelengths, step, start, MAX_ENERGY_OUTSIDE)
 
 
+def load_size_tables() -> None:
+    """Build the tables `suggested_size_px` reads (once per process; SciPy's special functions imported), so a
+    caller can have them made on another thread while it works."""
+    _airy_tail_table()
+
+
 @functools.cache
 def _airy_tail_table() -> tuple[np.ndarray, np.ndarray]:
     r = np.linspace(0.0, _AIRY_TABLE_LAMBDA_OVER_D, 20001)
@@ -191,7 +198,7 @@ def airy_tail(r_lambda_over_d: np.ndarray) -> np.ndarray:
     r, tail = _airy_tail_table()
     x = np.asarray(r_lambda_over_d, dtype=float)
     far = (2.0 / np.pi**2) / np.maximum(x, r[-1])
-    position = np.clip(np.nan_to_num(x), 0.0, r[-1]) * ((len(r) - 1) / r[-1])  # a uniform table: the cell by division
+    position = np.fmin(np.fmax(x, 0.0), r[-1]) * ((len(r) - 1) / r[-1])  # NaN to 0; a uniform table: the cell by division
     cell = np.minimum(position.astype(np.intp), len(r) - 2)
     fraction = position - cell
     near = tail[cell] * (1.0 - fraction) + tail[cell + 1] * fraction
