@@ -1,15 +1,20 @@
 """A depth layer's window blur and its pull-push upsampling, against independent oracles.
 
-Oracles: ``numpy.pad`` (the window's padding: its mode on a side at the image's border, zeros on a
-side inside the image); a direct spatial convolution in float64 of the planes so padded (the
-window's blur, to float32 round-off: 1e-5 of the planes' range); `convolve_padded`, the full
-padded grid's transform pair (the pruned transforms must give its numbers bit for bit, the claim
-`_pruned_convolution` makes); the definition of cell-centred x2 bilinear upsampling, 3/4 of a
-fine sample's own coarse sample and 1/4 of the next one out, edges clamped (exact in float32).
+Oracles:
+* ``numpy.pad``, for the window's padding: its mode on a side at the image's border, zeros on a
+  side inside the image;
+* a direct spatial convolution in float64 of the planes so padded, for the window's blur (float32
+  round-off: 1e-5 of the planes' range);
+* `convolve_padded`, the full padded grid's transform pair: the pruned transforms must give its
+  numbers bit for bit (the claim `_pruned_convolution` makes); the same whole-grid path as a GPU
+  backend runs it, with NumPy here, to 1e-6;
+* the definition of cell-centred x2 bilinear upsampling: 3/4 of a fine sample's own coarse sample
+  and 1/4 of the next one out, edges clamped (exact in float32).
 """
 
 import numpy as np
 import pytest
+import scipy.fft
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -18,6 +23,7 @@ from vissim.optics.blur.device import convolve_padded
 from vissim.optics.depth.pullpush import upsample2
 from vissim.optics.depth.windows import DEPTH_PADDING_MODES, _padded, blur_window
 from vissim.optics.psf.compute import PSF
+from vissim.optics.runtime.array_backend import ArrayBackend
 
 NUMPY_MODES = {"edge": "edge", "reflect": "symmetric"}  # how numpy.pad spells each depth padding
 TOUCHES = [(a, b, c, d) for a in (False, True) for b in (False, True) for c in (False, True) for d in (False, True)]
@@ -78,6 +84,23 @@ def test_window_blur_is_the_padded_planes_convolved(padding, touches, size):
     np.testing.assert_allclose(blurred, expected, atol=1e-5)
     full = convolve_padded(padded, psf, threads=1)[:, offset : offset + size[0], offset : offset + size[1]]
     np.testing.assert_array_equal(blurred, full)  # the pruned transforms: the full grid's numbers, bit for bit
+
+
+@pytest.mark.parametrize("padding", DEPTH_PADDING_MODES)
+def test_the_full_grid_path_a_gpu_takes_gives_the_same_blur(padding):
+    # A backend that is not the CPU's (here NumPy under another name, so it runs without a GPU) takes the
+    # whole padded grid to convolve_padded; the CPU's pruned transforms must agree with it to round-off.
+    rng = np.random.default_rng(11)
+    kernel = rng.random((7, 7))
+    kernel /= kernel.sum()
+    psf = PSF.from_array(kernel, 1.0, wavelength_nm=550.0, pupil_diameter_mm=4.0)
+    planes = rng.random((4, 19, 33), dtype=np.float32)
+    full_grid = ArrayBackend("numpy-full-grid", np, scipy.fft)
+    for touches in TOUCHES:
+        ours, shape = blur_window(planes, psf, padding, touches, threads=1)
+        theirs, their_shape = blur_window(planes, psf, padding, touches, full_grid)
+        assert shape == their_shape
+        np.testing.assert_allclose(ours, theirs, atol=1e-6)
 
 
 def bilinear_oracle(coarse: np.ndarray, shape) -> np.ndarray:
