@@ -6,8 +6,8 @@ Oracles:
 * a direct spatial convolution in float64 of the planes so padded, for the window's blur (float32
   round-off: 1e-5 of the planes' range);
 * `convolve_padded`, the full padded grid's transform pair: the pruned transforms must give its
-  numbers bit for bit (the claim `_pruned_convolution` makes); the same whole-grid path as a GPU
-  backend runs it, with NumPy here, to 1e-6;
+  numbers bit for bit (the claim `_pruned_convolution` makes), as does the same whole-grid path
+  run as a GPU backend runs it (with NumPy here);
 * the definition of cell-centred x2 bilinear upsampling: 3/4 of a fine sample's own coarse sample
   and 1/4 of the next one out, edges clamped (exact in float32).
 """
@@ -20,9 +20,12 @@ from hypothesis import strategies as st
 
 from vissim.optics.blur.convolve import padded_shape, padding_width_px
 from vissim.optics.blur.device import convolve_padded
+from vissim.optics.depth.composite import Compositor, LayerScene
+from vissim.optics.depth.depth_map import matte_indices
 from vissim.optics.depth.pullpush import upsample2
-from vissim.optics.depth.windows import DEPTH_PADDING_MODES, _padded, blur_window
+from vissim.optics.depth.windows import DEPTH_PADDING_MODES, _padded, blur_window, extended_layer
 from vissim.optics.psf.compute import PSF
+from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
 from vissim.optics.runtime.array_backend import ArrayBackend
 
 NUMPY_MODES = {"edge": "edge", "reflect": "symmetric"}  # how numpy.pad spells each depth padding
@@ -67,7 +70,7 @@ def direct_convolution(padded: np.ndarray, kernel: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("padding", DEPTH_PADDING_MODES)
 @pytest.mark.parametrize("touches", [(False, False, True, True), (True, False, False, True), (True, True, True, True),
                                      (False, False, False, False)])
-@pytest.mark.parametrize("size", [(23, 40), (5, 31)])  # the second: fewer rows than the padding
+@pytest.mark.parametrize("size", [(23, 40), (3, 31)])  # the second: fewer rows than the padding (5, 7)
 def test_window_blur_is_the_padded_planes_convolved(padding, touches, size):
     rng = np.random.default_rng(7)
     kernel = rng.random((9, 9))
@@ -89,7 +92,7 @@ def test_window_blur_is_the_padded_planes_convolved(padding, touches, size):
 @pytest.mark.parametrize("padding", DEPTH_PADDING_MODES)
 def test_the_full_grid_path_a_gpu_takes_gives_the_same_blur(padding):
     # A backend that is not the CPU's (here NumPy under another name, so it runs without a GPU) takes the
-    # whole padded grid to convolve_padded; the CPU's pruned transforms must agree with it to round-off.
+    # whole padded grid to convolve_padded; the CPU's pruned transforms must give its numbers, bit for bit.
     rng = np.random.default_rng(11)
     kernel = rng.random((7, 7))
     kernel /= kernel.sum()
@@ -100,7 +103,7 @@ def test_the_full_grid_path_a_gpu_takes_gives_the_same_blur(padding):
         ours, shape = blur_window(planes, psf, padding, touches, threads=1)
         theirs, their_shape = blur_window(planes, psf, padding, touches, full_grid)
         assert shape == their_shape
-        np.testing.assert_allclose(ours, theirs, atol=1e-6)
+        np.testing.assert_array_equal(ours, theirs)
 
 
 def bilinear_oracle(coarse: np.ndarray, shape) -> np.ndarray:
@@ -125,3 +128,77 @@ def test_upsampling_is_cell_centred_bilinear(rows, cols, odd, seed):
     coarse = np.random.default_rng(seed).random((3, rows, cols), dtype=np.float32)
     shape = (2 * rows - (odd[0] and rows > 1), 2 * cols - (odd[1] and cols > 1))
     np.testing.assert_array_equal(upsample2(coarse, shape), bilinear_oracle(coarse, shape))
+
+
+# -- a layer's extension, and the compositor --------------------------------------------------
+def small_scene(seed: int):
+    """A 26 x 30 ramp of proximities with a nearer block: its tent matte over an evenly spaced plan."""
+    rng = np.random.default_rng(seed)
+    proximity = np.linspace(0.2, 1.0, 26)[:, None] + 0.02 * rng.random((26, 30))
+    proximity[8:17, 5:19] = 2.6
+    layer_diopters = np.linspace(0.2, 2.6, 13)
+    lower, frac = matte_indices(proximity, layer_diopters)
+    upper = np.minimum(lower + 1, layer_diopters.size - 1)
+    colour = rng.random((3, 26, 30), dtype=np.float32)
+    return colour, lower.astype(np.intp), upper.astype(np.intp), frac.astype(np.float32), layer_diopters
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 20), k=st.integers(0, 11), keep=st.tuples(st.integers(0, 25), st.integers(1, 26)))
+def test_an_extension_kept_to_some_rows_equals_the_whole_one_there(seed, k, keep):
+    # extended_layer(keep=...) pushes only the rows the caller keeps (odd first and last rows included); on
+    # those rows it must equal the extension of the whole window, bit for bit.
+    colour, lower, upper, frac, layer_diopters = small_scene(seed)
+    first, end = min(keep), max(keep)
+    if first == end:
+        end += 1
+    on_layer = ((lower == k) & (frac < 1)) | ((upper == k) & (frac > 0))
+    rows = np.flatnonzero(on_layer.any(axis=1))
+    if rows.size == 0:
+        return
+    band = (int(rows[0]), int(rows[-1]) + 1)
+    whole = extended_layer(colour, lower, upper, frac, layer_diopters, k, 0.3, rows=band).copy()
+    kept = extended_layer(colour, lower, upper, frac, layer_diopters, k, 0.3, rows=band, keep=(first, end))
+    np.testing.assert_array_equal(kept[:, first:end], whole[:, first:end])
+
+
+def composited_by_hand(layers, layer_diopters, threshold_diopters, shape):
+    """The compositing formula of `vissim.optics.depth.depth_map` term by term, in float64 on the whole frame:
+    T_k = clip(1 - sum_j w_jk A_j, 0, 1), w rising from 0 to 1 as the proximity gap goes from 1x to 2x the
+    threshold; numerator += T_k P_k, denominator += T_k A_k, nearest first."""
+    numerator, denominator = np.zeros((3, *shape)), np.zeros(shape)
+    added = []
+    for k, (r0, r1, c0, c1), planes in layers:
+        whole = np.zeros((4, *shape))
+        whole[:, r0:r1, c0:c1] = planes
+        hidden = sum(min(max((layer_diopters[j] - layer_diopters[k]) / threshold_diopters - 1.0, 0.0), 1.0) * cover
+                     for j, cover in added)
+        transmitted = np.clip(1.0 - hidden, 0.0, 1.0)
+        numerator += transmitted * whole[:3]
+        denominator += transmitted * whole[3]
+        added.append((k, whole[3]))
+    return numerator, denominator
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_compositor_adds_each_layer_through_what_nearer_layers_let_through(seed):
+    # Nearer layers fully covering the top and bottom rows of farther windows: the compositor leaves those rows
+    # out, and must still give the formula's sums.
+    rng = np.random.default_rng(seed)
+    shape, layer_diopters, threshold = (24, 28), np.linspace(0.0, 3.0, 7), 0.6
+    scene = LayerScene(np.zeros((3, *shape), np.float32), np.zeros(shape, np.intp), np.zeros(shape, np.intp),
+                       np.zeros(shape, np.float32), layer_diopters, threshold, {}, {}, None, "edge", CPU_BACKEND, None)
+    compositor = Compositor(scene, layer_diopters[0])
+    layers = []
+    for k in range(6, -1, -1):  # near to far
+        r0, c0 = int(rng.integers(0, 8)), int(rng.integers(0, 8))
+        r1, c1 = int(rng.integers(r0 + 4, shape[0] + 1)), int(rng.integers(c0 + 4, shape[1] + 1))
+        planes = rng.random((4, r1 - r0, c1 - c0), dtype=np.float32)
+        if k >= 4:  # near layers: opaque bands across the frame's top and bottom rows
+            planes[3, : (r1 - r0) // 3] = 1.0
+            planes[3, -((r1 - r0) // 3) :] = 1.0
+        layers.append((k, (r0, r1, c0, c1), planes))
+        compositor.add(k, (r0, r1, c0, c1), planes.copy(), (0, 0))
+    numerator, denominator = composited_by_hand(layers, layer_diopters, threshold, shape)
+    np.testing.assert_allclose(compositor.numerator, numerator, atol=2e-6)
+    np.testing.assert_allclose(compositor.denominator, denominator, atol=2e-6)

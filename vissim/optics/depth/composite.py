@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vissim.optics.depth.psfs import LayerOptics
+from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
 from vissim.optics.depth.windows import (add_overlap, blur_coarse, blur_window, extended_layer, grow_box, nonzero_box,
                                          occlusion_weight)
 
@@ -50,7 +51,8 @@ class LayerScene:
         reach found from its PSF's size."""
         reach = {k: (optics.sizes[k] // 2 + 1) * optics.scales[k] for k in optics.fronts}
         lower, upper, frac = matte
-        lower, upper = (np.asarray(a, np.intp) for a in (lower, upper))  # take()'s own index type: no copy per layer
+        if backend is CPU_BACKEND:  # NumPy's take() converts other index types at every layer
+            lower, upper = (np.asarray(a, np.intp) for a in (lower, upper))
         colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
         return cls(colour, lower, upper, frac, layer_diopters, threshold_diopters, boxes, reach, optics, padding,
                    backend, threads)
@@ -112,15 +114,22 @@ class Compositor:
         self.largest = max(self.largest, shape)
         if proximity - self.scene.threshold_diopters > self.farthest:  # it occludes layers behind: keep its coverage
             self.pending.append((proximity, window, blurred[-1].copy()))
-        seen = np.flatnonzero(self.scene.backend.to_numpy(transmitted.any(axis=1)))  # rows fully hidden add nothing
-        if seen.size == 0:
+        first, end = self._seen_rows(transmitted)
+        if first == end:
             return
-        first, end = int(seen[0]), int(seen[-1]) + 1
         r0, c0, c1 = window[0], window[2], window[3]
         blurred = blurred[:, first:end]
         blurred *= transmitted[first:end]
         self.numerator[:, r0 + first : r0 + end, c0:c1] += blurred[:-1]
         self.denominator[r0 + first : r0 + end, c0:c1] += blurred[-1]
+
+    def _seen_rows(self, transmitted) -> tuple[int, int]:
+        """The rows (first, end) of a window between which a layer shows: the leading and trailing rows that
+        nearer content hides completely add nothing (on the CPU; a GPU takes the whole window, unsynchronised)."""
+        if self.scene.backend is not CPU_BACKEND:
+            return 0, transmitted.shape[0]
+        seen = np.flatnonzero(transmitted.any(axis=1))
+        return (0, 0) if seen.size == 0 else (int(seen[0]), int(seen[-1]) + 1)
 
     def _transmission(self, proximity: float, window: tuple):
         """``T`` on ``window`` for a layer at ``proximity`` (D): what the nearer layers added so far let through."""

@@ -62,7 +62,8 @@ the neighbourhood the whole frame would give them: the depth campaign's RGB-D re
 a floor, each window is a few per cent of the frame.  Within it, the FFT covers only the box of
 the extended layer's nonzero pixels grown by ``r_k`` (beyond it the blur is exactly zero), and
 pull-push sums only the rows that hold the layer's matte (the rest are sums of zeros).  The
-compositor adds a layer only on the rows where nearer content leaves it visible.
+compositor leaves out a window's leading and trailing rows where nearer content hides the layer
+completely.
 
 Threads: a layer's extension and blur depend on no other layer; only its compositing (the
 transmission through nearer layers) does.  On the CPU, one thread per core extends and blurs

@@ -217,7 +217,8 @@ def _pruned_convolution(planes, psf: PSF, padding: str, touches, offset: int, sh
     A 2-D real FFT transforms each row, then each column.  A padding row is zero or a copy of a
     plane's row (edge, reflect), so its row transform is zero or a copy: the rows' spectra are
     padded instead of the rows.  Backwards, only the planes' rows are transformed back, and the
-    inverse's 1 / (rows x cols) is applied last, as pocketfft applies it.
+    inverse's 1 / (rows x cols) is applied last, as SciPy's pocketfft applies it (the pinned SciPy;
+    ``tests/test_depth_windows.py`` holds the two to the same bits).
     """
     n, h, w = planes.shape
     workers = -1 if threads is None else threads
