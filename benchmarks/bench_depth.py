@@ -1,6 +1,6 @@
 """Benchmark: depth-dependent blur of a 1080p RGB-D image against one blur_image and the naive layer floor.
 
-    .venv/bin/python benchmarks/bench_depth.py [--cli | --cli-only] [--repeats N]
+    .venv/bin/python benchmarks/bench_depth.py [--cli | --cli-only] [--repeats N] [--baseline CHECKOUT]
 
 Scene (synthetic, linear RGB noise textures, the hardest case for every FFT shortcut): a wall at
 8 m over the top half, a floor sloping from 8 m (horizon) to 0.33 m (bottom row), and panels at
@@ -17,7 +17,10 @@ Measured in the same run, best of ``--repeats`` each, interleaved:
 * with ``--cli`` (``--cli-only``: this alone): ``vissim blur-depth`` and ``vissim blur`` of the
   same files, each a fresh process (imports, EXR reading and writing, PSFs: everything a user
   waits for), so every run is cold (nothing is cached across processes).  Printed per run: the
-  wall and CPU seconds of each and their ratio; then the best-of ratio and the runs' spread.
+  wall and CPU seconds of each and their ratio; then the best-of ratio and the runs' spread;
+* with ``--baseline CHECKOUT`` too: ``vissim blur-depth`` from another checkout of vissim (a git
+  worktree of an older commit, run by this interpreter), interleaved with the others, and the
+  ratio of the two blur-depths' medians: a change's effect measured in one run.
 """
 
 from __future__ import annotations
@@ -78,8 +81,10 @@ def best(function, repeats: int) -> float:
     return min(times)
 
 
-def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px=None) -> dict[str, list]:
-    """Wall and CPU seconds (user + system) of each command, per repeat: {name: [(wall_s, cpu_s), ...]}."""
+def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px=None,
+              baseline: Path | None = None) -> dict[str, list]:
+    """Wall and CPU seconds (user + system) of each command, per repeat: {name: [(wall_s, cpu_s), ...]};
+    with ``baseline`` (another checkout of vissim), its blur-depth too, as "baseline blur-depth"."""
     from vissim.imageio import write_data_map, write_image
 
     with tempfile.TemporaryDirectory() as folder:
@@ -90,12 +95,16 @@ def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px
         commands = {"blur": ["blur", str(rgb), "-o", str(out), *eye],
                     "blur-depth": ["blur-depth", str(rgb), str(depth_file), "-o", str(out), *eye]
                     + ([] if coarse_blur_px is None else ["--coarse-blur-px", f"{coarse_blur_px:g}"])}
+        roots = dict.fromkeys(commands, Path(__file__).resolve().parents[1])
+        if baseline is not None:
+            commands["baseline blur-depth"], roots["baseline blur-depth"] = commands["blur-depth"], baseline.resolve()
         times = {name: [] for name in commands}
-        env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
-        for _ in range(repeats):  # interleaved, so a busy machine slows both alike
+        for _ in range(repeats):  # interleaved, so a busy machine slows all alike
             for name, argv in commands.items():
+                env = dict(os.environ, PYTHONPATH=str(roots[name]))
                 before, start = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
-                subprocess.run([sys.executable, "-m", "vissim", *argv], check=True, capture_output=True, env=env)
+                subprocess.run([sys.executable, "-m", "vissim", *argv], check=True, capture_output=True, env=env,
+                               cwd=roots[name])  # python -m looks in the working folder first
                 after = resource.getrusage(resource.RUSAGE_CHILDREN)
                 cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
                 times[name].append((time.perf_counter() - start, cpu))
@@ -108,6 +117,9 @@ def main() -> None:
     parser.add_argument("--cli", action="store_true", help="also time the two commands (fresh processes)")
     parser.add_argument("--cli-only", action="store_true", help="time only the two commands")
     parser.add_argument("--coarse-blur-px", type=float, help="blur_depth's coarse_blur_px (default: off)")
+    parser.add_argument("--baseline", type=Path, metavar="CHECKOUT",
+                        help="with --cli/--cli-only: also time blur-depth from another checkout of vissim (e.g. a "
+                             "git worktree of an older commit), interleaved, and print new / baseline")
     args = parser.parse_args()
     image, depth = scene()
     if args.cli_only:
@@ -151,7 +163,7 @@ def main() -> None:
 
 
 def print_cli_times(image: np.ndarray, depth: np.ndarray, args) -> None:
-    times = cli_times(image, depth, args.repeats, args.coarse_blur_px)
+    times = cli_times(image, depth, args.repeats, args.coarse_blur_px, args.baseline)
     for i, ((depth_wall, depth_cpu), (blur_wall, blur_cpu)) in enumerate(zip(times["blur-depth"], times["blur"])):
         print(f"command line, cold run {i + 1}: vissim blur-depth {depth_wall:5.2f} s (cpu {depth_cpu:5.2f} s), "
               f"vissim blur {blur_wall:5.2f} s (cpu {blur_cpu:5.2f} s), ratio {depth_wall / blur_wall:4.2f}")
@@ -159,6 +171,10 @@ def print_cli_times(image: np.ndarray, depth: np.ndarray, args) -> None:
     best = min(t[0] for t in times["blur-depth"]) / min(t[0] for t in times["blur"])
     print(f"command line, cold: ratio blur-depth / blur {best:4.2f} (best of {args.repeats} each); per run "
           f"{ratios[0]:4.2f}-{ratios[-1]:4.2f} (median {ratios[len(ratios) // 2]:4.2f})")
+    if "baseline blur-depth" in times:
+        new, old = ([wall for wall, _ in times[name]] for name in ("blur-depth", "baseline blur-depth"))
+        print(f"command line, cold: blur-depth here / from {args.baseline}: median {np.median(new):5.2f} s / "
+              f"{np.median(old):5.2f} s = {np.median(new) / np.median(old):4.2f} ({args.repeats} interleaved runs each)")
 
 
 if __name__ == "__main__":
