@@ -29,6 +29,7 @@ def test_json_has_the_zernike_table_rms_and_added_power(capsys):
     assert result["vergence_theory_added_power"] == "+1.9925 DS"
     assert result["pupil_diameter_mm"] == 3.6 and result["wavelength_nm"] == 587.5618
     assert result["lenses"][0]["back_vertex_z_mm"] == 10.0
+    assert result["written"] == []  # --json's shared shape: the files written (none here)
 
 
 def test_readable_output_prints_the_table(capsys):

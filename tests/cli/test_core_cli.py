@@ -28,6 +28,7 @@ def test_rx_json_shape(capsys):
     assert info["J45_diopters"] == pytest.approx(0.0)
     assert set(info["zernike_um"]) == {"2,-2", "2,0", "2,2"}
     assert info["zernike_um"]["2,0"] > 0  # a myope
+    assert info["written"] == []  # --json's shared shape: the files written (none here)
 
 
 def test_rx_plus_cylinder_is_reported_in_minus_cylinder(capsys):

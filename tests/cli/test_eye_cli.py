@@ -67,7 +67,7 @@ PRESCRIPTION_KEYS = {"sphere_diopters", "cylinder_diopters", "axis_deg", "M", "J
 def test_the_json_record_has_the_issues_keys_and_types(capsys):
     r = record(capsys, "--eye-model", "escudero-sanz-1999", "--iris-mm", "3", "--wavelength-nm", "543",
                "--mtf-cyc-per-mm", "0,50", "--mtf-cyc-per-deg", "0,10,30")
-    assert r["model"] == "escudero-sanz-1999"
+    assert r["model"] == "escudero-sanz-1999" and r["written"] == []  # --json's shared shape: no file written
     for key in ("power_diopters", "image_focal_length_mm", "iris_mm", "wavelength_nm", "rms_um"):
         assert isinstance(r[key], float), key
     assert set(r["entrance_pupil"]) >= {"diameter_mm", "position_mm"}

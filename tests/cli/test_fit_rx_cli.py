@@ -36,6 +36,7 @@ def test_the_bench_tie_from_flags_gives_a_signed_fit_as_json(tmp_path, plus_two,
     assert record["settings"]["arcmin_per_px"] == 1.0  # read from the files
     written = json.loads(out.read_text())
     assert written["fit"]["status"] == "ok" and written["provenance"]["inputs"]["command"] == "fit-rx"
+    assert record["written"] == [str(out)] and record["provenance"] == written["provenance"]
 
 
 def test_without_a_bench_the_text_output_says_the_sign_is_undetermined(tmp_path, plus_two, capsys):

@@ -28,6 +28,7 @@ def test_json_for_a_plus_2_lens_at_infinity(capsys):
     assert result["object_distance_m"] is None
     assert result["vertex_distance_mm"] == 10.0
     assert round(result["thesis_table_4_2"][0]["power_diopters"], 4) == 2.0408
+    assert result["written"] == []  # --json's shared shape: the files written (none here)
 
 
 def test_json_for_the_chart_at_914mm(capsys):

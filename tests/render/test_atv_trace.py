@@ -264,6 +264,7 @@ def test_cli_writes_the_spot_and_a_json_summary(tmp_path, capsys):
     image = read_image(out)
     assert image.pixels.dtype == np.float32
     assert image.provenance["inputs"]["command"] == "render atv"
+    assert summary["written"] == [str(out)] and summary["provenance"]["inputs"]["command"] == "render atv"
     with pytest.raises(VissimInputError, match="already exists"):
         _cli(tmp_path, capsys, "--sphere", "-2", "-o", str(out))
 

@@ -219,11 +219,17 @@ def print_result(args: argparse.Namespace, lines: list[str], record: dict | None
         for line in lines:
             print(line)
         return
+    print_json(record or {}, written, provenance)
+
+
+def print_json(record: dict, written=(), provenance: dict | None = None) -> None:
+    """``--json``'s one object: ``record``, ``written`` (the files, as paths) and, when given, ``provenance``;
+    NumPy values as plain numbers and non-finite ones as strings (`vissim.provenance.json_safe`)."""
     import json
 
     from vissim.provenance import json_safe
 
-    out = {**(record or {}), "written": [str(p) for p in written]}
+    out = {**record, "written": [str(p) for p in written]}
     if provenance is not None:
         out["provenance"] = provenance
     print(json.dumps(json_safe(out), indent=2, allow_nan=False))

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 from vissim import __version__
-from vissim.cli._common import add_trial_lens_args, parse_float_list, trial_lens_powers
+from vissim.cli._common import add_trial_lens_args, parse_float_list, print_json, trial_lens_powers
 from vissim.errors import VissimInputError
 from vissim.cli import command_help
 
@@ -84,7 +83,7 @@ def run_wavefront(args: argparse.Namespace) -> int:
             vergence_theory_added_power=None if theory is None else theory.format(4),
             vissim_version=__version__,
         )
-        print(json.dumps(result, indent=2, allow_nan=False))
+        print_json(result)
         return 0
 
     lenses = " + ".join(str(lens.marked_power) for lens in bench.lenses) or "no lens"

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 from typing import TYPE_CHECKING
 
 from vissim import __version__
 from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg,
-                                add_trial_lens_args, field_deg_from_text, parse_float_list, trial_lens_powers)
+                                add_trial_lens_args, field_deg_from_text, parse_float_list, print_json,
+                                trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.eyes.models import EYE_MODELS
@@ -129,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
                         mtf_cyc_per_deg=_frequencies(args.mtf_cyc_per_deg, "--mtf-cyc-per-deg", "cycles per degree"),
                         lenses=lenses, lca=args.lca)
     if args.json:
-        print(json.dumps({**report.as_json(), "vissim_version": __version__}, indent=2, allow_nan=False))
+        print_json({**report.as_json(), "vissim_version": __version__})
         return 0
     _print_text(report)
     return 0

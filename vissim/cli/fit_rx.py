@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
 from vissim.checks import (DEFAULT_WAVELENGTH_NM, FIT_POWER_RANGE_DIOPTERS, MODEL_ERROR_RANGE_DIOPTERS, number_within,
                            VERTEX_DISTANCE_RANGE_MM)
-from vissim.cli._common import check_outputs_apart, image_sampling, refuse_existing
+from vissim.cli._common import check_outputs_apart, image_sampling, print_json, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
@@ -134,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
     if rendered_with is not None:  # a bench render: the fit beside vergence theory for its lenses
         record["vergence_theory"] = compare_with_theory(fit, rendered_with)
     record["mode_chosen"] = "given" if args.mode else ("geometric: IMAGE is a Mitsuba render" if rendered else "wave")
+    provenance = None
     if args.output is not None:
         from vissim.atomic import write_text_atomic
 
@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
         write_text_atomic(args.output, to_json({"fit": record, "provenance": provenance}) + "\n",
                           overwrite=args.overwrite)
     if args.json:
-        print(json.dumps(record, indent=2, default=float))
+        print_json(record, [] if args.output is None else [args.output], provenance)
     else:
         _print_text(record, args)
     return 0 if fit.status != "failed" else 1

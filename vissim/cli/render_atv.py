@@ -10,11 +10,10 @@ paraxial prediction, and print a summary (``--json``: one JSON object).
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from vissim.checks import EYE_PUPIL_RANGE_MM, size_text
-from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, refuse_existing,
+from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, print_json, refuse_existing,
                                 trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.rx.conventions import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
@@ -112,7 +111,7 @@ def run_atv(args: argparse.Namespace) -> int:
     """Render, write the EXR and print the summary; returns the exit code."""
     from vissim.atv.predict import predicted_spot
     from vissim.imageio import write_image
-    from vissim.provenance import json_safe, make_provenance
+    from vissim.provenance import make_provenance
     from vissim.render.atv_trace import DEFAULT_N_RAYS, render_atv_camera, trace_atv
 
     output = Path(args.output)
@@ -149,8 +148,7 @@ def run_atv(args: argparse.Namespace) -> int:
     )
     write_image(output, result.image, provenance=provenance, overwrite=args.overwrite, arcmin_per_px=result.arcmin_per_px)
     if args.json:
-        print(json.dumps(json_safe({**summary, "output": str(output), "prediction_geometric": prediction}),
-                         indent=2, sort_keys=True, allow_nan=False))
+        print_json({**summary, "output": str(output), "prediction_geometric": prediction}, [output], provenance)
     else:
         print(f"wrote {output}: {size_text(result.image.shape)} at {result.arcmin_per_px:g} "
               f"arcmin/px, {result.method} ({result.n_rays} {'rays' if result.method == 'trace' else 'camera paths'}, "

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.cli import command_help
+from vissim.cli._common import print_json
 
 
 def add_parser(subparsers) -> None:
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         raise VissimInputError(f"--pupil-mm must be a positive diameter in mm, got {args.pupil_mm!r}")
     info = describe(Prescription.parse(args.prescription), args.pupil_mm)
     if args.json:
-        print(json.dumps(info, indent=2))
+        print_json(info)
         return 0
     print(f"prescription (minus cyl): {info['prescription']}")
     print(f"plus-cylinder form:       {info['plus_cylinder_form']}")

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import logging
 import math
 from typing import TYPE_CHECKING
@@ -14,6 +13,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.rx.conventions import CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
 from vissim.cli import command_help
+from vissim.cli._common import print_json
 
 if TYPE_CHECKING:
     from vissim.optics.rx.trial_lens import TrialLens
@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
             thesis_table_4_2=thesis,
             vissim_version=__version__,
         )
-        print(json.dumps(result, indent=2, allow_nan=False))
+        print_json(result)
         return 0
 
     kind = "thin" if lens.is_thin else f"{lens.center_thickness_mm:g} mm thick, n = {lens.refractive_index:g}"
