@@ -129,12 +129,12 @@ def layer_pool(threads: int):
 def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, threads: int):
     """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
 
-    With a ``pool`` (of ``threads``) the layers are worked on ahead on it (at most ``2 threads`` ahead
-    of the caller; their PSFs twice as far ahead, so that a layer seldom waits for its own, each
-    submitted just before its layer, so that the first layers start at once):
-    a layer's extension and blur depend on no other layer, only its compositing (the caller's)
-    does.  A layer's task waits only for PSF tasks submitted before it, which have therefore
-    started: no deadlock.
+    With a ``pool`` (of ``threads``) the layers are worked on ahead on it: at most ``2 threads`` layers
+    ahead of the caller, their PSFs twice as far ahead, so that a layer seldom waits for its own.  Each
+    PSF is queued just before its layer, so that the first layers start at once.  A layer's
+    extension and blur depend on no other layer, only its compositing (the caller's) does.  A
+    layer's task waits only for PSF tasks submitted before it, which have therefore started: no
+    deadlock.
     """
     order = list(order)
     if pool is None:
@@ -144,7 +144,7 @@ def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, 
     futures: dict = {}
     for i, k in enumerate(order):
         for j, later in enumerate(order[i : i + 4 * threads + 1]):
-            optics.prefetch(pool, later)  # each layer's PSF just before its blur: the first blurs start at once
+            optics.prefetch(pool, later)
             if j <= 2 * threads and later not in futures:
                 futures[later] = pool.submit(work, later)
         yield k, futures.pop(k).result()
