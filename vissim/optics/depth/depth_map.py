@@ -51,19 +51,20 @@ alone the symmetric plan pairs layers of opposite defocus, whose PSFs are point 
 each other, so about half are computed), one pull-push and one batched convolution of
 (colours, extended coverage) (one real FFT pair, `vissim.optics.depth.windows.blur_window`,
 whose row transforms skip the padding rows on the CPU; blur.py's overlap-save squares measured
-no faster on these windows), on the layer's *window*: the box of its tent matte grown by ``2 (r_k + r_max)`` pixels (``r`` the
-PSF's half-width + 1, ``r_max`` the widest layer's).  A layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters where that
-content's blur (``r_max``) lets it show, and both spread once more through partly occluding
-neighbours.  The continuation itself is estimated by pull-push on the window grown by another
-`vissim.optics.depth.composite.EXTENSION_HALO_PX` (64) pixels, whose coarse levels then see
-the neighbourhood the whole frame would give them: the depth campaign's RGB-D results equal the full-frame estimate's
-(same dB to 0.1), and on the 1080p frame of ``benchmarks/bench_depth.py`` the two differ by
-60 dB PSNR (max 0.05 of the range, at panel edges).  On such a frame, whose layers are bands of
-a floor, each window is a few per cent of the frame.  Within it, the FFT covers only the box of
-the extended layer's nonzero pixels grown by ``r_k`` (beyond it the blur is exactly zero), and
-pull-push sums only the rows that hold the layer's matte (the rest are sums of zeros).  The
-compositor leaves out a window's leading and trailing rows where nearer content hides the layer
-completely.
+no faster on these windows), on the layer's *window*: the box of its tent matte grown by
+``2 (r_k + r_max)`` pixels (``r`` the PSF's half-width + 1, ``r_max`` the widest layer's).  A
+layer's blur reaches ``r_k`` beyond its matte, its continuation behind nearer content matters
+where that content's blur (``r_max``) lets it show, and both spread once more through partly
+occluding neighbours.  The continuation itself is estimated by pull-push on the window grown by
+another `vissim.optics.depth.composite.EXTENSION_HALO_PX` (64) pixels, whose coarse levels then
+see the neighbourhood the whole frame would give them: the depth campaign's RGB-D results equal
+the full-frame estimate's (same dB to 0.1), and on the 1080p frame of
+``benchmarks/bench_depth.py`` the two differ by 60 dB PSNR (max 0.05 of the range, at panel
+edges).  On such a frame, whose layers are bands of a floor, each window is a few per cent of
+the frame.  Within it, the FFT covers only the box of the extended layer's nonzero pixels grown
+by ``r_k`` (beyond it the blur is exactly zero), and pull-push sums only the rows that hold the
+layer's matte (the rest are sums of zeros).  The compositor leaves out a window's leading and
+trailing rows where nearer content hides the layer completely.
 
 Threads: a layer's extension and blur depend on no other layer; only its compositing (the
 transmission through nearer layers) does.  On the CPU, one thread per core extends and blurs
