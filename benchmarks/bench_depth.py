@@ -121,6 +121,8 @@ def main() -> None:
                         help="with --cli/--cli-only: also time blur-depth from another checkout of vissim (e.g. a "
                              "git worktree of an older commit), interleaved, and print new / baseline")
     args = parser.parse_args()
+    if args.baseline is not None and not (args.cli or args.cli_only):
+        parser.error("--baseline times the commands: give it with --cli or --cli-only")
     image, depth = scene()
     if args.cli_only:
         return print_cli_times(image, depth, args)

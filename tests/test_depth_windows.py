@@ -1,13 +1,13 @@
-"""A depth layer's window blur and its pull-push upsampling, against independent oracles.
+"""A depth layer's window blur, its extension and upsampling, and the compositor, against independent oracles.
 
 Oracles:
-* ``numpy.pad``, for the window's padding: its mode on a side at the image's border, zeros on a
-  side inside the image;
+* ``numpy.pad``, for a window's padding (`pad_window`): its mode on a side at the image's border, zeros on
+  a side inside the image;
 * a direct spatial convolution in float64 of the planes so padded, for the window's blur (float32
   round-off: 1e-5 of the planes' range);
 * `convolve_padded`, the full padded grid's transform pair: the pruned transforms must give its
-  numbers bit for bit (the claim `_pruned_convolution` makes), as does the same whole-grid path
-  run as a GPU backend runs it (with NumPy here);
+  numbers bit for bit (the claim `convolve_window` makes for the CPU), as does the whole-grid path
+  a GPU backend takes (run with NumPy here);
 * the definition of cell-centred x2 bilinear upsampling: 3/4 of a fine sample's own coarse sample
   and 1/4 of the next one out, edges clamped (exact in float32).
 """
@@ -18,12 +18,12 @@ import scipy.fft
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vissim.optics.blur.convolve import padded_shape, padding_width_px
-from vissim.optics.blur.device import convolve_padded
+from vissim.optics.blur.convolve import pad_window, padded_shape, padding_width_px
+from vissim.optics.blur.device import convolve_padded, convolve_window
 from vissim.optics.depth.composite import Compositor, LayerScene
 from vissim.optics.depth.depth_map import matte_indices
 from vissim.optics.depth.pullpush import upsample2
-from vissim.optics.depth.windows import DEPTH_PADDING_MODES, _padded, blur_window, extended_layer
+from vissim.optics.depth.windows import DEPTH_PADDING_MODES, extended_layer
 from vissim.optics.psf.compute import PSF
 from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
 from vissim.optics.runtime.array_backend import ArrayBackend
@@ -50,7 +50,7 @@ def numpy_padded(array, widths, padding, touches):
 def test_window_padding_is_numpy_pad_with_zeros_inside_the_image(rows, cols, widths, padding, touches, seed):
     planes = np.random.default_rng(seed).random((2, rows, cols), dtype=np.float32)
     top, bottom, left, right = widths
-    ours = _padded(_padded(planes, -2, (top, bottom), padding, touches[:2]), -1, (left, right), padding, touches[2:])
+    ours = pad_window(planes, ((top, bottom), (left, right)), padding, touches)
     np.testing.assert_array_equal(ours, numpy_padded(planes, ((top, bottom), (left, right)), padding, touches))
 
 
@@ -77,7 +77,7 @@ def test_window_blur_is_the_padded_planes_convolved(padding, touches, size):
     kernel /= kernel.sum()
     psf = PSF.from_array(kernel, 1.0, wavelength_nm=550.0, pupil_diameter_mm=4.0)
     planes = rng.random((4, *size), dtype=np.float32)
-    blurred, shape = blur_window(planes, psf, padding, touches, threads=1)
+    blurred, shape = convolve_window(planes, psf, padding, touches, threads=1)
 
     offset = padding_width_px(9)
     assert shape == padded_shape(size, 9)
@@ -100,8 +100,8 @@ def test_the_full_grid_path_a_gpu_takes_gives_the_same_blur(padding):
     planes = rng.random((4, 19, 33), dtype=np.float32)
     full_grid = ArrayBackend("numpy-full-grid", np, scipy.fft)
     for touches in TOUCHES:
-        ours, shape = blur_window(planes, psf, padding, touches, threads=1)
-        theirs, their_shape = blur_window(planes, psf, padding, touches, full_grid)
+        ours, shape = convolve_window(planes, psf, padding, touches, threads=1)
+        theirs, their_shape = convolve_window(planes, psf, padding, touches, full_grid)
         assert shape == their_shape
         np.testing.assert_array_equal(ours, theirs)
 
@@ -200,5 +200,7 @@ def test_the_compositor_adds_each_layer_through_what_nearer_layers_let_through(s
         layers.append((k, (r0, r1, c0, c1), planes))
         compositor.add(k, (r0, r1, c0, c1), planes.copy(), (0, 0))
     numerator, denominator = composited_by_hand(layers, layer_diopters, threshold, shape)
+    # float32 sums of 7 layers of values in [0, 1], against float64: each term's round-off is at most 6e-8
+    # (2^-24), so under 1e-6 in all; 2e-6 leaves room for the transmission's own round-off.
     np.testing.assert_allclose(compositor.numerator, numerator, atol=2e-6)
     np.testing.assert_allclose(compositor.denominator, denominator, atol=2e-6)

@@ -14,8 +14,11 @@ Oracles:
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import vissim
+from vissim.checks import EYE_RENDER_MAX_THETA_DEG
 from vissim.errors import VissimInputError
 from vissim.optics.blur.convolve import blur_image
 from vissim.optics.eyes.depth_eye import traced_depth_eye
@@ -23,8 +26,9 @@ from vissim.optics.eyes.eye import build_eye
 from vissim.optics.eyes.field_blur import eye_psf_grid, node_field_deg
 from vissim.optics.eyes.models import eye_model
 from vissim.optics.eyes.refraction import eye_refraction
-from vissim.optics.eyes.traced_wavefront import trace_eye_wavefront
+from vissim.optics.eyes.traced_wavefront import image_reach_deg, trace_eye_wavefront
 from vissim.optics.blur.field_dependent import blur_field_dependent
+from vissim.units import ARCMIN_PER_DEG
 
 MODEL, PUPIL_MM, WAVELENGTH_NM = "navarro-1985", 3.0, 555.0
 STEP = 3.0  # arcmin/px: a 20 degree chart in 401 px
@@ -158,17 +162,12 @@ def test_a_node_step_finer_than_a_pixel_or_too_many_nodes_is_refused_before_any_
 
 
 # -- how wide an eye's image may be: one rule for the blur and the renderer --------------------------------------
-from hypothesis import given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-
-from vissim.checks import EYE_RENDER_MAX_THETA_DEG  # noqa: E402
-from vissim.optics.eyes.traced_wavefront import image_reach_deg  # noqa: E402
 
 
 def _corner_angles_deg(shape, arcmin_per_px, field_deg, alpha_deg):
     """Each frame corner's angle from the optical axis, from unit vectors (tan x, tan y, 1) / norm turned by the
     visual axis's alpha about y (an independent statement of the frames: docs/conventions.md)."""
-    half_x, half_y = (n * arcmin_per_px / 2 / 60.0 for n in (shape[1], shape[0]))  # 60 arcmin a degree
+    half_x, half_y = (n * arcmin_per_px / 2 / ARCMIN_PER_DEG for n in (shape[1], shape[0]))
     a = np.radians(alpha_deg)
     angles = []
     for sx in (-1, 1):

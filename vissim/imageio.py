@@ -59,7 +59,8 @@ from vissim.provenance import from_json, to_json
 logger = logging.getLogger(__name__)
 
 __all__ = ["Image", "image_files", "output_bit_depth", "read_data_map", "read_image", "sampling_from_provenance", "srgb_decode",
-           "srgb_encode", "to_preview_png", "write_data_map", "write_image"]
+           "srgb_encode", "to_preview_png", "write_data_map", "write_image", "write_png_bytes", "encode_png",
+           "PNG_COMPRESS_LEVEL"]
 
 PROVENANCE_ATTRIBUTE = "vissim_provenance"
 #: Top-level provenance key holding an image's angular sampling, arcmin per pixel.
@@ -600,6 +601,14 @@ def write_image(
             tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib", **extra)
 
     return _write_with_sidecar(path, sidecar, encode, provenance, overwrite)
+
+
+def encode_png(codes: np.ndarray) -> bytes:
+    """8-bit codes, (H, W) or (H, W, 3), as the bytes of a PNG file in memory (zlib at `PNG_COMPRESS_LEVEL`, as
+    `write_image` writes one): a figure's, put in a file later by `write_png_bytes`."""
+    buffer = io.BytesIO()
+    _PILImage.fromarray(np.ascontiguousarray(codes)).save(buffer, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
+    return buffer.getvalue()
 
 
 def write_png_bytes(path: str | os.PathLike[str], png: bytes, *, provenance: dict | None = None,

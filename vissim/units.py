@@ -9,7 +9,7 @@ from vissim.lazy_import import lazy_module
 np = lazy_module("numpy")  # conversions of arrays import NumPy; the command line's help reads numbers only
 
 __all__ = ["xy_matrix_to_image_rowcol", "ARCMIN_PER_RAD", "ARCMIN_PER_DEG", "deg_to_mrad", "arcmin_to_rad", "rad_to_arcmin", "nm_to_mm", "nm_to_um",
-           "cyc_per_rad_to_cyc_per_deg", "mrad_to_arcmin", "MM_PER_M", "mm_to_m", "m_to_mm", "diopters_to_mm",
+           "cyc_per_rad_to_cyc_per_deg", "CYC_PER_DEG_PER_CYC_PER_RAD", "mrad_to_arcmin", "MM_PER_M", "mm_to_m", "m_to_mm", "diopters_to_mm",
            "diopters_to_per_mm", "REC709_LUMINANCE", "osa_xy_to_image_colrow", "image_colrow_to_osa_xy"]
 
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi

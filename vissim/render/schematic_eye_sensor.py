@@ -55,7 +55,6 @@ import numpy as np
 from vissim.bench.eye.scene import SENSOR_TYPE
 from vissim.bench.eye.sensor_eyes import sensor_eye, sensor_phase
 from vissim.checks import number_within
-from vissim.errors import VissimInputError
 from vissim.optics.eyes.defaults import DEFAULT_EYE_ARCMIN_PER_PX
 from vissim.optics.eyes.traced_wavefront import image_reach_deg, pupils_mm
 from vissim.units import ARCMIN_PER_DEG
@@ -72,8 +71,6 @@ log = logging.getLogger(__name__)
 
 #: The tables' reach is rounded up to a multiple of this (deg), so nearby films and fields share them.
 TABLE_REACH_STEP_DEG = 5.0
-
-
 #: Plugin name.
 SCHEMATIC_EYE_SENSOR = SENSOR_TYPE  # the scene names it so (vissim.bench.eye.scene)
 

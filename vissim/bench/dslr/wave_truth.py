@@ -35,7 +35,7 @@ import numpy as np
 from vissim.checks import OVERSAMPLE_RANGE, size_text
 from vissim.bench.dslr.traced_wavefront import D_LINE_NM, TracedWavefront, trace_bench_wavefront
 from vissim.bench.dslr.bench import DslrBench
-from vissim.charts import Chart, ChartSpec, chart_sidecar, render_chart_angular
+from vissim.charts import Chart, ChartSpec, render_chart_angular
 from vissim.errors import VissimInputError
 from vissim.optics.blur.convolve import blur_image
 from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
@@ -154,5 +154,5 @@ def wave_truth(
                                f"arcmin/px over {size_text(layout.shape_px)}")
     image = image_through_traced_lenses(bench, fine.pixels, oversample=oversample, wavelengths_nm=wavelengths_nm,
                                         weights=weights, mode=mode)
-    provenance = {**image.provenance, "chart": chart_sidecar(fine.spec, layout)}
+    provenance = {**image.provenance, "chart": fine.sidecar()}
     return WaveTruth(image.pixels.astype(np.float32), provenance)

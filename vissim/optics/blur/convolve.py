@@ -48,7 +48,8 @@ from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
 
 scipy_fft = lazy_module("scipy.fft")
 
-__all__ = ["blur_image", "image_kernel_psf", "BlurKernel", "PADDING_MODES", "border_mean", "psf_padding_width_px"]
+__all__ = ["blur_image", "image_kernel_psf", "BlurKernel", "PADDING_MODES", "border_mean", "psf_padding_width_px",
+           "pad_window"]
 
 log = logging.getLogger(__name__)
 
@@ -144,6 +145,20 @@ def pad_array(array, widths, mode: str, background: float | None = None, xp=np):
             raise AssertionError("constant padding needs a background value")  # pragma: no cover
         return xp.pad(array, widths, mode="constant", constant_values=background)
     return xp.pad(array, widths, mode=NUMPY_PAD_MODES[mode])
+
+
+def pad_window(array, widths, mode: str, touches, xp=np):
+    """A window of an image, (..., h, w), padded by ``widths`` ((top, bottom), (left, right)): as padding ``mode``
+    says on a side that ``touches`` (top, bottom, left, right) the image's border, with zeros on a side inside the
+    image (beyond it the window already holds everything that reaches it)."""
+    padded = pad_array(array, ((0, 0),) * (array.ndim - 2) + tuple(widths), mode, xp=xp)
+    (top, bottom), (left, right) = widths
+    rows, cols = padded.shape[-2:]
+    for touching, side in zip(touches, (np.s_[..., :top, :], np.s_[..., rows - bottom :, :], np.s_[..., :left],
+                                        np.s_[..., cols - right :])):
+        if not touching:
+            padded[side] = 0.0
+    return padded
 
 
 def border_mean(channel: np.ndarray) -> float:

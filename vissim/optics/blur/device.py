@@ -15,11 +15,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from vissim.optics.runtime.array_backend import CPU, ArrayBackend, array_backend
-from vissim.optics.blur.convolve import (BlurKernel, border_mean, checked_blur_inputs, pad_array, padded_shape,
-                                psf_padding_width_px)
+from vissim.optics.blur.convolve import (BlurKernel, border_mean, checked_blur_inputs, pad_array, pad_window,
+                                padded_shape, padding_width_px, psf_padding_width_px)
 from vissim.optics.psf.compute import PSF
 
-__all__ = ["blur_image_on", "convolve_padded"]
+__all__ = ["blur_image_on", "convolve_padded", "convolve_window"]
 
 
 def blur_image_on(
@@ -70,6 +70,50 @@ def convolve_padded(padded, psf: PSF, backend: ArrayBackend = CPU, *, threads: i
     spectrum = backend.fft.rfft2(padded, axes=(-2, -1), **kwargs)
     spectrum *= transfer
     return backend.fft.irfft2(spectrum, s=shape, axes=(-2, -1), overwrite_x=True, **kwargs)
+
+
+def convolve_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU, *,
+                    threads: int | None = None) -> tuple:
+    """Planes (C, h, w) of a window of an image, padded (`vissim.optics.blur.convolve.pad_window`) and convolved
+    with ``psf`` (`convolve_padded`): (the blurred planes, the padded grid's shape).
+
+    ``touches``: whether the window's (top, bottom, left, right) side is the image's border.  On the
+    CPU the rows' transforms skip the padding rows (`_convolve_window_pruned`), to the same bits.
+    """
+    n, h, w = planes.shape
+    offset = padding_width_px(psf.data.shape[0])
+    shape = padded_shape((h, w), psf.data.shape[0])
+    widths = ((offset, shape[0] - h - offset), (offset, shape[1] - w - offset))
+    if backend is CPU:
+        return _convolve_window_pruned(planes, psf, padding, touches, widths, shape, threads), shape
+    blurred = convolve_padded(pad_window(planes, widths, padding, touches, backend.xp), psf, backend, threads=threads)
+    return blurred[:, offset : offset + h, offset : offset + w], shape
+
+
+def _convolve_window_pruned(planes, psf: PSF, padding: str, touches, widths, shape: tuple[int, int],
+                            threads: int | None):
+    """`convolve_window` on the CPU, bit for bit, for about three quarters of the work: the real transforms along
+    the rows run only on the planes' own rows.
+
+    A 2-D real FFT transforms each row, then each column.  A padding row is zero or a copy of a
+    plane's row (edge, reflect), so its row transform is zero or a copy: the rows' spectra are
+    padded instead of the rows.  Backwards, only the planes' rows are transformed back, and the
+    inverse's 1 / (rows x cols) is applied last, as SciPy's pocketfft applies it (the pinned SciPy;
+    ``tests/test_depth_windows.py`` holds the two paths to the same bits).
+    """
+    n, h, w = planes.shape
+    (top, bottom), (left, right) = widths
+    workers = -1 if threads is None else threads
+    fft = CPU.fft
+    rows = fft.rfft(pad_window(planes, ((0, 0), (left, right)), padding, (False, False, *touches[2:])), axis=-1,
+                    workers=workers)
+    spectrum = fft.fft(pad_window(rows, ((top, bottom), (0, 0)), padding, (*touches[:2], False, False)), axis=-2,
+                       workers=workers, overwrite_x=True)
+    spectrum *= BlurKernel.prepare(psf, shape, dtype=np.float32, workers=workers).transfer
+    spectrum = fft.ifft(spectrum, axis=-2, workers=workers, overwrite_x=True, norm="forward")
+    blurred = fft.irfft(spectrum[:, top : top + h], n=shape[1], axis=-1, workers=workers, norm="forward")
+    blurred *= blurred.dtype.type(1.0 / (shape[0] * shape[1]))
+    return blurred[:, :, left : left + w]
 
 
 def _pad(channel, widths, mode: str, background, host_channel: np.ndarray, xp):

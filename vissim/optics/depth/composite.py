@@ -15,7 +15,8 @@ import numpy as np
 
 from vissim.optics.depth.psfs import LayerOptics
 from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
-from vissim.optics.depth.windows import (add_overlap, blur_coarse, blur_window, extended_layer, grow_box, nonzero_box,
+from vissim.optics.blur.device import convolve_window
+from vissim.optics.depth.windows import (add_overlap, blur_coarse, extended_layer, grow_box, nonzero_box,
                                          occlusion_weight)
 
 __all__ = ["Compositor", "EXTENSION_HALO_PX", "LayerScene", "blurred_layer"]
@@ -50,9 +51,9 @@ class LayerScene:
         """The scene and its tent ``matte`` (lower, upper, frac) moved to ``backend``; each non-empty layer's
         reach found from its PSF's size."""
         reach = {k: (optics.sizes[k] // 2 + 1) * optics.scales[k] for k in optics.fronts}
-        lower, upper, frac = matte
-        if backend is CPU_BACKEND:  # NumPy's take() converts other index types at every layer
-            lower, upper = (np.asarray(a, np.intp) for a in (lower, upper))
+        lower, upper, frac = matte  # indices of NumPy's own type (its take() converts others at every layer)
+        if backend is not CPU_BACKEND:  # half the bytes to send
+            lower, upper = (np.asarray(a, np.int32) for a in (lower, upper))
         colour, lower, upper, frac = (backend.asarray(a) for a in (colour, lower, upper, frac))
         return cls(colour, lower, upper, frac, layer_diopters, threshold_diopters, boxes, reach, optics, padding,
                    backend, threads)
@@ -86,8 +87,8 @@ def blurred_layer(scene: LayerScene, k: int) -> tuple:
     planes = planes[:, r0 - window_rows : r1 - window_rows, c0 - f0 : c1 - f0]
     touches = (r0 == 0, r1 == rows, c0 == 0, c1 == cols)
     if scale == 1:
-        blurred, shape = blur_window(planes, scene.optics.psf(k), scene.padding, touches, scene.backend,
-                                     scene.threads)
+        blurred, shape = convolve_window(planes, scene.optics.psf(k), scene.padding, touches, scene.backend,
+                                         threads=scene.threads)
     else:
         blurred, shape = blur_coarse(planes, scene.optics.psf(k), scene.padding, touches, scale, scene.backend,
                                      scene.threads)
@@ -142,7 +143,7 @@ class Compositor:
         for proximity_j, window_j, matte_j in self.pending:
             weight = occlusion_weight(proximity_j - proximity, threshold)
             if weight > 0:
-                add_overlap(transmitted, window, matte_j, window_j, scale=weight)
+                add_overlap(transmitted, window, matte_j, window_j, weight)
         xp.subtract(1.0, transmitted, out=transmitted)
         xp.clip(transmitted, 0.0, 1.0, out=transmitted)
         return transmitted

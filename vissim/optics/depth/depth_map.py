@@ -49,7 +49,7 @@ focus; every output is a weighted mean of (extended) input colours.
 Cost: per non-empty layer one PSF (cached by wavefront; for an eye whose wavefront is defocus
 alone the symmetric plan pairs layers of opposite defocus, whose PSFs are point reflections of
 each other, so about half are computed), one pull-push and one batched convolution of
-(colours, extended coverage) (one real FFT pair, `vissim.optics.depth.windows.blur_window`,
+(colours, extended coverage) (one real FFT pair, `vissim.optics.blur.device.convolve_window`,
 whose row transforms skip the padding rows on the CPU; blur.py's overlap-save squares measured
 no faster on these windows), on the layer's *window*: the box of its tent matte grown by
 ``2 (r_k + r_max)`` pixels (``r`` the PSF's half-width + 1, ``r_max`` the widest layer's).  A
@@ -433,7 +433,7 @@ def _depth_plan(proximity: np.ndarray, in_focus_diopters: float, step: float, pu
 
 @dataclass(frozen=True, eq=False)
 class _TentMatte:
-    """Each pixel's farther layer ``lower``, nearer ``upper`` (int32) and weight ``frac`` in the nearer
+    """Each pixel's farther layer ``lower``, nearer ``upper`` (NumPy's index type) and weight ``frac`` in the nearer
     (float32); each layer's summed matte ``coverage`` (px) and the non-empty layers, far to near."""
 
     lower: np.ndarray
@@ -449,9 +449,9 @@ def _tent_matte(proximity: np.ndarray, layer_diopters: np.ndarray) -> _TentMatte
     lower, frac = matte_indices(proximity, layer_diopters)
     coverage = np.bincount(lower.ravel(), weights=(1.0 - frac).ravel(), minlength=n_layers + 1)
     coverage += np.bincount((lower + 1).ravel(), weights=frac.ravel(), minlength=n_layers + 1)
-    upper = np.minimum(lower + 1, n_layers - 1).astype(np.int32)
+    upper = np.minimum(lower + 1, n_layers - 1)
     active = [k for k in range(n_layers) if coverage[k] > 0]
-    return _TentMatte(lower.astype(np.int32), upper, frac.astype(np.float32), coverage, active)
+    return _TentMatte(lower, upper, frac.astype(np.float32), coverage, active)
 
 
 def _layer_optics(eye: DepthViewer, layer_diopters: np.ndarray, matte: _TentMatte, wavelength: float, step: float, mode: str,
@@ -474,7 +474,7 @@ def _layer_optics(eye: DepthViewer, layer_diopters: np.ndarray, matte: _TentMatt
 def matte_indices(proximity: np.ndarray, layer_diopters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each pixel's farther layer index ``i`` and its weight ``t`` in layer ``i + 1`` (tent matte)."""
     if layer_diopters.size == 1:
-        return np.zeros(proximity.shape, np.int64), np.zeros(proximity.shape)
+        return np.zeros(proximity.shape, np.intp), np.zeros(proximity.shape)
     lower = np.searchsorted(layer_diopters, proximity, side="right")
     lower -= 1
     np.clip(lower, 0, layer_diopters.size - 2, out=lower)

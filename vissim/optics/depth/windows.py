@@ -5,20 +5,18 @@ Used by `vissim.optics.depth.depth_map.blur_depth` (module doc there: "Compositi
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
 
 from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
 from vissim.optics.runtime.array_backend import ArrayBackend, array_module
-from vissim.optics.blur.convolve import BlurKernel, pad_array, padded_shape, padding_width_px
-from vissim.optics.blur.device import convolve_padded
+from vissim.optics.blur.device import convolve_window
 from vissim.optics.psf.compute import PSF
 from vissim.optics.depth.pullpush import pull_push, upsample2
 
 __all__ = ["DEPTH_PADDING_MODES", "COARSE_FACTOR", "occlusion_weight", "extended_layer", "layer_boxes", "grow_box",
-           "nonzero_box", "add_overlap", "blur_window", "blur_coarse"]
+           "nonzero_box", "add_overlap", "blur_coarse"]
 
 DEPTH_PADDING_MODES = ("edge", "reflect")
 
@@ -104,7 +102,7 @@ def layer_boxes(lower, upper, frac, n_layers: int) -> dict[int, tuple[int, int, 
     for index, size in ((row_index, rows), (col_index, cols)):
         count = np.zeros(n_layers * size)
         for layer, present in ((lower, in_lower), (upper, in_upper)):
-            count += np.bincount((layer.astype(np.int64) * size + index).ravel(), weights=present.ravel(),
+            count += np.bincount((layer * size + index).ravel(), weights=present.ravel(),
                                  minlength=n_layers * size)
         hits.append(count.reshape(n_layers, size) > 0)
     boxes = {}
@@ -138,100 +136,14 @@ def _to_host(array) -> np.ndarray:
     return array.get() if hasattr(array, "get") and not isinstance(array, np.ndarray) else np.asarray(array)
 
 
-def add_overlap(target: np.ndarray, window, source: np.ndarray, source_window, scale=None) -> None:
-    """``target`` (on ``window``) += ``source`` (on ``source_window``), times ``scale`` if given, where the two
-    windows overlap."""
+def add_overlap(target: np.ndarray, window, source: np.ndarray, source_window, scale) -> None:
+    """``target`` (on ``window``) += ``scale`` x ``source`` (on ``source_window``) where the two windows overlap."""
     r0, r1 = max(window[0], source_window[0]), min(window[1], source_window[1])
     c0, c1 = max(window[2], source_window[2]), min(window[3], source_window[3])
     if r0 < r1 and c0 < c1:
         part = source[r0 - source_window[0] : r1 - source_window[0], c0 - source_window[2] : c1 - source_window[2]]
         target[r0 - window[0] : r1 - window[0], c0 - window[2] : c1 - window[2]] += \
-            part if scale is None else scale * part
-
-
-def blur_window(planes, psf: PSF, padding: str, touches, backend: ArrayBackend = CPU_BACKEND,
-                threads: int | None = None) -> tuple:
-    """Blur (C, h, w) planes of a window with one PSF: one real FFT pair on the padded grid.
-
-    ``touches``: whether the window's (top, bottom, left, right) side is the image's border.
-    Beyond the image's border the planes continue as ``padding`` says; beyond a window side inside
-    the image they are zero (the window already holds everything of the layer that reaches it).
-    ``backend`` holds the planes (NumPy or CuPy);
-    ``threads``: the CPU FFT's threads (default all).  Returns the blurred planes and the padded grid's shape.
-    On the CPU the rows' transforms skip the padding rows (`_pruned_convolution`); on a GPU the
-    padded grid goes whole to `vissim.optics.blur.device.convolve_padded`.
-    """
-    if padding not in DEPTH_PADDING_MODES:
-        raise AssertionError(f"depth padding {padding!r}")  # pragma: no cover  (blur_depth refuses it)
-    n, h, w = planes.shape
-    offset = padding_width_px(psf.data.shape[0])
-    shape = padded_shape((h, w), psf.data.shape[0])
-    if backend is CPU_BACKEND:
-        return _pruned_convolution(planes, psf, padding, touches, offset, shape, threads), shape
-    padded = _padded(planes, -2, (offset, shape[0] - h - offset), padding, touches[:2], backend.xp)
-    padded = _padded(padded, -1, (offset, shape[1] - w - offset), padding, touches[2:], backend.xp)
-    blurred = convolve_padded(padded, psf, backend, threads=threads)
-    return blurred[:, offset : offset + h, offset : offset + w], shape
-
-
-def _padded(array, axis: int, widths: tuple[int, int], padding: str, touches: tuple[bool, bool], xp=np):
-    """``array`` padded along ``axis`` by ``widths`` (before, after): as ``padding`` says on a side that
-    ``touches`` the image's border, zeros on a side inside the image (`numpy.pad`'s values, faster)."""
-    size = array.shape[axis]
-    (before, after), along = widths, functools.partial(_along, axis, array.ndim)
-    if padding == "reflect" and max(widths) > size:  # reflections of reflections: numpy.pad's own
-        full = [(0, 0)] * array.ndim
-        full[axis] = widths
-        padded = pad_array(array, full, padding, xp=xp)
-    else:
-        shape = list(array.shape)
-        shape[axis] += before + after
-        padded = xp.empty(shape, array.dtype)
-    padded[along(before, before + size)] = array
-    # each side: where it lies, the pixel "edge" repeats, the pixels "reflect" mirrors (numpy.pad's "symmetric")
-    for touching, side, edge, mirrored in ((touches[0], (0, before), (0, 1), (0, before)),
-                                           (touches[1], (before + size, before + size + after), (size - 1, size),
-                                            (size - after, size))):
-        if side[0] == side[1]:
-            continue
-        if not touching:
-            padded[along(*side)] = 0.0
-        elif padding == "edge":
-            padded[along(*side)] = array[along(*edge)]
-        elif max(widths) <= size:
-            padded[along(*side)] = xp.flip(array[along(*mirrored)], axis=axis)
-    return padded
-
-
-def _along(axis: int, ndim: int, start: int, stop: int) -> tuple:
-    index = [slice(None)] * ndim
-    index[axis] = slice(start, stop)
-    return tuple(index)
-
-
-def _pruned_convolution(planes, psf: PSF, padding: str, touches, offset: int, shape: tuple[int, int],
-                        threads: int | None):
-    """`vissim.optics.blur.device.convolve_padded` of the padded planes, cropped to the planes, bit for bit, for
-    about three quarters of its work: the real transforms along the rows run only on the planes' own rows.
-
-    A 2-D real FFT transforms each row, then each column.  A padding row is zero or a copy of a
-    plane's row (edge, reflect), so its row transform is zero or a copy: the rows' spectra are
-    padded instead of the rows.  Backwards, only the planes' rows are transformed back, and the
-    inverse's 1 / (rows x cols) is applied last, as SciPy's pocketfft applies it (the pinned SciPy;
-    ``tests/test_depth_windows.py`` holds the two to the same bits).
-    """
-    n, h, w = planes.shape
-    workers = -1 if threads is None else threads
-    top, bottom, left, right = offset, shape[0] - h - offset, offset, shape[1] - w - offset
-    fft = CPU_BACKEND.fft
-    rows = fft.rfft(_padded(planes, -1, (left, right), padding, touches[2:]), axis=-1, workers=workers)
-    spectrum = fft.fft(_padded(rows, -2, (top, bottom), padding, touches[:2]), axis=-2, workers=workers,
-                       overwrite_x=True)
-    spectrum *= BlurKernel.prepare(psf, shape, dtype=np.float32, workers=workers).transfer
-    spectrum = fft.ifft(spectrum, axis=-2, workers=workers, overwrite_x=True, norm="forward")
-    blurred = fft.irfft(spectrum[:, top : top + h], n=shape[1], axis=-1, workers=workers, norm="forward")
-    blurred *= blurred.dtype.type(1.0 / (shape[0] * shape[1]))
-    return blurred[:, :, left : left + w]
+            scale * part
 
 
 #: The coarse grid's pixel, in image pixels per side (``coarse_blur_px`` of `blur_depth`).
@@ -251,8 +163,8 @@ def blur_coarse(planes, psf: PSF, padding: str, touches, factor: int, backend: A
     xp = backend.xp
     even = xp.pad(planes, ((0, 0), (0, (-h) % q), (0, (-w) % q)), mode="edge")
     coarse = even.reshape(n, even.shape[1] // q, q, even.shape[2] // q, q).mean(axis=(2, 4))
-    blurred, shape = blur_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
-                                 threads)
+    blurred, shape = convolve_window(xp.ascontiguousarray(coarse, dtype=np.float32), psf, padding, touches, backend,
+                                     threads=threads)
     fine = blurred
     for _ in range(int(round(math.log2(q)))):
         fine = upsample2(fine, (2 * fine.shape[1], 2 * fine.shape[2]))

@@ -23,6 +23,7 @@ from vissim.optics.eyes.traced_wavefront import (CHIEF_RAY_SAMPLES, field_direct
 
 __all__ = ["chief_pupil_point_mm", "film_field_deg", "eye_to_world_rotation"]
 
+
 def chief_pupil_point_mm(eye: SchematicEye, field_deg, pupil_mm: float) -> np.ndarray:
     """Where the chief ray of the collimated beam at ``field_deg`` (the model's reference wavelength) crosses the
     paraxial entrance-pupil plane: (x, y, z) mm in the trace's frame (module doc)."""
