@@ -152,3 +152,15 @@ def test_depth_campaigns_take_the_ranges_of_checks(tmp_path, where, value, fragm
     with pytest.raises(VissimInputError) as caught:
         load_campaign(path)
     assert all(f in str(caught.value) for f in fragments), str(caught.value)
+
+
+@pytest.mark.parametrize("lens, fragments", [
+    ("{sphere_diopters = 1.0, prism = 2.0}", ["item[0].lenses[0]", "unknown lens field ['prism']", "axis_deg"]),
+    ("{sphere = 1.0}", ["item[0].lenses[0]", "'sphere' is now 'sphere_diopters'"]),
+])
+def test_a_lens_table_with_an_unknown_key_is_refused_naming_it(tmp_path, lens, fragments):
+    path = tmp_path / "lens.toml"
+    path.write_text(f'[[item]]\nletter = "K"\nlenses = [{lens}]\n')
+    with pytest.raises(VissimInputError) as caught:
+        load_campaign(path)
+    assert all(f in str(caught.value) for f in fragments), str(caught.value)

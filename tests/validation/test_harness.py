@@ -96,7 +96,7 @@ def test_items_shared_with_a_helper_process_give_the_same_numbers(tiny, tmp_path
     # the front: every item's numbers are those of a run without it.
     from vissim.validation.engine import helper_process
 
-    monkeypatch.setattr(helper_process, "available_cores", lambda: 2)
+    monkeypatch.setattr(helper_process, "available_cores", lambda: helper_process.HELPER_CORES)
     alone, shared = tmp_path / "alone", tmp_path / "shared"
     run_campaign(tiny, alone, render=fake_render, show_progress=False)
     with helper_process.campaign_helper("vissim.validation.dslr.item"):

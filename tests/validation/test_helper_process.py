@@ -26,7 +26,7 @@ def refuse(x):
 
 @pytest.fixture
 def two_cores(monkeypatch):
-    monkeypatch.setattr(helper_process, "available_cores", lambda: 2)
+    monkeypatch.setattr(helper_process, "available_cores", lambda: helper_process.HELPER_CORES)
 
 
 def test_shared_figures_are_the_ones_drawn_here_in_order(two_cores):

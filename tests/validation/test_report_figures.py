@@ -196,19 +196,22 @@ def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path
         assert f"optics figure {name!r} was skipped (OSError" in caplog.text
 
 
-@pytest.mark.parametrize("n_panels, long_names", [(1, False), (3, False), (3, True)])
+@pytest.mark.parametrize("n_panels, long_names", [(1, None), (3, None), (3, "words"), (3, "one word")])
 def test_fixed_layouts_keep_every_label_inside_the_figure_and_off_other_panels(cases, run_dir, n_panels, long_names):
     """The optics figures are laid out at fixed places (inches), not by matplotlib's layout engine: every text
     the figures draw lies inside the figure; no panel's labels overlap another panel or colour bar; no title
-    overlaps another, long configuration names (wrapped to their panel) included."""
+    overlaps another, configuration names as long as a name may be (`MAX_NAME_CHARS`), in words or in one word,
+    wrapped to their panel, included."""
     from dataclasses import replace
 
+    from vissim.checks import MAX_NAME_CHARS
     from vissim.validation.dslr.optics_figures import through_focus_figure_of
 
     chosen = (cases * 3)[:n_panels]
     if long_names:
-        chosen = [replace(case, configuration=f"configuration {i} with a name of fifty-four characters"[:54])
-                  for i, case in enumerate(chosen)]
+        word = "configuration with a long name " if long_names == "words" else "configuration_with_a_long_name_"
+        chosen = [replace(case, configuration=(f"{i}_" + word * 4)[:MAX_NAME_CHARS]) for i, case in enumerate(chosen)]
+        assert all(len(case.configuration) == MAX_NAME_CHARS for case in chosen)
     psfs = [case_psf(case) for case in chosen]
     for fig in (psf_figure_of(chosen, psfs), mtf_figure_of(chosen, psfs), through_focus_figure_of(chosen)):
         try:

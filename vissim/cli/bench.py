@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from vissim import __version__
-from vissim.cli._common import add_trial_lens_args, parse_float_list, print_json, trial_lens_powers
+from vissim.cli._common import add_json_arg, add_trial_lens_args, parse_float_list, print_json, trial_lens_powers
 from vissim.errors import VissimInputError
 from vissim.cli import command_help
 
@@ -46,7 +46,7 @@ def add_wavefront_parser(subparsers) -> argparse.ArgumentParser:
                         help="chart point as seen from the pupil centre, degrees: X towards the examiner's "
                              "right (the camera's left), Y up (default 0,0)")
     parser.add_argument("--max-order", type=int, default=8, metavar="N", help="Zernike radial order (default 8)")
-    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_json_arg(parser)
     parser.set_defaults(func=run_wavefront)
     return parser
 

@@ -6,7 +6,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from vissim import __version__
-from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg,
+from vissim.cli._common import (EYE_ACCOMMODATION_HELP, FIELD_DEG_HELP, RX_HELP, add_eye_model_arg, add_json_arg,
                                 add_trial_lens_args, field_deg_from_text, parse_float_list, print_json,
                                 trial_lens_powers)
 from vissim.errors import VissimInputError
@@ -77,7 +77,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                              "refraction at each wavelength minus that at --wavelength-nm (default the model's "
                              "reference), traced over the pupil given at --field-deg, beside the paraxial value, "
                              "Thibos's chromatic eye (1992) and Atchison & Smith's fit to measured eyes (2005)")
-    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
     return parser
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from vissim.checks import (DEFAULT_WAVELENGTH_NM, FIT_POWER_RANGE_DIOPTERS, MODEL_ERROR_RANGE_DIOPTERS, number_within,
                            VERTEX_DISTANCE_RANGE_MM)
-from vissim.cli._common import check_outputs_apart, image_sampling, print_json, refuse_existing
+from vissim.cli._common import add_json_arg, check_outputs_apart, image_sampling, print_json, refuse_existing
 from vissim.cli._parser import Number
 from vissim.errors import VissimInputError
 from vissim.progress import terminal_progress
@@ -49,7 +49,7 @@ def add_parser(subparsers) -> None:
                         type=Number(float, nonnegative=True, maximum=MODEL_ERROR_RANGE_DIOPTERS[1]),
                         help="the model's own error per power-vector component, added to the noise in the intervals "
                              "(default 0.0045: measured on Mitsuba bench renders; 0 gives noise-only intervals)")
-    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_json_arg(parser)
     parser.add_argument("-o", "--output", type=Path, metavar="FIT.json", help="also write the JSON record with provenance")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
     parser.set_defaults(func=run)

@@ -13,8 +13,8 @@ import argparse
 from pathlib import Path
 
 from vissim.checks import EYE_PUPIL_RANGE_MM, size_text
-from vissim.cli._common import (add_rx_arg, add_trial_lens_args, check_outputs_apart, print_json, refuse_existing,
-                                trial_lens_powers)
+from vissim.cli._common import (add_json_arg, add_rx_arg, add_trial_lens_args, check_outputs_apart, print_json,
+                                refuse_existing, trial_lens_powers)
 from vissim.errors import VissimInputError
 from vissim.optics.rx.conventions import CORNEA_TO_ENTRANCE_PUPIL_MM, EYE_VERTEX_DISTANCE_MM, SPECTACLE_VERTEX_DISTANCE_MM
 
@@ -69,7 +69,7 @@ def add_atv_parser(subparsers) -> argparse.ArgumentParser:
                         help="uncoated lenses: Fresnel transmittance per surface")
     method.add_argument("--variant", metavar="V", help="Mitsuba variant (default: chosen by vissim)")
     parser.add_argument("-o", "--output", required=True, metavar="PATH", help="output .exr (linear float32)")
-    parser.add_argument("--json", action="store_true", help="print a JSON summary")
+    add_json_arg(parser)
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
     parser.set_defaults(func=run_atv)
     return parser

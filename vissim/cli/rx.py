@@ -7,7 +7,7 @@ import argparse
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.cli import command_help
-from vissim.cli._common import print_json
+from vissim.cli._common import add_json_arg, print_json
 
 
 def add_parser(subparsers) -> None:
@@ -20,7 +20,7 @@ def add_parser(subparsers) -> None:
     )
     parser.add_argument("prescription", help="e.g. '-2.00 -1.25 x 180', '-2.00/-1.25x180', 'plano -0.75 x 90'")
     parser.add_argument("--pupil-mm", type=float, metavar="MM", help="pupil diameter in mm for Zernike coefficients (default none: no Zernike coefficients)")
-    parser.add_argument("--json", action="store_true", help="print JSON")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
 
 

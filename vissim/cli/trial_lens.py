@@ -13,7 +13,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.rx.conventions import CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
 from vissim.cli import command_help
-from vissim.cli._common import print_json
+from vissim.cli._common import add_json_arg, print_json
 
 if TYPE_CHECKING:
     from vissim.optics.rx.trial_lens import TrialLens
@@ -54,7 +54,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         help="centre thickness; 0 (default) = thin lens")
     parser.add_argument("--back-surface-diopters", type=float, default=0.0, metavar="D",
                         help="power of the back (camera-side) surface of a thick lens; 0 (default) = plano")
-    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_json_arg(parser)
     parser.set_defaults(func=run)
     return parser
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from vissim.atomic import write_json_atomic
-from vissim.charts import Chart, optotype_tile
+from vissim.charts import Chart, render_chart_angular
 from vissim.fit.capture import fit_bench_item
 from vissim.imaging.metrics import compare_images, noise_floor
 from vissim.optics.blur.resample import SUBPIXELS_PER_PX, block_mean
@@ -35,6 +35,7 @@ from vissim.validation.dslr.wave_bench import (
     residual_budget,
     traced_ray_image,
     traced_rays_setup,
+    wave_bench_chart,
 )
 from vissim.validation.engine.item_files import save_item_image
 from vissim.validation.engine.metrics import added_scores
@@ -46,21 +47,14 @@ log = logging.getLogger(__name__)
 
 
 def synthetic_chart(configuration: Configuration, settings: CampaignSettings, oversample: int = 1) -> Chart:
-    """The synthetic chart tile: the same letter, size, contrast and position the bench shows.
+    """The synthetic chart tile: the chart the bench shows (`wave_bench_chart`), rendered in visual angle.
 
     The letter is centred on the tile's centre (the bench's optical axis), not snapped to the
     pixel grid; ``oversample`` renders it on a grid that many times finer.
     """
     rows, cols = settings.tile_px
-    return optotype_tile(
-        configuration.letter,
-        configuration.logmar,
-        arcmin_per_px=settings.arcmin_per_px / oversample,
-        size_px=(rows * oversample, cols * oversample),
-        polarity=configuration.polarity,
-        viewing_distance_m=settings.chart_distance_m,
-        snap_to_pixels=False,
-    )
+    return render_chart_angular(wave_bench_chart(configuration, settings), settings.arcmin_per_px / oversample,
+                                size_px=(rows * oversample, cols * oversample), snap_to_pixels=False)
 
 
 def _comparison(kind: str, input_name: str, reference_kind: str, reference_image: str, setup: dict,
@@ -146,7 +140,7 @@ def _wave_bench(item: _Item, fine_chart: Chart):
     if not item.settings.wave_truth or item.captured:
         return None, None
     bench, settings = item.built.bench, item.settings
-    traced = compute_wave_bench(bench, item.built.configuration, settings, SUBPIXELS_PER_PX, fine_chart)
+    traced = compute_wave_bench(bench, fine_chart, settings, SUBPIXELS_PER_PX)
     item.images["wave_truth"] = save_item_image(item.item_dir, "wave_truth", traced.pixels,
                                                 {**item.provenance, "wave_truth": json_safe(traced.provenance)})
     item.floors[WAVE_BENCH] = None  # noise-free: no floor

@@ -22,8 +22,8 @@ from vissim.validation.dslr.wave_bench import TRACED_RAYS, WAVE_BENCH, WAVE_BENC
 from vissim.validation.dslr.wave_bench_report import (SELF_CHECK_MARGIN_DB, is_wave_bench_row, self_check_table,
                                                       wave_bench_tables)
 from vissim.validation.engine.helper_process import draw_figures
-from vissim.validation.engine.figures import (Figure, display_norm, pyplot, png_bytes, radiance_colorbar, scale_bar,
-                                              tiles_alt)
+from vissim.validation.engine.figures import (Figure, PanelLayout, display_norm, panel_grid, png_bytes, pyplot,
+                                              radiance_colorbar, scale_bar, tiles_alt)
 from vissim.validation.engine.protocol import ReportParts
 from vissim.validation.engine.metrics import (MEAN_ABS_DIFF, PSNR, SSIM, added_metrics, floor_column,
                                               metric_float)
@@ -241,22 +241,21 @@ class _TileRows:
 
     def __init__(self, n_rows: int, n_cols: int):
         self.width, height = 1.9 * n_cols + 1.8, 9.2
-        self.fig = pyplot.figure(figsize=(self.width, height))
         self.cell_w = (self.width - GRID_LEFT_IN - GRID_RIGHT_IN - GRID_GAP_IN * (n_cols - 1)) / n_cols
         self.cell_h = (height - GRID_TOP_IN - GRID_BOTTOM_IN - GRID_GAP_IN * (n_rows - 1)) / n_rows
         row_w = self.width - GRID_LEFT_IN - GRID_RIGHT_IN
-        self.rows, self.bars = [], []
-        for i in range(n_rows):
-            bottom = height - GRID_TOP_IN - (i + 1) * self.cell_h - i * GRID_GAP_IN
-            ax = self.fig.add_axes((GRID_LEFT_IN / self.width, bottom / height, row_w / self.width,
-                                    self.cell_h / height))
+        layout = PanelLayout(row_w, self.cell_h, left_in=GRID_LEFT_IN, right_in=GRID_RIGHT_IN, top_in=GRID_TOP_IN,
+                             bottom_in=GRID_BOTTOM_IN, column_gap_in=0.0, row_gap_in=GRID_GAP_IN)
+        self.fig, axes = panel_grid(n_rows, 1, layout)  # a row's tiles in one axes
+        self.rows, self.bars = list(axes[:, 0]), []
+        for ax in self.rows:
             ax.set_axis_off()
             ax.set_xlim(0.0, row_w)
             ax.set_ylim(0.0, self.cell_h)
-            self.rows.append(ax)
-            bar_left = self.width - GRID_RIGHT_IN + 0.15
-            self.bars.append(self.fig.add_axes((bar_left / self.width, (bottom + 0.08 * self.cell_h) / height,
-                                                0.13 / self.width, 0.84 * self.cell_h / height)))
+            bottom = ax.get_position().y0 * height  # a colour bar a row, 0.84 of its height, beside it
+            self.bars.append(self.fig.add_axes(((self.width - GRID_RIGHT_IN + 0.15) / self.width,
+                                                (bottom + 0.08 * self.cell_h) / height, 0.13 / self.width,
+                                                0.84 * self.cell_h / height)))
 
     def show(self, i: int, j: int, image: np.ndarray, **imshow) -> tuple:
         """Tile (i, j): ``image`` drawn and framed; the image artist and its box (x0, y0, width, height, inches)."""

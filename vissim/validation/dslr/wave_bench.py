@@ -86,15 +86,10 @@ def wave_bench_chart(configuration: Configuration, settings: CampaignSettings) -
                               polarity=configuration.polarity)
 
 
-def compute_wave_bench(bench: DslrBench, configuration: Configuration, settings: CampaignSettings,
-                       oversample: int, fine_chart: Chart | None = None) -> WaveTruth:
-    """The wave truth of ``bench`` (the configuration's) at the campaign's wavelength, ``oversample`` x finer.
-
-    ``fine_chart``: that chart already rendered on the fine grid (the item's synthetic chart), used when it is the
-    bench's chart; otherwise the chart is rendered here."""
-    chart = wave_bench_chart(configuration, settings)
-    return wave_truth(bench, fine_chart if fine_chart is not None and fine_chart.spec == chart else chart,
-                      wavelengths_nm=(settings.wavelength_nm,), oversample=oversample)
+def compute_wave_bench(bench: DslrBench, fine_chart: Chart, settings: CampaignSettings, oversample: int) -> WaveTruth:
+    """The wave truth of ``bench`` at the campaign's wavelength, ``oversample`` x finer: ``fine_chart``, the bench's
+    chart (`wave_bench_chart`) rendered on that grid (the item's synthetic chart)."""
+    return wave_truth(bench, fine_chart, wavelengths_nm=(settings.wavelength_nm,), oversample=oversample)
 
 
 def traced_ray_image(bench: DslrBench, fine: np.ndarray, oversample: int) -> np.ndarray:

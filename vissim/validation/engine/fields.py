@@ -231,10 +231,7 @@ def lens(entry: Any, source: str, where: str) -> LensSpec:
     if not isinstance(entry, dict):
         raise field_error(source, where, f"a lens is a number (sphere, D) or a table {{{', '.join(LENS_KEYS)}}}, "
                                          f"got {entry!r}")
-    unknown = set(entry) - set(LENS_KEYS)
-    refuse_renamed_keys(unknown, LENS_KEYS, f"{source}: {where}")
-    if unknown:
-        raise field_error(source, where, f"unknown lens {'field' if len(unknown) == 1 else 'fields'} {sorted(unknown)}; use {', '.join(LENS_KEYS)}")
+    refuse_unknown_keys(entry, LENS_KEYS, source, where, "lens field")
     cyl = number(entry.get("cylinder_diopters", 0.0), source, f"{where}.cylinder_diopters", "dioptres", **limit)
     if cyl != 0 and "axis_deg" not in entry:
         raise field_error(source, where, "a cylinder needs axis_deg, its axis in degrees (TABO)")

@@ -8,7 +8,6 @@ the display scale, labelled with the linear radiance they stand for.
 
 from __future__ import annotations
 
-import io
 from typing import NamedTuple
 
 import matplotlib
@@ -17,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as pyplot  # noqa: E402
 import numpy as np  # noqa: E402
 
-from vissim.imageio import PNG_COMPRESS_LEVEL, srgb_decode, srgb_encode  # noqa: E402
+from vissim.imageio import encode_png, srgb_decode, srgb_encode  # noqa: E402
 
 __all__ = ["Figure", "display_norm", "radiance_colorbar", "RADIANCE_LABEL", "DISPLAY_TICKS", "scale_bar",
            "scale_bar_arcmin", "tiles_alt", "png_bytes", "pyplot", "PanelLayout", "panel_grid", "titled_panel_grid",
@@ -77,20 +76,33 @@ def panel_grid(n_rows: int, n_cols: int, layout: PanelLayout):
 TITLE_WIDTH_SHARE, TITLE_LINE_EM = 0.97, 1.25
 
 
+#: Points in an inch (typography's unit: font sizes are in points).
+POINTS_PER_INCH = 72.0
+
+
 def wrapped_lines(text: str, width_in: float, fontsize: float) -> list[str]:
     """``text`` wrapped to ``width_in`` at ``fontsize`` (points), its own line breaks (blank lines too) kept: words
-    added to a line while the line's measured width fits; a single word wider than that stands alone."""
+    added to a line while the line's measured width fits; a word wider than a line alone is cut where it fills one."""
     from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import text_to_path
 
-    font, room_pt = FontProperties(size=fontsize), TITLE_WIDTH_SHARE * width_in * 72.0
+    font, room_pt = FontProperties(size=fontsize), TITLE_WIDTH_SHARE * width_in * POINTS_PER_INCH
+
+    def fits(candidate: str) -> bool:
+        return text_to_path.get_text_width_height_descent(candidate, font, ismath=False)[0] <= room_pt
+
     lines = []
     for part in text.split("\n"):
         line = ""
         for word in part.split():
             longer = f"{line} {word}" if line else word
-            if line and text_to_path.get_text_width_height_descent(longer, font, ismath=False)[0] > room_pt:
-                lines.append(line)
+            if not fits(longer):
+                if line:
+                    lines.append(line)
+                while not fits(word) and len(word) > 1:  # the longest head that fits its own line
+                    cut = max(n for n in range(1, len(word)) if n == 1 or fits(word[:n]))
+                    lines.append(word[:cut])
+                    word = word[cut:]
                 longer = word
             line = longer
         lines.append(line)
@@ -107,9 +119,9 @@ def titled_panel_grid(n_rows: int, n_cols: int, layout: PanelLayout, title: str,
     width_in, _ = layout.size_in(n_rows, n_cols)
     lines = wrapped_lines(title, width_in, fontsize)
     panels = [wrapped_lines(t, layout.panel_width_in + layout.column_gap_in, panel_fontsize) for t in panel_titles]
-    added_in = (len(lines) - (title.count("\n") + 1)) * TITLE_LINE_EM * fontsize / 72.0
+    added_in = (len(lines) - (title.count("\n") + 1)) * TITLE_LINE_EM * fontsize / POINTS_PER_INCH
     added_in += max((len(w) - (t.count("\n") + 1) for w, t in zip(panels, panel_titles)), default=0) * (
-        TITLE_LINE_EM * panel_fontsize / 72.0)
+        TITLE_LINE_EM * panel_fontsize / POINTS_PER_INCH)
     layout = layout._replace(top_in=layout.top_in + added_in)
     fig, axes = panel_grid(n_rows, n_cols, layout)
     fig.suptitle("\n".join(lines), fontsize=fontsize)
@@ -195,13 +207,8 @@ def tiles_alt(what: str, rows: list[str], columns: list[str], extra: str = "") -
 
 def png_bytes(fig) -> bytes:
     """A figure as RGB PNG bytes (`FIGURE_DPI`, opaque: the figure's white background); the figure is closed."""
-    from PIL import Image
-
     fig.set_dpi(FIGURE_DPI)
     fig.canvas.draw()
     rgba = np.asarray(fig.canvas.buffer_rgba())
     pyplot.close(fig)
-    buffer = io.BytesIO()
-    rgb = Image.fromarray(np.ascontiguousarray(rgba[..., :3]))
-    rgb.save(buffer, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
-    return buffer.getvalue()
+    return encode_png(rgba[..., :3])

@@ -7,8 +7,9 @@ end of a list while this process takes them from the front, one at a time each, 
 (`share_work`); each piece is done whole by one process and by the same code, so its result does
 not depend on where it was done.  The helper is spawned (this process may hold Dr.Jit's threads,
 which do not survive a fork) and needs about a second to start, so a campaign starts it before its
-renders (`campaign_helper`), the modules it will need imported meanwhile.  A helper that dies (killed
-for memory, say) leaves its pieces to this process.
+renders (`campaign_helper`), the modules it will need imported meanwhile: on `HELPER_CORES` cores, where
+it was measured to beat threads.  A report drawn alone (`draw_figures`) starts one wherever a core is spare.
+A helper that dies (killed for memory, say) leaves its pieces to this process.
 """
 
 from __future__ import annotations
@@ -123,7 +124,7 @@ def draw_figures(calls: list[tuple[Callable, tuple]], advance: Callable[[], None
     """
     if started_helper() is not None:
         return share_work(calls, started_helper(), advance)
-    if available_cores() < HELPER_CORES or len(calls) < FIGURES_WORTH_A_PROCESS:
+    if available_cores() == 1 or len(calls) < FIGURES_WORTH_A_PROCESS:  # no core to spare, or too few figures
         return [_done(work, arguments, advance) for work, arguments in calls]
     with _stopped_at_end(_spawn_helper()) as helper:
         return share_work(calls, helper, advance)

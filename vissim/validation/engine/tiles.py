@@ -7,11 +7,10 @@ shows a signed difference on a fixed scale, mid-grey for none, white for +``diff
 
 from __future__ import annotations
 
-import io
 
 import numpy as np
 
-from vissim.imageio import PNG_COMPRESS_LEVEL, srgb_encode
+from vissim.imageio import encode_png, srgb_encode
 
 __all__ = ["tile_strip", "TILE_ZOOM", "GAP_PX", "LABEL_PX"]
 
@@ -53,6 +52,4 @@ def tile_strip(images: list[np.ndarray], kinds: list[str], labels: list[str], di
         canvas.paste(Image.fromarray(tile, "L"), (x, LABEL_PX))
         draw.multiline_text((x + 1, 1), label, fill=0, font=font, spacing=1)
         x += tile.shape[1] + GAP_PX
-    buffer = io.BytesIO()
-    canvas.convert("RGB").save(buffer, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
-    return buffer.getvalue()
+    return encode_png(np.asarray(canvas.convert("RGB")))
