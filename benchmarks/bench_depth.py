@@ -11,6 +11,10 @@ Measured in the same run, best of ``--repeats`` each, interleaved:
 
 * ``blur_depth`` with its PSFs computed (cold: the PSF cache cleared) and cached (warm);
 * ``blur_image`` of the same image with one PSF (the widest layer's, edge padding);
+* the window floor: the FFT convolutions of the layers' windows alone (the planes and PSFs
+  ``blur_depth`` hands `vissim.optics.blur.device.convolve_window`, recorded in one call), spread
+  over as many threads as ``blur_depth`` uses: what is left when extension, PSFs and compositing
+  cost nothing;
 * the naive per-layer floor: per non-empty layer, the kernel's transform and one batched
   real FFT pair of 3 colour planes + coverage on the full padded frame (what the layered blur
   cost before it cropped each layer to its support), times the number of layers;
@@ -18,9 +22,10 @@ Measured in the same run, best of ``--repeats`` each, interleaved:
   same files, each a fresh process (imports, EXR reading and writing, PSFs: everything a user
   waits for), so every run is cold (nothing is cached across processes).  Printed per run: the
   wall and CPU seconds of each and their ratio; then the best-of ratio and the runs' spread;
-* with ``--baseline CHECKOUT`` too: ``vissim blur-depth`` from another checkout of vissim (a git
-  worktree of an older commit, run by this interpreter), interleaved with the others, and the
-  ratio of the two blur-depths' medians: a change's effect measured in one run.
+* with ``--baseline CHECKOUT`` too: ``vissim blur-depth`` and ``vissim blur`` from another checkout
+  of vissim (a git worktree of an older commit, run by this interpreter), interleaved with the
+  others: each command's median here over there (a change's effect measured in one run), and the
+  ratio blur-depth / blur in each checkout.
 """
 
 from __future__ import annotations
@@ -32,14 +37,18 @@ import subprocess
 import sys
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import scipy.fft
 
 from vissim.optics.blur.convolve import BlurKernel, blur_image, padded_shape, padding_width_px
+from vissim.optics.blur.device import convolve_window
+from vissim.optics.depth import composite
 from vissim.optics.depth.depth_map import blur_depth
-from vissim.optics.depth.psfs import cached_psf
+from vissim.optics.depth.psfs import cached_psf, worker_threads
+from vissim.optics.runtime.array_backend import CPU
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.pupil.wavefront import Wavefront
 
@@ -72,6 +81,32 @@ def naive_layer(planes: np.ndarray, psf, shape: tuple[int, int]) -> None:
     scipy.fft.irfft2(spectrum, s=shape, axes=(-2, -1), workers=-1, overwrite_x=True)
 
 
+def window_inputs(image: np.ndarray, depth: np.ndarray, kwargs: dict) -> list[tuple]:
+    """The arguments of every layer's FFT convolution in one ``blur_depth``: (planes, psf, padding, touches)."""
+    calls = []
+    convolve = composite.convolve_window
+
+    def recording(planes, psf, padding, touches, backend, threads=None):
+        calls.append((planes.copy(), psf, padding, touches))
+        return convolve(planes, psf, padding, touches, backend, threads=threads)
+
+    composite.convolve_window = recording
+    try:
+        blur_depth(image, depth, **kwargs)
+    finally:
+        composite.convolve_window = convolve
+    return calls
+
+
+def window_floor(calls: list[tuple]) -> float:
+    """Seconds to convolve the layers' windows alone, spread over one thread per core as blur_depth spreads them."""
+    threads = worker_threads(CPU)
+    start = time.perf_counter()
+    with ThreadPoolExecutor(threads) as pool:
+        list(pool.map(lambda call: convolve_window(*call, CPU, threads=1), calls))
+    return time.perf_counter() - start
+
+
 def best(function, repeats: int) -> float:
     times = []
     for _ in range(repeats):
@@ -84,7 +119,7 @@ def best(function, repeats: int) -> float:
 def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px=None,
               baseline: Path | None = None) -> dict[str, list]:
     """Wall and CPU seconds (user + system) of each command, per repeat: {name: [(wall_s, cpu_s), ...]};
-    with ``baseline`` (another checkout of vissim), its blur-depth too, as "baseline blur-depth"."""
+    with ``baseline`` (another checkout of vissim), its two commands too ("baseline blur-depth", "baseline blur")."""
     from vissim.imageio import write_data_map, write_image
 
     with tempfile.TemporaryDirectory() as folder:
@@ -97,7 +132,8 @@ def cli_times(image: np.ndarray, depth: np.ndarray, repeats: int, coarse_blur_px
                     + ([] if coarse_blur_px is None else ["--coarse-blur-px", f"{coarse_blur_px:g}"])}
         roots = dict.fromkeys(commands, Path(__file__).resolve().parents[1])
         if baseline is not None:
-            commands["baseline blur-depth"], roots["baseline blur-depth"] = commands["blur-depth"], baseline.resolve()
+            for name in ("blur-depth", "blur"):
+                commands[f"baseline {name}"], roots[f"baseline {name}"] = commands[name], baseline.resolve()
         times = {name: [] for name in commands}
         for _ in range(repeats):  # interleaved, so a busy machine slows all alike
             for name, argv in commands.items():
@@ -118,7 +154,7 @@ def main() -> None:
     parser.add_argument("--cli-only", action="store_true", help="time only the two commands")
     parser.add_argument("--coarse-blur-px", type=float, help="blur_depth's coarse_blur_px (default: off)")
     parser.add_argument("--baseline", type=Path, metavar="CHECKOUT",
-                        help="with --cli/--cli-only: also time blur-depth from another checkout of vissim (e.g. a "
+                        help="with --cli/--cli-only: also time both commands from another checkout of vissim (e.g. a "
                              "git worktree of an older commit), interleaved, and print new / baseline")
     args = parser.parse_args()
     if args.baseline is not None and not (args.cli or args.cli_only):
@@ -141,13 +177,16 @@ def main() -> None:
     frame = padded_shape((ROWS, COLS), widest.psf_size_px)
     planes = np.ascontiguousarray(np.moveaxis(np.concatenate([image, image[..., :1]], axis=-1), -1, 0))
 
-    timings = {"cold": [], "warm": [], "single": [], "floor": []}
+    windows = window_inputs(image, depth, kwargs)
+    timings = {"cold": [], "warm": [], "single": [], "floor": [], "windows": []}
     for _ in range(args.repeats):
         timings["cold"].append(best(cold, 1))
         timings["warm"].append(best(lambda: blur_depth(image, depth, **kwargs), 1))
         timings["single"].append(best(lambda: blur_image(image, single_psf, arcmin_per_px=STEP, padding="edge"), 1))
         timings["floor"].append(best(lambda: naive_layer(planes, single_psf, frame), 1))
-    cold_s, warm_s, single_s, floor_s = (min(timings[k]) for k in ("cold", "warm", "single", "floor"))
+        timings["windows"].append(window_floor(windows))
+    cold_s, warm_s, single_s, floor_s, windows_s = (min(timings[k]) for k in ("cold", "warm", "single", "floor",
+                                                                               "windows"))
     n = len(result.layers)
     print(f"image {COLS}x{ROWS} RGB float32, depth 0.33-8 m, eye {EYE.format()}, {PUPIL_MM:g} mm pupil, "
           f"{STEP:g} arcmin/px, 550 nm wave optics, coarse grid from {args.coarse_blur_px} px of blur")
@@ -158,8 +197,11 @@ def main() -> None:
     print(f"blur_image, one {single_psf.data.shape[0]} px PSF:        {single_s:6.3f} s")
     print(f"naive floor: {n} x (kernel + 4-plane rfft2/irfft2 on {frame}) = {n} x {1e3 * floor_s:.1f} ms = "
           f"{n * floor_s:5.2f} s")
+    print(f"window floor: the {len(windows)} layer windows' FFT convolutions alone, on {worker_threads(CPU)} "
+          f"thread(s): {windows_s:5.2f} s")
     print(f"ratios: blur_depth / blur_image {cold_s / single_s:5.1f} (cold), {warm_s / single_s:5.1f} (warm); "
-          f"blur_depth (warm) / naive floor {warm_s / (n * floor_s):5.2f}")
+          f"blur_depth (warm) / naive floor {warm_s / (n * floor_s):5.2f}; blur_depth (cold) / window floor "
+          f"{cold_s / windows_s:4.2f}")
     if args.cli:
         print_cli_times(image, depth, args)
 
@@ -174,9 +216,14 @@ def print_cli_times(image: np.ndarray, depth: np.ndarray, args) -> None:
     print(f"command line, cold: ratio blur-depth / blur {best:4.2f} (best of {args.repeats} each); per run "
           f"{ratios[0]:4.2f}-{ratios[-1]:4.2f} (median {ratios[len(ratios) // 2]:4.2f})")
     if "baseline blur-depth" in times:
-        new, old = ([wall for wall, _ in times[name]] for name in ("blur-depth", "baseline blur-depth"))
-        print(f"command line, cold: blur-depth here / from {args.baseline}: median {np.median(new):5.2f} s / "
-              f"{np.median(old):5.2f} s = {np.median(new) / np.median(old):4.2f} ({args.repeats} interleaved runs each)")
+        median = {name: float(np.median([wall for wall, _ in runs])) for name, runs in times.items()}
+        for name in ("blur-depth", "blur"):
+            print(f"command line, cold: {name} here / from {args.baseline}: median {median[name]:5.2f} s / "
+                  f"{median['baseline ' + name]:5.2f} s = {median[name] / median['baseline ' + name]:4.2f} "
+                  f"({args.repeats} interleaved runs each)")
+        print(f"command line, cold: median ratio blur-depth / blur {median['blur-depth'] / median['blur']:4.2f} here, "
+              f"{median['baseline blur-depth'] / median['baseline blur']:4.2f} from {args.baseline}; blur-depth here "
+              f"/ blur from there {median['blur-depth'] / median['baseline blur']:4.2f}")
 
 
 if __name__ == "__main__":
