@@ -3,15 +3,20 @@
 Oracles: the same blur computed on one thread, layer after layer (the pooled path must composite
 the same layers in the same order: equal to float32 round-off, abs 1e-6 on a [0, 1] image); the
 count of non-empty layers the result itself lists (progress); OpenBLAS's own thread count, read
-back through its C interface (the BLAS guard).
+back through its C interface (the BLAS guard); the scheduler's queue, recorded (`in_order`).
 """
+
+from concurrent.futures import Future
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import vissim.optics.depth.depth_map as depth_module
 import vissim.optics.depth.composite as composite_module
 from vissim.optics.depth.depth_map import blur_depth
+from vissim.optics.depth.psfs import in_order
 from vissim.optics.rx.prescription import Prescription
 from vissim.optics.runtime.threads import _openblas_controls, single_threaded_blas
 
@@ -68,3 +73,55 @@ def test_blas_runs_on_one_thread_inside_the_guard_and_as_before_after_it():
             assert get() == 1
         assert get() == 1
     assert get() == before
+
+
+class _RecordingPool:
+    """Runs each task as it is queued, and records what was queued at which step of the caller's loop."""
+
+    def __init__(self):
+        self.log, self.step = [], 0
+
+    def submit(self, function, *args):
+        self.log.append(("layer", args[0], self.step))
+        future = Future()
+        future.set_result(function(*args))
+        return future
+
+
+class _RecordingOptics:
+    def __init__(self, pool):
+        self.pool = pool
+
+    def prefetch(self, pool, k):
+        if not any(entry[:2] == ("psf", k) for entry in self.pool.log):
+            self.pool.log.append(("psf", k, self.pool.step))
+
+
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(1, 40), threads=st.integers(2, 4), costs=st.lists(st.integers(0, 9), min_size=40, max_size=40),
+       with_cost=st.booleans())
+def test_in_order_yields_each_layer_once_in_order_and_queues_the_last_ones_largest_first(n, threads, costs, with_cost):
+    order = list(range(n))[::-1]  # near to far, as blur_depth asks
+    pool = _RecordingPool()
+    optics = _RecordingOptics(pool)
+    results = []
+    for step, item in enumerate(in_order(lambda k: 10 * k, optics, order, pool, threads,
+                                         cost=costs.__getitem__ if with_cost else None)):
+        results.append(item)
+        pool.step = step + 1
+    assert results == [(k, 10 * k) for k in order]
+    queued = [(k, step) for kind, k, step in pool.log if kind == "layer"]
+    assert sorted(k for k, _ in queued) == sorted(order)  # each layer once
+    for k in order:  # a layer's PSF is asked for before the layer is queued (no task waits on one queued later)
+        assert pool.log.index(next(e for e in pool.log if e[:2] == ("psf", k))) < \
+            pool.log.index(next(e for e in pool.log if e[:2] == ("layer", k)))
+    # with costs, from this step on (everything left within the PSFs' reach) the rest is queued at once
+    final = max(n - (4 * threads + 1), 0) if with_cost else n
+    for k, step in queued:
+        if step < final:  # before: in order, at most 2 threads + 1 layers ahead of the caller
+            assert order.index(k) <= step + 2 * threads
+    assert [k for k, step in queued if step < final] == [k for k in order if (k, final) not in queued]
+    if with_cost:
+        last = [k for k, step in queued if step == final]
+        assert last == sorted(last, key=costs.__getitem__, reverse=True)
+        assert all(step <= final for _, step in queued)

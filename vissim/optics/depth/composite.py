@@ -62,6 +62,15 @@ class LayerScene:
     def shape(self) -> tuple[int, int]:
         return self.lower.shape
 
+    def window(self, k: int) -> tuple[int, int, int, int]:
+        """Layer ``k``'s window (`blurred_layer`): its matte's box grown by ``2 (r_k + r_max)``, inside the image."""
+        return grow_box(self.boxes[k], 2 * (self.reach[k] + max(self.reach.values())), self.shape)
+
+    def window_px(self, k: int) -> int:
+        """Pixels in layer ``k``'s window: what its extension and blur cost, roughly."""
+        r0, r1, c0, c1 = self.window(k)
+        return (r1 - r0) * (c1 - c0)
+
 
 def blurred_layer(scene: LayerScene, k: int) -> tuple:
     """Layer ``k`` extended behind nearer content and blurred on its window: (window, blurred planes, padded shape).
@@ -73,7 +82,7 @@ def blurred_layer(scene: LayerScene, k: int) -> tuple:
     """
     rows, cols = scene.shape
     boxes, reach, scale = scene.boxes, scene.reach, scene.optics.scales[k]
-    window = grow_box(boxes[k], 2 * (reach[k] + max(reach.values())), (rows, cols))
+    window = scene.window(k)
     e0, e1, f0, f1 = grow_box(window, EXTENSION_HALO_PX, (rows, cols))
     wide = (slice(e0, e1), slice(f0, f1))
     planes = extended_layer(scene.colour[:, e0:e1, f0:f1], scene.lower[wide], scene.upper[wide], scene.frac[wide],

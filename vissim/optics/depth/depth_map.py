@@ -69,7 +69,8 @@ trailing rows where nearer content hides the layer completely.
 Threads: a layer's extension and blur depend on no other layer; only its compositing (the
 transmission through nearer layers) does.  On the CPU, one thread per core extends and blurs
 layers ahead (their PSFs computed in the same pool, OpenBLAS held at one thread meanwhile:
-`vissim.optics.runtime.threads`) while the calling thread composites them near to far, in order:
+`vissim.optics.runtime.threads`; the last few started largest first, so that a large background
+does not end the call alone) while the calling thread composites them near to far, in order:
 the result equals the one-thread blur to float32 round-off (``tests/test_depth_threads.py``).
 """
 
@@ -372,7 +373,8 @@ def blur_depth(
         scene = LayerScene.on(backend, colour, (matte.lower, matte.upper, matte.frac), layer_diopters,
                               threshold_diopters, boxes, optics, padding, 1 if pool is not None else None)
         compositor = Compositor(scene, layer_diopters[matte.active[0]])
-        near_to_far = in_order(functools.partial(blurred_layer, scene), optics, reversed(matte.active), pool, threads)
+        near_to_far = in_order(functools.partial(blurred_layer, scene), optics, reversed(matte.active), pool, threads,
+                               cost=scene.window_px)
         for done, (k, (window, blurred, shape)) in enumerate(near_to_far, 1):
             compositor.add(k, window, blurred, shape)
             if progress is not None:

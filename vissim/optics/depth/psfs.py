@@ -126,7 +126,7 @@ def layer_pool(threads: int):
             pool.shutdown(wait=True, cancel_futures=True)
 
 
-def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, threads: int):
+def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, threads: int, cost=None):
     """``(k, work(k))`` for each layer ``k`` of ``order``, in that order.
 
     With a ``pool`` (of ``threads``) the layers are worked on ahead on it: at most ``2 threads`` layers
@@ -134,17 +134,25 @@ def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, 
     PSF is queued just before its layer, so that the first layers start at once.  A layer's
     extension and blur depend on no other layer, only its compositing (the caller's) does.  A
     layer's task waits only for PSF tasks submitted before it, which have therefore started: no
-    deadlock.
+    deadlock.  Once every layer left is within the PSFs' reach (``4 threads + 1`` layers), those not
+    yet queued are queued at once, the largest by ``cost(k)`` first (when given): a large last layer
+    (a scene's background, farthest) then does not run alone while the other threads wait.
     """
     order = list(order)
     if pool is None:
         for k in order:
             yield k, work(k)
         return
+    reach = 4 * threads + 1
     futures: dict = {}
     for i, k in enumerate(order):
-        for j, later in enumerate(order[i : i + 4 * threads + 1]):
+        for later in order[i : i + reach]:
             optics.prefetch(pool, later)
-            if j <= 2 * threads and later not in futures:
+        final = i + reach >= len(order)
+        queue = order[i : i + 2 * threads + 1]
+        if final and cost is not None:
+            queue = sorted(order[i:], key=cost, reverse=True)
+        for later in queue:
+            if later not in futures:
                 futures[later] = pool.submit(work, later)
         yield k, futures.pop(k).result()
