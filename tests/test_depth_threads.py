@@ -112,6 +112,7 @@ def test_in_order_yields_each_layer_once_in_order_and_queues_the_last_ones_large
     assert results == [(k, 10 * k) for k in order]
     queued = [(k, step) for kind, k, step in pool.log if kind == "layer"]
     assert sorted(k for k, _ in queued) == sorted(order)  # each layer once
+    assert [kind for kind, _, _ in pool.log[:2]] == ["psf", "layer"]  # the first layer starts after its PSF alone
     for k in order:  # a layer's PSF is asked for before the layer is queued (no task waits on one queued later)
         assert pool.log.index(next(e for e in pool.log if e[:2] == ("psf", k))) < \
             pool.log.index(next(e for e in pool.log if e[:2] == ("layer", k)))

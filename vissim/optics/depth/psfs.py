@@ -135,8 +135,9 @@ def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, 
     extension and blur depend on no other layer, only its compositing (the caller's) does.  A
     layer's task waits only for PSF tasks submitted before it, which have therefore started: no
     deadlock.  Once every layer left is within the PSFs' reach (``4 threads + 1`` layers), those not
-    yet queued are queued at once, the largest by ``cost(k)`` first (when given): a large last layer
-    (a scene's background, farthest) then does not run alone while the other threads wait.
+    yet queued are queued at once, each after its PSF, the largest by ``cost(k)`` first (when given):
+    a large last layer (a scene's background, farthest) then does not run alone while the other
+    threads wait.
     """
     order = list(order)
     if pool is None:
@@ -146,13 +147,10 @@ def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, 
     reach = 4 * threads + 1
     futures: dict = {}
     for i, k in enumerate(order):
-        for later in order[i : i + reach]:
+        final = cost is not None and i + reach >= len(order)
+        ahead = sorted(order[i:], key=cost, reverse=True) if final else order[i : i + reach]
+        for j, later in enumerate(ahead):
             optics.prefetch(pool, later)
-        final = i + reach >= len(order)
-        queue = order[i : i + 2 * threads + 1]
-        if final and cost is not None:
-            queue = sorted(order[i:], key=cost, reverse=True)
-        for later in queue:
-            if later not in futures:
+            if (final or j <= 2 * threads) and later not in futures:
                 futures[later] = pool.submit(work, later)
         yield k, futures.pop(k).result()
