@@ -45,7 +45,7 @@ import scipy.fft
 
 from vissim.optics.blur.convolve import BlurKernel, blur_image, padded_shape, padding_width_px
 from vissim.optics.blur.device import convolve_window
-from vissim.optics.depth import composite
+from vissim.optics.depth import composite, windows
 from vissim.optics.depth.depth_map import blur_depth
 from vissim.optics.depth.psfs import cached_psf, worker_threads
 from vissim.optics.runtime.array_backend import CPU
@@ -82,19 +82,21 @@ def naive_layer(planes: np.ndarray, psf, shape: tuple[int, int]) -> None:
 
 
 def window_inputs(image: np.ndarray, depth: np.ndarray, kwargs: dict) -> list[tuple]:
-    """The arguments of every layer's FFT convolution in one ``blur_depth``: (planes, psf, padding, touches)."""
+    """The arguments of every layer's FFT convolution in one ``blur_depth``, on the image's grid (`composite`) or the
+    coarse one (`windows.blur_coarse`): (planes, psf, padding, touches)."""
     calls = []
-    convolve = composite.convolve_window
 
     def recording(planes, psf, padding, touches, backend, threads=None):
         calls.append((planes.copy(), psf, padding, touches))
-        return convolve(planes, psf, padding, touches, backend, threads=threads)
+        return convolve_window(planes, psf, padding, touches, backend, threads=threads)
 
-    composite.convolve_window = recording
+    for module in (composite, windows):
+        module.convolve_window = recording
     try:
         blur_depth(image, depth, **kwargs)
     finally:
-        composite.convolve_window = convolve
+        for module in (composite, windows):
+            module.convolve_window = convolve_window
     return calls
 
 
@@ -177,14 +179,14 @@ def main() -> None:
     frame = padded_shape((ROWS, COLS), widest.psf_size_px)
     planes = np.ascontiguousarray(np.moveaxis(np.concatenate([image, image[..., :1]], axis=-1), -1, 0))
 
-    windows = window_inputs(image, depth, kwargs)
+    window_calls = window_inputs(image, depth, kwargs)
     timings = {"cold": [], "warm": [], "single": [], "floor": [], "windows": []}
     for _ in range(args.repeats):
         timings["cold"].append(best(cold, 1))
         timings["warm"].append(best(lambda: blur_depth(image, depth, **kwargs), 1))
         timings["single"].append(best(lambda: blur_image(image, single_psf, arcmin_per_px=STEP, padding="edge"), 1))
         timings["floor"].append(best(lambda: naive_layer(planes, single_psf, frame), 1))
-        timings["windows"].append(window_floor(windows))
+        timings["windows"].append(window_floor(window_calls))
     cold_s, warm_s, single_s, floor_s, windows_s = (min(timings[k]) for k in ("cold", "warm", "single", "floor",
                                                                                "windows"))
     n = len(result.layers)
@@ -197,7 +199,7 @@ def main() -> None:
     print(f"blur_image, one {single_psf.data.shape[0]} px PSF:        {single_s:6.3f} s")
     print(f"naive floor: {n} x (kernel + 4-plane rfft2/irfft2 on {frame}) = {n} x {1e3 * floor_s:.1f} ms = "
           f"{n * floor_s:5.2f} s")
-    print(f"window floor: the {len(windows)} layer windows' FFT convolutions alone, on {worker_threads(CPU)} "
+    print(f"window floor: the {len(window_calls)} layer windows' FFT convolutions alone, on {worker_threads(CPU)} "
           f"thread(s): {windows_s:5.2f} s")
     print(f"ratios: blur_depth / blur_image {cold_s / single_s:5.1f} (cold), {warm_s / single_s:5.1f} (warm); "
           f"blur_depth (warm) / naive floor {warm_s / (n * floor_s):5.2f}; blur_depth (cold) / window floor "

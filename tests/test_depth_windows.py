@@ -18,6 +18,7 @@ import scipy.fft
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from vissim.errors import VissimInputError
 from vissim.optics.blur.convolve import pad_window, padded_shape, padding_width_px
 from vissim.optics.blur.device import convolve_padded, convolve_window
 from vissim.optics.depth.composite import Compositor, LayerScene
@@ -65,6 +66,14 @@ def direct_convolution(padded: np.ndarray, kernel: np.ndarray) -> np.ndarray:
             out += kernel[i, j] * source[:, 2 * half - i : 2 * half - i + padded.shape[1],
                                          2 * half - j : 2 * half - j + padded.shape[2]]
     return out
+
+
+@pytest.mark.parametrize("padding", ["constant", "wrap", "symmetric"])
+def test_a_window_padded_any_other_way_is_refused(padding):
+    """Only padding whose rows copy the window's (edge, reflect) keeps the pruned transforms exact."""
+    psf = PSF.from_array(np.full((3, 3), 1 / 9), 1.0, wavelength_nm=550.0, pupil_diameter_mm=4.0)
+    with pytest.raises(VissimInputError, match=f"edge, reflect; got '{padding}'"):
+        convolve_window(np.ones((4, 5, 6), np.float32), psf, padding, (True,) * 4)
 
 
 @pytest.mark.parametrize("padding", DEPTH_PADDING_MODES)

@@ -1,8 +1,10 @@
 """`magnify`: an image resampled through a spectacle magnification, against the analytic image.
 
 Oracle: a Gaussian spot g(r) sampled on the pixel grid; magnified by M about the tile's centre it is g(M^-1 r),
-with TABO/OSA's x = -(column offset), y = -(row offset) (docs/conventions.md, "Pupil coordinates").  A cubic
-spline reproduces a spot 6 px wide to about 1e-5 of its peak.
+with TABO/OSA's x = -(column offset), y = -(row offset) (docs/conventions.md, "Pupil coordinates").  Flipping
+both axes commutes with a linear magnification, so the oracle pins which axis is which and their relative sign (a
+single axis flipped, or the two swapped, fails), not the common sign.  A cubic spline reproduces a spot 6 px wide
+to about 1e-5 of its peak.
 """
 
 import numpy as np

@@ -595,7 +595,7 @@ def write_image(
 
     def encode(tmp) -> None:
         if kind == "png":
-            _PILImage.fromarray(codes).save(tmp, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
+            _save_png(codes, tmp)
         else:
             photometric = "minisblack" if arr.ndim == 2 else "rgb"
             tifffile.imwrite(tmp, codes, photometric=photometric, compression="zlib", **extra)
@@ -607,8 +607,13 @@ def encode_png(codes: np.ndarray) -> bytes:
     """8-bit codes, (H, W) or (H, W, 3), as the bytes of a PNG file in memory (zlib at `PNG_COMPRESS_LEVEL`, as
     `write_image` writes one): a figure's, put in a file later by `write_png_bytes`."""
     buffer = io.BytesIO()
-    _PILImage.fromarray(np.ascontiguousarray(codes)).save(buffer, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
+    _save_png(codes, buffer)
     return buffer.getvalue()
+
+
+def _save_png(codes: np.ndarray, target) -> None:
+    """8-bit codes (grey, RGB or with alpha) saved as PNG into ``target`` (a path or a binary file object)."""
+    _PILImage.fromarray(np.ascontiguousarray(codes)).save(target, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
 
 
 def write_png_bytes(path: str | os.PathLike[str], png: bytes, *, provenance: dict | None = None,

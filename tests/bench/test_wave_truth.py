@@ -53,7 +53,7 @@ def test_wave_simulation_matches_the_wave_truth(lens):
 
 def test_a_chart_rendered_on_the_fine_grid_gives_the_same_truth_and_another_is_refused():
     """A campaign hands the wave truth the synthetic chart it rendered: the same pixels as the truth's own
-    rendering of the spec, bit for bit; a chart at another sampling is refused, naming both."""
+    rendering of the spec, bit for bit; a chart at another sampling, or snapped to pixels, is refused."""
     bench = DslrBench(lenses=(TrialLens(1.5),))
     spec = single_letter_spec("N", 1.0, viewing_distance_m=mm_to_m(bench.chart_distance_mm))
     rows, cols = bench.size_px
@@ -65,6 +65,10 @@ def test_a_chart_rendered_on_the_fine_grid_gives_the_same_truth_and_another_is_r
     with pytest.raises(VissimInputError, match=f"at {bench.arcmin_per_px / 5:g} arcmin/px.*drawn in visual angle "
                                                f"at {bench.arcmin_per_px / 4:g} arcmin/px"):
         wave_truth(bench, coarse, oversample=5)
+    snapped = render_chart_angular(spec, bench.arcmin_per_px / 5, size_px=(rows * 5, cols * 5), snap_to_pixels=True)
+    assert snapped.layout != fine.layout  # its letter moved to whole pixels
+    with pytest.raises(VissimInputError, match="not snapped to pixels"):
+        wave_truth(bench, snapped, oversample=5)
 
 
 def test_the_camera_must_be_focused_on_the_chart():

@@ -200,8 +200,8 @@ def test_a_failing_optics_figure_leaves_the_rest_of_the_report(run_dir, tmp_path
 def test_fixed_layouts_keep_every_label_inside_the_figure_and_off_other_panels(cases, run_dir, n_panels, long_names):
     """The optics figures are laid out at fixed places (inches), not by matplotlib's layout engine: every text
     the figures draw lies inside the figure; no panel's labels overlap another panel or colour bar; no title
-    overlaps another, configuration names as long as a name may be (`MAX_NAME_CHARS`), in words or in one word,
-    wrapped to their panel, included."""
+    overlaps another, configuration and group names as long as a name may be (`MAX_NAME_CHARS`), in words or in
+    one word, wrapped to their panel, included (0.5 px: window extents are rounded to whole pixels)."""
     from dataclasses import replace
 
     from vissim.checks import MAX_NAME_CHARS
@@ -210,8 +210,10 @@ def test_fixed_layouts_keep_every_label_inside_the_figure_and_off_other_panels(c
     chosen = (cases * 3)[:n_panels]
     if long_names:
         word = "configuration with a long name " if long_names == "words" else "configuration_with_a_long_name_"
-        chosen = [replace(case, configuration=(f"{i}_" + word * 4)[:MAX_NAME_CHARS]) for i, case in enumerate(chosen)]
-        assert all(len(case.configuration) == MAX_NAME_CHARS for case in chosen)
+        chosen = [replace(case, configuration=(f"{i}_" + word * 4)[:MAX_NAME_CHARS],
+                          group=(f"{i}_" + word.replace("configuration", "group") * 5)[:MAX_NAME_CHARS])
+                  for i, case in enumerate(chosen)]
+        assert all(len(case.configuration) == len(case.group) == MAX_NAME_CHARS for case in chosen)
     psfs = [case_psf(case) for case in chosen]
     for fig in (psf_figure_of(chosen, psfs), mtf_figure_of(chosen, psfs), through_focus_figure_of(chosen)):
         try:

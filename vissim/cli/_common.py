@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from vissim.atomic import check_outputs_apart, refuse_existing  # noqa: F401  (the commands' one door)
+from vissim.cli._output import JSON_HELP, add_json_arg, print_json, print_result  # noqa: F401  (likewise)
 from vissim.checks import (ARIZONA_ACCOMMODATION_RANGE_DIOPTERS, AXIS_RANGE_DEG, ENTRANCE_PUPIL_RANGE_MM,
                            NAVARRO_ACCOMMODATION_RANGE_DIOPTERS, eye_field_deg, number_within, trial_lens_diopters)
 from vissim.errors import VissimInputError
@@ -200,36 +201,3 @@ def image_sampling(image: Image, given: float | None, path: Path) -> float:
     if step is None:
         raise VissimInputError(f"{path} carries no angular sampling; give --arcmin-per-px (arcmin per pixel)")
     return step
-
-
-#: ``--json``'s help, the same on every command that computes numbers.
-JSON_HELP = "print one JSON object instead of the text lines: the numbers, the files written and their provenance"
-
-
-def add_json_arg(parser) -> None:
-    """``--json`` (`JSON_HELP`)."""
-    parser.add_argument("--json", action="store_true", help=JSON_HELP)
-
-
-def print_result(args: argparse.Namespace, lines: list[str], record: dict | None = None, written=(),
-                 provenance: dict | None = None) -> None:
-    """The command's text ``lines``, or with ``--json`` one JSON object: ``record`` (the numbers the lines say),
-    ``written`` (the files, as paths) and ``provenance`` (what the files record)."""
-    if not getattr(args, "json", False):
-        for line in lines:
-            print(line)
-        return
-    print_json(record or {}, written, provenance)
-
-
-def print_json(record: dict, written=(), provenance: dict | None = None) -> None:
-    """``--json``'s one object: ``record``, ``written`` (the files, as paths) and, when given, ``provenance``;
-    NumPy values as plain numbers and non-finite ones as strings (`vissim.provenance.json_safe`)."""
-    import json
-
-    from vissim.provenance import json_safe
-
-    out = {**record, "written": [str(p) for p in written]}
-    if provenance is not None:
-        out["provenance"] = provenance
-    print(json.dumps(json_safe(out), indent=2, allow_nan=False))

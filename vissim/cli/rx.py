@@ -7,7 +7,7 @@ import argparse
 from vissim.errors import VissimInputError
 from vissim.optics.rx.prescription import Prescription
 from vissim.cli import command_help
-from vissim.cli._common import add_json_arg, print_json
+from vissim.cli._output import add_json_arg, print_json
 
 
 def add_parser(subparsers) -> None:

@@ -13,7 +13,7 @@ from vissim.errors import VissimInputError
 from vissim.optics.rx.conventions import CROWN_GLASS_INDEX, EYE_VERTEX_DISTANCE_MM
 from vissim.thesis import THESIS_VERTEX_DISTANCE_MM
 from vissim.cli import command_help
-from vissim.cli._common import add_json_arg, print_json
+from vissim.cli._output import add_json_arg, print_json
 
 if TYPE_CHECKING:
     from vissim.optics.rx.trial_lens import TrialLens

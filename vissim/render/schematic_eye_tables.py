@@ -160,7 +160,7 @@ def eye_tables(eye: SchematicEye, iris_mm: float, wavelength_nm: float, max_thet
     """The tables of the module doc for ``eye`` with an iris ``iris_mm`` across, at ``wavelength_nm``,
     covering visual angles up to ``max_theta_deg``."""
     if not 0.0 <= max_theta_deg <= EYE_RENDER_MAX_THETA_DEG:
-        raise VissimInputError(f"the image reaches {max_theta_deg:.3g} deg from the eye's axis; the schematic-eye "
+        raise VissimInputError(f"the image reaches {max_theta_deg:.3g} deg from the eye's optical axis; the schematic-eye "
                                f"sensor renders up to {EYE_RENDER_MAX_THETA_DEG:g} deg")
     theta = table_theta_deg(max_theta_deg)
     radius = chief_ray_radii_mm(eye, theta, wavelength_nm)

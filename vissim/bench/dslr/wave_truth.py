@@ -35,7 +35,7 @@ import numpy as np
 from vissim.checks import OVERSAMPLE_RANGE, size_text
 from vissim.bench.dslr.traced_wavefront import D_LINE_NM, TracedWavefront, trace_bench_wavefront
 from vissim.bench.dslr.bench import DslrBench
-from vissim.charts import Chart, ChartSpec, render_chart_angular
+from vissim.charts import Chart, ChartSpec, layout_chart, render_chart_angular
 from vissim.errors import VissimInputError
 from vissim.optics.blur.convolve import blur_image
 from vissim.optics.psf.compute import PSF, compute_psf, suggested_size_px
@@ -147,11 +147,11 @@ def wave_truth(
     step, shape = bench.arcmin_per_px / oversample, (rows * oversample, cols * oversample)
     fine = chart if isinstance(chart, Chart) else render_chart_angular(chart, step, size_px=shape, snap_to_pixels=False)
     layout = fine.layout
-    if layout.rendering != "angular" or layout.arcmin_per_px != step or tuple(layout.shape_px) != shape:
+    if layout != layout_chart(fine.spec, arcmin_per_px=step, size_px=shape, snap_to_pixels=False):
         drawn = "in visual angle" if layout.rendering == "angular" else "for print"
         raise VissimInputError(f"the wave truth needs the chart in visual angle at {step:g} arcmin/px over "
-                               f"{size_text(shape)}; the chart given was drawn {drawn} at {layout.arcmin_per_px:g} "
-                               f"arcmin/px over {size_text(layout.shape_px)}")
+                               f"{size_text(shape)}, centred and not snapped to pixels; the chart given was drawn "
+                               f"{drawn} at {layout.arcmin_per_px:g} arcmin/px over {size_text(layout.shape_px)}")
     image = image_through_traced_lenses(bench, fine.pixels, oversample=oversample, wavelengths_nm=wavelengths_nm,
                                         weights=weights, mode=mode)
     provenance = {**image.provenance, "chart": fine.sidecar()}

@@ -14,12 +14,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from vissim.errors import VissimInputError
 from vissim.optics.runtime.array_backend import CPU, ArrayBackend, array_backend
 from vissim.optics.blur.convolve import (BlurKernel, border_mean, checked_blur_inputs, pad_array, pad_window,
                                 padded_shape, padding_width_px, psf_padding_width_px)
 from vissim.optics.psf.compute import PSF
 
-__all__ = ["blur_image_on", "convolve_padded", "convolve_window"]
+__all__ = ["blur_image_on", "convolve_padded", "convolve_window", "WINDOW_PADDING_MODES"]
+
+#: How `convolve_window` continues a window beyond the image's border (inside the image: zeros).
+WINDOW_PADDING_MODES = ("edge", "reflect")
 
 
 def blur_image_on(
@@ -78,9 +82,12 @@ def convolve_window(planes, psf: PSF, padding: str, touches, backend: ArrayBacke
     with ``psf`` (`convolve_padded`): (the blurred planes, the padded grid's shape).
 
     ``touches``: whether the window's (top, bottom, left, right) side is the image's border.  On the
-    CPU the rows' transforms skip the padding rows (`_convolve_window_pruned`), to the same bits.
+    CPU the rows' transforms skip the padding rows (`_convolve_window_pruned`), to the same bits.  ``padding``: one
+    of `WINDOW_PADDING_MODES`, whose padding rows are copies of the window's (the pruning's premise).
     """
-    n, h, w = planes.shape
+    if padding not in WINDOW_PADDING_MODES:
+        raise VissimInputError(f"a window's padding must be one of {', '.join(WINDOW_PADDING_MODES)}; got {padding!r}")
+    _, h, w = planes.shape
     offset = padding_width_px(psf.data.shape[0])
     shape = padded_shape((h, w), psf.data.shape[0])
     widths = ((offset, shape[0] - h - offset), (offset, shape[1] - w - offset))
@@ -101,7 +108,7 @@ def _convolve_window_pruned(planes, psf: PSF, padding: str, touches, widths, sha
     inverse's 1 / (rows x cols) is applied last, as SciPy's pocketfft applies it (the pinned SciPy;
     ``tests/test_depth_windows.py`` holds the two paths to the same bits).
     """
-    n, h, w = planes.shape
+    _, h, w = planes.shape
     (top, bottom), (left, right) = widths
     workers = -1 if threads is None else threads
     fft = CPU.fft

@@ -8,6 +8,7 @@ transmission of the nearer ones, and normalises by the blurred coverage.
 
 from __future__ import annotations
 
+import functools
 import logging
 from dataclasses import dataclass
 
@@ -62,9 +63,14 @@ class LayerScene:
     def shape(self) -> tuple[int, int]:
         return self.lower.shape
 
+    @functools.cached_property
+    def widest_reach(self) -> int:
+        """``r_max``: the largest PSF's reach (px)."""
+        return max(self.reach.values())
+
     def window(self, k: int) -> tuple[int, int, int, int]:
         """Layer ``k``'s window (`blurred_layer`): its matte's box grown by ``2 (r_k + r_max)``, inside the image."""
-        return grow_box(self.boxes[k], 2 * (self.reach[k] + max(self.reach.values())), self.shape)
+        return grow_box(self.boxes[k], 2 * (self.reach[k] + self.widest_reach), self.shape)
 
     def window_px(self, k: int) -> int:
         """Pixels in layer ``k``'s window: what its extension and blur cost, roughly."""

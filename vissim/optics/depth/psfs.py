@@ -146,11 +146,13 @@ def in_order(work, optics: LayerOptics, order, pool: ThreadPoolExecutor | None, 
         return
     reach = 4 * threads + 1
     futures: dict = {}
+    all_queued = False
     for i, k in enumerate(order):
-        final = cost is not None and i + reach >= len(order)
-        ahead = sorted(order[i:], key=cost, reverse=True) if final else order[i : i + reach]
-        for j, later in enumerate(ahead):
-            optics.prefetch(pool, later)
-            if (final or j <= 2 * threads) and later not in futures:
-                futures[later] = pool.submit(work, later)
+        if not all_queued:
+            all_queued = cost is not None and i + reach >= len(order)
+            ahead = sorted(order[i:], key=cost, reverse=True) if all_queued else order[i : i + reach]
+            for j, later in enumerate(ahead):
+                optics.prefetch(pool, later)
+                if (all_queued or j <= 2 * threads) and later not in futures:
+                    futures[later] = pool.submit(work, later)
         yield k, futures.pop(k).result()

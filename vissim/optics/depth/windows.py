@@ -11,14 +11,15 @@ import numpy as np
 
 from vissim.optics.runtime.array_backend import CPU as CPU_BACKEND
 from vissim.optics.runtime.array_backend import ArrayBackend, array_module
-from vissim.optics.blur.device import convolve_window
+from vissim.optics.blur.device import WINDOW_PADDING_MODES, convolve_window
 from vissim.optics.psf.compute import PSF
 from vissim.optics.depth.pullpush import pull_push, upsample2
 
 __all__ = ["DEPTH_PADDING_MODES", "COARSE_FACTOR", "occlusion_weight", "extended_layer", "layer_boxes", "grow_box",
            "nonzero_box", "add_overlap", "blur_coarse"]
 
-DEPTH_PADDING_MODES = ("edge", "reflect")
+#: How a depth blur continues the image beyond its border: as each layer's window is padded.
+DEPTH_PADDING_MODES = WINDOW_PADDING_MODES
 
 
 def occlusion_weight(proximity_gap_diopters, threshold_diopters: float):

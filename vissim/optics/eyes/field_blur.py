@@ -41,27 +41,15 @@ from vissim.progress import counter
 from vissim.optics.blur.convolve import image_kernel_psf, pixel_array
 from vissim.optics.eyes.eye import Eye, checked_eye
 from vissim.optics.eyes.psf_wavefront import eye_spectral_wavefront
-from vissim.optics.eyes.traced_wavefront import image_reach_deg
+from vissim.optics.eyes.traced_wavefront import image_reach_deg, node_field_deg
 from vissim.optics.blur.field_dependent import PSFGrid, blur_field_dependent, node_positions_px, psf_grid
 from vissim.optics.psf.compute import PSF
-from vissim.units import ARCMIN_PER_DEG, image_colrow_to_osa_xy
+from vissim.units import ARCMIN_PER_DEG
 
 __all__ = ["DEFAULT_FIELD_STEP_DEG", "node_field_deg", "eye_psf_grid", "eye_psf_grids", "blur_eye"]
 
 #: The default spacing of the PSF nodes, degrees of visual angle (measured: module doc).
 DEFAULT_FIELD_STEP_DEG = 2.0
-
-
-def node_field_deg(row_px: float, col_px: float, shape: tuple[int, int], arcmin_per_px: float,
-                   field_deg=(0.0, 0.0)) -> tuple[float, float]:
-    """The field angle (x, y) in degrees, OSA's frame, of image point ``[row_px, col_px]`` (module doc):
-    the one map from image pixels to field angles (the renderer's sensor draws its film by it too).
-    Numbers give floats; arrays (broadcast) give arrays."""
-    centre_row, centre_col = (shape[0] - 1) / 2.0, (shape[1] - 1) / 2.0
-    to_deg = arcmin_per_px / ARCMIN_PER_DEG
-    dx, dy = image_colrow_to_osa_xy((np.asarray(col_px) - centre_col) * to_deg, (np.asarray(row_px) - centre_row) * to_deg)
-    x, y = field_deg[0] + dx, field_deg[1] + dy
-    return (float(x), float(y)) if np.ndim(x) == 0 and np.ndim(y) == 0 else (x, y)
 
 
 def _band(wavelength_nm, weights) -> tuple[tuple[float, ...], tuple[float, ...] | None]:
@@ -117,7 +105,7 @@ def _check_image_field(shape: tuple[int, int], arcmin_per_px: float, centre, eye
     image is rendered), refused before any PSF."""
     widest = image_reach_deg(eye.schematic, shape[:2], arcmin_per_px, centre)
     if widest > EYE_RENDER_MAX_THETA_DEG:
-        raise VissimInputError(f"the image reaches {widest:.4g} deg from the eye's axis ({size_text(shape[:2])} at "
+        raise VissimInputError(f"the image reaches {widest:.4g} deg from the eye's optical axis ({size_text(shape[:2])} at "
                                f"{arcmin_per_px:g} arcmin/px about the field angle ({centre[0]:g}, {centre[1]:g}) deg), "
                                f"beyond the {EYE_RENDER_MAX_THETA_DEG:g} deg an eye's image is simulated and rendered "
                                "to: crop it, or give its true (finer) sampling")

@@ -65,9 +65,9 @@ from vissim.optics.eyes.surfaces import split_at_stop
 from vissim.optics.raytrace import RayBundle, aim_collimated, aim_rays, trace_rays, wavefront_on_reference_sphere_um
 from vissim.optics.pupil.zernike import fit_zernike_um
 from vissim.optics.runtime.threads import map_on_threads, map_shares
-from vissim.units import ARCMIN_PER_DEG
+from vissim.units import ARCMIN_PER_DEG, image_colrow_to_osa_xy
 
-__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "image_reach_deg", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
+__all__ = ["EyeWavefront", "trace_eye_wavefront", "field_map", "trace_to_retina", "field_direction", "image_reach_deg", "node_field_deg", "field_of_direction", "field_from_optical_axis_deg", "field_axis",
            "exit_pupil_position_mm", "entrance_pupil_from_iris_mm", "iris_from_entrance_pupil_mm", "max_iris_mm", "pupils_mm",
            "trace_eye_wavefronts", "entrance_pupils_from_irises_mm", "irises_from_entrance_pupil_mm",
            "DEFAULT_SAMPLES", "CHIEF_RAY_SAMPLES", "GRID_MARGIN"]
@@ -98,6 +98,18 @@ def field_axis(eye: SchematicEye) -> str:
     return "visual axis" if eye.visual_axis_deg != 0.0 else "optical axis"
 
 
+def node_field_deg(row_px: float, col_px: float, shape: tuple[int, int], arcmin_per_px: float,
+                   field_deg=(0.0, 0.0)) -> tuple[float, float]:
+    """The field angle (x, y) in degrees, OSA's frame, of image point ``[row_px, col_px]`` of an image of ``shape``
+    centred on ``field_deg`` (`vissim.optics.eyes.field_blur`'s module doc): the one map from image pixels to field
+    angles (the renderer's sensor draws its film by it too). Numbers give floats; arrays (broadcast) give arrays."""
+    centre_row, centre_col = (shape[0] - 1) / 2.0, (shape[1] - 1) / 2.0
+    to_deg = arcmin_per_px / ARCMIN_PER_DEG
+    dx, dy = image_colrow_to_osa_xy((np.asarray(col_px) - centre_col) * to_deg, (np.asarray(row_px) - centre_row) * to_deg)
+    x, y = field_deg[0] + dx, field_deg[1] + dy
+    return (float(x), float(y)) if np.ndim(x) == 0 and np.ndim(y) == 0 else (x, y)
+
+
 def image_reach_deg(eye: SchematicEye, shape: tuple[int, int], arcmin_per_px: float, field_deg) -> float:
     """How far from ``eye``'s optical axis an image of ``shape`` (rows, cols) reaches, deg: the one rule for how wide
     an eye's image may be (`vissim blur`'s check and the renderer's refusal, both against `EYE_RENDER_MAX_THETA_DEG`).
@@ -107,10 +119,9 @@ def image_reach_deg(eye: SchematicEye, shape: tuple[int, int], arcmin_per_px: fl
     along an axis is taken at 89 (the image is refused either way). A frame's widest point is a corner: the
     directions within an angle of an axis project onto the tangent plane as a convex region.
     """
-    half_x, half_y = shape[1] * arcmin_per_px / (2 * ARCMIN_PER_DEG), shape[0] * arcmin_per_px / (2 * ARCMIN_PER_DEG)
-    xs = np.clip([field_deg[0] - half_x, field_deg[0] + half_x], -MAX_TRACE_FIELD_DEG, MAX_TRACE_FIELD_DEG)
-    ys = np.clip([field_deg[1] - half_y, field_deg[1] + half_y], -MAX_TRACE_FIELD_DEG, MAX_TRACE_FIELD_DEG)
-    corners = field_direction(eye, np.meshgrid(xs, ys))
+    edges_row, edges_col = np.meshgrid([-0.5, shape[0] - 0.5], [-0.5, shape[1] - 0.5], indexing="ij")
+    xs, ys = node_field_deg(edges_row, edges_col, shape, arcmin_per_px, field_deg)
+    corners = field_direction(eye, np.clip([xs, ys], -MAX_TRACE_FIELD_DEG, MAX_TRACE_FIELD_DEG))
     return float(np.degrees(np.arccos(np.clip(corners[..., 2].min(), -1.0, 1.0))))
 
 

@@ -13,7 +13,6 @@ magnifies the image before blurring).  ``vissim report RUN`` redraws them from a
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -36,7 +35,6 @@ __all__ = ["OpticsCase", "optics_cases", "case_psf", "sampling_label", "psf_pane
            "mtf_figure_of", "through_focus_figure_of", "optics_figure", "OPTICS_FIGURES", "recorded_psf",
            "THROUGH_FOCUS_STEPS_D", "LOG_PSF_DECADES"]
 
-log = logging.getLogger(__name__)
 
 #: Sphere steps of the through-focus strip around each configuration's camera prescription, D.
 THROUGH_FOCUS_STEPS_D = (-1.0, -0.5, 0.0, 0.5, 1.0)
@@ -256,7 +254,9 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
         f"Through focus: the synthetic chart through the wave PSF of the camera prescription with its sphere stepped\n"
         f"({first.arcmin_per_px:g} arcmin/px, {first.pupil_diameter_mm:g} mm pupil, {first.wavelength_nm:g} nm, no "
         "spectacle magnification; scale bars in arcmin)", fontsize=9,
-        panel_titles=tuple("camera Rx (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it" for step in steps))
+        panel_titles=tuple("camera Rx (step 0)" if step == 0 else f"Rx sphere {step:+.2f} D from it" for step in steps),
+        row_titles=tuple(f"{case.group}\n{trial_lens_phrase(case.trial_lenses)}\ncamera Rx {case.prescription.format(2)}"
+                         for case in cases))
     for i, case in enumerate(cases):
         chart = read_image(case.synthetic).pixels
         for j, step in enumerate(steps):
@@ -267,8 +267,6 @@ def through_focus_figure_of(cases: list[OpticsCase], image_norm=None):
             ax.set_xticks([])
             ax.set_yticks([])
         scale_bar(axes[i, 0], chart.shape[1], case.arcmin_per_px)
-        axes[i, 0].set_ylabel(f"{case.group}\n{trial_lens_phrase(case.trial_lenses)}\ncamera Rx "
-                              f"{case.prescription.format(2)}", fontsize=7)
     radiance_colorbar(colorbar_beside(fig, layout, len(cases), len(steps), shown))
     return fig
 

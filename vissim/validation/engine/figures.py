@@ -110,24 +110,35 @@ def wrapped_lines(text: str, width_in: float, fontsize: float) -> list[str]:
 
 
 def titled_panel_grid(n_rows: int, n_cols: int, layout: PanelLayout, title: str, fontsize: float,
-                      panel_titles: tuple[str, ...] = (), panel_fontsize: float = 8.0):
+                      panel_titles: tuple[str, ...] = (), panel_fontsize: float = 8.0,
+                      row_titles: tuple[str, ...] = (), row_fontsize: float = 7.0):
     """`panel_grid` under ``title``, wrapped to the figure's width, its first row's panels under ``panel_titles``
-    (one a column), each wrapped to its panel and the gap beside it: (figure, axes, the layout used).
+    (one a column), each wrapped to its panel and the gap beside it, and each row's first panel labelled on its left
+    by ``row_titles`` (one a row), each wrapped to its panel's height: (figure, axes, the layout used).
 
-    ``layout.top_in`` holds the titles as written (their own line breaks); each line the wrapping adds to the
-    figure's title, or to the longest panel title, raises the top margin by one line."""
+    ``layout.top_in`` holds the titles as written (their own line breaks) and ``layout.left_in`` the row titles as
+    written; each line the wrapping adds to the figure's title or to the longest panel title raises the top margin
+    by one line, and each line it adds to the longest row title widens the left margin by one line."""
     width_in, _ = layout.size_in(n_rows, n_cols)
     lines = wrapped_lines(title, width_in, fontsize)
     panels = [wrapped_lines(t, layout.panel_width_in + layout.column_gap_in, panel_fontsize) for t in panel_titles]
-    added_in = (len(lines) - (title.count("\n") + 1)) * TITLE_LINE_EM * fontsize / POINTS_PER_INCH
-    added_in += max((len(w) - (t.count("\n") + 1) for w, t in zip(panels, panel_titles)), default=0) * (
-        TITLE_LINE_EM * panel_fontsize / POINTS_PER_INCH)
-    layout = layout._replace(top_in=layout.top_in + added_in)
+    rows = [wrapped_lines(t, layout.panel_height_in, row_fontsize) for t in row_titles]
+    layout = layout._replace(
+        top_in=layout.top_in + _added_lines([title], [lines]) * TITLE_LINE_EM * fontsize / POINTS_PER_INCH
+        + _added_lines(panel_titles, panels) * TITLE_LINE_EM * panel_fontsize / POINTS_PER_INCH,
+        left_in=layout.left_in + _added_lines(row_titles, rows) * TITLE_LINE_EM * row_fontsize / POINTS_PER_INCH)
     fig, axes = panel_grid(n_rows, n_cols, layout)
     fig.suptitle("\n".join(lines), fontsize=fontsize)
     for ax, wrapped in zip(axes[0], panels):
         ax.set_title("\n".join(wrapped), fontsize=panel_fontsize)
+    for ax, wrapped in zip(axes[:, 0], rows):
+        ax.set_ylabel("\n".join(wrapped), fontsize=row_fontsize)
     return fig, axes, layout
+
+
+def _added_lines(texts, wrapped) -> int:
+    """The most lines wrapping added to any of ``texts`` (beyond its own line breaks)."""
+    return max((len(w) - (t.count("\n") + 1) for t, w in zip(texts, wrapped)), default=0)
 
 
 #: A colour bar beside a panel grid: its gap from the grid and its width, inches; its share of the grid's height.

@@ -97,8 +97,11 @@ def _spawn_helper(modules: tuple[str, ...] = ()) -> Helper:
     pool = concurrent.futures.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
                                                   initializer=_log_as, initargs=(root.level, formatter))
     before = set(multiprocessing.active_children())
-    pool.submit(_import_all, tuple(modules))
+    pool.submit(_import_all, tuple(modules))  # the pool starts its one process here, in this call (Python >= 3.9)
     started = [child for child in multiprocessing.active_children() if child not in before]
+    if len(started) != 1:  # another thread started a child meanwhile, or the process died at once
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise RuntimeError(f"the helper process could not be told apart: {len(started)} new child processes")
     return Helper(pool, started[0])
 
 

@@ -123,7 +123,7 @@ def run_campaign(campaign: Campaign, run_dir: str | Path, *, workers: int = 1, s
         Local processes that make the renders (1: in this process).  Items are computed one per core at
         once (the cores this process may use: ``taskset`` limits them), each with OpenBLAS on one thread:
         shared with the campaign's helper process inside a `vissim.validation.engine.helper_process.campaign_helper`
-        block (``vissim validate`` starts one for a DSLR campaign on two cores), else on this process's threads; a
+        block (``vissim validate`` starts one for a DSLR campaign on `HELPER_CORES` cores), else on this process's threads; a
         kind whose items spread their own work (a population's eyes over the same ``workers``, a depth scene's layers over
         the cores) computes them one after another.
     scheduler : str, optional

@@ -7,7 +7,6 @@ shows a signed difference on a fixed scale, mid-grey for none, white for +``diff
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from vissim.imageio import encode_png, srgb_encode
